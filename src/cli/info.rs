@@ -1,0 +1,138 @@
+//! `slabscope info FILE`: what a volume is, in a few lines or as JSON.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use clap::Args;
+use serde_json::json;
+use slabscope::error::human_bytes;
+use slabscope::volume::dims_string;
+use slabscope::{Format, Volume};
+
+use super::LoadArgs;
+
+/// Bins of the histogram `info` shows.
+const HISTOGRAM_BINS: usize = 32;
+
+/// Arguments of `slabscope info`.
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The volume: a file, or a folder of TIFF slices.
+    pub file: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub load: LoadArgs,
+}
+
+pub fn run(args: &InfoArgs) -> Result<()> {
+    let loaded = super::load(&args.file, &args.load)?;
+    print(
+        &args.file.display().to_string(),
+        loaded.format,
+        &loaded.volume,
+        &loaded.notes,
+        args.json,
+    )
+}
+
+/// With no subcommand: until the TUI exists, describe the given file or the built-in dataset.
+pub fn run_default(file: Option<&Path>, load: &LoadArgs) -> Result<()> {
+    let Some(path) = file else {
+        let volume = slabscope::builtin_dataset()?;
+        return print(
+            slabscope::BUILTIN_NAME,
+            Format::Synthetic,
+            &volume,
+            &[],
+            false,
+        );
+    };
+    let loaded = super::load(path, load)?;
+    print(
+        &path.display().to_string(),
+        loaded.format,
+        &loaded.volume,
+        &loaded.notes,
+        false,
+    )
+}
+
+fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -> Result<()> {
+    let s = v.stats();
+    let hist = v.histogram(HISTOGRAM_BINS)?;
+    if json {
+        let out = json!({
+            "file": name,
+            "format": format.name(),
+            "dims": v.dims(),
+            "spacing": v.spacing(),
+            "type": v.voxel_type(),
+            "range": [s.min, s.max],
+            "mean": s.mean,
+            "voxels": v.len(),
+            "missing": s.missing,
+            "memory_bytes": v.memory_bytes(),
+            "histogram": hist,
+            "notes": notes,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    let [nx, ny, nz] = v.dims();
+    let [sx, sy, sz] = v.spacing();
+    println!("file       {name}");
+    println!("format     {}", format.name());
+    println!("dims       {}  ({} voxels)", dims_string(v.dims()), v.len());
+    println!(
+        "spacing    {sx} x {sy} x {sz} mm  (extent {:.1} x {:.1} x {:.1} mm)",
+        sx * nx as f64,
+        sy * ny as f64,
+        sz * nz as f64
+    );
+    println!("type       {}", v.voxel_type());
+    println!("range      {} .. {}", s.min, s.max);
+    println!("mean       {:.6}", s.mean);
+    if s.missing > 0 {
+        println!("missing    {} NaN/Inf voxels", s.missing);
+    }
+    println!("memory     {} as f32", human_bytes(v.memory_bytes()));
+    println!(
+        "histogram  {}  ({HISTOGRAM_BINS} bins, log scale)",
+        sparkline(&hist)
+    );
+    Ok(())
+}
+
+/// One character per bin, heights by log(1 + count); empty bins are blank.
+pub fn sparkline(counts: &[u64]) -> String {
+    const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
+    let top = counts
+        .iter()
+        .map(|&c| (c as f64).ln_1p())
+        .fold(0.0, f64::max);
+    counts
+        .iter()
+        .map(|&c| {
+            if c == 0 || top == 0.0 {
+                ' '
+            } else {
+                let level = ((c as f64).ln_1p() / top * 7.0).round() as usize;
+                BARS[level.min(7)]
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sparkline_scales_by_log() {
+        assert_eq!(sparkline(&[0, 1, 1_000_000]), " ▁█");
+        assert_eq!(sparkline(&[100, 1_000_000]), "▃█");
+        assert_eq!(sparkline(&[0, 0]), "  ");
+    }
+}

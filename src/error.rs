@@ -1,0 +1,139 @@
+//! The library's error type: one enum grouped by concern, every message naming the file and the problem.
+
+use std::path::{Path, PathBuf};
+
+/// Everything that can go wrong in slabscope's library.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Reading or writing a file failed at the operating-system level.
+    #[error("{}: {error}", path.display())]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// What the operating system said (part of the message, so not repeated as a source).
+        error: std::io::Error,
+    },
+    /// The file is not a valid volume of the format it claims, or its header contradicts itself or its data.
+    #[error("{}: {message}", path.display())]
+    Format {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is wrong, quoting the offending value.
+        message: String,
+    },
+    /// The file holds fewer bytes of voxel data than its header promises.
+    #[error("{}: truncated voxel data: expected {expected} bytes, found {found}", path.display())]
+    Truncated {
+        /// The file holding the voxel data.
+        path: PathBuf,
+        /// Bytes of voxel data the header describes.
+        expected: u64,
+        /// Bytes actually there.
+        found: u64,
+    },
+    /// Loading would need more memory than the limit allows; nothing was allocated.
+    #[error(
+        "{}: {what} needs {}, over the memory limit of {} (raise it with --max-memory)",
+        path.display(), human_bytes(*needed), human_bytes(*limit)
+    )]
+    TooLarge {
+        /// The file concerned.
+        path: PathBuf,
+        /// What would have been allocated, e.g. "a 4096x4096x4096 f32 volume".
+        what: String,
+        /// Bytes needed.
+        needed: u64,
+        /// Bytes allowed.
+        limit: u64,
+    },
+    /// The format is recognised but this variant of it is not supported.
+    #[error("{}: unsupported: {message}", path.display())]
+    Unsupported {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is not supported.
+        message: String,
+    },
+    /// A file that would be written exists already and overwriting was not asked for.
+    #[error("{}: already exists (use --force to overwrite it)", path.display())]
+    Exists {
+        /// The file that exists.
+        path: PathBuf,
+    },
+    /// A parameter outside its domain, such as zero bins or a zero axis.
+    #[error("invalid parameter: {0}")]
+    InvalidParameter(String),
+    /// The computation was cancelled through its cancellation flag.
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// The library's result type.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    /// An I/O error about `path`.
+    pub fn io(path: &Path, error: std::io::Error) -> Self {
+        Self::Io {
+            path: path.to_path_buf(),
+            error,
+        }
+    }
+
+    /// A format error about `path`.
+    pub fn format(path: &Path, message: impl Into<String>) -> Self {
+        Self::Format {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+
+    /// An unsupported-variant error about `path`.
+    pub fn unsupported(path: &Path, message: impl Into<String>) -> Self {
+        Self::Unsupported {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}
+
+/// A byte count for people: "1.5 GiB (1610612736 bytes)" above a KiB, "12 bytes" below.
+#[must_use]
+pub fn human_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 5] = ["KiB", "MiB", "GiB", "TiB", "PiB"];
+    if bytes < 1024 {
+        return format!("{bytes} bytes");
+    }
+    let mut value = bytes as f64 / 1024.0;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    format!("{value:.1} {} ({bytes} bytes)", UNITS[unit])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn human_bytes_picks_the_unit() {
+        assert_eq!(human_bytes(12), "12 bytes");
+        assert_eq!(human_bytes(1536), "1.5 KiB (1536 bytes)");
+        assert_eq!(human_bytes(3 << 30), "3.0 GiB (3221225472 bytes)");
+    }
+
+    #[test]
+    fn messages_name_the_file() {
+        let e = Error::Truncated {
+            path: "a/b.nrrd".into(),
+            expected: 100,
+            found: 40,
+        };
+        assert_eq!(
+            e.to_string(),
+            "a/b.nrrd: truncated voxel data: expected 100 bytes, found 40"
+        );
+    }
+}

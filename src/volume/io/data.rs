@@ -1,0 +1,308 @@
+//! Reading voxel data for every format through one path: the memory budget is checked before
+//! anything is allocated, and short or overlong data is reported with byte counts.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, ErrorKind, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+
+use flate2::bufread::{MultiGzDecoder, ZlibDecoder};
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::volume::voxel::decode_to;
+use crate::volume::{Endian, VoxelType, dims_string};
+
+/// How the voxel bytes are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Encoding {
+    /// Plain bytes (memory-mapped).
+    Raw,
+    /// A gzip stream, possibly of several members.
+    Gzip,
+    /// A zlib stream (MetaImage's `CompressedData`).
+    Zlib,
+    /// Whitespace-separated numbers (NRRD's `ascii`).
+    Ascii,
+}
+
+/// Where the voxel data starts after the start offset and skipped lines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Skip {
+    /// Skip this many (decoded) bytes.
+    Bytes(u64),
+    /// The data is the last bytes of the file (NRRD `byte skip: -1`, MetaImage `HeaderSize = -1`).
+    FromEnd,
+}
+
+/// Everything needed to read a volume's voxels from a file.
+#[derive(Clone, Debug)]
+pub(crate) struct DataSpec {
+    /// The file holding the data.
+    pub file: PathBuf,
+    /// Byte offset in the file where the data section starts (e.g. the end of an attached header).
+    pub start: u64,
+    /// Lines to skip from `start` before the data (NRRD `line skip`).
+    pub skip_lines: u64,
+    /// Bytes to skip after the lines, counted in decoded bytes for compressed data.
+    pub skip: Skip,
+    /// Storage encoding.
+    pub encoding: Encoding,
+    /// Dimensions of the volume to read.
+    pub dims: [usize; 3],
+    /// Voxel type in the file.
+    pub voxel_type: VoxelType,
+    /// Byte order in the file.
+    pub endian: Endian,
+    /// `value * slope + intercept`, when the format scales values.
+    pub scale: Option<(f64, f64)>,
+    /// Whether more data than the volume needs is expected (a 4D file read for its first volume).
+    pub allow_trailing: bool,
+}
+
+/// Checks `dims` against the memory limit for an f32 volume and returns the voxel count.
+pub(crate) fn check_budget(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<usize> {
+    if dims.contains(&0) {
+        return Err(Error::format(
+            path,
+            format!("dimensions {} contain a zero", dims_string(dims)),
+        ));
+    }
+    let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+    let bytes = count.and_then(|n| (n as u64).checked_mul(4));
+    match (count, bytes) {
+        (Some(n), Some(b)) if b <= max_memory => Ok(n),
+        _ => Err(Error::TooLarge {
+            path: path.to_path_buf(),
+            what: format!("a {} f32 volume", dims_string(dims)),
+            needed: bytes.unwrap_or(u64::MAX),
+            limit: max_memory,
+        }),
+    }
+}
+
+/// Reads the voxels `spec` describes, after checking the memory budget.
+pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> {
+    let count = check_budget(&spec.file, spec.dims, max_memory)?;
+    let expected = count as u64 * spec.voxel_type.size() as u64;
+    let path = spec.file.as_path();
+    let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    if spec.start > len {
+        return Err(Error::format(
+            path,
+            format!(
+                "data would start at byte {} but the file holds {len}",
+                spec.start
+            ),
+        ));
+    }
+    file.seek(SeekFrom::Start(spec.start))
+        .map_err(|e| Error::io(path, e))?;
+    let mut reader = BufReader::new(file);
+    let mut pos = spec.start;
+    for line in 0..spec.skip_lines {
+        let mut buf = Vec::new();
+        let n = reader
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            return Err(Error::format(
+                path,
+                format!(
+                    "file ends after {line} of {} lines to skip",
+                    spec.skip_lines
+                ),
+            ));
+        }
+        pos += n as u64;
+    }
+    match spec.encoding {
+        Encoding::Raw => read_raw(spec, pos, len, expected, count),
+        Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, count),
+        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, count),
+        Encoding::Ascii => read_ascii(spec, reader, count),
+    }
+}
+
+/// Voxels decoded per parallel task.
+const CHUNK: usize = 1 << 16;
+
+fn read_raw(spec: &DataSpec, pos: u64, len: u64, expected: u64, count: usize) -> Result<Vec<f32>> {
+    let path = spec.file.as_path();
+    let start = match spec.skip {
+        Skip::Bytes(n) => pos.saturating_add(n),
+        Skip::FromEnd => len.saturating_sub(expected).max(pos),
+    };
+    let found = len.saturating_sub(start);
+    if found < expected {
+        return Err(Error::Truncated {
+            path: path.to_path_buf(),
+            expected,
+            found,
+        });
+    }
+    if found > expected && !spec.allow_trailing {
+        return Err(Error::format(
+            path,
+            format!(
+                "header and file size disagree: a {} {} volume is {expected} bytes of data, \
+                 but the file holds {found} bytes after offset {start}",
+                dims_string(spec.dims),
+                spec.voxel_type
+            ),
+        ));
+    }
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let map = map_file(&file).map_err(|e| Error::io(path, e))?;
+    let start = usize::try_from(start).map_err(|_| Error::format(path, "offset beyond memory"))?;
+    let bytes = &map[start..start + expected as usize];
+    let mut out = vec![0.0f32; count];
+    let size = spec.voxel_type.size();
+    out.par_chunks_mut(CHUNK)
+        .zip(bytes.par_chunks(CHUNK * size))
+        .for_each(|(o, b)| decode_to(b, spec.voxel_type, spec.endian, spec.scale, o));
+    Ok(out)
+}
+
+/// Maps a file read-only.
+#[allow(unsafe_code)]
+fn map_file(file: &File) -> std::io::Result<memmap2::Mmap> {
+    // SAFETY: the map is read-only and lives only while this load decodes it. If another process
+    // truncates the file meanwhile, reads may fault (SIGBUS); that is the documented price of
+    // mapping, accepted because it avoids holding a second copy of a large raw volume.
+    unsafe { memmap2::Mmap::map(file) }
+}
+
+fn read_stream(
+    spec: &DataSpec,
+    mut reader: impl Read,
+    what: &str,
+    expected: u64,
+    count: usize,
+) -> Result<Vec<f32>> {
+    let path = spec.file.as_path();
+    let corrupt = |e: std::io::Error, at: u64| {
+        Error::format(
+            path,
+            format!("corrupt {what} data after {at} decoded bytes: {e}"),
+        )
+    };
+    let skip = match spec.skip {
+        Skip::Bytes(n) => n,
+        Skip::FromEnd => {
+            return Err(Error::unsupported(
+                path,
+                format!("data at the end of the file (skip -1) with {what} compression"),
+            ));
+        }
+    };
+    let skipped = std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink())
+        .map_err(|e| corrupt(e, 0))?;
+    if skipped < skip {
+        return Err(Error::format(
+            path,
+            format!("{what} data ends after {skipped} bytes, before the {skip} bytes to skip"),
+        ));
+    }
+    let size = spec.voxel_type.size();
+    let mut out = vec![0.0f32; count];
+    let mut buf = vec![0u8; (1 << 20) / size * size];
+    let mut done = 0usize;
+    while done < count {
+        let want = (count - done).min(buf.len() / size);
+        let got = fill(&mut reader, &mut buf[..want * size])
+            .map_err(|e| corrupt(e, (done * size) as u64))?;
+        let whole = got / size;
+        decode_to(
+            &buf[..whole * size],
+            spec.voxel_type,
+            spec.endian,
+            spec.scale,
+            &mut out[done..done + whole],
+        );
+        if got < want * size {
+            return Err(Error::Truncated {
+                path: path.to_path_buf(),
+                expected,
+                found: (done * size + got) as u64,
+            });
+        }
+        done += whole;
+    }
+    if !spec.allow_trailing {
+        let mut one = [0u8; 1];
+        if fill(&mut reader, &mut one).map_err(|e| corrupt(e, expected))? > 0 {
+            return Err(Error::format(
+                path,
+                format!(
+                    "header and data disagree: the {what} data holds more than the {expected} bytes \
+                     of a {} {} volume",
+                    dims_string(spec.dims),
+                    spec.voxel_type
+                ),
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// Reads until `buf` is full or the stream ends; returns the bytes read. A stream that ends inside
+/// a compressed block is an end, not an error, so that the caller reports the count.
+fn fill(reader: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match reader.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) if e.kind() == ErrorKind::UnexpectedEof => break,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
+fn read_ascii(spec: &DataSpec, mut reader: impl Read, count: usize) -> Result<Vec<f32>> {
+    let path = spec.file.as_path();
+    let mut text = String::new();
+    reader
+        .read_to_string(&mut text)
+        .map_err(|e| Error::format(path, format!("ascii data is not text: {e}")))?;
+    let skip = match spec.skip {
+        Skip::Bytes(n) => usize::try_from(n).unwrap_or(usize::MAX),
+        Skip::FromEnd => return Err(Error::unsupported(path, "byte skip -1 with ascii data")),
+    };
+    let text = text.get(skip..).unwrap_or("");
+    let mut out = Vec::with_capacity(count);
+    for token in text
+        .split(|c: char| c.is_ascii_whitespace() || c == ',')
+        .filter(|t| !t.is_empty())
+    {
+        if out.len() == count {
+            if spec.allow_trailing {
+                break;
+            }
+            return Err(Error::format(
+                path,
+                format!("ascii data holds more than the {count} values the header describes"),
+            ));
+        }
+        let v: f64 = token
+            .parse()
+            .map_err(|_| Error::format(path, format!("ascii data: {token:?} is not a number")))?;
+        out.push(match spec.scale {
+            Some((m, b)) => (v * m + b) as f32,
+            None => v as f32,
+        });
+    }
+    if out.len() < count {
+        return Err(Error::format(
+            path,
+            format!(
+                "truncated ascii data: expected {count} values, found {}",
+                out.len()
+            ),
+        ));
+    }
+    Ok(out)
+}

@@ -1,0 +1,237 @@
+//! Loading volumes from files: one entry point, [`load`], that picks the reader by content (magic
+//! bytes) first and by extension second, and writers for exporting.
+
+mod data;
+mod limits;
+mod metaimage;
+mod nifti;
+mod nrrd;
+mod raw;
+mod tiff;
+mod volumeshop;
+
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+pub use limits::{default_max_memory, parse_bytes, physical_memory};
+pub use nrrd::{NrrdEncoding, write_nrrd};
+pub use raw::{RawOptions, parse_dims, parse_raw_name};
+
+use crate::error::{Error, Result};
+use crate::volume::Volume;
+
+/// The file formats slabscope reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Format {
+    /// NIfTI-1, `.nii`, `.nii.gz` or a `.hdr`/`.img` pair.
+    Nifti,
+    /// NRRD, attached (`.nrrd`) or detached (`.nhdr`).
+    Nrrd,
+    /// MetaImage, `.mha` or `.mhd` with a data file.
+    MetaImage,
+    /// VolumeShop / TU Wien `.dat`: three u16 dimensions then u16 voxels.
+    VolumeShop,
+    /// Headerless raw voxels described by options or the file name.
+    Raw,
+    /// A multi-page TIFF stack.
+    Tiff,
+    /// A folder of single-page TIFF slices.
+    TiffFolder,
+    /// Made in memory (a phantom or the built-in dataset).
+    Synthetic,
+}
+
+impl Format {
+    /// The name shown to users and in JSON.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Nifti => "nifti",
+            Self::Nrrd => "nrrd",
+            Self::MetaImage => "metaimage",
+            Self::VolumeShop => "volumeshop",
+            Self::Raw => "raw",
+            Self::Tiff => "tiff",
+            Self::TiffFolder => "tiff-folder",
+            Self::Synthetic => "synthetic",
+        }
+    }
+}
+
+/// Options for [`load`].
+#[derive(Clone, Debug)]
+pub struct LoadOptions {
+    /// The most bytes the loaded f32 volume may occupy; checked before anything is allocated.
+    pub max_memory: u64,
+    /// Description of a headerless raw file; when `dims` is set the file is read as raw.
+    pub raw: RawOptions,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            max_memory: default_max_memory(),
+            raw: RawOptions::default(),
+        }
+    }
+}
+
+/// A loaded volume with what the loader noticed on the way.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The volume.
+    pub volume: Volume,
+    /// The format it was read as.
+    pub format: Format,
+    /// Things a user should know, e.g. "4D file: loaded the first of 12 volumes".
+    pub notes: Vec<String>,
+}
+
+/// Loads the volume at `path` (a file, or a folder of TIFF slices).
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    let (format, mut loaded) = if meta.is_dir() {
+        (Format::TiffFolder, tiff::load_folder(path, opts)?)
+    } else {
+        let format = detect(path, opts)?;
+        let loaded = match format {
+            Format::Nifti => nifti::load(path, opts)?,
+            Format::Nrrd => nrrd::load(path, opts)?,
+            Format::MetaImage => metaimage::load(path, opts)?,
+            Format::VolumeShop => volumeshop::load(path, opts)?,
+            Format::Raw => raw::load(path, opts)?,
+            Format::Tiff => tiff::load_stack(path, opts)?,
+            Format::TiffFolder | Format::Synthetic => unreachable!("not detected from a file"),
+        };
+        (format, loaded)
+    };
+    let missing = loaded.volume.stats().missing;
+    if missing > 0 {
+        loaded.notes.push(format!(
+            "{missing} NaN or infinite voxels are treated as missing (left out of every measure)"
+        ));
+    }
+    if loaded.volume.is_constant() {
+        loaded.notes.push(format!(
+            "every voxel is {}: the volume is constant and has no structure to analyse",
+            loaded.volume.stats().min
+        ));
+    }
+    Ok(Loaded {
+        volume: loaded.volume,
+        format,
+        notes: loaded.notes,
+    })
+}
+
+/// What a format reader returns before `load` adds its general notes.
+pub(crate) struct Read0 {
+    pub volume: Volume,
+    pub notes: Vec<String>,
+}
+
+fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
+    if opts.raw.dims.is_some() {
+        return Ok(Format::Raw);
+    }
+    let mut head = Vec::with_capacity(4096);
+    File::open(path)
+        .and_then(|f| f.take(4096).read_to_end(&mut head))
+        .map_err(|e| Error::io(path, e))?;
+    if let Some(format) = sniff(&head) {
+        return Ok(format);
+    }
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let ext = |e: &str| name.ends_with(e);
+    if ext(".dat") {
+        return Ok(Format::VolumeShop);
+    }
+    if ext(".raw") || ext(".bin") || ext(".vol") || ext(".img") || parse_raw_name(&name).is_some() {
+        return Ok(Format::Raw);
+    }
+    let what = if head.is_empty() {
+        "the file is empty".to_string()
+    } else if ext(".nii")
+        || ext(".nii.gz")
+        || ext(".nrrd")
+        || ext(".nhdr")
+        || ext(".mha")
+        || ext(".mhd")
+    {
+        "the name says volume but the content does not start like one".to_string()
+    } else {
+        "not a volume file".to_string()
+    };
+    Err(Error::format(
+        path,
+        format!(
+            "{what} (slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, and \
+             headerless raw data described with --dims and --type)"
+        ),
+    ))
+}
+
+/// Recognises a format by its first bytes.
+fn sniff(head: &[u8]) -> Option<Format> {
+    if head.starts_with(&[0x1f, 0x8b]) {
+        return nifti::is_gzipped_nifti(head).then_some(Format::Nifti);
+    }
+    if head.len() >= 348 && (&head[344..348] == b"n+1\0" || &head[344..348] == b"ni1\0") {
+        return Some(Format::Nifti);
+    }
+    if head.starts_with(b"NRRD000") {
+        return Some(Format::Nrrd);
+    }
+    if head.starts_with(b"II*\0")
+        || head.starts_with(b"MM\0*")
+        || head.starts_with(b"II+\0")
+        || head.starts_with(b"MM\0+")
+    {
+        return Some(Format::Tiff);
+    }
+    metaimage::looks_like(head).then_some(Format::MetaImage)
+}
+
+/// The data file a header names, relative to the header's folder; it must exist.
+pub(crate) fn data_file(header: &Path, name: &str) -> Result<PathBuf> {
+    let p = Path::new(name);
+    let file = if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        header.parent().unwrap_or(Path::new(".")).join(p)
+    };
+    if file.is_file() {
+        Ok(file)
+    } else {
+        Err(Error::format(
+            header,
+            format!("its data file {} does not exist", file.display()),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sniffs_magic_bytes() {
+        assert_eq!(sniff(b"NRRD0004\ntype: uchar\n"), Some(Format::Nrrd));
+        assert_eq!(sniff(b"II*\0\x08\0\0\0"), Some(Format::Tiff));
+        assert_eq!(
+            sniff(b"ObjectType = Image\nNDims = 3\n"),
+            Some(Format::MetaImage)
+        );
+        assert_eq!(sniff(b"hello world"), None);
+        let mut nii = vec![0u8; 352];
+        nii[344..348].copy_from_slice(b"n+1\0");
+        assert_eq!(sniff(&nii), Some(Format::Nifti));
+    }
+}

@@ -1,0 +1,504 @@
+//! NRRD (`.nrrd` with attached data, `.nhdr` with a detached data file): a small parser for the
+//! fields a scalar volume needs, and a writer (raw or gzip) that never overwrites unasked.
+
+use std::fs::File;
+use std::io::{BufWriter, Read, Write};
+use std::path::Path;
+
+use flate2::Compression;
+use flate2::write::GzEncoder;
+
+use super::data::{DataSpec, Encoding, Skip, read_voxels};
+use super::{LoadOptions, Read0, data_file};
+use crate::error::{Error, Result};
+use crate::volume::voxel::encode_le;
+use crate::volume::{Endian, Volume, VoxelType};
+
+/// The most bytes a header may take before we stop looking for its end.
+const MAX_HEADER: usize = 1 << 20;
+
+/// The fields of an NRRD header that slabscope uses.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Header {
+    pub voxel_type: VoxelType,
+    pub sizes: Vec<usize>,
+    pub encoding: Encoding,
+    pub endian: Option<Endian>,
+    pub spacings: Option<Vec<f64>>,
+    /// Length of each space direction; `None` for a `none` axis.
+    pub directions: Option<Vec<Option<f64>>>,
+    pub kinds: Option<Vec<String>>,
+    pub data_file: Option<String>,
+    pub line_skip: u64,
+    pub byte_skip: Skip,
+    /// Bytes up to and including the blank line that ends the header.
+    pub len: usize,
+}
+
+fn voxel_type(name: &str) -> std::result::Result<VoxelType, String> {
+    let t = name.trim().to_ascii_lowercase();
+    Ok(match t.as_str() {
+        "signed char" | "int8" | "int8_t" => VoxelType::I8,
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => VoxelType::U8,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => {
+            VoxelType::I16
+        }
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => {
+            VoxelType::U16
+        }
+        "int" | "signed int" | "int32" | "int32_t" => VoxelType::I32,
+        "uint" | "unsigned int" | "uint32" | "uint32_t" => VoxelType::U32,
+        "float" => VoxelType::F32,
+        "double" => VoxelType::F64,
+        _ => return Err(format!("NRRD type {t:?}")),
+    })
+}
+
+fn type_name(ty: VoxelType) -> &'static str {
+    match ty {
+        VoxelType::U8 => "uint8",
+        VoxelType::I8 => "int8",
+        VoxelType::U16 => "uint16",
+        VoxelType::I16 => "int16",
+        VoxelType::U32 => "uint32",
+        VoxelType::I32 => "int32",
+        VoxelType::F32 => "float",
+        VoxelType::F64 => "double",
+    }
+}
+
+/// Parses "(1,0,0) (0,1.5,0) none" into direction lengths.
+fn parse_directions(value: &str) -> Option<Vec<Option<f64>>> {
+    let mut out = Vec::new();
+    let mut rest = value.trim();
+    while !rest.is_empty() {
+        if let Some(r) = rest.strip_prefix("none") {
+            out.push(None);
+            rest = r.trim_start();
+        } else if let Some(r) = rest.strip_prefix('(') {
+            let end = r.find(')')?;
+            let comps: Option<Vec<f64>> =
+                r[..end].split(',').map(|c| c.trim().parse().ok()).collect();
+            let norm = comps?.iter().map(|c| c * c).sum::<f64>().sqrt();
+            out.push(Some(norm));
+            rest = r[end + 1..].trim_start();
+        } else {
+            return None;
+        }
+    }
+    Some(out)
+}
+
+/// Header fields as they are read, before the required ones are checked.
+#[derive(Default)]
+struct Fields {
+    voxel_type: Option<VoxelType>,
+    dimension: Option<usize>,
+    sizes: Option<Vec<usize>>,
+    encoding: Option<Encoding>,
+    endian: Option<Endian>,
+    spacings: Option<Vec<f64>>,
+    directions: Option<Vec<Option<f64>>>,
+    kinds: Option<Vec<String>>,
+    data_file: Option<String>,
+    line_skip: u64,
+    byte_skip: Option<Skip>,
+}
+
+fn whole_numbers(value: &str) -> Option<Vec<usize>> {
+    value.split_whitespace().map(|t| t.parse().ok()).collect()
+}
+
+/// Reads one `field: value` line into `f`.
+fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()> {
+    let bad = |m: String| Error::format(path, m);
+    match key.trim().to_ascii_lowercase().as_str() {
+        "type" => f.voxel_type = Some(voxel_type(value).map_err(|t| Error::unsupported(path, t))?),
+        "dimension" => {
+            f.dimension = Some(
+                value
+                    .parse()
+                    .map_err(|_| bad(format!("dimension {value:?}")))?,
+            );
+        }
+        "sizes" => {
+            f.sizes = Some(
+                whole_numbers(value)
+                    .ok_or_else(|| bad(format!("sizes {value:?} are not whole numbers")))?,
+            );
+        }
+        "encoding" => {
+            f.encoding = Some(match value.to_ascii_lowercase().as_str() {
+                "raw" => Encoding::Raw,
+                "gzip" | "gz" => Encoding::Gzip,
+                "ascii" | "text" | "txt" => Encoding::Ascii,
+                other => {
+                    return Err(Error::unsupported(path, format!("NRRD encoding {other:?}")));
+                }
+            });
+        }
+        "endian" => {
+            f.endian = Some(match value.to_ascii_lowercase().as_str() {
+                "little" => Endian::Little,
+                "big" => Endian::Big,
+                other => return Err(bad(format!("endian {other:?}"))),
+            });
+        }
+        "spacings" => {
+            let parse = |t: &str| {
+                if t.eq_ignore_ascii_case("nan") {
+                    Some(f64::NAN)
+                } else {
+                    t.parse().ok()
+                }
+            };
+            f.spacings = Some(
+                value
+                    .split_whitespace()
+                    .map(parse)
+                    .collect::<Option<_>>()
+                    .ok_or_else(|| bad(format!("spacings {value:?} are not numbers")))?,
+            );
+        }
+        "space directions" => {
+            f.directions = Some(
+                parse_directions(value)
+                    .ok_or_else(|| bad(format!("space directions {value:?}")))?,
+            );
+        }
+        "kinds" => {
+            f.kinds = Some(
+                value
+                    .split_whitespace()
+                    .map(str::to_ascii_lowercase)
+                    .collect(),
+            );
+        }
+        "data file" | "datafile" => f.data_file = Some(value.to_string()),
+        "line skip" | "lineskip" => {
+            f.line_skip = value
+                .parse()
+                .map_err(|_| bad(format!("line skip {value:?}")))?;
+        }
+        "byte skip" | "byteskip" => {
+            f.byte_skip = Some(match value.parse::<i64>() {
+                Ok(-1) => Skip::FromEnd,
+                Ok(n) if n >= 0 => Skip::Bytes(n as u64),
+                _ => return Err(bad(format!("byte skip {value:?}"))),
+            });
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Parses an NRRD header from the start of `bytes` (which may continue with attached data).
+pub(crate) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
+    let bad = |m: String| Error::format(path, m);
+    if !bytes.starts_with(b"NRRD000") {
+        return Err(bad("not an NRRD file (no NRRD000X magic)".into()));
+    }
+    let mut pos = 0;
+    let mut ended = false;
+    let mut fields = Fields::default();
+    let mut first = true;
+    while pos < bytes.len() {
+        let end = bytes[pos..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(bytes.len(), |i| pos + i);
+        let line = String::from_utf8_lossy(&bytes[pos..end]);
+        let line = line.trim_end_matches('\r');
+        pos = (end + 1).min(bytes.len());
+        if line.is_empty() {
+            ended = true;
+            break;
+        }
+        if std::mem::take(&mut first) || line.starts_with('#') || line.contains(":=") {
+            continue;
+        }
+        let Some((key, value)) = line.split_once(':') else {
+            return Err(bad(format!("header line {line:?} is not \"field: value\"")));
+        };
+        read_field(path, &mut fields, key, value.trim())?;
+    }
+    let missing = |f: &str| bad(format!("header has no \"{f}\" field"));
+    let h = Header {
+        voxel_type: fields.voxel_type.ok_or_else(|| missing("type"))?,
+        sizes: fields.sizes.ok_or_else(|| missing("sizes"))?,
+        encoding: fields.encoding.ok_or_else(|| missing("encoding"))?,
+        endian: fields.endian,
+        spacings: fields.spacings,
+        directions: fields.directions,
+        kinds: fields.kinds,
+        data_file: fields.data_file,
+        line_skip: fields.line_skip,
+        byte_skip: fields.byte_skip.unwrap_or(Skip::Bytes(0)),
+        len: pos,
+    };
+    let dimension = fields.dimension.ok_or_else(|| missing("dimension"))?;
+    if dimension != h.sizes.len() {
+        return Err(bad(format!(
+            "dimension is {dimension} but sizes lists {} numbers",
+            h.sizes.len()
+        )));
+    }
+    if !(1..=4).contains(&dimension) {
+        return Err(Error::unsupported(
+            path,
+            format!("{dimension}-dimensional NRRD (1 to 4 are read)"),
+        ));
+    }
+    if !ended && h.data_file.is_none() {
+        return Err(bad(
+            "header does not end with a blank line and names no data file".into(),
+        ));
+    }
+    Ok(h)
+}
+
+/// Reads the header bytes: up to the first blank line, or the whole (detached) header file.
+fn read_header_bytes(path: &Path) -> Result<Vec<u8>> {
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    let mut reader = file.take(MAX_HEADER as u64);
+    let mut chunk = [0u8; 8192];
+    loop {
+        let n = reader.read(&mut chunk).map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            return Ok(bytes);
+        }
+        bytes.extend_from_slice(&chunk[..n]);
+        if bytes.windows(2).any(|w| w == b"\n\n") || bytes.windows(4).any(|w| w == b"\r\n\r\n") {
+            return Ok(bytes);
+        }
+    }
+}
+
+fn is_spatial(kind: &str) -> bool {
+    matches!(kind, "domain" | "space" | "time" | "???" | "none")
+}
+
+pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+    let h = parse_header(path, &read_header_bytes(path)?)?;
+    let mut notes = Vec::new();
+    let mut axes: Vec<usize> = (0..h.sizes.len()).collect();
+    // A leading non-spatial axis of size 1 (a "scalar" component) is dropped; larger ones are
+    // multi-component voxels, which slabscope does not read.
+    if let Some(kinds) = &h.kinds {
+        if kinds.len() != h.sizes.len() {
+            return Err(Error::format(
+                path,
+                format!("kinds lists {} axes, sizes {}", kinds.len(), h.sizes.len()),
+            ));
+        }
+        if !is_spatial(&kinds[0]) && h.sizes.len() > 1 {
+            if h.sizes[0] != 1 {
+                return Err(Error::unsupported(
+                    path,
+                    format!(
+                        "{} components per voxel (kind {:?}); slabscope reads scalar volumes",
+                        h.sizes[0], kinds[0]
+                    ),
+                ));
+            }
+            axes.remove(0);
+        }
+    }
+    let mut dims = [1usize; 3];
+    let mut spacing = [1.0f64; 3];
+    for (k, &axis) in axes.iter().take(3).enumerate() {
+        dims[k] = h.sizes[axis];
+        let s = h
+            .spacings
+            .as_ref()
+            .and_then(|s| s.get(axis).copied())
+            .or_else(|| {
+                h.directions
+                    .as_ref()
+                    .and_then(|d| d.get(axis).copied().flatten())
+            });
+        match s {
+            Some(s) if s.is_finite() && s > 0.0 => spacing[k] = s,
+            Some(s) => notes.push(format!("axis {k} has spacing {s}: using 1 mm")),
+            None => {}
+        }
+    }
+    let extra: usize = axes.iter().skip(3).map(|&a| h.sizes[a]).product();
+    if extra == 0 {
+        return Err(Error::format(path, "the fourth size is zero"));
+    }
+    if extra > 1 {
+        notes.push(format!("4D file with {extra} volumes: loaded the first"));
+    }
+    if h.endian.is_none() && h.voxel_type.size() > 1 && h.encoding != Encoding::Ascii {
+        notes.push("no endian field: assuming little-endian".into());
+    }
+    let endian = h.endian.unwrap_or_default();
+    let (file, start) = match &h.data_file {
+        None => (path.to_path_buf(), h.len as u64),
+        Some(name) => {
+            if name.contains('%') || name.split_whitespace().count() > 1 || name.starts_with("LIST")
+            {
+                return Err(Error::unsupported(
+                    path,
+                    format!("multi-file data ({name:?})"),
+                ));
+            }
+            (data_file(path, name)?, 0)
+        }
+    };
+    let spec = DataSpec {
+        file,
+        start,
+        skip_lines: h.line_skip,
+        skip: h.byte_skip,
+        encoding: h.encoding,
+        dims,
+        voxel_type: h.voxel_type,
+        endian,
+        scale: None,
+        allow_trailing: extra > 1,
+    };
+    let voxels = read_voxels(&spec, opts.max_memory)?;
+    Ok(Read0 {
+        volume: Volume::new(dims, spacing, h.voxel_type, voxels)
+            .map_err(|e| Error::format(path, e.to_string()))?,
+        notes,
+    })
+}
+
+/// How [`write_nrrd`] stores the voxels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum NrrdEncoding {
+    /// Plain little-endian bytes.
+    Raw,
+    /// gzip-compressed (smaller, slower).
+    #[default]
+    Gzip,
+}
+
+/// Writes `volume` as an attached NRRD in its voxel type (integer types are rounded and clamped).
+///
+/// The file is written to a temporary file beside `path` and renamed into place; an existing
+/// `path` is replaced only when `force` is set.
+pub fn write_nrrd(path: &Path, volume: &Volume, encoding: NrrdEncoding, force: bool) -> Result<()> {
+    if !force && path.exists() {
+        return Err(Error::Exists {
+            path: path.to_path_buf(),
+        });
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let tmp = tempfile::Builder::new()
+        .prefix(".slabscope-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(|e| Error::io(path, e))?;
+    write_to(tmp.as_file(), volume, encoding).map_err(|e| Error::io(path, e))?;
+    let persisted = if force {
+        tmp.persist(path)
+    } else {
+        tmp.persist_noclobber(path)
+    };
+    persisted.map_err(|e| {
+        if e.error.kind() == std::io::ErrorKind::AlreadyExists {
+            Error::Exists {
+                path: path.to_path_buf(),
+            }
+        } else {
+            Error::io(path, e.error)
+        }
+    })?;
+    Ok(())
+}
+
+fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Result<()> {
+    let mut out = BufWriter::new(file);
+    let [nx, ny, nz] = volume.dims();
+    let [sx, sy, sz] = volume.spacing();
+    let ty = volume.voxel_type();
+    write!(
+        out,
+        "NRRD0004\n# written by slabscope {}\ntype: {}\ndimension: 3\nsizes: {nx} {ny} {nz}\n\
+         spacings: {sx} {sy} {sz}\nkinds: domain domain domain\n",
+        env!("CARGO_PKG_VERSION"),
+        type_name(ty)
+    )?;
+    if ty.size() > 1 {
+        writeln!(out, "endian: little")?;
+    }
+    let gz = encoding == NrrdEncoding::Gzip;
+    writeln!(out, "encoding: {}\n", if gz { "gzip" } else { "raw" })?;
+    let mut sink: Box<dyn Write + '_> = if gz {
+        Box::new(GzEncoder::new(&mut out, Compression::fast()))
+    } else {
+        Box::new(&mut out)
+    };
+    let mut bytes = Vec::new();
+    for chunk in volume.voxels().chunks(1 << 16) {
+        bytes.clear();
+        encode_le(chunk, ty, &mut bytes);
+        sink.write_all(&bytes)?;
+    }
+    drop(sink);
+    out.flush()?;
+    file.sync_all()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Header> {
+        parse_header(Path::new("t.nrrd"), text.as_bytes())
+    }
+
+    #[test]
+    fn parses_a_full_header() {
+        let h = parse(
+            "NRRD0005\n# comment\ntype: unsigned short\ndimension: 3\nsizes: 4 5 6\n\
+             endian: big\nencoding: gz\nspace directions: (2,0,0) (0,0.5,0) (0,0,3)\n\
+             byte skip: -1\nkey:=value\n\nDATA",
+        )
+        .unwrap();
+        assert_eq!(h.voxel_type, VoxelType::U16);
+        assert_eq!(h.sizes, vec![4, 5, 6]);
+        assert_eq!(h.encoding, Encoding::Gzip);
+        assert_eq!(h.endian, Some(Endian::Big));
+        assert_eq!(h.directions, Some(vec![Some(2.0), Some(0.5), Some(3.0)]));
+        assert_eq!(h.byte_skip, Skip::FromEnd);
+    }
+
+    #[test]
+    fn header_length_stops_at_the_blank_line() {
+        let text = "NRRD0004\ntype: uchar\ndimension: 1\nsizes: 3\nencoding: raw\n\nabc";
+        assert_eq!(parse(text).unwrap().len, text.len() - 3);
+    }
+
+    #[test]
+    fn rejects_bad_headers_with_reasons() {
+        let err = |t: &str| parse(t).unwrap_err().to_string();
+        assert!(
+            err("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 2\nencoding: raw\n\n")
+                .contains("dimension is 3")
+        );
+        assert!(err("NRRD0004\ntype: int64\n").contains("unsupported"));
+        assert!(err("NRRD0004\ntype: uchar\ndimension: 1\nsizes: 2\n\n").contains("\"encoding\""));
+        assert!(err("NRRD0004\ntype: uchar\nencoding: bzip2\n").contains("bzip2"));
+        assert!(err("NRRD0004\ntype: uchar\nsizes: 2 x\n").contains("whole numbers"));
+        assert!(err("NRRD0004\nno colon here\n").contains("not \"field: value\""));
+        assert!(err("PNG").contains("magic"));
+    }
+
+    #[test]
+    fn directions_accept_none_and_spaces() {
+        assert_eq!(
+            parse_directions("none (3,4,0) ( 0, 0, 2 )"),
+            Some(vec![None, Some(5.0), Some(2.0)])
+        );
+        assert_eq!(parse_directions("(1,0"), None);
+    }
+}

@@ -1,0 +1,129 @@
+//! Headerless raw voxels, described by options or by the file name (`bonsai_256x256x256_uint8.raw`,
+//! `head.256x256x113.u16.raw`); read through a memory map.
+
+use std::path::Path;
+
+use super::data::{DataSpec, Encoding, Skip, read_voxels};
+use super::{LoadOptions, Read0};
+use crate::error::{Error, Result};
+use crate::volume::{Endian, Volume, VoxelType, dims_string};
+
+/// How to read a headerless raw file; unset fields come from the file name or defaults.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RawOptions {
+    /// Dimensions `[nx, ny, nz]`; setting them makes any file load as raw.
+    pub dims: Option<[usize; 3]>,
+    /// Voxel type.
+    pub voxel_type: Option<VoxelType>,
+    /// Spacing in mm (default 1).
+    pub spacing: Option<[f64; 3]>,
+    /// Byte order (default little).
+    pub endian: Option<Endian>,
+    /// Bytes to skip at the start of the file (default 0).
+    pub offset: Option<u64>,
+}
+
+/// Parses `NXxNYxNZ` (e.g. `256x256x113`).
+#[must_use]
+pub fn parse_dims(text: &str) -> Option<[usize; 3]> {
+    let parts: Vec<usize> = text
+        .split(['x', 'X'])
+        .map(|p| p.trim().parse().ok())
+        .collect::<Option<_>>()?;
+    <[usize; 3]>::try_from(parts).ok()
+}
+
+/// Dimensions and voxel type found in a raw file's name, e.g. `bonsai_256x256x256_uint8.raw`.
+#[must_use]
+pub fn parse_raw_name(name: &str) -> Option<([usize; 3], Option<VoxelType>)> {
+    let tokens: Vec<&str> = name.split(['_', '.', '-', ' ']).collect();
+    let dims = tokens.iter().find_map(|t| parse_dims(t))?;
+    let ty = tokens.iter().find_map(|t| VoxelType::parse(t));
+    Some((dims, ty))
+}
+
+pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let from_name = parse_raw_name(&name);
+    let raw = &opts.raw;
+    let dims = raw.dims.or(from_name.map(|n| n.0)).ok_or_else(|| {
+        Error::format(
+            path,
+            "headerless raw data: give --dims NXxNYxNZ and --type, or name the file like \
+             NAME_256x256x113_uint16.raw",
+        )
+    })?;
+    let offset = raw.offset.unwrap_or(0);
+    let Some(voxel_type) = raw.voxel_type.or(from_name.and_then(|n| n.1)) else {
+        return Err(Error::format(
+            path,
+            missing_type_message(path, dims, offset),
+        ));
+    };
+    let spec = DataSpec {
+        file: path.to_path_buf(),
+        start: offset,
+        skip_lines: 0,
+        skip: Skip::Bytes(0),
+        encoding: Encoding::Raw,
+        dims,
+        voxel_type,
+        endian: raw.endian.unwrap_or_default(),
+        scale: None,
+        allow_trailing: false,
+    };
+    let voxels = read_voxels(&spec, opts.max_memory)?;
+    let spacing = raw.spacing.unwrap_or([1.0; 3]);
+    let mut notes = Vec::new();
+    if raw.spacing.is_none() {
+        notes.push("raw data carries no spacing: using 1 mm (set it with --spacing)".into());
+    }
+    Ok(Read0 {
+        volume: Volume::new(dims, spacing, voxel_type, voxels)
+            .map_err(|e| Error::format(path, e.to_string()))?,
+        notes,
+    })
+}
+
+/// "give --type", with the bytes per voxel the file size suggests.
+fn missing_type_message(path: &Path, dims: [usize; 3], offset: u64) -> String {
+    let voxels = dims.iter().map(|&d| d as u64).product::<u64>();
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    let data = len.saturating_sub(offset);
+    let hint = if voxels > 0 && data.is_multiple_of(voxels) && data > 0 {
+        format!(" (its size suggests {} bytes per voxel)", data / voxels)
+    } else {
+        String::new()
+    };
+    format!(
+        "headerless raw data of {}: give the voxel type with --type u8|i8|u16|i16|u32|i32|f32|f64{hint}",
+        dims_string(dims)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_dims_and_types_from_names() {
+        assert_eq!(
+            parse_raw_name("bonsai_256x256x256_uint8.raw"),
+            Some(([256, 256, 256], Some(VoxelType::U8)))
+        );
+        assert_eq!(
+            parse_raw_name("head.256x256x113.u16.raw"),
+            Some(([256, 256, 113], Some(VoxelType::U16)))
+        );
+        assert_eq!(
+            parse_raw_name("ct-512X512X45.raw"),
+            Some(([512, 512, 45], None))
+        );
+        assert_eq!(parse_raw_name("scan.raw"), None);
+        assert_eq!(parse_dims("1x2"), None);
+        assert_eq!(parse_dims("1x2x3x4"), None);
+    }
+}

@@ -1,0 +1,61 @@
+//! VolumeShop / TU Wien `.dat`: three little-endian u16 dimensions, then u16 voxels, recognised by
+//! the file size being exactly 6 + 2·nx·ny·nz.
+
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
+use super::data::{DataSpec, Encoding, Skip, read_voxels};
+use super::{LoadOptions, Read0};
+use crate::error::{Error, Result};
+use crate::volume::{Endian, Volume, VoxelType, dims_string};
+
+/// The dimensions a `.dat` header of `head` claims, when the file size `len` agrees with them.
+pub(crate) fn check_header(path: &Path, head: &[u8], len: u64) -> Result<[usize; 3]> {
+    if head.len() < 6 {
+        return Err(Error::format(
+            path,
+            format!("not a VolumeShop .dat file: {len} bytes is shorter than its 6-byte header"),
+        ));
+    }
+    let d = |i: usize| usize::from(u16::from_le_bytes([head[2 * i], head[2 * i + 1]]));
+    let dims = [d(0), d(1), d(2)];
+    let expected = 6 + 2 * dims.iter().map(|&v| v as u64).product::<u64>();
+    if dims.contains(&0) || expected != len {
+        return Err(Error::format(
+            path,
+            format!(
+                "not a VolumeShop .dat file: its header says {} u16 voxels ({expected} bytes with the header) \
+                 but the file holds {len} bytes; for other raw data give --dims and --type",
+                dims_string(dims)
+            ),
+        ));
+    }
+    Ok(dims)
+}
+
+pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+    let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let mut head = [0u8; 6];
+    let n = file.read(&mut head).map_err(|e| Error::io(path, e))?;
+    let dims = check_header(path, &head[..n], len)?;
+    let spec = DataSpec {
+        file: path.to_path_buf(),
+        start: 6,
+        skip_lines: 0,
+        skip: Skip::Bytes(0),
+        encoding: Encoding::Raw,
+        dims,
+        voxel_type: VoxelType::U16,
+        endian: Endian::Little,
+        scale: None,
+        allow_trailing: false,
+    };
+    let voxels = read_voxels(&spec, opts.max_memory)?;
+    Ok(Read0 {
+        volume: Volume::new(dims, [1.0; 3], VoxelType::U16, voxels)
+            .map_err(|e| Error::format(path, e.to_string()))?,
+        notes: vec!["VolumeShop .dat files carry no spacing: using 1 mm".into()],
+    })
+}

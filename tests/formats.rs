@@ -1,0 +1,282 @@
+//! Every format loads files written by other programs (`tests/data/make_fixtures.py`) with the
+//! right voxels, dimensions and spacing; the real volumes load as their README describes.
+
+#![allow(clippy::unwrap_used)] // tests fail loudly by design
+
+use std::path::{Path, PathBuf};
+
+use slabscope::volume::io::{NrrdEncoding, RawOptions, write_nrrd};
+use slabscope::volume::{Endian, VoxelType};
+use slabscope::{Format, LoadOptions, Loaded, Volume, load};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn open(name: &str) -> Loaded {
+    load(&data(name), &LoadOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Checks the 5x4x3 ramp `v = (x + 10y + 100z) * scale + offset` of `make_fixtures.py`.
+fn assert_ramp(v: &Volume, offset: f64, scale: f64) {
+    assert_eq!(v.dims(), [5, 4, 3]);
+    for z in 0..3 {
+        for y in 0..4 {
+            for x in 0..5 {
+                let expect = ((x + 10 * y + 100 * z) as f64 * scale + offset) as f32;
+                let got = v.array()[[x, y, z]];
+                assert!(
+                    (got - expect).abs() < 1e-4,
+                    "voxel ({x},{y},{z}): {got} != {expect}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn nifti_every_voxel_type() {
+    let cases = [
+        ("u8", VoxelType::U8, 0.0, 1.0),
+        ("i8", VoxelType::I8, -100.0, 0.5),
+        ("u16", VoxelType::U16, 1000.0, 1.0),
+        ("i16", VoxelType::I16, -100.0, 1.0),
+        ("u32", VoxelType::U32, 70000.0, 1.0),
+        ("i32", VoxelType::I32, -70000.0, 1.0),
+        ("f32", VoxelType::F32, 0.25, 0.5),
+        ("f64", VoxelType::F64, -0.5, 0.25),
+    ];
+    for (name, ty, offset, scale) in cases {
+        let l = open(&format!("ramp_{name}.nii"));
+        assert_eq!(l.format, Format::Nifti);
+        assert_eq!(l.volume.voxel_type(), ty, "{name}");
+        assert_eq!(l.volume.spacing(), [0.5, 0.75, 2.0], "{name}");
+        // i8 is truncated by numpy's astype: (v * 0.5 - 100) as i8 keeps the integer part.
+        if ty == VoxelType::I8 {
+            let v = &l.volume;
+            assert_eq!(v.array()[[3, 0, 0]], -98.0);
+            assert_eq!(v.array()[[0, 0, 2]], -0.0);
+        } else {
+            assert_ramp(&l.volume, offset, scale);
+        }
+    }
+}
+
+#[test]
+fn nifti_scaling_byte_order_gzip_and_4d() {
+    let l = open("ramp_i16_scaled.nii.gz");
+    assert_ramp(&l.volume, -10.0, 2.0);
+    assert_eq!(l.volume.voxel_type(), VoxelType::I16);
+
+    assert_ramp(&open("ramp_f32_be.nii").volume, 0.25, 0.5);
+    assert_ramp(&open("ramp_u8_two_members.nii.gz").volume, 0.0, 1.0);
+
+    let l = open("ramp_4d_um.nii.gz");
+    assert_ramp(&l.volume, 0.0, 1.0);
+    assert!(
+        l.notes.iter().any(|n| n.contains("loaded the first")),
+        "{:?}",
+        l.notes
+    );
+    assert_eq!(l.volume.spacing(), [0.001; 3], "micron units become mm");
+}
+
+#[test]
+fn nrrd_raw_gzip_detached_ascii() {
+    let l = open("ramp_u16_be.nrrd");
+    assert_eq!(l.format, Format::Nrrd);
+    assert_ramp(&l.volume, 1000.0, 1.0);
+    assert_eq!(l.volume.spacing(), [0.5, 0.75, 2.0]);
+
+    let l = open("ramp_f32_gzip.nrrd");
+    assert_ramp(&l.volume, 0.25, 0.5);
+    assert_eq!(
+        l.volume.spacing(),
+        [0.5, 0.75, 2.0],
+        "from space directions"
+    );
+
+    assert_ramp(&open("ramp_i16_detached.nhdr").volume, -100.0, 1.0);
+    assert_ramp(&open("ramp_u8_ascii.nrrd").volume, 0.0, 1.0);
+}
+
+#[test]
+fn metaimage_attached_compressed_detached() {
+    let l = open("ramp_i16.mha");
+    assert_eq!(l.format, Format::MetaImage);
+    assert_ramp(&l.volume, -100.0, 1.0);
+    assert_eq!(l.volume.spacing(), [0.5, 0.75, 2.0]);
+    assert_ramp(&open("ramp_f32_zlib.mha").volume, 0.25, 0.5);
+    assert_ramp(&open("ramp_u8.mhd").volume, 0.0, 1.0);
+}
+
+#[test]
+fn tiff_stacks_and_folders() {
+    let l = open("ramp_u16_stack.tif");
+    assert_eq!(l.format, Format::Tiff);
+    assert_ramp(&l.volume, 1000.0, 1.0);
+    assert_eq!(
+        l.volume.spacing(),
+        [0.5, 0.75, 2.0],
+        "ImageJ resolution and spacing"
+    );
+    assert_ramp(&open("ramp_f32_stack.tif").volume, 0.25, 0.5);
+
+    // slice_10 sorts after slice_2.
+    let l = open("ramp_slices");
+    assert_eq!(l.format, Format::TiffFolder);
+    assert_ramp(&l.volume, 0.0, 1.0);
+}
+
+#[test]
+fn real_volumes_match_their_readme() {
+    type Case = (&'static str, [usize; 3], [f64; 3], VoxelType, [f32; 2]);
+    let cases: [Case; 4] = [
+        (
+            "BrainProtonDensity3Slices.mha",
+            [181, 217, 3],
+            [1.0; 3],
+            VoxelType::U8,
+            [0.0, 250.0],
+        ),
+        (
+            "nilearn_image_10426.nii.gz",
+            [53, 63, 46],
+            [3.0; 3],
+            VoxelType::F32,
+            [-7.9414, 7.9413],
+        ),
+        (
+            "dx_MRI.nhdr",
+            [16, 128, 128],
+            [2.066_667, 1.773_153, 1.773_153],
+            VoxelType::U16,
+            [668.0, 57684.0],
+        ),
+        (
+            "pyvista_channels.nrrd",
+            [250, 250, 100],
+            [1.0; 3],
+            VoxelType::U8,
+            [0.0, 4.0],
+        ),
+    ];
+    for (name, dims, spacing, ty, range) in cases {
+        let v = open(name).volume;
+        assert_eq!(v.dims(), dims, "{name}");
+        assert_eq!(v.voxel_type(), ty, "{name}");
+        for (got, want) in v.spacing().iter().zip(spacing) {
+            assert!(
+                (got - want).abs() < 1e-5,
+                "{name} spacing {:?}",
+                v.spacing()
+            );
+        }
+        assert!(
+            (v.stats().min - range[0]).abs() < 1e-4,
+            "{name} min {}",
+            v.stats().min
+        );
+        assert!(
+            (v.stats().max - range[1]).abs() < 1e-4,
+            "{name} max {}",
+            v.stats().max
+        );
+    }
+}
+
+/// Writes `bytes` to a fresh temporary folder under `name`.
+fn temp_file(name: &str, bytes: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    (dir, path)
+}
+
+#[test]
+fn volumeshop_dat_is_recognised_by_size() {
+    let mut bytes = Vec::new();
+    for d in [3u16, 2, 2] {
+        bytes.extend(d.to_le_bytes());
+    }
+    for v in 0..12u16 {
+        bytes.extend((v * 100).to_le_bytes());
+    }
+    let (_dir, path) = temp_file("tooth.dat", &bytes);
+    let l = load(&path, &LoadOptions::default()).unwrap();
+    assert_eq!(l.format, Format::VolumeShop);
+    assert_eq!(l.volume.dims(), [3, 2, 2]);
+    assert_eq!(l.volume.array()[[2, 1, 1]], 1100.0);
+}
+
+#[test]
+fn raw_from_options_and_from_names() {
+    let bytes: Vec<u8> = (0..24u16).flat_map(u16::to_be_bytes).collect();
+    let mut with_offset = vec![0xAA; 10];
+    with_offset.extend(&bytes);
+    let (_dir, path) = temp_file("scan.bin", &with_offset);
+    let opts = LoadOptions {
+        raw: RawOptions {
+            dims: Some([4, 3, 2]),
+            voxel_type: Some(VoxelType::U16),
+            spacing: Some([0.5, 0.5, 1.5]),
+            endian: Some(Endian::Big),
+            offset: Some(10),
+        },
+        ..LoadOptions::default()
+    };
+    let l = load(&path, &opts).unwrap();
+    assert_eq!(l.format, Format::Raw);
+    assert_eq!(l.volume.spacing(), [0.5, 0.5, 1.5]);
+    assert_eq!(l.volume.array()[[3, 2, 1]], 23.0);
+
+    let bytes: Vec<u8> = (0..24u8).collect();
+    for name in ["bonsai_4x3x2_uint8.raw", "head.4x3x2.u8.raw"] {
+        let (_dir, path) = temp_file(name, &bytes);
+        let l = load(&path, &LoadOptions::default()).unwrap();
+        assert_eq!(l.volume.dims(), [4, 3, 2], "{name}");
+        assert_eq!(l.volume.array()[[1, 1, 1]], 17.0, "{name}");
+    }
+}
+
+#[test]
+fn large_raw_file_loads_through_the_map() {
+    // 64 MiB of u16: big enough that a parallel, chunked decode is exercised across chunks.
+    let n = 256 * 256 * 512;
+    let bytes: Vec<u8> = (0..n)
+        .flat_map(|i| ((i % 65_521) as u16).to_le_bytes())
+        .collect();
+    let (_dir, path) = temp_file("big_256x256x512_u16.raw", &bytes);
+    let v = load(&path, &LoadOptions::default()).unwrap().volume;
+    assert_eq!(v.len(), n);
+    assert_eq!(v.voxels()[n - 1], ((n - 1) % 65_521) as f32);
+    assert_eq!(v.voxels()[70_000], (70_000 % 65_521) as f32);
+}
+
+#[test]
+fn nrrd_writer_round_trips_and_never_overwrites() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = open("ramp_i16.mha").volume;
+    for (name, encoding) in [
+        ("a.nrrd", NrrdEncoding::Raw),
+        ("b.nrrd", NrrdEncoding::Gzip),
+    ] {
+        let path = dir.path().join(name);
+        write_nrrd(&path, &original, encoding, false).unwrap();
+        let back = load(&path, &LoadOptions::default()).unwrap().volume;
+        assert_eq!(back.voxels(), original.voxels());
+        assert_eq!(back.spacing(), original.spacing());
+        assert_eq!(back.voxel_type(), VoxelType::I16);
+        let err = write_nrrd(&path, &original, encoding, false).unwrap_err();
+        assert!(err.to_string().contains("already exists"), "{err}");
+        write_nrrd(&path, &original, encoding, true).unwrap();
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left behind");
+}
