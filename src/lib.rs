@@ -2,9 +2,13 @@
 //! Feixas and Sbert, 2008), as a library.
 //!
 //! The library knows nothing of terminals; the `slabscope` binary puts a TUI and a CLI over it.
-//! [`volume`] loads and holds volumes.
+//! [`volume`] loads and holds volumes; [`measure`] holds the information measures; [`view`] finds
+//! the most structured view (paper §3.1 and §4).
 
 pub mod error;
+pub mod measure;
+pub mod progress;
+pub mod view;
 pub mod volume;
 
 pub use error::{Error, Result};

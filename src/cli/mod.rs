@@ -1,7 +1,9 @@
 //! The headless command line: one file per subcommand, each a thin layer over the library.
 
+mod analyze;
 mod info;
 mod phantom;
+mod progress;
 
 use std::path::{Path, PathBuf};
 
@@ -33,6 +35,8 @@ pub struct Cli {
 pub enum Command {
     /// Dimensions, spacing, voxel type, range, mean and histogram of a volume.
     Info(info::InfoArgs),
+    /// The most structured view: entropy rate of every axis of the viewpoint sphere.
+    Analyze(analyze::AnalyzeArgs),
     /// Write a synthetic volume with known structure.
     Phantom(phantom::PhantomArgs),
 }
@@ -117,6 +121,7 @@ fn parse_bytes_arg(s: &str) -> Result<u64, String> {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Some(Command::Info(args)) => info::run(&args),
+        Some(Command::Analyze(args)) => analyze::run(&args),
         Some(Command::Phantom(args)) => phantom::run(&args),
         None => info::run_default(cli.file.as_deref(), &cli.load),
     }

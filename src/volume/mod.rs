@@ -3,6 +3,7 @@
 pub mod io;
 pub mod phantom;
 mod quantize;
+pub mod sampling;
 mod voxel;
 
 use ndarray::{Array3, ArrayView3, ShapeBuilder};

@@ -52,13 +52,10 @@ impl Quantizer {
         if self.range == 0.0 {
             return Some(0);
         }
-        let b = ((f64::from(v) - self.min) * self.bins / self.range).floor();
-        // Values below min (interpolation rounding) go to bin 0; `as` saturates negatives to 0.
-        Some(if b >= f64::from(self.last) {
-            self.last
-        } else {
-            b as u8
-        })
+        let t = (f64::from(v) - self.min) * self.bins / self.range;
+        // For t >= 0 truncation is floor; a t below 0 (interpolation rounding) is clamped to bin 0
+        // either way, since `as` saturates. So this is the formula, without a call to floor.
+        Some((t as u32).min(u32::from(self.last)) as u8)
     }
 }
 

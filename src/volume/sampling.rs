@@ -1,0 +1,607 @@
+//! Sampling a volume along an arbitrary axis on the ray lattice of DESIGN.md §2, with trilinear
+//! interpolation. Used by the view search (rays) and by oblique slice stacks (planes).
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::volume::{Quantizer, Volume};
+
+/// Dot product.
+#[inline]
+pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Cross product.
+#[inline]
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// `a` scaled to unit length, or `None` for a zero or non-finite vector.
+pub fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
+    let n = dot(a, a).sqrt();
+    (n.is_finite() && n > 1e-12).then(|| a.map(|c| c / n))
+}
+
+/// The canonical one of `d` and `-d`: the one whose first non-zero component (|c| > 1e-9, in
+/// x, y, z order) is positive.
+pub fn canonical(d: [f64; 3]) -> [f64; 3] {
+    match d.iter().find(|c| c.abs() > 1e-9) {
+        Some(c) if *c < 0.0 => d.map(|c| -c),
+        _ => d,
+    }
+}
+
+/// The orthonormal frame `(d, u, v)` of DESIGN.md §2: `e` is the coordinate axis where `|d|` has
+/// its smallest component (the first on ties), `u = normalize(e - (e·d) d)`, `v = d × u`.
+pub fn frame(d: [f64; 3]) -> Result<([f64; 3], [f64; 3], [f64; 3])> {
+    let d = normalize(d)
+        .ok_or_else(|| Error::InvalidParameter(format!("axis {d:?} has no direction")))?;
+    let mut smallest = 0;
+    for k in 1..3 {
+        if d[k].abs() < d[smallest].abs() {
+            smallest = k;
+        }
+    }
+    let mut e = [0.0; 3];
+    e[smallest] = 1.0;
+    let ed = dot(e, d);
+    let u = normalize([e[0] - ed * d[0], e[1] - ed * d[1], e[2] - ed * d[2]])
+        .expect("e is not parallel to d, since it is d's smallest component");
+    Ok((d, u, cross(d, u)))
+}
+
+/// One ray of a lattice: sample `k` (for `k` in `k0..=k1`) lies at `origin + k·step` in voxel
+/// index coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Position of sample `k = 0`, in voxel index coordinates.
+    pub origin: [f64; 3],
+    /// Displacement between consecutive samples, in voxel index coordinates.
+    pub step: [f64; 3],
+    /// First sample inside the box.
+    pub k0: i64,
+    /// Last sample inside the box.
+    pub k1: i64,
+}
+
+impl Ray {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        (self.k1 - self.k0 + 1) as usize
+    }
+
+    /// Always false: rays are only made when they hold samples.
+    pub fn is_empty(&self) -> bool {
+        self.k1 < self.k0
+    }
+
+    /// Position of sample `k` in voxel index coordinates.
+    #[inline]
+    pub fn at(&self, k: i64) -> [f64; 3] {
+        let k = k as f64;
+        [
+            self.origin[0] + k * self.step[0],
+            self.origin[1] + k * self.step[1],
+            self.origin[2] + k * self.step[2],
+        ]
+    }
+}
+
+/// The lattice of parallel rays along an axis: rays through `(i + a)·x·u + (j + b)·x·v`, samples
+/// `(k + c)·y·d` along them, counted only inside the box spanned by the first and last voxel
+/// centres (physical coordinates, voxel (0,0,0) at the origin). `(a, b, c)` is the phase, zero for
+/// the paper's lattice.
+#[derive(Clone, Debug)]
+pub struct Lattice {
+    /// Unit axis direction in physical space.
+    pub d: [f64; 3],
+    /// First in-plane unit vector.
+    pub u: [f64; 3],
+    /// Second in-plane unit vector.
+    pub v: [f64; 3],
+    /// Distance between neighbouring rays, mm.
+    pub ray_spacing: f64,
+    /// Distance between samples along a ray, mm.
+    pub sample_spacing: f64,
+    phase: [f64; 3],
+    extent: [f64; 3],
+    spacing: [f64; 3],
+}
+
+impl Lattice {
+    /// The lattice along `axis` for a volume of `dims` and `spacing`, with ray spacing `x`, sample
+    /// spacing `y` (mm) and a phase in units of the spacings.
+    pub fn new(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        axis: [f64; 3],
+        x: f64,
+        y: f64,
+        phase: [f64; 3],
+    ) -> Result<Self> {
+        for (name, s) in [("ray spacing", x), ("sample spacing", y)] {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(Error::InvalidParameter(format!(
+                    "{name} must be a positive number of mm, not {s}"
+                )));
+            }
+        }
+        let (d, u, v) = frame(axis)?;
+        Ok(Self {
+            d,
+            u,
+            v,
+            ray_spacing: x,
+            sample_spacing: y,
+            phase,
+            extent: std::array::from_fn(|k| (dims[k] - 1) as f64 * spacing[k]),
+            spacing,
+        })
+    }
+
+    /// The lattice of `volume` with the default spacings (the smallest voxel spacing).
+    pub fn for_volume(volume: &Volume, axis: [f64; 3]) -> Result<Self> {
+        let s = min_spacing(volume.spacing());
+        Self::new(volume.dims(), volume.spacing(), axis, s, s, [0.0; 3])
+    }
+
+    fn corners(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
+        (0..8).map(|c| std::array::from_fn(|k| if c >> k & 1 == 1 { self.extent[k] } else { 0.0 }))
+    }
+
+    /// The integer range of `t` such that `(t + phase)·spacing` covers the projections of the box
+    /// on `axis`.
+    fn index_range(&self, axis: [f64; 3], spacing: f64, phase: f64) -> (i64, i64) {
+        let (lo, hi) = self
+            .corners()
+            .map(|c| dot(c, axis))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(t), b.max(t))
+            });
+        (
+            (lo / spacing - phase - 1e-9).ceil() as i64,
+            (hi / spacing - phase + 1e-9).floor() as i64,
+        )
+    }
+
+    /// Inclusive ranges of the ray indices `i` and `j` that can meet the box.
+    pub fn ray_ranges(&self) -> ((i64, i64), (i64, i64)) {
+        (
+            self.index_range(self.u, self.ray_spacing, self.phase[0]),
+            self.index_range(self.v, self.ray_spacing, self.phase[1]),
+        )
+    }
+
+    /// Inclusive range of the sample index `k` along the axis over the whole box.
+    pub fn sample_range(&self) -> (i64, i64) {
+        self.index_range(self.d, self.sample_spacing, self.phase[2])
+    }
+
+    /// Physical position of lattice point `(i, j, k)`.
+    pub fn point(&self, i: i64, j: i64, k: i64) -> [f64; 3] {
+        let (a, b, c) = (
+            (i as f64 + self.phase[0]) * self.ray_spacing,
+            (j as f64 + self.phase[1]) * self.ray_spacing,
+            (k as f64 + self.phase[2]) * self.sample_spacing,
+        );
+        std::array::from_fn(|m| a * self.u[m] + b * self.v[m] + c * self.d[m])
+    }
+
+    /// Whether a physical point lies inside the box (with a relative tolerance of 1e-9).
+    pub fn inside(&self, p: [f64; 3]) -> bool {
+        (0..3).all(|m| {
+            let eps = 1e-9 * (1.0 + self.extent[m]);
+            p[m] >= -eps && p[m] <= self.extent[m] + eps
+        })
+    }
+
+    /// Voxel index coordinates of a physical point.
+    pub fn to_index(&self, p: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|m| p[m] / self.spacing[m])
+    }
+
+    /// Ray `(i, j)`, or `None` when it misses the box.
+    pub fn ray(&self, i: i64, j: i64) -> Option<Ray> {
+        let base = self.point(i, j, 0);
+        let y = self.sample_spacing;
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for m in 0..3 {
+            let eps = 1e-9 * (1.0 + self.extent[m]);
+            let dm = y * self.d[m];
+            if dm.abs() < 1e-12 {
+                if base[m] < -eps || base[m] > self.extent[m] + eps {
+                    return None;
+                }
+                continue;
+            }
+            let t1 = (-eps - base[m]) / dm;
+            let t2 = (self.extent[m] + eps - base[m]) / dm;
+            lo = lo.max(t1.min(t2));
+            hi = hi.min(t1.max(t2));
+        }
+        let (k0, k1) = (lo.ceil() as i64, hi.floor() as i64);
+        (k0 <= k1).then(|| Ray {
+            origin: self.to_index(base),
+            step: self.to_index(self.d.map(|c| c * y)),
+            k0,
+            k1,
+        })
+    }
+}
+
+/// The smallest of three spacings.
+pub fn min_spacing(spacing: [f64; 3]) -> f64 {
+    spacing.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// Trilinear interpolation of a volume at voxel index coordinates.
+#[derive(Clone, Copy)]
+pub struct Interpolator<'a> {
+    data: &'a [f32],
+    stride: [usize; 3],
+    /// Per axis: the stride to the next voxel (0 for a single-voxel axis).
+    next: [usize; 3],
+    /// Per axis: the largest lower corner index (n - 2, or 0 for a single-voxel axis).
+    last: [usize; 3],
+}
+
+impl<'a> Interpolator<'a> {
+    /// An interpolator over `volume`.
+    pub fn new(volume: &'a Volume) -> Self {
+        let dims = volume.dims();
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        Self {
+            data: volume.voxels(),
+            stride,
+            next: std::array::from_fn(|m| if dims[m] > 1 { stride[m] } else { 0 }),
+            last: dims.map(|n| n.saturating_sub(2)),
+        }
+    }
+
+    /// The value at `p`, which must lie inside the volume up to rounding (lattice samples do);
+    /// NaN when a voxel it mixes is missing.
+    #[inline]
+    pub fn sample(&self, p: [f64; 3]) -> f32 {
+        let mut base = 0;
+        let mut f = [0.0f32; 3];
+        for m in 0..3 {
+            // Truncation is floor here, since q >= 0.
+            let q = p[m].max(0.0);
+            let i = (q as usize).min(self.last[m]);
+            f[m] = (q - i as f64) as f32;
+            base += i * self.stride[m];
+        }
+        self.interpolate(base, f)
+    }
+
+    /// Trilinear interpolation in the cell whose lower corner is at linear offset `base`, with
+    /// fractions `f` along x, y and z.
+    #[inline]
+    fn interpolate(&self, base: usize, f: [f32; 3]) -> f32 {
+        let [x1, y1, z1] = self.next;
+        let c = &self.data[base..=base + x1 + y1 + z1];
+        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+        let c00 = lerp(c[0], c[x1], f[0]);
+        let c10 = lerp(c[y1], c[y1 + x1], f[0]);
+        let c01 = lerp(c[z1], c[z1 + x1], f[0]);
+        let c11 = lerp(c[z1 + y1], c[z1 + y1 + x1], f[0]);
+        lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
+    }
+
+    /// The linear memory offset of integer index coordinates (or of an integer step).
+    #[inline]
+    pub fn linear(&self, p: [i64; 3]) -> i64 {
+        p[0] * self.stride[0] as i64 + p[1] * self.stride[1] as i64 + p[2] * self.stride[2] as i64
+    }
+
+    /// The voxel at a linear memory offset.
+    #[inline]
+    pub fn at_linear(&self, index: usize) -> f32 {
+        self.data[index]
+    }
+
+    /// The voxel at integer index coordinates.
+    #[inline]
+    pub fn voxel(&self, x: usize, y: usize, z: usize) -> f32 {
+        self.data[x * self.stride[0] + y * self.stride[1] + z * self.stride[2]]
+    }
+}
+
+/// Marks a cell whose corners do not all lie safely inside one bin.
+const MIXED: u8 = u8::MAX;
+
+/// Fraction bits of fixed-point positions.
+pub const FIXED_BITS: u32 = 32;
+const FIXED_STEP: f64 = 1.0 / (1u64 << FIXED_BITS) as f64;
+
+/// A position in voxel index coordinates as 32.32 fixed point, so that a ray advances by exact
+/// integer additions and finding the cell needs no float-to-integer conversion per sample.
+#[inline]
+pub fn to_fixed(p: [f64; 3]) -> [i64; 3] {
+    p.map(|c| (c * (1u64 << FIXED_BITS) as f64).round() as i64)
+}
+
+/// `out[i] = a[i]` where `a[i] == a[i + offset]`, else `MIXED`; entries without a partner are
+/// `MIXED`.
+fn merge_with_neighbour(a: &[u8], offset: usize, out: &mut Vec<u8>) {
+    const CHUNK: usize = 1 << 16;
+    let n = a.len();
+    out.clear();
+    out.resize(n, MIXED);
+    let pairs = n.saturating_sub(offset);
+    out[..pairs]
+        .par_chunks_mut(CHUNK)
+        .zip(
+            a[..pairs]
+                .par_chunks(CHUNK)
+                .zip(a[offset..].par_chunks(CHUNK)),
+        )
+        .for_each(|(o, (x, y))| {
+            for ((o, &x), &y) in o.iter_mut().zip(x).zip(y) {
+                *o = if x == y { x } else { MIXED };
+            }
+        });
+}
+
+/// Quantized trilinear sampling: the bin of the interpolated value, as
+/// [`Quantizer::bin`]`(`[`Interpolator::sample`]`)` gives it, but answered from a per-cell map
+/// where all eight corners of a cell lie in one bin with a margin for rounding. A trilinear
+/// sample is a convex combination of its corners, so it lies in their bin too: the map only
+/// saves work, it never changes a result.
+pub struct BinSampler<'a> {
+    it: Interpolator<'a>,
+    q: Quantizer,
+    /// Per cell (indexed by its lower corner voxel): its bin, or `MIXED`.
+    cells: Vec<u8>,
+    /// Per voxel: its bin by the exact formula; `u8::MAX` also for a missing voxel, so that value
+    /// is checked again.
+    voxel_bins: Vec<u8>,
+}
+
+impl<'a> BinSampler<'a> {
+    /// Builds the cell map of `volume` for quantizer `q` (one byte per voxel).
+    pub fn new(volume: &'a Volume, q: Quantizer) -> Self {
+        let s = volume.stats();
+        // Trilinear interpolation in f32 is within a few ulps of the largest corner magnitude;
+        // keep corners 16 ulps (in bin units) away from the bin edges.
+        let span = f64::from(s.max) - f64::from(s.min);
+        let scale = if span > 0.0 {
+            q.bins() as f64 / span
+        } else {
+            0.0
+        };
+        let magnitude = f64::from(s.min.abs().max(s.max.abs()));
+        let margin = 16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9;
+        let last = q.bins() - 1;
+        let safe_bin = |v: f32| -> u8 {
+            if v.is_nan() {
+                return MIXED;
+            }
+            let t = (f64::from(v) - f64::from(s.min)) * scale;
+            let b = (t.max(0.0) as usize).min(last);
+            let low_ok = b == 0 || t - b as f64 >= margin;
+            let high_ok = b == last || (b + 1) as f64 - t >= margin;
+            if low_ok && high_ok { b as u8 } else { MIXED }
+        };
+        let voxels = volume.voxels();
+        let mut voxel_bins: Vec<u8> = vec![0; voxels.len()];
+        voxel_bins
+            .par_chunks_mut(1 << 16)
+            .zip(voxels.par_chunks(1 << 16))
+            .for_each(|(b, v)| {
+                b.iter_mut()
+                    .zip(v)
+                    .for_each(|(b, &v)| *b = q.bin(v).unwrap_or(MIXED));
+            });
+        let mut cells: Vec<u8> = vec![0; voxels.len()];
+        cells
+            .par_chunks_mut(1 << 16)
+            .zip(voxels.par_chunks(1 << 16))
+            .for_each(|(b, v)| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v)));
+        let it = Interpolator::new(volume);
+        // A cell is uniform when its corners agree pairwise along x, then y, then z: three passes
+        // of `a[i] = a[i] if a[i] == a[i + offset] else MIXED`. Entries whose partner wraps
+        // around a row belong to no cell and are never read.
+        let mut spare = Vec::new();
+        for offset in it.next {
+            if offset > 0 {
+                merge_with_neighbour(&cells, offset, &mut spare);
+                std::mem::swap(&mut cells, &mut spare);
+            }
+        }
+        Self {
+            it,
+            q,
+            cells,
+            voxel_bins,
+        }
+    }
+
+    /// The interpolator underneath.
+    pub fn interpolator(&self) -> &Interpolator<'a> {
+        &self.it
+    }
+
+    /// Number of bins.
+    pub fn bins(&self) -> usize {
+        self.q.bins()
+    }
+
+    /// The bin of the value at `p` (inside the volume up to rounding), `None` when missing.
+    #[inline]
+    pub fn bin(&self, p: [f64; 3]) -> Option<u8> {
+        self.bin_fixed(to_fixed(p))
+    }
+
+    /// The bin of the value at `p` in 32.32 fixed-point index coordinates (see [`to_fixed`]).
+    #[inline]
+    pub fn bin_fixed(&self, p: [i64; 3]) -> Option<u8> {
+        let mut base = 0;
+        let mut corner = [0i64; 3];
+        for m in 0..3 {
+            let i = (p[m].max(0) >> FIXED_BITS).min(self.it.last[m] as i64);
+            corner[m] = i;
+            base += i as usize * self.it.stride[m];
+        }
+        let cell = self.cells[base];
+        if cell != MIXED {
+            return Some(cell);
+        }
+        let f = std::array::from_fn(|m| {
+            ((p[m].max(0) - (corner[m] << FIXED_BITS)) as f64 * FIXED_STEP) as f32
+        });
+        self.q.bin(self.it.interpolate(base, f))
+    }
+
+    /// The bin of the voxel at a linear memory offset, `None` when missing.
+    #[inline]
+    pub fn bin_at_linear(&self, index: usize) -> Option<u8> {
+        match self.voxel_bins[index] {
+            MIXED => self.q.bin(self.it.data[index]),
+            b => Some(b),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::VoxelType;
+
+    #[test]
+    fn frame_is_orthonormal_and_follows_the_design() {
+        let (d, u, v) = frame([0.0, 0.0, 2.0]).unwrap();
+        assert_eq!(
+            (d, u, v),
+            ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+        );
+        let (_, u, v) = frame([1.0, 0.0, 0.0]).unwrap();
+        assert_eq!((u, v), ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]));
+        for axis in [[1.0, 2.0, 3.0], [-0.3, 0.1, 0.9], [1.0, 1.0, 1.0]] {
+            let (d, u, v) = frame(axis).unwrap();
+            for (a, b) in [(d, u), (d, v), (u, v)] {
+                assert!(dot(a, b).abs() < 1e-12);
+            }
+            for a in [d, u, v] {
+                assert!((dot(a, a) - 1.0).abs() < 1e-12);
+            }
+        }
+        assert!(frame([0.0; 3]).is_err());
+    }
+
+    #[test]
+    fn canonical_picks_the_positive_first_component() {
+        assert_eq!(canonical([-1.0, 2.0, 0.0]), [1.0, -2.0, -0.0]);
+        assert_eq!(canonical([0.0, -0.5, 1.0]), [-0.0, 0.5, -1.0]);
+        assert_eq!(canonical([1e-12, 0.0, -1.0]), [-1e-12, -0.0, 1.0]);
+    }
+
+    #[test]
+    fn axis_aligned_rays_are_the_voxel_columns() {
+        let l = Lattice::new([4, 3, 5], [1.0; 3], [0.0, 0.0, 1.0], 1.0, 1.0, [0.0; 3]).unwrap();
+        assert_eq!(l.ray_ranges(), ((0, 3), (0, 2)));
+        let r = l.ray(2, 1).unwrap();
+        assert_eq!((r.k0, r.k1), (0, 4));
+        assert_eq!(r.at(3), [2.0, 1.0, 3.0]);
+        assert!(l.ray(4, 0).is_none());
+        assert!(l.ray(-1, 0).is_none());
+    }
+
+    #[test]
+    fn oblique_rays_stay_inside_the_box() {
+        let l = Lattice::new(
+            [10, 12, 9],
+            [1.0, 0.5, 2.0],
+            [1.0, 2.0, 3.0],
+            0.5,
+            0.5,
+            [0.3, 0.7, 0.1],
+        )
+        .unwrap();
+        let ((i0, i1), (j0, j1)) = l.ray_ranges();
+        let mut samples = 0;
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                if let Some(r) = l.ray(i, j) {
+                    for k in [r.k0, r.k1] {
+                        let p = r.at(k);
+                        assert!(p[0] > -1e-6 && p[0] < 9.0 + 1e-6, "{p:?}");
+                        assert!(p[1] > -1e-6 && p[1] < 11.0 + 1e-6, "{p:?}");
+                        assert!(p[2] > -1e-6 && p[2] < 8.0 + 1e-6, "{p:?}");
+                    }
+                    assert!(
+                        !l.inside(l.point(i, j, r.k0 - 1)) && !l.inside(l.point(i, j, r.k1 + 1))
+                    );
+                    samples += r.len();
+                }
+            }
+        }
+        // The box is 9 x 5.5 x 16 mm = 792 mm³; each sample stands for 0.5³ mm³.
+        let expected = 792.0 / 0.125;
+        assert!(
+            (samples as f64 / expected - 1.0).abs() < 0.1,
+            "{samples} samples, about {expected} expected"
+        );
+    }
+
+    #[test]
+    fn the_cell_map_never_changes_a_bin() {
+        // Blocky data with noise: many uniform cells, many mixed ones, values at bin edges.
+        let dims = [20, 17, 13];
+        let mut state = 9u64;
+        let data: Vec<f32> = (0..dims.iter().product::<usize>())
+            .map(|i| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1);
+                let block = ((i % 20) / 5 + (i / 340) / 4) as f32 * 25.0;
+                block + ((state >> 40) % 4) as f32 * if i % 7 == 0 { 3.0 } else { 0.0 }
+            })
+            .collect();
+        let vol = Volume::new(dims, [1.0; 3], VoxelType::F32, data).unwrap();
+        for bins in [2, 7, 32] {
+            let q = vol.quantizer(bins).unwrap();
+            let fast = BinSampler::new(&vol, q);
+            let it = Interpolator::new(&vol);
+            let mut uniform = 0;
+            for n in 0..20_000u32 {
+                let h = |k: u32| f64::from((n.wrapping_mul(2_654_435_761) >> k) % 1000) / 999.0;
+                let p = [h(0) * 19.0, h(7) * 16.0, h(13) * 12.0];
+                assert_eq!(fast.bin(p), q.bin(it.sample(p)), "{p:?} with {bins} bins");
+                let base = (p[0] as usize).min(18)
+                    + 20 * ((p[1] as usize).min(15) + 17 * (p[2] as usize).min(11));
+                uniform += usize::from(fast.cells[base] != MIXED);
+            }
+            assert!(uniform > 1000, "the map is used ({uniform} uniform hits)");
+        }
+    }
+
+    #[test]
+    fn trilinear_is_exact_on_linear_fields() {
+        let dims = [4, 5, 6];
+        let data: Vec<f32> = (0..120)
+            .map(|i| {
+                let (x, y, z) = (i % 4, (i / 4) % 5, i / 20);
+                (2 * x + 3 * y + 5 * z) as f32
+            })
+            .collect();
+        let vol = Volume::new(dims, [1.0; 3], VoxelType::F32, data).unwrap();
+        let it = Interpolator::new(&vol);
+        for p in [
+            [0.5, 0.25, 1.75],
+            [3.0, 4.0, 5.0],
+            [0.0, 0.0, 0.0],
+            [2.2, 3.9, 4.1],
+        ] {
+            let expect = 2.0 * p[0] + 3.0 * p[1] + 5.0 * p[2];
+            assert!((f64::from(it.sample(p)) - expect).abs() < 1e-4, "{p:?}");
+        }
+        assert_eq!(it.voxel(3, 4, 5), 2.0 * 3.0 + 3.0 * 4.0 + 5.0 * 5.0);
+    }
+}
