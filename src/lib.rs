@@ -7,6 +7,7 @@
 
 pub mod error;
 pub mod measure;
+pub mod partition;
 pub mod progress;
 pub mod view;
 pub mod volume;

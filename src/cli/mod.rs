@@ -35,7 +35,7 @@ pub struct Cli {
 pub enum Command {
     /// Dimensions, spacing, voxel type, range, mean and histogram of a volume.
     Info(info::InfoArgs),
-    /// The most structured view: entropy rate of every axis of the viewpoint sphere.
+    /// The most structured view and the slabs along it: views, best axis, partition, steps.
     Analyze(analyze::AnalyzeArgs),
     /// Write a synthetic volume with known structure.
     Phantom(phantom::PhantomArgs),
@@ -155,5 +155,28 @@ pub fn check_writable(path: &Path, force: bool) -> Result<()> {
             dir.display()
         );
     }
+    Ok(())
+}
+
+/// Writes `bytes` to `path` through a temporary file renamed into place; an existing file is
+/// replaced only when `force` is set.
+pub fn write_new(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
+    use std::io::Write;
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".slabscope-")
+        .suffix(".tmp")
+        .tempfile_in(dir)?;
+    tmp.write_all(bytes)?;
+    tmp.as_file().sync_all()?;
+    let done = if force {
+        tmp.persist(path)
+    } else {
+        tmp.persist_noclobber(path)
+    };
+    done.map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.error))?;
     Ok(())
 }

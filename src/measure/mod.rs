@@ -32,6 +32,17 @@ pub fn entropy(counts: impl IntoIterator<Item = u64> + Clone) -> f64 {
     (n.log2() - sum_c_log_c(counts) / n).max(0.0)
 }
 
+/// `N·H` of a count histogram in bits: `N log2 N - Σ c log2 c`. Additive forms of information
+/// (the gain of a split, the information kept by a partition) are differences of these.
+pub fn scaled_entropy(counts: impl IntoIterator<Item = u64> + Clone) -> f64 {
+    let n: u64 = counts.clone().into_iter().sum();
+    if n == 0 {
+        return 0.0;
+    }
+    let n = n as f64;
+    (n * n.log2() - sum_c_log_c(counts)).max(0.0)
+}
+
 /// Jensen-Shannon divergence of two count histograms weighted by their totals (eq. 5 with
 /// `π_i = N_i / (N_1 + N_2)`), in bits: `H(p_1 + p_2) - Σ π_i H(p_i)`.
 pub fn jensen_shannon(a: &[u64], b: &[u64]) -> f64 {

@@ -2,8 +2,8 @@
 
 use crate::error::{Error, Result};
 
-/// The largest number of bins: symbols are stored in a byte.
-pub const MAX_BINS: usize = 256;
+/// The largest number of bins: symbols are stored in a byte, and 255 marks a missing sample.
+pub const MAX_BINS: usize = 255;
 
 /// Maps intensities to bins: `bin = min(B-1, floor((v - min) * B / (max - min)))` in f64, all
 /// values in bin 0 when `max == min`, and missing (NaN) values to no bin.
@@ -16,7 +16,7 @@ pub struct Quantizer {
 }
 
 impl Quantizer {
-    /// A quantizer for `bins` bins (2 to 256) over `[min, max]`.
+    /// A quantizer for `bins` bins (2 to 255) over `[min, max]`.
     pub fn new(min: f32, max: f32, bins: usize) -> Result<Self> {
         if !(2..=MAX_BINS).contains(&bins) {
             return Err(Error::InvalidParameter(format!(
@@ -84,7 +84,7 @@ mod tests {
     #[test]
     fn rejects_bad_bins_and_ranges() {
         assert!(Quantizer::new(0.0, 1.0, 1).is_err());
-        assert!(Quantizer::new(0.0, 1.0, 257).is_err());
+        assert!(Quantizer::new(0.0, 1.0, 256).is_err());
         assert!(Quantizer::new(1.0, 0.0, 8).is_err());
         assert!(Quantizer::new(f32::NAN, 0.0, 8).is_err());
     }

@@ -1,0 +1,534 @@
+//! Slice stacks along an axis (DESIGN.md §2): the voxel planes for a coordinate axis, planes of the
+//! grid resampled on the ray lattice for an oblique one. Stored pixel-major: each pixel's column
+//! of quantized symbols across the slices is contiguous, over the slices where it is valid.
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::progress::Monitor;
+use crate::volume::Volume;
+use crate::volume::sampling::{Interpolator, Lattice, canonical, normalize};
+
+/// The symbol of a sample that does not count: outside the volume, missing, or background.
+pub const MISSING: u8 = u8::MAX;
+
+/// How to cut a volume into slices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StackParams {
+    /// Quantization bins (2 to 255).
+    pub bins: usize,
+    /// Voxels at or below this value are left out of every histogram.
+    pub background: Option<f32>,
+    /// Ray spacing of an oblique lattice, mm (default: the smallest voxel spacing).
+    pub ray_spacing: Option<f64>,
+    /// Distance between oblique slices, mm (default: the smallest voxel spacing).
+    pub sample_spacing: Option<f64>,
+}
+
+impl Default for StackParams {
+    fn default() -> Self {
+        Self {
+            bins: 32,
+            background: None,
+            ray_spacing: None,
+            sample_spacing: None,
+        }
+    }
+}
+
+/// One pixel's column: symbols for slices `first .. first + len`, stored from `offset`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Column {
+    offset: usize,
+    first: u32,
+    len: u32,
+}
+
+/// The slices of a volume along an axis, quantized.
+#[derive(Clone, Debug)]
+pub struct SliceStack {
+    axis: [f64; 3],
+    bins: usize,
+    slices: usize,
+    /// Millimetres between consecutive slices.
+    thickness: f64,
+    /// Position along the axis of slice 0's centre, mm (voxel (0,0,0) at 0).
+    offset: f64,
+    columns: Vec<Column>,
+    symbols: Vec<u8>,
+    /// Per slice: the sum and count of the values that count, for slab means.
+    sums: Vec<f64>,
+    counts: Vec<u64>,
+}
+
+/// The coordinate axis `d` is, if it is one.
+pub fn coordinate_axis(d: [f64; 3]) -> Option<usize> {
+    (0..3).find(|&m| d[m].abs() > 1.0 - 1e-12)
+}
+
+impl SliceStack {
+    /// Cuts `volume` into slices perpendicular to `axis` (made canonical).
+    pub fn new(
+        volume: &Volume,
+        axis: [f64; 3],
+        params: &StackParams,
+        monitor: &Monitor,
+    ) -> Result<Self> {
+        let d =
+            canonical(normalize(axis).ok_or_else(|| {
+                Error::InvalidParameter(format!("axis {axis:?} has no direction"))
+            })?);
+        let q = volume.quantizer(params.bins)?;
+        let keep = |v: f32| -> u8 {
+            match params.background {
+                Some(t) if v <= t => MISSING,
+                _ => q.bin(v).unwrap_or(MISSING),
+            }
+        };
+        let stack = match coordinate_axis(d) {
+            Some(m) => Self::along_coordinate(volume, m, params.bins, &keep, monitor)?,
+            None => Self::along_lattice(volume, d, params, &keep, monitor)?,
+        };
+        stack.with_sums(volume, d, params, monitor)
+    }
+
+    fn along_coordinate(
+        volume: &Volume,
+        m: usize,
+        bins: usize,
+        keep: &(dyn Fn(f32) -> u8 + Sync),
+        monitor: &Monitor,
+    ) -> Result<Self> {
+        let dims = volume.dims();
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        let n = dims[m];
+        let (a, b) = match m {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        let pixels = dims[a] * dims[b];
+        let voxels = volume.voxels();
+        let mut symbols = vec![MISSING; pixels * n];
+        monitor.start(pixels.div_ceil(4096) as u64);
+        symbols
+            .par_chunks_mut(4096 * n)
+            .enumerate()
+            .try_for_each(|(c, out)| {
+                for (k, col) in out.chunks_mut(n).enumerate() {
+                    let p = c * 4096 + k;
+                    let base = (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b];
+                    for (s, o) in col.iter_mut().enumerate() {
+                        *o = keep(voxels[base + s * stride[m]]);
+                    }
+                }
+                monitor.advance(1)
+            })?;
+        let columns = (0..pixels)
+            .map(|p| Column {
+                offset: p * n,
+                first: 0,
+                len: n as u32,
+            })
+            .collect();
+        let mut axis = [0.0; 3];
+        axis[m] = 1.0;
+        Ok(Self {
+            axis,
+            bins,
+            slices: n,
+            thickness: volume.spacing()[m],
+            offset: 0.0,
+            columns,
+            symbols,
+            sums: Vec::new(),
+            counts: Vec::new(),
+        })
+    }
+
+    fn along_lattice(
+        volume: &Volume,
+        d: [f64; 3],
+        params: &StackParams,
+        keep: &(dyn Fn(f32) -> u8 + Sync),
+        monitor: &Monitor,
+    ) -> Result<Self> {
+        let lattice = oblique_lattice(volume, d, params)?;
+        let ((i0, i1), (j0, j1)) = lattice.ray_ranges();
+        let (k_first, k_last) = lattice.sample_range();
+        let slices = (k_last - k_first + 1).max(0) as usize;
+        let it = Interpolator::new(volume);
+        let rows: Vec<i64> = (j0..=j1).collect();
+        monitor.start(rows.len() as u64);
+        let per_row = rows
+            .par_iter()
+            .map(|&j| {
+                let mut columns = Vec::new();
+                let mut symbols = Vec::new();
+                for i in i0..=i1 {
+                    if let Some(ray) = lattice.ray(i, j) {
+                        columns.push(Column {
+                            offset: symbols.len(),
+                            first: (ray.k0 - k_first) as u32,
+                            len: ray.len() as u32,
+                        });
+                        symbols.extend((ray.k0..=ray.k1).map(|k| keep(it.sample(ray.at(k)))));
+                    }
+                }
+                monitor.advance(1)?;
+                Ok((columns, symbols))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let total = per_row.iter().map(|(_, s)| s.len()).sum();
+        let mut columns = Vec::with_capacity(per_row.iter().map(|(c, _)| c.len()).sum());
+        let mut symbols = Vec::with_capacity(total);
+        for (cols, syms) in per_row {
+            let base = symbols.len();
+            columns.extend(cols.into_iter().map(|c| Column {
+                offset: c.offset + base,
+                ..c
+            }));
+            symbols.extend(syms);
+        }
+        Ok(Self {
+            axis: d,
+            bins: params.bins,
+            slices,
+            thickness: lattice.sample_spacing,
+            offset: k_first as f64 * lattice.sample_spacing,
+            columns,
+            symbols,
+            sums: Vec::new(),
+            counts: Vec::new(),
+        })
+    }
+
+    /// Adds the per-slice sums of the counted values (for slab means).
+    fn with_sums(
+        mut self,
+        volume: &Volume,
+        d: [f64; 3],
+        params: &StackParams,
+        monitor: &Monitor,
+    ) -> Result<Self> {
+        monitor.check()?;
+        let counted = |v: f32| v.is_finite() && params.background.is_none_or(|t| v > t);
+        let (sums, counts) = if let Some(m) = coordinate_axis(d) {
+            plane_sums(volume, m, &counted)
+        } else {
+            lattice_sums(
+                volume,
+                &oblique_lattice(volume, d, params)?,
+                self.slices,
+                &counted,
+            )
+        };
+        self.sums = sums;
+        self.counts = counts;
+        Ok(self)
+    }
+
+    /// Builds a stack directly from slices of symbols (each a `pixels`-long row, `MISSING` for
+    /// samples that do not count), for tests and synthetic data.
+    pub fn from_slices(slices: &[Vec<u8>], bins: usize) -> Result<Self> {
+        let n = slices.len();
+        let pixels = slices.first().map_or(0, Vec::len);
+        if n == 0 || pixels == 0 || slices.iter().any(|s| s.len() != pixels) {
+            return Err(Error::InvalidParameter(
+                "slices must be non-empty and of one size".into(),
+            ));
+        }
+        if slices
+            .iter()
+            .flatten()
+            .any(|&s| s != MISSING && usize::from(s) >= bins)
+        {
+            return Err(Error::InvalidParameter(format!(
+                "a symbol is not below {bins} bins"
+            )));
+        }
+        let symbols = (0..pixels)
+            .flat_map(|p| slices.iter().map(move |s| s[p]))
+            .collect();
+        let counts = slices
+            .iter()
+            .map(|s| s.iter().filter(|&&v| v != MISSING).count() as u64)
+            .collect();
+        let sums = slices
+            .iter()
+            .map(|s| {
+                s.iter()
+                    .filter(|&&v| v != MISSING)
+                    .map(|&v| f64::from(v))
+                    .sum()
+            })
+            .collect();
+        Ok(Self {
+            axis: [0.0, 0.0, 1.0],
+            bins,
+            slices: n,
+            thickness: 1.0,
+            offset: 0.0,
+            columns: (0..pixels)
+                .map(|p| Column {
+                    offset: p * n,
+                    first: 0,
+                    len: n as u32,
+                })
+                .collect(),
+            symbols,
+            sums,
+            counts,
+        })
+    }
+
+    /// The canonical axis the slices are perpendicular to.
+    pub fn axis(&self) -> [f64; 3] {
+        self.axis
+    }
+
+    /// Number of slices.
+    pub fn slices(&self) -> usize {
+        self.slices
+    }
+
+    /// Number of bins of the symbols.
+    pub fn bins(&self) -> usize {
+        self.bins
+    }
+
+    /// Millimetres between consecutive slices.
+    pub fn thickness(&self) -> f64 {
+        self.thickness
+    }
+
+    /// Position along the axis of slice 0's centre, mm, with voxel (0,0,0) at 0.
+    pub fn offset(&self) -> f64 {
+        self.offset
+    }
+
+    /// Number of pixel columns.
+    pub fn pixels(&self) -> usize {
+        self.columns.len()
+    }
+
+    /// Mean of the counted values of slices `start..end`, or `None` when none counts.
+    pub fn mean(&self, start: usize, end: usize) -> Option<f64> {
+        let n: u64 = self.counts[start..end].iter().sum();
+        (n > 0).then(|| self.sums[start..end].iter().sum::<f64>() / n as f64)
+    }
+
+    /// The symbols of pixel `p` in slices `start..end`, clipped to where the column is valid,
+    /// with the slice index of the first one.
+    #[inline]
+    pub fn column(&self, p: usize, start: usize, end: usize) -> (usize, &[u8]) {
+        let c = self.columns[p];
+        let (first, last) = (c.first as usize, (c.first + c.len) as usize);
+        let (a, b) = (start.max(first), end.min(last));
+        if a >= b {
+            return (a, &[]);
+        }
+        (a, &self.symbols[c.offset + a - first..c.offset + b - first])
+    }
+
+    /// The slices where pixel `p`'s column is valid: `(first, len)`.
+    #[inline]
+    pub fn column_range(&self, p: usize) -> (usize, usize) {
+        let c = self.columns[p];
+        (c.first as usize, c.len as usize)
+    }
+
+    /// Per slice, the histogram of its symbols (counted samples only): `slices × bins` counts.
+    pub fn slice_histograms(&self) -> Vec<u64> {
+        let (n, bins) = (self.slices, self.bins);
+        let zero = || vec![0u64; n * bins];
+        self.columns
+            .par_chunks(4096)
+            .fold(zero, |mut h, cols| {
+                for c in cols {
+                    let syms = &self.symbols[c.offset..c.offset + c.len as usize];
+                    for (k, &s) in syms.iter().enumerate() {
+                        if s != MISSING {
+                            h[(c.first as usize + k) * bins + usize::from(s)] += 1;
+                        }
+                    }
+                }
+                h
+            })
+            .reduce(zero, |mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
+                a
+            })
+    }
+}
+
+/// Per voxel plane along coordinate axis `m`: the sum and count of the counted values.
+fn plane_sums(
+    volume: &Volume,
+    m: usize,
+    counted: &(dyn Fn(f32) -> bool + Sync),
+) -> (Vec<f64>, Vec<u64>) {
+    let dims = volume.dims();
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    let plane = volume.len() / dims[m];
+    let voxels = volume.voxels();
+    let (a, b) = match m {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    };
+    (0..dims[m])
+        .into_par_iter()
+        .map(|s| {
+            let (mut sum, mut count) = (0.0, 0u64);
+            for p in 0..plane {
+                let v =
+                    voxels[s * stride[m] + (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b]];
+                if counted(v) {
+                    sum += f64::from(v);
+                    count += 1;
+                }
+            }
+            (sum, count)
+        })
+        .unzip()
+}
+
+/// Per lattice slice: the sum and count of the counted interpolated values.
+fn lattice_sums(
+    volume: &Volume,
+    lattice: &Lattice,
+    slices: usize,
+    counted: &(dyn Fn(f32) -> bool + Sync),
+) -> (Vec<f64>, Vec<u64>) {
+    let it = Interpolator::new(volume);
+    let ((i0, i1), (j0, j1)) = lattice.ray_ranges();
+    let (k_first, _) = lattice.sample_range();
+    let zero = || (vec![0.0f64; slices], vec![0u64; slices]);
+    (j0..=j1)
+        .into_par_iter()
+        .fold(zero, |(mut sums, mut counts), j| {
+            for i in i0..=i1 {
+                if let Some(ray) = lattice.ray(i, j) {
+                    for k in ray.k0..=ray.k1 {
+                        let v = it.sample(ray.at(k));
+                        if counted(v) {
+                            let s = (k - k_first) as usize;
+                            sums[s] += f64::from(v);
+                            counts[s] += 1;
+                        }
+                    }
+                }
+            }
+            (sums, counts)
+        })
+        .reduce(zero, |(mut a, mut b), (c, e)| {
+            a.iter_mut().zip(c).for_each(|(x, y)| *x += y);
+            b.iter_mut().zip(e).for_each(|(x, y)| *x += y);
+            (a, b)
+        })
+}
+
+/// The lattice of an oblique stack.
+fn oblique_lattice(volume: &Volume, d: [f64; 3], params: &StackParams) -> Result<Lattice> {
+    let s = crate::volume::sampling::min_spacing(volume.spacing());
+    Lattice::new(
+        volume.dims(),
+        volume.spacing(),
+        d,
+        params.ray_spacing.unwrap_or(s),
+        params.sample_spacing.unwrap_or(s),
+        [0.0; 3],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::VoxelType;
+
+    fn ramp() -> Volume {
+        let data = (0..4 * 3 * 5).map(|i| i as f32).collect();
+        Volume::new([4, 3, 5], [1.0, 1.0, 2.5], VoxelType::F32, data).unwrap()
+    }
+
+    #[test]
+    fn coordinate_slices_are_voxel_planes() {
+        let v = ramp();
+        let q = v.quantizer(60).unwrap();
+        for (m, n) in [(0, 4), (1, 3), (2, 5)] {
+            let mut axis = [0.0; 3];
+            axis[m] = -1.0;
+            let s = SliceStack::new(
+                &v,
+                axis,
+                &StackParams {
+                    bins: 60,
+                    ..StackParams::default()
+                },
+                &Monitor::none(),
+            )
+            .unwrap();
+            assert_eq!(s.axis()[m], 1.0, "canonical");
+            assert_eq!(s.slices(), n);
+            assert_eq!(s.pixels(), 60 / n);
+            let h = s.slice_histograms();
+            // Every slice holds exactly the voxels of its plane.
+            for slice in 0..n {
+                let mut expect = vec![0u64; 60];
+                for (i, &x) in v.voxels().iter().enumerate() {
+                    let coord = [i % 4, (i / 4) % 3, i / 12][m];
+                    if coord == slice {
+                        expect[usize::from(q.bin(x).unwrap())] += 1;
+                    }
+                }
+                assert_eq!(
+                    &h[slice * 60..(slice + 1) * 60],
+                    &expect[..],
+                    "axis {m} slice {slice}"
+                );
+            }
+        }
+        let s = SliceStack::new(
+            &v,
+            [0.0, 0.0, 1.0],
+            &StackParams::default(),
+            &Monitor::none(),
+        )
+        .unwrap();
+        assert_eq!(s.thickness(), 2.5);
+        assert_eq!(s.mean(0, 1), Some((0..12).sum::<i32>() as f64 / 12.0));
+    }
+
+    #[test]
+    fn background_is_left_out() {
+        let v = ramp();
+        let params = StackParams {
+            background: Some(29.0),
+            ..StackParams::default()
+        };
+        let s = SliceStack::new(&v, [0.0, 0.0, 1.0], &params, &Monitor::none()).unwrap();
+        let h = s.slice_histograms();
+        let per_slice: Vec<u64> = h.chunks(32).map(|c| c.iter().sum()).collect();
+        assert_eq!(per_slice, vec![0, 0, 6, 12, 12]);
+        assert_eq!(s.mean(0, 2), None);
+    }
+
+    #[test]
+    fn oblique_stacks_count_only_samples_inside() {
+        let v = ramp();
+        let s = SliceStack::new(
+            &v,
+            [1.0, 1.0, 1.0],
+            &StackParams::default(),
+            &Monitor::none(),
+        )
+        .unwrap();
+        let total: u64 = s.slice_histograms().iter().sum();
+        // The box is 3 x 2 x 10 mm: about 60 samples at 1 mm.
+        assert!((40..=90).contains(&total), "{total} samples");
+        for p in 0..s.pixels() {
+            assert!(s.column(p, 0, s.slices()).1.iter().all(|&c| c != MISSING));
+        }
+    }
+}

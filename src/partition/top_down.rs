@@ -1,0 +1,235 @@
+//! Top-down partitioning (paper §5.1, eq. 5 and 6): greedy information-bottleneck splits. Each
+//! step takes, over all current slabs and all cuts strictly inside them, the cut with the largest
+//! gain `ΔI = (v1 + v2)/v_T · JS(v1/(v1+v2), v2/(v1+v2); p1, p2)`; ties go to the lowest slice.
+
+use serde::Serialize;
+
+use super::{Slab, prefix_histograms};
+use crate::measure::scaled_entropy;
+
+/// One split of the top-down history.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Split {
+    /// The slab that was split.
+    pub split: Slab,
+    /// The first slice of the second part.
+    pub at: usize,
+    /// `ΔI` of this cut, bits.
+    pub gain: f64,
+    /// `ΔI` of every cut strictly inside the slab, in slice order (cut `split.0 + 1 + i`).
+    #[serde(skip)]
+    pub curve: Vec<f64>,
+    /// `I(slab; intensity)` after this split, bits.
+    pub information: f64,
+}
+
+/// The whole top-down history: splits until every slab is one slice.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplitHistory {
+    /// Number of slices.
+    pub slices: usize,
+    /// The splits in the order they were taken.
+    pub steps: Vec<Split>,
+    /// `H(intensity)` of the whole stack, the most information any partition can keep, bits.
+    pub entropy: f64,
+}
+
+/// Gains of splitting slabs, from per-slice histograms.
+pub(crate) struct Gains {
+    prefix: Vec<u64>,
+    bins: usize,
+    total: f64,
+}
+
+impl Gains {
+    /// From `slices × bins` histograms.
+    pub(crate) fn new(histograms: &[u64], bins: usize) -> Self {
+        let prefix = prefix_histograms(histograms, bins);
+        let slices = histograms.len() / bins;
+        let total = prefix[slices * bins..].iter().sum::<u64>() as f64;
+        Self {
+            prefix,
+            bins,
+            total,
+        }
+    }
+
+    /// `N·H` of slab `[a, b)`.
+    pub(crate) fn scaled(&self, a: usize, b: usize) -> f64 {
+        let (lo, hi) = (
+            &self.prefix[a * self.bins..(a + 1) * self.bins],
+            &self.prefix[b * self.bins..(b + 1) * self.bins],
+        );
+        scaled_entropy(hi.iter().zip(lo).map(|(h, l)| h - l))
+    }
+
+    /// Counted samples of the whole stack.
+    pub(crate) fn total(&self) -> f64 {
+        self.total
+    }
+
+    /// `ΔI` of every cut strictly inside `[a, b)`: `(F(a,b) - F(a,c) - F(c,b)) / v_T`.
+    fn curve(&self, a: usize, b: usize) -> Vec<f64> {
+        if self.total == 0.0 {
+            return vec![0.0; b.saturating_sub(a + 1)];
+        }
+        let whole = self.scaled(a, b);
+        (a + 1..b)
+            .map(|c| ((whole - self.scaled(a, c) - self.scaled(c, b)) / self.total).max(0.0))
+            .collect()
+    }
+}
+
+/// The best cut of a curve: (index, gain), the first on ties.
+fn best_cut(curve: &[f64]) -> Option<(usize, f64)> {
+    let mut best: Option<(usize, f64)> = None;
+    for (i, &g) in curve.iter().enumerate() {
+        if best.is_none_or(|(_, b)| g > b) {
+            best = Some((i, g));
+        }
+    }
+    best
+}
+
+impl SplitHistory {
+    /// Splits the stack with per-slice `histograms` (`slices × bins`) until every slab is one slice.
+    pub fn new(histograms: &[u64], bins: usize) -> Self {
+        Self::with_limit(histograms, bins, usize::MAX)
+    }
+
+    /// Like [`new`](Self::new), but stops after `limit` splits.
+    pub fn with_limit(histograms: &[u64], bins: usize, limit: usize) -> Self {
+        let slices = histograms.len() / bins;
+        let gains = Gains::new(histograms, bins);
+        let entropy = if gains.total > 0.0 {
+            gains.scaled(0, slices) / gains.total
+        } else {
+            0.0
+        };
+        // Current slabs in slice order, each with its gain curve.
+        let mut slabs: Vec<(Slab, Vec<f64>)> = vec![((0, slices), gains.curve(0, slices))];
+        let mut steps = Vec::with_capacity(slices.saturating_sub(1));
+        let mut information = 0.0;
+        while steps.len() < limit {
+            // Slabs are in slice order, so a strict improvement keeps the lowest cut on ties.
+            let mut choice: Option<(usize, usize, f64)> = None;
+            for (s, ((_, _), curve)) in slabs.iter().enumerate() {
+                if let Some((i, g)) = best_cut(curve)
+                    && choice.is_none_or(|(_, _, b)| g > b)
+                {
+                    choice = Some((s, i, g));
+                }
+            }
+            let Some((s, i, gain)) = choice else { break };
+            let ((a, b), curve) = slabs.remove(s);
+            let at = a + 1 + i;
+            information += gain;
+            slabs.insert(s, ((at, b), gains.curve(at, b)));
+            slabs.insert(s, ((a, at), gains.curve(a, at)));
+            steps.push(Split {
+                split: (a, b),
+                at,
+                gain,
+                curve,
+                information,
+            });
+        }
+        Self {
+            slices,
+            steps,
+            entropy,
+        }
+    }
+
+    /// The slabs after the first `steps` splits, in slice order.
+    pub fn slabs_after(&self, steps: usize) -> Vec<Slab> {
+        let mut cuts: Vec<usize> = self.steps.iter().take(steps).map(|s| s.at).collect();
+        cuts.sort_unstable();
+        let mut bounds = vec![0];
+        bounds.extend(cuts);
+        bounds.push(self.slices);
+        bounds.windows(2).map(|w| (w[0], w[1])).collect()
+    }
+
+    /// The slabs of a `k`-slab partition (clamped to 1 ..= slices).
+    pub fn slabs(&self, k: usize) -> Vec<Slab> {
+        self.slabs_after(k.clamp(1, self.slices) - 1)
+    }
+
+    /// How many splits are taken before the best gain falls below `threshold`.
+    pub fn steps_above(&self, threshold: f64) -> usize {
+        self.steps
+            .iter()
+            .take_while(|s| s.gain >= threshold)
+            .count()
+    }
+
+    /// `I(slab; intensity)` of the `k`-slab partition, bits.
+    pub fn information(&self, k: usize) -> f64 {
+        match k.clamp(1, self.slices) - 1 {
+            0 => 0.0,
+            n => self.steps[n - 1].information,
+        }
+    }
+
+    /// The gain of every cut of the whole stack: the first split's curve.
+    pub fn gain_curve(&self) -> &[f64] {
+        self.steps.first().map_or(&[], |s| &s.curve)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Histograms of slices that each hold `n` voxels of one material.
+    fn materials(of_slice: &[usize], bins: usize, n: u64) -> Vec<u64> {
+        of_slice
+            .iter()
+            .flat_map(|&m| (0..bins).map(move |b| if b == m { n } else { 0 }))
+            .collect()
+    }
+
+    #[test]
+    fn a_sharp_boundary_is_the_first_cut_worth_one_bit() {
+        let h = materials(&[0, 0, 0, 0, 1, 1, 1, 1], 4, 10);
+        let t = SplitHistory::new(&h, 4);
+        assert_eq!(t.steps[0].split, (0, 8));
+        assert_eq!(t.steps[0].at, 4);
+        assert!((t.steps[0].gain - 1.0).abs() < 1e-12);
+        assert_eq!(t.slabs(2), vec![(0, 4), (4, 8)]);
+        assert!((t.entropy - 1.0).abs() < 1e-12);
+        // Every later split gains nothing.
+        assert!(t.steps[1..].iter().all(|s| s.gain.abs() < 1e-12));
+        assert_eq!(t.steps.len(), 7);
+    }
+
+    #[test]
+    fn ties_go_to_the_lowest_slice() {
+        // Three equal thirds of three materials: cuts at 2 and 4 gain the same.
+        let h = materials(&[0, 0, 1, 1, 2, 2], 3, 5);
+        let t = SplitHistory::new(&h, 3);
+        assert_eq!(t.steps[0].at, 2);
+        assert_eq!(t.steps[1].at, 4);
+        assert!((t.information(3) - 3f64.log2()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn curves_cover_every_cut_and_information_adds_up() {
+        let h = materials(&[0, 1, 1, 2, 0, 3, 3], 4, 3);
+        let t = SplitHistory::new(&h, 4);
+        assert_eq!(t.gain_curve().len(), 6);
+        let mut sum = 0.0;
+        for s in &t.steps {
+            assert_eq!(s.curve.len(), s.split.1 - s.split.0 - 1);
+            sum += s.gain;
+            assert!((s.information - sum).abs() < 1e-12);
+        }
+        // Splitting into single slices keeps everything: I = H(X) when slices are pure.
+        assert!((t.information(7) - t.entropy).abs() < 1e-12);
+        assert_eq!(
+            t.steps_above(0.5),
+            t.steps.iter().take_while(|s| s.gain >= 0.5).count()
+        );
+    }
+}

@@ -1,0 +1,230 @@
+//! The command line as a user runs it: the JSON contract of DESIGN.md §3, exports, overwrite
+//! protection and errors.
+
+#![allow(clippy::unwrap_used)] // tests fail loudly by design
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn slabscope() -> Command {
+    Command::cargo_bin("slabscope").unwrap()
+}
+
+/// Runs slabscope with `args`; returns (success, stdout, stderr).
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = slabscope().args(args).output().unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn json(args: &[&str]) -> Value {
+    let (ok, stdout, stderr) = run(args);
+    assert!(ok, "{args:?}: {stderr}");
+    serde_json::from_str(&stdout).unwrap()
+}
+
+/// A small layers phantom in a temporary folder.
+fn layers(dir: &Path) -> PathBuf {
+    let path = dir.join("layers.nrrd");
+    let (ok, _, stderr) = run(&[
+        "phantom",
+        "layers",
+        "-o",
+        path.to_str().unwrap(),
+        "--size",
+        "24",
+    ]);
+    assert!(ok, "{stderr}");
+    path
+}
+
+#[test]
+fn analyze_json_follows_the_contract() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path());
+    let d = json(&["analyze", file.to_str().unwrap(), "--json"]);
+    assert_eq!(d["dims"], serde_json::json!([24, 24, 24]));
+    assert_eq!(d["params"]["bins"], 32);
+    assert_eq!(d["params"]["block"], 3);
+    assert_eq!(d["params"]["level"], 1);
+    let views = d["views"].as_array().unwrap();
+    assert_eq!(views.len(), 21);
+    let rates: Vec<f64> = views
+        .iter()
+        .map(|v| v["entropy_rate"].as_f64().unwrap())
+        .collect();
+    assert!(
+        rates.windows(2).all(|w| w[0] <= w[1]),
+        "views sorted lowest first"
+    );
+    assert_eq!(d["best_axis"], views[0]["axis"]);
+    let p = &d["partition"];
+    assert_eq!(p["method"], "topdown");
+    assert_eq!(p["axis"], d["best_axis"]);
+    let slabs = p["slabs"].as_array().unwrap();
+    assert_eq!(slabs.len(), 4, "four slabs by default");
+    assert_eq!(slabs[0][0], 0);
+    assert_eq!(slabs[3][1], p["slices"]);
+    for w in slabs.windows(2) {
+        assert_eq!(w[0][1], w[1][0], "slabs are contiguous");
+    }
+    let steps = p["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 3);
+    assert!(steps[0]["split"].is_array() && steps[0]["at"].is_u64() && steps[0]["gain"].is_f64());
+}
+
+#[test]
+fn a_named_axis_skips_the_view_search_unless_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path());
+    let f = file.to_str().unwrap();
+    let d = json(&[
+        "analyze", f, "--axis", "z", "--method", "bottomup", "--slabs", "3", "--json",
+    ]);
+    assert!(d["best_axis"].is_null());
+    assert!(d.get("views").is_none());
+    let p = &d["partition"];
+    assert_eq!(p["axis"], serde_json::json!([0.0, 0.0, 1.0]));
+    let steps = p["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 21, "24 slices merged down to 3");
+    let m = &steps[0]["merge"];
+    assert_eq!(m[0][1], m[1][0], "a merge joins adjacent slabs");
+    assert!(steps[0]["nmi"].as_f64().unwrap() <= 1.0);
+    let d = json(&[
+        "analyze", f, "--axis", "0,0,-2", "--views", "--method", "optimal", "--json",
+    ]);
+    assert_eq!(d["views"].as_array().unwrap().len(), 21);
+    assert_eq!(
+        d["partition"]["axis"],
+        serde_json::json!([0.0, 0.0, 1.0]),
+        "made canonical"
+    );
+    assert_eq!(d["partition"]["steps"].as_array().unwrap().len(), 0);
+}
+
+#[test]
+fn thresholds_stop_the_methods() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path());
+    let f = file.to_str().unwrap();
+    let d = json(&[
+        "analyze",
+        f,
+        "--axis",
+        "1,1,1",
+        "--threshold",
+        "0.01",
+        "--json",
+    ]);
+    for s in d["partition"]["steps"].as_array().unwrap() {
+        assert!(s["gain"].as_f64().unwrap() >= 0.01);
+    }
+    let (ok, _, stderr) = run(&["analyze", f, "--slabs", "3", "--threshold", "0.1"]);
+    assert!(!ok && stderr.contains("cannot be used with"), "{stderr}");
+}
+
+#[test]
+fn exports_are_written_and_never_overwritten_unasked() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path());
+    let labels = dir.path().join("labels.nrrd");
+    let slabs = dir.path().join("slabs.json");
+    let curves = dir.path().join("curves.csv");
+    let args = [
+        "analyze",
+        file.to_str().unwrap(),
+        "--axis",
+        "z",
+        "--slabs",
+        "3",
+        "--export-labels",
+        labels.to_str().unwrap(),
+        "--export-slabs",
+        slabs.to_str().unwrap(),
+        "--curves",
+        curves.to_str().unwrap(),
+    ];
+    let (ok, _, stderr) = run(&args);
+    assert!(ok, "{stderr}");
+    let info = json(&["info", labels.to_str().unwrap(), "--json"]);
+    assert_eq!(info["dims"], serde_json::json!([24, 24, 24]));
+    assert_eq!(info["type"], "u8");
+    assert_eq!(info["range"], serde_json::json!([0.0, 2.0]));
+    let s: Value = serde_json::from_str(&std::fs::read_to_string(&slabs).unwrap()).unwrap();
+    assert_eq!(s["slabs"].as_array().unwrap().len(), 3);
+    assert_eq!(s["slabs"][0]["fraction"][0], 0.0);
+    assert_eq!(s["slabs"][2]["fraction"][1], 1.0);
+    let csv = std::fs::read_to_string(&curves).unwrap();
+    assert!(csv.starts_with("cut,mm,nmi,gain\n"));
+    assert_eq!(csv.lines().count(), 24, "a header and 23 cuts");
+
+    let before = std::fs::read(&slabs).unwrap();
+    let (ok, stdout, stderr) = run(&args);
+    assert!(!ok && stderr.contains("already exists"), "{stderr}");
+    assert!(stdout.is_empty());
+    assert_eq!(std::fs::read(&slabs).unwrap(), before);
+    let mut forced = args.to_vec();
+    forced.push("--force");
+    let (ok, _, stderr) = run(&forced);
+    assert!(ok, "{stderr}");
+}
+
+#[test]
+fn phantoms_are_deterministic_and_protected() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.nrrd");
+    let b = dir.path().join("b.nrrd");
+    for p in [&a, &b] {
+        let (ok, _, stderr) = run(&[
+            "phantom",
+            "body",
+            "-o",
+            p.to_str().unwrap(),
+            "--dims",
+            "20x20x30",
+            "--seed",
+            "7",
+        ]);
+        assert!(ok, "{stderr}");
+    }
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    let (ok, _, stderr) = run(&["phantom", "body", "-o", a.to_str().unwrap()]);
+    assert!(!ok && stderr.contains("already exists"), "{stderr}");
+    let info = json(&["info", a.to_str().unwrap(), "--json"]);
+    assert_eq!(info["type"], "i16");
+    assert_eq!(info["format"], "nrrd");
+}
+
+#[test]
+fn analysis_errors_are_clear() {
+    let dir = tempfile::tempdir().unwrap();
+    let constant = dir.path().join("constant.nrrd");
+    std::fs::write(&constant, b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n\x05\x05\x05\x05\x05\x05\x05\x05")
+        .unwrap();
+    let (ok, stdout, stderr) = run(&["analyze", constant.to_str().unwrap()]);
+    assert!(!ok && stdout.is_empty());
+    assert!(stderr.contains("constant"), "{stderr}");
+    let file = layers(dir.path());
+    let f = file.to_str().unwrap();
+    for (args, phrase) in [
+        (
+            vec!["analyze", f, "--axis", "z", "--slabs", "0"],
+            "--slabs 0 is not between 1 and the 24 slices",
+        ),
+        (
+            vec!["analyze", f, "--axis", "0,0,0"],
+            "is not best, x, y, z or a direction",
+        ),
+        (vec!["analyze", f, "--bins", "300"], "300 is not in 2..=255"),
+        (vec!["analyze", f, "--level", "9"], "9 is not in 0..=4"),
+    ] {
+        let (ok, stdout, stderr) = run(&args);
+        assert!(!ok && stdout.is_empty(), "{args:?}");
+        assert!(stderr.contains(phrase), "{args:?}: {stderr}");
+    }
+}
