@@ -9,6 +9,7 @@ pub mod error;
 pub mod measure;
 pub mod partition;
 pub mod progress;
+pub mod render;
 pub mod view;
 pub mod volume;
 

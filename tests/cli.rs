@@ -228,3 +228,62 @@ fn analysis_errors_are_clear() {
         assert!(stderr.contains(phrase), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn render_writes_a_png_of_the_asked_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path());
+    let out = dir.path().join("view.png");
+    let f = file.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    let (ok, _, stderr) = run(&[
+        "render", f, "-o", o, "--size", "120x90", "--axis", "z", "--slabs", "3", "--mode", "mip",
+    ]);
+    assert!(ok, "{stderr}");
+    let png = tiny_skia::Pixmap::load_png(&out).unwrap();
+    assert_eq!((png.width(), png.height()), (120, 90));
+    let (ok, _, stderr) = run(&["render", f, "-o", o, "--size", "120x90", "--axis", "z"]);
+    assert!(!ok && stderr.contains("already exists"), "{stderr}");
+    let (ok, _, stderr) = run(&[
+        "render",
+        f,
+        "-o",
+        o,
+        "--force",
+        "--axis",
+        "z",
+        "--slabs",
+        "2",
+        "--highlight",
+        "5",
+    ]);
+    assert!(
+        !ok && stderr.contains("--highlight 5: there are only 2 slabs"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = run(&["render", f, "-o", o, "--force", "--size", "0x5"]);
+    assert!(!ok && stderr.contains("is not a size"), "{stderr}");
+}
+
+#[test]
+fn preview_prints_half_blocks_without_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path());
+    let (ok, stdout, stderr) = run(&[
+        "preview",
+        file.to_str().unwrap(),
+        "--axis",
+        "z",
+        "--protocol",
+        "blocks",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains('▄') || stdout.contains('▀'),
+        "half-block characters expected"
+    );
+    assert!(
+        stdout.contains("\u{1b}["),
+        "colour escape sequences expected"
+    );
+}

@@ -4,6 +4,7 @@ mod analyze;
 mod info;
 mod phantom;
 mod progress;
+mod render;
 
 use std::path::{Path, PathBuf};
 
@@ -37,6 +38,10 @@ pub enum Command {
     Info(info::InfoArgs),
     /// The most structured view and the slabs along it: views, best axis, partition, steps.
     Analyze(analyze::AnalyzeArgs),
+    /// Render the exploded view to a PNG file.
+    Render(render::RenderArgs),
+    /// Show the exploded view inline in the terminal.
+    Preview(render::PreviewArgs),
     /// Write a synthetic volume with known structure.
     Phantom(phantom::PhantomArgs),
 }
@@ -123,6 +128,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Info(args)) => info::run(&args),
         Some(Command::Analyze(args)) => analyze::run(&args),
         Some(Command::Phantom(args)) => phantom::run(&args),
+        Some(Command::Render(args)) => render::run_render(&args),
+        Some(Command::Preview(args)) => render::run_preview(&args),
         None => info::run_default(cli.file.as_deref(), &cli.load),
     }
 }

@@ -294,6 +294,39 @@ impl<'a> Interpolator<'a> {
         lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
     }
 
+    /// The value at `p` and its gradient (per voxel index unit), both from the trilinear
+    /// interpolant of the cell around `p`, so shading costs no extra voxel reads.
+    #[inline]
+    pub fn sample_gradient(&self, p: [f64; 3]) -> (f32, [f32; 3]) {
+        let mut base = 0;
+        let mut f = [0.0f32; 3];
+        for m in 0..3 {
+            let q = p[m].max(0.0);
+            let i = (q as usize).min(self.last[m]);
+            f[m] = (q - i as f64) as f32;
+            base += i * self.stride[m];
+        }
+        let [x1, y1, z1] = self.next;
+        let c = &self.data[base..=base + x1 + y1 + z1];
+        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+        let (c000, c100, c010, c110) = (c[0], c[x1], c[y1], c[y1 + x1]);
+        let (c001, c101, c011, c111) = (c[z1], c[z1 + x1], c[z1 + y1], c[z1 + y1 + x1]);
+        let c00 = lerp(c000, c100, f[0]);
+        let c10 = lerp(c010, c110, f[0]);
+        let c01 = lerp(c001, c101, f[0]);
+        let c11 = lerp(c011, c111, f[0]);
+        let (lo, hi) = (lerp(c00, c10, f[1]), lerp(c01, c11, f[1]));
+        let value = lerp(lo, hi, f[2]);
+        let dz = hi - lo;
+        let dy = lerp(c10 - c00, c11 - c01, f[2]);
+        let dx = lerp(
+            lerp(c100 - c000, c110 - c010, f[1]),
+            lerp(c101 - c001, c111 - c011, f[1]),
+            f[2],
+        );
+        (value, [dx, dy, dz])
+    }
+
     /// The linear memory offset of integer index coordinates (or of an integer step).
     #[inline]
     pub fn linear(&self, p: [i64; 3]) -> i64 {
@@ -603,5 +636,8 @@ mod tests {
             assert!((f64::from(it.sample(p)) - expect).abs() < 1e-4, "{p:?}");
         }
         assert_eq!(it.voxel(3, 4, 5), 2.0 * 3.0 + 3.0 * 4.0 + 5.0 * 5.0);
+        let (v, g) = it.sample_gradient([1.5, 2.25, 3.5]);
+        assert!((f64::from(v) - (3.0 + 6.75 + 17.5)).abs() < 1e-4);
+        assert_eq!(g, [2.0, 3.0, 5.0]);
     }
 }

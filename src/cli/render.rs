@@ -1,0 +1,320 @@
+//! `slabscope render FILE -o OUT.png` and `slabscope preview FILE`: the exploded view as a PNG,
+//! or printed inline in the terminal.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::{Args, ValueEnum};
+use image::{DynamicImage, RgbaImage};
+use slabscope::progress::Monitor;
+use slabscope::render::{
+    CameraParams, Colormap, Gap, Image, Layout, Mode, Preset, RenderParams, Renderer,
+};
+
+use super::LoadArgs;
+use super::analyze::{AxisChoice, PartitionArgs, ViewArgs, run_partition, run_search};
+use super::progress::Bar;
+
+/// What the render shows and how.
+#[derive(Debug, Args, Clone)]
+pub struct ViewOptions {
+    /// Direct volume rendering or maximum intensity projection.
+    #[arg(long, value_enum, default_value_t = ModeArg::Dvr)]
+    pub mode: ModeArg,
+    /// Transfer function.
+    #[arg(long = "tf", value_enum, default_value_t = PresetArg::Auto)]
+    pub preset: PresetArg,
+    /// Colour map.
+    #[arg(long, value_enum, default_value_t = ColormapArg::Grey)]
+    pub colormap: ColormapArg,
+    /// Camera angle around the slab axis, degrees.
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+    pub azimuth: f64,
+    /// Camera angle above the slab planes, degrees.
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    pub elevation: f64,
+    /// Magnification (1 fits the scene).
+    #[arg(long, default_value_t = 1.0)]
+    pub zoom: f64,
+    /// Perspective projection instead of orthographic.
+    #[arg(long)]
+    pub perspective: bool,
+    /// Gaps between slabs: all equal, or wider where neighbouring slabs are less alike.
+    #[arg(long, value_enum, default_value_t = GapArg::Similarity)]
+    pub gap: GapArg,
+    /// Total gap as a fraction of the stack's length.
+    #[arg(long, default_value_t = 0.3)]
+    pub spread: f64,
+    /// Show this slab normally and the others faint.
+    #[arg(long, value_name = "SLAB")]
+    pub highlight: Option<usize>,
+    /// Show only the highlighted slab.
+    #[arg(long, requires = "highlight")]
+    pub solo: bool,
+    /// Sample distance along rays, in smallest voxel spacings.
+    #[arg(long, default_value_t = 1.0)]
+    pub step: f64,
+    /// No gradient shading.
+    #[arg(long)]
+    pub no_shading: bool,
+    /// No slab outlines.
+    #[arg(long)]
+    pub no_outlines: bool,
+    /// No slab numbers.
+    #[arg(long)]
+    pub no_labels: bool,
+}
+
+/// Render modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ModeArg {
+    /// Direct volume rendering.
+    Dvr,
+    /// Maximum intensity projection.
+    Mip,
+}
+
+/// Transfer function presets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PresetArg {
+    /// From the histogram.
+    Auto,
+    /// CT bone (Hounsfield units).
+    CtBone,
+    /// CT soft tissue (Hounsfield units).
+    CtSoft,
+    /// MRI, from percentiles.
+    Mri,
+}
+
+/// Colour maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ColormapArg {
+    /// Black to white.
+    Grey,
+    /// Grey with a cool tint.
+    Bone,
+    /// Black, red, yellow, white.
+    Hot,
+    /// Dark blue to yellow.
+    Viridis,
+}
+
+/// Gap sizing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GapArg {
+    /// All gaps equal.
+    Uniform,
+    /// Proportional to 1 - NMI of the slabs at each boundary.
+    Similarity,
+}
+
+impl ViewOptions {
+    /// The library's render parameters for a `width × height` image.
+    pub fn params(&self, width: u32, height: u32) -> RenderParams {
+        RenderParams {
+            width,
+            height,
+            mode: match self.mode {
+                ModeArg::Dvr => Mode::Dvr,
+                ModeArg::Mip => Mode::Mip,
+            },
+            preset: match self.preset {
+                PresetArg::Auto => Preset::Auto,
+                PresetArg::CtBone => Preset::CtBone,
+                PresetArg::CtSoft => Preset::CtSoft,
+                PresetArg::Mri => Preset::Mri,
+            },
+            colormap: match self.colormap {
+                ColormapArg::Grey => Colormap::Grey,
+                ColormapArg::Bone => Colormap::Bone,
+                ColormapArg::Hot => Colormap::Hot,
+                ColormapArg::Viridis => Colormap::Viridis,
+            },
+            camera: CameraParams {
+                azimuth: self.azimuth,
+                elevation: self.elevation,
+                zoom: self.zoom,
+                perspective: self.perspective,
+            },
+            shading: !self.no_shading,
+            step: self.step,
+            outlines: !self.no_outlines,
+            labels: !self.no_labels,
+            highlight: self.highlight,
+            solo: self.solo,
+            ..RenderParams::default()
+        }
+    }
+
+    fn gap(&self) -> Gap {
+        match self.gap {
+            GapArg::Uniform => Gap::Uniform,
+            GapArg::Similarity => Gap::Similarity,
+        }
+    }
+}
+
+/// Arguments of `slabscope render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The volume: a file, or a folder of TIFF slices.
+    pub file: PathBuf,
+    /// Output PNG file.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: PathBuf,
+    /// Image size.
+    #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Overwrite OUT if it exists.
+    #[arg(long)]
+    pub force: bool,
+    #[command(flatten)]
+    pub options: ViewOptions,
+    #[command(flatten)]
+    pub partition: PartitionArgs,
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[command(flatten)]
+    pub load: LoadArgs,
+}
+
+/// Arguments of `slabscope preview`.
+#[derive(Debug, Args)]
+pub struct PreviewArgs {
+    /// The volume: a file, or a folder of TIFF slices.
+    pub file: PathBuf,
+    /// Terminal image protocol (default: detected).
+    #[arg(long, value_enum, default_value_t = Protocol::Auto)]
+    pub protocol: Protocol,
+    #[command(flatten)]
+    pub options: ViewOptions,
+    #[command(flatten)]
+    pub partition: PartitionArgs,
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[command(flatten)]
+    pub load: LoadArgs,
+}
+
+/// How the preview reaches the terminal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Protocol {
+    /// Detect kitty, iTerm2 or sixel support; else half-blocks.
+    Auto,
+    /// The kitty graphics protocol.
+    Kitty,
+    /// iTerm2 inline images.
+    Iterm,
+    /// Sixel graphics.
+    Sixel,
+    /// Unicode half-blocks with colours: works everywhere.
+    Blocks,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("{s:?} is not WxH, e.g. 640x480"))?;
+    match (w.parse::<u32>(), h.parse::<u32>()) {
+        (Ok(w), Ok(h))
+            if w > 0 && h > 0 && u64::from(w) * u64::from(h) <= slabscope::render::MAX_PIXELS =>
+        {
+            Ok((w, h))
+        }
+        _ => Err(format!("{s:?} is not a size between 1x1 and 8192x8192")),
+    }
+}
+
+/// Loads, finds the axis and the slabs, and renders `width × height`.
+fn render_file(
+    file: &std::path::Path,
+    load: &LoadArgs,
+    view: &ViewArgs,
+    partition: &PartitionArgs,
+    options: &ViewOptions,
+    (width, height): (u32, u32),
+) -> Result<Image> {
+    let loaded = super::load(file, load)?;
+    let volume = &loaded.volume;
+    let axis = match partition.axis {
+        AxisChoice::Direction(d) => d,
+        AxisChoice::Best => run_search(volume, &view.params())?.best().axis,
+    };
+    let part = run_partition(volume, axis, &partition.params(view))?;
+    if let Some(h) = options.highlight
+        && h >= part.slabs.len()
+    {
+        bail!(
+            "--highlight {h}: there are only {} slabs (numbered from 0)",
+            part.slabs.len()
+        );
+    }
+    let layout = Layout::exploded(&part, options.gap(), options.spread);
+    let renderer = Renderer::new(volume)?;
+    let bar = Bar::new("render");
+    let report = |f: f64| bar.set(f);
+    Ok(renderer.render(
+        &layout,
+        &options.params(width, height),
+        &Monitor::new(None, Some(&report)),
+    )?)
+}
+
+pub fn run_render(args: &RenderArgs) -> Result<()> {
+    super::check_writable(&args.output, args.force)?;
+    let image = render_file(
+        &args.file,
+        &args.load,
+        &args.view,
+        &args.partition,
+        &args.options,
+        args.size,
+    )?;
+    super::write_new(&args.output, &image.png()?, args.force)
+}
+
+pub fn run_preview(args: &PreviewArgs) -> Result<()> {
+    let (cols, rows) = crossterm::terminal::size().unwrap_or((80, 24));
+    let rows = rows.saturating_sub(2).max(4);
+    if cols < 10 {
+        bail!("the terminal is {cols} columns wide: too small for a preview");
+    }
+    // Pixels per cell: the terminal's own when it says, else a common 8x16; half-blocks show
+    // one pixel by two per cell.
+    let (cell_w, cell_h) = match crossterm::terminal::window_size() {
+        Ok(s) if s.width > 0 && s.height > 0 && s.columns > 0 && s.rows > 0 => {
+            (u32::from(s.width / s.columns), u32::from(s.height / s.rows))
+        }
+        _ => (8, 16),
+    };
+    let size = if args.protocol == Protocol::Blocks {
+        (u32::from(cols), u32::from(rows) * 2)
+    } else {
+        (u32::from(cols) * cell_w, u32::from(rows) * cell_h)
+    };
+    let image = render_file(
+        &args.file,
+        &args.load,
+        &args.view,
+        &args.partition,
+        &args.options,
+        size,
+    )?;
+    let (w, h) = (image.pixmap.width(), image.pixmap.height());
+    let rgba = RgbaImage::from_raw(w, h, image.pixmap.data().to_vec())
+        .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
+    let auto = args.protocol == Protocol::Auto;
+    let config = viuer::Config {
+        width: Some(u32::from(cols)),
+        height: Some(u32::from(rows)),
+        absolute_offset: false,
+        use_kitty: auto || args.protocol == Protocol::Kitty,
+        use_iterm: auto || args.protocol == Protocol::Iterm,
+        use_sixel: auto || args.protocol == Protocol::Sixel,
+        truecolor: viuer::Config::default().truecolor || !auto,
+        ..viuer::Config::default()
+    };
+    viuer::print(&DynamicImage::ImageRgba8(rgba), &config)?;
+    Ok(())
+}
