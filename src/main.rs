@@ -1,6 +1,7 @@
 //! The `slabscope` binary: argument parsing and dispatch to the CLI commands.
 
 mod cli;
+mod tui;
 
 use std::process::ExitCode;
 

@@ -235,7 +235,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&to_json(&name, volume, views.as_ref(), &part))?
+            serde_json::to_string_pretty(&analysis_json(&name, volume, views.as_ref(), &part))?
         );
     } else {
         if let Some(v) = &views {
@@ -259,7 +259,12 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
 }
 
 /// The object of DESIGN.md §3.
-fn to_json(name: &str, volume: &Volume, views: Option<&ViewSearch>, part: &Partition) -> Value {
+pub fn analysis_json(
+    name: &str,
+    volume: &Volume,
+    views: Option<&ViewSearch>,
+    part: &Partition,
+) -> Value {
     let s = volume.stats();
     let mut out = json!({
         "file": name,

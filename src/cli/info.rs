@@ -1,6 +1,6 @@
 //! `slabscope info FILE`: what a volume is, in a few lines or as JSON.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
@@ -34,28 +34,6 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         &loaded.volume,
         &loaded.notes,
         args.json,
-    )
-}
-
-/// With no subcommand: until the TUI exists, describe the given file or the built-in dataset.
-pub fn run_default(file: Option<&Path>, load: &LoadArgs) -> Result<()> {
-    let Some(path) = file else {
-        let volume = slabscope::builtin_dataset()?;
-        return print(
-            slabscope::BUILTIN_NAME,
-            Format::Synthetic,
-            &volume,
-            &[],
-            false,
-        );
-    };
-    let loaded = super::load(path, load)?;
-    print(
-        &path.display().to_string(),
-        loaded.format,
-        &loaded.volume,
-        &loaded.notes,
-        false,
     )
 }
 

@@ -1,6 +1,9 @@
 //! The headless command line: one file per subcommand, each a thin layer over the library.
 
 mod analyze;
+
+pub use analyze::analysis_json;
+pub use render::Protocol;
 mod info;
 mod phantom;
 mod progress;
@@ -25,6 +28,9 @@ use slabscope::{LoadOptions, Loaded};
 pub struct Cli {
     /// Volume to open (default: the built-in dataset).
     pub file: Option<PathBuf>,
+    /// Terminal image protocol of the preview (default: asked of the terminal).
+    #[arg(long, value_enum, default_value_t = Protocol::Auto)]
+    pub protocol: Protocol,
     #[command(flatten)]
     pub load: LoadArgs,
     #[command(subcommand)]
@@ -130,7 +136,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Some(Command::Phantom(args)) => phantom::run(&args),
         Some(Command::Render(args)) => render::run_render(&args),
         Some(Command::Preview(args)) => render::run_preview(&args),
-        None => info::run_default(cli.file.as_deref(), &cli.load),
+        None => crate::tui::run(cli.file, cli.load.options(), cli.protocol),
     }
 }
 

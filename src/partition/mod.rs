@@ -11,7 +11,10 @@ use serde::Serialize;
 
 pub use bottom_up::{Merge, MergeHistory, slice_nmi};
 pub use optimal::{MAX_SLICES, OptimalPartitions, Optimum};
-pub use result::{Comparison, Partition, PartitionParams, Step, Stop, label_volume, partition};
+pub use result::{
+    Comparison, Partition, PartitionParams, Step, Stop, boundary_gains, label_volume, partition,
+    slab_nmi,
+};
 pub use stack::{MISSING, SliceStack, StackParams, coordinate_axis};
 pub use top_down::{Split, SplitHistory};
 

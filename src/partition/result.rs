@@ -276,6 +276,30 @@ pub fn partition(
     })
 }
 
+/// The NMI of the two slabs at each boundary of `slabs` (one pass over the stack).
+pub fn slab_nmi(stack: &SliceStack, slabs: &[Slab], monitor: &Monitor) -> Result<Vec<f64>> {
+    consecutive_nmi(stack, &Columns::new(stack), slabs, monitor)
+}
+
+/// ΔI of each boundary of `slabs`: the information lost by merging the two slabs there, bits.
+pub fn boundary_gains(histograms: &[u64], bins: usize, slabs: &[Slab]) -> Vec<f64> {
+    let gains = Gains::new(histograms, bins);
+    let total = gains.total();
+    slabs
+        .windows(2)
+        .map(|w| {
+            let lost = gains.scaled(w[0].0, w[1].1)
+                - gains.scaled(w[0].0, w[0].1)
+                - gains.scaled(w[1].0, w[1].1);
+            if total > 0.0 {
+                (lost / total).max(0.0)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
 /// A label volume: the index of the slab each voxel lies in (u8, or u16 above 255 slabs), with
 /// the volume's dimensions and spacing. A voxel belongs to the slice whose centre is nearest
 /// along the axis.

@@ -15,6 +15,31 @@ pub enum Gap {
     Similarity,
 }
 
+/// The geometry of a slice stack that a layout needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stack {
+    /// Unit axis.
+    pub axis: [f64; 3],
+    /// Number of slices.
+    pub slices: usize,
+    /// Distance between slices, mm.
+    pub thickness: f64,
+    /// Position of slice 0's centre along the axis, mm.
+    pub offset: f64,
+}
+
+impl Stack {
+    /// The stack of a partition.
+    pub fn of(p: &Partition) -> Self {
+        Self {
+            axis: p.axis,
+            slices: p.slices,
+            thickness: p.thickness,
+            offset: p.offset,
+        }
+    }
+}
+
 /// One slab of the scene: the part of the volume whose position along the axis lies in
 /// `[lo, hi)` (mm, voxel (0,0,0) at 0), drawn translated by `offset` mm along the axis.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -54,11 +79,25 @@ impl Layout {
 
     /// The slabs of `p` pulled apart: the gaps add up to `spread` times the stack's length.
     pub fn exploded(p: &Partition, gap: Gap, spread: f64) -> Self {
-        let k = p.slabs.len();
-        let total = spread.max(0.0) * p.slices as f64 * p.thickness;
-        let weights: Vec<f64> = match gap {
-            Gap::Uniform => vec![1.0; k.saturating_sub(1)],
-            Gap::Similarity => p.boundary_nmi.iter().map(|n| (1.0 - n).max(0.0)).collect(),
+        Self::from_slabs(&Stack::of(p), &p.slabs, Some(&p.boundary_nmi), gap, spread)
+    }
+
+    /// `slabs` of a stack pulled apart; `nmi` (one per boundary) sizes similarity gaps, which
+    /// are uniform without it.
+    pub fn from_slabs(
+        stack: &Stack,
+        slabs: &[(usize, usize)],
+        nmi: Option<&[f64]>,
+        gap: Gap,
+        spread: f64,
+    ) -> Self {
+        let k = slabs.len();
+        let total = spread.max(0.0) * stack.slices as f64 * stack.thickness;
+        let weights: Vec<f64> = match (gap, nmi) {
+            (Gap::Similarity, Some(nmi)) if nmi.len() + 1 == k => {
+                nmi.iter().map(|n| (1.0 - n).max(0.0)).collect()
+            }
+            _ => vec![1.0; k.saturating_sub(1)],
         };
         let sum: f64 = weights.iter().sum();
         let gaps: Vec<f64> = if sum > 1e-12 {
@@ -67,9 +106,8 @@ impl Layout {
             vec![total / k.saturating_sub(1).max(1) as f64; k.saturating_sub(1)]
         };
         let mut offset = -total / 2.0;
-        let edge = |c: usize| p.offset + (c as f64 - 0.5) * p.thickness;
-        let slabs = p
-            .slabs
+        let edge = |c: usize| stack.offset + (c as f64 - 0.5) * stack.thickness;
+        let placed = slabs
             .iter()
             .enumerate()
             .map(|(i, &(a, b))| {
@@ -85,8 +123,8 @@ impl Layout {
             })
             .collect();
         Self {
-            axis: p.axis,
-            slabs,
+            axis: stack.axis,
+            slabs: placed,
         }
     }
 

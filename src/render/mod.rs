@@ -15,7 +15,7 @@ use serde::Serialize;
 use tiny_skia::Pixmap;
 
 pub use camera::{Camera, CameraParams};
-pub use layout::{Gap, Layout, Placement};
+pub use layout::{Gap, Layout, Placement, Stack};
 pub use transfer::{Colormap, HISTOGRAM_BINS, Preset, Transfer};
 
 use crate::error::{Error, Result};

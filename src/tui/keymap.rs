@@ -1,0 +1,85 @@
+//! Keys to actions. While a prompt is open, keys type into it.
+
+use crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+
+use super::app::{Action, Ask};
+
+/// The action of `key`, if any; `typing` when a prompt is open.
+pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {
+    if key.kind == KeyEventKind::Release {
+        return None;
+    }
+    if key.modifiers.contains(KeyModifiers::CONTROL) && matches!(key.code, KeyCode::Char('c' | 'd'))
+    {
+        return Some(Action::Quit);
+    }
+    if typing {
+        return match key.code {
+            KeyCode::Char(c) => Some(Action::Type(c)),
+            KeyCode::Backspace => Some(Action::Erase),
+            KeyCode::Enter => Some(Action::Submit),
+            KeyCode::Esc => Some(Action::Escape),
+            _ => None,
+        };
+    }
+    Some(match key.code {
+        KeyCode::Char('q') => Action::Quit,
+        KeyCode::Char('?') | KeyCode::F(1) => Action::ToggleHelp,
+        KeyCode::Esc => Action::Escape,
+        KeyCode::Tab => Action::Focus(1),
+        KeyCode::BackTab => Action::Focus(-1),
+        KeyCode::Up | KeyCode::Left | KeyCode::Char('k' | 'h') => Action::Move(-1),
+        KeyCode::Down | KeyCode::Right | KeyCode::Char('j' | 'l') => Action::Move(1),
+        KeyCode::PageUp => Action::Page(-1),
+        KeyCode::PageDown => Action::Page(1),
+        KeyCode::Enter => Action::Select,
+        KeyCode::Char('n' | '.') => Action::Step(1),
+        KeyCode::Char('p' | ',') => Action::Step(-1),
+        KeyCode::Home => Action::StepTo(false),
+        KeyCode::End => Action::StepTo(true),
+        KeyCode::Char('+' | '=') => Action::Slabs(1),
+        KeyCode::Char('-' | '_') => Action::Slabs(-1),
+        KeyCode::Char('m') => Action::CycleMethod,
+        KeyCode::Char('a') => Action::Ask(Ask::Axis),
+        KeyCode::Char('t') => Action::Ask(Ask::Threshold),
+        KeyCode::Char('[') => Action::Orbit(-15.0, 0.0),
+        KeyCode::Char(']') => Action::Orbit(15.0, 0.0),
+        KeyCode::Char('{') => Action::Orbit(0.0, -10.0),
+        KeyCode::Char('}') => Action::Orbit(0.0, 10.0),
+        KeyCode::Char('z') => Action::Zoom(1.25),
+        KeyCode::Char('Z') => Action::Zoom(0.8),
+        KeyCode::Char('s') => Action::Spread(-0.1),
+        KeyCode::Char('S') => Action::Spread(0.1),
+        KeyCode::Char('r') => Action::ToggleMode,
+        KeyCode::Char('f') => Action::CycleTransfer,
+        KeyCode::Char('c') => Action::CycleColormap,
+        KeyCode::Char('g') => Action::ToggleGap,
+        KeyCode::Char('o') => Action::ToggleSolo,
+        KeyCode::Char('P') => Action::TogglePerspective,
+        KeyCode::Char('e') => Action::Export,
+        _ => return None,
+    })
+}
+
+/// The key help: (keys, what they do).
+pub const HELP: &[(&str, &str)] = &[
+    ("Tab / S-Tab", "next / previous pane"),
+    ("↑↓ j k", "move in the pane: axis, slab, slice"),
+    ("Enter", "partition along the selected axis"),
+    ("a", "type an axis: x, y, z or DX,DY,DZ"),
+    ("m", "method: top-down, bottom-up, optimal"),
+    ("n p  . ,", "one split or merge forward / back"),
+    ("Home End", "start / end of the history"),
+    ("+ -", "one slab more / fewer"),
+    ("t", "threshold (empty clears)"),
+    ("[ ] { }", "orbit: azimuth, elevation"),
+    ("z Z", "zoom in / out"),
+    ("s S", "spread less / more"),
+    ("g", "gaps: similarity / uniform"),
+    ("r", "render: DVR / MIP"),
+    ("f c", "transfer function, colour map"),
+    ("o P", "selected slab alone; perspective"),
+    ("e", "export PNG, JSON and label NRRD"),
+    ("Esc", "cancel work, close help"),
+    ("? q", "help, quit"),
+];

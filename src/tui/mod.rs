@@ -1,0 +1,223 @@
+//! The terminal UI: `slabscope [FILE]`. Events (keys, resizes, job messages) become actions;
+//! [`app::App::update`] is the only place state changes and returns effects that [`jobs::Jobs`]
+//! carries out in the background; drawing is a pure function of the state. The loop is generic
+//! over the ratatui backend, so tests drive it on a `TestBackend`.
+
+pub mod analysis;
+pub mod app;
+pub mod jobs;
+pub mod keymap;
+pub mod panes;
+pub mod ui;
+
+#[cfg(test)]
+mod tests;
+
+use std::io::{Write, stdout};
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use crossterm::event::{self, Event as TermEvent, KeyEvent};
+use crossterm::execute;
+use crossterm::terminal::{
+    EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
+};
+use ratatui::Terminal;
+use ratatui::backend::{Backend, CrosstermBackend};
+use ratatui_image::picker::cap_parser::QueryStdioOptions;
+use ratatui_image::picker::{Picker, ProtocolType};
+use slabscope::LoadOptions;
+
+pub use crate::cli::Protocol;
+use app::{Action, App, Effect};
+use jobs::Jobs;
+use ui::Theme;
+
+/// Everything the loop waits for.
+pub enum Event {
+    /// A key press.
+    Key(KeyEvent),
+    /// The terminal changed size.
+    Resize,
+    /// A background job's message.
+    Job(app::JobMsg),
+}
+
+/// How long the terminal may take to say which image protocol it speaks.
+const QUERY_TIMEOUT: Duration = Duration::from_millis(250);
+
+/// The image protocol for the preview: asked of the terminal (in-band, so it works over SSH and
+/// through tmux), or as the user says.
+fn picker(protocol: Protocol) -> Picker {
+    let fixed = |p: ProtocolType| {
+        let mut picker = Picker::halfblocks();
+        picker.set_protocol_type(p);
+        picker
+    };
+    match protocol {
+        Protocol::Blocks => Picker::halfblocks(),
+        Protocol::Kitty => fixed(ProtocolType::Kitty),
+        Protocol::Iterm => fixed(ProtocolType::Iterm2),
+        Protocol::Sixel => fixed(ProtocolType::Sixel),
+        Protocol::Auto => {
+            let start = Instant::now();
+            let options = QueryStdioOptions {
+                timeout: QUERY_TIMEOUT,
+                ..QueryStdioOptions::default()
+            };
+            let picker = Picker::from_query_stdio_with_options(options)
+                .unwrap_or_else(|_| Picker::halfblocks());
+            if start.elapsed() >= QUERY_TIMEOUT {
+                // The terminal did not answer in time, and the query's reader thread is still
+                // blocked on stdin, where it would eat keys. A device status request that the
+                // terminal itself always answers lets it finish.
+                let mut out = stdout();
+                let _ = out.write_all(b"\x1b[5n").and_then(|()| out.flush());
+                std::thread::sleep(Duration::from_millis(150));
+            }
+            picker
+        }
+    }
+}
+
+/// Opens the TUI on `file` (None: the built-in dataset) and runs it until the user quits.
+pub fn run(file: Option<PathBuf>, load: LoadOptions, protocol: Protocol) -> Result<()> {
+    let name = file.as_ref().map_or_else(
+        || slabscope::BUILTIN_NAME.to_string(),
+        |p| p.display().to_string(),
+    );
+    // The query switches raw mode on and off itself, so it comes first.
+    let picker = picker(protocol);
+    enable_raw_mode()?;
+    execute!(stdout(), EnterAlternateScreen)?;
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        restore();
+        default_hook(info);
+    }));
+    let result = (|| {
+        let mut terminal = Terminal::new(CrosstermBackend::new(stdout()))?;
+        let (tx, rx) = channel();
+        spawn_input(tx.clone());
+        let mut jobs = Jobs::new(tx, picker, file, load);
+        let (mut app, effects) = App::new(name);
+        run_loop(
+            &mut terminal,
+            &mut app,
+            &rx,
+            &mut jobs,
+            effects,
+            Theme::from_env(),
+        )
+    })();
+    restore();
+    let _ = std::panic::take_hook();
+    result
+}
+
+/// Leaves the alternate screen and raw mode; safe to call twice.
+fn restore() {
+    let _ = disable_raw_mode();
+    let _ = execute!(stdout(), LeaveAlternateScreen, crossterm::cursor::Show);
+}
+
+/// Reads terminal events on their own thread.
+fn spawn_input(tx: Sender<Event>) {
+    std::thread::spawn(move || {
+        while let Ok(ev) = event::read() {
+            let sent = match ev {
+                TermEvent::Key(k) => tx.send(Event::Key(k)),
+                TermEvent::Resize(..) => tx.send(Event::Resize),
+                _ => Ok(()),
+            };
+            if sent.is_err() {
+                break;
+            }
+        }
+    });
+}
+
+/// Something that carries out effects: the real jobs, or a test's recorder.
+pub trait Runner {
+    /// Carries out `effect` for `app`.
+    fn run(&mut self, effect: Effect, app: &App);
+    /// Sees a job message before the app does.
+    fn observe(&mut self, _msg: &app::JobMsg) {}
+}
+
+impl Runner for Jobs {
+    fn run(&mut self, effect: Effect, app: &App) {
+        Jobs::run(self, effect, app);
+    }
+
+    fn observe(&mut self, msg: &app::JobMsg) {
+        Jobs::observe(self, msg);
+    }
+}
+
+/// Applies `action` and runs its effects.
+pub fn dispatch(app: &mut App, runner: &mut impl Runner, action: Action) {
+    for effect in app.update(action) {
+        runner.run(effect, app);
+    }
+}
+
+/// Tells the app the preview's size for a screen of `size`, then draws.
+pub fn redraw<B: Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+    runner: &mut impl Runner,
+    theme: Theme,
+) -> Result<()>
+where
+    B::Error: Send + Sync + 'static,
+{
+    let size = terminal.size()?;
+    if let Some((w, h)) =
+        ui::preview_cells(ratatui::layout::Rect::new(0, 0, size.width, size.height))
+    {
+        dispatch(app, runner, Action::PreviewArea(w, h));
+    }
+    terminal.draw(|frame| ui::draw(frame, app, theme))?;
+    Ok(())
+}
+
+/// Applies one event.
+pub fn handle(app: &mut App, runner: &mut impl Runner, event: Event) {
+    let action = match event {
+        Event::Key(key) => keymap::action(key, app.prompt.is_some()),
+        Event::Resize => None,
+        Event::Job(msg) => {
+            runner.observe(&msg);
+            Some(Action::Job(msg))
+        }
+    };
+    if let Some(action) = action {
+        dispatch(app, runner, action);
+    }
+}
+
+/// Draws, waits for an event, applies it; until the app quits.
+pub fn run_loop<B: Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+    events: &Receiver<Event>,
+    runner: &mut impl Runner,
+    initial: Vec<Effect>,
+    theme: Theme,
+) -> Result<()>
+where
+    B::Error: Send + Sync + 'static,
+{
+    for effect in initial {
+        runner.run(effect, app);
+    }
+    while !app.quit {
+        redraw(terminal, app, runner, theme)?;
+        let Ok(event) = events.recv() else { break };
+        handle(app, runner, event);
+    }
+    Ok(())
+}

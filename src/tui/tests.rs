@@ -1,0 +1,409 @@
+//! Tests of the TUI without a terminal: `update` for every action, each pane rendered into a
+//! buffer, and whole-app snapshots driven by keys and fake job results on a `TestBackend`.
+//!
+//! Snapshots live in `src/tui/snapshots/`; `INSTA_UPDATE=always cargo test` rewrites them.
+
+use std::sync::{Arc, OnceLock};
+
+use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+use image::{DynamicImage, Rgba, RgbaImage};
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+use ratatui::buffer::Buffer;
+use ratatui::layout::{Rect, Size};
+use ratatui::widgets::Widget;
+use ratatui_image::Resize;
+use ratatui_image::picker::Picker;
+use slabscope::Volume;
+use slabscope::partition::{Method, StackParams};
+use slabscope::progress::Monitor;
+use slabscope::render::Mode;
+use slabscope::view::{ViewParams, ViewSearch, search};
+use slabscope::volume::phantom;
+
+use super::analysis::Analysis;
+use super::app::{Action, App, Ask, Effect, Job, JobMsg, Load, Pane};
+use super::panes;
+use super::ui::Theme;
+use super::{Event, Runner, handle, redraw};
+
+/// Records effects instead of running them.
+#[derive(Default)]
+struct Recorder(Vec<Effect>);
+
+impl Runner for Recorder {
+    fn run(&mut self, effect: Effect, _app: &App) {
+        self.0.push(effect);
+    }
+}
+
+const PLAIN: Theme = Theme { color: false };
+
+/// A small volume, its view search and its analysis along z, computed once for all tests.
+fn fixture() -> &'static (Arc<Volume>, ViewSearch, Arc<Analysis>) {
+    static FIXTURE: OnceLock<(Arc<Volume>, ViewSearch, Arc<Analysis>)> = OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let volume = Arc::new(phantom::body([24, 24, 40], 1).unwrap());
+        let views = search(&volume, &ViewParams::default(), &Monitor::none()).unwrap();
+        let analysis = Analysis::compute(
+            &volume,
+            views.best().axis,
+            &StackParams::default(),
+            &Monitor::none(),
+        )
+        .unwrap();
+        (volume, views, Arc::new(analysis))
+    })
+}
+
+/// An app taken through loading, the view search and the analysis, as the jobs would report.
+fn ready_app() -> App {
+    let (volume, views, analysis) = fixture();
+    let (mut app, effects) = App::new("body.nrrd".into());
+    assert!(matches!(effects[..], [Effect::Load]));
+    let effects = app.update(Action::Job(JobMsg::Loaded(Ok((
+        Arc::clone(volume),
+        vec![],
+    )))));
+    assert!(matches!(effects[..], [Effect::SearchViews]), "{effects:?}");
+    let effects = app.update(Action::Job(JobMsg::Views(Ok(Box::new(views.clone())))));
+    match &effects[..] {
+        [Effect::Analyze(1, axis, _)] => assert_eq!(*axis, views.best().axis),
+        other => panic!("{other:?}"),
+    }
+    app.update(Action::Job(JobMsg::Analysis(1, Ok(Arc::clone(analysis)))));
+    app
+}
+
+fn key(c: char) -> Event {
+    Event::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE))
+}
+
+#[test]
+fn the_analysis_opens_on_four_top_down_slabs() {
+    let app = ready_app();
+    assert_eq!(app.method, Method::TopDown);
+    assert_eq!(app.slabs().unwrap().len(), 4);
+    assert_eq!(app.position, 3);
+}
+
+#[test]
+fn stepping_moves_through_the_history_and_stops_at_its_ends() {
+    let mut app = ready_app();
+    app.preview_cells = (40, 12);
+    let effects = app.update(Action::Step(1));
+    assert_eq!(app.slabs().unwrap().len(), 5);
+    assert!(
+        matches!(effects[..], [Effect::Render(_)]),
+        "a step re-renders"
+    );
+    app.update(Action::StepTo(false));
+    assert_eq!(app.position, 0);
+    assert!(app.update(Action::Step(-1)).is_empty());
+    assert_eq!(app.position, 0);
+    assert_eq!(app.message.as_deref(), Some("at the start of the history"));
+    app.update(Action::StepTo(true));
+    let last = app.analysis.ready().unwrap().last(Method::TopDown);
+    assert_eq!(app.position, last);
+    assert_eq!(app.slabs().unwrap().len(), 40, "every slice its own slab");
+    app.update(Action::Step(1));
+    assert_eq!(app.message.as_deref(), Some("at the end of the history"));
+}
+
+#[test]
+fn switching_method_keeps_the_slab_count() {
+    let mut app = ready_app();
+    for method in [Method::BottomUp, Method::Optimal, Method::TopDown] {
+        app.update(Action::CycleMethod);
+        assert_eq!(app.method, method);
+        assert_eq!(app.slabs().unwrap().len(), 4, "{method:?}");
+    }
+    app.update(Action::CycleMethod);
+    app.update(Action::Step(1));
+    assert_eq!(app.slabs().unwrap().len(), 3, "a bottom-up step merges");
+    app.update(Action::Slabs(2));
+    assert_eq!(app.slabs().unwrap().len(), 5);
+    app.update(Action::Slabs(-10));
+    assert_eq!(app.slabs().unwrap().len(), 1);
+}
+
+#[test]
+fn prompts_take_an_axis_and_a_threshold() {
+    let mut app = ready_app();
+    app.update(Action::Ask(Ask::Axis));
+    for c in "0,1,1".chars() {
+        app.update(Action::Type(c));
+    }
+    app.update(Action::Erase);
+    app.update(Action::Type('2'));
+    match &app.update(Action::Submit)[..] {
+        [Effect::Analyze(2, axis, _)] => assert_eq!(*axis, [0.0, 1.0, 2.0]),
+        other => panic!("{other:?}"),
+    }
+    assert!(app.analysis.running());
+    let mut app = ready_app();
+    app.update(Action::Ask(Ask::Axis));
+    app.update(Action::Type('w'));
+    assert!(app.update(Action::Submit).is_empty());
+    assert!(app.message.as_deref().unwrap().contains("is not x, y, z"));
+    app.update(Action::Ask(Ask::Threshold));
+    for c in "0.002".chars() {
+        app.update(Action::Type(c));
+    }
+    app.update(Action::Submit);
+    assert_eq!(app.threshold, Some(0.002));
+    assert_eq!(
+        app.position,
+        app.analysis.ready().unwrap().top.steps_above(0.002)
+    );
+    app.update(Action::Ask(Ask::Threshold));
+    app.update(Action::Escape);
+    assert!(app.prompt.is_none(), "Esc closes a prompt");
+}
+
+#[test]
+fn selecting_a_viewpoint_partitions_along_it() {
+    let mut app = ready_app();
+    app.update(Action::Move(2));
+    assert_eq!(app.view_row, 2);
+    let axis = fixture().1.views[2].axis;
+    match &app.update(Action::Select)[..] {
+        [Effect::Analyze(2, a, _)] => assert_eq!(*a, axis),
+        other => panic!("{other:?}"),
+    }
+    app.update(Action::Move(-10));
+    assert_eq!(app.view_row, 0, "the cursor stops at the top");
+}
+
+#[test]
+fn stale_results_are_dropped() {
+    let mut app = ready_app();
+    app.update(Action::Ask(Ask::Axis));
+    app.update(Action::Type('x'));
+    app.update(Action::Submit);
+    // A late result of the first request (generation 1) does not replace the running one.
+    app.update(Action::Job(JobMsg::Analysis(
+        1,
+        Ok(Arc::clone(&fixture().2)),
+    )));
+    assert!(app.analysis.running());
+    app.preview_cells = (20, 8);
+    app.update(Action::Orbit(15.0, 0.0));
+    app.update(Action::Orbit(15.0, 0.0));
+    let image = Box::new(tiny_protocol(20, 8));
+    app.update(Action::Job(JobMsg::Rendered(1, Ok(image))));
+    assert!(
+        !matches!(app.preview, Load::Ready(_)),
+        "an older render is not shown"
+    );
+}
+
+#[test]
+fn escape_cancels_running_work_and_quit_quits() {
+    let (mut app, _) = App::new("x".into());
+    app.views = Load::Running(0.4);
+    assert!(matches!(app.update(Action::Escape)[..], [Effect::Cancel]));
+    assert!(matches!(app.views, Load::Failed(_)));
+    app.update(Action::ToggleHelp);
+    assert!(app.help);
+    assert!(app.update(Action::Escape).is_empty());
+    assert!(!app.help, "Esc closes the help first");
+    assert!(matches!(
+        app.update(Action::Quit)[..],
+        [Effect::Cancel, Effect::Quit]
+    ));
+    assert!(app.quit);
+}
+
+#[test]
+fn the_look_changes_re_render() {
+    let mut app = ready_app();
+    assert!(
+        app.update(Action::Orbit(15.0, 0.0)).is_empty(),
+        "no preview area yet"
+    );
+    app.update(Action::PreviewArea(30, 10));
+    assert!(
+        app.update(Action::PreviewArea(30, 10)).is_empty(),
+        "same size: nothing to do"
+    );
+    let render = |effects: Vec<Effect>| match effects.into_iter().next() {
+        Some(Effect::Render(r)) => r,
+        other => panic!("{other:?}"),
+    };
+    let r = render(app.update(Action::Orbit(15.0, -30.0)));
+    assert_eq!(
+        (r.camera.azimuth, r.camera.elevation),
+        (60.0, -10.0),
+        "30° + two orbits of 15°"
+    );
+    assert_eq!(r.slabs.len(), 4);
+    assert_eq!(render(app.update(Action::ToggleMode)).mode, Mode::Mip);
+    for _ in 0..30 {
+        app.update(Action::Spread(0.1));
+    }
+    assert_eq!(app.look.spread, 2.0, "spread is capped");
+    app.focus = Pane::Slabs;
+    let r = render(app.update(Action::Move(1)));
+    assert_eq!(r.highlight, Some(1), "the selected slab is highlighted");
+    let r = render(app.update(Action::ToggleSolo));
+    assert!(r.solo);
+    assert!(matches!(app.update(Action::Export)[..], [Effect::Export]));
+    app.update(Action::Focus(1));
+    assert_eq!(app.focus, Pane::Curves);
+    app.update(Action::Move(5));
+    assert_eq!(app.cursor, 5);
+}
+
+#[test]
+fn progress_updates_the_gauges() {
+    let (mut app, _) = App::new("x".into());
+    app.update(Action::Job(JobMsg::Progress(Job::Load, 0.5)));
+    assert!(matches!(app.volume, Load::Running(f) if f == 0.5));
+    app.update(Action::Job(JobMsg::Loaded(Err("x: truncated".into()))));
+    assert!(matches!(app.volume, Load::Failed(_)));
+}
+
+/// A halfblocks image of `w × h` cells: a diagonal gradient.
+fn tiny_protocol(w: u16, h: u16) -> ratatui_image::protocol::Protocol {
+    let picker = Picker::halfblocks();
+    let font = picker.font_size();
+    let (pw, ph) = (
+        u32::from(w) * u32::from(font.width),
+        u32::from(h) * u32::from(font.height),
+    );
+    let image = RgbaImage::from_fn(pw, ph, |x, y| {
+        Rgba([(x * 255 / pw) as u8, (y * 255 / ph) as u8, 128, 255])
+    });
+    picker
+        .new_protocol(
+            DynamicImage::ImageRgba8(image),
+            Size::new(w, h),
+            Resize::Fit(None),
+        )
+        .unwrap()
+}
+
+/// The characters of a buffer, one line per row.
+fn text(buffer: &Buffer) -> String {
+    let area = buffer.area;
+    (area.y..area.y + area.height)
+        .map(|y| {
+            (area.x..area.x + area.width)
+                .map(|x| buffer[(x, y)].symbol())
+                .collect::<String>()
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn pane(widget: impl Widget, w: u16, h: u16) -> String {
+    let mut buffer = Buffer::empty(Rect::new(0, 0, w, h));
+    widget.render(buffer.area, &mut buffer);
+    text(&buffer)
+}
+
+#[test]
+fn panes_render_into_buffers() {
+    let mut app = ready_app();
+    app.focus = Pane::Slabs;
+    insta::assert_snapshot!(
+        "views",
+        pane(
+            panes::views::ViewsPane {
+                app: &app,
+                theme: PLAIN,
+                focused: false
+            },
+            40,
+            12
+        )
+    );
+    insta::assert_snapshot!(
+        "views_wide_with_sphere",
+        pane(
+            panes::views::ViewsPane {
+                app: &app,
+                theme: PLAIN,
+                focused: true
+            },
+            90,
+            14
+        )
+    );
+    insta::assert_snapshot!(
+        "slabs",
+        pane(
+            panes::slabs::SlabsPane {
+                app: &app,
+                theme: PLAIN,
+                focused: true
+            },
+            60,
+            9
+        )
+    );
+    insta::assert_snapshot!(
+        "curves",
+        pane(
+            panes::curves::CurvesPane {
+                app: &app,
+                theme: PLAIN,
+                focused: false
+            },
+            60,
+            12
+        )
+    );
+    insta::assert_snapshot!(
+        "status",
+        pane(
+            panes::status::StatusLines {
+                app: &app,
+                theme: PLAIN
+            },
+            110,
+            2
+        )
+    );
+    insta::assert_snapshot!("help", pane(panes::help::Help { theme: PLAIN }, 70, 24));
+}
+
+/// Runs `events` through the app on a test terminal of `w × h`, returning the screen after each.
+fn screens(app: &mut App, w: u16, h: u16, events: Vec<Event>) -> Vec<String> {
+    let mut terminal = Terminal::new(TestBackend::new(w, h)).unwrap();
+    let mut runner = Recorder::default();
+    let mut out = Vec::new();
+    redraw(&mut terminal, app, &mut runner, PLAIN).unwrap();
+    out.push(text(terminal.backend().buffer()));
+    for event in events {
+        handle(app, &mut runner, event);
+        redraw(&mut terminal, app, &mut runner, PLAIN).unwrap();
+        out.push(text(terminal.backend().buffer()));
+    }
+    out
+}
+
+#[test]
+fn whole_app_snapshots() {
+    let mut app = ready_app();
+    let cells = super::ui::preview_cells(Rect::new(0, 0, 100, 30)).unwrap();
+    let events = vec![
+        Event::Job(JobMsg::Rendered(
+            1,
+            Ok(Box::new(tiny_protocol(cells.0, cells.1))),
+        )),
+        key('m'),
+        Event::Key(KeyEvent::new(KeyCode::Home, KeyModifiers::NONE)),
+        key('n'),
+    ];
+    let shots = screens(&mut app, 100, 30, events);
+    insta::assert_snapshot!("app_top_down", shots[1]);
+    insta::assert_snapshot!("app_bottom_up_one_merge", shots[4]);
+    let mut small = ready_app();
+    insta::assert_snapshot!("app_80x24", screens(&mut small, 80, 24, vec![])[0]);
+    insta::assert_snapshot!(
+        "app_too_small",
+        screens(&mut ready_app(), 50, 15, vec![])[0]
+    );
+}

@@ -1,0 +1,101 @@
+//! The real binary in a real terminal (tmux): it opens on the built-in dataset, shows the panes,
+//! steps a merge, and quits leaving the terminal as it was. Skipped where tmux is absent.
+
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+/// A tmux server of our own, so the test never touches the user's sessions.
+struct Tmux {
+    socket: String,
+}
+
+impl Tmux {
+    fn run(&self, args: &[&str]) -> String {
+        let out = Command::new("tmux")
+            .arg("-L")
+            .arg(&self.socket)
+            .args(args)
+            .output()
+            .expect("tmux runs");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    }
+
+    fn screen(&self) -> String {
+        self.run(&["capture-pane", "-p", "-t", "smoke"])
+    }
+
+    /// Waits until the screen shows `text`, for at most `secs` seconds.
+    fn wait_for(&self, text: &str, secs: u64) -> String {
+        let start = Instant::now();
+        loop {
+            let screen = self.screen();
+            if screen.contains(text) {
+                return screen;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(secs),
+                "waited {secs} s for {text:?}; the screen shows:\n{screen}"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    fn keys(&self, keys: &str) {
+        self.run(&["send-keys", "-t", "smoke", keys]);
+    }
+}
+
+impl Drop for Tmux {
+    fn drop(&mut self) {
+        let _ = Command::new("tmux")
+            .arg("-L")
+            .arg(&self.socket)
+            .arg("kill-server")
+            .output();
+    }
+}
+
+#[test]
+fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
+    if Command::new("tmux").arg("-V").output().is_err() {
+        eprintln!(
+            "SKIPPED: tmux is not installed, so the TUI smoke test cannot run (apt-get install tmux)"
+        );
+        return;
+    }
+    let tmux = Tmux {
+        socket: format!("slabscope-smoke-{}", std::process::id()),
+    };
+    let command = format!(
+        "{} --protocol blocks; echo EXITED $?; sleep 60",
+        env!("CARGO_BIN_EXE_slabscope")
+    );
+    tmux.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "smoke",
+        "-x",
+        "100",
+        "-y",
+        "30",
+        &command,
+    ]);
+    let screen = tmux.wait_for("Slabs:", 120);
+    for pane in ["axes", "Exploded view", "Curves"] {
+        assert!(screen.contains(pane), "{pane} missing:\n{screen}");
+    }
+    tmux.keys("m");
+    tmux.wait_for("bottom-up", 60);
+    tmux.keys("Home");
+    tmux.wait_for("n merges the most similar pair", 30);
+    tmux.keys("n");
+    let screen = tmux.wait_for("merged", 30);
+    assert!(screen.contains("step 1/"), "{screen}");
+    tmux.keys("q");
+    let screen = tmux.wait_for("EXITED 0", 30);
+    assert!(
+        !screen.contains("Exploded view"),
+        "the alternate screen is gone:\n{screen}"
+    );
+}
