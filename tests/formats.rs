@@ -269,6 +269,15 @@ fn nrrd_writer_round_trips_and_never_overwrites() {
         assert_eq!(back.voxels(), original.voxels());
         assert_eq!(back.spacing(), original.spacing());
         assert_eq!(back.voxel_type(), VoxelType::I16);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+            assert_eq!(
+                mode, 0o644,
+                "written files are readable, not the temporary file's 0600"
+            );
+        }
         let err = write_nrrd(&path, &original, encoding, false).unwrap_err();
         assert!(err.to_string().contains("already exists"), "{err}");
         write_nrrd(&path, &original, encoding, true).unwrap();

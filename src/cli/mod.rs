@@ -171,25 +171,9 @@ pub fn check_writable(path: &Path, force: bool) -> Result<()> {
     Ok(())
 }
 
-/// Writes `bytes` to `path` through a temporary file renamed into place; an existing file is
-/// replaced only when `force` is set.
+/// Writes `bytes` to `path` atomically; an existing file is replaced only when `force` is set.
 pub fn write_new(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
     use std::io::Write;
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".slabscope-")
-        .suffix(".tmp")
-        .tempfile_in(dir)?;
-    tmp.write_all(bytes)?;
-    tmp.as_file().sync_all()?;
-    let done = if force {
-        tmp.persist(path)
-    } else {
-        tmp.persist_noclobber(path)
-    };
-    done.map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.error))?;
+    slabscope::volume::io::write_atomic(path, force, |mut file| file.write_all(bytes))?;
     Ok(())
 }

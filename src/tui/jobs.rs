@@ -142,6 +142,7 @@ impl Jobs {
         };
         let slabs = analysis.slabs(app.method, app.position);
         let (method, look, name) = (app.method, app.look, app.name.clone());
+        let views = app.views.ready().cloned();
         let stack_params = app.stack.clone();
         let stem = Path::new(&name)
             .file_stem()
@@ -172,7 +173,10 @@ impl Jobs {
                 let image = Renderer::new(&volume)?.render(&layout, &render, monitor)?;
                 crate::cli::write_new(&png, &image.png()?, false)?;
                 let text = serde_json::to_string_pretty(&crate::cli::analysis_json(
-                    &name, &volume, None, &part,
+                    &name,
+                    &volume,
+                    views.as_ref(),
+                    &part,
                 ))?;
                 crate::cli::write_new(&json, text.as_bytes(), false)?;
                 let labelled = slabscope::partition::label_volume(&volume, &part)?;

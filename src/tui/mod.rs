@@ -46,7 +46,7 @@ pub enum Event {
 }
 
 /// How long the terminal may take to say which image protocol it speaks.
-const QUERY_TIMEOUT: Duration = Duration::from_millis(250);
+const QUERY_TIMEOUT: Duration = Duration::from_millis(150);
 
 /// The image protocol for the preview: asked of the terminal (in-band, so it works over SSH and
 /// through tmux), or as the user says.
@@ -75,7 +75,7 @@ fn picker(protocol: Protocol) -> Picker {
                 // terminal itself always answers lets it finish.
                 let mut out = stdout();
                 let _ = out.write_all(b"\x1b[5n").and_then(|()| out.flush());
-                std::thread::sleep(Duration::from_millis(150));
+                std::thread::sleep(Duration::from_millis(40));
             }
             picker
         }

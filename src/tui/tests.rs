@@ -407,3 +407,28 @@ fn whole_app_snapshots() {
         screens(&mut ready_app(), 50, 15, vec![])[0]
     );
 }
+
+/// Not a test but a measurement: `cargo test --release --bin slabscope tui_step_timing -- --ignored
+/// --nocapture` prints the time of one step forward or back, from the key to the redrawn screen.
+#[test]
+#[ignore = "a benchmark: prints timings, asserts nothing about them"]
+fn tui_step_timing() {
+    for (w, h) in [(80, 24), (200, 60)] {
+        let mut app = ready_app();
+        let mut terminal = Terminal::new(TestBackend::new(w, h)).unwrap();
+        let mut runner = Recorder::default();
+        redraw(&mut terminal, &mut app, &mut runner, Theme { color: true }).unwrap();
+        let steps = 400;
+        let start = std::time::Instant::now();
+        for i in 0..steps {
+            handle(
+                &mut app,
+                &mut runner,
+                key(if i % 2 == 0 { 'n' } else { 'p' }),
+            );
+            redraw(&mut terminal, &mut app, &mut runner, Theme { color: true }).unwrap();
+        }
+        let per = start.elapsed().as_secs_f64() * 1e3 / f64::from(steps);
+        println!("{w}x{h}: {per:.3} ms per step and redraw");
+    }
+}

@@ -199,6 +199,51 @@ fn sniff(head: &[u8]) -> Option<Format> {
     metaimage::looks_like(head).then_some(Format::MetaImage)
 }
 
+/// Writes a file through a temporary file beside `path`, renamed into place when complete, so a
+/// reader never sees half a file; an existing `path` is replaced only when `force` is set. The
+/// file gets the usual permissions (0644 on Unix), not the temporary file's private ones.
+pub fn write_atomic(
+    path: &Path,
+    force: bool,
+    write: impl FnOnce(&File) -> std::io::Result<()>,
+) -> Result<()> {
+    if !force && path.exists() {
+        return Err(Error::Exists {
+            path: path.to_path_buf(),
+        });
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".slabscope-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o644));
+    }
+    let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
+    write(tmp.as_file())
+        .and_then(|()| tmp.as_file().sync_all())
+        .map_err(|e| Error::io(path, e))?;
+    let persisted = if force {
+        tmp.persist(path)
+    } else {
+        tmp.persist_noclobber(path)
+    };
+    persisted.map_err(|e| {
+        if e.error.kind() == std::io::ErrorKind::AlreadyExists {
+            Error::Exists {
+                path: path.to_path_buf(),
+            }
+        } else {
+            Error::io(path, e.error)
+        }
+    })?;
+    Ok(())
+}
+
 /// The data file a header names, relative to the header's folder; it must exist.
 pub(crate) fn data_file(header: &Path, name: &str) -> Result<PathBuf> {
     let p = Path::new(name);

@@ -383,36 +383,7 @@ pub enum NrrdEncoding {
 /// The file is written to a temporary file beside `path` and renamed into place; an existing
 /// `path` is replaced only when `force` is set.
 pub fn write_nrrd(path: &Path, volume: &Volume, encoding: NrrdEncoding, force: bool) -> Result<()> {
-    if !force && path.exists() {
-        return Err(Error::Exists {
-            path: path.to_path_buf(),
-        });
-    }
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let tmp = tempfile::Builder::new()
-        .prefix(".slabscope-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, e))?;
-    write_to(tmp.as_file(), volume, encoding).map_err(|e| Error::io(path, e))?;
-    let persisted = if force {
-        tmp.persist(path)
-    } else {
-        tmp.persist_noclobber(path)
-    };
-    persisted.map_err(|e| {
-        if e.error.kind() == std::io::ErrorKind::AlreadyExists {
-            Error::Exists {
-                path: path.to_path_buf(),
-            }
-        } else {
-            Error::io(path, e.error)
-        }
-    })?;
-    Ok(())
+    super::write_atomic(path, force, |file| write_to(file, volume, encoding))
 }
 
 fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Result<()> {
@@ -444,8 +415,7 @@ fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Re
         sink.write_all(&bytes)?;
     }
     drop(sink);
-    out.flush()?;
-    file.sync_all()
+    out.flush()
 }
 
 #[cfg(test)]
