@@ -121,8 +121,27 @@ impl Columns {
 }
 
 /// The joint histograms `h(S_i, S_i+1)` of consecutive slabs of `slabs` (contiguous, in order),
-/// each `bins × bins`, by one pass over the active pixels and the constant groups.
+/// each `bins × bins`. Many pairs are split among the threads, each pair's histogram made once;
+/// a few pairs (a merge step) split the pixels instead.
 fn consecutive_joints(stack: &SliceStack, columns: &Columns, slabs: &[Slab]) -> Vec<Vec<u64>> {
+    let pairs = slabs.len().saturating_sub(1);
+    let threads = rayon::current_num_threads();
+    if pairs >= 4 * threads {
+        let per = pairs.div_ceil(2 * threads);
+        let blocks: Vec<Vec<Vec<u64>>> = (0..pairs)
+            .step_by(per)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|first| joints_over_pixels(stack, columns, &slabs[first..(first + per).min(pairs) + 1], false))
+            .collect();
+        return blocks.into_iter().flatten().collect();
+    }
+    joints_over_pixels(stack, columns, slabs, true)
+}
+
+/// The joint histograms of consecutive `slabs` by one pass over the active pixels (in parallel
+/// when `parallel`) and the constant groups.
+fn joints_over_pixels(stack: &SliceStack, columns: &Columns, slabs: &[Slab], parallel: bool) -> Vec<Vec<u64>> {
     let b = stack.bins();
     let pairs = slabs.len().saturating_sub(1);
     if pairs == 0 {
@@ -131,7 +150,7 @@ fn consecutive_joints(stack: &SliceStack, columns: &Columns, slabs: &[Slab]) -> 
     let (start, end) = (slabs[0].0, slabs[slabs.len() - 1].1);
     let zero = || vec![0u64; pairs * b * b];
     // A few tasks per thread: each task sums into its own histograms, which are then added up.
-    let tasks = rayon::current_num_threads() * 4;
+    let tasks = if parallel { rayon::current_num_threads() * 4 } else { 1 };
     let chunk = columns.active.len().div_ceil(tasks).max(1024);
     let mut flat = columns
         .active
