@@ -170,6 +170,13 @@ pub struct RenderArgs {
     #[arg(long)]
     pub force: bool,
     #[command(flatten)]
+    pub scene: SceneArgs,
+}
+
+/// What to show: how to read the volume, find the axis, cut the slabs and render them.
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    #[command(flatten)]
     pub options: ViewOptions,
     #[command(flatten)]
     pub partition: PartitionArgs,
@@ -188,13 +195,7 @@ pub struct PreviewArgs {
     #[arg(long, value_enum, default_value_t = Protocol::Auto)]
     pub protocol: Protocol,
     #[command(flatten)]
-    pub options: ViewOptions,
-    #[command(flatten)]
-    pub partition: PartitionArgs,
-    #[command(flatten)]
-    pub view: ViewArgs,
-    #[command(flatten)]
-    pub load: LoadArgs,
+    pub scene: SceneArgs,
 }
 
 /// How the preview reaches the terminal.
@@ -229,19 +230,17 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// Loads, finds the axis and the slabs, and renders `width × height`.
 fn render_file(
     file: &std::path::Path,
-    load: &LoadArgs,
-    view: &ViewArgs,
-    partition: &PartitionArgs,
-    options: &ViewOptions,
+    scene: &SceneArgs,
     (width, height): (u32, u32),
 ) -> Result<Image> {
-    let loaded = super::load(file, load)?;
+    let loaded = super::load(file, &scene.load)?;
     let volume = &loaded.volume;
-    let axis = match partition.axis {
+    let axis = match scene.partition.axis {
         AxisChoice::Direction(d) => d,
-        AxisChoice::Best => run_search(volume, &view.params())?.best().axis,
+        AxisChoice::Best => run_search(volume, &scene.view.params())?.best().axis,
     };
-    let part = run_partition(volume, axis, &partition.params(view))?;
+    let part = run_partition(volume, axis, &scene.partition.params(&scene.view))?;
+    let options = &scene.options;
     if let Some(h) = options.highlight
         && h >= part.slabs.len()
     {
@@ -263,14 +262,7 @@ fn render_file(
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {
     super::check_writable(&args.output, args.force)?;
-    let image = render_file(
-        &args.file,
-        &args.load,
-        &args.view,
-        &args.partition,
-        &args.options,
-        args.size,
-    )?;
+    let image = render_file(&args.file, &args.scene, args.size)?;
     super::write_new(&args.output, &image.png()?, args.force)
 }
 
@@ -293,14 +285,7 @@ pub fn run_preview(args: &PreviewArgs) -> Result<()> {
     } else {
         (u32::from(cols) * cell_w, u32::from(rows) * cell_h)
     };
-    let image = render_file(
-        &args.file,
-        &args.load,
-        &args.view,
-        &args.partition,
-        &args.options,
-        size,
-    )?;
+    let image = render_file(&args.file, &args.scene, size)?;
     let (w, h) = (image.pixmap.width(), image.pixmap.height());
     let rgba = RgbaImage::from_raw(w, h, image.pixmap.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;

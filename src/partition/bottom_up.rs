@@ -132,7 +132,14 @@ fn consecutive_joints(stack: &SliceStack, columns: &Columns, slabs: &[Slab]) -> 
             .step_by(per)
             .collect::<Vec<_>>()
             .into_par_iter()
-            .map(|first| joints_over_pixels(stack, columns, &slabs[first..(first + per).min(pairs) + 1], false))
+            .map(|first| {
+                joints_over_pixels(
+                    stack,
+                    columns,
+                    &slabs[first..=(first + per).min(pairs)],
+                    false,
+                )
+            })
             .collect();
         return blocks.into_iter().flatten().collect();
     }
@@ -141,7 +148,12 @@ fn consecutive_joints(stack: &SliceStack, columns: &Columns, slabs: &[Slab]) -> 
 
 /// The joint histograms of consecutive `slabs` by one pass over the active pixels (in parallel
 /// when `parallel`) and the constant groups.
-fn joints_over_pixels(stack: &SliceStack, columns: &Columns, slabs: &[Slab], parallel: bool) -> Vec<Vec<u64>> {
+fn joints_over_pixels(
+    stack: &SliceStack,
+    columns: &Columns,
+    slabs: &[Slab],
+    parallel: bool,
+) -> Vec<Vec<u64>> {
     let b = stack.bins();
     let pairs = slabs.len().saturating_sub(1);
     if pairs == 0 {
@@ -150,7 +162,11 @@ fn joints_over_pixels(stack: &SliceStack, columns: &Columns, slabs: &[Slab], par
     let (start, end) = (slabs[0].0, slabs[slabs.len() - 1].1);
     let zero = || vec![0u64; pairs * b * b];
     // A few tasks per thread: each task sums into its own histograms, which are then added up.
-    let tasks = if parallel { rayon::current_num_threads() * 4 } else { 1 };
+    let tasks = if parallel {
+        rayon::current_num_threads() * 4
+    } else {
+        1
+    };
     let chunk = columns.active.len().div_ceil(tasks).max(1024);
     let mut flat = columns
         .active

@@ -318,12 +318,12 @@ impl Frame<'_> {
             hit = true;
             match self.params.mode {
                 Mode::Dvr => {
-                    self.composite(origin, d, slab, (t0, t1), faint, &mut acc);
+                    self.composite((origin, d), slab, (t0, t1), faint, &mut acc);
                     if acc[3] >= OPAQUE {
                         break;
                     }
                 }
-                Mode::Mip => self.maximum(origin, d, slab, (t0, t1), faint, &mut mip),
+                Mode::Mip => self.maximum((origin, d), slab, (t0, t1), faint, &mut mip),
             }
         }
         match self.params.mode {
@@ -382,18 +382,18 @@ impl Frame<'_> {
         )
     }
 
-    fn composite(
+    /// Visits the grid samples of `range` inside `slab` in order, in voxel index coordinates,
+    /// jumping over bricks that `empty` rules out; stops when `visit` returns false.
+    fn march(
         &self,
-        o: [f64; 3],
-        d: [f64; 3],
+        (o, d): ([f64; 3], [f64; 3]),
         slab: &Placement,
         range: (f64, f64),
-        faint: bool,
-        acc: &mut [f32; 4],
+        empty: impl Fn(usize) -> bool,
+        mut visit: impl FnMut([f64; 3]) -> bool,
     ) {
         let dir_index: [f64; 3] = std::array::from_fn(|m| d[m] / self.spacing[m]);
         let (mut n, last) = self.samples(range);
-        let k = if faint { GHOST } else { 1.0 };
         while n <= last {
             let t = n as f64 * self.step;
             let p: [f64; 3] = std::array::from_fn(|m| o[m] + t * d[m]);
@@ -403,69 +403,83 @@ impl Frame<'_> {
             }
             let q: [f64; 3] = std::array::from_fn(|m| p[m] / self.spacing[m]);
             let b = self.bricks.index(q);
-            if self.transparent[self.bricks.linear(b)] {
+            if empty(self.bricks.linear(b)) {
                 let skip = Bricks::exit(q, dir_index, b);
                 n = n.max(((t + skip) / self.step).ceil() as i64);
                 continue;
             }
-            let (v, g) = if self.params.shading {
-                self.it.sample_gradient(q)
-            } else {
-                (self.it.sample(q), [0.0; 3])
-            };
-            if v.is_nan() {
-                continue;
-            }
-            let c = self.transfer.rgba(v);
-            if c[3] <= 0.0 {
-                continue;
-            }
-            let light = if self.params.shading {
-                shade(g, self.spacing, d)
-            } else {
-                1.0
-            };
-            let w = (1.0 - acc[3]) * k;
-            for i in 0..3 {
-                acc[i] += w * c[i] * light;
-            }
-            acc[3] += w * c[3];
-            if acc[3] >= OPAQUE {
+            if !visit(q) {
                 return;
             }
         }
     }
 
+    fn composite(
+        &self,
+        ray: ([f64; 3], [f64; 3]),
+        slab: &Placement,
+        range: (f64, f64),
+        faint: bool,
+        acc: &mut [f32; 4],
+    ) {
+        let k = if faint { GHOST } else { 1.0 };
+        let shading = self.params.shading;
+        self.march(
+            ray,
+            slab,
+            range,
+            |b| self.transparent[b],
+            |q| {
+                let (v, g) = if shading {
+                    self.it.sample_gradient(q)
+                } else {
+                    (self.it.sample(q), [0.0; 3])
+                };
+                let c = if v.is_nan() {
+                    [0.0; 4]
+                } else {
+                    self.transfer.rgba(v)
+                };
+                if c[3] > 0.0 {
+                    let light = if shading {
+                        shade(g, self.spacing, ray.1)
+                    } else {
+                        1.0
+                    };
+                    let w = (1.0 - acc[3]) * k;
+                    for i in 0..3 {
+                        acc[i] += w * c[i] * light;
+                    }
+                    acc[3] += w * c[3];
+                }
+                acc[3] < OPAQUE
+            },
+        );
+    }
+
     fn maximum(
         &self,
-        o: [f64; 3],
-        d: [f64; 3],
+        ray: ([f64; 3], [f64; 3]),
         slab: &Placement,
         range: (f64, f64),
         faint: bool,
         best: &mut (f32, bool),
     ) {
-        let dir_index: [f64; 3] = std::array::from_fn(|m| d[m] / self.spacing[m]);
-        let (mut n, last) = self.samples(range);
-        while n <= last {
-            let t = n as f64 * self.step;
-            let p: [f64; 3] = std::array::from_fn(|m| o[m] + t * d[m]);
-            n += 1;
-            if !self.inside(p, slab) {
-                continue;
-            }
-            let q: [f64; 3] = std::array::from_fn(|m| p[m] / self.spacing[m]);
-            let b = self.bricks.index(q);
-            if self.bricks.max[self.bricks.linear(b)] <= best.0 {
-                let skip = Bricks::exit(q, dir_index, b);
-                n = n.max(((t + skip) / self.step).ceil() as i64);
-                continue;
-            }
-            let v = self.it.sample(q);
-            if v > best.0 {
-                *best = (v, faint);
-            }
-        }
+        let top = std::cell::Cell::new(*best);
+        self.march(
+            ray,
+            slab,
+            range,
+            |b| self.bricks.max[b] <= top.get().0,
+            |q| {
+                let v = self.it.sample(q);
+                if v > top.get().0 {
+                    top.set((v, faint));
+                }
+                true
+            },
+        );
+        *best = top.get();
     }
 }
 

@@ -268,6 +268,13 @@ impl<'a> Interpolator<'a> {
     /// NaN when a voxel it mixes is missing.
     #[inline]
     pub fn sample(&self, p: [f64; 3]) -> f32 {
+        let (base, f) = self.cell(p);
+        self.interpolate(base, f)
+    }
+
+    /// The linear offset of the lower corner of the cell around `p`, and the fractions in it.
+    #[inline]
+    fn cell(&self, p: [f64; 3]) -> (usize, [f32; 3]) {
         let mut base = 0;
         let mut f = [0.0f32; 3];
         for m in 0..3 {
@@ -277,7 +284,7 @@ impl<'a> Interpolator<'a> {
             f[m] = (q - i as f64) as f32;
             base += i * self.stride[m];
         }
-        self.interpolate(base, f)
+        (base, f)
     }
 
     /// Trilinear interpolation in the cell whose lower corner is at linear offset `base`, with
@@ -298,14 +305,7 @@ impl<'a> Interpolator<'a> {
     /// interpolant of the cell around `p`, so shading costs no extra voxel reads.
     #[inline]
     pub fn sample_gradient(&self, p: [f64; 3]) -> (f32, [f32; 3]) {
-        let mut base = 0;
-        let mut f = [0.0f32; 3];
-        for m in 0..3 {
-            let q = p[m].max(0.0);
-            let i = (q as usize).min(self.last[m]);
-            f[m] = (q - i as f64) as f32;
-            base += i * self.stride[m];
-        }
+        let (base, f) = self.cell(p);
         let [x1, y1, z1] = self.next;
         let c = &self.data[base..=base + x1 + y1 + z1];
         let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);

@@ -8,7 +8,7 @@ use std::path::Path;
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
-use crate::volume::{Endian, Volume, VoxelType};
+use crate::volume::{Endian, VoxelType};
 
 const MAX_HEADER: u64 = 1 << 20;
 
@@ -247,11 +247,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: extra > 1,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Ok(Read0 {
-        volume: Volume::new(dims, spacing, h.voxel_type, voxels)
-            .map_err(|e| Error::format(path, e.to_string()))?,
-        notes,
-    })
+    Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)
 }
 
 #[cfg(test)]

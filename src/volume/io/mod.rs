@@ -134,6 +134,22 @@ pub(crate) struct Read0 {
     pub notes: Vec<String>,
 }
 
+impl Read0 {
+    /// The volume read from `path`, with the reader's notes.
+    pub(crate) fn new(
+        path: &Path,
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        ty: crate::volume::VoxelType,
+        voxels: Vec<f32>,
+        notes: Vec<String>,
+    ) -> Result<Self> {
+        let volume = Volume::new(dims, spacing, ty, voxels)
+            .map_err(|e| Error::format(path, e.to_string()))?;
+        Ok(Self { volume, notes })
+    }
+}
+
 fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
     if opts.raw.dims.is_some() {
         return Ok(Format::Raw);

@@ -12,7 +12,7 @@ use nifti::{Endianness, NiftiHeader};
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
-use crate::volume::{Endian, Volume, VoxelType, dims_string};
+use crate::volume::{Endian, VoxelType, dims_string};
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
@@ -175,11 +175,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: extra > 1,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Ok(Read0 {
-        volume: Volume::new(dims, spacing, ty, voxels)
-            .map_err(|e| Error::format(path, e.to_string()))?,
-        notes,
-    })
+    Read0::new(path, dims, spacing, ty, voxels, notes)
 }
 
 /// The `.img` (or `.img.gz`) beside a `.hdr` header.

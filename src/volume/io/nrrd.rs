@@ -361,11 +361,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: extra > 1,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Ok(Read0 {
-        volume: Volume::new(dims, spacing, h.voxel_type, voxels)
-            .map_err(|e| Error::format(path, e.to_string()))?,
-        notes,
-    })
+    Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)
 }
 
 /// How [`write_nrrd`] stores the voxels.

@@ -6,7 +6,7 @@ use std::path::Path;
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
-use crate::volume::{Endian, Volume, VoxelType, dims_string};
+use crate::volume::{Endian, VoxelType, dims_string};
 
 /// How to read a headerless raw file; unset fields come from the file name or defaults.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -81,11 +81,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     if raw.spacing.is_none() {
         notes.push("raw data carries no spacing: using 1 mm (set it with --spacing)".into());
     }
-    Ok(Read0 {
-        volume: Volume::new(dims, spacing, voxel_type, voxels)
-            .map_err(|e| Error::format(path, e.to_string()))?,
-        notes,
-    })
+    Read0::new(path, dims, spacing, voxel_type, voxels, notes)
 }
 
 /// "give --type", with the bytes per voxel the file size suggests.

@@ -12,7 +12,7 @@ use tiff::tags::{ResolutionUnit, Tag};
 use super::data::check_budget;
 use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
-use crate::volume::{Volume, VoxelType};
+use crate::volume::VoxelType;
 
 type Tiff = Decoder<BufReader<File>>;
 
@@ -159,11 +159,7 @@ pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     }
     let (w, h, ty) = first.expect("a TIFF has a first page");
     let dims = [w as usize, h as usize, pages];
-    Ok(Read0 {
-        volume: Volume::new(dims, spacing, ty, voxels)
-            .map_err(|e| Error::format(path, e.to_string()))?,
-        notes: Vec::new(),
-    })
+    Read0::new(path, dims, spacing, ty, voxels, Vec::new())
 }
 
 /// The last run of digits in a file name, for ordering slices.
@@ -224,11 +220,7 @@ pub(crate) fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
             .unwrap_or_default()
             .to_string_lossy()
     )];
-    Ok(Read0 {
-        volume: Volume::new(dims, spacing, ty, voxels)
-            .map_err(|e| Error::format(dir, e.to_string()))?,
-        notes,
-    })
+    Read0::new(dir, dims, spacing, ty, voxels, notes)
 }
 
 #[cfg(test)]

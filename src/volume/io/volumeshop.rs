@@ -8,7 +8,7 @@ use std::path::Path;
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
-use crate::volume::{Endian, Volume, VoxelType, dims_string};
+use crate::volume::{Endian, VoxelType, dims_string};
 
 /// The dimensions a `.dat` header of `head` claims, when the file size `len` agrees with them.
 pub(crate) fn check_header(path: &Path, head: &[u8], len: u64) -> Result<[usize; 3]> {
@@ -53,9 +53,6 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: false,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Ok(Read0 {
-        volume: Volume::new(dims, [1.0; 3], VoxelType::U16, voxels)
-            .map_err(|e| Error::format(path, e.to_string()))?,
-        notes: vec!["VolumeShop .dat files carry no spacing: using 1 mm".into()],
-    })
+    let notes = vec!["VolumeShop .dat files carry no spacing: using 1 mm".into()];
+    Read0::new(path, dims, [1.0; 3], VoxelType::U16, voxels, notes)
 }
