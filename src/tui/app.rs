@@ -678,6 +678,7 @@ impl App {
                 effects
             }
             JobMsg::Loaded(Err(e)) => {
+                self.message = Some(format!("{e} (q quits)"));
                 self.volume = Load::Failed(e);
                 vec![]
             }

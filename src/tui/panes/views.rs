@@ -35,7 +35,7 @@ impl Widget for ViewsPane<'_> {
         block.render(area, buf);
         let Load::Ready(views) = &self.app.views else {
             let idle = match &self.app.volume {
-                Load::Failed(e) => format!("cannot load {}: {e}", self.app.name),
+                Load::Failed(e) => format!("cannot load the volume: {e}"),
                 _ => format!("loading {}…", self.app.name),
             };
             placeholder(
