@@ -48,13 +48,17 @@ impl Widget for SlabsPane<'_> {
         } else {
             "ΔI→"
         };
-        // The millimetres column only where there is room for it.
-        let wide = area.width >= 56;
-        let mut header = vec!["#", "slices"];
+        // The mean where there is room, and the millimetre range where there is more.
+        let (medium, wide) = (area.width >= 41, area.width >= 56);
+        let mut header = vec!["#", "slices", "mm"];
         if wide {
-            header.push("mm");
+            header.push("from–to mm");
         }
-        header.extend(["H", "mean", next_header]);
+        header.push("H");
+        if medium {
+            header.push("mean");
+        }
+        header.push(next_header);
         let header =
             Row::new(header).style(self.theme.fg(Color::DarkGray).add_modifier(Modifier::BOLD));
         let visible = usize::from(area.height.saturating_sub(3));
@@ -74,11 +78,20 @@ impl Widget for SlabsPane<'_> {
                 };
                 let mean = s.mean.map_or_else(|| "-".into(), |m| format!("{m:.1}"));
                 let mark = if s.near_empty { " ∅" } else { "" };
-                let mut cells = vec![format!("{i}{mark}"), super::slices_text(s.slices)];
+                let thickness = format!("{:.1}", s.mm.1 - s.mm.0);
+                let mut cells = vec![
+                    format!("{i}{mark}"),
+                    super::slices_text(s.slices),
+                    thickness,
+                ];
                 if wide {
                     cells.push(format!("{:.1}–{:.1}", s.mm.0, s.mm.1));
                 }
-                cells.extend([format!("{:.2}", s.entropy), mean, next]);
+                cells.push(format!("{:.2}", s.entropy));
+                if medium {
+                    cells.push(mean);
+                }
+                cells.push(next);
                 let row = Row::new(cells);
                 match (i == app.slab_row, self.focused) {
                     (true, true) => row.style(self.theme.selected()),
@@ -88,15 +101,19 @@ impl Widget for SlabsPane<'_> {
                 }
             })
             .collect();
-        let mut widths = vec![Constraint::Length(3), Constraint::Length(8)];
+        let mut widths = vec![
+            Constraint::Length(3),
+            Constraint::Length(8),
+            Constraint::Length(5),
+        ];
         if wide {
             widths.push(Constraint::Length(13));
         }
-        widths.extend([
-            Constraint::Length(4),
-            Constraint::Length(7),
-            Constraint::Min(6),
-        ]);
+        widths.push(Constraint::Length(4));
+        if medium {
+            widths.push(Constraint::Length(7));
+        }
+        widths.push(Constraint::Min(6));
         Table::new(rows, widths)
             .header(header)
             .block(self.theme.block(title, self.focused))
