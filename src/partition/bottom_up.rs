@@ -47,18 +47,38 @@ impl PixelHistogram {
         }
     }
 
-    fn fill(&mut self, symbols: &[u8]) {
+    fn clear(&mut self) {
         for &u in &self.used {
             self.counts[usize::from(u)] = 0;
         }
         self.used.clear();
+    }
+
+    #[inline]
+    fn add(&mut self, symbol: u8, n: u32) {
+        let c = &mut self.counts[usize::from(symbol)];
+        if *c == 0 {
+            self.used.push(symbol);
+        }
+        *c += n;
+    }
+
+    fn fill(&mut self, symbols: &[u8]) {
+        self.clear();
         for &s in symbols {
             if s != MISSING {
-                let c = &mut self.counts[usize::from(s)];
-                if *c == 0 {
-                    self.used.push(s);
-                }
-                *c += 1;
+                self.add(s, 1);
+            }
+        }
+    }
+
+    /// Adds `other ⊗ self` into the `bins × bins` joint histogram `h` (rows are `other`'s bins).
+    fn cross_into(&self, other: &Self, h: &mut [u64], bins: usize) {
+        for &x in &other.used {
+            let cx = u64::from(other.counts[usize::from(x)]);
+            let row = &mut h[usize::from(x) * bins..(usize::from(x) + 1) * bins];
+            for &y in &self.used {
+                row[usize::from(y)] += cx * u64::from(self.counts[usize::from(y)]);
             }
         }
     }
@@ -75,6 +95,13 @@ pub(crate) struct Columns {
     active: Vec<u32>,
     /// Constant columns: (symbol, first slice, slices, how many pixels).
     constant: Vec<(u8, usize, usize, u64)>,
+    /// The active columns as runs of one symbol: active column `i` has the runs
+    /// `run_start[i] .. run_start[i + 1]`, each from slice `run_first[r]` to the next run's first
+    /// (or `run_end[i]`), of symbol `run_symbol[r]`.
+    run_start: Vec<usize>,
+    run_first: Vec<u32>,
+    run_symbol: Vec<u8>,
+    run_end: Vec<u32>,
 }
 
 impl Columns {
@@ -116,7 +143,82 @@ impl Columns {
         constant.sort_unstable();
         let mut active = active;
         active.sort_unstable();
-        Self { active, constant }
+        let per_column: Vec<(Vec<u32>, Vec<u8>, u32)> = active
+            .par_iter()
+            .map(|&p| {
+                let (first, column) = stack.column(p as usize, 0, n);
+                let (mut firsts, mut symbols) = (Vec::new(), Vec::new());
+                for (k, &c) in column.iter().enumerate() {
+                    if symbols.last() != Some(&c) {
+                        firsts.push((first + k) as u32);
+                        symbols.push(c);
+                    }
+                }
+                (firsts, symbols, (first + column.len()) as u32)
+            })
+            .collect();
+        let mut run_start = Vec::with_capacity(active.len() + 1);
+        let total: usize = per_column.iter().map(|c| c.0.len()).sum();
+        let (mut run_first, mut run_symbol) =
+            (Vec::with_capacity(total), Vec::with_capacity(total));
+        let mut run_end = Vec::with_capacity(active.len());
+        for (firsts, symbols, end) in per_column {
+            run_start.push(run_first.len());
+            run_first.extend(firsts);
+            run_symbol.extend(symbols);
+            run_end.push(end);
+        }
+        run_start.push(run_first.len());
+        Self {
+            active,
+            constant,
+            run_start,
+            run_first,
+            run_symbol,
+            run_end,
+        }
+    }
+
+    /// The symbol of active column `i` when one run covers all of slices `lo..hi`.
+    #[inline]
+    fn single_run(&self, i: usize, lo: usize, hi: usize) -> Option<u8> {
+        let runs = self.run_start[i]..self.run_start[i + 1];
+        let firsts = &self.run_first[runs.clone()];
+        let r = firsts
+            .partition_point(|&f| f as usize <= lo)
+            .checked_sub(1)?;
+        let end = firsts.get(r + 1).copied().unwrap_or(self.run_end[i]) as usize;
+        (end >= hi).then(|| self.run_symbol[runs][r])
+    }
+
+    /// Fills `hists[j]` with active column `i`'s histogram over `slabs[j]` (contiguous slabs),
+    /// from its runs: the work is the number of runs, not of slices.
+    fn fill_from_runs(&self, i: usize, slabs: &[Slab], hists: &mut [PixelHistogram]) {
+        for h in hists.iter_mut() {
+            h.clear();
+        }
+        let (lo, hi) = (slabs[0].0 as u32, slabs[slabs.len() - 1].1 as u32);
+        let runs = self.run_start[i]..self.run_start[i + 1];
+        let firsts = &self.run_first[runs.clone()];
+        let symbols = &self.run_symbol[runs];
+        let end = self.run_end[i];
+        let mut r = firsts.partition_point(|&f| f <= lo).saturating_sub(1);
+        let mut j = 0;
+        while r < firsts.len() && firsts[r] < hi {
+            let run_end = firsts.get(r + 1).copied().unwrap_or(end).min(hi);
+            let mut from = firsts[r].max(lo);
+            if symbols[r] != MISSING {
+                while from < run_end {
+                    while slabs[j].1 as u32 <= from {
+                        j += 1;
+                    }
+                    let to = run_end.min(slabs[j].1 as u32);
+                    hists[j].add(symbols[r], to - from);
+                    from = to;
+                }
+            }
+            r += 1;
+        }
     }
 }
 
@@ -168,39 +270,43 @@ fn joints_over_pixels(
         1
     };
     let chunk = columns.active.len().div_ceil(tasks).max(1024);
-    let mut flat = columns
-        .active
-        .par_iter()
+    let singles = slabs.iter().all(|s| s.1 - s.0 == 1);
+    let mut flat = (0..columns.active.len())
+        .into_par_iter()
         .with_min_len(chunk)
         .fold(
-            || (zero(), PixelHistogram::new(b), PixelHistogram::new(b)),
-            |(mut joint, mut prev, mut cur), &p| {
-                let (first, column) = stack.column(p as usize, start, end);
-                if column.is_empty() {
-                    return (joint, prev, cur);
+            || (zero(), vec![]),
+            |(mut joint, mut hists): (Vec<u64>, Vec<PixelHistogram>), i| {
+                if hists.is_empty() {
+                    hists = (0..slabs.len()).map(|_| PixelHistogram::new(b)).collect();
                 }
-                // The part of the column inside slab `s`.
-                let take = |s: Slab| {
-                    let clip = |i: usize| i.saturating_sub(first).min(column.len());
-                    &column[clip(s.0)..clip(s.1)]
-                };
-                prev.fill(take(slabs[0]));
-                for (i, &slab) in slabs.iter().enumerate().skip(1) {
-                    cur.fill(take(slab));
-                    let h = &mut joint[(i - 1) * b * b..i * b * b];
-                    for &x in &prev.used {
-                        let cx = u64::from(prev.counts[usize::from(x)]);
-                        let row = &mut h[usize::from(x) * b..(usize::from(x) + 1) * b];
-                        for &y in &cur.used {
-                            row[usize::from(y)] += cx * u64::from(cur.counts[usize::from(y)]);
+                if !singles && let Some(symbol) = columns.single_run(i, start, end) {
+                    // One symbol throughout the slabs: each pair adds |S_j|·|S_j+1| to (s, s).
+                    if symbol != MISSING {
+                        let cell = usize::from(symbol) * (b + 1);
+                        for (j, pair) in slabs.windows(2).enumerate() {
+                            joint[j * b * b + cell] +=
+                                ((pair[0].1 - pair[0].0) * (pair[1].1 - pair[1].0)) as u64;
                         }
                     }
-                    std::mem::swap(&mut prev, &mut cur);
+                    return (joint, hists);
                 }
-                (joint, prev, cur)
+                if singles {
+                    let (first, column) = stack.column(columns.active[i] as usize, start, end);
+                    for (j, h) in hists.iter_mut().enumerate() {
+                        let k = (start + j).wrapping_sub(first);
+                        h.fill(column.get(k..=k).unwrap_or(&[]));
+                    }
+                } else {
+                    columns.fill_from_runs(i, slabs, &mut hists);
+                }
+                for (j, pair) in hists.windows(2).enumerate() {
+                    pair[1].cross_into(&pair[0], &mut joint[j * b * b..(j + 1) * b * b], b);
+                }
+                (joint, hists)
             },
         )
-        .map(|(joint, _, _)| joint)
+        .map(|(joint, _)| joint)
         .reduce(zero, |mut a, c| {
             a.iter_mut().zip(&c).for_each(|(x, y)| *x += y);
             a
@@ -369,6 +475,47 @@ mod tests {
                 &literal_joint(&slices, slabs[i], slabs[i + 1], 5),
                 "pair {i}"
             );
+        }
+    }
+
+    #[test]
+    fn oblique_columns_follow_the_pairwise_definition() {
+        use crate::volume::{Volume, VoxelType};
+        // Blocky values with noise, so columns have both long runs and short ones, and start and
+        // end at different slices.
+        let mut state = 11u32;
+        let data = (0..14 * 11 * 9)
+            .map(|i| {
+                state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+                ((i % 14) / 5 * 20 + (i / 154) / 3 * 30) as f32
+                    + if state >> 29 == 0 { 15.0 } else { 0.0 }
+            })
+            .collect();
+        let v = Volume::new([14, 11, 9], [1.0; 3], VoxelType::F32, data).unwrap();
+        let params = super::super::StackParams {
+            bins: 8,
+            ..Default::default()
+        };
+        let stack = SliceStack::new(&v, [1.0, 2.0, 3.0], &params, &Monitor::none()).unwrap();
+        let n = stack.slices();
+        let slabs = [(0, 3), (3, 4), (4, n / 2), (n / 2, n)];
+        let joints = consecutive_joints(&stack, &Columns::new(&stack), &slabs);
+        let symbol = |p: usize, k: usize| stack.column(p, k, k + 1).1.first().copied();
+        for (i, joint) in joints.iter().enumerate() {
+            let mut literal = vec![0u64; 64];
+            for p in 0..stack.pixels() {
+                for s in slabs[i].0..slabs[i].1 {
+                    for t in slabs[i + 1].0..slabs[i + 1].1 {
+                        if let (Some(x), Some(y)) = (symbol(p, s), symbol(p, t))
+                            && x != MISSING
+                            && y != MISSING
+                        {
+                            literal[usize::from(x) * 8 + usize::from(y)] += 1;
+                        }
+                    }
+                }
+            }
+            assert_eq!(joint, &literal, "pair {i}");
         }
     }
 

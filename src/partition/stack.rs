@@ -370,7 +370,6 @@ fn plane_sums(
 ) -> (Vec<f64>, Vec<u64>) {
     let dims = volume.dims();
     let stride = [1, dims[0], dims[0] * dims[1]];
-    let plane = volume.len() / dims[m];
     let voxels = volume.voxels();
     let (a, b) = match m {
         0 => (1, 2),
@@ -381,12 +380,14 @@ fn plane_sums(
         .into_par_iter()
         .map(|s| {
             let (mut sum, mut count) = (0.0, 0u64);
-            for p in 0..plane {
-                let v =
-                    voxels[s * stride[m] + (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b]];
-                if counted(v) {
-                    sum += f64::from(v);
-                    count += 1;
+            for j in 0..dims[b] {
+                let row = s * stride[m] + j * stride[b];
+                for i in 0..dims[a] {
+                    let v = voxels[row + i * stride[a]];
+                    if counted(v) {
+                        sum += f64::from(v);
+                        count += 1;
+                    }
                 }
             }
             (sum, count)
