@@ -473,21 +473,34 @@ fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
     }
     println!();
     let best = v.best();
-    let margin = v
-        .views
-        .get(1)
-        .map(|next| next.entropy_rate - v.views[0].entropy_rate);
     print!(
         "best     {}{} h = {:.4} bits/sample",
         format_axis(best.axis).trim(),
         axis_name(best.axis),
         best.entropy_rate
     );
-    if let Some(m) = margin {
-        print!(", {m:.4} below the runner-up");
+    // The margin to the next candidate: the best sphere axis for a refined best, else the
+    // sphere's runner-up.
+    match (&v.refined, v.views.get(1)) {
+        (Some(r), _) => print!(
+            ", {:.4} below the best sphere axis",
+            v.views[0].entropy_rate - r.entropy_rate
+        ),
+        (None, Some(next)) => print!(
+            ", {:.4} below the runner-up",
+            next.entropy_rate - best.entropy_rate
+        ),
+        (None, None) => {}
     }
     println!();
     if v.uncertain {
-        println!("         uncertain: its spread over shifted lattices exceeds that margin");
+        let which = if v.refined.is_some() {
+            "the best sphere axis"
+        } else {
+            "it"
+        };
+        println!(
+            "         uncertain: {which} varies more over shifted lattices than its margin over the sphere's runner-up"
+        );
     }
 }
