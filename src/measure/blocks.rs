@@ -86,7 +86,9 @@ pub struct BlockCounts {
     short_mask: u64,
     long: Table,
     short: Table,
-    single: Vec<u64>,
+    /// Counts per symbol, indexed by the byte itself so that no bounds check is needed.
+    single: Box<[u64; 256]>,
+    bins: usize,
 }
 
 impl BlockCounts {
@@ -103,7 +105,8 @@ impl BlockCounts {
             short_mask: (1u64 << (bits * (block as u32 - 1))) - 1,
             long: Table::new(bits * block as u32),
             short: Table::new(bits * (block as u32 - 1)),
-            single: vec![0; bins],
+            single: Box::new([0; 256]),
+            bins,
         }
     }
 
@@ -112,7 +115,7 @@ impl BlockCounts {
     pub fn push_to(&mut self, run: &mut Run, symbol: u8) {
         run.code = ((run.code << self.bits) | u64::from(symbol)) & self.long_mask;
         run.len += 1;
-        self.single[usize::from(symbol)] += 1;
+        self.single[symbol as usize] += 1;
         if run.len + 1 >= self.block {
             self.short.add(run.code & self.short_mask);
             if run.len >= self.block {
@@ -141,7 +144,7 @@ impl BlockCounts {
         self.short.merge(&other.short);
         self.single
             .iter_mut()
-            .zip(&other.single)
+            .zip(other.single.iter())
             .for_each(|(a, b)| *a += b);
     }
 
@@ -158,7 +161,7 @@ impl BlockCounts {
     /// `(H(X^1), H(X^(L-1)), H(X^L))` in bits.
     pub fn entropies(&self) -> (f64, f64, f64) {
         (
-            entropy(self.single.iter().copied()),
+            entropy(self.single[..self.bins].iter().copied()),
             self.short.entropy(),
             self.long.entropy(),
         )
