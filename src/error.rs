@@ -63,6 +63,9 @@ pub enum Error {
     /// A parameter outside its domain, such as zero bins or a zero axis.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
+    /// The volume cannot be analysed as asked: it is constant, or one slice thick along the axis.
+    #[error("{0}")]
+    Degenerate(String),
     /// The computation was cancelled through its cancellation flag.
     #[error("cancelled")]
     Cancelled,

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use serde_json::{Value, json};
 use slabscope::Volume;
@@ -220,8 +220,9 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let loaded = super::load(&args.file, &args.load)?;
     let volume = &loaded.volume;
     let search_views = args.views || args.partition.axis == AxisChoice::Best;
+    let file = args.file.display().to_string();
     let views = if search_views {
-        Some(run_search(volume, &args.view.params())?)
+        Some(run_search(volume, &args.view.params()).with_context(|| file.clone())?)
     } else {
         None
     };
@@ -230,7 +231,8 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         (AxisChoice::Best, Some(v)) => v.best().axis,
         (AxisChoice::Best, None) => unreachable!("the view search runs for --axis best"),
     };
-    let part = run_partition(volume, axis, &args.partition.params(&args.view))?;
+    let part = run_partition(volume, axis, &args.partition.params(&args.view))
+        .with_context(|| file.clone())?;
     let name = args.file.display().to_string();
     if args.json {
         println!(

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
 use slabscope::progress::Monitor;
@@ -237,9 +237,15 @@ fn render_file(
     let volume = &loaded.volume;
     let axis = match scene.partition.axis {
         AxisChoice::Direction(d) => d,
-        AxisChoice::Best => run_search(volume, &scene.view.params())?.best().axis,
+        AxisChoice::Best => {
+            run_search(volume, &scene.view.params())
+                .with_context(|| file.display().to_string())?
+                .best()
+                .axis
+        }
     };
-    let part = run_partition(volume, axis, &scene.partition.params(&scene.view))?;
+    let part = run_partition(volume, axis, &scene.partition.params(&scene.view))
+        .with_context(|| file.display().to_string())?;
     let options = &scene.options;
     if let Some(h) = options.highlight
         && h >= part.slabs.len()

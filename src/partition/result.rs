@@ -192,7 +192,7 @@ pub fn partition(
     monitor: &Monitor,
 ) -> Result<Partition> {
     if volume.is_constant() {
-        return Err(Error::InvalidParameter(format!(
+        return Err(Error::Degenerate(format!(
             "the volume is constant (every voxel is {}): there is nothing to partition",
             volume.stats().min
         )));
@@ -200,7 +200,7 @@ pub fn partition(
     let stack = SliceStack::new(volume, axis, &params.stack, monitor)?;
     let n = stack.slices();
     if n < 2 {
-        return Err(Error::InvalidParameter(format!(
+        return Err(Error::Degenerate(format!(
             "only {n} slice along the axis: nothing to partition"
         )));
     }

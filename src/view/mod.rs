@@ -97,10 +97,10 @@ fn resolve(volume: &Volume, params: &ViewParams) -> Result<ViewParams> {
         ));
     }
     if volume.is_constant() {
-        return bad(format!(
+        return Err(Error::Degenerate(format!(
             "the volume is constant (every voxel is {}): every axis has entropy rate 0",
             volume.stats().min
-        ));
+        )));
     }
     let s = min_spacing(volume.spacing());
     Ok(ViewParams {
