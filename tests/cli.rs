@@ -208,7 +208,10 @@ fn analysis_errors_are_clear() {
         .unwrap();
     let (ok, stdout, stderr) = run(&["analyze", constant.to_str().unwrap()]);
     assert!(!ok && stdout.is_empty());
-    assert!(stderr.contains("constant.nrrd: the volume is constant (every voxel is 5)"), "{stderr}");
+    assert!(
+        stderr.contains("constant.nrrd: the volume is constant (every voxel is 5)"),
+        "{stderr}"
+    );
     let file = layers(dir.path());
     let f = file.to_str().unwrap();
     for (args, phrase) in [

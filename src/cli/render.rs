@@ -27,6 +27,9 @@ pub struct ViewOptions {
     /// Colour map.
     #[arg(long, value_enum, default_value_t = ColormapArg::Grey)]
     pub colormap: ColormapArg,
+    /// Window LO,HI: grey from LO to HI and opacity rising across it (replaces the preset's).
+    #[arg(long, value_name = "LO,HI", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<(f32, f32)>,
     /// Camera angle around the slab axis, degrees.
     #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
     pub azimuth: f64,
@@ -131,6 +134,7 @@ impl ViewOptions {
                 ColormapArg::Hot => Colormap::Hot,
                 ColormapArg::Viridis => Colormap::Viridis,
             },
+            window: self.window,
             camera: CameraParams {
                 azimuth: self.azimuth,
                 elevation: self.elevation,
@@ -211,6 +215,15 @@ pub enum Protocol {
     Sixel,
     /// Unicode half-blocks with colours: works everywhere.
     Blocks,
+}
+
+fn parse_window(s: &str) -> Result<(f32, f32), String> {
+    let bad = || format!("{s:?} is not LO,HI with LO below HI, e.g. -200,1500");
+    let (lo, hi) = s.split_once(',').ok_or_else(bad)?;
+    match (lo.trim().parse::<f32>(), hi.trim().parse::<f32>()) {
+        (Ok(lo), Ok(hi)) if lo.is_finite() && hi.is_finite() && lo < hi => Ok((lo, hi)),
+        _ => Err(bad()),
+    }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {

@@ -16,7 +16,7 @@ use tiny_skia::Pixmap;
 
 pub use camera::{Camera, CameraParams};
 pub use layout::{Gap, Layout, Placement, Stack};
-pub use transfer::{Colormap, HISTOGRAM_BINS, Preset, Transfer};
+pub use transfer::{Colormap, HISTOGRAM_BINS, Look, Preset, Transfer};
 
 use crate::error::{Error, Result};
 use crate::progress::Monitor;
@@ -46,6 +46,8 @@ pub struct RenderParams {
     pub preset: Preset,
     /// Colour map.
     pub colormap: Colormap,
+    /// Grey and opacity ramp from `lo` to `hi`, replacing the preset's.
+    pub window: Option<(f32, f32)>,
     /// The camera.
     pub camera: CameraParams,
     /// Gradient shading (DVR).
@@ -72,6 +74,7 @@ impl Default for RenderParams {
             mode: Mode::Dvr,
             preset: Preset::Auto,
             colormap: Colormap::Grey,
+            window: None,
             camera: CameraParams::default(),
             shading: true,
             step: 1.0,
@@ -235,14 +238,13 @@ impl<'a> Renderer<'a> {
         let spacing = self.volume.spacing();
         let reference = min_spacing(spacing);
         let step = params.step * reference;
-        let transfer = Transfer::with_histogram(
-            self.volume.stats(),
-            &self.histogram,
-            params.preset,
-            params.colormap,
-            step,
-            reference,
-        )?;
+        let look = Look {
+            preset: params.preset,
+            colormap: params.colormap,
+            window: params.window,
+        };
+        let transfer =
+            Transfer::with_histogram(self.volume.stats(), &self.histogram, look, step, reference)?;
         let transparent = self
             .bricks
             .min

@@ -98,6 +98,21 @@ impl Colormap {
 /// Entries of the lookup table.
 const LUT: usize = 2048;
 
+/// The opacity a user's window reaches at its high end.
+const WINDOW_OPACITY: f32 = 0.6;
+
+/// What a transfer function is made of: a preset, a colour map and, optionally, a window that
+/// replaces the preset's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Look {
+    /// Preset.
+    pub preset: Preset,
+    /// Colour map.
+    pub colormap: Colormap,
+    /// Grey ramp and opacity ramp from `lo` to `hi`, instead of the preset's.
+    pub window: Option<(f32, f32)>,
+}
+
 /// Bins of the histogram the presets read percentiles from.
 pub const HISTOGRAM_BINS: usize = 255;
 
@@ -155,18 +170,28 @@ impl Transfer {
         reference: f64,
     ) -> Result<Self> {
         let h = volume.histogram(HISTOGRAM_BINS)?;
-        Self::with_histogram(volume.stats(), &h, preset, colormap, step, reference)
+        let look = Look {
+            preset,
+            colormap,
+            window: None,
+        };
+        Self::with_histogram(volume.stats(), &h, look, step, reference)
     }
 
-    /// Like [`new`](Self::new), from the volume's statistics and a histogram of its values.
+    /// Like [`new`](Self::new), from the volume's statistics and a histogram of its values; a
+    /// window in `look` replaces the preset's.
     pub fn with_histogram(
         s: Stats,
         h: &[u64],
-        preset: Preset,
-        colormap: Colormap,
+        look: Look,
         step: f64,
         reference: f64,
     ) -> Result<Self> {
+        let Look {
+            preset,
+            colormap,
+            window: custom,
+        } = look;
         if !(step.is_finite() && step > 0.0 && reference > 0.0) {
             return Err(Error::InvalidParameter(format!(
                 "sampling step {step} must be positive"
@@ -197,6 +222,11 @@ impl Transfer {
                 };
                 ((lo, p995), vec![(lo, p995, 0.6)])
             }
+        };
+        // A user's window: grey from its low to its high end, opacity rising across it.
+        let (window, ramps) = match custom {
+            Some((lo, hi)) => ((lo, hi), vec![(lo, hi, WINDOW_OPACITY)]),
+            None => (window, ramps),
         };
         let scale = if s.max > s.min {
             (LUT - 1) as f32 / (s.max - s.min)
@@ -287,6 +317,23 @@ mod tests {
         // Half the step: less opacity per sample.
         let half = Transfer::new(&v, Preset::CtBone, Colormap::Grey, 0.5, 1.0).unwrap();
         assert!(half.rgba(1500.0)[3] < t.rgba(1500.0)[3]);
+    }
+
+    #[test]
+    fn a_window_replaces_the_preset() {
+        let data = (0..1000).map(|i| i as f32).collect();
+        let v = Volume::new([10, 10, 10], [1.0; 3], VoxelType::F32, data).unwrap();
+        let h = v.histogram(HISTOGRAM_BINS).unwrap();
+        let look = Look {
+            preset: Preset::CtBone,
+            colormap: Colormap::Grey,
+            window: Some((400.0, 600.0)),
+        };
+        let t = Transfer::with_histogram(v.stats(), &h, look, 1.0, 1.0).unwrap();
+        assert_eq!(t.rgba(399.0)[3], 0.0);
+        assert!((t.rgba(999.0)[3] - WINDOW_OPACITY).abs() < 1e-6);
+        assert_eq!(t.grey(300.0), [0.0; 3]);
+        assert_eq!(t.grey(700.0), [1.0; 3]);
     }
 
     #[test]
