@@ -61,6 +61,19 @@ fn one_bright_voxel_appears_where_the_camera_puts_it() {
     }
 }
 
+/// A body phantom and its default partition (top-down, 4 slabs) along z.
+fn body_in_slabs(dims: [usize; 3], seed: u64) -> (Volume, slabscope::partition::Partition) {
+    let v = phantom::body(dims, seed).unwrap();
+    let p = partition(
+        &v,
+        [0.0, 0.0, 1.0],
+        &PartitionParams::default(),
+        &Monitor::none(),
+    )
+    .unwrap();
+    (v, p)
+}
+
 /// A volume of two materials, below and above z = 20, and its 2-slab partition along z.
 fn two_slabs() -> (Volume, slabscope::partition::Partition) {
     let v = phantom::layers([32, 32, 40], [0.0, 0.0, 1.0], 1).unwrap();
@@ -148,14 +161,7 @@ fn zero_spread_equals_the_plain_render() {
 
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
-    let v = phantom::body([40, 40, 64], 2).unwrap();
-    let p = partition(
-        &v,
-        [0.0, 0.0, 1.0],
-        &PartitionParams::default(),
-        &Monitor::none(),
-    )
-    .unwrap();
+    let (v, p) = body_in_slabs([40, 40, 64], 2);
     let layout = Layout::exploded(&p, Gap::Similarity, 0.3);
     let params = RenderParams {
         preset: Preset::CtSoft,
@@ -210,14 +216,7 @@ fn check_reference(name: &str, image: &slabscope::render::Image) {
 
 #[test]
 fn fixed_scenes_match_their_reference_images() {
-    let v = phantom::body([48, 48, 78], 1).unwrap();
-    let p = partition(
-        &v,
-        [0.0, 0.0, 1.0],
-        &PartitionParams::default(),
-        &Monitor::none(),
-    )
-    .unwrap();
+    let (v, p) = body_in_slabs([48, 48, 78], 1);
     let renderer = Renderer::new(&v).unwrap();
     let scenes = [
         (
