@@ -407,12 +407,7 @@ fn print_partition(p: &Partition) {
 
 /// "x", "y" or "z" for a coordinate axis, else nothing.
 pub fn axis_name(axis: [f64; 3]) -> &'static str {
-    match axis.map(|c| c.abs() > 1.0 - 1e-9) {
-        [true, _, _] => " (x)",
-        [_, true, _] => " (y)",
-        [_, _, true] => " (z)",
-        _ => "",
-    }
+    slabscope::partition::coordinate_axis(axis).map_or("", |m| [" (x)", " (y)", " (z)"][m])
 }
 
 /// `[ 0.526, -0.851,  0.000]`.

@@ -9,13 +9,14 @@ mod top_down;
 
 use serde::Serialize;
 
+pub use crate::volume::sampling::coordinate_axis;
 pub use bottom_up::{Merge, MergeHistory, slice_nmi};
 pub use optimal::{MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{
     Comparison, Partition, PartitionParams, Step, Stop, boundary_gains, label_volume, partition,
     slab_nmi,
 };
-pub use stack::{MISSING, SliceStack, StackParams, coordinate_axis};
+pub use stack::{MISSING, SliceStack, StackParams};
 pub use top_down::{Split, SplitHistory};
 
 use crate::measure::entropy;

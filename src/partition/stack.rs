@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use crate::error::{Error, Result};
 use crate::progress::Monitor;
 use crate::volume::Volume;
-use crate::volume::sampling::{Interpolator, Lattice, canonical, normalize};
+use crate::volume::sampling::{Interpolator, Lattice, canonical, coordinate_axis, normalize};
 
 /// The symbol of a sample that does not count: outside the volume, missing, or background.
 pub const MISSING: u8 = u8::MAX;
@@ -61,9 +61,13 @@ pub struct SliceStack {
     counts: Vec<u64>,
 }
 
-/// The coordinate axis `d` is, if it is one.
-pub fn coordinate_axis(d: [f64; 3]) -> Option<usize> {
-    (0..3).find(|&m| d[m].abs() > 1.0 - 1e-12)
+/// The two axes other than `m`, in order.
+fn other_axes(m: usize) -> (usize, usize) {
+    match m {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    }
 }
 
 impl SliceStack {
@@ -102,11 +106,7 @@ impl SliceStack {
         let dims = volume.dims();
         let stride = [1, dims[0], dims[0] * dims[1]];
         let n = dims[m];
-        let (a, b) = match m {
-            0 => (1, 2),
-            1 => (0, 2),
-            _ => (0, 1),
-        };
+        let (a, b) = other_axes(m);
         let pixels = dims[a] * dims[b];
         let voxels = volume.voxels();
         let mut symbols = vec![MISSING; pixels * n];
@@ -371,11 +371,7 @@ fn plane_sums(
     let dims = volume.dims();
     let stride = [1, dims[0], dims[0] * dims[1]];
     let voxels = volume.voxels();
-    let (a, b) = match m {
-        0 => (1, 2),
-        1 => (0, 2),
-        _ => (0, 1),
-    };
+    let (a, b) = other_axes(m);
     (0..dims[m])
         .into_par_iter()
         .map(|s| {

@@ -28,6 +28,11 @@ pub fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
     (n.is_finite() && n > 1e-12).then(|| a.map(|c| c / n))
 }
 
+/// The coordinate axis (0 for x, 1 for y, 2 for z) that the unit vector `d` lies along, if any.
+pub fn coordinate_axis(d: [f64; 3]) -> Option<usize> {
+    (0..3).find(|&m| d[m].abs() > 1.0 - 1e-12)
+}
+
 /// The canonical one of `d` and `-d`: the one whose first non-zero component (|c| > 1e-9, in
 /// x, y, z order) is positive.
 pub fn canonical(d: [f64; 3]) -> [f64; 3] {

@@ -49,12 +49,7 @@ pub fn placeholder<T>(
 /// `[ 0.526, -0.851,  0.000] (x)`, compact.
 pub fn axis_text(axis: [f64; 3]) -> String {
     let c = axis.map(|c| if c.abs() < 5e-4 { 0.0 } else { c });
-    let name = match axis.map(|c| c.abs() > 1.0 - 1e-9) {
-        [true, _, _] => " x",
-        [_, true, _] => " y",
-        [_, _, true] => " z",
-        _ => "",
-    };
+    let name = slabscope::partition::coordinate_axis(axis).map_or("", |m| [" x", " y", " z"][m]);
     format!("[{:6.3},{:6.3},{:6.3}]{name}", c[0], c[1], c[2])
 }
 

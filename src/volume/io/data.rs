@@ -117,7 +117,7 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
         pos += n as u64;
     }
     match spec.encoding {
-        Encoding::Raw => read_raw(spec, pos, len, expected, count),
+        Encoding::Raw => read_raw(spec, &reader.into_inner(), (pos, len), expected, count),
         Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, count),
         Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, count),
         Encoding::Ascii => read_ascii(spec, reader, count),
@@ -127,7 +127,13 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
 /// Voxels decoded per parallel task.
 const CHUNK: usize = 1 << 16;
 
-fn read_raw(spec: &DataSpec, pos: u64, len: u64, expected: u64, count: usize) -> Result<Vec<f32>> {
+fn read_raw(
+    spec: &DataSpec,
+    file: &File,
+    (pos, len): (u64, u64),
+    expected: u64,
+    count: usize,
+) -> Result<Vec<f32>> {
     let path = spec.file.as_path();
     let start = match spec.skip {
         Skip::Bytes(n) => pos.saturating_add(n),
@@ -152,8 +158,7 @@ fn read_raw(spec: &DataSpec, pos: u64, len: u64, expected: u64, count: usize) ->
             ),
         ));
     }
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let map = map_file(&file).map_err(|e| Error::io(path, e))?;
+    let map = map_file(file).map_err(|e| Error::io(path, e))?;
     let start = usize::try_from(start).map_err(|_| Error::format(path, "offset beyond memory"))?;
     let bytes = &map[start..start + expected as usize];
     let mut out = vec![0.0f32; count];
