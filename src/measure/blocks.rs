@@ -58,7 +58,13 @@ impl Table {
         }
         let s = match self {
             Self::Dense(v) => sum_c_log_c(v.iter().copied()),
-            Self::Sparse(m) => sum_c_log_c(m.values().copied()),
+            Self::Sparse(m) => {
+                // In a fixed order: a hash map's order changes from run to run, and with it the
+                // last bits of a floating-point sum.
+                let mut counts: Vec<u64> = m.values().copied().collect();
+                counts.sort_unstable();
+                sum_c_log_c(counts)
+            }
         };
         ((n as f64).log2() - s / n as f64).max(0.0)
     }
