@@ -1,5 +1,11 @@
 //! Block entropies of symbol sequences (paper eq. 2): counts of L-blocks, (L-1)-blocks and single
 //! symbols pooled over many sequences, as the entropy rate `h = H(X^L) - H(X^(L-1))` needs.
+//!
+//! Only the L-blocks are counted per symbol. Every (L-1)-block of a sequence but its last is the
+//! first L-1 symbols of an L-block, and every symbol but the last L-1 is the first symbol of one;
+//! so the (L-1)-block and symbol counts are the L-block counts summed over their trailing symbols,
+//! plus what each sequence leaves at its end. That makes a symbol one table update instead of
+//! three.
 
 use std::collections::HashMap;
 
@@ -25,22 +31,29 @@ impl Table {
     }
 
     #[inline]
-    fn add(&mut self, code: u64) {
+    fn add(&mut self, code: u64, n: u64) {
         match self {
-            Self::Dense(v) => v[code as usize] += 1,
-            Self::Sparse(m) => *m.entry(code).or_insert(0) += 1,
+            Self::Dense(v) => v[code as usize] += n,
+            Self::Sparse(m) => add_sparse(m, code, n),
+        }
+    }
+
+    /// Calls `f(code, count)` for every code counted.
+    fn for_each(&self, mut f: impl FnMut(u64, u64)) {
+        match self {
+            Self::Dense(v) => v
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c > 0)
+                .for_each(|(k, &c)| f(k as u64, c)),
+            Self::Sparse(m) => m.iter().for_each(|(&k, &c)| f(k, c)),
         }
     }
 
     fn merge(&mut self, other: &Self) {
         match (self, other) {
             (Self::Dense(a), Self::Dense(b)) => a.iter_mut().zip(b).for_each(|(x, y)| *x += y),
-            (Self::Sparse(a), Self::Sparse(b)) => {
-                for (k, c) in b {
-                    *a.entry(*k).or_insert(0) += c;
-                }
-            }
-            _ => unreachable!("tables of one BlockCounts share a layout"),
+            (a, b) => b.for_each(|k, c| a.add(k, c)),
         }
     }
 
@@ -70,31 +83,118 @@ impl Table {
     }
 }
 
+/// Kept out of line so that the dense path of [`Table::add`] stays small enough to inline.
+#[inline(never)]
+fn add_sparse(m: &mut HashMap<u64, u64>, code: u64, n: u64) {
+    *m.entry(code).or_insert(0) += n;
+}
+
 /// Where one sequence stands: its last L symbols as a packed code, and how many symbols it has.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Run {
     code: u64,
-    len: usize,
+    len: u64,
+}
+
+/// How symbols pack into block codes: `bits` per symbol, the latest in the lowest bits.
+#[derive(Clone, Copy, Debug)]
+struct Packing {
+    bits: u32,
+    block: u64,
+    long_mask: u64,
+    short_mask: u64,
+}
+
+impl Packing {
+    /// `run` with `symbol` appended; whether it now ends an L-block.
+    #[inline]
+    fn push(&self, run: &mut Run, symbol: u8) -> bool {
+        run.code = ((run.code << self.bits) | u64::from(symbol)) & self.long_mask;
+        run.len += 1;
+        run.len >= self.block
+    }
+}
+
+/// What ended sequences leave beyond their L-blocks: the last (L-1)-block of each (the one that
+/// starts no L-block) and its last L-1 symbols (indexed by the byte itself: no bounds check).
+#[derive(Clone, Debug)]
+struct Ends {
+    short: Table,
+    single: Box<[u64; 256]>,
+}
+
+impl Ends {
+    fn end_run(&mut self, packing: &Packing, run: &mut Run) {
+        let tail = run.len.min(packing.block - 1);
+        if tail == packing.block - 1 {
+            self.short.add(run.code & packing.short_mask, 1);
+        }
+        let symbol_mask = (1u64 << packing.bits) - 1;
+        for i in 0..tail {
+            self.single[((run.code >> (u64::from(packing.bits) * i)) & symbol_mask) as usize] += 1;
+        }
+        *run = Run::default();
+    }
+}
+
+/// Something that counts the blocks of interleaved sequences: [`BlockCounts`], or its
+/// [`DenseCounts`] view for hot loops.
+pub trait Counter {
+    /// Appends a symbol to the sequence whose state is `run`.
+    fn push_to(&mut self, run: &mut Run, symbol: u8);
+
+    /// Ends the sequence whose state is `run` (at its end or where a missing sample breaks it),
+    /// counting what it leaves, and resets `run` for a new one.
+    fn end_run(&mut self, run: &mut Run);
 }
 
 /// Counts of the L-blocks, (L-1)-blocks and single symbols of sequences over `bins` symbols.
 ///
 /// Feed one sequence at a time with [`push`](Self::push) and end it with
-/// [`end_sequence`](Self::end_sequence), or interleave many with [`push_to`](Self::push_to), each
-/// with its own [`Run`]: blocks never span two sequences. Merge counts from several threads with
+/// [`end_sequence`](Self::end_sequence), or interleave many through [`Counter`], each with its
+/// own [`Run`]: blocks never span two sequences. Merge counts from several threads with
 /// [`merge`](Self::merge); counts are integers, so the result does not depend on the order.
 #[derive(Clone, Debug)]
 pub struct BlockCounts {
-    block: usize,
-    bits: u32,
+    packing: Packing,
     run: Run,
-    long_mask: u64,
-    short_mask: u64,
     long: Table,
-    short: Table,
-    /// Counts per symbol, indexed by the byte itself so that no bounds check is needed.
-    single: Box<[u64; 256]>,
+    ends: Ends,
     bins: usize,
+}
+
+impl Counter for BlockCounts {
+    #[inline]
+    fn push_to(&mut self, run: &mut Run, symbol: u8) {
+        if self.packing.push(run, symbol) {
+            self.long.add(run.code, 1);
+        }
+    }
+
+    fn end_run(&mut self, run: &mut Run) {
+        self.ends.end_run(&self.packing, run);
+    }
+}
+
+/// A view of [`BlockCounts`] whose L-block table is a dense array, so that counting a symbol
+/// needs no dispatch: see [`BlockCounts::dense`].
+pub struct DenseCounts<'a> {
+    packing: Packing,
+    long: &'a mut [u64],
+    ends: &'a mut Ends,
+}
+
+impl Counter for DenseCounts<'_> {
+    #[inline]
+    fn push_to(&mut self, run: &mut Run, symbol: u8) {
+        if self.packing.push(run, symbol) {
+            self.long[run.code as usize] += 1;
+        }
+    }
+
+    fn end_run(&mut self, run: &mut Run) {
+        self.ends.end_run(&self.packing, run);
+    }
 }
 
 impl BlockCounts {
@@ -103,30 +203,34 @@ impl BlockCounts {
         assert!((2..=4).contains(&block), "block length {block}");
         assert!((2..=256).contains(&bins), "bins {bins}");
         let bits = usize::BITS - (bins - 1).leading_zeros();
+        let block_bits = bits * block as u32;
         Self {
-            block,
-            bits,
+            packing: Packing {
+                bits,
+                block: block as u64,
+                long_mask: (1u64 << block_bits) - 1,
+                short_mask: (1u64 << (block_bits - bits)) - 1,
+            },
             run: Run::default(),
-            long_mask: (1u64 << (bits * block as u32)) - 1,
-            short_mask: (1u64 << (bits * (block as u32 - 1))) - 1,
-            long: Table::new(bits * block as u32),
-            short: Table::new(bits * (block as u32 - 1)),
-            single: Box::new([0; 256]),
+            long: Table::new(block_bits),
+            ends: Ends {
+                short: Table::new(block_bits - bits),
+                single: Box::new([0; 256]),
+            },
             bins,
         }
     }
 
-    /// Appends a symbol to the sequence whose state is `run`.
-    #[inline]
-    pub fn push_to(&mut self, run: &mut Run, symbol: u8) {
-        run.code = ((run.code << self.bits) | u64::from(symbol)) & self.long_mask;
-        run.len += 1;
-        self.single[symbol as usize] += 1;
-        if run.len + 1 >= self.block {
-            self.short.add(run.code & self.short_mask);
-            if run.len >= self.block {
-                self.long.add(run.code);
-            }
+    /// The fast view, when the L-block table is dense (`bits × L` at most 18: 32 bins with
+    /// L = 3, or 8 bins with L = 4, for example).
+    pub fn dense(&mut self) -> Option<DenseCounts<'_>> {
+        match &mut self.long {
+            Table::Dense(long) => Some(DenseCounts {
+                packing: self.packing,
+                long,
+                ends: &mut self.ends,
+            }),
+            Table::Sparse(_) => None,
         }
     }
 
@@ -138,37 +242,48 @@ impl BlockCounts {
         self.run = run;
     }
 
-    /// Ends the current sequence (also used where a missing sample breaks a ray).
+    /// Ends the current sequence (also used where a missing sample breaks a sequence).
     #[inline]
     pub fn end_sequence(&mut self) {
-        self.run = Run::default();
+        let mut run = self.run;
+        self.end_run(&mut run);
+        self.run = run;
     }
 
-    /// Adds `other`'s counts to these.
+    /// Adds `other`'s counts to these (both with no sequence under way).
     pub fn merge(&mut self, other: &Self) {
         self.long.merge(&other.long);
-        self.short.merge(&other.short);
-        self.single
+        self.ends.short.merge(&other.ends.short);
+        self.ends
+            .single
             .iter_mut()
-            .zip(other.single.iter())
+            .zip(other.ends.single.iter())
             .for_each(|(a, b)| *a += b);
     }
 
-    /// Number of symbols counted.
+    /// Number of symbols counted in ended sequences.
     pub fn symbols(&self) -> u64 {
-        self.single.iter().sum()
+        self.long.total() + self.ends.single.iter().sum::<u64>()
     }
 
     /// The block length L.
     pub fn block(&self) -> usize {
-        self.block
+        self.packing.block as usize
     }
 
-    /// `(H(X^1), H(X^(L-1)), H(X^L))` in bits.
+    /// `(H(X^1), H(X^(L-1)), H(X^L))` in bits, over the ended sequences.
     pub fn entropies(&self) -> (f64, f64, f64) {
+        let bits = self.packing.bits;
+        let short_bits = bits * (self.packing.block as u32 - 1);
+        let mut short = self.ends.short.clone();
+        let mut single = *self.ends.single;
+        self.long.for_each(|code, n| {
+            short.add(code >> bits, n);
+            single[(code >> short_bits) as usize] += n;
+        });
         (
-            entropy(self.single[..self.bins].iter().copied()),
-            self.short.entropy(),
+            entropy(single[..self.bins].iter().copied()),
+            short.entropy(),
             self.long.entropy(),
         )
     }
@@ -241,6 +356,37 @@ mod tests {
     }
 
     #[test]
+    fn many_short_sequences_match_a_brute_force_count() {
+        let mut state = 7u64;
+        let mut next = |n: u64| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 33) % n
+        };
+        for block in 2..=4 {
+            let seqs: Vec<Vec<u8>> = (0..60)
+                .map(|_| {
+                    let len = next(9);
+                    (0..len).map(|_| next(3) as u8).collect()
+                })
+                .collect();
+            let brute = |len: usize| {
+                let mut m: HashMap<&[u8], u64> = HashMap::new();
+                for w in seqs.iter().flat_map(|s| s.windows(len)) {
+                    *m.entry(w).or_insert(0) += 1;
+                }
+                entropy(m.into_values().collect::<Vec<_>>())
+            };
+            let got = block_entropies(seqs.iter().map(Vec::as_slice), 3, block);
+            let expect = (brute(1), brute(block - 1), brute(block));
+            assert!((got.0 - expect.0).abs() < EPS, "L = {block}");
+            assert!((got.1 - expect.1).abs() < EPS, "L = {block}");
+            assert!((got.2 - expect.2).abs() < EPS, "L = {block}");
+        }
+    }
+
+    #[test]
     fn merging_is_counting_together() {
         let a = [&[0u8, 1, 2, 3][..]];
         let b = [&[3u8, 3, 1][..]];
@@ -253,6 +399,7 @@ mod tests {
             y.push(*s);
         }
         x.end_sequence();
+        y.end_sequence();
         x.merge(&y);
         let both = block_entropies([a[0], b[0]], 4, 3);
         assert_eq!(x.entropies(), both);

@@ -5,9 +5,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::Result;
-use crate::measure::{BlockCounts, Run};
+use crate::measure::{BlockCounts, Counter, Run};
 use crate::progress::Monitor;
-use crate::volume::sampling::{BinSampler, Lattice, Ray, to_fixed};
+use crate::volume::cells::MIXED;
+use crate::volume::sampling::{BinSampler, Lattice, to_fixed};
 
 /// Spread of an axis's entropy rate over shifted lattices (`--phases`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -91,88 +92,154 @@ impl AxisEntropy {
 }
 
 /// Rays are walked in square tiles of this many rays a side, all rays of a tile advancing
-/// together sample by sample, so that the voxels in use stay a small neighbourhood in memory.
+/// together sample by sample, so that the voxels in use stay a small neighbourhood in memory and
+/// the rays' independent work overlaps.
 const TILE: i64 = 16;
 
-/// Whether every sample of `ray` falls exactly on a voxel centre, so no interpolation is needed.
-fn on_grid(ray: &Ray) -> bool {
-    let whole = |x: f64| (x - x.round()).abs() < 1e-9;
-    ray.origin.iter().chain(&ray.step).all(|&c| whole(c))
-}
-
-/// A ray of a tile being walked: where it is and its block state.
+/// A ray of a tile being walked: where it is, its block state, and how many samples it has in
+/// the tile's common walk (all inside cells, see [`BinSampler::inner_span`]) and after it.
 struct Walker {
-    k0: i64,
-    k1: i64,
+    p: [i64; 3],
     run: Run,
-    path: Path,
+    inner: i64,
+    tail: i64,
+    grid: bool,
 }
 
-/// How a walker finds its next sample.
-enum Path {
-    /// On the voxel grid: the linear index of the current sample and the step between samples.
-    Grid(i64, i64),
-    /// Anywhere else: the current position and the step, in fixed point.
-    Fixed([i64; 3], [i64; 3]),
+/// Whether `x` is a whole number up to rounding.
+fn is_whole(x: f64) -> bool {
+    (x - x.round()).abs() < 1e-9
 }
 
-/// Feeds the quantized samples of the rays `(i, j)` of one tile into `counts`, advancing all rays
-/// together; a missing sample breaks its ray's sequence. Returns the number of rays.
+/// One sample at `w`'s position (anywhere in the volume up to rounding) into its run.
+fn edge_sample(sampler: &BinSampler, counts: &mut impl Counter, w: &mut Walker) {
+    let bin = if w.grid {
+        sampler.voxel_bin(w.p)
+    } else {
+        sampler.bin_fixed(w.p)
+    };
+    match bin {
+        Some(b) => counts.push_to(&mut w.run, b),
+        None => counts.end_run(&mut w.run),
+    }
+}
+
+/// The bin of a sample in a mixed cell: interpolated, or the voxel itself on the grid. Out of
+/// line, to keep the common path of [`walk_tile`] small.
+#[inline(never)]
+fn mixed_bin(sampler: &BinSampler, p: [i64; 3], cell: usize, grid: bool) -> Option<u8> {
+    if grid {
+        sampler.voxel_bin(p)
+    } else {
+        sampler.inner_bin(p, cell)
+    }
+}
+
+#[inline]
+fn advance(p: &mut [i64; 3], step: [i64; 3]) {
+    for m in 0..3 {
+        p[m] += step[m];
+    }
+}
+
+/// Feeds the quantized samples of the rays `(i, j)` of one tile into `counts`: each ray's
+/// samples in order, a missing sample breaking its sequence. `step` is the lattice's step in
+/// fixed point. Returns the number of rays.
 fn walk_tile(
     lattice: &Lattice,
     (is, js): ((i64, i64), (i64, i64)),
+    step: [i64; 3],
     sampler: &BinSampler,
-    counts: &mut BlockCounts,
+    counts: &mut impl Counter,
     walkers: &mut Vec<Walker>,
 ) -> u64 {
+    let whole_step = lattice.step().iter().all(|&c| is_whole(c));
     walkers.clear();
     for j in js.0..=js.1 {
         for i in is.0..=is.1 {
-            if let Some(ray) = lattice.ray(i, j) {
-                let path = if on_grid(&ray) {
-                    let it = sampler.interpolator();
-                    let start = it.linear(ray.at(ray.k0).map(|c| c.round() as i64));
-                    Path::Grid(start, it.linear(ray.step.map(|c| c.round() as i64)))
-                } else {
-                    Path::Fixed(to_fixed(ray.at(ray.k0)), to_fixed(ray.step))
-                };
-                walkers.push(Walker {
-                    k0: ray.k0,
-                    k1: ray.k1,
-                    run: Run::default(),
-                    path,
-                });
-            }
-        }
-    }
-    let k0 = walkers.iter().map(|w| w.k0).min().unwrap_or(0);
-    let k1 = walkers.iter().map(|w| w.k1).max().unwrap_or(-1);
-    for k in k0..=k1 {
-        for w in walkers.iter_mut() {
-            if k < w.k0 || k > w.k1 {
+            let Some(ray) = lattice.ray(i, j) else {
                 continue;
-            }
-            let bin = match &mut w.path {
-                Path::Grid(index, step) => {
-                    let b = sampler.bin_at_linear(*index as usize);
-                    *index += *step;
-                    b
-                }
-                Path::Fixed(p, step) => {
-                    let b = sampler.bin_fixed(*p);
-                    for m in 0..3 {
-                        p[m] += step[m];
-                    }
-                    b
-                }
             };
-            match bin {
-                Some(b) => counts.push_to(&mut w.run, b),
-                None => w.run = Run::default(),
+            let start = ray.at(ray.k0);
+            let grid = whole_step && start.iter().all(|&c| is_whole(c));
+            let p = to_fixed(if grid { start.map(f64::round) } else { start });
+            let n = ray.k1 - ray.k0 + 1;
+            let (t0, t1) = sampler.inner_span(p, step, n);
+            let mut w = Walker {
+                p,
+                run: Run::default(),
+                inner: t1 - t0,
+                tail: n - t1,
+                grid,
+            };
+            // The samples before the inner span, one by one.
+            for _ in 0..t0 {
+                edge_sample(sampler, counts, &mut w);
+                advance(&mut w.p, step);
             }
+            walkers.push(w);
         }
     }
-    walkers.len() as u64
+    let rays = walkers.len() as u64;
+    // The inner spans, all rays together: longest first, so the rays still walking are always
+    // a prefix.
+    walkers.sort_unstable_by_key(|w| std::cmp::Reverse(w.inner));
+    let mut active = walkers.len();
+    let mut t = 0;
+    loop {
+        while active > 0 && walkers[active - 1].inner <= t {
+            active -= 1;
+        }
+        if active == 0 {
+            break;
+        }
+        for w in &mut walkers[..active] {
+            let cell = sampler.inner_cell(w.p);
+            match sampler.cell_bin(cell) {
+                MIXED => match mixed_bin(sampler, w.p, cell, w.grid) {
+                    Some(b) => counts.push_to(&mut w.run, b),
+                    None => counts.end_run(&mut w.run),
+                },
+                b => counts.push_to(&mut w.run, b),
+            }
+            advance(&mut w.p, step);
+        }
+        t += 1;
+    }
+    // The samples after the inner span.
+    for w in walkers.iter_mut() {
+        for _ in 0..w.tail {
+            edge_sample(sampler, counts, w);
+            advance(&mut w.p, step);
+        }
+        counts.end_run(&mut w.run);
+    }
+    rays
+}
+
+/// Feeds the rays of the tile row `js` into `counts`. Returns the number of rays.
+fn walk_row(
+    lattice: &Lattice,
+    js: (i64, i64),
+    sampler: &BinSampler,
+    counts: &mut impl Counter,
+) -> u64 {
+    let ((i0, i1), _) = lattice.ray_ranges();
+    let lattice_step = lattice.step();
+    // A whole step is snapped, so that rays on the grid stay exactly on it.
+    let step = if lattice_step.iter().all(|&c| is_whole(c)) {
+        to_fixed(lattice_step.map(f64::round))
+    } else {
+        to_fixed(lattice_step)
+    };
+    let mut walkers = Vec::with_capacity((TILE * TILE) as usize);
+    (i0..=i1)
+        .step_by(TILE as usize)
+        .map(|i| {
+            let is = (i, (i + TILE - 1).min(i1));
+            walk_tile(lattice, (is, js), step, sampler, counts, &mut walkers)
+        })
+        .sum()
 }
 
 /// The inclusive ranges of the tile rows of `lattice`'s rays.
@@ -196,22 +263,21 @@ pub fn entropy_rate(
     block: usize,
     monitor: &Monitor,
 ) -> Result<AxisEntropy> {
-    let ((i0, i1), _) = lattice.ray_ranges();
     let rows: Vec<(i64, i64)> = tile_rows(lattice).collect();
-    let empty = || (BlockCounts::new(sampler.bins(), block), 0u64, Vec::new());
-    let (counts, rays, _) = rows
+    let empty = || (BlockCounts::new(sampler.bins(), block), 0);
+    let (counts, rays) = rows
         .into_par_iter()
-        .try_fold(empty, |(mut counts, mut rays, mut walkers), js| {
-            for i in (i0..=i1).step_by(TILE as usize) {
-                let is = (i, (i + TILE - 1).min(i1));
-                rays += walk_tile(lattice, (is, js), sampler, &mut counts, &mut walkers);
-            }
+        .try_fold(empty, |(mut counts, rays), js| {
+            let row = match counts.dense() {
+                Some(mut dense) => walk_row(lattice, js, sampler, &mut dense),
+                None => walk_row(lattice, js, sampler, &mut counts),
+            };
             monitor.advance(1)?;
-            Ok((counts, rays, walkers))
+            Ok((counts, rays + row))
         })
-        .try_reduce(empty, |(mut a, ra, w), (b, rb, _)| {
+        .try_reduce(empty, |(mut a, ra), (b, rb)| {
             a.merge(&b);
-            Ok((a, ra + rb, w))
+            Ok((a, ra + rb))
         })?;
     Ok(AxisEntropy::new(lattice.d, &counts, rays))
 }

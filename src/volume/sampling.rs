@@ -1,9 +1,8 @@
 //! Sampling a volume along an arbitrary axis on the ray lattice of DESIGN.md §2, with trilinear
 //! interpolation. Used by the view search (rays) and by oblique slice stacks (planes).
 
-use rayon::prelude::*;
-
 use crate::error::{Error, Result};
+use crate::volume::cells::{MIXED, cell_map};
 use crate::volume::{Quantizer, Volume};
 
 /// Dot product.
@@ -211,6 +210,11 @@ impl Lattice {
         std::array::from_fn(|m| p[m] / self.spacing[m])
     }
 
+    /// Displacement between consecutive samples of a ray, in voxel index coordinates.
+    pub fn step(&self) -> [f64; 3] {
+        self.to_index(self.d.map(|c| c * self.sample_spacing))
+    }
+
     /// Ray `(i, j)`, or `None` when it misses the box.
     pub fn ray(&self, i: i64, j: i64) -> Option<Ray> {
         let base = self.point(i, j, 0);
@@ -233,7 +237,7 @@ impl Lattice {
         let (k0, k1) = (lo.ceil() as i64, hi.floor() as i64);
         (k0 <= k1).then(|| Ray {
             origin: self.to_index(base),
-            step: self.to_index(self.d.map(|c| c * y)),
+            step: self.step(),
             k0,
             k1,
         })
@@ -351,9 +355,6 @@ impl<'a> Interpolator<'a> {
     }
 }
 
-/// Marks a cell whose corners do not all lie safely inside one bin.
-const MIXED: u8 = u8::MAX;
-
 /// Fraction bits of fixed-point positions.
 pub const FIXED_BITS: u32 = 32;
 const FIXED_STEP: f64 = 1.0 / (1u64 << FIXED_BITS) as f64;
@@ -365,99 +366,23 @@ pub fn to_fixed(p: [f64; 3]) -> [i64; 3] {
     p.map(|c| (c * (1u64 << FIXED_BITS) as f64).round() as i64)
 }
 
-/// `out[i] = a[i]` where `a[i] == a[i + offset]`, else `MIXED`; entries without a partner are
-/// `MIXED`.
-fn merge_with_neighbour(a: &[u8], offset: usize, out: &mut Vec<u8>) {
-    const CHUNK: usize = 1 << 16;
-    let n = a.len();
-    out.clear();
-    out.resize(n, MIXED);
-    let pairs = n.saturating_sub(offset);
-    out[..pairs]
-        .par_chunks_mut(CHUNK)
-        .zip(
-            a[..pairs]
-                .par_chunks(CHUNK)
-                .zip(a[offset..].par_chunks(CHUNK)),
-        )
-        .for_each(|(o, (x, y))| {
-            for ((o, &x), &y) in o.iter_mut().zip(x).zip(y) {
-                *o = if x == y { x } else { MIXED };
-            }
-        });
-}
-
 /// Quantized trilinear sampling: the bin of the interpolated value, as
-/// [`Quantizer::bin`]`(`[`Interpolator::sample`]`)` gives it, but answered from a per-cell map
-/// where all eight corners of a cell lie in one bin with a margin for rounding. A trilinear
-/// sample is a convex combination of its corners, so it lies in their bin too: the map only
-/// saves work, it never changes a result.
+/// [`Quantizer::bin`]`(`[`Interpolator::sample`]`)` gives it, but answered from a cell map (see
+/// [`cell_map`]) where all eight corners of a cell lie in one bin with a margin for rounding:
+/// the map only saves work, it never changes a result.
 pub struct BinSampler<'a> {
     it: Interpolator<'a>,
     q: Quantizer,
-    /// Per cell (indexed by its lower corner voxel): its bin, or `MIXED`.
     cells: Vec<u8>,
-    /// Per voxel: its bin by the exact formula; `u8::MAX` also for a missing voxel, so that value
-    /// is checked again.
-    voxel_bins: Vec<u8>,
 }
 
 impl<'a> BinSampler<'a> {
     /// Builds the cell map of `volume` for quantizer `q` (one byte per voxel).
     pub fn new(volume: &'a Volume, q: Quantizer) -> Self {
-        let s = volume.stats();
-        // Trilinear interpolation in f32 is within a few ulps of the largest corner magnitude;
-        // keep corners 16 ulps (in bin units) away from the bin edges.
-        let span = f64::from(s.max) - f64::from(s.min);
-        let scale = if span > 0.0 {
-            q.bins() as f64 / span
-        } else {
-            0.0
-        };
-        let magnitude = f64::from(s.min.abs().max(s.max.abs()));
-        let margin = 16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9;
-        let last = q.bins() - 1;
-        let safe_bin = |v: f32| -> u8 {
-            if v.is_nan() {
-                return MIXED;
-            }
-            let t = (f64::from(v) - f64::from(s.min)) * scale;
-            let b = (t.max(0.0) as usize).min(last);
-            let low_ok = b == 0 || t - b as f64 >= margin;
-            let high_ok = b == last || (b + 1) as f64 - t >= margin;
-            if low_ok && high_ok { b as u8 } else { MIXED }
-        };
-        let voxels = volume.voxels();
-        let mut voxel_bins: Vec<u8> = vec![0; voxels.len()];
-        voxel_bins
-            .par_chunks_mut(1 << 16)
-            .zip(voxels.par_chunks(1 << 16))
-            .for_each(|(b, v)| {
-                b.iter_mut()
-                    .zip(v)
-                    .for_each(|(b, &v)| *b = q.bin(v).unwrap_or(MIXED));
-            });
-        let mut cells: Vec<u8> = vec![0; voxels.len()];
-        cells
-            .par_chunks_mut(1 << 16)
-            .zip(voxels.par_chunks(1 << 16))
-            .for_each(|(b, v)| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v)));
-        let it = Interpolator::new(volume);
-        // A cell is uniform when its corners agree pairwise along x, then y, then z: three passes
-        // of `a[i] = a[i] if a[i] == a[i + offset] else MIXED`. Entries whose partner wraps
-        // around a row belong to no cell and are never read.
-        let mut spare = Vec::new();
-        for offset in it.next {
-            if offset > 0 {
-                merge_with_neighbour(&cells, offset, &mut spare);
-                std::mem::swap(&mut cells, &mut spare);
-            }
-        }
         Self {
-            it,
+            it: Interpolator::new(volume),
+            cells: cell_map(volume, &q),
             q,
-            cells,
-            voxel_bins,
         }
     }
 
@@ -477,34 +402,95 @@ impl<'a> BinSampler<'a> {
         self.bin_fixed(to_fixed(p))
     }
 
-    /// The bin of the value at `p` in 32.32 fixed-point index coordinates (see [`to_fixed`]).
-    #[inline]
+    /// The bin of the value at `p` in 32.32 fixed-point index coordinates (see [`to_fixed`]),
+    /// inside the volume up to rounding: positions just outside are clamped into it.
     pub fn bin_fixed(&self, p: [i64; 3]) -> Option<u8> {
-        let mut base = 0;
+        let mut index = 0;
         let mut corner = [0i64; 3];
         for m in 0..3 {
             let i = (p[m].max(0) >> FIXED_BITS).min(self.it.last[m] as i64);
             corner[m] = i;
-            base += i as usize * self.it.stride[m];
+            index += i as usize * self.it.stride[m];
         }
-        let cell = self.cells[base];
-        if cell != MIXED {
-            return Some(cell);
+        match self.cells[index] {
+            MIXED => {
+                let f = std::array::from_fn(|m| {
+                    ((p[m].max(0) - (corner[m] << FIXED_BITS)) as f64 * FIXED_STEP) as f32
+                });
+                self.q.bin(self.it.interpolate(index, f))
+            }
+            bin => Some(bin),
         }
-        let f = std::array::from_fn(|m| {
-            ((p[m].max(0) - (corner[m] << FIXED_BITS)) as f64 * FIXED_STEP) as f32
-        });
-        self.q.bin(self.it.interpolate(base, f))
     }
 
-    /// The bin of the voxel at a linear memory offset, `None` when missing.
-    #[inline]
-    pub fn bin_at_linear(&self, index: usize) -> Option<u8> {
-        match self.voxel_bins[index] {
-            MIXED => self.q.bin(self.it.data[index]),
-            b => Some(b),
+    /// The samples `t` in `0..n` of the ray `p + t·step` (fixed point) that lie inside a cell
+    /// without clamping (each coordinate in `[0, last + 1)`), as a range `t0..t1`: there
+    /// [`inner_bin`](Self::inner_bin) applies. Empty ranges are `n..n`.
+    pub fn inner_span(&self, p: [i64; 3], step: [i64; 3], n: i64) -> (i64, i64) {
+        let (mut t0, mut t1) = (0i64, n);
+        for m in 0..3 {
+            // 0 <= p + t·s < end, in exact integer arithmetic.
+            let end = ((self.it.last[m] + 1) as i128) << FIXED_BITS;
+            let (p, s) = (i128::from(p[m]), i128::from(step[m]));
+            let (lo, hi) = match s.cmp(&0) {
+                std::cmp::Ordering::Equal if (0..end).contains(&p) => continue,
+                std::cmp::Ordering::Equal => (0, 0),
+                std::cmp::Ordering::Greater => (div_ceil(-p, s), div_floor(end - 1 - p, s) + 1),
+                std::cmp::Ordering::Less => (div_ceil(end - 1 - p, s), div_floor(-p, s) + 1),
+            };
+            t0 = t0.max(lo.clamp(0, n as i128) as i64);
+            t1 = t1.min(hi.clamp(0, n as i128) as i64);
         }
+        if t0 < t1 { (t0, t1) } else { (n, n) }
     }
+
+    /// The linear index of the cell around `p` (fixed point), which must lie in
+    /// [`inner_span`](Self::inner_span)'s range.
+    #[inline]
+    pub fn inner_cell(&self, p: [i64; 3]) -> usize {
+        (p[0] >> FIXED_BITS) as usize * self.it.stride[0]
+            + (p[1] >> FIXED_BITS) as usize * self.it.stride[1]
+            + (p[2] >> FIXED_BITS) as usize * self.it.stride[2]
+    }
+
+    /// The bin of cell `index` when all its samples share one, else [`MIXED`].
+    #[inline]
+    pub fn cell_bin(&self, index: usize) -> u8 {
+        self.cells[index]
+    }
+
+    /// The bin of the trilinear sample at `p` in cell `index`, where `p` lies in
+    /// [`inner_span`](Self::inner_span)'s range and `index` is its
+    /// [`inner_cell`](Self::inner_cell); `None` when a voxel it mixes is missing.
+    #[inline]
+    pub fn inner_bin(&self, p: [i64; 3], index: usize) -> Option<u8> {
+        let mask = (1i64 << FIXED_BITS) - 1;
+        let f = p.map(|c| ((c & mask) as f64 * FIXED_STEP) as f32);
+        self.q.bin(self.it.interpolate(index, f))
+    }
+
+    /// The bin of the voxel at `p`, which must be a voxel centre (whole index coordinates in
+    /// fixed point) inside the volume; `None` when it is missing.
+    #[inline]
+    pub fn voxel_bin(&self, p: [i64; 3]) -> Option<u8> {
+        let index: usize = (0..3)
+            .map(|m| (p[m] >> FIXED_BITS) as usize * self.it.stride[m])
+            .sum();
+        self.q.bin(self.it.data[index])
+    }
+}
+
+fn div_floor(a: i128, b: i128) -> i128 {
+    let q = a / b;
+    if (a % b != 0) && ((a < 0) != (b < 0)) {
+        q - 1
+    } else {
+        q
+    }
+}
+
+fn div_ceil(a: i128, b: i128) -> i128 {
+    -div_floor(-a, b)
 }
 
 #[cfg(test)]
