@@ -8,7 +8,7 @@ use crate::error::Result;
 use crate::measure::{BlockCounts, Counter, Run};
 use crate::progress::Monitor;
 use crate::volume::cells::MIXED;
-use crate::volume::sampling::{BinSampler, Lattice, to_fixed};
+use crate::volume::sampling::{BinSampler, Lattice, cross, to_fixed};
 
 /// Spread of an axis's entropy rate over shifted lattices (`--phases`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -91,15 +91,44 @@ impl AxisEntropy {
     }
 }
 
-/// Rays are walked in square tiles of this many rays a side, all rays of a tile advancing
-/// together sample by sample, so that the voxels in use stay a small neighbourhood in memory and
-/// the rays' independent work overlaps.
-const TILE: i64 = 16;
+/// Rays are walked in tiles of this many rays, all rays of a tile advancing together sample by
+/// sample, so that the memory they read stays a small neighbourhood and their independent work
+/// overlaps.
+const TILE_RAYS: i64 = 256;
+
+/// Cells per cache line in the cell map (one byte per cell).
+const CELLS_PER_LINE: f64 = 64.0;
+
+/// The shape of the tiles of `lattice`: how many rays along `i` and along `j`.
+///
+/// Reading memory dominates the walk, so the shape is the one whose walk crosses the fewest
+/// cache lines. A tile sweeps a prism along the axis; its cross-section's area is the same for
+/// every shape, so the lines it crosses differ by its side faces: a face spanned by a tile edge
+/// `e` and the step `s` crosses about `|(e × s)_x| + (|(e × s)_y| + |(e × s)_z|) / 64` lines per
+/// unit area (cache lines run 64 cells along x). Minimizing `ti·c_i + tj·c_j` with
+/// `ti·tj = TILE_RAYS` gives `ti = sqrt(TILE_RAYS·c_j / c_i)`, rounded to a power of two.
+fn tile_shape(lattice: &Lattice) -> (i64, i64) {
+    let to_index = |w: [f64; 3], length: f64| lattice.to_index(w.map(|c| c * length));
+    let step = to_index(lattice.d, lattice.sample_spacing);
+    let cost = |w: [f64; 3]| {
+        let n = cross(to_index(w, lattice.ray_spacing), step);
+        n[0].abs() + (n[1].abs() + n[2].abs()) / CELLS_PER_LINE
+    };
+    let (ci, cj) = (cost(lattice.u), cost(lattice.v));
+    let ratio = (TILE_RAYS as f64 * cj / ci.max(1e-12)).sqrt();
+    let max_log = TILE_RAYS.ilog2() as f64;
+    let ti = 1i64 << ratio.log2().round().clamp(0.0, max_log) as u32;
+    (ti, TILE_RAYS / ti)
+}
 
 /// A ray of a tile being walked: where it is, its block state, and how many samples it has in
 /// the tile's common walk (all inside cells, see [`BinSampler::inner_span`]) and after it.
 struct Walker {
     p: [i64; 3],
+    /// During the common walk: the bin or `MIXED` of the cell of `p`, and the cell of the next
+    /// sample.
+    bin: u8,
+    next: usize,
     run: Run,
     inner: i64,
     tail: i64,
@@ -136,6 +165,11 @@ fn mixed_bin(sampler: &BinSampler, p: [i64; 3], cell: usize, grid: bool) -> Opti
 }
 
 #[inline]
+fn add(p: [i64; 3], step: [i64; 3]) -> [i64; 3] {
+    std::array::from_fn(|m| p[m] + step[m])
+}
+
+#[inline]
 fn advance(p: &mut [i64; 3], step: [i64; 3]) {
     for m in 0..3 {
         p[m] += step[m];
@@ -167,6 +201,8 @@ fn walk_tile(
             let (t0, t1) = sampler.inner_span(p, step, n);
             let mut w = Walker {
                 p,
+                bin: MIXED,
+                next: 0,
                 run: Run::default(),
                 inner: t1 - t0,
                 tail: n - t1,
@@ -184,6 +220,10 @@ fn walk_tile(
     // The inner spans, all rays together: longest first, so the rays still walking are always
     // a prefix.
     walkers.sort_unstable_by_key(|w| std::cmp::Reverse(w.inner));
+    for w in walkers.iter_mut().filter(|w| w.inner > 0) {
+        w.bin = sampler.cell_bin(sampler.inner_cell(w.p));
+        w.next = sampler.inner_cell(add(w.p, step));
+    }
     let mut active = walkers.len();
     let mut t = 0;
     loop {
@@ -194,15 +234,24 @@ fn walk_tile(
             break;
         }
         for w in &mut walkers[..active] {
-            let cell = sampler.inner_cell(w.p);
-            match sampler.cell_bin(cell) {
-                MIXED => match mixed_bin(sampler, w.p, cell, w.grid) {
+            match w.bin {
+                MIXED => match mixed_bin(sampler, w.p, sampler.inner_cell(w.p), w.grid) {
                     Some(b) => counts.push_to(&mut w.run, b),
                     None => counts.end_run(&mut w.run),
                 },
                 b => counts.push_to(&mut w.run, b),
             }
             advance(&mut w.p, step);
+            // A walker comes back a whole round of the tile later, time enough for memory: ask
+            // now for the cell after next, and for the corners of the next if it is mixed.
+            if w.inner > t + 1 {
+                w.bin = sampler.cell_bin(w.next);
+                if w.bin == MIXED {
+                    sampler.prefetch_corners(w.next);
+                }
+            }
+            w.next = sampler.inner_cell(add(w.p, step));
+            sampler.prefetch_cell(w.next);
         }
         t += 1;
     }
@@ -232,11 +281,12 @@ fn walk_row(
     } else {
         to_fixed(lattice_step)
     };
-    let mut walkers = Vec::with_capacity((TILE * TILE) as usize);
+    let (ti, _) = tile_shape(lattice);
+    let mut walkers = Vec::with_capacity(TILE_RAYS as usize);
     (i0..=i1)
-        .step_by(TILE as usize)
+        .step_by(ti as usize)
         .map(|i| {
-            let is = (i, (i + TILE - 1).min(i1));
+            let is = (i, (i + ti - 1).min(i1));
             walk_tile(lattice, (is, js), step, sampler, counts, &mut walkers)
         })
         .sum()
@@ -245,9 +295,10 @@ fn walk_row(
 /// The inclusive ranges of the tile rows of `lattice`'s rays.
 fn tile_rows(lattice: &Lattice) -> impl Iterator<Item = (i64, i64)> {
     let (_, (j0, j1)) = lattice.ray_ranges();
+    let (_, tj) = tile_shape(lattice);
     (j0..=j1)
-        .step_by(TILE as usize)
-        .map(move |j| (j, (j + TILE - 1).min(j1)))
+        .step_by(tj as usize)
+        .map(move |j| (j, (j + tj - 1).min(j1)))
 }
 
 /// Number of progress units [`entropy_rate`] reports for `lattice`: its rows of tiles.

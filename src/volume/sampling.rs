@@ -445,12 +445,32 @@ impl<'a> BinSampler<'a> {
     }
 
     /// The linear index of the cell around `p` (fixed point), which must lie in
-    /// [`inner_span`](Self::inner_span)'s range.
+    /// [`inner_span`](Self::inner_span)'s range for the index to be meaningful (anywhere else
+    /// it is some number, fit only for [`prefetch_cell`](Self::prefetch_cell)).
     #[inline]
     pub fn inner_cell(&self, p: [i64; 3]) -> usize {
-        (p[0] >> FIXED_BITS) as usize * self.it.stride[0]
-            + (p[1] >> FIXED_BITS) as usize * self.it.stride[1]
-            + (p[2] >> FIXED_BITS) as usize * self.it.stride[2]
+        let [sx, sy, sz] = self.it.stride;
+        ((p[0] >> FIXED_BITS) as usize)
+            .wrapping_mul(sx)
+            .wrapping_add(((p[1] >> FIXED_BITS) as usize).wrapping_mul(sy))
+            .wrapping_add(((p[2] >> FIXED_BITS) as usize).wrapping_mul(sz))
+    }
+
+    /// Asks the processor to bring cell `index` of the map into cache, for a read soon after.
+    /// Any index may be given: a prefetch never faults.
+    #[inline]
+    pub fn prefetch_cell(&self, index: usize) {
+        prefetch(self.cells.as_ptr().wrapping_add(index));
+    }
+
+    /// Asks the processor to bring the corner voxels of cell `index` into cache.
+    #[inline]
+    pub fn prefetch_corners(&self, index: usize) {
+        let [_, y, z] = self.it.next;
+        let base = self.it.data.as_ptr().wrapping_add(index);
+        for offset in [0, y, z, y + z] {
+            prefetch(base.wrapping_add(offset));
+        }
     }
 
     /// The bin of cell `index` when all its samples share one, else [`MIXED`].
@@ -478,6 +498,21 @@ impl<'a> BinSampler<'a> {
             .sum();
         self.q.bin(self.it.data[index])
     }
+}
+
+/// Asks the processor to bring the cache line at `address` into cache. Any address may be
+/// given: a prefetch never faults.
+#[inline]
+#[allow(unsafe_code)]
+fn prefetch<T>(address: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is a hint: it reads nothing into the program and does not fault on any
+    // address, so the pointer needs no validity.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(address.cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = address;
 }
 
 fn div_floor(a: i128, b: i128) -> i128 {
