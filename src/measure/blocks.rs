@@ -17,14 +17,21 @@ const DENSE_BITS: u32 = 18;
 /// A histogram over block codes, dense for small alphabets.
 #[derive(Clone, Debug)]
 enum Table {
+    /// One count per code, and one more that counts nothing: a slot that branch-free code can
+    /// add to when it has nothing to count (see [`DenseCounts::split`]).
     Dense(Vec<u64>),
     Sparse(HashMap<u64, u64>),
+}
+
+/// The counts of a dense table, without its spare slot.
+fn counted(v: &[u64]) -> &[u64] {
+    &v[..v.len() - 1]
 }
 
 impl Table {
     fn new(bits: u32) -> Self {
         if bits <= DENSE_BITS {
-            Self::Dense(vec![0; 1 << bits])
+            Self::Dense(vec![0; (1 << bits) + 1])
         } else {
             Self::Sparse(HashMap::new())
         }
@@ -41,7 +48,7 @@ impl Table {
     /// Calls `f(code, count)` for every code counted.
     fn for_each(&self, mut f: impl FnMut(u64, u64)) {
         match self {
-            Self::Dense(v) => v
+            Self::Dense(v) => counted(v)
                 .iter()
                 .enumerate()
                 .filter(|(_, c)| **c > 0)
@@ -59,7 +66,7 @@ impl Table {
 
     fn total(&self) -> u64 {
         match self {
-            Self::Dense(v) => v.iter().sum(),
+            Self::Dense(v) => counted(v).iter().sum(),
             Self::Sparse(m) => m.values().sum(),
         }
     }
@@ -70,7 +77,7 @@ impl Table {
             return 0.0;
         }
         let s = match self {
-            Self::Dense(v) => sum_c_log_c(v.iter().copied()),
+            Self::Dense(v) => sum_c_log_c(counted(v).iter().copied()),
             Self::Sparse(m) => {
                 // In a fixed order: a hash map's order changes from run to run, and with it the
                 // last bits of a floating-point sum.
@@ -94,6 +101,19 @@ fn add_sparse(m: &mut HashMap<u64, u64>, code: u64, n: u64) {
 pub struct Run {
     code: u64,
     len: u64,
+}
+
+impl Run {
+    /// A run with the packed code of its last symbols and its length (which may be capped at
+    /// L: only whether it reaches L - 1 and L matters).
+    pub fn from_parts(code: u64, len: u64) -> Self {
+        Self { code, len }
+    }
+
+    /// `(code, length)`.
+    pub fn parts(&self) -> (u64, u64) {
+        (self.code, self.len)
+    }
 }
 
 /// How symbols pack into block codes: `bits` per symbol, the latest in the lowest bits.
@@ -182,6 +202,43 @@ pub struct DenseCounts<'a> {
     packing: Packing,
     long: &'a mut [u64],
     ends: &'a mut Ends,
+}
+
+impl DenseCounts<'_> {
+    /// `(bits per symbol, mask of an L-block code, L)`.
+    pub fn packing(&self) -> (u32, u64, u64) {
+        (
+            self.packing.bits,
+            self.packing.long_mask,
+            self.packing.block,
+        )
+    }
+
+    /// The L-block counts, indexed by code (`mask + 1` of them) and followed by a spare slot
+    /// that counts nothing, and what ends runs.
+    pub fn split(&mut self) -> (&mut [u64], RunEnds<'_>) {
+        (
+            &mut *self.long,
+            RunEnds {
+                packing: self.packing,
+                ends: &mut *self.ends,
+            },
+        )
+    }
+}
+
+/// Ends runs of a [`DenseCounts`] while its L-block counts are borrowed: see
+/// [`DenseCounts::split`].
+pub struct RunEnds<'a> {
+    packing: Packing,
+    ends: &'a mut Ends,
+}
+
+impl RunEnds<'_> {
+    /// As [`Counter::end_run`].
+    pub fn end_run(&mut self, run: &mut Run) {
+        self.ends.end_run(&self.packing, run);
+    }
 }
 
 impl Counter for DenseCounts<'_> {

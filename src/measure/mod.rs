@@ -4,7 +4,7 @@
 
 mod blocks;
 
-pub use blocks::{BlockCounts, Counter, DenseCounts, Run, block_entropies};
+pub use blocks::{BlockCounts, Counter, DenseCounts, Run, RunEnds, block_entropies};
 
 /// `Σ c·log2 c` over the non-zero counts, the part of an entropy that depends on the shape.
 #[inline]

@@ -36,6 +36,13 @@ impl Quantizer {
         })
     }
 
+    /// `(min, max - min, B)` of the formula, for code that computes it in other forms (which
+    /// must give the same bins).
+    #[must_use]
+    pub fn formula(&self) -> (f64, f64, f64) {
+        (self.min, self.range, self.bins)
+    }
+
     /// Number of bins.
     #[must_use]
     pub fn bins(&self) -> usize {

@@ -363,7 +363,17 @@ const FIXED_STEP: f64 = 1.0 / (1u64 << FIXED_BITS) as f64;
 /// integer additions and finding the cell needs no float-to-integer conversion per sample.
 #[inline]
 pub fn to_fixed(p: [f64; 3]) -> [i64; 3] {
-    p.map(|c| (c * (1u64 << FIXED_BITS) as f64).round() as i64)
+    p.map(|c| round_half_away(c * (1u64 << FIXED_BITS) as f64))
+}
+
+/// `x.round() as i64` (halves away from zero) for `|x| < 2^52`, without the library call that
+/// `round` is on processors before SSE4.1.
+#[inline]
+pub fn round_half_away(x: f64) -> i64 {
+    let whole = x as i64;
+    // Exact: both are below 2^52 in magnitude.
+    let rest = x - whole as f64;
+    whole + i64::from(rest >= 0.5) - i64::from(rest <= -0.5)
 }
 
 /// Quantized trilinear sampling: the bin of the interpolated value, as
@@ -379,9 +389,10 @@ pub struct BinSampler<'a> {
 impl<'a> BinSampler<'a> {
     /// Builds the cell map of `volume` for quantizer `q` (one byte per voxel).
     pub fn new(volume: &'a Volume, q: Quantizer) -> Self {
+        let cells = cell_map(volume, &q);
         Self {
             it: Interpolator::new(volume),
-            cells: cell_map(volume, &q),
+            cells,
             q,
         }
     }
@@ -429,8 +440,15 @@ impl<'a> BinSampler<'a> {
     pub fn inner_span(&self, p: [i64; 3], step: [i64; 3], n: i64) -> (i64, i64) {
         let (mut t0, mut t1) = (0i64, n);
         for m in 0..3 {
-            // 0 <= p + t·s < end, in exact integer arithmetic.
+            // 0 <= p + t·s < end, in exact integer arithmetic (i128 only where i64 might not
+            // hold it: no ordinary volume).
             let end = ((self.it.last[m] + 1) as i128) << FIXED_BITS;
+            if end < 1 << 60 && p[m].unsigned_abs() < 1 << 60 && step[m].unsigned_abs() < 1 << 60 {
+                let (lo, hi) = span_along(p[m], step[m], end as i64);
+                t0 = t0.max(lo.clamp(0, n));
+                t1 = t1.min(hi.clamp(0, n));
+                continue;
+            }
             let (p, s) = (i128::from(p[m]), i128::from(step[m]));
             let (lo, hi) = match s.cmp(&0) {
                 std::cmp::Ordering::Equal if (0..end).contains(&p) => continue,
@@ -473,6 +491,33 @@ impl<'a> BinSampler<'a> {
         }
     }
 
+    /// The cell map: per cell (at the linear index of its lower corner voxel) its bin or
+    /// [`MIXED`].
+    pub fn cells(&self) -> &[u8] {
+        &self.cells
+    }
+
+    /// The quantizer.
+    pub fn quantizer(&self) -> &Quantizer {
+        &self.q
+    }
+
+    /// The voxels, x fastest.
+    pub fn voxels(&self) -> &'a [f32] {
+        self.it.data
+    }
+
+    /// Offsets from a cell's lower corner voxel to its neighbours along x, y and z (0 along an
+    /// axis of one voxel, whose cells are flat).
+    pub fn corner_steps(&self) -> [usize; 3] {
+        self.it.next
+    }
+
+    /// Linear memory strides of the voxel grid along x, y and z.
+    pub fn strides(&self) -> [usize; 3] {
+        self.it.stride
+    }
+
     /// The bin of cell `index` when all its samples share one, else [`MIXED`].
     #[inline]
     pub fn cell_bin(&self, index: usize) -> u8 {
@@ -513,6 +558,19 @@ fn prefetch<T>(address: *const T) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = address;
+}
+
+/// The range `lo..hi` of `t` with `0 <= p + t·s < end`, all below 2^60 in magnitude (so that no
+/// sum overflows); an empty range when there is none, and `i64::MIN..i64::MAX` for every `t`.
+fn span_along(p: i64, s: i64, end: i64) -> (i64, i64) {
+    let floor = |a: i64, b: i64| a.div_euclid(b) - i64::from(b < 0 && a.rem_euclid(b) != 0);
+    let ceil = |a: i64, b: i64| -floor(-a, b);
+    match s.cmp(&0) {
+        std::cmp::Ordering::Equal if (0..end).contains(&p) => (i64::MIN, i64::MAX),
+        std::cmp::Ordering::Equal => (0, 0),
+        std::cmp::Ordering::Greater => (ceil(-p, s), floor(end - 1 - p, s) + 1),
+        std::cmp::Ordering::Less => (ceil(end - 1 - p, s), floor(-p, s) + 1),
+    }
 }
 
 fn div_floor(a: i128, b: i128) -> i128 {
@@ -638,6 +696,59 @@ mod tests {
                 uniform += usize::from(fast.cells[base] != MIXED);
             }
             assert!(uniform > 1000, "the map is used ({uniform} uniform hits)");
+        }
+    }
+
+    #[test]
+    fn rounding_halves_away_from_zero_like_the_library() {
+        for x in [
+            0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            0.499_999_999_999_999_94,
+            -2.4,
+            7.0,
+            1e15 + 0.5,
+            -3.75,
+            4_294_967_295.5,
+        ] {
+            assert_eq!(round_half_away(x), x.round() as i64, "{x}");
+        }
+        let mut state = 3u64;
+        for _ in 0..10_000 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            let x = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e12;
+            assert_eq!(round_half_away(x), x.round() as i64, "{x}");
+        }
+    }
+
+    #[test]
+    fn inner_spans_are_exactly_the_samples_inside_cells() {
+        let dims = [6, 5, 7];
+        let v = Volume::new(dims, [1.0; 3], VoxelType::F32, vec![1.0; 210]).unwrap();
+        let sampler = BinSampler::new(&v, v.quantizer(4).unwrap());
+        let one = 1i64 << FIXED_BITS;
+        let inside = |p: [i64; 3]| (0..3).all(|m| p[m] >= 0 && p[m] < (dims[m] as i64 - 1) * one);
+        for (p, step) in [
+            ([0, 0, 0], [one, 0, 0]),
+            ([-3, one / 2, one], [one / 3, one / 7, -one / 5]),
+            ([5 * one, 4 * one, 6 * one], [-one, -one, -one]),
+            ([one, 4 * one, one], [one / 2, 0, one / 4]),
+            ([2 * one + 1, one, one], [0, 0, 0]),
+        ] {
+            let n = 40;
+            let (t0, t1) = sampler.inner_span(p, step, n);
+            let expect: Vec<i64> = (0..n)
+                .filter(|&t| inside(std::array::from_fn(|m| p[m] + t * step[m])))
+                .collect();
+            let got: Vec<i64> = (t0..t1).collect();
+            // The samples inside cells form one run along a straight line.
+            assert_eq!(got, expect, "{p:?} + t·{step:?}");
         }
     }
 
