@@ -7,6 +7,9 @@ use rayon::prelude::*;
 
 use super::{Quantizer, Volume};
 
+/// Voxels per parallel task.
+const CHUNK: usize = 1 << 16;
+
 /// Marks a cell whose corners do not all lie safely inside one bin.
 pub const MIXED: u8 = u8::MAX;
 
@@ -39,43 +42,29 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> Vec<u8> {
         if low_ok && high_ok { b as u8 } else { MIXED }
     };
     let voxels = volume.voxels();
-    let mut cells: Vec<u8> = vec![0; voxels.len()];
-    cells
-        .par_chunks_mut(1 << 16)
-        .zip(voxels.par_chunks(1 << 16))
+    let mut bins: Vec<u8> = vec![0; voxels.len()];
+    bins.par_chunks_mut(CHUNK)
+        .zip(voxels.par_chunks(CHUNK))
         .for_each(|(b, v)| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v)));
-    // A cell is uniform when its corners agree pairwise along x, then y, then z: three passes
-    // of `a[i] = a[i] if a[i] == a[i + offset] else MIXED`. Entries whose partner wraps around a
-    // row belong to no cell and are never read.
+    // A cell is uniform when its eight corners share a bin. Entries without a whole cell (on
+    // the last plane of an axis) are left MIXED and never read.
     let [nx, ny, nz] = volume.dims();
-    let mut spare = Vec::new();
-    for (n, stride) in [(nx, 1), (ny, nx), (nz, nx * ny)] {
-        if n > 1 {
-            merge_with_neighbour(&cells, stride, &mut spare);
-            std::mem::swap(&mut cells, &mut spare);
-        }
-    }
-    cells
-}
-
-/// `out[i] = a[i]` where `a[i] == a[i + offset]`, else `MIXED`; entries without a partner are
-/// `MIXED`.
-fn merge_with_neighbour(a: &[u8], offset: usize, out: &mut Vec<u8>) {
-    const CHUNK: usize = 1 << 16;
-    let n = a.len();
-    out.clear();
-    out.resize(n, MIXED);
-    let pairs = n.saturating_sub(offset);
-    out[..pairs]
+    let next = |n: usize, stride: usize| if n > 1 { stride } else { 0 };
+    let (x, y, z) = (next(nx, 1), next(ny, nx), next(nz, nx * ny));
+    let corners = [x, y, y + x, z, z + x, z + y, z + y + x];
+    let cells_with_corners = bins.len() - (z + y + x);
+    let mut cells = vec![MIXED; bins.len()];
+    cells[..cells_with_corners]
         .par_chunks_mut(CHUNK)
-        .zip(
-            a[..pairs]
-                .par_chunks(CHUNK)
-                .zip(a[offset..].par_chunks(CHUNK)),
-        )
-        .for_each(|(o, (x, y))| {
-            for ((o, &x), &y) in o.iter_mut().zip(x).zip(y) {
-                *o = if x == y { x } else { MIXED };
+        .enumerate()
+        .for_each(|(c, out)| {
+            let start = c * CHUNK;
+            let here = &bins[start..start + out.len()];
+            let others = corners.map(|o| &bins[start + o..start + o + out.len()]);
+            for (i, (o, &b)) in out.iter_mut().zip(here).enumerate() {
+                let same = others.iter().all(|other| other[i] == b);
+                *o = if same { b } else { MIXED };
             }
         });
+    cells
 }

@@ -234,7 +234,7 @@ impl Lattice {
             lo = lo.max(t1.min(t2));
             hi = hi.min(t1.max(t2));
         }
-        let (k0, k1) = (lo.ceil() as i64, hi.floor() as i64);
+        let (k0, k1) = (ceil_i64(lo), floor_i64(hi));
         (k0 <= k1).then(|| Ray {
             origin: self.to_index(base),
             step: self.step(),
@@ -242,6 +242,21 @@ impl Lattice {
             k1,
         })
     }
+}
+
+/// `x.floor() as i64` for `|x| < 2^52`, without the library call that `floor` is on
+/// processors before SSE4.1.
+#[inline]
+pub fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    t - i64::from((t as f64) > x)
+}
+
+/// `x.ceil() as i64` for `|x| < 2^52` (see [`floor_i64`]).
+#[inline]
+pub fn ceil_i64(x: f64) -> i64 {
+    let t = x as i64;
+    t + i64::from((t as f64) < x)
 }
 
 /// The smallest of three spacings.
@@ -696,6 +711,25 @@ mod tests {
                 uniform += usize::from(fast.cells[base] != MIXED);
             }
             assert!(uniform > 1000, "the map is used ({uniform} uniform hits)");
+        }
+    }
+
+    #[test]
+    fn floor_and_ceil_match_the_library() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.999_999,
+            -2.000_001,
+            1e15 + 0.5,
+            -7.25,
+        ] {
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "{x}");
         }
     }
 

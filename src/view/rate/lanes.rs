@@ -131,30 +131,23 @@ fn gather_labels(
     sz: __m256i,
 ) -> __m256i {
     let cell = natural(cells_shuffled(p, sy, sz));
-    // SAFETY: only the cells of lanes in `on` are read; the caller sets there only lanes whose
-    // positions lie in their inner spans, so each index is a cell of the map (which `available`
-    // checked fits 31 bits), and four bytes from there stay within its padding.
+    // Lanes not in `on` (whose positions may lie outside the volume) read cell 0.
     let mut at = Narrow::default();
     at.set(_mm256_and_si256(cell, on));
     let cells = sampler.cells();
-    let mut lab = Narrow::default();
-    for l in 0..LANES {
-        lab.0[l] = u32::from(cells[at.0[l] as usize]);
+    let mut labels = Narrow::default();
+    for (label, &i) in labels.0.iter_mut().zip(&at.0) {
+        *label = u32::from(cells[i as usize]);
     }
-    let gathered = lab.get();
-    let labels = _mm256_and_si256(gathered, _mm256_set1_epi32(0xff));
+    let labels = labels.get();
     let mixed = _mm256_and_si256(
         _mm256_cmpeq_epi32(labels, _mm256_set1_epi32(i32::from(MIXED))),
         on,
     );
-    let mut pending = _mm256_movemask_ps(_mm256_castsi256_ps(mixed)) as u32;
-    if pending != 0 {
-        let mut at = Narrow::default();
-        at.set(cell);
-        while pending != 0 {
-            sampler.prefetch_corners(at.0[pending.trailing_zeros() as usize] as usize);
-            pending &= pending - 1;
-        }
+    let mut pending = bits_of(mixed);
+    while pending != 0 {
+        sampler.prefetch_corners(at.0[pending.trailing_zeros() as usize] as usize);
+        pending &= pending - 1;
     }
     labels
 }
@@ -301,18 +294,17 @@ impl Group {
         }
     }
 
+    /// Puts the group's runs back in `walkers`, and each walker at the end of its inner span
+    /// (`step` further per sample).
     #[target_feature(enable = "avx2")]
-    fn store(&self, walkers: &mut [Walker]) {
-        let mut pos = [Wide::default(); 3];
-        for m in 0..3 {
-            pos[m].set(0, self.p[m][0]);
-            pos[m].set(1, self.p[m][1]);
-        }
+    fn store(&self, walkers: &mut [Walker], step: [i64; 3]) {
         let (mut code, mut len) = (Narrow::default(), Narrow::default());
         code.set(self.code);
         len.set(self.len);
         for (l, w) in walkers.iter_mut().enumerate() {
-            w.p = [pos[0].0[l], pos[1].0[l], pos[2].0[l]];
+            for m in 0..3 {
+                w.p[m] += w.inner * step[m];
+            }
             w.run = Run::from_parts(u64::from(code.0[l]), u64::from(len.0[l]));
         }
     }
@@ -430,7 +422,7 @@ pub(super) fn walk(
             table,
             &mut ends,
         );
-        g.store(group);
+        g.store(group, step);
     }
 }
 
@@ -508,15 +500,8 @@ fn walk_group(
             // holds `mask + 2` counts (asserted by `walk`).
             unsafe { *table.get_unchecked_mut(slot as usize) += 1 };
         }
-        // Move the walking lanes on.
-        let on64 = [
-            _mm256_cvtepi32_epi64(_mm256_castsi256_si128(on)),
-            _mm256_cvtepi32_epi64(_mm256_extracti128_si256::<1>(on)),
-        ];
-        for m in 0..3 {
-            for h in 0..2 {
-                g.p[m][h] = _mm256_add_epi64(g.p[m][h], _mm256_and_si256(c.step[m], on64[h]));
-            }
-        }
+        // Move on; lanes past their spans too (they read nothing more, and `Group::store`
+        // puts them where their spans end).
+        g.p = offset(&g.p, &c.step);
     }
 }
