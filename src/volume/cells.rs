@@ -18,7 +18,10 @@ pub const MIXED: u8 = u8::MAX;
 /// voxel are no cell's and must not be read.
 ///
 /// A corner counts as in a bin only with a margin for the rounding of f32 interpolation.
-pub fn cell_map(volume: &Volume, q: &Quantizer) -> Vec<u8> {
+///
+/// Returns the map and, per voxel, the bin it safely lies in or [`MIXED`] (near a bin edge, or
+/// missing): samples on the voxel grid read that, and compute only the [`MIXED`] ones.
+pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
     let s = volume.stats();
     // Trilinear interpolation in f32 is within a few ulps of the largest corner magnitude; keep
     // corners 16 ulps (in bin units) away from the bin edges.
@@ -66,5 +69,5 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> Vec<u8> {
                 *o = if same { b } else { MIXED };
             }
         });
-    cells
+    (cells, bins)
 }

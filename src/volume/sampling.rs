@@ -210,6 +210,19 @@ impl Lattice {
         std::array::from_fn(|m| p[m] / self.spacing[m])
     }
 
+    /// The coordinate axis whose voxel columns are exactly this lattice's rays, sample for
+    /// sample: the axis is a coordinate axis, the sample spacing is its voxel spacing, the ray
+    /// spacing is the other two, and the phase is whole.
+    pub fn columns(&self) -> Option<usize> {
+        let m = coordinate_axis(self.d)?;
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b;
+        let whole = |x: f64| (x - round_half_away(x) as f64).abs() < 1e-9;
+        (same(self.sample_spacing, self.spacing[m])
+            && (0..3).all(|a| a == m || same(self.ray_spacing, self.spacing[a]))
+            && self.phase.iter().all(|&c| whole(c)))
+        .then_some(m)
+    }
+
     /// Displacement between consecutive samples of a ray, in voxel index coordinates.
     pub fn step(&self) -> [f64; 3] {
         self.to_index(self.d.map(|c| c * self.sample_spacing))
@@ -399,15 +412,20 @@ pub struct BinSampler<'a> {
     it: Interpolator<'a>,
     q: Quantizer,
     cells: Vec<u8>,
+    /// Per voxel: the bin it safely lies in, or `MIXED` (see [`cell_map`]).
+    voxel_bins: Vec<u8>,
+    dims: [usize; 3],
 }
 
 impl<'a> BinSampler<'a> {
     /// Builds the cell map of `volume` for quantizer `q` (one byte per voxel).
     pub fn new(volume: &'a Volume, q: Quantizer) -> Self {
-        let cells = cell_map(volume, &q);
+        let (cells, voxel_bins) = cell_map(volume, &q);
         Self {
             it: Interpolator::new(volume),
             cells,
+            voxel_bins,
+            dims: volume.dims(),
             q,
         }
     }
@@ -512,6 +530,22 @@ impl<'a> BinSampler<'a> {
         &self.cells
     }
 
+    /// Per voxel: the bin it safely lies in, or [`MIXED`] (then [`voxel_bin_at`] tells).
+    ///
+    /// [`voxel_bin_at`]: Self::voxel_bin_at
+    pub fn voxel_bins(&self) -> &[u8] {
+        &self.voxel_bins
+    }
+
+    /// The bin of the voxel at linear index `index`, `None` when it is missing.
+    #[inline]
+    pub fn voxel_bin_at(&self, index: usize) -> Option<u8> {
+        match self.voxel_bins[index] {
+            MIXED => self.q.bin(self.it.data[index]),
+            b => Some(b),
+        }
+    }
+
     /// The quantizer.
     pub fn quantizer(&self) -> &Quantizer {
         &self.q
@@ -526,6 +560,11 @@ impl<'a> BinSampler<'a> {
     /// axis of one voxel, whose cells are flat).
     pub fn corner_steps(&self) -> [usize; 3] {
         self.it.next
+    }
+
+    /// Dimensions of the voxel grid.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
     }
 
     /// Linear memory strides of the voxel grid along x, y and z.
