@@ -157,7 +157,7 @@ struct Mixer<'a> {
     voxels: &'a [f32],
     /// Offsets of a cell's eight corners from its lower one, in the order of
     /// `Interpolator::interpolate`.
-    corners: [__m256i; 8],
+    corners: [usize; 8],
     min: __m256d,
     range: __m256d,
     bins: __m256d,
@@ -170,10 +170,10 @@ impl<'a> Mixer<'a> {
     #[target_feature(enable = "avx2")]
     fn new(sampler: &BinSampler<'a>) -> Option<Self> {
         let (min, range, bins) = sampler.quantizer().formula();
-        let [x, y, z] = sampler.corner_steps().map(|s| s as i32);
+        let [x, y, z] = sampler.corner_steps();
         (range > 0.0).then(|| Self {
             voxels: sampler.voxels(),
-            corners: [0, x, y, y + x, z, z + x, z + y, z + y + x].map(|o| _mm256_set1_epi32(o)),
+            corners: [0, x, y, y + x, z, z + x, z + y, z + y + x],
             min: _mm256_set1_pd(min),
             range: _mm256_set1_pd(range),
             bins: _mm256_set1_pd(bins),
@@ -187,19 +187,20 @@ impl<'a> Mixer<'a> {
     #[inline]
     #[target_feature(enable = "avx2")]
     fn bins(&self, p: &Positions, mixed: __m256i, sy: __m256i, sz: __m256i) -> (__m256i, __m256i) {
-        let cell = natural(cells_shuffled(p, sy, sz));
-        let base = self.voxels.as_ptr();
-        let on = _mm256_castsi256_ps(mixed);
-        // SAFETY: the lanes read are mixed cells of the map at positions in their inner spans,
-        // so all eight corners are voxels of the volume (indices fit 31 bits: `available`).
-        let c: [__m256; 8] = std::array::from_fn(|k| unsafe {
-            _mm256_mask_i32gather_ps::<4>(
-                _mm256_setzero_ps(),
-                base,
-                _mm256_add_epi32(cell, self.corners[k]),
-                on,
-            )
-        });
+        // The corners of the mixed lanes, read one by one (gathers are slower here).
+        let mut cell = Narrow::default();
+        cell.set(natural(cells_shuffled(p, sy, sz)));
+        let mut corners = [Narrow::default(); 8];
+        let mut lanes = bits_of(mixed);
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let base = cell.0[l] as usize;
+            for (corner, &offset) in corners.iter_mut().zip(&self.corners) {
+                corner.0[l] = self.voxels[base + offset].to_bits();
+            }
+        }
+        let c: [__m256; 8] = std::array::from_fn(|k| _mm256_castsi256_ps(corners[k].get()));
         // Fractions: the low 32 bits of each coordinate, as f64 times 2^-32, rounded to f32.
         let fraction = |m: usize| {
             let low = natural(_mm256_castps_si256(_mm256_shuffle_ps::<0b10_00_10_00>(
@@ -495,10 +496,8 @@ fn walk_group(
         let mut slots = Narrow::default();
         slots.set(_mm256_blendv_epi8(c.spare, g.code, complete));
         for &slot in &slots.0 {
-            debug_assert!((slot as usize) < table.len());
-            // SAFETY: slots are codes masked to `mask` or the spare `mask + 1`, and the table
-            // holds `mask + 2` counts (asserted by `walk`).
-            unsafe { *table.get_unchecked_mut(slot as usize) += 1 };
+            // Codes are masked to `mask`, the spare is `mask + 1`.
+            table[slot as usize] += 1;
         }
         // Move on; lanes past their spans too (they read nothing more, and `Group::store`
         // puts them where their spans end).
