@@ -614,16 +614,28 @@ fn prefetch<T>(address: *const T) {
     let _ = address;
 }
 
-/// The range `lo..hi` of `t` with `0 <= p + t·s < end`, all below 2^60 in magnitude (so that no
-/// sum overflows); an empty range when there is none, and `i64::MIN..i64::MAX` for every `t`.
+/// The range `lo..hi` of `t` with `0 <= p + t·s < end`, all below 2^60 in magnitude; an empty
+/// range when there is none, and `i64::MIN..i64::MAX` for every `t`. Exact, without integer
+/// division (rays need it once each, and a division costs tens of cycles).
 fn span_along(p: i64, s: i64, end: i64) -> (i64, i64) {
-    let floor = |a: i64, b: i64| a.div_euclid(b) - i64::from(b < 0 && a.rem_euclid(b) != 0);
-    let ceil = |a: i64, b: i64| -floor(-a, b);
+    // The smallest t with p + t·s >= bound, for s > 0: a floating-point guess, made exact.
+    let first = |s: i64, bound: i64| {
+        let reaches = |t: i64| i128::from(p) + i128::from(t) * i128::from(s) >= i128::from(bound);
+        let mut t = ceil_i64((bound - p) as f64 / s as f64);
+        while !reaches(t) {
+            t += 1;
+        }
+        while reaches(t - 1) {
+            t -= 1;
+        }
+        t
+    };
     match s.cmp(&0) {
         std::cmp::Ordering::Equal if (0..end).contains(&p) => (i64::MIN, i64::MAX),
         std::cmp::Ordering::Equal => (0, 0),
-        std::cmp::Ordering::Greater => (ceil(-p, s), floor(end - 1 - p, s) + 1),
-        std::cmp::Ordering::Less => (ceil(end - 1 - p, s), floor(-p, s) + 1),
+        std::cmp::Ordering::Greater => (first(s, 0), first(s, end)),
+        // p + t·s = p + (-t)·(-s): mirror the range.
+        std::cmp::Ordering::Less => (1 - first(-s, end), 1 - first(-s, 0)),
     }
 }
 
@@ -769,6 +781,25 @@ mod tests {
         ] {
             assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
             assert_eq!(ceil_i64(x), x.ceil() as i64, "{x}");
+        }
+    }
+
+    #[test]
+    fn spans_along_one_coordinate_match_a_brute_force_search() {
+        let mut state = 5u64;
+        let mut next = |n: i64| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            (state >> 33) as i64 % n
+        };
+        for _ in 0..5000 {
+            let (p, s, end) = (next(201) - 100, next(41) - 20, next(60) + 1);
+            let (lo, hi) = span_along(p, s, end);
+            for t in -300..300 {
+                let inside = (0..end).contains(&(p + t * s));
+                assert_eq!(inside, (lo..hi).contains(&t), "p {p} s {s} end {end} t {t}");
+            }
         }
     }
 
