@@ -1,12 +1,14 @@
 //! The common walk of a tile eight rays at a time with AVX2 (x86-64 processors since 2013).
 //!
 //! A group of eight neighbouring rays walks its inner spans together: positions, cell indices
-//! and block codes live in vector registers and the cell map is read by gathers. No position
-//! depends on what memory returns, so reads are issued well ahead of use: each cell is
-//! prefetched `2·AHEAD` steps before it is needed and its label gathered `AHEAD` steps before
-//! (when the corners of a mixed cell are prefetched in turn). It feeds exactly the same symbols
-//! to the same sequences as [`super::scalar_walk`]; only the order in which rays take turns
-//! differs, and counts are sums.
+//! and block codes live in vector registers. No position depends on what memory returns, so
+//! reads are issued well ahead of use: each cell is prefetched `2·AHEAD` steps before it is
+//! needed and its label read `AHEAD` steps before (when the corners of a mixed cell are
+//! prefetched in turn). Samples in mixed cells are interpolated and quantized eight at a time
+//! with the same f32 and f64 operations as `BinSampler::inner_bin`. (AVX2 gathers were tried
+//! for the reads and were no faster than plain loads on the processors here.) It feeds exactly
+//! the same symbols to the same sequences as [`super::scalar_walk`]; only the order in which
+//! rays take turns differs, and counts are sums.
 #![allow(unsafe_code)]
 // The intrinsics used are too many to name one by one.
 #![allow(clippy::wildcard_imports)]
@@ -21,7 +23,7 @@ use crate::volume::sampling::{BinSampler, FIXED_BITS};
 /// Rays per group: eight 32-bit lanes of a 256-bit register.
 const LANES: usize = 8;
 
-/// How many steps ahead of its use a label is gathered (twice that, its cell is prefetched).
+/// How many steps ahead of its use a label is read (twice that, its cell is prefetched).
 const AHEAD: usize = 8;
 
 /// Whether this processor has AVX2, and `sampler`'s cells can be indexed by 32-bit lanes.

@@ -94,9 +94,9 @@ impl AxisEntropy {
     }
 }
 
-/// Rays are walked in tiles of this many rays, all rays of a tile advancing together sample by
-/// sample, so that the memory they read stays a small neighbourhood and their independent work
-/// overlaps.
+/// Rays are walked in tiles of this many neighbouring rays, so that the memory they read stays a
+/// small neighbourhood: the scalar walk advances all rays of a tile together, one sample each in
+/// turn; the vector walk takes them eight at a time.
 const TILE_RAYS: i64 = 256;
 
 /// Cells per cache line in the cell map (one byte per cell).
