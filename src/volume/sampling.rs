@@ -595,7 +595,7 @@ impl<'a> BinSampler<'a> {
         let index: usize = (0..3)
             .map(|m| (p[m] >> FIXED_BITS) as usize * self.it.stride[m])
             .sum();
-        self.q.bin(self.it.data[index])
+        self.voxel_bin_at(index)
     }
 }
 
