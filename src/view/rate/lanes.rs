@@ -283,8 +283,8 @@ impl Group {
             for m in 0..3 {
                 pos[m].0[l] = w.p[m];
             }
-            // Spans are far below 2^31 samples, so they compare as signed 32-bit lanes.
-            left.0[l] = u32::try_from(w.inner).unwrap_or(i32::MAX as u32);
+            // `walk` sends spans of 2^31 samples or more to the scalar walk.
+            left.0[l] = w.inner as u32;
             let (c, n) = w.run.parts();
             code.0[l] = c as u32;
             len.0[l] = n.min(block) as u32;
@@ -386,6 +386,11 @@ pub(super) fn walk(
     sampler: &BinSampler,
     counts: &mut DenseCounts,
 ) {
+    // Samples left are counted in signed 32-bit lanes.
+    if walkers.iter().any(|w| w.inner > i64::from(i32::MAX)) {
+        super::scalar_walk(walkers, step, sampler, counts);
+        return;
+    }
     let (bits, mask, block) = counts.packing();
     let (table, mut ends) = counts.split();
     assert_eq!(
