@@ -376,44 +376,58 @@ fn rate_with(
     let vector = walk != (Walk::Tiles { vector: false });
     let rows: Vec<(i64, i64)> = tile_rows(lattice).collect();
     let step = fixed_step(lattice);
-    let empty = || (BlockCounts::new(sampler.bins(), block), 0);
-    let (counts, rays) = rows
+    let (counts, rays) = count_in_parallel(rows, sampler.bins(), block, monitor, |js, counts| {
+        match counts.dense() {
+            #[cfg(target_arch = "x86_64")]
+            Some(mut dense) if vector && lanes::available(sampler) => {
+                let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
+                    #[allow(unsafe_code)]
+                    // SAFETY: `lanes::available` found AVX2 on this processor.
+                    unsafe {
+                        lanes::walk(w, step, sampler, c);
+                    }
+                };
+                walk_row(lattice, js, step, sampler, &mut dense, &mut common)
+            }
+            Some(mut dense) => {
+                let _ = vector;
+                let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
+                    scalar_walk(w, step, sampler, c);
+                };
+                walk_row(lattice, js, step, sampler, &mut dense, &mut common)
+            }
+            None => {
+                let mut common = |w: &mut [Walker], c: &mut BlockCounts| {
+                    scalar_walk(w, step, sampler, c);
+                };
+                walk_row(lattice, js, step, sampler, counts, &mut common)
+            }
+        }
+    })?;
+    Ok(AxisEntropy::new(lattice.d, &counts, rays))
+}
+
+/// Block counts of `parts` of the work, counted in parallel by `count` (which returns its
+/// rays), one progress unit per part.
+fn count_in_parallel<P: Send>(
+    parts: Vec<P>,
+    bins: usize,
+    block: usize,
+    monitor: &Monitor,
+    count: impl Fn(P, &mut BlockCounts) -> u64 + Sync,
+) -> Result<(BlockCounts, u64)> {
+    let empty = || (BlockCounts::new(bins, block), 0);
+    parts
         .into_par_iter()
-        .try_fold(empty, |(mut counts, rays), js| {
-            let row = match counts.dense() {
-                #[cfg(target_arch = "x86_64")]
-                Some(mut dense) if vector && lanes::available(sampler) => {
-                    let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
-                        #[allow(unsafe_code)]
-                        // SAFETY: `lanes::available` found AVX2 on this processor.
-                        unsafe {
-                            lanes::walk(w, step, sampler, c);
-                        }
-                    };
-                    walk_row(lattice, js, step, sampler, &mut dense, &mut common)
-                }
-                Some(mut dense) => {
-                    let _ = vector;
-                    let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
-                        scalar_walk(w, step, sampler, c);
-                    };
-                    walk_row(lattice, js, step, sampler, &mut dense, &mut common)
-                }
-                None => {
-                    let mut common = |w: &mut [Walker], c: &mut BlockCounts| {
-                        scalar_walk(w, step, sampler, c);
-                    };
-                    walk_row(lattice, js, step, sampler, &mut counts, &mut common)
-                }
-            };
+        .try_fold(empty, |(mut counts, rays), part| {
+            let n = count(part, &mut counts);
             monitor.advance(1)?;
-            Ok((counts, rays + row))
+            Ok((counts, rays + n))
         })
         .try_reduce(empty, |(mut a, ra), (b, rb)| {
             a.merge(&b);
             Ok((a, ra + rb))
-        })?;
-    Ok(AxisEntropy::new(lattice.d, &counts, rays))
+        })
 }
 
 /// Voxel columns along one axis, walked a few side by side (so that their work overlaps) in
@@ -497,23 +511,20 @@ fn column_rate(
     let columns = Columns::new(sampler.dims(), axis);
     // As many parts as the general walk reports progress units.
     let parts = work_units(lattice).max(1) as usize;
-    let empty = || (BlockCounts::new(sampler.bins(), block), 0);
-    let (counts, rays) = (0..parts)
-        .into_par_iter()
-        .try_fold(empty, |(mut counts, rays), part| {
-            let items = columns.items();
-            let range = part * items / parts..(part + 1) * items / parts;
-            let n = match counts.dense() {
-                Some(mut dense) => columns.walk(range, sampler, &mut dense),
-                None => columns.walk(range, sampler, &mut counts),
-            };
-            monitor.advance(1)?;
-            Ok((counts, rays + n))
-        })
-        .try_reduce(empty, |(mut a, ra), (b, rb)| {
-            a.merge(&b);
-            Ok((a, ra + rb))
-        })?;
+    let items = columns.items();
+    let ranges = (0..parts)
+        .map(|part| part * items / parts..(part + 1) * items / parts)
+        .collect();
+    let (counts, rays) = count_in_parallel(
+        ranges,
+        sampler.bins(),
+        block,
+        monitor,
+        |range, counts| match counts.dense() {
+            Some(mut dense) => columns.walk(range, sampler, &mut dense),
+            None => columns.walk(range, sampler, counts),
+        },
+    )?;
     Ok(AxisEntropy::new(lattice.d, &counts, rays))
 }
 
