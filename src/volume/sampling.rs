@@ -364,18 +364,6 @@ impl<'a> Interpolator<'a> {
         (value, [dx, dy, dz])
     }
 
-    /// The linear memory offset of integer index coordinates (or of an integer step).
-    #[inline]
-    pub fn linear(&self, p: [i64; 3]) -> i64 {
-        p[0] * self.stride[0] as i64 + p[1] * self.stride[1] as i64 + p[2] * self.stride[2] as i64
-    }
-
-    /// The voxel at a linear memory offset.
-    #[inline]
-    pub fn at_linear(&self, index: usize) -> f32 {
-        self.data[index]
-    }
-
     /// The voxel at integer index coordinates.
     #[inline]
     pub fn voxel(&self, x: usize, y: usize, z: usize) -> f32 {
@@ -428,11 +416,6 @@ impl<'a> BinSampler<'a> {
             dims: volume.dims(),
             q,
         }
-    }
-
-    /// The interpolator underneath.
-    pub fn interpolator(&self) -> &Interpolator<'a> {
-        &self.it
     }
 
     /// Number of bins.
@@ -592,10 +575,7 @@ impl<'a> BinSampler<'a> {
     /// fixed point) inside the volume; `None` when it is missing.
     #[inline]
     pub fn voxel_bin(&self, p: [i64; 3]) -> Option<u8> {
-        let index: usize = (0..3)
-            .map(|m| (p[m] >> FIXED_BITS) as usize * self.it.stride[m])
-            .sum();
-        self.voxel_bin_at(index)
+        self.voxel_bin_at(self.inner_cell(p))
     }
 }
 
