@@ -33,30 +33,46 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
     };
     let magnitude = f64::from(s.min.abs().max(s.max.abs()));
     let margin = 16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9;
-    let last = q.bins() - 1;
+    let last = (q.bins() - 1) as f64;
+    let min = f64::from(s.min);
+    // 2^52: adding it to a number in 0..2^51 leaves that number rounded to a whole one in the
+    // low bits of the sum.
+    let whole = 2f64.powi(52);
+    // Without branches (`&` and `|`, not `&&` and `||`), so that the compiler can work on
+    // several voxels at once.
+    #[allow(clippy::needless_bitwise_bool)]
     let safe_bin = |v: f32| -> u8 {
-        if v.is_nan() {
-            return MIXED;
+        let t = (f64::from(v) - min) * scale;
+        // The bin is ⌊t⌋ clamped to 0..B - 1: c rounded down. A NaN voxel gives 0 here, and is
+        // marked below.
+        let c = if t > 0.0 { t } else { 0.0 };
+        let c = if c < last { c } else { last };
+        let sum = c + whole;
+        let rounded_up = sum - whole > c;
+        let b = (sum.to_bits() as u8).wrapping_sub(u8::from(rounded_up));
+        let bf = f64::from(b);
+        let low_ok = (b == 0) | (t - bf >= margin);
+        let high_ok = (bf == last) | (bf + 1.0 - t >= margin);
+        if low_ok & high_ok & !t.is_nan() {
+            b
+        } else {
+            MIXED
         }
-        let t = (f64::from(v) - f64::from(s.min)) * scale;
-        let b = (t.max(0.0) as usize).min(last);
-        let low_ok = b == 0 || t - b as f64 >= margin;
-        let high_ok = b == last || (b + 1) as f64 - t >= margin;
-        if low_ok && high_ok { b as u8 } else { MIXED }
     };
     let voxels = volume.voxels();
     let mut bins: Vec<u8> = vec![0; voxels.len()];
     bins.par_chunks_mut(CHUNK)
         .zip(voxels.par_chunks(CHUNK))
-        .for_each(|(b, v)| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v)));
+        .for_each(|(b, v)| wide(|| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v))));
     // A cell is uniform when its eight corners share a bin. Entries without a whole cell (on
-    // the last plane of an axis) are left MIXED and never read.
+    // the last plane of an axis) are MIXED and never read.
     let [nx, ny, nz] = volume.dims();
     let next = |n: usize, stride: usize| if n > 1 { stride } else { 0 };
     let (x, y, z) = (next(nx, 1), next(ny, nx), next(nz, nx * ny));
     let corners = [x, y, y + x, z, z + x, z + y, z + y + x];
     let cells_with_corners = bins.len() - (z + y + x);
-    let mut cells = vec![MIXED; bins.len()];
+    let mut cells = vec![0; bins.len()];
+    cells[cells_with_corners..].fill(MIXED);
     cells[..cells_with_corners]
         .par_chunks_mut(CHUNK)
         .enumerate()
@@ -64,10 +80,192 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
             let start = c * CHUNK;
             let here = &bins[start..start + out.len()];
             let others = corners.map(|o| &bins[start + o..start + o + out.len()]);
-            for (i, (o, &b)) in out.iter_mut().zip(here).enumerate() {
-                let same = others.iter().all(|other| other[i] == b);
-                *o = if same { b } else { MIXED };
-            }
+            // Corner by corner, each loop simple enough to be vectorized: first the bits in
+            // which any corner differs from the lower one, then the label.
+            wide(|| {
+                out.fill(0);
+                for other in others {
+                    for ((o, &b), &c) in out.iter_mut().zip(here).zip(other) {
+                        *o |= b ^ c;
+                    }
+                }
+                for (o, &b) in out.iter_mut().zip(here) {
+                    *o = if *o == 0 { b } else { MIXED };
+                }
+            });
         });
     (cells, bins)
+}
+
+/// Runs `work`, compiled for AVX2 as well as for the baseline processor and run so where the
+/// processor has it: the loops above are vectorized either way, and AVX2 doubles their width.
+#[inline]
+fn wide(work: impl FnOnce()) {
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") {
+        // SAFETY: this processor has AVX2.
+        #[allow(unsafe_code)]
+        unsafe {
+            with_avx2(work);
+        }
+        return;
+    }
+    work();
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn with_avx2(work: impl FnOnce()) {
+    work();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::VoxelType;
+
+    /// The cell map written plainly: what the branch-free passes must reproduce.
+    fn plain_cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
+        let s = volume.stats();
+        let span = f64::from(s.max) - f64::from(s.min);
+        let scale = if span > 0.0 {
+            q.bins() as f64 / span
+        } else {
+            0.0
+        };
+        let magnitude = f64::from(s.min.abs().max(s.max.abs()));
+        let margin = 16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9;
+        let last = q.bins() - 1;
+        let bins: Vec<u8> = volume
+            .voxels()
+            .iter()
+            .map(|&v| {
+                if v.is_nan() {
+                    return MIXED;
+                }
+                let t = (f64::from(v) - f64::from(s.min)) * scale;
+                let b = (t.max(0.0) as usize).min(last);
+                let low_ok = b == 0 || t - b as f64 >= margin;
+                let high_ok = b == last || (b + 1) as f64 - t >= margin;
+                if low_ok && high_ok { b as u8 } else { MIXED }
+            })
+            .collect();
+        let [nx, ny, nz] = volume.dims();
+        let mut cells = vec![MIXED; bins.len()];
+        for z in 0..nz.saturating_sub(1).max(usize::from(nz == 1)) {
+            for y in 0..ny.saturating_sub(1).max(usize::from(ny == 1)) {
+                for x in 0..nx.saturating_sub(1).max(usize::from(nx == 1)) {
+                    let at = |dx: usize, dy: usize, dz: usize| {
+                        let (x, y, z) = (
+                            (x + dx).min(nx - 1),
+                            (y + dy).min(ny - 1),
+                            (z + dz).min(nz - 1),
+                        );
+                        bins[x + nx * (y + ny * z)]
+                    };
+                    let b = at(0, 0, 0);
+                    let same = (0..8).all(|k| at(k & 1, k >> 1 & 1, k >> 2) == b);
+                    cells[x + nx * (y + ny * z)] = if same { b } else { MIXED };
+                }
+            }
+        }
+        (cells, bins)
+    }
+
+    /// Voxels on, near and between bin edges of `bins` bins over 0..=100, with missing ones.
+    fn awkward(dims: [usize; 3], bins: usize) -> Volume {
+        let width = 100.0 / bins as f64;
+        let mut state = 5u64;
+        let data = (0..dims.iter().product::<usize>())
+            .map(|i| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                let r = state >> 33;
+                let edge = (r % (bins as u64 + 1)) as f64 * width;
+                match r % 7 {
+                    0 => f32::NAN,
+                    1 => edge as f32,
+                    2 => (edge + 1e-6) as f32,
+                    3 => (edge - 1e-6).max(0.0) as f32,
+                    // Runs of one value, so that some cells are uniform.
+                    _ => ((i / 5) % bins) as f32 * width as f32 + 0.5 * width as f32,
+                }
+            })
+            .collect();
+        let mut v = Volume::new(dims, [1.0; 3], VoxelType::F32, data).unwrap();
+        // Pin the range to 0..=100 whatever the draws.
+        v = Volume::new(dims, [1.0; 3], VoxelType::F32, {
+            let mut d = v.voxels().to_vec();
+            d[0] = 0.0;
+            d[1] = 100.0;
+            d
+        })
+        .unwrap();
+        v
+    }
+
+    #[test]
+    fn the_cell_map_is_the_plain_one() {
+        for dims in [[9, 7, 5], [1, 6, 4], [5, 1, 1], [70, 3, 2]] {
+            for bins in [2, 7, 32, 255] {
+                let v = awkward(dims, bins);
+                let q = v.quantizer(bins).unwrap();
+                let (cells, voxel_bins) = cell_map(&v, &q);
+                let (plain_cells, plain_bins) = plain_cell_map(&v, &q);
+                assert_eq!(voxel_bins, plain_bins, "{dims:?} {bins} bins");
+                assert!(voxel_bins.contains(&MIXED) && voxel_bins.iter().any(|&b| b != MIXED));
+                // Entries without a whole cell are never read: compare the others.
+                let [nx, ny, nz] = dims;
+                for (i, (&c, &p)) in cells.iter().zip(&plain_cells).enumerate() {
+                    let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
+                    let whole = (nx == 1 || x + 1 < nx)
+                        && (ny == 1 || y + 1 < ny)
+                        && (nz == 1 || z + 1 < nz);
+                    if whole {
+                        assert_eq!(c, p, "{dims:?} {bins} bins, cell {i}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_safe_bin_is_the_quantizers_bin() {
+        let v = awkward([40, 30, 20], 32);
+        let q = v.quantizer(32).unwrap();
+        let (_, voxel_bins) = cell_map(&v, &q);
+        for (&b, &x) in voxel_bins.iter().zip(v.voxels()) {
+            if b != MIXED {
+                assert_eq!(q.bin(x), Some(b), "{x}");
+            } else if x.is_nan() {
+                assert_eq!(q.bin(x), None);
+            }
+        }
+    }
+
+    #[test]
+    fn a_cell_is_mixed_whenever_one_corner_differs() {
+        // 255 bins over 0..=255: bin b holds b + 0.5. Labels that differ in one bit only, and
+        // a missing corner (MIXED is all ones) beside bin 127.
+        let value = |b: u8| f32::from(b) + 0.5;
+        for (a, b) in [
+            (127, None),
+            (3, Some(131)),
+            (0, Some(128)),
+            (254, Some(126)),
+            (9, Some(9)),
+        ] {
+            for corner in 0..8 {
+                let mut data = vec![value(a); 8];
+                data[corner] = b.map_or(f32::NAN, value);
+                // Fix the range to 0..=255 in a second cell.
+                data.extend([0.0, 255.0, 0.0, 255.0, 0.0, 255.0, 0.0, 255.0]);
+                let v = Volume::new([2, 2, 4], [1.0; 3], VoxelType::F32, data).unwrap();
+                let (cells, _) = cell_map(&v, &v.quantizer(255).unwrap());
+                let expected = if b == Some(a) { a } else { MIXED };
+                assert_eq!(cells[0], expected, "{a} beside {b:?} at corner {corner}");
+            }
+        }
+    }
 }
