@@ -367,9 +367,8 @@ struct Consts {
     /// Strides of the voxel grid along y and z.
     sy: __m256i,
     sz: __m256i,
-    /// One step, and AHEAD steps.
+    /// One step.
     step: [__m256i; 3],
-    near: [__m256i; 3],
     /// The low 32 bits of a step (its fractional part), in 32-bit lanes.
     step_low: [__m256i; 3],
     /// The packing of block codes: bits per symbol, mask, L; and the spare slot's index.
@@ -382,7 +381,10 @@ struct Consts {
 /// The state of a group of eight rays in registers: positions, the lengths of their inner
 /// spans, and their runs (code and length capped at L).
 struct Group {
+    /// The positions AHEAD steps on, and the cells of the AHEAD steps before (step `t`'s at
+    /// `t % AHEAD`), in lane order.
     p: Positions,
+    cells: [__m256i; AHEAD],
     /// The fractional parts of the positions where the spans start.
     origin: [__m256i; 3],
     span: __m256i,
@@ -392,7 +394,7 @@ struct Group {
 
 impl Group {
     #[target_feature(enable = "avx2")]
-    fn load(walkers: &[Walker], block: u64) -> Self {
+    fn load(walkers: &[Walker], block: u64, c: &Consts) -> Self {
         let mut pos = [Wide::default(); 3];
         let (mut span, mut code, mut len) =
             (Narrow::default(), Narrow::default(), Narrow::default());
@@ -406,10 +408,17 @@ impl Group {
             code.0[l] = c as u32;
             len.0[l] = n.min(block) as u32;
         }
-        let p = std::array::from_fn(|m| [pos[m].get(0), pos[m].get(1)]);
+        let mut p = std::array::from_fn(|m| [pos[m].get(0), pos[m].get(1)]);
+        let origin = fractions(&p);
+        let cells = std::array::from_fn(|_| {
+            let cell = natural(cells_shuffled(&p, c.sy, c.sz));
+            p = offset(&p, &c.step);
+            cell
+        });
         Self {
             p,
-            origin: fractions(&p),
+            cells,
+            origin,
             span: span.get(),
             code: code.get(),
             len: len.get(),
@@ -456,7 +465,7 @@ impl Group {
     }
 
     /// Walks `chunk.steps` steps from step `chunk.start`: reads the labels of the cells, and
-    /// queues the samples in mixed cells (prefetching cells AHEAD steps on).
+    /// queues the samples in mixed cells (prefetching the cells AHEAD steps on).
     #[target_feature(enable = "avx2")]
     fn read(&mut self, chunk: &mut Chunk, c: &Consts, sampler: &BinSampler) {
         let cells = sampler.cells();
@@ -465,13 +474,15 @@ impl Group {
         for t in 0..chunk.steps {
             let step = chunk.start + t;
             let on = self.on(step);
+            let ring = &mut self.cells[step % AHEAD];
+            // Lanes past their spans (whose positions may lie outside the volume) read cell 0.
+            let cell = _mm256_and_si256(*ring, on);
+            *ring = natural(cells_shuffled(&self.p, c.sy, c.sz));
             let mut future = Narrow::default();
-            future.set(cells_shuffled(&offset(&self.p, &c.near), c.sy, c.sz));
+            future.set(*ring);
             for &cell in &future.0 {
                 sampler.prefetch_cell(cell as usize);
             }
-            // Lanes past their spans (whose positions may lie outside the volume) read cell 0.
-            let cell = _mm256_and_si256(natural(cells_shuffled(&self.p, c.sy, c.sz)), on);
             let mut at = Narrow::default();
             at.set(cell);
             let labels = at.0.map(|i| cells[i as usize]);
@@ -578,18 +589,10 @@ pub(super) fn walk(
         "a dense table holds every code and a spare"
     );
     let [_, sy, sz] = sampler.strides();
-    let times = |n: i64| {
-        [
-            _mm256_set1_epi64x(step[0] * n),
-            _mm256_set1_epi64x(step[1] * n),
-            _mm256_set1_epi64x(step[2] * n),
-        ]
-    };
     let consts = Consts {
         sy: _mm256_set1_epi32(sy as i32),
         sz: _mm256_set1_epi32(sz as i32),
-        step: times(1),
-        near: times(AHEAD as i64),
+        step: step.map(|s| _mm256_set1_epi64x(s)),
         step_low: step.map(|s| _mm256_set1_epi32(s as i32)),
         shift: _mm_cvtsi32_si128(bits as i32),
         code_mask: _mm256_set1_epi32(mask as i32),
@@ -599,7 +602,7 @@ pub(super) fn walk(
     let mixer = Mixer::new(sampler);
     let mut chunks = Box::new([Chunk::new(), Chunk::new()]);
     for group in walkers.chunks_mut(LANES) {
-        let mut g = Group::load(group, block);
+        let mut g = Group::load(group, block, &consts);
         // On the grid, samples are voxels, not interpolated: the scalar path takes them.
         let vector_mixer = mixer.as_ref().filter(|_| !group.iter().any(|w| w.grid));
         let mut finish = |g: &mut Group, chunk: &mut Chunk| {
