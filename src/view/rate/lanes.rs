@@ -165,7 +165,7 @@ fn fractions(p: &Positions) -> [__m256i; 3] {
     })
 }
 
-/// Steps of a group walked per chunk (see [`walk_group`]).
+/// Steps of a group walked per chunk (see the module documentation).
 const CHUNK: usize = 32;
 
 /// Entries of a chunk's queue: one per lane and step, and a register's worth past that.
