@@ -1,7 +1,8 @@
 //! The common walk of a tile eight rays at a time with AVX2 (x86-64 processors since 2013).
 //!
 //! A group of eight neighbouring rays walks its inner spans together, in chunks of [`CHUNK`]
-//! steps, each in three passes with no branch that depends on the data in the first two:
+//! steps, each in three passes with no branch per step or per lane on the data (only loops over
+//! the queue of mixed samples, and a rare one for missing samples):
 //!
 //! 1. **Read**: positions and cell indices in vector registers, the label of each lane's cell
 //!    (its bin, or [`MIXED`]) into the chunk, cells prefetched [`AHEAD`] steps before they are
