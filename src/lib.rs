@@ -10,6 +10,8 @@ pub mod measure;
 pub mod partition;
 pub mod progress;
 pub mod render;
+#[cfg(test)]
+mod testing;
 pub mod view;
 pub mod volume;
 

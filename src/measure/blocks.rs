@@ -365,6 +365,7 @@ pub fn block_entropies<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::Lcg;
 
     const EPS: f64 = 1e-12;
 
@@ -414,13 +415,8 @@ mod tests {
 
     #[test]
     fn many_short_sequences_match_a_brute_force_count() {
-        let mut state = 7u64;
-        let mut next = |n: u64| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 33) % n
-        };
+        let mut lcg = Lcg::new(7);
+        let mut next = |n: u64| (lcg.next_u64() >> 33) % n;
         for block in 2..=4 {
             let seqs: Vec<Vec<u8>> = (0..60)
                 .map(|_| {

@@ -23,16 +23,7 @@ pub const MIXED: u8 = u8::MAX;
 /// missing): samples on the voxel grid read that, and compute only the [`MIXED`] ones.
 pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
     let s = volume.stats();
-    // Trilinear interpolation in f32 is within a few ulps of the largest corner magnitude; keep
-    // corners 16 ulps (in bin units) away from the bin edges.
-    let span = f64::from(s.max) - f64::from(s.min);
-    let scale = if span > 0.0 {
-        q.bins() as f64 / span
-    } else {
-        0.0
-    };
-    let magnitude = f64::from(s.min.abs().max(s.max.abs()));
-    let margin = 16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9;
+    let (scale, margin) = scale_and_margin(volume, q);
     let last = (q.bins() - 1) as f64;
     let min = f64::from(s.min);
     // 2^52: adding it to a number in 0..2^51 leaves that number rounded to a whole one in the
@@ -97,6 +88,24 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
     (cells, bins)
 }
 
+/// Bins per unit of intensity, and how far (in bins) a corner must lie from a bin edge to count
+/// as safely inside its bin: trilinear interpolation in f32 is within a few ulps of the largest
+/// corner magnitude, so 16 ulps in bin units.
+fn scale_and_margin(volume: &Volume, q: &Quantizer) -> (f64, f64) {
+    let s = volume.stats();
+    let span = f64::from(s.max) - f64::from(s.min);
+    let scale = if span > 0.0 {
+        q.bins() as f64 / span
+    } else {
+        0.0
+    };
+    let magnitude = f64::from(s.min.abs().max(s.max.abs()));
+    (
+        scale,
+        16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9,
+    )
+}
+
 /// Runs `work`, compiled for AVX2 as well as for the baseline processor and run so where the
 /// processor has it: the loops above are vectorized either way, and AVX2 doubles their width.
 #[inline]
@@ -123,18 +132,12 @@ fn with_avx2(work: impl FnOnce()) {
 mod tests {
     use super::*;
     use crate::VoxelType;
+    use crate::testing::Lcg;
 
     /// The cell map written plainly: what the branch-free passes must reproduce.
     fn plain_cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
         let s = volume.stats();
-        let span = f64::from(s.max) - f64::from(s.min);
-        let scale = if span > 0.0 {
-            q.bins() as f64 / span
-        } else {
-            0.0
-        };
-        let magnitude = f64::from(s.min.abs().max(s.max.abs()));
-        let margin = 16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9;
+        let (scale, margin) = scale_and_margin(volume, q);
         let last = q.bins() - 1;
         let bins: Vec<u8> = volume
             .voxels()
@@ -175,13 +178,10 @@ mod tests {
     /// Voxels on, near and between bin edges of `bins` bins over 0..=100, with missing ones.
     fn awkward(dims: [usize; 3], bins: usize) -> Volume {
         let width = 100.0 / bins as f64;
-        let mut state = 5u64;
+        let mut lcg = Lcg::new(5);
         let data = (0..dims.iter().product::<usize>())
             .map(|i| {
-                state = state
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                let r = state >> 33;
+                let r = lcg.next_u64() >> 33;
                 let edge = (r % (bins as u64 + 1)) as f64 * width;
                 match r % 7 {
                     0 => f32::NAN,

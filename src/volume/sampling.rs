@@ -635,6 +635,7 @@ fn div_ceil(a: i128, b: i128) -> i128 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::Lcg;
     use crate::volume::VoxelType;
 
     #[test]
@@ -717,12 +718,10 @@ mod tests {
     fn the_cell_map_never_changes_a_bin() {
         // Blocky data with noise: many uniform cells, many mixed ones, values at bin edges.
         let dims = [20, 17, 13];
-        let mut state = 9u64;
+        let mut lcg = Lcg::with_increment(9, 1);
         let data: Vec<f32> = (0..dims.iter().product::<usize>())
             .map(|i| {
-                state = state
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1);
+                let state = lcg.next_u64();
                 let block = ((i % 20) / 5 + (i / 340) / 4) as f32 * 25.0;
                 block + ((state >> 40) % 4) as f32 * if i % 7 == 0 { 3.0 } else { 0.0 }
             })
@@ -766,13 +765,8 @@ mod tests {
 
     #[test]
     fn spans_along_one_coordinate_match_a_brute_force_search() {
-        let mut state = 5u64;
-        let mut next = |n: i64| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
-            (state >> 33) as i64 % n
-        };
+        let mut lcg = Lcg::with_increment(5, 1);
+        let mut next = |n: i64| (lcg.next_u64() >> 33) as i64 % n;
         for _ in 0..5000 {
             let (p, s, end) = (next(201) - 100, next(41) - 20, next(60) + 1);
             let (lo, hi) = span_along(p, s, end);
@@ -801,11 +795,9 @@ mod tests {
         ] {
             assert_eq!(round_half_away(x), x.round() as i64, "{x}");
         }
-        let mut state = 3u64;
+        let mut lcg = Lcg::with_increment(3, 1);
         for _ in 0..10_000 {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
+            let state = lcg.next_u64();
             let x = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e12;
             assert_eq!(round_half_away(x), x.round() as i64, "{x}");
         }

@@ -532,19 +532,15 @@ fn column_rate(
 mod tests {
     use super::*;
     use crate::measure::block_entropies;
+    use crate::testing::Lcg;
     use crate::volume::Volume;
     use crate::volume::VoxelType;
     use crate::volume::sampling::min_spacing;
 
     fn random_volume(dims: [usize; 3], levels: u32, seed: u64) -> Volume {
-        let mut state = seed;
+        let mut lcg = Lcg::new(seed);
         let data = (0..dims.iter().product::<usize>())
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                ((state >> 33) % u64::from(levels)) as f32
-            })
+            .map(|_| ((lcg.next_u64() >> 33) % u64::from(levels)) as f32)
             .collect();
         Volume::new(dims, [1.0; 3], VoxelType::U8, data).unwrap()
     }
@@ -592,13 +588,10 @@ mod tests {
 
     /// A noisy volume with blocks, bins at their edges and missing voxels.
     fn awkward_volume(dims: [usize; 3], spacing: [f64; 3], seed: u64) -> Volume {
-        let mut state = seed;
+        let mut lcg = Lcg::new(seed);
         let data = (0..dims.iter().product::<usize>())
             .map(|i| {
-                state = state
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                let r = (state >> 33) as u32;
+                let r = (lcg.next_u64() >> 33) as u32;
                 let (x, y, z) = (
                     i % dims[0],
                     (i / dims[0]) % dims[1],
