@@ -331,7 +331,7 @@ impl Mixer<'_> {
         if len == 0 {
             return;
         }
-        // Fill the last eight with copies of the first entry, a real one.
+        // Pad the queue to whole registers with copies of its first entry (a real cell).
         for queue in &mut chunk.queue {
             let first = queue[0];
             queue[len..len.next_multiple_of(LANES)].fill(first);
