@@ -116,6 +116,21 @@ pub struct Lattice {
     phase: [f64; 3],
     extent: [f64; 3],
     spacing: [f64; 3],
+    /// Worked out once for [`ray`](Self::ray), which runs for every ray.
+    per_ray: PerRay,
+}
+
+/// What every ray of a lattice shares, worked out once.
+#[derive(Clone, Debug)]
+struct PerRay {
+    /// The step between samples in voxel index coordinates.
+    step: [f64; 3],
+    /// `1 / spacing` where dividing by the spacing and multiplying by this agree for every
+    /// number (a power of two), else `None`.
+    inverse_spacing: [Option<f64>; 3],
+    /// Per axis: the step in mm, and its reciprocal.
+    dm: [f64; 3],
+    inverse_dm: [f64; 3],
 }
 
 impl Lattice {
@@ -137,6 +152,7 @@ impl Lattice {
             }
         }
         let (d, u, v) = frame(axis)?;
+        let dm = d.map(|c| y * c);
         Ok(Self {
             d,
             u,
@@ -146,6 +162,15 @@ impl Lattice {
             phase,
             extent: std::array::from_fn(|k| (dims[k] - 1) as f64 * spacing[k]),
             spacing,
+            per_ray: PerRay {
+                step: std::array::from_fn(|m| dm[m] / spacing[m]),
+                inverse_spacing: spacing.map(|s| {
+                    let inverse = 1.0 / s;
+                    (power_of_two(s) && power_of_two(inverse)).then_some(inverse)
+                }),
+                dm,
+                inverse_dm: dm.map(|c| 1.0 / c),
+            },
         })
     }
 
@@ -207,7 +232,11 @@ impl Lattice {
 
     /// Voxel index coordinates of a physical point.
     pub fn to_index(&self, p: [f64; 3]) -> [f64; 3] {
-        std::array::from_fn(|m| p[m] / self.spacing[m])
+        std::array::from_fn(|m| match self.per_ray.inverse_spacing[m] {
+            // The same number as the division: the reciprocal of a power of two is exact.
+            Some(inverse) => p[m] * inverse,
+            None => p[m] / self.spacing[m],
+        })
     }
 
     /// The coordinate axis whose voxel columns are exactly this lattice's rays, sample for
@@ -225,29 +254,28 @@ impl Lattice {
 
     /// Displacement between consecutive samples of a ray, in voxel index coordinates.
     pub fn step(&self) -> [f64; 3] {
-        self.to_index(self.d.map(|c| c * self.sample_spacing))
+        self.per_ray.step
     }
 
     /// Ray `(i, j)`, or `None` when it misses the box.
     pub fn ray(&self, i: i64, j: i64) -> Option<Ray> {
         let base = self.point(i, j, 0);
-        let y = self.sample_spacing;
-        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-        for m in 0..3 {
-            let eps = 1e-9 * (1.0 + self.extent[m]);
-            let dm = y * self.d[m];
-            if dm.abs() < 1e-12 {
-                if base[m] < -eps || base[m] > self.extent[m] + eps {
-                    return None;
-                }
-                continue;
-            }
-            let t1 = (-eps - base[m]) / dm;
-            let t2 = (self.extent[m] + eps - base[m]) / dm;
-            lo = lo.max(t1.min(t2));
-            hi = hi.min(t1.max(t2));
-        }
+        // The samples inside: `(bound - base) / dm` for the two bounds per axis, first with the
+        // reciprocal (a few units in the last place from the quotient), then, only when that
+        // lies so near a whole number that the two might round to different ones, exactly.
+        let (lo, hi) = self.sample_bounds(base, |x, m| x * self.per_ray.inverse_dm[m])?;
         let (k0, k1) = (ceil_i64(lo), floor_i64(hi));
+        let margin = |x: f64| 1e-12 * (1.0 + x.abs());
+        let clear = k0 as f64 - lo > margin(lo)
+            && lo - (k0 - 1) as f64 > margin(lo)
+            && hi - k1 as f64 > margin(hi)
+            && (k1 + 1) as f64 - hi > margin(hi);
+        let (k0, k1) = if clear {
+            (k0, k1)
+        } else {
+            let (lo, hi) = self.sample_bounds(base, |x, m| x / self.per_ray.dm[m])?;
+            (ceil_i64(lo), floor_i64(hi))
+        };
         (k0 <= k1).then(|| Ray {
             origin: self.to_index(base),
             step: self.step(),
@@ -255,6 +283,40 @@ impl Lattice {
             k1,
         })
     }
+
+    /// The range of real `k` where `base + k·y·d` lies in the box (with a tolerance), dividing
+    /// by the step along axis `m` with `divide`; `None` when the ray misses the box.
+    #[inline]
+    fn sample_bounds(
+        &self,
+        base: [f64; 3],
+        divide: impl Fn(f64, usize) -> f64,
+    ) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for m in 0..3 {
+            let eps = 1e-9 * (1.0 + self.extent[m]);
+            let dm = self.per_ray.dm[m];
+            if dm.abs() < 1e-12 {
+                if base[m] < -eps || base[m] > self.extent[m] + eps {
+                    return None;
+                }
+                continue;
+            }
+            // The bounds are ordered as the numerators are when `dm > 0` (rounding keeps the
+            // order), the other way round otherwise; all finite, so `>` does what `max` does.
+            let t1 = divide(-eps - base[m], m);
+            let t2 = divide(self.extent[m] + eps - base[m], m);
+            let (near, far) = if dm > 0.0 { (t1, t2) } else { (t2, t1) };
+            lo = if near > lo { near } else { lo };
+            hi = if far < hi { far } else { hi };
+        }
+        Some((lo, hi))
+    }
+}
+
+/// Whether `x` is a power of two in the normal range (no mantissa bits set).
+fn power_of_two(x: f64) -> bool {
+    x.is_normal() && x.to_bits() & ((1 << 52) - 1) == 0
 }
 
 /// `x.floor() as i64` for `|x| < 2^52`, without the library call that `floor` is on
@@ -454,28 +516,16 @@ impl<'a> BinSampler<'a> {
     /// without clamping (each coordinate in `[0, last + 1)`), as a range `t0..t1`: there
     /// [`inner_bin`](Self::inner_bin) applies. Empty ranges are `n..n`.
     pub fn inner_span(&self, p: [i64; 3], step: [i64; 3], n: i64) -> (i64, i64) {
-        let (mut t0, mut t1) = (0i64, n);
-        for m in 0..3 {
-            // 0 <= p + t·s < end, in exact integer arithmetic (i128 only where i64 might not
-            // hold it: no ordinary volume).
-            let end = ((self.it.last[m] + 1) as i128) << FIXED_BITS;
-            if end < 1 << 60 && p[m].unsigned_abs() < 1 << 60 && step[m].unsigned_abs() < 1 << 60 {
-                let (lo, hi) = span_along(p[m], step[m], end as i64);
-                t0 = t0.max(lo.clamp(0, n));
-                t1 = t1.min(hi.clamp(0, n));
-                continue;
-            }
-            let (p, s) = (i128::from(p[m]), i128::from(step[m]));
-            let (lo, hi) = match s.cmp(&0) {
-                std::cmp::Ordering::Equal if (0..end).contains(&p) => continue,
-                std::cmp::Ordering::Equal => (0, 0),
-                std::cmp::Ordering::Greater => (div_ceil(-p, s), div_floor(end - 1 - p, s) + 1),
-                std::cmp::Ordering::Less => (div_ceil(end - 1 - p, s), div_floor(-p, s) + 1),
-            };
-            t0 = t0.max(lo.clamp(0, n as i128) as i64);
-            t1 = t1.min(hi.clamp(0, n as i128) as i64);
+        self.inner_spans(step).of(p, n)
+    }
+
+    /// [`inner_span`](Self::inner_span) for many rays of one `step`.
+    pub fn inner_spans(&self, step: [i64; 3]) -> InnerSpans {
+        InnerSpans {
+            step,
+            inverse: step.map(|s| 1.0 / s as f64),
+            end: std::array::from_fn(|m| ((self.it.last[m] + 1) as i128) << FIXED_BITS),
         }
-        if t0 < t1 { (t0, t1) } else { (n, n) }
     }
 
     /// The linear index of the cell around `p` (fixed point), which must lie in
@@ -594,14 +644,64 @@ fn prefetch<T>(address: *const T) {
     let _ = address;
 }
 
-/// The range `lo..hi` of `t` with `0 <= p + t·s < end`, all below 2^60 in magnitude; an empty
-/// range when there is none, and `i64::MIN..i64::MAX` for every `t`. Exact, without integer
-/// division (rays need it once each, and a division costs tens of cycles).
-fn span_along(p: i64, s: i64, end: i64) -> (i64, i64) {
+/// The inner spans of rays that share a step (see [`BinSampler::inner_span`]), with the step's
+/// reciprocals worked out once.
+pub struct InnerSpans {
+    step: [i64; 3],
+    inverse: [f64; 3],
+    end: [i128; 3],
+}
+
+impl InnerSpans {
+    /// The inner span of the ray from `p` with `n` samples.
+    pub fn of(&self, p: [i64; 3], n: i64) -> (i64, i64) {
+        // The samples inside cells are where a line meets a box: one run. Most rays start and
+        // end inside, and then that is all of them.
+        let inside = |t: i64| {
+            (0..3).all(|m| {
+                self.step[m]
+                    .checked_mul(t)
+                    .and_then(|d| d.checked_add(p[m]))
+                    .is_some_and(|c| c >= 0 && i128::from(c) < self.end[m])
+            })
+        };
+        if n > 0 && inside(0) && inside(n - 1) {
+            return (0, n);
+        }
+        let (mut t0, mut t1) = (0i64, n);
+        for m in 0..3 {
+            // 0 <= p + t·s < end, in exact integer arithmetic (i128 only where i64 might not
+            // hold it: no ordinary volume).
+            let (end, s) = (self.end[m], self.step[m]);
+            if end < 1 << 60 && p[m].unsigned_abs() < 1 << 60 && s.unsigned_abs() < 1 << 60 {
+                let (lo, hi) = span_along(p[m], s, self.inverse[m], end as i64);
+                t0 = t0.max(lo.clamp(0, n));
+                t1 = t1.min(hi.clamp(0, n));
+                continue;
+            }
+            let (p, s) = (i128::from(p[m]), i128::from(s));
+            let (lo, hi) = match s.cmp(&0) {
+                std::cmp::Ordering::Equal if (0..end).contains(&p) => continue,
+                std::cmp::Ordering::Equal => (0, 0),
+                std::cmp::Ordering::Greater => (div_ceil(-p, s), div_floor(end - 1 - p, s) + 1),
+                std::cmp::Ordering::Less => (div_ceil(end - 1 - p, s), div_floor(-p, s) + 1),
+            };
+            t0 = t0.max(lo.clamp(0, n as i128) as i64);
+            t1 = t1.min(hi.clamp(0, n as i128) as i64);
+        }
+        if t0 < t1 { (t0, t1) } else { (n, n) }
+    }
+}
+
+/// The range `lo..hi` of `t` with `0 <= p + t·s < end`, all below 2^60 in magnitude, given
+/// `inverse = 1 / s`; an empty range when there is none, and `i64::MIN..i64::MAX` for every
+/// `t`. Exact, without integer division (rays need it once each, and a division costs tens of
+/// cycles).
+fn span_along(p: i64, s: i64, inverse: f64, end: i64) -> (i64, i64) {
     // The smallest t with p + t·s >= bound, for s > 0: a floating-point guess, made exact.
-    let first = |s: i64, bound: i64| {
+    let first = |s: i64, inverse: f64, bound: i64| {
         let reaches = |t: i64| i128::from(p) + i128::from(t) * i128::from(s) >= i128::from(bound);
-        let mut t = ceil_i64((bound - p) as f64 / s as f64);
+        let mut t = ceil_i64((bound - p) as f64 * inverse);
         while !reaches(t) {
             t += 1;
         }
@@ -613,9 +713,9 @@ fn span_along(p: i64, s: i64, end: i64) -> (i64, i64) {
     match s.cmp(&0) {
         std::cmp::Ordering::Equal if (0..end).contains(&p) => (i64::MIN, i64::MAX),
         std::cmp::Ordering::Equal => (0, 0),
-        std::cmp::Ordering::Greater => (first(s, 0), first(s, end)),
+        std::cmp::Ordering::Greater => (first(s, inverse, 0), first(s, inverse, end)),
         // p + t·s = p + (-t)·(-s): mirror the range.
-        std::cmp::Ordering::Less => (1 - first(-s, end), 1 - first(-s, 0)),
+        std::cmp::Ordering::Less => (1 - first(-s, -inverse, end), 1 - first(-s, -inverse, 0)),
     }
 }
 
@@ -675,6 +775,85 @@ mod tests {
         assert_eq!(r.at(3), [2.0, 1.0, 3.0]);
         assert!(l.ray(4, 0).is_none());
         assert!(l.ray(-1, 0).is_none());
+    }
+
+    /// `Lattice::ray`'s sample range as the definition computes it: a division per bound.
+    fn rays_by_division(l: &Lattice, i: i64, j: i64) -> Option<(i64, i64)> {
+        let base = l.point(i, j, 0);
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for m in 0..3 {
+            let eps = 1e-9 * (1.0 + l.extent[m]);
+            let dm = l.sample_spacing * l.d[m];
+            if dm.abs() < 1e-12 {
+                if base[m] < -eps || base[m] > l.extent[m] + eps {
+                    return None;
+                }
+                continue;
+            }
+            let t1 = (-eps - base[m]) / dm;
+            let t2 = (l.extent[m] + eps - base[m]) / dm;
+            lo = lo.max(t1.min(t2));
+            hi = hi.min(t1.max(t2));
+        }
+        let (k0, k1) = (lo.ceil() as i64, hi.floor() as i64);
+        (k0 <= k1).then_some((k0, k1))
+    }
+
+    #[test]
+    fn rays_are_the_ones_division_gives() {
+        // Random axes, spacings and phases, and lattices whose samples fall on the box's faces
+        // (whole steps from a whole phase), where a bound is a whole number.
+        let mut lcg = Lcg::new(11);
+        let mut unit = move || (lcg.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let mut cases = vec![
+            ([7, 5, 9], [1.0; 3], [1.0, 0.0, 0.0], 1.0, 1.0, [0.0; 3]),
+            (
+                [7, 5, 9],
+                [0.5, 1.0, 2.0],
+                [1.0, 1.0, 0.0],
+                0.5,
+                0.5,
+                [0.0; 3],
+            ),
+            ([7, 5, 9], [1.0; 3], [1.0, 2.0, 2.0], 1.0, 1.0, [0.0; 3]),
+            (
+                [6, 6, 6],
+                [1.0; 3],
+                [0.0, 3.0, 4.0],
+                1.0,
+                1.0,
+                [1.0, 0.0, 2.0],
+            ),
+        ];
+        for _ in 0..40 {
+            let axis = [unit() - 0.5, unit() - 0.5, unit() - 0.5];
+            let spacing = [0.3 + unit(), 0.3 + unit(), 0.3 + unit()];
+            let phase = [unit(), unit(), unit()];
+            cases.push(([9, 8, 11], spacing, axis, 0.2 + unit(), 0.2 + unit(), phase));
+        }
+        let mut rays = 0;
+        for (dims, spacing, axis, x, y, phase) in cases {
+            let l = Lattice::new(dims, spacing, axis, x, y, phase).unwrap();
+            let ((i0, i1), (j0, j1)) = l.ray_ranges();
+            for j in j0 - 1..=j1 + 1 {
+                for i in i0 - 1..=i1 + 1 {
+                    let got = l.ray(i, j).map(|r| (r.k0, r.k1));
+                    assert_eq!(got, rays_by_division(&l, i, j), "{axis:?} ray {i}, {j}");
+                    rays += usize::from(got.is_some());
+                }
+            }
+        }
+        assert!(rays > 1000, "{rays} rays");
+    }
+
+    #[test]
+    fn index_coordinates_are_divisions_by_the_spacing() {
+        let p = [0.1, -7.3, 1e-310];
+        for spacing in [[1.0, 2.0, 0.25], [0.7, 3.0, 1.5], [1.0, 1.0, 0.125]] {
+            let l = Lattice::new([4, 4, 4], spacing, [1.0, 2.0, 3.0], 1.0, 1.0, [0.0; 3]).unwrap();
+            let exact: [f64; 3] = std::array::from_fn(|m| p[m] / spacing[m]);
+            assert_eq!(l.to_index(p).map(f64::to_bits), exact.map(f64::to_bits));
+        }
     }
 
     #[test]
@@ -769,7 +948,7 @@ mod tests {
         let mut next = |n: i64| (lcg.next_u64() >> 33) as i64 % n;
         for _ in 0..5000 {
             let (p, s, end) = (next(201) - 100, next(41) - 20, next(60) + 1);
-            let (lo, hi) = span_along(p, s, end);
+            let (lo, hi) = span_along(p, s, 1.0 / s as f64, end);
             for t in -300..300 {
                 let inside = (0..end).contains(&(p + t * s));
                 assert_eq!(inside, (lo..hi).contains(&t), "p {p} s {s} end {end} t {t}");
@@ -812,6 +991,7 @@ mod tests {
         let inside = |p: [i64; 3]| (0..3).all(|m| p[m] >= 0 && p[m] < (dims[m] as i64 - 1) * one);
         for (p, step) in [
             ([0, 0, 0], [one, 0, 0]),
+            ([0, 0, 0], [one / 5, one / 6, one / 7]),
             ([-3, one / 2, one], [one / 3, one / 7, -one / 5]),
             ([5 * one, 4 * one, 6 * one], [-one, -one, -one]),
             ([one, 4 * one, one], [one / 2, 0, one / 4]),
@@ -825,6 +1005,25 @@ mod tests {
             let got: Vec<i64> = (t0..t1).collect();
             // The samples inside cells form one run along a straight line.
             assert_eq!(got, expect, "{p:?} + t·{step:?}");
+        }
+        // Random rays of one step, as a lattice has them: starting inside, on a face, or
+        // outside, and ending inside or out.
+        let mut lcg = Lcg::new(3);
+        let mut next = move |n: i64| (lcg.next_u64() >> 33) as i64 % n;
+        for _ in 0..200 {
+            let step: [i64; 3] = std::array::from_fn(|_| next(2 * one) - one);
+            let spans = sampler.inner_spans(step);
+            for _ in 0..50 {
+                let p = std::array::from_fn(|m| next((dims[m] as i64 + 2) * one) - one);
+                let n = next(12);
+                let (t0, t1) = spans.of(p, n);
+                let expect: Vec<i64> = (0..n)
+                    .filter(|&t| inside(std::array::from_fn(|m| p[m] + t * step[m])))
+                    .collect();
+                let got: Vec<i64> = (t0..t1).collect();
+                assert_eq!(got, expect, "{p:?} + t·{step:?}, {n} samples");
+                assert!(t0 < t1 || t0 == n, "empty spans are n..n");
+            }
         }
     }
 

@@ -192,6 +192,7 @@ fn walk_tile<C: Counter>(
     common: &mut impl FnMut(&mut [Walker], &mut C),
 ) -> u64 {
     let whole_step = lattice.step().iter().all(|&c| is_whole(c));
+    let spans = sampler.inner_spans(step);
     walkers.clear();
     for j in js.0..=js.1 {
         for i in is.0..=is.1 {
@@ -206,7 +207,7 @@ fn walk_tile<C: Counter>(
                 start
             });
             let n = ray.k1 - ray.k0 + 1;
-            let (t0, t1) = sampler.inner_span(p, step, n);
+            let (t0, t1) = spans.of(p, n);
             let mut w = Walker {
                 p,
                 bin: MIXED,
