@@ -454,21 +454,25 @@ impl Group {
         _mm256_cmpgt_epi32(self.span, _mm256_set1_epi32(t as i32))
     }
 
-    /// Ends the runs of the lanes set in `lanes` (missing samples).
+    /// Ends the runs (`code`, `len`) of the lanes set in `lanes` (missing samples).
     #[target_feature(enable = "avx2")]
-    fn end_runs(&mut self, mut lanes: u32, ends: &mut RunEnds) {
-        let (mut code, mut len) = (Narrow::default(), Narrow::default());
-        code.set(self.code);
-        len.set(self.len);
+    fn end_runs(
+        mut lanes: u32,
+        (code, len): (__m256i, __m256i),
+        ends: &mut RunEnds,
+    ) -> (__m256i, __m256i) {
+        let (mut codes, mut lens) = (Narrow::default(), Narrow::default());
+        codes.set(code);
+        lens.set(len);
         while lanes != 0 {
             let l = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            let (c, n) = (u64::from(code.0[l]), u64::from(len.0[l]));
+            let (c, n) = (u64::from(codes.0[l]), u64::from(lens.0[l]));
             ends.end_run(&mut Run::from_parts(c, n));
-            code.0[l] = 0;
-            len.0[l] = 0;
+            codes.0[l] = 0;
+            lens.0[l] = 0;
         }
-        (self.code, self.len) = (code.get(), len.get());
+        (codes.get(), lens.get())
     }
 
     /// Walks `chunk.steps` steps from step `chunk.start`: reads the labels of the cells, and
@@ -520,11 +524,14 @@ impl Group {
     #[target_feature(enable = "avx2")]
     fn count(&mut self, chunk: &Chunk, c: &Consts, table: &mut [u64], ends: &mut RunEnds) {
         let one = _mm256_set1_epi32(1);
+        // The runs in locals, which stay in registers: in `self` they would go through memory
+        // at every step, as the table's increments might write them.
+        let (mut code, mut len) = (self.code, self.len);
         for t in 0..chunk.steps {
             let mut push = self.on(chunk.start + t);
             let missing = chunk.missing[t];
             if missing != 0 {
-                self.end_runs(u32::from(missing), ends);
+                (code, len) = Self::end_runs(u32::from(missing), (code, len), ends);
                 push = _mm256_andnot_si256(lanes_of(u32::from(missing)), push);
             }
             let labels =
@@ -532,20 +539,21 @@ impl Group {
             // Append the symbols: code = (code << bits | symbol) & mask, length capped at L;
             // count each complete L-block, and send the other lanes to the spare slot.
             let pushed = _mm256_and_si256(
-                _mm256_or_si256(_mm256_sll_epi32(self.code, c.shift), labels),
+                _mm256_or_si256(_mm256_sll_epi32(code, c.shift), labels),
                 c.code_mask,
             );
-            let grown = _mm256_min_epu32(_mm256_add_epi32(self.len, one), c.full);
-            self.code = _mm256_blendv_epi8(self.code, pushed, push);
-            self.len = _mm256_blendv_epi8(self.len, grown, push);
-            let complete = _mm256_and_si256(_mm256_cmpeq_epi32(self.len, c.full), push);
+            let grown = _mm256_min_epu32(_mm256_add_epi32(len, one), c.full);
+            code = _mm256_blendv_epi8(code, pushed, push);
+            len = _mm256_blendv_epi8(len, grown, push);
+            let complete = _mm256_and_si256(_mm256_cmpeq_epi32(len, c.full), push);
             let mut slots = Narrow::default();
-            slots.set(_mm256_blendv_epi8(c.spare, self.code, complete));
+            slots.set(_mm256_blendv_epi8(c.spare, code, complete));
             for &slot in &slots.0 {
                 // Codes are masked to `mask`, the spare is `mask + 1`.
                 table[slot as usize] += 1;
             }
         }
+        (self.code, self.len) = (code, len);
     }
 }
 
