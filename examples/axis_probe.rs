@@ -5,9 +5,10 @@
 use std::time::Instant;
 
 use slabscope::progress::Monitor;
+use slabscope::view::BinSampler;
+use slabscope::view::lattice::Lattice;
 use slabscope::view::{entropy_rate, icosphere};
 use slabscope::volume::phantom;
-use slabscope::volume::sampling::{BinSampler, Lattice};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let volume = phantom::body([256, 256, 415], 1)?;

@@ -1,9 +1,13 @@
-//! The library's error type: one enum grouped by concern, every message naming the file and the problem.
+//! The library's error type: one enum grouped by concern, every message naming the file and the
+//! problem. Errors are data: a front end reads the fields (the parameter's name and value, the
+//! bytes needed and allowed) and words them in its own terms, such as command-line flags; the
+//! library's own messages name no flag.
 
 use std::path::{Path, PathBuf};
 
 /// Everything that can go wrong in slabscope's library.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// Reading or writing a file failed at the operating-system level.
     #[error("{}: {error}", path.display())]
@@ -33,7 +37,7 @@ pub enum Error {
     },
     /// Loading would need more memory than the limit allows; nothing was allocated.
     #[error(
-        "{}: {what} needs {}, over the memory limit of {} (raise it with --max-memory)",
+        "{}: {what} needs {}, over the memory limit of {}",
         path.display(), human_bytes(*needed), human_bytes(*limit)
     )]
     TooLarge {
@@ -55,14 +59,25 @@ pub enum Error {
         message: String,
     },
     /// A file that would be written exists already and overwriting was not asked for.
-    #[error("{}: already exists (use --force to overwrite it)", path.display())]
+    #[error("{}: already exists", path.display())]
     Exists {
         /// The file that exists.
         path: PathBuf,
     },
     /// A parameter outside its domain, such as zero bins or a zero axis.
-    #[error("invalid parameter: {0}")]
-    InvalidParameter(String),
+    #[error("{parameter} {value}: expected {expected}")]
+    InvalidParameter {
+        /// The parameter's name, as the library's parameter types spell it (`bins`, `slabs`,
+        /// `ray_spacing`, ...).
+        parameter: &'static str,
+        /// The value given, as text.
+        value: String,
+        /// What it must be, e.g. "between 2 and 255".
+        expected: String,
+    },
+    /// Encoding an output (a PNG) failed.
+    #[error("encoding failed: {0}")]
+    Encode(String),
     /// The volume cannot be analysed as asked: it is constant, or one slice thick along the axis.
     #[error("{0}")]
     Degenerate(String),
@@ -88,6 +103,19 @@ impl Error {
         Self::Format {
             path: path.to_path_buf(),
             message: message.into(),
+        }
+    }
+
+    /// An invalid-parameter error: `parameter` was `value`, and should be `expected`.
+    pub fn invalid(
+        parameter: &'static str,
+        value: impl std::fmt::Display,
+        expected: impl Into<String>,
+    ) -> Self {
+        Self::InvalidParameter {
+            parameter,
+            value: value.to_string(),
+            expected: expected.into(),
         }
     }
 

@@ -2,20 +2,47 @@
 //! Feixas and Sbert, 2008), as a library.
 //!
 //! The library knows nothing of terminals; the `slabscope` binary puts a TUI and a CLI over it.
-//! [`volume`] loads and holds volumes; [`measure`] holds the information measures; [`view`] finds
-//! the most structured view (paper §3.1 and §4).
+//! Its modules, from the bottom up (each depends only on those above it):
+//!
+//! - [`error`]: the [`Error`] enum, grouped by concern, with the parameter's name and value as data.
+//! - [`progress`]: the [`Monitor`] every long computation takes: phase, progress and cancellation.
+//! - [`measure`]: entropy, block entropies, Jensen-Shannon divergence, MI and NMI: pure maths.
+//! - [`geometry`]: vectors, the [`Axis`] type (parsed, printed, canonical) and an axis's frame.
+//! - [`volume`]: the [`Volume`], its statistics and quantization (DESIGN §2), trilinear
+//!   interpolation, the cell map, synthetic phantoms, and `io/` with one reader per format.
+//! - [`view`]: the most structured view (paper §3.1, §4): the icosphere, the ray lattice and the
+//!   sampling parameters, the entropy rate of an axis and the search over the sphere.
+//! - [`partition`](mod@partition): slabs along an axis (paper §5): slice stacks, top-down (§5.1), bottom-up
+//!   (§5.2), the optimum, and [`Histories`], all three step histories read at any position.
+//! - [`analysis`]: the view search and the partition together, as one call.
+//! - [`render`]: the exploded view (paper §3, step 3): camera, transfer functions, layout, the ray
+//!   caster and overlays.
+//! - [`report`]: the JSON contract (DESIGN §3) and the other exports, built from the results.
 
+pub mod analysis;
 pub mod error;
+pub mod geometry;
 pub mod measure;
 pub mod partition;
 pub mod progress;
 pub mod render;
+pub mod report;
 #[cfg(test)]
 mod testing;
 pub mod view;
 pub mod volume;
 
+pub use analysis::{Analysis, AnalysisParams, analyze};
 pub use error::{Error, Result};
+pub use geometry::Axis;
+pub use partition::{
+    Histories, Method, Partition, PartitionParams, Scope, Stop, label_volume, partition,
+};
+pub use progress::{Monitor, Progress};
+pub use render::{Layout, RenderParams, Renderer};
+pub use report::{AnalysisReport, SCHEMA_VERSION, SlabsReport};
+pub use view::lattice::SamplingParams;
+pub use view::{ViewParams, ViewSearch, search};
 pub use volume::io::{Format, LoadOptions, Loaded, load};
 pub use volume::{Quantizer, Stats, Volume, VoxelType};
 

@@ -1,18 +1,52 @@
-//! The `slabscope` binary: argument parsing and dispatch to the CLI commands.
+//! The `slabscope` binary: argument parsing and dispatch. With a subcommand the CLI runs it;
+//! without one the TUI opens. The two front ends import nothing of each other.
 
 mod cli;
+mod term;
 mod tui;
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
 
+/// Similarity-based exploded views of 3D volumes.
+#[derive(Debug, Parser)]
+#[command(
+    name = "slabscope",
+    version,
+    about,
+    args_conflicts_with_subcommands = true
+)]
+struct Cli {
+    /// Volume to open in the TUI (default: the built-in dataset).
+    file: Option<PathBuf>,
+    /// Terminal image protocol of the preview (default: asked of the terminal).
+    #[arg(long, value_enum, default_value_t = term::Protocol::Auto)]
+    protocol: term::Protocol,
+    #[command(flatten)]
+    analysis: cli::AnalysisArgs,
+    #[command(flatten)]
+    load: cli::LoadArgs,
+    #[command(subcommand)]
+    command: Option<cli::Command>,
+}
+
 fn main() -> ExitCode {
-    let args = cli::Cli::parse();
-    match cli::run(args) {
+    let args = Cli::parse();
+    let result = match args.command {
+        Some(command) => cli::run(command),
+        None => tui::run(tui::Options {
+            file: args.file,
+            load: args.load.options(),
+            protocol: args.protocol,
+            analysis: args.analysis.params(true),
+        }),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("slabscope: error: {e:#}");
+            eprintln!("slabscope: error: {}", cli::error_message(&e));
             ExitCode::FAILURE
         }
     }

@@ -5,11 +5,25 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
 
-/// Watches a long computation: counts finished units of work, reports the fraction done when its
-/// whole percentage changes, and says whether the computation was cancelled.
+/// Where a long computation is: the phase it is in ("view search", "slicing", "bottom-up", ...)
+/// and the fraction of that phase done.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Progress {
+    /// The phase, in words a user reads.
+    pub phase: &'static str,
+    /// The fraction of the phase done, 0 to 1; it never goes down within a phase.
+    pub fraction: f64,
+}
+
+/// The callback that receives progress.
+pub type Report<'a> = &'a (dyn Fn(Progress) + Sync);
+
+/// Watches a long computation: counts finished units of work, reports the phase and the fraction
+/// done when its whole percentage changes, and says whether the computation was cancelled.
 pub struct Monitor<'a> {
     cancel: Option<&'a AtomicBool>,
-    report: Option<&'a (dyn Fn(f64) + Sync)>,
+    report: Option<Report<'a>>,
+    phase: std::sync::Mutex<&'static str>,
     total: AtomicU64,
     done: AtomicU64,
     percent: AtomicU64,
@@ -17,10 +31,11 @@ pub struct Monitor<'a> {
 
 impl<'a> Monitor<'a> {
     /// A monitor with an optional cancellation flag and progress callback (fraction in [0, 1]).
-    pub fn new(cancel: Option<&'a AtomicBool>, report: Option<&'a (dyn Fn(f64) + Sync)>) -> Self {
+    pub fn new(cancel: Option<&'a AtomicBool>, report: Option<Report<'a>>) -> Self {
         Self {
             cancel,
             report,
+            phase: std::sync::Mutex::new(""),
             total: AtomicU64::new(1),
             done: AtomicU64::new(0),
             percent: AtomicU64::new(0),
@@ -32,11 +47,29 @@ impl<'a> Monitor<'a> {
         Monitor::new(None, None)
     }
 
-    /// Sets the number of work units the computation will report, and restarts the count.
-    pub fn start(&self, total: u64) {
+    /// Starts `phase`, which will report `total` units of work, and reports it at 0%.
+    pub fn start(&self, phase: &'static str, total: u64) {
+        *self
+            .phase
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) = phase;
         self.total.store(total.max(1), Ordering::Relaxed);
         self.done.store(0, Ordering::Relaxed);
         self.percent.store(0, Ordering::Relaxed);
+        if let Some(report) = self.report {
+            report(Progress {
+                phase,
+                fraction: 0.0,
+            });
+        }
+    }
+
+    /// The phase under way.
+    pub fn phase(&self) -> &'static str {
+        *self
+            .phase
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
     }
 
     /// Whether cancellation was asked for.
@@ -62,7 +95,10 @@ impl<'a> Monitor<'a> {
         if let Some(report) = self.report
             && self.percent.fetch_max(percent, Ordering::Relaxed) < percent
         {
-            report(done.min(total) as f64 / total as f64);
+            report(Progress {
+                phase: self.phase(),
+                fraction: percent as f64 / 100.0,
+            });
         }
         self.check()
     }
@@ -77,15 +113,38 @@ mod tests {
     #[test]
     fn reports_each_whole_percent_once() {
         let seen = Mutex::new(Vec::new());
-        let report = |f: f64| seen.lock().unwrap().push(f);
+        let report = |p: Progress| seen.lock().unwrap().push(p);
         let m = Monitor::new(None, Some(&report));
-        m.start(1000);
+        m.start("counting", 1000);
         for _ in 0..1000 {
             m.advance(1).unwrap();
         }
+        m.start("second", 10);
         let seen = seen.into_inner().unwrap();
-        assert_eq!(seen.len(), 100);
-        assert_eq!(seen.last(), Some(&1.0));
+        assert_eq!(
+            seen.len(),
+            102,
+            "0% and each whole percent of the first phase, then 0%"
+        );
+        assert_eq!(
+            seen[100],
+            Progress {
+                phase: "counting",
+                fraction: 1.0
+            }
+        );
+        assert!(
+            seen[..101]
+                .windows(2)
+                .all(|w| w[0].fraction < w[1].fraction)
+        );
+        assert_eq!(
+            seen[101],
+            Progress {
+                phase: "second",
+                fraction: 0.0
+            }
+        );
     }
 
     #[test]

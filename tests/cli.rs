@@ -217,7 +217,7 @@ fn analysis_errors_are_clear() {
     for (args, phrase) in [
         (
             vec!["analyze", f, "--axis", "z", "--slabs", "0"],
-            "--slabs 0 is not between 1 and the 24 slices",
+            "--slabs 0: expected between 1 and the 24 slices",
         ),
         (
             vec!["analyze", f, "--axis", "0,0,0"],

@@ -9,7 +9,7 @@ use slabscope::partition::{
 };
 use slabscope::progress::Monitor;
 use slabscope::volume::phantom;
-use slabscope::{Volume, VoxelType};
+use slabscope::{SamplingParams, Volume, VoxelType};
 
 /// A pseudo-random value in `0..n` for `(a, b)`.
 fn hash(a: u64, b: u64, n: u64) -> u64 {
@@ -34,7 +34,10 @@ fn materials(nz: usize, material: impl Fn(usize) -> usize) -> Volume {
 
 fn stack(v: &Volume, bins: usize) -> SliceStack {
     let params = StackParams {
-        bins,
+        sampling: SamplingParams {
+            bins,
+            ..SamplingParams::default()
+        },
         ..StackParams::default()
     };
     SliceStack::new(v, [0.0, 0.0, 1.0], &params, &Monitor::none()).unwrap()

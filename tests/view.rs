@@ -4,11 +4,11 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use slabscope::geometry::{canonical, dot};
 use slabscope::progress::Monitor;
 use slabscope::view::{ViewParams, ViewSearch, axis_angle, icosphere, search};
 use slabscope::volume::phantom;
-use slabscope::volume::sampling::{canonical, dot};
-use slabscope::{Error, Volume, VoxelType};
+use slabscope::{Error, SamplingParams, Volume, VoxelType};
 
 /// A linear congruential generator: deterministic noise without a dependency.
 struct Lcg(u64);
@@ -47,7 +47,10 @@ fn a_volume_constant_along_z_has_zero_rate_there_and_z_wins() {
     let r = run(
         &v,
         &ViewParams {
-            bins: 8,
+            sampling: SamplingParams {
+                bins: 8,
+                ..SamplingParams::default()
+            },
             ..ViewParams::default()
         },
     );
@@ -67,7 +70,10 @@ fn iid_noise_has_rate_close_to_its_symbol_entropy_on_every_axis() {
     let r = run(
         &v,
         &ViewParams {
-            bins: 8,
+            sampling: SamplingParams {
+                bins: 8,
+                ..SamplingParams::default()
+            },
             ..ViewParams::default()
         },
     );
@@ -115,8 +121,8 @@ fn layers_are_best_seen_along_them() {
     .unwrap();
     let worst_on_sphere = along.views.last().unwrap().entropy_rate;
     assert!(worst_on_sphere > r.best().entropy_rate + 0.1);
-    let sampler = slabscope::volume::sampling::BinSampler::new(&v, v.quantizer(32).unwrap());
-    let lattice = slabscope::volume::sampling::Lattice::for_volume(&v, normal).unwrap();
+    let sampler = slabscope::view::BinSampler::new(&v, v.quantizer(32).unwrap());
+    let lattice = slabscope::view::lattice::Lattice::for_volume(&v, normal).unwrap();
     let h_normal = slabscope::view::entropy_rate(&sampler, &lattice, 3, &Monitor::none())
         .unwrap()
         .entropy_rate;
@@ -154,7 +160,10 @@ fn permuting_the_volume_axes_permutes_the_results() {
     let a = Volume::new([nx, ny, nz], [1.0; 3], VoxelType::U8, data).unwrap();
     let b = Volume::new([ny, nz, nx], [1.0; 3], VoxelType::U8, permuted).unwrap();
     let params = ViewParams {
-        bins: 16,
+        sampling: SamplingParams {
+            bins: 16,
+            ..SamplingParams::default()
+        },
         ..ViewParams::default()
     };
     let (ra, rb) = (run(&a, &params), run(&b, &params));
@@ -196,14 +205,17 @@ fn anisotropic_spacing_is_respected() {
     let coarse = physical_layers([40, 40, 40], [1.0; 3]);
     let fine = physical_layers([40, 40, 80], [1.0, 1.0, 0.5]);
     let params = ViewParams {
-        bins: 8,
+        sampling: SamplingParams {
+            bins: 8,
+            ..SamplingParams::default()
+        },
         ..ViewParams::default()
     };
     let (a, b) = (run(&coarse, &params), run(&fine, &params));
     assert_eq!(a.best().axis, b.best().axis);
     assert!(dot(a.best().axis, [0.0, 1.0 / 5f64.sqrt(), 2.0 / 5f64.sqrt()]).abs() < 0.3);
     assert_eq!(
-        b.params.ray_spacing,
+        b.params.sampling.ray_spacing,
         Some(0.5),
         "the smallest spacing is the default"
     );
@@ -213,7 +225,7 @@ fn anisotropic_spacing_is_respected() {
 fn cancellation_stops_the_search_with_an_error() {
     let v = phantom::body([64, 64, 104], 1).unwrap();
     let flag = AtomicBool::new(false);
-    let cancel_on_progress = |_: f64| flag.store(true, Ordering::Relaxed);
+    let cancel_on_progress = |_: slabscope::Progress| flag.store(true, Ordering::Relaxed);
     let monitor = Monitor::new(Some(&flag), Some(&cancel_on_progress));
     let result = search(&v, &ViewParams::default(), &monitor);
     assert!(matches!(result, Err(Error::Cancelled)), "{result:?}");
@@ -256,11 +268,17 @@ fn bad_parameters_and_constant_volumes_are_refused() {
             ..ViewParams::default()
         },
         ViewParams {
-            bins: 1,
+            sampling: SamplingParams {
+                bins: 1,
+                ..SamplingParams::default()
+            },
             ..ViewParams::default()
         },
         ViewParams {
-            ray_spacing: Some(0.0),
+            sampling: SamplingParams {
+                ray_spacing: Some(0.0),
+                ..SamplingParams::default()
+            },
             ..ViewParams::default()
         },
     ] {

@@ -30,7 +30,7 @@ pub struct PhantomArgs {
     #[arg(long, value_name = "N", conflicts_with = "dims")]
     pub size: Option<usize>,
     /// Dimensions NXxNYxNZ (default: 96 cubed for layers and shepp-logan, 128x128x208 for body).
-    #[arg(long, value_name = "NXxNYxNZ", value_parser = super::parse_dims_arg)]
+    #[arg(long, value_name = "NXxNYxNZ", value_parser = super::args::parse_dims_arg)]
     pub dims: Option<[usize; 3]>,
     /// Seed of the noise.
     #[arg(long, default_value_t = 1)]
@@ -55,7 +55,7 @@ pub fn run(args: &PhantomArgs) -> Result<()> {
     let dims = args.dims.or(args.size.map(|n| [n; 3])).unwrap_or(default);
     let volume = match args.kind {
         Kind::Layers => {
-            let Some(normal) = super::parse_triple(&args.normal) else {
+            let Some(normal) = slabscope::geometry::parse_triple(&args.normal) else {
                 bail!("--normal {:?} is not three numbers DX,DY,DZ", args.normal);
             };
             phantom::layers(dims, normal, args.seed)?

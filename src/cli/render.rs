@@ -6,14 +6,13 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
-use slabscope::progress::Monitor;
 use slabscope::render::{
     CameraParams, Colormap, Gap, Image, Layout, Mode, Preset, RenderParams, Renderer,
 };
 
-use super::LoadArgs;
-use super::analyze::{AxisChoice, PartitionArgs, ViewArgs, run_partition, run_search};
-use super::progress::Bar;
+use super::args::{AnalysisArgs, LoadArgs};
+use super::progress::with_bar;
+use crate::term::Protocol;
 
 /// What the render shows and how.
 #[derive(Debug, Args, Clone)]
@@ -183,9 +182,7 @@ pub struct SceneArgs {
     #[command(flatten)]
     pub options: ViewOptions,
     #[command(flatten)]
-    pub partition: PartitionArgs,
-    #[command(flatten)]
-    pub view: ViewArgs,
+    pub analysis: AnalysisArgs,
     #[command(flatten)]
     pub load: LoadArgs,
 }
@@ -200,21 +197,6 @@ pub struct PreviewArgs {
     pub protocol: Protocol,
     #[command(flatten)]
     pub scene: SceneArgs,
-}
-
-/// How the preview reaches the terminal.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Protocol {
-    /// Detect kitty, iTerm2 or sixel support; else half-blocks.
-    Auto,
-    /// The kitty graphics protocol.
-    Kitty,
-    /// iTerm2 inline images.
-    Iterm,
-    /// Sixel graphics.
-    Sixel,
-    /// Unicode half-blocks with colours: works everywhere.
-    Blocks,
 }
 
 fn parse_window(s: &str) -> Result<(f32, f32), String> {
@@ -248,17 +230,10 @@ fn render_file(
 ) -> Result<Image> {
     let loaded = super::load(file, &scene.load)?;
     let volume = &loaded.volume;
-    let axis = match scene.partition.axis {
-        AxisChoice::Direction(d) => d,
-        AxisChoice::Best => {
-            run_search(volume, &scene.view.params())
-                .with_context(|| file.display().to_string())?
-                .best()
-                .axis
-        }
-    };
-    let part = run_partition(volume, axis, &scene.partition.params(&scene.view))
-        .with_context(|| file.display().to_string())?;
+    let params = scene.analysis.params(false);
+    let part = with_bar(|monitor| slabscope::analyze(volume, &params, monitor))
+        .with_context(|| file.display().to_string())?
+        .partition;
     let options = &scene.options;
     if let Some(h) = options.highlight
         && h >= part.slabs.len()
@@ -270,13 +245,9 @@ fn render_file(
     }
     let layout = Layout::exploded(&part, options.gap(), options.spread);
     let renderer = Renderer::new(volume)?;
-    let bar = Bar::new("render");
-    let report = |f: f64| bar.set(f);
-    Ok(renderer.render(
-        &layout,
-        &options.params(width, height),
-        &Monitor::new(None, Some(&report)),
-    )?)
+    Ok(with_bar(|monitor| {
+        renderer.render(&layout, &options.params(width, height), monitor)
+    })?)
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {

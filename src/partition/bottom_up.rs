@@ -373,7 +373,7 @@ impl MergeHistory {
     /// Like [`new`](Self::new), but stops after `limit` merges.
     pub fn with_limit(stack: &SliceStack, monitor: &Monitor, limit: usize) -> Result<Self> {
         let n = stack.slices();
-        monitor.start(n as u64);
+        monitor.start("bottom-up", n as u64);
         let columns = Columns::new(stack);
         let mut slabs: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
         let mut nmi = consecutive_nmi(stack, &columns, &slabs, monitor)?;
@@ -493,7 +493,10 @@ mod tests {
             .collect();
         let v = Volume::new([14, 11, 9], [1.0; 3], VoxelType::F32, data).unwrap();
         let params = super::super::StackParams {
-            bins: 8,
+            sampling: crate::SamplingParams {
+                bins: 8,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let stack = SliceStack::new(&v, [1.0, 2.0, 3.0], &params, &Monitor::none()).unwrap();

@@ -2,6 +2,7 @@
 //! the optimal partition, and summaries of the slabs they give.
 
 mod bottom_up;
+mod histories;
 mod optimal;
 mod result;
 mod stack;
@@ -9,13 +10,11 @@ mod top_down;
 
 use serde::Serialize;
 
-pub use crate::volume::sampling::coordinate_axis;
+pub use crate::geometry::coordinate_axis;
 pub use bottom_up::{Merge, MergeHistory, slice_nmi};
+pub use histories::{Histories, Scope};
 pub use optimal::{MAX_SLICES, OptimalPartitions, Optimum};
-pub use result::{
-    Comparison, Partition, PartitionParams, Step, Stop, boundary_gains, label_volume, partition,
-    slab_nmi,
-};
+pub use result::{Comparison, Partition, PartitionParams, Step, Stop, label_volume, partition};
 pub use stack::{MISSING, SliceStack, StackParams};
 pub use top_down::{Split, SplitHistory};
 
@@ -23,6 +22,16 @@ use crate::measure::entropy;
 
 /// A slab: the half-open range of slices `[start, end)` along the axis.
 pub type Slab = (usize, usize);
+
+/// Slices `[a, b)` for people, inclusive as a reader counts them: `12` for one slice, `12–40`
+/// for several.
+pub fn slab_text((a, b): Slab) -> String {
+    if b <= a + 1 {
+        a.to_string()
+    } else {
+        format!("{a}–{}", b - 1)
+    }
+}
 
 /// How slabs are found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -112,6 +121,12 @@ pub fn describe(stack: &SliceStack, histograms: &[u64], slabs: &[Slab]) -> Vec<S
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn slab_ranges_read_inclusively() {
+        assert_eq!(slab_text((12, 13)), "12");
+        assert_eq!(slab_text((0, 45)), "0–44");
+    }
 
     #[test]
     fn prefix_sums_accumulate_per_bin() {

@@ -34,9 +34,11 @@ impl OptimalPartitions {
     pub fn new(histograms: &[u64], bins: usize, max_slabs: usize) -> Result<Self> {
         let n = histograms.len() / bins;
         if n > MAX_SLICES {
-            return Err(Error::InvalidParameter(format!(
-                "the optimal partition takes at most {MAX_SLICES} slices, not {n}"
-            )));
+            return Err(Error::invalid(
+                "slices",
+                n,
+                format!("at most {MAX_SLICES} for the optimal partition"),
+            ));
         }
         let kmax = max_slabs.clamp(1, n.max(1));
         let gains = Gains::new(histograms, bins);
@@ -49,7 +51,6 @@ impl OptimalPartitions {
             }
         }
         let whole = cost[n];
-        let total = gains.total();
         // best[k][b]: least Σ F over k slabs covering [0, b); from[k][b]: where the last starts.
         let mut best = vec![vec![f64::INFINITY; width]; kmax + 1];
         let mut from = vec![vec![0usize; width]; kmax + 1];
@@ -75,11 +76,7 @@ impl OptimalPartitions {
                     end = start;
                 }
                 slabs.reverse();
-                let information = if total > 0.0 {
-                    ((whole - best[k][n]) / total).max(0.0)
-                } else {
-                    0.0
-                };
+                let information = gains.bits(whole - best[k][n]);
                 Optimum { slabs, information }
             })
             .collect();

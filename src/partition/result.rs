@@ -1,18 +1,14 @@
-//! One partition as a front end shows it: run a method along an axis to a stopping rule, and
-//! gather the slabs, the steps taken, what each slab holds, its boundaries and the curves.
+//! One partition as a front end shows it: a position in a method's history, with the slabs, the
+//! steps taken, what each slab holds, its boundaries and the curves.
 
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::bottom_up::{Columns, consecutive_nmi};
-use super::top_down::Gains;
-use super::{
-    MergeHistory, Method, OptimalPartitions, Slab, SlabInfo, SliceStack, SplitHistory, StackParams,
-    describe,
-};
-use crate::error::{Error, Result};
+use super::histories::{Histories, Scope};
+use super::{MAX_SLICES, Method, Slab, SlabInfo, SliceStack, StackParams};
+use crate::error::Result;
+use crate::geometry::dot;
 use crate::progress::Monitor;
-use crate::volume::sampling::dot;
 use crate::volume::{Volume, VoxelType};
 
 /// When to stop splitting or merging.
@@ -118,70 +114,70 @@ pub struct Partition {
 /// The optimum is compared with greedy up to at least this many slabs.
 const COMPARE_SLABS: usize = 8;
 
-/// The slabs and steps of `params.method` stopped by `params.stop`.
-fn choose(
-    stack: &SliceStack,
-    h: &[u64],
-    top: &SplitHistory,
-    optimal: &OptimalPartitions,
-    params: &PartitionParams,
-    monitor: &Monitor,
-) -> Result<(Vec<Slab>, Vec<Step>)> {
-    let (n, bins) = (stack.slices(), stack.bins());
-    Ok(match params.method {
-        Method::TopDown => {
-            let taken = match params.stop {
-                Stop::Slabs(k) => k - 1,
-                Stop::Threshold(t) => top.steps_above(t),
-            };
-            let steps = top.steps[..taken]
-                .iter()
-                .map(|s| Step::Split {
-                    split: s.split,
-                    at: s.at,
-                    gain: s.gain,
-                })
-                .collect();
-            (top.slabs_after(taken), steps)
+impl PartitionParams {
+    /// The histories a partition by these parameters reads: bottom-up only for its own method,
+    /// the optimum as far as the method and the comparison with greedy need.
+    pub fn scope(&self, slices_hint: Option<usize>) -> Scope {
+        let wanted = match (self.method, self.stop) {
+            (_, Stop::Slabs(k)) => k,
+            // The threshold rule of the optimal method may ask for any count.
+            (Method::Optimal, Stop::Threshold(_)) => slices_hint.unwrap_or(MAX_SLICES),
+            (_, Stop::Threshold(_)) => 1,
+        };
+        Scope {
+            bottom_up: self.method == Method::BottomUp,
+            optimal_slabs: wanted.max(COMPARE_SLABS),
         }
-        Method::BottomUp => {
-            let history = MergeHistory::new(stack, monitor)?;
-            let taken = match params.stop {
-                Stop::Slabs(k) => n - k,
-                Stop::Threshold(t) => history.steps_above(t),
-            };
-            let steps = history.steps[..taken]
-                .iter()
-                .map(|m| Step::Merge {
-                    merge: m.merge,
-                    nmi: m.nmi,
-                })
-                .collect();
-            (history.slabs_after(taken), steps)
-        }
-        Method::Optimal => {
-            let k = match params.stop {
-                Stop::Slabs(k) => k,
-                Stop::Threshold(t) => {
-                    // Grow K while one more slab adds at least t bits.
-                    let full = OptimalPartitions::new(h, bins, n)?;
-                    let i = full
-                        .by_count
-                        .windows(2)
-                        .position(|w| w[1].information - w[0].information < t);
-                    i.map_or(n, |i| i + 1)
-                }
-            };
-            let slabs = match optimal.get(k) {
-                Some(o) => o.slabs.clone(),
-                None => OptimalPartitions::new(h, bins, k)?
-                    .get(k)
-                    .map(|o| o.slabs.clone())
-                    .unwrap_or_default(),
-            };
-            (slabs, Vec::new())
-        }
-    })
+    }
+}
+
+impl Partition {
+    /// The partition at `position` of `method`'s history, with everything a front end shows
+    /// about it (one pass over the stack for the NMI at its boundaries).
+    pub fn new(
+        histories: &Histories,
+        method: Method,
+        position: usize,
+        monitor: &Monitor,
+    ) -> Result<Self> {
+        let stack = histories.stack();
+        let slabs = histories.slabs(method, position);
+        let k = slabs.len();
+        let boundary_nmi = histories.boundary_nmi(&slabs, monitor)?;
+        let top = histories.top();
+        let comparison = histories
+            .optimal()
+            .map(|o| {
+                o.by_count
+                    .iter()
+                    .take(k.max(COMPARE_SLABS))
+                    .enumerate()
+                    .map(|(i, o)| Comparison {
+                        slabs: i + 1,
+                        optimal: o.information,
+                        greedy: top.information(i + 1),
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        Ok(Self {
+            axis: stack.axis(),
+            method,
+            slices: stack.slices(),
+            thickness: stack.thickness(),
+            offset: stack.offset(),
+            info: histories.describe(&slabs),
+            steps: histories.steps(method, position),
+            boundary_gain: histories.boundary_gains(&slabs),
+            information: histories.information(&slabs),
+            entropy: histories.entropy(),
+            nmi_curve: histories.nmi_curve().to_vec(),
+            gain_curve: histories.gain_curve().to_vec(),
+            boundary_nmi,
+            slabs,
+            comparison,
+        })
+    }
 }
 
 /// Partitions `volume` along `axis`.
@@ -191,113 +187,12 @@ pub fn partition(
     params: &PartitionParams,
     monitor: &Monitor,
 ) -> Result<Partition> {
-    if volume.is_constant() {
-        return Err(Error::Degenerate(format!(
-            "the volume is constant (every voxel is {}): there is nothing to partition",
-            volume.stats().min
-        )));
-    }
+    Histories::check_not_constant(volume)?;
     let stack = SliceStack::new(volume, axis, &params.stack, monitor)?;
-    let n = stack.slices();
-    if n < 2 {
-        return Err(Error::Degenerate(format!(
-            "only {n} slice along the axis: nothing to partition"
-        )));
-    }
-    if let Stop::Slabs(k) = params.stop
-        && !(1..=n).contains(&k)
-    {
-        return Err(Error::InvalidParameter(format!(
-            "--slabs {k} is not between 1 and the {n} slices"
-        )));
-    }
-    let bins = stack.bins();
-    let h = stack.slice_histograms();
-    let top = SplitHistory::new(&h, bins);
-    let wanted = match params.stop {
-        Stop::Slabs(k) => k,
-        Stop::Threshold(_) => 1,
-    };
-    let limit = wanted.max(COMPARE_SLABS).min(n);
-    let optimal = OptimalPartitions::new(&h, bins, limit)?;
-    let (slabs, steps) = choose(&stack, &h, &top, &optimal, params, monitor)?;
-    monitor.check()?;
-    let columns = Columns::new(&stack);
-    let boundary_nmi = consecutive_nmi(&stack, &columns, &slabs, monitor)?;
-    let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
-    let nmi_curve = consecutive_nmi(&stack, &columns, &singles, monitor)?;
-    let gains = Gains::new(&h, bins);
-    let total = gains.total();
-    let ratio = |x: f64| {
-        if total > 0.0 {
-            (x / total).max(0.0)
-        } else {
-            0.0
-        }
-    };
-    let boundary_gain = slabs
-        .windows(2)
-        .map(|w| {
-            ratio(
-                gains.scaled(w[0].0, w[1].1)
-                    - gains.scaled(w[0].0, w[0].1)
-                    - gains.scaled(w[1].0, w[1].1),
-            )
-        })
-        .collect();
-    let information =
-        ratio(gains.scaled(0, n) - slabs.iter().map(|&(a, b)| gains.scaled(a, b)).sum::<f64>());
-    let comparison = optimal
-        .by_count
-        .iter()
-        .enumerate()
-        .map(|(i, o)| Comparison {
-            slabs: i + 1,
-            optimal: o.information,
-            greedy: top.information(i + 1),
-        })
-        .collect();
-    Ok(Partition {
-        axis: stack.axis(),
-        method: params.method,
-        slices: n,
-        thickness: stack.thickness(),
-        offset: stack.offset(),
-        info: describe(&stack, &h, &slabs),
-        slabs,
-        steps,
-        boundary_nmi,
-        boundary_gain,
-        information,
-        entropy: top.entropy,
-        nmi_curve,
-        gain_curve: top.gain_curve().to_vec(),
-        comparison,
-    })
-}
-
-/// The NMI of the two slabs at each boundary of `slabs` (one pass over the stack).
-pub fn slab_nmi(stack: &SliceStack, slabs: &[Slab], monitor: &Monitor) -> Result<Vec<f64>> {
-    consecutive_nmi(stack, &Columns::new(stack), slabs, monitor)
-}
-
-/// ΔI of each boundary of `slabs`: the information lost by merging the two slabs there, bits.
-pub fn boundary_gains(histograms: &[u64], bins: usize, slabs: &[Slab]) -> Vec<f64> {
-    let gains = Gains::new(histograms, bins);
-    let total = gains.total();
-    slabs
-        .windows(2)
-        .map(|w| {
-            let lost = gains.scaled(w[0].0, w[1].1)
-                - gains.scaled(w[0].0, w[0].1)
-                - gains.scaled(w[1].0, w[1].1);
-            if total > 0.0 {
-                (lost / total).max(0.0)
-            } else {
-                0.0
-            }
-        })
-        .collect()
+    let scope = params.scope(Some(stack.slices()));
+    let histories = Histories::of_stack(stack, scope, monitor)?;
+    let position = histories.position(params.method, params.stop)?;
+    Partition::new(&histories, params.method, position, monitor)
 }
 
 /// A label volume: the index of the slab each voxel lies in (u8, or u16 above 255 slabs), with

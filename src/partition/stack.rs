@@ -5,35 +5,23 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::geometry::{canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
+use crate::view::lattice::{Lattice, SamplingParams};
 use crate::volume::Volume;
-use crate::volume::sampling::{Interpolator, Lattice, canonical, coordinate_axis, normalize};
+use crate::volume::interpolate::Interpolator;
 
 /// The symbol of a sample that does not count: outside the volume, missing, or background.
 pub const MISSING: u8 = u8::MAX;
 
 /// How to cut a volume into slices.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct StackParams {
-    /// Quantization bins (2 to 255).
-    pub bins: usize,
+    /// Bins, and for an oblique axis the lattice's spacings (the ray spacing between a slice's
+    /// pixels, the sample spacing between slices): the view search's.
+    pub sampling: SamplingParams,
     /// Voxels at or below this value are left out of every histogram.
     pub background: Option<f32>,
-    /// Ray spacing of an oblique lattice, mm (default: the smallest voxel spacing).
-    pub ray_spacing: Option<f64>,
-    /// Distance between oblique slices, mm (default: the smallest voxel spacing).
-    pub sample_spacing: Option<f64>,
-}
-
-impl Default for StackParams {
-    fn default() -> Self {
-        Self {
-            bins: 32,
-            background: None,
-            ray_spacing: None,
-            sample_spacing: None,
-        }
-    }
 }
 
 /// One pixel's column: symbols for slices `first .. first + len`, stored from `offset`.
@@ -78,11 +66,10 @@ impl SliceStack {
         params: &StackParams,
         monitor: &Monitor,
     ) -> Result<Self> {
-        let d =
-            canonical(normalize(axis).ok_or_else(|| {
-                Error::InvalidParameter(format!("axis {axis:?} has no direction"))
-            })?);
-        let q = volume.quantizer(params.bins)?;
+        let d = canonical(normalize(axis).ok_or_else(|| {
+            Error::invalid("axis", format!("{axis:?}"), "a direction with a length")
+        })?);
+        let q = volume.quantizer(params.sampling.bins)?;
         let keep = |v: f32| -> u8 {
             match params.background {
                 Some(t) if v <= t => MISSING,
@@ -90,7 +77,7 @@ impl SliceStack {
             }
         };
         let stack = match coordinate_axis(d) {
-            Some(m) => Self::along_coordinate(volume, m, params.bins, &keep, monitor)?,
+            Some(m) => Self::along_coordinate(volume, m, params.sampling.bins, &keep, monitor)?,
             None => Self::along_lattice(volume, d, params, &keep, monitor)?,
         };
         stack.with_sums(volume, d, params, monitor)
@@ -110,7 +97,7 @@ impl SliceStack {
         let pixels = dims[a] * dims[b];
         let voxels = volume.voxels();
         let mut symbols = vec![MISSING; pixels * n];
-        monitor.start(pixels.div_ceil(4096) as u64);
+        monitor.start("slicing", pixels.div_ceil(4096) as u64);
         symbols
             .par_chunks_mut(4096 * n)
             .enumerate()
@@ -159,7 +146,7 @@ impl SliceStack {
         let slices = (k_last - k_first + 1).max(0) as usize;
         let it = Interpolator::new(volume);
         let rows: Vec<i64> = (j0..=j1).collect();
-        monitor.start(rows.len() as u64);
+        monitor.start("slicing", rows.len() as u64);
         let per_row = rows
             .par_iter()
             .map(|&j| {
@@ -192,7 +179,7 @@ impl SliceStack {
         }
         Ok(Self {
             axis: d,
-            bins: params.bins,
+            bins: params.sampling.bins,
             slices,
             thickness: lattice.sample_spacing,
             offset: k_first as f64 * lattice.sample_spacing,
@@ -234,8 +221,10 @@ impl SliceStack {
         let n = slices.len();
         let pixels = slices.first().map_or(0, Vec::len);
         if n == 0 || pixels == 0 || slices.iter().any(|s| s.len() != pixels) {
-            return Err(Error::InvalidParameter(
-                "slices must be non-empty and of one size".into(),
+            return Err(Error::invalid(
+                "slices",
+                format!("{n} of {pixels} pixels"),
+                "at least one, all of one size",
             ));
         }
         if slices
@@ -243,9 +232,11 @@ impl SliceStack {
             .flatten()
             .any(|&s| s != MISSING && usize::from(s) >= bins)
         {
-            return Err(Error::InvalidParameter(format!(
-                "a symbol is not below {bins} bins"
-            )));
+            return Err(Error::invalid(
+                "symbols",
+                "out of range",
+                format!("below {bins} bins"),
+            ));
         }
         let symbols = (0..pixels)
             .flat_map(|p| slices.iter().map(move |s| s[p]))
@@ -428,15 +419,8 @@ fn lattice_sums(
 
 /// The lattice of an oblique stack.
 fn oblique_lattice(volume: &Volume, d: [f64; 3], params: &StackParams) -> Result<Lattice> {
-    let s = crate::volume::sampling::min_spacing(volume.spacing());
-    Lattice::new(
-        volume.dims(),
-        volume.spacing(),
-        d,
-        params.ray_spacing.unwrap_or(s),
-        params.sample_spacing.unwrap_or(s),
-        [0.0; 3],
-    )
+    let (x, y) = params.sampling.spacings(volume.spacing())?;
+    Lattice::new(volume.dims(), volume.spacing(), d, x, y, [0.0; 3])
 }
 
 #[cfg(test)]
@@ -460,7 +444,10 @@ mod tests {
                 &v,
                 axis,
                 &StackParams {
-                    bins: 60,
+                    sampling: SamplingParams {
+                        bins: 60,
+                        ..SamplingParams::default()
+                    },
                     ..StackParams::default()
                 },
                 &Monitor::none(),

@@ -63,19 +63,37 @@ impl Gains {
         scaled_entropy(hi.iter().zip(lo).map(|(h, l)| h - l))
     }
 
-    /// Counted samples of the whole stack.
-    pub(crate) fn total(&self) -> f64 {
-        self.total
+    /// `F / v_T`: a difference of scaled entropies as bits of the whole stack (0 when the stack
+    /// counts no sample; never negative, which only rounding could make it).
+    pub(crate) fn bits(&self, f: f64) -> f64 {
+        if self.total > 0.0 {
+            (f / self.total).max(0.0)
+        } else {
+            0.0
+        }
     }
 
-    /// `ΔI` of every cut strictly inside `[a, b)`: `(F(a,b) - F(a,c) - F(c,b)) / v_T`.
+    /// `ΔI` of the cut at `c` of slab `[a, b)` (eq. 6), which is also the information lost by
+    /// merging `[a, c)` and `[c, b)`: `(F(a,b) - F(a,c) - F(c,b)) / v_T`.
+    pub(crate) fn merge_loss(&self, a: usize, c: usize, b: usize) -> f64 {
+        self.bits(self.scaled(a, b) - self.scaled(a, c) - self.scaled(c, b))
+    }
+
+    /// `I(slab; intensity)` of a partition of the whole stack: `(F(all) - Σ F(slab)) / v_T`.
+    pub(crate) fn information(&self, slabs: &[Slab]) -> f64 {
+        let slices = self.prefix.len() / self.bins - 1;
+        let parts: f64 = slabs.iter().map(|&(a, b)| self.scaled(a, b)).sum();
+        self.bits(self.scaled(0, slices) - parts)
+    }
+
+    /// `ΔI` of every cut strictly inside `[a, b)`.
     fn curve(&self, a: usize, b: usize) -> Vec<f64> {
         if self.total == 0.0 {
             return vec![0.0; b.saturating_sub(a + 1)];
         }
         let whole = self.scaled(a, b);
         (a + 1..b)
-            .map(|c| ((whole - self.scaled(a, c) - self.scaled(c, b)) / self.total).max(0.0))
+            .map(|c| self.bits(whole - self.scaled(a, c) - self.scaled(c, b)))
             .collect()
     }
 }

@@ -2,7 +2,7 @@
 //! perspective, with the axis pointing up in the image so the slabs stack vertically.
 
 use crate::error::Result;
-use crate::volume::sampling::{cross, dot, frame, normalize};
+use crate::geometry::{cross, dot, frame, normalize};
 
 /// Vertical field of view of the perspective camera, degrees.
 const FOV_DEGREES: f64 = 30.0;

@@ -19,9 +19,10 @@ pub use layout::{Gap, Layout, Placement, Stack};
 pub use transfer::{Colormap, HISTOGRAM_BINS, Look, Preset, Transfer};
 
 use crate::error::{Error, Result};
+use crate::geometry::{dot, min_spacing};
 use crate::progress::Monitor;
 use crate::volume::Volume;
-use crate::volume::sampling::{Interpolator, dot, min_spacing};
+use crate::volume::interpolate::Interpolator;
 
 /// How samples become pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -112,7 +113,7 @@ impl Image {
     pub fn png(&self) -> Result<Vec<u8>> {
         self.pixmap
             .encode_png()
-            .map_err(|e| Error::InvalidParameter(format!("PNG encoding failed: {e}")))
+            .map_err(|e| Error::Encode(format!("PNG: {e}")))
     }
 }
 
@@ -225,15 +226,14 @@ impl<'a> Renderer<'a> {
     ) -> Result<Image> {
         let (w, h) = (params.width, params.height);
         if w == 0 || h == 0 || u64::from(w) * u64::from(h) > MAX_PIXELS {
-            return Err(Error::InvalidParameter(format!(
-                "image size {w}x{h} is not between 1x1 and {MAX_PIXELS} pixels"
-            )));
+            return Err(Error::invalid(
+                "size",
+                format!("{w}x{h}"),
+                format!("between 1x1 and {MAX_PIXELS} pixels"),
+            ));
         }
         if !(params.step.is_finite() && params.step > 0.0) {
-            return Err(Error::InvalidParameter(format!(
-                "step {} must be positive",
-                params.step
-            )));
+            return Err(Error::invalid("step", params.step, "a positive number"));
         }
         let spacing = self.volume.spacing();
         let reference = min_spacing(spacing);
@@ -269,8 +269,8 @@ impl<'a> Renderer<'a> {
             step,
         };
         let mut pixmap = Pixmap::new(w, h)
-            .ok_or_else(|| Error::InvalidParameter(format!("image size {w}x{h}")))?;
-        monitor.start(u64::from(h));
+            .ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "an image that fits"))?;
+        monitor.start("rendering", u64::from(h));
         let bg = params.background.map(|c| f32::from(c) / 255.0);
         pixmap
             .data_mut()

@@ -4,7 +4,7 @@
 use tiny_skia::{Paint, PathBuilder, Rect, Stroke, Transform};
 
 use super::{Image, Layout, RenderParams};
-use crate::volume::sampling::{cross, dot, normalize};
+use crate::geometry::{cross, dot, normalize};
 
 /// Outline colour, and the highlighted slab's.
 const LINE: [u8; 4] = [90, 200, 230, 200];

@@ -193,9 +193,7 @@ impl Transfer {
             window: custom,
         } = look;
         if !(step.is_finite() && step > 0.0 && reference > 0.0) {
-            return Err(Error::InvalidParameter(format!(
-                "sampling step {step} must be positive"
-            )));
+            return Err(Error::invalid("step", step, "a positive number"));
         }
         let p = percentiles(s, h, &[0.01, 0.05, 0.2, 0.6, 0.98, 0.995]);
         let (p1, p5, p20, p60, p98, p995) = (p[0], p[1], p[2], p[3], p[4], p[5]);

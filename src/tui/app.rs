@@ -1,41 +1,20 @@
-//! The TUI's state and its one mutator, [`App::update`]: actions in, effects out, no I/O.
+//! The TUI's state and its one mutator, [`App::update`]: actions in, effects out, no I/O. The app
+//! dispatches: each pane owns its state, and the app brings the panes up to date when the
+//! partition changes.
 
 use std::sync::Arc;
 
-use ratatui_image::protocol::Protocol;
-use slabscope::Volume;
-use slabscope::partition::{Method, StackParams};
-use slabscope::render::{CameraParams, Colormap, Gap, Mode, Preset};
-use slabscope::view::ViewSearch;
+use slabscope::render::{Colormap, Gap, Mode, Preset};
+use slabscope::{AnalysisParams, Progress, Volume};
 
-use super::analysis::Analysis;
-
-/// Something computed in the background: not asked for yet, under way, done, or failed.
-pub enum Load<T> {
-    /// Not asked for.
-    Idle,
-    /// Under way, with the fraction done.
-    Running(f64),
-    /// Done.
-    Ready(T),
-    /// Failed, with the message.
-    Failed(String),
-}
-
-impl<T> Load<T> {
-    /// The value, when ready.
-    pub fn ready(&self) -> Option<&T> {
-        match self {
-            Self::Ready(v) => Some(v),
-            _ => None,
-        }
-    }
-
-    /// Whether it is under way.
-    pub fn running(&self) -> bool {
-        matches!(self, Self::Running(_))
-    }
-}
+use super::event::{Action, Ask, Effect, ExportRequest, Job, JobMsg, Load, RenderRequest};
+use super::panes::curves::{Curves, CurvesPane};
+use super::panes::preview::PreviewPane;
+use super::panes::slabs::{SlabTable, SlabsPane};
+use super::panes::status::{Prompt, StatusBar};
+use super::panes::views::ViewsPane;
+use super::partitioning::Partitioning;
+use super::theme::Theme;
 
 /// The panes that take the keyboard's focus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,300 +38,66 @@ impl Pane {
     }
 }
 
-/// What a prompt asks for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Ask {
-    /// An axis: x, y, z or DX,DY,DZ.
-    Axis,
-    /// A threshold (empty clears it).
-    Threshold,
-}
-
-/// A line of text being typed.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Prompt {
-    /// What it asks for.
-    pub ask: Ask,
-    /// What has been typed.
-    pub text: String,
-}
-
-/// Background work that can be running.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Job {
-    /// Loading the volume.
-    Load,
-    /// The view search.
-    Views,
-    /// The histories along an axis.
-    Analysis,
-    /// A render.
-    Render,
-}
-
-/// A job's message back to the UI.
-pub enum JobMsg {
-    /// Progress of a job, 0 to 1.
-    Progress(Job, f64),
-    /// The volume loaded (with the loader's notes), or why not.
-    Loaded(Result<(Arc<Volume>, Vec<String>), String>),
-    /// The view search's result.
-    Views(Result<Box<ViewSearch>, String>),
-    /// The histories along the axis of request `generation`.
-    Analysis(u64, Result<Arc<Analysis>, String>),
-    /// A render of request `generation`.
-    Rendered(u64, Result<Box<Protocol>, String>),
-    /// An export finished: what was written, or why not.
-    Exported(Result<String, String>),
-}
-
-/// Everything the user can do, and what jobs report.
-pub enum Action {
-    /// Leave.
-    Quit,
-    /// Show or hide the key help.
-    ToggleHelp,
-    /// Move the focus to the next or previous pane.
-    Focus(isize),
-    /// Move the cursor of the focused pane.
-    Move(isize),
-    /// Page the cursor of the focused pane.
-    Page(isize),
-    /// Act on the cursor (partition along the selected axis).
-    Select,
-    /// Take `n` more steps of the history (negative: back).
-    Step(isize),
-    /// Go to the start or the end of the history.
-    StepTo(bool),
-    /// One slab more or fewer.
-    Slabs(isize),
-    /// Switch method: top-down, bottom-up, optimal.
-    CycleMethod,
-    /// Start typing an axis or a threshold.
-    Ask(Ask),
-    /// A typed character for the prompt.
-    Type(char),
-    /// Delete the prompt's last character.
-    Erase,
-    /// Accept the prompt.
-    Submit,
-    /// Close the prompt or help, or cancel running work.
-    Escape,
-    /// Orbit the camera: degrees of azimuth and elevation.
-    Orbit(f64, f64),
-    /// Zoom by a factor.
-    Zoom(f64),
-    /// Change the spread by this much.
-    Spread(f64),
-    /// DVR or MIP.
-    ToggleMode,
-    /// Next transfer function.
-    CycleTransfer,
-    /// Next colour map.
-    CycleColormap,
-    /// Uniform or similarity gaps.
-    ToggleGap,
-    /// Show the selected slab alone, or all.
-    ToggleSolo,
-    /// Perspective or orthographic.
-    TogglePerspective,
-    /// Write the view (PNG), the analysis (JSON) and the labels (NRRD).
-    Export,
-    /// The preview pane's size in cells changed.
-    PreviewArea(u16, u16),
-    /// A job's message.
-    Job(JobMsg),
-}
-
-/// What to render, at which size.
-#[derive(Clone, Debug)]
-pub struct RenderRequest {
-    /// Request number; only the newest result is shown.
-    pub generation: u64,
-    /// The slabs (empty: the whole volume, seen around `axis`).
-    pub slabs: Vec<(usize, usize)>,
-    /// The axis.
-    pub axis: [f64; 3],
-    /// NMI at each boundary, where known.
-    pub nmi: Option<Vec<f64>>,
-    /// The slice stack, for the slabs' geometry and unknown NMIs.
-    pub stack: Option<Arc<slabscope::partition::SliceStack>>,
-    /// Camera and look.
-    pub camera: CameraParams,
-    /// DVR or MIP.
-    pub mode: Mode,
-    /// Transfer function.
-    pub preset: Preset,
-    /// Colour map.
-    pub colormap: Colormap,
-    /// Gaps.
-    pub gap: Gap,
-    /// Spread.
-    pub spread: f64,
-    /// The selected slab.
-    pub highlight: Option<usize>,
-    /// Show it alone.
-    pub solo: bool,
-    /// Preview size in cells.
-    pub cells: (u16, u16),
-}
-
-/// What the event loop does on the app's behalf.
-#[derive(Clone, Debug)]
-pub enum Effect {
-    /// Load the volume.
-    Load,
-    /// Run the view search.
-    SearchViews,
-    /// Compute the histories along `axis` as request `generation`.
-    Analyze(u64, [f64; 3], StackParams),
-    /// Render.
-    Render(RenderRequest),
-    /// Cancel running jobs.
-    Cancel,
-    /// Write exports for the current partition.
-    Export,
-    /// Leave.
-    Quit,
-}
-
-/// The look of the exploded view.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Look {
-    /// Camera.
-    pub camera: CameraParams,
-    /// Spread.
-    pub spread: f64,
-    /// Gaps.
-    pub gap: Gap,
-    /// DVR or MIP.
-    pub mode: Mode,
-    /// Transfer function.
-    pub preset: Preset,
-    /// Colour map.
-    pub colormap: Colormap,
-    /// Selected slab alone.
-    pub solo: bool,
-}
-
-impl Default for Look {
-    fn default() -> Self {
-        Self {
-            camera: CameraParams::default(),
-            spread: 0.3,
-            gap: Gap::Similarity,
-            mode: Mode::Dvr,
-            preset: Preset::Auto,
-            colormap: Colormap::Grey,
-            solo: false,
-        }
-    }
-}
-
 /// The whole state of the TUI.
 pub struct App {
     /// The volume's name.
     pub name: String,
+    /// How to analyse it.
+    pub params: AnalysisParams,
+    /// Colours.
+    pub theme: Theme,
     /// The volume.
     pub volume: Load<Arc<Volume>>,
-    /// The view search.
-    pub views: Load<ViewSearch>,
-    /// The histories along the current axis.
-    pub analysis: Load<Arc<Analysis>>,
-    /// The axis being partitioned.
-    pub axis: Option<[f64; 3]>,
-    /// Partition method.
-    pub method: Method,
-    /// Position in the method's history.
-    pub position: usize,
-    /// Stop by threshold instead of by position.
-    pub threshold: Option<f64>,
-    /// Slice options.
-    pub stack: StackParams,
+    /// The partition being stepped through.
+    pub part: Partitioning,
     /// The focused pane.
     pub focus: Pane,
-    /// Selected row of the viewpoint list.
-    pub view_row: usize,
-    /// Selected slab.
-    pub slab_row: usize,
-    /// Slice under the curve cursor.
-    pub cursor: usize,
-    /// The look of the preview.
-    pub look: Look,
-    /// The preview image.
-    pub preview: Load<Box<Protocol>>,
-    /// Preview size in cells.
-    pub preview_cells: (u16, u16),
-    /// A prompt being typed.
-    pub prompt: Option<Prompt>,
     /// Whether the help overlay shows.
     pub help: bool,
-    /// The last message for the user.
-    pub message: Option<String>,
     /// Whether to leave.
     pub quit: bool,
-    analysis_generation: u64,
-    render_generation: u64,
+    /// The viewpoints.
+    pub views: ViewsPane,
+    /// The slabs.
+    pub slabs: SlabsPane,
+    /// The curves.
+    pub curves: CurvesPane,
+    /// The exploded view.
+    pub preview: PreviewPane,
+    /// The status lines.
+    pub status: StatusBar,
+    /// An export under way, with its progress.
+    export: Load<()>,
 }
 
 impl App {
     /// A fresh app for the volume called `name`; the first effects load it.
-    pub fn new(name: String) -> (Self, Vec<Effect>) {
+    pub fn new(name: String, params: AnalysisParams, theme: Theme) -> (Self, Vec<Effect>) {
         let app = Self {
+            views: ViewsPane::new(&name, theme),
+            slabs: SlabsPane::new(theme),
+            curves: CurvesPane::new(theme),
+            preview: PreviewPane::new(theme),
+            status: StatusBar::new(&params, theme),
+            part: Partitioning::new(params.method, params.stop, params.stack()),
             name,
-            volume: Load::Running(0.0),
-            views: Load::Idle,
-            analysis: Load::Idle,
-            axis: None,
-            method: Method::TopDown,
-            position: 3,
-            threshold: None,
-            stack: StackParams::default(),
+            params,
+            theme,
+            volume: Load::started("loading"),
             focus: Pane::Views,
-            view_row: 0,
-            slab_row: 0,
-            cursor: 0,
-            look: Look::default(),
-            preview: Load::Idle,
-            preview_cells: (0, 0),
-            prompt: None,
             help: false,
-            message: None,
             quit: false,
-            analysis_generation: 0,
-            render_generation: 0,
+            export: Load::Idle,
         };
         (app, vec![Effect::Load])
     }
 
-    /// The slabs shown now, when the analysis is ready.
-    pub fn slabs(&self) -> Option<Vec<(usize, usize)>> {
-        self.analysis
-            .ready()
-            .map(|a| a.slabs(self.method, self.position))
-    }
-
     /// Applies `action`; returns what the event loop must do.
     pub fn update(&mut self, action: Action) -> Vec<Effect> {
-        if let Some(prompt) = &mut self.prompt {
-            match action {
-                Action::Type(c) => {
-                    prompt.text.push(c);
-                    return vec![];
-                }
-                Action::Erase => {
-                    prompt.text.pop();
-                    return vec![];
-                }
-                Action::Submit => return self.submit(),
-                Action::Escape => {
-                    self.prompt = None;
-                    return vec![];
-                }
-                Action::Job(_) | Action::PreviewArea(..) | Action::Quit => {}
-                _ => return vec![],
-            }
-        }
+        let action = match self.on_prompt(action) {
+            Ok(effects) => return effects,
+            Err(action) => action,
+        };
         match action {
             Action::Quit => {
                 self.quit = true;
@@ -365,63 +110,90 @@ impl App {
             Action::Escape => self.escape(),
             Action::Focus(by) => {
                 self.focus = self.focus.step(by);
+                self.sync_focus();
                 vec![]
             }
             Action::Move(by) => self.move_cursor(by),
             Action::Page(by) => self.move_cursor(by * 10),
             Action::Select => self.select(),
-            Action::Step(by) => self.step(by),
-            Action::StepTo(end) => self.step_to(end),
-            Action::Slabs(by) => self.change_slabs(by),
-            Action::CycleMethod => self.cycle_method(),
+            Action::Step(by) => match self.part.step(by) {
+                Ok(()) => self.after_step(),
+                Err(message) => {
+                    self.status.message = Some(message.into());
+                    vec![]
+                }
+            },
+            Action::StepTo(end) => {
+                self.part.step_to(end);
+                self.after_step()
+            }
+            Action::Slabs(by) => {
+                self.part.change_slabs(by);
+                self.after_step()
+            }
+            Action::CycleMethod => {
+                self.part.cycle_method();
+                self.after_step()
+            }
             Action::Ask(ask) => {
-                self.prompt = Some(Prompt {
+                self.status.prompt = Some(Prompt {
                     ask,
                     text: String::new(),
                 });
                 vec![]
             }
             Action::Type(_) | Action::Erase | Action::Submit => vec![],
-            Action::Orbit(az, el) => self.restyle(|l| {
-                l.camera.azimuth = (l.camera.azimuth + az).rem_euclid(360.0);
-                l.camera.elevation = (l.camera.elevation + el).clamp(-85.0, 85.0);
-            }),
-            Action::Zoom(f) => {
-                self.restyle(|l| l.camera.zoom = (l.camera.zoom * f).clamp(0.25, 8.0))
-            }
-            Action::Spread(d) => self.restyle(|l| l.spread = (l.spread + d).clamp(0.0, 2.0)),
-            Action::ToggleMode => self.restyle(|l| {
-                l.mode = if l.mode == Mode::Dvr {
-                    Mode::Mip
-                } else {
-                    Mode::Dvr
-                }
-            }),
-            Action::CycleTransfer => self.restyle(|l| l.preset = next(&Preset::ALL, l.preset)),
-            Action::CycleColormap => {
-                self.restyle(|l| l.colormap = next(&Colormap::ALL, l.colormap))
-            }
-            Action::ToggleGap => self.restyle(|l| {
-                l.gap = if l.gap == Gap::Uniform {
-                    Gap::Similarity
-                } else {
-                    Gap::Uniform
-                }
-            }),
-            Action::ToggleSolo => self.restyle(|l| l.solo = !l.solo),
-            Action::TogglePerspective => {
-                self.restyle(|l| l.camera.perspective = !l.camera.perspective)
-            }
             Action::Export => self.export(),
             Action::PreviewArea(w, h) => {
-                if (w, h) == self.preview_cells {
+                if (w, h) == self.preview.cells {
                     return vec![];
                 }
-                self.preview_cells = (w, h);
+                self.preview.cells = (w, h);
                 self.render()
             }
             Action::Job(msg) => self.on_job(msg),
+            look => self.restyle(&look),
         }
+    }
+
+    /// While a prompt is open, keys type into it: `Ok` with the effects when the prompt took the
+    /// action, `Err` with the action when it goes on (jobs, resizes, quitting).
+    fn on_prompt(&mut self, action: Action) -> Result<Vec<Effect>, Action> {
+        let Some(prompt) = self.status.prompt.as_mut() else {
+            return Err(action);
+        };
+        match action {
+            Action::Type(c) => prompt.text.push(c),
+            Action::Erase => {
+                prompt.text.pop();
+            }
+            Action::Escape => self.status.prompt = None,
+            Action::Submit => return Ok(self.submit()),
+            Action::Job(_) | Action::PreviewArea(..) | Action::Quit => return Err(action),
+            _ => {}
+        }
+        Ok(vec![])
+    }
+
+    /// Changes the look of the preview, which re-renders.
+    fn restyle(&mut self, action: &Action) -> Vec<Effect> {
+        let l = &mut self.preview.look;
+        match *action {
+            Action::Orbit(az, el) => {
+                l.camera.azimuth = (l.camera.azimuth + az).rem_euclid(360.0);
+                l.camera.elevation = (l.camera.elevation + el).clamp(-85.0, 85.0);
+            }
+            Action::Zoom(f) => l.camera.zoom = (l.camera.zoom * f).clamp(0.25, 8.0),
+            Action::Spread(d) => l.spread = (l.spread + d).clamp(0.0, 2.0),
+            Action::ToggleMode => l.mode = next(&[Mode::Dvr, Mode::Mip], l.mode),
+            Action::CycleTransfer => l.preset = next(&Preset::ALL, l.preset),
+            Action::CycleColormap => l.colormap = next(&Colormap::ALL, l.colormap),
+            Action::ToggleGap => l.gap = next(&[Gap::Uniform, Gap::Similarity], l.gap),
+            Action::ToggleSolo => l.solo = !l.solo,
+            Action::TogglePerspective => l.camera.perspective = !l.camera.perspective,
+            _ => return vec![],
+        }
+        self.render()
     }
 
     fn escape(&mut self) -> Vec<Effect> {
@@ -429,18 +201,23 @@ impl App {
             self.help = false;
             return vec![];
         }
-        let busy = self.views.running() || self.analysis.running() || self.preview.running();
-        if busy {
-            if self.views.running() {
-                self.views = Load::Failed("cancelled".into());
-            }
-            if self.analysis.running() {
-                self.analysis = Load::Failed("cancelled".into());
-            }
-            self.message = Some("cancelled".into());
-            return vec![Effect::Cancel];
+        let busy = self.views.views.running()
+            || self.part.histories.running()
+            || self.preview.image.running()
+            || self.export.running();
+        if !busy {
+            return vec![];
         }
-        vec![]
+        if self.views.views.running() {
+            self.views.views = Load::Failed("cancelled".into());
+        }
+        if self.part.histories.running() {
+            self.part.histories = Load::Failed("cancelled".into());
+        }
+        self.export = Load::Idle;
+        self.status.message = Some("cancelled".into());
+        self.sync();
+        vec![Effect::Cancel]
     }
 
     fn move_cursor(&mut self, by: isize) -> Vec<Effect> {
@@ -449,168 +226,98 @@ impl App {
         };
         match self.focus {
             Pane::Views => {
-                let len = self.views.ready().map_or(0, |v| v.views.len());
-                self.view_row = shift(self.view_row, len);
+                self.views.row = shift(self.views.row, self.views.len());
                 vec![]
             }
             Pane::Slabs => {
-                let len = self.slabs().map_or(0, |s| s.len());
-                self.slab_row = shift(self.slab_row, len);
+                self.slabs.row = shift(self.slabs.row, self.slabs.len());
                 self.render()
             }
             Pane::Curves => {
-                let len = self.analysis.ready().map_or(0, |a| a.slices());
-                self.cursor = shift(self.cursor, len);
+                self.curves.cursor = shift(self.curves.cursor, self.curves.len());
                 vec![]
             }
-            Pane::Preview => self.update(Action::Orbit(by as f64 * 15.0, 0.0)),
+            Pane::Preview => self.restyle(&Action::Orbit(by as f64 * 15.0, 0.0)),
         }
     }
 
     fn select(&mut self) -> Vec<Effect> {
-        if self.focus != Pane::Views {
-            return vec![];
-        }
-        match self.views.ready().and_then(|v| v.views.get(self.view_row)) {
-            Some(view) => {
-                let axis = view.axis;
-                self.analyze(axis)
-            }
-            None => vec![],
+        match (self.focus, self.views.selected()) {
+            (Pane::Views, Some(axis)) => self.analyze(axis),
+            _ => vec![],
         }
     }
 
     /// Starts the histories along `axis`.
     fn analyze(&mut self, axis: [f64; 3]) -> Vec<Effect> {
-        self.axis = Some(axis);
-        self.analysis_generation += 1;
-        self.analysis = Load::Running(0.0);
-        self.cursor = 0;
-        self.slab_row = 0;
-        vec![Effect::Analyze(
-            self.analysis_generation,
-            axis,
-            self.stack.clone(),
-        )]
+        let effect = self.part.start(axis);
+        self.curves.cursor = 0;
+        self.slabs.row = 0;
+        self.sync();
+        vec![effect]
     }
 
-    fn step(&mut self, by: isize) -> Vec<Effect> {
-        let Some(a) = self.analysis.ready() else {
-            return vec![];
-        };
-        let last = a.last(self.method) as isize;
-        let position = (self.position as isize + by).clamp(0, last) as usize;
-        if position == self.position {
-            self.message = Some(
-                if by > 0 {
-                    "at the end of the history"
-                } else {
-                    "at the start of the history"
-                }
-                .into(),
-            );
+    /// After the position, the method or the slab count changed: new panes, a new picture.
+    fn after_step(&mut self) -> Vec<Effect> {
+        if self.part.ready().is_none() {
             return vec![];
         }
-        self.threshold = None;
-        self.set_position(position)
-    }
-
-    fn step_to(&mut self, end: bool) -> Vec<Effect> {
-        let Some(a) = self.analysis.ready() else {
-            return vec![];
-        };
-        let position = if end { a.last(self.method) } else { 0 };
-        self.threshold = None;
-        self.set_position(position)
-    }
-
-    fn set_position(&mut self, position: usize) -> Vec<Effect> {
-        self.position = position;
-        self.message = None;
-        let k = self.slabs().map_or(1, |s| s.len());
-        self.slab_row = self.slab_row.min(k - 1);
+        self.status.message = None;
+        self.sync();
         self.render()
     }
 
-    fn change_slabs(&mut self, by: isize) -> Vec<Effect> {
-        let Some(a) = self.analysis.ready() else {
-            return vec![];
-        };
-        let k = a.slab_count(self.method, self.position) as isize + by;
-        let position = a.position_for(self.method, k.max(1) as usize);
-        self.threshold = None;
-        self.set_position(position)
-    }
-
-    fn cycle_method(&mut self) -> Vec<Effect> {
-        let k = self
-            .analysis
-            .ready()
-            .map(|a| a.slab_count(self.method, self.position));
-        self.method = match self.method {
-            Method::TopDown => Method::BottomUp,
-            Method::BottomUp => Method::Optimal,
-            Method::Optimal => Method::TopDown,
-        };
-        let Some(a) = self.analysis.ready() else {
-            return vec![];
-        };
-        let position = match self.threshold {
-            Some(t) => a.position_for_threshold(self.method, t),
-            None => a.position_for(self.method, k.unwrap_or(4)),
-        };
-        self.set_position(position)
-    }
-
     fn submit(&mut self) -> Vec<Effect> {
-        let Some(prompt) = self.prompt.take() else {
+        let Some(prompt) = self.status.prompt.take() else {
             return vec![];
         };
         let text = prompt.text.trim();
         match prompt.ask {
             Ask::Axis => {
-                if let Some(axis) = parse_axis(text) {
-                    self.analyze(axis)
+                if let Ok(axis) = text.parse::<slabscope::Axis>() {
+                    self.analyze(axis.direction())
                 } else {
-                    self.message = Some(format!("{text:?} is not x, y, z or DX,DY,DZ"));
+                    self.status.message = Some(format!("{text:?} is not x, y, z or DX,DY,DZ"));
                     vec![]
                 }
             }
             Ask::Threshold if text.is_empty() => {
-                self.threshold = None;
-                self.message = Some("threshold cleared".into());
+                self.part.set_threshold(None);
+                self.status.message = Some("threshold cleared".into());
+                self.sync();
                 vec![]
             }
             Ask::Threshold => match text.parse::<f64>() {
                 Ok(t) if t.is_finite() => {
-                    self.threshold = Some(t);
-                    match self.analysis.ready() {
-                        Some(a) => {
-                            let position = a.position_for_threshold(self.method, t);
-                            self.set_position(position)
-                        }
-                        None => vec![],
-                    }
+                    self.part.set_threshold(Some(t));
+                    self.after_step()
                 }
                 _ => {
-                    self.message = Some(format!("{text:?} is not a number"));
+                    self.status.message = Some(format!("{text:?} is not a number"));
                     vec![]
                 }
             },
         }
     }
 
-    fn restyle(&mut self, change: impl FnOnce(&mut Look)) -> Vec<Effect> {
-        change(&mut self.look);
-        self.render()
-    }
-
     fn export(&mut self) -> Vec<Effect> {
-        if self.analysis.ready().is_none() {
-            self.message = Some("nothing to export yet: the partition is not ready".into());
+        let Some(histories) = self.part.ready() else {
+            self.status.message = Some("nothing to export yet: the partition is not ready".into());
             return vec![];
-        }
-        vec![Effect::Export]
+        };
+        let request = ExportRequest {
+            name: self.name.clone(),
+            histories: Arc::clone(histories),
+            views: self.views.views.ready().cloned(),
+            view_params: self.params.view.clone(),
+            method: self.part.method,
+            position: self.part.position,
+            look: self.preview.look,
+            highlight: Some(self.slabs.row),
+        };
+        self.export = Load::started("exporting");
+        self.sync();
+        vec![Effect::Export(Box::new(request))]
     }
 
     /// A render of the current state, when there is somewhere to show it.
@@ -618,106 +325,85 @@ impl App {
         let Some(volume) = self.volume.ready() else {
             return vec![];
         };
-        let (w, h) = self.preview_cells;
+        let (w, h) = self.preview.cells;
         if w < 4 || h < 2 {
             return vec![];
         }
-        self.render_generation += 1;
-        let slabs = self.slabs().unwrap_or_default();
-        let nmi = self
-            .analysis
-            .ready()
-            .and_then(|a| a.known_nmi(self.method, self.position));
-        let stack = self.analysis.ready().map(|a| Arc::clone(&a.stack));
-        let axis = self.axis.unwrap_or_else(|| {
+        self.preview.generation += 1;
+        let slabs = self.part.slabs().unwrap_or_default();
+        let histories = self.part.ready();
+        let axis = self.part.axis.unwrap_or_else(|| {
             if volume.dims()[2] > 1 {
                 [0.0, 0.0, 1.0]
             } else {
                 [0.0, 1.0, 0.0]
             }
         });
-        let keep = matches!(self.preview, Load::Ready(_));
-        if !keep {
-            self.preview = Load::Running(0.0);
+        if !matches!(self.preview.image, Load::Ready(_)) {
+            self.preview.image = Load::started("rendering");
         }
-        vec![Effect::Render(RenderRequest {
-            generation: self.render_generation,
-            highlight: (!slabs.is_empty()).then_some(self.slab_row),
+        vec![Effect::Render(Box::new(RenderRequest {
+            generation: self.preview.generation,
+            highlight: (!slabs.is_empty()).then_some(self.slabs.row),
+            nmi: histories.and_then(|h| h.known_nmi(self.part.method, self.part.position)),
+            histories: histories.cloned(),
             slabs,
             axis,
-            nmi,
-            stack,
-            camera: self.look.camera,
-            mode: self.look.mode,
-            preset: self.look.preset,
-            colormap: self.look.colormap,
-            gap: self.look.gap,
-            spread: self.look.spread,
-            solo: self.look.solo,
-            cells: self.preview_cells,
-        })]
+            look: self.preview.look,
+            cells: self.preview.cells,
+        }))]
     }
 
     fn on_job(&mut self, msg: JobMsg) -> Vec<Effect> {
         match msg {
-            JobMsg::Progress(job, f) => {
-                match job {
-                    Job::Load if self.volume.running() => self.volume = Load::Running(f),
-                    Job::Views if self.views.running() => self.views = Load::Running(f),
-                    Job::Analysis if self.analysis.running() => self.analysis = Load::Running(f),
-                    _ => {}
-                }
+            JobMsg::Progress(job, p) => {
+                self.on_progress(job, p);
                 vec![]
             }
             JobMsg::Loaded(Ok((volume, notes))) => {
-                self.message = notes.first().cloned();
+                self.status.message = notes.first().cloned();
                 self.volume = Load::Ready(volume);
-                self.views = Load::Running(0.0);
-                let mut effects = vec![Effect::SearchViews];
+                self.views.views = Load::started("view search");
+                let mut effects = vec![Effect::SearchViews(self.params.view.clone())];
+                if let Some(axis) = self.params.axis {
+                    effects.extend(self.analyze(axis.direction()));
+                }
+                self.sync();
                 effects.extend(self.render());
                 effects
             }
             JobMsg::Loaded(Err(e)) => {
-                self.message = Some(format!("{e} (q quits)"));
+                self.status.message = Some(format!("{e} (q quits)"));
+                self.views.idle = format!("cannot load the volume: {e}");
                 self.volume = Load::Failed(e);
                 vec![]
             }
             JobMsg::Views(Ok(views)) => {
                 let best = views.best().axis;
-                self.views = Load::Ready(*views);
-                self.view_row = 0;
-                if self.axis.is_none() {
-                    self.analyze(best)
-                } else {
-                    vec![]
-                }
+                self.views.views = Load::Ready(*views);
+                self.views.row = 0;
+                let effects = match self.part.axis {
+                    None => self.analyze(best),
+                    Some(_) => vec![],
+                };
+                self.sync();
+                effects
             }
             JobMsg::Views(Err(e)) => {
-                self.views = Load::Failed(e);
+                self.views.views = Load::Failed(e);
+                self.sync();
                 vec![]
             }
             JobMsg::Analysis(generation, result) => {
-                if generation != self.analysis_generation {
+                if !self.part.finish(generation, result) {
                     return vec![];
                 }
-                match result {
-                    Ok(a) => {
-                        let position = match self.threshold {
-                            Some(t) => a.position_for_threshold(self.method, t),
-                            None => a.position_for(self.method, 4),
-                        };
-                        self.analysis = Load::Ready(a);
-                        self.set_position(position)
-                    }
-                    Err(e) => {
-                        self.analysis = Load::Failed(e);
-                        vec![]
-                    }
-                }
+                self.sync();
+                self.render()
             }
             JobMsg::Rendered(generation, result) => {
-                if generation == self.render_generation {
-                    self.preview = match result {
+                if generation == self.preview.generation {
+                    self.preview.image = match result {
                         Ok(p) => Load::Ready(p),
                         Err(e) => Load::Failed(e),
                     };
@@ -725,13 +411,87 @@ impl App {
                 vec![]
             }
             JobMsg::Exported(result) => {
-                self.message = Some(match result {
+                self.export = Load::Idle;
+                self.status.message = Some(match result {
                     Ok(m) => m,
                     Err(e) => format!("export failed: {e}"),
                 });
+                self.sync();
                 vec![]
             }
         }
+    }
+
+    fn on_progress(&mut self, job: Job, p: Progress) {
+        match job {
+            Job::Load if self.volume.running() => self.volume = Load::Running(p),
+            Job::Views if self.views.views.running() => self.views.views = Load::Running(p),
+            Job::Analysis => self.part.progress(p),
+            Job::Export if self.export.running() => self.export = Load::Running(p),
+            _ => return,
+        }
+        self.sync_status();
+        if job == Job::Analysis {
+            self.sync();
+        }
+    }
+
+    /// Brings every pane up to date with the partition.
+    fn sync(&mut self) {
+        let part = &self.part;
+        match &part.histories {
+            Load::Ready(h) => {
+                let table = SlabTable::new(h, part.method, part.position);
+                let boundaries = table.info.iter().skip(1).map(|s| s.slices.0).collect();
+                self.slabs.row = self.slabs.row.min(table.info.len().saturating_sub(1));
+                self.slabs.table = Load::Ready(table);
+                self.curves.curves = Load::Ready(Curves {
+                    histories: Arc::clone(h),
+                    boundaries,
+                });
+            }
+            other => {
+                self.slabs.table = pending(other);
+                self.curves.curves = pending(other);
+            }
+        }
+        self.views.current = part.axis;
+        self.sync_status();
+        self.sync_focus();
+    }
+
+    /// The status lines: method, position, explanation and the jobs under way.
+    fn sync_status(&mut self) {
+        let s = &mut self.status;
+        s.method = self.part.method;
+        s.position = self.part.position_text();
+        s.explanation = self.part.explain();
+        s.jobs.clear();
+        for (job, load) in [
+            ("views", self.views.views.status()),
+            ("histories", self.part.histories.status()),
+            ("export", self.export.status()),
+        ] {
+            if let Load::Running(p) = load {
+                s.jobs.push((job, p));
+            }
+        }
+    }
+
+    fn sync_focus(&mut self) {
+        self.views.focused = self.focus == Pane::Views;
+        self.slabs.focused = self.focus == Pane::Slabs;
+        self.curves.focused = self.focus == Pane::Curves;
+        self.preview.focused = self.focus == Pane::Preview;
+    }
+}
+
+/// The state of something not ready, for a pane that shows its gauge or error.
+fn pending<T, U>(load: &Load<T>) -> Load<U> {
+    match load {
+        Load::Running(p) => Load::Running(*p),
+        Load::Failed(e) => Load::Failed(e.clone()),
+        Load::Idle | Load::Ready(_) => Load::Idle,
     }
 }
 
@@ -739,21 +499,4 @@ impl App {
 fn next<T: Copy + PartialEq>(all: &[T], current: T) -> T {
     let i = all.iter().position(|x| *x == current).unwrap_or(0);
     all[(i + 1) % all.len()]
-}
-
-/// `x`, `y`, `z` or `DX,DY,DZ`.
-pub fn parse_axis(text: &str) -> Option<[f64; 3]> {
-    match text {
-        "x" => Some([1.0, 0.0, 0.0]),
-        "y" => Some([0.0, 1.0, 0.0]),
-        "z" => Some([0.0, 0.0, 1.0]),
-        _ => {
-            let v: Vec<f64> = text
-                .split(',')
-                .map(|p| p.trim().parse().ok())
-                .collect::<Option<_>>()?;
-            let a = <[f64; 3]>::try_from(v).ok()?;
-            (a.iter().all(|c| c.is_finite()) && a.iter().any(|c| *c != 0.0)).then_some(a)
-        }
-    }
 }

@@ -1,6 +1,7 @@
-//! Background work for the TUI: loading, the view search and the histories each on their own
-//! thread with a shared cancellation flag, and a render worker that always takes the newest
-//! request (a newer one replaces a queued one and cancels the one in flight).
+//! Background work for the TUI: loading, the view search, the histories and exports each on their
+//! own thread with a shared cancellation flag, and a render worker that always takes the newest
+//! request (a newer one replaces a queued one and cancels the one in flight). Every effect
+//! carries the data it needs; nothing here reads the app.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -11,15 +12,14 @@ use image::{DynamicImage, RgbaImage};
 use ratatui::layout::Size;
 use ratatui_image::Resize;
 use ratatui_image::picker::Picker;
-use slabscope::partition::slab_nmi;
-use slabscope::progress::Monitor;
-use slabscope::render::{Gap, Layout, RenderParams, Renderer, Stack};
-use slabscope::view::{ViewParams, search};
-use slabscope::{LoadOptions, Volume};
+use slabscope::render::{Gap, Stack};
+use slabscope::volume::io::{NrrdEncoding, write_atomic, write_nrrd};
+use slabscope::{
+    Analysis, AnalysisReport, Error, Histories, Layout, LoadOptions, Monitor, Partition, Progress,
+    RenderParams, Renderer, Scope, Volume, label_volume, search,
+};
 
-use super::Event;
-use super::analysis::Analysis;
-use super::app::{App, Effect, Job, JobMsg, RenderRequest};
+use super::event::{Effect, Event, ExportRequest, Job, JobMsg, RenderRequest};
 
 /// The largest preview render, pixels: terminals rarely show more, and it bounds the time.
 const MAX_PREVIEW: (u32, u32) = (1280, 960);
@@ -69,8 +69,8 @@ impl Jobs {
         }
     }
 
-    /// Carries out `effect` for `app`.
-    pub fn run(&mut self, effect: Effect, app: &App) {
+    /// Carries out `effect`.
+    pub fn run(&mut self, effect: Effect) {
         match effect {
             Effect::Load => self.spawn(Job::Load, {
                 let (source, load) = (self.source.clone(), self.load.clone());
@@ -84,13 +84,13 @@ impl Jobs {
                     JobMsg::Loaded(loaded.map_err(|e| e.to_string()))
                 }
             }),
-            Effect::SearchViews => {
+            Effect::SearchViews(params) => {
                 let Some(volume) = self.volume.clone() else {
                     return;
                 };
                 self.spawn(Job::Views, move |monitor| {
                     JobMsg::Views(
-                        search(&volume, &ViewParams::default(), monitor)
+                        search(&volume, &params, monitor)
                             .map(Box::new)
                             .map_err(|e| e.to_string()),
                     )
@@ -101,14 +101,14 @@ impl Jobs {
                     return;
                 };
                 self.spawn(Job::Analysis, move |monitor| {
-                    let result = Analysis::compute(&volume, axis, &params, monitor);
+                    let result = Histories::new(&volume, axis, &params, Scope::ALL, monitor);
                     JobMsg::Analysis(generation, result.map(Arc::new).map_err(|e| e.to_string()))
                 });
             }
             Effect::Render(request) => {
                 if let Some(tx) = &self.renders {
                     self.render_cancel.store(true, Ordering::Relaxed);
-                    let _ = tx.send(request);
+                    let _ = tx.send(*request);
                 }
             }
             Effect::Cancel => {
@@ -116,7 +116,15 @@ impl Jobs {
                 self.render_cancel.store(true, Ordering::Relaxed);
                 self.cancel = Arc::new(AtomicBool::new(false));
             }
-            Effect::Export => self.export(app),
+            Effect::Export(request) => {
+                if let Some(volume) = self.volume.clone() {
+                    self.spawn(Job::Export, move |monitor| {
+                        JobMsg::Exported(
+                            export(&volume, &request, monitor).map_err(|e| e.to_string()),
+                        )
+                    });
+                }
+            }
             Effect::Quit => {}
         }
     }
@@ -125,77 +133,62 @@ impl Jobs {
     fn spawn(&self, job: Job, work: impl FnOnce(&Monitor) -> JobMsg + Send + 'static) {
         let (events, cancel) = (self.events.clone(), Arc::clone(&self.cancel));
         std::thread::spawn(move || {
-            let progress = |f: f64| {
-                let _ = events.send(Event::Job(JobMsg::Progress(job, f)));
+            let progress = |p: Progress| {
+                let _ = events.send(Event::Job(JobMsg::Progress(job, p)));
             };
             let monitor = Monitor::new(Some(&cancel), Some(&progress));
             let msg = work(&monitor);
             let _ = events.send(Event::Job(msg));
         });
     }
+}
 
-    fn export(&self, app: &App) {
-        let (Some(volume), Some(analysis), Some(axis)) =
-            (self.volume.clone(), app.analysis.ready().cloned(), app.axis)
-        else {
-            return;
-        };
-        let slabs = analysis.slabs(app.method, app.position);
-        let (method, look, name) = (app.method, app.look, app.name.clone());
-        let views = app.views.ready().cloned();
-        let stack_params = app.stack.clone();
-        let stem = Path::new(&name)
-            .file_stem()
-            .map_or_else(|| "builtin".into(), |s| s.to_string_lossy().into_owned());
-        self.spawn(Job::Render, move |monitor| {
-            let k = slabs.len();
-            let result = (|| -> anyhow::Result<String> {
-                let params = slabscope::partition::PartitionParams {
-                    method,
-                    stop: slabscope::partition::Stop::Slabs(k),
-                    stack: stack_params,
-                };
-                let part = slabscope::partition::partition(&volume, axis, &params, monitor)?;
-                let png = free_name(&format!("{stem}-slabscope"), "png");
-                let json = free_name(&format!("{stem}-slabscope"), "json");
-                let labels = free_name(&format!("{stem}-slabscope-labels"), "nrrd");
-                let layout = Layout::exploded(&part, look.gap, look.spread);
-                let render = RenderParams {
-                    width: 1280,
-                    height: 960,
-                    mode: look.mode,
-                    preset: look.preset,
-                    colormap: look.colormap,
-                    camera: look.camera,
-                    solo: look.solo,
-                    ..RenderParams::default()
-                };
-                let image = Renderer::new(&volume)?.render(&layout, &render, monitor)?;
-                crate::cli::write_new(&png, &image.png()?, false)?;
-                let text = serde_json::to_string_pretty(&crate::cli::analysis_json(
-                    &name,
-                    &volume,
-                    views.as_ref(),
-                    &part,
-                ))?;
-                crate::cli::write_new(&json, text.as_bytes(), false)?;
-                let labelled = slabscope::partition::label_volume(&volume, &part)?;
-                slabscope::volume::io::write_nrrd(
-                    &labels,
-                    &labelled,
-                    slabscope::volume::io::NrrdEncoding::Gzip,
-                    false,
-                )?;
-                Ok(format!(
-                    "wrote {}, {} and {}",
-                    png.display(),
-                    json.display(),
-                    labels.display()
-                ))
-            })();
-            JobMsg::Exported(result.map_err(|e| format!("{e:#}")))
-        });
-    }
+/// Writes the view (PNG), the analysis (JSON) and the labels (NRRD) of the request's partition
+/// to the current folder under names not taken yet; says what it wrote.
+fn export(volume: &Volume, r: &ExportRequest, monitor: &Monitor) -> slabscope::Result<String> {
+    let part = Partition::new(&r.histories, r.method, r.position, monitor)?;
+    let stem = Path::new(&r.name)
+        .file_stem()
+        .map_or_else(|| "builtin".into(), |s| s.to_string_lossy().into_owned());
+    let png = free_name(&format!("{stem}-slabscope"), "png");
+    let json = free_name(&format!("{stem}-slabscope"), "json");
+    let labels = free_name(&format!("{stem}-slabscope-labels"), "nrrd");
+    let layout = Layout::exploded(&part, r.look.gap, r.look.spread);
+    let render = RenderParams {
+        width: 1280,
+        height: 960,
+        mode: r.look.mode,
+        preset: r.look.preset,
+        colormap: r.look.colormap,
+        camera: r.look.camera,
+        highlight: r.highlight.filter(|&h| h < part.slabs.len()),
+        solo: r.look.solo,
+        ..RenderParams::default()
+    };
+    let image = Renderer::new(volume)?.render(&layout, &render, monitor)?;
+    write_new(&png, &image.png()?)?;
+    let analysis = Analysis {
+        views: r.views.clone(),
+        partition: part,
+    };
+    let report = AnalysisReport::new(&r.name, volume, &r.view_params, &analysis)?;
+    let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Encode(e.to_string()))?;
+    write_new(&json, text.as_bytes())?;
+    monitor.start("writing labels", 1);
+    let labelled = label_volume(volume, &analysis.partition)?;
+    write_nrrd(&labels, &labelled, NrrdEncoding::Gzip, false)?;
+    Ok(format!(
+        "wrote {}, {} and {}",
+        png.display(),
+        json.display(),
+        labels.display()
+    ))
+}
+
+/// Writes `bytes` to `path`, which must not exist.
+fn write_new(path: &Path, bytes: &[u8]) -> slabscope::Result<()> {
+    use std::io::Write;
+    write_atomic(path, false, |mut file| file.write_all(bytes))
 }
 
 /// `stem.ext` in the current folder, or `stem-1.ext`, `stem-2.ext`, … when taken.
@@ -267,11 +260,13 @@ fn render(
     r: &RenderRequest,
     monitor: &Monitor,
 ) -> anyhow::Result<Box<ratatui_image::protocol::Protocol>> {
-    let layout = match &r.stack {
-        Some(stack) if !r.slabs.is_empty() => {
-            let nmi = match (&r.nmi, r.gap) {
+    let look = &r.look;
+    let layout = match &r.histories {
+        Some(h) if !r.slabs.is_empty() => {
+            let stack = h.stack();
+            let nmi = match (&r.nmi, look.gap) {
                 (Some(nmi), _) => Some(nmi.clone()),
-                (None, Gap::Similarity) => Some(slab_nmi(stack, &r.slabs, monitor)?),
+                (None, Gap::Similarity) => Some(h.boundary_nmi(&r.slabs, monitor)?),
                 (None, Gap::Uniform) => None,
             };
             let geometry = Stack {
@@ -280,7 +275,7 @@ fn render(
                 thickness: stack.thickness(),
                 offset: stack.offset(),
             };
-            Layout::from_slabs(&geometry, &r.slabs, nmi.as_deref(), r.gap, r.spread)
+            Layout::from_slabs(&geometry, &r.slabs, nmi.as_deref(), look.gap, look.spread)
         }
         _ => Layout::whole(r.axis),
     };
@@ -295,12 +290,12 @@ fn render(
     let params = RenderParams {
         width: width.max(1),
         height: height.max(1),
-        mode: r.mode,
-        preset: r.preset,
-        colormap: r.colormap,
-        camera: r.camera,
+        mode: look.mode,
+        preset: look.preset,
+        colormap: look.colormap,
+        camera: look.camera,
         highlight: r.highlight,
-        solo: r.solo,
+        solo: look.solo,
         outlines: true,
         labels: height >= 120,
         ..RenderParams::default()

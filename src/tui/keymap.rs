@@ -2,7 +2,7 @@
 
 use crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
-use super::app::{Action, Ask};
+use super::event::{Action, Ask};
 
 /// The action of `key`, if any; `typing` when a prompt is open.
 pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {

@@ -3,11 +3,13 @@
 //! carries out in the background; drawing is a pure function of the state. The loop is generic
 //! over the ratatui backend, so tests drive it on a `TestBackend`.
 
-pub mod analysis;
 pub mod app;
+pub mod event;
 pub mod jobs;
 pub mod keymap;
 pub mod panes;
+pub mod partitioning;
+pub mod theme;
 pub mod ui;
 
 #[cfg(test)]
@@ -19,7 +21,7 @@ use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
 use anyhow::Result;
-use crossterm::event::{self, Event as TermEvent, KeyEvent};
+use crossterm::event::Event as TermEvent;
 use crossterm::execute;
 use crossterm::terminal::{
     EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
@@ -28,21 +30,24 @@ use ratatui::Terminal;
 use ratatui::backend::{Backend, CrosstermBackend};
 use ratatui_image::picker::cap_parser::QueryStdioOptions;
 use ratatui_image::picker::{Picker, ProtocolType};
-use slabscope::LoadOptions;
+use slabscope::{AnalysisParams, LoadOptions};
 
-pub use crate::cli::Protocol;
-use app::{Action, App, Effect};
+use crate::term::Protocol;
+use app::App;
+use event::{Action, Effect, Event, JobMsg};
 use jobs::Jobs;
-use ui::Theme;
+use theme::Theme;
 
-/// Everything the loop waits for.
-pub enum Event {
-    /// A key press.
-    Key(KeyEvent),
-    /// The terminal changed size.
-    Resize,
-    /// A background job's message.
-    Job(app::JobMsg),
+/// What the TUI opens and how.
+pub struct Options {
+    /// The volume (None: the built-in dataset).
+    pub file: Option<PathBuf>,
+    /// How to read it.
+    pub load: LoadOptions,
+    /// The image protocol, or `Auto` to ask the terminal.
+    pub protocol: Protocol,
+    /// How to analyse it.
+    pub analysis: AnalysisParams,
 }
 
 /// How long the terminal may take to say which image protocol it speaks.
@@ -82,8 +87,14 @@ fn picker(protocol: Protocol) -> Picker {
     }
 }
 
-/// Opens the TUI on `file` (None: the built-in dataset) and runs it until the user quits.
-pub fn run(file: Option<PathBuf>, load: LoadOptions, protocol: Protocol) -> Result<()> {
+/// Opens the TUI and runs it until the user quits.
+pub fn run(options: Options) -> Result<()> {
+    let Options {
+        file,
+        load,
+        protocol,
+        analysis,
+    } = options;
     let name = file.as_ref().map_or_else(
         || slabscope::BUILTIN_NAME.to_string(),
         |p| p.display().to_string(),
@@ -102,15 +113,8 @@ pub fn run(file: Option<PathBuf>, load: LoadOptions, protocol: Protocol) -> Resu
         let (tx, rx) = channel();
         spawn_input(tx.clone());
         let mut jobs = Jobs::new(tx, picker, file, load);
-        let (mut app, effects) = App::new(name);
-        run_loop(
-            &mut terminal,
-            &mut app,
-            &rx,
-            &mut jobs,
-            effects,
-            Theme::from_env(),
-        )
+        let (mut app, effects) = App::new(name, analysis, Theme::from_env());
+        run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)
     })();
     restore();
     let _ = std::panic::take_hook();
@@ -126,7 +130,7 @@ fn restore() {
 /// Reads terminal events on their own thread.
 fn spawn_input(tx: Sender<Event>) {
     std::thread::spawn(move || {
-        while let Ok(ev) = event::read() {
+        while let Ok(ev) = crossterm::event::read() {
             let sent = match ev {
                 TermEvent::Key(k) => tx.send(Event::Key(k)),
                 TermEvent::Resize(..) => tx.send(Event::Resize),
@@ -141,18 +145,18 @@ fn spawn_input(tx: Sender<Event>) {
 
 /// Something that carries out effects: the real jobs, or a test's recorder.
 pub trait Runner {
-    /// Carries out `effect` for `app`.
-    fn run(&mut self, effect: Effect, app: &App);
+    /// Carries out `effect`.
+    fn run(&mut self, effect: Effect);
     /// Sees a job message before the app does.
-    fn observe(&mut self, _msg: &app::JobMsg) {}
+    fn observe(&mut self, _msg: &JobMsg) {}
 }
 
 impl Runner for Jobs {
-    fn run(&mut self, effect: Effect, app: &App) {
-        Jobs::run(self, effect, app);
+    fn run(&mut self, effect: Effect) {
+        Jobs::run(self, effect);
     }
 
-    fn observe(&mut self, msg: &app::JobMsg) {
+    fn observe(&mut self, msg: &JobMsg) {
         Jobs::observe(self, msg);
     }
 }
@@ -160,7 +164,7 @@ impl Runner for Jobs {
 /// Applies `action` and runs its effects.
 pub fn dispatch(app: &mut App, runner: &mut impl Runner, action: Action) {
     for effect in app.update(action) {
-        runner.run(effect, app);
+        runner.run(effect);
     }
 }
 
@@ -169,7 +173,6 @@ pub fn redraw<B: Backend>(
     terminal: &mut Terminal<B>,
     app: &mut App,
     runner: &mut impl Runner,
-    theme: Theme,
 ) -> Result<()>
 where
     B::Error: Send + Sync + 'static,
@@ -180,14 +183,14 @@ where
     {
         dispatch(app, runner, Action::PreviewArea(w, h));
     }
-    terminal.draw(|frame| ui::draw(frame, app, theme))?;
+    terminal.draw(|frame| ui::draw(frame, app))?;
     Ok(())
 }
 
 /// Applies one event.
 pub fn handle(app: &mut App, runner: &mut impl Runner, event: Event) {
     let action = match event {
-        Event::Key(key) => keymap::action(key, app.prompt.is_some()),
+        Event::Key(key) => keymap::action(key, app.status.prompt.is_some()),
         Event::Resize => None,
         Event::Job(msg) => {
             runner.observe(&msg);
@@ -206,16 +209,15 @@ pub fn run_loop<B: Backend>(
     events: &Receiver<Event>,
     runner: &mut impl Runner,
     initial: Vec<Effect>,
-    theme: Theme,
 ) -> Result<()>
 where
     B::Error: Send + Sync + 'static,
 {
     for effect in initial {
-        runner.run(effect, app);
+        runner.run(effect);
     }
     while !app.quit {
-        redraw(terminal, app, runner, theme)?;
+        redraw(terminal, app, runner)?;
         let Ok(event) = events.recv() else { break };
         handle(app, runner, event);
     }

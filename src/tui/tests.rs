@@ -14,58 +14,71 @@ use ratatui::layout::{Rect, Size};
 use ratatui::widgets::Widget;
 use ratatui_image::Resize;
 use ratatui_image::picker::Picker;
-use slabscope::Volume;
 use slabscope::partition::{Method, StackParams};
-use slabscope::progress::Monitor;
 use slabscope::render::Mode;
 use slabscope::view::{ViewParams, ViewSearch, search};
 use slabscope::volume::phantom;
+use slabscope::{AnalysisParams, Histories, Monitor, Progress, Scope, Volume};
 
-use super::analysis::Analysis;
-use super::app::{Action, App, Ask, Effect, Job, JobMsg, Load, Pane};
+use super::app::{App, Pane};
+use super::event::{Action, Ask, Effect, Event, Job, JobMsg, Load};
 use super::panes;
-use super::ui::Theme;
-use super::{Event, Runner, handle, redraw};
+use super::theme::Theme;
+use super::{Runner, handle, redraw};
 
 /// Records effects instead of running them.
 #[derive(Default)]
 struct Recorder(Vec<Effect>);
 
 impl Runner for Recorder {
-    fn run(&mut self, effect: Effect, _app: &App) {
+    fn run(&mut self, effect: Effect) {
         self.0.push(effect);
     }
 }
 
 const PLAIN: Theme = Theme { color: false };
 
-/// A small volume, its view search and its analysis along z, computed once for all tests.
-fn fixture() -> &'static (Arc<Volume>, ViewSearch, Arc<Analysis>) {
-    static FIXTURE: OnceLock<(Arc<Volume>, ViewSearch, Arc<Analysis>)> = OnceLock::new();
+/// A small volume, its view search and its histories along the best axis, computed once for all
+/// tests.
+fn fixture() -> &'static (Arc<Volume>, ViewSearch, Arc<Histories>) {
+    static FIXTURE: OnceLock<(Arc<Volume>, ViewSearch, Arc<Histories>)> = OnceLock::new();
     FIXTURE.get_or_init(|| {
         let volume = Arc::new(phantom::body([24, 24, 40], 1).unwrap());
         let views = search(&volume, &ViewParams::default(), &Monitor::none()).unwrap();
-        let analysis = Analysis::compute(
+        let histories = Histories::new(
             &volume,
             views.best().axis,
             &StackParams::default(),
+            Scope::ALL,
             &Monitor::none(),
         )
         .unwrap();
-        (volume, views, Arc::new(analysis))
+        (volume, views, Arc::new(histories))
     })
+}
+
+/// An app with the default parameters.
+fn new_app(name: &str, theme: Theme) -> (App, Vec<Effect>) {
+    App::new(name.into(), AnalysisParams::default(), theme)
 }
 
 /// An app taken through loading, the view search and the analysis, as the jobs would report.
 fn ready_app() -> App {
+    ready_app_with(PLAIN)
+}
+
+fn ready_app_with(theme: Theme) -> App {
     let (volume, views, analysis) = fixture();
-    let (mut app, effects) = App::new("body.nrrd".into());
+    let (mut app, effects) = new_app("body.nrrd", theme);
     assert!(matches!(effects[..], [Effect::Load]));
     let effects = app.update(Action::Job(JobMsg::Loaded(Ok((
         Arc::clone(volume),
         vec![],
     )))));
-    assert!(matches!(effects[..], [Effect::SearchViews]), "{effects:?}");
+    assert!(
+        matches!(effects[..], [Effect::SearchViews(_)]),
+        "{effects:?}"
+    );
     let effects = app.update(Action::Job(JobMsg::Views(Ok(Box::new(views.clone())))));
     match &effects[..] {
         [Effect::Analyze(1, axis, _)] => assert_eq!(*axis, views.best().axis),
@@ -82,32 +95,42 @@ fn key(c: char) -> Event {
 #[test]
 fn the_analysis_opens_on_four_top_down_slabs() {
     let app = ready_app();
-    assert_eq!(app.method, Method::TopDown);
-    assert_eq!(app.slabs().unwrap().len(), 4);
-    assert_eq!(app.position, 3);
+    assert_eq!(app.part.method, Method::TopDown);
+    assert_eq!(app.part.slabs().unwrap().len(), 4);
+    assert_eq!(app.part.position, 3);
 }
 
 #[test]
 fn stepping_moves_through_the_history_and_stops_at_its_ends() {
     let mut app = ready_app();
-    app.preview_cells = (40, 12);
+    app.preview.cells = (40, 12);
     let effects = app.update(Action::Step(1));
-    assert_eq!(app.slabs().unwrap().len(), 5);
+    assert_eq!(app.part.slabs().unwrap().len(), 5);
     assert!(
         matches!(effects[..], [Effect::Render(_)]),
         "a step re-renders"
     );
     app.update(Action::StepTo(false));
-    assert_eq!(app.position, 0);
+    assert_eq!(app.part.position, 0);
     assert!(app.update(Action::Step(-1)).is_empty());
-    assert_eq!(app.position, 0);
-    assert_eq!(app.message.as_deref(), Some("at the start of the history"));
+    assert_eq!(app.part.position, 0);
+    assert_eq!(
+        app.status.message.as_deref(),
+        Some("at the start of the history")
+    );
     app.update(Action::StepTo(true));
-    let last = app.analysis.ready().unwrap().last(Method::TopDown);
-    assert_eq!(app.position, last);
-    assert_eq!(app.slabs().unwrap().len(), 40, "every slice its own slab");
+    let last = app.part.ready().unwrap().last(Method::TopDown);
+    assert_eq!(app.part.position, last);
+    assert_eq!(
+        app.part.slabs().unwrap().len(),
+        40,
+        "every slice its own slab"
+    );
     app.update(Action::Step(1));
-    assert_eq!(app.message.as_deref(), Some("at the end of the history"));
+    assert_eq!(
+        app.status.message.as_deref(),
+        Some("at the end of the history")
+    );
 }
 
 #[test]
@@ -115,16 +138,20 @@ fn switching_method_keeps_the_slab_count() {
     let mut app = ready_app();
     for method in [Method::BottomUp, Method::Optimal, Method::TopDown] {
         app.update(Action::CycleMethod);
-        assert_eq!(app.method, method);
-        assert_eq!(app.slabs().unwrap().len(), 4, "{method:?}");
+        assert_eq!(app.part.method, method);
+        assert_eq!(app.part.slabs().unwrap().len(), 4, "{method:?}");
     }
     app.update(Action::CycleMethod);
     app.update(Action::Step(1));
-    assert_eq!(app.slabs().unwrap().len(), 3, "a bottom-up step merges");
+    assert_eq!(
+        app.part.slabs().unwrap().len(),
+        3,
+        "a bottom-up step merges"
+    );
     app.update(Action::Slabs(2));
-    assert_eq!(app.slabs().unwrap().len(), 5);
+    assert_eq!(app.part.slabs().unwrap().len(), 5);
     app.update(Action::Slabs(-10));
-    assert_eq!(app.slabs().unwrap().len(), 1);
+    assert_eq!(app.part.slabs().unwrap().len(), 1);
 }
 
 #[test]
@@ -137,42 +164,53 @@ fn prompts_take_an_axis_and_a_threshold() {
     app.update(Action::Erase);
     app.update(Action::Type('2'));
     match &app.update(Action::Submit)[..] {
-        [Effect::Analyze(2, axis, _)] => assert_eq!(*axis, [0.0, 1.0, 2.0]),
+        [Effect::Analyze(2, axis, _)] => {
+            assert_eq!(
+                *axis,
+                slabscope::Axis::new([0.0, 1.0, 2.0]).unwrap().direction()
+            );
+        }
         other => panic!("{other:?}"),
     }
-    assert!(app.analysis.running());
+    assert!(app.part.histories.running());
     let mut app = ready_app();
     app.update(Action::Ask(Ask::Axis));
     app.update(Action::Type('w'));
     assert!(app.update(Action::Submit).is_empty());
-    assert!(app.message.as_deref().unwrap().contains("is not x, y, z"));
+    assert!(
+        app.status
+            .message
+            .as_deref()
+            .unwrap()
+            .contains("is not x, y, z")
+    );
     app.update(Action::Ask(Ask::Threshold));
     for c in "0.002".chars() {
         app.update(Action::Type(c));
     }
     app.update(Action::Submit);
-    assert_eq!(app.threshold, Some(0.002));
+    assert_eq!(app.part.threshold, Some(0.002));
     assert_eq!(
-        app.position,
-        app.analysis.ready().unwrap().top.steps_above(0.002)
+        app.part.position,
+        app.part.ready().unwrap().top().steps_above(0.002)
     );
     app.update(Action::Ask(Ask::Threshold));
     app.update(Action::Escape);
-    assert!(app.prompt.is_none(), "Esc closes a prompt");
+    assert!(app.status.prompt.is_none(), "Esc closes a prompt");
 }
 
 #[test]
 fn selecting_a_viewpoint_partitions_along_it() {
     let mut app = ready_app();
     app.update(Action::Move(2));
-    assert_eq!(app.view_row, 2);
+    assert_eq!(app.views.row, 2);
     let axis = fixture().1.views[2].axis;
     match &app.update(Action::Select)[..] {
         [Effect::Analyze(2, a, _)] => assert_eq!(*a, axis),
         other => panic!("{other:?}"),
     }
     app.update(Action::Move(-10));
-    assert_eq!(app.view_row, 0, "the cursor stops at the top");
+    assert_eq!(app.views.row, 0, "the cursor stops at the top");
 }
 
 #[test]
@@ -186,24 +224,27 @@ fn stale_results_are_dropped() {
         1,
         Ok(Arc::clone(&fixture().2)),
     )));
-    assert!(app.analysis.running());
-    app.preview_cells = (20, 8);
+    assert!(app.part.histories.running());
+    app.preview.cells = (20, 8);
     app.update(Action::Orbit(15.0, 0.0));
     app.update(Action::Orbit(15.0, 0.0));
     let image = Box::new(tiny_protocol(20, 8));
     app.update(Action::Job(JobMsg::Rendered(1, Ok(image))));
     assert!(
-        !matches!(app.preview, Load::Ready(_)),
+        !matches!(app.preview.image, Load::Ready(_)),
         "an older render is not shown"
     );
 }
 
 #[test]
 fn escape_cancels_running_work_and_quit_quits() {
-    let (mut app, _) = App::new("x".into());
-    app.views = Load::Running(0.4);
+    let (mut app, _) = new_app("x", PLAIN);
+    app.views.views = Load::Running(Progress {
+        phase: "view search",
+        fraction: 0.4,
+    });
     assert!(matches!(app.update(Action::Escape)[..], [Effect::Cancel]));
-    assert!(matches!(app.views, Load::Failed(_)));
+    assert!(matches!(app.views.views, Load::Failed(_)));
     app.update(Action::ToggleHelp);
     assert!(app.help);
     assert!(app.update(Action::Escape).is_empty());
@@ -233,33 +274,40 @@ fn the_look_changes_re_render() {
     };
     let r = render(app.update(Action::Orbit(15.0, -30.0)));
     assert_eq!(
-        (r.camera.azimuth, r.camera.elevation),
+        (r.look.camera.azimuth, r.look.camera.elevation),
         (60.0, -10.0),
         "30° + two orbits of 15°"
     );
     assert_eq!(r.slabs.len(), 4);
-    assert_eq!(render(app.update(Action::ToggleMode)).mode, Mode::Mip);
+    assert_eq!(render(app.update(Action::ToggleMode)).look.mode, Mode::Mip);
     for _ in 0..30 {
         app.update(Action::Spread(0.1));
     }
-    assert_eq!(app.look.spread, 2.0, "spread is capped");
+    assert_eq!(app.preview.look.spread, 2.0, "spread is capped");
     app.focus = Pane::Slabs;
     let r = render(app.update(Action::Move(1)));
     assert_eq!(r.highlight, Some(1), "the selected slab is highlighted");
     let r = render(app.update(Action::ToggleSolo));
-    assert!(r.solo);
-    assert!(matches!(app.update(Action::Export)[..], [Effect::Export]));
+    assert!(r.look.solo);
+    assert!(matches!(
+        app.update(Action::Export)[..],
+        [Effect::Export(_)]
+    ));
     app.update(Action::Focus(1));
     assert_eq!(app.focus, Pane::Curves);
     app.update(Action::Move(5));
-    assert_eq!(app.cursor, 5);
+    assert_eq!(app.curves.cursor, 5);
 }
 
 #[test]
 fn progress_updates_the_gauges() {
-    let (mut app, _) = App::new("x".into());
-    app.update(Action::Job(JobMsg::Progress(Job::Load, 0.5)));
-    assert!(matches!(app.volume, Load::Running(f) if f == 0.5));
+    let (mut app, _) = new_app("x", PLAIN);
+    let half = Progress {
+        phase: "loading",
+        fraction: 0.5,
+    };
+    app.update(Action::Job(JobMsg::Progress(Job::Load, half)));
+    assert!(matches!(app.volume, Load::Running(p) if p == half));
     app.update(Action::Job(JobMsg::Loaded(Err("x: truncated".into()))));
     assert!(matches!(app.volume, Load::Failed(_)));
 }
@@ -307,66 +355,15 @@ fn pane(widget: impl Widget, w: u16, h: u16) -> String {
 fn panes_render_into_buffers() {
     let mut app = ready_app();
     app.focus = Pane::Slabs;
-    insta::assert_snapshot!(
-        "views",
-        pane(
-            panes::views::ViewsPane {
-                app: &app,
-                theme: PLAIN,
-                focused: false
-            },
-            40,
-            12
-        )
-    );
-    insta::assert_snapshot!(
-        "views_wide_with_sphere",
-        pane(
-            panes::views::ViewsPane {
-                app: &app,
-                theme: PLAIN,
-                focused: true
-            },
-            90,
-            14
-        )
-    );
-    insta::assert_snapshot!(
-        "slabs",
-        pane(
-            panes::slabs::SlabsPane {
-                app: &app,
-                theme: PLAIN,
-                focused: true
-            },
-            60,
-            9
-        )
-    );
-    insta::assert_snapshot!(
-        "curves",
-        pane(
-            panes::curves::CurvesPane {
-                app: &app,
-                theme: PLAIN,
-                focused: false
-            },
-            60,
-            12
-        )
-    );
-    insta::assert_snapshot!(
-        "status",
-        pane(
-            panes::status::StatusLines {
-                app: &app,
-                theme: PLAIN
-            },
-            110,
-            2
-        )
-    );
-    insta::assert_snapshot!("help", pane(panes::help::Help { theme: PLAIN }, 70, 24));
+    app.views.focused = false;
+    insta::assert_snapshot!("views", pane(&app.views, 40, 12));
+    app.views.focused = true;
+    insta::assert_snapshot!("views_wide_with_sphere", pane(&app.views, 90, 14));
+    app.slabs.focused = true;
+    insta::assert_snapshot!("slabs", pane(&app.slabs, 60, 9));
+    insta::assert_snapshot!("curves", pane(&app.curves, 60, 12));
+    insta::assert_snapshot!("status", pane(&app.status, 110, 2));
+    insta::assert_snapshot!("help", pane(&panes::help::Help { theme: PLAIN }, 70, 24));
 }
 
 /// Runs `events` through the app on a test terminal of `w × h`, returning the screen after each.
@@ -374,11 +371,11 @@ fn screens(app: &mut App, w: u16, h: u16, events: Vec<Event>) -> Vec<String> {
     let mut terminal = Terminal::new(TestBackend::new(w, h)).unwrap();
     let mut runner = Recorder::default();
     let mut out = Vec::new();
-    redraw(&mut terminal, app, &mut runner, PLAIN).unwrap();
+    redraw(&mut terminal, app, &mut runner).unwrap();
     out.push(text(terminal.backend().buffer()));
     for event in events {
         handle(app, &mut runner, event);
-        redraw(&mut terminal, app, &mut runner, PLAIN).unwrap();
+        redraw(&mut terminal, app, &mut runner).unwrap();
         out.push(text(terminal.backend().buffer()));
     }
     out
@@ -414,10 +411,10 @@ fn whole_app_snapshots() {
 #[ignore = "a benchmark: prints timings, asserts nothing about them"]
 fn tui_step_timing() {
     for (w, h) in [(80, 24), (200, 60)] {
-        let mut app = ready_app();
+        let mut app = ready_app_with(Theme { color: true });
         let mut terminal = Terminal::new(TestBackend::new(w, h)).unwrap();
         let mut runner = Recorder::default();
-        redraw(&mut terminal, &mut app, &mut runner, Theme { color: true }).unwrap();
+        redraw(&mut terminal, &mut app, &mut runner).unwrap();
         let steps = 400;
         let start = std::time::Instant::now();
         for i in 0..steps {
@@ -426,7 +423,7 @@ fn tui_step_timing() {
                 &mut runner,
                 key(if i % 2 == 0 { 'n' } else { 'p' }),
             );
-            redraw(&mut terminal, &mut app, &mut runner, Theme { color: true }).unwrap();
+            redraw(&mut terminal, &mut app, &mut runner).unwrap();
         }
         let per = start.elapsed().as_secs_f64() * 1e3 / f64::from(steps);
         println!("{w}x{h}: {per:.3} ms per step and redraw");

@@ -2,62 +2,13 @@
 
 use ratatui::Frame;
 use ratatui::layout::{Alignment, Constraint, Direction, Layout, Rect};
-use ratatui::style::{Color, Modifier, Style};
 use ratatui::widgets::{Block, Borders, Paragraph, Wrap};
 
-use super::app::{App, Pane};
+use super::app::App;
 use super::panes;
 
 /// The smallest terminal the layout works in.
 pub const MIN_SIZE: (u16, u16) = (60, 18);
-
-/// Colours, or none when `NO_COLOR` is set.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Theme {
-    /// Whether to use colours.
-    pub color: bool,
-}
-
-impl Theme {
-    /// From the environment: no colours when `NO_COLOR` is set and not empty.
-    pub fn from_env() -> Self {
-        Self {
-            color: std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty()),
-        }
-    }
-
-    /// `style` with foreground `c`, or plain without colours.
-    pub fn fg(self, c: Color) -> Style {
-        if self.color {
-            Style::default().fg(c)
-        } else {
-            Style::default()
-        }
-    }
-
-    /// The style of something selected: reversed (and bold with colours).
-    pub fn selected(self) -> Style {
-        let reversed = Style::default().add_modifier(Modifier::REVERSED);
-        if self.color {
-            reversed.add_modifier(Modifier::BOLD)
-        } else {
-            reversed
-        }
-    }
-
-    /// A pane's frame, brighter when focused.
-    pub fn block(self, title: String, focused: bool) -> Block<'static> {
-        let style = if focused {
-            self.fg(Color::Cyan).add_modifier(Modifier::BOLD)
-        } else {
-            self.fg(Color::DarkGray)
-        };
-        Block::default()
-            .borders(Borders::ALL)
-            .border_style(style)
-            .title(title)
-    }
-}
 
 /// Where each pane goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -113,7 +64,7 @@ pub fn preview_cells(area: Rect) -> Option<(u16, u16)> {
 }
 
 /// Draws the whole screen.
-pub fn draw(frame: &mut Frame, app: &App, theme: Theme) {
+pub fn draw(frame: &mut Frame, app: &App) {
     let area = frame.area();
     let Some(a) = areas(area) else {
         let text = format!(
@@ -128,40 +79,12 @@ pub fn draw(frame: &mut Frame, app: &App, theme: Theme) {
         );
         return;
     };
-    frame.render_widget(
-        panes::views::ViewsPane {
-            app,
-            theme,
-            focused: app.focus == Pane::Views,
-        },
-        a.views,
-    );
-    frame.render_widget(
-        panes::slabs::SlabsPane {
-            app,
-            theme,
-            focused: app.focus == Pane::Slabs,
-        },
-        a.slabs,
-    );
-    frame.render_widget(
-        panes::curves::CurvesPane {
-            app,
-            theme,
-            focused: app.focus == Pane::Curves,
-        },
-        a.curves,
-    );
-    frame.render_widget(
-        panes::preview::PreviewPane {
-            app,
-            theme,
-            focused: app.focus == Pane::Preview,
-        },
-        a.preview,
-    );
-    frame.render_widget(panes::status::StatusLines { app, theme }, a.status);
+    frame.render_widget(&app.views, a.views);
+    frame.render_widget(&app.slabs, a.slabs);
+    frame.render_widget(&app.curves, a.curves);
+    frame.render_widget(&app.preview, a.preview);
+    frame.render_widget(&app.status, a.status);
     if app.help {
-        frame.render_widget(panes::help::Help { theme }, area);
+        frame.render_widget(&panes::help::Help { theme: app.theme }, area);
     }
 }

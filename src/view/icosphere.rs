@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 
-use crate::volume::sampling::{canonical, normalize};
+use crate::geometry::{canonical, normalize};
 
 /// The highest subdivision level offered.
 pub const MAX_LEVEL: usize = 4;
@@ -95,7 +95,7 @@ pub fn spacing_degrees(level: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::sampling::dot;
+    use crate::geometry::dot;
 
     #[test]
     fn vertex_and_axis_counts() {

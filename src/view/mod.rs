@@ -2,31 +2,30 @@
 //! sphere, lowest first, optionally checked on shifted lattices and refined around the best.
 
 pub mod icosphere;
+pub mod lattice;
 mod rate;
 
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use rate::{AxisEntropy, PhaseSpread, entropy_rate, work_units};
+pub use rate::{AxisEntropy, BinSampler, InnerSpans, PhaseSpread, entropy_rate, work_units};
 
 use crate::error::{Error, Result};
+use crate::geometry::{canonical, dot, frame, normalize};
 use crate::progress::Monitor;
+use crate::view::lattice::{Lattice, SamplingParams};
 use crate::volume::Volume;
-use crate::volume::sampling::{BinSampler, Lattice, canonical, dot, frame, min_spacing, normalize};
 
-/// Parameters of the view search; `None` spacings mean the smallest voxel spacing.
+/// Parameters of the view search.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ViewParams {
-    /// Quantization bins B.
-    pub bins: usize,
+    /// Bins and spacings, shared with the slicing.
+    #[serde(flatten)]
+    pub sampling: SamplingParams,
     /// Block length L (2 to 4).
     pub block: usize,
     /// Icosphere subdivision level (0 to 4).
     pub level: usize,
-    /// Distance between rays, mm.
-    pub ray_spacing: Option<f64>,
-    /// Distance between samples along a ray, mm.
-    pub sample_spacing: Option<f64>,
     /// Shifted lattices per axis for the spread of h (0: the paper's single lattice).
     pub phases: usize,
     /// Seed of the lattice shifts.
@@ -38,11 +37,9 @@ pub struct ViewParams {
 impl Default for ViewParams {
     fn default() -> Self {
         Self {
-            bins: 32,
+            sampling: SamplingParams::default(),
             block: 3,
             level: 1,
-            ray_spacing: None,
-            sample_spacing: None,
             phases: 0,
             phase_seed: 1,
             refine: false,
@@ -76,24 +73,21 @@ impl ViewSearch {
 
 /// The validated parameters with spacings resolved.
 fn resolve(volume: &Volume, params: &ViewParams) -> Result<ViewParams> {
-    let bad = |m: String| Err(Error::InvalidParameter(m));
     if !(2..=4).contains(&params.block) {
-        return bad(format!(
-            "block length must be 2, 3 or 4, not {}",
-            params.block
-        ));
+        return Err(Error::invalid("block", params.block, "2, 3 or 4"));
     }
     if params.level > icosphere::MAX_LEVEL {
-        return bad(format!(
-            "level must be 0 to {}, not {}",
-            icosphere::MAX_LEVEL,
-            params.level
+        return Err(Error::invalid(
+            "level",
+            params.level,
+            format!("0 to {}", icosphere::MAX_LEVEL),
         ));
     }
     if params.phases > MAX_PHASES {
-        return bad(format!(
-            "phases must be at most {MAX_PHASES}, not {}",
-            params.phases
+        return Err(Error::invalid(
+            "phases",
+            params.phases,
+            format!("at most {MAX_PHASES}"),
         ));
     }
     if volume.is_constant() {
@@ -102,10 +96,8 @@ fn resolve(volume: &Volume, params: &ViewParams) -> Result<ViewParams> {
             volume.stats().min
         )));
     }
-    let s = min_spacing(volume.spacing());
     Ok(ViewParams {
-        ray_spacing: Some(params.ray_spacing.unwrap_or(s)),
-        sample_spacing: Some(params.sample_spacing.unwrap_or(s)),
+        sampling: params.sampling.resolved(volume.spacing())?,
         ..params.clone()
     })
 }
@@ -136,8 +128,8 @@ impl Evaluator<'_> {
             self.volume.dims(),
             self.volume.spacing(),
             axis,
-            self.params.ray_spacing.unwrap_or(1.0),
-            self.params.sample_spacing.unwrap_or(1.0),
+            self.params.sampling.ray_spacing.unwrap_or(1.0),
+            self.params.sampling.sample_spacing.unwrap_or(1.0),
             phase(self.params.phase_seed, n),
         )
     }
@@ -148,8 +140,10 @@ impl Evaluator<'_> {
 
     /// The entropy rate of `axis` on the paper's lattice, with the phase spread when asked for.
     fn evaluate(&self, axis: [f64; 3], monitor: &Monitor) -> Result<AxisEntropy> {
-        let axis =
-            canonical(normalize(axis).ok_or_else(|| Error::InvalidParameter("zero axis".into()))?);
+        let axis = canonical(
+            normalize(axis)
+                .ok_or_else(|| Error::invalid("axis", "[0, 0, 0]", "a direction with a length"))?,
+        );
         let mut result = entropy_rate(
             &self.sampler,
             &self.lattice(axis, 0)?,
@@ -175,7 +169,7 @@ impl Evaluator<'_> {
 /// the sphere's order). Fails with [`Error::Cancelled`] when the monitor's flag is raised.
 pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result<ViewSearch> {
     let params = resolve(volume, params)?;
-    let sampler = BinSampler::new(volume, volume.quantizer(params.bins)?);
+    let sampler = BinSampler::new(volume, volume.quantizer(params.sampling.bins)?);
     let eval = Evaluator {
         volume,
         sampler,
@@ -183,7 +177,7 @@ pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result
     };
     let axes = icosphere::axes(eval.params.level);
     let total = axes.iter().map(|&a| eval.units(a)).sum::<Result<u64>>()?;
-    monitor.start(total);
+    monitor.start("view search", total);
     let mut views = axes
         .par_iter()
         .map(|&axis| eval.evaluate(axis, monitor))
@@ -218,7 +212,7 @@ fn refine(eval: &Evaluator, views: &[AxisEntropy], monitor: &Monitor) -> Result<
     let seeds = &views[..views.len().min(REFINE_SEEDS)];
     let per_step = eval.units(seeds[0].axis)? * 8;
     let steps = (start / REFINE_STOP_DEGREES).log2().ceil() as u64 + 4;
-    monitor.start(per_step * steps * seeds.len() as u64);
+    monitor.start("refining", per_step * steps * seeds.len() as u64);
     let quiet = Monitor::new(None, None);
     let mut best: Option<AxisEntropy> = None;
     for seed in seeds {

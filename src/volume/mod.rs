@@ -1,10 +1,10 @@
 //! The volume: f32 voxels with x fastest, spacing in millimetres, statistics and quantization.
 
 pub mod cells;
+pub mod interpolate;
 pub mod io;
 pub mod phantom;
 mod quantize;
-pub mod sampling;
 mod voxel;
 
 use ndarray::{Array3, ArrayView3, ShapeBuilder};
@@ -54,23 +54,26 @@ impl Volume {
         mut voxels: Vec<f32>,
     ) -> Result<Self> {
         if dims.contains(&0) {
-            return Err(Error::InvalidParameter(format!(
-                "volume dimensions {} contain a zero",
-                dims_string(dims)
-            )));
+            return Err(Error::invalid(
+                "dims",
+                dims_string(dims),
+                "at least one voxel along each axis",
+            ));
         }
         let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
         if count != Some(voxels.len()) {
-            return Err(Error::InvalidParameter(format!(
-                "{} voxels given for dimensions {}",
+            return Err(Error::invalid(
+                "voxels",
                 voxels.len(),
-                dims_string(dims)
-            )));
+                format!("one per voxel of {}", dims_string(dims)),
+            ));
         }
         if spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-            return Err(Error::InvalidParameter(format!(
-                "spacing {spacing:?} must be positive and finite"
-            )));
+            return Err(Error::invalid(
+                "spacing",
+                format!("{spacing:?}"),
+                "three positive finite numbers",
+            ));
         }
         voxels.par_iter_mut().for_each(|v| {
             if v.is_infinite() {
@@ -79,13 +82,13 @@ impl Volume {
         });
         let stats = compute_stats(&voxels);
         if stats.finite == 0 {
-            return Err(Error::InvalidParameter(format!(
+            return Err(Error::Degenerate(format!(
                 "all {} voxels are NaN or infinite: the volume holds no data",
                 voxels.len()
             )));
         }
         let data = Array3::from_shape_vec(dims.f(), voxels)
-            .map_err(|e| Error::InvalidParameter(e.to_string()))?;
+            .map_err(|e| Error::invalid("dims", dims_string(dims), e.to_string()))?;
         Ok(Self {
             data,
             spacing,

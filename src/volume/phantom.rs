@@ -36,9 +36,11 @@ fn check_dims(dims: [usize; 3]) -> Result<usize> {
     let n = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
     match n {
         Some(n) if n > 0 && dims.iter().all(|&d| d <= 65_536) => Ok(n),
-        _ => Err(Error::InvalidParameter(format!(
-            "phantom dimensions {dims:?} must be between 1 and 65536 each"
-        ))),
+        _ => Err(Error::invalid(
+            "dims",
+            crate::volume::dims_string(dims),
+            "between 1 and 65536 voxels along each axis",
+        )),
     }
 }
 
@@ -69,9 +71,11 @@ fn generate(
 pub fn layers(dims: [usize; 3], normal: [f64; 3], seed: u64) -> Result<Volume> {
     let len = normal.iter().map(|c| c * c).sum::<f64>().sqrt();
     if !(len.is_finite() && len > 0.0) {
-        return Err(Error::InvalidParameter(format!(
-            "layer normal {normal:?} has no direction"
-        )));
+        return Err(Error::invalid(
+            "normal",
+            format!("{normal:?}"),
+            "a direction with a length",
+        ));
     }
     let n = normal.map(|c| c / len);
     let half = |k: usize| (dims[k] as f64 - 1.0) / 2.0;

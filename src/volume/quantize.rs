@@ -19,14 +19,18 @@ impl Quantizer {
     /// A quantizer for `bins` bins (2 to 255) over `[min, max]`.
     pub fn new(min: f32, max: f32, bins: usize) -> Result<Self> {
         if !(2..=MAX_BINS).contains(&bins) {
-            return Err(Error::InvalidParameter(format!(
-                "bins must be between 2 and {MAX_BINS}, not {bins}"
-            )));
+            return Err(Error::invalid(
+                "bins",
+                bins,
+                format!("between 2 and {MAX_BINS}"),
+            ));
         }
         if !(min.is_finite() && max.is_finite() && min <= max) {
-            return Err(Error::InvalidParameter(format!(
-                "quantization range [{min}, {max}] is not a finite interval"
-            )));
+            return Err(Error::invalid(
+                "range",
+                format!("[{min}, {max}]"),
+                "a finite interval",
+            ));
         }
         Ok(Self {
             min: f64::from(min),

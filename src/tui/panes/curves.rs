@@ -1,24 +1,54 @@
 //! The curves pane: along the axis, the NMI between consecutive slices and the ΔI of cutting the
 //! whole stack at each slice, with the current slab boundaries and the slice cursor.
 
+use std::sync::Arc;
+
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::Color;
 use ratatui::symbols::Marker;
 use ratatui::widgets::{Axis, Chart, Dataset, GraphType, Widget};
+use slabscope::Histories;
 
 use super::placeholder;
-use crate::tui::app::App;
-use crate::tui::ui::Theme;
+use crate::tui::event::Load;
+use crate::tui::theme::Theme;
 
-/// The curves pane.
-pub struct CurvesPane<'a> {
-    /// The state.
-    pub app: &'a App,
-    /// Colours.
-    pub theme: Theme,
+/// The curves along the axis and where the slabs meet.
+pub struct Curves {
+    /// The histories, which hold the curves.
+    pub histories: Arc<Histories>,
+    /// The first slice of every slab but the first.
+    pub boundaries: Vec<usize>,
+}
+
+/// The curves pane's state.
+pub struct CurvesPane {
+    /// The curves, or the gauge of the histories behind them.
+    pub curves: Load<Curves>,
+    /// The slice under the cursor.
+    pub cursor: usize,
     /// Whether it has the focus.
     pub focused: bool,
+    /// Colours.
+    pub theme: Theme,
+}
+
+impl CurvesPane {
+    /// An empty pane.
+    pub fn new(theme: Theme) -> Self {
+        Self {
+            curves: Load::Idle,
+            cursor: 0,
+            focused: false,
+            theme,
+        }
+    }
+
+    /// Number of slices the cursor moves over.
+    pub fn len(&self) -> usize {
+        self.curves.ready().map_or(0, |c| c.histories.slices())
+    }
 }
 
 /// A curve to plot: its values at cuts 1 .. n, its name and colour.
@@ -82,18 +112,25 @@ fn chart(
         .render(area, buf);
 }
 
-impl Widget for CurvesPane<'_> {
+impl Widget for &CurvesPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let app = self.app;
-        let Some(analysis) = app.analysis.ready() else {
+        let Load::Ready(curves) = &self.curves else {
             let block = self.theme.block(" Curves ".into(), self.focused);
             let inner = block.inner(area);
             block.render(area, buf);
-            placeholder(&app.analysis, "histories", "", self.theme, inner, buf);
+            placeholder(
+                &self.curves.status(),
+                "histories",
+                "",
+                self.theme,
+                inner,
+                buf,
+            );
             return;
         };
-        let (nmi, gain) = (analysis.nmi_curve(), analysis.gain_curve());
-        let c = app.cursor.min(analysis.slices() - 1);
+        let h = &curves.histories;
+        let (nmi, gain) = (h.nmi_curve(), h.gain_curve());
+        let c = self.cursor.min(h.slices() - 1);
         let at = |v: &[f64]| {
             c.checked_sub(1)
                 .and_then(|i| v.get(i))
@@ -103,12 +140,6 @@ impl Widget for CurvesPane<'_> {
         let block = self.theme.block(title, self.focused);
         let inner = block.inner(area);
         block.render(area, buf);
-        let boundaries: Vec<usize> = analysis
-            .slabs(app.method, app.position)
-            .iter()
-            .skip(1)
-            .map(|s| s.0)
-            .collect();
         let [top, bottom] =
             Layout::vertical([Constraint::Percentage(50), Constraint::Percentage(50)]).areas(inner);
         let nmi = Curve {
@@ -121,7 +152,7 @@ impl Widget for CurvesPane<'_> {
             name: "ΔI of a first cut",
             color: Color::Magenta,
         };
-        chart(&nmi, &boundaries, c, self.theme, top, buf);
-        chart(&gain, &boundaries, c, self.theme, bottom, buf);
+        chart(&nmi, &curves.boundaries, c, self.theme, top, buf);
+        chart(&gain, &curves.boundaries, c, self.theme, bottom, buf);
     }
 }

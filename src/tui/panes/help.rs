@@ -6,7 +6,7 @@ use ratatui::style::{Color, Modifier};
 use ratatui::widgets::{Clear, Row, Table, Widget};
 
 use crate::tui::keymap::HELP;
-use crate::tui::ui::Theme;
+use crate::tui::theme::Theme;
 
 /// The help overlay, centred over the screen.
 pub struct Help {
@@ -14,7 +14,7 @@ pub struct Help {
     pub theme: Theme,
 }
 
-impl Widget for Help {
+impl Widget for &Help {
     fn render(self, area: Rect, buf: &mut Buffer) {
         let height = (HELP.len() as u16 + 2).min(area.height);
         let width = 56.min(area.width);

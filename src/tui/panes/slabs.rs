@@ -5,95 +5,172 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Rect};
 use ratatui::style::{Color, Modifier};
 use ratatui::widgets::{Row, Table, Widget};
-use slabscope::partition::Method;
+use slabscope::Histories;
+use slabscope::partition::{Method, SlabInfo, slab_text};
 
 use super::placeholder;
-use crate::tui::app::App;
-use crate::tui::ui::Theme;
+use crate::tui::event::Load;
+use crate::tui::theme::Theme;
 
-/// The slabs pane.
-pub struct SlabsPane<'a> {
-    /// The state.
-    pub app: &'a App,
-    /// Colours.
-    pub theme: Theme,
-    /// Whether it has the focus.
-    pub focused: bool,
+/// The partition as the table shows it.
+pub struct SlabTable {
+    /// Slices of the stack.
+    pub slices: usize,
+    /// Whether the boundary values are NMI (bottom-up) or ΔI.
+    pub method: Method,
+    /// Each slab.
+    pub info: Vec<SlabInfo>,
+    /// The value at each slab's boundary with the next: NMI where the history knows it
+    /// (bottom-up), else ΔI.
+    pub next: Vec<f64>,
 }
 
-impl Widget for SlabsPane<'_> {
+impl SlabTable {
+    /// The table of `method` at `position` of `h`.
+    pub fn new(h: &Histories, method: Method, position: usize) -> Self {
+        let slabs = h.slabs(method, position);
+        let next = match h.known_nmi(method, position) {
+            Some(nmi) => nmi,
+            None => h.boundary_gains(&slabs),
+        };
+        Self {
+            slices: h.slices(),
+            method,
+            info: h.describe(&slabs),
+            next,
+        }
+    }
+}
+
+/// The slabs pane's state.
+pub struct SlabsPane {
+    /// The table, or the gauge of the histories behind it.
+    pub table: Load<SlabTable>,
+    /// The selected slab.
+    pub row: usize,
+    /// Whether it has the focus.
+    pub focused: bool,
+    /// Colours.
+    pub theme: Theme,
+}
+
+impl SlabsPane {
+    /// An empty pane.
+    pub fn new(theme: Theme) -> Self {
+        Self {
+            table: Load::Idle,
+            row: 0,
+            focused: false,
+            theme,
+        }
+    }
+
+    /// Number of slabs shown.
+    pub fn len(&self) -> usize {
+        self.table.ready().map_or(0, |t| t.info.len())
+    }
+}
+
+/// Which columns fit: the mean where there is room, the millimetre range where there is more.
+struct Columns {
+    medium: bool,
+    wide: bool,
+}
+
+impl Columns {
+    fn of(width: u16) -> Self {
+        Self {
+            medium: width >= 41,
+            wide: width >= 56,
+        }
+    }
+
+    fn header(&self, method: Method) -> Vec<&'static str> {
+        let mut h = vec!["#", "slices", "mm"];
+        if self.wide {
+            h.push("from–to mm");
+        }
+        h.push("H");
+        if self.medium {
+            h.push("mean");
+        }
+        h.push(if method == Method::BottomUp {
+            "NMI→"
+        } else {
+            "ΔI→"
+        });
+        h
+    }
+
+    fn cells(&self, i: usize, s: &SlabInfo, next: Option<f64>) -> Vec<String> {
+        let mark = if s.near_empty { " ∅" } else { "" };
+        let mut cells = vec![
+            format!("{i}{mark}"),
+            slab_text(s.slices),
+            format!("{:.1}", s.mm.1 - s.mm.0),
+        ];
+        if self.wide {
+            cells.push(format!("{:.1}–{:.1}", s.mm.0, s.mm.1));
+        }
+        cells.push(format!("{:.2}", s.entropy));
+        if self.medium {
+            cells.push(s.mean.map_or_else(|| "-".into(), |m| format!("{m:.1}")));
+        }
+        cells.push(next.map_or_else(String::new, |v| format!("{v:.4}")));
+        cells
+    }
+
+    fn widths(&self) -> Vec<Constraint> {
+        let mut w = vec![
+            Constraint::Length(3),
+            Constraint::Length(8),
+            Constraint::Length(5),
+        ];
+        if self.wide {
+            w.push(Constraint::Length(13));
+        }
+        w.push(Constraint::Length(4));
+        if self.medium {
+            w.push(Constraint::Length(7));
+        }
+        w.push(Constraint::Min(6));
+        w
+    }
+}
+
+impl Widget for &SlabsPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let app = self.app;
-        let Some(analysis) = app.analysis.ready() else {
+        let Load::Ready(table) = &self.table else {
             let block = self.theme.block(" Slabs ".into(), self.focused);
             let inner = block.inner(area);
             block.render(area, buf);
+            let idle = "waiting for the best axis…";
             placeholder(
-                &app.analysis,
+                &self.table.status(),
                 "partition",
-                "waiting for the best axis…",
+                idle,
                 self.theme,
                 inner,
                 buf,
             );
             return;
         };
-        let slabs = analysis.slabs(app.method, app.position);
-        let info = analysis.describe(&slabs);
-        let nmi = analysis.known_nmi(app.method, app.position);
-        let gains = analysis.gains(&slabs);
-        let title = format!(" Slabs: {} of {} slices ", slabs.len(), analysis.slices());
-        let next_header = if app.method == Method::BottomUp {
-            "NMI→"
-        } else {
-            "ΔI→"
-        };
-        // The mean where there is room, and the millimetre range where there is more.
-        let (medium, wide) = (area.width >= 41, area.width >= 56);
-        let mut header = vec!["#", "slices", "mm"];
-        if wide {
-            header.push("from–to mm");
-        }
-        header.push("H");
-        if medium {
-            header.push("mean");
-        }
-        header.push(next_header);
-        let header =
-            Row::new(header).style(self.theme.fg(Color::DarkGray).add_modifier(Modifier::BOLD));
+        let title = format!(" Slabs: {} of {} slices ", table.info.len(), table.slices);
+        let columns = Columns::of(area.width);
+        let header = Row::new(columns.header(table.method))
+            .style(self.theme.fg(Color::DarkGray).add_modifier(Modifier::BOLD));
         let visible = usize::from(area.height.saturating_sub(3));
-        let first = app.slab_row.saturating_sub(visible.saturating_sub(1));
-        let rows: Vec<Row> = info
+        let first = self.row.saturating_sub(visible.saturating_sub(1));
+        let rows: Vec<Row> = table
+            .info
             .iter()
             .enumerate()
             .skip(first)
             .take(visible)
             .map(|(i, s)| {
-                let next = match (&nmi, gains.get(i)) {
-                    (Some(n), _) if i + 1 < slabs.len() => {
-                        format!("{:.4}", n.get(i).copied().unwrap_or(f64::NAN))
-                    }
-                    (None, Some(g)) => format!("{g:.4}"),
-                    _ => String::new(),
-                };
-                let mean = s.mean.map_or_else(|| "-".into(), |m| format!("{m:.1}"));
-                let mark = if s.near_empty { " ∅" } else { "" };
-                let thickness = format!("{:.1}", s.mm.1 - s.mm.0);
-                let mut cells = vec![
-                    format!("{i}{mark}"),
-                    super::slices_text(s.slices),
-                    thickness,
-                ];
-                if wide {
-                    cells.push(format!("{:.1}–{:.1}", s.mm.0, s.mm.1));
-                }
-                cells.push(format!("{:.2}", s.entropy));
-                if medium {
-                    cells.push(mean);
-                }
-                cells.push(next);
-                let row = Row::new(cells);
-                match (i == app.slab_row, self.focused) {
+                let next = table.next.get(i).copied();
+                let row = Row::new(columns.cells(i, s, next));
+                match (i == self.row, self.focused) {
                     (true, true) => row.style(self.theme.selected()),
                     (true, false) => row.style(self.theme.fg(Color::Yellow)),
                     _ if s.near_empty => row.style(self.theme.fg(Color::DarkGray)),
@@ -101,20 +178,7 @@ impl Widget for SlabsPane<'_> {
                 }
             })
             .collect();
-        let mut widths = vec![
-            Constraint::Length(3),
-            Constraint::Length(8),
-            Constraint::Length(5),
-        ];
-        if wide {
-            widths.push(Constraint::Length(13));
-        }
-        widths.push(Constraint::Length(4));
-        if medium {
-            widths.push(Constraint::Length(7));
-        }
-        widths.push(Constraint::Min(6));
-        Table::new(rows, widths)
+        Table::new(rows, columns.widths())
             .header(header)
             .block(self.theme.block(title, self.focused))
             .render(area, buf);

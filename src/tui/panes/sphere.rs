@@ -5,10 +5,10 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::{Color, Style};
 use ratatui::widgets::Widget;
+use slabscope::geometry::dot;
 use slabscope::view::AxisEntropy;
-use slabscope::volume::sampling::dot;
 
-use crate::tui::ui::Theme;
+use crate::tui::theme::Theme;
 
 /// The sphere map.
 pub struct SphereMap<'a> {

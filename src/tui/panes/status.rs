@@ -5,22 +5,58 @@ use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
+use slabscope::partition::Method;
+use slabscope::{AnalysisParams, Progress};
 
-use crate::tui::app::{App, Ask};
-use crate::tui::ui::Theme;
+use crate::tui::event::Ask;
+use crate::tui::theme::Theme;
 
-/// The status lines.
-pub struct StatusLines<'a> {
-    /// The state.
-    pub app: &'a App,
+/// A line of text being typed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Prompt {
+    /// What it asks for.
+    pub ask: Ask,
+    /// What has been typed.
+    pub text: String,
+}
+
+/// The status lines' state.
+pub struct StatusBar {
+    /// A prompt being typed.
+    pub prompt: Option<Prompt>,
+    /// The last message for the user.
+    pub message: Option<String>,
+    /// What the last step did.
+    pub explanation: Option<String>,
+    /// The method.
+    pub method: Method,
+    /// Position, slab count and threshold.
+    pub position: Option<String>,
+    /// Background work under way, each with its progress.
+    pub jobs: Vec<(&'static str, Progress)>,
+    /// The analysis settings, short.
+    pub settings: String,
     /// Colours.
     pub theme: Theme,
 }
 
-impl Widget for StatusLines<'_> {
-    fn render(self, area: Rect, buf: &mut Buffer) {
-        let app = self.app;
-        let first = if let Some(p) = &app.prompt {
+impl StatusBar {
+    /// Empty lines, with the settings of `params`.
+    pub fn new(params: &AnalysisParams, theme: Theme) -> Self {
+        Self {
+            prompt: None,
+            message: None,
+            explanation: None,
+            method: params.method,
+            position: None,
+            jobs: Vec::new(),
+            settings: settings_text(params),
+            theme,
+        }
+    }
+
+    fn first_line(&self) -> Line<'static> {
+        if let Some(p) = &self.prompt {
             let what = match p.ask {
                 Ask::Axis => "axis (x, y, z or DX,DY,DZ)",
                 Ask::Threshold => "threshold (empty clears)",
@@ -29,53 +65,73 @@ impl Widget for StatusLines<'_> {
                 Span::styled(format!("{what}> "), self.theme.fg(Color::Cyan)),
                 Span::raw(format!("{}█", p.text)),
             ])
-        } else if let Some(m) = &app.message {
+        } else if let Some(m) = &self.message {
             Line::from(Span::styled(m.clone(), self.theme.fg(Color::Yellow)))
-        } else if let Some(a) = app.analysis.ready() {
-            Line::from(Span::styled(
-                a.explain(app.method, app.position),
-                self.theme.fg(Color::Green),
-            ))
+        } else if let Some(e) = &self.explanation {
+            Line::from(Span::styled(e.clone(), self.theme.fg(Color::Green)))
         } else {
             Line::from("")
-        };
-        let method = match app.method {
-            slabscope::partition::Method::TopDown => "top-down",
-            slabscope::partition::Method::BottomUp => "bottom-up",
-            slabscope::partition::Method::Optimal => "optimal",
+        }
+    }
+
+    fn second_line(&self, width: u16) -> Line<'static> {
+        let method = match self.method {
+            Method::TopDown => "top-down",
+            Method::BottomUp => "bottom-up",
+            Method::Optimal => "optimal",
         };
         let mut parts = vec![Span::styled(
             format!(" {method} "),
             self.theme.selected().add_modifier(Modifier::BOLD),
         )];
-        if let Some(a) = app.analysis.ready() {
-            let threshold = app
-                .threshold
-                .map_or_else(String::new, |t| format!("  threshold {t}"));
-            parts.push(Span::raw(format!(
-                " step {}/{}  {} slabs{threshold} ",
-                app.position,
-                a.last(app.method),
-                a.slab_count(app.method, app.position),
-            )));
+        if let Some(p) = &self.position {
+            parts.push(Span::raw(format!(" {p} ")));
         }
-        for (job, running) in [
-            ("views", app.views.running()),
-            ("histories", app.analysis.running()),
-        ] {
-            if running {
-                parts.push(Span::styled(
-                    format!(" {job}… "),
-                    self.theme.fg(Color::Cyan),
-                ));
-            }
+        for (job, p) in &self.jobs {
+            let text = format!(" {job}: {} {:.0}% ", p.phase, p.fraction * 100.0);
+            parts.push(Span::styled(text, self.theme.fg(Color::Cyan)));
         }
-        let hints = if area.width >= 100 {
+        if width >= 100 {
+            parts.push(Span::styled(
+                format!(" {} ", self.settings),
+                self.theme.fg(Color::DarkGray),
+            ));
+        }
+        let hints = if width >= 140 {
             " n/p step  +/- slabs  m method  Tab pane  ? help  q quit"
         } else {
             " n/p  +/-  m  ? help  q quit"
         };
         parts.push(Span::styled(hints, self.theme.fg(Color::DarkGray)));
-        Paragraph::new(vec![first, Line::from(parts)]).render(area, buf);
+        Line::from(parts)
+    }
+}
+
+/// `32 bins, L 3, level 1`, with the phases, spacings and background when set.
+pub fn settings_text(p: &AnalysisParams) -> String {
+    let v = &p.view;
+    let mut parts = vec![
+        format!("{} bins", v.sampling.bins),
+        format!("L {}", v.block),
+        format!("level {}", v.level),
+    ];
+    if v.phases > 0 {
+        parts.push(format!("phases {}", v.phases));
+    }
+    if let Some(x) = v.sampling.ray_spacing {
+        parts.push(format!("rays {x} mm"));
+    }
+    if let Some(y) = v.sampling.sample_spacing {
+        parts.push(format!("samples {y} mm"));
+    }
+    if let Some(b) = p.background {
+        parts.push(format!("background ≤ {b}"));
+    }
+    parts.join(", ")
+}
+
+impl Widget for &StatusBar {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        Paragraph::new(vec![self.first_line(), self.second_line(area.width)]).render(area, buf);
     }
 }

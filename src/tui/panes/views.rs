@@ -2,54 +2,93 @@
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
-use ratatui::style::{Color, Modifier};
+use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
+use slabscope::view::AxisEntropy;
+use slabscope::{Axis, ViewSearch};
 
+use super::placeholder;
 use super::sphere::SphereMap;
-use super::{axis_text, placeholder};
-use crate::tui::app::{App, Load};
-use crate::tui::ui::Theme;
+use crate::tui::event::Load;
+use crate::tui::theme::Theme;
 
-/// The viewpoints pane.
-pub struct ViewsPane<'a> {
-    /// The state.
-    pub app: &'a App,
-    /// Colours.
-    pub theme: Theme,
+/// The viewpoints pane's state.
+pub struct ViewsPane {
+    /// The view search.
+    pub views: Load<ViewSearch>,
+    /// The selected row.
+    pub row: usize,
+    /// The axis being partitioned.
+    pub current: Option<[f64; 3]>,
+    /// What to say before the search starts (loading, or why the volume did not load).
+    pub idle: String,
     /// Whether it has the focus.
     pub focused: bool,
+    /// Colours.
+    pub theme: Theme,
 }
 
-impl Widget for ViewsPane<'_> {
-    fn render(self, area: Rect, buf: &mut Buffer) {
-        let title = match self.app.views.ready() {
-            Some(v) if area.width >= 44 => {
-                format!(" Viewpoints: {} axes, entropy rate h ", v.views.len())
-            }
-            Some(v) => format!(" {} axes, h ", v.views.len()),
-            None => " Viewpoints ".into(),
+impl ViewsPane {
+    /// A pane waiting for the volume called `name`.
+    pub fn new(name: &str, theme: Theme) -> Self {
+        Self {
+            views: Load::Idle,
+            row: 0,
+            current: None,
+            idle: format!("loading {name}…"),
+            focused: true,
+            theme,
+        }
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.views.ready().map_or(0, |v| v.views.len())
+    }
+
+    /// The axis of the selected row.
+    pub fn selected(&self) -> Option<[f64; 3]> {
+        self.views
+            .ready()
+            .and_then(|v| v.views.get(self.row))
+            .map(|v| v.axis)
+    }
+
+    /// One row: a mark, the rank, the axis and its entropy rate, compact in a narrow list.
+    fn line(&self, i: usize, v: &AxisEntropy, width: u16) -> Line<'static> {
+        let axis = Axis::new(v.axis).unwrap_or(Axis::Z);
+        let current = self
+            .current
+            .is_some_and(|a| Axis::new(a).is_ok_and(|a| a.angle(axis) < 1e-6));
+        let mark = match (current, i == 0) {
+            (true, _) => "●",
+            (false, true) => "*",
+            _ => " ",
         };
-        let block = self.theme.block(title, self.focused);
-        let inner = block.inner(area);
-        block.render(area, buf);
-        let Load::Ready(views) = &self.app.views else {
-            let idle = match &self.app.volume {
-                Load::Failed(e) => format!("cannot load the volume: {e}"),
-                _ => format!("loading {}…", self.app.name),
-            };
-            placeholder(
-                &self.app.views,
-                "view search",
-                &idle,
-                self.theme,
-                inner,
-                buf,
-            );
-            return;
+        let text = if width >= 38 {
+            let name = axis.name().map_or(String::new(), |n| format!(" {n}"));
+            format!("{mark}{:>3} {axis}{name} {:.4}", i + 1, v.entropy_rate)
+        } else {
+            format!("{mark}{:>2} {axis:.2} {:.3}", i + 1, v.entropy_rate)
         };
-        // The sphere map takes the right part of a wide pane or the bottom of a tall one.
-        let (list, map) = if inner.width >= 70 {
+        let mut style = if current {
+            self.theme.fg(Color::Yellow)
+        } else {
+            self.theme.fg(Color::Reset)
+        };
+        if i == self.row && self.focused {
+            style = style.patch(self.theme.selected());
+        } else if i == self.row {
+            style = style.add_modifier(Modifier::BOLD);
+        }
+        Line::from(Span::styled(text, style))
+    }
+
+    /// The list's area and the sphere map's, which takes the right part of a wide pane or the
+    /// bottom of a tall one.
+    fn split(inner: Rect) -> (Rect, Option<Rect>) {
+        if inner.width >= 70 {
             let [l, m] =
                 Layout::horizontal([Constraint::Length(38), Constraint::Min(0)]).areas(inner);
             (l, Some(m))
@@ -60,61 +99,51 @@ impl Widget for ViewsPane<'_> {
             (l, Some(m))
         } else {
             (inner, None)
+        }
+    }
+}
+
+impl Widget for &ViewsPane {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        let title = match self.views.ready() {
+            Some(v) if area.width >= 44 => {
+                format!(" Viewpoints: {} axes, entropy rate h ", v.views.len())
+            }
+            Some(v) => format!(" {} axes, h ", v.views.len()),
+            None => " Viewpoints ".into(),
         };
+        let block = self.theme.block(title, self.focused);
+        let inner = block.inner(area);
+        block.render(area, buf);
+        let Load::Ready(views) = &self.views else {
+            placeholder(
+                &self.views.status(),
+                "view search",
+                &self.idle,
+                self.theme,
+                inner,
+                buf,
+            );
+            return;
+        };
+        let (list, map) = ViewsPane::split(inner);
         let rows = usize::from(list.height);
-        let first = self.app.view_row.saturating_sub(rows.saturating_sub(1));
+        let first = self.row.saturating_sub(rows.saturating_sub(1));
         let lines: Vec<Line> = views
             .views
             .iter()
             .enumerate()
             .skip(first)
             .take(rows)
-            .map(|(i, v)| {
-                let current = self
-                    .app
-                    .axis
-                    .is_some_and(|a| slabscope::view::axis_angle(a, v.axis) < 1e-6);
-                let mark = match (current, i == 0) {
-                    (true, _) => "●",
-                    (false, true) => "*",
-                    _ => " ",
-                };
-                let text = if list.width >= 38 {
-                    format!(
-                        "{mark}{:>3} {} {:.4}",
-                        i + 1,
-                        axis_text(v.axis),
-                        v.entropy_rate
-                    )
-                } else {
-                    let c = v.axis.map(|c| if c.abs() < 5e-3 { 0.0 } else { c });
-                    format!(
-                        "{mark}{:>2} [{:5.2},{:5.2},{:5.2}] {:.3}",
-                        i + 1,
-                        c[0],
-                        c[1],
-                        c[2],
-                        v.entropy_rate
-                    )
-                };
-                let mut style = if current {
-                    self.theme.fg(Color::Yellow)
-                } else {
-                    self.theme.fg(Color::Reset)
-                };
-                if i == self.app.view_row && self.focused {
-                    style = style.patch(self.theme.selected());
-                } else if i == self.app.view_row {
-                    style = style.add_modifier(Modifier::BOLD);
-                }
-                Line::from(Span::styled(text, style))
-            })
+            .map(|(i, v)| self.line(i, v, list.width))
             .collect();
-        Paragraph::new(lines).render(list, buf);
+        Paragraph::new(lines)
+            .style(Style::default())
+            .render(list, buf);
         if let Some(map) = map {
             SphereMap {
                 views: &views.views,
-                current: self.app.axis,
+                current: self.current,
                 theme: self.theme,
             }
             .render(map, buf);

@@ -30,10 +30,11 @@
 
 use std::arch::x86_64::*;
 
+use super::BinSampler;
 use super::{Walker, mixed_bin};
 use crate::measure::{DenseCounts, Run, RunEnds};
+use crate::view::lattice::FIXED_BITS;
 use crate::volume::cells::MIXED;
-use crate::volume::sampling::{BinSampler, FIXED_BITS};
 
 /// Rays per group: eight 32-bit lanes of a 256-bit register.
 const LANES: usize = 8;

@@ -11,7 +11,12 @@ use crate::error::Result;
 use crate::measure::{BlockCounts, Counter, DenseCounts, Run};
 use crate::progress::Monitor;
 use crate::volume::cells::MIXED;
-use crate::volume::sampling::{BinSampler, Lattice, cross, round_half_away, to_fixed};
+mod sampler;
+
+pub use sampler::{BinSampler, InnerSpans};
+
+use crate::geometry::cross;
+use crate::view::lattice::{Lattice, round_half_away, to_fixed};
 
 /// Spread of an axis's entropy rate over shifted lattices (`--phases`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -532,11 +537,11 @@ fn column_rate(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::min_spacing;
     use crate::measure::block_entropies;
     use crate::testing::Lcg;
     use crate::volume::Volume;
     use crate::volume::VoxelType;
-    use crate::volume::sampling::min_spacing;
 
     fn random_volume(dims: [usize; 3], levels: u32, seed: u64) -> Volume {
         let mut lcg = Lcg::new(seed);

@@ -1,0 +1,96 @@
+//! The whole analysis of one volume, as `analyze`, the TUI's export and triage run it: the most
+//! structured view (paper §3.1, §4), then the slabs along it (paper §5).
+
+use crate::error::Result;
+use crate::geometry::Axis;
+use crate::partition::{Method, Partition, PartitionParams, StackParams, Stop, partition};
+use crate::progress::Monitor;
+use crate::view::{ViewParams, ViewSearch, search};
+use crate::volume::Volume;
+
+/// What to analyse and how. The sampling (bins and spacings) is stated once, in `view`, and used
+/// by the slicing too.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnalysisParams {
+    /// The view search's parameters.
+    pub view: ViewParams,
+    /// The axis to partition along; `None` for the view search's best.
+    pub axis: Option<Axis>,
+    /// Run the view search even when `axis` is given.
+    pub search_views: bool,
+    /// The partition method.
+    pub method: Method,
+    /// When to stop splitting or merging.
+    pub stop: Stop,
+    /// Voxels at or below this value are left out of every slab histogram.
+    pub background: Option<f32>,
+}
+
+impl Default for AnalysisParams {
+    fn default() -> Self {
+        Self {
+            view: ViewParams::default(),
+            axis: None,
+            search_views: false,
+            method: Method::TopDown,
+            stop: Stop::Slabs(4),
+            background: None,
+        }
+    }
+}
+
+impl AnalysisParams {
+    /// How the slices are cut: the view search's sampling, and the background.
+    pub fn stack(&self) -> StackParams {
+        StackParams {
+            sampling: self.view.sampling,
+            background: self.background,
+        }
+    }
+
+    /// The partition's parameters.
+    pub fn partition(&self) -> PartitionParams {
+        PartitionParams {
+            method: self.method,
+            stop: self.stop,
+            stack: self.stack(),
+        }
+    }
+
+    /// Whether the view search runs.
+    pub fn runs_search(&self) -> bool {
+        self.axis.is_none() || self.search_views
+    }
+}
+
+/// The result of an analysis.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// The view search, when it ran.
+    pub views: Option<ViewSearch>,
+    /// The partition along the chosen axis.
+    pub partition: Partition,
+}
+
+impl Analysis {
+    /// The axis partitioned along.
+    pub fn axis(&self) -> [f64; 3] {
+        self.partition.axis
+    }
+}
+
+/// Runs the view search (unless an axis is given) and partitions along the axis.
+pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> Result<Analysis> {
+    let views = if params.runs_search() {
+        Some(search(volume, &params.view, monitor)?)
+    } else {
+        None
+    };
+    let axis = match (params.axis, &views) {
+        (Some(a), _) => a.direction(),
+        (None, Some(v)) => v.best().axis,
+        (None, None) => unreachable!("the view search runs when no axis is given"),
+    };
+    let partition = partition(volume, axis, &params.partition(), monitor)?;
+    Ok(Analysis { views, partition })
+}

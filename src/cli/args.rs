@@ -1,0 +1,187 @@
+//! The flags several commands share: how to read a file, and how to analyse it (view search and
+//! partition). `slabscope [FILE]` takes the same analysis flags as `analyze`.
+
+use clap::{Args, ValueEnum};
+use slabscope::volume::io::{RawOptions, default_max_memory, parse_bytes, parse_dims};
+use slabscope::volume::{Endian, VoxelType};
+use slabscope::{AnalysisParams, Axis, LoadOptions, Method, SamplingParams, Stop, ViewParams};
+
+/// How to read the input: needed only for headerless raw files, and to change the memory limit.
+#[derive(Debug, Args, Clone, Default)]
+pub struct LoadArgs {
+    /// Dimensions of a headerless raw file, NXxNYxNZ (makes any file load as raw).
+    #[arg(long, value_name = "NXxNYxNZ", value_parser = parse_dims_arg)]
+    pub dims: Option<[usize; 3]>,
+    /// Voxel type of a raw file: u8, i8, u16, i16, u32, i32, f32 or f64.
+    #[arg(long = "type", value_name = "TYPE", value_parser = parse_type_arg)]
+    pub voxel_type: Option<VoxelType>,
+    /// Voxel spacing of a raw file in mm, SX,SY,SZ.
+    #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_spacing_arg)]
+    pub spacing: Option<[f64; 3]>,
+    /// Byte order of a raw file.
+    #[arg(long, value_name = "little|big", value_parser = parse_endian_arg)]
+    pub endian: Option<Endian>,
+    /// Bytes to skip at the start of a raw file.
+    #[arg(long, value_name = "BYTES")]
+    pub offset: Option<u64>,
+    /// The most memory the loaded volume may take, e.g. 8G (default: half the physical memory).
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes_arg)]
+    pub max_memory: Option<u64>,
+}
+
+impl LoadArgs {
+    /// The library's load options.
+    pub fn options(&self) -> LoadOptions {
+        LoadOptions {
+            max_memory: self.max_memory.unwrap_or_else(default_max_memory),
+            raw: RawOptions {
+                dims: self.dims,
+                voxel_type: self.voxel_type,
+                spacing: self.spacing,
+                endian: self.endian,
+                offset: self.offset,
+            },
+        }
+    }
+}
+
+/// How to find the most structured view and the slabs along it.
+#[derive(Debug, Args, Clone)]
+pub struct AnalysisArgs {
+    /// Quantization bins.
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u16).range(2..=255))]
+    pub bins: u16,
+    /// Block length L of the entropy rate H(X^L) - H(X^(L-1)).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(2..=4))]
+    pub block: u8,
+    /// Icosphere level: 0, 1, 2, 3 or 4 for 12, 42, 162, 642 or 2562 viewpoints.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(0..=4))]
+    pub level: u8,
+    /// Distance between rays in mm (default: the smallest voxel spacing).
+    #[arg(long, value_name = "MM", value_parser = positive)]
+    pub ray_spacing: Option<f64>,
+    /// Distance between samples along a ray in mm (default: the smallest voxel spacing).
+    #[arg(long, value_name = "MM", value_parser = positive)]
+    pub sample_spacing: Option<f64>,
+    /// Also compute h on N shifted lattices per axis and report its mean and spread.
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=64))]
+    pub phases: u8,
+    /// Refine the best axes on a finer local search, to within 2 degrees.
+    #[arg(long)]
+    pub refine: bool,
+    /// The axis: best (the view search's), x, y, z, or a direction DX,DY,DZ.
+    #[arg(long, default_value = "best", value_parser = parse_axis)]
+    pub axis: AxisArg,
+    /// How to find the slabs.
+    #[arg(long, value_enum, default_value_t = MethodArg::Topdown)]
+    pub method: MethodArg,
+    /// Number of slabs.
+    #[arg(long, value_name = "K", conflicts_with = "threshold")]
+    pub slabs: Option<usize>,
+    /// Stop when the best ΔI (topdown), the largest NMI (bottomup), or the gain of one more slab
+    /// (optimal) falls below T.
+    #[arg(long, value_name = "T", value_parser = finite)]
+    pub threshold: Option<f64>,
+    /// Leave voxels at or below this value out of every histogram.
+    #[arg(long, value_name = "VALUE", value_parser = finite)]
+    pub background: Option<f64>,
+}
+
+/// `--axis`: `None` for the view search's best.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisArg(pub Option<Axis>);
+
+fn parse_axis(s: &str) -> Result<AxisArg, String> {
+    match s.trim() {
+        "best" => Ok(AxisArg(None)),
+        t => t
+            .parse::<Axis>()
+            .map(|a| AxisArg(Some(a)))
+            .map_err(|_| format!("{s:?} is not best, x, y, z or a direction DX,DY,DZ")),
+    }
+}
+
+/// The partition methods.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// Greedy splits by information gain (paper §5.1).
+    Topdown,
+    /// Greedy merges by normalized mutual information (paper §5.2).
+    Bottomup,
+    /// The partition that keeps the most information (dynamic programming).
+    Optimal,
+}
+
+impl AnalysisArgs {
+    /// The library's parameters; `search_views` runs the view search even for a named axis.
+    pub fn params(&self, search_views: bool) -> AnalysisParams {
+        AnalysisParams {
+            view: ViewParams {
+                sampling: SamplingParams {
+                    bins: usize::from(self.bins),
+                    ray_spacing: self.ray_spacing,
+                    sample_spacing: self.sample_spacing,
+                },
+                block: usize::from(self.block),
+                level: usize::from(self.level),
+                phases: usize::from(self.phases),
+                refine: self.refine,
+                ..ViewParams::default()
+            },
+            axis: self.axis.0,
+            search_views,
+            method: match self.method {
+                MethodArg::Topdown => Method::TopDown,
+                MethodArg::Bottomup => Method::BottomUp,
+                MethodArg::Optimal => Method::Optimal,
+            },
+            stop: match (self.slabs, self.threshold) {
+                (_, Some(t)) => Stop::Threshold(t),
+                (k, None) => Stop::Slabs(k.unwrap_or(4)),
+            },
+            background: self.background.map(|b| b as f32),
+        }
+    }
+}
+
+fn finite(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| format!("{s:?} is not a number"))
+}
+
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("{s:?} is not a positive number")),
+    }
+}
+
+/// Parses `NXxNYxNZ`.
+pub fn parse_dims_arg(s: &str) -> Result<[usize; 3], String> {
+    parse_dims(s).ok_or_else(|| format!("{s:?} is not NXxNYxNZ, e.g. 256x256x113"))
+}
+
+fn parse_type_arg(s: &str) -> Result<VoxelType, String> {
+    VoxelType::parse(s)
+        .ok_or_else(|| format!("{s:?} is not one of u8, i8, u16, i16, u32, i32, f32, f64"))
+}
+
+fn parse_spacing_arg(s: &str) -> Result<[f64; 3], String> {
+    slabscope::geometry::parse_triple(s)
+        .filter(|v| v.iter().all(|x| x.is_finite() && *x > 0.0))
+        .ok_or_else(|| format!("{s:?} is not three positive numbers SX,SY,SZ"))
+}
+
+fn parse_endian_arg(s: &str) -> Result<Endian, String> {
+    match s {
+        "little" => Ok(Endian::Little),
+        "big" => Ok(Endian::Big),
+        _ => Err(format!("{s:?} is not little or big")),
+    }
+}
+
+fn parse_bytes_arg(s: &str) -> Result<u64, String> {
+    parse_bytes(s).ok_or_else(|| format!("{s:?} is not a size such as 512M or 8G"))
+}

@@ -1,0 +1,156 @@
+//! The reports other programs read: the JSON object of `analyze --json` (DESIGN.md §3), the slab
+//! boundaries for renderers, and the curves as CSV. Built from library results only, so that the
+//! CLI, the TUI's export and triage print the same thing. Every JSON object carries
+//! [`SCHEMA_VERSION`], raised whenever a field changes meaning or goes away.
+
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use crate::analysis::Analysis;
+use crate::error::Result;
+use crate::partition::Partition;
+use crate::view::{AxisEntropy, ViewParams};
+use crate::volume::Volume;
+
+/// The version of the JSON contract.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The object `analyze --json` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct AnalysisReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The file as the user named it.
+    pub file: String,
+    /// `[nx, ny, nz]`.
+    pub dims: [usize; 3],
+    /// `[sx, sy, sz]`, mm.
+    pub spacing: [f64; 3],
+    /// Smallest and largest finite voxel.
+    pub range: [f32; 2],
+    /// The sampling and view-search parameters, spacings resolved to millimetres.
+    pub params: ViewParams,
+    /// Every axis of the view search, lowest entropy rate first (absent without a search).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub views: Option<Vec<AxisEntropy>>,
+    /// The most structured axis (null without a search).
+    pub best_axis: Option<[f64; 3]>,
+    /// With phases: whether the best axis's spread exceeds its margin over the runner-up.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertain: Option<bool>,
+    /// With refinement: the best axis found near the best sphere axes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refined: Option<AxisEntropy>,
+    /// The partition along the axis.
+    pub partition: Partition,
+}
+
+impl AnalysisReport {
+    /// The report of `analysis` of `volume`, read from the file `file`, run with `view` (whose
+    /// spacings are resolved here when no view search ran).
+    pub fn new(
+        file: &str,
+        volume: &Volume,
+        view: &ViewParams,
+        analysis: &Analysis,
+    ) -> Result<Self> {
+        let s = volume.stats();
+        let views = analysis.views.as_ref();
+        let params = match views {
+            Some(v) => v.params.clone(),
+            None => ViewParams {
+                sampling: view.sampling.resolved(volume.spacing())?,
+                ..view.clone()
+            },
+        };
+        Ok(Self {
+            schema_version: SCHEMA_VERSION,
+            file: file.to_string(),
+            dims: volume.dims(),
+            spacing: volume.spacing(),
+            range: [s.min, s.max],
+            params,
+            views: views.map(|v| v.views.clone()),
+            best_axis: views.map(|v| v.best().axis),
+            uncertain: views.map(|v| v.uncertain),
+            refined: views.and_then(|v| v.refined.clone()),
+            partition: analysis.partition.clone(),
+        })
+    }
+}
+
+/// The slab boundaries in the form renderers take: slice indices, millimetres along the axis
+/// and fractions of its length.
+#[derive(Clone, Debug, Serialize)]
+pub struct SlabsReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The file as the user named it.
+    pub file: String,
+    /// The canonical axis.
+    pub axis: [f64; 3],
+    /// The method that found the slabs.
+    pub method: crate::partition::Method,
+    /// Number of slices.
+    pub slices: usize,
+    /// Distance between slices, mm.
+    pub thickness_mm: f64,
+    /// The slabs in slice order.
+    pub slabs: Vec<SlabBounds>,
+}
+
+/// One slab's bounds.
+#[derive(Clone, Debug, Serialize)]
+pub struct SlabBounds {
+    /// Its number, from 0.
+    pub index: usize,
+    /// Slices `[start, end)`.
+    pub slices: (usize, usize),
+    /// Where it starts and ends along the axis, mm.
+    pub mm: (f64, f64),
+    /// Where it starts and ends as fractions of the stack.
+    pub fraction: (f64, f64),
+}
+
+impl SlabsReport {
+    /// The bounds of `p`'s slabs.
+    pub fn new(file: &str, p: &Partition) -> Self {
+        let n = p.slices as f64;
+        Self {
+            schema_version: SCHEMA_VERSION,
+            file: file.to_string(),
+            axis: p.axis,
+            method: p.method,
+            slices: p.slices,
+            thickness_mm: p.thickness,
+            slabs: p
+                .info
+                .iter()
+                .enumerate()
+                .map(|(index, s)| SlabBounds {
+                    index,
+                    slices: s.slices,
+                    mm: s.mm,
+                    fraction: (s.slices.0 as f64 / n, s.slices.1 as f64 / n),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// `cut,mm,nmi,gain`: for each boundary between slice c-1 and c, its position, the NMI of the
+/// two slices, and the ΔI of cutting the whole stack there.
+pub fn curves_csv(p: &Partition) -> String {
+    let mut out = String::from("cut,mm,nmi,gain\n");
+    for c in 1..p.slices {
+        let mm = p.offset + (c as f64 - 0.5) * p.thickness;
+        let _ = writeln!(
+            out,
+            "{c},{mm},{},{}",
+            p.nmi_curve[c - 1],
+            p.gain_curve[c - 1]
+        );
+    }
+    out
+}

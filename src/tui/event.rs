@@ -1,0 +1,271 @@
+//! What flows through the TUI: events into the loop, actions into [`App::update`], effects out of
+//! it, and the messages background jobs send back.
+//!
+//! [`App::update`]: super::app::App::update
+
+use std::sync::Arc;
+
+use crossterm::event::KeyEvent;
+use ratatui_image::protocol::Protocol;
+use slabscope::partition::{Method, Slab, StackParams};
+use slabscope::render::{CameraParams, Colormap, Gap, Mode, Preset};
+use slabscope::{Histories, Progress, ViewParams, ViewSearch, Volume};
+
+/// Everything the loop waits for.
+pub enum Event {
+    /// A key press.
+    Key(KeyEvent),
+    /// The terminal changed size.
+    Resize,
+    /// A background job's message.
+    Job(JobMsg),
+}
+
+/// Something computed in the background: not asked for yet, under way, done, or failed.
+pub enum Load<T> {
+    /// Not asked for.
+    Idle,
+    /// Under way, with its phase and the fraction done.
+    Running(Progress),
+    /// Done.
+    Ready(T),
+    /// Failed, with the message.
+    Failed(String),
+}
+
+impl<T> Load<T> {
+    /// Under way, at the start of `phase`.
+    pub fn started(phase: &'static str) -> Self {
+        Self::Running(Progress {
+            phase,
+            fraction: 0.0,
+        })
+    }
+
+    /// The value, when ready.
+    pub fn ready(&self) -> Option<&T> {
+        match self {
+            Self::Ready(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// Whether it is under way.
+    pub fn running(&self) -> bool {
+        matches!(self, Self::Running(_))
+    }
+
+    /// The same state without the value, for a pane that shows only the gauge or the error.
+    pub fn status(&self) -> Load<()> {
+        match self {
+            Self::Idle => Load::Idle,
+            Self::Running(p) => Load::Running(*p),
+            Self::Ready(_) => Load::Ready(()),
+            Self::Failed(e) => Load::Failed(e.clone()),
+        }
+    }
+}
+
+/// Background work that can be running.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Job {
+    /// Loading the volume.
+    Load,
+    /// The view search.
+    Views,
+    /// The histories along an axis.
+    Analysis,
+    /// Writing the exports.
+    Export,
+}
+
+/// A job's message back to the UI.
+pub enum JobMsg {
+    /// Progress of a job.
+    Progress(Job, Progress),
+    /// The volume loaded (with the loader's notes), or why not.
+    Loaded(Result<(Arc<Volume>, Vec<String>), String>),
+    /// The view search's result.
+    Views(Result<Box<ViewSearch>, String>),
+    /// The histories along the axis of request `generation`.
+    Analysis(u64, Result<Arc<Histories>, String>),
+    /// A render of request `generation`.
+    Rendered(u64, Result<Box<Protocol>, String>),
+    /// An export finished: what was written, or why not.
+    Exported(Result<String, String>),
+}
+
+/// Everything the user can do, and what jobs report.
+pub enum Action {
+    /// Leave.
+    Quit,
+    /// Show or hide the key help.
+    ToggleHelp,
+    /// Move the focus to the next or previous pane.
+    Focus(isize),
+    /// Move the cursor of the focused pane.
+    Move(isize),
+    /// Page the cursor of the focused pane.
+    Page(isize),
+    /// Act on the cursor (partition along the selected axis).
+    Select,
+    /// Take `n` more steps of the history (negative: back).
+    Step(isize),
+    /// Go to the start or the end of the history.
+    StepTo(bool),
+    /// One slab more or fewer.
+    Slabs(isize),
+    /// Switch method: top-down, bottom-up, optimal.
+    CycleMethod,
+    /// Start typing an axis or a threshold.
+    Ask(Ask),
+    /// A typed character for the prompt.
+    Type(char),
+    /// Delete the prompt's last character.
+    Erase,
+    /// Accept the prompt.
+    Submit,
+    /// Close the prompt or help, or cancel running work.
+    Escape,
+    /// Orbit the camera: degrees of azimuth and elevation.
+    Orbit(f64, f64),
+    /// Zoom by a factor.
+    Zoom(f64),
+    /// Change the spread by this much.
+    Spread(f64),
+    /// DVR or MIP.
+    ToggleMode,
+    /// Next transfer function.
+    CycleTransfer,
+    /// Next colour map.
+    CycleColormap,
+    /// Uniform or similarity gaps.
+    ToggleGap,
+    /// Show the selected slab alone, or all.
+    ToggleSolo,
+    /// Perspective or orthographic.
+    TogglePerspective,
+    /// Write the view (PNG), the analysis (JSON) and the labels (NRRD).
+    Export,
+    /// The preview pane's size in cells changed.
+    PreviewArea(u16, u16),
+    /// A job's message.
+    Job(JobMsg),
+}
+
+/// What a prompt asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ask {
+    /// An axis: x, y, z or DX,DY,DZ.
+    Axis,
+    /// A threshold (empty clears it).
+    Threshold,
+}
+
+/// The look of the exploded view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Look {
+    /// Camera.
+    pub camera: CameraParams,
+    /// Spread.
+    pub spread: f64,
+    /// Gaps.
+    pub gap: Gap,
+    /// DVR or MIP.
+    pub mode: Mode,
+    /// Transfer function.
+    pub preset: Preset,
+    /// Colour map.
+    pub colormap: Colormap,
+    /// Selected slab alone.
+    pub solo: bool,
+}
+
+impl Default for Look {
+    fn default() -> Self {
+        Self {
+            camera: CameraParams::default(),
+            spread: 0.3,
+            gap: Gap::Similarity,
+            mode: Mode::Dvr,
+            preset: Preset::Auto,
+            colormap: Colormap::Grey,
+            solo: false,
+        }
+    }
+}
+
+/// What to render, at which size.
+#[derive(Clone)]
+pub struct RenderRequest {
+    /// Request number; only the newest result is shown.
+    pub generation: u64,
+    /// The slabs (empty: the whole volume, seen around `axis`).
+    pub slabs: Vec<Slab>,
+    /// The axis.
+    pub axis: [f64; 3],
+    /// NMI at each boundary, where known.
+    pub nmi: Option<Vec<f64>>,
+    /// The histories, for the slabs' geometry and unknown NMIs.
+    pub histories: Option<Arc<Histories>>,
+    /// Camera, gaps and colours.
+    pub look: Look,
+    /// The selected slab.
+    pub highlight: Option<usize>,
+    /// Preview size in cells.
+    pub cells: (u16, u16),
+}
+
+/// What to export: everything the export job needs, so that it reads nothing of the app.
+#[derive(Clone)]
+pub struct ExportRequest {
+    /// The volume's name, for the file names and the report.
+    pub name: String,
+    /// The histories along the axis.
+    pub histories: Arc<Histories>,
+    /// The view search, when done.
+    pub views: Option<ViewSearch>,
+    /// The view search's parameters.
+    pub view_params: ViewParams,
+    /// The method and position in its history.
+    pub method: Method,
+    /// The position in the method's history.
+    pub position: usize,
+    /// The look of the picture.
+    pub look: Look,
+    /// The selected slab.
+    pub highlight: Option<usize>,
+}
+
+/// What the event loop does on the app's behalf.
+#[derive(Clone)]
+pub enum Effect {
+    /// Load the volume.
+    Load,
+    /// Run the view search.
+    SearchViews(ViewParams),
+    /// Compute the histories along `axis` as request `generation`.
+    Analyze(u64, [f64; 3], StackParams),
+    /// Render.
+    Render(Box<RenderRequest>),
+    /// Write exports.
+    Export(Box<ExportRequest>),
+    /// Cancel running jobs.
+    Cancel,
+    /// Leave.
+    Quit,
+}
+
+impl std::fmt::Debug for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Load => write!(f, "Load"),
+            Self::SearchViews(_) => write!(f, "SearchViews"),
+            Self::Analyze(g, axis, _) => write!(f, "Analyze({g}, {axis:?})"),
+            Self::Render(r) => write!(f, "Render({})", r.generation),
+            Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),
+            Self::Cancel => write!(f, "Cancel"),
+            Self::Quit => write!(f, "Quit"),
+        }
+    }
+}

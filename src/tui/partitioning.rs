@@ -1,0 +1,220 @@
+//! Where the user stands in the histories along the current axis: the method, the position in its
+//! history, the threshold that chose it, and the words that explain the last step.
+
+use std::sync::Arc;
+
+use slabscope::partition::{Method, Slab, StackParams, Stop, slab_text};
+use slabscope::{Histories, Progress};
+
+use super::event::{Effect, Load};
+
+/// The partition being stepped through.
+pub struct Partitioning {
+    /// The histories along the axis.
+    pub histories: Load<Arc<Histories>>,
+    /// The axis being partitioned.
+    pub axis: Option<[f64; 3]>,
+    /// Partition method.
+    pub method: Method,
+    /// Position in the method's history.
+    pub position: usize,
+    /// Stop by threshold instead of by position.
+    pub threshold: Option<f64>,
+    /// How the slices are cut.
+    pub stack: StackParams,
+    /// The slab count asked for, for histories still to come.
+    slabs: usize,
+    generation: u64,
+}
+
+impl Partitioning {
+    /// Nothing computed yet; `stop` chooses the first position once the histories are there.
+    pub fn new(method: Method, stop: Stop, stack: StackParams) -> Self {
+        let (slabs, threshold) = match stop {
+            Stop::Slabs(k) => (k, None),
+            Stop::Threshold(t) => (4, Some(t)),
+        };
+        Self {
+            histories: Load::Idle,
+            axis: None,
+            method,
+            position: slabs.saturating_sub(1),
+            threshold,
+            stack,
+            slabs,
+            generation: 0,
+        }
+    }
+
+    /// The histories, when ready.
+    pub fn ready(&self) -> Option<&Arc<Histories>> {
+        self.histories.ready()
+    }
+
+    /// The slabs shown now, when the histories are ready.
+    pub fn slabs(&self) -> Option<Vec<Slab>> {
+        self.ready().map(|h| h.slabs(self.method, self.position))
+    }
+
+    /// The slab count shown now.
+    pub fn slab_count(&self) -> Option<usize> {
+        self.ready()
+            .map(|h| h.slab_count(self.method, self.position))
+    }
+
+    /// Starts the histories along `axis`.
+    pub fn start(&mut self, axis: [f64; 3]) -> Effect {
+        if let Some(k) = self.slab_count() {
+            self.slabs = k;
+        }
+        self.axis = Some(axis);
+        self.generation += 1;
+        self.histories = Load::started("slicing");
+        Effect::Analyze(self.generation, axis, self.stack.clone())
+    }
+
+    /// Takes the histories of request `generation`; false for a stale one.
+    pub fn finish(&mut self, generation: u64, result: Result<Arc<Histories>, String>) -> bool {
+        if generation != self.generation {
+            return false;
+        }
+        match result {
+            Ok(h) => {
+                self.position = match self.threshold {
+                    Some(t) => h.position_for_threshold(self.method, t),
+                    None => h.position_for(self.method, self.slabs),
+                };
+                self.histories = Load::Ready(h);
+            }
+            Err(e) => self.histories = Load::Failed(e),
+        }
+        true
+    }
+
+    /// Records the progress of the running computation.
+    pub fn progress(&mut self, p: Progress) {
+        if self.histories.running() {
+            self.histories = Load::Running(p);
+        }
+    }
+
+    /// Moves `by` steps; the message to show when already at an end.
+    pub fn step(&mut self, by: isize) -> Result<(), &'static str> {
+        let Some(h) = self.ready() else { return Ok(()) };
+        let position =
+            (self.position as isize + by).clamp(0, h.last(self.method) as isize) as usize;
+        if position == self.position {
+            return Err(if by > 0 {
+                "at the end of the history"
+            } else {
+                "at the start of the history"
+            });
+        }
+        self.threshold = None;
+        self.position = position;
+        Ok(())
+    }
+
+    /// Goes to the start or the end of the history.
+    pub fn step_to(&mut self, end: bool) {
+        if let Some(h) = self.ready() {
+            self.position = if end { h.last(self.method) } else { 0 };
+            self.threshold = None;
+        }
+    }
+
+    /// One slab more or fewer (`by`).
+    pub fn change_slabs(&mut self, by: isize) {
+        if let Some(h) = self.ready() {
+            let k = h.slab_count(self.method, self.position) as isize + by;
+            self.position = h.position_for(self.method, k.max(1) as usize);
+            self.threshold = None;
+        }
+    }
+
+    /// Switches to the next method, keeping the slab count (or the threshold).
+    pub fn cycle_method(&mut self) {
+        let k = self.slab_count();
+        self.method = match self.method {
+            Method::TopDown => Method::BottomUp,
+            Method::BottomUp => Method::Optimal,
+            Method::Optimal => Method::TopDown,
+        };
+        if let Some(h) = self.ready() {
+            self.position = match self.threshold {
+                Some(t) => h.position_for_threshold(self.method, t),
+                None => h.position_for(self.method, k.unwrap_or(self.slabs)),
+            };
+        }
+    }
+
+    /// Stops at `threshold`, or clears it.
+    pub fn set_threshold(&mut self, threshold: Option<f64>) {
+        self.threshold = threshold;
+        if let (Some(t), Some(h)) = (threshold, self.ready()) {
+            self.position = h.position_for_threshold(self.method, t);
+        }
+    }
+
+    /// `step 3/39  4 slabs  threshold 0.01`.
+    pub fn position_text(&self) -> Option<String> {
+        let h = self.ready()?;
+        let threshold = self
+            .threshold
+            .map_or_else(String::new, |t| format!("  threshold {t}"));
+        Some(format!(
+            "step {}/{}  {} slabs{threshold}",
+            self.position,
+            h.last(self.method),
+            h.slab_count(self.method, self.position),
+        ))
+    }
+
+    /// One sentence on the last step taken to reach the position, for teaching.
+    pub fn explain(&self) -> Option<String> {
+        let h = self.ready()?;
+        let (method, position) = (self.method, self.position);
+        Some(match (method, position) {
+            _ if !h.has(method) => format!("{} is not available here", method.name()),
+            (Method::TopDown, 0) => format!(
+                "top-down starts with one slab of {} slices; n splits it",
+                h.slices()
+            ),
+            (Method::TopDown, p) => {
+                let s = &h.top().steps[p - 1];
+                let candidates: usize = h.slabs(method, p - 1).iter().map(|(a, b)| b - a - 1).sum();
+                format!(
+                    "split {} at {}: ΔI {:.4} bits, the largest of {candidates} cuts; I = {:.4} bits",
+                    slab_text(s.split),
+                    s.at,
+                    s.gain,
+                    s.information
+                )
+            }
+            (Method::BottomUp, 0) => format!(
+                "bottom-up starts with {} one-slice slabs; n merges the most similar pair",
+                h.slices()
+            ),
+            (Method::BottomUp, p) => {
+                let bottom = h.bottom()?;
+                let m = &bottom.steps[p - 1];
+                format!(
+                    "merged {} and {}: NMI {:.4}, the highest of {} adjacent pairs",
+                    slab_text(m.merge.0),
+                    slab_text(m.merge.1),
+                    m.nmi,
+                    m.pairs.len()
+                )
+            }
+            (Method::Optimal, p) => {
+                let k = p + 1;
+                let best = h.optimal()?.by_count[p].information;
+                let greedy = h.top().information(k);
+                format!(
+                    "the best {k} slabs keep I = {best:.4} bits; greedy top-down {greedy:.4} ({:.4} less)",
+                    best - greedy
+                )
+            }
+        })
+    }
+}

@@ -1,0 +1,530 @@
+//! The ray lattice of DESIGN.md §2 (paper §4): parallel rays a ray spacing apart along an axis,
+//! samples a sample spacing apart along them, counted inside the box of the voxel centres. The
+//! view search walks it ray by ray; oblique slice stacks resample the volume on it. Positions are
+//! also kept in 32.32 fixed point, so that a walk advances by exact integer additions.
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::geometry::{coordinate_axis, dot, frame, min_spacing};
+use crate::volume::Volume;
+
+/// How a volume is sampled and its samples quantized: the same for the view search and for the
+/// slices it partitions, so that both see one signal. `None` spacings mean the smallest voxel
+/// spacing.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SamplingParams {
+    /// Quantization bins B (2 to 255).
+    pub bins: usize,
+    /// Distance between rays (and between oblique slices' pixels), mm.
+    pub ray_spacing: Option<f64>,
+    /// Distance between samples along a ray (and between oblique slices), mm.
+    pub sample_spacing: Option<f64>,
+}
+
+impl Default for SamplingParams {
+    fn default() -> Self {
+        Self {
+            bins: 32,
+            ray_spacing: None,
+            sample_spacing: None,
+        }
+    }
+}
+
+impl SamplingParams {
+    /// The spacings in mm for a volume of `spacing`: the given ones, else the smallest voxel
+    /// spacing; an error for a spacing that is not a positive finite number.
+    pub fn spacings(&self, spacing: [f64; 3]) -> Result<(f64, f64)> {
+        let s = min_spacing(spacing);
+        let x = self.ray_spacing.unwrap_or(s);
+        let y = self.sample_spacing.unwrap_or(s);
+        for (name, v) in [("ray_spacing", x), ("sample_spacing", y)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::invalid(name, v, "a positive number of mm"));
+            }
+        }
+        Ok((x, y))
+    }
+
+    /// These parameters with the spacings resolved for a volume of `spacing`.
+    pub fn resolved(&self, spacing: [f64; 3]) -> Result<Self> {
+        let (x, y) = self.spacings(spacing)?;
+        Ok(Self {
+            ray_spacing: Some(x),
+            sample_spacing: Some(y),
+            ..*self
+        })
+    }
+}
+
+/// One ray of a lattice: sample `k` (for `k` in `k0..=k1`) lies at `origin + k·step` in voxel
+/// index coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Position of sample `k = 0`, in voxel index coordinates.
+    pub origin: [f64; 3],
+    /// Displacement between consecutive samples, in voxel index coordinates.
+    pub step: [f64; 3],
+    /// First sample inside the box.
+    pub k0: i64,
+    /// Last sample inside the box.
+    pub k1: i64,
+}
+
+impl Ray {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        (self.k1 - self.k0 + 1) as usize
+    }
+
+    /// Always false: rays are only made when they hold samples.
+    pub fn is_empty(&self) -> bool {
+        self.k1 < self.k0
+    }
+
+    /// Position of sample `k` in voxel index coordinates.
+    #[inline]
+    pub fn at(&self, k: i64) -> [f64; 3] {
+        let k = k as f64;
+        [
+            self.origin[0] + k * self.step[0],
+            self.origin[1] + k * self.step[1],
+            self.origin[2] + k * self.step[2],
+        ]
+    }
+}
+
+/// The lattice of parallel rays along an axis: rays through `(i + a)·x·u + (j + b)·x·v`, samples
+/// `(k + c)·y·d` along them, counted only inside the box spanned by the first and last voxel
+/// centres (physical coordinates, voxel (0,0,0) at the origin). `(a, b, c)` is the phase, zero for
+/// the paper's lattice.
+#[derive(Clone, Debug)]
+pub struct Lattice {
+    /// Unit axis direction in physical space.
+    pub d: [f64; 3],
+    /// First in-plane unit vector.
+    pub u: [f64; 3],
+    /// Second in-plane unit vector.
+    pub v: [f64; 3],
+    /// Distance between neighbouring rays, mm.
+    pub ray_spacing: f64,
+    /// Distance between samples along a ray, mm.
+    pub sample_spacing: f64,
+    phase: [f64; 3],
+    extent: [f64; 3],
+    spacing: [f64; 3],
+    /// Worked out once for [`ray`](Self::ray), which runs for every ray.
+    per_ray: PerRay,
+}
+
+/// What every ray of a lattice shares, worked out once.
+#[derive(Clone, Debug)]
+struct PerRay {
+    /// The step between samples in voxel index coordinates.
+    step: [f64; 3],
+    /// `1 / spacing` where dividing by the spacing and multiplying by this agree for every
+    /// number (a power of two), else `None`.
+    inverse_spacing: [Option<f64>; 3],
+    /// Per axis: the step in mm, and its reciprocal.
+    dm: [f64; 3],
+    inverse_dm: [f64; 3],
+}
+
+impl Lattice {
+    /// The lattice along `axis` for a volume of `dims` and `spacing`, with ray spacing `x`, sample
+    /// spacing `y` (mm) and a phase in units of the spacings.
+    pub fn new(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        axis: [f64; 3],
+        x: f64,
+        y: f64,
+        phase: [f64; 3],
+    ) -> Result<Self> {
+        for (name, s) in [("ray_spacing", x), ("sample_spacing", y)] {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(Error::invalid(name, s, "a positive number of mm"));
+            }
+        }
+        let (d, u, v) = frame(axis)?;
+        let dm = d.map(|c| y * c);
+        Ok(Self {
+            d,
+            u,
+            v,
+            ray_spacing: x,
+            sample_spacing: y,
+            phase,
+            extent: std::array::from_fn(|k| (dims[k] - 1) as f64 * spacing[k]),
+            spacing,
+            per_ray: PerRay {
+                step: std::array::from_fn(|m| dm[m] / spacing[m]),
+                inverse_spacing: spacing.map(|s| {
+                    let inverse = 1.0 / s;
+                    (power_of_two(s) && power_of_two(inverse)).then_some(inverse)
+                }),
+                dm,
+                inverse_dm: dm.map(|c| 1.0 / c),
+            },
+        })
+    }
+
+    /// The lattice of `volume` with the default spacings (the smallest voxel spacing).
+    pub fn for_volume(volume: &Volume, axis: [f64; 3]) -> Result<Self> {
+        let s = min_spacing(volume.spacing());
+        Self::new(volume.dims(), volume.spacing(), axis, s, s, [0.0; 3])
+    }
+
+    fn corners(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
+        (0..8).map(|c| std::array::from_fn(|k| if c >> k & 1 == 1 { self.extent[k] } else { 0.0 }))
+    }
+
+    /// The integer range of `t` such that `(t + phase)·spacing` covers the projections of the box
+    /// on `axis`.
+    fn index_range(&self, axis: [f64; 3], spacing: f64, phase: f64) -> (i64, i64) {
+        let (lo, hi) = self
+            .corners()
+            .map(|c| dot(c, axis))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                (a.min(t), b.max(t))
+            });
+        (
+            (lo / spacing - phase - 1e-9).ceil() as i64,
+            (hi / spacing - phase + 1e-9).floor() as i64,
+        )
+    }
+
+    /// Inclusive ranges of the ray indices `i` and `j` that can meet the box.
+    pub fn ray_ranges(&self) -> ((i64, i64), (i64, i64)) {
+        (
+            self.index_range(self.u, self.ray_spacing, self.phase[0]),
+            self.index_range(self.v, self.ray_spacing, self.phase[1]),
+        )
+    }
+
+    /// Inclusive range of the sample index `k` along the axis over the whole box.
+    pub fn sample_range(&self) -> (i64, i64) {
+        self.index_range(self.d, self.sample_spacing, self.phase[2])
+    }
+
+    /// Physical position of lattice point `(i, j, k)`.
+    pub fn point(&self, i: i64, j: i64, k: i64) -> [f64; 3] {
+        let (a, b, c) = (
+            (i as f64 + self.phase[0]) * self.ray_spacing,
+            (j as f64 + self.phase[1]) * self.ray_spacing,
+            (k as f64 + self.phase[2]) * self.sample_spacing,
+        );
+        std::array::from_fn(|m| a * self.u[m] + b * self.v[m] + c * self.d[m])
+    }
+
+    /// Whether a physical point lies inside the box (with a relative tolerance of 1e-9).
+    pub fn inside(&self, p: [f64; 3]) -> bool {
+        (0..3).all(|m| {
+            let eps = 1e-9 * (1.0 + self.extent[m]);
+            p[m] >= -eps && p[m] <= self.extent[m] + eps
+        })
+    }
+
+    /// Voxel index coordinates of a physical point.
+    pub fn to_index(&self, p: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|m| match self.per_ray.inverse_spacing[m] {
+            // The same number as the division: the reciprocal of a power of two is exact.
+            Some(inverse) => p[m] * inverse,
+            None => p[m] / self.spacing[m],
+        })
+    }
+
+    /// The coordinate axis whose voxel columns are exactly this lattice's rays, sample for
+    /// sample: the axis is a coordinate axis, the sample spacing is its voxel spacing, the ray
+    /// spacing is the other two, and the phase is whole.
+    pub fn columns(&self) -> Option<usize> {
+        let m = coordinate_axis(self.d)?;
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b;
+        let whole = |x: f64| (x - round_half_away(x) as f64).abs() < 1e-9;
+        (same(self.sample_spacing, self.spacing[m])
+            && (0..3).all(|a| a == m || same(self.ray_spacing, self.spacing[a]))
+            && self.phase.iter().all(|&c| whole(c)))
+        .then_some(m)
+    }
+
+    /// Displacement between consecutive samples of a ray, in voxel index coordinates.
+    pub fn step(&self) -> [f64; 3] {
+        self.per_ray.step
+    }
+
+    /// Ray `(i, j)`, or `None` when it misses the box.
+    pub fn ray(&self, i: i64, j: i64) -> Option<Ray> {
+        let base = self.point(i, j, 0);
+        // The samples inside: `(bound - base) / dm` for the two bounds per axis, first with the
+        // reciprocal (a few units in the last place from the quotient), then, only when that
+        // lies so near a whole number that the two might round to different ones, exactly.
+        let (lo, hi) = self.sample_bounds(base, |x, m| x * self.per_ray.inverse_dm[m])?;
+        let (k0, k1) = (ceil_i64(lo), floor_i64(hi));
+        let margin = |x: f64| 1e-12 * (1.0 + x.abs());
+        let clear = k0 as f64 - lo > margin(lo)
+            && lo - (k0 - 1) as f64 > margin(lo)
+            && hi - k1 as f64 > margin(hi)
+            && (k1 + 1) as f64 - hi > margin(hi);
+        let (k0, k1) = if clear {
+            (k0, k1)
+        } else {
+            let (lo, hi) = self.sample_bounds(base, |x, m| x / self.per_ray.dm[m])?;
+            (ceil_i64(lo), floor_i64(hi))
+        };
+        (k0 <= k1).then(|| Ray {
+            origin: self.to_index(base),
+            step: self.step(),
+            k0,
+            k1,
+        })
+    }
+
+    /// The range of real `k` where `base + k·y·d` lies in the box (with a tolerance), dividing
+    /// by the step along axis `m` with `divide`; `None` when the ray misses the box.
+    #[inline]
+    fn sample_bounds(
+        &self,
+        base: [f64; 3],
+        divide: impl Fn(f64, usize) -> f64,
+    ) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for m in 0..3 {
+            let eps = 1e-9 * (1.0 + self.extent[m]);
+            let dm = self.per_ray.dm[m];
+            if dm.abs() < 1e-12 {
+                if base[m] < -eps || base[m] > self.extent[m] + eps {
+                    return None;
+                }
+                continue;
+            }
+            // The bounds are ordered as the numerators are when `dm > 0` (rounding keeps the
+            // order), the other way round otherwise; all finite, so `>` does what `max` does.
+            let t1 = divide(-eps - base[m], m);
+            let t2 = divide(self.extent[m] + eps - base[m], m);
+            let (near, far) = if dm > 0.0 { (t1, t2) } else { (t2, t1) };
+            lo = if near > lo { near } else { lo };
+            hi = if far < hi { far } else { hi };
+        }
+        Some((lo, hi))
+    }
+}
+
+/// Whether `x` is a power of two in the normal range (no mantissa bits set).
+fn power_of_two(x: f64) -> bool {
+    x.is_normal() && x.to_bits() & ((1 << 52) - 1) == 0
+}
+
+/// `x.floor() as i64` for `|x| < 2^52`, without the library call that `floor` is on
+/// processors before SSE4.1.
+#[inline]
+pub fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    t - i64::from((t as f64) > x)
+}
+
+/// `x.ceil() as i64` for `|x| < 2^52` (see [`floor_i64`]).
+#[inline]
+pub fn ceil_i64(x: f64) -> i64 {
+    let t = x as i64;
+    t + i64::from((t as f64) < x)
+}
+
+/// Fraction bits of fixed-point positions.
+pub const FIXED_BITS: u32 = 32;
+pub(crate) const FIXED_STEP: f64 = 1.0 / (1u64 << FIXED_BITS) as f64;
+
+/// A position in voxel index coordinates as 32.32 fixed point, so that a ray advances by exact
+/// integer additions and finding the cell needs no float-to-integer conversion per sample.
+#[inline]
+pub fn to_fixed(p: [f64; 3]) -> [i64; 3] {
+    p.map(|c| round_half_away(c * (1u64 << FIXED_BITS) as f64))
+}
+
+/// `x.round() as i64` (halves away from zero) for `|x| < 2^52`, without the library call that
+/// `round` is on processors before SSE4.1.
+#[inline]
+pub fn round_half_away(x: f64) -> i64 {
+    let whole = x as i64;
+    // Exact: both are below 2^52 in magnitude.
+    let rest = x - whole as f64;
+    whole + i64::from(rest >= 0.5) - i64::from(rest <= -0.5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::Lcg;
+
+    #[test]
+    fn axis_aligned_rays_are_the_voxel_columns() {
+        let l = Lattice::new([4, 3, 5], [1.0; 3], [0.0, 0.0, 1.0], 1.0, 1.0, [0.0; 3]).unwrap();
+        assert_eq!(l.ray_ranges(), ((0, 3), (0, 2)));
+        let r = l.ray(2, 1).unwrap();
+        assert_eq!((r.k0, r.k1), (0, 4));
+        assert_eq!(r.at(3), [2.0, 1.0, 3.0]);
+        assert!(l.ray(4, 0).is_none());
+        assert!(l.ray(-1, 0).is_none());
+    }
+
+    /// `Lattice::ray`'s sample range as the definition computes it: a division per bound.
+    fn rays_by_division(l: &Lattice, i: i64, j: i64) -> Option<(i64, i64)> {
+        let base = l.point(i, j, 0);
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for m in 0..3 {
+            let eps = 1e-9 * (1.0 + l.extent[m]);
+            let dm = l.sample_spacing * l.d[m];
+            if dm.abs() < 1e-12 {
+                if base[m] < -eps || base[m] > l.extent[m] + eps {
+                    return None;
+                }
+                continue;
+            }
+            let t1 = (-eps - base[m]) / dm;
+            let t2 = (l.extent[m] + eps - base[m]) / dm;
+            lo = lo.max(t1.min(t2));
+            hi = hi.min(t1.max(t2));
+        }
+        let (k0, k1) = (lo.ceil() as i64, hi.floor() as i64);
+        (k0 <= k1).then_some((k0, k1))
+    }
+
+    #[test]
+    fn rays_are_the_ones_division_gives() {
+        // Random axes, spacings and phases, and lattices whose samples fall on the box's faces
+        // (whole steps from a whole phase), where a bound is a whole number.
+        let mut lcg = Lcg::new(11);
+        let mut unit = move || (lcg.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let mut cases = vec![
+            ([7, 5, 9], [1.0; 3], [1.0, 0.0, 0.0], 1.0, 1.0, [0.0; 3]),
+            (
+                [7, 5, 9],
+                [0.5, 1.0, 2.0],
+                [1.0, 1.0, 0.0],
+                0.5,
+                0.5,
+                [0.0; 3],
+            ),
+            ([7, 5, 9], [1.0; 3], [1.0, 2.0, 2.0], 1.0, 1.0, [0.0; 3]),
+            (
+                [6, 6, 6],
+                [1.0; 3],
+                [0.0, 3.0, 4.0],
+                1.0,
+                1.0,
+                [1.0, 0.0, 2.0],
+            ),
+        ];
+        for _ in 0..40 {
+            let axis = [unit() - 0.5, unit() - 0.5, unit() - 0.5];
+            let spacing = [0.3 + unit(), 0.3 + unit(), 0.3 + unit()];
+            let phase = [unit(), unit(), unit()];
+            cases.push(([9, 8, 11], spacing, axis, 0.2 + unit(), 0.2 + unit(), phase));
+        }
+        let mut rays = 0;
+        for (dims, spacing, axis, x, y, phase) in cases {
+            let l = Lattice::new(dims, spacing, axis, x, y, phase).unwrap();
+            let ((i0, i1), (j0, j1)) = l.ray_ranges();
+            for j in j0 - 1..=j1 + 1 {
+                for i in i0 - 1..=i1 + 1 {
+                    let got = l.ray(i, j).map(|r| (r.k0, r.k1));
+                    assert_eq!(got, rays_by_division(&l, i, j), "{axis:?} ray {i}, {j}");
+                    rays += usize::from(got.is_some());
+                }
+            }
+        }
+        assert!(rays > 1000, "{rays} rays");
+    }
+
+    #[test]
+    fn index_coordinates_are_divisions_by_the_spacing() {
+        let p = [0.1, -7.3, 1e-310];
+        for spacing in [[1.0, 2.0, 0.25], [0.7, 3.0, 1.5], [1.0, 1.0, 0.125]] {
+            let l = Lattice::new([4, 4, 4], spacing, [1.0, 2.0, 3.0], 1.0, 1.0, [0.0; 3]).unwrap();
+            let exact: [f64; 3] = std::array::from_fn(|m| p[m] / spacing[m]);
+            assert_eq!(l.to_index(p).map(f64::to_bits), exact.map(f64::to_bits));
+        }
+    }
+
+    #[test]
+    fn oblique_rays_stay_inside_the_box() {
+        let l = Lattice::new(
+            [10, 12, 9],
+            [1.0, 0.5, 2.0],
+            [1.0, 2.0, 3.0],
+            0.5,
+            0.5,
+            [0.3, 0.7, 0.1],
+        )
+        .unwrap();
+        let ((i0, i1), (j0, j1)) = l.ray_ranges();
+        let mut samples = 0;
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                if let Some(r) = l.ray(i, j) {
+                    for k in [r.k0, r.k1] {
+                        let p = r.at(k);
+                        assert!(p[0] > -1e-6 && p[0] < 9.0 + 1e-6, "{p:?}");
+                        assert!(p[1] > -1e-6 && p[1] < 11.0 + 1e-6, "{p:?}");
+                        assert!(p[2] > -1e-6 && p[2] < 8.0 + 1e-6, "{p:?}");
+                    }
+                    assert!(
+                        !l.inside(l.point(i, j, r.k0 - 1)) && !l.inside(l.point(i, j, r.k1 + 1))
+                    );
+                    samples += r.len();
+                }
+            }
+        }
+        // The box is 9 x 5.5 x 16 mm = 792 mm³; each sample stands for 0.5³ mm³.
+        let expected = 792.0 / 0.125;
+        assert!(
+            (samples as f64 / expected - 1.0).abs() < 0.1,
+            "{samples} samples, about {expected} expected"
+        );
+    }
+
+    #[test]
+    fn floor_and_ceil_match_the_library() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.999_999,
+            -2.000_001,
+            1e15 + 0.5,
+            -7.25,
+        ] {
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "{x}");
+        }
+    }
+
+    #[test]
+    fn rounding_halves_away_from_zero_like_the_library() {
+        for x in [
+            0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            0.499_999_999_999_999_94,
+            -2.4,
+            7.0,
+            1e15 + 0.5,
+            -3.75,
+            4_294_967_295.5,
+        ] {
+            assert_eq!(round_half_away(x), x.round() as i64, "{x}");
+        }
+        let mut lcg = Lcg::with_increment(3, 1);
+        for _ in 0..10_000 {
+            let state = lcg.next_u64();
+            let x = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e12;
+            assert_eq!(round_half_away(x), x.round() as i64, "{x}");
+        }
+    }
+}
