@@ -44,16 +44,7 @@ fn a_volume_constant_along_z_has_zero_rate_there_and_z_wins() {
     let plane: Vec<f32> = (0..nx * ny).map(|_| rng.below(9) as f32).collect();
     let data: Vec<f32> = (0..nz).flat_map(|_| plane.iter().copied()).collect();
     let v = Volume::new([nx, ny, nz], [1.0; 3], VoxelType::U8, data).unwrap();
-    let r = run(
-        &v,
-        &ViewParams {
-            sampling: SamplingParams {
-                bins: 8,
-                ..SamplingParams::default()
-            },
-            ..ViewParams::default()
-        },
-    );
+    let r = run(&v, &ViewParams::with_bins(8));
     assert_eq!(r.best().axis, [0.0, 0.0, 1.0]);
     assert_eq!(r.best().entropy_rate, 0.0);
     assert!(
@@ -67,16 +58,7 @@ fn iid_noise_has_rate_close_to_its_symbol_entropy_on_every_axis() {
     let mut rng = Lcg(11);
     let data: Vec<f32> = (0..48 * 48 * 48).map(|_| rng.below(8) as f32).collect();
     let v = Volume::new([48; 3], [1.0; 3], VoxelType::U8, data).unwrap();
-    let r = run(
-        &v,
-        &ViewParams {
-            sampling: SamplingParams {
-                bins: 8,
-                ..SamplingParams::default()
-            },
-            ..ViewParams::default()
-        },
-    );
+    let r = run(&v, &ViewParams::with_bins(8));
     for a in &r.views {
         let gap = a.h1 - a.entropy_rate;
         assert!(
@@ -159,13 +141,7 @@ fn permuting_the_volume_axes_permutes_the_results() {
     }
     let a = Volume::new([nx, ny, nz], [1.0; 3], VoxelType::U8, data).unwrap();
     let b = Volume::new([ny, nz, nx], [1.0; 3], VoxelType::U8, permuted).unwrap();
-    let params = ViewParams {
-        sampling: SamplingParams {
-            bins: 16,
-            ..SamplingParams::default()
-        },
-        ..ViewParams::default()
-    };
+    let params = ViewParams::with_bins(16);
     let (ra, rb) = (run(&a, &params), run(&b, &params));
     for view in &ra.views {
         let d = view.axis;
@@ -204,13 +180,7 @@ fn physical_layers(dims: [usize; 3], spacing: [f64; 3]) -> Volume {
 fn anisotropic_spacing_is_respected() {
     let coarse = physical_layers([40, 40, 40], [1.0; 3]);
     let fine = physical_layers([40, 40, 80], [1.0, 1.0, 0.5]);
-    let params = ViewParams {
-        sampling: SamplingParams {
-            bins: 8,
-            ..SamplingParams::default()
-        },
-        ..ViewParams::default()
-    };
+    let params = ViewParams::with_bins(8);
     let (a, b) = (run(&coarse, &params), run(&fine, &params));
     assert_eq!(a.best().axis, b.best().axis);
     assert!(dot(a.best().axis, [0.0, 1.0 / 5f64.sqrt(), 2.0 / 5f64.sqrt()]).abs() < 0.3);
@@ -267,13 +237,7 @@ fn bad_parameters_and_constant_volumes_are_refused() {
             level: 5,
             ..ViewParams::default()
         },
-        ViewParams {
-            sampling: SamplingParams {
-                bins: 1,
-                ..SamplingParams::default()
-            },
-            ..ViewParams::default()
-        },
+        ViewParams::with_bins(1),
         ViewParams {
             sampling: SamplingParams {
                 ray_spacing: Some(0.0),

@@ -47,6 +47,19 @@ impl Default for ViewParams {
     }
 }
 
+impl ViewParams {
+    /// The defaults with `bins` quantization bins.
+    pub fn with_bins(bins: usize) -> Self {
+        Self {
+            sampling: SamplingParams {
+                bins,
+                ..SamplingParams::default()
+            },
+            ..Self::default()
+        }
+    }
+}
+
 /// The most shifted lattices `--phases` allows.
 pub const MAX_PHASES: usize = 64;
 

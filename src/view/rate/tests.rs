@@ -1,0 +1,135 @@
+//! Tests of the walks: every walk counts what the scalar walk counts, and axis-aligned rates
+//! equal brute-force counts over voxel columns.
+
+use super::*;
+use crate::geometry::min_spacing;
+use crate::measure::block_entropies;
+use crate::testing::Lcg;
+use crate::volume::Volume;
+use crate::volume::VoxelType;
+
+fn random_volume(dims: [usize; 3], levels: u32, seed: u64) -> Volume {
+    let mut lcg = Lcg::new(seed);
+    let data = (0..dims.iter().product::<usize>())
+        .map(|_| ((lcg.next_u64() >> 33) % u64::from(levels)) as f32)
+        .collect();
+    Volume::new(dims, [1.0; 3], VoxelType::U8, data).unwrap()
+}
+
+#[test]
+fn axis_aligned_rate_equals_a_brute_force_count_over_columns() {
+    let v = random_volume([7, 6, 9], 5, 3);
+    let q = v.quantizer(4).unwrap();
+    let bins: Vec<u8> = v.voxels().iter().map(|&x| q.bin(x).unwrap()).collect();
+    let [nx, ny, nz] = v.dims();
+    let idx = |x: usize, y: usize, z: usize| x + nx * (y + ny * z);
+    let columns = |axis: usize| -> Vec<Vec<u8>> {
+        match axis {
+            0 => (0..ny * nz)
+                .map(|r| (0..nx).map(|x| bins[idx(x, r % ny, r / ny)]).collect())
+                .collect(),
+            1 => (0..nx * nz)
+                .map(|r| (0..ny).map(|y| bins[idx(r % nx, y, r / nx)]).collect())
+                .collect(),
+            _ => (0..nx * ny)
+                .map(|r| (0..nz).map(|z| bins[idx(r % nx, r / nx, z)]).collect())
+                .collect(),
+        }
+    };
+    for (axis, d) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        .into_iter()
+        .enumerate()
+    {
+        for block in 2..=4 {
+            let lattice = Lattice::for_volume(&v, d).unwrap();
+            let sampler = BinSampler::new(&v, q);
+            let got = entropy_rate(&sampler, &lattice, block, &Monitor::none()).unwrap();
+            let cols = columns(axis);
+            let (h1, hs, hl) = block_entropies(cols.iter().map(Vec::as_slice), 4, block);
+            assert!(
+                (got.entropy_rate - (hl - hs)).abs() < 1e-12,
+                "axis {axis} L {block}"
+            );
+            assert!((got.h1 - h1).abs() < 1e-12);
+            assert_eq!(got.samples, v.len() as u64);
+            assert_eq!(got.rays, cols.len() as u64);
+        }
+    }
+}
+
+/// A noisy volume with blocks, bins at their edges and missing voxels.
+fn awkward_volume(dims: [usize; 3], spacing: [f64; 3], seed: u64) -> Volume {
+    let mut lcg = Lcg::new(seed);
+    let data = (0..dims.iter().product::<usize>())
+        .map(|i| {
+            let r = (lcg.next_u64() >> 33) as u32;
+            let (x, y, z) = (
+                i % dims[0],
+                (i / dims[0]) % dims[1],
+                i / (dims[0] * dims[1]),
+            );
+            if r.is_multiple_of(97) {
+                f32::NAN
+            } else {
+                ((x / 3 + y / 4 + z / 5) % 7) as f32 * 10.0 + (r % 5) as f32 * 0.7
+            }
+        })
+        .collect();
+    Volume::new(dims, spacing, VoxelType::F32, data).unwrap()
+}
+
+#[test]
+fn every_walk_counts_what_the_scalar_walk_counts() {
+    // Whatever the processor: without AVX2 the vector runs take the scalar walk.
+    let (mut samples, mut columns) = (0, 0);
+    for (dims, spacing) in [
+        ([23, 19, 31], [1.0, 1.0, 1.0]),
+        ([40, 9, 17], [0.7, 1.3, 2.1]),
+        ([1, 20, 20], [1.0, 1.0, 1.0]),
+    ] {
+        let v = awkward_volume(dims, spacing, 11);
+        for (bins, block) in [(32, 3), (8, 4), (5, 2), (200, 3)] {
+            let sampler = BinSampler::new(&v, v.quantizer(bins).unwrap());
+            for axis in [
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 0.0],
+                [0.3, -0.5, 0.81],
+                [1.0, 1.0, 1.0],
+            ] {
+                for (phase, along) in [
+                    ([0.0; 3], 1.0),
+                    ([0.0, 2.0, 0.0], 0.9),
+                    ([0.31, 0.77, 0.5], 1.0),
+                ] {
+                    let s = min_spacing(v.spacing());
+                    let lattice =
+                        Lattice::new(dims, v.spacing(), axis, s, s * along, phase).unwrap();
+                    let none = Monitor::none();
+                    let walk = |walk| rate_with(&sampler, &lattice, block, &none, walk);
+                    let fast = walk(Walk::Fastest).unwrap();
+                    let vector = walk(Walk::Tiles { vector: true }).unwrap();
+                    let scalar = walk(Walk::Tiles { vector: false }).unwrap();
+                    let at = format!("{dims:?} {bins} bins, L {block}, {axis:?} {phase:?}");
+                    assert_eq!(fast, scalar, "{at}");
+                    assert_eq!(vector, scalar, "{at}");
+                    columns += usize::from(lattice.columns().is_some());
+                    samples += fast.samples;
+                }
+            }
+        }
+    }
+    assert!(samples > 1_000_000, "{samples} samples compared");
+    assert!(columns >= 12, "{columns} column walks compared");
+}
+
+#[test]
+fn missing_voxels_break_sequences() {
+    let mut data = vec![1.0f32; 27];
+    data[13] = f32::NAN; // the centre
+    data[0] = 0.0;
+    let v = Volume::new([3, 3, 3], [1.0; 3], VoxelType::F32, data).unwrap();
+    let q = v.quantizer(2).unwrap();
+    let lattice = Lattice::for_volume(&v, [0.0, 0.0, 1.0]).unwrap();
+    let r = entropy_rate(&BinSampler::new(&v, q), &lattice, 2, &Monitor::none()).unwrap();
+    assert_eq!(r.samples, 26);
+}
