@@ -58,6 +58,16 @@ pub enum Error {
         /// What is not supported.
         message: String,
     },
+    /// Headerless raw data whose description is incomplete: the raw options that must be given.
+    #[error("{}: {detail}: its {} must be given", path.display(), missing.join(" and "))]
+    RawUndescribed {
+        /// The file concerned.
+        path: PathBuf,
+        /// The raw options missing: `dims`, `type`.
+        missing: &'static [&'static str],
+        /// What is known of the data, and any hint from its size or name.
+        detail: String,
+    },
     /// A file that would be written exists already and overwriting was not asked for.
     #[error("{}: already exists", path.display())]
     Exists {

@@ -119,6 +119,20 @@ fn in_flag_terms(e: &Error) -> String {
             None => e.to_string(),
         },
         Error::TooLarge { .. } => format!("{e} (raise it with --max-memory)"),
+        Error::RawUndescribed {
+            path,
+            missing,
+            detail,
+        } => {
+            let flags: Vec<&str> = missing
+                .iter()
+                .map(|m| match *m {
+                    "dims" => "--dims NXxNYxNZ",
+                    _ => "--type u8|i8|u16|i16|u32|i32|f32|f64",
+                })
+                .collect();
+            format!("{}: {detail}: give {}", path.display(), flags.join(" and "))
+        }
         Error::Exists { .. } => format!("{e} (use --force to overwrite it)"),
         _ => e.to_string(),
     }

@@ -189,7 +189,7 @@ fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
         path,
         format!(
             "{what} (slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, and \
-             headerless raw data described with --dims and --type)"
+             headerless raw data given its dimensions and voxel type)"
         ),
     ))
 }

@@ -49,19 +49,21 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         .unwrap_or_default();
     let from_name = parse_raw_name(&name);
     let raw = &opts.raw;
-    let dims = raw.dims.or(from_name.map(|n| n.0)).ok_or_else(|| {
-        Error::format(
-            path,
-            "headerless raw data: give --dims NXxNYxNZ and --type, or name the file like \
-             NAME_256x256x113_uint16.raw",
-        )
-    })?;
+    let dims = raw
+        .dims
+        .or(from_name.map(|n| n.0))
+        .ok_or_else(|| Error::RawUndescribed {
+            path: path.to_path_buf(),
+            missing: &["dims", "type"],
+            detail: "headerless raw data (or a name like NAME_256x256x113_uint16.raw)".into(),
+        })?;
     let offset = raw.offset.unwrap_or(0);
     let Some(voxel_type) = raw.voxel_type.or(from_name.and_then(|n| n.1)) else {
-        return Err(Error::format(
-            path,
-            missing_type_message(path, dims, offset),
-        ));
+        return Err(Error::RawUndescribed {
+            path: path.to_path_buf(),
+            missing: &["type"],
+            detail: missing_type_detail(path, dims, offset),
+        });
     };
     let spec = DataSpec {
         file: path.to_path_buf(),
@@ -79,13 +81,13 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let spacing = raw.spacing.unwrap_or([1.0; 3]);
     let mut notes = Vec::new();
     if raw.spacing.is_none() {
-        notes.push("raw data carries no spacing: using 1 mm (set it with --spacing)".into());
+        notes.push("raw data carries no spacing: using 1 mm per voxel".into());
     }
     Read0::new(path, dims, spacing, voxel_type, voxels, notes)
 }
 
-/// "give --type", with the bytes per voxel the file size suggests.
-fn missing_type_message(path: &Path, dims: [usize; 3], offset: u64) -> String {
+/// What is known of raw data without a voxel type, with the bytes per voxel its size suggests.
+fn missing_type_detail(path: &Path, dims: [usize; 3], offset: u64) -> String {
     let voxels = dims.iter().map(|&d| d as u64).product::<u64>();
     let len = std::fs::metadata(path).map_or(0, |m| m.len());
     let data = len.saturating_sub(offset);
@@ -94,10 +96,7 @@ fn missing_type_message(path: &Path, dims: [usize; 3], offset: u64) -> String {
     } else {
         String::new()
     };
-    format!(
-        "headerless raw data of {}: give the voxel type with --type u8|i8|u16|i16|u32|i32|f32|f64{hint}",
-        dims_string(dims)
-    )
+    format!("headerless raw data of {}{hint}", dims_string(dims))
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@ pub(crate) fn check_header(path: &Path, head: &[u8], len: u64) -> Result<[usize;
             path,
             format!(
                 "not a VolumeShop .dat file: its header says {} u16 voxels ({expected} bytes with the header) \
-                 but the file holds {len} bytes; for other raw data give --dims and --type",
+                 but the file holds {len} bytes; other raw data needs its dimensions and voxel type",
                 dims_string(dims)
             ),
         ));
