@@ -1,6 +1,7 @@
 //! `slabscope render FILE -o OUT.png` and `slabscope preview FILE`: the exploded view as a PNG,
 //! or printed inline in the terminal.
 
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
@@ -12,7 +13,7 @@ use slabscope::render::{
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::progress::with_bar;
-use crate::term::Protocol;
+use crate::term::{self, Graphics, Protocol};
 
 /// What the render shows and how.
 #[derive(Debug, Args, Clone)]
@@ -257,39 +258,61 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
 }
 
 pub fn run_preview(args: &PreviewArgs) -> Result<()> {
-    let (cols, rows) = crossterm::terminal::size().unwrap_or((80, 24));
-    let rows = rows.saturating_sub(2).max(4);
-    if cols < 10 {
-        bail!("the terminal is {cols} columns wide: too small for a preview");
+    if !std::io::stdout().is_terminal() {
+        bail!(
+            "standard output is not a terminal, so there is nowhere to show the picture: \
+             `slabscope render FILE -o OUT.png` writes it to a file"
+        );
     }
-    // Pixels per cell: the terminal's own when it says, else a common 8x16; half-blocks show
-    // one pixel by two per cell.
-    let (cell_w, cell_h) = match crossterm::terminal::window_size() {
-        Ok(s) if s.width > 0 && s.height > 0 && s.columns > 0 && s.rows > 0 => {
-            (u32::from(s.width / s.columns), u32::from(s.height / s.rows))
-        }
-        _ => (8, 16),
-    };
-    let size = if args.protocol == Protocol::Blocks {
-        (u32::from(cols), u32::from(rows) * 2)
-    } else {
-        (u32::from(cols) * cell_w, u32::from(rows) * cell_h)
-    };
-    let image = render_file(&args.file, &args.scene, size)?;
+    let (cols, rows) = crossterm::terminal::size()?;
+    if cols < 10 || rows < 6 {
+        bail!("the terminal is {cols}x{rows}: too small for a preview");
+    }
+    // The terminal's answers are read in raw mode, so that none is echoed.
+    crossterm::terminal::enable_raw_mode()?;
+    let caps = term::detect(args.protocol, &mut std::io::stdout());
+    crossterm::terminal::disable_raw_mode()?;
+    let caps = caps?;
+    if let Some(note) = &caps.note {
+        eprintln!("slabscope: note: {note}");
+    }
+    let cells = (cols, rows - 2);
+    let image = render_file(&args.file, &args.scene, caps.image_size(cells))?;
     let (w, h) = (image.pixmap.width(), image.pixmap.height());
     let rgba = RgbaImage::from_raw(w, h, image.pixmap.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
-    let auto = args.protocol == Protocol::Auto;
-    let config = viuer::Config {
-        width: Some(u32::from(cols)),
-        height: Some(u32::from(rows)),
-        absolute_offset: false,
-        use_kitty: auto || args.protocol == Protocol::Kitty,
-        use_iterm: auto || args.protocol == Protocol::Iterm,
-        use_sixel: auto || args.protocol == Protocol::Sixel,
-        truecolor: viuer::Config::default().truecolor || !auto,
-        ..viuer::Config::default()
-    };
-    viuer::print(&DynamicImage::ImageRgba8(rgba), &config)?;
+    if caps.graphics == Graphics::Blocks {
+        // viuer draws half-blocks well; the other protocols go through our own encoder, which
+        // knows tmux and the terminal's sizes.
+        let config = viuer::Config {
+            width: Some(u32::from(cols)),
+            height: Some(u32::from(cells.1)),
+            absolute_offset: false,
+            use_kitty: false,
+            use_iterm: false,
+            use_sixel: false,
+            ..viuer::Config::default()
+        };
+        viuer::print(&DynamicImage::ImageRgba8(rgba), &config)?;
+        return Ok(());
+    }
+    let covered = (
+        w.div_ceil(u32::from(caps.cell.0)) as u16,
+        h.div_ceil(u32::from(caps.cell.1)) as u16,
+    );
+    let encoded = term::image::encode(&rgba, covered, &caps).map_err(|e| anyhow::anyhow!(e))?;
+    let mut out = std::io::stdout().lock();
+    out.write_all(placed(encoded.sequence().unwrap_or_default(), covered.1).as_bytes())?;
+    out.flush()?;
     Ok(())
+}
+
+/// The picture `seq` printed at the cursor with the cursor left on the line below its `rows`:
+/// room made first (so that drawing scrolls nothing), the cursor saved and restored around the
+/// picture, whatever the terminal does with it after a sixel.
+fn placed(seq: &str, rows: u16) -> String {
+    format!(
+        "{}\x1b[{rows}A\x1b7{seq}\x1b8\x1b[{rows}B\r",
+        "\n".repeat(usize::from(rows))
+    )
 }

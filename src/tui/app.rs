@@ -38,6 +38,19 @@ impl Pane {
     }
 }
 
+/// What the app knows of the screen it draws on.
+#[derive(Clone, Debug, Default)]
+pub struct Screen {
+    /// Colours.
+    pub theme: Theme,
+    /// What takes a drawn image away where it is a layer of its own (kitty).
+    pub hide: String,
+    /// What the user should know about the terminal, such as how to let images through tmux.
+    pub note: Option<String>,
+    /// How images are drawn, in words.
+    pub graphics: &'static str,
+}
+
 /// The whole state of the TUI.
 pub struct App {
     /// The volume's name.
@@ -72,8 +85,9 @@ pub struct App {
 
 impl App {
     /// A fresh app for the volume called `name`; the first effects load it.
-    pub fn new(name: String, params: AnalysisParams, theme: Theme) -> (Self, Vec<Effect>) {
-        let app = Self {
+    pub fn new(name: String, params: AnalysisParams, screen: Screen) -> (Self, Vec<Effect>) {
+        let theme = screen.theme;
+        let mut app = Self {
             views: ViewsPane::new(&name, theme),
             slabs: SlabsPane::new(theme),
             curves: CurvesPane::new(theme),
@@ -89,6 +103,9 @@ impl App {
             quit: false,
             export: Load::Idle,
         };
+        app.preview.hide = screen.hide;
+        app.preview.graphics = screen.graphics;
+        app.status.message = screen.note;
         (app, vec![Effect::Load])
     }
 
@@ -105,6 +122,7 @@ impl App {
             }
             Action::ToggleHelp => {
                 self.help = !self.help;
+                self.sync_focus();
                 vec![]
             }
             Action::Escape => self.escape(),
@@ -199,6 +217,7 @@ impl App {
     fn escape(&mut self) -> Vec<Effect> {
         if self.help {
             self.help = false;
+            self.sync_focus();
             return vec![];
         }
         let busy = self.views.views.running()
@@ -483,6 +502,7 @@ impl App {
         self.slabs.focused = self.focus == Pane::Slabs;
         self.curves.focused = self.focus == Pane::Curves;
         self.preview.focused = self.focus == Pane::Preview;
+        self.preview.covered = self.help;
     }
 }
 

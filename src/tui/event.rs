@@ -6,10 +6,11 @@
 use std::sync::Arc;
 
 use crossterm::event::KeyEvent;
-use ratatui_image::protocol::Protocol;
 use slabscope::partition::{Method, Slab, StackParams};
 use slabscope::render::{CameraParams, Colormap, Gap, Mode, Preset};
 use slabscope::{Histories, Progress, ViewParams, ViewSearch, Volume};
+
+use crate::term::image::TermImage;
 
 /// Everything the loop waits for.
 pub enum Event {
@@ -90,7 +91,7 @@ pub enum JobMsg {
     /// The histories along the axis of request `generation`.
     Analysis(u64, Result<Arc<Histories>, String>),
     /// A render of request `generation`.
-    Rendered(u64, Result<Box<Protocol>, String>),
+    Rendered(u64, Result<Box<TermImage>, String>),
     /// An export finished: what was written, or why not.
     Exported(Result<String, String>),
 }

@@ -8,10 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 
-use image::{DynamicImage, RgbaImage};
-use ratatui::layout::Size;
-use ratatui_image::Resize;
-use ratatui_image::picker::Picker;
+use image::RgbaImage;
 use slabscope::render::{Gap, Stack};
 use slabscope::volume::io::{NrrdEncoding, write_atomic, write_nrrd};
 use slabscope::{
@@ -20,9 +17,8 @@ use slabscope::{
 };
 
 use super::event::{Effect, Event, ExportRequest, Job, JobMsg, RenderRequest};
-
-/// The largest preview render, pixels: terminals rarely show more, and it bounds the time.
-const MAX_PREVIEW: (u32, u32) = (1280, 960);
+use crate::term::image::{TermImage, encode};
+use crate::term::{Caps, Graphics};
 
 /// Runs effects in the background and reports through the event channel.
 pub struct Jobs {
@@ -30,7 +26,7 @@ pub struct Jobs {
     cancel: Arc<AtomicBool>,
     renders: Option<Sender<RenderRequest>>,
     render_cancel: Arc<AtomicBool>,
-    picker: Picker,
+    caps: Caps,
     source: Option<PathBuf>,
     load: LoadOptions,
     volume: Option<Arc<Volume>>,
@@ -40,7 +36,7 @@ impl Jobs {
     /// Jobs reporting to `events`, loading `source` (None: the built-in dataset).
     pub fn new(
         events: Sender<Event>,
-        picker: Picker,
+        caps: Caps,
         source: Option<PathBuf>,
         load: LoadOptions,
     ) -> Self {
@@ -49,7 +45,7 @@ impl Jobs {
             cancel: Arc::new(AtomicBool::new(false)),
             renders: None,
             render_cancel: Arc::new(AtomicBool::new(false)),
-            picker,
+            caps,
             source,
             load,
             volume: None,
@@ -62,7 +58,7 @@ impl Jobs {
             self.volume = Some(Arc::clone(volume));
             self.renders = Some(start_renderer(
                 Arc::clone(volume),
-                self.picker.clone(),
+                self.caps.clone(),
                 self.events.clone(),
                 Arc::clone(&self.render_cancel),
             ));
@@ -210,7 +206,7 @@ fn free_name(stem: &str, ext: &str) -> PathBuf {
 /// for the terminal and sends it back.
 fn start_renderer(
     volume: Arc<Volume>,
-    picker: Picker,
+    caps: Caps,
     events: Sender<Event>,
     cancel: Arc<AtomicBool>,
 ) -> Sender<RenderRequest> {
@@ -227,7 +223,7 @@ fn start_renderer(
             cancel.store(false, Ordering::Relaxed);
             let monitor = Monitor::new(Some(&cancel), None);
             let generation = request.generation;
-            match render(&renderer, &picker, &request, &monitor) {
+            match render(&renderer, &caps, &request, &monitor) {
                 Err(e)
                     if matches!(
                         e.downcast_ref::<slabscope::Error>(),
@@ -256,10 +252,10 @@ fn newest(rx: &Receiver<RenderRequest>) -> Option<RenderRequest> {
 
 fn render(
     renderer: &Renderer,
-    picker: &Picker,
+    caps: &Caps,
     r: &RenderRequest,
     monitor: &Monitor,
-) -> anyhow::Result<Box<ratatui_image::protocol::Protocol>> {
+) -> anyhow::Result<Box<TermImage>> {
     let look = &r.look;
     let layout = match &r.histories {
         Some(h) if !r.slabs.is_empty() => {
@@ -279,14 +275,8 @@ fn render(
         }
         _ => Layout::whole(r.axis),
     };
-    // One image pixel per font pixel: the protocol maps pixels to cells by the font size (and
-    // half-blocks then average them down to two per cell).
-    let (cols, rows) = (u32::from(r.cells.0), u32::from(r.cells.1));
-    let font = picker.font_size();
-    let (width, height) = (
-        (cols * u32::from(font.width)).min(MAX_PREVIEW.0),
-        (rows * u32::from(font.height)).min(MAX_PREVIEW.1),
-    );
+    // One image pixel per screen pixel, as large as the terminal takes.
+    let (width, height) = caps.image_size(r.cells);
     let params = RenderParams {
         width: width.max(1),
         height: height.max(1),
@@ -303,10 +293,102 @@ fn render(
     let image = renderer.render(&layout, &params, monitor)?;
     let rgba = RgbaImage::from_raw(width, height, image.pixmap.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
-    let size = Size::new(r.cells.0, r.cells.1);
-    Ok(Box::new(picker.new_protocol(
-        DynamicImage::ImageRgba8(rgba),
-        size,
-        Resize::Fit(None),
-    )?))
+    let cells = match caps.graphics {
+        Graphics::Blocks => r.cells,
+        _ => (
+            (width.div_ceil(u32::from(caps.cell.0)) as u16).min(r.cells.0),
+            (height.div_ceil(u32::from(caps.cell.1)) as u16).min(r.cells.1),
+        ),
+    };
+    Ok(Box::new(
+        encode(&rgba, cells, caps).map_err(|e| anyhow::anyhow!(e))?,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Instant;
+
+    use slabscope::partition::Method;
+    use slabscope::{AnalysisParams, Scope};
+
+    use super::*;
+    use crate::term::Caps;
+    use crate::tui::event::Look;
+
+    /// Not a test but a measurement: `cargo test --release --bin slabscope preview_timing --
+    /// --ignored --nocapture` prints, for the built-in dataset, the time to the first image
+    /// after start, and the time and bytes of an image after a step at 1000×600 pixels, per
+    /// protocol.
+    #[test]
+    #[ignore = "a benchmark: prints timings, asserts nothing about them"]
+    fn preview_timing() {
+        let start = Instant::now();
+        let volume = slabscope::builtin_dataset().unwrap();
+        let renderer = Renderer::new(&volume).unwrap();
+        let cells = (125, 37);
+        let sixel = Caps {
+            graphics: Graphics::Sixel,
+            cell: (8, 16),
+            ..Caps::blocks()
+        };
+        let whole = RenderRequest {
+            generation: 1,
+            slabs: Vec::new(),
+            axis: [0.0, 0.0, 1.0],
+            nmi: None,
+            histories: None,
+            look: Look::default(),
+            highlight: None,
+            cells,
+        };
+        let first = render(&renderer, &sixel, &whole, &Monitor::none()).unwrap();
+        println!(
+            "first image (load, render, sixel) {:.0} ms after start, {} KB",
+            start.elapsed().as_secs_f64() * 1e3,
+            first.bytes / 1024
+        );
+        let params = AnalysisParams::default();
+        let h = Arc::new(
+            Histories::new(
+                &volume,
+                [0.0, 0.0, 1.0],
+                &params.stack(),
+                Scope::ALL,
+                &Monitor::none(),
+            )
+            .unwrap(),
+        );
+        for (name, graphics) in [
+            ("sixel", Graphics::Sixel),
+            ("kitty", Graphics::Kitty),
+            ("iTerm2", Graphics::Iterm),
+            ("half-blocks", Graphics::Blocks),
+        ] {
+            let caps = Caps {
+                graphics,
+                ..sixel.clone()
+            };
+            let step = RenderRequest {
+                slabs: h.slabs(Method::TopDown, 4),
+                histories: Some(Arc::clone(&h)),
+                ..whole.clone()
+            };
+            let mut times = Vec::new();
+            let mut bytes = 0;
+            for _ in 0..5 {
+                let t = Instant::now();
+                bytes = render(&renderer, &caps, &step, &Monitor::none())
+                    .unwrap()
+                    .bytes;
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+            times.sort_by(f64::total_cmp);
+            println!(
+                "{name:>11}: an image after a step at 1000x592 px in {:.0} ms (median of 5), {} KB",
+                times[2],
+                bytes / 1024
+            );
+        }
+    }
 }

@@ -15,12 +15,11 @@ pub mod ui;
 #[cfg(test)]
 mod tests;
 
-use std::io::{Write, stdout};
+use std::io::{IsTerminal, Write, stdout};
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, Sender, channel};
-use std::time::{Duration, Instant};
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use crossterm::event::Event as TermEvent;
 use crossterm::execute;
 use crossterm::terminal::{
@@ -28,12 +27,10 @@ use crossterm::terminal::{
 };
 use ratatui::Terminal;
 use ratatui::backend::{Backend, CrosstermBackend};
-use ratatui_image::picker::cap_parser::QueryStdioOptions;
-use ratatui_image::picker::{Picker, ProtocolType};
 use slabscope::{AnalysisParams, LoadOptions};
 
-use crate::term::Protocol;
-use app::App;
+use crate::term::{self, Protocol};
+use app::{App, Screen};
 use event::{Action, Effect, Event, JobMsg};
 use jobs::Jobs;
 use theme::Theme;
@@ -50,43 +47,6 @@ pub struct Options {
     pub analysis: AnalysisParams,
 }
 
-/// How long the terminal may take to say which image protocol it speaks.
-const QUERY_TIMEOUT: Duration = Duration::from_millis(150);
-
-/// The image protocol for the preview: asked of the terminal (in-band, so it works over SSH and
-/// through tmux), or as the user says.
-fn picker(protocol: Protocol) -> Picker {
-    let fixed = |p: ProtocolType| {
-        let mut picker = Picker::halfblocks();
-        picker.set_protocol_type(p);
-        picker
-    };
-    match protocol {
-        Protocol::Blocks => Picker::halfblocks(),
-        Protocol::Kitty => fixed(ProtocolType::Kitty),
-        Protocol::Iterm => fixed(ProtocolType::Iterm2),
-        Protocol::Sixel => fixed(ProtocolType::Sixel),
-        Protocol::Auto => {
-            let start = Instant::now();
-            let options = QueryStdioOptions {
-                timeout: QUERY_TIMEOUT,
-                ..QueryStdioOptions::default()
-            };
-            let picker = Picker::from_query_stdio_with_options(options)
-                .unwrap_or_else(|_| Picker::halfblocks());
-            if start.elapsed() >= QUERY_TIMEOUT {
-                // The terminal did not answer in time, and the query's reader thread is still
-                // blocked on stdin, where it would eat keys. A device status request that the
-                // terminal itself always answers lets it finish.
-                let mut out = stdout();
-                let _ = out.write_all(b"\x1b[5n").and_then(|()| out.flush());
-                std::thread::sleep(Duration::from_millis(40));
-            }
-            picker
-        }
-    }
-}
-
 /// Opens the TUI and runs it until the user quits.
 pub fn run(options: Options) -> Result<()> {
     let Options {
@@ -99,32 +59,54 @@ pub fn run(options: Options) -> Result<()> {
         || slabscope::BUILTIN_NAME.to_string(),
         |p| p.display().to_string(),
     );
-    // The query switches raw mode on and off itself, so it comes first.
-    let picker = picker(protocol);
+    if !std::io::stdout().is_terminal() || term::tty_input().is_err() {
+        bail!(
+            "the TUI needs a terminal, and this has none (over SSH, `ssh -t`); \
+             `slabscope analyze`, `render` and `preview` work without one"
+        );
+    }
+    // Raw mode first, then the terminal's answers are read here, on this thread, so that no
+    // reader is left behind to race the UI for the keyboard.
     enable_raw_mode()?;
-    execute!(stdout(), EnterAlternateScreen)?;
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
-        restore();
+        restore("");
         default_hook(info);
     }));
+    let caps = match term::detect(protocol, &mut stdout()) {
+        Ok(caps) => caps,
+        Err(e) => {
+            restore("");
+            return Err(e.into());
+        }
+    };
+    let hide = term::image::hide_sequence(&caps);
     let result = (|| {
+        execute!(stdout(), EnterAlternateScreen)?;
         let mut terminal = Terminal::new(CrosstermBackend::new(stdout()))?;
         let (tx, rx) = channel();
         spawn_input(tx.clone());
-        let mut jobs = Jobs::new(tx, picker, file, load);
-        let (mut app, effects) = App::new(name, analysis, Theme::from_env());
+        let screen = Screen {
+            theme: Theme::from_env(),
+            hide: hide.clone(),
+            note: caps.note.clone(),
+            graphics: caps.graphics.name(),
+        };
+        let mut jobs = Jobs::new(tx, caps, file, load);
+        let (mut app, effects) = App::new(name, analysis, screen);
         run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)
     })();
-    restore();
+    restore(&hide);
     let _ = std::panic::take_hook();
     result
 }
 
-/// Leaves the alternate screen and raw mode; safe to call twice.
-fn restore() {
+/// Takes images away (`hide`), leaves the alternate screen and raw mode; safe to call twice.
+fn restore(hide: &str) {
+    let mut out = stdout();
+    let _ = out.write_all(hide.as_bytes());
+    let _ = execute!(out, LeaveAlternateScreen, crossterm::cursor::Show);
     let _ = disable_raw_mode();
-    let _ = execute!(stdout(), LeaveAlternateScreen, crossterm::cursor::Show);
 }
 
 /// Reads terminal events on their own thread.

@@ -6,25 +6,25 @@
 use std::sync::{Arc, OnceLock};
 
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
-use image::{DynamicImage, Rgba, RgbaImage};
+use image::{Rgba, RgbaImage};
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
 use ratatui::buffer::Buffer;
-use ratatui::layout::{Rect, Size};
+use ratatui::layout::Rect;
 use ratatui::widgets::Widget;
-use ratatui_image::Resize;
-use ratatui_image::picker::Picker;
 use slabscope::partition::{Method, StackParams};
 use slabscope::render::Mode;
 use slabscope::view::{ViewParams, ViewSearch, search};
 use slabscope::volume::phantom;
 use slabscope::{AnalysisParams, Histories, Monitor, Progress, Scope, Volume};
 
-use super::app::{App, Pane};
+use super::app::{App, Pane, Screen};
 use super::event::{Action, Ask, Effect, Event, Job, JobMsg, Load};
 use super::panes;
 use super::theme::Theme;
 use super::{Runner, handle, redraw};
+use crate::term::Caps;
+use crate::term::image::{TermImage, encode};
 
 /// Records effects instead of running them.
 #[derive(Default)]
@@ -59,7 +59,11 @@ fn fixture() -> &'static (Arc<Volume>, ViewSearch, Arc<Histories>) {
 
 /// An app with the default parameters.
 fn new_app(name: &str, theme: Theme) -> (App, Vec<Effect>) {
-    App::new(name.into(), AnalysisParams::default(), theme)
+    let screen = Screen {
+        theme,
+        ..Screen::default()
+    };
+    App::new(name.into(), AnalysisParams::default(), screen)
 }
 
 /// An app taken through loading, the view search and the analysis, as the jobs would report.
@@ -312,24 +316,14 @@ fn progress_updates_the_gauges() {
     assert!(matches!(app.volume, Load::Failed(_)));
 }
 
-/// A halfblocks image of `w × h` cells: a diagonal gradient.
-fn tiny_protocol(w: u16, h: u16) -> ratatui_image::protocol::Protocol {
-    let picker = Picker::halfblocks();
-    let font = picker.font_size();
-    let (pw, ph) = (
-        u32::from(w) * u32::from(font.width),
-        u32::from(h) * u32::from(font.height),
-    );
+/// A half-blocks image of `w × h` cells: a diagonal gradient.
+fn tiny_protocol(w: u16, h: u16) -> TermImage {
+    let caps = Caps::blocks();
+    let (pw, ph) = caps.image_size((w, h));
     let image = RgbaImage::from_fn(pw, ph, |x, y| {
         Rgba([(x * 255 / pw) as u8, (y * 255 / ph) as u8, 128, 255])
     });
-    picker
-        .new_protocol(
-            DynamicImage::ImageRgba8(image),
-            Size::new(w, h),
-            Resize::Fit(None),
-        )
-        .unwrap()
+    encode(&image, (w, h), &caps).unwrap()
 }
 
 /// The characters of a buffer, one line per row.

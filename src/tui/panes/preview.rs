@@ -3,10 +3,9 @@
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::widgets::{Paragraph, Widget, Wrap};
-use ratatui_image::Image;
-use ratatui_image::protocol::Protocol;
 use slabscope::render::{Gap, Mode};
 
+use crate::term::image::TermImage;
 use crate::tui::event::{Load, Look};
 use crate::tui::theme::Theme;
 
@@ -15,7 +14,14 @@ pub struct PreviewPane {
     /// Camera, gaps and colours.
     pub look: Look,
     /// The image, encoded for the terminal.
-    pub image: Load<Box<Protocol>>,
+    pub image: Load<Box<TermImage>>,
+    /// Something (the help) covers the pane: the image is taken away until it closes, and
+    /// sent again then.
+    pub covered: bool,
+    /// What takes a drawn image away where it is a layer of its own (kitty).
+    pub hide: String,
+    /// How images are drawn, in words.
+    pub graphics: &'static str,
     /// The image's size in cells.
     pub cells: (u16, u16),
     /// The newest render request; only its result is shown.
@@ -32,6 +38,9 @@ impl PreviewPane {
         Self {
             look: Look::default(),
             image: Load::Idle,
+            covered: false,
+            hide: String::new(),
+            graphics: "",
             cells: (0, 0),
             generation: 0,
             focused: false,
@@ -42,8 +51,14 @@ impl PreviewPane {
     /// The title: what the picture shows and how.
     fn title(&self) -> String {
         let l = &self.look;
+        let bytes = match &self.image {
+            Load::Ready(i) if !self.graphics.is_empty() => {
+                format!(" [{} {} KB]", self.graphics, i.bytes.div_ceil(1024))
+            }
+            _ => String::new(),
+        };
         format!(
-            " Exploded view: {} {} {}, spread {:.1}, {} gaps, az {:.0}° el {:.0}°{} ",
+            " Exploded view: {} {} {}, spread {:.1}, {} gaps, az {:.0}° el {:.0}°{}{bytes} ",
             if l.mode == Mode::Dvr { "DVR" } else { "MIP" },
             l.preset.name(),
             l.colormap.name(),
@@ -66,7 +81,12 @@ impl Widget for &PreviewPane {
         let inner = block.inner(area);
         block.render(area, buf);
         match &self.image {
-            Load::Ready(protocol) => Image::new(protocol).render(inner, buf),
+            Load::Ready(_) if self.covered => {
+                if let Some(cell) = buf.cell_mut((inner.x, inner.y)) {
+                    cell.set_symbol(&format!("{} ", self.hide));
+                }
+            }
+            Load::Ready(image) => image.as_ref().render(inner, buf),
             Load::Running(_) => Paragraph::new("rendering…").render(inner, buf),
             Load::Failed(e) => Paragraph::new(format!("render failed: {e}"))
                 .wrap(Wrap { trim: true })
