@@ -105,7 +105,7 @@ impl App {
         };
         app.preview.hide = screen.hide;
         app.preview.graphics = screen.graphics;
-        app.status.message = screen.note;
+        app.status.notice = screen.note;
         (app, vec![Effect::Load])
     }
 

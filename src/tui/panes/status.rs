@@ -36,6 +36,9 @@ pub struct StatusBar {
     pub jobs: Vec<(&'static str, Progress)>,
     /// The analysis settings, short.
     pub settings: String,
+    /// What the user should know about the terminal (how to let images through tmux), shown
+    /// for as long as it holds.
+    pub notice: Option<String>,
     /// Colours.
     pub theme: Theme,
 }
@@ -51,6 +54,7 @@ impl StatusBar {
             position: None,
             jobs: Vec::new(),
             settings: settings_text(params),
+            notice: None,
             theme,
         }
     }
@@ -90,6 +94,9 @@ impl StatusBar {
         for (job, p) in &self.jobs {
             let text = format!(" {job}: {} {:.0}% ", p.phase, p.fraction * 100.0);
             parts.push(Span::styled(text, self.theme.fg(Color::Cyan)));
+        }
+        if let Some(n) = &self.notice {
+            parts.push(Span::styled(format!(" {n} "), self.theme.fg(Color::Yellow)));
         }
         if width >= 100 {
             parts.push(Span::styled(
