@@ -186,6 +186,15 @@ fn zlib(raw: &[u8]) -> Vec<u8> {
     z.finish().unwrap_or_default()
 }
 
+/// Writes `seq` (a [`hide_sequence`]) into the first cell of `area`, which then takes one column
+/// as a blank would, so that the rest of the area is drawn as usual.
+pub fn hide(seq: &str, area: Rect, buf: &mut Buffer) {
+    if let Some(cell) = buf.cell_mut((area.x, area.y)) {
+        cell.set_symbol(&format!("{seq} "))
+            .set_diff_option(ONE_WIDE);
+    }
+}
+
 /// One character wide, whatever the symbol's text: the first cell of an escape-sequence image.
 const ONE_WIDE: CellDiffOption = CellDiffOption::ForcedWidth(NonZeroU16::MIN);
 

@@ -5,7 +5,7 @@ use ratatui::layout::Rect;
 use ratatui::widgets::{Paragraph, Widget, Wrap};
 use slabscope::render::{Gap, Mode};
 
-use crate::term::image::TermImage;
+use crate::term::image::{TermImage, hide};
 use crate::tui::event::{Load, Look};
 use crate::tui::theme::Theme;
 
@@ -81,11 +81,7 @@ impl Widget for &PreviewPane {
         let inner = block.inner(area);
         block.render(area, buf);
         match &self.image {
-            Load::Ready(_) if self.covered => {
-                if let Some(cell) = buf.cell_mut((inner.x, inner.y)) {
-                    cell.set_symbol(&format!("{} ", self.hide));
-                }
-            }
+            Load::Ready(_) if self.covered => hide(&self.hide, inner, buf),
             Load::Ready(image) => image.as_ref().render(inner, buf),
             Load::Running(_) => Paragraph::new("rendering…").render(inner, buf),
             Load::Failed(e) => Paragraph::new(format!("render failed: {e}"))
