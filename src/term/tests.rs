@@ -6,11 +6,11 @@ use super::query::{Replies, parse};
 use super::tmux::Passthrough;
 use super::*;
 
-const XTERM: &[u8] =
+pub(crate) const XTERM: &[u8] =
     b"\x1bP>|XTerm(379)\x1b\\\x1b[?2;0;1000;1000S\x1b[?1;0;256S\x1b[?63;1;2;4;6;9;15;16;22;28c";
-const MLTERM: &[u8] =
+pub(crate) const MLTERM: &[u8] =
     b"\x1b[6;22;10t\x1b[4;660;1000t\x1b[?1;3;0S\x1b[?1;0;1024S\x1b[?63;1;2;3;4;6;7;15;18;22;29c";
-const KITTY_OLD: &[u8] =
+pub(crate) const KITTY_OLD: &[u8] =
     b"\x1bP>|kitty(0.26.5)\x1b\\\x1b_Gi=31;OK\x1b\\\x1b[6;20;9t\x1b[4;400;639t\x1b[?62;c";
 const KITTY_NEW: &[u8] =
     b"\x1bP>|kitty(0.35.2)\x1b\\\x1b_Gi=31;OK\x1b\\\x1b[6;40;18t\x1b[4;1600;2880t\x1b[?62;c";
