@@ -7,6 +7,7 @@ use crate::partition::{Method, Partition, PartitionParams, StackParams, Stop, pa
 use crate::progress::Monitor;
 use crate::view::{ViewParams, ViewSearch, search};
 use crate::volume::Volume;
+use crate::volume::background::BackgroundRule;
 
 /// What to analyse and how. The sampling (bins and spacings) is stated once, in `view`, and used
 /// by the slicing too.
@@ -22,8 +23,8 @@ pub struct AnalysisParams {
     pub method: Method,
     /// When to stop splitting or merging.
     pub stop: Stop,
-    /// Voxels at or below this value are left out of every slab histogram.
-    pub background: Option<f32>,
+    /// The background, left out of every slab histogram.
+    pub background: BackgroundRule,
 }
 
 impl Default for AnalysisParams {
@@ -34,12 +35,21 @@ impl Default for AnalysisParams {
             search_views: false,
             method: Method::TopDown,
             stop: Stop::Slabs(4),
-            background: None,
+            background: BackgroundRule::Auto,
         }
     }
 }
 
 impl AnalysisParams {
+    /// The paper's method: the view search on one lattice per axis, every voxel counted.
+    pub fn paper() -> Self {
+        Self {
+            view: ViewParams::paper(),
+            background: BackgroundRule::None,
+            ..Self::default()
+        }
+    }
+
     /// How the slices are cut: the view search's sampling, and the background.
     pub fn stack(&self) -> StackParams {
         StackParams {

@@ -9,8 +9,8 @@ use serde::Serialize;
 
 use crate::analysis::Analysis;
 use crate::error::Result;
-use crate::partition::Partition;
-use crate::view::{AxisEntropy, ViewParams};
+use crate::partition::{BackgroundSummary, Partition};
+use crate::view::{AxisEntropy, Contender, RankedBy, ViewParams};
 use crate::volume::Volume;
 
 /// The version of the JSON contract.
@@ -36,12 +36,23 @@ pub struct AnalysisReport {
     pub views: Option<Vec<AxisEntropy>>,
     /// The most structured axis (null without a search).
     pub best_axis: Option<[f64; 3]>,
-    /// With phases: whether the best axis's spread exceeds its margin over the runner-up.
+    /// What the views are sorted by: `phase_mean` or `paper_lattice` (absent without a search).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub uncertain: Option<bool>,
+    pub ranked_by: Option<RankedBy>,
+    /// Whether another axis is a contender: null on the paper's single lattice, absent without a
+    /// search.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertain: Option<Option<bool>>,
+    /// The best axis and its contenders, each `{axis, mean, se}`: null on the paper's single
+    /// lattice, absent without a search.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contenders: Option<Option<Vec<Contender>>>,
     /// With refinement: the best axis found near the best sphere axes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub refined: Option<AxisEntropy>,
+    /// What was left out of the slab histograms as background: `{"mode", "value", "fraction"}`,
+    /// null when nothing was (`--background none`).
+    pub background: Option<BackgroundSummary>,
     /// The partition along the axis.
     pub partition: Partition,
 }
@@ -73,8 +84,11 @@ impl AnalysisReport {
             params,
             views: views.map(|v| v.views.clone()),
             best_axis: views.map(|v| v.best().axis),
+            ranked_by: views.map(|v| v.ranked_by),
             uncertain: views.map(|v| v.uncertain),
+            contenders: views.map(|v| v.contenders.clone()),
             refined: views.and_then(|v| v.refined.clone()),
+            background: Some(analysis.partition.background).filter(|b| b.mode != "none"),
             partition: analysis.partition.clone(),
         })
     }

@@ -52,17 +52,59 @@ fn analyze_json_follows_the_contract() {
     assert_eq!(d["params"]["bins"], 32);
     assert_eq!(d["params"]["block"], 3);
     assert_eq!(d["params"]["level"], 1);
+    assert_eq!(d["schema_version"], 1);
+    assert_eq!(d["params"]["phases"], 8);
+    assert_eq!(d["ranked_by"], "phase_mean");
     let views = d["views"].as_array().unwrap();
     assert_eq!(views.len(), 21);
-    let rates: Vec<f64> = views
+    let means: Vec<f64> = views
+        .iter()
+        .map(|v| v["phases"]["mean"].as_f64().unwrap())
+        .collect();
+    assert!(
+        means.windows(2).all(|w| w[0] <= w[1]),
+        "views sorted by the score the ranking used, lowest first"
+    );
+    for v in views {
+        let p = &v["phases"];
+        assert_eq!(p["n"], 8);
+        assert!(p["min"].as_f64() <= p["mean"].as_f64() && p["mean"].as_f64() <= p["max"].as_f64());
+        assert!(v["entropy_rate"].is_f64() && p["std"].is_f64());
+    }
+    assert_eq!(d["best_axis"], views[0]["axis"]);
+    let contenders = d["contenders"].as_array().unwrap();
+    assert_eq!(
+        contenders[0]["axis"], d["best_axis"],
+        "the best comes first"
+    );
+    assert_eq!(d["uncertain"], contenders.len() > 1);
+    assert!(
+        contenders
+            .iter()
+            .all(|c| c["mean"].is_f64() && c["se"].is_f64())
+    );
+    assert_eq!(d["background"]["mode"], "auto");
+    assert!(d["background"]["fraction"].is_f64());
+    // The paper's method: one lattice, every voxel.
+    let paper = json(&[
+        "analyze",
+        file.to_str().unwrap(),
+        "--json",
+        "--phases",
+        "0",
+        "--background",
+        "none",
+    ]);
+    assert_eq!(paper["ranked_by"], "paper_lattice");
+    assert!(paper["uncertain"].is_null() && paper["contenders"].is_null());
+    assert!(paper["background"].is_null());
+    let rates: Vec<f64> = paper["views"]
+        .as_array()
+        .unwrap()
         .iter()
         .map(|v| v["entropy_rate"].as_f64().unwrap())
         .collect();
-    assert!(
-        rates.windows(2).all(|w| w[0] <= w[1]),
-        "views sorted lowest first"
-    );
-    assert_eq!(d["best_axis"], views[0]["axis"]);
+    assert!(rates.windows(2).all(|w| w[0] <= w[1]), "by the paper's h");
     let p = &d["partition"];
     assert_eq!(p["method"], "topdown");
     assert_eq!(p["axis"], d["best_axis"]);

@@ -201,7 +201,11 @@ fn check_terminal(display: &Display, name: &str, terminal: &[&str]) {
             check_picture(display, name, d);
         }
         display.key("q");
-        wait_until(20, || read(&d.join("end")) == n, "the TUI to quit");
+        wait_until(
+            20,
+            || read(&d.join("end")) == n,
+            &format!("{name}: quit {i}"),
+        );
         // As the shell found the tty when the TUI had quit, before the next launch.
         let settings = read(&d.join("after"));
         assert!(

@@ -61,13 +61,14 @@ fn one_bright_voxel_appears_where_the_camera_puts_it() {
     }
 }
 
-/// A body phantom and its default partition (top-down, 4 slabs) along z.
+/// A body phantom and the paper's partition of it (top-down, 4 slabs, every voxel) along z, as
+/// the reference images were made.
 fn body_in_slabs(dims: [usize; 3], seed: u64) -> (Volume, slabscope::partition::Partition) {
     let v = phantom::body(dims, seed).unwrap();
     let p = partition(
         &v,
         [0.0, 0.0, 1.0],
-        &PartitionParams::default(),
+        &PartitionParams::paper(),
         &Monitor::none(),
     )
     .unwrap();
@@ -80,7 +81,7 @@ fn two_slabs() -> (Volume, slabscope::partition::Partition) {
     let params = PartitionParams {
         method: Method::TopDown,
         stop: Stop::Slabs(2),
-        ..PartitionParams::default()
+        ..PartitionParams::paper()
     };
     let p = partition(&v, [0.0, 0.0, 1.0], &params, &Monitor::none()).unwrap();
     (v, p)

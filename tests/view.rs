@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use slabscope::geometry::{canonical, dot};
 use slabscope::progress::Monitor;
-use slabscope::view::{ViewParams, ViewSearch, axis_angle, icosphere, search};
+use slabscope::view::{ViewParams, ViewSearch, axis_angle, icosphere, score, search};
 use slabscope::volume::phantom;
 use slabscope::{Error, SamplingParams, Volume, VoxelType};
 
@@ -216,10 +216,16 @@ fn phases_report_a_spread_and_refine_reports_a_nearby_axis() {
         assert!(s.min <= s.mean && s.mean <= s.max && s.std >= 0.0);
     }
     let refined = r.refined.as_ref().unwrap();
-    assert!(refined.entropy_rate <= r.views[0].entropy_rate);
-    // The layers are normal to (0, 1, 3); the refined axis lies close to their plane.
+    assert!(
+        score(refined) <= score(&r.views[0]),
+        "refined by the ranking's score"
+    );
+    // The layers are normal to (0, 1, 3); the refined axis lies within 3° of their plane, as
+    // the best sphere axis does.
     let n = [0.0, 1.0 / 10f64.sqrt(), 3.0 / 10f64.sqrt()];
-    assert!(dot(refined.axis, n).abs() < dot(r.views[0].axis, n).abs() + 1e-9);
+    let off_plane = |a: [f64; 3]| dot(a, n).abs().asin().to_degrees();
+    assert!(off_plane(r.views[0].axis) < 3.0);
+    assert!(off_plane(refined.axis) < 3.0, "{:?}", refined.axis);
 }
 
 #[test]

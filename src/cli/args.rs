@@ -2,6 +2,7 @@
 //! partition). `slabscope [FILE]` takes the same analysis flags as `analyze`.
 
 use clap::{Args, ValueEnum};
+use slabscope::volume::background::BackgroundRule;
 use slabscope::volume::io::{RawOptions, default_max_memory, parse_bytes, parse_dims};
 use slabscope::volume::{Endian, VoxelType};
 use slabscope::{AnalysisParams, Axis, LoadOptions, Method, SamplingParams, Stop, ViewParams};
@@ -63,9 +64,13 @@ pub struct AnalysisArgs {
     /// Distance between samples along a ray in mm (default: the smallest voxel spacing).
     #[arg(long, value_name = "MM", value_parser = positive)]
     pub sample_spacing: Option<f64>,
-    /// Also compute h on N shifted lattices per axis and report its mean and spread.
-    #[arg(long, value_name = "N", default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=64))]
+    /// Rank axes by the mean of h over N lattice phases, the paper's lattice among them (0: by
+    /// the paper's single lattice, as the paper does).
+    #[arg(long, value_name = "N", default_value_t = 8, value_parser = clap::value_parser!(u8).range(0..=64))]
     pub phases: u8,
+    /// Each shifted lattice walks one block of rays in K, spread over the volume (1: every ray).
+    #[arg(long, value_name = "K", default_value_t = slabscope::view::DEFAULT_PHASE_SUBSET, value_parser = clap::value_parser!(u64).range(1..=64))]
+    pub phase_subset: u64,
     /// Refine the best axes on a finer local search, to within 2 degrees.
     #[arg(long)]
     pub refine: bool,
@@ -82,9 +87,11 @@ pub struct AnalysisArgs {
     /// (optimal) falls below T.
     #[arg(long, value_name = "T", value_parser = finite)]
     pub threshold: Option<f64>,
-    /// Leave voxels at or below this value out of every histogram.
-    #[arg(long, value_name = "VALUE", value_parser = finite)]
-    pub background: Option<f64>,
+    /// The background left out of slab histograms: auto (the region connected to the border at
+    /// or below a threshold from the border voxels), none (every voxel, as the paper), or VALUE
+    /// (every voxel at or below it).
+    #[arg(long, value_name = "auto|none|VALUE", default_value = "auto", value_parser = parse_background, allow_hyphen_values = true)]
+    pub background: BackgroundRule,
 }
 
 /// `--axis`: `None` for the view search's best.
@@ -125,6 +132,7 @@ impl AnalysisArgs {
                 block: usize::from(self.block),
                 level: usize::from(self.level),
                 phases: usize::from(self.phases),
+                phase_subset: self.phase_subset,
                 refine: self.refine,
                 ..ViewParams::default()
             },
@@ -139,8 +147,18 @@ impl AnalysisArgs {
                 (_, Some(t)) => Stop::Threshold(t),
                 (k, None) => Stop::Slabs(k.unwrap_or(4)),
             },
-            background: self.background.map(|b| b as f32),
+            background: self.background,
         }
+    }
+}
+
+fn parse_background(s: &str) -> Result<BackgroundRule, String> {
+    match s.trim() {
+        "auto" => Ok(BackgroundRule::Auto),
+        "none" => Ok(BackgroundRule::None),
+        t => finite(t)
+            .map(|v| BackgroundRule::Below(v as f32))
+            .map_err(|_| format!("{s:?} is not auto, none or a number")),
     }
 }
 

@@ -7,6 +7,7 @@ mod info;
 mod phantom;
 mod progress;
 mod render;
+mod text;
 
 use std::path::Path;
 

@@ -15,7 +15,7 @@ pub use bottom_up::{Merge, MergeHistory, slice_nmi};
 pub use histories::{Histories, Scope};
 pub use optimal::{MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{Comparison, Partition, PartitionParams, Step, Stop, label_volume, partition};
-pub use stack::{MISSING, SliceStack, StackParams};
+pub use stack::{BackgroundSummary, MISSING, SliceStack, StackParams};
 pub use top_down::{Split, SplitHistory};
 
 use crate::measure::entropy;
@@ -82,37 +82,35 @@ pub struct SlabInfo {
     pub entropy: f64,
     /// Mean intensity of its counted samples.
     pub mean: Option<f64>,
-    /// Fewer than 5% of the stack's average samples per slice, or nearly one bin: such slabs are
-    /// what the paper's bottom-up isolates at the volume's edges (their NMI with anything is ~0).
-    pub near_empty: bool,
+    /// The share of its positions inside the volume that are background or missing.
+    pub background_fraction: f64,
+    /// It holds next to nothing: at least [`EMPTY_FRACTION`] of it is background or missing.
+    pub empty: bool,
 }
 
-/// Entropy below which a slab counts as nearly uniform, bits.
-const NEAR_EMPTY_ENTROPY: f64 = 0.05;
+/// A slab at least this much background or missing is empty.
+pub const EMPTY_FRACTION: f64 = 0.95;
 
 /// Summaries of `slabs` of `stack`, whose per-slice histograms are `histograms`.
 pub fn describe(stack: &SliceStack, histograms: &[u64], slabs: &[Slab]) -> Vec<SlabInfo> {
     let bins = stack.bins();
     let prefix = prefix_histograms(histograms, bins);
-    let all: u64 = histograms.iter().sum();
-    let per_slice = all as f64 / stack.slices().max(1) as f64;
     slabs
         .iter()
         .map(|&(a, b)| {
             let h: Vec<u64> = (0..bins)
                 .map(|x| prefix[b * bins + x] - prefix[a * bins + x])
                 .collect();
-            let samples: u64 = h.iter().sum();
-            let e = entropy(h.iter().copied());
             let (t, o) = (stack.thickness(), stack.offset());
+            let left_out = stack.left_out(a, b);
             SlabInfo {
                 slices: (a, b),
                 mm: (o + (a as f64 - 0.5) * t, o + (b as f64 - 0.5) * t),
-                samples,
-                entropy: e,
+                samples: h.iter().sum(),
+                entropy: entropy(h.iter().copied()),
                 mean: stack.mean(a, b),
-                near_empty: (samples as f64) < 0.05 * per_slice * (b - a) as f64
-                    || e < NEAR_EMPTY_ENTROPY,
+                background_fraction: left_out,
+                empty: left_out >= EMPTY_FRACTION,
             }
         })
         .collect()

@@ -5,10 +5,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::histories::{Histories, Scope};
-use super::{MAX_SLICES, Method, Slab, SlabInfo, SliceStack, StackParams};
+use super::{BackgroundSummary, MAX_SLICES, Method, Slab, SlabInfo, SliceStack, StackParams};
 use crate::error::Result;
 use crate::geometry::dot;
 use crate::progress::Monitor;
+use crate::volume::background::BackgroundRule;
 use crate::volume::{Volume, VoxelType};
 
 /// When to stop splitting or merging.
@@ -109,12 +110,26 @@ pub struct Partition {
     pub gain_curve: Vec<f64>,
     /// The optimum beside the greedy top-down for 1 ..= max(8, K) slabs.
     pub comparison: Vec<Comparison>,
+    /// What was left out as background (reported at the top of the analysis).
+    #[serde(skip)]
+    pub background: BackgroundSummary,
 }
 
 /// The optimum is compared with greedy up to at least this many slabs.
 const COMPARE_SLABS: usize = 8;
 
 impl PartitionParams {
+    /// The paper's partition: top-down to 4 slabs, every voxel counted.
+    pub fn paper() -> Self {
+        Self {
+            stack: StackParams {
+                background: BackgroundRule::None,
+                ..StackParams::default()
+            },
+            ..Self::default()
+        }
+    }
+
     /// The histories a partition by these parameters reads: bottom-up only for its own method,
     /// the optimum as far as the method and the comparison with greedy need.
     pub fn scope(&self, slices_hint: Option<usize>) -> Scope {
@@ -176,6 +191,7 @@ impl Partition {
             boundary_nmi,
             slabs,
             comparison,
+            background: stack.background(),
         })
     }
 }

@@ -3,12 +3,14 @@
 //! of quantized symbols across the slices is contiguous, over the slices where it is valid.
 
 use rayon::prelude::*;
+use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::geometry::{canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
 use crate::view::lattice::{Lattice, SamplingParams};
 use crate::volume::Volume;
+use crate::volume::background::{Background, BackgroundRule};
 use crate::volume::interpolate::Interpolator;
 
 /// The symbol of a sample that does not count: outside the volume, missing, or background.
@@ -20,8 +22,8 @@ pub struct StackParams {
     /// Bins, and for an oblique axis the lattice's spacings (the ray spacing between a slice's
     /// pixels, the sample spacing between slices): the view search's.
     pub sampling: SamplingParams,
-    /// Voxels at or below this value are left out of every histogram.
-    pub background: Option<f32>,
+    /// The background, left out of every histogram.
+    pub background: BackgroundRule,
 }
 
 /// One pixel's column: symbols for slices `first .. first + len`, stored from `offset`.
@@ -47,6 +49,42 @@ pub struct SliceStack {
     /// Per slice: the sum and count of the values that count, for slab means.
     sums: Vec<f64>,
     counts: Vec<u64>,
+    /// Per slice: the samples inside the volume's box, background and missing ones included.
+    positions: Vec<u64>,
+    /// The background left out.
+    background: BackgroundSummary,
+}
+
+/// What was left out as background, for reports: `{"mode": "auto", "value": 12.0,
+/// "fraction": 0.38}`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct BackgroundSummary {
+    /// How it was chosen: `none`, `auto` or `value`.
+    pub mode: &'static str,
+    /// The threshold: background voxels are at or below it (`None` when there is none).
+    pub value: Option<f32>,
+    /// The share of the volume's voxels that are background.
+    pub fraction: f64,
+}
+
+impl BackgroundSummary {
+    /// The summary of `b`.
+    pub fn of(b: &Background) -> Self {
+        Self {
+            mode: match b.rule {
+                BackgroundRule::None => "none",
+                BackgroundRule::Auto => "auto",
+                BackgroundRule::Below(_) => "value",
+            },
+            value: b.value,
+            fraction: b.fraction,
+        }
+    }
+
+    /// Whether any voxel was left out.
+    pub fn any(&self) -> bool {
+        self.fraction > 0.0
+    }
 }
 
 /// The two axes other than `m`, in order.
@@ -70,24 +108,28 @@ impl SliceStack {
             Error::invalid("axis", format!("{axis:?}"), "a direction with a length")
         })?);
         let q = volume.quantizer(params.sampling.bins)?;
-        let keep = |v: f32| -> u8 {
-            match params.background {
-                Some(t) if v <= t => MISSING,
-                _ => q.bin(v).unwrap_or(MISSING),
+        let background = Background::find(volume, params.background);
+        // A sample's voxel (the nearest, for an interpolated one) and value.
+        let keep = |index: usize, v: f32| -> u8 {
+            if background.contains(index, v) {
+                MISSING
+            } else {
+                q.bin(v).unwrap_or(MISSING)
             }
         };
-        let stack = match coordinate_axis(d) {
+        let mut stack = match coordinate_axis(d) {
             Some(m) => Self::along_coordinate(volume, m, params.sampling.bins, &keep, monitor)?,
             None => Self::along_lattice(volume, d, params, &keep, monitor)?,
         };
-        stack.with_sums(volume, d, params, monitor)
+        stack.background = BackgroundSummary::of(&background);
+        stack.with_sums(volume, d, params, &background, monitor)
     }
 
     fn along_coordinate(
         volume: &Volume,
         m: usize,
         bins: usize,
-        keep: &(dyn Fn(f32) -> u8 + Sync),
+        keep: &(dyn Fn(usize, f32) -> u8 + Sync),
         monitor: &Monitor,
     ) -> Result<Self> {
         let dims = volume.dims();
@@ -106,7 +148,8 @@ impl SliceStack {
                     let p = c * 4096 + k;
                     let base = (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b];
                     for (s, o) in col.iter_mut().enumerate() {
-                        *o = keep(voxels[base + s * stride[m]]);
+                        let i = base + s * stride[m];
+                        *o = keep(i, voxels[i]);
                     }
                 }
                 monitor.advance(1)
@@ -130,6 +173,8 @@ impl SliceStack {
             symbols,
             sums: Vec::new(),
             counts: Vec::new(),
+            positions: vec![pixels as u64; n],
+            background: BackgroundSummary::default(),
         })
     }
 
@@ -137,7 +182,7 @@ impl SliceStack {
         volume: &Volume,
         d: [f64; 3],
         params: &StackParams,
-        keep: &(dyn Fn(f32) -> u8 + Sync),
+        keep: &(dyn Fn(usize, f32) -> u8 + Sync),
         monitor: &Monitor,
     ) -> Result<Self> {
         let lattice = oblique_lattice(volume, d, params)?;
@@ -159,7 +204,10 @@ impl SliceStack {
                             first: (ray.k0 - k_first) as u32,
                             len: ray.len() as u32,
                         });
-                        symbols.extend((ray.k0..=ray.k1).map(|k| keep(it.sample(ray.at(k)))));
+                        symbols.extend((ray.k0..=ray.k1).map(|k| {
+                            let p = ray.at(k);
+                            keep(it.nearest(p), it.sample(p))
+                        }));
                     }
                 }
                 monitor.advance(1)?;
@@ -169,7 +217,14 @@ impl SliceStack {
         let total = per_row.iter().map(|(_, s)| s.len()).sum();
         let mut columns = Vec::with_capacity(per_row.iter().map(|(c, _)| c.len()).sum());
         let mut symbols = Vec::with_capacity(total);
+        let mut positions = vec![0u64; slices];
         for (cols, syms) in per_row {
+            for c in &cols {
+                let first = c.first as usize;
+                for p in &mut positions[first..first + c.len as usize] {
+                    *p += 1;
+                }
+            }
             let base = symbols.len();
             columns.extend(cols.into_iter().map(|c| Column {
                 offset: c.offset + base,
@@ -187,6 +242,8 @@ impl SliceStack {
             symbols,
             sums: Vec::new(),
             counts: Vec::new(),
+            positions,
+            background: BackgroundSummary::default(),
         })
     }
 
@@ -196,10 +253,11 @@ impl SliceStack {
         volume: &Volume,
         d: [f64; 3],
         params: &StackParams,
+        background: &Background,
         monitor: &Monitor,
     ) -> Result<Self> {
         monitor.check()?;
-        let counted = |v: f32| v.is_finite() && params.background.is_none_or(|t| v > t);
+        let counted = |index: usize, v: f32| v.is_finite() && !background.contains(index, v);
         let (sums, counts) = if let Some(m) = coordinate_axis(d) {
             plane_sums(volume, m, &counted)
         } else {
@@ -270,6 +328,8 @@ impl SliceStack {
             symbols,
             sums,
             counts,
+            positions: vec![pixels as u64; n],
+            background: BackgroundSummary::default(),
         })
     }
 
@@ -301,6 +361,23 @@ impl SliceStack {
     /// Number of pixel columns.
     pub fn pixels(&self) -> usize {
         self.columns.len()
+    }
+
+    /// The share of the positions of slices `start..end` inside the volume that do not count:
+    /// background or missing voxels.
+    pub fn left_out(&self, start: usize, end: usize) -> f64 {
+        let positions: u64 = self.positions[start..end].iter().sum();
+        let counted: u64 = self.counts[start..end].iter().sum();
+        if positions == 0 {
+            1.0
+        } else {
+            1.0 - counted as f64 / positions as f64
+        }
+    }
+
+    /// What was left out as background.
+    pub fn background(&self) -> BackgroundSummary {
+        self.background
     }
 
     /// Mean of the counted values of slices `start..end`, or `None` when none counts.
@@ -357,7 +434,7 @@ impl SliceStack {
 fn plane_sums(
     volume: &Volume,
     m: usize,
-    counted: &(dyn Fn(f32) -> bool + Sync),
+    counted: &(dyn Fn(usize, f32) -> bool + Sync),
 ) -> (Vec<f64>, Vec<u64>) {
     let dims = volume.dims();
     let stride = [1, dims[0], dims[0] * dims[1]];
@@ -370,8 +447,9 @@ fn plane_sums(
             for j in 0..dims[b] {
                 let row = s * stride[m] + j * stride[b];
                 for i in 0..dims[a] {
-                    let v = voxels[row + i * stride[a]];
-                    if counted(v) {
+                    let index = row + i * stride[a];
+                    let v = voxels[index];
+                    if counted(index, v) {
                         sum += f64::from(v);
                         count += 1;
                     }
@@ -387,7 +465,7 @@ fn lattice_sums(
     volume: &Volume,
     lattice: &Lattice,
     slices: usize,
-    counted: &(dyn Fn(f32) -> bool + Sync),
+    counted: &(dyn Fn(usize, f32) -> bool + Sync),
 ) -> (Vec<f64>, Vec<u64>) {
     let it = Interpolator::new(volume);
     let ((i0, i1), (j0, j1)) = lattice.ray_ranges();
@@ -399,8 +477,9 @@ fn lattice_sums(
             for i in i0..=i1 {
                 if let Some(ray) = lattice.ray(i, j) {
                     for k in ray.k0..=ray.k1 {
-                        let v = it.sample(ray.at(k));
-                        if counted(v) {
+                        let p = ray.at(k);
+                        let v = it.sample(p);
+                        if counted(it.nearest(p), v) {
                             let s = (k - k_first) as usize;
                             sums[s] += f64::from(v);
                             counts[s] += 1;
@@ -488,7 +567,7 @@ mod tests {
     fn background_is_left_out() {
         let v = ramp();
         let params = StackParams {
-            background: Some(29.0),
+            background: BackgroundRule::Below(29.0),
             ..StackParams::default()
         };
         let s = SliceStack::new(&v, [0.0, 0.0, 1.0], &params, &Monitor::none()).unwrap();

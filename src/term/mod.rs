@@ -112,6 +112,8 @@ pub struct Caps {
     pub tmux: bool,
     /// Something the user should know, e.g. how to let images through tmux.
     pub note: Option<String>,
+    /// Keys typed while the terminal was asked (printable characters and Ctrl-C).
+    pub typed: String,
 }
 
 /// The cell size assumed when the terminal does not say.
@@ -129,6 +131,7 @@ impl Caps {
             emulator: None,
             tmux: false,
             note: None,
+            typed: String::new(),
         }
     }
 
@@ -222,6 +225,7 @@ pub fn choose(
         emulator,
         tmux: passthrough.is_some(),
         note: (!notes.is_empty()).then(|| notes.join("; ")),
+        typed: r.typed.clone(),
     }
 }
 

@@ -28,6 +28,9 @@ pub struct Replies {
     pub sixel_colors: Option<u16>,
     /// DA1: the primary device attributes (4 means sixel).
     pub attributes: Option<Vec<u16>>,
+    /// What the user typed while the terminal answered (printable characters and Ctrl-C), to be
+    /// taken as keys rather than lost.
+    pub typed: String,
 }
 
 impl Replies {
@@ -142,9 +145,43 @@ fn string_after<'a>(bytes: &'a [u8], intro: &[u8]) -> Option<&'a [u8]> {
     Some(&rest[..end])
 }
 
+/// The bytes of `input` outside escape sequences (CSI, and DCS, APC and OSC strings), kept when
+/// printable or Ctrl-C: keys typed while the replies came in.
+fn typed(input: &[u8]) -> String {
+    let mut out = String::new();
+    let mut i = 0;
+    while i < input.len() {
+        match input[i] {
+            0x1b if i + 1 < input.len() => {
+                let rest = &input[i + 2..];
+                let len = match input[i + 1] {
+                    b'[' => rest
+                        .iter()
+                        .position(|b| (0x40..=0x7e).contains(b))
+                        .map(|p| p + 1),
+                    b'P' | b'_' | b']' => rest
+                        .windows(2)
+                        .position(|w| w == b"\x1b\\")
+                        .map(|p| p + 2)
+                        .or_else(|| rest.iter().position(|&b| b == 0x07).map(|p| p + 1)),
+                    _ => Some(0),
+                };
+                i += 2 + len.unwrap_or(rest.len());
+            }
+            b @ (0x20..=0x7e | 0x03) => {
+                out.push(char::from(b));
+                i += 1;
+            }
+            _ => i += 1,
+        }
+    }
+    out
+}
+
 /// What the replies in `bytes` say, whatever their order and whatever else is mixed in.
 pub fn parse(bytes: &[u8]) -> Replies {
     let mut r = Replies {
+        typed: typed(bytes),
         version: string_after(bytes, b"\x1bP>|").map(|v| String::from_utf8_lossy(v).into_owned()),
         kitty_graphics: string_after(bytes, b"\x1b_G")
             .is_some_and(|s| s.split(|&b| b == b';').nth(1) == Some(b"OK")),
@@ -205,6 +242,15 @@ mod tests {
             "an incomplete reply is not the end"
         );
         assert!(has_da1(b"\x1b[?1;2c"));
+    }
+
+    #[test]
+    fn keys_typed_while_the_terminal_answers_are_kept() {
+        let mut bytes = b"q".to_vec();
+        bytes.extend_from_slice(XTERM);
+        bytes.extend_from_slice(b"n\x03");
+        assert_eq!(parse(&bytes).typed, "qn\u{3}");
+        assert_eq!(parse(KITTY_OLD).typed, "", "replies alone are no keys");
     }
 
     #[test]

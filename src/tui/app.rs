@@ -5,13 +5,14 @@
 use std::sync::Arc;
 
 use slabscope::render::{Colormap, Gap, Mode, Preset};
+use slabscope::volume::background::BackgroundRule;
 use slabscope::{AnalysisParams, Progress, Volume};
 
 use super::event::{Action, Ask, Effect, ExportRequest, Job, JobMsg, Load, RenderRequest};
 use super::panes::curves::{Curves, CurvesPane};
 use super::panes::preview::PreviewPane;
 use super::panes::slabs::{SlabTable, SlabsPane};
-use super::panes::status::{Prompt, StatusBar};
+use super::panes::status::{Prompt, StatusBar, settings_text};
 use super::panes::views::ViewsPane;
 use super::partitioning::Partitioning;
 use super::theme::Theme;
@@ -162,6 +163,7 @@ impl App {
             }
             Action::Type(_) | Action::Erase | Action::Submit => vec![],
             Action::Export => self.export(),
+            Action::ToggleBackground => self.toggle_background(),
             Action::PreviewArea(w, h) => {
                 if (w, h) == self.preview.cells {
                     return vec![];
@@ -316,6 +318,26 @@ impl App {
                     vec![]
                 }
             },
+        }
+    }
+
+    /// Leaves the background out of the slabs (found automatically), or counts every voxel as
+    /// the paper does; the histories along the axis are computed again.
+    fn toggle_background(&mut self) -> Vec<Effect> {
+        let rule = match self.params.background {
+            BackgroundRule::None => BackgroundRule::Auto,
+            _ => BackgroundRule::None,
+        };
+        self.params.background = rule;
+        self.part.stack.background = rule;
+        self.status.settings = settings_text(&self.params);
+        self.status.message = Some(match rule {
+            BackgroundRule::None => "background counted: every voxel is in the slabs".into(),
+            _ => "background left out: the region connected to the border, found from it".into(),
+        });
+        match self.part.axis {
+            Some(axis) => self.analyze(axis),
+            None => vec![],
         }
     }
 

@@ -146,6 +146,8 @@ pub enum Action {
     ToggleSolo,
     /// Perspective or orthographic.
     TogglePerspective,
+    /// Leave the background out of the slabs, or count every voxel.
+    ToggleBackground,
     /// Write the view (PNG), the analysis (JSON) and the labels (NRRD).
     Export,
     /// The preview pane's size in cells changed.

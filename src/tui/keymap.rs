@@ -57,6 +57,7 @@ pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {
         KeyCode::Char('o') => Action::ToggleSolo,
         KeyCode::Char('P') => Action::TogglePerspective,
         KeyCode::Char('e') => Action::Export,
+        KeyCode::Char('b') => Action::ToggleBackground,
         _ => return None,
     })
 }
@@ -72,6 +73,7 @@ pub const HELP: &[(&str, &str)] = &[
     ("Home End", "start / end of the history"),
     ("+ -", "one slab more / fewer"),
     ("t", "threshold (empty clears)"),
+    ("b", "background: left out (auto) / counted"),
     ("[ ] { }", "orbit: azimuth, elevation"),
     ("z Z", "zoom in / out"),
     ("s S", "spread less / more"),
@@ -82,4 +84,18 @@ pub const HELP: &[(&str, &str)] = &[
     ("e", "export PNG, JSON and label NRRD"),
     ("Esc", "cancel work, close help"),
     ("? q", "help, quit"),
+];
+
+/// The words on the screen: (term, what it means).
+pub const GLOSSARY: &[(&str, &str)] = &[
+    ("h", "entropy rate H(X^L) - H(X^L-1) along an axis:"),
+    ("", "lower is more structured; mean over lattice phases"),
+    ("H(X^L)", "entropy of L samples in a row, bits"),
+    ("* ≈", "the best axis; a contender within 2 std. errors"),
+    ("ΔI", "information a cut gains (JS divergence, weighted)"),
+    ("I", "information the slabs keep about the intensity"),
+    ("NMI", "normalized mutual information of two slabs"),
+    ("JS", "Jensen-Shannon divergence of two histograms"),
+    ("0–44", "slices 0 to 44, both included"),
+    ("∅", "an empty slab: 95% or more background or missing"),
 ];

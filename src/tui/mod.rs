@@ -20,7 +20,7 @@ use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, Sender, channel};
 
 use anyhow::{Result, bail};
-use crossterm::event::Event as TermEvent;
+use crossterm::event::{Event as TermEvent, KeyCode, KeyEvent, KeyModifiers};
 use crossterm::execute;
 use crossterm::terminal::{
     EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
@@ -85,6 +85,14 @@ pub fn run(options: Options) -> Result<()> {
         execute!(stdout(), EnterAlternateScreen)?;
         let mut terminal = Terminal::new(CrosstermBackend::new(stdout()))?;
         let (tx, rx) = channel();
+        // Keys typed while the terminal answered come first.
+        for c in caps.typed.chars() {
+            let key = match c {
+                '\x03' => KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL),
+                c => KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE),
+            };
+            let _ = tx.send(Event::Key(key));
+        }
         spawn_input(tx.clone());
         let screen = Screen {
             theme: Theme::from_env(),

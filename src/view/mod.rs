@@ -1,20 +1,33 @@
 //! The most structured view (paper §3.1 and §4): the entropy rate of every axis of the viewpoint
-//! sphere, lowest first, optionally checked on shifted lattices and refined around the best.
+//! sphere, ranked by its mean over lattice phases (DESIGN §2: the paper's lattice favours the
+//! coordinate axes), with the axes that cannot be told from the best named as contenders, and
+//! optionally refined around the best.
 
 pub mod icosphere;
 pub mod lattice;
 mod rate;
+mod refine;
 
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use rate::{AxisEntropy, BinSampler, InnerSpans, PhaseSpread, entropy_rate, work_units};
+pub use rate::{
+    AxisEntropy, BinSampler, InnerSpans, PhaseStats, RaySubset, entropy_rate, entropy_rate_of,
+    work_units, work_units_of,
+};
 
 use crate::error::{Error, Result};
-use crate::geometry::{canonical, dot, frame, normalize};
+use crate::geometry::{canonical, dot, normalize};
 use crate::progress::Monitor;
 use crate::view::lattice::{Lattice, SamplingParams};
 use crate::volume::Volume;
+
+/// The lattice phases averaged by default, the paper's among them.
+pub const DEFAULT_PHASES: usize = 8;
+
+/// Each shifted lattice walks one block of rays in this many by default, so that the seven
+/// shifted lattices together cost about 0.6 of a full lattice (when the volume affords it).
+pub const DEFAULT_PHASE_SUBSET: u64 = 12;
 
 /// Parameters of the view search.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -26,8 +39,11 @@ pub struct ViewParams {
     pub block: usize,
     /// Icosphere subdivision level (0 to 4).
     pub level: usize,
-    /// Shifted lattices per axis for the spread of h (0: the paper's single lattice).
+    /// Lattice phases averaged per axis, the paper's lattice among them; 0 ranks by the paper's
+    /// single lattice.
     pub phases: usize,
+    /// Each shifted lattice walks one block of rays in this many (1: every ray).
+    pub phase_subset: u64,
     /// Seed of the lattice shifts.
     pub phase_seed: u64,
     /// Whether to refine the best axes on a finer local grid.
@@ -40,7 +56,8 @@ impl Default for ViewParams {
             sampling: SamplingParams::default(),
             block: 3,
             level: 1,
-            phases: 0,
+            phases: DEFAULT_PHASES,
+            phase_subset: DEFAULT_PHASE_SUBSET,
             phase_seed: 1,
             refine: false,
         }
@@ -58,30 +75,97 @@ impl ViewParams {
             ..Self::default()
         }
     }
+
+    /// The paper's method: one lattice per axis, ranked by its entropy rate.
+    pub fn paper() -> Self {
+        Self {
+            phases: 0,
+            ..Self::default()
+        }
+    }
 }
 
-/// The most shifted lattices `--phases` allows.
+/// A shifted lattice walking a subset of its rays keeps at least this many samples per cell
+/// of the L-block table (see [`Evaluator::subset`]).
+pub const SAMPLES_PER_CELL: u64 = 32;
+
+/// The most lattice phases `--phases` allows.
 pub const MAX_PHASES: usize = 64;
+
+/// What the views are sorted by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RankedBy {
+    /// The mean entropy rate over lattice phases.
+    PhaseMean,
+    /// The entropy rate on the paper's lattice.
+    PaperLattice,
+}
+
+/// An axis that cannot be told from the best: its mean lies within two standard errors of the
+/// difference (DESIGN §2).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Contender {
+    /// The canonical axis.
+    pub axis: [f64; 3],
+    /// Its mean entropy rate over the phases.
+    pub mean: f64,
+    /// The standard error of that mean.
+    pub se: f64,
+}
 
 /// The result of the view search.
 #[derive(Clone, Debug, Serialize)]
 pub struct ViewSearch {
-    /// One entry per axis, lowest entropy rate first.
+    /// One entry per axis, by the score the ranking used (lowest first).
     pub views: Vec<AxisEntropy>,
     /// The parameters, with the spacings resolved to millimetres.
     pub params: ViewParams,
-    /// With phases: whether the best axis's spread exceeds its margin over the runner-up.
-    pub uncertain: bool,
+    /// What the views are sorted by.
+    pub ranked_by: RankedBy,
+    /// With phases: whether another axis is a contender (`None` on the paper's single lattice).
+    pub uncertain: Option<bool>,
+    /// With phases: the best axis and every contender, best first.
+    pub contenders: Option<Vec<Contender>>,
     /// With refine: the best axis found near the best sphere axes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub refined: Option<AxisEntropy>,
 }
 
 impl ViewSearch {
-    /// The most structured axis: the refined one when there is one, else the lowest on the sphere.
+    /// The most structured axis: the refined one when there is one, else the first on the sphere.
     pub fn best(&self) -> &AxisEntropy {
         self.refined.as_ref().unwrap_or(&self.views[0])
     }
+}
+
+/// The score an axis is ranked by: its phase mean when there is one, else the paper's rate.
+pub fn score(a: &AxisEntropy) -> f64 {
+    a.phases.map_or(a.entropy_rate, |p| p.mean)
+}
+
+/// The contenders of `best` among `views`: `best` itself first, then every axis whose mean is
+/// within two standard errors of the difference, `mean_b - mean_best < 2·√(se_b² + se_best²)`.
+pub fn contenders(best: &AxisEntropy, views: &[AxisEntropy]) -> Option<Vec<Contender>> {
+    let of = |a: &AxisEntropy| {
+        a.phases.map(|p| Contender {
+            axis: a.axis,
+            mean: p.mean,
+            se: p.se(),
+        })
+    };
+    let b = of(best)?;
+    let mut out = vec![b];
+    for a in views {
+        if a.axis == best.axis {
+            continue;
+        }
+        let c = of(a)?;
+        if c.mean - b.mean < 2.0 * c.se.hypot(b.se) {
+            out.push(c);
+        }
+    }
+    Some(out)
 }
 
 /// The validated parameters with spacings resolved.
@@ -102,6 +186,9 @@ fn resolve(volume: &Volume, params: &ViewParams) -> Result<ViewParams> {
             params.phases,
             format!("at most {MAX_PHASES}"),
         ));
+    }
+    if params.phase_subset == 0 {
+        return Err(Error::invalid("phase_subset", 0, "at least 1"));
     }
     if volume.is_constant() {
         return Err(Error::Degenerate(format!(
@@ -147,39 +234,57 @@ impl Evaluator<'_> {
         )
     }
 
-    fn units(&self, axis: [f64; 3]) -> Result<u64> {
-        Ok(work_units(&self.lattice(axis, 0)?) * (1 + self.params.phases as u64))
+    /// The rays a shifted lattice walks, for an axis whose paper lattice counted `samples`:
+    /// one block in `phase_subset`, spread over the volume, as long as each shifted lattice keeps
+    /// [`SAMPLES_PER_CELL`] samples per cell of the L-block table; else all of them.
+    ///
+    /// The plug-in entropy of L-blocks is biased low by about `cells / (2·N·ln 2)` bits for N
+    /// samples, so a lattice with fewer samples scores lower; with this many samples a cell the
+    /// bias stays below 0.023 bit and varies between axes by a tenth of that. Small volumes, where
+    /// it would not, are cheap to walk whole.
+    fn subset(&self, samples: u64, n: usize) -> RaySubset {
+        let cells = (self.params.sampling.bins as u64).saturating_pow(self.params.block as u32);
+        let affordable = samples / cells.saturating_mul(SAMPLES_PER_CELL).max(1);
+        RaySubset {
+            every: self.params.phase_subset.min(affordable).max(1),
+            offset: n as u64,
+        }
     }
 
-    /// The entropy rate of `axis` on the paper's lattice, with the phase spread when asked for.
+    fn units(&self, axis: [f64; 3]) -> Result<u64> {
+        let phases = self.params.phases.max(1) as u64;
+        Ok(work_units(&self.lattice(axis, 0)?) * phases)
+    }
+
+    /// The entropy rate of `axis` on the paper's lattice, with the phase statistics when asked
+    /// for.
     fn evaluate(&self, axis: [f64; 3], monitor: &Monitor) -> Result<AxisEntropy> {
         let axis = canonical(
             normalize(axis)
                 .ok_or_else(|| Error::invalid("axis", "[0, 0, 0]", "a direction with a length"))?,
         );
-        let mut result = entropy_rate(
-            &self.sampler,
-            &self.lattice(axis, 0)?,
-            self.params.block,
-            monitor,
-        )?;
+        let block = self.params.block;
+        let mut result = entropy_rate(&self.sampler, &self.lattice(axis, 0)?, block, monitor)?;
         result.axis = axis;
         if self.params.phases > 0 {
             let mut values = vec![result.entropy_rate];
-            for n in 1..=self.params.phases {
+            for n in 1..self.params.phases {
                 let lattice = self.lattice(axis, n)?;
-                values.push(
-                    entropy_rate(&self.sampler, &lattice, self.params.block, monitor)?.entropy_rate,
-                );
+                let subset = self.subset(result.samples, n);
+                let r = entropy_rate_of(&self.sampler, &lattice, block, subset, monitor)?;
+                // A subset walks fewer rows of tiles: the progress of the rest.
+                let rest = work_units(&lattice).saturating_sub(work_units_of(&lattice, subset));
+                monitor.advance(rest)?;
+                values.push(r.entropy_rate);
             }
-            result.phases = Some(PhaseSpread::of(&values));
+            result.phases = Some(PhaseStats::of(&values));
         }
         Ok(result)
     }
 }
 
-/// Evaluates every axis of the viewpoint sphere and returns them sorted by entropy rate (ties keep
-/// the sphere's order). Fails with [`Error::Cancelled`] when the monitor's flag is raised.
+/// Evaluates every axis of the viewpoint sphere and sorts them by their score (ties keep the
+/// sphere's order). Fails with [`Error::Cancelled`] when the monitor's flag is raised.
 pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result<ViewSearch> {
     let params = resolve(volume, params)?;
     let sampler = BinSampler::new(volume, volume.quantizer(params.sampling.bins)?);
@@ -195,79 +300,25 @@ pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result
         .par_iter()
         .map(|&axis| eval.evaluate(axis, monitor))
         .collect::<Result<Vec<_>>>()?;
-    views.sort_by(|a, b| a.entropy_rate.total_cmp(&b.entropy_rate));
-    let uncertain = match (&views[0].phases, views.get(1)) {
-        (Some(spread), Some(next)) => spread.range() > next.entropy_rate - views[0].entropy_rate,
-        _ => false,
-    };
+    views.sort_by(|a, b| score(a).total_cmp(&score(b)));
     let refined = if eval.params.refine {
-        Some(refine(&eval, &views, monitor)?)
+        Some(refine::refine(&eval, &views, monitor)?)
     } else {
         None
     };
+    let contenders = contenders(refined.as_ref().unwrap_or(&views[0]), &views);
     Ok(ViewSearch {
+        ranked_by: if eval.params.phases > 0 {
+            RankedBy::PhaseMean
+        } else {
+            RankedBy::PaperLattice
+        },
+        uncertain: contenders.as_ref().map(|c| c.len() > 1),
+        contenders,
         views,
         params: eval.params,
-        uncertain,
         refined,
     })
-}
-
-/// How many of the best sphere axes [`refine`] starts from.
-const REFINE_SEEDS: usize = 3;
-/// The pattern search stops when its step falls below this angle, degrees.
-const REFINE_STOP_DEGREES: f64 = 1.0;
-
-/// A pattern search on the sphere from each of the best few axes: try the eight neighbours at
-/// the current angular step, move to a better one or halve the step, until the step is below 1°.
-fn refine(eval: &Evaluator, views: &[AxisEntropy], monitor: &Monitor) -> Result<AxisEntropy> {
-    let start = icosphere::spacing_degrees(eval.params.level) / 2.0;
-    let seeds = &views[..views.len().min(REFINE_SEEDS)];
-    let per_step = eval.units(seeds[0].axis)? * 8;
-    let steps = (start / REFINE_STOP_DEGREES).log2().ceil() as u64 + 4;
-    monitor.start("refining", per_step * steps * seeds.len() as u64);
-    let quiet = Monitor::new(None, None);
-    let mut best: Option<AxisEntropy> = None;
-    for seed in seeds {
-        let mut here = seed.clone();
-        let mut step = start;
-        while step >= REFINE_STOP_DEGREES {
-            let (_, u, v) = frame(here.axis)?;
-            let t = step.to_radians().tan();
-            let around: Vec<[f64; 3]> = [
-                (-1.0, -1.0),
-                (-1.0, 0.0),
-                (-1.0, 1.0),
-                (0.0, -1.0),
-                (0.0, 1.0),
-                (1.0, -1.0),
-                (1.0, 0.0),
-                (1.0, 1.0),
-            ]
-            .iter()
-            .map(|&(a, b)| std::array::from_fn(|m| here.axis[m] + t * (a * u[m] + b * v[m])))
-            .collect();
-            let tried = around
-                .par_iter()
-                .map(|&axis| eval.evaluate(axis, &quiet))
-                .collect::<Result<Vec<_>>>()?;
-            monitor.advance(per_step)?;
-            match tried
-                .into_iter()
-                .min_by(|a, b| a.entropy_rate.total_cmp(&b.entropy_rate))
-            {
-                Some(c) if c.entropy_rate < here.entropy_rate => here = c,
-                _ => step /= 2.0,
-            }
-        }
-        if best
-            .as_ref()
-            .is_none_or(|b| here.entropy_rate < b.entropy_rate)
-        {
-            best = Some(here);
-        }
-    }
-    Ok(best.expect("at least one seed"))
 }
 
 /// The angle between two axes in degrees, ignoring their sign.

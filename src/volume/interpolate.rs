@@ -90,6 +90,18 @@ impl<'a> Interpolator<'a> {
         (value, [dx, dy, dz])
     }
 
+    /// The linear index of the voxel nearest to `p` (index coordinates inside the volume up to
+    /// rounding).
+    #[inline]
+    pub fn nearest(&self, p: [f64; 3]) -> usize {
+        (0..3)
+            .map(|m| {
+                let i = (p[m].max(0.0) + 0.5) as usize;
+                i.min(self.last[m] + usize::from(self.next[m] > 0)) * self.stride[m]
+            })
+            .sum()
+    }
+
     /// The voxel at integer index coordinates.
     #[inline]
     pub fn voxel(&self, x: usize, y: usize, z: usize) -> f32 {

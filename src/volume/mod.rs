@@ -1,5 +1,6 @@
 //! The volume: f32 voxels with x fastest, spacing in millimetres, statistics and quantization.
 
+pub mod background;
 pub mod cells;
 pub mod interpolate;
 pub mod io;

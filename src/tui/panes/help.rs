@@ -1,11 +1,12 @@
-//! The help overlay: every key.
+//! The help overlay: every key, and the words the screens use, side by side where the terminal
+//! is wide, one above the other where it is tall.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Rect};
 use ratatui::style::{Color, Modifier};
 use ratatui::widgets::{Clear, Row, Table, Widget};
 
-use crate::tui::keymap::HELP;
+use crate::tui::keymap::{GLOSSARY, HELP};
 use crate::tui::theme::Theme;
 
 /// The help overlay, centred over the screen.
@@ -14,23 +15,71 @@ pub struct Help {
     pub theme: Theme,
 }
 
-impl Widget for &Help {
-    fn render(self, area: Rect, buf: &mut Buffer) {
-        let height = (HELP.len() as u16 + 2).min(area.height);
-        let width = 56.min(area.width);
-        let popup = Rect {
-            x: area.x + (area.width - width) / 2,
-            y: area.y + (area.height - height) / 2,
-            width,
-            height,
-        };
-        Clear.render(popup, buf);
-        let rows = HELP
+/// Width of one table.
+const WIDTH: u16 = 64;
+
+impl Help {
+    fn table(&self, title: &str, rows: &[(&str, &str)], area: Rect, buf: &mut Buffer) {
+        Clear.render(area, buf);
+        let rows = rows
             .iter()
             .map(|(k, v)| Row::new([k.to_string(), v.to_string()]));
         Table::new(rows, [Constraint::Length(13), Constraint::Min(0)])
-            .block(self.theme.block(" Keys (Esc or ? closes) ".into(), true))
+            .block(self.theme.block(title.into(), true))
             .style(self.theme.fg(Color::Reset).add_modifier(Modifier::empty()))
-            .render(popup, buf);
+            .render(area, buf);
+    }
+}
+
+impl Widget for &Help {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        let (keys, words) = (HELP.len() as u16 + 2, GLOSSARY.len() as u16 + 2);
+        let width = WIDTH.min(area.width);
+        let centred = |w: u16, h: u16| Rect {
+            x: area.x + (area.width - w) / 2,
+            y: area.y + (area.height - h.min(area.height)) / 2,
+            width: w,
+            height: h.min(area.height),
+        };
+        let key_title = " Keys (Esc or ? closes) ";
+        let word_title = " Words (slice ranges are inclusive) ";
+        if area.width > 2 * WIDTH {
+            let both = centred(2 * WIDTH + 1, keys.max(words));
+            self.table(
+                key_title,
+                HELP,
+                Rect {
+                    width: WIDTH,
+                    ..both
+                },
+                buf,
+            );
+            let right = Rect {
+                x: both.x + WIDTH + 1,
+                width: WIDTH,
+                height: words.min(both.height),
+                ..both
+            };
+            self.table(word_title, GLOSSARY, right, buf);
+        } else if area.height >= keys + words {
+            let both = centred(width, keys + words);
+            self.table(
+                key_title,
+                HELP,
+                Rect {
+                    height: keys,
+                    ..both
+                },
+                buf,
+            );
+            let below = Rect {
+                y: both.y + keys,
+                height: words,
+                ..both
+            };
+            self.table(word_title, GLOSSARY, below, buf);
+        } else {
+            self.table(key_title, HELP, centred(width, keys), buf);
+        }
     }
 }

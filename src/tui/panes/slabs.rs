@@ -6,7 +6,7 @@ use ratatui::layout::{Constraint, Rect};
 use ratatui::style::{Color, Modifier};
 use ratatui::widgets::{Row, Table, Widget};
 use slabscope::Histories;
-use slabscope::partition::{Method, SlabInfo, slab_text};
+use slabscope::partition::{BackgroundSummary, Method, SlabInfo, slab_text};
 
 use super::placeholder;
 use crate::tui::event::Load;
@@ -23,6 +23,8 @@ pub struct SlabTable {
     /// The value at each slab's boundary with the next: NMI where the history knows it
     /// (bottom-up), else ΔI.
     pub next: Vec<f64>,
+    /// What was left out as background.
+    pub background: BackgroundSummary,
 }
 
 impl SlabTable {
@@ -38,6 +40,7 @@ impl SlabTable {
             method,
             info: h.describe(&slabs),
             next,
+            background: h.stack().background(),
         }
     }
 }
@@ -103,7 +106,7 @@ impl Columns {
     }
 
     fn cells(&self, i: usize, s: &SlabInfo, next: Option<f64>) -> Vec<String> {
-        let mark = if s.near_empty { " ∅" } else { "" };
+        let mark = if s.empty { " ∅" } else { "" };
         let mut cells = vec![
             format!("{i}{mark}"),
             slab_text(s.slices),
@@ -155,7 +158,17 @@ impl Widget for &SlabsPane {
             );
             return;
         };
-        let title = format!(" Slabs: {} of {} slices ", table.info.len(), table.slices);
+        let b = table.background;
+        let left_out = if b.any() && area.width >= 50 {
+            format!(", {:.0}% background left out", b.fraction * 100.0)
+        } else {
+            String::new()
+        };
+        let title = format!(
+            " Slabs: {} of {} slices{left_out} ",
+            table.info.len(),
+            table.slices
+        );
         let columns = Columns::of(area.width);
         let header = Row::new(columns.header(table.method))
             .style(self.theme.fg(Color::DarkGray).add_modifier(Modifier::BOLD));
@@ -173,7 +186,7 @@ impl Widget for &SlabsPane {
                 match (i == self.row, self.focused) {
                     (true, true) => row.style(self.theme.selected()),
                     (true, false) => row.style(self.theme.fg(Color::Yellow)),
-                    _ if s.near_empty => row.style(self.theme.fg(Color::DarkGray)),
+                    _ if s.empty => row.style(self.theme.fg(Color::DarkGray)),
                     _ => row,
                 }
             })

@@ -1,12 +1,13 @@
-//! A latitude-longitude map of the viewpoint sphere, each cell coloured by the entropy rate of
-//! the nearest axis (antipodes alike), with the current axis marked.
+//! A latitude-longitude map of the viewpoint sphere, each cell coloured by the score of the
+//! nearest axis (antipodes alike: the mean entropy rate over phases, or the paper's), with the
+//! current axis marked and a legend of the colours below it.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::{Color, Style};
 use ratatui::widgets::Widget;
 use slabscope::geometry::dot;
-use slabscope::view::AxisEntropy;
+use slabscope::view::{AxisEntropy, score};
 
 use crate::tui::theme::Theme;
 
@@ -60,21 +61,15 @@ impl Widget for SphereMap<'_> {
             .views
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(v.entropy_rate), b.max(v.entropy_rate))
+                (a.min(score(v)), b.max(score(v)))
             });
         let span = (hi - lo).max(1e-12);
-        let (w, h) = (area.width, area.height);
-        let cell_of = |d: [f64; 3]| -> Option<(u16, u16)> {
-            let lon = d[1].atan2(d[0]).to_degrees();
-            let lat = d[2].clamp(-1.0, 1.0).asin().to_degrees();
-            let x = ((lon + 180.0) / 360.0 * f64::from(w))
-                .floor()
-                .clamp(0.0, f64::from(w - 1)) as u16;
-            let y = ((90.0 - lat) / 180.0 * f64::from(h))
-                .floor()
-                .clamp(0.0, f64::from(h - 1)) as u16;
-            Some((x, y))
+        // The last row is the legend.
+        let map = Rect {
+            height: area.height - 1,
+            ..area
         };
+        let (w, h) = (map.width, map.height);
         for y in 0..h {
             for x in 0..w {
                 let d = direction(x, y, w, h);
@@ -83,29 +78,68 @@ impl Widget for SphereMap<'_> {
                     .iter()
                     .max_by(|a, b| dot(a.axis, d).abs().total_cmp(&dot(b.axis, d).abs()));
                 let Some(v) = nearest else { continue };
-                let t = (v.entropy_rate - lo) / span;
-                let cell = &mut buf[(area.x + x, area.y + y)];
-                if self.theme.color {
-                    cell.set_char(' ')
-                        .set_style(Style::default().bg(thermal(t)));
-                } else {
-                    cell.set_char(SHADES[(t * 4.0).round() as usize]);
-                }
+                self.shade(&mut buf[(map.x + x, map.y + y)], (score(v) - lo) / span);
             }
         }
         if let Some(a) = self.current {
             for d in [a, a.map(|c| -c)] {
-                if let Some((x, y)) = cell_of(d) {
-                    let style = if self.theme.color {
-                        Style::default().fg(Color::White).bg(Color::Black)
-                    } else {
-                        Style::default()
-                    };
-                    buf[(area.x + x, area.y + y)].set_char('◆').set_style(style);
-                }
+                let (x, y) = cell_of(d, w, h);
+                let style = if self.theme.color {
+                    Style::default().fg(Color::White).bg(Color::Black)
+                } else {
+                    Style::default()
+                };
+                buf[(map.x + x, map.y + y)].set_char('◆').set_style(style);
             }
         }
+        self.legend(
+            Rect::new(area.x, area.bottom() - 1, area.width, 1),
+            lo,
+            hi,
+            buf,
+        );
     }
+}
+
+impl SphereMap<'_> {
+    /// A cell of the map at `t` (0 for the lowest score, 1 for the highest).
+    fn shade(&self, cell: &mut ratatui::buffer::Cell, t: f64) {
+        if self.theme.color {
+            cell.set_char(' ')
+                .set_style(Style::default().bg(thermal(t)));
+        } else {
+            cell.set_char(SHADES[(t * 4.0).round() as usize]);
+        }
+    }
+
+    /// `0.105 ░▒▓█ 0.246 (◆ axis)`: the colours from the lowest score to the highest.
+    fn legend(&self, area: Rect, lo: f64, hi: f64, buf: &mut Buffer) {
+        let (left, right) = (format!("{lo:.3} "), format!(" {hi:.3} ◆ axis"));
+        let ramp = area
+            .width
+            .saturating_sub((left.chars().count() + right.chars().count()) as u16)
+            .min(12);
+        buf.set_string(area.x, area.y, &left, Style::default());
+        let x0 = area.x + left.chars().count() as u16;
+        for i in 0..ramp {
+            let t = f64::from(i) / f64::from(ramp.max(2) - 1);
+            self.shade(&mut buf[(x0 + i, area.y)], t);
+        }
+        buf.set_string(x0 + ramp, area.y, &right, Style::default());
+    }
+}
+
+/// The map cell of direction `d` in a `w × h` map.
+fn cell_of(d: [f64; 3], w: u16, h: u16) -> (u16, u16) {
+    let lon = d[1].atan2(d[0]).to_degrees();
+    let lat = d[2].clamp(-1.0, 1.0).asin().to_degrees();
+    let x = ((lon + 180.0) / 360.0 * f64::from(w))
+        .floor()
+        .clamp(0.0, f64::from(w - 1)) as u16;
+    let y = ((90.0 - lat) / 180.0 * f64::from(h))
+        .floor()
+        .clamp(0.0, f64::from(h - 1)) as u16;
+    (x, y)
 }
 
 #[cfg(test)]

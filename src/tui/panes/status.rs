@@ -6,6 +6,7 @@ use ratatui::style::{Color, Modifier};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
 use slabscope::partition::Method;
+use slabscope::volume::background::BackgroundRule;
 use slabscope::{AnalysisParams, Progress};
 
 use crate::tui::event::Ask;
@@ -131,9 +132,11 @@ pub fn settings_text(p: &AnalysisParams) -> String {
     if let Some(y) = v.sampling.sample_spacing {
         parts.push(format!("samples {y} mm"));
     }
-    if let Some(b) = p.background {
-        parts.push(format!("background ≤ {b}"));
-    }
+    parts.push(match p.background {
+        BackgroundRule::Auto => "background auto".into(),
+        BackgroundRule::None => "background none".into(),
+        BackgroundRule::Below(v) => format!("background ≤ {v}"),
+    });
     parts.join(", ")
 }
 

@@ -5,7 +5,7 @@ use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
-use slabscope::view::AxisEntropy;
+use slabscope::view::{AxisEntropy, RankedBy, score};
 use slabscope::{Axis, ViewSearch};
 
 use super::placeholder;
@@ -55,22 +55,28 @@ impl ViewsPane {
             .map(|v| v.axis)
     }
 
-    /// One row: a mark, the rank, the axis and its entropy rate, compact in a narrow list.
-    fn line(&self, i: usize, v: &AxisEntropy, width: u16) -> Line<'static> {
+    /// One row: a mark (● the axis partitioned, * the best, ≈ a contender of the best), the
+    /// rank, the axis and its score, compact in a narrow list.
+    fn line(&self, views: &ViewSearch, i: usize, v: &AxisEntropy, width: u16) -> Line<'static> {
         let axis = Axis::new(v.axis).unwrap_or(Axis::Z);
         let current = self
             .current
             .is_some_and(|a| Axis::new(a).is_ok_and(|a| a.angle(axis) < 1e-6));
-        let mark = match (current, i == 0) {
-            (true, _) => "●",
-            (false, true) => "*",
+        let contender = views
+            .contenders
+            .as_ref()
+            .is_some_and(|c| c.iter().skip(1).any(|c| c.axis == v.axis));
+        let mark = match (current, i == 0, contender) {
+            (true, ..) => "●",
+            (_, true, _) => "*",
+            (_, _, true) => "≈",
             _ => " ",
         };
         let text = if width >= 38 {
             let name = axis.name().map_or(String::new(), |n| format!(" {n}"));
-            format!("{mark}{:>3} {axis}{name} {:.4}", i + 1, v.entropy_rate)
+            format!("{mark}{:>3} {axis}{name} {:.4}", i + 1, score(v))
         } else {
-            format!("{mark}{:>2} {axis:.2} {:.3}", i + 1, v.entropy_rate)
+            format!("{mark}{:>2} {axis:.2} {:.3}", i + 1, score(v))
         };
         let mut style = if current {
             self.theme.fg(Color::Yellow)
@@ -103,13 +109,30 @@ impl ViewsPane {
     }
 }
 
+/// What the scores are: the mean entropy rate over phases, or the paper's.
+fn what(v: &ViewSearch) -> String {
+    match v.ranked_by {
+        RankedBy::PhaseMean => format!("mean h over {} phases", v.params.phases),
+        RankedBy::PaperLattice => "h on the paper's lattice".into(),
+    }
+}
+
+/// `: clear` or `: uncertain (2 ≈)`, with phases.
+fn verdict(v: &ViewSearch) -> String {
+    match &v.contenders {
+        Some(c) if c.len() > 1 => format!(": uncertain ({} ≈)", c.len() - 1),
+        Some(_) => ": clear".into(),
+        None => String::new(),
+    }
+}
+
 impl Widget for &ViewsPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
         let title = match self.views.ready() {
             Some(v) if area.width >= 44 => {
-                format!(" Viewpoints: {} axes, entropy rate h ", v.views.len())
+                format!(" {} axes by {}{} ", v.views.len(), what(v), verdict(v))
             }
-            Some(v) => format!(" {} axes, h ", v.views.len()),
+            Some(v) => format!(" {} axes, h{} ", v.views.len(), verdict(v)),
             None => " Viewpoints ".into(),
         };
         let block = self.theme.block(title, self.focused);
@@ -135,7 +158,7 @@ impl Widget for &ViewsPane {
             .enumerate()
             .skip(first)
             .take(rows)
-            .map(|(i, v)| self.line(i, v, list.width))
+            .map(|(i, v)| self.line(views, i, v, list.width))
             .collect();
         Paragraph::new(lines)
             .style(Style::default())

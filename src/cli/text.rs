@@ -1,0 +1,234 @@
+//! The analysis as text for people: the views with the verdict on the best, then the slabs.
+//! Slab ranges read `slices 0–44`, inclusive; the JSON keeps half-open `[start, end)`.
+
+use slabscope::partition::{Step, slab_text};
+use slabscope::view::{AxisEntropy, RankedBy, ViewSearch, icosphere, score};
+use slabscope::volume::dims_string;
+use slabscope::{Analysis, Axis, Partition, Volume};
+
+/// Prints the whole analysis of `volume`, read from `name`.
+pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
+    if let Some(v) = &analysis.views {
+        print_views(name, volume, v);
+        println!();
+    }
+    print_partition(&analysis.partition);
+}
+
+/// `[ 0.000, 0.000, 1.000] (z)`, or without the name for an oblique axis.
+fn axis_text(axis: [f64; 3]) -> String {
+    match Axis::new(axis) {
+        Ok(a) => match a.name() {
+            Some(n) => format!("{a} ({n})"),
+            None => a.to_string(),
+        },
+        Err(_) => format!("{axis:?}"),
+    }
+}
+
+/// `1 slab`, `4 slabs`: `n` and the word for one or for many.
+fn count(n: usize, one: &str, many: &str) -> String {
+    if n == 1 {
+        format!("1 {one}")
+    } else {
+        format!("{n} {many}")
+    }
+}
+
+fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
+    let p = &v.params;
+    let [sx, sy, sz] = volume.spacing();
+    println!(
+        "volume   {name}: {} {}, spacing {sx} x {sy} x {sz} mm",
+        dims_string(volume.dims()),
+        volume.voxel_type()
+    );
+    println!(
+        "views    {} viewpoints ({} axes, icosphere level {}), {} bins, blocks of {}, rays every {} mm, samples every {} mm",
+        icosphere::icosphere(p.level).len(),
+        v.views.len(),
+        p.level,
+        p.sampling.bins,
+        p.block,
+        p.sampling.ray_spacing.unwrap_or(1.0),
+        p.sampling.sample_spacing.unwrap_or(1.0)
+    );
+    match v.ranked_by {
+        RankedBy::PhaseMean => println!(
+            "         ranked by the mean of h over {} lattice phases: the paper's lattice and {} shifted \
+             ones (each walking one block of rays in {} where the volume affords it)",
+            p.phases,
+            p.phases - 1,
+            p.phase_subset
+        ),
+        RankedBy::PaperLattice => println!("         ranked by h on the paper's lattice"),
+    }
+    println!();
+    print_view_table(v);
+    println!();
+    print_verdict(v);
+}
+
+fn print_view_table(v: &ViewSearch) {
+    let phases = v.ranked_by == RankedBy::PhaseMean;
+    print!("  rank    axis                          azim    elev   h (bits)   H(X^1)  H(X^L)/L");
+    println!("{}", if phases { "   mean h ± se" } else { "" });
+    let show = |rank: String, mark: &str, a: &AxisEntropy| {
+        print!(
+            "  {rank:>4} {mark:1}  {:<28} {:6.1}  {:6.1}   {:8.4} {:8.4}  {:8.4}",
+            axis_text(a.axis),
+            a.azimuth,
+            a.elevation,
+            a.entropy_rate,
+            a.h1,
+            a.per_symbol
+        );
+        match a.phases {
+            Some(s) => println!("   {:.4} ± {:.4}", s.mean, s.se()),
+            None => println!(),
+        }
+    };
+    for (i, a) in v.views.iter().enumerate() {
+        let mark = if i == 0 && v.refined.is_none() {
+            "*"
+        } else {
+            ""
+        };
+        show((i + 1).to_string(), mark, a);
+    }
+    if let Some(r) = &v.refined {
+        show("ref".into(), "*", r);
+    }
+}
+
+/// The best axis, its margin, and whether it can be told from the others.
+fn print_verdict(v: &ViewSearch) {
+    let best = v.best();
+    let what = match best.phases {
+        Some(s) => format!(
+            "mean h = {:.4} ± {:.4} bits/sample over {} phases ({:.4} on the paper's lattice)",
+            s.mean,
+            s.se(),
+            s.n,
+            best.entropy_rate
+        ),
+        None => format!("h = {:.4} bits/sample", best.entropy_rate),
+    };
+    let next = match &v.refined {
+        Some(_) => Some((&v.views[0], "the best sphere axis")),
+        None => v.views.get(1).map(|n| (n, "the runner-up")),
+    };
+    let margin = next.map_or_else(String::new, |(n, which)| {
+        format!(", {:.4} below {which}", score(n) - score(best))
+    });
+    println!("best     {} {what}{margin}", axis_text(best.axis));
+    match &v.contenders {
+        None => {}
+        Some(c) if c.len() <= 1 => {
+            println!("         clear: no other axis lies within two standard errors of it");
+        }
+        Some(c) => {
+            println!(
+                "         uncertain: {} within two standard errors of the difference, \
+                 so the data cannot tell them from it:",
+                count(c.len() - 1, "other axis", "other axes")
+            );
+            for other in &c[1..] {
+                println!(
+                    "           {}  mean h {:.4} ± {:.4}",
+                    axis_text(other.axis),
+                    other.mean,
+                    other.se
+                );
+            }
+        }
+    }
+}
+
+fn print_partition(p: &Partition) {
+    println!(
+        "partition {} along {}: {} {} mm apart, {} keeping I = {:.4} of {:.4} bits",
+        p.method.name(),
+        axis_text(p.axis),
+        count(p.slices, "slice", "slices"),
+        p.thickness,
+        count(p.slabs.len(), "slab", "slabs"),
+        p.information,
+        p.entropy
+    );
+    let b = p.background;
+    match (b.mode, b.value) {
+        ("none", _) => println!("          background: none (every voxel counts)"),
+        ("auto", None) => println!("          background: none found at the border"),
+        (mode, Some(t)) => println!(
+            "          background: {:.0}% of the voxels, {}, ≤ {t}; left out of the slabs",
+            b.fraction * 100.0,
+            if mode == "auto" {
+                "connected to the border"
+            } else {
+                "every voxel"
+            }
+        ),
+        _ => {}
+    }
+    println!();
+    print_slab_table(p);
+    print_steps(&p.steps);
+    println!();
+    println!("optimum  slabs  I optimal  I greedy top-down  shortfall");
+    for c in &p.comparison {
+        println!(
+            "         {:5}  {:9.4}  {:17.4}  {:9.4}",
+            c.slabs,
+            c.optimal,
+            c.greedy,
+            c.optimal - c.greedy
+        );
+    }
+}
+
+fn print_slab_table(p: &Partition) {
+    println!(
+        "  slab  slices         mm                     entropy       mean  left out   next: NMI       ΔI"
+    );
+    for (i, s) in p.info.iter().enumerate() {
+        let next = match (p.boundary_nmi.get(i), p.boundary_gain.get(i)) {
+            (Some(n), Some(g)) => format!("{n:9.4} {g:8.4}"),
+            _ => String::new(),
+        };
+        let mean = s.mean.map_or_else(|| "-".into(), |m| format!("{m:.2}"));
+        let mark = if s.empty { "  empty" } else { "" };
+        println!(
+            "  {i:4}  {:<13}  {:>9.1} .. {:>9.1}  {:8.4} {:>10}  {:>7.1}%   {next}{mark}",
+            slab_text(s.slices),
+            s.mm.0,
+            s.mm.1,
+            s.entropy,
+            mean,
+            s.background_fraction * 100.0
+        );
+    }
+}
+
+fn print_steps(steps: &[Step]) {
+    if steps.is_empty() {
+        return;
+    }
+    println!();
+    println!("steps");
+    for (i, step) in steps.iter().enumerate() {
+        match step {
+            Step::Split { split, at, gain } => println!(
+                "  {:3}. split slices {} at {at}: ΔI {gain:.4} bits",
+                i + 1,
+                slab_text(*split)
+            ),
+            Step::Merge { merge, nmi } => println!(
+                "  {:3}. merge slices {} with {}: NMI {nmi:.4}",
+                i + 1,
+                slab_text(merge.0),
+                slab_text(merge.1)
+            ),
+        }
+    }
+}

@@ -1,0 +1,276 @@
+//! The background of a volume (beyond the paper, DESIGN §2): what lies around the object, left out
+//! of slab histograms so that slabs are not spent on air. By default it is found: the region
+//! connected to the volume's border at or below a threshold estimated from the border voxels, so
+//! that dark cavities inside the object (lungs, airways, ventricles) stay in.
+
+use serde::Serialize;
+
+use crate::volume::Volume;
+
+/// How the background is chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[serde(rename_all = "lowercase", tag = "mode", content = "value")]
+pub enum BackgroundRule {
+    /// None: every voxel counts, as in the paper.
+    None,
+    /// Found: the region connected to the border at or below a threshold from the border.
+    #[default]
+    Auto,
+    /// Every voxel at or below this value.
+    Below(f32),
+}
+
+/// The background a rule found in a volume.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Background {
+    /// The rule.
+    pub rule: BackgroundRule,
+    /// The threshold: voxels at or below it can be background (`None` when there is none).
+    pub value: Option<f32>,
+    /// The share of the volume's voxels that are background.
+    pub fraction: f64,
+    /// For a found background: one bit per voxel.
+    mask: Option<Vec<u64>>,
+}
+
+/// Border voxels a threshold is estimated from must mostly be dark: their median must lie in
+/// the lowest this share of the volume's range.
+const DARK_BORDER: f64 = 0.25;
+
+/// The threshold lies this many robust standard deviations above the border's median.
+const NOISE_WIDTH: f64 = 5.0;
+
+impl Background {
+    /// No background.
+    pub fn none() -> Self {
+        Self {
+            rule: BackgroundRule::None,
+            value: None,
+            fraction: 0.0,
+            mask: None,
+        }
+    }
+
+    /// The background `rule` finds in `volume`.
+    pub fn find(volume: &Volume, rule: BackgroundRule) -> Self {
+        match rule {
+            BackgroundRule::None => Self::none(),
+            BackgroundRule::Below(t) => {
+                let n = volume.voxels().iter().filter(|&&v| v <= t).count();
+                Self {
+                    rule,
+                    value: Some(t),
+                    fraction: n as f64 / volume.len() as f64,
+                    mask: None,
+                }
+            }
+            BackgroundRule::Auto => match border_threshold(volume) {
+                Some(t) => {
+                    let (mask, count) = connected_below(volume, t);
+                    Self {
+                        rule,
+                        value: Some(t),
+                        fraction: count as f64 / volume.len() as f64,
+                        mask: Some(mask),
+                    }
+                }
+                None => Self {
+                    rule,
+                    ..Self::none()
+                },
+            },
+        }
+    }
+
+    /// Whether the voxel at linear `index`, of value `v`, is background.
+    #[inline]
+    pub fn contains(&self, index: usize, v: f32) -> bool {
+        match (&self.mask, self.rule) {
+            (Some(mask), _) => mask[index / 64] >> (index % 64) & 1 == 1,
+            (None, BackgroundRule::Below(t)) => v <= t,
+            (None, _) => false,
+        }
+    }
+
+    /// Whether any voxel is background.
+    pub fn is_empty(&self) -> bool {
+        self.fraction == 0.0
+    }
+}
+
+/// The voxels on the volume's six faces, finite ones only.
+fn border_values(volume: &Volume) -> Vec<f32> {
+    let [nx, ny, nz] = volume.dims();
+    let v = volume.voxels();
+    let mut out = Vec::new();
+    for z in 0..nz {
+        for y in 0..ny {
+            let edge_zy = z == 0 || z + 1 == nz || y == 0 || y + 1 == ny;
+            let row = (z * ny + y) * nx;
+            if edge_zy {
+                out.extend_from_slice(&v[row..row + nx]);
+            } else {
+                out.push(v[row]);
+                out.push(v[row + nx - 1]);
+            }
+        }
+    }
+    out.retain(|x| x.is_finite());
+    out
+}
+
+/// The background threshold from the border: the border's median plus five robust standard
+/// deviations (1.4826 × the median absolute deviation), when the border is mostly dark; `None`
+/// when the volume has no background to speak of (its border is bright, or it is all border).
+pub fn border_threshold(volume: &Volume) -> Option<f32> {
+    let mut border = border_values(volume);
+    let s = volume.stats();
+    let range = f64::from(s.max) - f64::from(s.min);
+    if border.is_empty() || range <= 0.0 || volume.dims().iter().any(|&d| d < 3) {
+        return None;
+    }
+    let median = median_of(&mut border);
+    if (f64::from(median) - f64::from(s.min)) / range > DARK_BORDER {
+        return None;
+    }
+    let mut deviations: Vec<f32> = border.iter().map(|v| (v - median).abs()).collect();
+    let sigma = 1.4826 * f64::from(median_of(&mut deviations));
+    Some((f64::from(median) + NOISE_WIDTH * sigma) as f32)
+}
+
+fn median_of(values: &mut [f32]) -> f32 {
+    let mid = values.len() / 2;
+    *values.select_nth_unstable_by(mid, f32::total_cmp).1
+}
+
+/// The voxels at or below `t` connected (6-neighbours) to a border voxel at or below `t`, as a
+/// bit mask, with their count. A scanline fill: runs along x, a stack of seeds, no recursion.
+fn connected_below(volume: &Volume, t: f32) -> (Vec<u64>, usize) {
+    let [nx, ny, nz] = volume.dims();
+    let v = volume.voxels();
+    let mut mask = vec![0u64; v.len().div_ceil(64)];
+    let set = |mask: &mut Vec<u64>, i: usize| mask[i / 64] |= 1 << (i % 64);
+    let get = |mask: &Vec<u64>, i: usize| mask[i / 64] >> (i % 64) & 1 == 1;
+    let candidate = |mask: &Vec<u64>, i: usize| v[i] <= t && !get(mask, i);
+    let mut stack: Vec<usize> = Vec::new();
+    let mut count = 0;
+    // Seeds: every border voxel at or below t.
+    for z in 0..nz {
+        for y in 0..ny {
+            let row = (z * ny + y) * nx;
+            let edge = z == 0 || z + 1 == nz || y == 0 || y + 1 == ny;
+            if edge {
+                stack.extend((row..row + nx).filter(|&i| v[i] <= t));
+            } else {
+                stack.extend([row, row + nx - 1].into_iter().filter(|&i| v[i] <= t));
+            }
+        }
+    }
+    while let Some(seed) = stack.pop() {
+        if !candidate(&mask, seed) {
+            continue;
+        }
+        let row = seed - seed % nx;
+        let (mut a, mut b) = (seed, seed);
+        while a > row && candidate(&mask, a - 1) {
+            a -= 1;
+        }
+        while b + 1 < row + nx && candidate(&mask, b + 1) {
+            b += 1;
+        }
+        for i in a..=b {
+            set(&mut mask, i);
+        }
+        count += b - a + 1;
+        let (y, z) = ((row / nx) % ny, row / (nx * ny));
+        let neighbours = [
+            (y > 0).then(|| row - nx),
+            (y + 1 < ny).then(|| row + nx),
+            (z > 0).then(|| row - nx * ny),
+            (z + 1 < nz).then(|| row + nx * ny),
+        ];
+        for other in neighbours.into_iter().flatten() {
+            // One seed at the start of every run of candidates beside [a, b].
+            let mut in_run = false;
+            for x in a - row..=b - row {
+                let i = other + x;
+                let c = candidate(&mask, i);
+                if c && !in_run {
+                    stack.push(i);
+                }
+                in_run = c;
+            }
+        }
+    }
+    (mask, count)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::VoxelType;
+
+    /// A 20³ volume: noisy air (0 to 4) around a ball of 100 that holds a dark cavity.
+    fn ball_with_cavity() -> Volume {
+        let n = 20;
+        let data = (0..n * n * n)
+            .map(|i| {
+                let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
+                let r2 = |c: usize| {
+                    let d = |a: usize| a as f64 - c as f64;
+                    d(x) * d(x) + d(y) * d(y) + d(z) * d(z)
+                };
+                let noise = (i * 7919 % 5) as f32;
+                if r2(10) <= 9.0 {
+                    noise
+                } else if r2(10) <= 64.0 {
+                    100.0 + noise
+                } else {
+                    noise
+                }
+            })
+            .collect();
+        Volume::new([n, n, n], [1.0; 3], VoxelType::F32, data).unwrap()
+    }
+
+    #[test]
+    fn the_air_around_is_background_and_the_cavity_inside_is_not() {
+        let v = ball_with_cavity();
+        let b = Background::find(&v, BackgroundRule::Auto);
+        let t = b.value.unwrap();
+        assert!((4.0..100.0).contains(&t), "{t}");
+        let idx = |x: usize, y: usize, z: usize| x + 20 * (y + 20 * z);
+        assert!(b.contains(idx(0, 0, 0), 0.0));
+        assert!(b.contains(idx(1, 10, 10), 0.0), "air beside the ball");
+        assert!(!b.contains(idx(10, 10, 10), 0.0), "the cavity is inside");
+        assert!(!b.contains(idx(10, 10, 15), 100.0), "the ball");
+        let outside = (0..8000)
+            .filter(|&i| {
+                let (x, y, z) = (i % 20, (i / 20) % 20, i / 400);
+                let d = |a: usize| a as f64 - 10.0;
+                d(x) * d(x) + d(y) * d(y) + d(z) * d(z) > 64.0
+            })
+            .count();
+        assert_eq!((b.fraction * 8000.0).round() as usize, outside);
+    }
+
+    #[test]
+    fn a_bright_border_has_no_background_and_rules_do_what_they_say() {
+        let v = Volume::new(
+            [4, 4, 4],
+            [1.0; 3],
+            VoxelType::F32,
+            (0..64)
+                .map(|i| if i == 21 { 0.0 } else { 50.0 + (i % 3) as f32 })
+                .collect(),
+        )
+        .unwrap();
+        let auto = Background::find(&v, BackgroundRule::Auto);
+        assert_eq!((auto.value, auto.fraction), (None, 0.0));
+        let none = Background::find(&v, BackgroundRule::None);
+        assert!(!none.contains(21, 0.0));
+        let below = Background::find(&v, BackgroundRule::Below(50.0));
+        assert!(below.contains(21, 0.0) && !below.contains(0, 51.0));
+        assert!((below.fraction - 22.0 / 64.0).abs() < 1e-12);
+    }
+}
