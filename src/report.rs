@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use crate::analysis::Analysis;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::partition::{BackgroundSummary, Partition};
 use crate::view::{AxisEntropy, Contender, RankedBy, ViewParams};
 use crate::volume::Volume;
@@ -153,6 +153,24 @@ impl SlabsReport {
     }
 }
 
+/// `value` as pretty JSON, with every `-0.0` written as `0.0` (a direction component that is
+/// zero has no sign worth printing).
+pub fn to_json(value: &impl Serialize) -> Result<String> {
+    fn unsign(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Number(n) if n.as_f64() == Some(0.0) && n.is_f64() => {
+                *v = serde_json::json!(0.0);
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(unsign),
+            serde_json::Value::Object(o) => o.values_mut().for_each(unsign),
+            _ => {}
+        }
+    }
+    let mut v = serde_json::to_value(value).map_err(|e| Error::Encode(e.to_string()))?;
+    unsign(&mut v);
+    serde_json::to_string_pretty(&v).map_err(|e| Error::Encode(e.to_string()))
+}
+
 /// `cut,mm,nmi,gain`: for each boundary between slice c-1 and c, its position, the NMI of the
 /// two slices, and the ΔI of cutting the whole stack there.
 pub fn curves_csv(p: &Partition) -> String {
@@ -167,4 +185,17 @@ pub fn curves_csv(p: &Partition) -> String {
         );
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_negative_zero_is_written() {
+        let text =
+            to_json(&serde_json::json!({"axis": [1.0, -0.0, -0.0], "n": [-0.5, 0]})).unwrap();
+        assert!(!text.contains("-0.0"), "{text}");
+        assert!(text.contains("-0.5"));
+    }
 }

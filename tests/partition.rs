@@ -4,10 +4,11 @@
 
 use proptest::prelude::*;
 use slabscope::partition::{
-    MISSING, MergeHistory, OptimalPartitions, Slab, SliceStack, SplitHistory, StackParams,
-    slice_nmi,
+    MISSING, MergeHistory, OptimalPartitions, PartitionParams, Slab, SliceStack, SplitHistory,
+    StackParams, partition, slice_nmi,
 };
 use slabscope::progress::Monitor;
+use slabscope::volume::background::{Background, BackgroundRule};
 use slabscope::volume::phantom;
 use slabscope::{SamplingParams, Volume, VoxelType};
 
@@ -275,4 +276,76 @@ proptest! {
             prop_assert!((m.nmi - expect).abs() < 1e-12, "{:?}: {} vs {}", m.merge, m.nmi, expect);
         }
     }
+}
+
+/// The voxel of `v` at normalized body coordinates (x, y in [-1, 1], z in [0, 1]).
+fn voxel_at(v: &Volume, p: [f64; 3]) -> usize {
+    let [nx, ny, nz] = v.dims();
+    let x = (f64::midpoint(p[0], 1.0) * nx as f64) as usize;
+    let y = (f64::midpoint(p[1], 1.0) * ny as f64) as usize;
+    let z = (p[2] * nz as f64) as usize;
+    x + nx * (y + ny * z)
+}
+
+#[test]
+fn the_body_phantom_has_air_around_it_and_lungs_inside() {
+    let v = phantom::body([64, 64, 104], 1).unwrap();
+    let b = Background::find(&v, BackgroundRule::Auto);
+    let t = b.value.unwrap();
+    assert!((-1000.0..-800.0).contains(&t), "threshold {t}");
+    assert!((0.6..0.98).contains(&b.fraction), "{}", b.fraction);
+    let at = |p: [f64; 3]| {
+        let i = voxel_at(&v, p);
+        b.contains(i, v.voxels()[i])
+    };
+    assert!(at([-0.95, -0.95, 0.5]), "air in a corner");
+    assert!(at([0.0, 0.0, 0.3]), "air between the legs");
+    assert!(!at([-0.28, 0.02, 0.71]), "a lung is inside the body");
+    assert!(!at([0.0, 0.0, 0.93]), "the brain");
+    assert!(!at([0.22, 0.0, 0.3]), "a leg");
+}
+
+#[test]
+fn a_dark_cavity_inside_a_head_is_not_background() {
+    // The modified Shepp-Logan head: 0 around it, and two ellipsoids of 0 inside the brain
+    // (1 - 0.8 - 0.2).
+    let v = phantom::shepp_logan([65, 65, 65]).unwrap();
+    let b = Background::find(&v, BackgroundRule::Auto);
+    let idx = |x: usize, y: usize, z: usize| x + 65 * (y + 65 * z);
+    assert!(b.contains(idx(0, 0, 0), 0.0), "the air border");
+    // The centre of the left dark ellipsoid (0.22, 0, 0) in [-1, 1] coordinates.
+    let cavity = idx((f64::midpoint(0.22, 1.0) * 64.0).round() as usize, 32, 32);
+    assert!(v.voxels()[cavity].abs() < 1e-6, "the cavity is dark");
+    assert!(!b.contains(cavity, 0.0), "but inside");
+    assert!(b.fraction > 0.3 && b.fraction < 0.8, "{}", b.fraction);
+}
+
+#[test]
+fn with_the_background_left_out_the_end_slabs_hold_the_body() {
+    let v = phantom::body([64, 64, 104], 1).unwrap();
+    let mean_of_ends = |background| {
+        let params = PartitionParams {
+            stack: StackParams {
+                background,
+                ..StackParams::default()
+            },
+            ..PartitionParams::default()
+        };
+        let p = partition(&v, [0.0, 0.0, 1.0], &params, &Monitor::none()).unwrap();
+        let (first, last) = (&p.info[0], &p.info[p.info.len() - 1]);
+        (
+            first.mean.unwrap(),
+            last.mean.unwrap(),
+            first.empty || last.empty,
+        )
+    };
+    let (first, last, empty) = mean_of_ends(BackgroundRule::Auto);
+    assert!(
+        first > -300.0 && last > -300.0,
+        "tissue: {first} and {last} HU"
+    );
+    assert!(!empty, "the legs and the head are not empty");
+    // Counting every voxel, air dominates both ends, as in the paper.
+    let (first, last, _) = mean_of_ends(BackgroundRule::None);
+    assert!(first < -800.0 && last < -800.0, "{first} and {last} HU");
 }

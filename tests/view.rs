@@ -255,3 +255,84 @@ fn bad_parameters_and_constant_volumes_are_refused() {
         assert!(search(&v, &params, &Monitor::none()).is_err(), "{params:?}");
     }
 }
+
+/// The i.i.d. noise volume `n`³ of 256 values, u8.
+fn noise(n: usize, seed: u64) -> Volume {
+    let mut rng = Lcg(seed);
+    let data = (0..n * n * n).map(|_| rng.below(256) as f32).collect();
+    Volume::new([n; 3], [1.0; 3], VoxelType::U8, data).unwrap()
+}
+
+#[test]
+fn on_noise_every_axis_scores_the_same_by_default_though_not_on_the_paper_lattice() {
+    let v = noise(64, 17);
+    let spread = |r: &ViewSearch| {
+        let s: Vec<f64> = r.views.iter().map(score).collect();
+        s.iter().copied().fold(f64::MIN, f64::max) - s.iter().copied().fold(f64::MAX, f64::min)
+    };
+    let default = run(&v, &ViewParams::default());
+    assert!(
+        spread(&default) < 0.05,
+        "the 21 phase means differ by {}",
+        spread(&default)
+    );
+    assert_eq!(default.uncertain, Some(true), "noise has no best axis");
+    // On the paper's lattice the coordinate axes see unsmoothed voxels and lose by far.
+    let paper = run(&v, &ViewParams::paper());
+    assert!(spread(&paper) > 0.3, "{}", spread(&paper));
+    assert!(paper.uncertain.is_none() && paper.contenders.is_none());
+}
+
+#[test]
+fn layers_one_voxel_thick_are_seen_along_them_not_through_them() {
+    // Each z plane one of four materials with mild noise: every axis in the planes sees one
+    // material; every axis through them mixes materials, which interpolation smooths.
+    let (n, mut rng) = (40, Lcg(3));
+    let materials: Vec<f32> = (0..n).map(|_| (rng.below(4) * 60) as f32).collect();
+    let data = (0..n * n * n)
+        .map(|i| materials[i / (n * n)] + rng.below(12) as f32)
+        .collect();
+    let v = Volume::new([n; 3], [1.0; 3], VoxelType::U8, data).unwrap();
+    let r = run(&v, &ViewParams::default());
+    assert!(
+        r.best().axis[2].abs() < 1e-9,
+        "an axis through the layers won: {:?}",
+        r.best().axis
+    );
+}
+
+#[test]
+fn a_near_tie_is_uncertain_with_both_axes_named_and_a_clear_winner_is_not() {
+    // Constant along y in the lower half, along x in the upper one, random across: x and y
+    // are equally structured, and nothing else comes near.
+    let (n, mut rng) = (32, Lcg(5));
+    let r: Vec<f32> = (0..n * n).map(|_| (rng.below(8) * 25) as f32).collect();
+    let data = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
+            if z < n / 2 {
+                r[x + n * z]
+            } else {
+                r[y + n * z]
+            }
+        })
+        .collect();
+    let tie = Volume::new([n; 3], [1.0; 3], VoxelType::U8, data).unwrap();
+    let r = run(&tie, &ViewParams::default());
+    assert_eq!(r.uncertain, Some(true));
+    let named: Vec<[f64; 3]> = r.contenders.unwrap().iter().map(|c| c.axis).collect();
+    for axis in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        assert!(
+            named.iter().any(|a| axis_angle(*a, axis) < 1e-6),
+            "{axis:?} not among {named:?}"
+        );
+    }
+    // Constant along z, random across: z has rate 0 and nothing comes near.
+    let plane: Vec<f32> = (0..n * n).map(|_| rng.below(200) as f32).collect();
+    let data = (0..n * n * n).map(|i| plane[i % (n * n)]).collect();
+    let clear = Volume::new([n; 3], [1.0; 3], VoxelType::U8, data).unwrap();
+    let r = run(&clear, &ViewParams::default());
+    assert_eq!(r.best().axis, [0.0, 0.0, 1.0]);
+    assert_eq!(r.uncertain, Some(false));
+    assert_eq!(r.contenders.unwrap().len(), 1, "the best alone");
+}

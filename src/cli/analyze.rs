@@ -57,7 +57,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let part = &analysis.partition;
     if args.json {
         let report = AnalysisReport::new(&name, volume, &params.view, &analysis)?;
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        println!("{}", slabscope::report::to_json(&report)?);
     } else {
         super::text::print_analysis(&name, volume, &analysis);
     }
@@ -66,7 +66,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         write_nrrd(path, &labels, NrrdEncoding::Gzip, args.force)?;
     }
     if let Some(path) = &args.export_slabs {
-        let text = serde_json::to_string_pretty(&SlabsReport::new(&name, part))?;
+        let text = slabscope::report::to_json(&SlabsReport::new(&name, part))?;
         super::write_new(path, text.as_bytes(), args.force)?;
     }
     if let Some(path) = &args.curves {

@@ -161,7 +161,7 @@ fn print_partition(p: &Partition) {
         ("none", _) => println!("          background: none (every voxel counts)"),
         ("auto", None) => println!("          background: none found at the border"),
         (mode, Some(t)) => println!(
-            "          background: {:.0}% of the voxels, {}, ≤ {t}; left out of the slabs",
+            "          background: {:.0}% of the voxels, {}, ≤ {t:.1}; left out of the slabs",
             b.fraction * 100.0,
             if mode == "auto" {
                 "connected to the border"

@@ -84,17 +84,19 @@ pub struct SlabInfo {
     pub mean: Option<f64>,
     /// The share of its positions inside the volume that are background or missing.
     pub background_fraction: f64,
-    /// It holds next to nothing: at least [`EMPTY_FRACTION`] of it is background or missing.
+    /// It holds next to nothing: per slice, fewer counted samples (neither background nor
+    /// missing) than [`EMPTY_SHARE`] of the stack's average.
     pub empty: bool,
 }
 
-/// A slab at least this much background or missing is empty.
-pub const EMPTY_FRACTION: f64 = 0.95;
+/// A slab counting less than this share of the stack's average samples per slice is empty.
+pub const EMPTY_SHARE: f64 = 0.05;
 
 /// Summaries of `slabs` of `stack`, whose per-slice histograms are `histograms`.
 pub fn describe(stack: &SliceStack, histograms: &[u64], slabs: &[Slab]) -> Vec<SlabInfo> {
     let bins = stack.bins();
     let prefix = prefix_histograms(histograms, bins);
+    let per_slice = histograms.iter().sum::<u64>() as f64 / stack.slices().max(1) as f64;
     slabs
         .iter()
         .map(|&(a, b)| {
@@ -102,15 +104,15 @@ pub fn describe(stack: &SliceStack, histograms: &[u64], slabs: &[Slab]) -> Vec<S
                 .map(|x| prefix[b * bins + x] - prefix[a * bins + x])
                 .collect();
             let (t, o) = (stack.thickness(), stack.offset());
-            let left_out = stack.left_out(a, b);
+            let samples = h.iter().sum::<u64>();
             SlabInfo {
                 slices: (a, b),
                 mm: (o + (a as f64 - 0.5) * t, o + (b as f64 - 0.5) * t),
-                samples: h.iter().sum(),
+                samples,
                 entropy: entropy(h.iter().copied()),
                 mean: stack.mean(a, b),
-                background_fraction: left_out,
-                empty: left_out >= EMPTY_FRACTION,
+                background_fraction: stack.left_out(a, b),
+                empty: (samples as f64) < EMPTY_SHARE * per_slice * (b - a) as f64,
             }
         })
         .collect()

@@ -12,7 +12,7 @@ use image::RgbaImage;
 use slabscope::render::{Gap, Stack};
 use slabscope::volume::io::{NrrdEncoding, write_atomic, write_nrrd};
 use slabscope::{
-    Analysis, AnalysisReport, Error, Histories, Layout, LoadOptions, Monitor, Partition, Progress,
+    Analysis, AnalysisReport, Histories, Layout, LoadOptions, Monitor, Partition, Progress,
     RenderParams, Renderer, Scope, Volume, label_volume, search,
 };
 
@@ -168,7 +168,7 @@ fn export(volume: &Volume, r: &ExportRequest, monitor: &Monitor) -> slabscope::R
         partition: part,
     };
     let report = AnalysisReport::new(&r.name, volume, &r.view_params, &analysis)?;
-    let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Encode(e.to_string()))?;
+    let text = slabscope::report::to_json(&report)?;
     write_new(&json, text.as_bytes())?;
     monitor.start("writing labels", 1);
     let labelled = label_volume(volume, &analysis.partition)?;

@@ -97,5 +97,5 @@ pub const GLOSSARY: &[(&str, &str)] = &[
     ("NMI", "normalized mutual information of two slabs"),
     ("JS", "Jensen-Shannon divergence of two histograms"),
     ("0–44", "slices 0 to 44, both included"),
-    ("∅", "an empty slab: 95% or more background or missing"),
+    ("∅", "an empty slab: next to nothing but background"),
 ];
