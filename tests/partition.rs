@@ -4,8 +4,8 @@
 
 use proptest::prelude::*;
 use slabscope::partition::{
-    MISSING, MergeHistory, OptimalPartitions, PartitionParams, Slab, SliceStack, SplitHistory,
-    StackParams, partition, slice_nmi,
+    Histories, MISSING, MergeHistory, OptimalPartitions, PAIRS_KEPT, PartitionParams, Scope, Slab,
+    SliceStack, SplitHistory, StackParams, partition, slice_nmi,
 };
 use slabscope::progress::Monitor;
 use slabscope::volume::background::{Background, BackgroundRule};
@@ -348,4 +348,49 @@ fn with_the_background_left_out_the_end_slabs_hold_the_body() {
     // Counting every voxel, air dominates both ends, as in the paper.
     let (first, last, _) = mean_of_ends(BackgroundRule::None);
     assert!(first < -800.0 && last < -800.0, "{first} and {last} HU");
+}
+
+#[test]
+fn a_long_axis_keeps_memory_linear_in_its_slices() {
+    // 20,000 slices of one voxel: segments of 500 slices, each its own level, with noise.
+    let n = 20_000;
+    let data = (0..n)
+        .map(|i| (hash(i as u64 / 500, 1, 200) + hash(i as u64, 2, 5)) as f32)
+        .collect();
+    let v = Volume::new([n, 1, 1], [1.0; 3], VoxelType::U8, data).unwrap();
+    let h = Histories::new(
+        &v,
+        [1.0, 0.0, 0.0],
+        &StackParams::default(),
+        Scope::ALL,
+        &Monitor::none(),
+    )
+    .unwrap();
+    // Top-down keeps a gain a step (no curve), to its step limit, and one curve of the stack.
+    assert_eq!(h.top().steps.len(), Scope::ALL.top_steps);
+    assert_eq!(h.gain_curve().len(), n - 1);
+    // Bottom-up keeps the pairs only once few slabs are left.
+    let bottom = h.bottom().unwrap();
+    assert_eq!(bottom.steps.len(), n - 1);
+    let stored: usize = bottom.steps.iter().map(|m| m.pairs.len()).sum();
+    assert!(
+        stored <= PAIRS_KEPT * PAIRS_KEPT / 2 + PAIRS_KEPT,
+        "{stored} pairs kept"
+    );
+    assert_eq!(h.nmi_curve().len(), n - 1);
+    // The optimum does not fit, and says so; the other methods work.
+    assert!(h.optimal().is_none());
+    assert!(
+        h.notes()
+            .iter()
+            .any(|n| n.contains("optimal partition is skipped"))
+    );
+    let four = h.slabs(slabscope::Method::TopDown, 3);
+    assert_eq!(four.len(), 4);
+    let near_an_end = |c: usize| (c + 1) % 500 <= 2;
+    assert!(
+        four.iter().skip(1).all(|s| near_an_end(s.0)),
+        "{four:?}: cuts at segment ends"
+    );
+    assert_eq!(h.slabs(slabscope::Method::BottomUp, n - 4).len(), 4);
 }

@@ -74,6 +74,16 @@ fn print_view_table(v: &ViewSearch) {
     print!("  rank    axis                          azim    elev   h (bits)   H(X^1)  H(X^L)/L");
     println!("{}", if phases { "   mean h ± se" } else { "" });
     let show = |rank: String, mark: &str, a: &AxisEntropy| {
+        if !a.measured() {
+            println!(
+                "  {rank:>4} {mark:1}  {:<28} {:6.1}  {:6.1}   too thin: no {} samples in a row",
+                axis_text(a.axis),
+                a.azimuth,
+                a.elevation,
+                v.params.block
+            );
+            return;
+        }
         print!(
             "  {rank:>4} {mark:1}  {:<28} {:6.1}  {:6.1}   {:8.4} {:8.4}  {:8.4}",
             axis_text(a.axis),
@@ -106,17 +116,21 @@ fn print_verdict(v: &ViewSearch) {
     let best = v.best();
     let what = match best.phases {
         Some(s) => format!(
-            "mean h = {:.4} ± {:.4} bits/sample over {} phases ({:.4} on the paper's lattice)",
+            "mean h = {:.4} ± {:.4} bits/sample over {} ({:.4} on the paper's lattice)",
             s.mean,
             s.se(),
-            s.n,
+            count(s.n, "phase", "phases"),
             best.entropy_rate
         ),
         None => format!("h = {:.4} bits/sample", best.entropy_rate),
     };
     let next = match &v.refined {
         Some(_) => Some((&v.views[0], "the best sphere axis")),
-        None => v.views.get(1).map(|n| (n, "the runner-up")),
+        None => v
+            .views
+            .get(1)
+            .filter(|n| n.measured())
+            .map(|n| (n, "the runner-up")),
     };
     let margin = next.map_or_else(String::new, |(n, which)| {
         format!(", {:.4} below {which}", score(n) - score(best))
@@ -174,6 +188,9 @@ fn print_partition(p: &Partition) {
     println!();
     print_slab_table(p);
     print_steps(&p.steps);
+    if p.comparison.is_empty() {
+        return print_notes(&p.notes);
+    }
     println!();
     println!("optimum  slabs  I optimal  I greedy top-down  shortfall");
     for c in &p.comparison {
@@ -185,6 +202,7 @@ fn print_partition(p: &Partition) {
             c.optimal - c.greedy
         );
     }
+    print_notes(&p.notes);
 }
 
 fn print_slab_table(p: &Partition) {
@@ -230,5 +248,14 @@ fn print_steps(steps: &[Step]) {
                 slab_text(merge.1)
             ),
         }
+    }
+}
+
+fn print_notes(notes: &[String]) {
+    if !notes.is_empty() {
+        println!();
+    }
+    for n in notes {
+        println!("note     {n}");
     }
 }

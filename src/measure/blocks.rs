@@ -323,6 +323,11 @@ impl BlockCounts {
         self.long.total() + self.ends.single.iter().sum::<u64>()
     }
 
+    /// Number of L-blocks counted.
+    pub fn blocks(&self) -> u64 {
+        self.long.total()
+    }
+
     /// The block length L.
     pub fn block(&self) -> usize {
         self.packing.block as usize

@@ -24,13 +24,17 @@ pub struct Scope {
     /// The optimal partitions into 1 ..= this many slabs (0: none). Skipped when the stack has
     /// more than [`MAX_SLICES`] slices.
     pub optimal_slabs: usize,
+    /// The most top-down splits to take.
+    pub top_steps: usize,
 }
 
 impl Scope {
-    /// Every history, with the optimum up to 32 slabs: what an interactive front end steps through.
+    /// Every history, the optimum up to 32 slabs and top-down to 4096 splits: what an interactive
+    /// front end steps through.
     pub const ALL: Self = Self {
         bottom_up: true,
         optimal_slabs: 32,
+        top_steps: 4096,
     };
 }
 
@@ -80,7 +84,7 @@ impl Histories {
         }
         let bins = stack.bins();
         let histograms = stack.slice_histograms();
-        let top = SplitHistory::new(&histograms, bins);
+        let top = SplitHistory::with_limit(&histograms, bins, scope.top_steps);
         let bottom = if scope.bottom_up {
             Some(MergeHistory::new(&stack, monitor)?)
         } else {
@@ -289,7 +293,11 @@ impl Histories {
     /// the next merge), without a pass over the stack.
     pub fn known_nmi(&self, method: Method, position: usize) -> Option<Vec<f64>> {
         match (method, &self.bottom) {
-            (Method::BottomUp, Some(b)) => b.steps.get(position).map(|m| m.pairs.clone()),
+            (Method::BottomUp, Some(b)) => b
+                .steps
+                .get(position)
+                .map(|m| m.pairs.clone())
+                .filter(|p| !p.is_empty()),
             _ => None,
         }
     }
@@ -297,6 +305,25 @@ impl Histories {
     /// The NMI of the two slabs at each boundary of `slabs` (one pass over the stack).
     pub fn boundary_nmi(&self, slabs: &[Slab], monitor: &Monitor) -> Result<Vec<f64>> {
         consecutive_nmi(&self.stack, &Columns::new(&self.stack), slabs, monitor)
+    }
+
+    /// What the histories leave out, for the user: the optimum on a stack too long for it, a
+    /// top-down history stopped short of single slices.
+    pub fn notes(&self) -> Vec<String> {
+        let n = self.slices();
+        let mut notes = Vec::new();
+        if self.optimal.is_none() && n > MAX_SLICES {
+            notes.push(format!(
+                "the optimal partition is skipped: {n} slices, more than the {MAX_SLICES} it takes"
+            ));
+        }
+        if self.top.steps.len() + 1 < n && self.top.steps.len() >= Scope::ALL.top_steps {
+            notes.push(format!(
+                "top-down history kept to its first {} splits of {n} slices",
+                self.top.steps.len()
+            ));
+        }
+        notes
     }
 
     /// The NMI between each slice and the next.
@@ -369,6 +396,7 @@ mod tests {
         let scope = Scope {
             bottom_up: false,
             optimal_slabs: 0,
+            top_steps: usize::MAX,
         };
         let h = Histories::of_stack(stack, scope, &Monitor::none()).unwrap();
         assert!(!h.has(Method::BottomUp));

@@ -11,7 +11,7 @@ mod top_down;
 use serde::Serialize;
 
 pub use crate::geometry::coordinate_axis;
-pub use bottom_up::{Merge, MergeHistory, slice_nmi};
+pub use bottom_up::{Merge, MergeHistory, PAIRS_KEPT, slice_nmi};
 pub use histories::{Histories, Scope};
 pub use optimal::{MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{Comparison, Partition, PartitionParams, Step, Stop, label_volume, partition};

@@ -113,6 +113,8 @@ pub struct Partition {
     /// What was left out as background (reported at the top of the analysis).
     #[serde(skip)]
     pub background: BackgroundSummary,
+    /// What was left out of the analysis, and why.
+    pub notes: Vec<String>,
 }
 
 /// The optimum is compared with greedy up to at least this many slabs.
@@ -142,6 +144,11 @@ impl PartitionParams {
         Scope {
             bottom_up: self.method == Method::BottomUp,
             optimal_slabs: wanted.max(COMPARE_SLABS),
+            // The greedy side of the comparison, and the method's own steps.
+            top_steps: match (self.method, self.stop) {
+                (Method::TopDown, Stop::Threshold(_)) => usize::MAX,
+                _ => wanted.max(COMPARE_SLABS) - 1,
+            },
         }
     }
 }
@@ -192,6 +199,7 @@ impl Partition {
             slabs,
             comparison,
             background: stack.background(),
+            notes: histories.notes(),
         })
     }
 }

@@ -186,7 +186,7 @@ impl SliceStack {
         monitor: &Monitor,
     ) -> Result<Self> {
         let lattice = oblique_lattice(volume, d, params)?;
-        let ((i0, i1), (j0, j1)) = lattice.ray_ranges();
+        let (_, (j0, j1)) = lattice.ray_ranges();
         let (k_first, k_last) = lattice.sample_range();
         let slices = (k_last - k_first + 1).max(0) as usize;
         let it = Interpolator::new(volume);
@@ -197,18 +197,16 @@ impl SliceStack {
             .map(|&j| {
                 let mut columns = Vec::new();
                 let mut symbols = Vec::new();
-                for i in i0..=i1 {
-                    if let Some(ray) = lattice.ray(i, j) {
-                        columns.push(Column {
-                            offset: symbols.len(),
-                            first: (ray.k0 - k_first) as u32,
-                            len: ray.len() as u32,
-                        });
-                        symbols.extend((ray.k0..=ray.k1).map(|k| {
-                            let p = ray.at(k);
-                            keep(it.nearest(p), it.sample(p))
-                        }));
-                    }
+                for ray in lattice.row(j) {
+                    columns.push(Column {
+                        offset: symbols.len(),
+                        first: (ray.k0 - k_first) as u32,
+                        len: ray.len() as u32,
+                    });
+                    symbols.extend((ray.k0..=ray.k1).map(|k| {
+                        let p = ray.at(k);
+                        keep(it.nearest(p), it.sample(p))
+                    }));
                 }
                 monitor.advance(1)?;
                 Ok((columns, symbols))
@@ -468,22 +466,20 @@ fn lattice_sums(
     counted: &(dyn Fn(usize, f32) -> bool + Sync),
 ) -> (Vec<f64>, Vec<u64>) {
     let it = Interpolator::new(volume);
-    let ((i0, i1), (j0, j1)) = lattice.ray_ranges();
+    let (_, (j0, j1)) = lattice.ray_ranges();
     let (k_first, _) = lattice.sample_range();
     let zero = || (vec![0.0f64; slices], vec![0u64; slices]);
     (j0..=j1)
         .into_par_iter()
         .fold(zero, |(mut sums, mut counts), j| {
-            for i in i0..=i1 {
-                if let Some(ray) = lattice.ray(i, j) {
-                    for k in ray.k0..=ray.k1 {
-                        let p = ray.at(k);
-                        let v = it.sample(p);
-                        if counted(it.nearest(p), v) {
-                            let s = (k - k_first) as usize;
-                            sums[s] += f64::from(v);
-                            counts[s] += 1;
-                        }
+            for ray in lattice.row(j) {
+                for k in ray.k0..=ray.k1 {
+                    let p = ray.at(k);
+                    let v = it.sample(p);
+                    if counted(it.nearest(p), v) {
+                        let s = (k - k_first) as usize;
+                        sums[s] += f64::from(v);
+                        counts[s] += 1;
                     }
                 }
             }

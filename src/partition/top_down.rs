@@ -2,6 +2,9 @@
 //! step takes, over all current slabs and all cuts strictly inside them, the cut with the largest
 //! gain `ΔI = (v1 + v2)/v_T · JS(v1/(v1+v2), v2/(v1+v2); p1, p2)`; ties go to the lowest slice.
 
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
 use serde::Serialize;
 
 use super::{Slab, prefix_histograms};
@@ -16,14 +19,12 @@ pub struct Split {
     pub at: usize,
     /// `ΔI` of this cut, bits.
     pub gain: f64,
-    /// `ΔI` of every cut strictly inside the slab, in slice order (cut `split.0 + 1 + i`).
-    #[serde(skip)]
-    pub curve: Vec<f64>,
     /// `I(slab; intensity)` after this split, bits.
     pub information: f64,
 }
 
-/// The whole top-down history: splits until every slab is one slice.
+/// The top-down history: splits until every slab is one slice (or a limit). Its memory is linear
+/// in the slices: each step keeps its gain, and a curve is computed when asked for.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplitHistory {
     /// Number of slices.
@@ -32,6 +33,8 @@ pub struct SplitHistory {
     pub steps: Vec<Split>,
     /// `H(intensity)` of the whole stack, the most information any partition can keep, bits.
     pub entropy: f64,
+    /// `ΔI` of cutting the whole stack at each slice 1 .. slices.
+    gain_curve: Vec<f64>,
 }
 
 /// Gains of splitting slabs, from per-slice histograms.
@@ -98,15 +101,48 @@ impl Gains {
     }
 }
 
-/// The best cut of a curve: (index, gain), the first on ties.
-fn best_cut(curve: &[f64]) -> Option<(usize, f64)> {
-    let mut best: Option<(usize, f64)> = None;
-    for (i, &g) in curve.iter().enumerate() {
-        if best.is_none_or(|(_, b)| g > b) {
-            best = Some((i, g));
-        }
+/// A slab waiting to be split, with its best cut: ordered by gain, then (for ties) by the lowest
+/// cut, so that a max-heap pops the split DESIGN §2 takes next.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Candidate {
+    gain: f64,
+    at: usize,
+    slab: Slab,
+}
+
+impl Eq for Candidate {}
+
+impl Ord for Candidate {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.gain
+            .total_cmp(&other.gain)
+            .then_with(|| other.at.cmp(&self.at))
     }
-    best
+}
+
+impl PartialOrd for Candidate {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Gains {
+    /// The best cut of `[a, b)`: the largest `ΔI`, the lowest slice on ties; `None` for one slice.
+    fn best_cut(&self, (a, b): Slab) -> Option<Candidate> {
+        let whole = self.scaled(a, b);
+        let mut best: Option<Candidate> = None;
+        for c in a + 1..b {
+            let gain = self.bits(whole - self.scaled(a, c) - self.scaled(c, b));
+            if best.is_none_or(|x| gain > x.gain) {
+                best = Some(Candidate {
+                    gain,
+                    at: c,
+                    slab: (a, b),
+                });
+            }
+        }
+        best
+    }
 }
 
 impl SplitHistory {
@@ -116,39 +152,28 @@ impl SplitHistory {
     }
 
     /// Like [`new`](Self::new), but stops after `limit` splits.
+    ///
+    /// Each slab's best cut is found once, when the slab is made, and the slabs wait in a heap:
+    /// a step costs the length of the slab it splits.
     pub fn with_limit(histograms: &[u64], bins: usize, limit: usize) -> Self {
         let slices = histograms.len() / bins;
         let gains = Gains::new(histograms, bins);
-        let entropy = if gains.total > 0.0 {
-            gains.scaled(0, slices) / gains.total
-        } else {
-            0.0
-        };
-        // Current slabs in slice order, each with its gain curve.
-        let mut slabs: Vec<(Slab, Vec<f64>)> = vec![((0, slices), gains.curve(0, slices))];
-        let mut steps = Vec::with_capacity(slices.saturating_sub(1));
+        let entropy = gains.bits(gains.scaled(0, slices));
+        let gain_curve = gains.curve(0, slices);
+        let mut heap: BinaryHeap<Candidate> = gains.best_cut((0, slices)).into_iter().collect();
+        let mut steps = Vec::with_capacity(slices.saturating_sub(1).min(limit));
         let mut information = 0.0;
-        while steps.len() < limit {
-            // Slabs are in slice order, so a strict improvement keeps the lowest cut on ties.
-            let mut choice: Option<(usize, usize, f64)> = None;
-            for (s, ((_, _), curve)) in slabs.iter().enumerate() {
-                if let Some((i, g)) = best_cut(curve)
-                    && choice.is_none_or(|(_, _, b)| g > b)
-                {
-                    choice = Some((s, i, g));
-                }
-            }
-            let Some((s, i, gain)) = choice else { break };
-            let ((a, b), curve) = slabs.remove(s);
-            let at = a + 1 + i;
-            information += gain;
-            slabs.insert(s, ((at, b), gains.curve(at, b)));
-            slabs.insert(s, ((a, at), gains.curve(a, at)));
+        while steps.len() < limit
+            && let Some(c) = heap.pop()
+        {
+            let (a, b) = c.slab;
+            information += c.gain;
+            heap.extend(gains.best_cut((a, c.at)));
+            heap.extend(gains.best_cut((c.at, b)));
             steps.push(Split {
-                split: (a, b),
-                at,
-                gain,
-                curve,
+                split: c.slab,
+                at: c.at,
+                gain: c.gain,
                 information,
             });
         }
@@ -156,6 +181,7 @@ impl SplitHistory {
             slices,
             steps,
             entropy,
+            gain_curve,
         }
     }
 
@@ -182,9 +208,10 @@ impl SplitHistory {
             .count()
     }
 
-    /// `I(slab; intensity)` of the `k`-slab partition, bits.
+    /// `I(slab; intensity)` of the `k`-slab partition, bits (of the last one the history has,
+    /// when it stopped short of `k`).
     pub fn information(&self, k: usize) -> f64 {
-        match k.clamp(1, self.slices) - 1 {
+        match (k.clamp(1, self.slices) - 1).min(self.steps.len()) {
             0 => 0.0,
             n => self.steps[n - 1].information,
         }
@@ -192,7 +219,7 @@ impl SplitHistory {
 
     /// The gain of every cut of the whole stack: the first split's curve.
     pub fn gain_curve(&self) -> &[f64] {
-        self.steps.first().map_or(&[], |s| &s.curve)
+        &self.gain_curve
     }
 }
 
@@ -239,7 +266,6 @@ mod tests {
         assert_eq!(t.gain_curve().len(), 6);
         let mut sum = 0.0;
         for s in &t.steps {
-            assert_eq!(s.curve.len(), s.split.1 - s.split.0 - 1);
             sum += s.gain;
             assert!((s.information - sum).abs() < 1e-12);
         }

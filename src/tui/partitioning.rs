@@ -203,7 +203,7 @@ impl Partitioning {
                     slab_text(m.merge.0),
                     slab_text(m.merge.1),
                     m.nmi,
-                    m.pairs.len()
+                    h.slab_count(method, p - 1) - 1
                 )
             }
             (Method::Optimal, p) => {

@@ -203,6 +203,51 @@ impl Lattice {
         )
     }
 
+    /// The rays of row `j` that can meet the box: an inclusive range of `i` holding every `i`
+    /// for which [`ray`](Self::ray) is `Some` (and a few around it), or `None` when the row
+    /// misses the box. The box seen along the axis is a convex polygon, the hull of its eight
+    /// corners; a row is a line across it, which it meets in an interval whose ends lie on
+    /// segments between two corners. Rows of a flat box (one voxel thick) meet it in a point or
+    /// not at all, so walking only these spans keeps a lattice's cost to the rays that count.
+    pub fn row_span(&self, j: i64) -> Option<(i64, i64)> {
+        let y = (j as f64 + self.phase[1]) * self.ray_spacing;
+        let points: Vec<(f64, f64)> = self
+            .corners()
+            .map(|c| (dot(c, self.u), dot(c, self.v)))
+            .collect();
+        let size: f64 = self.extent.iter().sum();
+        let margin = 1e-6 * (1.0 + size) + 1e-9 * self.ray_spacing;
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (a, p) in points.iter().enumerate() {
+            if (p.1 - y).abs() <= margin {
+                (lo, hi) = (lo.min(p.0), hi.max(p.0));
+            }
+            for q in &points[a + 1..] {
+                if (p.1 - y) * (q.1 - y) < 0.0 {
+                    let x = p.0 + (y - p.1) * (q.0 - p.0) / (q.1 - p.1);
+                    (lo, hi) = (lo.min(x), hi.max(x));
+                }
+            }
+        }
+        if lo > hi {
+            return None;
+        }
+        let to_i = |x: f64| x / self.ray_spacing - self.phase[0];
+        Some((
+            floor_i64(to_i(lo - margin)) - 1,
+            ceil_i64(to_i(hi + margin)) + 1,
+        ))
+    }
+
+    /// The rays of row `j` that meet the box, in order of `i`.
+    pub fn row(&self, j: i64) -> impl Iterator<Item = Ray> + '_ {
+        let ((i0, i1), _) = self.ray_ranges();
+        let (a, b) = self
+            .row_span(j)
+            .map_or((1, 0), |(a, b)| (a.max(i0), b.min(i1)));
+        (a..=b).filter_map(move |i| self.ray(i, j))
+    }
+
     /// Inclusive range of the sample index `k` along the axis over the whole box.
     pub fn sample_range(&self) -> (i64, i64) {
         self.index_range(self.d, self.sample_spacing, self.phase[2])

@@ -144,6 +144,14 @@ pub fn score(a: &AxisEntropy) -> f64 {
     a.phases.map_or(a.entropy_rate, |p| p.mean)
 }
 
+/// The order of the ranking: measured axes by score (lowest first), then the axes too thin to
+/// measure.
+fn rank(a: &AxisEntropy, b: &AxisEntropy) -> std::cmp::Ordering {
+    (!a.measured(), score(a))
+        .partial_cmp(&(!b.measured(), score(b)))
+        .unwrap_or(std::cmp::Ordering::Equal)
+}
+
 /// The contenders of `best` among `views`: `best` itself first, then every axis whose mean is
 /// within two standard errors of the difference, `mean_b - mean_best < 2·√(se_b² + se_best²)`.
 pub fn contenders(best: &AxisEntropy, views: &[AxisEntropy]) -> Option<Vec<Contender>> {
@@ -157,7 +165,7 @@ pub fn contenders(best: &AxisEntropy, views: &[AxisEntropy]) -> Option<Vec<Conte
     let b = of(best)?;
     let mut out = vec![b];
     for a in views {
-        if a.axis == best.axis {
+        if a.axis == best.axis || !a.measured() {
             continue;
         }
         let c = of(a)?;
@@ -267,7 +275,12 @@ impl Evaluator<'_> {
         let mut result = entropy_rate(&self.sampler, &self.lattice(axis, 0)?, block, monitor)?;
         result.axis = axis;
         if self.params.phases > 0 {
-            let mut values = vec![result.entropy_rate];
+            // Phases whose rays hold no block say nothing, and are left out of the mean.
+            let mut values: Vec<f64> = result
+                .measured()
+                .then_some(result.entropy_rate)
+                .into_iter()
+                .collect();
             for n in 1..self.params.phases {
                 let lattice = self.lattice(axis, n)?;
                 let subset = self.subset(result.samples, n);
@@ -275,9 +288,11 @@ impl Evaluator<'_> {
                 // A subset walks fewer rows of tiles: the progress of the rest.
                 let rest = work_units(&lattice).saturating_sub(work_units_of(&lattice, subset));
                 monitor.advance(rest)?;
-                values.push(r.entropy_rate);
+                if r.measured() {
+                    values.push(r.entropy_rate);
+                }
             }
-            result.phases = Some(PhaseStats::of(&values));
+            result.phases = (!values.is_empty()).then(|| PhaseStats::of(&values));
         }
         Ok(result)
     }
@@ -300,7 +315,13 @@ pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result
         .par_iter()
         .map(|&axis| eval.evaluate(axis, monitor))
         .collect::<Result<Vec<_>>>()?;
-    views.sort_by(|a, b| score(a).total_cmp(&score(b)));
+    views.sort_by(rank);
+    if !views[0].measured() {
+        return Err(Error::Degenerate(format!(
+            "no ray holds {} samples in a row along any axis: the volume is too thin to measure",
+            eval.params.block
+        )));
+    }
     let refined = if eval.params.refine {
         Some(refine::refine(&eval, &views, monitor)?)
     } else {

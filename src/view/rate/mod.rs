@@ -111,6 +111,8 @@ pub struct AxisEntropy {
     pub rays: u64,
     /// Samples counted (missing ones left out).
     pub samples: u64,
+    /// L-blocks counted.
+    pub blocks: u64,
     /// The entropy rate over lattice phases, when asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub phases: Option<PhaseStats>,
@@ -131,8 +133,15 @@ impl AxisEntropy {
             per_symbol: h_long / counts.block() as f64,
             rays,
             samples: counts.symbols(),
+            blocks: counts.blocks(),
             phases: None,
         }
+    }
+
+    /// Whether any ray held a block of L samples: without one, the rate says nothing (the
+    /// volume is too thin along this axis) and the axis is ranked last.
+    pub fn measured(&self) -> bool {
+        self.blocks > 0
     }
 }
 
@@ -227,13 +236,21 @@ fn advance(p: &mut [i64; 3], step: [i64; 3]) {
     }
 }
 
-/// Feeds the quantized samples of the rays `(i, j)` of one tile that `subset` keeps into
-/// `counts`: each ray's samples in order, a missing sample breaking its sequence. `step` is the
-/// lattice's step in fixed point; `common` walks the rays' inner spans together. Returns the
-/// number of rays.
+/// The rays of one tile: columns `is` of the rows `js.0 ..`, each row's rays that can meet the
+/// box in `rows` (see [`Lattice::row_span`]), and the subset walked.
+struct TileRays<'a> {
+    is: (i64, i64),
+    js: (i64, i64),
+    rows: &'a [Option<(i64, i64)>],
+    subset: RaySubset,
+}
+
+/// Feeds the quantized samples of the rays `(i, j)` of one tile into `counts`: each ray's
+/// samples in order, a missing sample breaking its sequence. `step` is the lattice's step in
+/// fixed point; `common` walks the rays' inner spans together. Returns the number of rays.
 fn walk_tile<C: Counter>(
     lattice: &Lattice,
-    (is, js, subset): ((i64, i64), (i64, i64), RaySubset),
+    tile: &TileRays,
     step: [i64; 3],
     sampler: &BinSampler,
     counts: &mut C,
@@ -243,9 +260,10 @@ fn walk_tile<C: Counter>(
     let whole_step = lattice.step().iter().all(|&c| is_whole(c));
     let spans = sampler.inner_spans(step);
     walkers.clear();
-    for j in js.0..=js.1 {
-        for i in is.0..=is.1 {
-            if !subset.keeps(i, j) {
+    for (j, row) in (tile.js.0..=tile.js.1).zip(tile.rows) {
+        let Some((a, b)) = *row else { continue };
+        for i in a.max(tile.is.0)..=b.min(tile.is.1) {
+            if !tile.subset.keeps(i, j) {
                 continue;
             }
             let Some(ray) = lattice.ray(i, j) else {
@@ -349,21 +367,28 @@ fn walk_row<C: Counter>(
     common: &mut impl FnMut(&mut [Walker], &mut C),
 ) -> u64 {
     let ((i0, i1), _) = lattice.ray_ranges();
+    let rows: Vec<Option<(i64, i64)>> = (js.0..=js.1).map(|j| lattice.row_span(j)).collect();
+    // The columns any row of the tile row can meet.
+    let (lo, hi) = rows
+        .iter()
+        .flatten()
+        .fold((i1, i0), |(lo, hi), &(a, b)| (lo.min(a), hi.max(b)));
+    let (lo, hi) = (lo.max(i0), hi.min(i1));
+    if lo > hi {
+        return 0;
+    }
     let (ti, _) = tile_shape(lattice, subset.every);
     let mut walkers = Vec::with_capacity(TILE_RAYS as usize);
-    (i0..=i1)
+    (lo..=hi)
         .step_by(ti as usize)
         .map(|i| {
-            let is = (i, (i + ti - 1).min(i1));
-            walk_tile(
-                lattice,
-                (is, js, subset),
-                step,
-                sampler,
-                counts,
-                &mut walkers,
-                common,
-            )
+            let tile = TileRays {
+                is: (i, (i + ti - 1).min(hi)),
+                js,
+                rows: &rows,
+                subset,
+            };
+            walk_tile(lattice, &tile, step, sampler, counts, &mut walkers, common)
         })
         .sum()
 }
