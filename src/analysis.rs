@@ -80,6 +80,8 @@ pub struct Analysis {
     pub views: Option<ViewSearch>,
     /// The partition along the chosen axis.
     pub partition: Partition,
+    /// What the user should know: spacings coarsened to the sample budget, histories cut short.
+    pub notes: Vec<String>,
 }
 
 impl Analysis {
@@ -102,5 +104,19 @@ pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> R
         (None, None) => unreachable!("the view search runs when no axis is given"),
     };
     let partition = partition(volume, axis, &params.partition(), monitor)?;
-    Ok(Analysis { views, partition })
+    let notes = notes(volume, &params.view, &partition);
+    Ok(Analysis {
+        views,
+        partition,
+        notes,
+    })
+}
+
+/// The notes of an analysis of `volume` with `view`'s sampling that gave `partition`.
+pub fn notes(volume: &Volume, view: &ViewParams, partition: &Partition) -> Vec<String> {
+    view.sampling
+        .budget_note(volume.dims(), volume.spacing())
+        .into_iter()
+        .chain(partition.notes.iter().cloned())
+        .collect()
 }

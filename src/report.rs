@@ -53,6 +53,8 @@ pub struct AnalysisReport {
     /// What was left out of the slab histograms as background: `{"mode", "value", "fraction"}`,
     /// null when nothing was (`--background none`).
     pub background: Option<BackgroundSummary>,
+    /// What the user should know about this analysis.
+    pub notes: Vec<String>,
     /// The partition along the axis.
     pub partition: Partition,
 }
@@ -71,7 +73,7 @@ impl AnalysisReport {
         let params = match views {
             Some(v) => v.params.clone(),
             None => ViewParams {
-                sampling: view.sampling.resolved(volume.spacing())?,
+                sampling: view.sampling.resolved(volume.dims(), volume.spacing())?,
                 ..view.clone()
             },
         };
@@ -89,6 +91,7 @@ impl AnalysisReport {
             contenders: views.map(|v| v.contenders.clone()),
             refined: views.and_then(|v| v.refined.clone()),
             background: Some(analysis.partition.background).filter(|b| b.mode != "none"),
+            notes: analysis.notes.clone(),
             partition: analysis.partition.clone(),
         })
     }

@@ -13,6 +13,7 @@ pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
         println!();
     }
     print_partition(&analysis.partition);
+    print_notes(&analysis.notes);
 }
 
 /// `[ 0.000, 0.000, 1.000] (z)`, or without the name for an oblique axis.
@@ -189,7 +190,7 @@ fn print_partition(p: &Partition) {
     print_slab_table(p);
     print_steps(&p.steps);
     if p.comparison.is_empty() {
-        return print_notes(&p.notes);
+        return;
     }
     println!();
     println!("optimum  slabs  I optimal  I greedy top-down  shortfall");
@@ -202,7 +203,6 @@ fn print_partition(p: &Partition) {
             c.optimal - c.greedy
         );
     }
-    print_notes(&p.notes);
 }
 
 fn print_slab_table(p: &Partition) {

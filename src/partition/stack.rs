@@ -494,7 +494,7 @@ fn lattice_sums(
 
 /// The lattice of an oblique stack.
 fn oblique_lattice(volume: &Volume, d: [f64; 3], params: &StackParams) -> Result<Lattice> {
-    let (x, y) = params.sampling.spacings(volume.spacing())?;
+    let (x, y, _) = params.sampling.spacings(volume.dims(), volume.spacing())?;
     Lattice::new(volume.dims(), volume.spacing(), d, x, y, [0.0; 3])
 }
 

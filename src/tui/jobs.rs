@@ -165,6 +165,7 @@ fn export(volume: &Volume, r: &ExportRequest, monitor: &Monitor) -> slabscope::R
     write_new(&png, &image.png()?)?;
     let analysis = Analysis {
         views: r.views.clone(),
+        notes: slabscope::analysis::notes(volume, &r.view_params, &part),
         partition: part,
     };
     let report = AnalysisReport::new(&r.name, volume, &r.view_params, &analysis)?;

@@ -32,10 +32,20 @@ impl Default for SamplingParams {
     }
 }
 
+/// A lattice takes at most this many samples per voxel of the volume (and at least
+/// [`MIN_SAMPLE_BUDGET`] in all): finer spacings are coarsened to fit, and said so.
+pub const SAMPLES_PER_VOXEL: f64 = 16.0;
+
+/// The sample budget of a lattice is never below this.
+pub const MIN_SAMPLE_BUDGET: f64 = 4_194_304.0;
+
 impl SamplingParams {
-    /// The spacings in mm for a volume of `spacing`: the given ones, else the smallest voxel
-    /// spacing; an error for a spacing that is not a positive finite number.
-    pub fn spacings(&self, spacing: [f64; 3]) -> Result<(f64, f64)> {
+    /// The spacings in mm for a volume of `dims` and `spacing`: the given ones, else the
+    /// smallest voxel spacing, coarsened when a lattice would take more samples than the budget
+    /// ([`SAMPLES_PER_VOXEL`] a voxel): the finer of the two first, up to the other, then both
+    /// alike. Returns the spacings and how much coarser the cell became (1 when nothing changed);
+    /// an error for a spacing that is not a positive finite number.
+    pub fn spacings(&self, dims: [usize; 3], spacing: [f64; 3]) -> Result<(f64, f64, f64)> {
         let s = min_spacing(spacing);
         let x = self.ray_spacing.unwrap_or(s);
         let y = self.sample_spacing.unwrap_or(s);
@@ -44,16 +54,44 @@ impl SamplingParams {
                 return Err(Error::invalid(name, v, "a positive number of mm"));
             }
         }
-        Ok((x, y))
+        // A lattice's samples fill the box of the voxels: its volume over a cell's, x²·y.
+        let voxels: f64 = dims.iter().map(|&n| n as f64).product();
+        let box_volume: f64 = (0..3).map(|k| dims[k] as f64 * spacing[k]).product();
+        let budget = (SAMPLES_PER_VOXEL * voxels).max(MIN_SAMPLE_BUDGET);
+        let over = box_volume / (x * x * y) / budget;
+        if over <= 1.0 {
+            return Ok((x, y, 1.0));
+        }
+        let (x1, y1) = if x < y && x * over.sqrt() <= y {
+            (x * over.sqrt(), y)
+        } else if y < x && y * over <= x {
+            (x, y * over)
+        } else {
+            let b = x.max(y);
+            let rest = (box_volume / (b * b * b) / budget).max(1.0).cbrt();
+            (b * rest, b * rest)
+        };
+        Ok((x1, y1, (x1 * x1 * y1 / (x * x * y)).cbrt()))
     }
 
-    /// These parameters with the spacings resolved for a volume of `spacing`.
-    pub fn resolved(&self, spacing: [f64; 3]) -> Result<Self> {
-        let (x, y) = self.spacings(spacing)?;
+    /// These parameters with the spacings resolved for a volume of `dims` and `spacing`.
+    pub fn resolved(&self, dims: [usize; 3], spacing: [f64; 3]) -> Result<Self> {
+        let (x, y, _) = self.spacings(dims, spacing)?;
         Ok(Self {
             ray_spacing: Some(x),
             sample_spacing: Some(y),
             ..*self
+        })
+    }
+
+    /// What the budget changed, in words, when it changed anything.
+    pub fn budget_note(&self, dims: [usize; 3], spacing: [f64; 3]) -> Option<String> {
+        let (x, y, factor) = self.spacings(dims, spacing).ok()?;
+        (factor > 1.0).then(|| {
+            format!(
+                "rays every {x:.4} mm and samples every {y:.4} mm, coarser than asked: a finer \
+                 lattice would take more than {SAMPLES_PER_VOXEL} samples a voxel"
+            )
         })
     }
 }
@@ -571,5 +609,35 @@ mod tests {
             let x = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e12;
             assert_eq!(round_half_away(x), x.round() as i64, "{x}");
         }
+    }
+
+    #[test]
+    fn a_lattice_finer_than_the_budget_is_coarsened_finest_first() {
+        let sampling = |x: Option<f64>, y: Option<f64>| SamplingParams {
+            bins: 32,
+            ray_spacing: x,
+            sample_spacing: y,
+        };
+        let dims = [200, 200, 200];
+        // The defaults take one sample a voxel: untouched.
+        let (x, y, f) = sampling(None, None).spacings(dims, [1.0; 3]).unwrap();
+        assert_eq!((x, y, f), (1.0, 1.0, 1.0));
+        // Rays 100 times finer: the rays alone are coarsened, to 16 samples a voxel.
+        let (x, y, _) = sampling(Some(0.01), None).spacings(dims, [1.0; 3]).unwrap();
+        assert_eq!(y, 1.0);
+        assert!((1.0 / (x * x * y) - 16.0).abs() < 1e-6, "{x}");
+        // A header's tiny spacing makes both fine: both coarsened alike.
+        let (x, y, f) = sampling(None, None)
+            .spacings(dims, [1e-4, 1.0, 1.0])
+            .unwrap();
+        assert!((x - y).abs() < 1e-12 && f > 1.0);
+        let samples = 200.0 * 1e-4 * 200.0 * 200.0 / (x * x * y);
+        assert!((samples / (16.0 * 8e6) - 1.0).abs() < 1e-6, "{samples}");
+        assert!(
+            sampling(None, None)
+                .budget_note(dims, [1e-4, 1.0, 1.0])
+                .is_some()
+        );
+        assert!(sampling(None, None).budget_note(dims, [1.0; 3]).is_none());
     }
 }

@@ -205,7 +205,7 @@ fn resolve(volume: &Volume, params: &ViewParams) -> Result<ViewParams> {
         )));
     }
     Ok(ViewParams {
-        sampling: params.sampling.resolved(volume.spacing())?,
+        sampling: params.sampling.resolved(volume.dims(), volume.spacing())?,
         ..params.clone()
     })
 }
