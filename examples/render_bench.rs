@@ -13,7 +13,7 @@ use slabscope::volume::phantom;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let volume = phantom::body([256, 256, 415], 1)?;
     let none = Monitor::none();
-    let part = partition(&volume, [0.0, 0.0, 1.0], &PartitionParams::default(), &none)?;
+    let part = partition(&volume, [0.0, 0.0, 1.0], &PartitionParams::paper(), &none)?;
     let layout = Layout::exploded(&part, Gap::Similarity, 0.3);
     let t = Instant::now();
     let renderer = Renderer::new(&volume)?;

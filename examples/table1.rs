@@ -8,6 +8,7 @@ use std::time::Instant;
 use slabscope::partition::{MergeHistory, SliceStack, SplitHistory, StackParams};
 use slabscope::progress::Monitor;
 use slabscope::view::{ViewParams, search};
+use slabscope::volume::background::BackgroundRule;
 use slabscope::volume::phantom;
 
 /// The paper's rows: name, size, and seconds for best view, P(2), P(4), P(8), G(8), G(4), G(2).
@@ -68,10 +69,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let _ = std::fs::write("/proc/self/clear_refs", "5");
         let volume = phantom::body(dims, 1)?;
         let none = Monitor::none();
-        let (views, t_view) = time(|| search(&volume, &ViewParams::default(), &none));
+        // The paper's method: one lattice per axis, every voxel counted.
+        let paper_stack = StackParams {
+            background: BackgroundRule::None,
+            ..StackParams::default()
+        };
+        let (views, t_view) = time(|| search(&volume, &ViewParams::paper(), &none));
         let axis = views?.best().axis;
         let (stack, t_slice) =
-            time(|| SliceStack::new(&volume, axis, &StackParams::default(), &none));
+            time(|| SliceStack::new(&volume, axis, &paper_stack, &none));
         let stack = stack?;
         let n = stack.slices();
         let (h, t_hist) = time(|| stack.slice_histograms());
