@@ -76,8 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let (views, t_view) = time(|| search(&volume, &ViewParams::paper(), &none));
         let axis = views?.best().axis;
-        let (stack, t_slice) =
-            time(|| SliceStack::new(&volume, axis, &paper_stack, &none));
+        let (stack, t_slice) = time(|| SliceStack::new(&volume, axis, &paper_stack, &none));
         let stack = stack?;
         let n = stack.slices();
         let (h, t_hist) = time(|| stack.slice_histograms());

@@ -2,7 +2,7 @@
 //! structured view (paper §3.1, §4), then the slabs along it (paper §5).
 
 use crate::error::Result;
-use crate::geometry::Axis;
+use crate::geometry::AxisChoice;
 use crate::partition::{Method, Partition, PartitionParams, StackParams, Stop, partition};
 use crate::progress::Monitor;
 use crate::view::{ViewParams, ViewSearch, search};
@@ -15,8 +15,8 @@ use crate::volume::background::BackgroundRule;
 pub struct AnalysisParams {
     /// The view search's parameters.
     pub view: ViewParams,
-    /// The axis to partition along; `None` for the view search's best.
-    pub axis: Option<Axis>,
+    /// The axis to partition along.
+    pub axis: AxisChoice,
     /// Run the view search even when `axis` is given.
     pub search_views: bool,
     /// The partition method.
@@ -31,7 +31,7 @@ impl Default for AnalysisParams {
     fn default() -> Self {
         Self {
             view: ViewParams::default(),
-            axis: None,
+            axis: AxisChoice::Best,
             search_views: false,
             method: Method::TopDown,
             stop: Stop::Slabs(4),
@@ -69,7 +69,7 @@ impl AnalysisParams {
 
     /// Whether the view search runs.
     pub fn runs_search(&self) -> bool {
-        self.axis.is_none() || self.search_views
+        self.axis == AxisChoice::Best || self.search_views
     }
 }
 
@@ -93,12 +93,13 @@ impl Analysis {
 
 /// Runs the view search (unless an axis is given) and partitions along the axis.
 pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> Result<Analysis> {
+    let chosen = params.axis.resolve(volume)?;
     let views = if params.runs_search() {
         Some(search(volume, &params.view, monitor)?)
     } else {
         None
     };
-    let axis = match (params.axis, &views) {
+    let axis = match (chosen, &views) {
         (Some(a), _) => a.direction(),
         (None, Some(v)) => v.best().axis,
         (None, None) => unreachable!("the view search runs when no axis is given"),

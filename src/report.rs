@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use crate::analysis::Analysis;
 use crate::error::{Error, Result};
+use crate::geometry::{WorldAxis, dot};
 use crate::partition::{BackgroundSummary, Partition};
 use crate::view::{AxisEntropy, Contender, RankedBy, ViewParams};
 use crate::volume::Volume;
@@ -29,6 +30,9 @@ pub struct AnalysisReport {
     pub spacing: [f64; 3],
     /// Smallest and largest finite voxel.
     pub range: [f32; 2],
+    /// The voxel-to-world transform: `affine`, `orientation`, `orthogonal`, `world_bounds`.
+    #[serde(flatten)]
+    pub geometry: GeometryReport,
     /// The sampling and view-search parameters, spacings resolved to millimetres.
     pub params: ViewParams,
     /// Every axis of the view search, lowest entropy rate first (absent without a search).
@@ -83,6 +87,7 @@ impl AnalysisReport {
             dims: volume.dims(),
             spacing: volume.spacing(),
             range: [s.min, s.max],
+            geometry: GeometryReport::of(volume),
             params,
             views: views.map(|v| v.views.clone()),
             best_axis: views.map(|v| v.best().axis),
@@ -97,16 +102,50 @@ impl AnalysisReport {
     }
 }
 
+/// Where a volume lies in the world, as `info --json` and `analyze --json` give it.
+#[derive(Clone, Debug, Serialize)]
+pub struct GeometryReport {
+    /// The 4×4 voxel-to-world matrix, rows, voxel index to RAS+ mm; spacing on the diagonal when
+    /// the file states no orientation.
+    pub affine: [[f64; 4]; 4],
+    /// The orientation codes as nibabel's `aff2axcodes` gives them (`LPS`, `RAS`, `LSA`, ...),
+    /// null when the file states no orientation.
+    pub orientation: Option<String>,
+    /// Whether the voxel axes are perpendicular in the world (false under shear, such as a
+    /// tilted gantry's).
+    pub orthogonal: bool,
+    /// The smallest and largest world coordinates of the voxel centres, `[[x, y, z], [x, y, z]]`.
+    pub world_bounds: [[f64; 3]; 2],
+}
+
+impl GeometryReport {
+    /// The geometry of `volume`.
+    pub fn of(volume: &Volume) -> Self {
+        let t = volume.transform();
+        Self {
+            affine: t.matrix,
+            orientation: t.axcodes(),
+            orthogonal: t.is_orthogonal(),
+            world_bounds: t.world_bounds(volume.dims()),
+        }
+    }
+}
+
 /// The slab boundaries in the form renderers take: slice indices, millimetres along the axis
-/// and fractions of its length.
+/// and fractions of its length, and each boundary plane as a point and a normal in world mm.
 #[derive(Clone, Debug, Serialize)]
 pub struct SlabsReport {
     /// [`SCHEMA_VERSION`].
     pub schema_version: u32,
     /// The file as the user named it.
     pub file: String,
-    /// The canonical axis.
+    /// The canonical axis, in physical voxel space.
     pub axis: [f64; 3],
+    /// The axis in world coordinates: `world_axis` and `anatomy`.
+    #[serde(flatten)]
+    pub world: WorldAxis,
+    /// The orientation codes of the volume (`LPS`, `RAS`, ...), null when the file states none.
+    pub orientation: Option<String>,
     /// The method that found the slabs.
     pub method: crate::partition::Method,
     /// Number of slices.
@@ -115,6 +154,9 @@ pub struct SlabsReport {
     pub thickness_mm: f64,
     /// The slabs in slice order.
     pub slabs: Vec<SlabBounds>,
+    /// The K + 1 boundary planes in order, from the start of slab 0 to the end of the last:
+    /// slab i lies between planes i and i + 1.
+    pub planes: Vec<Plane>,
 }
 
 /// One slab's bounds.
@@ -124,20 +166,54 @@ pub struct SlabBounds {
     pub index: usize,
     /// Slices `[start, end)`.
     pub slices: (usize, usize),
-    /// Where it starts and ends along the axis, mm.
+    /// Where it starts and ends along the axis, mm from voxel (0, 0, 0).
     pub mm: (f64, f64),
+    /// Where it starts and ends along `world_axis`, world mm.
+    pub world_mm: (f64, f64),
     /// Where it starts and ends as fractions of the stack.
     pub fraction: (f64, f64),
 }
 
+/// A plane in world millimetres: the points `x` with `normal · (x - point) = 0`.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Plane {
+    /// The point of the plane nearest the volume's centre.
+    pub point: [f64; 3],
+    /// Its unit normal, `world_axis`.
+    pub normal: [f64; 3],
+    /// Its signed position along the normal, `normal · point`.
+    pub world_mm: f64,
+}
+
 impl SlabsReport {
-    /// The bounds of `p`'s slabs.
-    pub fn new(file: &str, p: &Partition) -> Self {
+    /// The bounds of `p`'s slabs, a partition of `volume`.
+    pub fn new(file: &str, volume: &Volume, p: &Partition) -> Self {
         let n = p.slices as f64;
+        let t = volume.transform();
+        let spacing = volume.spacing();
+        let centre: [f64; 3] =
+            std::array::from_fn(|k| (volume.dims()[k] as f64 - 1.0) / 2.0 * spacing[k]);
+        let plane = |s: f64| {
+            let along = s - dot(centre, p.axis);
+            let point = t.physical_point(
+                std::array::from_fn(|k| centre[k] + along * p.axis[k]),
+                spacing,
+            );
+            let normal = p.world.world_axis;
+            Plane {
+                point,
+                normal,
+                world_mm: dot(normal, point),
+            }
+        };
+        let mut planes: Vec<Plane> = p.info.iter().map(|s| plane(s.mm.0)).collect();
+        planes.extend(p.info.last().map(|s| plane(s.mm.1)));
         Self {
             schema_version: SCHEMA_VERSION,
             file: file.to_string(),
             axis: p.axis,
+            world: p.world.clone(),
+            orientation: t.axcodes(),
             method: p.method,
             slices: p.slices,
             thickness_mm: p.thickness,
@@ -149,9 +225,11 @@ impl SlabsReport {
                     index,
                     slices: s.slices,
                     mm: s.mm,
+                    world_mm: s.world_mm,
                     fraction: (s.slices.0 as f64 / n, s.slices.1 as f64 / n),
                 })
                 .collect(),
+            planes,
         }
     }
 }
@@ -174,15 +252,16 @@ pub fn to_json(value: &impl Serialize) -> Result<String> {
     serde_json::to_string_pretty(&v).map_err(|e| Error::Encode(e.to_string()))
 }
 
-/// `cut,mm,nmi,gain`: for each boundary between slice c-1 and c, its position, the NMI of the
-/// two slices, and the ΔI of cutting the whole stack there.
+/// `cut,mm,world_mm,nmi,gain`: for each boundary between slice c-1 and c, its position along the
+/// axis and along `world_axis`, the NMI of the two slices, and the ΔI of cutting the whole stack there.
 pub fn curves_csv(p: &Partition) -> String {
-    let mut out = String::from("cut,mm,nmi,gain\n");
+    let mut out = String::from("cut,mm,world_mm,nmi,gain\n");
     for c in 1..p.slices {
         let mm = p.offset + (c as f64 - 0.5) * p.thickness;
         let _ = writeln!(
             out,
-            "{c},{mm},{},{}",
+            "{c},{mm},{},{},{}",
+            p.world_mm(mm),
             p.nmi_curve[c - 1],
             p.gain_curve[c - 1]
         );

@@ -202,7 +202,7 @@ fn exports_are_written_and_never_overwritten_unasked() {
     assert_eq!(s["slabs"][0]["fraction"][0], 0.0);
     assert_eq!(s["slabs"][2]["fraction"][1], 1.0);
     let csv = std::fs::read_to_string(&curves).unwrap();
-    assert!(csv.starts_with("cut,mm,nmi,gain\n"));
+    assert!(csv.starts_with("cut,mm,world_mm,nmi,gain\n"));
     assert_eq!(csv.lines().count(), 24, "a header and 23 cuts");
 
     let before = std::fs::read(&slabs).unwrap();
@@ -263,7 +263,19 @@ fn analysis_errors_are_clear() {
         ),
         (
             vec!["analyze", f, "--axis", "0,0,0"],
-            "is not best, x, y, z or a direction",
+            "is not best, x, y, z, axial, coronal, sagittal or a direction",
+        ),
+        (
+            vec!["analyze", f, "--axis", "axial"],
+            "--axis axial: expected x, y, z or a direction, since the file states no orientation",
+        ),
+        (
+            vec!["analyze", f, "--export-labels", "labels.vtk"],
+            "labels.vtk: unsupported: volumes are written as .nrrd, .nii or .nii.gz",
+        ),
+        (
+            vec!["render", f, "-o", "view.bmp"],
+            "view.bmp: unsupported: pictures are written as .png, .jpg or .jpeg",
         ),
         (vec!["analyze", f, "--bins", "300"], "300 is not in 2..=255"),
         (vec!["analyze", f, "--level", "9"], "9 is not in 0..=4"),
@@ -287,6 +299,23 @@ fn render_writes_a_png_of_the_asked_size() {
     assert!(ok, "{stderr}");
     let png = tiny_skia::Pixmap::load_png(&out).unwrap();
     assert_eq!((png.width(), png.height()), (120, 90));
+    // A .jpg name gets a JPEG, not PNG bytes under a JPEG name.
+    let jpeg = dir.path().join("view.JPG");
+    let (ok, _, stderr) = run(&[
+        "render",
+        f,
+        "-o",
+        jpeg.to_str().unwrap(),
+        "--size",
+        "120x90",
+        "--axis",
+        "z",
+    ]);
+    assert!(ok, "{stderr}");
+    let bytes = std::fs::read(&jpeg).unwrap();
+    assert_eq!(&bytes[..3], &[0xff, 0xd8, 0xff]);
+    let decoded = image::load_from_memory_with_format(&bytes, image::ImageFormat::Jpeg).unwrap();
+    assert_eq!((decoded.width(), decoded.height()), (120, 90));
     let (ok, _, stderr) = run(&["render", f, "-o", o, "--size", "120x90", "--axis", "z"]);
     assert!(!ok && stderr.contains("already exists"), "{stderr}");
     let (ok, _, stderr) = run(&[

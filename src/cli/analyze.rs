@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use slabscope::report::curves_csv;
-use slabscope::volume::io::{NrrdEncoding, write_nrrd};
+use slabscope::volume::io::{VolumeOutput, write_volume};
 use slabscope::{AnalysisReport, SlabsReport, label_volume};
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -25,7 +25,8 @@ pub struct AnalyzeArgs {
     pub views: bool,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
-    /// Write the slab index of every voxel as a label volume (NRRD).
+    /// Write the slab index of every voxel as a label volume in the source's world geometry:
+    /// NRRD (.nrrd) or NIfTI (.nii, .nii.gz), by the extension.
     #[arg(long, value_name = "OUT.nrrd")]
     pub export_labels: Option<PathBuf>,
     /// Write the slab boundaries as slice indices, millimetres and fractions of the axis (JSON).
@@ -42,6 +43,9 @@ pub struct AnalyzeArgs {
 }
 
 pub fn run(args: &AnalyzeArgs) -> Result<()> {
+    if let Some(path) = &args.export_labels {
+        VolumeOutput::for_path(path)?;
+    }
     for path in [&args.export_labels, &args.export_slabs, &args.curves]
         .into_iter()
         .flatten()
@@ -63,10 +67,10 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     }
     if let Some(path) = &args.export_labels {
         let labels = label_volume(volume, part)?;
-        write_nrrd(path, &labels, NrrdEncoding::Gzip, args.force)?;
+        write_volume(path, &labels, args.force)?;
     }
     if let Some(path) = &args.export_slabs {
-        let text = slabscope::report::to_json(&SlabsReport::new(&name, part))?;
+        let text = slabscope::report::to_json(&SlabsReport::new(&name, volume, part))?;
         super::write_new(path, text.as_bytes(), args.force)?;
     }
     if let Some(path) = &args.curves {

@@ -2,10 +2,11 @@
 //! partition). `slabscope [FILE]` takes the same analysis flags as `analyze`.
 
 use clap::{Args, ValueEnum};
+use slabscope::geometry::AxisChoice;
 use slabscope::volume::background::BackgroundRule;
 use slabscope::volume::io::{RawOptions, default_max_memory, parse_bytes, parse_dims};
 use slabscope::volume::{Endian, VoxelType};
-use slabscope::{AnalysisParams, Axis, LoadOptions, Method, SamplingParams, Stop, ViewParams};
+use slabscope::{AnalysisParams, LoadOptions, Method, SamplingParams, Stop, ViewParams};
 
 /// How to read the input: needed only for headerless raw files, and to change the memory limit.
 #[derive(Debug, Args, Clone, Default)]
@@ -74,9 +75,10 @@ pub struct AnalysisArgs {
     /// Refine the best axes on a finer local search, to within 2 degrees.
     #[arg(long)]
     pub refine: bool,
-    /// The axis: best (the view search's), x, y, z, or a direction DX,DY,DZ.
+    /// The axis: best (the view search's), x, y, z, a direction DX,DY,DZ, or axial, coronal,
+    /// sagittal (the volume axis nearest that plane's normal; needs a stated orientation).
     #[arg(long, default_value = "best", value_parser = parse_axis)]
-    pub axis: AxisArg,
+    pub axis: AxisChoice,
     /// How to find the slabs.
     #[arg(long, value_enum, default_value_t = MethodArg::Topdown)]
     pub method: MethodArg,
@@ -94,18 +96,10 @@ pub struct AnalysisArgs {
     pub background: BackgroundRule,
 }
 
-/// `--axis`: `None` for the view search's best.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AxisArg(pub Option<Axis>);
-
-fn parse_axis(s: &str) -> Result<AxisArg, String> {
-    match s.trim() {
-        "best" => Ok(AxisArg(None)),
-        t => t
-            .parse::<Axis>()
-            .map(|a| AxisArg(Some(a)))
-            .map_err(|_| format!("{s:?} is not best, x, y, z or a direction DX,DY,DZ")),
-    }
+fn parse_axis(s: &str) -> Result<AxisChoice, String> {
+    s.parse().map_err(|_| {
+        format!("{s:?} is not best, x, y, z, axial, coronal, sagittal or a direction DX,DY,DZ")
+    })
 }
 
 /// The partition methods.
@@ -136,7 +130,7 @@ impl AnalysisArgs {
                 refine: self.refine,
                 ..ViewParams::default()
             },
-            axis: self.axis.0,
+            axis: self.axis,
             search_views,
             method: match self.method {
                 MethodArg::Topdown => Method::TopDown,

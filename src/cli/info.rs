@@ -6,6 +6,7 @@ use anyhow::Result;
 use clap::Args;
 use serde_json::json;
 use slabscope::error::human_bytes;
+use slabscope::report::GeometryReport;
 use slabscope::volume::dims_string;
 use slabscope::{Format, Volume};
 
@@ -40,6 +41,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
 fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -> Result<()> {
     let s = v.stats();
     let hist = v.histogram(HISTOGRAM_BINS)?;
+    let geometry = GeometryReport::of(v);
     if json {
         let out = json!({
             "file": name,
@@ -52,6 +54,10 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
             "voxels": v.len(),
             "missing": s.missing,
             "memory_bytes": v.memory_bytes(),
+            "affine": geometry.affine,
+            "orientation": geometry.orientation,
+            "orthogonal": geometry.orthogonal,
+            "world_bounds": geometry.world_bounds,
             "histogram": hist,
             "notes": notes,
         });
@@ -60,27 +66,85 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
     }
     let [nx, ny, nz] = v.dims();
     let [sx, sy, sz] = v.spacing();
-    println!("file       {name}");
-    println!("format     {}", format.name());
-    println!("dims       {}  ({} voxels)", dims_string(v.dims()), v.len());
+    println!("file        {name}");
+    println!("format      {}", format.name());
     println!(
-        "spacing    {sx} x {sy} x {sz} mm  (extent {:.1} x {:.1} x {:.1} mm)",
+        "dims        {}  ({} voxels)",
+        dims_string(v.dims()),
+        v.len()
+    );
+    println!(
+        "spacing     {sx} x {sy} x {sz} mm  (extent {:.1} x {:.1} x {:.1} mm)",
         sx * nx as f64,
         sy * ny as f64,
         sz * nz as f64
     );
-    println!("type       {}", v.voxel_type());
-    println!("range      {} .. {}", s.min, s.max);
-    println!("mean       {:.6}", s.mean);
+    print_geometry(&geometry);
+    println!("type        {}", v.voxel_type());
+    println!("range       {} .. {}", s.min, s.max);
+    println!("mean        {:.6}", s.mean);
     if s.missing > 0 {
-        println!("missing    {} NaN/Inf voxels", s.missing);
+        println!("missing     {} NaN/Inf voxels", s.missing);
     }
-    println!("memory     {} as f32", human_bytes(v.memory_bytes()));
+    println!("memory      {} as f32", human_bytes(v.memory_bytes()));
     println!(
-        "histogram  {}  ({HISTOGRAM_BINS} bins, log scale)",
+        "histogram   {}  ({HISTOGRAM_BINS} bins, log scale)",
         sparkline(&hist)
     );
     Ok(())
+}
+
+/// The orientation, the transform and the world box.
+fn print_geometry(g: &GeometryReport) {
+    let Some(codes) = &g.orientation else {
+        println!("orientation unknown: the file states none (no anatomical directions are named)");
+        return;
+    };
+    let axes: Vec<String> = ["x", "y", "z"]
+        .iter()
+        .zip(codes.chars())
+        .map(|(a, c)| format!("{a} to {}", side(c)))
+        .collect();
+    let shear = if g.orthogonal {
+        String::new()
+    } else {
+        "; sheared: the voxel axes are not perpendicular".into()
+    };
+    println!("orientation {codes}  ({}{shear})", axes.join(", "));
+    for (r, row) in g.affine.iter().take(3).enumerate() {
+        let label = if r == 0 { "affine" } else { "" };
+        let cells: Vec<String> = row.iter().map(|x| format!("{:>9}", number(*x))).collect();
+        println!("{label:<11} [{} ]  {}", cells.join(" "), ["R", "A", "S"][r]);
+    }
+    let [lo, hi] = g.world_bounds;
+    println!(
+        "world box   R {} .. {}, A {} .. {}, S {} .. {} mm",
+        number(lo[0]),
+        number(hi[0]),
+        number(lo[1]),
+        number(hi[1]),
+        number(lo[2]),
+        number(hi[2])
+    );
+}
+
+/// The anatomical side a code letter names.
+fn side(code: char) -> &'static str {
+    match code {
+        'R' => "right",
+        'L' => "left",
+        'A' => "anterior",
+        'P' => "posterior",
+        'S' => "superior",
+        _ => "inferior",
+    }
+}
+
+/// `x` with at most 4 decimals and no trailing zeros.
+fn number(x: f64) -> String {
+    let s = format!("{:.4}", x + 0.0);
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
 }
 
 /// One character per bin, heights by log(1 + count); empty bins are blank.

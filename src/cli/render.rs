@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
 use slabscope::render::{
-    CameraParams, Colormap, Gap, Image, Layout, Mode, Preset, RenderParams, Renderer,
+    CameraParams, Colormap, Gap, Image, ImageOutput, Layout, Mode, Preset, RenderParams, Renderer,
 };
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -164,7 +164,7 @@ impl ViewOptions {
 pub struct RenderArgs {
     /// The volume: a file, or a folder of TIFF slices.
     pub file: PathBuf,
-    /// Output PNG file.
+    /// Output picture: PNG, or JPEG for a .jpg or .jpeg name.
     #[arg(short, long, value_name = "OUT.png")]
     pub output: PathBuf,
     /// Image size.
@@ -252,9 +252,10 @@ fn render_file(
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {
+    let format = ImageOutput::for_path(&args.output)?;
     super::check_writable(&args.output, args.force)?;
     let image = render_file(&args.file, &args.scene, args.size)?;
-    super::write_new(&args.output, &image.png()?, args.force)
+    super::write_new(&args.output, &image.encode(format)?, args.force)
 }
 
 pub fn run_preview(args: &PreviewArgs) -> Result<()> {

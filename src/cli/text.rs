@@ -1,6 +1,7 @@
 //! The analysis as text for people: the views with the verdict on the best, then the slabs.
 //! Slab ranges read `slices 0–44`, inclusive; the JSON keeps half-open `[start, end)`.
 
+use slabscope::geometry::WorldAxis;
 use slabscope::partition::{Step, slab_text};
 use slabscope::view::{AxisEntropy, RankedBy, ViewSearch, icosphere, score};
 use slabscope::volume::dims_string;
@@ -8,11 +9,12 @@ use slabscope::{Analysis, Axis, Partition, Volume};
 
 /// Prints the whole analysis of `volume`, read from `name`.
 pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
+    let known = volume.transform().known;
     if let Some(v) = &analysis.views {
         print_views(name, volume, v);
         println!();
     }
-    print_partition(&analysis.partition);
+    print_partition(&analysis.partition, known);
     print_notes(&analysis.notes);
 }
 
@@ -24,6 +26,30 @@ fn axis_text(axis: [f64; 3]) -> String {
             None => a.to_string(),
         },
         Err(_) => format!("{axis:?}"),
+    }
+}
+
+/// The axis with its anatomical name and world normal when the orientation is known:
+/// `[ 0.000, 0.000, 1.000] (z), I→S axial, world normal [0.000, 0.000, 1.000]`.
+fn world_axis_text(axis: [f64; 3], world: &WorldAxis, known: bool) -> String {
+    if !known {
+        return axis_text(axis);
+    }
+    let [x, y, z] = world.world_axis;
+    format!(
+        "{} {}, world normal [{x:.3}, {y:.3}, {z:.3}]",
+        axis_text(axis),
+        anatomy_text(world, known)
+    )
+}
+
+/// `I→S, axial`; `oblique` for an axis no world axis names; empty when the orientation is
+/// unknown.
+fn anatomy_text(world: &WorldAxis, known: bool) -> &str {
+    match &world.anatomy {
+        Some(a) => a,
+        None if known => "oblique",
+        None => "",
     }
 }
 
@@ -39,8 +65,12 @@ fn count(n: usize, one: &str, many: &str) -> String {
 fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
     let p = &v.params;
     let [sx, sy, sz] = volume.spacing();
+    let orientation = volume.transform().axcodes().map_or_else(
+        || "orientation unknown".to_string(),
+        |c| format!("orientation {c}"),
+    );
     println!(
-        "volume   {name}: {} {}, spacing {sx} x {sy} x {sz} mm",
+        "volume   {name}: {} {}, spacing {sx} x {sy} x {sz} mm, {orientation}",
         dims_string(volume.dims()),
         volume.voxel_type()
     );
@@ -65,19 +95,32 @@ fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
         RankedBy::PaperLattice => println!("         ranked by h on the paper's lattice"),
     }
     println!();
-    print_view_table(v);
+    let known = volume.transform().known;
+    print_view_table(v, known);
     println!();
-    print_verdict(v);
+    print_verdict(v, known);
 }
 
-fn print_view_table(v: &ViewSearch) {
+fn print_view_table(v: &ViewSearch, known: bool) {
     let phases = v.ranked_by == RankedBy::PhaseMean;
-    print!("  rank    axis                          azim    elev   h (bits)   H(X^1)  H(X^L)/L");
+    let anatomy = if known {
+        format!("{:<15}", "anatomy")
+    } else {
+        String::new()
+    };
+    print!(
+        "  rank    axis                          {anatomy}azim    elev   h (bits)   H(X^1)  H(X^L)/L"
+    );
     println!("{}", if phases { "   mean h ± se" } else { "" });
     let show = |rank: String, mark: &str, a: &AxisEntropy| {
+        let anatomy = if known {
+            format!("{:<15}", anatomy_text(&a.world, known))
+        } else {
+            String::new()
+        };
         if !a.measured() {
             println!(
-                "  {rank:>4} {mark:1}  {:<28} {:6.1}  {:6.1}   too thin: no {} samples in a row",
+                "  {rank:>4} {mark:1}  {:<28} {anatomy}{:6.1}  {:6.1}   too thin: no {} samples in a row",
                 axis_text(a.axis),
                 a.azimuth,
                 a.elevation,
@@ -86,7 +129,7 @@ fn print_view_table(v: &ViewSearch) {
             return;
         }
         print!(
-            "  {rank:>4} {mark:1}  {:<28} {:6.1}  {:6.1}   {:8.4} {:8.4}  {:8.4}",
+            "  {rank:>4} {mark:1}  {:<28} {anatomy}{:6.1}  {:6.1}   {:8.4} {:8.4}  {:8.4}",
             axis_text(a.axis),
             a.azimuth,
             a.elevation,
@@ -113,7 +156,7 @@ fn print_view_table(v: &ViewSearch) {
 }
 
 /// The best axis, its margin, and whether it can be told from the others.
-fn print_verdict(v: &ViewSearch) {
+fn print_verdict(v: &ViewSearch, known: bool) {
     let best = v.best();
     let what = match best.phases {
         Some(s) => format!(
@@ -136,7 +179,10 @@ fn print_verdict(v: &ViewSearch) {
     let margin = next.map_or_else(String::new, |(n, which)| {
         format!(", {:.4} below {which}", score(n) - score(best))
     });
-    println!("best     {} {what}{margin}", axis_text(best.axis));
+    println!(
+        "best     {}\n         {what}{margin}",
+        world_axis_text(best.axis, &best.world, known)
+    );
     match &v.contenders {
         None => {}
         Some(c) if c.len() <= 1 => {
@@ -160,11 +206,11 @@ fn print_verdict(v: &ViewSearch) {
     }
 }
 
-fn print_partition(p: &Partition) {
+fn print_partition(p: &Partition, known: bool) {
     println!(
-        "partition {} along {}: {} {} mm apart, {} keeping I = {:.4} of {:.4} bits",
+        "partition {} along {}:\n          {} {} mm apart, {} keeping I = {:.4} of {:.4} bits",
         p.method.name(),
-        axis_text(p.axis),
+        world_axis_text(p.axis, &p.world, known),
         count(p.slices, "slice", "slices"),
         p.thickness,
         count(p.slabs.len(), "slab", "slabs"),
@@ -187,7 +233,7 @@ fn print_partition(p: &Partition) {
         _ => {}
     }
     println!();
-    print_slab_table(p);
+    print_slab_table(p, known);
     print_steps(&p.steps);
     if p.comparison.is_empty() {
         return;
@@ -205,10 +251,11 @@ fn print_partition(p: &Partition) {
     }
 }
 
-fn print_slab_table(p: &Partition) {
-    println!(
-        "  slab  slices         mm                     entropy       mean  left out   next: NMI       ΔI"
-    );
+fn print_slab_table(p: &Partition, known: bool) {
+    // World millimetres along the world normal; without an orientation they count from voxel
+    // (0, 0, 0) along the axis.
+    let mm = if known { "world mm" } else { "mm" };
+    println!("  slab  slices         {mm:<22} entropy       mean  left out   next: NMI       ΔI");
     for (i, s) in p.info.iter().enumerate() {
         let next = match (p.boundary_nmi.get(i), p.boundary_gain.get(i)) {
             (Some(n), Some(g)) => format!("{n:9.4} {g:8.4}"),
@@ -219,8 +266,8 @@ fn print_slab_table(p: &Partition) {
         println!(
             "  {i:4}  {:<13}  {:>9.1} .. {:>9.1}  {:8.4} {:>10}  {:>7.1}%   {next}{mark}",
             slab_text(s.slices),
-            s.mm.0,
-            s.mm.1,
+            s.world_mm.0,
+            s.world_mm.1,
             s.entropy,
             mean,
             s.background_fraction * 100.0

@@ -76,6 +76,10 @@ pub struct SlabInfo {
     /// Where it starts and ends along the axis, mm (voxel (0,0,0) at 0; boundaries lie halfway
     /// between slice centres).
     pub mm: (f64, f64),
+    /// Where it starts and ends in world coordinates: the signed positions of its boundary
+    /// planes along the partition's `world_axis`, mm (equal to `mm` when the file states no
+    /// orientation).
+    pub world_mm: (f64, f64),
     /// Counted samples.
     pub samples: u64,
     /// Entropy of its intensity histogram, bits.
@@ -105,9 +109,11 @@ pub fn describe(stack: &SliceStack, histograms: &[u64], slabs: &[Slab]) -> Vec<S
                 .collect();
             let (t, o) = (stack.thickness(), stack.offset());
             let samples = h.iter().sum::<u64>();
+            let mm = (o + (a as f64 - 0.5) * t, o + (b as f64 - 0.5) * t);
             SlabInfo {
                 slices: (a, b),
-                mm: (o + (a as f64 - 0.5) * t, o + (b as f64 - 0.5) * t),
+                mm,
+                world_mm: (stack.world_mm(mm.0), stack.world_mm(mm.1)),
                 samples,
                 entropy: entropy(h.iter().copied()),
                 mean: stack.mean(a, b),

@@ -7,7 +7,7 @@ use serde::Serialize;
 use super::histories::{Histories, Scope};
 use super::{BackgroundSummary, MAX_SLICES, Method, Slab, SlabInfo, SliceStack, StackParams};
 use crate::error::Result;
-use crate::geometry::dot;
+use crate::geometry::{WorldAxis, dot};
 use crate::progress::Monitor;
 use crate::volume::background::BackgroundRule;
 use crate::volume::{Volume, VoxelType};
@@ -82,6 +82,12 @@ pub struct Comparison {
 pub struct Partition {
     /// The canonical axis.
     pub axis: [f64; 3],
+    /// The axis in world coordinates: `world_axis` and `anatomy`.
+    #[serde(flatten)]
+    pub world: WorldAxis,
+    /// Position `s` mm along the axis lies at `a·s + b` mm along `world_axis`: `(a, b)`.
+    #[serde(skip)]
+    pub world_line: (f64, f64),
     /// The method.
     pub method: Method,
     /// Number of slices.
@@ -154,6 +160,11 @@ impl PartitionParams {
 }
 
 impl Partition {
+    /// The world position (mm along `world_axis`) of position `s` mm along the axis.
+    pub fn world_mm(&self, s: f64) -> f64 {
+        self.world_line.0 * s + self.world_line.1
+    }
+
     /// The partition at `position` of `method`'s history, with everything a front end shows
     /// about it (one pass over the stack for the NMI at its boundaries).
     pub fn new(
@@ -184,6 +195,8 @@ impl Partition {
             .unwrap_or_default();
         Ok(Self {
             axis: stack.axis(),
+            world: stack.world().clone(),
+            world_line: stack.world_line(),
             method,
             slices: stack.slices(),
             thickness: stack.thickness(),
@@ -252,5 +265,6 @@ pub fn label_volume(volume: &Volume, p: &Partition) -> Result<Volume> {
     } else {
         VoxelType::U16
     };
-    Volume::new(volume.dims(), volume.spacing(), ty, labels)
+    Ok(Volume::new(volume.dims(), volume.spacing(), ty, labels)?
+        .with_transform(*volume.transform()))
 }

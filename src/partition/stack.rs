@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::geometry::{canonical, coordinate_axis, normalize};
+use crate::geometry::{WorldAxis, canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
 use crate::view::lattice::{Lattice, SamplingParams};
 use crate::volume::Volume;
@@ -53,6 +53,10 @@ pub struct SliceStack {
     positions: Vec<u64>,
     /// The background left out.
     background: BackgroundSummary,
+    /// The axis in world coordinates.
+    world: WorldAxis,
+    /// A position `s` along the axis is at `a·s + b` along the world axis: `(a, b)`.
+    world_line: (f64, f64),
 }
 
 /// What was left out as background, for reports: `{"mode": "auto", "value": 12.0,
@@ -122,6 +126,8 @@ impl SliceStack {
             None => Self::along_lattice(volume, d, params, &keep, monitor)?,
         };
         stack.background = BackgroundSummary::of(&background);
+        stack.world = volume.transform().describe(d, volume.spacing());
+        stack.world_line = volume.transform().world_line(d, volume.spacing());
         stack.with_sums(volume, d, params, &background, monitor)
     }
 
@@ -175,6 +181,8 @@ impl SliceStack {
             counts: Vec::new(),
             positions: vec![pixels as u64; n],
             background: BackgroundSummary::default(),
+            world: WorldAxis::default(),
+            world_line: (1.0, 0.0),
         })
     }
 
@@ -242,6 +250,8 @@ impl SliceStack {
             counts: Vec::new(),
             positions,
             background: BackgroundSummary::default(),
+            world: WorldAxis::default(),
+            world_line: (1.0, 0.0),
         })
     }
 
@@ -328,6 +338,11 @@ impl SliceStack {
             counts,
             positions: vec![pixels as u64; n],
             background: BackgroundSummary::default(),
+            world: WorldAxis {
+                world_axis: [0.0, 0.0, 1.0],
+                anatomy: None,
+            },
+            world_line: (1.0, 0.0),
         })
     }
 
@@ -354,6 +369,23 @@ impl SliceStack {
     /// Position along the axis of slice 0's centre, mm, with voxel (0,0,0) at 0.
     pub fn offset(&self) -> f64 {
         self.offset
+    }
+
+    /// The axis in world coordinates: the slab planes' world normal and anatomical name.
+    pub fn world(&self) -> &WorldAxis {
+        &self.world
+    }
+
+    /// The world position (along [`world`](Self::world)'s axis, mm) of position `s` mm along the
+    /// axis.
+    pub fn world_mm(&self, s: f64) -> f64 {
+        let (a, b) = self.world_line;
+        a * s + b
+    }
+
+    /// `(a, b)` of [`world_mm`](Self::world_mm)`(s) = a·s + b`.
+    pub fn world_line(&self) -> (f64, f64) {
+        self.world_line
     }
 
     /// Number of pixel columns.

@@ -115,6 +115,61 @@ impl Image {
             .encode_png()
             .map_err(|e| Error::Encode(format!("PNG: {e}")))
     }
+
+    /// The image encoded as `format` asks.
+    pub fn encode(&self, format: ImageOutput) -> Result<Vec<u8>> {
+        match format {
+            ImageOutput::Png => self.png(),
+            ImageOutput::Jpeg => {
+                let rgb: Vec<u8> = self
+                    .pixmap
+                    .data()
+                    .chunks_exact(4)
+                    .flat_map(|p| [p[0], p[1], p[2]])
+                    .collect();
+                let mut out = Vec::new();
+                image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
+                    .encode(
+                        &rgb,
+                        self.pixmap.width(),
+                        self.pixmap.height(),
+                        image::ExtendedColorType::Rgb8,
+                    )
+                    .map_err(|e| Error::Encode(format!("JPEG: {e}")))?;
+                Ok(out)
+            }
+        }
+    }
+}
+
+/// JPEG quality of [`ImageOutput::Jpeg`]: high, as a picture for a report should be.
+const JPEG_QUALITY: u8 = 92;
+
+/// The image formats renders are written in, chosen by the output's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageOutput {
+    /// `.png`: lossless.
+    Png,
+    /// `.jpg` or `.jpeg`.
+    Jpeg,
+}
+
+impl ImageOutput {
+    /// The format the name of `path` asks for; an unknown extension is an error, found before
+    /// any work is done.
+    pub fn for_path(path: &std::path::Path) -> Result<Self> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("png") => Ok(Self::Png),
+            Some("jpg" | "jpeg") => Ok(Self::Jpeg),
+            _ => Err(Error::unsupported(
+                path,
+                "pictures are written as .png, .jpg or .jpeg, chosen by the extension",
+            )),
+        }
+    }
 }
 
 /// Per-brick minimum and maximum of the voxels a brick's cells interpolate.

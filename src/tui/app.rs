@@ -403,11 +403,14 @@ impl App {
             }
             JobMsg::Loaded(Ok((volume, notes))) => {
                 self.status.message = notes.first().cloned();
+                let chosen = self.params.axis.resolve(&volume);
                 self.volume = Load::Ready(volume);
                 self.views.views = Load::started("view search");
                 let mut effects = vec![Effect::SearchViews(self.params.view.clone())];
-                if let Some(axis) = self.params.axis {
-                    effects.extend(self.analyze(axis.direction()));
+                match chosen {
+                    Ok(Some(axis)) => effects.extend(self.analyze(axis.direction())),
+                    Ok(None) => {}
+                    Err(e) => self.status.message = Some(e.to_string()),
                 }
                 self.sync();
                 effects.extend(self.render());

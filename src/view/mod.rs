@@ -274,6 +274,10 @@ impl Evaluator<'_> {
         let block = self.params.block;
         let mut result = entropy_rate(&self.sampler, &self.lattice(axis, 0)?, block, monitor)?;
         result.axis = axis;
+        result.world = self
+            .volume
+            .transform()
+            .describe(axis, self.volume.spacing());
         if self.params.phases > 0 {
             // Phases whose rays hold no block say nothing, and are left out of the mean.
             let mut values: Vec<f64> = result

@@ -15,6 +15,7 @@ pub use quantize::Quantizer;
 pub use voxel::{Endian, VoxelType};
 
 use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
 
 /// Summary statistics over the finite voxels of a volume.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,6 +42,7 @@ pub struct Volume {
     spacing: [f64; 3],
     voxel_type: VoxelType,
     stats: Stats,
+    transform: WorldTransform,
 }
 
 impl Volume {
@@ -95,6 +97,7 @@ impl Volume {
             spacing,
             voxel_type,
             stats,
+            transform: WorldTransform::unknown(spacing),
         })
     }
 
@@ -109,6 +112,23 @@ impl Volume {
     #[must_use]
     pub fn spacing(&self) -> [f64; 3] {
         self.spacing
+    }
+
+    /// This volume with the voxel-to-world transform its file states (see [`WorldTransform`]);
+    /// unchanged when `t` is not finite or not invertible.
+    #[must_use]
+    pub fn with_transform(mut self, t: WorldTransform) -> Self {
+        if t.is_usable() {
+            self.transform = t;
+        }
+        self
+    }
+
+    /// The voxel-to-world transform: to RAS+ mm, or spacing on the diagonal when the file states
+    /// no orientation.
+    #[must_use]
+    pub fn transform(&self) -> &WorldTransform {
+        &self.transform
     }
 
     /// The voxel type of the file the volume came from.

@@ -7,6 +7,7 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
 use crate::volume::{Volume, VoxelType};
 
 /// The intensities of the six `layers` materials (u8).
@@ -279,7 +280,8 @@ fn trunk_hu(p: [f64; 3]) -> f64 {
 }
 
 /// A CT-like figure in Hounsfield-like units (i16): head, neck, torso with lungs, heart, spine,
-/// ribs and abdominal organs, arms, legs; long axis along z with the head at high z.
+/// ribs and abdominal organs, arms, legs; long axis along z with the head at high z, the liver on
+/// the low-x side and the spine at high y, so its axes are LPS, and its transform says so.
 pub fn body(dims: [usize; 3], seed: u64) -> Result<Volume> {
     let [nx, ny, nz] = dims;
     let data = generate(dims, |x, y, z, i| {
@@ -291,7 +293,15 @@ pub fn body(dims: [usize; 3], seed: u64) -> Result<Volume> {
         let v = body_hu(p) + BODY_NOISE * gaussian(seed, i);
         v.round().clamp(-1024.0, 3071.0) as f32
     })?;
-    Volume::new(dims, [1.0; 3], VoxelType::I16, data)
+    Ok(Volume::new(dims, [1.0; 3], VoxelType::I16, data)?.with_transform(body_transform(dims)))
+}
+
+/// The body's place in the world: it is laid out as a CT scan is (x to the patient's left, y to
+/// the back, z to the head: LPS), centred on the origin, 1 mm voxels.
+fn body_transform(dims: [usize; 3]) -> WorldTransform {
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let centre = dims.map(|n| -(n as f64 - 1.0) / 2.0);
+    WorldTransform::lps(identity, centre)
 }
 
 /// The ten ellipsoids of the modified 3D Shepp-Logan phantom: intensity, semi-axes (a, b, c),

@@ -15,7 +15,7 @@ mod sampler;
 
 pub use sampler::{BinSampler, InnerSpans};
 
-use crate::geometry::cross;
+use crate::geometry::{WorldAxis, cross};
 use crate::view::lattice::{Lattice, round_half_away, to_fixed};
 
 /// An axis's entropy rate over lattice phases: the paper's lattice and shifted ones.
@@ -93,6 +93,9 @@ impl RaySubset {
 pub struct AxisEntropy {
     /// Canonical unit direction in physical space.
     pub axis: [f64; 3],
+    /// The axis in world coordinates: `world_axis` and `anatomy`.
+    #[serde(flatten)]
+    pub world: WorldAxis,
     /// Angle of the axis's projection on the x-y plane from +x, degrees.
     pub azimuth: f64,
     /// Angle of the axis above the x-y plane, degrees.
@@ -123,6 +126,10 @@ impl AxisEntropy {
         let (h1, h_short, h_long) = counts.entropies();
         Self {
             axis,
+            world: WorldAxis {
+                world_axis: axis,
+                anatomy: None,
+            },
             // `+ 0.0` turns -0 into 0 for display.
             azimuth: axis[1].atan2(axis[0]).to_degrees() + 0.0,
             elevation: axis[2].clamp(-1.0, 1.0).asin().to_degrees() + 0.0,

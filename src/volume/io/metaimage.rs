@@ -8,6 +8,7 @@ use std::path::Path;
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
 use crate::volume::{Endian, VoxelType};
 
 const MAX_HEADER: u64 = 1 << 20;
@@ -44,6 +45,10 @@ pub(crate) struct Header {
     pub skip: Skip,
     pub channels: usize,
     pub data_file: String,
+    /// `TransformMatrix`: each axis's direction in LPS, one after the other.
+    pub directions: Option<Vec<f64>>,
+    /// `Offset`: the world position of voxel (0, 0, 0), LPS mm.
+    pub offset: Option<Vec<f64>>,
     /// Bytes up to and including the `ElementDataFile` line.
     pub len: usize,
 }
@@ -78,6 +83,8 @@ struct Fields {
     skip: Option<Skip>,
     channels: Option<usize>,
     data_file: Option<String>,
+    directions: Option<Vec<f64>>,
+    offset: Option<Vec<f64>>,
 }
 
 /// Reads one `Key = Value` line into `f`.
@@ -121,6 +128,10 @@ fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()>
             });
         }
         "ElementDataFile" => f.data_file = Some(value.to_string()),
+        "TransformMatrix" | "Rotation" | "Orientation" => {
+            f.directions = Some(numbers("TransformMatrix")?);
+        }
+        "Offset" | "Position" | "Origin" => f.offset = Some(numbers("Offset")?),
         _ => {}
     }
     Ok(())
@@ -156,6 +167,8 @@ pub(crate) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
         compressed: f.compressed,
         skip: f.skip.unwrap_or(Skip::Bytes(0)),
         channels: f.channels.unwrap_or(1),
+        directions: f.directions,
+        offset: f.offset,
         data_file: f
             .data_file
             .ok_or_else(|| missing("ElementDataFile (it must be the last field)"))?,
@@ -247,7 +260,24 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: extra > 1,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)
+    let transform = transform(&h, spacing);
+    Ok(Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?.with_transform(transform))
+}
+
+/// The voxel-to-world transform of a 3D header with `TransformMatrix` or `Offset`: ITK's world
+/// is LPS, and the matrix lists each axis's direction in turn.
+fn transform(h: &Header, spacing: [f64; 3]) -> Option<WorldTransform> {
+    if h.dims.len() < 3 || (h.directions.is_none() && h.offset.is_none()) {
+        return None;
+    }
+    let identity = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let m = h.directions.as_deref().unwrap_or(&identity);
+    let o = h.offset.as_deref().unwrap_or(&[0.0; 3]);
+    if m.len() != 9 || o.len() != 3 {
+        return None;
+    }
+    let linear = std::array::from_fn(|r| std::array::from_fn(|c| m[3 * c + r] * spacing[c]));
+    Some(WorldTransform::lps(linear, [o[0], o[1], o[2]]))
 }
 
 #[cfg(test)]

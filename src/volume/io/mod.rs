@@ -17,10 +17,12 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 pub use limits::{default_max_memory, parse_bytes, physical_memory};
+pub use nifti::write_nifti;
 pub use nrrd::{NrrdEncoding, write_nrrd};
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
 
 use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
 use crate::volume::Volume;
 
 /// The file formats slabscope reads.
@@ -148,6 +150,21 @@ impl Read0 {
             .map_err(|e| Error::format(path, e.to_string()))?;
         Ok(Self { volume, notes })
     }
+
+    /// With the voxel-to-world transform the file states, when it states one; a note when it is
+    /// unusable (not finite, or singular).
+    pub(crate) fn with_transform(mut self, t: Option<WorldTransform>) -> Self {
+        if let Some(t) = t {
+            if t.is_usable() {
+                self.volume = self.volume.with_transform(t);
+            } else {
+                self.notes.push(
+                    "the orientation in the header is singular or not finite: ignored".into(),
+                );
+            }
+        }
+        self
+    }
 }
 
 fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
@@ -213,6 +230,52 @@ fn sniff(head: &[u8]) -> Option<Format> {
         return Some(Format::Tiff);
     }
     metaimage::looks_like(head).then_some(Format::MetaImage)
+}
+
+/// The formats slabscope writes volumes in, chosen by the output's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeOutput {
+    /// `.nrrd`: attached, gzip-compressed, in LPS `space`.
+    Nrrd,
+    /// `.nii`.
+    Nifti,
+    /// `.nii.gz`.
+    NiftiGz,
+}
+
+impl VolumeOutput {
+    /// The format the name of `path` asks for; an unknown extension is an error, so that it is
+    /// found before any work is done.
+    pub fn for_path(path: &Path) -> Result<Self> {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        // The name is lowercased: `.NII.GZ` counts.
+        let ends = |ext: &str| name.len() > ext.len() && name.ends_with(ext);
+        if ends(".nrrd") {
+            Ok(Self::Nrrd)
+        } else if ends(".nii.gz") {
+            Ok(Self::NiftiGz)
+        } else if ends(".nii") {
+            Ok(Self::Nifti)
+        } else {
+            Err(Error::unsupported(
+                path,
+                "volumes are written as .nrrd, .nii or .nii.gz, chosen by the extension",
+            ))
+        }
+    }
+}
+
+/// Writes `volume` in the format its extension names ([`VolumeOutput`]), atomically; an existing
+/// `path` is replaced only when `force` is set.
+pub fn write_volume(path: &Path, volume: &Volume, force: bool) -> Result<()> {
+    match VolumeOutput::for_path(path)? {
+        VolumeOutput::Nrrd => write_nrrd(path, volume, NrrdEncoding::Gzip, force),
+        VolumeOutput::Nifti => write_nifti(path, volume, false, force),
+        VolumeOutput::NiftiGz => write_nifti(path, volume, true, force),
+    }
 }
 
 /// Writes a file through a temporary file beside `path`, renamed into place when complete, so a

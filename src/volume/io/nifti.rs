@@ -3,16 +3,20 @@
 //! and multi-member gzip streams are accepted.
 
 use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
+use flate2::Compression;
 use flate2::bufread::MultiGzDecoder;
+use flate2::write::GzEncoder;
 use nifti::{Endianness, NiftiHeader};
 
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
-use crate::volume::{Endian, VoxelType, dims_string};
+use crate::geometry::WorldTransform;
+use crate::volume::voxel::encode_le;
+use crate::volume::{Endian, Volume, VoxelType, dims_string};
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
@@ -56,36 +60,39 @@ pub(crate) fn read_header(path: &Path) -> Result<(NiftiHeader, bool)> {
     Ok((header, gz))
 }
 
+/// NIfTI `datatype` codes of the voxel types slabscope reads and writes.
+const DATATYPES: [(i16, VoxelType); 8] = [
+    (2, VoxelType::U8),
+    (4, VoxelType::I16),
+    (8, VoxelType::I32),
+    (16, VoxelType::F32),
+    (64, VoxelType::F64),
+    (256, VoxelType::I8),
+    (512, VoxelType::U16),
+    (768, VoxelType::U32),
+];
+
 fn voxel_type(path: &Path, code: i16) -> Result<VoxelType> {
-    Ok(match code {
-        2 => VoxelType::U8,
-        4 => VoxelType::I16,
-        8 => VoxelType::I32,
-        16 => VoxelType::F32,
-        64 => VoxelType::F64,
-        256 => VoxelType::I8,
-        512 => VoxelType::U16,
-        768 => VoxelType::U32,
-        other => {
-            let name = match other {
-                32 => "complex64",
-                128 => "rgb24",
-                1024 => "int64",
-                1280 => "uint64",
-                1536 => "float128",
-                1792 => "complex128",
-                2048 => "complex256",
-                2304 => "rgba32",
-                _ => "unknown",
-            };
-            return Err(Error::unsupported(
-                path,
-                format!(
-                    "NIfTI datatype {other} ({name}); slabscope reads u8, i8, u16, i16, u32, i32, f32 and f64"
-                ),
-            ));
-        }
-    })
+    if let Some(&(_, ty)) = DATATYPES.iter().find(|d| d.0 == code) {
+        return Ok(ty);
+    }
+    let name = match code {
+        32 => "complex64",
+        128 => "rgb24",
+        1024 => "int64",
+        1280 => "uint64",
+        1536 => "float128",
+        1792 => "complex128",
+        2048 => "complex256",
+        2304 => "rgba32",
+        _ => "unknown",
+    };
+    Err(Error::unsupported(
+        path,
+        format!(
+            "NIfTI datatype {code} ({name}); slabscope reads u8, i8, u16, i16, u32, i32, f32 and f64"
+        ),
+    ))
 }
 
 /// Millimetres per spatial unit of `xyzt_units` (metres, mm, microns; unknown counts as mm).
@@ -175,7 +182,53 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: extra > 1,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Read0::new(path, dims, spacing, ty, voxels, notes)
+    Ok(Read0::new(path, dims, spacing, ty, voxels, notes)?.with_transform(transform(&h, unit)))
+}
+
+/// The voxel-to-world transform the header states, in mm: the sform when its code is set, else
+/// the qform (quaternion, offsets and `pixdim`, with `pixdim[0]` the handedness), else none.
+fn transform(h: &NiftiHeader, unit: f64) -> Option<WorldTransform> {
+    if h.sform_code > 0 {
+        let rows = [h.srow_x, h.srow_y, h.srow_z];
+        let linear = rows.map(|r| [r[0], r[1], r[2]].map(|v| f64::from(v) * unit));
+        let origin = rows.map(|r| f64::from(r[3]) * unit);
+        return Some(WorldTransform::ras(linear, origin));
+    }
+    if h.qform_code <= 0 {
+        return None;
+    }
+    let (b, c, d) = (
+        f64::from(h.quatern_b),
+        f64::from(h.quatern_c),
+        f64::from(h.quatern_d),
+    );
+    let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+    let r = [
+        [
+            a * a + b * b - c * c - d * d,
+            2.0 * (b * c - a * d),
+            2.0 * (b * d + a * c),
+        ],
+        [
+            2.0 * (b * c + a * d),
+            a * a + c * c - b * b - d * d,
+            2.0 * (c * d - a * b),
+        ],
+        [
+            2.0 * (b * d - a * c),
+            2.0 * (c * d + a * b),
+            a * a + d * d - c * c - b * b,
+        ],
+    ];
+    let qfac = if h.pixdim[0] < 0.0 { -1.0 } else { 1.0 };
+    let zoom = [
+        f64::from(h.pixdim[1]),
+        f64::from(h.pixdim[2]),
+        qfac * f64::from(h.pixdim[3]),
+    ];
+    let linear = r.map(|row| std::array::from_fn(|k| row[k] * zoom[k] * unit));
+    let origin = [h.quatern_x, h.quatern_y, h.quatern_z].map(|v| f64::from(v) * unit);
+    Some(WorldTransform::ras(linear, origin))
 }
 
 /// The `.img` (or `.img.gz`) beside a `.hdr` header.
@@ -189,4 +242,87 @@ fn image_file(path: &Path, gz: bool) -> Result<PathBuf> {
         path,
         &format!("{stem}{}", if gz { ".img.gz" } else { ".img" }),
     )
+}
+
+/// Writes `volume` as a single-file NIfTI-1 (`.nii`, or gzip-compressed when `gzip`) in its voxel
+/// type (integer types rounded and clamped), with its voxel-to-world transform as both the sform
+/// and the qform (code 1, scanner), so that every reader places it alike; a sheared transform has
+/// no quaternion and is written as the sform alone. A volume of unknown orientation gets both
+/// codes 0 and its spacing in `pixdim`.
+///
+/// The file is written to a temporary file beside `path` and renamed into place; an existing
+/// `path` is replaced only when `force` is set.
+pub fn write_nifti(path: &Path, volume: &Volume, gzip: bool, force: bool) -> Result<()> {
+    let header = header_bytes(volume);
+    super::write_atomic(path, force, |file| {
+        let mut out = BufWriter::new(file);
+        if gzip {
+            let mut gz = GzEncoder::new(&mut out, Compression::fast());
+            write_body(&mut gz, &header, volume)?;
+            gz.finish()?;
+        } else {
+            write_body(&mut out, &header, volume)?;
+        }
+        out.flush()
+    })
+}
+
+fn write_body(out: &mut impl Write, header: &[u8; 352], volume: &Volume) -> std::io::Result<()> {
+    out.write_all(header)?;
+    let mut bytes = Vec::new();
+    for chunk in volume.voxels().chunks(1 << 16) {
+        bytes.clear();
+        encode_le(chunk, volume.voxel_type(), &mut bytes);
+        out.write_all(&bytes)?;
+    }
+    Ok(())
+}
+
+/// The 348-byte little-endian NIfTI-1 header of `volume` and the 4 zero bytes that say no
+/// extension follows.
+fn header_bytes(volume: &Volume) -> [u8; 352] {
+    let mut h = [0u8; 352];
+    let mut put = |at: usize, bytes: &[u8]| h[at..at + bytes.len()].copy_from_slice(bytes);
+    let ty = volume.voxel_type();
+    let code = DATATYPES.iter().find(|d| d.1 == ty).map_or(16, |d| d.0);
+    let [nx, ny, nz] = volume.dims().map(|n| n as i16);
+    let t = volume.transform();
+    let known = t.known;
+    let zooms = if known { t.zooms() } else { volume.spacing() };
+    let quaternion = if known { t.quaternion() } else { None };
+    put(0, &348i32.to_le_bytes());
+    put(38, b"r");
+    for (k, d) in [3, nx, ny, nz, 1, 1, 1, 1].iter().enumerate() {
+        put(40 + 2 * k, &d.to_le_bytes());
+    }
+    put(70, &code.to_le_bytes());
+    put(72, &(8 * ty.size() as i16).to_le_bytes());
+    let qfac = quaternion.map_or(1.0, |q| q.qfac);
+    let pixdim = [qfac, zooms[0], zooms[1], zooms[2], 1.0, 1.0, 1.0, 1.0];
+    for (k, p) in pixdim.iter().enumerate() {
+        put(76 + 4 * k, &(*p as f32).to_le_bytes());
+    }
+    put(108, &352f32.to_le_bytes()); // vox_offset
+    put(112, &1f32.to_le_bytes()); // scl_slope
+    put(123, &[2]); // xyzt_units: mm
+    let description = format!("slabscope {}", env!("CARGO_PKG_VERSION"));
+    put(148, &description.as_bytes()[..description.len().min(79)]);
+    if known {
+        let qform_code = i16::from(quaternion.is_some());
+        put(252, &qform_code.to_le_bytes());
+        put(254, &1i16.to_le_bytes()); // sform_code: scanner
+        if let Some(q) = quaternion {
+            for (k, v) in [q.b, q.c, q.d].iter().enumerate() {
+                put(256 + 4 * k, &(*v as f32).to_le_bytes());
+            }
+        }
+        for r in 0..3 {
+            put(268 + 4 * r, &(t.matrix[r][3] as f32).to_le_bytes());
+            for c in 0..4 {
+                put(280 + 16 * r + 4 * c, &(t.matrix[r][c] as f32).to_le_bytes());
+            }
+        }
+    }
+    put(344, b"n+1\0");
+    h
 }

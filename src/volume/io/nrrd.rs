@@ -11,6 +11,7 @@ use flate2::write::GzEncoder;
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
 use crate::volume::voxel::encode_le;
 use crate::volume::{Endian, Volume, VoxelType};
 
@@ -25,8 +26,13 @@ pub(crate) struct Header {
     pub encoding: Encoding,
     pub endian: Option<Endian>,
     pub spacings: Option<Vec<f64>>,
-    /// Length of each space direction; `None` for a `none` axis.
-    pub directions: Option<Vec<Option<f64>>>,
+    /// Each axis's space direction (a vector of the space's dimension); `None` for a `none`
+    /// axis.
+    pub directions: Option<Vec<Option<Vec<f64>>>>,
+    /// `space`, lowercase (e.g. `left-posterior-superior`).
+    pub space: Option<String>,
+    /// `space origin`.
+    pub origin: Option<Vec<f64>>,
     pub kinds: Option<Vec<String>>,
     pub data_file: Option<String>,
     pub line_skip: u64,
@@ -67,8 +73,8 @@ fn type_name(ty: VoxelType) -> &'static str {
     }
 }
 
-/// Parses "(1,0,0) (0,1.5,0) none" into direction lengths.
-fn parse_directions(value: &str) -> Option<Vec<Option<f64>>> {
+/// Parses "(1,0,0) (0,1.5,0) none" into direction vectors.
+fn parse_directions(value: &str) -> Option<Vec<Option<Vec<f64>>>> {
     let mut out = Vec::new();
     let mut rest = value.trim();
     while !rest.is_empty() {
@@ -76,17 +82,60 @@ fn parse_directions(value: &str) -> Option<Vec<Option<f64>>> {
             out.push(None);
             rest = r.trim_start();
         } else if let Some(r) = rest.strip_prefix('(') {
-            let end = r.find(')')?;
-            let comps: Option<Vec<f64>> =
-                r[..end].split(',').map(|c| c.trim().parse().ok()).collect();
-            let norm = comps?.iter().map(|c| c * c).sum::<f64>().sqrt();
-            out.push(Some(norm));
-            rest = r[end + 1..].trim_start();
+            let (vector, r) = parse_vector(r)?;
+            out.push(Some(vector));
+            rest = r.trim_start();
         } else {
             return None;
         }
     }
     Some(out)
+}
+
+/// The numbers of a vector "1,0.5,2)" (after its opening parenthesis), and what follows it.
+fn parse_vector(after_paren: &str) -> Option<(Vec<f64>, &str)> {
+    let end = after_paren.find(')')?;
+    let comps = after_paren[..end]
+        .split(',')
+        .map(|c| c.trim().parse().ok())
+        .collect::<Option<Vec<f64>>>()?;
+    Some((comps, &after_paren[end + 1..]))
+}
+
+/// Per world axis, the sign that takes an NRRD `space` to RAS+; `None` for a space without
+/// anatomical meaning (`scanner-xyz`, `3D-right-handed`, ...).
+fn space_to_ras(space: &str) -> Option<[f64; 3]> {
+    Some(match space {
+        "right-anterior-superior" | "ras" => [1.0, 1.0, 1.0],
+        "left-anterior-superior" | "las" => [-1.0, 1.0, 1.0],
+        "left-posterior-superior" | "lps" => [-1.0, -1.0, 1.0],
+        _ => return None,
+    })
+}
+
+/// The voxel-to-world transform of the spatial axes `axes` of a header with an anatomical
+/// `space` and `space directions`.
+fn transform(h: &Header, axes: &[usize]) -> Option<WorldTransform> {
+    let sign = space_to_ras(h.space.as_deref()?)?;
+    let directions = h.directions.as_ref()?;
+    let columns: Vec<&Vec<f64>> = axes
+        .iter()
+        .take(3)
+        .map(|&a| directions.get(a)?.as_ref())
+        .collect::<Option<_>>()?;
+    if columns.len() != 3 || columns.iter().any(|c| c.len() != 3) {
+        return None;
+    }
+    let origin = match &h.origin {
+        Some(o) if o.len() == 3 => [o[0], o[1], o[2]],
+        Some(_) => return None,
+        None => [0.0; 3],
+    };
+    let linear = std::array::from_fn(|r| std::array::from_fn(|c| columns[c][r] * sign[r]));
+    Some(WorldTransform::ras(
+        linear,
+        std::array::from_fn(|r| origin[r] * sign[r]),
+    ))
 }
 
 /// Header fields as they are read, before the required ones are checked.
@@ -98,7 +147,9 @@ struct Fields {
     encoding: Option<Encoding>,
     endian: Option<Endian>,
     spacings: Option<Vec<f64>>,
-    directions: Option<Vec<Option<f64>>>,
+    directions: Option<Vec<Option<Vec<f64>>>>,
+    space: Option<String>,
+    origin: Option<Vec<f64>>,
     kinds: Option<Vec<String>>,
     data_file: Option<String>,
     line_skip: u64,
@@ -166,6 +217,15 @@ fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()>
                     .ok_or_else(|| bad(format!("space directions {value:?}")))?,
             );
         }
+        "space" => f.space = Some(value.trim().to_ascii_lowercase()),
+        "space origin" => {
+            let vector = value
+                .trim()
+                .strip_prefix('(')
+                .and_then(parse_vector)
+                .ok_or_else(|| bad(format!("space origin {value:?}")))?;
+            f.origin = Some(vector.0);
+        }
         "kinds" => {
             f.kinds = Some(
                 value
@@ -230,6 +290,8 @@ pub(crate) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
         endian: fields.endian,
         spacings: fields.spacings,
         directions: fields.directions,
+        space: fields.space,
+        origin: fields.origin,
         kinds: fields.kinds,
         data_file: fields.data_file,
         line_skip: fields.line_skip,
@@ -316,7 +378,8 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
             .or_else(|| {
                 h.directions
                     .as_ref()
-                    .and_then(|d| d.get(axis).copied().flatten())
+                    .and_then(|d| d.get(axis)?.as_ref())
+                    .map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt())
             });
         match s {
             Some(s) if s.is_finite() && s > 0.0 => spacing[k] = s,
@@ -361,7 +424,8 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: extra > 1,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)
+    let transform = transform(&h, &axes);
+    Ok(Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?.with_transform(transform))
 }
 
 /// How [`write_nrrd`] stores the voxels.
@@ -374,7 +438,9 @@ pub enum NrrdEncoding {
     Gzip,
 }
 
-/// Writes `volume` as an attached NRRD in its voxel type (integer types are rounded and clamped).
+/// Writes `volume` as an attached NRRD in its voxel type (integer types are rounded and clamped),
+/// with its voxel-to-world transform as `space: left-posterior-superior`, `space directions` and
+/// `space origin` when it is known, and as `spacings` when it is not.
 ///
 /// The file is written to a temporary file beside `path` and renamed into place; an existing
 /// `path` is replaced only when `force` is set.
@@ -389,11 +455,28 @@ fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Re
     let ty = volume.voxel_type();
     write!(
         out,
-        "NRRD0004\n# written by slabscope {}\ntype: {}\ndimension: 3\nsizes: {nx} {ny} {nz}\n\
-         spacings: {sx} {sy} {sz}\nkinds: domain domain domain\n",
+        "NRRD0004\n# written by slabscope {}\ntype: {}\ndimension: 3\nsizes: {nx} {ny} {nz}\n",
         env!("CARGO_PKG_VERSION"),
         type_name(ty)
     )?;
+    let t = volume.transform();
+    if t.known {
+        // LPS, as Slicer and ITK write it: x and y negated from RAS.
+        let lps = |r: usize, v: f64| if r < 2 { -v } else { v };
+        let vector = |v: [f64; 3]| format!("({},{},{})", v[0], v[1], v[2]);
+        let column = |c: usize| vector(std::array::from_fn(|r| lps(r, t.matrix[r][c]) + 0.0));
+        writeln!(
+            out,
+            "space: left-posterior-superior\nspace directions: {} {} {}\nspace origin: {}",
+            column(0),
+            column(1),
+            column(2),
+            vector(std::array::from_fn(|r| lps(r, t.matrix[r][3]) + 0.0))
+        )?;
+    } else {
+        writeln!(out, "spacings: {sx} {sy} {sz}")?;
+    }
+    writeln!(out, "kinds: domain domain domain")?;
     if ty.size() > 1 {
         writeln!(out, "endian: little")?;
     }
@@ -434,7 +517,14 @@ mod tests {
         assert_eq!(h.sizes, vec![4, 5, 6]);
         assert_eq!(h.encoding, Encoding::Gzip);
         assert_eq!(h.endian, Some(Endian::Big));
-        assert_eq!(h.directions, Some(vec![Some(2.0), Some(0.5), Some(3.0)]));
+        assert_eq!(
+            h.directions,
+            Some(vec![
+                Some(vec![2.0, 0.0, 0.0]),
+                Some(vec![0.0, 0.5, 0.0]),
+                Some(vec![0.0, 0.0, 3.0])
+            ])
+        );
         assert_eq!(h.byte_skip, Skip::FromEnd);
     }
 
@@ -463,7 +553,11 @@ mod tests {
     fn directions_accept_none_and_spaces() {
         assert_eq!(
             parse_directions("none (3,4,0) ( 0, 0, 2 )"),
-            Some(vec![None, Some(5.0), Some(2.0)])
+            Some(vec![
+                None,
+                Some(vec![3.0, 4.0, 0.0]),
+                Some(vec![0.0, 0.0, 2.0])
+            ])
         );
         assert_eq!(parse_directions("(1,0"), None);
     }

@@ -2,10 +2,14 @@
 //! origin), the [`Axis`] type that every front end parses and prints, and the orthonormal frame
 //! of an axis that the ray lattice and the camera build on (DESIGN.md §2).
 
+pub mod world;
+
 use std::fmt;
 use std::str::FromStr;
 
 use serde::{Serialize, Serializer};
+
+pub use world::{Anatomy, WorldAxis, WorldTransform};
 
 use crate::error::{Error, Result};
 
@@ -161,6 +165,63 @@ impl fmt::Display for Axis {
             "[{:width$.decimals$},{:width$.decimals$},{:width$.decimals$}]",
             c[0], c[1], c[2]
         )
+    }
+}
+
+/// Which axis to cut slabs along: the view search's best, a direction in the volume, or the
+/// volume axis nearest an anatomical plane's normal (which needs a known orientation).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AxisChoice {
+    /// The view search's best.
+    #[default]
+    Best,
+    /// This direction in physical voxel space.
+    Along(Axis),
+    /// The volume axis (x, y or z) nearest the normal of these planes.
+    Anatomical(Anatomy),
+}
+
+impl AxisChoice {
+    /// The direction chosen in `volume`, `None` for the view search's best; an error for an
+    /// anatomical plane when the volume's orientation is unknown.
+    pub fn resolve(self, volume: &crate::Volume) -> Result<Option<Axis>> {
+        match self {
+            Self::Best => Ok(None),
+            Self::Along(a) => Ok(Some(a)),
+            Self::Anatomical(plane) => volume
+                .transform()
+                .anatomical_axis(plane, volume.spacing())
+                .map(|m| Some([Axis::X, Axis::Y, Axis::Z][m]))
+                .ok_or_else(|| {
+                    Error::invalid(
+                        "axis",
+                        plane.name(),
+                        "x, y, z or a direction, since the file states no orientation (so no \
+                         axis can be named axial, coronal or sagittal)",
+                    )
+                }),
+        }
+    }
+}
+
+impl FromStr for AxisChoice {
+    type Err = Error;
+
+    /// `best`, `axial`, `coronal`, `sagittal`, or an [`Axis`].
+    fn from_str(text: &str) -> Result<Self> {
+        Ok(match text.trim() {
+            "best" => Self::Best,
+            "axial" => Self::Anatomical(Anatomy::Axial),
+            "coronal" => Self::Anatomical(Anatomy::Coronal),
+            "sagittal" => Self::Anatomical(Anatomy::Sagittal),
+            t => Self::Along(t.parse().map_err(|_| {
+                Error::invalid(
+                    "axis",
+                    text,
+                    "best, x, y, z, axial, coronal, sagittal or a direction DX,DY,DZ",
+                )
+            })?),
+        })
     }
 }
 
