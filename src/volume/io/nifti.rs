@@ -15,6 +15,7 @@ use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
+use crate::geometry::world::Quaternion;
 use crate::volume::voxel::encode_le;
 use crate::volume::{Endian, Volume, VoxelType, dims_string};
 
@@ -202,7 +203,15 @@ fn transform(h: &NiftiHeader, unit: f64) -> Option<WorldTransform> {
         f64::from(h.quatern_c),
         f64::from(h.quatern_d),
     );
-    let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+    // As nifti1_io: a rotation of 180° has a = 0, which the rounding of b, c and d to f32 can
+    // leave a little above or below.
+    let (a, b, c, d) = match 1.0 - (b * b + c * c + d * d) {
+        a2 if a2 < 1e-7 => {
+            let norm = (b * b + c * c + d * d).sqrt();
+            (0.0, b / norm, c / norm, d / norm)
+        }
+        a2 => (a2.sqrt(), b, c, d),
+    };
     let r = [
         [
             a * a + b * b - c * c - d * d,
@@ -278,6 +287,30 @@ fn write_body(out: &mut impl Write, header: &[u8; 352], volume: &Volume) -> std:
     Ok(())
 }
 
+/// The quaternion's `(b, c, d)` as f32. Near a rotation of 180° (`a` close to 0, as for LPS or
+/// LSA axes) they are rounded so that `b² + c² + d²` is not below 1, so that readers (`nifti1_io`,
+/// nibabel, ITK) take `a` as 0 rather than the square root of a rounding error, which would
+/// turn the axes by up to a milliradian.
+fn stored_quaternion(q: Quaternion) -> [f32; 3] {
+    let sum = |v: &[f32; 3]| v.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>();
+    let mut v = [q.b, q.c, q.d].map(|x| x as f32);
+    if 1.0 - (q.b * q.b + q.c * q.c + q.d * q.d) >= 1e-6 {
+        return v;
+    }
+    let largest = (0..3)
+        .max_by(|&i, &j| v[i].abs().total_cmp(&v[j].abs()))
+        .unwrap_or(0);
+    for _ in 0..8 {
+        if sum(&v) >= 1.0 {
+            break;
+        }
+        // One unit in the last place away from zero.
+        let x = v[largest];
+        v[largest] = f32::from_bits(x.to_bits() + 1);
+    }
+    v
+}
+
 /// The 348-byte little-endian NIfTI-1 header of `volume` and the 4 zero bytes that say no
 /// extension follows.
 fn header_bytes(volume: &Volume) -> [u8; 352] {
@@ -312,8 +345,8 @@ fn header_bytes(volume: &Volume) -> [u8; 352] {
         put(252, &qform_code.to_le_bytes());
         put(254, &1i16.to_le_bytes()); // sform_code: scanner
         if let Some(q) = quaternion {
-            for (k, v) in [q.b, q.c, q.d].iter().enumerate() {
-                put(256 + 4 * k, &(*v as f32).to_le_bytes());
+            for (k, v) in stored_quaternion(q).iter().enumerate() {
+                put(256 + 4 * k, &v.to_le_bytes());
             }
         }
         for r in 0..3 {
