@@ -9,12 +9,11 @@ use slabscope::{Analysis, Axis, Partition, Volume};
 
 /// Prints the whole analysis of `volume`, read from `name`.
 pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
-    let known = volume.transform().known;
     if let Some(v) = &analysis.views {
         print_views(name, volume, v);
         println!();
     }
-    print_partition(&analysis.partition, known);
+    print_partition(&analysis.partition);
     print_notes(&analysis.notes);
 }
 
@@ -31,26 +30,16 @@ fn axis_text(axis: [f64; 3]) -> String {
 
 /// The axis with its anatomical name and world normal when the orientation is known:
 /// `[ 0.000, 0.000, 1.000] (z), I→S axial, world normal [0.000, 0.000, 1.000]`.
-fn world_axis_text(axis: [f64; 3], world: &WorldAxis, known: bool) -> String {
-    if !known {
+fn world_axis_text(axis: [f64; 3], world: &WorldAxis) -> String {
+    if !world.oriented {
         return axis_text(axis);
     }
     let [x, y, z] = world.world_axis;
     format!(
         "{} {}, world normal [{x:.3}, {y:.3}, {z:.3}]",
         axis_text(axis),
-        anatomy_text(world, known)
+        world.anatomy_text()
     )
-}
-
-/// `I→S, axial`; `oblique` for an axis no world axis names; empty when the orientation is
-/// unknown.
-fn anatomy_text(world: &WorldAxis, known: bool) -> &str {
-    match &world.anatomy {
-        Some(a) => a,
-        None if known => "oblique",
-        None => "",
-    }
 }
 
 /// `1 slab`, `4 slabs`: `n` and the word for one or for many.
@@ -98,7 +87,7 @@ fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
     let known = volume.transform().known;
     print_view_table(v, known);
     println!();
-    print_verdict(v, known);
+    print_verdict(v);
 }
 
 fn print_view_table(v: &ViewSearch, known: bool) {
@@ -114,7 +103,7 @@ fn print_view_table(v: &ViewSearch, known: bool) {
     println!("{}", if phases { "   mean h ± se" } else { "" });
     let show = |rank: String, mark: &str, a: &AxisEntropy| {
         let anatomy = if known {
-            format!("{:<15}", anatomy_text(&a.world, known))
+            format!("{:<15}", a.world.anatomy_text())
         } else {
             String::new()
         };
@@ -156,7 +145,7 @@ fn print_view_table(v: &ViewSearch, known: bool) {
 }
 
 /// The best axis, its margin, and whether it can be told from the others.
-fn print_verdict(v: &ViewSearch, known: bool) {
+fn print_verdict(v: &ViewSearch) {
     let best = v.best();
     let what = match best.phases {
         Some(s) => format!(
@@ -181,7 +170,7 @@ fn print_verdict(v: &ViewSearch, known: bool) {
     });
     println!(
         "best     {}\n         {what}{margin}",
-        world_axis_text(best.axis, &best.world, known)
+        world_axis_text(best.axis, &best.world)
     );
     match &v.contenders {
         None => {}
@@ -206,11 +195,11 @@ fn print_verdict(v: &ViewSearch, known: bool) {
     }
 }
 
-fn print_partition(p: &Partition, known: bool) {
+fn print_partition(p: &Partition) {
     println!(
         "partition {} along {}:\n          {} {} mm apart, {} keeping I = {:.4} of {:.4} bits",
         p.method.name(),
-        world_axis_text(p.axis, &p.world, known),
+        world_axis_text(p.axis, &p.world),
         count(p.slices, "slice", "slices"),
         p.thickness,
         count(p.slabs.len(), "slab", "slabs"),
@@ -233,7 +222,7 @@ fn print_partition(p: &Partition, known: bool) {
         _ => {}
     }
     println!();
-    print_slab_table(p, known);
+    print_slab_table(p);
     print_steps(&p.steps);
     if p.comparison.is_empty() {
         return;
@@ -251,10 +240,10 @@ fn print_partition(p: &Partition, known: bool) {
     }
 }
 
-fn print_slab_table(p: &Partition, known: bool) {
+fn print_slab_table(p: &Partition) {
     // World millimetres along the world normal; without an orientation they count from voxel
     // (0, 0, 0) along the axis.
-    let mm = if known { "world mm" } else { "mm" };
+    let mm = if p.world.oriented { "world mm" } else { "mm" };
     println!("  slab  slices         {mm:<22} entropy       mean  left out   next: NMI       ΔI");
     for (i, s) in p.info.iter().enumerate() {
         let next = match (p.boundary_nmi.get(i), p.boundary_gain.get(i)) {

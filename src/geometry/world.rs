@@ -255,6 +255,7 @@ impl WorldTransform {
                 .world_normal(d, spacing)
                 .map_or(d, |n| n.map(|c| c + 0.0)),
             anatomy: self.anatomical_name(d, spacing),
+            oriented: self.known,
         }
     }
 
@@ -337,6 +338,22 @@ pub struct WorldAxis {
     /// `I→S, axial`, `P→A, coronal`, `L→R, sagittal` when the orientation is known and the normal
     /// lies within [`NAMING_DEGREES`] of a world axis; null otherwise.
     pub anatomy: Option<String>,
+    /// Whether the volume's orientation is known (an axis without an anatomical name is then
+    /// oblique); the reports state it once, as `orientation`.
+    #[serde(skip)]
+    pub oriented: bool,
+}
+
+impl WorldAxis {
+    /// `I→S, axial`; `oblique` for an axis no world axis names; empty when the orientation is
+    /// unknown.
+    pub fn anatomy_text(&self) -> &str {
+        match &self.anatomy {
+            Some(a) => a,
+            None if self.oriented => "oblique",
+            None => "",
+        }
+    }
 }
 
 /// A NIfTI qform rotation: the quaternion's `b, c, d` (`a = √(1 − b² − c² − d²)`), and `qfac`.

@@ -341,6 +341,7 @@ impl SliceStack {
             world: WorldAxis {
                 world_axis: [0.0, 0.0, 1.0],
                 anatomy: None,
+                oriented: false,
             },
             world_line: (1.0, 0.0),
         })

@@ -6,6 +6,7 @@ use ratatui::layout::{Constraint, Rect};
 use ratatui::style::{Color, Modifier};
 use ratatui::widgets::{Row, Table, Widget};
 use slabscope::Histories;
+use slabscope::geometry::WorldAxis;
 use slabscope::partition::{BackgroundSummary, Method, SlabInfo, slab_text};
 
 use super::placeholder;
@@ -25,6 +26,8 @@ pub struct SlabTable {
     pub next: Vec<f64>,
     /// What was left out as background.
     pub background: BackgroundSummary,
+    /// The axis in the world: its anatomical name, and whether millimetres are world ones.
+    pub world: WorldAxis,
 }
 
 impl SlabTable {
@@ -41,6 +44,7 @@ impl SlabTable {
             info: h.describe(&slabs),
             next,
             background: h.stack().background(),
+            world: h.stack().world().clone(),
         }
     }
 }
@@ -78,20 +82,27 @@ impl SlabsPane {
 struct Columns {
     medium: bool,
     wide: bool,
+    /// Whether the range is in world millimetres.
+    world: bool,
 }
 
 impl Columns {
-    fn of(width: u16) -> Self {
+    fn of(width: u16, world: bool) -> Self {
         Self {
             medium: width >= 41,
             wide: width >= 56,
+            world,
         }
     }
 
     fn header(&self, method: Method) -> Vec<&'static str> {
         let mut h = vec!["#", "slices", "mm"];
         if self.wide {
-            h.push("from–to mm");
+            h.push(if self.world {
+                "world mm"
+            } else {
+                "from–to mm"
+            });
         }
         h.push("H");
         if self.medium {
@@ -113,7 +124,7 @@ impl Columns {
             format!("{:.1}", s.mm.1 - s.mm.0),
         ];
         if self.wide {
-            cells.push(format!("{:.1}–{:.1}", s.mm.0, s.mm.1));
+            cells.push(format!("{:.1}–{:.1}", s.world_mm.0, s.world_mm.1));
         }
         cells.push(format!("{:.2}", s.entropy));
         if self.medium {
@@ -164,12 +175,16 @@ impl Widget for &SlabsPane {
         } else {
             String::new()
         };
+        let anatomy = match &table.world.anatomy {
+            Some(a) if area.width >= 40 => format!(", {}", a.replace(", ", " ")),
+            _ => String::new(),
+        };
         let title = format!(
-            " Slabs: {} of {} slices{left_out} ",
+            " Slabs: {} of {} slices{anatomy}{left_out} ",
             table.info.len(),
             table.slices
         );
-        let columns = Columns::of(area.width);
+        let columns = Columns::of(area.width, table.world.oriented);
         let header = Row::new(columns.header(table.method))
             .style(self.theme.fg(Color::DarkGray).add_modifier(Modifier::BOLD));
         let visible = usize::from(area.height.saturating_sub(3));

@@ -13,6 +13,12 @@ use super::sphere::SphereMap;
 use crate::tui::event::Load;
 use crate::tui::theme::Theme;
 
+/// The list's width: rank, axis, name and score.
+const LIST: u16 = 38;
+
+/// The list's width with the anatomical name, when the orientation is known.
+const LIST_WIDE: u16 = 52;
+
 /// The viewpoints pane's state.
 pub struct ViewsPane {
     /// The view search.
@@ -72,7 +78,16 @@ impl ViewsPane {
             (_, _, true) => "≈",
             _ => " ",
         };
-        let text = if width >= 38 {
+        let text = if width >= LIST_WIDE {
+            // With the anatomy: `I→S axial`, `oblique`.
+            let name = axis.name().unwrap_or(" ");
+            let anatomy = v.world.anatomy_text().replace(", ", " ");
+            format!(
+                "{mark}{:>3} {axis} {name} {anatomy:<13} {:.4}",
+                i + 1,
+                score(v)
+            )
+        } else if width >= LIST {
             let name = axis.name().map_or(String::new(), |n| format!(" {n}"));
             format!("{mark}{:>3} {axis}{name} {:.4}", i + 1, score(v))
         } else {
@@ -93,10 +108,15 @@ impl ViewsPane {
 
     /// The list's area and the sphere map's, which takes the right part of a wide pane or the
     /// bottom of a tall one.
-    fn split(inner: Rect) -> (Rect, Option<Rect>) {
-        if inner.width >= 70 {
+    fn split(inner: Rect, oriented: bool) -> (Rect, Option<Rect>) {
+        let list = if oriented && inner.width >= LIST_WIDE + 32 {
+            LIST_WIDE
+        } else {
+            LIST
+        };
+        if inner.width >= list + 32 {
             let [l, m] =
-                Layout::horizontal([Constraint::Length(38), Constraint::Min(0)]).areas(inner);
+                Layout::horizontal([Constraint::Length(list), Constraint::Min(0)]).areas(inner);
             (l, Some(m))
         } else if inner.height >= 22 {
             let [l, m] =
@@ -149,7 +169,8 @@ impl Widget for &ViewsPane {
             );
             return;
         };
-        let (list, map) = ViewsPane::split(inner);
+        let oriented = views.views.first().is_some_and(|v| v.world.oriented);
+        let (list, map) = ViewsPane::split(inner, oriented);
         let rows = usize::from(list.height);
         let first = self.row.saturating_sub(rows.saturating_sub(1));
         let lines: Vec<Line> = views

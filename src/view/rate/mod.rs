@@ -129,6 +129,7 @@ impl AxisEntropy {
             world: WorldAxis {
                 world_axis: axis,
                 anatomy: None,
+                oriented: false,
             },
             // `+ 0.0` turns -0 into 0 for display.
             azimuth: axis[1].atan2(axis[0]).to_degrees() + 0.0,
