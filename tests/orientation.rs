@@ -300,3 +300,104 @@ fn exports_read_back_in_nibabel_and_simpleitk() {
         }
     }
 }
+
+/// A 21×17×19 volume, dark but for one bright voxel at `bright`, with `linear` (unit spacing)
+/// as its transform.
+fn marked(bright: [usize; 3], linear: [[f64; 3]; 3]) -> Volume {
+    let mut data = vec![0.0f32; 21 * 17 * 19];
+    data[bright[0] + 21 * (bright[1] + 17 * bright[2])] = 1000.0;
+    Volume::new([21, 17, 19], [1.0; 3], slabscope::VoxelType::F32, data)
+        .unwrap()
+        .with_transform(WorldTransform::ras(linear, [0.0; 3]))
+}
+
+/// Where the brightest pixel of a MIP straight from the default camera's front lies, as
+/// fractions of the width and height.
+fn brightest(v: &Volume, axis: [f64; 3]) -> (f64, f64) {
+    use slabscope::render::{CameraParams, Layout, Mode, Preset, RenderParams, Renderer};
+    let params = RenderParams {
+        width: 120,
+        height: 100,
+        mode: Mode::Mip,
+        preset: Preset::CtBone,
+        outlines: false,
+        labels: false,
+        camera: CameraParams {
+            azimuth: 0.0,
+            elevation: 0.0,
+            ..CameraParams::default()
+        },
+        ..RenderParams::default()
+    };
+    let image = Renderer::new(v)
+        .unwrap()
+        .render(&Layout::whole(axis), &params, &Monitor::none())
+        .unwrap();
+    let data = image.pixmap.data();
+    let i = (0..120 * 100).max_by_key(|&i| data[4 * i]).unwrap();
+    ((i % 120) as f64 / 120.0, (i / 120) as f64 / 100.0)
+}
+
+#[test]
+fn pictures_show_the_patients_right_on_the_left_and_the_head_up() {
+    let diag = |a: f64, b: f64, c: f64| [[a, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, c]];
+    // The bright voxel lies to the patient's right and towards the head, whichever way the
+    // voxels run: RAS, LPS (a rotation of RAS) and LAS (its mirror image).
+    for (name, linear, bright) in [
+        ("RAS", diag(1.0, 1.0, 1.0), [17, 8, 15]),
+        ("LPS", diag(-1.0, -1.0, 1.0), [3, 8, 15]),
+        ("LAS", diag(-1.0, 1.0, 1.0), [3, 8, 15]),
+        ("LAI", diag(-1.0, 1.0, -1.0), [3, 8, 3]),
+    ] {
+        let v = marked(bright, linear);
+        // Axial slabs from the front: right on the left, superior up.
+        let (x, y) = brightest(&v, [0.0, 0.0, 1.0]);
+        assert!(x < 0.4 && y < 0.4, "{name} axial: at ({x:.2}, {y:.2})");
+        // Coronal slabs from the feet: right on the left, anterior up (the voxel is central
+        // front to back, so halfway up).
+        let (x, _) = brightest(&v, [0.0, 1.0, 0.0]);
+        assert!(x < 0.4, "{name} coronal: at x = {x:.2}");
+    }
+}
+
+#[test]
+fn renders_carry_the_triad_only_when_the_orientation_is_known() {
+    use slabscope::render::{Layout, RenderParams, Renderer};
+    let red = |v: &Volume| {
+        let params = RenderParams {
+            width: 160,
+            height: 120,
+            ..RenderParams::default()
+        };
+        let image = Renderer::new(v)
+            .unwrap()
+            .render(&Layout::whole([0.0, 0.0, 1.0]), &params, &Monitor::none())
+            .unwrap();
+        // The R arrow's colour, in the lower left quarter.
+        let data = image.pixmap.data();
+        (60..120)
+            .flat_map(|y| (0..40).map(move |x| 4 * (y * 160 + x)))
+            .filter(|&i| {
+                let (r, g, b) = (
+                    i32::from(data[i]),
+                    i32::from(data[i + 1]),
+                    i32::from(data[i + 2]),
+                );
+                r > g + 40 && r > b + 40
+            })
+            .count()
+    };
+    let oriented = marked(
+        [3, 8, 15],
+        [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]],
+    );
+    assert!(red(&oriented) > 5, "the R arrow is drawn");
+    let unknown = Volume::new(
+        [21, 17, 19],
+        [1.0; 3],
+        slabscope::VoxelType::F32,
+        oriented.voxels().to_vec(),
+    )
+    .unwrap();
+    assert_eq!(red(&unknown), 0, "no made-up orientation");
+}

@@ -9,7 +9,7 @@ use std::str::FromStr;
 
 use serde::{Serialize, Serializer};
 
-pub use world::{Anatomy, WorldAxis, WorldTransform};
+pub use world::{Anatomy, DisplayFrame, WorldAxis, WorldTransform};
 
 use crate::error::{Error, Result};
 

@@ -125,6 +125,43 @@ impl WorldTransform {
         (dot(n, mul(b, along)), dot(n, origin))
     }
 
+    /// The physical direction (spacing applied) of world direction `w`: `B⁻¹·w` normalized.
+    pub fn physical_direction(&self, w: [f64; 3], spacing: [f64; 3]) -> Option<[f64; 3]> {
+        normalize(mul(invert(self.physical_to_world(spacing))?, w))
+    }
+
+    /// Whether the voxel axes are left-handed in the world (a negative determinant, as LAS and
+    /// LPS volumes have): a picture made in voxel space is then the mirror image of the anatomy.
+    pub fn is_mirrored(&self) -> bool {
+        let a = self.linear();
+        let col = |c: usize| [a[0][c], a[1][c], a[2][c]];
+        dot(col(0), cross(col(1), col(2))) < 0.0
+    }
+
+    /// How to show slabs along physical direction `d` so that no one asks which way is up (see
+    /// [`DisplayFrame`]); `None` when the orientation is unknown.
+    pub fn display_frame(&self, d: [f64; 3], spacing: [f64; 3]) -> Option<DisplayFrame> {
+        if !self.known {
+            return None;
+        }
+        let n = self.world_normal(d, spacing)?;
+        let k = [2, 1, 0]
+            .into_iter()
+            .find(|&k| n[k].abs() > 0.1)
+            .unwrap_or(0);
+        let up = if n[k] < 0.0 { d.map(|c| -c) } else { d };
+        let front = if n[1].abs() < 0.9 {
+            [0.0, 1.0, 0.0]
+        } else {
+            [0.0, 0.0, -1.0]
+        };
+        Some(DisplayFrame {
+            up,
+            front: self.physical_direction(front, spacing)?,
+            mirrored: self.is_mirrored(),
+        })
+    }
+
     /// The world point of physical point `p` (voxel indices times `spacing`).
     pub fn physical_point(&self, p: [f64; 3], spacing: [f64; 3]) -> [f64; 3] {
         self.apply(std::array::from_fn(|k| p[k] / spacing[k]))
@@ -354,6 +391,20 @@ impl WorldAxis {
             None => "",
         }
     }
+}
+
+/// How a picture of slabs along an axis is set up when the orientation is known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DisplayFrame {
+    /// The physical direction that points up in the picture: the axis's more superior end,
+    /// else its more anterior end, else its more right end.
+    pub up: [f64; 3],
+    /// The physical direction the default camera looks from: the anterior, or the feet when the
+    /// axis runs front to back (so that the patient's right is on the picture's left, as
+    /// radiologists read).
+    pub front: [f64; 3],
+    /// Whether voxel space is the world's mirror image: the camera mirrors it back.
+    pub mirrored: bool,
 }
 
 /// A NIfTI qform rotation: the quaternion's `b, c, d` (`a = √(1 − b² − c² − d²)`), and `qfac`.

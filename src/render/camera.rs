@@ -2,7 +2,7 @@
 //! perspective, with the axis pointing up in the image so the slabs stack vertically.
 
 use crate::error::Result;
-use crate::geometry::{cross, dot, frame, normalize};
+use crate::geometry::{DisplayFrame, cross, dot, frame, normalize};
 
 /// Vertical field of view of the perspective camera, degrees.
 const FOV_DEGREES: f64 = 30.0;
@@ -60,7 +60,34 @@ impl Camera {
         width: u32,
         height: u32,
     ) -> Result<Self> {
-        let (d, u, v) = frame(axis)?;
+        Self::oriented(center, radius, axis, None, p, width, height)
+    }
+
+    /// As [`new`](Self::new), oriented by `display` when the world is known: its `up` (which
+    /// replaces `axis`) points up in the image, azimuth 0 looks from its `front`, and a mirrored
+    /// voxel space is mirrored back, so that the picture shows the anatomy as it is.
+    pub fn oriented(
+        center: [f64; 3],
+        radius: f64,
+        axis: [f64; 3],
+        display: Option<DisplayFrame>,
+        p: &CameraParams,
+        width: u32,
+        height: u32,
+    ) -> Result<Self> {
+        let (d, mut u, mut v) = frame(display.map_or(axis, |f| f.up))?;
+        if let Some(f) = display.and_then(|f| {
+            let along = dot(f.front, d);
+            normalize(std::array::from_fn(|m| f.front[m] - along * d[m]))
+        }) {
+            u = f;
+            v = cross(d, u);
+        }
+        // Azimuth turns the same way in the world, and right is right, in a mirrored space.
+        let mirrored = display.is_some_and(|f| f.mirrored);
+        if mirrored {
+            v = v.map(|c| -c);
+        }
         let (az, el) = (
             p.azimuth.to_radians(),
             p.elevation.clamp(-89.9, 89.9).to_radians(),
@@ -73,7 +100,10 @@ impl Camera {
         let along = dot(d, back);
         let up = normalize(std::array::from_fn(|m| d[m] - along * back[m]))
             .expect("elevation is below 90 degrees");
-        let right = cross(up, back);
+        let mut right = cross(up, back);
+        if mirrored {
+            right = right.map(|c| -c);
+        }
         let aspect = f64::from(width) / f64::from(height.max(1));
         let zoom = p.zoom.max(1e-3);
         let half_fov = (FOV_DEGREES / 2.0).to_radians();
@@ -113,6 +143,12 @@ impl Camera {
             let origin = std::array::from_fn(|m| on_plane[m] + self.distance * self.back[m]);
             (origin, self.back.map(|c| -c))
         }
+    }
+
+    /// A direction in the image: its components to the right and up (y up), and towards the
+    /// viewer.
+    pub fn screen_direction(&self, d: [f64; 3]) -> (f64, f64, f64) {
+        (dot(d, self.right), dot(d, self.up), dot(d, self.back))
     }
 
     /// The image position (x right, y down, in pixels) of a world point.
@@ -162,6 +198,43 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_front_is_seen_at_azimuth_zero() {
+        // Up along z, looking from +y with no elevation: +x is to the left in the image.
+        let p = CameraParams {
+            azimuth: 0.0,
+            elevation: 0.0,
+            ..CameraParams::default()
+        };
+        let display = |mirrored| DisplayFrame {
+            up: [0.0, 0.0, 1.0],
+            front: [0.0, 1.0, 0.0],
+            mirrored,
+        };
+        let cam = |mirrored| {
+            Camera::oriented(
+                [0.0; 3],
+                10.0,
+                [1.0, 0.0, 0.0],
+                Some(display(mirrored)),
+                &p,
+                100,
+                100,
+            )
+            .unwrap()
+        };
+        let (x, _, toward) = cam(false).screen_direction([1.0, 0.0, 0.0]);
+        assert!((x + 1.0).abs() < 1e-12 && toward.abs() < 1e-12);
+        // A mirrored voxel space is shown mirrored back.
+        let (x, _, _) = cam(true).screen_direction([1.0, 0.0, 0.0]);
+        assert!((x - 1.0).abs() < 1e-12);
+        let cam = cam(false);
+        let (_, _, toward) = cam.screen_direction([0.0, 1.0, 0.0]);
+        assert!((toward - 1.0).abs() < 1e-12);
+        let (_, up, _) = cam.screen_direction([0.0, 0.0, 1.0]);
+        assert!((up - 1.0).abs() < 1e-12);
     }
 
     #[test]

@@ -311,7 +311,9 @@ impl<'a> Renderer<'a> {
         let extent: [f64; 3] = std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m]);
         let center = extent.map(|e| e / 2.0);
         let radius = dot(extent, extent).sqrt() / 2.0 + layout.reach() + reference;
-        let camera = Camera::new(center, radius, layout.axis, &params.camera, w, h)?;
+        let t = self.volume.transform();
+        let display = t.display_frame(layout.axis, spacing);
+        let camera = Camera::oriented(center, radius, layout.axis, display, &params.camera, w, h)?;
         let frame = Frame {
             it: Interpolator::new(self.volume),
             bricks: &self.bricks,
@@ -346,6 +348,9 @@ impl<'a> Renderer<'a> {
         let mut image = Image { pixmap, camera };
         if params.outlines || params.labels {
             overlay::draw(&mut image, layout, extent, params);
+        }
+        if params.labels && t.known {
+            overlay::triad(&mut image, |w| t.physical_direction(w, spacing), params);
         }
         Ok(image)
     }

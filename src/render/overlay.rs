@@ -46,7 +46,8 @@ fn section(axis: [f64; 3], s: f64, extent: [f64; 3]) -> Vec<[f64; 3]> {
     points
 }
 
-/// 3x5 digits, rows top to bottom, 3 bits a row (bit 2 is the left column).
+/// 3x5 glyphs of digits and of the anatomical letters, rows top to bottom, 3 bits a row (bit 2
+/// is the left column).
 const DIGITS: [[u8; 5]; 10] = [
     [7, 5, 5, 5, 7],
     [2, 6, 2, 2, 7],
@@ -60,13 +61,30 @@ const DIGITS: [[u8; 5]; 10] = [
     [7, 5, 7, 1, 7],
 ];
 
-/// Draws `text` (digits) with its top-left at `(x, y)`, `scale` pixels per font pixel.
+const LETTERS: [(char, [u8; 5]); 6] = [
+    ('R', [6, 5, 6, 5, 5]),
+    ('L', [4, 4, 4, 4, 7]),
+    ('A', [2, 5, 7, 5, 5]),
+    ('P', [6, 5, 6, 4, 4]),
+    ('S', [3, 4, 2, 1, 6]),
+    ('I', [7, 2, 2, 2, 7]),
+];
+
+fn glyph(ch: char) -> Option<&'static [u8; 5]> {
+    match ch.to_digit(10) {
+        Some(d) => Some(&DIGITS[d as usize]),
+        None => LETTERS.iter().find(|l| l.0 == ch).map(|l| &l.1),
+    }
+}
+
+/// Draws `text` (digits and the letters R, L, A, P, S, I) with its top-left at `(x, y)`,
+/// `scale` pixels per font pixel.
 fn draw_digits(image: &mut Image, text: &str, x: f32, y: f32, scale: f32, colour: [u8; 4]) {
     let mut paint = Paint::default();
     paint.set_color_rgba8(colour[0], colour[1], colour[2], colour[3]);
     for (i, ch) in text.chars().enumerate() {
-        let Some(d) = ch.to_digit(10) else { continue };
-        for (row, bits) in DIGITS[d as usize].iter().enumerate() {
+        let Some(g) = glyph(ch) else { continue };
+        for (row, bits) in g.iter().enumerate() {
             for col in 0..3 {
                 if bits >> (2 - col) & 1 == 1 {
                     let px = x + (i as f32 * 4.0 + col as f32) * scale;
@@ -155,5 +173,55 @@ pub(super) fn draw(image: &mut Image, layout: &Layout, extent: [f64; 3], params:
                 colour,
             );
         }
+    }
+}
+
+/// The world axes' colours, as Slicer and ITK-SNAP draw them: R red, A green, S blue.
+const AXIS_COLOURS: [[u8; 4]; 3] = [[235, 80, 70, 255], [90, 200, 90, 255], [90, 140, 255, 255]];
+
+/// An orientation triad in the lower left corner: the world's R, A and S directions as the
+/// camera sees them, each an arrow from a common origin with its letter at the tip, faint when
+/// it points away from the viewer. `physical` takes a world direction to the render's space.
+pub(super) fn triad(
+    image: &mut Image,
+    physical: impl Fn([f64; 3]) -> Option<[f64; 3]>,
+    params: &RenderParams,
+) {
+    let (w, h) = (params.width as f32, params.height as f32);
+    let scale = (params.height as f32 / 160.0).clamp(1.0, 3.0).round();
+    let length = (0.08 * w.min(h)).max(10.0);
+    let origin = (4.0 * scale + length, h - 4.0 * scale - length);
+    for (k, letter) in ["R", "A", "S"].iter().enumerate() {
+        let mut world = [0.0; 3];
+        world[k] = 1.0;
+        let Some(d) = physical(world) else { continue };
+        let (x, y, toward) = image.camera.screen_direction(d);
+        let mut colour = AXIS_COLOURS[k];
+        if toward < -0.1 {
+            colour[3] = 120;
+        }
+        let tip = (origin.0 + length * x as f32, origin.1 - length * y as f32);
+        let mut paint = Paint::default();
+        paint.set_color_rgba8(colour[0], colour[1], colour[2], colour[3]);
+        paint.anti_alias = true;
+        let mut pb = PathBuilder::new();
+        pb.move_to(origin.0, origin.1);
+        pb.line_to(tip.0, tip.1);
+        let stroke = Stroke {
+            width: scale.max(1.5),
+            ..Stroke::default()
+        };
+        if let Some(path) = pb.finish() {
+            image
+                .pixmap
+                .stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+        }
+        // The letter beyond the tip, centred on the arrow's line.
+        let reach = 3.5 * scale;
+        let (lx, ly) = (
+            tip.0 + reach * x as f32 - 1.5 * scale,
+            tip.1 - reach * y as f32 - 2.5 * scale,
+        );
+        draw_digits(image, letter, lx, ly, scale, colour);
     }
 }
