@@ -16,8 +16,12 @@ use crate::tui::theme::Theme;
 /// The list's width: rank, axis, name and score.
 const LIST: u16 = 38;
 
+/// The list's width with the plane's short name (`ax`, `cor`, `sag`), when the orientation is
+/// known.
+const LIST_SHORT: u16 = 42;
+
 /// The list's width with the anatomical name, when the orientation is known.
-const LIST_WIDE: u16 = 52;
+const LIST_WIDE: u16 = 51;
 
 /// The viewpoints pane's state.
 pub struct ViewsPane {
@@ -78,15 +82,25 @@ impl ViewsPane {
             (_, _, true) => "≈",
             _ => " ",
         };
-        let text = if width >= LIST_WIDE {
+        let oriented = v.world.oriented;
+        let text = if oriented && width >= LIST_WIDE {
             // With the anatomy: `I→S axial`, `oblique`.
             let name = axis.name().unwrap_or(" ");
             let anatomy = v.world.anatomy_text().replace(", ", " ");
             format!(
-                "{mark}{:>3} {axis} {name} {anatomy:<13} {:.4}",
+                "{mark}{:>3} {axis} {name} {anatomy:<12} {:.4}",
                 i + 1,
                 score(v)
             )
+        } else if oriented && width >= LIST_SHORT {
+            // The plane in three letters: `ax`, `cor`, `sag`, blank when oblique.
+            let name = axis.name().unwrap_or(" ");
+            let plane = v.world.anatomy.as_deref().map_or("", |a| {
+                let plane = a.rsplit(' ').next().unwrap_or("");
+                &plane[..plane.len().min(3)]
+            });
+            let plane = if plane == "axi" { "ax" } else { plane };
+            format!("{mark}{:>3} {axis} {name} {plane:<3} {:.4}", i + 1, score(v))
         } else if width >= LIST {
             let name = axis.name().map_or(String::new(), |n| format!(" {n}"));
             format!("{mark}{:>3} {axis}{name} {:.4}", i + 1, score(v))
@@ -109,10 +123,10 @@ impl ViewsPane {
     /// The list's area and the sphere map's, which takes the right part of a wide pane or the
     /// bottom of a tall one.
     fn split(inner: Rect, oriented: bool) -> (Rect, Option<Rect>) {
-        let list = if oriented && inner.width >= LIST_WIDE + 32 {
-            LIST_WIDE
-        } else {
-            LIST
+        let list = match inner.width {
+            w if oriented && w >= LIST_WIDE + 32 => LIST_WIDE,
+            w if oriented && w >= LIST_SHORT + 32 => LIST_SHORT,
+            _ => LIST,
         };
         if inner.width >= list + 32 {
             let [l, m] =
