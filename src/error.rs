@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 #[non_exhaustive]
 pub enum Error {
     /// Reading or writing a file failed at the operating-system level.
-    #[error("{}: {error}", path.display())]
+    #[error("{}: {error}", shown(path))]
     Io {
         /// The file concerned.
         path: PathBuf,
@@ -18,7 +18,7 @@ pub enum Error {
         error: std::io::Error,
     },
     /// The file is not a valid volume of the format it claims, or its header contradicts itself or its data.
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {message}", shown(path))]
     Format {
         /// The file concerned.
         path: PathBuf,
@@ -26,7 +26,10 @@ pub enum Error {
         message: String,
     },
     /// The file holds fewer bytes of voxel data than its header promises.
-    #[error("{}: truncated voxel data: expected {expected} bytes, found {found}", path.display())]
+    #[error(
+        "{}: truncated voxel data: expected {expected} bytes, found {found}",
+        shown(path)
+    )]
     Truncated {
         /// The file holding the voxel data.
         path: PathBuf,
@@ -38,7 +41,7 @@ pub enum Error {
     /// Loading would need more memory than the limit allows; nothing was allocated.
     #[error(
         "{}: {what} needs {}, over the memory limit of {}",
-        path.display(), human_bytes(*needed), human_bytes(*limit)
+        shown(path), human_bytes(*needed), human_bytes(*limit)
     )]
     TooLarge {
         /// The file concerned.
@@ -51,7 +54,7 @@ pub enum Error {
         limit: u64,
     },
     /// The format is recognised but this variant of it is not supported.
-    #[error("{}: unsupported: {message}", path.display())]
+    #[error("{}: unsupported: {message}", shown(path))]
     Unsupported {
         /// The file concerned.
         path: PathBuf,
@@ -59,7 +62,7 @@ pub enum Error {
         message: String,
     },
     /// Headerless raw data whose description is incomplete: the raw options that must be given.
-    #[error("{}: {detail}: its {} must be given", path.display(), missing.join(" and "))]
+    #[error("{}: {detail}: its {} must be given", shown(path), missing.join(" and "))]
     RawUndescribed {
         /// The file concerned.
         path: PathBuf,
@@ -69,7 +72,7 @@ pub enum Error {
         detail: String,
     },
     /// A file that would be written exists already and overwriting was not asked for.
-    #[error("{}: already exists", path.display())]
+    #[error("{}: already exists", shown(path))]
     Exists {
         /// The file that exists.
         path: PathBuf,
@@ -94,6 +97,17 @@ pub enum Error {
     /// The computation was cancelled through its cancellation flag.
     #[error("cancelled")]
     Cancelled,
+}
+
+/// A path as messages show it: on one line, with control characters (a newline in a file
+/// name) escaped as Rust escapes them.
+pub fn shown(path: &Path) -> String {
+    let text = path.display().to_string();
+    if text.chars().any(char::is_control) {
+        text.chars().flat_map(char::escape_default).collect()
+    } else {
+        text
+    }
 }
 
 /// The library's result type.
@@ -126,6 +140,40 @@ impl Error {
             parameter,
             value: value.to_string(),
             expected: expected.into(),
+        }
+    }
+
+    /// The file this error is about, when it names one.
+    pub fn path(&self) -> Option<&Path> {
+        match self {
+            Self::Io { path, .. }
+            | Self::Format { path, .. }
+            | Self::Truncated { path, .. }
+            | Self::TooLarge { path, .. }
+            | Self::Unsupported { path, .. }
+            | Self::RawUndescribed { path, .. }
+            | Self::Exists { path } => Some(path),
+            _ => None,
+        }
+    }
+
+    /// This error, reported about `named`, the file the user gave, when it is about another
+    /// file that `named` led to (a detached header's data file, a folder's slice): the message
+    /// then names both, the user's first.
+    #[must_use]
+    pub fn reached_from(self, named: &Path) -> Self {
+        match self.path() {
+            Some(p) if p != named => {
+                let inner = self.to_string();
+                let message = inner
+                    .strip_prefix(&format!("{}: ", shown(p)))
+                    .unwrap_or(&inner);
+                Self::Format {
+                    path: named.to_path_buf(),
+                    message: format!("{}: {message}", shown(p)),
+                }
+            }
+            _ => self,
         }
     }
 

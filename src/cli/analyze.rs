@@ -1,16 +1,16 @@
 //! `slabscope analyze FILE`: the view search (and, with the partition, the slabs), as a table or
 //! as the JSON object of DESIGN.md §3.
 
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use slabscope::report::curves_csv;
-use slabscope::volume::io::{VolumeOutput, write_volume};
+use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
 use slabscope::{AnalysisReport, SlabsReport, label_volume};
 
 use super::args::{AnalysisArgs, LoadArgs};
-use super::progress::with_bar;
 
 /// Arguments of `slabscope analyze`.
 #[derive(Debug, Args)]
@@ -46,35 +46,44 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     if let Some(path) = &args.export_labels {
         VolumeOutput::for_path(path)?;
     }
-    for path in [&args.export_labels, &args.export_slabs, &args.curves]
+    let outputs: Vec<&Path> = [&args.export_labels, &args.export_slabs, &args.curves]
         .into_iter()
         .flatten()
-    {
-        super::check_writable(path, args.force)?;
-    }
+        .map(PathBuf::as_path)
+        .collect();
+    super::check_outputs(&outputs, std::slice::from_ref(&args.file), args.force)?;
     let loaded = super::load(&args.file, &args.load)?;
+    super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let volume = &loaded.volume;
     let name = args.file.display().to_string();
     let params = args.analysis.params(args.views);
-    let analysis = with_bar(|monitor| slabscope::analyze(volume, &params, monitor))
-        .with_context(|| name.clone())?;
+    let analysis = args.analysis.analyze(&name, volume, args.views)?;
     let part = &analysis.partition;
-    if args.json {
-        let report = AnalysisReport::new(&name, volume, &params.view, &analysis)?;
-        println!("{}", slabscope::report::to_json(&report)?);
-    } else {
-        super::text::print_analysis(&name, volume, &analysis);
-    }
+    // Every export is written in full before any is put in place, and the report printed only
+    // then: an error leaves no export behind and nothing on standard output.
+    let mut staged = Vec::new();
     if let Some(path) = &args.export_labels {
-        let labels = label_volume(volume, part)?;
-        write_volume(path, &labels, args.force)?;
+        staged.push(stage_volume(path, &label_volume(volume, part)?)?);
     }
     if let Some(path) = &args.export_slabs {
         let text = slabscope::report::to_json(&SlabsReport::new(&name, volume, part))?;
-        super::write_new(path, text.as_bytes(), args.force)?;
+        staged.push(stage(path, |mut f| f.write_all(text.as_bytes()))?);
     }
     if let Some(path) = &args.curves {
-        super::write_new(path, curves_csv(part).as_bytes(), args.force)?;
+        let text = curves_csv(part);
+        staged.push(stage(path, |mut f| f.write_all(text.as_bytes()))?);
+    }
+    let report = if args.json {
+        Some(AnalysisReport::new(&name, volume, &params.view, &analysis)?)
+    } else {
+        None
+    };
+    for s in staged {
+        s.persist(args.force)?;
+    }
+    match report {
+        Some(report) => println!("{}", slabscope::report::to_json(&report)?),
+        None => super::text::print_analysis(&name, volume, &analysis),
     }
     Ok(())
 }

@@ -87,7 +87,7 @@ pub struct AnalysisArgs {
     pub slabs: Option<usize>,
     /// Stop when the best ΔI (topdown), the largest NMI (bottomup), or the gain of one more slab
     /// (optimal) falls below T.
-    #[arg(long, value_name = "T", value_parser = finite)]
+    #[arg(long, value_name = "T", value_parser = within(0.0, 1e6))]
     pub threshold: Option<f64>,
     /// The background left out of slab histograms: auto (the region connected to the border at
     /// or below a threshold from the border voxels), none (every voxel, as the paper), or VALUE
@@ -114,6 +114,35 @@ pub enum MethodArg {
 }
 
 impl AnalysisArgs {
+    /// Runs the analysis of `volume` (read from `name`) with a progress bar; an error names the
+    /// file, and a slab count the user did not give is not blamed on `--slabs`.
+    pub fn analyze(
+        &self,
+        name: &str,
+        volume: &slabscope::Volume,
+        search_views: bool,
+    ) -> anyhow::Result<slabscope::Analysis> {
+        let params = self.params(search_views);
+        super::progress::with_bar(|monitor| slabscope::analyze(volume, &params, monitor))
+            .map_err(|e| match (&e, self.slabs, self.threshold) {
+                (
+                    slabscope::Error::InvalidParameter {
+                        parameter: "slabs",
+                        expected,
+                        ..
+                    },
+                    None,
+                    None,
+                ) => {
+                    anyhow::anyhow!(
+                        "the default of 4 slabs does not fit: {expected} (--slabs K asks for fewer)"
+                    )
+                }
+                _ => e.into(),
+            })
+            .map_err(|e| e.context(name.to_string()))
+    }
+
     /// The library's parameters; `search_views` runs the view search even for a named axis.
     pub fn params(&self, search_views: bool) -> AnalysisParams {
         AnalysisParams {
@@ -161,6 +190,14 @@ fn finite(s: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| v.is_finite())
         .ok_or_else(|| format!("{s:?} is not a number"))
+}
+
+/// A parser of numbers in `lo..=hi`, for float options.
+pub fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    move |s: &str| match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("{s:?} is not a number from {lo} to {hi}")),
+    }
 }
 
 fn positive(s: &str) -> Result<f64, String> {

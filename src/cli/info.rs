@@ -49,8 +49,8 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
             "dims": v.dims(),
             "spacing": v.spacing(),
             "type": v.voxel_type(),
-            "range": [s.min, s.max],
-            "mean": s.mean,
+            "range": (s.finite > 0).then_some([s.min, s.max]),
+            "mean": (s.finite > 0).then_some(s.mean),
             "voxels": v.len(),
             "missing": s.missing,
             "memory_bytes": v.memory_bytes(),
@@ -81,8 +81,12 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
     );
     print_geometry(&geometry);
     println!("type        {}", v.voxel_type());
-    println!("range       {} .. {}", s.min, s.max);
-    println!("mean        {:.6}", s.mean);
+    if s.finite == 0 {
+        println!("range       none: every voxel is NaN or infinite");
+    } else {
+        println!("range       {} .. {}", s.min, s.max);
+        println!("mean        {:.6}", s.mean);
+    }
     if s.missing > 0 {
         println!("missing     {} NaN/Inf voxels", s.missing);
     }

@@ -9,10 +9,12 @@ mod progress;
 mod render;
 mod text;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::Subcommand;
+use slabscope::error::shown;
+use slabscope::volume::io::{check_output, same_file};
 use slabscope::{Error, Loaded};
 
 pub use args::{AnalysisArgs, LoadArgs};
@@ -34,6 +36,7 @@ pub enum Command {
 
 /// Runs a subcommand.
 pub fn run(command: Command) -> Result<()> {
+    remove_staged_on_signals();
     match command {
         Command::Info(args) => info::run(&args),
         Command::Analyze(args) => analyze::run(&args),
@@ -41,6 +44,22 @@ pub fn run(command: Command) -> Result<()> {
         Command::Render(args) => render::run_render(&args),
         Command::Preview(args) => render::run_preview(&args),
     }
+}
+
+/// On SIGINT, SIGTERM or SIGHUP, removes the outputs staged and not yet in place, then ends as
+/// the signal would have ended the process.
+fn remove_staged_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            slabscope::volume::io::remove_staged();
+            let _ = signal_hook::low_level::emulate_default_handler(signal);
+            std::process::exit(128 + signal);
+        }
+    });
 }
 
 /// Loads `path`, printing the loader's notes to stderr.
@@ -52,26 +71,38 @@ pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
     Ok(loaded)
 }
 
-/// Fails unless `path` may be written: it must not exist unless `force` is set.
-pub fn check_writable(path: &Path, force: bool) -> Result<()> {
-    if path.exists() && !force {
-        return Err(Error::Exists {
-            path: path.to_path_buf(),
+/// Checks, before any work, the files a command will write: each may be written (a new file,
+/// or with `--force` an existing regular file, in a folder that takes new files), none is one of
+/// `inputs` (`--force` or not), and no two are the same file.
+pub fn check_outputs(outputs: &[&Path], inputs: &[PathBuf], force: bool) -> Result<()> {
+    for (i, out) in outputs.iter().enumerate() {
+        check_output(out, force)?;
+        if inputs.iter().any(|input| same_path(out, input)) {
+            bail!(
+                "{}: is an input of this command; slabscope never writes over its input",
+                shown(out)
+            );
         }
-        .into());
-    }
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        bail!(
-            "{}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        );
+        if outputs[..i].iter().any(|o| same_path(o, out)) {
+            bail!("{}: given for two outputs", shown(out));
+        }
     }
     Ok(())
+}
+
+/// Whether two paths name one file: the same file, or (for files yet to be made) the same name
+/// in the same folder.
+fn same_path(a: &Path, b: &Path) -> bool {
+    let resolved = |p: &Path| {
+        let dir = p
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        dir.canonicalize()
+            .ok()
+            .map(|d| d.join(p.file_name().unwrap_or_default()))
+    };
+    same_file(a, b) || (resolved(a).is_some() && resolved(a) == resolved(b))
 }
 
 /// Writes `bytes` to `path` atomically; an existing file is replaced only when `force` is set.

@@ -47,7 +47,7 @@ pub struct PhantomArgs {
 }
 
 pub fn run(args: &PhantomArgs) -> Result<()> {
-    super::check_writable(&args.output, args.force)?;
+    super::check_outputs(&[&args.output], &[], args.force)?;
     let default = match args.kind {
         Kind::Body => [128, 128, 208],
         Kind::Layers | Kind::SheppLogan => [96; 3],

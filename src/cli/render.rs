@@ -4,14 +4,14 @@
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
 use slabscope::render::{
     CameraParams, Colormap, Gap, Image, ImageOutput, Layout, Mode, Preset, RenderParams, Renderer,
 };
 
-use super::args::{AnalysisArgs, LoadArgs};
+use super::args::{AnalysisArgs, LoadArgs, within};
 use super::progress::with_bar;
 use crate::term::{self, Graphics, Protocol};
 
@@ -31,13 +31,13 @@ pub struct ViewOptions {
     #[arg(long, value_name = "LO,HI", value_parser = parse_window, allow_hyphen_values = true)]
     pub window: Option<(f32, f32)>,
     /// Camera angle around the slab axis, degrees.
-    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true, value_parser = within(-360.0, 360.0))]
     pub azimuth: f64,
     /// Camera angle above the slab planes, degrees.
-    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true, value_parser = within(-90.0, 90.0))]
     pub elevation: f64,
     /// Magnification (1 fits the scene).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = within(0.05, 50.0))]
     pub zoom: f64,
     /// Perspective projection instead of orthographic.
     #[arg(long)]
@@ -46,7 +46,7 @@ pub struct ViewOptions {
     #[arg(long, value_enum, default_value_t = GapArg::Similarity)]
     pub gap: GapArg,
     /// Total gap as a fraction of the stack's length.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, value_parser = within(0.0, 10.0))]
     pub spread: f64,
     /// Show this slab normally and the others faint.
     #[arg(long, value_name = "SLAB")]
@@ -55,7 +55,7 @@ pub struct ViewOptions {
     #[arg(long, requires = "highlight")]
     pub solo: bool,
     /// Sample distance along rays, in smallest voxel spacings.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = within(0.05, 10.0))]
     pub step: f64,
     /// No gradient shading.
     #[arg(long)]
@@ -228,12 +228,16 @@ fn render_file(
     file: &std::path::Path,
     scene: &SceneArgs,
     (width, height): (u32, u32),
+    output: Option<(&std::path::Path, bool)>,
 ) -> Result<Image> {
     let loaded = super::load(file, &scene.load)?;
+    if let Some((path, force)) = output {
+        super::check_outputs(&[path], &loaded.sources, force)?;
+    }
     let volume = &loaded.volume;
-    let params = scene.analysis.params(false);
-    let part = with_bar(|monitor| slabscope::analyze(volume, &params, monitor))
-        .with_context(|| file.display().to_string())?
+    let part = scene
+        .analysis
+        .analyze(&file.display().to_string(), volume, false)?
         .partition;
     let options = &scene.options;
     if let Some(h) = options.highlight
@@ -253,8 +257,17 @@ fn render_file(
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {
     let format = ImageOutput::for_path(&args.output)?;
-    super::check_writable(&args.output, args.force)?;
-    let image = render_file(&args.file, &args.scene, args.size)?;
+    super::check_outputs(
+        &[&args.output],
+        std::slice::from_ref(&args.file),
+        args.force,
+    )?;
+    let image = render_file(
+        &args.file,
+        &args.scene,
+        args.size,
+        Some((&args.output, args.force)),
+    )?;
     super::write_new(&args.output, &image.encode(format)?, args.force)
 }
 
@@ -278,7 +291,7 @@ pub fn run_preview(args: &PreviewArgs) -> Result<()> {
         eprintln!("slabscope: note: {note}");
     }
     let cells = (cols, rows - 2);
-    let image = render_file(&args.file, &args.scene, caps.image_size(cells))?;
+    let image = render_file(&args.file, &args.scene, caps.image_size(cells), None)?;
     let (w, h) = (image.pixmap.width(), image.pixmap.height());
     let rgba = RgbaImage::from_raw(w, h, image.pixmap.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;

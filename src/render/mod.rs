@@ -94,6 +94,9 @@ pub const MAX_PIXELS: u64 = 64 << 20;
 /// Voxels a side of a brick of the empty-space grid.
 const BRICK: usize = 8;
 
+/// Slabs may be moved at most this many times the volume's diagonal.
+const MAX_REACH: f64 = 100.0;
+
 /// Opacity at which a ray stops.
 const OPAQUE: f32 = 0.99;
 
@@ -260,6 +263,7 @@ struct Frame<'a> {
 impl<'a> Renderer<'a> {
     /// Prepares `volume` for rendering (one pass over its voxels).
     pub fn new(volume: &'a Volume) -> Result<Self> {
+        volume.require_data()?;
         Ok(Self {
             volume,
             bricks: Bricks::new(volume),
@@ -290,6 +294,19 @@ impl<'a> Renderer<'a> {
         if !(params.step.is_finite() && params.step > 0.0) {
             return Err(Error::invalid("step", params.step, "a positive number"));
         }
+        let c = &params.camera;
+        if !(c.zoom.is_finite() && c.zoom > 1e-3 && c.zoom < 1e3) {
+            return Err(Error::invalid(
+                "zoom",
+                c.zoom,
+                "a number between 0.001 and 1000",
+            ));
+        }
+        for (name, v) in [("azimuth", c.azimuth), ("elevation", c.elevation)] {
+            if !v.is_finite() {
+                return Err(Error::invalid(name, v, "a finite angle in degrees"));
+            }
+        }
         let spacing = self.volume.spacing();
         let reference = min_spacing(spacing);
         let step = params.step * reference;
@@ -310,7 +327,15 @@ impl<'a> Renderer<'a> {
         let dims = self.volume.dims();
         let extent: [f64; 3] = std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m]);
         let center = extent.map(|e| e / 2.0);
-        let radius = dot(extent, extent).sqrt() / 2.0 + layout.reach() + reference;
+        let diagonal = dot(extent, extent).sqrt();
+        if !(layout.reach().is_finite() && layout.reach() <= MAX_REACH * diagonal.max(reference)) {
+            return Err(Error::invalid(
+                "spread",
+                layout.reach(),
+                format!("slabs moved at most {MAX_REACH} times the volume's diagonal"),
+            ));
+        }
+        let radius = diagonal / 2.0 + layout.reach() + reference;
         let t = self.volume.transform();
         let display = t.display_frame(layout.axis, spacing);
         let camera = Camera::oriented(center, radius, layout.axis, display, &params.camera, w, h)?;

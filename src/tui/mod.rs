@@ -59,6 +59,10 @@ pub fn run(options: Options) -> Result<()> {
         || slabscope::BUILTIN_NAME.to_string(),
         |p| p.display().to_string(),
     );
+    // A file that cannot be opened is an error before the screen changes.
+    if let Some(path) = &file {
+        slabscope::volume::io::check_input(path)?;
+    }
     if !std::io::stdout().is_terminal() || term::tty_input().is_err() {
         bail!(
             "the TUI needs a terminal, and this has none (over SSH, `ssh -t`); \
@@ -101,8 +105,13 @@ pub fn run(options: Options) -> Result<()> {
             graphics: caps.graphics.name(),
         };
         let mut jobs = Jobs::new(tx, caps, file, load);
-        let (mut app, effects) = App::new(name, analysis, screen);
-        run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)
+        let (mut app, effects) = App::new(name.clone(), analysis, screen);
+        run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)?;
+        // The user saw why; the exit status says so too.
+        match &app.volume {
+            event::Load::Failed(e) => bail!("{e}"),
+            _ => Ok(()),
+        }
     })();
     restore(&hide);
     let _ = std::panic::take_hook();

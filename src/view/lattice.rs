@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::geometry::{coordinate_axis, dot, frame, min_spacing};
-use crate::volume::Volume;
+use crate::volume::{MAX_SPACING_RATIO, Volume};
 
 /// How a volume is sampled and its samples quantized: the same for the view search and for the
 /// slices it partitions, so that both see one signal. `None` spacings mean the smallest voxel
@@ -50,8 +50,19 @@ impl SamplingParams {
         let x = self.ray_spacing.unwrap_or(s);
         let y = self.sample_spacing.unwrap_or(s);
         for (name, v) in [("ray_spacing", x), ("sample_spacing", y)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::invalid(name, v, "a positive number of mm"));
+            if !(v.is_finite()
+                && v > 0.0
+                && v <= MAX_SPACING_RATIO * s
+                && s <= MAX_SPACING_RATIO * v)
+            {
+                return Err(Error::invalid(
+                    name,
+                    v,
+                    format!(
+                        "a positive number of mm within a factor of {MAX_SPACING_RATIO} of the \
+                         smallest voxel spacing, {s} mm"
+                    ),
+                ));
             }
         }
         // A lattice's samples fill the box of the voxels: its volume over a cell's, x²·y.

@@ -17,6 +17,11 @@ pub use voxel::{Endian, VoxelType};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 
+/// The largest ratio between two voxel spacings (and between a lattice spacing and the smallest
+/// voxel spacing): real data reach about 200 (histology), and the work of the view search grows
+/// with the square of the ratio.
+pub const MAX_SPACING_RATIO: f64 = 1e4;
+
 /// Summary statistics over the finite voxels of a volume.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Stats {
@@ -49,7 +54,8 @@ impl Volume {
     /// Builds a volume from voxels in x-fastest order.
     ///
     /// Fails when a dimension is zero, the voxel count does not match, a spacing is not a positive
-    /// finite number, or no voxel is finite.
+    /// finite number or lies more than [`MAX_SPACING_RATIO`] from another. A volume with no
+    /// finite voxel is made (it can be described) but cannot be analysed.
     pub fn new(
         dims: [usize; 3],
         spacing: [f64; 3],
@@ -71,11 +77,19 @@ impl Volume {
                 format!("one per voxel of {}", dims_string(dims)),
             ));
         }
-        if spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        let (lo, hi) = spacing
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), &s| {
+                (lo.min(s), hi.max(s))
+            });
+        if spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) || hi > MAX_SPACING_RATIO * lo {
             return Err(Error::invalid(
                 "spacing",
                 format!("{spacing:?}"),
-                "three positive finite numbers",
+                format!(
+                    "three positive finite numbers within a factor of {MAX_SPACING_RATIO} of \
+                     each other"
+                ),
             ));
         }
         voxels.par_iter_mut().for_each(|v| {
@@ -84,12 +98,6 @@ impl Volume {
             }
         });
         let stats = compute_stats(&voxels);
-        if stats.finite == 0 {
-            return Err(Error::Degenerate(format!(
-                "all {} voxels are NaN or infinite: the volume holds no data",
-                voxels.len()
-            )));
-        }
         let data = Array3::from_shape_vec(dims.f(), voxels)
             .map_err(|e| Error::invalid("dims", dims_string(dims), e.to_string()))?;
         Ok(Self {
@@ -183,11 +191,26 @@ impl Volume {
 
     /// The quantizer of DESIGN.md §2 for `bins` bins over this volume's finite range.
     pub fn quantizer(&self, bins: usize) -> Result<Quantizer> {
+        self.require_data()?;
         Quantizer::new(self.stats.min, self.stats.max, bins)
+    }
+
+    /// Fails when no voxel is finite: such a volume can be described, not analysed or drawn.
+    pub fn require_data(&self) -> Result<()> {
+        if self.stats.finite == 0 {
+            return Err(Error::Degenerate(format!(
+                "all {} voxels are NaN or infinite: the volume holds no data",
+                self.len()
+            )));
+        }
+        Ok(())
     }
 
     /// Counts of finite voxels per quantization bin (`bins` equal-width bins over [min, max]).
     pub fn histogram(&self, bins: usize) -> Result<Vec<u64>> {
+        if self.stats.finite == 0 {
+            return Ok(vec![0; bins]);
+        }
         let q = self.quantizer(bins)?;
         Ok(self
             .voxels()
@@ -274,13 +297,24 @@ mod tests {
     }
 
     #[test]
-    fn rejects_bad_shapes_and_empty_data() {
+    fn rejects_bad_shapes_and_spacings() {
         let bad = |dims, spacing, data| Volume::new(dims, spacing, VoxelType::U8, data).is_err();
         assert!(bad([0, 1, 1], [1.0; 3], vec![]));
         assert!(bad([2, 2, 2], [1.0; 3], ramp(7)));
         assert!(bad([1, 1, 2], [1.0, 0.0, 1.0], ramp(2)));
         assert!(bad([1, 1, 2], [1.0, f64::NAN, 1.0], ramp(2)));
-        assert!(bad([1, 1, 2], [1.0; 3], vec![f32::NAN; 2]));
+        assert!(
+            bad([1, 1, 2], [1.0, 1e-5, 1.0], ramp(2)),
+            "a spacing ratio above 1e4"
+        );
+        assert!(
+            !bad([1, 1, 2], [1.0, 1e-4, 1.0], ramp(2)),
+            "a ratio of 1e4 is allowed"
+        );
+        // A volume with no finite voxel is described, not analysed.
+        let empty = Volume::new([1, 1, 2], [1.0; 3], VoxelType::U8, vec![f32::NAN; 2]).unwrap();
+        assert_eq!(empty.histogram(4).unwrap(), vec![0; 4]);
+        assert!(matches!(empty.quantizer(4), Err(Error::Degenerate(_))));
     }
 
     #[test]

@@ -100,7 +100,11 @@ impl ViewsPane {
                 &plane[..plane.len().min(3)]
             });
             let plane = if plane == "axi" { "ax" } else { plane };
-            format!("{mark}{:>3} {axis} {name} {plane:<3} {:.4}", i + 1, score(v))
+            format!(
+                "{mark}{:>3} {axis} {name} {plane:<3} {:.4}",
+                i + 1,
+                score(v)
+            )
         } else if width >= LIST {
             let name = axis.name().map_or(String::new(), |n| format!(" {n}"));
             format!("{mark}{:>3} {axis}{name} {:.4}", i + 1, score(v))

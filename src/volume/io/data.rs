@@ -101,10 +101,8 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
     let mut reader = BufReader::new(file);
     let mut pos = spec.start;
     for line in 0..spec.skip_lines {
-        let mut buf = Vec::new();
-        let n = reader
-            .read_until(b'\n', &mut buf)
-            .map_err(|e| Error::io(path, e))?;
+        // Streamed: a "line" without an end is not held in memory.
+        let n = reader.skip_until(b'\n').map_err(|e| Error::io(path, e))?;
         if n == 0 {
             return Err(Error::format(
                 path,
@@ -267,22 +265,69 @@ fn fill(reader: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
     Ok(got)
 }
 
-fn read_ascii(spec: &DataSpec, mut reader: impl Read, count: usize) -> Result<Vec<f32>> {
+/// The longest token of ascii data: longer ones are not numbers slabscope reads.
+const MAX_TOKEN: usize = 64;
+
+/// Characters of a bad token an error quotes.
+const QUOTED: usize = 40;
+
+/// `token` quoted for a one-line message: at most [`QUOTED`] characters, escaped.
+fn quote(token: &[u8]) -> String {
+    let text = String::from_utf8_lossy(&token[..token.len().min(QUOTED)]);
+    let more = if token.len() > QUOTED { "…" } else { "" };
+    format!("{text:?}{more}")
+}
+
+/// The next whitespace- or comma-separated token of `reader` in `token`: `false` at the end. A
+/// token longer than [`MAX_TOKEN`] stops the reading, so that no garbage is held in memory.
+fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std::io::Result<bool> {
+    token.clear();
+    loop {
+        let buf = match reader.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if buf.is_empty() {
+            return Ok(!token.is_empty());
+        }
+        let separator = |b: &u8| b.is_ascii_whitespace() || *b == b',';
+        let mut used = 0;
+        for b in buf {
+            used += 1;
+            if separator(b) {
+                if !token.is_empty() {
+                    reader.consume(used);
+                    return Ok(true);
+                }
+            } else {
+                token.push(*b);
+                if token.len() > MAX_TOKEN {
+                    reader.consume(used);
+                    return Ok(true);
+                }
+            }
+        }
+        reader.consume(used);
+    }
+}
+
+fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, count: usize) -> Result<Vec<f32>> {
     let path = spec.file.as_path();
-    let mut text = String::new();
-    reader
-        .read_to_string(&mut text)
-        .map_err(|e| Error::format(path, format!("ascii data is not text: {e}")))?;
+    let io = |e: std::io::Error| Error::format(path, format!("ascii data: {e}"));
     let skip = match spec.skip {
-        Skip::Bytes(n) => usize::try_from(n).unwrap_or(usize::MAX),
+        Skip::Bytes(n) => n,
         Skip::FromEnd => return Err(Error::unsupported(path, "byte skip -1 with ascii data")),
     };
-    let text = text.get(skip..).unwrap_or("");
-    let mut out = Vec::with_capacity(count);
-    for token in text
-        .split(|c: char| c.is_ascii_whitespace() || c == ',')
-        .filter(|t| !t.is_empty())
-    {
+    std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(io)?;
+    let ty = spec.voxel_type;
+    let integer = !matches!(ty, VoxelType::F32 | VoxelType::F64);
+    let (lo, hi) = ty.range();
+    let mut out = Vec::new();
+    out.try_reserve_exact(count)
+        .map_err(|_| Error::format(path, "no memory for the ascii data"))?;
+    let mut token = Vec::with_capacity(MAX_TOKEN + 1);
+    while next_token(&mut reader, &mut token).map_err(io)? {
         if out.len() == count {
             if spec.allow_trailing {
                 break;
@@ -292,9 +337,20 @@ fn read_ascii(spec: &DataSpec, mut reader: impl Read, count: usize) -> Result<Ve
                 format!("ascii data holds more than the {count} values the header describes"),
             ));
         }
-        let v: f64 = token
-            .parse()
-            .map_err(|_| Error::format(path, format!("ascii data: {token:?} is not a number")))?;
+        let bad = |why: &str| {
+            Error::format(
+                path,
+                format!("ascii data, value {}: {} {why}", out.len(), quote(&token)),
+            )
+        };
+        let v: f64 = std::str::from_utf8(&token)
+            .ok()
+            .filter(|_| token.len() <= MAX_TOKEN)
+            .and_then(|t| t.parse().ok())
+            .ok_or_else(|| bad("is not a number"))?;
+        if integer && !(v.fract() == 0.0 && (lo..=hi).contains(&v)) {
+            return Err(bad(&format!("is not a {ty} value ({lo} to {hi})")));
+        }
         out.push(match spec.scale {
             Some((m, b)) => (v * m + b) as f32,
             None => v as f32,

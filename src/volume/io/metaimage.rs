@@ -261,7 +261,11 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let transform = transform(&h, spacing);
-    Ok(Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?.with_transform(transform))
+    Ok(
+        Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?
+            .with_transform(transform)
+            .with_source(&spec.file),
+    )
 }
 
 /// The voxel-to-world transform of a 3D header with `TransformMatrix` or `Offset`: ITK's world

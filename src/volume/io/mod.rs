@@ -6,6 +6,7 @@ mod limits;
 mod metaimage;
 mod nifti;
 mod nrrd;
+mod output;
 mod raw;
 mod tiff;
 mod volumeshop;
@@ -19,6 +20,7 @@ use serde::Serialize;
 pub use limits::{default_max_memory, parse_bytes, physical_memory};
 pub use nifti::write_nifti;
 pub use nrrd::{NrrdEncoding, write_nrrd};
+pub use output::{Staged, check_output, remove_staged, same_file, stage, write_atomic};
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
 
 use crate::error::{Error, Result};
@@ -91,10 +93,52 @@ pub struct Loaded {
     pub format: Format,
     /// Things a user should know, e.g. "4D file: loaded the first of 12 volumes".
     pub notes: Vec<String>,
+    /// Every file read: the one named, and a detached header's data file.
+    pub sources: Vec<PathBuf>,
 }
 
 /// Loads the volume at `path` (a file, or a folder of TIFF slices).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    check_input(path)?;
+    load_checked(path, opts).map_err(|e| e.reached_from(path))
+}
+
+/// Fails unless `path` is a regular file or a folder: a FIFO would block forever and a device
+/// would never end.
+pub fn check_input(path: &Path) -> Result<()> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    match kind(&meta) {
+        None => Ok(()),
+        Some(kind) => Err(Error::unsupported(
+            path,
+            format!("{kind}: slabscope reads regular files and folders"),
+        )),
+    }
+}
+
+/// What a path that is neither a regular file nor a folder is, in words.
+fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
+    if meta.is_file() || meta.is_dir() {
+        return None;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_fifo() {
+            return Some("a FIFO (named pipe)");
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return Some("a device");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("not a regular file")
+}
+
+fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let (format, mut loaded) = if meta.is_dir() {
         (Format::TiffFolder, tiff::load_folder(path, opts)?)
@@ -123,10 +167,13 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             loaded.volume.stats().min
         ));
     }
+    let mut sources = vec![path.to_path_buf()];
+    sources.extend(loaded.sources.into_iter().filter(|s| s != path));
     Ok(Loaded {
         volume: loaded.volume,
         format,
         notes: loaded.notes,
+        sources,
     })
 }
 
@@ -134,6 +181,8 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
 pub(crate) struct Read0 {
     pub volume: Volume,
     pub notes: Vec<String>,
+    /// Files read besides the one named (a detached header's data file).
+    pub sources: Vec<PathBuf>,
 }
 
 impl Read0 {
@@ -148,7 +197,17 @@ impl Read0 {
     ) -> Result<Self> {
         let volume = Volume::new(dims, spacing, ty, voxels)
             .map_err(|e| Error::format(path, e.to_string()))?;
-        Ok(Self { volume, notes })
+        Ok(Self {
+            volume,
+            notes,
+            sources: Vec::new(),
+        })
+    }
+
+    /// With `file` among the files read, when it is not the one named.
+    pub(crate) fn with_source(mut self, file: &Path) -> Self {
+        self.sources.push(file.to_path_buf());
+        self
     }
 
     /// With the voxel-to-world transform the file states, when it states one; a note when it is
@@ -269,58 +328,20 @@ impl VolumeOutput {
 }
 
 /// Writes `volume` in the format its extension names ([`VolumeOutput`]), atomically; an existing
-/// `path` is replaced only when `force` is set.
+/// `path` is replaced only when `force` is set, and only when it is a regular file.
 pub fn write_volume(path: &Path, volume: &Volume, force: bool) -> Result<()> {
-    match VolumeOutput::for_path(path)? {
-        VolumeOutput::Nrrd => write_nrrd(path, volume, NrrdEncoding::Gzip, force),
-        VolumeOutput::Nifti => write_nifti(path, volume, false, force),
-        VolumeOutput::NiftiGz => write_nifti(path, volume, true, force),
-    }
+    check_output(path, force)?;
+    stage_volume(path, volume)?.persist(force)
 }
 
-/// Writes a file through a temporary file beside `path`, renamed into place when complete, so a
-/// reader never sees half a file; an existing `path` is replaced only when `force` is set. The
-/// file gets the usual permissions (0644 on Unix), not the temporary file's private ones.
-pub fn write_atomic(
-    path: &Path,
-    force: bool,
-    write: impl FnOnce(&File) -> std::io::Result<()>,
-) -> Result<()> {
-    if !force && path.exists() {
-        return Err(Error::Exists {
-            path: path.to_path_buf(),
-        });
+/// `volume` written in the format the extension of `path` names, to a temporary file beside it
+/// that [`Staged::persist`] puts in place.
+pub fn stage_volume(path: &Path, volume: &Volume) -> Result<Staged> {
+    match VolumeOutput::for_path(path)? {
+        VolumeOutput::Nrrd => nrrd::stage(path, volume, NrrdEncoding::Gzip),
+        VolumeOutput::Nifti => nifti::stage(path, volume, false),
+        VolumeOutput::NiftiGz => nifti::stage(path, volume, true),
     }
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".slabscope-").suffix(".tmp");
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o644));
-    }
-    let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
-    write(tmp.as_file())
-        .and_then(|()| tmp.as_file().sync_all())
-        .map_err(|e| Error::io(path, e))?;
-    let persisted = if force {
-        tmp.persist(path)
-    } else {
-        tmp.persist_noclobber(path)
-    };
-    persisted.map_err(|e| {
-        if e.error.kind() == std::io::ErrorKind::AlreadyExists {
-            Error::Exists {
-                path: path.to_path_buf(),
-            }
-        } else {
-            Error::io(path, e.error)
-        }
-    })?;
-    Ok(())
 }
 
 /// The data file a header names, relative to the header's folder; it must exist.
@@ -331,13 +352,20 @@ pub(crate) fn data_file(header: &Path, name: &str) -> Result<PathBuf> {
     } else {
         header.parent().unwrap_or(Path::new(".")).join(p)
     };
-    if file.is_file() {
-        Ok(file)
-    } else {
-        Err(Error::format(
+    match std::fs::metadata(&file) {
+        Ok(meta) if meta.is_file() => Ok(file),
+        Ok(meta) => Err(Error::format(
             header,
-            format!("its data file {} does not exist", file.display()),
-        ))
+            format!(
+                "its data file {} is {}",
+                crate::error::shown(&file),
+                kind(&meta).unwrap_or("a folder")
+            ),
+        )),
+        Err(e) => Err(Error::format(
+            header,
+            format!("its data file {}: {e}", crate::error::shown(&file)),
+        )),
     }
 }
 

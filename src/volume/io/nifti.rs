@@ -12,7 +12,7 @@ use flate2::write::GzEncoder;
 use nifti::{Endianness, NiftiHeader};
 
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
-use super::{LoadOptions, Read0, data_file};
+use super::{LoadOptions, Read0, Staged, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::geometry::world::Quaternion;
@@ -108,19 +108,28 @@ fn unit_to_mm(xyzt_units: u8) -> f64 {
 pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (h, gz) = read_header(path)?;
     let mut notes = Vec::new();
-    let ndim = usize::from(h.dim[0]);
+    // The header's dims are signed 16-bit numbers (the crate reads them unsigned).
+    let signed = |i: usize| h.dim[i] as i16;
+    let ndim = signed(0);
     if !(1..=7).contains(&ndim) {
         return Err(Error::format(
             path,
             format!("dim[0] is {ndim}, not between 1 and 7"),
         ));
     }
+    let ndim = ndim as usize;
+    if let Some(i) = (1..=ndim).find(|&i| signed(i) < 1) {
+        return Err(Error::format(
+            path,
+            format!(
+                "dim[{i}] is {}: every used dimension must be at least 1",
+                signed(i)
+            ),
+        ));
+    }
     let dim = |i: usize| if i <= ndim { usize::from(h.dim[i]) } else { 1 };
     let dims = [dim(1), dim(2), dim(3)];
     let extra: usize = (4..=ndim).map(dim).product();
-    if extra == 0 {
-        return Err(Error::format(path, "a dimension beyond the third is zero"));
-    }
     if extra > 1 {
         notes.push(format!(
             "{ndim}D file with {extra} volumes of {}: loaded the first",
@@ -183,7 +192,9 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         allow_trailing: extra > 1,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Ok(Read0::new(path, dims, spacing, ty, voxels, notes)?.with_transform(transform(&h, unit)))
+    Ok(Read0::new(path, dims, spacing, ty, voxels, notes)?
+        .with_transform(transform(&h, unit))
+        .with_source(&spec.file))
 }
 
 /// The voxel-to-world transform the header states, in mm: the sform when its code is set, else
@@ -262,8 +273,14 @@ fn image_file(path: &Path, gz: bool) -> Result<PathBuf> {
 /// The file is written to a temporary file beside `path` and renamed into place; an existing
 /// `path` is replaced only when `force` is set.
 pub fn write_nifti(path: &Path, volume: &Volume, gzip: bool, force: bool) -> Result<()> {
+    super::check_output(path, force)?;
+    stage(path, volume, gzip)?.persist(force)
+}
+
+/// `volume` as NIfTI-1 in a temporary file beside `path`, to be put in place.
+pub(crate) fn stage(path: &Path, volume: &Volume, gzip: bool) -> Result<Staged> {
     let header = header_bytes(volume);
-    super::write_atomic(path, force, |file| {
+    super::stage(path, |file| {
         let mut out = BufWriter::new(file);
         if gzip {
             let mut gz = GzEncoder::new(&mut out, Compression::fast());

@@ -9,7 +9,7 @@ use flate2::Compression;
 use flate2::write::GzEncoder;
 
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
-use super::{LoadOptions, Read0, data_file};
+use super::{LoadOptions, Read0, Staged, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::voxel::encode_le;
@@ -425,7 +425,11 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let transform = transform(&h, &axes);
-    Ok(Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?.with_transform(transform))
+    Ok(
+        Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?
+            .with_transform(transform)
+            .with_source(&spec.file),
+    )
 }
 
 /// How [`write_nrrd`] stores the voxels.
@@ -445,7 +449,13 @@ pub enum NrrdEncoding {
 /// The file is written to a temporary file beside `path` and renamed into place; an existing
 /// `path` is replaced only when `force` is set.
 pub fn write_nrrd(path: &Path, volume: &Volume, encoding: NrrdEncoding, force: bool) -> Result<()> {
-    super::write_atomic(path, force, |file| write_to(file, volume, encoding))
+    super::check_output(path, force)?;
+    stage(path, volume, encoding)?.persist(force)
+}
+
+/// `volume` as NRRD in a temporary file beside `path`, to be put in place.
+pub(crate) fn stage(path: &Path, volume: &Volume, encoding: NrrdEncoding) -> Result<Staged> {
+    super::stage(path, |file| write_to(file, volume, encoding))
 }
 
 fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Result<()> {

@@ -16,56 +16,151 @@ use crate::volume::VoxelType;
 
 type Tiff = Decoder<BufReader<File>>;
 
-fn open(path: &Path, max_memory: u64) -> Result<Tiff> {
+fn open(path: &Path) -> Result<Tiff> {
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut limits = Limits::default();
-    limits.decoding_buffer_size = usize::try_from(max_memory).unwrap_or(usize::MAX);
     Decoder::new(BufReader::new(file))
-        .map(|d| d.with_limits(limits))
         .map_err(|e| Error::format(path, format!("not a readable TIFF: {e}")))
 }
 
-/// Decodes the current page, checking it is grayscale, and appends it to `out`.
-fn read_page(
-    path: &Path,
-    dec: &mut Tiff,
-    page: usize,
-    out: &mut Vec<f32>,
-) -> Result<(u32, u32, VoxelType)> {
-    let fail = |e: tiff::TiffError| Error::format(path, format!("page {page}: {e}"));
-    let (w, h) = dec.dimensions().map_err(fail)?;
-    match dec.colortype().map_err(fail)? {
-        tiff::ColorType::Gray(_) => {}
-        other => {
-            return Err(Error::unsupported(
-                path,
-                format!("page {page} is {other:?}; slabscope reads grayscale TIFF"),
-            ));
-        }
-    }
-    let image = dec.read_image().map_err(fail)?;
-    let ty = match image {
-        DecodingResult::U8(v) => extend(out, v, VoxelType::U8),
-        DecodingResult::I8(v) => extend(out, v, VoxelType::I8),
-        DecodingResult::U16(v) => extend(out, v, VoxelType::U16),
-        DecodingResult::I16(v) => extend(out, v, VoxelType::I16),
-        DecodingResult::U32(v) => extend(out, v, VoxelType::U32),
-        DecodingResult::I32(v) => extend(out, v, VoxelType::I32),
-        DecodingResult::F32(v) => extend(out, v, VoxelType::F32),
-        DecodingResult::F64(v) => extend(out, v, VoxelType::F64),
-        _ => {
-            return Err(Error::unsupported(
-                path,
-                format!("page {page}: 64-bit integer or 16-bit float samples"),
-            ));
-        }
-    };
-    Ok((w, h, ty))
+/// A page as its directory describes it, read without decoding anything.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Page {
+    width: u32,
+    height: u32,
+    ty: VoxelType,
 }
 
-fn extend<T: Copy + Into<f64>>(out: &mut Vec<f32>, values: Vec<T>, ty: VoxelType) -> VoxelType {
-    out.extend(values.into_iter().map(|v| v.into() as f32));
-    ty
+impl Page {
+    /// Its decoded size in bytes, and in f32 voxels.
+    fn bytes(self) -> usize {
+        self.width as usize * self.height as usize * self.ty.size()
+    }
+
+    fn voxels(self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// The current page's size and sample type, from its tags alone: one grayscale sample a pixel
+/// of a type slabscope reads, or an error that names what it is instead.
+fn describe(path: &Path, dec: &mut Tiff, page: usize) -> Result<Page> {
+    let fail = |e: tiff::TiffError| Error::format(path, format!("page {page}: {e}"));
+    let unsupported = |what: String| {
+        Err(Error::unsupported(
+            path,
+            format!("page {page} has {what}; slabscope reads grayscale TIFF"),
+        ))
+    };
+    let (width, height) = dec.dimensions().map_err(fail)?;
+    let tag = |dec: &mut Tiff, tag: Tag, default: u16| -> Result<u16> {
+        match dec.find_tag_unsigned_vec::<u16>(tag).map_err(fail)? {
+            None => Ok(default),
+            Some(v) => Ok(v.first().copied().unwrap_or(default)),
+        }
+    };
+    let samples = tag(dec, Tag::SamplesPerPixel, 1)?;
+    let bits = tag(dec, Tag::BitsPerSample, 1)?;
+    let format = tag(dec, Tag::SampleFormat, 1)?;
+    let photometric = tag(dec, Tag::PhotometricInterpretation, 1)?;
+    if samples != 1 || photometric > 1 {
+        let kind = match dec.colortype() {
+            Ok(c) => format!("{c:?} pixels"),
+            Err(_) => format!("{samples} samples a pixel"),
+        };
+        return unsupported(kind);
+    }
+    let ty = match (format, bits) {
+        (1, 8) => VoxelType::U8,
+        (2, 8) => VoxelType::I8,
+        (1, 16) => VoxelType::U16,
+        (2, 16) => VoxelType::I16,
+        (1, 32) => VoxelType::U32,
+        (2, 32) => VoxelType::I32,
+        (3, 32) => VoxelType::F32,
+        (3, 64) => VoxelType::F64,
+        (3, b) => return unsupported(format!("{b}-bit float samples")),
+        (1 | 2, 64) => return unsupported("64-bit integer samples".into()),
+        (_, 1) => return unsupported("1-bit (black and white) samples".into()),
+        (_, b) => return unsupported(format!("{b}-bit samples of format {format}")),
+    };
+    Ok(Page { width, height, ty })
+}
+
+fn pages_agree(path: &Path, page: usize, first: Page, this: Page) -> Result<()> {
+    if first == this {
+        return Ok(());
+    }
+    Err(Error::format(
+        path,
+        format!(
+            "page {page} is {}x{} {} but the first page is {}x{} {}",
+            this.width, this.height, this.ty, first.width, first.height, first.ty
+        ),
+    ))
+}
+
+/// Decodes the current page, described by `page`, into `out` (its voxels), with the decoder
+/// allowed no more memory than the page needs.
+fn decode(
+    path: &Path,
+    dec: Tiff,
+    index: usize,
+    page: Page,
+    buffer: &mut DecodingResult,
+    out: &mut [f32],
+) -> Result<Tiff> {
+    let mut limits = Limits::default();
+    limits.decoding_buffer_size = page.bytes();
+    // Compressed strips are read whole: no bigger than the page, with room for data that did
+    // not compress.
+    limits.intermediate_buffer_size = page.bytes().saturating_mul(2).saturating_add(1 << 16);
+    let mut dec = dec.with_limits(limits);
+    dec.read_image_to_buffer(buffer)
+        .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
+    let n = fill(buffer, out);
+    if n != page.voxels() {
+        return Err(Error::format(
+            path,
+            format!("page {index} decoded to {n} samples, not {}", page.voxels()),
+        ));
+    }
+    Ok(dec)
+}
+
+/// Widens the decoded samples into `out`; the number of samples decoded.
+fn fill(buffer: &DecodingResult, out: &mut [f32]) -> usize {
+    fn widen<T: Copy + Into<f64>>(values: &[T], out: &mut [f32]) -> usize {
+        for (o, &v) in out.iter_mut().zip(values) {
+            *o = v.into() as f32;
+        }
+        values.len()
+    }
+    match buffer {
+        DecodingResult::U8(v) => widen(v, out),
+        DecodingResult::I8(v) => widen(v, out),
+        DecodingResult::U16(v) => widen(v, out),
+        DecodingResult::I16(v) => widen(v, out),
+        DecodingResult::U32(v) => widen(v, out),
+        DecodingResult::I32(v) => widen(v, out),
+        DecodingResult::F32(v) => widen(v, out),
+        DecodingResult::F64(v) => widen(v, out),
+        _ => 0,
+    }
+}
+
+/// A zeroed voxel buffer of `dims`, after checking the budget; an allocation the machine cannot
+/// make is an error, not an abort.
+fn voxel_buffer(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<Vec<f32>> {
+    let n = check_budget(path, dims, max_memory)?;
+    let mut voxels = Vec::new();
+    voxels.try_reserve_exact(n).map_err(|_| Error::TooLarge {
+        path: path.to_path_buf(),
+        what: format!("a {} f32 volume", crate::volume::dims_string(dims)),
+        needed: n as u64 * 4,
+        limit: max_memory,
+    })?;
+    voxels.resize(n, 0.0);
+    Ok(voxels)
 }
 
 /// x, y spacing from the resolution tags (pixels per unit), and z from ImageJ's `spacing=`.
@@ -115,51 +210,38 @@ fn spacing(dec: &mut Tiff) -> [f64; 3] {
     [ok(sx), ok(sy), ok(sz)]
 }
 
-fn pages_agree(
-    path: &Path,
-    page: usize,
-    first: (u32, u32, VoxelType),
-    this: (u32, u32, VoxelType),
-) -> Result<()> {
-    if first == this {
-        return Ok(());
-    }
-    Err(Error::format(
-        path,
-        format!(
-            "page {page} is {}x{} {} but the first page is {}x{} {}",
-            this.0, this.1, this.2, first.0, first.1, first.2
-        ),
-    ))
-}
-
 pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let mut dec = open(path, opts.max_memory)?;
+    let mut dec = open(path)?;
     let spacing = spacing(&mut dec);
-    let mut voxels = Vec::new();
-    let mut first = None;
-    let mut pages = 0usize;
-    loop {
-        if let Some((w, h, _)) = first {
-            check_budget(path, [w as usize, h as usize, pages + 1], opts.max_memory)?;
-        } else {
-            let (w, h) = dec
-                .dimensions()
-                .map_err(|e| Error::format(path, e.to_string()))?;
-            check_budget(path, [w as usize, h as usize, 1], opts.max_memory)?;
-        }
-        let this = read_page(path, &mut dec, pages, &mut voxels)?;
-        pages_agree(path, pages, *first.get_or_insert(this), this)?;
-        pages += 1;
-        if !dec.more_images() {
-            break;
-        }
+    // Every page is described and checked against the first, and the whole stack against the
+    // budget, before a single one is decoded.
+    let first = describe(path, &mut dec, 0)?;
+    let mut pages = 1usize;
+    check_budget(
+        path,
+        [first.width as usize, first.height as usize, 1],
+        opts.max_memory,
+    )?;
+    while dec.more_images() {
         dec.next_image()
             .map_err(|e| Error::format(path, format!("page {pages}: {e}")))?;
+        pages_agree(path, pages, first, describe(path, &mut dec, pages)?)?;
+        pages += 1;
+        check_budget(
+            path,
+            [first.width as usize, first.height as usize, pages],
+            opts.max_memory,
+        )?;
     }
-    let (w, h, ty) = first.expect("a TIFF has a first page");
-    let dims = [w as usize, h as usize, pages];
-    Read0::new(path, dims, spacing, ty, voxels, Vec::new())
+    let dims = [first.width as usize, first.height as usize, pages];
+    let mut voxels = voxel_buffer(path, dims, opts.max_memory)?;
+    let mut buffer = DecodingResult::U8(Vec::new());
+    for (index, out) in voxels.chunks_mut(first.voxels()).enumerate() {
+        dec.seek_to_image(index)
+            .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
+        dec = decode(path, dec, index, first, &mut buffer, out)?;
+    }
+    Read0::new(path, dims, spacing, first.ty, voxels, Vec::new())
 }
 
 /// The last run of digits in a file name, for ordering slices.
@@ -174,18 +256,29 @@ fn slice_number(path: &Path) -> Option<u64> {
     digits.chars().rev().collect::<String>().parse().ok()
 }
 
-/// The TIFF files of a folder in slice order.
+/// The TIFF files of a folder in slice order. Anything named like a slice that is not a
+/// readable regular file (a folder, a FIFO, a broken or looping link) is an error that names it,
+/// not a slice silently left out.
 pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
-    let mut files: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.is_file()
-                && p.extension().is_some_and(|e| {
-                    e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff")
-                })
-        })
-        .collect();
+    let mut files = Vec::new();
+    for entry in entries {
+        let path = entry.map_err(|e| Error::io(dir, e))?.path();
+        let named = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
+        if !named {
+            continue;
+        }
+        let meta = std::fs::metadata(&path).map_err(|e| Error::io(&path, e))?;
+        if !meta.is_file() {
+            return Err(Error::format(
+                &path,
+                "named like a slice, but not a regular file",
+            ));
+        }
+        files.push(path);
+    }
     if files.is_empty() {
         return Err(Error::format(dir, "folder holds no .tif or .tiff slices"));
     }
@@ -195,32 +288,36 @@ pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
 
 pub(crate) fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = slice_files(dir)?;
-    let mut first_dec = open(&files[0], opts.max_memory)?;
-    let (w, h) = first_dec
-        .dimensions()
-        .map_err(|e| Error::format(&files[0], e.to_string()))?;
-    check_budget(dir, [w as usize, h as usize, files.len()], opts.max_memory)?;
-    let spacing = spacing(&mut first_dec);
-    drop(first_dec);
-    let mut voxels = Vec::with_capacity(w as usize * h as usize * files.len());
-    let mut first = None;
-    for (i, file) in files.iter().enumerate() {
-        let mut dec = open(file, opts.max_memory)?;
-        let this = read_page(file, &mut dec, 0, &mut voxels)?;
-        pages_agree(file, i, *first.get_or_insert(this), this)?;
+    let mut dec = open(&files[0])?;
+    let spacing = spacing(&mut dec);
+    let first = describe(&files[0], &mut dec, 0)?;
+    let dims = [first.width as usize, first.height as usize, files.len()];
+    check_budget(dir, dims, opts.max_memory)?;
+    // Every slice is described and checked before any is decoded.
+    for (i, file) in files.iter().enumerate().skip(1) {
+        pages_agree(file, i, first, describe(file, &mut open(file)?, 0)?)?;
     }
-    let (w, h, ty) = first.expect("the folder has a first slice");
-    let dims = [w as usize, h as usize, files.len()];
+    let mut voxels = voxel_buffer(dir, dims, opts.max_memory)?;
+    let mut buffer = DecodingResult::U8(Vec::new());
+    for (file, out) in files.iter().zip(voxels.chunks_mut(first.voxels())) {
+        let mut dec = open(file)?;
+        // The file may have changed since it was described.
+        pages_agree(file, 0, first, describe(file, &mut dec, 0)?)?;
+        decode(file, dec, 0, first, &mut buffer, out)?;
+    }
+    let name = |p: &PathBuf| {
+        p.file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned()
+    };
     let notes = vec![format!(
         "{} slices from {} to {}",
         files.len(),
-        files[0].file_name().unwrap_or_default().to_string_lossy(),
-        files[files.len() - 1]
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
+        name(&files[0]),
+        name(&files[files.len() - 1])
     )];
-    Read0::new(dir, dims, spacing, ty, voxels, notes)
+    Read0::new(dir, dims, spacing, first.ty, voxels, notes)
 }
 
 #[cfg(test)]
