@@ -102,8 +102,8 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
     let mut pos = spec.start;
     for line in 0..spec.skip_lines {
         // Streamed: a "line" without an end is not held in memory.
-        let n = reader.skip_until(b'\n').map_err(|e| Error::io(path, e))?;
-        if n == 0 {
+        let (n, ended) = skip_line(&mut reader).map_err(|e| Error::io(path, e))?;
+        if !ended {
             return Err(Error::format(
                 path,
                 format!(
@@ -119,6 +119,33 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
         Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, count),
         Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, count),
         Encoding::Ascii => read_ascii(spec, reader, count),
+    }
+}
+
+/// Skips one line of `reader`: the bytes skipped, and whether a newline ended them (else the
+/// file did).
+fn skip_line(reader: &mut impl BufRead) -> std::io::Result<(u64, bool)> {
+    let mut skipped = 0u64;
+    loop {
+        let buf = match reader.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if buf.is_empty() {
+            return Ok((skipped, false));
+        }
+        match buf.iter().position(|&b| b == b'\n') {
+            Some(i) => {
+                reader.consume(i + 1);
+                return Ok((skipped + i as u64 + 1, true));
+            }
+            None => {
+                let n = buf.len();
+                reader.consume(n);
+                skipped += n as u64;
+            }
+        }
     }
 }
 
