@@ -112,7 +112,7 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
                 ),
             ));
         }
-        pos += n as u64;
+        pos += n;
     }
     match spec.encoding {
         Encoding::Raw => read_raw(spec, &reader.into_inner(), (pos, len), expected, count),
@@ -135,17 +135,13 @@ fn skip_line(reader: &mut impl BufRead) -> std::io::Result<(u64, bool)> {
         if buf.is_empty() {
             return Ok((skipped, false));
         }
-        match buf.iter().position(|&b| b == b'\n') {
-            Some(i) => {
-                reader.consume(i + 1);
-                return Ok((skipped + i as u64 + 1, true));
-            }
-            None => {
-                let n = buf.len();
-                reader.consume(n);
-                skipped += n as u64;
-            }
+        if let Some(i) = buf.iter().position(|&b| b == b'\n') {
+            reader.consume(i + 1);
+            return Ok((skipped + i as u64 + 1, true));
         }
+        let n = buf.len();
+        reader.consume(n);
+        skipped += n as u64;
     }
 }
 
