@@ -150,6 +150,11 @@ fn in_flag_terms(e: &Error) -> String {
             Some((_, flag)) => format!("{flag} {value}: expected {expected}"),
             None => e.to_string(),
         },
+        Error::TooLarge { what, .. }
+            if what.contains("this machine") || what.contains("system") =>
+        {
+            e.to_string()
+        }
         Error::TooLarge { .. } => format!("{e} (raise it with --max-memory)"),
         Error::RawUndescribed {
             path,

@@ -90,6 +90,9 @@ impl PixelHistogram {
     }
 }
 
+/// Columns a task of [`Columns::new`] fills.
+const COLUMN_BLOCK: usize = 1024;
+
 /// Bytes of joint histograms one pass may hold per thread.
 const PASS_BYTES: usize = 32 << 20;
 
@@ -149,32 +152,49 @@ impl Columns {
         constant.sort_unstable();
         let mut active = active;
         active.sort_unstable();
-        let per_column: Vec<(Vec<u32>, Vec<u8>, u32)> = active
-            .par_iter()
-            .map(|&p| {
+        // Two passes, so that the runs are written once, in place: count each column's runs,
+        // then fill the arrays, a block of columns a task.
+        let runs = |p: u32| {
+            let (_, column) = stack.column(p as usize, 0, n);
+            1 + column.windows(2).filter(|w| w[0] != w[1]).count()
+        };
+        let counts: Vec<usize> = active.par_iter().map(|&p| runs(p)).collect();
+        let mut run_start = Vec::with_capacity(active.len() + 1);
+        run_start.push(0);
+        for c in &counts {
+            run_start.push(run_start.last().copied().unwrap_or(0) + c);
+        }
+        drop(counts);
+        let total = run_start.last().copied().unwrap_or(0);
+        let (mut run_first, mut run_symbol) = (vec![0u32; total], vec![0u8; total]);
+        let mut run_end = vec![0u32; active.len()];
+        let mut tasks = Vec::with_capacity(active.len().div_ceil(COLUMN_BLOCK));
+        let (mut firsts, mut symbols) = (&mut run_first[..], &mut run_symbol[..]);
+        for (b, (columns, ends)) in active
+            .chunks(COLUMN_BLOCK)
+            .zip(run_end.chunks_mut(COLUMN_BLOCK))
+            .enumerate()
+        {
+            let len = run_start[b * COLUMN_BLOCK + columns.len()] - run_start[b * COLUMN_BLOCK];
+            let (f, rest_f) = std::mem::take(&mut firsts).split_at_mut(len);
+            let (s, rest_s) = std::mem::take(&mut symbols).split_at_mut(len);
+            (firsts, symbols) = (rest_f, rest_s);
+            tasks.push((columns, ends, f, s));
+        }
+        tasks.into_par_iter().for_each(|(columns, ends, f, s)| {
+            let mut at = 0;
+            for (&p, end) in columns.iter().zip(ends) {
                 let (first, column) = stack.column(p as usize, 0, n);
-                let (mut firsts, mut symbols) = (Vec::new(), Vec::new());
                 for (k, &c) in column.iter().enumerate() {
-                    if symbols.last() != Some(&c) {
-                        firsts.push((first + k) as u32);
-                        symbols.push(c);
+                    if k == 0 || column[k - 1] != c {
+                        f[at] = (first + k) as u32;
+                        s[at] = c;
+                        at += 1;
                     }
                 }
-                (firsts, symbols, (first + column.len()) as u32)
-            })
-            .collect();
-        let mut run_start = Vec::with_capacity(active.len() + 1);
-        let total: usize = per_column.iter().map(|c| c.0.len()).sum();
-        let (mut run_first, mut run_symbol) =
-            (Vec::with_capacity(total), Vec::with_capacity(total));
-        let mut run_end = Vec::with_capacity(active.len());
-        for (firsts, symbols, end) in per_column {
-            run_start.push(run_first.len());
-            run_first.extend(firsts);
-            run_symbol.extend(symbols);
-            run_end.push(end);
-        }
-        run_start.push(run_first.len());
+                *end = (first + column.len()) as u32;
+            }
+        });
         Self {
             active,
             constant,

@@ -9,8 +9,8 @@ use std::sync::Arc;
 use super::bottom_up::{Columns, consecutive_nmi};
 use super::top_down::Gains;
 use super::{
-    MAX_SLICES, MergeHistory, Method, OptimalPartitions, Slab, SlabInfo, SliceStack, SplitHistory,
-    StackParams, Step, Stop, describe,
+    COMPARE_MAX_SLICES, MAX_SLICES, MergeHistory, Method, OptimalPartitions, Slab, SlabInfo,
+    SliceStack, SplitHistory, StackParams, Step, Stop, describe,
 };
 use crate::error::{Error, Result};
 use crate::progress::Monitor;
@@ -22,8 +22,12 @@ pub struct Scope {
     /// Compute the bottom-up history (the costly one: a pass over the stack per merge pair).
     pub bottom_up: bool,
     /// The optimal partitions into 1 ..= this many slabs (0: none). Skipped when the stack has
-    /// more than [`MAX_SLICES`] slices.
+    /// more than `optimal_max_slices` slices.
     pub optimal_slabs: usize,
+    /// The longest stack the optimum is computed for: its table grows with the square of the
+    /// slices (8 bytes each), so [`COMPARE_MAX_SLICES`] when it is only compared with greedy,
+    /// [`MAX_SLICES`] when it is the method asked for.
+    pub optimal_max_slices: usize,
     /// The most top-down splits to take.
     pub top_steps: usize,
 }
@@ -34,6 +38,7 @@ impl Scope {
     pub const ALL: Self = Self {
         bottom_up: true,
         optimal_slabs: 32,
+        optimal_max_slices: COMPARE_MAX_SLICES,
         top_steps: 4096,
     };
 }
@@ -46,6 +51,8 @@ pub struct Histories {
     top: SplitHistory,
     bottom: Option<MergeHistory>,
     optimal: Option<OptimalPartitions>,
+    /// The longest stack the optimum was to be computed for.
+    optimal_max_slices: usize,
     nmi_curve: Vec<f64>,
 }
 
@@ -90,7 +97,8 @@ impl Histories {
         } else {
             None
         };
-        let optimal = if scope.optimal_slabs > 0 && n <= MAX_SLICES {
+        let optimal_max_slices = scope.optimal_max_slices.min(MAX_SLICES);
+        let optimal = if scope.optimal_slabs > 0 && n <= optimal_max_slices {
             Some(OptimalPartitions::new(
                 &histograms,
                 bins,
@@ -112,6 +120,7 @@ impl Histories {
             top,
             bottom,
             optimal,
+            optimal_max_slices,
             nmi_curve,
         })
     }
@@ -157,10 +166,14 @@ impl Histories {
         }
         let n = self.slices();
         Err(match method {
-            Method::Optimal if n > MAX_SLICES => Error::invalid(
+            Method::Optimal if n > self.optimal_max_slices => Error::invalid(
                 "slices",
                 n,
-                format!("at most {MAX_SLICES} for the optimal partition"),
+                format!(
+                    "at most {} for the optimal partition (its table grows with the square of \
+                     the slices)",
+                    self.optimal_max_slices
+                ),
             ),
             _ => Error::invalid("method", method.name(), "a history that was computed"),
         })
@@ -312,9 +325,11 @@ impl Histories {
     pub fn notes(&self) -> Vec<String> {
         let n = self.slices();
         let mut notes = Vec::new();
-        if self.optimal.is_none() && n > MAX_SLICES {
+        if self.optimal.is_none() && n > self.optimal_max_slices {
             notes.push(format!(
-                "the optimal partition is skipped: {n} slices, more than the {MAX_SLICES} it takes"
+                "the optimal partition is skipped: {n} slices, more than the {} it is computed \
+                 for (its table grows with the square of the slices)",
+                self.optimal_max_slices
             ));
         }
         if self.top.steps.len() + 1 < n && self.top.steps.len() >= Scope::ALL.top_steps {
@@ -396,6 +411,7 @@ mod tests {
         let scope = Scope {
             bottom_up: false,
             optimal_slabs: 0,
+            optimal_max_slices: MAX_SLICES,
             top_steps: usize::MAX,
         };
         let h = Histories::of_stack(stack, scope, &Monitor::none()).unwrap();

@@ -13,7 +13,7 @@ use serde::Serialize;
 pub use crate::geometry::coordinate_axis;
 pub use bottom_up::{Merge, MergeHistory, PAIRS_KEPT, slice_nmi};
 pub use histories::{Histories, Scope};
-pub use optimal::{MAX_SLICES, OptimalPartitions, Optimum};
+pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{Comparison, Partition, PartitionParams, Step, Stop, label_volume, partition};
 pub use stack::{BackgroundSummary, MISSING, SliceStack, StackParams};
 pub use top_down::{Split, SplitHistory};

@@ -11,6 +11,9 @@ use crate::error::{Error, Result};
 /// The most slices the dynamic programme takes (its table is slices² values).
 pub const MAX_SLICES: usize = 8192;
 
+/// The longest stack whose optimum is computed only to compare with greedy (a 32 MiB table).
+pub const COMPARE_MAX_SLICES: usize = 2048;
+
 /// The best partition with a given number of slabs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Optimum {

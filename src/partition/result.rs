@@ -5,7 +5,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::histories::{Histories, Scope};
-use super::{BackgroundSummary, MAX_SLICES, Method, Slab, SlabInfo, SliceStack, StackParams};
+use super::{
+    BackgroundSummary, COMPARE_MAX_SLICES, MAX_SLICES, Method, Slab, SlabInfo, SliceStack,
+    StackParams,
+};
 use crate::error::Result;
 use crate::geometry::{WorldAxis, dot};
 use crate::progress::Monitor;
@@ -150,6 +153,11 @@ impl PartitionParams {
         Scope {
             bottom_up: self.method == Method::BottomUp,
             optimal_slabs: wanted.max(COMPARE_SLABS),
+            optimal_max_slices: if self.method == Method::Optimal {
+                MAX_SLICES
+            } else {
+                COMPARE_MAX_SLICES
+            },
             // The greedy side of the comparison, and the method's own steps.
             top_steps: match (self.method, self.stop) {
                 (Method::TopDown, Stop::Threshold(_)) => usize::MAX,

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use flate2::bufread::{MultiGzDecoder, ZlibDecoder};
 use rayon::prelude::*;
 
+use super::limits::physical_memory;
 use crate::error::{Error, Result};
 use crate::volume::voxel::decode_to;
 use crate::volume::{Endian, VoxelType, dims_string};
@@ -69,20 +70,51 @@ pub(crate) fn check_budget(path: &Path, dims: [usize; 3], max_memory: u64) -> Re
     }
     let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
     let bytes = count.and_then(|n| (n as u64).checked_mul(4));
+    // A limit above this machine's memory is this machine's memory.
+    let (limit, machine) = match physical_memory() {
+        Some(m) if m < max_memory => (m, true),
+        _ => (max_memory, false),
+    };
     match (count, bytes) {
-        (Some(n), Some(b)) if b <= max_memory => Ok(n),
+        (Some(n), Some(b)) if b <= limit => Ok(n),
         _ => Err(Error::TooLarge {
             path: path.to_path_buf(),
-            what: format!("a {} f32 volume", dims_string(dims)),
+            what: format!(
+                "a {} f32 volume{}",
+                dims_string(dims),
+                if machine {
+                    " (more than this machine has)"
+                } else {
+                    ""
+                }
+            ),
             needed: bytes.unwrap_or(u64::MAX),
-            limit: max_memory,
+            limit,
         }),
     }
+}
+
+/// A zeroed voxel buffer of `dims`, after checking the budget; an allocation the machine cannot
+/// make is an error, not an abort.
+pub(crate) fn voxel_buffer(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<Vec<f32>> {
+    let n = check_budget(path, dims, max_memory)?;
+    // Asked of the system first, so that a refusal is an error; then made zeroed, whose pages
+    // the system provides only as they are written.
+    let mut probe: Vec<f32> = Vec::new();
+    probe.try_reserve_exact(n).map_err(|_| Error::TooLarge {
+        path: path.to_path_buf(),
+        what: format!("a {} f32 volume (the system refused it)", dims_string(dims)),
+        needed: n as u64 * 4,
+        limit: max_memory,
+    })?;
+    drop(probe);
+    Ok(vec![0.0; n])
 }
 
 /// Reads the voxels `spec` describes, after checking the memory budget.
 pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> {
     let count = check_budget(&spec.file, spec.dims, max_memory)?;
+    let out = voxel_buffer(&spec.file, spec.dims, max_memory)?;
     let expected = count as u64 * spec.voxel_type.size() as u64;
     let path = spec.file.as_path();
     let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
@@ -115,10 +147,10 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
         pos += n;
     }
     match spec.encoding {
-        Encoding::Raw => read_raw(spec, &reader.into_inner(), (pos, len), expected, count),
-        Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, count),
-        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, count),
-        Encoding::Ascii => read_ascii(spec, reader, count),
+        Encoding::Raw => read_raw(spec, &reader.into_inner(), (pos, len), expected, out),
+        Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, out),
+        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, out),
+        Encoding::Ascii => read_ascii(spec, reader, out),
     }
 }
 
@@ -153,7 +185,7 @@ fn read_raw(
     file: &File,
     (pos, len): (u64, u64),
     expected: u64,
-    count: usize,
+    mut out: Vec<f32>,
 ) -> Result<Vec<f32>> {
     let path = spec.file.as_path();
     let start = match spec.skip {
@@ -182,7 +214,6 @@ fn read_raw(
     let map = map_file(file).map_err(|e| Error::io(path, e))?;
     let start = usize::try_from(start).map_err(|_| Error::format(path, "offset beyond memory"))?;
     let bytes = &map[start..start + expected as usize];
-    let mut out = vec![0.0f32; count];
     let size = spec.voxel_type.size();
     out.par_chunks_mut(CHUNK)
         .zip(bytes.par_chunks(CHUNK * size))
@@ -204,8 +235,9 @@ fn read_stream(
     mut reader: impl Read,
     what: &str,
     expected: u64,
-    count: usize,
+    mut out: Vec<f32>,
 ) -> Result<Vec<f32>> {
+    let count = out.len();
     let path = spec.file.as_path();
     let corrupt = |e: std::io::Error, at: u64| {
         Error::format(
@@ -231,7 +263,6 @@ fn read_stream(
         ));
     }
     let size = spec.voxel_type.size();
-    let mut out = vec![0.0f32; count];
     let mut buf = vec![0u8; (1 << 20) / size * size];
     let mut done = 0usize;
     while done < count {
@@ -335,7 +366,9 @@ fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std::io::Result
     }
 }
 
-fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, count: usize) -> Result<Vec<f32>> {
+fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, mut out: Vec<f32>) -> Result<Vec<f32>> {
+    let count = out.len();
+    out.clear();
     let path = spec.file.as_path();
     let io = |e: std::io::Error| Error::format(path, format!("ascii data: {e}"));
     let skip = match spec.skip {
@@ -346,9 +379,6 @@ fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, count: usize) -> Result
     let ty = spec.voxel_type;
     let integer = !matches!(ty, VoxelType::F32 | VoxelType::F64);
     let (lo, hi) = ty.range();
-    let mut out = Vec::new();
-    out.try_reserve_exact(count)
-        .map_err(|_| Error::format(path, "no memory for the ascii data"))?;
     let mut token = Vec::with_capacity(MAX_TOKEN + 1);
     while next_token(&mut reader, &mut token).map_err(io)? {
         if out.len() == count {

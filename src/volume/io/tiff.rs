@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
 
-use super::data::check_budget;
+use super::data::{check_budget, voxel_buffer};
 use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
 use crate::volume::VoxelType;
@@ -146,21 +146,6 @@ fn fill(buffer: &DecodingResult, out: &mut [f32]) -> usize {
         DecodingResult::F64(v) => widen(v, out),
         _ => 0,
     }
-}
-
-/// A zeroed voxel buffer of `dims`, after checking the budget; an allocation the machine cannot
-/// make is an error, not an abort.
-fn voxel_buffer(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<Vec<f32>> {
-    let n = check_budget(path, dims, max_memory)?;
-    let mut voxels = Vec::new();
-    voxels.try_reserve_exact(n).map_err(|_| Error::TooLarge {
-        path: path.to_path_buf(),
-        what: format!("a {} f32 volume", crate::volume::dims_string(dims)),
-        needed: n as u64 * 4,
-        limit: max_memory,
-    })?;
-    voxels.resize(n, 0.0);
-    Ok(voxels)
 }
 
 /// x, y spacing from the resolution tags (pixels per unit), and z from ImageJ's `spacing=`.
