@@ -43,11 +43,30 @@ fn main() -> ExitCode {
             analysis: args.analysis.params(true),
         }),
     };
-    match result {
+    let code = match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("slabscope: error: {}", cli::error_message(&e));
             ExitCode::FAILURE
         }
+    };
+    report_peak_memory();
+    code
+}
+
+/// With `SLABSCOPE_REPORT_PEAK` set, prints the process's peak resident memory to stderr at the
+/// end (Linux), for the tests that hold slabscope to its memory budget.
+fn report_peak_memory() {
+    if std::env::var_os("SLABSCOPE_REPORT_PEAK").is_none() {
+        return;
+    }
+    let peak = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+            line.split_whitespace().nth(1)?.parse::<u64>().ok()
+        });
+    if let Some(kib) = peak {
+        eprintln!("slabscope: peak memory: {kib} KiB");
     }
 }

@@ -172,6 +172,35 @@ fn a_huge_second_tiff_page_is_refused_before_it_is_decoded() {
 }
 
 #[test]
+fn tiff_directories_are_checked_before_the_decoder_reads_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("odd.tif");
+    let patched = |at: usize, bytes: &[u8]| {
+        tiff(&path, &[Page::gray8(4, 4)]);
+        let mut b = std::fs::read(&path).unwrap();
+        b[at..at + bytes.len()].copy_from_slice(bytes);
+        std::fs::write(&path, b).unwrap();
+    };
+    // The first directory (at byte 8: 2 bytes of count, 10 entries of 12) points to itself.
+    patched(130, &8u32.to_le_bytes());
+    let (out, took) = run(&["info", s(&path)], 1 << 30);
+    fails(
+        &out,
+        "odd.tif",
+        "page 1: its directory loops back to an earlier one",
+    );
+    assert!(took < Duration::from_secs(2));
+    // Its first tag made an ASCII value of 2³¹ bytes.
+    patched(12, &[2, 0, 0xff, 0xff, 0xff, 0x7f]);
+    let (out, _) = run(&["info", s(&path), "--max-memory", "64M"], 64 << 20);
+    fails(
+        &out,
+        "odd.tif",
+        "page 0: tag 256 claims 2147483647 values, more than the file holds",
+    );
+}
+
+#[test]
 fn tiff_samples_slabscope_does_not_read_are_named() {
     let dir = tempfile::tempdir().unwrap();
     for (name, bits, format, phrase) in [

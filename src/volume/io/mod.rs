@@ -9,6 +9,7 @@ mod nrrd;
 mod output;
 mod raw;
 mod tiff;
+mod tiff_ifd;
 mod volumeshop;
 
 use std::fs::File;

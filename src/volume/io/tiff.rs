@@ -10,16 +10,21 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
 
 use super::data::{check_budget, voxel_buffer};
-use super::{LoadOptions, Read0};
+use super::{LoadOptions, Read0, tiff_ifd};
 use crate::error::{Error, Result};
 use crate::volume::VoxelType;
 
 type Tiff = Decoder<BufReader<File>>;
 
-fn open(path: &Path) -> Result<Tiff> {
+/// Opens a TIFF whose directories [`tiff_ifd::check`] found sound; returns its decoder and
+/// its length in bytes.
+fn open(path: &Path) -> Result<(Tiff, u64)> {
+    tiff_ifd::check(path)?;
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    Decoder::new(BufReader::new(file))
-        .map_err(|e| Error::format(path, format!("not a readable TIFF: {e}")))
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let dec = Decoder::new(BufReader::new(file))
+        .map_err(|e| Error::format(path, format!("not a readable TIFF: {e}")))?;
+    Ok((dec, len))
 }
 
 /// A page as its directory describes it, read without decoding anything.
@@ -103,14 +108,16 @@ fn pages_agree(path: &Path, page: usize, first: Page, this: Page) -> Result<()> 
 /// allowed no more memory than the page needs.
 fn decode(
     path: &Path,
-    dec: Tiff,
+    (dec, len): (Tiff, u64),
     index: usize,
     page: Page,
     buffer: &mut DecodingResult,
     out: &mut [f32],
-) -> Result<Tiff> {
+) -> Result<(Tiff, u64)> {
     let mut limits = Limits::default();
-    limits.decoding_buffer_size = page.bytes();
+    // The page, and any tag value (the crate charges those to the same limit; the directory
+    // walk found each within the file).
+    limits.decoding_buffer_size = page.bytes().max(usize::try_from(len).unwrap_or(usize::MAX));
     // Compressed strips are read whole: no bigger than the page, with room for data that did
     // not compress.
     limits.intermediate_buffer_size = page.bytes().saturating_mul(2).saturating_add(1 << 16);
@@ -124,7 +131,7 @@ fn decode(
             format!("page {index} decoded to {n} samples, not {}", page.voxels()),
         ));
     }
-    Ok(dec)
+    Ok((dec, len))
 }
 
 /// Widens the decoded samples into `out`; the number of samples decoded.
@@ -196,7 +203,7 @@ fn spacing(dec: &mut Tiff) -> [f64; 3] {
 }
 
 pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let mut dec = open(path)?;
+    let (mut dec, len) = open(path)?;
     let spacing = spacing(&mut dec);
     // Every page is described and checked against the first, and the whole stack against the
     // budget, before a single one is decoded.
@@ -224,7 +231,7 @@ pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     for (index, out) in voxels.chunks_mut(first.voxels()).enumerate() {
         dec.seek_to_image(index)
             .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
-        dec = decode(path, dec, index, first, &mut buffer, out)?;
+        dec = decode(path, (dec, len), index, first, &mut buffer, out)?.0;
     }
     Read0::new(path, dims, spacing, first.ty, voxels, Vec::new())
 }
@@ -273,22 +280,22 @@ pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
 
 pub(crate) fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = slice_files(dir)?;
-    let mut dec = open(&files[0])?;
+    let (mut dec, _) = open(&files[0])?;
     let spacing = spacing(&mut dec);
     let first = describe(&files[0], &mut dec, 0)?;
     let dims = [first.width as usize, first.height as usize, files.len()];
     check_budget(dir, dims, opts.max_memory)?;
     // Every slice is described and checked before any is decoded.
     for (i, file) in files.iter().enumerate().skip(1) {
-        pages_agree(file, i, first, describe(file, &mut open(file)?, 0)?)?;
+        pages_agree(file, i, first, describe(file, &mut open(file)?.0, 0)?)?;
     }
     let mut voxels = voxel_buffer(dir, dims, opts.max_memory)?;
     let mut buffer = DecodingResult::U8(Vec::new());
     for (file, out) in files.iter().zip(voxels.chunks_mut(first.voxels())) {
-        let mut dec = open(file)?;
+        let (mut dec, len) = open(file)?;
         // The file may have changed since it was described.
         pages_agree(file, 0, first, describe(file, &mut dec, 0)?)?;
-        decode(file, dec, 0, first, &mut buffer, out)?;
+        decode(file, (dec, len), 0, first, &mut buffer, out)?;
     }
     let name = |p: &PathBuf| {
         p.file_name()
