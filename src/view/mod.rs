@@ -86,7 +86,7 @@ impl ViewParams {
 }
 
 /// A shifted lattice walking a subset of its rays keeps at least this many samples per cell
-/// of the L-block table (see [`Evaluator::subset`]).
+/// of the L-block table (the view search's sampled passes choose their subset by it).
 pub const SAMPLES_PER_CELL: u64 = 32;
 
 /// The most lattice phases `--phases` allows.

@@ -58,9 +58,9 @@ impl PhaseStats {
     }
 }
 
-/// Which rays of a lattice are walked: one block of [`RUN`]×[`RUN`] neighbouring rays in
-/// `every`, in a pattern spread evenly over the plane of rays (ray `(i, j)` when
-/// `⌊i / RUN⌋ + 5·⌊j / RUN⌋ ≡ offset` modulo `every`). `every = 1` walks them all. Neighbours
+/// Which rays of a lattice are walked: one block of 8×8 neighbouring rays in `every`, in a
+/// pattern spread evenly over the plane of rays (ray `(i, j)` when
+/// `⌊i / 8⌋ + 5·⌊j / 8⌋ ≡ offset` modulo `every`). `every = 1` walks them all. Neighbours
 /// share the cache lines they read, which single rays spread apart would not (measured: single
 /// rays cost half as much again per sample); small blocks spread over the volume sample it
 /// evenly, which whole tiles would not (their means strayed by 0.02 bit on the body phantom).
