@@ -1,5 +1,6 @@
-//! Times exploded renders of a 256x256x415 body phantom with 4 slabs (the benchmark) and
-//! writes the last image of each size to /tmp for looking at.
+//! Times exploded renders of a 256x256x415 body phantom with 4 slabs (the benchmark): the
+//! default (cut faces, automatic transfer function) and plain DVR and MIP, and the slice strip of
+//! `render --faces`; writes the last image of each to /tmp for looking at.
 //!
 //! `cargo run --release --example render_bench`
 
@@ -7,14 +8,16 @@ use std::time::Instant;
 
 use slabscope::partition::{PartitionParams, partition};
 use slabscope::progress::Monitor;
-use slabscope::render::{Gap, Layout, Mode, Preset, RenderParams, Renderer};
+use slabscope::render::{
+    DEFAULT_SPREAD, Gap, Layout, Look, Mode, Preset, RenderParams, Renderer, Stack, slice,
+};
 use slabscope::volume::phantom;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let volume = phantom::body([256, 256, 415], 1)?;
     let none = Monitor::none();
     let part = partition(&volume, [0.0, 0.0, 1.0], &PartitionParams::paper(), &none)?;
-    let layout = Layout::exploded(&part, Gap::Similarity, 0.3);
+    let layout = Layout::exploded(&part, Gap::Similarity, DEFAULT_SPREAD);
     let t = Instant::now();
     let renderer = Renderer::new(&volume)?;
     println!(
@@ -23,6 +26,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t.elapsed().as_secs_f64() * 1e3
     );
     for (mode, preset, name) in [
+        (Mode::Cut, Preset::Auto, "cut-auto"),
+        (Mode::Dvr, Preset::Auto, "dvr-auto"),
         (Mode::Dvr, Preset::CtBone, "dvr-bone"),
         (Mode::Dvr, Preset::CtSoft, "dvr-soft"),
         (Mode::Mip, Preset::CtBone, "mip"),
@@ -51,6 +56,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 std::fs::write(format!("/tmp/render-{name}-{w}.png"), image.png()?)?;
             }
         }
+    }
+    let look = Look {
+        preset: Preset::Auto,
+        colormap: slabscope::render::Colormap::Grey,
+        window: None,
+    };
+    let transfer = renderer.transfer(look, 1.0)?;
+    let mut times = Vec::new();
+    let mut strip = None;
+    for _ in 0..5 {
+        let t = Instant::now();
+        strip = Some(slice::faces(
+            &volume,
+            &transfer,
+            &Stack::of(&part),
+            &part.slabs,
+            (150, 150),
+        )?);
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "faces strip of 4 slabs, 150x150 tiles: median {:6.1} ms",
+        times[2]
+    );
+    if let Some(strip) = strip {
+        std::fs::write("/tmp/render-faces.png", strip.encode_png()?)?;
     }
     Ok(())
 }

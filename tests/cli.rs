@@ -360,3 +360,70 @@ fn preview_without_a_terminal_says_to_render_to_a_file() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_reader_that_goes_away_ends_slabscope_quietly() {
+    // `slabscope analyze F | head -1`: the pipe is closed before the report is written.
+    let dir = tempfile::tempdir().unwrap();
+    let path = layers(dir.path());
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("slabscope"))
+        .args(["analyze", path.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn slice_writes_one_slice_and_render_faces_a_strip() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path());
+    let f = file.to_str().unwrap();
+    let out = dir.path().join("slice.png");
+    let o = out.to_str().unwrap();
+    // The 24-voxel cube, fit into 200x100: 100x100.
+    let (ok, stdout, stderr) = run(&[
+        "slice", f, "--axis", "z", "--index", "3", "--size", "200x100", "-o", o,
+    ]);
+    assert!(ok && stdout.is_empty(), "{stderr}");
+    let png = tiny_skia::Pixmap::load_png(&out).unwrap();
+    assert_eq!((png.width(), png.height()), (100, 100));
+    let (ok, _, stderr) = run(&[
+        "slice", f, "--axis", "z", "--index", "24", "-o", o, "--force",
+    ]);
+    assert!(!ok, "past the last slice");
+    assert!(
+        stderr.contains("--index 24: there are 24 slices along this axis"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = run(&["slice", f, "--axis", "z", "-o", o]);
+    assert!(!ok && stderr.contains("already exists"), "{stderr}");
+    let strip = dir.path().join("faces.png");
+    let (ok, _, stderr) = run(&[
+        "render",
+        f,
+        "--faces",
+        "--axis",
+        "z",
+        "--slabs",
+        "3",
+        "--size",
+        "400x200",
+        "-o",
+        strip.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let png = tiny_skia::Pixmap::load_png(&strip).unwrap();
+    // Three columns of tiles fit into 400x200, and two rows of them.
+    assert!(png.width() <= 400 && png.width() > 300, "{}", png.width());
+    assert!(
+        png.height() <= 200 && png.height() > 150,
+        "{}",
+        png.height()
+    );
+}

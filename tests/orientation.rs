@@ -301,10 +301,10 @@ fn exports_read_back_in_nibabel_and_simpleitk() {
     }
 }
 
-/// A 21×17×19 volume, dark but for one bright voxel at `bright`, with `linear` (unit spacing)
-/// as its transform.
+/// A 21×17×19 volume of faint tissue (which the camera frames whole) but for one bright voxel at
+/// `bright`, with `linear` (unit spacing) as its transform.
 fn marked(bright: [usize; 3], linear: [[f64; 3]; 3]) -> Volume {
-    let mut data = vec![0.0f32; 21 * 17 * 19];
+    let mut data = vec![200.0f32; 21 * 17 * 19];
     data[bright[0] + 21 * (bright[1] + 17 * bright[2])] = 1000.0;
     Volume::new([21, 17, 19], [1.0; 3], slabscope::VoxelType::F32, data)
         .unwrap()

@@ -52,14 +52,30 @@ struct Display {
 
 impl Display {
     fn start() -> Self {
-        let number = 140 + std::process::id() % 50;
-        let name = format!(":{number}");
-        let server = Command::new("Xvfb")
-            .args([&name, "-screen", "0", "1800x1100x24", "-nolisten", "tcp"])
-            .stdout(Stdio::null())
+        // Xvfb picks a free display and says which (stale locks of killed servers stay behind
+        // and would make a display number chosen here collide).
+        let mut server = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1800x1100x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
             .expect("Xvfb starts");
+        let mut line = String::new();
+        std::io::BufRead::read_line(
+            &mut std::io::BufReader::new(server.stdout.take().expect("piped")),
+            &mut line,
+        )
+        .expect("Xvfb names its display");
+        let number: u32 = line.trim().parse().expect("a display number");
+        let name = format!(":{number}");
         let socket = PathBuf::from(format!("/tmp/.X11-unix/X{number}"));
         wait_until(10, || socket.exists(), "the X server's socket");
         Self { server, name }

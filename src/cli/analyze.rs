@@ -82,7 +82,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         s.persist(args.force)?;
     }
     match report {
-        Some(report) => println!("{}", slabscope::report::to_json(&report)?),
+        Some(report) => outln!("{}", slabscope::report::to_json(&report)?),
         None => super::text::print_analysis(&name, volume, &analysis),
     }
     Ok(())

@@ -61,37 +61,37 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
             "histogram": hist,
             "notes": notes,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        outln!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
     let [nx, ny, nz] = v.dims();
     let [sx, sy, sz] = v.spacing();
-    println!("file        {name}");
-    println!("format      {}", format.name());
-    println!(
+    outln!("file        {name}");
+    outln!("format      {}", format.name());
+    outln!(
         "dims        {}  ({} voxels)",
         dims_string(v.dims()),
         v.len()
     );
-    println!(
+    outln!(
         "spacing     {sx} x {sy} x {sz} mm  (extent {:.1} x {:.1} x {:.1} mm)",
         sx * nx as f64,
         sy * ny as f64,
         sz * nz as f64
     );
     print_geometry(&geometry);
-    println!("type        {}", v.voxel_type());
+    outln!("type        {}", v.voxel_type());
     if s.finite == 0 {
-        println!("range       none: every voxel is NaN or infinite");
+        outln!("range       none: every voxel is NaN or infinite");
     } else {
-        println!("range       {} .. {}", s.min, s.max);
-        println!("mean        {:.6}", s.mean);
+        outln!("range       {} .. {}", s.min, s.max);
+        outln!("mean        {:.6}", s.mean);
     }
     if s.missing > 0 {
-        println!("missing     {} NaN/Inf voxels", s.missing);
+        outln!("missing     {} NaN/Inf voxels", s.missing);
     }
-    println!("memory      {} as f32", human_bytes(v.memory_bytes()));
-    println!(
+    outln!("memory      {} as f32", human_bytes(v.memory_bytes()));
+    outln!(
         "histogram   {}  ({HISTOGRAM_BINS} bins, log scale)",
         sparkline(&hist)
     );
@@ -101,7 +101,7 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
 /// The orientation, the transform and the world box.
 fn print_geometry(g: &GeometryReport) {
     let Some(codes) = &g.orientation else {
-        println!("orientation unknown: the file states none (no anatomical directions are named)");
+        outln!("orientation unknown: the file states none (no anatomical directions are named)");
         return;
     };
     let axes: Vec<String> = ["x", "y", "z"]
@@ -114,14 +114,14 @@ fn print_geometry(g: &GeometryReport) {
     } else {
         "; sheared: the voxel axes are not perpendicular".into()
     };
-    println!("orientation {codes}  ({}{shear})", axes.join(", "));
+    outln!("orientation {codes}  ({}{shear})", axes.join(", "));
     for (r, row) in g.affine.iter().take(3).enumerate() {
         let label = if r == 0 { "affine" } else { "" };
         let cells: Vec<String> = row.iter().map(|x| format!("{:>9}", number(*x))).collect();
-        println!("{label:<11} [{} ]  {}", cells.join(" "), ["R", "A", "S"][r]);
+        outln!("{label:<11} [{} ]  {}", cells.join(" "), ["R", "A", "S"][r]);
     }
     let [lo, hi] = g.world_bounds;
-    println!(
+    outln!(
         "world box   R {} .. {}, A {} .. {}, S {} .. {} mm",
         number(lo[0]),
         number(hi[0]),

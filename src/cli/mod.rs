@@ -1,12 +1,25 @@
 //! The headless command line: one file per subcommand, each a thin layer over the library, and
 //! the wording of library errors in flag terms.
 
+/// `println!` for the report on standard output: a reader that has gone (`slabscope info F |
+/// head`) ends slabscope quietly instead of with a panic.
+macro_rules! outln {
+    () => { $crate::cli::emit(format_args!("\n")) };
+    ($($t:tt)*) => { $crate::cli::emit(format_args!("{}\n", format_args!($($t)*))) };
+}
+
+/// `print!` for the report on standard output, as [`outln!`].
+macro_rules! out {
+    ($($t:tt)*) => { $crate::cli::emit(format_args!($($t)*)) };
+}
+
 mod analyze;
 pub mod args;
 mod info;
 mod phantom;
 mod progress;
 mod render;
+mod slice;
 mod text;
 
 use std::path::{Path, PathBuf};
@@ -30,6 +43,8 @@ pub enum Command {
     Render(render::RenderArgs),
     /// Show the exploded view inline in the terminal.
     Preview(render::PreviewArgs),
+    /// Write one slice across the slab axis to a PNG file, oriented as radiologists read it.
+    Slice(slice::SliceArgs),
     /// Write a synthetic volume with known structure.
     Phantom(phantom::PhantomArgs),
 }
@@ -43,6 +58,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Phantom(args) => phantom::run(&args),
         Command::Render(args) => render::run_render(&args),
         Command::Preview(args) => render::run_preview(&args),
+        Command::Slice(args) => slice::run(&args),
     }
 }
 
@@ -172,6 +188,19 @@ fn in_flag_terms(e: &Error) -> String {
         }
         Error::Exists { .. } => format!("{e} (use --force to overwrite it)"),
         _ => e.to_string(),
+    }
+}
+
+/// Writes to standard output; a closed pipe ends the process quietly (its outputs are already
+/// in place: reports print last), any other failure with a one-line error.
+pub(crate) fn emit(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    if let Err(e) = std::io::stdout().lock().write_fmt(args) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("slabscope: error: writing to standard output: {e}");
+        std::process::exit(1);
     }
 }
 

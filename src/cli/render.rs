@@ -7,9 +7,14 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
+use slabscope::Loaded;
+use slabscope::geometry::min_spacing;
+use slabscope::partition::Partition;
 use slabscope::render::{
-    CameraParams, Colormap, Gap, Image, ImageOutput, Layout, Mode, Preset, RenderParams, Renderer,
+    CameraParams, Colormap, Gap, ImageOutput, Layout, Look, Mode, Preset, RenderParams, Renderer,
+    Stack, encode, slice,
 };
+use tiny_skia::Pixmap;
 
 use super::args::{AnalysisArgs, LoadArgs, within};
 use super::progress::with_bar;
@@ -18,18 +23,12 @@ use crate::term::{self, Graphics, Protocol};
 /// What the render shows and how.
 #[derive(Debug, Args, Clone)]
 pub struct ViewOptions {
-    /// Direct volume rendering or maximum intensity projection.
-    #[arg(long, value_enum, default_value_t = ModeArg::Dvr)]
+    /// Cut faces (the cross-section at every cut, the volume rendered behind), plain direct
+    /// volume rendering, or maximum intensity projection.
+    #[arg(long, value_enum, default_value_t = ModeArg::Cut)]
     pub mode: ModeArg,
-    /// Transfer function.
-    #[arg(long = "tf", value_enum, default_value_t = PresetArg::Auto)]
-    pub preset: PresetArg,
-    /// Colour map.
-    #[arg(long, value_enum, default_value_t = ColormapArg::Grey)]
-    pub colormap: ColormapArg,
-    /// Window LO,HI: grey from LO to HI and opacity rising across it (replaces the preset's).
-    #[arg(long, value_name = "LO,HI", value_parser = parse_window, allow_hyphen_values = true)]
-    pub window: Option<(f32, f32)>,
+    #[command(flatten)]
+    pub look: LookArgs,
     /// Camera angle around the slab axis, degrees.
     #[arg(long, default_value_t = 30.0, allow_negative_numbers = true, value_parser = within(-360.0, 360.0))]
     pub azimuth: f64,
@@ -46,7 +45,7 @@ pub struct ViewOptions {
     #[arg(long, value_enum, default_value_t = GapArg::Similarity)]
     pub gap: GapArg,
     /// Total gap as a fraction of the stack's length.
-    #[arg(long, default_value_t = 0.3, value_parser = within(0.0, 10.0))]
+    #[arg(long, default_value_t = slabscope::render::DEFAULT_SPREAD, value_parser = within(0.0, 10.0))]
     pub spread: f64,
     /// Show this slab normally and the others faint.
     #[arg(long, value_name = "SLAB")]
@@ -68,9 +67,47 @@ pub struct ViewOptions {
     pub no_labels: bool,
 }
 
+/// How values become colours.
+#[derive(Debug, Args, Clone)]
+pub struct LookArgs {
+    /// Transfer function (auto: windowed on what is not background, CT in a soft-tissue
+    /// window, label volumes in distinct colours).
+    #[arg(long = "tf", value_enum, default_value_t = PresetArg::Auto)]
+    pub preset: PresetArg,
+    /// Colour map.
+    #[arg(long, value_enum, default_value_t = ColormapArg::Grey)]
+    pub colormap: ColormapArg,
+    /// Window LO,HI: grey from LO to HI and opacity rising across it (replaces the preset's).
+    #[arg(long, value_name = "LO,HI", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<(f32, f32)>,
+}
+
+impl LookArgs {
+    /// The library's look.
+    pub fn look(&self) -> Look {
+        Look {
+            preset: match self.preset {
+                PresetArg::Auto => Preset::Auto,
+                PresetArg::CtBone => Preset::CtBone,
+                PresetArg::CtSoft => Preset::CtSoft,
+                PresetArg::Mri => Preset::Mri,
+            },
+            colormap: match self.colormap {
+                ColormapArg::Grey => Colormap::Grey,
+                ColormapArg::Bone => Colormap::Bone,
+                ColormapArg::Hot => Colormap::Hot,
+                ColormapArg::Viridis => Colormap::Viridis,
+            },
+            window: self.window,
+        }
+    }
+}
+
 /// Render modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ModeArg {
+    /// Direct volume rendering with each slab's cut faces showing the cross-section there.
+    Cut,
     /// Direct volume rendering.
     Dvr,
     /// Maximum intensity projection.
@@ -115,26 +152,18 @@ pub enum GapArg {
 impl ViewOptions {
     /// The library's render parameters for a `width × height` image.
     pub fn params(&self, width: u32, height: u32) -> RenderParams {
+        let look = self.look.look();
         RenderParams {
             width,
             height,
             mode: match self.mode {
+                ModeArg::Cut => Mode::Cut,
                 ModeArg::Dvr => Mode::Dvr,
                 ModeArg::Mip => Mode::Mip,
             },
-            preset: match self.preset {
-                PresetArg::Auto => Preset::Auto,
-                PresetArg::CtBone => Preset::CtBone,
-                PresetArg::CtSoft => Preset::CtSoft,
-                PresetArg::Mri => Preset::Mri,
-            },
-            colormap: match self.colormap {
-                ColormapArg::Grey => Colormap::Grey,
-                ColormapArg::Bone => Colormap::Bone,
-                ColormapArg::Hot => Colormap::Hot,
-                ColormapArg::Viridis => Colormap::Viridis,
-            },
-            window: self.window,
+            preset: look.preset,
+            colormap: look.colormap,
+            window: look.window,
             camera: CameraParams {
                 azimuth: self.azimuth,
                 elevation: self.elevation,
@@ -146,6 +175,7 @@ impl ViewOptions {
             outlines: !self.no_outlines,
             labels: !self.no_labels,
             highlight: self.highlight,
+            fade: self.highlight.is_some(),
             solo: self.solo,
             ..RenderParams::default()
         }
@@ -173,6 +203,10 @@ pub struct RenderArgs {
     /// Overwrite OUT if it exists.
     #[arg(long)]
     pub force: bool,
+    /// Instead of the exploded view, the faces of every slab: its last slice above its first,
+    /// a column a slab, fit into the size.
+    #[arg(long)]
+    pub faces: bool,
     #[command(flatten)]
     pub scene: SceneArgs,
 }
@@ -209,7 +243,7 @@ fn parse_window(s: &str) -> Result<(f32, f32), String> {
     }
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(super) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("{s:?} is not WxH, e.g. 640x480"))?;
@@ -223,23 +257,54 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     }
 }
 
-/// Loads, finds the axis and the slabs, and renders `width × height`.
+/// Loads `file` (checking that `output` may be written), and finds the axis and the slabs.
+pub(super) fn load_and_partition(
+    file: &std::path::Path,
+    load: &LoadArgs,
+    analysis: &AnalysisArgs,
+    output: Option<(&std::path::Path, bool)>,
+) -> Result<(Loaded, Partition)> {
+    let loaded = super::load(file, load)?;
+    if let Some((path, force)) = output {
+        super::check_outputs(&[path], &loaded.sources, force)?;
+    }
+    let part = analysis
+        .analyze(&file.display().to_string(), &loaded.volume, false)?
+        .partition;
+    Ok((loaded, part))
+}
+
+/// Loads, finds the axis and the slabs, and renders `width × height`: the exploded view, or
+/// with `faces` the strip of slab faces.
 fn render_file(
     file: &std::path::Path,
     scene: &SceneArgs,
     (width, height): (u32, u32),
     output: Option<(&std::path::Path, bool)>,
-) -> Result<Image> {
-    let loaded = super::load(file, &scene.load)?;
-    if let Some((path, force)) = output {
-        super::check_outputs(&[path], &loaded.sources, force)?;
-    }
+    faces: bool,
+) -> Result<Pixmap> {
+    let (loaded, part) = load_and_partition(file, &scene.load, &scene.analysis, output)?;
     let volume = &loaded.volume;
-    let part = scene
-        .analysis
-        .analyze(&file.display().to_string(), volume, false)?
-        .partition;
     let options = &scene.options;
+    if faces {
+        let renderer = Renderer::new(volume)?;
+        let transfer = renderer.transfer(options.look.look(), min_spacing(volume.spacing()))?;
+        let k = part.slabs.len() as u32;
+        let tile = (
+            width.saturating_sub(4 * (k + 1)) / k.max(1),
+            height.saturating_sub(12) / 2,
+        );
+        if tile.0 < 8 || tile.1 < 8 {
+            bail!("--size {width}x{height}: too small for the faces of {k} slabs");
+        }
+        return Ok(slice::faces(
+            volume,
+            &transfer,
+            &Stack::of(&part),
+            &part.slabs,
+            tile,
+        )?);
+    }
     if let Some(h) = options.highlight
         && h >= part.slabs.len()
     {
@@ -250,9 +315,9 @@ fn render_file(
     }
     let layout = Layout::exploded(&part, options.gap(), options.spread);
     let renderer = Renderer::new(volume)?;
-    Ok(with_bar(|monitor| {
-        renderer.render(&layout, &options.params(width, height), monitor)
-    })?)
+    let image =
+        with_bar(|monitor| renderer.render(&layout, &options.params(width, height), monitor))?;
+    Ok(image.pixmap)
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {
@@ -267,8 +332,9 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         &args.scene,
         args.size,
         Some((&args.output, args.force)),
+        args.faces,
     )?;
-    super::write_new(&args.output, &image.encode(format)?, args.force)
+    super::write_new(&args.output, &encode(&image, format)?, args.force)
 }
 
 pub fn run_preview(args: &PreviewArgs) -> Result<()> {
@@ -291,9 +357,9 @@ pub fn run_preview(args: &PreviewArgs) -> Result<()> {
         eprintln!("slabscope: note: {note}");
     }
     let cells = (cols, rows - 2);
-    let image = render_file(&args.file, &args.scene, caps.image_size(cells), None)?;
-    let (w, h) = (image.pixmap.width(), image.pixmap.height());
-    let rgba = RgbaImage::from_raw(w, h, image.pixmap.data().to_vec())
+    let image = render_file(&args.file, &args.scene, caps.image_size(cells), None, false)?;
+    let (w, h) = (image.width(), image.height());
+    let rgba = RgbaImage::from_raw(w, h, image.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
     if caps.graphics == Graphics::Blocks {
         // viuer draws half-blocks well; the other protocols go through our own encoder, which

@@ -11,7 +11,7 @@ use slabscope::{Analysis, Axis, Partition, Volume};
 pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
     if let Some(v) = &analysis.views {
         print_views(name, volume, v);
-        println!();
+        outln!();
     }
     print_partition(&analysis.partition);
     print_notes(&analysis.notes);
@@ -58,12 +58,12 @@ fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
         || "orientation unknown".to_string(),
         |c| format!("orientation {c}"),
     );
-    println!(
+    outln!(
         "volume   {name}: {} {}, spacing {sx} x {sy} x {sz} mm, {orientation}",
         dims_string(volume.dims()),
         volume.voxel_type()
     );
-    println!(
+    outln!(
         "views    {} viewpoints ({} axes, icosphere level {}), {} bins, blocks of {}, rays every {} mm, samples every {} mm",
         icosphere::icosphere(p.level).len(),
         v.views.len(),
@@ -74,19 +74,19 @@ fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
         p.sampling.sample_spacing.unwrap_or(1.0)
     );
     match v.ranked_by {
-        RankedBy::PhaseMean => println!(
+        RankedBy::PhaseMean => outln!(
             "         ranked by the mean of h over {} lattice phases: the paper's lattice and {} shifted \
              ones (each walking one block of rays in {} where the volume affords it)",
             p.phases,
             p.phases - 1,
             p.phase_subset
         ),
-        RankedBy::PaperLattice => println!("         ranked by h on the paper's lattice"),
+        RankedBy::PaperLattice => outln!("         ranked by h on the paper's lattice"),
     }
-    println!();
+    outln!();
     let known = volume.transform().known;
     print_view_table(v, known);
-    println!();
+    outln!();
     print_verdict(v);
 }
 
@@ -97,10 +97,10 @@ fn print_view_table(v: &ViewSearch, known: bool) {
     } else {
         String::new()
     };
-    print!(
+    out!(
         "  rank    axis                          {anatomy}azim    elev   h (bits)   H(X^1)  H(X^L)/L"
     );
-    println!("{}", if phases { "   mean h ± se" } else { "" });
+    outln!("{}", if phases { "   mean h ± se" } else { "" });
     let show = |rank: String, mark: &str, a: &AxisEntropy| {
         let anatomy = if known {
             format!("{:<15}", a.world.anatomy_text())
@@ -108,7 +108,7 @@ fn print_view_table(v: &ViewSearch, known: bool) {
             String::new()
         };
         if !a.measured() {
-            println!(
+            outln!(
                 "  {rank:>4} {mark:1}  {:<28} {anatomy}{:6.1}  {:6.1}   too thin: no {} samples in a row",
                 axis_text(a.axis),
                 a.azimuth,
@@ -117,7 +117,7 @@ fn print_view_table(v: &ViewSearch, known: bool) {
             );
             return;
         }
-        print!(
+        out!(
             "  {rank:>4} {mark:1}  {:<28} {anatomy}{:6.1}  {:6.1}   {:8.4} {:8.4}  {:8.4}",
             axis_text(a.axis),
             a.azimuth,
@@ -127,8 +127,8 @@ fn print_view_table(v: &ViewSearch, known: bool) {
             a.per_symbol
         );
         match a.phases {
-            Some(s) => println!("   {:.4} ± {:.4}", s.mean, s.se()),
-            None => println!(),
+            Some(s) => outln!("   {:.4} ± {:.4}", s.mean, s.se()),
+            None => outln!(),
         }
     };
     for (i, a) in v.views.iter().enumerate() {
@@ -168,23 +168,23 @@ fn print_verdict(v: &ViewSearch) {
     let margin = next.map_or_else(String::new, |(n, which)| {
         format!(", {:.4} below {which}", score(n) - score(best))
     });
-    println!(
+    outln!(
         "best     {}\n         {what}{margin}",
         world_axis_text(best.axis, &best.world)
     );
     match &v.contenders {
         None => {}
         Some(c) if c.len() <= 1 => {
-            println!("         clear: no other axis lies within two standard errors of it");
+            outln!("         clear: no other axis lies within two standard errors of it");
         }
         Some(c) => {
-            println!(
+            outln!(
                 "         uncertain: {} within two standard errors of the difference, \
                  so the data cannot tell them from it:",
                 count(c.len() - 1, "other axis", "other axes")
             );
             for other in &c[1..] {
-                println!(
+                outln!(
                     "           {}  mean h {:.4} ± {:.4}",
                     axis_text(other.axis),
                     other.mean,
@@ -196,7 +196,7 @@ fn print_verdict(v: &ViewSearch) {
 }
 
 fn print_partition(p: &Partition) {
-    println!(
+    outln!(
         "partition {} along {}:\n          {} {} mm apart, {} keeping I = {:.4} of {:.4} bits",
         p.method.name(),
         world_axis_text(p.axis, &p.world),
@@ -208,9 +208,9 @@ fn print_partition(p: &Partition) {
     );
     let b = p.background;
     match (b.mode, b.value) {
-        ("none", _) => println!("          background: none (every voxel counts)"),
-        ("auto", None) => println!("          background: none found at the border"),
-        (mode, Some(t)) => println!(
+        ("none", _) => outln!("          background: none (every voxel counts)"),
+        ("auto", None) => outln!("          background: none found at the border"),
+        (mode, Some(t)) => outln!(
             "          background: {:.0}% of the voxels, {}, ≤ {t:.1}; left out of the slabs",
             b.fraction * 100.0,
             if mode == "auto" {
@@ -221,16 +221,16 @@ fn print_partition(p: &Partition) {
         ),
         _ => {}
     }
-    println!();
+    outln!();
     print_slab_table(p);
     print_steps(&p.steps);
     if p.comparison.is_empty() {
         return;
     }
-    println!();
-    println!("optimum  slabs  I optimal  I greedy top-down  shortfall");
+    outln!();
+    outln!("optimum  slabs  I optimal  I greedy top-down  shortfall");
     for c in &p.comparison {
-        println!(
+        outln!(
             "         {:5}  {:9.4}  {:17.4}  {:9.4}",
             c.slabs,
             c.optimal,
@@ -244,7 +244,7 @@ fn print_slab_table(p: &Partition) {
     // World millimetres along the world normal; without an orientation they count from voxel
     // (0, 0, 0) along the axis.
     let mm = if p.world.oriented { "world mm" } else { "mm" };
-    println!("  slab  slices         {mm:<22} entropy       mean  left out   next: NMI       ΔI");
+    outln!("  slab  slices         {mm:<22} entropy       mean  left out   next: NMI       ΔI");
     for (i, s) in p.info.iter().enumerate() {
         let next = match (p.boundary_nmi.get(i), p.boundary_gain.get(i)) {
             (Some(n), Some(g)) => format!("{n:9.4} {g:8.4}"),
@@ -252,7 +252,7 @@ fn print_slab_table(p: &Partition) {
         };
         let mean = s.mean.map_or_else(|| "-".into(), |m| format!("{m:.2}"));
         let mark = if s.empty { "  empty" } else { "" };
-        println!(
+        outln!(
             "  {i:4}  {:<13}  {:>9.1} .. {:>9.1}  {:8.4} {:>10}  {:>7.1}%   {next}{mark}",
             slab_text(s.slices),
             s.world_mm.0,
@@ -268,16 +268,16 @@ fn print_steps(steps: &[Step]) {
     if steps.is_empty() {
         return;
     }
-    println!();
-    println!("steps");
+    outln!();
+    outln!("steps");
     for (i, step) in steps.iter().enumerate() {
         match step {
-            Step::Split { split, at, gain } => println!(
+            Step::Split { split, at, gain } => outln!(
                 "  {:3}. split slices {} at {at}: ΔI {gain:.4} bits",
                 i + 1,
                 slab_text(*split)
             ),
-            Step::Merge { merge, nmi } => println!(
+            Step::Merge { merge, nmi } => outln!(
                 "  {:3}. merge slices {} with {}: NMI {nmi:.4}",
                 i + 1,
                 slab_text(merge.0),
@@ -289,9 +289,9 @@ fn print_steps(steps: &[Step]) {
 
 fn print_notes(notes: &[String]) {
     if !notes.is_empty() {
-        println!();
+        outln!();
     }
     for n in notes {
-        println!("note     {n}");
+        outln!("note     {n}");
     }
 }

@@ -45,6 +45,8 @@ pub struct Camera {
     /// Distance of the eye from the centre (perspective), or of the ray origins (orthographic).
     distance: f64,
     perspective: bool,
+    /// The zoom asked for, applied again after [`fit`](Self::fit).
+    zoom: f64,
     width: u32,
     height: u32,
 }
@@ -122,9 +124,84 @@ impl Camera {
             half_h,
             distance,
             perspective: p.perspective,
+            zoom,
             width,
             height,
         })
+    }
+
+    /// Pans and scales the view so that `points` fill the image, but for `margin` of its
+    /// width and height on every side and `room` more of its width on the left; then applies
+    /// the zoom the camera was made with (around the new centre). Orthographic cameras fit
+    /// exactly; perspective ones move the eye, to within a few per cent.
+    pub fn fit(&mut self, points: &[[f64; 3]], margin: f64, room: f64) {
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        let (target_w, target_h) = (w * (1.0 - 2.0 * margin - room), h * (1.0 - 2.0 * margin));
+        if points.is_empty() || target_w <= 1.0 || target_h <= 1.0 {
+            return;
+        }
+        let target_x = w * (margin + room) + target_w / 2.0;
+        // The scene's bounding sphere, which the eye must stay out of.
+        let radius = points
+            .iter()
+            .map(|p| {
+                let r: [f64; 3] = std::array::from_fn(|m| p[m] - self.center[m]);
+                dot(r, r).sqrt()
+            })
+            .fold(0.0, f64::max);
+        let zoom = self.zoom;
+        self.half_h *= zoom;
+        self.distance *= if self.perspective { zoom } else { 1.0 };
+        for _ in 0..if self.perspective { 6 } else { 1 } {
+            let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+            for &p in points {
+                let (x, y) = self.project(p);
+                (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+            }
+            if !(x1 > x0 || y1 > y0) || ![x0, x1, y0, y1].iter().all(|v| v.is_finite()) {
+                break;
+            }
+            // Pan the box's centre to the image's, then scale it into the target, then pan it
+            // to the target's centre.
+            let (px, py) = (2.0 * self.half_w / w, 2.0 * self.half_h / h);
+            let (dx, dy) = (
+                f64::midpoint(x0, x1) - w / 2.0,
+                h / 2.0 - f64::midpoint(y0, y1),
+            );
+            let ratio = ((x1 - x0) / target_w).max((y1 - y0) / target_h).max(1e-9);
+            let shift_x = dx * px - (target_x - w / 2.0) * px * ratio;
+            self.center = std::array::from_fn(|m| {
+                self.center[m] + shift_x * self.right[m] + dy * py * self.up[m]
+            });
+            if self.perspective {
+                self.distance = (self.distance * ratio).max(radius * 1.05);
+                self.half_h = self.distance * (FOV_DEGREES / 2.0).to_radians().tan();
+            } else {
+                self.half_h *= ratio;
+            }
+            self.half_w = self.half_h * w / h;
+        }
+        if self.perspective {
+            self.distance = (self.distance / zoom).max(radius * 1.05);
+            self.half_h = self.distance * (FOV_DEGREES / 2.0).to_radians().tan();
+            self.half_w = self.half_h * w / h;
+        } else {
+            self.half_h /= zoom;
+            self.half_w /= zoom;
+            // Ray origins stay outside the scene whatever the pan.
+            self.distance = self.distance.max(3.0 * radius + 1.0);
+        }
+    }
+
+    /// The parameter along the ray through its pixel at which world point `p` lies.
+    pub fn depth(&self, p: [f64; 3]) -> f64 {
+        let rel: [f64; 3] = std::array::from_fn(|m| p[m] - self.center[m]);
+        if self.perspective {
+            let eye: [f64; 3] = std::array::from_fn(|m| self.distance * self.back[m] - rel[m]);
+            dot(eye, eye).sqrt()
+        } else {
+            self.distance - dot(rel, self.back)
+        }
     }
 
     /// Origin and unit direction of the ray through the centre of pixel `(x, y)` (y down).

@@ -5,13 +5,22 @@ use serde::Serialize;
 
 use crate::partition::Partition;
 
+/// With similarity gaps, this share of the total gap is spread evenly (the rest by
+/// dissimilarity), so that no gap is narrower than this fraction of the mean and every cut shows.
+pub const MIN_GAP: f64 = 0.5;
+
+/// The total gap, as a fraction of the stack's length, that renders use unless told: wide
+/// enough that the cut faces show from the default camera.
+pub const DEFAULT_SPREAD: f64 = 0.5;
+
 /// How the gaps between slabs are sized.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Gap {
     /// Every gap the same.
     Uniform,
-    /// Proportional to `1 - NMI` of the two slabs: the strongest boundaries open widest.
+    /// Proportional to `1 - NMI` of the two slabs: the strongest boundaries open widest (none
+    /// narrower than [`MIN_GAP`] of the mean).
     Similarity,
 }
 
@@ -93,12 +102,18 @@ impl Layout {
     ) -> Self {
         let k = slabs.len();
         let total = spread.max(0.0) * stack.slices as f64 * stack.thickness;
-        let weights: Vec<f64> = match (gap, nmi) {
+        let mut weights: Vec<f64> = match (gap, nmi) {
             (Gap::Similarity, Some(nmi)) if nmi.len() + 1 == k => {
                 nmi.iter().map(|n| (1.0 - n).max(0.0)).collect()
             }
             _ => vec![1.0; k.saturating_sub(1)],
         };
+        // Every gap shows: a share of the total spread evenly, the rest by the weights, so
+        // that none is narrower than that share of the mean.
+        let mean = weights.iter().sum::<f64>() / weights.len().max(1) as f64;
+        for w in &mut weights {
+            *w = MIN_GAP * mean + (1.0 - MIN_GAP) * *w;
+        }
         let sum: f64 = weights.iter().sum();
         let gaps: Vec<f64> = if sum > 1e-12 {
             weights.iter().map(|w| total * w / sum).collect()
@@ -134,5 +149,40 @@ impl Layout {
             .iter()
             .map(|s| s.offset.abs())
             .fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn similarity_gaps_follow_dissimilarity_but_none_closes() {
+        let stack = Stack {
+            axis: [0.0, 0.0, 1.0],
+            slices: 100,
+            thickness: 1.0,
+            offset: 0.0,
+        };
+        let slabs = [(0, 25), (25, 50), (50, 75), (75, 100)];
+        let nmi = [0.99, 0.5, 0.2];
+        let l = Layout::from_slabs(&stack, &slabs, Some(&nmi), Gap::Similarity, 0.6);
+        let gaps: Vec<f64> = l
+            .slabs
+            .windows(2)
+            .map(|w| w[1].offset - w[0].offset)
+            .collect();
+        let total: f64 = gaps.iter().sum();
+        assert!(
+            (total - 60.0).abs() < 1e-9,
+            "the gaps add up to the spread: {total}"
+        );
+        let mean = total / 3.0;
+        assert!(gaps[0] >= MIN_GAP * mean - 1e-9, "{gaps:?}");
+        assert!(gaps[0] < gaps[1] && gaps[1] < gaps[2], "{gaps:?}");
+        let uniform = Layout::from_slabs(&stack, &slabs, Some(&nmi), Gap::Uniform, 0.6);
+        for w in uniform.slabs.windows(2) {
+            assert!((w[1].offset - w[0].offset - 20.0).abs() < 1e-9);
+        }
     }
 }

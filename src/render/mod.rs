@@ -1,6 +1,8 @@
 //! The exploded view (paper §3, step 3): a CPU ray caster for slabs pulled apart along their
-//! axis, with direct volume rendering or maximum intensity projection, empty-space skipping,
-//! early ray termination, optional shading, and outlines and labels drawn with tiny-skia.
+//! axis, with cut faces that show the cross-section at every cut, direct volume rendering or
+//! maximum intensity projection, empty-space skipping, early ray termination, optional shading,
+//! a camera that frames what is drawn, and outlines (where they are seen) and labels drawn with
+//! tiny-skia. [`mod@slice`] draws the cross-sections themselves.
 //!
 //! Every pixel is computed on its own from the same inputs, so images are identical whatever the
 //! number of threads.
@@ -8,6 +10,7 @@
 mod camera;
 mod layout;
 mod overlay;
+pub mod slice;
 mod transfer;
 
 use rayon::prelude::*;
@@ -15,19 +18,24 @@ use serde::Serialize;
 use tiny_skia::Pixmap;
 
 pub use camera::{Camera, CameraParams};
-pub use layout::{Gap, Layout, Placement, Stack};
-pub use transfer::{Colormap, HISTOGRAM_BINS, Look, Preset, Transfer};
+pub use layout::{DEFAULT_SPREAD, Gap, Layout, MIN_GAP, Placement, Stack};
+pub use transfer::{Colormap, HISTOGRAM_BINS, Look, MAX_LABELS, Preset, Transfer, label_values};
 
 use crate::error::{Error, Result};
 use crate::geometry::{dot, min_spacing};
 use crate::progress::Monitor;
 use crate::volume::Volume;
 use crate::volume::interpolate::Interpolator;
+use overlay::Aabb;
 
 /// How samples become pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
+    /// Direct volume rendering with cut faces: where a ray enters a slab through a cut, the
+    /// cross-section there, through the colour window and opaque off the background, as a
+    /// surface; the volume behind it where it is clear.
+    Cut,
     /// Direct volume rendering: front-to-back compositing through the transfer function.
     Dvr,
     /// Maximum intensity projection through the colour window.
@@ -41,7 +49,7 @@ pub struct RenderParams {
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
-    /// DVR or MIP.
+    /// Cut faces, DVR or MIP.
     pub mode: Mode,
     /// Transfer function.
     pub preset: Preset,
@@ -59,8 +67,10 @@ pub struct RenderParams {
     pub outlines: bool,
     /// Draw slab numbers.
     pub labels: bool,
-    /// Show this slab normally and the others faint.
+    /// Outline this slab in the highlight colour.
     pub highlight: Option<usize>,
+    /// Draw the slabs other than the highlighted one faint.
+    pub fade: bool,
     /// Render only the highlighted slab.
     pub solo: bool,
     /// Background colour.
@@ -72,7 +82,7 @@ impl Default for RenderParams {
         Self {
             width: 640,
             height: 480,
-            mode: Mode::Dvr,
+            mode: Mode::Cut,
             preset: Preset::Auto,
             colormap: Colormap::Grey,
             window: None,
@@ -82,9 +92,42 @@ impl Default for RenderParams {
             outlines: true,
             labels: true,
             highlight: None,
+            fade: false,
             solo: false,
             background: [12, 12, 18],
         }
+    }
+}
+
+impl RenderParams {
+    /// Checks what no render can do: an image too small or too large, a step, zoom or angle
+    /// out of range.
+    pub fn check(&self) -> Result<()> {
+        let (w, h) = (self.width, self.height);
+        if w == 0 || h == 0 || u64::from(w) * u64::from(h) > MAX_PIXELS {
+            return Err(Error::invalid(
+                "size",
+                format!("{w}x{h}"),
+                format!("between 1x1 and {MAX_PIXELS} pixels"),
+            ));
+        }
+        if !(self.step.is_finite() && self.step > 0.0) {
+            return Err(Error::invalid("step", self.step, "a positive number"));
+        }
+        let c = &self.camera;
+        if !(c.zoom.is_finite() && c.zoom > 1e-3 && c.zoom < 1e3) {
+            return Err(Error::invalid(
+                "zoom",
+                c.zoom,
+                "a number between 0.001 and 1000",
+            ));
+        }
+        for (name, v) in [("azimuth", c.azimuth), ("elevation", c.elevation)] {
+            if !v.is_finite() {
+                return Err(Error::invalid(name, v, "a finite angle in degrees"));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -103,44 +146,60 @@ const OPAQUE: f32 = 0.99;
 /// Faint slabs keep this fraction of their colour and opacity.
 const GHOST: f32 = 0.2;
 
+/// The light a cut face gets whatever its angle to the view (the rest grows with it).
+const FACE_AMBIENT: f64 = 0.75;
+
+/// The camera leaves this fraction of the image free on each side of the scene.
+const MARGIN: f64 = 0.04;
+
+/// And this fraction more on the left, for the slab numbers.
+const LABEL_ROOM: f64 = 0.05;
+
 /// A rendered image and the camera that made it.
 pub struct Image {
     /// RGBA pixels (opaque, so premultiplied equals straight).
     pub pixmap: Pixmap,
     /// The camera, to project world points into the image.
     pub camera: Camera,
+    /// Per pixel, row by row: how far along its ray the image turns half opaque, mm (infinite
+    /// where it never does), to tell what is in front of what.
+    pub depth: Vec<f32>,
 }
 
 impl Image {
     /// The image as PNG bytes.
     pub fn png(&self) -> Result<Vec<u8>> {
-        self.pixmap
-            .encode_png()
-            .map_err(|e| Error::Encode(format!("PNG: {e}")))
+        encode(&self.pixmap, ImageOutput::Png)
     }
 
     /// The image encoded as `format` asks.
     pub fn encode(&self, format: ImageOutput) -> Result<Vec<u8>> {
-        match format {
-            ImageOutput::Png => self.png(),
-            ImageOutput::Jpeg => {
-                let rgb: Vec<u8> = self
-                    .pixmap
-                    .data()
-                    .chunks_exact(4)
-                    .flat_map(|p| [p[0], p[1], p[2]])
-                    .collect();
-                let mut out = Vec::new();
-                image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
-                    .encode(
-                        &rgb,
-                        self.pixmap.width(),
-                        self.pixmap.height(),
-                        image::ExtendedColorType::Rgb8,
-                    )
-                    .map_err(|e| Error::Encode(format!("JPEG: {e}")))?;
-                Ok(out)
-            }
+        encode(&self.pixmap, format)
+    }
+}
+
+/// `pixmap` (opaque) encoded as `format` asks.
+pub fn encode(pixmap: &Pixmap, format: ImageOutput) -> Result<Vec<u8>> {
+    match format {
+        ImageOutput::Png => pixmap
+            .encode_png()
+            .map_err(|e| Error::Encode(format!("PNG: {e}"))),
+        ImageOutput::Jpeg => {
+            let rgb: Vec<u8> = pixmap
+                .data()
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
+            let mut out = Vec::new();
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
+                .encode(
+                    &rgb,
+                    pixmap.width(),
+                    pixmap.height(),
+                    image::ExtendedColorType::Rgb8,
+                )
+                .map_err(|e| Error::Encode(format!("JPEG: {e}")))?;
+            Ok(out)
         }
     }
 }
@@ -215,6 +274,30 @@ impl Bricks {
         Self { count, min, max }
     }
 
+    /// The box around the bricks that are not `transparent`, in mm: what a render shows
+    /// (the whole volume when nothing is).
+    fn content(&self, transparent: &[bool], spacing: [f64; 3], extent: [f64; 3]) -> Aabb {
+        let (mut lo, mut hi) = ([usize::MAX; 3], [0; 3]);
+        for (b, _) in transparent.iter().enumerate().filter(|(_, t)| !**t) {
+            let c = [
+                b % self.count[0],
+                (b / self.count[0]) % self.count[1],
+                b / (self.count[0] * self.count[1]),
+            ];
+            for m in 0..3 {
+                lo[m] = lo[m].min(c[m]);
+                hi[m] = hi[m].max(c[m] + 1);
+            }
+        }
+        if lo[0] == usize::MAX {
+            return Aabb::of(extent);
+        }
+        Aabb {
+            lo: std::array::from_fn(|m| ((lo[m] * BRICK) as f64 * spacing[m]).min(extent[m])),
+            hi: std::array::from_fn(|m| ((hi[m] * BRICK) as f64 * spacing[m]).min(extent[m])),
+        }
+    }
+
     #[inline]
     fn index(&self, p: [f64; 3]) -> [usize; 3] {
         std::array::from_fn(|m| ((p[m].max(0.0) as usize) / BRICK).min(self.count[m] - 1))
@@ -240,11 +323,13 @@ impl Bricks {
     }
 }
 
-/// What a render of one volume can reuse: the brick grid and the value histogram.
+/// What a render of one volume can reuse: the brick grid, the value histogram and, for a
+/// label volume, its labels.
 pub struct Renderer<'a> {
     volume: &'a Volume,
     bricks: Bricks,
     histogram: Vec<u64>,
+    labels: Option<Vec<(f32, u64)>>,
 }
 
 /// Everything the per-pixel loop reads.
@@ -253,6 +338,7 @@ struct Frame<'a> {
     bricks: &'a Bricks,
     transparent: Vec<bool>,
     transfer: Transfer,
+    labels: bool,
     layout: &'a Layout,
     params: &'a RenderParams,
     spacing: [f64; 3],
@@ -268,7 +354,31 @@ impl<'a> Renderer<'a> {
             volume,
             bricks: Bricks::new(volume),
             histogram: volume.histogram(HISTOGRAM_BINS)?,
+            labels: label_values(volume),
         })
+    }
+
+    /// The labels of a label volume (integers with few distinct values), with their counts.
+    pub fn labels(&self) -> Option<&[(f32, u64)]> {
+        self.labels.as_deref()
+    }
+
+    /// The transfer function of `look` for samples `step` mm apart: a label volume's
+    /// categorical colours when `look` is the automatic preset with no window.
+    pub fn transfer(&self, look: Look, step: f64) -> Result<Transfer> {
+        let reference = min_spacing(self.volume.spacing());
+        match &self.labels {
+            Some(labels) if look.preset == Preset::Auto && look.window.is_none() => {
+                Transfer::for_labels(labels, step, reference)
+            }
+            _ => Transfer::with_histogram(
+                self.volume.stats(),
+                &self.histogram,
+                look,
+                step,
+                reference,
+            ),
+        }
     }
 
     /// The volume being rendered.
@@ -283,30 +393,8 @@ impl<'a> Renderer<'a> {
         params: &RenderParams,
         monitor: &Monitor,
     ) -> Result<Image> {
+        params.check()?;
         let (w, h) = (params.width, params.height);
-        if w == 0 || h == 0 || u64::from(w) * u64::from(h) > MAX_PIXELS {
-            return Err(Error::invalid(
-                "size",
-                format!("{w}x{h}"),
-                format!("between 1x1 and {MAX_PIXELS} pixels"),
-            ));
-        }
-        if !(params.step.is_finite() && params.step > 0.0) {
-            return Err(Error::invalid("step", params.step, "a positive number"));
-        }
-        let c = &params.camera;
-        if !(c.zoom.is_finite() && c.zoom > 1e-3 && c.zoom < 1e3) {
-            return Err(Error::invalid(
-                "zoom",
-                c.zoom,
-                "a number between 0.001 and 1000",
-            ));
-        }
-        for (name, v) in [("azimuth", c.azimuth), ("elevation", c.elevation)] {
-            if !v.is_finite() {
-                return Err(Error::invalid(name, v, "a finite angle in degrees"));
-            }
-        }
         let spacing = self.volume.spacing();
         let reference = min_spacing(spacing);
         let step = params.step * reference;
@@ -315,9 +403,8 @@ impl<'a> Renderer<'a> {
             colormap: params.colormap,
             window: params.window,
         };
-        let transfer =
-            Transfer::with_histogram(self.volume.stats(), &self.histogram, look, step, reference)?;
-        let transparent = self
+        let transfer = self.transfer(look, step)?;
+        let transparent: Vec<bool> = self
             .bricks
             .min
             .iter()
@@ -338,11 +425,20 @@ impl<'a> Renderer<'a> {
         let radius = diagonal / 2.0 + layout.reach() + reference;
         let t = self.volume.transform();
         let display = t.display_frame(layout.axis, spacing);
-        let camera = Camera::oriented(center, radius, layout.axis, display, &params.camera, w, h)?;
+        let mut camera =
+            Camera::oriented(center, radius, layout.axis, display, &params.camera, w, h)?;
+        let room = if params.labels { LABEL_ROOM } else { 0.0 };
+        let content = self.bricks.content(&transparent, spacing, extent);
+        camera.fit(
+            &overlay::scene_points(layout, &content, params),
+            MARGIN,
+            room,
+        );
         let frame = Frame {
             it: Interpolator::new(self.volume),
             bricks: &self.bricks,
             transparent,
+            labels: transfer.is_labels(),
             transfer,
             layout,
             params,
@@ -354,25 +450,32 @@ impl<'a> Renderer<'a> {
             .ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "an image that fits"))?;
         monitor.start("rendering", u64::from(h));
         let bg = params.background.map(|c| f32::from(c) / 255.0);
+        let mut depth = vec![f32::INFINITY; w as usize * h as usize];
         pixmap
             .data_mut()
             .par_chunks_mut(w as usize * 4)
+            .zip(depth.par_chunks_mut(w as usize))
             .enumerate()
-            .try_for_each(|(y, row)| {
-                for (x, px) in row.chunks_mut(4).enumerate() {
+            .try_for_each(|(y, (row, depths))| {
+                for (x, (px, z)) in row.chunks_mut(4).zip(depths).enumerate() {
                     let (o, d) = camera.ray(x as u32, y as u32);
-                    let c = frame.trace(o, d);
+                    let (c, t) = frame.trace(o, d);
                     for k in 0..3 {
                         px[k] =
                             ((c[k] + (1.0 - c[3]) * bg[k]).clamp(0.0, 1.0) * 255.0).round() as u8;
                     }
                     px[3] = 255;
+                    *z = t;
                 }
                 monitor.advance(1)
             })?;
-        let mut image = Image { pixmap, camera };
+        let mut image = Image {
+            pixmap,
+            camera,
+            depth,
+        };
         if params.outlines || params.labels {
-            overlay::draw(&mut image, layout, extent, params);
+            overlay::draw(&mut image, layout, &content, params, step);
         }
         if params.labels && t.known {
             overlay::triad(&mut image, |w| t.physical_direction(w, spacing), params);
@@ -381,52 +484,111 @@ impl<'a> Renderer<'a> {
     }
 }
 
+/// Where a ray crosses one slab: the parameter range inside the box and the slab, and the
+/// parameter where it enters through a cut, if it does.
+struct Crossing {
+    range: (f64, f64),
+    cut: Option<f64>,
+}
+
+/// What a ray has gathered so far: premultiplied colour, and the parameter where it turned half
+/// opaque.
+struct Ray {
+    acc: [f32; 4],
+    depth: f32,
+}
+
+impl Ray {
+    /// Composites `c` (premultiplied) behind what is there, at parameter `t`.
+    #[inline]
+    fn add(&mut self, c: [f32; 4], light: f32, k: f32, t: f64) {
+        let w = (1.0 - self.acc[3]) * k;
+        for i in 0..3 {
+            self.acc[i] += w * c[i] * light;
+        }
+        self.acc[3] += w * c[3];
+        if self.acc[3] >= 0.5 && self.depth.is_infinite() {
+            self.depth = t as f32;
+        }
+    }
+}
+
 impl Frame<'_> {
-    /// Premultiplied RGBA along the ray from `o` in direction `d` (unit), through every slab.
-    fn trace(&self, o: [f64; 3], d: [f64; 3]) -> [f32; 4] {
+    /// Premultiplied RGBA along the ray from `o` in direction `d` (unit), through every slab,
+    /// and the parameter where it turned half opaque (infinite if it did not).
+    fn trace(&self, o: [f64; 3], d: [f64; 3]) -> ([f32; 4], f32) {
         let ascending = dot(d, self.layout.axis) >= 0.0;
-        let mut acc = [0.0f32; 4];
-        // MIP starts at the window's floor: values below it all map to its colour, so bricks
-        // whose maximum lies below can be skipped without changing a pixel.
-        let mut mip = (self.transfer.floor(), false);
-        let mut hit = false;
+        let mut ray = Ray {
+            acc: [0.0; 4],
+            depth: f32::INFINITY,
+        };
+        // MIP starts at the window's floor: values below it all map to the background, so
+        // bricks whose maximum lies below can be skipped without changing a pixel.
+        let mut mip = (self.transfer.floor(), false, f64::INFINITY);
         let count = self.layout.slabs.len();
         for n in 0..count {
-            let slab = &self.layout.slabs[if ascending { n } else { count - 1 - n }];
-            let faint = self.params.highlight.is_some_and(|h| h != slab.index);
-            if faint && self.params.solo {
+            let i = if ascending { n } else { count - 1 - n };
+            let slab = &self.layout.slabs[i];
+            let other = self.params.highlight.is_some_and(|h| h != slab.index);
+            if other && self.params.solo {
                 continue;
             }
+            let faint = other && self.params.fade;
             let origin: [f64; 3] =
                 std::array::from_fn(|m| o[m] - slab.offset * self.layout.axis[m]);
-            let Some((t0, t1)) = self.interval(origin, d, slab) else {
+            let Some(crossing) = self.crossing(origin, d, slab, self.exposed(i)) else {
                 continue;
             };
-            hit = true;
+            let k = if faint { GHOST } else { 1.0 };
             match self.params.mode {
-                Mode::Dvr => {
-                    self.composite((origin, d), slab, (t0, t1), faint, &mut acc);
-                    if acc[3] >= OPAQUE {
+                Mode::Cut | Mode::Dvr => {
+                    if self.params.mode == Mode::Cut
+                        && let Some(t) = crossing.cut
+                    {
+                        self.face((origin, d), t, k, &mut ray);
+                    }
+                    if ray.acc[3] < OPAQUE {
+                        self.composite((origin, d), slab, crossing.range, k, &mut ray);
+                    }
+                    if ray.acc[3] >= OPAQUE {
                         break;
                     }
                 }
-                Mode::Mip => self.maximum((origin, d), slab, (t0, t1), faint, &mut mip),
+                Mode::Mip => self.maximum((origin, d), slab, crossing.range, faint, &mut mip),
             }
         }
         match self.params.mode {
-            Mode::Mip if hit => {
+            // On a clean background: only what rises above the window's floor shows.
+            Mode::Mip if mip.0 > self.transfer.floor() => {
                 let c = self.transfer.grey(mip.0);
                 let k = if mip.1 { GHOST } else { 1.0 };
-                [c[0] * k, c[1] * k, c[2] * k, 1.0]
+                ([c[0] * k, c[1] * k, c[2] * k, k], mip.2 as f32)
             }
-            Mode::Mip => [0.0; 4],
-            Mode::Dvr => acc,
+            Mode::Mip => ([0.0; 4], f32::INFINITY),
+            Mode::Cut | Mode::Dvr => (ray.acc, ray.depth),
         }
     }
 
-    /// The parameter range where the ray lies inside the box and the slab, widened by a step so
-    /// that boundary samples are decided by [`Frame::inside`] alone.
-    fn interval(&self, o: [f64; 3], d: [f64; 3], slab: &Placement) -> Option<(f64, f64)> {
+    /// Whether the cuts at the start and the end of slab `i` are exposed: pulled away from the
+    /// neighbour there, or the neighbour not drawn (the first slab's start and the last one's
+    /// end are the volume's, not cuts).
+    fn exposed(&self, i: usize) -> (bool, bool) {
+        let slabs = &self.layout.slabs;
+        let shown = |j: usize| !self.params.solo || self.params.highlight.is_none_or(|h| h == j);
+        let apart = |j: usize| !shown(j) || (slabs[j].offset - slabs[i].offset).abs() > 1e-9;
+        (i > 0 && apart(i - 1), i + 1 < slabs.len() && apart(i + 1))
+    }
+
+    /// Where the ray crosses the box and the slab, widened by a step so that boundary samples
+    /// are decided by [`Frame::inside`] alone; and where it enters through a cut plane of the
+    /// slab that is `exposed` (at its start, at its end).
+    fn crossing(
+        &self,
+        o: [f64; 3],
+        d: [f64; 3],
+        slab: &Placement,
+        exposed: (bool, bool),
+    ) -> Option<Crossing> {
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
         for m in 0..3 {
             if d[m].abs() < 1e-12 {
@@ -440,16 +602,26 @@ impl Frame<'_> {
             hi = hi.min(a.max(b));
         }
         let (s0, ds) = (dot(o, self.layout.axis), dot(d, self.layout.axis));
+        let mut cut = None;
         if ds.abs() < 1e-12 {
             if s0 < slab.lo || s0 >= slab.hi {
                 return None;
             }
         } else {
             let (a, b) = ((slab.lo - s0) / ds, (slab.hi - s0) / ds);
-            lo = lo.max(a.min(b));
+            let enter = a.min(b);
+            // Rays going up the axis enter through the start, rays going down through the end.
+            let open = if ds > 0.0 { exposed.0 } else { exposed.1 };
+            if open && enter.is_finite() && enter >= lo {
+                cut = Some(enter);
+            }
+            lo = lo.max(enter);
             hi = hi.min(a.max(b));
         }
-        (lo <= hi).then_some((lo - self.step, hi + self.step))
+        (lo <= hi).then_some(Crossing {
+            range: (lo - self.step, hi + self.step),
+            cut,
+        })
     }
 
     /// Whether the volume-space point `p` is inside the box and the slab.
@@ -469,15 +641,26 @@ impl Frame<'_> {
         )
     }
 
-    /// Visits the grid samples of `range` inside `slab` in order, in voxel index coordinates,
-    /// jumping over bricks that `empty` rules out; stops when `visit` returns false.
+    /// The value at voxel index point `q`: interpolated, or a label volume's nearest voxel.
+    #[inline]
+    fn value(&self, q: [f64; 3]) -> f32 {
+        if self.labels {
+            self.it.data[self.it.nearest(q)]
+        } else {
+            self.it.sample(q)
+        }
+    }
+
+    /// Visits the grid samples of `range` inside `slab` in order, in voxel index coordinates
+    /// with their parameter, jumping over bricks that `empty` rules out; stops when `visit`
+    /// returns false.
     fn march(
         &self,
         (o, d): ([f64; 3], [f64; 3]),
         slab: &Placement,
         range: (f64, f64),
         empty: impl Fn(usize) -> bool,
-        mut visit: impl FnMut([f64; 3]) -> bool,
+        mut visit: impl FnMut([f64; 3], f64) -> bool,
     ) {
         let dir_index: [f64; 3] = std::array::from_fn(|m| d[m] / self.spacing[m]);
         let (mut n, last) = self.samples(range);
@@ -495,9 +678,24 @@ impl Frame<'_> {
                 n = n.max(((t + skip) / self.step).ceil() as i64);
                 continue;
             }
-            if !visit(q) {
+            if !visit(q, t) {
                 return;
             }
+        }
+    }
+
+    /// The cut face where the ray enters a slab at parameter `t`: the section there through
+    /// the face colours, lit as a surface facing the axis.
+    fn face(&self, (o, d): ([f64; 3], [f64; 3]), t: f64, k: f32, ray: &mut Ray) {
+        let q: [f64; 3] = std::array::from_fn(|m| {
+            ((o[m] + t * d[m]).clamp(0.0, self.extent[m])) / self.spacing[m]
+        });
+        let c = self.transfer.face(self.value(q));
+        if c[3] > 0.0 {
+            // Faces are read, not sculpted: mostly flat light, a little from the angle.
+            let light =
+                (FACE_AMBIENT + (1.0 - FACE_AMBIENT) * dot(d, self.layout.axis).abs()) as f32;
+            ray.add(c, light, k, t);
         }
     }
 
@@ -506,22 +704,22 @@ impl Frame<'_> {
         ray: ([f64; 3], [f64; 3]),
         slab: &Placement,
         range: (f64, f64),
-        faint: bool,
-        acc: &mut [f32; 4],
+        k: f32,
+        out: &mut Ray,
     ) {
-        let k = if faint { GHOST } else { 1.0 };
         let shading = self.params.shading;
         self.march(
             ray,
             slab,
             range,
             |b| self.transparent[b],
-            |q| {
+            |q, t| {
                 let (v, g) = if shading {
                     self.it.sample_gradient(q)
                 } else {
                     (self.it.sample(q), [0.0; 3])
                 };
+                let v = if self.labels { self.value(q) } else { v };
                 let c = if v.is_nan() {
                     [0.0; 4]
                 } else {
@@ -533,13 +731,9 @@ impl Frame<'_> {
                     } else {
                         1.0
                     };
-                    let w = (1.0 - acc[3]) * k;
-                    for i in 0..3 {
-                        acc[i] += w * c[i] * light;
-                    }
-                    acc[3] += w * c[3];
+                    out.add(c, light, k, t);
                 }
-                acc[3] < OPAQUE
+                out.acc[3] < OPAQUE
             },
         );
     }
@@ -550,7 +744,7 @@ impl Frame<'_> {
         slab: &Placement,
         range: (f64, f64),
         faint: bool,
-        best: &mut (f32, bool),
+        best: &mut (f32, bool, f64),
     ) {
         let top = std::cell::Cell::new(*best);
         self.march(
@@ -558,10 +752,10 @@ impl Frame<'_> {
             slab,
             range,
             |b| self.bricks.max[b] <= top.get().0,
-            |q| {
-                let v = self.it.sample(q);
+            |q, t| {
+                let v = self.value(q);
                 if v > top.get().0 {
-                    top.set((v, faint));
+                    top.set((v, faint, t));
                 }
                 true
             },

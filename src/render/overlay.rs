@@ -1,7 +1,7 @@
 //! Overlays drawn over a render with tiny-skia: each slab's outline (the two planes that bound
-//! it, cut by the volume's box) and its number.
+//! it, cut by the volume's box) where it is seen, its number, and the orientation triad.
 
-use tiny_skia::{Paint, PathBuilder, Rect, Stroke, Transform};
+use tiny_skia::{Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 use super::{Image, Layout, RenderParams};
 use crate::geometry::{cross, dot, normalize};
@@ -10,11 +10,37 @@ use crate::geometry::{cross, dot, normalize};
 const LINE: [u8; 4] = [90, 200, 230, 200];
 const HIGHLIGHT: [u8; 4] = [255, 210, 60, 255];
 
-/// The polygon where the plane `p·axis = s` cuts the box `[0, extent]`, in order around it.
-fn section(axis: [f64; 3], s: f64, extent: [f64; 3]) -> Vec<[f64; 3]> {
-    let corner = |c: usize| -> [f64; 3] {
-        std::array::from_fn(|m| if c >> m & 1 == 1 { extent[m] } else { 0.0 })
-    };
+/// An axis-aligned box in physical space (voxel indices times spacing).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Aabb {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+}
+
+impl Aabb {
+    /// The box `[0, extent]`.
+    pub fn of(extent: [f64; 3]) -> Self {
+        Self {
+            lo: [0.0; 3],
+            hi: extent,
+        }
+    }
+
+    /// Corner `c`: bit `m` of `c` chooses the high end along axis `m`.
+    pub fn corner(&self, c: usize) -> [f64; 3] {
+        std::array::from_fn(|m| {
+            if c >> m & 1 == 1 {
+                self.hi[m]
+            } else {
+                self.lo[m]
+            }
+        })
+    }
+}
+
+/// The polygon where the plane `p·axis = s` cuts `aabb`, in order around it.
+pub(super) fn section(axis: [f64; 3], s: f64, aabb: &Aabb) -> Vec<[f64; 3]> {
+    let corner = |c: usize| aabb.corner(c);
     let mut points = Vec::new();
     for a in 0..8usize {
         for m in 0..3 {
@@ -79,7 +105,14 @@ fn glyph(ch: char) -> Option<&'static [u8; 5]> {
 
 /// Draws `text` (digits and the letters R, L, A, P, S, I) with its top-left at `(x, y)`,
 /// `scale` pixels per font pixel.
-fn draw_digits(image: &mut Image, text: &str, x: f32, y: f32, scale: f32, colour: [u8; 4]) {
+pub(super) fn draw_digits(
+    pixmap: &mut Pixmap,
+    text: &str,
+    x: f32,
+    y: f32,
+    scale: f32,
+    colour: [u8; 4],
+) {
     let mut paint = Paint::default();
     paint.set_color_rgba8(colour[0], colour[1], colour[2], colour[3]);
     for (i, ch) in text.chars().enumerate() {
@@ -90,9 +123,7 @@ fn draw_digits(image: &mut Image, text: &str, x: f32, y: f32, scale: f32, colour
                     let px = x + (i as f32 * 4.0 + col as f32) * scale;
                     let py = y + row as f32 * scale;
                     if let Some(r) = Rect::from_xywh(px, py, scale, scale) {
-                        image
-                            .pixmap
-                            .fill_rect(r, &paint, Transform::identity(), None);
+                        pixmap.fill_rect(r, &paint, Transform::identity(), None);
                     }
                 }
             }
@@ -100,78 +131,166 @@ fn draw_digits(image: &mut Image, text: &str, x: f32, y: f32, scale: f32, colour
     }
 }
 
-/// Draws every slab's outline and number.
-pub(super) fn draw(image: &mut Image, layout: &Layout, extent: [f64; 3], params: &RenderParams) {
+/// The range of `p·axis` over `aabb`.
+fn span(axis: [f64; 3], aabb: &Aabb) -> (f64, f64) {
+    (0..8)
+        .map(|c: usize| dot(aabb.corner(c), axis))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            (a.min(s), b.max(s))
+        })
+}
+
+/// The slabs a render draws: all, or the highlighted one alone.
+fn drawn<'a>(
+    layout: &'a Layout,
+    params: &'a RenderParams,
+) -> impl Iterator<Item = &'a super::Placement> {
+    layout.slabs.iter().filter(move |slab| {
+        !(params.solo && params.highlight.is_some() && params.highlight != Some(slab.index))
+    })
+}
+
+/// The two sections that bound `slab` (where its planes cut the box), where they are drawn.
+fn caps(slab: &super::Placement, axis: [f64; 3], aabb: &Aabb) -> [Vec<[f64; 3]>; 2] {
+    let (smin, smax) = span(axis, aabb);
+    [slab.lo.max(smin), slab.hi.min(smax)].map(|s| {
+        section(axis, s, aabb)
+            .into_iter()
+            .map(|p| std::array::from_fn(|m| p[m] + slab.offset * axis[m]))
+            .collect()
+    })
+}
+
+/// Points whose hull is the drawn scene: each drawn slab's bounding sections of `aabb` and the
+/// corners of `aabb` inside it, where they are drawn.
+pub(super) fn scene_points(layout: &Layout, aabb: &Aabb, params: &RenderParams) -> Vec<[f64; 3]> {
     let axis = layout.axis;
-    let corners = (0..8).map(|c: usize| -> f64 {
-        dot(
-            std::array::from_fn(|m| if c >> m & 1 == 1 { extent[m] } else { 0.0 }),
-            axis,
-        )
-    });
-    let (smin, smax) = corners.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
-        (a.min(s), b.max(s))
-    });
-    let scale = (params.height as f32 / 160.0).clamp(1.0, 3.0).round();
-    for slab in &layout.slabs {
-        let selected = params.highlight == Some(slab.index);
-        if params.solo && params.highlight.is_some() && !selected {
-            continue;
+    let mut points = Vec::new();
+    for slab in drawn(layout, params) {
+        for cap in caps(slab, axis, aabb) {
+            points.extend(cap);
         }
+        for c in 0..8usize {
+            let p = aabb.corner(c);
+            let s = dot(p, axis);
+            if s >= slab.lo && s <= slab.hi {
+                points.push(std::array::from_fn(|m| p[m] + slab.offset * axis[m]));
+            }
+        }
+    }
+    points
+}
+
+/// Pixels between the points at which an outline is tested against the depth of the image.
+const OUTLINE_PIECE: f64 = 2.0;
+
+/// Draws every slab's outline (its sections of `aabb`) where it is seen (in front of what the
+/// image shows there) and its number, the numbers moved apart where they would overlap.
+pub(super) fn draw(
+    image: &mut Image,
+    layout: &Layout,
+    aabb: &Aabb,
+    params: &RenderParams,
+    step: f64,
+) {
+    let axis = layout.axis;
+    let scale = (params.height as f32 / 160.0).clamp(1.0, 3.0).round();
+    let size: [f64; 3] = std::array::from_fn(|m| aabb.hi[m] - aabb.lo[m]);
+    let diagonal = dot(size, size).sqrt();
+    // An outline lies on the surface it bounds: it is seen unless something lies clearly in
+    // front of it.
+    let tolerance = 2.0 * step + 0.01 * diagonal;
+    let mut numbers = Vec::new();
+    for slab in drawn(layout, params) {
+        let selected = params.highlight == Some(slab.index);
         let colour = if selected { HIGHLIGHT } else { LINE };
-        let caps: Vec<Vec<(f32, f32)>> = [slab.lo.max(smin), slab.hi.min(smax)]
-            .iter()
-            .map(|&s| {
-                section(axis, s, extent)
-                    .into_iter()
-                    .map(|p| {
-                        let q = std::array::from_fn(|m| p[m] + slab.offset * axis[m]);
-                        let (x, y) = image.camera.project(q);
-                        (x as f32, y as f32)
-                    })
-                    .collect()
-            })
-            .collect();
+        let caps = caps(slab, axis, aabb);
         if params.outlines {
-            let mut paint = Paint::default();
-            paint.set_color_rgba8(colour[0], colour[1], colour[2], colour[3]);
-            paint.anti_alias = true;
-            let stroke = Stroke {
-                width: if selected { 2.0 } else { 1.0 },
-                ..Stroke::default()
-            };
+            let mut pb = PathBuilder::new();
             for cap in &caps {
-                let mut pb = PathBuilder::new();
-                for (i, &(x, y)) in cap.iter().enumerate() {
-                    if i == 0 {
-                        pb.move_to(x, y);
-                    } else {
-                        pb.line_to(x, y);
-                    }
+                for (i, &a) in cap.iter().enumerate() {
+                    visible_pieces(image, a, cap[(i + 1) % cap.len()], tolerance, &mut pb);
                 }
-                pb.close();
-                if let Some(path) = pb.finish() {
-                    image
-                        .pixmap
-                        .stroke_path(&path, &paint, &stroke, Transform::identity(), None);
-                }
+            }
+            if let Some(path) = pb.finish() {
+                let mut paint = Paint::default();
+                paint.set_color_rgba8(colour[0], colour[1], colour[2], colour[3]);
+                paint.anti_alias = true;
+                let stroke = Stroke {
+                    width: if selected { 2.0 } else { 1.0 },
+                    line_cap: tiny_skia::LineCap::Round,
+                    ..Stroke::default()
+                };
+                image
+                    .pixmap
+                    .stroke_path(&path, &paint, &stroke, Transform::identity(), None);
             }
         }
         // The number goes left of the slab, level with the middle of its outline.
-        let points: Vec<(f32, f32)> = caps.into_iter().flatten().collect();
+        let points: Vec<(f32, f32)> = caps
+            .iter()
+            .flatten()
+            .map(|&p| {
+                let (x, y) = image.camera.project(p);
+                (x as f32, y as f32)
+            })
+            .collect();
         if params.labels && !points.is_empty() {
             let left = points.iter().map(|p| p.0).fold(f32::INFINITY, f32::min);
             let middle = points.iter().map(|p| p.1).sum::<f32>() / points.len() as f32;
-            let text = slab.index.to_string();
-            let width = text.len() as f32 * 4.0 * scale;
-            draw_digits(
-                image,
-                &text,
-                (left - width - 4.0).max(1.0),
-                middle - 2.5 * scale,
-                scale,
-                colour,
-            );
+            numbers.push((slab.index, left, middle - 2.5 * scale, colour));
+        }
+    }
+    // Top to bottom, each number at least a line below the one above it.
+    numbers.sort_by(|a, b| a.2.total_cmp(&b.2));
+    let mut below = f32::NEG_INFINITY;
+    for (index, left, top, colour) in numbers {
+        let text = index.to_string();
+        let width = text.len() as f32 * 4.0 * scale;
+        let top = top.max(below);
+        draw_digits(
+            &mut image.pixmap,
+            &text,
+            (left - width - 4.0).max(1.0),
+            top,
+            scale,
+            colour,
+        );
+        below = top + 7.0 * scale;
+    }
+}
+
+/// Adds to `pb` the parts of the segment from `a` to `b` (world points) that are in front of
+/// what the image shows, tested every couple of pixels.
+fn visible_pieces(image: &Image, a: [f64; 3], b: [f64; 3], tolerance: f64, pb: &mut PathBuilder) {
+    let cam = &image.camera;
+    let (w, h) = (image.pixmap.width(), image.pixmap.height());
+    let (pa, pb_) = (cam.project(a), cam.project(b));
+    let length = (pb_.0 - pa.0).hypot(pb_.1 - pa.1);
+    let pieces = ((length / OUTLINE_PIECE).ceil() as usize).clamp(1, 4096);
+    let point = |f: f64| -> [f64; 3] { std::array::from_fn(|m| a[m] + f * (b[m] - a[m])) };
+    let seen = |f: f64| {
+        let p = point(f);
+        let (x, y) = cam.project(p);
+        if x < 0.0 || y < 0.0 || x >= f64::from(w) || y >= f64::from(h) {
+            return true;
+        }
+        let z = image.depth[y as usize * w as usize + x as usize];
+        cam.depth(p) <= f64::from(z) + tolerance
+    };
+    let mut open = false;
+    for i in 0..pieces {
+        let (f0, f1) = (i as f64 / pieces as f64, (i + 1) as f64 / pieces as f64);
+        if seen(f64::midpoint(f0, f1)) {
+            if !open {
+                let (x, y) = cam.project(point(f0));
+                pb.move_to(x as f32, y as f32);
+                open = true;
+            }
+            let (x, y) = cam.project(point(f1));
+            pb.line_to(x as f32, y as f32);
+        } else {
+            open = false;
         }
     }
 }
@@ -222,6 +341,6 @@ pub(super) fn triad(
             tip.0 + reach * x as f32 - 1.5 * scale,
             tip.1 - reach * y as f32 - 2.5 * scale,
         );
-        draw_digits(image, letter, lx, ly, scale, colour);
+        draw_digits(&mut image.pixmap, letter, lx, ly, scale, colour);
     }
 }

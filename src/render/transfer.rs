@@ -1,5 +1,6 @@
 //! Transfer functions: intensity to colour (a window over a colour map) and opacity (piecewise
-//! linear), baked into a lookup table with opacity corrected for the sampling step.
+//! linear), baked into a lookup table with opacity corrected for the sampling step; the colour
+//! and opacity of cut faces; and a categorical colour table for label volumes.
 
 use serde::Serialize;
 
@@ -24,6 +25,15 @@ impl Preset {
     /// Every preset, for cycling in the TUI.
     pub const ALL: [Preset; 4] = [Self::Auto, Self::CtBone, Self::CtSoft, Self::Mri];
 
+    /// Whether the preset makes sense for a volume of `stats`: the CT presets are in Hounsfield
+    /// units and need air (about -1000) in the volume.
+    pub fn suits(self, stats: Stats) -> bool {
+        match self {
+            Self::CtBone | Self::CtSoft => stats.min <= AIR_HU,
+            Self::Auto | Self::Mri => true,
+        }
+    }
+
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -34,6 +44,12 @@ impl Preset {
         }
     }
 }
+
+/// A volume whose values reach this low is taken to be CT in Hounsfield units.
+const AIR_HU: f32 = -500.0;
+
+/// The colour window of CT at most: soft tissue (level 40, width 400 HU).
+const CT_WINDOW: (f32, f32) = (-160.0, 240.0);
 
 /// Colour maps from 0 to 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -101,6 +117,40 @@ const LUT: usize = 2048;
 /// The opacity a user's window reaches at its high end.
 const WINDOW_OPACITY: f32 = 0.6;
 
+/// A cut face turns from clear to opaque over this fraction of the colour window, from the
+/// value where the volume stops being background.
+const FACE_RAMP: f32 = 0.04;
+
+/// The most distinct values a volume of integers may have to be drawn as labels.
+pub const MAX_LABELS: usize = 64;
+
+/// Opacity of a label per reference millimetre: solid after a few voxels.
+const LABEL_OPACITY: f32 = 0.5;
+
+/// Distinct colours for labels (Glasbey's first, without black and white), in order.
+const PALETTE: [[u8; 3]; 20] = [
+    [230, 25, 75],
+    [60, 180, 75],
+    [255, 225, 25],
+    [0, 130, 200],
+    [245, 130, 48],
+    [145, 30, 180],
+    [70, 240, 240],
+    [240, 50, 230],
+    [210, 245, 60],
+    [250, 190, 212],
+    [0, 128, 128],
+    [220, 190, 255],
+    [170, 110, 40],
+    [255, 250, 200],
+    [128, 0, 0],
+    [170, 255, 195],
+    [128, 128, 0],
+    [255, 215, 180],
+    [0, 0, 128],
+    [128, 128, 128],
+];
+
 /// What a transfer function is made of: a preset, a colour map and, optionally, a window that
 /// replaces the preset's.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -123,15 +173,22 @@ pub struct Transfer {
     scale: f32,
     /// Premultiplied RGBA per entry, opacity already corrected for the step.
     table: Vec<[f32; 4]>,
-    /// The colour window, for MIP.
+    /// Premultiplied RGBA of a cut face per entry: the colour window, opaque off the background.
+    face: Vec<[f32; 4]>,
+    /// The colour window, for MIP and slices.
     window: (f32, f32),
     colormap: Colormap,
     /// Opacity per entry, for empty-space tests (a brick's range scans it; ranges are short).
     opacity: Vec<f32>,
+    /// The values of a label volume, ascending: the tables then hold one entry per label.
+    labels: Option<Vec<f32>>,
 }
 
 /// An opacity ramp: from value, to value, opacity reached.
 type Ramp = (f32, f32, f32);
+
+/// A range of values, low and high end.
+type Band = (f32, f32);
 
 /// The linear ramp from (x0, 0) to (x1, 1).
 fn ramp(v: f32, x0: f32, x1: f32) -> f32 {
@@ -141,7 +198,12 @@ fn ramp(v: f32, x0: f32, x1: f32) -> f32 {
     ((v - x0) / (x1 - x0)).clamp(0.0, 1.0)
 }
 
-/// Values at fractions `q` of the finite voxels, from a histogram of `h.len()` equal bins.
+/// The value at the centre of bin `b` of a histogram of `bins` equal bins over the range of `s`.
+fn bin_value(s: Stats, b: usize, bins: usize) -> f32 {
+    s.min + (s.max - s.min) * (b as f32 + 0.5) / bins.max(1) as f32
+}
+
+/// Values at fractions `q` of the voxels a histogram of `h.len()` equal bins counts.
 fn percentiles(s: Stats, h: &[u64], q: &[f64]) -> Vec<f32> {
     let bins = h.len().max(1);
     let total: u64 = h.iter().sum();
@@ -153,10 +215,101 @@ fn percentiles(s: Stats, h: &[u64], q: &[f64]) -> Vec<f32> {
                 acc += c;
                 acc > target
             });
-            let b = b.unwrap_or(bins - 1);
-            s.min + (s.max - s.min) * (b as f32 + 0.5) / bins as f32
+            bin_value(s, b.unwrap_or(bins - 1), bins)
         })
         .collect()
+}
+
+/// The background, as a range of histogram bins: when the most common value lies in the lower
+/// half of the range (air, a scanner's zero), every bin from the lowest up to where its peak has
+/// fallen below a tenth of its height; else a narrow spike of at least a fifth of the voxels
+/// (the zeros around a masked statistical map), wherever it lies; else none.
+fn background(s: Stats, h: &[u64]) -> Option<std::ops::Range<usize>> {
+    let (mode, &peak) = h.iter().enumerate().max_by_key(|(_, c)| **c)?;
+    let low = |b: usize| h[b] * 10 < peak;
+    if bin_value(s, mode, h.len()) < f32::midpoint(s.min, s.max) {
+        return Some(0..(mode + 1..h.len()).find(|&b| low(b)).unwrap_or(h.len()));
+    }
+    let start = (0..mode).rev().find(|&b| low(b)).map_or(0, |b| b + 1);
+    let end = (mode + 1..h.len()).find(|&b| low(b)).unwrap_or(h.len());
+    let total: u64 = h.iter().sum();
+    let share: u64 = h[start..end].iter().sum();
+    (end - start <= SPIKE_BINS && share * 5 >= total).then_some(start..end)
+}
+
+/// The widest a background away from the lowest values may be, in histogram bins.
+const SPIKE_BINS: usize = 3;
+
+/// The opacity ramp from (x0, 0) to (x1, 1), rising either way (a step where they meet).
+fn rise(v: f32, x0: f32, x1: f32) -> f32 {
+    if x0 > x1 {
+        ramp(-v, -x0, -x1)
+    } else {
+        ramp(v, x0, x1)
+    }
+}
+
+/// Colour window, opacity as a sum of ramps, and the band of values where cut faces are clear
+/// (`None`: up to where the opacity begins), of `preset` for a volume of `s` and histogram `h`.
+fn shape(preset: Preset, s: Stats, h: &[u64]) -> ((f32, f32), Vec<Ramp>, Option<Band>) {
+    let p = percentiles(s, h, &[0.005, 0.01, 0.2, 0.6, 0.98, 0.995]);
+    let (p05, p1, p20, p60, p98, p995) = (p[0], p[1], p[2], p[3], p[4], p[5]);
+    match preset {
+        Preset::CtBone => ((-200.0, 1500.0), vec![(150.0, 700.0, 0.85)], None),
+        Preset::CtSoft => (
+            (-300.0, 500.0),
+            vec![(-300.0, 60.0, 0.08), (300.0, 900.0, 0.7)],
+            None,
+        ),
+        Preset::Mri => ((p1, p995), vec![(p20, p60, 0.04), (p60, p995, 0.5)], None),
+        Preset::Auto => {
+            let bins = h.len();
+            let edge = |b: usize| s.min + (s.max - s.min) * b as f32 / bins as f32;
+            let background = background(s, h);
+            let mut tissue = h.to_vec();
+            if let Some(r) = &background {
+                tissue[r.clone()].fill(0);
+            }
+            if tissue.iter().all(|&c| c == 0) {
+                tissue = h.to_vec();
+            }
+            let q = percentiles(s, &tissue, &[0.01, 0.99]);
+            let mut window = if q[1] > q[0] {
+                (q[0], q[1])
+            } else {
+                (p1, p995)
+            };
+            // CT in Hounsfield units: the soft-tissue window radiologists start from.
+            if s.min <= AIR_HU && window.0 < CT_WINDOW.1 && window.1 > CT_WINDOW.0 {
+                window = (window.0.max(CT_WINDOW.0), window.1.min(CT_WINDOW.1));
+            }
+            match background {
+                // Opacity from a quarter of the way between the background and the 98th
+                // percentile, as air and tissue are in CT and MRI.
+                Some(r) if r.start == 0 => {
+                    let top = bin_value(s, r.end.max(1) - 1, bins);
+                    let lo = top + 0.25 * (p98 - top);
+                    (
+                        window,
+                        vec![(lo, p995, 0.6)],
+                        Some((f32::NEG_INFINITY, edge(r.end))),
+                    )
+                }
+                // A spike inside the range: clear there, opaque away from it both ways.
+                Some(r) => {
+                    let (b0, b1) = (edge(r.start), edge(r.end));
+                    let below = p05.min(b0) - 1e-3 * (s.max - s.min);
+                    let ramps = vec![(b1, p995.max(b1), 0.6), (b0, below, 0.6)];
+                    (window, ramps, Some((b0, b1)))
+                }
+                None => (
+                    window,
+                    vec![(p1, p995, 0.6)],
+                    Some((f32::NEG_INFINITY, f32::NEG_INFINITY)),
+                ),
+            }
+        }
+    }
 }
 
 impl Transfer {
@@ -180,6 +333,11 @@ impl Transfer {
 
     /// Like [`new`](Self::new), from the volume's statistics and a histogram of its values; a
     /// window in `look` replaces the preset's.
+    ///
+    /// `Auto` windows the colours on the voxels that are not background (1st to 99th
+    /// percentile), so that CT in Hounsfield units and MRI in any scale look right untuned; its
+    /// opacity rises from a quarter of the way between the background and the 98th percentile.
+    /// Cut faces are opaque wherever the volume is not background.
     pub fn with_histogram(
         s: Stats,
         h: &[u64],
@@ -192,48 +350,34 @@ impl Transfer {
             colormap,
             window: custom,
         } = look;
-        if !(step.is_finite() && step > 0.0 && reference > 0.0) {
-            return Err(Error::invalid("step", step, "a positive number"));
-        }
-        let p = percentiles(s, h, &[0.01, 0.05, 0.2, 0.6, 0.98, 0.995]);
-        let (p1, p5, p20, p60, p98, p995) = (p[0], p[1], p[2], p[3], p[4], p[5]);
-        // Opacity as a sum of ramps: (from, to, opacity).
-        let (window, ramps): ((f32, f32), Vec<Ramp>) = match preset {
-            Preset::CtBone => ((-200.0, 1500.0), vec![(150.0, 700.0, 0.85)]),
-            Preset::CtSoft => (
-                (-300.0, 500.0),
-                vec![(-300.0, 60.0, 0.08), (300.0, 900.0, 0.7)],
-            ),
-            Preset::Mri => ((p1, p995), vec![(p20, p60, 0.04), (p60, p995, 0.5)]),
-            Preset::Auto => {
-                let mode = h
-                    .iter()
-                    .enumerate()
-                    .max_by_key(|(_, c)| **c)
-                    .map_or(0, |(i, _)| i);
-                let mode_value =
-                    s.min + (s.max - s.min) * (mode as f32 + 0.5) / h.len().max(1) as f32;
-                let lo = if mode_value < f32::midpoint(s.min, s.max) {
-                    mode_value + 0.25 * (p98 - mode_value)
-                } else {
-                    p5
-                };
-                ((lo, p995), vec![(lo, p995, 0.6)])
-            }
-        };
+        check_step(step, reference)?;
+        let (window, ramps, band) = shape(preset, s, h);
         // A user's window: grey from its low to its high end, opacity rising across it.
-        let (window, ramps) = match custom {
-            Some((lo, hi)) => ((lo, hi), vec![(lo, hi, WINDOW_OPACITY)]),
-            None => (window, ramps),
+        let (window, ramps, band) = match custom {
+            Some((lo, hi)) => ((lo, hi), vec![(lo, hi, WINDOW_OPACITY)], None),
+            None => (window, ramps, band),
         };
+        // Faces are clear where the opacity has not begun, unless the preset knows the
+        // background; they turn opaque over a small part of the window on either side.
+        let (clear_lo, clear_hi) = band.unwrap_or_else(|| {
+            let start = ramps
+                .iter()
+                .map(|r| r.0.min(r.1))
+                .fold(f32::INFINITY, f32::min);
+            (f32::NEG_INFINITY, start)
+        });
+        let soft = FACE_RAMP * (window.1 - window.0).abs().max(f32::EPSILON);
         let scale = if s.max > s.min {
             (LUT - 1) as f32 / (s.max - s.min)
         } else {
             0.0
         };
         let exponent = (step / reference) as f32;
-        let mut table = Vec::with_capacity(LUT);
-        let mut opacity = Vec::with_capacity(LUT);
+        let (mut table, mut face, mut opacity) = (
+            Vec::with_capacity(LUT),
+            Vec::with_capacity(LUT),
+            Vec::with_capacity(LUT),
+        );
         for i in 0..LUT {
             let v = if scale > 0.0 {
                 s.min + i as f32 / scale
@@ -242,28 +386,91 @@ impl Transfer {
             };
             let a: f32 = ramps
                 .iter()
-                .map(|&(x0, x1, o)| o * ramp(v, x0, x1))
+                .map(|&(x0, x1, o)| o * rise(v, x0, x1))
                 .sum::<f32>()
                 .min(1.0);
             let a = 1.0 - (1.0 - a).powf(exponent);
             let c = colormap.at(ramp(v, window.0, window.1));
             table.push([c[0] * a, c[1] * a, c[2] * a, a]);
+            let f = if v > clear_hi {
+                ramp(v, clear_hi, clear_hi + soft)
+            } else if v < clear_lo {
+                ramp(-v, -clear_lo, -clear_lo + soft)
+            } else {
+                0.0
+            };
+            face.push([c[0] * f, c[1] * f, c[2] * f, f]);
             opacity.push(a);
         }
         Ok(Self {
             min: s.min,
             scale,
             table,
+            face,
             window,
             colormap,
             opacity,
+            labels: None,
         })
+    }
+
+    /// A categorical transfer function for a label volume of `labels` (value, voxel count): the
+    /// most common label (the background) clear, every other a distinct colour of the palette,
+    /// in ascending order of value.
+    pub fn for_labels(labels: &[(f32, u64)], step: f64, reference: f64) -> Result<Self> {
+        check_step(step, reference)?;
+        let mut labels = labels.to_vec();
+        labels.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let background = labels
+            .iter()
+            .enumerate()
+            .max_by_key(|(_, l)| l.1)
+            .map_or(0, |(i, _)| i);
+        let a = 1.0 - (1.0 - LABEL_OPACITY).powf((step / reference) as f32);
+        let (mut table, mut face, mut opacity) = (Vec::new(), Vec::new(), Vec::new());
+        let mut colour = PALETTE.iter().cycle();
+        for i in 0..labels.len() {
+            if i == background {
+                table.push([0.0; 4]);
+                face.push([0.0; 4]);
+                opacity.push(0.0);
+                continue;
+            }
+            let c = colour
+                .next()
+                .expect("the palette cycles")
+                .map(|c| f32::from(c) / 255.0);
+            table.push([c[0] * a, c[1] * a, c[2] * a, a]);
+            face.push([c[0], c[1], c[2], 1.0]);
+            opacity.push(a);
+        }
+        let values: Vec<f32> = labels.iter().map(|l| l.0).collect();
+        let window = (values[0], values[values.len() - 1]);
+        Ok(Self {
+            min: window.0,
+            scale: 0.0,
+            table,
+            face,
+            window,
+            colormap: Colormap::Grey,
+            opacity,
+            labels: Some(values),
+        })
+    }
+
+    /// Whether this is a label volume's categorical table (whose samples must be taken from
+    /// the nearest voxel: interpolated labels are not labels).
+    pub fn is_labels(&self) -> bool {
+        self.labels.is_some()
     }
 
     /// The table index of value `v`.
     #[inline]
     fn index(&self, v: f32) -> usize {
-        (((v - self.min) * self.scale) as usize).min(LUT - 1)
+        match &self.labels {
+            None => (((v - self.min) * self.scale) as usize).min(LUT - 1),
+            Some(l) => l.partition_point(|&x| x < v).min(l.len() - 1),
+        }
     }
 
     /// Premultiplied RGBA of value `v`.
@@ -272,10 +479,40 @@ impl Transfer {
         self.table[self.index(v)]
     }
 
+    /// Premultiplied RGBA of a cut face at value `v` (not corrected for the step: a face is a
+    /// surface).
+    #[inline]
+    pub fn face(&self, v: f32) -> [f32; 4] {
+        if v.is_nan() {
+            return [0.0; 4];
+        }
+        self.face[self.index(v)]
+    }
+
     /// Whether every value in `[lo, hi]` is fully transparent.
     pub fn transparent(&self, lo: f32, hi: f32) -> bool {
-        let (a, b) = (self.index(lo), self.index(hi));
-        self.opacity[a.min(b)..=a.max(b)].iter().all(|&o| o == 0.0)
+        let range = match &self.labels {
+            None => {
+                let (a, b) = (self.index(lo), self.index(hi));
+                a.min(b)..=a.max(b)
+            }
+            Some(l) => {
+                let (a, b) = (
+                    l.partition_point(|&x| x < lo),
+                    l.partition_point(|&x| x <= hi),
+                );
+                if a >= b {
+                    return true;
+                }
+                a..=b - 1
+            }
+        };
+        self.opacity[range].iter().all(|&o| o == 0.0)
+    }
+
+    /// The colour window, low and high end.
+    pub fn window(&self) -> (f32, f32) {
+        self.window
     }
 
     /// The low end of the colour window: every value at or below it looks the same in MIP.
@@ -283,10 +520,70 @@ impl Transfer {
         self.window.0
     }
 
-    /// The colour of value `v` through the window alone (for MIP).
+    /// The colour of value `v` through the window alone (for MIP and slices); a label's colour.
     pub fn grey(&self, v: f32) -> [f32; 3] {
+        if self.labels.is_some() {
+            let f = self.face(v);
+            return [f[0], f[1], f[2]];
+        }
         self.colormap.at(ramp(v, self.window.0, self.window.1))
     }
+}
+
+fn check_step(step: f64, reference: f64) -> Result<()> {
+    if step.is_finite() && step > 0.0 && reference > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid("step", step, "a positive number"))
+    }
+}
+
+/// The distinct values of `volume` with their voxel counts, when it looks like a label volume:
+/// integer voxels with between 2 and [`MAX_LABELS`] distinct values.
+pub fn label_values(volume: &Volume) -> Option<Vec<(f32, u64)>> {
+    use rayon::prelude::*;
+    if !volume.voxel_type().is_integer() {
+        return None;
+    }
+    let merge = |mut a: Vec<(f32, u64)>, b: Vec<(f32, u64)>| -> Option<Vec<(f32, u64)>> {
+        for (v, n) in b {
+            match a.iter_mut().find(|e| e.0 == v) {
+                Some(e) => e.1 += n,
+                None => a.push((v, n)),
+            }
+        }
+        (a.len() <= MAX_LABELS).then_some(a)
+    };
+    let values = volume
+        .voxels()
+        .par_chunks(1 << 16)
+        .map(|chunk| {
+            let mut seen: Vec<(f32, u64)> = Vec::new();
+            let mut last = 0;
+            for &v in chunk {
+                if v.is_nan() {
+                    continue;
+                }
+                if seen.get(last).is_some_and(|e| e.0 == v) {
+                    seen[last].1 += 1;
+                    continue;
+                }
+                match seen.iter().position(|e| e.0 == v) {
+                    Some(i) => {
+                        seen[i].1 += 1;
+                        last = i;
+                    }
+                    None if seen.len() == MAX_LABELS => return None,
+                    None => {
+                        last = seen.len();
+                        seen.push((v, 1));
+                    }
+                }
+            }
+            Some(seen)
+        })
+        .try_reduce(Vec::new, merge)?;
+    (values.len() >= 2).then_some(values)
 }
 
 #[cfg(test)]
@@ -344,5 +641,83 @@ mod tests {
         let t = Transfer::new(&v, Preset::Auto, Colormap::Grey, 1.0, 1.0).unwrap();
         assert_eq!(t.rgba(0.0)[3], 0.0);
         assert!(t.rgba(100.0)[3] > 0.3);
+    }
+
+    #[test]
+    fn ct_presets_suit_only_volumes_in_hounsfield_units() {
+        let stats = |min: f32| Stats {
+            min,
+            max: 1000.0,
+            mean: 0.0,
+            finite: 1,
+            missing: 0,
+        };
+        for p in Preset::ALL {
+            assert!(p.suits(stats(-1024.0)), "{p:?}");
+        }
+        assert!(!Preset::CtBone.suits(stats(0.0)));
+        assert!(!Preset::CtSoft.suits(stats(0.0)));
+        assert!(Preset::Mri.suits(stats(0.0)) && Preset::Auto.suits(stats(0.0)));
+    }
+
+    #[test]
+    fn auto_windows_ct_on_soft_tissue_and_clears_faces_in_air() {
+        // Half air at -1000, then fat, soft tissue and bone.
+        let data: Vec<f32> = (0..4000)
+            .map(|i| match i % 8 {
+                0..4 => -1000.0 + (i % 13) as f32,
+                4 => -100.0,
+                5 | 6 => 40.0 + (i % 7) as f32,
+                _ => 1200.0,
+            })
+            .collect();
+        let v = Volume::new([20, 20, 10], [1.0; 3], VoxelType::I16, data).unwrap();
+        let t = Transfer::new(&v, Preset::Auto, Colormap::Grey, 1.0, 1.0).unwrap();
+        let (lo, hi) = t.window();
+        assert!(
+            (-160.0..-90.0).contains(&lo) && (hi - 240.0).abs() < 1.0,
+            "{lo}..{hi}"
+        );
+        assert_eq!(t.face(-1000.0)[3], 0.0, "air is clear on a cut face");
+        assert_eq!(t.face(40.0)[3], 1.0, "tissue is opaque on it");
+        assert_eq!(t.face(1200.0), [1.0; 4], "bone is white");
+    }
+
+    #[test]
+    fn a_spike_of_zeros_inside_the_range_is_the_background() {
+        // A signed map: 70% exactly zero, the rest spread both ways.
+        let data: Vec<f32> = (0..10_000)
+            .map(|i| {
+                if i % 10 < 7 {
+                    0.0
+                } else {
+                    ((i % 97) as f32 - 48.0) / 6.0
+                }
+            })
+            .collect();
+        let v = Volume::new([25, 20, 20], [1.0; 3], VoxelType::F32, data).unwrap();
+        let t = Transfer::new(&v, Preset::Auto, Colormap::Grey, 1.0, 1.0).unwrap();
+        assert_eq!(t.face(0.0)[3], 0.0, "zero is clear");
+        assert_eq!(t.rgba(0.0)[3], 0.0);
+        assert_eq!(t.face(6.0)[3], 1.0, "high values are opaque");
+        assert_eq!(t.face(-6.0)[3], 1.0, "and low ones");
+        assert!(t.rgba(8.0)[3] > 0.3 && t.rgba(-8.0)[3] > 0.3);
+    }
+
+    #[test]
+    fn labels_have_distinct_colours_and_a_clear_background() {
+        let labels = [(0.0, 900), (2.0, 50), (5.0, 30), (9.0, 20)];
+        let t = Transfer::for_labels(&labels, 1.0, 1.0).unwrap();
+        assert!(t.is_labels());
+        assert_eq!(t.rgba(0.0)[3], 0.0);
+        assert_eq!(t.face(0.0)[3], 0.0);
+        let colours: Vec<[f32; 3]> = [2.0, 5.0, 9.0].iter().map(|&v| t.grey(v)).collect();
+        assert!(colours[0] != colours[1] && colours[1] != colours[2] && colours[0] != colours[2]);
+        assert!(t.transparent(0.0, 0.0) && t.transparent(0.5, 1.5));
+        assert!(!t.transparent(0.0, 2.0) && !t.transparent(4.0, 6.0));
+        // The background need not be the lowest value.
+        let t = Transfer::for_labels(&[(1.0, 5), (3.0, 100)], 1.0, 1.0).unwrap();
+        assert_eq!(t.rgba(3.0)[3], 0.0);
+        assert!(t.rgba(1.0)[3] > 0.0);
     }
 }

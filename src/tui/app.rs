@@ -8,7 +8,9 @@ use slabscope::render::{Colormap, Gap, Mode, Preset};
 use slabscope::volume::background::BackgroundRule;
 use slabscope::{AnalysisParams, Progress, Volume};
 
-use super::event::{Action, Ask, Effect, ExportRequest, Job, JobMsg, Load, RenderRequest};
+use super::event::{
+    Action, Ask, Effect, ExportRequest, Job, JobMsg, Load, RenderRequest, SliceRequest,
+};
 use super::panes::curves::{Curves, CurvesPane};
 use super::panes::preview::PreviewPane;
 use super::panes::slabs::{SlabTable, SlabsPane};
@@ -132,8 +134,15 @@ impl App {
                 self.sync_focus();
                 vec![]
             }
-            Action::Move(by) => self.move_cursor(by),
+            Action::Sideways(by) if self.pointing() => self.move_pointer(by, 0),
+            Action::Move(by) | Action::Sideways(by) => self.move_cursor(by),
             Action::Page(by) => self.move_cursor(by * 10),
+            Action::ToggleSlices => {
+                self.preview.slices = !self.preview.slices;
+                self.preview.caption = None;
+                self.render()
+            }
+            Action::WindowWidth(_) | Action::WindowLevel(_) => self.window(&action),
             Action::Select => self.select(),
             Action::Step(by) => match self.part.step(by) {
                 Ok(()) => self.after_step(),
@@ -205,8 +214,16 @@ impl App {
             }
             Action::Zoom(f) => l.camera.zoom = (l.camera.zoom * f).clamp(0.25, 8.0),
             Action::Spread(d) => l.spread = (l.spread + d).clamp(0.0, 2.0),
-            Action::ToggleMode => l.mode = next(&[Mode::Dvr, Mode::Mip], l.mode),
-            Action::CycleTransfer => l.preset = next(&Preset::ALL, l.preset),
+            Action::ToggleMode => l.mode = next(&[Mode::Cut, Mode::Dvr, Mode::Mip], l.mode),
+            Action::CycleTransfer => {
+                // Only the presets that fit the volume: no CT windows on an MRI.
+                let fits: Vec<Preset> = Preset::ALL
+                    .into_iter()
+                    .filter(|p| self.volume.ready().is_none_or(|v| p.suits(v.stats())))
+                    .collect();
+                l.preset = next(&fits, l.preset);
+                l.window = None;
+            }
             Action::CycleColormap => l.colormap = next(&Colormap::ALL, l.colormap),
             Action::ToggleGap => l.gap = next(&[Gap::Uniform, Gap::Similarity], l.gap),
             Action::ToggleSolo => l.solo = !l.solo,
@@ -256,10 +273,66 @@ impl App {
             }
             Pane::Curves => {
                 self.curves.cursor = shift(self.curves.cursor, self.curves.len());
-                vec![]
+                if self.preview.slices {
+                    self.render()
+                } else {
+                    vec![]
+                }
             }
+            Pane::Preview if self.pointing() => self.move_pointer(0, by),
             Pane::Preview => self.restyle(&Action::Orbit(by as f64 * 15.0, 0.0)),
         }
+    }
+
+    /// Whether the arrows move the slice view's pointer.
+    fn pointing(&self) -> bool {
+        self.focus == Pane::Preview && self.preview.slices
+    }
+
+    /// Moves the slice view's pointer by voxels to the right and down on the screen.
+    fn move_pointer(&mut self, right: isize, down: isize) -> Vec<Effect> {
+        let (Some(volume), Some(axis)) = (self.volume.ready(), self.part.axis) else {
+            return vec![];
+        };
+        let Ok(frame) = slabscope::render::slice::SliceFrame::new(volume, axis) else {
+            return vec![];
+        };
+        let spacing = volume.spacing();
+        let dims = volume.dims();
+        let step = slabscope::geometry::min_spacing(spacing);
+        let p = self.preview.pointer.unwrap_or_else(|| centre(volume));
+        self.preview.pointer = Some(std::array::from_fn(|m| {
+            let moved = p[m] + step * (right as f64 * frame.right[m] - down as f64 * frame.up[m]);
+            moved.clamp(0.0, (dims[m] - 1) as f64 * spacing[m])
+        }));
+        self.render()
+    }
+
+    /// Narrows, widens or moves the window of the picture and the slices, starting from the
+    /// preset's.
+    fn window(&mut self, action: &Action) -> Vec<Effect> {
+        let Some(volume) = self.volume.ready() else {
+            return vec![];
+        };
+        let look = &mut self.preview.look;
+        let (lo, hi) = match look.window {
+            Some(w) => w,
+            None => {
+                match slabscope::render::Transfer::new(volume, look.preset, look.colormap, 1.0, 1.0)
+                {
+                    Ok(t) => t.window(),
+                    Err(_) => return vec![],
+                }
+            }
+        };
+        let (level, width) = (f32::midpoint(lo, hi), (hi - lo).max(f32::EPSILON));
+        let (level, width) = match *action {
+            Action::WindowWidth(f) => (level, width * f),
+            Action::WindowLevel(f) => (level + f * width, width),
+            _ => (level, width),
+        };
+        look.window = Some((level - width / 2.0, level + width / 2.0));
+        self.render()
     }
 
     fn select(&mut self) -> Vec<Effect> {
@@ -392,6 +465,10 @@ impl App {
             axis,
             look: self.preview.look,
             cells: self.preview.cells,
+            slice: (self.preview.slices && histories.is_some()).then(|| SliceRequest {
+                index: self.curves.cursor,
+                pointer: self.preview.pointer.unwrap_or_else(|| centre(volume)),
+            }),
         }))]
     }
 
@@ -448,7 +525,10 @@ impl App {
             JobMsg::Rendered(generation, result) => {
                 if generation == self.preview.generation {
                     self.preview.image = match result {
-                        Ok(p) => Load::Ready(p),
+                        Ok(r) => {
+                            self.preview.caption = r.caption;
+                            Load::Ready(Box::new(r.image))
+                        }
                         Err(e) => Load::Failed(e),
                     };
                 }
@@ -538,6 +618,12 @@ fn pending<T, U>(load: &Load<T>) -> Load<U> {
         Load::Failed(e) => Load::Failed(e.clone()),
         Load::Idle | Load::Ready(_) => Load::Idle,
     }
+}
+
+/// The centre of `volume`, in mm from voxel (0, 0, 0).
+fn centre(volume: &Volume) -> [f64; 3] {
+    let (dims, spacing) = (volume.dims(), volume.spacing());
+    std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m] / 2.0)
 }
 
 /// The element after `current` in `all`, wrapping around.

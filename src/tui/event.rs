@@ -91,9 +91,17 @@ pub enum JobMsg {
     /// The histories along the axis of request `generation`.
     Analysis(u64, Result<Arc<Histories>, String>),
     /// A render of request `generation`.
-    Rendered(u64, Result<Box<TermImage>, String>),
+    Rendered(u64, Result<Box<Rendered>, String>),
     /// An export finished: what was written, or why not.
     Exported(Result<String, String>),
+}
+
+/// A picture for the preview pane, and the slice view's readout.
+pub struct Rendered {
+    /// The picture, encoded for the terminal.
+    pub image: TermImage,
+    /// What the slice view reads at its pointer.
+    pub caption: Option<String>,
 }
 
 /// Everything the user can do, and what jobs report.
@@ -104,8 +112,11 @@ pub enum Action {
     ToggleHelp,
     /// Move the focus to the next or previous pane.
     Focus(isize),
-    /// Move the cursor of the focused pane.
+    /// Move the cursor of the focused pane (up and down).
     Move(isize),
+    /// Move the cursor of the focused pane sideways (the slice view's pointer; elsewhere as
+    /// [`Action::Move`]).
+    Sideways(isize),
     /// Page the cursor of the focused pane.
     Page(isize),
     /// Act on the cursor (partition along the selected axis).
@@ -134,8 +145,14 @@ pub enum Action {
     Zoom(f64),
     /// Change the spread by this much.
     Spread(f64),
-    /// DVR or MIP.
+    /// Cut faces, DVR or MIP.
     ToggleMode,
+    /// The slice view or the exploded view.
+    ToggleSlices,
+    /// Multiply the window's width by this factor.
+    WindowWidth(f32),
+    /// Move the window's level by this fraction of its width.
+    WindowLevel(f32),
     /// Next transfer function.
     CycleTransfer,
     /// Next colour map.
@@ -174,25 +191,39 @@ pub struct Look {
     pub spread: f64,
     /// Gaps.
     pub gap: Gap,
-    /// DVR or MIP.
+    /// Cut faces, DVR or MIP.
     pub mode: Mode,
     /// Transfer function.
     pub preset: Preset,
     /// Colour map.
     pub colormap: Colormap,
+    /// The window set with the window and level keys, replacing the preset's.
+    pub window: Option<(f32, f32)>,
     /// Selected slab alone.
     pub solo: bool,
+}
+
+impl Look {
+    /// The library's look.
+    pub fn colours(&self) -> slabscope::render::Look {
+        slabscope::render::Look {
+            preset: self.preset,
+            colormap: self.colormap,
+            window: self.window,
+        }
+    }
 }
 
 impl Default for Look {
     fn default() -> Self {
         Self {
             camera: CameraParams::default(),
-            spread: 0.3,
+            spread: slabscope::render::DEFAULT_SPREAD,
             gap: Gap::Similarity,
-            mode: Mode::Dvr,
+            mode: Mode::Cut,
             preset: Preset::Auto,
             colormap: Colormap::Grey,
+            window: None,
             solo: false,
         }
     }
@@ -217,6 +248,18 @@ pub struct RenderRequest {
     pub highlight: Option<usize>,
     /// Preview size in cells.
     pub cells: (u16, u16),
+    /// The slice view instead of the exploded view.
+    pub slice: Option<SliceRequest>,
+}
+
+/// What the slice view shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SliceRequest {
+    /// The slice under the curves' cursor.
+    pub index: usize,
+    /// The pointer: a physical point (voxel indices times spacing), read where it projects
+    /// onto the slice.
+    pub pointer: [f64; 3],
 }
 
 /// What to export: everything the export job needs, so that it reads nothing of the app.

@@ -9,15 +9,21 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 
 use image::RgbaImage;
+use slabscope::geometry::{self, min_spacing};
+use slabscope::partition::Slab;
+use slabscope::render::slice::{self, SliceParams};
 use slabscope::render::{Gap, Stack};
 use slabscope::volume::io::{NrrdEncoding, write_atomic, write_nrrd};
 use slabscope::{
     Analysis, AnalysisReport, Histories, Layout, LoadOptions, Monitor, Partition, Progress,
     RenderParams, Renderer, Scope, Volume, label_volume, search,
 };
+use tiny_skia::Pixmap;
 
-use super::event::{Effect, Event, ExportRequest, Job, JobMsg, RenderRequest};
-use crate::term::image::{TermImage, encode};
+use super::event::{
+    Effect, Event, ExportRequest, Job, JobMsg, Look, RenderRequest, Rendered, SliceRequest,
+};
+use crate::term::image::encode;
 use crate::term::{Caps, Graphics};
 
 /// Runs effects in the background and reports through the event channel.
@@ -156,6 +162,7 @@ fn export(volume: &Volume, r: &ExportRequest, monitor: &Monitor) -> slabscope::R
         mode: r.look.mode,
         preset: r.look.preset,
         colormap: r.look.colormap,
+        window: r.look.window,
         camera: r.look.camera,
         highlight: r.highlight.filter(|&h| h < part.slabs.len()),
         solo: r.look.solo,
@@ -256,54 +263,221 @@ fn render(
     caps: &Caps,
     r: &RenderRequest,
     monitor: &Monitor,
-) -> anyhow::Result<Box<TermImage>> {
+) -> anyhow::Result<Box<Rendered>> {
     let look = &r.look;
-    let layout = match &r.histories {
-        Some(h) if !r.slabs.is_empty() => {
-            let stack = h.stack();
-            let nmi = match (&r.nmi, look.gap) {
-                (Some(nmi), _) => Some(nmi.clone()),
-                (None, Gap::Similarity) => Some(h.boundary_nmi(&r.slabs, monitor)?),
-                (None, Gap::Uniform) => None,
-            };
-            let geometry = Stack {
-                axis: stack.axis(),
-                slices: stack.slices(),
-                thickness: stack.thickness(),
-                offset: stack.offset(),
-            };
-            Layout::from_slabs(&geometry, &r.slabs, nmi.as_deref(), look.gap, look.spread)
+    let geometry = r.histories.as_ref().map(|h| {
+        let stack = h.stack();
+        Stack {
+            axis: stack.axis(),
+            slices: stack.slices(),
+            thickness: stack.thickness(),
+            offset: stack.offset(),
         }
-        _ => Layout::whole(r.axis),
-    };
+    });
+    let cells = r.cells;
     // One image pixel per screen pixel, as large as the terminal takes.
-    let (width, height) = caps.image_size(r.cells);
-    let params = RenderParams {
-        width: width.max(1),
-        height: height.max(1),
-        mode: look.mode,
-        preset: look.preset,
-        colormap: look.colormap,
-        camera: look.camera,
-        highlight: r.highlight,
-        solo: look.solo,
-        outlines: true,
-        labels: height >= 120,
-        ..RenderParams::default()
+    let (width, height) = caps.image_size(cells);
+    let (width, height) = (width.max(1), height.max(1));
+    let (pixmap, caption) = match (r.slice, &geometry) {
+        (Some(s), Some(stack)) if !r.slabs.is_empty() => {
+            let highlight = r.highlight.unwrap_or(0).min(r.slabs.len() - 1);
+            let view = SliceView {
+                stack,
+                slab: (highlight, r.slabs[highlight]),
+                request: s,
+                size: (width, height),
+            };
+            let (pixmap, caption) = view.draw(renderer, look)?;
+            (pixmap, Some(caption))
+        }
+        _ => {
+            let layout = match (&r.histories, &geometry) {
+                (Some(h), Some(stack)) if !r.slabs.is_empty() => {
+                    let nmi = match (&r.nmi, look.gap) {
+                        (Some(nmi), _) => Some(nmi.clone()),
+                        (None, Gap::Similarity) => Some(h.boundary_nmi(&r.slabs, monitor)?),
+                        (None, Gap::Uniform) => None,
+                    };
+                    Layout::from_slabs(stack, &r.slabs, nmi.as_deref(), look.gap, look.spread)
+                }
+                _ => Layout::whole(r.axis),
+            };
+            let params = RenderParams {
+                width,
+                height,
+                mode: look.mode,
+                preset: look.preset,
+                colormap: look.colormap,
+                window: look.window,
+                camera: look.camera,
+                highlight: r.highlight,
+                solo: look.solo,
+                outlines: true,
+                labels: height >= 120,
+                ..RenderParams::default()
+            };
+            (renderer.render(&layout, &params, monitor)?.pixmap, None)
+        }
     };
-    let image = renderer.render(&layout, &params, monitor)?;
-    let rgba = RgbaImage::from_raw(width, height, image.pixmap.data().to_vec())
+    let rgba = RgbaImage::from_raw(width, height, pixmap.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
     let cells = match caps.graphics {
-        Graphics::Blocks => r.cells,
+        Graphics::Blocks => cells,
         _ => (
-            (width.div_ceil(u32::from(caps.cell.0)) as u16).min(r.cells.0),
-            (height.div_ceil(u32::from(caps.cell.1)) as u16).min(r.cells.1),
+            (width.div_ceil(u32::from(caps.cell.0)) as u16).min(cells.0),
+            (height.div_ceil(u32::from(caps.cell.1)) as u16).min(cells.1),
         ),
     };
-    Ok(Box::new(
-        encode(&rgba, cells, caps).map_err(|e| anyhow::anyhow!(e))?,
-    ))
+    Ok(Box::new(Rendered {
+        image: encode(&rgba, cells, caps).map_err(|e| anyhow::anyhow!(e))?,
+        caption,
+    }))
+}
+
+/// The slice view: the slice under the cursor, large, with the pointer's cross; beside it the
+/// selected slab's faces, its last slice above its first.
+struct SliceView<'a> {
+    stack: &'a Stack,
+    slab: (usize, Slab),
+    request: SliceRequest,
+    size: (u32, u32),
+}
+
+impl SliceView<'_> {
+    /// The picture and the readout at the pointer: slice, voxel, world position, value.
+    fn draw(&self, renderer: &Renderer, look: &Look) -> anyhow::Result<(Pixmap, String)> {
+        let volume = renderer.volume();
+        let spacing = volume.spacing();
+        let transfer = renderer.transfer(look.colours(), min_spacing(spacing))?;
+        let (w, h) = self.size;
+        let mut canvas = Pixmap::new(w, h).ok_or_else(|| anyhow::anyhow!("no room for slices"))?;
+        canvas.fill(tiny_skia::Color::from_rgba8(12, 12, 18, 255));
+        let stack = self.stack;
+        let index = self.request.index.min(stack.slices.saturating_sub(1));
+        let at = |i: usize| stack.offset + i as f64 * stack.thickness;
+        // The slice takes three fifths of a wide pane, the faces the rest.
+        let side = if w > h { w * 2 / 5 } else { 0 };
+        let params = |fit: (u32, u32)| SliceParams {
+            fit: (fit.0.max(1), fit.1.max(1)),
+            background: [0, 0, 0],
+            ..SliceParams::default()
+        };
+        let main = slice::slice(
+            volume,
+            &transfer,
+            stack.axis,
+            at(index),
+            &params((w - side, h)),
+        )?;
+        let origin = (
+            (w - side - main.pixmap.width()) / 2,
+            (h - main.pixmap.height()) / 2,
+        );
+        paste(&mut canvas, &main.pixmap, origin);
+        // The pointer, moved onto the plane.
+        let n = stack.axis;
+        let p = self.request.pointer;
+        let off = at(index) - geometry::dot(p, n);
+        let on_plane: [f64; 3] = std::array::from_fn(|m| p[m] + off * n[m]);
+        let (px, py) = main.pixel_of(on_plane);
+        cross_hair(
+            &mut canvas,
+            (
+                origin.0 as f32 + px as f32 + 0.5,
+                origin.1 as f32 + py as f32 + 0.5,
+            ),
+        );
+        let (k, (a, b)) = self.slab;
+        if side > 8 {
+            for (row, s) in [b.saturating_sub(1).max(a), a].into_iter().enumerate() {
+                let face = slice::slice(
+                    volume,
+                    &transfer,
+                    stack.axis,
+                    at(s),
+                    &params((side - 4, h / 2 - 2)),
+                )?;
+                let x = w - side + 2 + (side - 4 - face.pixmap.width()) / 2;
+                let y = row as u32 * (h / 2) + 1 + (h / 2 - 2 - face.pixmap.height()) / 2;
+                paste(&mut canvas, &face.pixmap, (x, y));
+            }
+        }
+        Ok((
+            canvas,
+            readout(volume, on_plane, index, stack.slices, k, (a, b)),
+        ))
+    }
+}
+
+/// What the slice view reads at physical point `p`.
+fn readout(
+    volume: &Volume,
+    p: [f64; 3],
+    index: usize,
+    slices: usize,
+    k: usize,
+    (a, b): Slab,
+) -> String {
+    let (spacing, dims) = (volume.spacing(), volume.dims());
+    let ijk: [usize; 3] =
+        std::array::from_fn(|m| ((p[m] / spacing[m]).round().max(0.0) as usize).min(dims[m] - 1));
+    let value = volume.voxels()[ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])];
+    let t = volume.transform();
+    let world = t.apply(ijk.map(|i| i as f64));
+    let place = if t.known {
+        let named = |v: f64, pos: char, neg: char| {
+            format!("{}{:.1}", if v >= 0.0 { pos } else { neg }, v.abs())
+        };
+        format!(
+            "{} {} {} mm",
+            named(world[0], 'R', 'L'),
+            named(world[1], 'A', 'P'),
+            named(world[2], 'S', 'I')
+        )
+    } else {
+        format!("{:.1}, {:.1}, {:.1} mm", world[0], world[1], world[2])
+    };
+    format!(
+        "slice {index}/{} · slab {k} faces {a}, {} · voxel {}, {}, {} · {place} · value {value}",
+        slices - 1,
+        b.saturating_sub(1),
+        ijk[0],
+        ijk[1],
+        ijk[2]
+    )
+}
+
+/// Draws `image` onto `canvas` with its top left at `at`.
+fn paste(canvas: &mut Pixmap, image: &Pixmap, at: (u32, u32)) {
+    canvas.draw_pixmap(
+        at.0 as i32,
+        at.1 as i32,
+        image.as_ref(),
+        &tiny_skia::PixmapPaint::default(),
+        tiny_skia::Transform::identity(),
+        None,
+    );
+}
+
+/// A yellow cross with an open centre at `(x, y)`.
+fn cross_hair(canvas: &mut Pixmap, (x, y): (f32, f32)) {
+    let mut paint = tiny_skia::Paint::default();
+    paint.set_color_rgba8(255, 220, 90, 230);
+    let (gap, arm) = (3.0, 9.0);
+    let mut pb = tiny_skia::PathBuilder::new();
+    for (dx, dy) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)] {
+        pb.move_to(x + dx * gap, y + dy * gap);
+        pb.line_to(x + dx * (gap + arm), y + dy * (gap + arm));
+    }
+    if let Some(path) = pb.finish() {
+        canvas.stroke_path(
+            &path,
+            &paint,
+            &tiny_skia::Stroke::default(),
+            tiny_skia::Transform::identity(),
+            None,
+        );
+    }
 }
 
 #[cfg(test)]
@@ -342,12 +516,13 @@ mod tests {
             look: Look::default(),
             highlight: None,
             cells,
+            slice: None,
         };
         let first = render(&renderer, &sixel, &whole, &Monitor::none()).unwrap();
         println!(
             "first image (load, render, sixel) {:.0} ms after start, {} KB",
             start.elapsed().as_secs_f64() * 1e3,
-            first.bytes / 1024
+            first.image.bytes / 1024
         );
         let params = AnalysisParams::default();
         let h = Arc::new(
@@ -381,6 +556,7 @@ mod tests {
                 let t = Instant::now();
                 bytes = render(&renderer, &caps, &step, &Monitor::none())
                     .unwrap()
+                    .image
                     .bytes;
                 times.push(t.elapsed().as_secs_f64() * 1e3);
             }

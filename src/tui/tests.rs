@@ -13,13 +13,13 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::widgets::Widget;
 use slabscope::partition::{Method, StackParams};
-use slabscope::render::Mode;
+use slabscope::render::{Mode, Preset};
 use slabscope::view::{ViewParams, ViewSearch, search};
 use slabscope::volume::phantom;
 use slabscope::{AnalysisParams, Histories, Monitor, Progress, Scope, Volume};
 
 use super::app::{App, Pane, Screen};
-use super::event::{Action, Ask, Effect, Event, Job, JobMsg, Load};
+use super::event::{Action, Ask, Effect, Event, Job, JobMsg, Load, Rendered};
 use super::panes;
 use super::theme::Theme;
 use super::{Runner, handle, redraw};
@@ -232,7 +232,7 @@ fn stale_results_are_dropped() {
     app.preview.cells = (20, 8);
     app.update(Action::Orbit(15.0, 0.0));
     app.update(Action::Orbit(15.0, 0.0));
-    let image = Box::new(tiny_protocol(20, 8));
+    let image = Box::new(rendered(20, 8));
     app.update(Action::Job(JobMsg::Rendered(1, Ok(image))));
     assert!(
         !matches!(app.preview.image, Load::Ready(_)),
@@ -283,7 +283,9 @@ fn the_look_changes_re_render() {
         "30° + two orbits of 15°"
     );
     assert_eq!(r.slabs.len(), 4);
+    assert_eq!(render(app.update(Action::ToggleMode)).look.mode, Mode::Dvr);
     assert_eq!(render(app.update(Action::ToggleMode)).look.mode, Mode::Mip);
+    assert_eq!(render(app.update(Action::ToggleMode)).look.mode, Mode::Cut);
     for _ in 0..30 {
         app.update(Action::Spread(0.1));
     }
@@ -324,6 +326,14 @@ fn tiny_protocol(w: u16, h: u16) -> TermImage {
         Rgba([(x * 255 / pw) as u8, (y * 255 / ph) as u8, 128, 255])
     });
     encode(&image, (w, h), &caps).unwrap()
+}
+
+/// A render job's result: a gradient in half-blocks.
+fn rendered(w: u16, h: u16) -> Rendered {
+    Rendered {
+        image: tiny_protocol(w, h),
+        caption: None,
+    }
 }
 
 /// The characters of a buffer, one line per row.
@@ -382,7 +392,7 @@ fn whole_app_snapshots() {
     let events = vec![
         Event::Job(JobMsg::Rendered(
             1,
-            Ok(Box::new(tiny_protocol(cells.0, cells.1))),
+            Ok(Box::new(rendered(cells.0, cells.1))),
         )),
         key('m'),
         Event::Key(KeyEvent::new(KeyCode::Home, KeyModifiers::NONE)),
@@ -422,4 +432,72 @@ fn tui_step_timing() {
         let per = start.elapsed().as_secs_f64() * 1e3 / f64::from(steps);
         println!("{w}x{h}: {per:.3} ms per step and redraw");
     }
+}
+
+#[test]
+fn the_slice_view_follows_the_cursor_and_its_pointer() {
+    let mut app = ready_app();
+    app.preview.cells = (40, 12);
+    let render = |effects: Vec<Effect>| match effects.into_iter().next() {
+        Some(Effect::Render(r)) => r,
+        other => panic!("{other:?}"),
+    };
+    assert!(render(app.update(Action::Orbit(0.0, 0.0))).slice.is_none());
+    let r = render(app.update(Action::ToggleSlices));
+    let first = r.slice.expect("the slice view asks for a slice");
+    assert_eq!(first.index, app.curves.cursor);
+    // The curves' cursor picks the slice.
+    app.focus = Pane::Curves;
+    let r = render(app.update(Action::Move(5)));
+    assert_eq!(r.slice.unwrap().index, first.index + 5);
+    // In the preview, the arrows move the pointer by a voxel across the screen.
+    app.focus = Pane::Preview;
+    let r = render(app.update(Action::Sideways(1)));
+    let moved = r.slice.unwrap().pointer;
+    let step: f64 = (0..3)
+        .map(|m| (moved[m] - first.pointer[m]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let spacing = app.volume.ready().unwrap().spacing();
+    let voxel = spacing.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!((step - voxel).abs() < 1e-9, "{step} vs {voxel}");
+    let r = render(app.update(Action::Move(1)));
+    assert_ne!(r.slice.unwrap().pointer, moved, "up and down move it too");
+    assert!(render(app.update(Action::ToggleSlices)).slice.is_none());
+}
+
+#[test]
+fn window_keys_narrow_widen_and_move_the_window() {
+    let mut app = ready_app();
+    app.preview.cells = (40, 12);
+    let window = |effects: Vec<Effect>| match effects.into_iter().next() {
+        Some(Effect::Render(r)) => r.look.window.expect("a window"),
+        other => panic!("{other:?}"),
+    };
+    let (lo, hi) = window(app.update(Action::WindowWidth(1.0)));
+    let (nlo, nhi) = window(app.update(Action::WindowWidth(0.8)));
+    assert!(((nhi - nlo) - 0.8 * (hi - lo)).abs() < 1e-3 * (hi - lo));
+    assert!((f32::midpoint(nlo, nhi) - f32::midpoint(lo, hi)).abs() < 1e-3 * (hi - lo));
+    let (mlo, mhi) = window(app.update(Action::WindowLevel(0.05)));
+    assert!((mlo - nlo - 0.05 * (nhi - nlo)).abs() < 1e-3 * (hi - lo));
+    assert!((mhi - mlo - (nhi - nlo)).abs() < 1e-3 * (hi - lo));
+    // A new transfer function starts from its own window again.
+    app.update(Action::CycleTransfer);
+    assert_eq!(app.preview.look.window, None);
+}
+
+#[test]
+fn transfer_functions_that_do_not_fit_are_skipped() {
+    let mut app = ready_app();
+    let stats = app.volume.ready().unwrap().stats();
+    let mut seen = vec![app.preview.look.preset];
+    for _ in 0..4 {
+        app.update(Action::CycleTransfer);
+        seen.push(app.preview.look.preset);
+    }
+    for p in &seen {
+        assert!(p.suits(stats), "{p:?}");
+    }
+    let ct = stats.min <= -500.0;
+    assert_eq!(seen.contains(&Preset::CtBone), ct, "{seen:?}");
 }

@@ -28,6 +28,12 @@ pub struct PreviewPane {
     pub generation: u64,
     /// Whether it has the focus.
     pub focused: bool,
+    /// The slice view instead of the exploded view.
+    pub slices: bool,
+    /// The slice view's pointer, a physical point (`None`: the volume's centre).
+    pub pointer: Option<[f64; 3]>,
+    /// What the slice view reads at its pointer, shown on the bottom border.
+    pub caption: Option<String>,
     /// Colours.
     pub theme: Theme,
 }
@@ -44,6 +50,9 @@ impl PreviewPane {
             cells: (0, 0),
             generation: 0,
             focused: false,
+            slices: false,
+            pointer: None,
+            caption: None,
             theme,
         }
     }
@@ -57,9 +66,25 @@ impl PreviewPane {
             }
             _ => String::new(),
         };
+        let window = l
+            .window
+            .map(|(lo, hi)| format!(", window {} .. {}", short(lo), short(hi)))
+            .unwrap_or_default();
+        if self.slices {
+            return format!(
+                " Slices: the slice at the cursor, the selected slab's faces (v: exploded \
+                 view), {} {}{window}{bytes} ",
+                l.preset.name(),
+                l.colormap.name()
+            );
+        }
         format!(
-            " Exploded view: {} {} {}, spread {:.1}, {} gaps, az {:.0}° el {:.0}°{}{bytes} ",
-            if l.mode == Mode::Dvr { "DVR" } else { "MIP" },
+            " Exploded view: {} {} {}{window}, spread {:.1}, {} gaps, az {:.0}° el {:.0}°{}{bytes} ",
+            match l.mode {
+                Mode::Cut => "cut faces",
+                Mode::Dvr => "DVR",
+                Mode::Mip => "MIP",
+            },
             l.preset.name(),
             l.colormap.name(),
             l.spread,
@@ -75,9 +100,22 @@ impl PreviewPane {
     }
 }
 
+/// A window bound in few characters.
+fn short(v: f32) -> String {
+    if v.abs() >= 100.0 || v == v.round() {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
 impl Widget for &PreviewPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let block = self.theme.block(self.title(), self.focused);
+        let mut block = self.theme.block(self.title(), self.focused);
+        // The readout goes on the bottom border, so that the picture keeps its place.
+        if let Some(caption) = self.caption.as_ref().filter(|_| self.slices) {
+            block = block.title_bottom(format!(" {caption} "));
+        }
         let inner = block.inner(area);
         block.render(area, buf);
         match &self.image {
