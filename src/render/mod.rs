@@ -560,7 +560,7 @@ impl Frame<'_> {
         match self.params.mode {
             // On a clean background: only what rises above the window's floor shows.
             Mode::Mip if mip.0 > self.transfer.floor() => {
-                let c = self.transfer.grey(mip.0);
+                let c = self.transfer.mip_grey(mip.0);
                 let k = if mip.1 { GHOST } else { 1.0 };
                 ([c[0] * k, c[1] * k, c[2] * k, k], mip.2 as f32)
             }

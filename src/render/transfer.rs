@@ -175,8 +175,10 @@ pub struct Transfer {
     table: Vec<[f32; 4]>,
     /// Premultiplied RGBA of a cut face per entry: the colour window, opaque off the background.
     face: Vec<[f32; 4]>,
-    /// The colour window, for MIP and slices.
+    /// The colour window, for faces and slices.
     window: (f32, f32),
+    /// The colour window of MIP.
+    mip: (f32, f32),
     colormap: Colormap,
     /// Opacity per entry, for empty-space tests (a brick's range scans it; ranges are short).
     opacity: Vec<f32>,
@@ -249,19 +251,35 @@ fn rise(v: f32, x0: f32, x1: f32) -> f32 {
     }
 }
 
-/// Colour window, opacity as a sum of ramps, and the band of values where cut faces are clear
-/// (`None`: up to where the opacity begins), of `preset` for a volume of `s` and histogram `h`.
-fn shape(preset: Preset, s: Stats, h: &[u64]) -> ((f32, f32), Vec<Ramp>, Option<Band>) {
+/// What a preset makes of a volume.
+struct Shape {
+    /// The colour window of DVR, cut faces and slices.
+    window: Band,
+    /// The colour window of MIP, which shows the brightest: wider than a soft-tissue window.
+    mip: Band,
+    /// Opacity as a sum of ramps.
+    ramps: Vec<Ramp>,
+    /// The values where cut faces are clear (`None`: up to where the opacity begins).
+    band: Option<Band>,
+}
+
+/// The shape of `preset` for a volume of `s` and histogram `h`.
+fn shape(preset: Preset, s: Stats, h: &[u64]) -> Shape {
     let p = percentiles(s, h, &[0.005, 0.01, 0.2, 0.6, 0.98, 0.995]);
     let (p05, p1, p20, p60, p98, p995) = (p[0], p[1], p[2], p[3], p[4], p[5]);
+    let fixed = |window: Band, ramps: Vec<Ramp>| Shape {
+        window,
+        mip: window,
+        ramps,
+        band: None,
+    };
     match preset {
-        Preset::CtBone => ((-200.0, 1500.0), vec![(150.0, 700.0, 0.85)], None),
-        Preset::CtSoft => (
+        Preset::CtBone => fixed((-200.0, 1500.0), vec![(150.0, 700.0, 0.85)]),
+        Preset::CtSoft => fixed(
             (-300.0, 500.0),
             vec![(-300.0, 60.0, 0.08), (300.0, 900.0, 0.7)],
-            None,
         ),
-        Preset::Mri => ((p1, p995), vec![(p20, p60, 0.04), (p60, p995, 0.5)], None),
+        Preset::Mri => fixed((p1, p995), vec![(p20, p60, 0.04), (p60, p995, 0.5)]),
         Preset::Auto => {
             let bins = h.len();
             let edge = |b: usize| s.min + (s.max - s.min) * b as f32 / bins as f32;
@@ -274,23 +292,24 @@ fn shape(preset: Preset, s: Stats, h: &[u64]) -> ((f32, f32), Vec<Ramp>, Option<
                 tissue = h.to_vec();
             }
             let q = percentiles(s, &tissue, &[0.01, 0.99]);
-            let mut window = if q[1] > q[0] {
+            let mip = if q[1] > q[0] {
                 (q[0], q[1])
             } else {
                 (p1, p995)
             };
             // CT in Hounsfield units: the soft-tissue window radiologists start from.
-            if s.min <= AIR_HU && window.0 < CT_WINDOW.1 && window.1 > CT_WINDOW.0 {
-                window = (window.0.max(CT_WINDOW.0), window.1.min(CT_WINDOW.1));
-            }
-            match background {
+            let window = if s.min <= AIR_HU && mip.0 < CT_WINDOW.1 && mip.1 > CT_WINDOW.0 {
+                (mip.0.max(CT_WINDOW.0), mip.1.min(CT_WINDOW.1))
+            } else {
+                mip
+            };
+            let (ramps, band) = match background {
                 // Opacity from a quarter of the way between the background and the 98th
                 // percentile, as air and tissue are in CT and MRI.
                 Some(r) if r.start == 0 => {
                     let top = bin_value(s, r.end.max(1) - 1, bins);
                     let lo = top + 0.25 * (p98 - top);
                     (
-                        window,
                         vec![(lo, p995, 0.6)],
                         Some((f32::NEG_INFINITY, edge(r.end))),
                     )
@@ -300,13 +319,18 @@ fn shape(preset: Preset, s: Stats, h: &[u64]) -> ((f32, f32), Vec<Ramp>, Option<
                     let (b0, b1) = (edge(r.start), edge(r.end));
                     let below = p05.min(b0) - 1e-3 * (s.max - s.min);
                     let ramps = vec![(b1, p995.max(b1), 0.6), (b0, below, 0.6)];
-                    (window, ramps, Some((b0, b1)))
+                    (ramps, Some((b0, b1)))
                 }
                 None => (
-                    window,
                     vec![(p1, p995, 0.6)],
                     Some((f32::NEG_INFINITY, f32::NEG_INFINITY)),
                 ),
+            };
+            Shape {
+                window,
+                mip,
+                ramps,
+                band,
             }
         }
     }
@@ -351,11 +375,20 @@ impl Transfer {
             window: custom,
         } = look;
         check_step(step, reference)?;
-        let (window, ramps, band) = shape(preset, s, h);
         // A user's window: grey from its low to its high end, opacity rising across it.
-        let (window, ramps, band) = match custom {
-            Some((lo, hi)) => ((lo, hi), vec![(lo, hi, WINDOW_OPACITY)], None),
-            None => (window, ramps, band),
+        let Shape {
+            window,
+            mip,
+            ramps,
+            band,
+        } = match custom {
+            Some(w) => Shape {
+                window: w,
+                mip: w,
+                ramps: vec![(w.0, w.1, WINDOW_OPACITY)],
+                band: None,
+            },
+            None => shape(preset, s, h),
         };
         // Faces are clear where the opacity has not begun, unless the preset knows the
         // background; they turn opaque over a small part of the window on either side.
@@ -408,6 +441,7 @@ impl Transfer {
             table,
             face,
             window,
+            mip,
             colormap,
             opacity,
             labels: None,
@@ -452,6 +486,7 @@ impl Transfer {
             table,
             face,
             window,
+            mip: window,
             colormap: Colormap::Grey,
             opacity,
             labels: Some(values),
@@ -515,18 +550,28 @@ impl Transfer {
         self.window
     }
 
-    /// The low end of the colour window: every value at or below it looks the same in MIP.
+    /// The low end of MIP's window: every value at or below it is background in MIP.
     pub fn floor(&self) -> f32 {
-        self.window.0
+        self.mip.0
     }
 
-    /// The colour of value `v` through the window alone (for MIP and slices); a label's colour.
+    /// The colour of value `v` through the window alone (for slices); a label's colour.
     pub fn grey(&self, v: f32) -> [f32; 3] {
+        self.through(v, self.window)
+    }
+
+    /// The colour of value `v` in MIP: through MIP's window, which for CT is wider than the
+    /// soft tissue's, so that bone stands out; a label's colour.
+    pub fn mip_grey(&self, v: f32) -> [f32; 3] {
+        self.through(v, self.mip)
+    }
+
+    fn through(&self, v: f32, (lo, hi): (f32, f32)) -> [f32; 3] {
         if self.labels.is_some() {
             let f = self.face(v);
             return [f[0], f[1], f[2]];
         }
-        self.colormap.at(ramp(v, self.window.0, self.window.1))
+        self.colormap.at(ramp(v, lo, hi))
     }
 }
 
@@ -681,6 +726,8 @@ mod tests {
         assert_eq!(t.face(-1000.0)[3], 0.0, "air is clear on a cut face");
         assert_eq!(t.face(40.0)[3], 1.0, "tissue is opaque on it");
         assert_eq!(t.face(1200.0), [1.0; 4], "bone is white");
+        // MIP shows the brightest: its window reaches bone, so soft tissue is not white there.
+        assert!(t.mip_grey(240.0)[0] < 0.5 && t.mip_grey(1200.0)[0] > 0.95);
     }
 
     #[test]
