@@ -403,6 +403,19 @@ fn slice_writes_one_slice_and_render_faces_a_strip() {
     );
     let (ok, _, stderr) = run(&["slice", f, "--axis", "z", "-o", o]);
     assert!(!ok && stderr.contains("already exists"), "{stderr}");
+    // A volume of 3 slices has a middle slice, though not the 4 slabs a partition would ask.
+    let thin = dir.path().join("thin.nrrd");
+    let (ok, _, stderr) = run(&[
+        "phantom",
+        "layers",
+        "-o",
+        thin.to_str().unwrap(),
+        "--dims",
+        "16x16x3",
+    ]);
+    assert!(ok, "{stderr}");
+    let (ok, _, stderr) = run(&["slice", thin.to_str().unwrap(), "-o", o, "--force"]);
+    assert!(ok, "{stderr}");
     let strip = dir.path().join("faces.png");
     let (ok, _, stderr) = run(&[
         "render",

@@ -6,10 +6,13 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use slabscope::geometry::min_spacing;
+use slabscope::partition::slice_geometry;
 use slabscope::render::{ImageOutput, Renderer, Stack, encode, slice};
+use slabscope::view::search;
 
 use super::args::{AnalysisArgs, LoadArgs};
-use super::render::{LookArgs, load_and_partition, parse_size};
+use super::progress::with_bar;
+use super::render::{LookArgs, parse_size};
 
 /// Arguments of `slabscope slice`.
 #[derive(Debug, Args)]
@@ -46,13 +49,32 @@ pub fn run(args: &SliceArgs) -> Result<()> {
         std::slice::from_ref(&args.file),
         args.force,
     )?;
-    let (loaded, part) = load_and_partition(
-        &args.file,
-        &args.load,
-        &args.analysis,
-        Some((&args.output, args.force)),
-    )?;
-    let stack = Stack::of(&part);
+    let loaded = super::load(&args.file, &args.load)?;
+    super::check_outputs(&[&args.output], &loaded.sources, args.force)?;
+    let volume = &loaded.volume;
+    // The axis, and where its slices lie: no partition is needed (a 3-slice volume has a
+    // middle slice, if not 4 slabs).
+    let params = args.analysis.params(false);
+    let name = args.file.display().to_string();
+    let axis = match params
+        .axis
+        .resolve(volume)
+        .map_err(|e| anyhow::anyhow!(e))?
+    {
+        Some(axis) => axis.direction(),
+        None => {
+            let views = with_bar(|monitor| search(volume, &params.view, monitor))
+                .map_err(|e| anyhow::Error::from(e).context(name.clone()))?;
+            views.best().axis
+        }
+    };
+    let (axis, slices, thickness, offset) = slice_geometry(volume, axis, &params.stack())?;
+    let stack = Stack {
+        axis,
+        slices,
+        thickness,
+        offset,
+    };
     let index = args.index.unwrap_or(stack.slices / 2);
     if index >= stack.slices {
         bail!(
@@ -60,7 +82,6 @@ pub fn run(args: &SliceArgs) -> Result<()> {
             stack.slices
         );
     }
-    let volume = &loaded.volume;
     let transfer =
         Renderer::new(volume)?.transfer(args.look.look(), min_spacing(volume.spacing()))?;
     let params = slice::SliceParams {

@@ -100,6 +100,30 @@ fn other_axes(m: usize) -> (usize, usize) {
     }
 }
 
+/// Where the slices perpendicular to `axis` lie, without cutting them: the canonical axis,
+/// the number of slices, the distance between them and the position of slice 0 along the axis,
+/// mm (what [`SliceStack::new`] makes, for a slice view that needs no histograms).
+pub fn slice_geometry(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &StackParams,
+) -> Result<([f64; 3], usize, f64, f64)> {
+    let d =
+        canonical(normalize(axis).ok_or_else(|| {
+            Error::invalid("axis", format!("{axis:?}"), "a direction with a length")
+        })?);
+    if let Some(m) = coordinate_axis(d) {
+        let mut axis = [0.0; 3];
+        axis[m] = 1.0;
+        return Ok((axis, volume.dims()[m], volume.spacing()[m], 0.0));
+    }
+    let lattice = oblique_lattice(volume, d, params)?;
+    let (k_first, k_last) = lattice.sample_range();
+    let slices = (k_last - k_first + 1).max(0) as usize;
+    let step = lattice.sample_spacing;
+    Ok((d, slices, step, k_first as f64 * step))
+}
+
 impl SliceStack {
     /// Cuts `volume` into slices perpendicular to `axis` (made canonical).
     pub fn new(
@@ -621,6 +645,25 @@ mod tests {
         assert!((40..=90).contains(&total), "{total} samples");
         for p in 0..s.pixels() {
             assert!(s.column(p, 0, s.slices()).1.iter().all(|&c| c != MISSING));
+        }
+    }
+
+    #[test]
+    fn the_geometry_alone_matches_the_stack() {
+        let v = ramp();
+        let params = StackParams::default();
+        for axis in [
+            [0.0, 0.0, 1.0],
+            [0.0, -1.0, 0.0],
+            [1.0, 2.0, 3.0],
+            [-0.3, 0.1, 0.9],
+        ] {
+            let stack = SliceStack::new(&v, axis, &params, &Monitor::none()).unwrap();
+            let (d, slices, thickness, offset) = slice_geometry(&v, axis, &params).unwrap();
+            assert_eq!(d, stack.axis(), "{axis:?}");
+            assert_eq!(slices, stack.slices(), "{axis:?}");
+            assert_eq!(thickness.to_bits(), stack.thickness().to_bits(), "{axis:?}");
+            assert_eq!(offset.to_bits(), stack.offset().to_bits(), "{axis:?}");
         }
     }
 }

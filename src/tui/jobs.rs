@@ -437,13 +437,14 @@ fn readout(
     } else {
         format!("{:.1}, {:.1}, {:.1} mm", world[0], world[1], world[2])
     };
+    // The reading first: the pane's border may be narrow.
     format!(
-        "slice {index}/{} · slab {k} faces {a}, {} · voxel {}, {}, {} · {place} · value {value}",
-        slices - 1,
-        b.saturating_sub(1),
+        "voxel {},{},{} = {value} · {place} · slice {index}/{} · slab {k}: faces {a}, {}",
         ijk[0],
         ijk[1],
-        ijk[2]
+        ijk[2],
+        slices - 1,
+        b.saturating_sub(1),
     )
 }
 
