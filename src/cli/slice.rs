@@ -56,17 +56,12 @@ pub fn run(args: &SliceArgs) -> Result<()> {
     // middle slice, if not 4 slabs).
     let params = args.analysis.params(false);
     let name = args.file.display().to_string();
-    let axis = match params
-        .axis
-        .resolve(volume)
-        .map_err(|e| anyhow::anyhow!(e))?
-    {
-        Some(axis) => axis.direction(),
-        None => {
-            let views = with_bar(|monitor| search(volume, &params.view, monitor))
-                .map_err(|e| anyhow::Error::from(e).context(name.clone()))?;
-            views.best().axis
-        }
+    let axis = if let Some(axis) = params.axis.resolve(volume)? {
+        axis.direction()
+    } else {
+        let views = with_bar(|monitor| search(volume, &params.view, monitor))
+            .map_err(|e| anyhow::Error::from(e).context(name))?;
+        views.best().axis
     };
     let (axis, slices, thickness, offset) = slice_geometry(volume, axis, &params.stack())?;
     let stack = Stack {
