@@ -76,7 +76,7 @@ fn nifti_scaling_byte_order_gzip_and_4d() {
     let l = open("ramp_4d_um.nii.gz");
     assert_ramp(&l.volume, 0.0, 1.0);
     assert!(
-        l.notes.iter().any(|n| n.contains("loaded the first")),
+        l.notes.iter().any(|n| n.contains("loaded volume 0")),
         "{:?}",
         l.notes
     );
@@ -288,4 +288,89 @@ fn nrrd_writer_round_trips_and_never_overwrites() {
         .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
         .collect();
     assert!(leftovers.is_empty(), "temporary files left behind");
+}
+
+/// Loads volume `n` of `path`.
+fn volume_of(path: &Path, n: usize) -> slabscope::Result<Loaded> {
+    load(
+        path,
+        &LoadOptions {
+            volume: n,
+            ..LoadOptions::default()
+        },
+    )
+}
+
+#[test]
+fn any_volume_of_a_4d_file_can_be_read() {
+    // NIfTI: the fixture's second volume is the first plus 500.
+    let nii = data("ramp_4d_um.nii.gz");
+    let l = volume_of(&nii, 1).unwrap();
+    assert_ramp(&l.volume, 500.0, 1.0);
+    assert!(
+        l.notes.iter().any(|n| n.contains("loaded volume 1")),
+        "{:?}",
+        l.notes
+    );
+    let e = volume_of(&nii, 2).unwrap_err().to_string();
+    assert!(
+        e.contains("holds 2 volumes (numbered from 0), so there is no volume 2"),
+        "{e}"
+    );
+    // NRRD and MetaImage, 2x2x1 voxels, three volumes of (v + 10·t), in every encoding and
+    // placement of the data.
+    let values: Vec<u8> = (0..3u8)
+        .flat_map(|t| (0..4u8).map(move |v| v + 10 * t))
+        .collect();
+    let ascii = values
+        .iter()
+        .map(u8::to_string)
+        .collect::<Vec<_>>()
+        .join(" ");
+    let gzip = {
+        use std::io::Write;
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        e.write_all(&values).unwrap();
+        e.finish().unwrap()
+    };
+    let nrrd = |encoding: &str, skip: &str, body: &[u8]| {
+        let mut f = format!(
+            "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 2 2 1 3\nencoding: {encoding}\n{skip}\n"
+        )
+        .into_bytes();
+        f.extend(body);
+        f
+    };
+    let mut padded = vec![7u8; 5];
+    padded.extend(&values);
+    let files = [
+        ("raw.nrrd", nrrd("raw", "", &values)),
+        ("ascii.nrrd", nrrd("ascii", "", ascii.as_bytes())),
+        ("gzip.nrrd", nrrd("gzip", "", &gzip)),
+        ("end.nrrd", nrrd("raw", "byte skip: -1\n", &padded)),
+        (
+            "four.mha",
+            [
+                b"ObjectType = Image\nNDims = 4\nDimSize = 2 2 1 3\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n"
+                    .as_slice(),
+                &values,
+            ]
+            .concat(),
+        ),
+    ];
+    for (name, bytes) in files {
+        let (_dir, path) = temp_file(name, &bytes);
+        for t in 0..3 {
+            let l = volume_of(&path, t).unwrap_or_else(|e| panic!("{name} {t}: {e}"));
+            let got: Vec<f32> = l.volume.voxels().to_vec();
+            let want: Vec<f32> = (0..4).map(|v| (v + 10 * t) as f32).collect();
+            assert_eq!(got, want, "{name}, volume {t}");
+        }
+        assert!(volume_of(&path, 3).is_err(), "{name}");
+    }
+    // A 3D file, a folder of slices: volume 0 only.
+    let e = volume_of(&data("ramp_u8.nii"), 1).unwrap_err().to_string();
+    assert!(e.contains("holds 1 volume"), "{e}");
+    let e = volume_of(&data("ramp_slices"), 1).unwrap_err().to_string();
+    assert!(e.contains("holds 1 volume"), "{e}");
 }

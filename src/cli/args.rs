@@ -29,6 +29,9 @@ pub struct LoadArgs {
     /// The most memory the loaded volume may take, e.g. 8G (default: half the physical memory).
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes_arg)]
     pub max_memory: Option<u64>,
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage) to read, from 0.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub volume: usize,
 }
 
 impl LoadArgs {
@@ -43,6 +46,7 @@ impl LoadArgs {
                 endian: self.endian,
                 offset: self.offset,
             },
+            volume: self.volume,
         }
     }
 }

@@ -142,6 +142,7 @@ const FLAGS: &[(&str, &str)] = &[
     ("step", "--step"),
     ("size", "--size"),
     ("spacing", "--spacing"),
+    ("volume", "--volume"),
 ];
 
 /// One error for people, on one line: each cause in the chain, library errors worded in the

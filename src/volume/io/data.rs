@@ -56,8 +56,47 @@ pub(crate) struct DataSpec {
     pub endian: Endian,
     /// `value * slope + intercept`, when the format scales values.
     pub scale: Option<(f64, f64)>,
-    /// Whether more data than the volume needs is expected (a 4D file read for its first volume).
-    pub allow_trailing: bool,
+    /// Which volume of how many the file holds one after the other (a 4D file): `(0, 1)` for a
+    /// 3D file.
+    pub volumes: (usize, usize),
+}
+
+impl DataSpec {
+    /// Whether more data than the volume needs is expected (a later volume of a 4D file).
+    fn allow_trailing(&self) -> bool {
+        self.volumes.0 + 1 < self.volumes.1
+    }
+
+    /// The bytes (decoded) before the volume read: the skip, and the volumes before it (more
+    /// than any file holds, when that overflows); `None` when the data is the file's end.
+    fn skip_bytes(&self, volume_bytes: u64) -> Option<u64> {
+        match self.skip {
+            Skip::Bytes(n) => {
+                Some(n.saturating_add((self.volumes.0 as u64).saturating_mul(volume_bytes)))
+            }
+            Skip::FromEnd => None,
+        }
+    }
+}
+
+/// The volume a reader reads of the `count` a file holds: `opts.volume`, checked, and the note
+/// that says which was read.
+pub(crate) fn pick_volume(
+    path: &Path,
+    count: usize,
+    volume: usize,
+    notes: &mut Vec<String>,
+) -> Result<(usize, usize)> {
+    if volume >= count {
+        return Err(one_volume(path, count, volume));
+    }
+    if count > 1 {
+        notes.push(format!(
+            "4D file with {count} volumes: loaded volume {volume}{}",
+            if volume == 0 { " (the first)" } else { "" }
+        ));
+    }
+    Ok((volume, count))
 }
 
 /// Checks `dims` against the memory limit for an f32 volume and returns the voxel count.
@@ -188,9 +227,12 @@ fn read_raw(
     mut out: Vec<f32>,
 ) -> Result<Vec<f32>> {
     let path = spec.file.as_path();
-    let start = match spec.skip {
-        Skip::Bytes(n) => pos.saturating_add(n),
-        Skip::FromEnd => len.saturating_sub(expected).max(pos),
+    // Without a skip, the data (every volume of it) is the end of the file.
+    let start = if let Some(n) = spec.skip_bytes(expected) {
+        pos.saturating_add(n)
+    } else {
+        let behind = (spec.volumes.1 - spec.volumes.0) as u64;
+        len.saturating_sub(expected.saturating_mul(behind)).max(pos)
     };
     let found = len.saturating_sub(start);
     if found < expected {
@@ -200,7 +242,7 @@ fn read_raw(
             found,
         });
     }
-    if found > expected && !spec.allow_trailing {
+    if found > expected && !spec.allow_trailing() {
         return Err(Error::format(
             path,
             format!(
@@ -245,14 +287,11 @@ fn read_stream(
             format!("corrupt {what} data after {at} decoded bytes: {e}"),
         )
     };
-    let skip = match spec.skip {
-        Skip::Bytes(n) => n,
-        Skip::FromEnd => {
-            return Err(Error::unsupported(
-                path,
-                format!("data at the end of the file (skip -1) with {what} compression"),
-            ));
-        }
+    let Some(skip) = spec.skip_bytes(expected) else {
+        return Err(Error::unsupported(
+            path,
+            format!("data at the end of the file (skip -1) with {what} compression"),
+        ));
     };
     let skipped = std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink())
         .map_err(|e| corrupt(e, 0))?;
@@ -286,7 +325,7 @@ fn read_stream(
         }
         done += whole;
     }
-    if !spec.allow_trailing {
+    if !spec.allow_trailing() {
         let mut one = [0u8; 1];
         if fill(&mut reader, &mut one).map_err(|e| corrupt(e, expected))? > 0 {
             return Err(Error::format(
@@ -380,9 +419,22 @@ fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, mut out: Vec<f32>) -> R
     let integer = !matches!(ty, VoxelType::F32 | VoxelType::F64);
     let (lo, hi) = ty.range();
     let mut token = Vec::with_capacity(MAX_TOKEN + 1);
+    // The volumes before the one read.
+    let before = spec.volumes.0 * count;
+    for read in 0..before {
+        if !next_token(&mut reader, &mut token).map_err(io)? {
+            return Err(Error::format(
+                path,
+                format!(
+                    "truncated ascii data: {read} values before volume {} of {before}",
+                    spec.volumes.0
+                ),
+            ));
+        }
+    }
     while next_token(&mut reader, &mut token).map_err(io)? {
         if out.len() == count {
-            if spec.allow_trailing {
+            if spec.allow_trailing() {
                 break;
             }
             return Err(Error::format(
@@ -419,4 +471,15 @@ fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, mut out: Vec<f32>) -> R
         ));
     }
     Ok(out)
+}
+
+/// The error for volume `volume` of a file that holds `count`.
+pub(crate) fn one_volume(path: &Path, count: usize, volume: usize) -> Error {
+    Error::format(
+        path,
+        format!(
+            "holds {count} volume{} (numbered from 0), so there is no volume {volume}",
+            if count == 1 { "" } else { "s" }
+        ),
+    )
 }

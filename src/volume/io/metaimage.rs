@@ -5,7 +5,7 @@ use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 
-use super::data::{DataSpec, Encoding, Skip, read_voxels};
+use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
 use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -223,9 +223,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     if extra == 0 {
         return Err(Error::format(path, "the fourth DimSize is zero"));
     }
-    if extra > 1 {
-        notes.push(format!("4D file with {extra} volumes: loaded the first"));
-    }
+    let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
     let (file, start, skip) = match h.data_file.as_str() {
         "LOCAL" => (path.to_path_buf(), h.len as u64, Skip::Bytes(0)),
         name if name.starts_with("LIST")
@@ -257,7 +255,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
             Endian::Little
         },
         scale: None,
-        allow_trailing: extra > 1,
+        volumes,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let transform = transform(&h, spacing);

@@ -74,6 +74,8 @@ pub struct LoadOptions {
     pub max_memory: u64,
     /// Description of a headerless raw file; when `dims` is set the file is read as raw.
     pub raw: RawOptions,
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage) to read, from 0.
+    pub volume: usize,
 }
 
 impl Default for LoadOptions {
@@ -81,6 +83,7 @@ impl Default for LoadOptions {
         Self {
             max_memory: default_max_memory(),
             raw: RawOptions::default(),
+            volume: 0,
         }
     }
 }
@@ -92,7 +95,7 @@ pub struct Loaded {
     pub volume: Volume,
     /// The format it was read as.
     pub format: Format,
-    /// Things a user should know, e.g. "4D file: loaded the first of 12 volumes".
+    /// Things a user should know, e.g. "4D file with 12 volumes: loaded volume 0 (the first)".
     pub notes: Vec<String>,
     /// Every file read: the one named, and a detached header's data file.
     pub sources: Vec<PathBuf>,
@@ -142,9 +145,15 @@ fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
 fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let (format, mut loaded) = if meta.is_dir() {
+        if opts.volume > 0 {
+            return Err(data::one_volume(path, 1, opts.volume));
+        }
         (Format::TiffFolder, tiff::load_folder(path, opts)?)
     } else {
         let format = detect(path, opts)?;
+        if opts.volume > 0 && !matches!(format, Format::Nifti | Format::Nrrd | Format::MetaImage) {
+            return Err(data::one_volume(path, 1, opts.volume));
+        }
         let loaded = match format {
             Format::Nifti => nifti::load(path, opts)?,
             Format::Nrrd => nrrd::load(path, opts)?,

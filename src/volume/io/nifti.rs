@@ -11,13 +11,13 @@ use flate2::bufread::MultiGzDecoder;
 use flate2::write::GzEncoder;
 use nifti::{Endianness, NiftiHeader};
 
-use super::data::{DataSpec, Encoding, Skip, read_voxels};
+use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
 use super::{LoadOptions, Read0, Staged, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::geometry::world::Quaternion;
 use crate::volume::voxel::encode_le;
-use crate::volume::{Endian, Volume, VoxelType, dims_string};
+use crate::volume::{Endian, Volume, VoxelType};
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
@@ -130,12 +130,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let dim = |i: usize| if i <= ndim { usize::from(h.dim[i]) } else { 1 };
     let dims = [dim(1), dim(2), dim(3)];
     let extra: usize = (4..=ndim).map(dim).product();
-    if extra > 1 {
-        notes.push(format!(
-            "{ndim}D file with {extra} volumes of {}: loaded the first",
-            dims_string(dims)
-        ));
-    }
+    let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
     let ty = voxel_type(path, h.datatype)?;
     let unit = unit_to_mm(h.xyzt_units);
     let mut spacing = [1.0; 3];
@@ -189,7 +184,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
             Endianness::Big => Endian::Big,
         },
         scale,
-        allow_trailing: extra > 1,
+        volumes,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     Ok(Read0::new(path, dims, spacing, ty, voxels, notes)?

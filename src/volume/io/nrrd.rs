@@ -8,7 +8,7 @@ use std::path::Path;
 use flate2::Compression;
 use flate2::write::GzEncoder;
 
-use super::data::{DataSpec, Encoding, Skip, read_voxels};
+use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
 use super::{LoadOptions, Read0, Staged, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -391,9 +391,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     if extra == 0 {
         return Err(Error::format(path, "the fourth size is zero"));
     }
-    if extra > 1 {
-        notes.push(format!("4D file with {extra} volumes: loaded the first"));
-    }
+    let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
     if h.endian.is_none() && h.voxel_type.size() > 1 && h.encoding != Encoding::Ascii {
         notes.push("no endian field: assuming little-endian".into());
     }
@@ -421,7 +419,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         voxel_type: h.voxel_type,
         endian,
         scale: None,
-        allow_trailing: extra > 1,
+        volumes,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let transform = transform(&h, &axes);

@@ -75,7 +75,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         voxel_type,
         endian: raw.endian.unwrap_or_default(),
         scale: None,
-        allow_trailing: false,
+        volumes: (0, 1),
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let spacing = raw.spacing.unwrap_or([1.0; 3]);

@@ -50,7 +50,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         voxel_type: VoxelType::U16,
         endian: Endian::Little,
         scale: None,
-        allow_trailing: false,
+        volumes: (0, 1),
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let notes = vec!["VolumeShop .dat files carry no spacing: using 1 mm".into()];
