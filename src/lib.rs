@@ -18,6 +18,7 @@
 //! - [`render`]: the exploded view (paper §3, step 3): camera, transfer functions, layout, the ray
 //!   caster and overlays.
 //! - [`report`]: the JSON contract (DESIGN §3) and the other exports, built from the results.
+//! - [`triage`]: many volumes at once: what a set of paths holds, shards of it, one row each.
 
 pub mod analysis;
 pub mod error;
@@ -29,6 +30,7 @@ pub mod render;
 pub mod report;
 #[cfg(test)]
 mod testing;
+pub mod triage;
 pub mod view;
 pub mod volume;
 

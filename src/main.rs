@@ -41,10 +41,11 @@ fn main() -> ExitCode {
             load: args.load.options(),
             protocol: args.protocol,
             analysis: args.analysis.params(true),
-        }),
+        })
+        .map(|()| 0),
     };
     let code = match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => ExitCode::from(code),
         Err(e) => {
             eprintln!("slabscope: error: {}", cli::error_message(&e));
             ExitCode::FAILURE

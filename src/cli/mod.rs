@@ -21,6 +21,7 @@ mod progress;
 mod render;
 mod slice;
 mod text;
+mod triage;
 
 use std::path::{Path, PathBuf};
 
@@ -45,13 +46,19 @@ pub enum Command {
     Preview(render::PreviewArgs),
     /// Write one slice across the slab axis to a PNG file, oriented as radiologists read it.
     Slice(slice::SliceArgs),
+    /// Every volume under folders or among files, one row each: format, geometry, problems,
+    /// best axis, slabs (exit status 1 when some failed, 2 when none could be listed).
+    Triage(triage::TriageArgs),
     /// Write a synthetic volume with known structure.
     Phantom(phantom::PhantomArgs),
 }
 
-/// Runs a subcommand.
-pub fn run(command: Command) -> Result<()> {
+/// Runs a subcommand; the exit status it asks for (0 unless `triage` says otherwise).
+pub fn run(command: Command) -> Result<u8> {
     remove_staged_on_signals();
+    if let Command::Triage(args) = &command {
+        return triage::run(args);
+    }
     match command {
         Command::Info(args) => info::run(&args),
         Command::Analyze(args) => analyze::run(&args),
@@ -59,7 +66,9 @@ pub fn run(command: Command) -> Result<()> {
         Command::Render(args) => render::run_render(&args),
         Command::Preview(args) => render::run_preview(&args),
         Command::Slice(args) => slice::run(&args),
+        Command::Triage(_) => unreachable!("run above"),
     }
+    .map(|()| 0)
 }
 
 /// On SIGINT, SIGTERM or SIGHUP, removes the outputs staged and not yet in place, then ends as

@@ -2,6 +2,7 @@
 //! bytes) first and by extension second, and writers for exporting.
 
 mod data;
+mod folder;
 mod limits;
 mod metaimage;
 mod nifti;
@@ -18,6 +19,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+pub use folder::{Folder, folder_kind, volume_name};
 pub use limits::{default_max_memory, parse_bytes, physical_memory};
 pub use nifti::write_nifti;
 pub use nrrd::{NrrdEncoding, write_nrrd};
@@ -145,6 +147,13 @@ fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
 fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let (format, mut loaded) = if meta.is_dir() {
+        if folder_kind(path)? == Folder::Collection {
+            return Err(Error::format(
+                path,
+                "a folder of volumes, not one stack of TIFF slices: name a volume in it, or \
+                 triage the folder",
+            ));
+        }
         if opts.volume > 0 {
             return Err(data::one_volume(path, 1, opts.volume));
         }

@@ -1,0 +1,314 @@
+//! `slabscope triage DIR|FILES...`: every volume under the paths, one row each (a table, JSON
+//! Lines or CSV), a broken file a row with its error; shards for clusters, and a manifest so that
+//! shards need not walk the folders again.
+
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use slabscope::triage::{TriageRow, discover, shard};
+use slabscope::{Error, Monitor, Progress};
+
+use super::args::{AnalysisArgs, LoadArgs};
+use super::progress::Bar;
+
+/// Arguments of `slabscope triage`.
+#[derive(Debug, Args)]
+pub struct TriageArgs {
+    /// Folders (walked recursively; a folder of TIFF slices is one volume) and files.
+    #[arg(required_unless_present = "manifest")]
+    pub paths: Vec<PathBuf>,
+    /// One JSON object per volume and line (JSON Lines).
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Comma-separated values, with a header line.
+    #[arg(long)]
+    pub csv: bool,
+    /// Print the sorted list of volumes, one path a line, and stop (a manifest for --manifest).
+    #[arg(long, conflicts_with_all = ["json", "csv"])]
+    pub list: bool,
+    /// Read the list of volumes from FILE (one path a line, as --list writes it) instead of
+    /// walking folders.
+    #[arg(long, value_name = "FILE", conflicts_with = "paths")]
+    pub manifest: Option<PathBuf>,
+    /// Take the K-th of N contiguous blocks of the sorted volumes (K from 1), e.g.
+    /// `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Stop the analysis of a volume after this many seconds (its row says so).
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = super::args::within(0.1, 86400.0))]
+    pub timeout: f64,
+    #[command(flatten)]
+    pub analysis: AnalysisArgs,
+    #[command(flatten)]
+    pub load: LoadArgs,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("{s:?} is not K/N with 1 <= K <= N, e.g. 3/10");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    match (k.trim().parse::<usize>(), n.trim().parse::<usize>()) {
+        (Ok(k), Ok(n)) if (1..=n).contains(&k) => Ok((k, n)),
+        _ => Err(bad()),
+    }
+}
+
+/// The longest manifest read, bytes, and its longest line.
+const MAX_MANIFEST: u64 = 256 << 20;
+const MAX_LINE: usize = 4096;
+
+/// Reads a manifest: one path a line, blank lines skipped.
+fn read_manifest(path: &Path) -> Result<Vec<PathBuf>> {
+    slabscope::volume::io::check_input(path)?;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    if len > MAX_MANIFEST {
+        bail!(
+            "{}: a manifest of {len} bytes; at most {MAX_MANIFEST} are read",
+            path.display()
+        );
+    }
+    let mut paths = Vec::new();
+    for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
+        let line = line.with_context(|| format!("{}: line {}", path.display(), i + 1))?;
+        if line.len() > MAX_LINE {
+            bail!(
+                "{}: line {} is longer than {MAX_LINE} characters",
+                path.display(),
+                i + 1
+            );
+        }
+        if !line.trim().is_empty() {
+            paths.push(PathBuf::from(line));
+        }
+    }
+    Ok(paths)
+}
+
+/// Runs triage; the exit status: 0 when every volume was looked at, 1 when some failed (their
+/// rows printed), 2 for an error before any row.
+pub fn run(args: &TriageArgs) -> Result<u8> {
+    let volumes = match volumes(args) {
+        Ok(v) => v,
+        Err(e) => {
+            eprintln!("slabscope: error: {}", super::error_message(&e));
+            return Ok(2);
+        }
+    };
+    if args.list {
+        for v in &volumes {
+            outln!("{}", v.display());
+        }
+        return Ok(0);
+    }
+    if args.csv {
+        outln!("{}", CSV_HEADER.join(","));
+    } else if !args.json {
+        outln!(
+            "   {:<11} {:<13} {:<19} {:<4} {:<5} {:<22} {:>2} path  (problems)",
+            "format",
+            "dims",
+            "spacing mm",
+            "orient",
+            "type",
+            "best axis (? uncertain)",
+            "K"
+        );
+    }
+    let bar = Bar::new();
+    let mut failed = 0;
+    for (i, path) in volumes.iter().enumerate() {
+        let at = |fraction: f64| {
+            bar.set(Progress {
+                phase: "triage",
+                fraction: (i as f64 + fraction.clamp(0.0, 1.0)) / volumes.len() as f64,
+            });
+        };
+        at(0.0);
+        let row = look(path, args, &at);
+        failed += usize::from(row.error.is_some());
+        let line = if args.json {
+            serde_json::to_string(&row)?
+        } else if args.csv {
+            csv_line(&row)
+        } else {
+            table_line(&row)
+        };
+        outln!("{line}");
+    }
+    drop(bar);
+    Ok(u8::from(failed > 0))
+}
+
+/// The volumes a run takes: from the manifest or the walk, sorted, then its shard.
+fn volumes(args: &TriageArgs) -> Result<Vec<PathBuf>> {
+    let mut all = match &args.manifest {
+        Some(m) => read_manifest(m)?,
+        None => discover(&args.paths)?,
+    };
+    all.sort();
+    all.dedup();
+    Ok(match args.shard {
+        Some((k, n)) => shard(&all, k, n).to_vec(),
+        None => all,
+    })
+}
+
+/// One volume's row: loaded, analysed within the timeout, or the one-line error of either.
+fn look(path: &Path, args: &TriageArgs, progress: &(dyn Fn(f64) + Sync)) -> TriageRow {
+    let name = path.display().to_string();
+    // The row names the file: its errors need not.
+    let message = |e: Error| {
+        let m = super::error_message(&e.into());
+        m.strip_prefix(&format!("{name}: "))
+            .map_or(m.clone(), str::to_string)
+    };
+    let loaded = match slabscope::load(path, &args.load.options()) {
+        Ok(l) => l,
+        Err(e) => return TriageRow::failed(&name, message(e)),
+    };
+    let row = TriageRow::loaded(&name, &loaded);
+    // A watchdog raises the cancel flag at the timeout, unless told first that the work is done.
+    let cancel = Arc::new(AtomicBool::new(false));
+    let (done, finished) = std::sync::mpsc::channel::<()>();
+    let watchdog = {
+        let cancel = Arc::clone(&cancel);
+        let timeout = Duration::from_secs_f64(args.timeout);
+        std::thread::spawn(move || {
+            if finished.recv_timeout(timeout).is_err() {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        })
+    };
+    let report = |p: Progress| progress(p.fraction);
+    let monitor = Monitor::new(Some(&cancel), Some(&report));
+    let result = slabscope::analyze(&loaded.volume, &args.analysis.params(false), &monitor);
+    let _ = done.send(());
+    let _ = watchdog.join();
+    match result {
+        Ok(analysis) => row.analysed(&analysis),
+        Err(Error::Cancelled) => row.with_error(format!(
+            "the analysis took longer than the {} s timeout",
+            args.timeout
+        )),
+        Err(e) => row.with_error(message(e)),
+    }
+}
+
+const CSV_HEADER: [&str; 14] = [
+    "path",
+    "format",
+    "dims",
+    "spacing",
+    "orientation",
+    "type",
+    "min",
+    "max",
+    "missing",
+    "best_axis",
+    "entropy_rate",
+    "uncertain",
+    "slabs",
+    "problems",
+];
+
+fn triple<T: std::fmt::Display>(v: &[T; 3], sep: &str) -> String {
+    format!("{}{sep}{}{sep}{}", v[0], v[1], v[2])
+}
+
+fn axis_text(a: &[f64; 3]) -> String {
+    format!("{:.3},{:.3},{:.3}", a[0], a[1], a[2])
+}
+
+fn slabs_text(slabs: &[[usize; 2]]) -> String {
+    slabs
+        .iter()
+        .map(|s| format!("{}-{}", s[0], s[1].saturating_sub(1)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// What is wrong: the error, else the problems.
+fn problems(row: &TriageRow) -> String {
+    match &row.error {
+        Some(e) => format!("error: {e}"),
+        None => row.problems.join("; "),
+    }
+}
+
+/// A CSV field, quoted when it holds a comma, a quote or a line break.
+fn field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn csv_line(row: &TriageRow) -> String {
+    let opt = |v: Option<String>| v.unwrap_or_default();
+    [
+        row.path.clone(),
+        opt(row.format.clone()),
+        opt(row.dims.map(|d| triple(&d, "x"))),
+        opt(row.spacing.map(|s| triple(&s, "x"))),
+        opt(row.orientation.clone()),
+        opt(row.voxel_type.clone()),
+        opt(row.range.map(|r| r[0].to_string())),
+        opt(row.range.map(|r| r[1].to_string())),
+        opt(row.missing.map(|m| m.to_string())),
+        opt(row.best_axis.as_ref().map(axis_text)),
+        opt(row.entropy_rate.map(|h| format!("{h:.4}"))),
+        opt(row.uncertain.map(|u| u.to_string())),
+        opt(row.slabs.as_deref().map(slabs_text)),
+        problems(row),
+    ]
+    .iter()
+    .map(|s| field(s))
+    .collect::<Vec<_>>()
+    .join(",")
+}
+
+/// A row of the table: fixed-width columns, then the path and what is wrong.
+fn table_line(row: &TriageRow) -> String {
+    let dims = row.dims.map(|d| triple(&d, "x")).unwrap_or_default();
+    let spacing = row
+        .spacing
+        .map(|s| format!("{:.3}x{:.3}x{:.3}", s[0], s[1], s[2]))
+        .unwrap_or_default();
+    let axis = match (&row.best_axis, &row.anatomy) {
+        (_, Some(name)) => name.split(',').next().unwrap_or_default().to_string(),
+        (Some(a), None) => match slabscope::partition::coordinate_axis(*a) {
+            Some(m) => ["x", "y", "z"][m].to_string(),
+            None => format!("[{}]", axis_text(a)),
+        },
+        (None, None) => String::new(),
+    };
+    let verdict = match row.uncertain {
+        Some(true) => "?",
+        _ => "",
+    };
+    let slabs = row.slabs.as_ref().map_or(0, Vec::len);
+    let status = if row.error.is_some() { "!!" } else { "ok" };
+    let wrong = problems(row);
+    format!(
+        "{status} {:<11} {:<13} {:<19} {:<4} {:<5} {:<22} {:>2} {}{}",
+        row.format.as_deref().unwrap_or("-"),
+        dims,
+        spacing,
+        row.orientation.as_deref().unwrap_or("-"),
+        row.voxel_type.as_deref().unwrap_or("-"),
+        format!("{axis}{verdict}"),
+        slabs,
+        row.path,
+        if wrong.is_empty() {
+            String::new()
+        } else {
+            format!("  ({wrong})")
+        }
+    )
+}

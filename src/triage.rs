@@ -1,0 +1,208 @@
+//! Many volumes at once: what a set of paths holds (folders walked; a folder of TIFF slices is
+//! one volume), in a stable order that shards split, and one row per volume with what a first
+//! look needs: the format and geometry, the problems, the most structured axis and the slabs
+//! along it.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::analysis::Analysis;
+use crate::error::{Error, Result};
+use crate::report::SCHEMA_VERSION;
+pub use crate::volume::io::{Folder, folder_kind};
+use crate::volume::io::{Loaded, volume_name};
+
+/// The most volumes a walk collects: a bound on the memory a folder tree can claim.
+pub const MAX_VOLUMES: usize = 1 << 20;
+
+/// The deepest a walk goes below a folder it was given.
+pub const MAX_DEPTH: usize = 64;
+
+/// The volumes under `paths`, sorted and without repeats: each file named, each folder of
+/// slices, and, walked recursively, every volume in the other folders (symbolic links to
+/// folders are not followed, so that no walk loops). A path that cannot be read is kept: its
+/// row will say why.
+pub fn discover(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut found = Vec::new();
+    for path in paths {
+        let meta = std::fs::metadata(path);
+        match meta {
+            Ok(m) if m.is_dir() => walk(path, 0, &mut found)?,
+            _ => push(&mut found, path.clone())?,
+        }
+    }
+    found.sort();
+    found.dedup();
+    Ok(found)
+}
+
+fn push(found: &mut Vec<PathBuf>, path: PathBuf) -> Result<()> {
+    if found.len() >= MAX_VOLUMES {
+        return Err(Error::format(
+            &path,
+            format!("more than {MAX_VOLUMES} volumes: name fewer folders, or shard a manifest"),
+        ));
+    }
+    found.push(path);
+    Ok(())
+}
+
+fn walk(dir: &Path, depth: usize, found: &mut Vec<PathBuf>) -> Result<()> {
+    if folder_kind(dir)? == Folder::Slices {
+        return push(found, dir.to_path_buf());
+    }
+    if depth >= MAX_DEPTH {
+        return Err(Error::format(
+            dir,
+            format!("folders nest deeper than {MAX_DEPTH}"),
+        ));
+    }
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let path = entry.path();
+        let Ok(t) = entry.file_type() else { continue };
+        if t.is_dir() {
+            walk(&path, depth + 1, found)?;
+        } else if volume_name(&path) {
+            push(found, path)?;
+        }
+    }
+    Ok(())
+}
+
+/// Block `k` (from 1) of `n` contiguous blocks of `items`: the volumes one machine of `n` takes,
+/// so that the blocks of `k = 1..=n` are the whole list, each item in exactly one.
+pub fn shard<T>(items: &[T], k: usize, n: usize) -> &[T] {
+    if n == 0 || k == 0 || k > n {
+        return &[];
+    }
+    let len = items.len();
+    &items[(k - 1) * len / n..k * len / n]
+}
+
+/// One volume's row: what it is, what is wrong with it, and its most structured axis and slabs.
+/// Rows carry no timings, so that the rows of shards concatenate to those of one run.
+#[derive(Clone, Debug, Serialize)]
+pub struct TriageRow {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The file or folder as found.
+    pub path: String,
+    /// The format read (null when loading failed).
+    pub format: Option<String>,
+    /// `[nx, ny, nz]`.
+    pub dims: Option<[usize; 3]>,
+    /// `[sx, sy, sz]`, mm.
+    pub spacing: Option<[f64; 3]>,
+    /// Orientation codes (`RAS`, `LPS`, ...), null when the file states none.
+    pub orientation: Option<String>,
+    /// The voxel type in the file.
+    #[serde(rename = "type")]
+    pub voxel_type: Option<String>,
+    /// Smallest and largest finite voxel.
+    pub range: Option<[f32; 2]>,
+    /// Voxels that were NaN or infinite.
+    pub missing: Option<usize>,
+    /// What the loader and the analysis noticed (a 4D file, a coarsened lattice, ...).
+    pub problems: Vec<String>,
+    /// Why the volume could not be looked at, on one line; null when it could.
+    pub error: Option<String>,
+    /// The most structured axis (null when no view search ran or it failed).
+    pub best_axis: Option<[f64; 3]>,
+    /// Its anatomical name, when the orientation names it.
+    pub anatomy: Option<String>,
+    /// Its entropy rate, bits (the mean over lattice phases where the ranking used it).
+    pub entropy_rate: Option<f64>,
+    /// Whether another axis is a contender (null on the paper's single lattice).
+    pub uncertain: Option<bool>,
+    /// The axis partitioned along.
+    pub axis: Option<[f64; 3]>,
+    /// The slabs along it, `[start, end)` slice indices.
+    pub slabs: Option<Vec<[usize; 2]>>,
+}
+
+impl TriageRow {
+    /// The row of a volume that could not be looked at.
+    pub fn failed(path: &str, error: String) -> Self {
+        Self {
+            schema_version: SCHEMA_VERSION,
+            path: path.to_string(),
+            format: None,
+            dims: None,
+            spacing: None,
+            orientation: None,
+            voxel_type: None,
+            range: None,
+            missing: None,
+            problems: Vec::new(),
+            error: Some(error),
+            best_axis: None,
+            anatomy: None,
+            entropy_rate: None,
+            uncertain: None,
+            axis: None,
+            slabs: None,
+        }
+    }
+
+    /// The row of `loaded`, found at `path`, without its analysis (yet).
+    pub fn loaded(path: &str, loaded: &Loaded) -> Self {
+        let v = &loaded.volume;
+        let s = v.stats();
+        Self {
+            format: Some(loaded.format.name().to_string()),
+            dims: Some(v.dims()),
+            spacing: Some(v.spacing()),
+            orientation: v.transform().axcodes(),
+            voxel_type: Some(v.voxel_type().to_string()),
+            range: (s.finite > 0).then_some([s.min, s.max]),
+            missing: Some(s.missing),
+            problems: loaded.notes.clone(),
+            error: None,
+            ..Self::failed(path, String::new())
+        }
+    }
+
+    /// Adds what the analysis found.
+    #[must_use]
+    pub fn analysed(mut self, analysis: &Analysis) -> Self {
+        if let Some(views) = &analysis.views {
+            let best = views.best();
+            self.best_axis = Some(best.axis);
+            self.anatomy.clone_from(&best.world.anatomy);
+            self.entropy_rate = Some(crate::view::score(best));
+            self.uncertain = views.uncertain;
+        }
+        let p = &analysis.partition;
+        if self.anatomy.is_none() {
+            self.anatomy.clone_from(&p.world.anatomy);
+        }
+        self.axis = Some(p.axis);
+        self.slabs = Some(p.slabs.iter().map(|&(a, b)| [a, b]).collect());
+        self.problems.extend(analysis.notes.iter().cloned());
+        self
+    }
+
+    /// The row with `error` (the analysis failed after the volume loaded).
+    #[must_use]
+    pub fn with_error(mut self, error: String) -> Self {
+        self.error = Some(error);
+        self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_split_a_list_into_contiguous_blocks_that_cover_it_once() {
+        let items: Vec<usize> = (0..10).collect();
+        for n in 1..=12 {
+            let joined: Vec<usize> = (1..=n).flat_map(|k| shard(&items, k, n).to_vec()).collect();
+            assert_eq!(joined, items, "{n} shards");
+        }
+        assert!(shard(&items, 0, 3).is_empty() && shard(&items, 4, 3).is_empty());
+    }
+}

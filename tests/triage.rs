@@ -1,0 +1,224 @@
+//! `slabscope triage`: a folder mixing formats, broken files among them, one row each with the
+//! right problems; exit statuses; shards whose union is one run; manifests.
+
+#![allow(clippy::unwrap_used)] // tests fail loudly by design
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+/// Runs slabscope; returns (exit status, stdout, stderr).
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = Command::cargo_bin("slabscope")
+        .unwrap()
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A tree of volumes in every format, a folder of slices, two broken files and a stray text
+/// file.
+fn archive(root: &Path) {
+    let copy = |from: &str, to: &str| {
+        let to = root.join(to);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(data(from), to).unwrap();
+    };
+    copy("ramp_u8.nii", "mr/ramp_u8.nii");
+    copy("ramp_4d_um.nii.gz", "mr/four.nii.gz");
+    copy("ramp_u16_be.nrrd", "ct/a.nrrd");
+    copy("ramp_i16_detached.nhdr", "ct/ramp_i16_detached.nhdr");
+    copy("ramp_i16_detached.raw", "ct/ramp_i16_detached.raw");
+    copy("ramp_i16.mha", "ct/deeper/b.mha");
+    for f in ["slice_1.tif", "slice_2.tif", "slice_10.tif"] {
+        copy(&format!("ramp_slices/{f}"), &format!("stack/{f}"));
+    }
+    std::fs::write(root.join("mr/broken.nii"), b"not a volume at all").unwrap();
+    let truncated = std::fs::read(data("ramp_u16_be.nrrd")).unwrap();
+    std::fs::write(
+        root.join("ct/truncated.nrrd"),
+        &truncated[..truncated.len() - 7],
+    )
+    .unwrap();
+    std::fs::write(root.join("README.txt"), b"notes").unwrap();
+}
+
+fn rows(stdout: &str) -> Vec<Value> {
+    stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn every_volume_is_a_row_and_broken_files_are_rows_with_their_error() {
+    let dir = tempfile::tempdir().unwrap();
+    archive(dir.path());
+    let root = dir.path().to_str().unwrap();
+    let (code, stdout, stderr) = run(&["triage", root, "--json", "--slabs", "2"]);
+    assert_eq!(code, 1, "some failed: {stderr}");
+    let rows = rows(&stdout);
+    let names: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            let p = r["path"].as_str().unwrap();
+            p.strip_prefix(root).unwrap().to_string()
+        })
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "/ct/a.nrrd",
+            "/ct/deeper/b.mha",
+            "/ct/ramp_i16_detached.nhdr",
+            "/ct/truncated.nrrd",
+            "/mr/broken.nii",
+            "/mr/four.nii.gz",
+            "/mr/ramp_u8.nii",
+            "/stack",
+        ],
+        "sorted; the slices one volume; the data file and the text file left out"
+    );
+    let row = |name: &str| &rows[names.iter().position(|n| n == name).unwrap()];
+    for ok in [
+        "/ct/a.nrrd",
+        "/ct/deeper/b.mha",
+        "/mr/ramp_u8.nii",
+        "/stack",
+    ] {
+        let r = row(ok);
+        assert!(r["error"].is_null(), "{ok}: {r}");
+        assert_eq!(r["dims"], serde_json::json!([5, 4, 3]), "{ok}");
+        assert_eq!(r["slabs"].as_array().unwrap().len(), 2, "{ok}");
+        assert!(r["best_axis"].is_array(), "{ok}");
+    }
+    assert_eq!(row("/stack")["format"], "tiff-folder");
+    assert_eq!(row("/mr/ramp_u8.nii")["orientation"], "RAS");
+    let four = row("/mr/four.nii.gz");
+    assert!(
+        four["problems"][0]
+            .as_str()
+            .unwrap()
+            .contains("4D file with 2 volumes")
+    );
+    let broken = row("/mr/broken.nii")["error"].as_str().unwrap().to_string();
+    assert!(broken.contains("does not start like one"), "{broken}");
+    assert!(
+        !broken.contains(root),
+        "the row names the file, its error need not: {broken}"
+    );
+    let truncated = row("/ct/truncated.nrrd")["error"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert!(truncated.contains("truncated"), "{truncated}");
+    // The table and CSV say the same, one line a volume after a header.
+    let (code, table, _) = run(&["triage", root, "--slabs", "2"]);
+    assert_eq!((code, table.lines().count()), (1, 9));
+    assert!(table.lines().nth(4).unwrap().starts_with("!! "));
+    let (_, csv, _) = run(&["triage", root, "--csv", "--slabs", "2"]);
+    assert_eq!(csv.lines().count(), 9);
+    assert!(csv.starts_with("path,format,dims,"));
+    // Everything loads: 0.
+    let good = dir.path().join("ct/deeper");
+    let (code, _, stderr) = run(&["triage", good.to_str().unwrap(), "--slabs", "2"]);
+    assert_eq!(code, 0, "{stderr}");
+}
+
+#[test]
+fn shards_concatenate_to_one_run_and_manifests_replace_the_walk() {
+    let dir = tempfile::tempdir().unwrap();
+    archive(dir.path());
+    let root = dir.path().to_str().unwrap();
+    let (_, whole, _) = run(&["triage", root, "--json", "--slabs", "2"]);
+    let mut joined = String::new();
+    for k in 1..=3 {
+        let shard = format!("{k}/3");
+        let (_, part, _) = run(&["triage", root, "--json", "--slabs", "2", "--shard", &shard]);
+        joined.push_str(&part);
+    }
+    assert_eq!(joined, whole);
+    let (code, list, _) = run(&["triage", "--list", root]);
+    assert_eq!((code, list.lines().count()), (0, 8));
+    let manifest = dir.path().join("manifest.txt");
+    std::fs::write(&manifest, &list).unwrap();
+    let m = manifest.to_str().unwrap();
+    let (_, from_manifest, _) = run(&["triage", "--manifest", m, "--json", "--slabs", "2"]);
+    assert_eq!(from_manifest, whole);
+    let (_, second, _) = run(&[
+        "triage",
+        "--manifest",
+        m,
+        "--json",
+        "--slabs",
+        "2",
+        "--shard",
+        "2/3",
+    ]);
+    let (_, direct, _) = run(&["triage", root, "--json", "--slabs", "2", "--shard", "2/3"]);
+    assert_eq!(second, direct);
+}
+
+#[test]
+fn errors_before_any_row_exit_with_2_and_bad_shards_are_refused() {
+    let (code, stdout, stderr) = run(&["triage", "--manifest", "/nonexistent/manifest"]);
+    assert_eq!(code, 2);
+    assert!(
+        stdout.is_empty() && stderr.contains("/nonexistent/manifest"),
+        "{stderr}"
+    );
+    for bad in ["0/3", "4/3", "3", "a/b"] {
+        let (code, _, stderr) = run(&["triage", ".", "--shard", bad]);
+        assert_ne!(code, 0, "{bad}");
+        assert!(stderr.contains("is not K/N"), "{bad}: {stderr}");
+    }
+    // A folder of volumes is not itself a volume.
+    let dir = tempfile::tempdir().unwrap();
+    archive(dir.path());
+    let (code, _, stderr) = run(&["info", dir.path().join("ct").to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("a folder of volumes"), "{stderr}");
+}
+
+#[test]
+fn a_volume_past_the_timeout_is_a_row_with_that_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.nrrd");
+    let (code, _, stderr) = run(&[
+        "phantom",
+        "body",
+        "--dims",
+        "96x96x160",
+        "-o",
+        big.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let (code, stdout, _) = run(&[
+        "triage",
+        big.to_str().unwrap(),
+        "--json",
+        "--timeout",
+        "0.1",
+    ]);
+    assert_eq!(code, 1);
+    let rows = rows(&stdout);
+    let error = rows[0]["error"].as_str().unwrap();
+    assert!(error.contains("longer than the 0.1 s timeout"), "{error}");
+    assert_eq!(
+        rows[0]["dims"],
+        serde_json::json!([96, 96, 160]),
+        "loaded before it stopped"
+    );
+}
