@@ -4,13 +4,18 @@
 //! along it.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use serde::Serialize;
 
-use crate::analysis::Analysis;
+use crate::analysis::{Analysis, AnalysisParams, analyze};
 use crate::error::{Error, Result};
+use crate::progress::{Monitor, Progress};
 use crate::report::SCHEMA_VERSION;
 pub use crate::volume::io::{Folder, folder_kind};
+use crate::volume::io::{LoadOptions, load};
 use crate::volume::io::{Loaded, volume_name};
 
 /// The most volumes a walk collects: a bound on the memory a folder tree can claim.
@@ -189,6 +194,77 @@ impl TriageRow {
     pub fn with_error(mut self, error: String) -> Self {
         self.error = Some(error);
         self
+    }
+}
+
+/// The coarse lattice of the fast path: rays and samples this many smallest voxel spacings
+/// apart, an eighth of the samples.
+pub const COARSE: f64 = 2.0;
+
+/// The fast path applies to volumes at least this many voxels along every axis.
+pub const COARSE_MIN_DIM: usize = 32;
+
+/// How triage looks at each volume.
+#[derive(Clone, Debug)]
+pub struct Look {
+    /// How to read files.
+    pub load: LoadOptions,
+    /// How to analyse them.
+    pub params: AnalysisParams,
+    /// The most time an analysis may take.
+    pub timeout: Duration,
+    /// The fast path: the view search on a lattice [`COARSE`] times coarser than the voxels
+    /// (where the parameters name no spacing and the volume has [`COARSE_MIN_DIM`] voxels a
+    /// side); the partition at full resolution.
+    pub fast: bool,
+}
+
+/// One volume's row: loaded and analysed as `how` says (stopped at its timeout, the progress
+/// reported as a fraction), or the error of either as `describe` words it.
+pub fn look(
+    path: &Path,
+    how: &Look,
+    progress: &(dyn Fn(f64) + Sync),
+    describe: &dyn Fn(Error) -> String,
+) -> TriageRow {
+    let (opts, timeout) = (&how.load, how.timeout);
+    let name = path.display().to_string();
+    let loaded = match load(path, opts) {
+        Ok(l) => l,
+        Err(e) => return TriageRow::failed(&name, describe(e)),
+    };
+    let row = TriageRow::loaded(&name, &loaded);
+    // A watchdog raises the cancel flag at the timeout, unless told first that the work is done.
+    let cancel = Arc::new(AtomicBool::new(false));
+    let (done, finished) = std::sync::mpsc::channel::<()>();
+    let watchdog = {
+        let cancel = Arc::clone(&cancel);
+        std::thread::spawn(move || {
+            if finished.recv_timeout(timeout).is_err() {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        })
+    };
+    let report = |p: Progress| progress(p.fraction);
+    let monitor = Monitor::new(Some(&cancel), Some(&report));
+    let v = &loaded.volume;
+    let mut params = how.params.clone();
+    let sampling = &mut params.view.sampling;
+    let unset = sampling.ray_spacing.is_none() && sampling.sample_spacing.is_none();
+    if how.fast && unset && v.dims().iter().all(|&n| n >= COARSE_MIN_DIM) {
+        let coarse = COARSE * crate::geometry::min_spacing(v.spacing());
+        (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
+    }
+    let result = analyze(v, &params, &monitor);
+    let _ = done.send(());
+    let _ = watchdog.join();
+    match result {
+        Ok(analysis) => row.analysed(&analysis),
+        Err(Error::Cancelled) => row.with_error(format!(
+            "the analysis took longer than the {} s timeout",
+            timeout.as_secs_f64()
+        )),
+        Err(e) => row.with_error(describe(e)),
     }
 }
 

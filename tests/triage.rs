@@ -222,3 +222,30 @@ fn a_volume_past_the_timeout_is_a_row_with_that_error() {
         "loaded before it stopped"
     );
 }
+
+#[test]
+fn the_fast_path_finds_the_full_searchs_axis_on_a_body() {
+    use slabscope::triage::{Look, look};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("body.nrrd");
+    let v = slabscope::volume::phantom::body([64, 64, 96], 3).unwrap();
+    slabscope::volume::io::write_nrrd(&path, &v, slabscope::volume::io::NrrdEncoding::Raw, false)
+        .unwrap();
+    let row = |fast: bool| {
+        let how = Look {
+            load: slabscope::LoadOptions::default(),
+            params: slabscope::AnalysisParams::default(),
+            timeout: std::time::Duration::from_secs(600),
+            fast,
+        };
+        look(&path, &how, &|_| {}, &|e| e.to_string())
+    };
+    let (fast, full) = (row(true), row(false));
+    assert!(fast.error.is_none() && full.error.is_none());
+    assert_eq!(fast.best_axis, full.best_axis);
+    assert_eq!(fast.best_axis, Some([0.0, 0.0, 1.0]), "head to feet");
+    assert_eq!(
+        fast.slabs, full.slabs,
+        "the partition is at full resolution either way"
+    );
+}

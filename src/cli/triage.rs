@@ -4,14 +4,12 @@
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use slabscope::triage::{TriageRow, discover, shard};
-use slabscope::{Error, Monitor, Progress};
+use slabscope::triage::{Look, TriageRow, discover, shard};
+use slabscope::{Error, Progress};
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::progress::Bar;
@@ -39,6 +37,11 @@ pub struct TriageArgs {
     /// `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
     #[arg(long, value_name = "K/N", value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
+    /// The view search on the voxels' own lattice, not the fast path's twice coarser one (which
+    /// is used unless --ray-spacing or --sample-spacing is given, on volumes of 32 voxels a side
+    /// or more).
+    #[arg(long)]
+    pub full: bool,
     /// Stop the analysis of a volume after this many seconds (its row says so).
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = super::args::within(0.1, 86400.0))]
     pub timeout: f64,
@@ -158,45 +161,21 @@ fn volumes(args: &TriageArgs) -> Result<Vec<PathBuf>> {
     })
 }
 
-/// One volume's row: loaded, analysed within the timeout, or the one-line error of either.
+/// One volume's row, errors worded in the CLI's terms and without the path the row names.
 fn look(path: &Path, args: &TriageArgs, progress: &(dyn Fn(f64) + Sync)) -> TriageRow {
     let name = path.display().to_string();
-    // The row names the file: its errors need not.
-    let message = |e: Error| {
+    let describe = |e: Error| {
         let m = super::error_message(&e.into());
         m.strip_prefix(&format!("{name}: "))
             .map_or(m.clone(), str::to_string)
     };
-    let loaded = match slabscope::load(path, &args.load.options()) {
-        Ok(l) => l,
-        Err(e) => return TriageRow::failed(&name, message(e)),
+    let how = Look {
+        load: args.load.options(),
+        params: args.analysis.params(false),
+        timeout: Duration::from_secs_f64(args.timeout),
+        fast: !args.full,
     };
-    let row = TriageRow::loaded(&name, &loaded);
-    // A watchdog raises the cancel flag at the timeout, unless told first that the work is done.
-    let cancel = Arc::new(AtomicBool::new(false));
-    let (done, finished) = std::sync::mpsc::channel::<()>();
-    let watchdog = {
-        let cancel = Arc::clone(&cancel);
-        let timeout = Duration::from_secs_f64(args.timeout);
-        std::thread::spawn(move || {
-            if finished.recv_timeout(timeout).is_err() {
-                cancel.store(true, Ordering::Relaxed);
-            }
-        })
-    };
-    let report = |p: Progress| progress(p.fraction);
-    let monitor = Monitor::new(Some(&cancel), Some(&report));
-    let result = slabscope::analyze(&loaded.volume, &args.analysis.params(false), &monitor);
-    let _ = done.send(());
-    let _ = watchdog.join();
-    match result {
-        Ok(analysis) => row.analysed(&analysis),
-        Err(Error::Cancelled) => row.with_error(format!(
-            "the analysis took longer than the {} s timeout",
-            args.timeout
-        )),
-        Err(e) => row.with_error(message(e)),
-    }
+    slabscope::triage::look(path, &how, progress, &describe)
 }
 
 const CSV_HEADER: [&str; 14] = [

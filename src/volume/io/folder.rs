@@ -27,13 +27,15 @@ pub(crate) fn is_tiff(path: &Path) -> bool {
 }
 
 /// What a folder is: one volume (a stack of two or more TIFF slices and no other volume file
-/// or folder), or a collection of volumes.
+/// or folder), a collection of volumes, or nothing slabscope reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Folder {
     /// A stack of TIFF slices: one volume.
     Slices,
-    /// Anything else: the volumes in it (and below it) are looked at one by one.
+    /// Volume files or folders (or a single TIFF file): looked at one by one.
     Collection,
+    /// Neither a volume file nor a folder in it.
+    Empty,
 }
 
 /// Says what the folder `dir` is.
@@ -53,6 +55,8 @@ pub fn folder_kind(dir: &Path) -> Result<Folder> {
     }
     Ok(if tiffs >= 2 && others == 0 {
         Folder::Slices
+    } else if tiffs + others == 0 {
+        Folder::Empty
     } else {
         Folder::Collection
     })

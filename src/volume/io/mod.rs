@@ -147,12 +147,21 @@ fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
 fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let (format, mut loaded) = if meta.is_dir() {
-        if folder_kind(path)? == Folder::Collection {
-            return Err(Error::format(
-                path,
-                "a folder of volumes, not one stack of TIFF slices: name a volume in it, or \
-                 triage the folder",
-            ));
+        match folder_kind(path)? {
+            Folder::Collection => {
+                return Err(Error::format(
+                    path,
+                    "a folder of volumes, not one stack of TIFF slices: name a volume in it, or \
+                     triage the folder",
+                ));
+            }
+            Folder::Empty => {
+                return Err(Error::format(
+                    path,
+                    "folder holds no .tif or .tiff slices and no volume files",
+                ));
+            }
+            Folder::Slices => {}
         }
         if opts.volume > 0 {
             return Err(data::one_volume(path, 1, opts.volume));

@@ -1,0 +1,56 @@
+//! Times triage of 100 volumes of 128³ (the benchmark): body phantoms with different
+//! seeds written as NRRD to a temporary folder, then walked, loaded and analysed one after the
+//! other as `slabscope triage` does (view search and a 4-slab partition each).
+//!
+//! `cargo run --release --example triage_bench`
+
+use std::time::{Duration, Instant};
+
+use slabscope::AnalysisParams;
+use slabscope::triage::{Look, discover, look};
+use slabscope::volume::io::{NrrdEncoding, write_nrrd};
+use slabscope::volume::phantom;
+use slabscope::{Error, LoadOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let count = 100;
+    let dir = tempfile::tempdir()?;
+    let t = Instant::now();
+    for i in 0..count {
+        let v = phantom::body([128, 128, 128], i as u64 + 1)?;
+        write_nrrd(
+            &dir.path().join(format!("v{i:03}.nrrd")),
+            &v,
+            NrrdEncoding::Raw,
+            false,
+        )?;
+    }
+    println!(
+        "wrote {count} volumes of 128³ in {:.1} s",
+        t.elapsed().as_secs_f64()
+    );
+    let volumes = discover(&[dir.path().to_path_buf()])?;
+    let describe = |e: Error| e.to_string();
+    for fast in [true, false] {
+        let how = Look {
+            load: LoadOptions::default(),
+            params: AnalysisParams::default(),
+            timeout: Duration::from_secs(60),
+            fast,
+        };
+        let t = Instant::now();
+        let mut failed = 0;
+        for path in &volumes {
+            failed += usize::from(look(path, &how, &|_| {}, &describe).error.is_some());
+        }
+        let took = t.elapsed().as_secs_f64();
+        println!(
+            "triage of {} volumes ({}): {took:.1} s ({:.0} ms a volume), {failed} failed, {} threads",
+            volumes.len(),
+            if fast { "fast path" } else { "--full" },
+            took * 1e3 / volumes.len() as f64,
+            rayon::current_num_threads()
+        );
+    }
+    Ok(())
+}
