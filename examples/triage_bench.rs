@@ -37,11 +37,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             params: AnalysisParams::default(),
             timeout: Duration::from_secs(60),
             fast,
+            tile: None,
         };
         let t = Instant::now();
         let mut failed = 0;
         for path in &volumes {
-            failed += usize::from(look(path, &how, &|_| {}, &describe).error.is_some());
+            failed += usize::from(look(path, &how, &|_| {}, &describe).row.error.is_some());
         }
         let took = t.elapsed().as_secs_f64();
         println!(

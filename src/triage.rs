@@ -217,21 +217,33 @@ pub struct Look {
     /// (where the parameters name no spacing and the volume has [`COARSE_MIN_DIM`] voxels a
     /// side); the partition at full resolution.
     pub fast: bool,
+    /// Draw each volume's contact-sheet cell, with tiles of this many pixels.
+    pub tile: Option<u32>,
+}
+
+/// What triage gives of one volume: its row, and its contact-sheet cell when asked for and the
+/// volume could be drawn.
+pub struct Looked {
+    /// The row.
+    pub row: TriageRow,
+    /// The cell.
+    pub cell: Option<tiny_skia::Pixmap>,
 }
 
 /// One volume's row: loaded and analysed as `how` says (stopped at its timeout, the progress
-/// reported as a fraction), or the error of either as `describe` words it.
+/// reported as a fraction), or the error of either as `describe` words it; and its cell.
 pub fn look(
     path: &Path,
     how: &Look,
     progress: &(dyn Fn(f64) + Sync),
     describe: &dyn Fn(Error) -> String,
-) -> TriageRow {
+) -> Looked {
+    let failed = |row: TriageRow| Looked { row, cell: None };
     let (opts, timeout) = (&how.load, how.timeout);
     let name = path.display().to_string();
     let loaded = match load(path, opts) {
         Ok(l) => l,
-        Err(e) => return TriageRow::failed(&name, describe(e)),
+        Err(e) => return failed(TriageRow::failed(&name, describe(e))),
     };
     let row = TriageRow::loaded(&name, &loaded);
     // A watchdog raises the cancel flag at the timeout, unless told first that the work is done.
@@ -255,16 +267,30 @@ pub fn look(
         let coarse = COARSE * crate::geometry::min_spacing(v.spacing());
         (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
     }
-    let result = analyze(v, &params, &monitor);
+    let result = analyze(v, &params, &monitor).and_then(|analysis| {
+        let cell = match how.tile {
+            Some(tile) => Some(crate::render::sheet::cell(
+                v,
+                &analysis.partition,
+                tile,
+                &monitor,
+            )?),
+            None => None,
+        };
+        Ok((analysis, cell))
+    });
     let _ = done.send(());
     let _ = watchdog.join();
     match result {
-        Ok(analysis) => row.analysed(&analysis),
-        Err(Error::Cancelled) => row.with_error(format!(
+        Ok((analysis, cell)) => Looked {
+            row: row.analysed(&analysis),
+            cell,
+        },
+        Err(Error::Cancelled) => failed(row.with_error(format!(
             "the analysis took longer than the {} s timeout",
             timeout.as_secs_f64()
-        )),
-        Err(e) => row.with_error(describe(e)),
+        ))),
+        Err(e) => failed(row.with_error(describe(e))),
     }
 }
 

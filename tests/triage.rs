@@ -237,8 +237,9 @@ fn the_fast_path_finds_the_full_searchs_axis_on_a_body() {
             params: slabscope::AnalysisParams::default(),
             timeout: std::time::Duration::from_secs(600),
             fast,
+            tile: None,
         };
-        look(&path, &how, &|_| {}, &|e| e.to_string())
+        look(&path, &how, &|_| {}, &|e| e.to_string()).row
     };
     let (fast, full) = (row(true), row(false));
     assert!(fast.error.is_none() && full.error.is_none());
@@ -247,5 +248,39 @@ fn the_fast_path_finds_the_full_searchs_axis_on_a_body() {
     assert_eq!(
         fast.slabs, full.slabs,
         "the partition is at full resolution either way"
+    );
+}
+
+#[test]
+fn the_contact_sheet_has_a_cell_per_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    archive(dir.path());
+    let root = dir.path().to_str().unwrap();
+    let out = dir.path().join("sheet.png");
+    let o = out.to_str().unwrap();
+    let (code, stdout, stderr) =
+        run(&["triage", root, "--slabs", "2", "--sheet", o, "--tile", "64"]);
+    assert_eq!(code, 1, "{stderr}");
+    assert_eq!(stdout.lines().count(), 9);
+    // 8 volumes, cells of 128x64 in 2 columns and 4 rows, 6 pixels apart.
+    let png = tiny_skia::Pixmap::load_png(&out).unwrap();
+    assert_eq!((png.width(), png.height()), (2 * 134 + 6, 4 * 70 + 6));
+    // The first volume (a.nrrd) drew; the broken file's cell (the fifth) is empty.
+    let pixel = |x: u32, y: u32| {
+        let i = 4 * (y * png.width() + x) as usize;
+        [png.data()[i], png.data()[i + 1], png.data()[i + 2]]
+    };
+    assert_eq!(
+        pixel(6 + 100, 2 * 70 + 6 + 40),
+        [30, 30, 38],
+        "an empty cell"
+    );
+    assert_ne!(pixel(6 + 64 + 20, 6 + 20), [30, 30, 38], "a drawn cell");
+    // An existing sheet is not overwritten unasked, and nothing is looked at.
+    let (code, stdout, stderr) = run(&["triage", root, "--sheet", o]);
+    assert_eq!(code, 2);
+    assert!(
+        stdout.is_empty() && stderr.contains("already exists"),
+        "{stderr}"
     );
 }

@@ -8,7 +8,8 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use slabscope::triage::{Look, TriageRow, discover, shard};
+use slabscope::render::{ImageOutput, encode, sheet};
+use slabscope::triage::{Look, Looked, TriageRow, discover, shard};
 use slabscope::{Error, Progress};
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -42,6 +43,16 @@ pub struct TriageArgs {
     /// or more).
     #[arg(long)]
     pub full: bool,
+    /// Also write a contact sheet: per volume, numbered in row order, its exploded view and its
+    /// three orthogonal mid slices.
+    #[arg(long, value_name = "OUT.png")]
+    pub sheet: Option<PathBuf>,
+    /// Size of the sheet's pictures, pixels.
+    #[arg(long, value_name = "PIXELS", default_value_t = 160, value_parser = clap::value_parser!(u32).range(32..=1024))]
+    pub tile: u32,
+    /// Overwrite the sheet if it exists.
+    #[arg(long)]
+    pub force: bool,
     /// Stop the analysis of a volume after this many seconds (its row says so).
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = super::args::within(0.1, 86400.0))]
     pub timeout: f64,
@@ -95,7 +106,7 @@ fn read_manifest(path: &Path) -> Result<Vec<PathBuf>> {
 /// Runs triage; the exit status: 0 when every volume was looked at, 1 when some failed (their
 /// rows printed), 2 for an error before any row.
 pub fn run(args: &TriageArgs) -> Result<u8> {
-    let volumes = match volumes(args) {
+    let volumes = match volumes(args).and_then(|v| check_sheet(args, &v).map(|()| v)) {
         Ok(v) => v,
         Err(e) => {
             eprintln!("slabscope: error: {}", super::error_message(&e));
@@ -124,6 +135,7 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
     }
     let bar = Bar::new();
     let mut failed = 0;
+    let mut cells = Vec::new();
     for (i, path) in volumes.iter().enumerate() {
         let at = |fraction: f64| {
             bar.set(Progress {
@@ -132,8 +144,11 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
             });
         };
         at(0.0);
-        let row = look(path, args, &at);
+        let Looked { row, cell } = look(path, args, &at);
         failed += usize::from(row.error.is_some());
+        if args.sheet.is_some() {
+            cells.push(cell);
+        }
         let line = if args.json {
             serde_json::to_string(&row)?
         } else if args.csv {
@@ -144,7 +159,30 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
         outln!("{line}");
     }
     drop(bar);
+    if let Some(out) = &args.sheet {
+        let picture = sheet::sheet(&cells, args.tile, sheet_columns(cells.len()))?;
+        super::write_new(
+            out,
+            &encode(&picture, ImageOutput::for_path(out)?)?,
+            args.force,
+        )?;
+    }
     Ok(u8::from(failed > 0))
+}
+
+/// Columns of the sheet: about as many as rows (cells are twice as wide as high).
+fn sheet_columns(count: usize) -> usize {
+    ((count as f64 / 2.0).sqrt().ceil() as usize).max(1)
+}
+
+/// Before any work: the sheet can be written (a new picture, not an input) and will fit.
+fn check_sheet(args: &TriageArgs, volumes: &[PathBuf]) -> Result<()> {
+    if let Some(out) = &args.sheet {
+        ImageOutput::for_path(out)?;
+        super::check_outputs(&[out], volumes, args.force)?;
+        sheet::check_sheet(volumes.len(), args.tile, sheet_columns(volumes.len()))?;
+    }
+    Ok(())
 }
 
 /// The volumes a run takes: from the manifest or the walk, sorted, then its shard.
@@ -161,8 +199,9 @@ fn volumes(args: &TriageArgs) -> Result<Vec<PathBuf>> {
     })
 }
 
-/// One volume's row, errors worded in the CLI's terms and without the path the row names.
-fn look(path: &Path, args: &TriageArgs, progress: &(dyn Fn(f64) + Sync)) -> TriageRow {
+/// One volume's row (and cell), errors worded in the CLI's terms and without the path the row
+/// names.
+fn look(path: &Path, args: &TriageArgs, progress: &(dyn Fn(f64) + Sync)) -> Looked {
     let name = path.display().to_string();
     let describe = |e: Error| {
         let m = super::error_message(&e.into());
@@ -174,6 +213,7 @@ fn look(path: &Path, args: &TriageArgs, progress: &(dyn Fn(f64) + Sync)) -> Tria
         params: args.analysis.params(false),
         timeout: Duration::from_secs_f64(args.timeout),
         fast: !args.full,
+        tile: args.sheet.as_ref().map(|_| args.tile),
     };
     slabscope::triage::look(path, &how, progress, &describe)
 }

@@ -10,6 +10,7 @@
 mod camera;
 mod layout;
 mod overlay;
+pub mod sheet;
 pub mod slice;
 mod transfer;
 
