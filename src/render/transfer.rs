@@ -589,6 +589,9 @@ fn check_step(step: f64, reference: f64) -> Result<()> {
     }
 }
 
+/// Distinct values with their counts, and how many voxels equal the one before them.
+type Seen = (Vec<(f32, u64)>, u64);
+
 /// The distinct values of `volume` with their voxel counts, when it looks like a label volume:
 /// integer voxels with between 2 and [`MAX_LABELS`] distinct values, in regions (most voxels
 /// equal to their neighbour).
@@ -597,7 +600,6 @@ pub fn label_values(volume: &Volume) -> Option<Vec<(f32, u64)>> {
     if !volume.voxel_type().is_integer() {
         return None;
     }
-    type Seen = (Vec<(f32, u64)>, u64);
     let merge = |(mut a, ra): Seen, (b, rb): Seen| -> Option<Seen> {
         for (v, n) in b {
             match a.iter_mut().find(|e| e.0 == v) {
