@@ -2,6 +2,7 @@
 //! dispatches: each pane owns its state, and the app brings the panes up to date when the
 //! partition changes.
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use slabscope::render::{Colormap, Gap, Mode, Preset};
@@ -12,6 +13,7 @@ use super::event::{
     Action, Ask, Effect, ExportRequest, Job, JobMsg, Load, RenderRequest, SliceRequest,
 };
 use super::panes::curves::{Curves, CurvesPane};
+use super::panes::files::FilesPane;
 use super::panes::preview::PreviewPane;
 use super::panes::slabs::{SlabTable, SlabsPane};
 use super::panes::status::{Prompt, StatusBar, settings_text};
@@ -84,12 +86,17 @@ pub struct App {
     pub status: StatusBar,
     /// An export under way, with its progress.
     export: Load<()>,
+    /// A folder's volumes, when the TUI was opened on one.
+    pub files: Option<FilesPane>,
+    /// The screen, for a fresh start on another volume.
+    screen: Screen,
 }
 
 impl App {
     /// A fresh app for the volume called `name`; the first effects load it.
     pub fn new(name: String, params: AnalysisParams, screen: Screen) -> (Self, Vec<Effect>) {
         let theme = screen.theme;
+        let kept = screen.clone();
         let mut app = Self {
             views: ViewsPane::new(&name, theme),
             slabs: SlabsPane::new(theme),
@@ -105,6 +112,8 @@ impl App {
             help: false,
             quit: false,
             export: Load::Idle,
+            files: None,
+            screen: kept,
         };
         app.preview.hide = screen.hide;
         app.preview.graphics = screen.graphics;
@@ -112,9 +121,109 @@ impl App {
         (app, vec![Effect::Load])
     }
 
+    /// A fresh app for the volumes of the folder `root` (`paths`, sorted, at least one): the
+    /// first opens, the list shows, and triage fills it in the background.
+    pub fn for_folder(
+        root: PathBuf,
+        paths: Vec<PathBuf>,
+        params: AnalysisParams,
+        screen: Screen,
+    ) -> (Self, Vec<Effect>) {
+        let name = paths[0].display().to_string();
+        let (mut app, mut effects) = Self::new(name, params, screen);
+        effects.push(Effect::Triage(paths.clone(), Box::new(app.params.clone())));
+        app.files = Some(FilesPane::new(root, paths, app.theme));
+        app.sync_focus();
+        (app, effects)
+    }
+
+    /// Opens volume `i` of the folder: every pane starts afresh (the look and the list stay).
+    fn open(&mut self, i: usize) -> Vec<Effect> {
+        let Some(mut files) = self.files.take() else {
+            return vec![];
+        };
+        if i >= files.paths.len() {
+            self.files = Some(files);
+            return vec![];
+        }
+        let path = files.paths[i].clone();
+        (files.open, files.row, files.shown) = (i, i, false);
+        let look = self.preview.look;
+        let cells = self.preview.cells;
+        let (fresh, effects) = Self::new(
+            path.display().to_string(),
+            self.params.clone(),
+            self.screen.clone(),
+        );
+        *self = fresh;
+        self.preview.look = look;
+        self.preview.cells = cells;
+        self.status.message = Some(format!(
+            "volume {} of {}: {}",
+            i + 1,
+            files.paths.len(),
+            files.name(i)
+        ));
+        self.files = Some(files);
+        self.sync_focus();
+        let mut out = vec![Effect::Cancel, Effect::Open(path)];
+        out.extend(effects);
+        out
+    }
+
+    /// While the file list shows, the keys move in it, open, or close it.
+    fn on_files(&mut self, action: Action) -> Result<Vec<Effect>, Action> {
+        let Some(files) = self.files.as_mut() else {
+            return Err(action);
+        };
+        match action {
+            Action::Page(by) => {
+                let next = (files.open as isize + by).clamp(0, files.paths.len() as isize - 1);
+                return if next as usize == files.open {
+                    Ok(vec![])
+                } else {
+                    Ok(self.open(next as usize))
+                };
+            }
+            Action::ToggleFiles => {
+                files.shown = !files.shown;
+                files.row = files.open;
+                let shown = files.shown;
+                self.preview.covered = shown || self.help;
+                return Ok(self.render_if(!shown));
+            }
+            _ if !files.shown => return Err(action),
+            Action::Move(by) | Action::Sideways(by) => {
+                let last = files.paths.len() as isize - 1;
+                files.row = (files.row as isize + by).clamp(0, last) as usize;
+            }
+            Action::Select => {
+                let row = files.row;
+                return Ok(self.open(row));
+            }
+            Action::Escape => {
+                files.shown = false;
+                self.preview.covered = self.help;
+                return Ok(self.render_if(true));
+            }
+            Action::Job(_) | Action::PreviewArea(..) | Action::Quit => return Err(action),
+            _ => {}
+        }
+        Ok(vec![])
+    }
+
+    /// A render when `yes` (the picture was covered and shows again).
+    fn render_if(&mut self, yes: bool) -> Vec<Effect> {
+        if yes { self.render() } else { vec![] }
+    }
+
     /// Applies `action`; returns what the event loop must do.
     pub fn update(&mut self, action: Action) -> Vec<Effect> {
         let action = match self.on_prompt(action) {
+            Ok(effects) => return effects,
+            Err(action) => action,
+        };
+        let action = match self.on_files(action) {
             Ok(effects) => return effects,
             Err(action) => action,
         };
@@ -534,6 +643,12 @@ impl App {
                 }
                 vec![]
             }
+            JobMsg::Triaged(i, row) => {
+                if let Some(slot) = self.files.as_mut().and_then(|f| f.rows.get_mut(i)) {
+                    *slot = Some(*row);
+                }
+                vec![]
+            }
             JobMsg::Exported(result) => {
                 self.export = Load::Idle;
                 self.status.message = Some(match result {
@@ -607,7 +722,7 @@ impl App {
         self.slabs.focused = self.focus == Pane::Slabs;
         self.curves.focused = self.focus == Pane::Curves;
         self.preview.focused = self.focus == Pane::Preview;
-        self.preview.covered = self.help;
+        self.preview.covered = self.help || self.files.as_ref().is_some_and(|f| f.shown);
     }
 }
 

@@ -94,6 +94,8 @@ pub enum JobMsg {
     Rendered(u64, Result<Box<Rendered>, String>),
     /// An export finished: what was written, or why not.
     Exported(Result<String, String>),
+    /// Background triage's row of volume `index` of the folder.
+    Triaged(usize, Box<slabscope::triage::TriageRow>),
 }
 
 /// A picture for the preview pane, and the slice view's readout.
@@ -149,6 +151,8 @@ pub enum Action {
     ToggleMode,
     /// The slice view or the exploded view.
     ToggleSlices,
+    /// Show or hide a folder's file list.
+    ToggleFiles,
     /// Multiply the window's width by this factor.
     WindowWidth(f32),
     /// Move the window's level by this fraction of its width.
@@ -296,6 +300,11 @@ pub enum Effect {
     Render(Box<RenderRequest>),
     /// Write exports.
     Export(Box<ExportRequest>),
+    /// Load this volume instead (a folder's next volume).
+    Open(std::path::PathBuf),
+    /// Triage these volumes in the background with these parameters, one row each as it
+    /// completes.
+    Triage(Vec<std::path::PathBuf>, Box<slabscope::AnalysisParams>),
     /// Cancel running jobs.
     Cancel,
     /// Leave.
@@ -310,6 +319,8 @@ impl std::fmt::Debug for Effect {
             Self::Analyze(g, axis, _) => write!(f, "Analyze({g}, {axis:?})"),
             Self::Render(r) => write!(f, "Render({})", r.generation),
             Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),
+            Self::Open(p) => write!(f, "Open({})", p.display()),
+            Self::Triage(p, _) => write!(f, "Triage({} volumes)", p.len()),
             Self::Cancel => write!(f, "Cancel"),
             Self::Quit => write!(f, "Quit"),
         }

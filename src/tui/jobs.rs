@@ -107,6 +107,39 @@ impl Jobs {
                     JobMsg::Analysis(generation, result.map(Arc::new).map_err(|e| e.to_string()))
                 });
             }
+            Effect::Open(path) => {
+                // The next volume: its own load, views, histories and renders.
+                self.source = Some(path);
+                self.volume = None;
+                self.renders = None;
+            }
+            Effect::Triage(paths, params) => {
+                let (events, load) = (self.events.clone(), self.load.clone());
+                std::thread::spawn(move || {
+                    let how = slabscope::triage::Look {
+                        load,
+                        params: *params,
+                        timeout: std::time::Duration::from_secs(60),
+                        fast: true,
+                        tile: None,
+                    };
+                    for (i, path) in paths.iter().enumerate() {
+                        // The list names the file: its errors need not.
+                        let prefix = format!("{}: ", path.display());
+                        let describe = |e: slabscope::Error| {
+                            let m = e.to_string();
+                            m.strip_prefix(&prefix).map_or(m.clone(), str::to_string)
+                        };
+                        let row = slabscope::triage::look(path, &how, &|_| {}, &describe).row;
+                        if events
+                            .send(Event::Job(JobMsg::Triaged(i, Box::new(row))))
+                            .is_err()
+                        {
+                            break;
+                        }
+                    }
+                });
+            }
             Effect::Render(request) => {
                 if let Some(tx) = &self.renders {
                     self.render_cancel.store(true, Ordering::Relaxed);

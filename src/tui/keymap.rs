@@ -54,6 +54,7 @@ pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {
         KeyCode::Char('S') => Action::Spread(0.1),
         KeyCode::Char('r') => Action::ToggleMode,
         KeyCode::Char('v') => Action::ToggleSlices,
+        KeyCode::Char('F') => Action::ToggleFiles,
         KeyCode::Char('w') => Action::WindowWidth(0.8),
         KeyCode::Char('W') => Action::WindowWidth(1.25),
         KeyCode::Char('<') => Action::WindowLevel(-0.05),
@@ -90,7 +91,7 @@ pub const HELP: &[(&str, &str)] = &[
     ("w W < >", "window narrower / wider, level lower / higher"),
     ("f c", "transfer function (those that fit), colours"),
     ("o P", "selected slab alone; perspective"),
-    ("e", "export PNG, JSON and label NRRD"),
+    ("e  F", "export; a folder's file list (PgUp PgDn: volumes)"),
     ("Esc", "cancel work, close help"),
     ("? q", "help, quit"),
 ];

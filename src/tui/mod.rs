@@ -27,6 +27,7 @@ use crossterm::terminal::{
 };
 use ratatui::Terminal;
 use ratatui::backend::{Backend, CrosstermBackend};
+use slabscope::triage::{Folder, discover, folder_kind};
 use slabscope::{AnalysisParams, LoadOptions};
 
 use crate::term::{self, Protocol};
@@ -63,6 +64,21 @@ pub fn run(options: Options) -> Result<()> {
     if let Some(path) = &file {
         slabscope::volume::io::check_input(path)?;
     }
+    // A folder of volumes opens as a file list, its first volume open.
+    let folder = match &file {
+        Some(dir) if dir.is_dir() && folder_kind(dir)? != Folder::Slices => {
+            let paths = discover(std::slice::from_ref(dir))?;
+            if paths.is_empty() {
+                bail!("{}: holds no volume slabscope reads", dir.display());
+            }
+            Some((dir.clone(), paths))
+        }
+        _ => None,
+    };
+    let file = match &folder {
+        Some((_, paths)) => Some(paths[0].clone()),
+        None => file,
+    };
     if !std::io::stdout().is_terminal() || term::tty_input().is_err() {
         bail!(
             "the TUI needs a terminal, and this has none (over SSH, `ssh -t`); \
@@ -105,11 +121,15 @@ pub fn run(options: Options) -> Result<()> {
             graphics: caps.graphics.name(),
         };
         let mut jobs = Jobs::new(tx, caps, file, load);
-        let (mut app, effects) = App::new(name.clone(), analysis, screen);
+        let (mut app, effects) = match folder {
+            Some((root, paths)) => App::for_folder(root, paths, analysis, screen),
+            None => App::new(name.clone(), analysis, screen),
+        };
         run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)?;
         // The user saw why; the exit status says so too.
         match &app.volume {
-            event::Load::Failed(e) => bail!("{e}"),
+            // A folder's volumes are browsed: one that fails is a line in the list.
+            event::Load::Failed(e) if app.files.is_none() => bail!("{e}"),
             _ => Ok(()),
         }
     })();

@@ -84,6 +84,9 @@ pub fn draw(frame: &mut Frame, app: &App) {
     frame.render_widget(&app.curves, a.curves);
     frame.render_widget(&app.preview, a.preview);
     frame.render_widget(&app.status, a.status);
+    if let Some(files) = app.files.as_ref().filter(|f| f.shown) {
+        frame.render_widget(files, area);
+    }
     if app.help {
         frame.render_widget(&panes::help::Help { theme: app.theme }, area);
     }

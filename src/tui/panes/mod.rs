@@ -1,6 +1,7 @@
 //! The panes: each owns its state and renders it (`impl Widget for &Pane`).
 
 pub mod curves;
+pub mod files;
 pub mod help;
 pub mod preview;
 pub mod slabs;
