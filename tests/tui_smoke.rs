@@ -99,3 +99,54 @@ fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
         "the alternate screen is gone:\n{screen}"
     );
 }
+
+#[test]
+fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
+    if Command::new("tmux").arg("-V").output().is_err() {
+        eprintln!("SKIPPED: tmux is not installed, so the folder smoke test cannot run");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    for name in ["ramp_u8.nii", "ramp_i16.mha", "ramp_u16_be.nrrd"] {
+        std::fs::copy(data.join(name), dir.path().join(name)).unwrap();
+    }
+    std::fs::write(dir.path().join("zz_broken.nii"), b"no volume").unwrap();
+    let tmux = Tmux {
+        socket: format!("slabscope-folder-{}", std::process::id()),
+    };
+    let command = format!(
+        "{} {} --protocol blocks --slabs 2; echo EXITED $?; sleep 60",
+        env!("CARGO_BIN_EXE_slabscope"),
+        dir.path().display()
+    );
+    tmux.run(&[
+        "new-session",
+        "-d",
+        "-s",
+        "smoke",
+        "-x",
+        "120",
+        "-y",
+        "32",
+        &command,
+    ]);
+    // The list, filled by triage: three volumes and the broken file's error.
+    let screen = tmux.wait_for("(4 looked at)", 120);
+    assert!(
+        screen.contains("ramp_i16.mha") && screen.contains("ramp_u8.nii"),
+        "{screen}"
+    );
+    assert!(
+        screen.contains("zz_broken.nii  error: the name says volume"),
+        "{screen}"
+    );
+    // Enter on the second line opens it; PgDn the next.
+    tmux.keys("Down");
+    tmux.keys("Enter");
+    tmux.wait_for("volume 2 of 4: ramp_u16_be.nrrd", 30);
+    tmux.keys("NPage");
+    tmux.wait_for("volume 3 of 4: ramp_u8.nii", 30);
+    tmux.keys("q");
+    tmux.wait_for("EXITED 0", 30);
+}

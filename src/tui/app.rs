@@ -132,7 +132,13 @@ impl App {
         let name = paths[0].display().to_string();
         let (mut app, mut effects) = Self::new(name, params, screen);
         effects.push(Effect::Triage(paths.clone(), Box::new(app.params.clone())));
-        app.files = Some(FilesPane::new(root, paths, app.theme));
+        let files = FilesPane::new(root, paths, app.theme);
+        app.status.volume = Some(format!(
+            "volume 1 of {}: {}",
+            files.paths.len(),
+            files.name(0)
+        ));
+        app.files = Some(files);
         app.sync_focus();
         (app, effects)
     }
@@ -158,7 +164,7 @@ impl App {
         *self = fresh;
         self.preview.look = look;
         self.preview.cells = cells;
-        self.status.message = Some(format!(
+        self.status.volume = Some(format!(
             "volume {} of {}: {}",
             i + 1,
             files.paths.len(),

@@ -40,6 +40,8 @@ pub struct StatusBar {
     /// What the user should know about the terminal (how to let images through tmux), shown
     /// for as long as it holds.
     pub notice: Option<String>,
+    /// Which of a folder's volumes is open (`2/12 name`).
+    pub volume: Option<String>,
     /// Colours.
     pub theme: Theme,
 }
@@ -56,6 +58,7 @@ impl StatusBar {
             jobs: Vec::new(),
             settings: settings_text(params),
             notice: None,
+            volume: None,
             theme,
         }
     }
@@ -89,6 +92,9 @@ impl StatusBar {
             format!(" {method} "),
             self.theme.selected().add_modifier(Modifier::BOLD),
         )];
+        if let Some(v) = &self.volume {
+            parts.push(Span::styled(format!(" {v} "), self.theme.fg(Color::Green)));
+        }
         if let Some(p) = &self.position {
             parts.push(Span::raw(format!(" {p} ")));
         }
