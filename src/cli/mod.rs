@@ -96,6 +96,18 @@ pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
     Ok(loaded)
 }
 
+/// The picture format the name of `out` asks for, after checking, before any work, that `out`
+/// may be written by a command reading `input`.
+pub fn picture_output(
+    out: &Path,
+    input: &Path,
+    force: bool,
+) -> Result<slabscope::render::ImageOutput> {
+    let format = slabscope::render::ImageOutput::for_path(out)?;
+    check_outputs(&[out], &[input.to_path_buf()], force)?;
+    Ok(format)
+}
+
 /// Checks, before any work, the files a command will write: each may be written (a new file,
 /// or with `--force` an existing regular file, in a folder that takes new files), none is one of
 /// `inputs` (`--force` or not), and no two are the same file.

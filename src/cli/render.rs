@@ -11,8 +11,8 @@ use slabscope::Loaded;
 use slabscope::geometry::min_spacing;
 use slabscope::partition::Partition;
 use slabscope::render::{
-    CameraParams, Colormap, Gap, ImageOutput, Layout, Look, Mode, Preset, RenderParams, Renderer,
-    Stack, encode, slice,
+    CameraParams, Colormap, Gap, Layout, Look, Mode, Preset, RenderParams, Renderer, Stack, encode,
+    slice,
 };
 use tiny_skia::Pixmap;
 
@@ -321,12 +321,7 @@ fn render_file(
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {
-    let format = ImageOutput::for_path(&args.output)?;
-    super::check_outputs(
-        &[&args.output],
-        std::slice::from_ref(&args.file),
-        args.force,
-    )?;
+    let format = super::picture_output(&args.output, &args.file, args.force)?;
     let image = render_file(
         &args.file,
         &args.scene,

@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use slabscope::geometry::min_spacing;
 use slabscope::partition::slice_geometry;
-use slabscope::render::{ImageOutput, Renderer, Stack, encode, slice};
+use slabscope::render::{Renderer, Stack, encode, slice};
 use slabscope::view::search;
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -43,12 +43,7 @@ pub struct SliceArgs {
 }
 
 pub fn run(args: &SliceArgs) -> Result<()> {
-    let format = ImageOutput::for_path(&args.output)?;
-    super::check_outputs(
-        &[&args.output],
-        std::slice::from_ref(&args.file),
-        args.force,
-    )?;
+    let format = super::picture_output(&args.output, &args.file, args.force)?;
     let loaded = super::load(&args.file, &args.load)?;
     super::check_outputs(&[&args.output], &loaded.sources, args.force)?;
     let volume = &loaded.volume;
