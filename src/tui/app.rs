@@ -649,6 +649,8 @@ impl App {
                 }
                 vec![]
             }
+            // The jobs unwrap these before the app sees them.
+            JobMsg::Epoch(..) => vec![],
             JobMsg::Triaged(i, row) => {
                 if let Some(slot) = self.files.as_mut().and_then(|f| f.rows.get_mut(i)) {
                     *slot = Some(*row);

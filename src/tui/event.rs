@@ -96,6 +96,9 @@ pub enum JobMsg {
     Exported(Result<String, String>),
     /// Background triage's row of volume `index` of the folder.
     Triaged(usize, Box<slabscope::triage::TriageRow>),
+    /// A message of a job started for the volume open in `epoch` (the jobs drop it once
+    /// another volume is open; the app never sees this wrapper).
+    Epoch(u64, Box<JobMsg>),
 }
 
 /// A picture for the preview pane, and the slice view's readout.

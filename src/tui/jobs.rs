@@ -36,6 +36,8 @@ pub struct Jobs {
     source: Option<PathBuf>,
     load: LoadOptions,
     volume: Option<Arc<Volume>>,
+    /// Which volume is open: one more at each [`Effect::Open`].
+    epoch: u64,
 }
 
 impl Jobs {
@@ -55,17 +57,18 @@ impl Jobs {
             source,
             load,
             volume: None,
+            epoch: 0,
         }
     }
 
     /// Sees a message before the app does: a loaded volume starts the render worker.
-    pub fn observe(&mut self, msg: &JobMsg) {
+    fn observe(&mut self, msg: &JobMsg) {
         if let JobMsg::Loaded(Ok((volume, _))) = msg {
             self.volume = Some(Arc::clone(volume));
             self.renders = Some(start_renderer(
                 Arc::clone(volume),
                 self.caps.clone(),
-                self.events.clone(),
+                (self.events.clone(), self.epoch),
                 Arc::clone(&self.render_cancel),
             ));
         }
@@ -108,7 +111,9 @@ impl Jobs {
                 });
             }
             Effect::Open(path) => {
-                // The next volume: its own load, views, histories and renders.
+                // The next volume: its own load, views, histories and renders; what the jobs of
+                // the last one still send is dropped.
+                self.epoch += 1;
                 self.source = Some(path);
                 self.volume = None;
                 self.renders = None;
@@ -166,15 +171,27 @@ impl Jobs {
 
     /// Runs `work` on its own thread with a monitor that reports `job`'s progress.
     fn spawn(&self, job: Job, work: impl FnOnce(&Monitor) -> JobMsg + Send + 'static) {
-        let (events, cancel) = (self.events.clone(), Arc::clone(&self.cancel));
+        let (events, cancel, epoch) = (self.events.clone(), Arc::clone(&self.cancel), self.epoch);
         std::thread::spawn(move || {
-            let progress = |p: Progress| {
-                let _ = events.send(Event::Job(JobMsg::Progress(job, p)));
+            let send = |msg: JobMsg| {
+                let _ = events.send(Event::Job(JobMsg::Epoch(epoch, Box::new(msg))));
             };
+            let progress = |p: Progress| send(JobMsg::Progress(job, p));
             let monitor = Monitor::new(Some(&cancel), Some(&progress));
-            let msg = work(&monitor);
-            let _ = events.send(Event::Job(msg));
+            send(work(&monitor));
         });
+    }
+
+    /// The message the app should see of `msg`: none when it belongs to a volume no longer
+    /// open.
+    pub fn admit(&mut self, msg: JobMsg) -> Option<JobMsg> {
+        let msg = match msg {
+            JobMsg::Epoch(epoch, _) if epoch != self.epoch => return None,
+            JobMsg::Epoch(_, inner) => *inner,
+            msg => msg,
+        };
+        self.observe(&msg);
+        Some(msg)
     }
 }
 
@@ -248,11 +265,12 @@ fn free_name(stem: &str, ext: &str) -> PathBuf {
 fn start_renderer(
     volume: Arc<Volume>,
     caps: Caps,
-    events: Sender<Event>,
+    (events, epoch): (Sender<Event>, u64),
     cancel: Arc<AtomicBool>,
 ) -> Sender<RenderRequest> {
     let (tx, rx) = channel::<RenderRequest>();
     std::thread::spawn(move || {
+        let events = EpochSender { events, epoch };
         let renderer = match Renderer::new(&volume) {
             Ok(r) => r,
             Err(e) => {
@@ -280,6 +298,23 @@ fn start_renderer(
         }
     });
     tx
+}
+
+/// Sends a volume's messages marked with its epoch.
+struct EpochSender {
+    events: Sender<Event>,
+    epoch: u64,
+}
+
+impl EpochSender {
+    fn send(&self, event: Event) -> Result<(), std::sync::mpsc::SendError<Event>> {
+        match event {
+            Event::Job(msg) => self
+                .events
+                .send(Event::Job(JobMsg::Epoch(self.epoch, Box::new(msg)))),
+            other => self.events.send(other),
+        }
+    }
 }
 
 /// Waits for a request, then takes the newest one queued.
@@ -524,6 +559,20 @@ mod tests {
     use super::*;
     use crate::term::Caps;
     use crate::tui::event::Look;
+
+    #[test]
+    fn messages_of_a_volume_no_longer_open_are_dropped() {
+        let (tx, _rx) = channel();
+        let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
+        let done = |epoch| JobMsg::Epoch(epoch, Box::new(JobMsg::Exported(Ok("x".into()))));
+        assert!(matches!(jobs.admit(done(0)), Some(JobMsg::Exported(_))));
+        jobs.run(Effect::Open(PathBuf::from("next.nii")));
+        assert!(jobs.admit(done(0)).is_none(), "the last volume's");
+        assert!(matches!(jobs.admit(done(1)), Some(JobMsg::Exported(_))));
+        // The folder's triage rows are for every volume: never dropped.
+        let row = slabscope::triage::TriageRow::failed("a", "b".into());
+        assert!(jobs.admit(JobMsg::Triaged(0, Box::new(row))).is_some());
+    }
 
     /// Not a test but a measurement: `cargo test --release --bin slabscope preview_timing --
     /// --ignored --nocapture` prints, for the built-in dataset, the time to the first image

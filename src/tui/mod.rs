@@ -166,8 +166,10 @@ fn spawn_input(tx: Sender<Event>) {
 pub trait Runner {
     /// Carries out `effect`.
     fn run(&mut self, effect: Effect);
-    /// Sees a job message before the app does.
-    fn observe(&mut self, _msg: &JobMsg) {}
+    /// Sees a job message before the app does: the message the app gets, if any.
+    fn admit(&mut self, msg: JobMsg) -> Option<JobMsg> {
+        Some(msg)
+    }
 }
 
 impl Runner for Jobs {
@@ -175,8 +177,8 @@ impl Runner for Jobs {
         Jobs::run(self, effect);
     }
 
-    fn observe(&mut self, msg: &JobMsg) {
-        Jobs::observe(self, msg);
+    fn admit(&mut self, msg: JobMsg) -> Option<JobMsg> {
+        Jobs::admit(self, msg)
     }
 }
 
@@ -211,10 +213,7 @@ pub fn handle(app: &mut App, runner: &mut impl Runner, event: Event) {
     let action = match event {
         Event::Key(key) => keymap::action(key, app.status.prompt.is_some()),
         Event::Resize => None,
-        Event::Job(msg) => {
-            runner.observe(&msg);
-            Some(Action::Job(msg))
-        }
+        Event::Job(msg) => runner.admit(msg).map(Action::Job),
     };
     if let Some(action) = action {
         dispatch(app, runner, action);
