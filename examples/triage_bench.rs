@@ -2,12 +2,13 @@
 //! seeds written as NRRD to a temporary folder, then walked, loaded and analysed one after the
 //! other as `slabscope triage` does (view search and a 4-slab partition each).
 //!
-//! `cargo run --release --example triage_bench`
+//! `cargo run --release --example triage_bench` (as `slabscope triage` does: two volumes at a
+//! time; also one at a time, and the full search)
 
 use std::time::{Duration, Instant};
 
 use slabscope::AnalysisParams;
-use slabscope::triage::{Look, discover, look};
+use slabscope::triage::{Look, discover, look_all};
 use slabscope::volume::io::{NrrdEncoding, write_nrrd};
 use slabscope::volume::phantom;
 use slabscope::{Error, LoadOptions};
@@ -30,8 +31,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t.elapsed().as_secs_f64()
     );
     let volumes = discover(&[dir.path().to_path_buf()])?;
-    let describe = |e: Error| e.to_string();
-    for fast in [true, false] {
+    let describe = |_: &std::path::Path, e: Error| e.to_string();
+    for (fast, workers) in [(true, 2), (true, 1), (false, 2)] {
         let how = Look {
             load: LoadOptions::default(),
             params: AnalysisParams::default(),
@@ -41,12 +42,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let t = Instant::now();
         let mut failed = 0;
-        for path in &volumes {
-            failed += usize::from(look(path, &how, &|_| {}, &describe).row.error.is_some());
-        }
+        look_all(&volumes, &how, workers, &describe, |_, looked| {
+            failed += usize::from(looked.row.error.is_some());
+        });
         let took = t.elapsed().as_secs_f64();
         println!(
-            "triage of {} volumes ({}): {took:.1} s ({:.0} ms a volume), {failed} failed, {} threads",
+            "triage of {} volumes ({}, {workers} at a time): {took:.1} s ({:.0} ms a volume), \
+             {failed} failed, {} threads",
             volumes.len(),
             if fast { "fast path" } else { "--full" },
             took * 1e3 / volumes.len() as f64,

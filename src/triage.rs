@@ -4,8 +4,8 @@
 //! along it.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, PoisonError, RwLock};
 use std::time::Duration;
 
 use serde::Serialize;
@@ -292,6 +292,67 @@ pub fn look(
         ))),
         Err(e) => failed(row.with_error(describe(e))),
     }
+}
+
+/// Looks at every one of `volumes` as `how` says, `workers` at a time, and hands the results to
+/// `emit` in order, as they complete. The volumes looked at together share the memory budget:
+/// each loads within its share, and one that needs more is looked at again alone, with the
+/// whole budget. `describe` words an error of a volume.
+pub fn look_all(
+    volumes: &[PathBuf],
+    how: &Look,
+    workers: usize,
+    describe: &(dyn Fn(&Path, Error) -> String + Sync),
+    mut emit: impl FnMut(usize, Looked),
+) {
+    let workers = workers.min(volumes.len()).max(1);
+    let next = AtomicUsize::new(0);
+    // Read: looking within a share of the budget; write: alone, with all of it.
+    let gate = RwLock::new(());
+    let shared = Look {
+        load: LoadOptions {
+            max_memory: how.load.max_memory / workers as u64,
+            ..how.load.clone()
+        },
+        ..how.clone()
+    };
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Looked)>();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            let (tx, next, gate, shared) = (tx.clone(), &next, &gate, &shared);
+            scope.spawn(move || {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(path) = volumes.get(i) else { break };
+                    let too_large = std::cell::Cell::new(false);
+                    let words = |e: Error| {
+                        too_large.set(too_large.get() || matches!(e, Error::TooLarge { .. }));
+                        describe(path, e)
+                    };
+                    let reading = gate.read().unwrap_or_else(PoisonError::into_inner);
+                    let mut looked = look(path, shared, &|_| {}, &words);
+                    drop(reading);
+                    if too_large.get() && workers > 1 {
+                        let _alone = gate.write().unwrap_or_else(PoisonError::into_inner);
+                        looked = look(path, how, &|_| {}, &|e| describe(path, e));
+                    }
+                    if tx.send((i, looked)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut waiting = std::collections::BTreeMap::new();
+        let mut due = 0;
+        for (i, looked) in rx {
+            waiting.insert(i, looked);
+            while let Some(looked) = waiting.remove(&due) {
+                emit(due, looked);
+                due += 1;
+            }
+        }
+    });
 }
 
 #[cfg(test)]

@@ -136,28 +136,29 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
     let bar = Bar::new();
     let mut failed = 0;
     let mut cells = Vec::new();
-    for (i, path) in volumes.iter().enumerate() {
-        let at = |fraction: f64| {
-            bar.set(Progress {
-                phase: "triage",
-                fraction: (i as f64 + fraction.clamp(0.0, 1.0)) / volumes.len() as f64,
-            });
-        };
-        at(0.0);
-        let Looked { row, cell } = look(path, args, &at);
+    let mut result = Ok(());
+    look_all(&volumes, args, |i, Looked { row, cell }| {
+        bar.set(Progress {
+            phase: "triage",
+            fraction: (i + 1) as f64 / volumes.len() as f64,
+        });
         failed += usize::from(row.error.is_some());
         if args.sheet.is_some() {
             cells.push(cell);
         }
         let line = if args.json {
-            serde_json::to_string(&row)?
+            serde_json::to_string(&row).map_err(anyhow::Error::from)
         } else if args.csv {
-            csv_line(&row)
+            Ok(csv_line(&row))
         } else {
-            table_line(&row)
+            Ok(table_line(&row))
         };
-        outln!("{line}");
-    }
+        match line {
+            Ok(line) => outln!("{line}"),
+            Err(e) => result = Err(e),
+        }
+    });
+    result?;
     drop(bar);
     if let Some(out) = &args.sheet {
         let picture = sheet::sheet(&cells, args.tile, sheet_columns(cells.len()))?;
@@ -199,15 +200,9 @@ fn volumes(args: &TriageArgs) -> Result<Vec<PathBuf>> {
     })
 }
 
-/// One volume's row (and cell), errors worded in the CLI's terms and without the path the row
-/// names.
-fn look(path: &Path, args: &TriageArgs, progress: &(dyn Fn(f64) + Sync)) -> Looked {
-    let name = path.display().to_string();
-    let describe = |e: Error| {
-        let m = super::error_message(&e.into());
-        m.strip_prefix(&format!("{name}: "))
-            .map_or(m.clone(), str::to_string)
-    };
+/// Every volume's row (and cell), looked at as `slabscope::triage::look_all` does, errors worded
+/// in the CLI's terms and without the path the row names; handed to `emit` in order.
+fn look_all(volumes: &[PathBuf], args: &TriageArgs, emit: impl FnMut(usize, Looked)) {
     let how = Look {
         load: args.load.options(),
         params: args.analysis.params(false),
@@ -215,8 +210,16 @@ fn look(path: &Path, args: &TriageArgs, progress: &(dyn Fn(f64) + Sync)) -> Look
         fast: !args.full,
         tile: args.sheet.as_ref().map(|_| args.tile),
     };
-    slabscope::triage::look(path, &how, progress, &describe)
+    let describe = |path: &Path, e: Error| {
+        let m = super::error_message(&e.into());
+        m.strip_prefix(&format!("{}: ", path.display()))
+            .map_or(m.clone(), str::to_string)
+    };
+    slabscope::triage::look_all(volumes, &how, WORKERS, &describe, emit);
 }
+
+/// Volumes looked at at once, on this machine's two cores.
+const WORKERS: usize = 2;
 
 const CSV_HEADER: [&str; 14] = [
     "path",
