@@ -204,6 +204,9 @@ pub const COARSE: f64 = 2.0;
 /// The fast path applies to volumes at least this many voxels along every axis.
 pub const COARSE_MIN_DIM: usize = 32;
 
+/// The most lattice phases the fast path ranks by.
+pub const COARSE_PHASES: usize = 4;
+
 /// How triage looks at each volume.
 #[derive(Clone, Debug)]
 pub struct Look {
@@ -213,9 +216,9 @@ pub struct Look {
     pub params: AnalysisParams,
     /// The most time an analysis may take.
     pub timeout: Duration,
-    /// The fast path: the view search on a lattice [`COARSE`] times coarser than the voxels
-    /// (where the parameters name no spacing and the volume has [`COARSE_MIN_DIM`] voxels a
-    /// side); the partition at full resolution.
+    /// The fast path: the view search on a lattice [`COARSE`] times coarser than the voxels,
+    /// ranked over at most [`COARSE_PHASES`] phases (where the parameters name no spacing and
+    /// the volume has [`COARSE_MIN_DIM`] voxels a side); the partition at full resolution.
     pub fast: bool,
     /// Draw each volume's contact-sheet cell, with tiles of this many pixels.
     pub tile: Option<u32>,
@@ -266,6 +269,7 @@ pub fn look(
     if how.fast && unset && v.dims().iter().all(|&n| n >= COARSE_MIN_DIM) {
         let coarse = COARSE * crate::geometry::min_spacing(v.spacing());
         (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
+        params.view.phases = params.view.phases.min(COARSE_PHASES);
     }
     let result = analyze(v, &params, &monitor).and_then(|analysis| {
         let cell = match how.tile {

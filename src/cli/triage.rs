@@ -38,9 +38,9 @@ pub struct TriageArgs {
     /// `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
     #[arg(long, value_name = "K/N", value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
-    /// The view search on the voxels' own lattice, not the fast path's twice coarser one (which
-    /// is used unless --ray-spacing or --sample-spacing is given, on volumes of 32 voxels a side
-    /// or more).
+    /// The view search on the voxels' own lattice over every phase, not the fast path's twice
+    /// coarser lattice over 4 phases (used unless --ray-spacing or --sample-spacing is given, on
+    /// volumes of 32 voxels a side or more).
     #[arg(long)]
     pub full: bool,
     /// Also write a contact sheet: per volume, numbered in row order, its exploded view and its
