@@ -189,6 +189,19 @@ impl TriageRow {
         self
     }
 
+    /// The best axis in few characters: its anatomical plane (`I→S`), else `x`, `y` or `z`, else
+    /// its components; none without a view search.
+    pub fn axis_name(&self) -> Option<String> {
+        if let Some(name) = &self.anatomy {
+            return name.split(',').next().map(str::to_string);
+        }
+        let a = self.best_axis?;
+        Some(match crate::geometry::coordinate_axis(a) {
+            Some(m) => ["x", "y", "z"][m].to_string(),
+            None => format!("[{:.2},{:.2},{:.2}]", a[0] + 0.0, a[1] + 0.0, a[2] + 0.0),
+        })
+    }
+
     /// The row with `error` (the analysis failed after the volume loaded).
     #[must_use]
     pub fn with_error(mut self, error: String) -> Self {
@@ -362,6 +375,18 @@ pub fn look_all(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn axes_are_named_in_few_characters() {
+        let mut row = TriageRow::failed("a", String::new());
+        assert_eq!(row.axis_name(), None);
+        row.best_axis = Some([-0.0, 1.0, 0.0]);
+        assert_eq!(row.axis_name().as_deref(), Some("y"));
+        row.best_axis = Some([0.6, -0.0, 0.8]);
+        assert_eq!(row.axis_name().as_deref(), Some("[0.60,0.00,0.80]"));
+        row.anatomy = Some("I→S, axial".into());
+        assert_eq!(row.axis_name().as_deref(), Some("I→S"));
+    }
 
     #[test]
     fn shards_split_a_list_into_contiguous_blocks_that_cover_it_once() {

@@ -302,14 +302,7 @@ fn table_line(row: &TriageRow) -> String {
         .spacing
         .map(|s| format!("{:.3}x{:.3}x{:.3}", s[0], s[1], s[2]))
         .unwrap_or_default();
-    let axis = match (&row.best_axis, &row.anatomy) {
-        (_, Some(name)) => name.split(',').next().unwrap_or_default().to_string(),
-        (Some(a), None) => match slabscope::partition::coordinate_axis(*a) {
-            Some(m) => ["x", "y", "z"][m].to_string(),
-            None => format!("[{}]", axis_text(a)),
-        },
-        (None, None) => String::new(),
-    };
+    let axis = row.axis_name().unwrap_or_default();
     let verdict = match row.uncertain {
         Some(true) => "?",
         _ => "",

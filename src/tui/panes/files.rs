@@ -68,11 +68,9 @@ impl FilesPane {
                     .dims
                     .map(|d| format!("{}x{}x{}", d[0], d[1], d[2]))
                     .unwrap_or_default();
-                let axis = match (&r.anatomy, &r.best_axis, &r.error) {
-                    (_, _, Some(e)) => format!("error: {e}"),
-                    (Some(a), _, None) => a.split(',').next().unwrap_or_default().to_string(),
-                    (None, Some(a), None) => format!("[{:.2},{:.2},{:.2}]", a[0], a[1], a[2]),
-                    (None, None, None) => String::new(),
+                let axis = match &r.error {
+                    Some(e) => format!("error: {e}"),
+                    None => r.axis_name().unwrap_or_default(),
                 };
                 let status = if r.error.is_some() { "!!" } else { "ok" };
                 vec![
