@@ -10,6 +10,26 @@ struct Tmux {
 }
 
 impl Tmux {
+    /// A server of our own named for `name`, running `command` in a `cols`×`rows` window.
+    fn start(name: &str, command: &str, (cols, rows): (u16, u16)) -> Self {
+        let tmux = Tmux {
+            socket: format!("slabscope-{name}-{}", std::process::id()),
+        };
+        let (cols, rows) = (cols.to_string(), rows.to_string());
+        tmux.run(&[
+            "new-session",
+            "-d",
+            "-s",
+            "smoke",
+            "-x",
+            &cols,
+            "-y",
+            &rows,
+            command,
+        ]);
+        tmux
+    }
+
     fn run(&self, args: &[&str]) -> String {
         let out = Command::new("tmux")
             .arg("-L")
@@ -63,24 +83,11 @@ fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
         );
         return;
     }
-    let tmux = Tmux {
-        socket: format!("slabscope-smoke-{}", std::process::id()),
-    };
     let command = format!(
         "{} --protocol blocks; echo EXITED $?; sleep 60",
         env!("CARGO_BIN_EXE_slabscope")
     );
-    tmux.run(&[
-        "new-session",
-        "-d",
-        "-s",
-        "smoke",
-        "-x",
-        "100",
-        "-y",
-        "30",
-        &command,
-    ]);
+    let tmux = Tmux::start("smoke", &command, (100, 30));
     let screen = tmux.wait_for("Slabs:", 120);
     for pane in ["axes", "Exploded view", "Curves"] {
         assert!(screen.contains(pane), "{pane} missing:\n{screen}");
@@ -112,25 +119,12 @@ fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
         std::fs::copy(data.join(name), dir.path().join(name)).unwrap();
     }
     std::fs::write(dir.path().join("zz_broken.nii"), b"no volume").unwrap();
-    let tmux = Tmux {
-        socket: format!("slabscope-folder-{}", std::process::id()),
-    };
     let command = format!(
         "{} {} --protocol blocks --slabs 2; echo EXITED $?; sleep 60",
         env!("CARGO_BIN_EXE_slabscope"),
         dir.path().display()
     );
-    tmux.run(&[
-        "new-session",
-        "-d",
-        "-s",
-        "smoke",
-        "-x",
-        "120",
-        "-y",
-        "32",
-        &command,
-    ]);
+    let tmux = Tmux::start("folder", &command, (120, 32));
     // The list, filled by triage: three volumes and the broken file's error.
     let screen = tmux.wait_for("(4 looked at)", 120);
     assert!(
