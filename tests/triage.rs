@@ -184,12 +184,17 @@ fn errors_before_any_row_exit_with_2_and_bad_shards_are_refused() {
         assert_ne!(code, 0, "{bad}");
         assert!(stderr.contains("is not K/N"), "{bad}: {stderr}");
     }
-    // A folder of volumes is not itself a volume.
+    // A folder of volumes is not itself a volume: analysing it is an error, info lists it.
     let dir = tempfile::tempdir().unwrap();
     archive(dir.path());
-    let (code, _, stderr) = run(&["info", dir.path().join("ct").to_str().unwrap()]);
+    let ct = dir.path().join("ct");
+    let (code, _, stderr) = run(&["analyze", ct.to_str().unwrap()]);
     assert_eq!(code, 1);
     assert!(stderr.contains("a folder of volumes"), "{stderr}");
+    let (code, stdout, stderr) = run(&["info", ct.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{stderr}");
+    let listed: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(listed["volumes"].as_array().unwrap().len(), 4, "{listed}");
 }
 
 #[test]

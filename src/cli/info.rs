@@ -7,6 +7,7 @@ use clap::Args;
 use serde_json::json;
 use slabscope::error::human_bytes;
 use slabscope::report::GeometryReport;
+use slabscope::triage::{Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
 use slabscope::{Format, Volume};
 
@@ -18,7 +19,7 @@ const HISTOGRAM_BINS: usize = 32;
 /// Arguments of `slabscope info`.
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// The volume: a file, or a folder of TIFF slices.
+    /// The volume: a file, or a folder of TIFF slices (a folder of volumes is listed).
     pub file: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -28,6 +29,28 @@ pub struct InfoArgs {
 }
 
 pub fn run(args: &InfoArgs) -> Result<()> {
+    // A folder of volumes is listed, one path a line (what `triage` would look at).
+    let dir = &args.file;
+    if dir.is_dir() && folder_kind(dir)? == Folder::Collection {
+        let volumes = discover(std::slice::from_ref(dir))?;
+        if args.json {
+            let out = json!({
+                "folder": dir.display().to_string(),
+                "volumes": volumes.iter().map(|v| v.display().to_string()).collect::<Vec<_>>(),
+            });
+            outln!("{}", serde_json::to_string_pretty(&out)?);
+        } else {
+            outln!("folder      {}", dir.display());
+            outln!(
+                "volumes     {} (a collection: `slabscope triage` looks at them all)",
+                volumes.len()
+            );
+            for v in &volumes {
+                outln!("            {}", v.display());
+            }
+        }
+        return Ok(());
+    }
     let loaded = super::load(&args.file, &args.load)?;
     print(
         &args.file.display().to_string(),
