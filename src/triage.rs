@@ -54,6 +54,8 @@ fn push(found: &mut Vec<PathBuf>, path: PathBuf) -> Result<()> {
 }
 
 fn walk(dir: &Path, depth: usize, found: &mut Vec<PathBuf>) -> Result<()> {
+    // The folder is read twice, to classify it and to walk it, rather than held: a folder of
+    // millions of entries stays out of memory.
     if folder_kind(dir)? == Folder::Slices {
         return push(found, dir.to_path_buf());
     }

@@ -212,6 +212,12 @@ fn positive(s: &str) -> Result<f64, String> {
 }
 
 /// Parses `NXxNYxNZ`.
+/// Two values written `A` then a separator then `B` (spaces around each allowed).
+pub fn pair<T: std::str::FromStr>(s: &str, separators: &[char]) -> Option<(T, T)> {
+    let (a, b) = s.split_once(separators)?;
+    Some((a.trim().parse().ok()?, b.trim().parse().ok()?))
+}
+
 pub fn parse_dims_arg(s: &str) -> Result<[usize; 3], String> {
     parse_dims(s).ok_or_else(|| format!("{s:?} is not NXxNYxNZ, e.g. 256x256x113"))
 }

@@ -7,16 +7,14 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
-use slabscope::Loaded;
 use slabscope::geometry::min_spacing;
-use slabscope::partition::Partition;
 use slabscope::render::{
     CameraParams, Colormap, Gap, Layout, Look, Mode, Preset, RenderParams, Renderer, Stack, encode,
     slice,
 };
 use tiny_skia::Pixmap;
 
-use super::args::{AnalysisArgs, LoadArgs, within};
+use super::args::{AnalysisArgs, LoadArgs, pair, within};
 use super::progress::with_bar;
 use crate::term::{self, Graphics, Protocol};
 
@@ -235,43 +233,20 @@ pub struct PreviewArgs {
 }
 
 fn parse_window(s: &str) -> Result<(f32, f32), String> {
-    let bad = || format!("{s:?} is not LO,HI with LO below HI, e.g. -200,1500");
-    let (lo, hi) = s.split_once(',').ok_or_else(bad)?;
-    match (lo.trim().parse::<f32>(), hi.trim().parse::<f32>()) {
-        (Ok(lo), Ok(hi)) if lo.is_finite() && hi.is_finite() && lo < hi => Ok((lo, hi)),
-        _ => Err(bad()),
-    }
+    pair::<f32>(s, &[','])
+        .filter(|&(lo, hi)| lo.is_finite() && hi.is_finite() && lo < hi)
+        .ok_or_else(|| format!("{s:?} is not LO,HI with LO below HI, e.g. -200,1500"))
 }
 
 pub(super) fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("{s:?} is not WxH, e.g. 640x480"))?;
-    match (w.parse::<u32>(), h.parse::<u32>()) {
-        (Ok(w), Ok(h))
-            if w > 0 && h > 0 && u64::from(w) * u64::from(h) <= slabscope::render::MAX_PIXELS =>
-        {
-            Ok((w, h))
-        }
-        _ => Err(format!("{s:?} is not a size between 1x1 and 8192x8192")),
+    if !s.contains(['x', 'X']) {
+        return Err(format!("{s:?} is not WxH, e.g. 640x480"));
     }
-}
-
-/// Loads `file` (checking that `output` may be written), and finds the axis and the slabs.
-pub(super) fn load_and_partition(
-    file: &std::path::Path,
-    load: &LoadArgs,
-    analysis: &AnalysisArgs,
-    output: Option<(&std::path::Path, bool)>,
-) -> Result<(Loaded, Partition)> {
-    let loaded = super::load(file, load)?;
-    if let Some((path, force)) = output {
-        super::check_outputs(&[path], &loaded.sources, force)?;
-    }
-    let part = analysis
-        .analyze(&file.display().to_string(), &loaded.volume, false)?
-        .partition;
-    Ok((loaded, part))
+    pair::<u32>(s, &['x', 'X'])
+        .filter(|&(w, h)| {
+            w > 0 && h > 0 && u64::from(w) * u64::from(h) <= slabscope::render::MAX_PIXELS
+        })
+        .ok_or_else(|| format!("{s:?} is not a size between 1x1 and 8192x8192"))
 }
 
 /// Loads, finds the axis and the slabs, and renders `width × height`: the exploded view, or
@@ -283,8 +258,15 @@ fn render_file(
     output: Option<(&std::path::Path, bool)>,
     faces: bool,
 ) -> Result<Pixmap> {
-    let (loaded, part) = load_and_partition(file, &scene.load, &scene.analysis, output)?;
+    let loaded = super::load(file, &scene.load)?;
+    if let Some((path, force)) = output {
+        super::check_outputs(&[path], &loaded.sources, force)?;
+    }
     let volume = &loaded.volume;
+    let part = scene
+        .analysis
+        .analyze(&file.display().to_string(), volume, false)?
+        .partition;
     let options = &scene.options;
     if faces {
         let renderer = Renderer::new(volume)?;

@@ -79,7 +79,7 @@ pub fn run(args: &SliceArgs) -> Result<()> {
         letters: !args.no_letters,
         ..slice::SliceParams::default()
     };
-    let position = stack.offset + index as f64 * stack.thickness;
+    let position = stack.position(index);
     let image = slice::slice(volume, &transfer, stack.axis, position, &params)?;
     super::write_new(&args.output, &encode(&image.pixmap, format)?, args.force)
 }

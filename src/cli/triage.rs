@@ -63,12 +63,9 @@ pub struct TriageArgs {
 }
 
 fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("{s:?} is not K/N with 1 <= K <= N, e.g. 3/10");
-    let (k, n) = s.split_once('/').ok_or_else(bad)?;
-    match (k.trim().parse::<usize>(), n.trim().parse::<usize>()) {
-        (Ok(k), Ok(n)) if (1..=n).contains(&k) => Ok((k, n)),
-        _ => Err(bad()),
-    }
+    super::args::pair::<usize>(s, &['/'])
+        .filter(|&(k, n)| (1..=n).contains(&k))
+        .ok_or_else(|| format!("{s:?} is not K/N with 1 <= K <= N, e.g. 3/10"))
 }
 
 /// The longest manifest read, bytes, and its longest line.

@@ -125,6 +125,11 @@ impl WorldTransform {
         (dot(n, mul(b, along)), dot(n, origin))
     }
 
+    /// The world direction of physical direction `d` (spacing applied): `B·d`.
+    pub fn world_direction(&self, d: [f64; 3], spacing: [f64; 3]) -> [f64; 3] {
+        mul(self.physical_to_world(spacing), d)
+    }
+
     /// The physical direction (spacing applied) of world direction `w`: `B⁻¹·w` normalized.
     pub fn physical_direction(&self, w: [f64; 3], spacing: [f64; 3]) -> Option<[f64; 3]> {
         normalize(mul(invert(self.physical_to_world(spacing))?, w))

@@ -38,6 +38,11 @@ pub struct Stack {
 }
 
 impl Stack {
+    /// The position of the centre of `slice` along the axis, mm.
+    pub fn position(&self, slice: usize) -> f64 {
+        self.offset + slice as f64 * self.thickness
+    }
+
     /// The stack of a partition.
     pub fn of(p: &Partition) -> Self {
         Self {

@@ -165,6 +165,8 @@ pub struct Image {
     /// Per pixel, row by row: how far along its ray the image turns half opaque, mm (infinite
     /// where it never does), to tell what is in front of what.
     pub depth: Vec<f32>,
+    /// The colour window the transfer function used.
+    pub window: (f32, f32),
 }
 
 impl Image {
@@ -203,6 +205,28 @@ pub fn encode(pixmap: &Pixmap, format: ImageOutput) -> Result<Vec<u8>> {
             Ok(out)
         }
     }
+}
+
+/// Draws `image` centred in the area `(x, y, width, height)` of `canvas` (its top left within the
+/// area when it is larger); returns where its top left went.
+pub fn paste_centred(
+    canvas: &mut Pixmap,
+    image: &Pixmap,
+    (x, y, width, height): (u32, u32, u32, u32),
+) -> (u32, u32) {
+    let at = (
+        x + width.saturating_sub(image.width()) / 2,
+        y + height.saturating_sub(image.height()) / 2,
+    );
+    canvas.draw_pixmap(
+        at.0 as i32,
+        at.1 as i32,
+        image.as_ref(),
+        &tiny_skia::PixmapPaint::default(),
+        tiny_skia::Transform::identity(),
+        None,
+    );
+    at
 }
 
 /// JPEG quality of [`ImageOutput::Jpeg`]: high, as a picture for a report should be.
@@ -341,6 +365,8 @@ struct Frame<'a> {
     transfer: Transfer,
     labels: bool,
     layout: &'a Layout,
+    /// Per slab, whether its start and end cuts are exposed.
+    exposed: Vec<(bool, bool)>,
     params: &'a RenderParams,
     spacing: [f64; 3],
     extent: [f64; 3],
@@ -442,6 +468,7 @@ impl<'a> Renderer<'a> {
             labels: transfer.is_labels(),
             transfer,
             layout,
+            exposed: exposed_cuts(layout, params),
             params,
             spacing,
             extent,
@@ -474,6 +501,7 @@ impl<'a> Renderer<'a> {
             pixmap,
             camera,
             depth,
+            window: frame.transfer.window(),
         };
         if params.outlines || params.labels {
             overlay::draw(&mut image, layout, &content, params, step);
@@ -483,6 +511,20 @@ impl<'a> Renderer<'a> {
         }
         Ok(image)
     }
+}
+
+/// Per slab of `layout`, whether the cuts at its start and its end are exposed: pulled away
+/// from the neighbour there, or the neighbour not drawn (the first slab's start and the last
+/// one's end are the volume's, not cuts).
+fn exposed_cuts(layout: &Layout, params: &RenderParams) -> Vec<(bool, bool)> {
+    let slabs = &layout.slabs;
+    let shown = |j: usize| !params.solo || params.highlight.is_none_or(|h| h == j);
+    (0..slabs.len())
+        .map(|i| {
+            let apart = |j: usize| !shown(j) || (slabs[j].offset - slabs[i].offset).abs() > 1e-9;
+            (i > 0 && apart(i - 1), i + 1 < slabs.len() && apart(i + 1))
+        })
+        .collect()
 }
 
 /// Where a ray crosses one slab: the parameter range inside the box and the slab, and the
@@ -537,7 +579,7 @@ impl Frame<'_> {
             let faint = other && self.params.fade;
             let origin: [f64; 3] =
                 std::array::from_fn(|m| o[m] - slab.offset * self.layout.axis[m]);
-            let Some(crossing) = self.crossing(origin, d, slab, self.exposed(i)) else {
+            let Some(crossing) = self.crossing(origin, d, slab, self.exposed[i]) else {
                 continue;
             };
             let k = if faint { GHOST } else { 1.0 };
@@ -568,16 +610,6 @@ impl Frame<'_> {
             Mode::Mip => ([0.0; 4], f32::INFINITY),
             Mode::Cut | Mode::Dvr => (ray.acc, ray.depth),
         }
-    }
-
-    /// Whether the cuts at the start and the end of slab `i` are exposed: pulled away from the
-    /// neighbour there, or the neighbour not drawn (the first slab's start and the last one's
-    /// end are the volume's, not cuts).
-    fn exposed(&self, i: usize) -> (bool, bool) {
-        let slabs = &self.layout.slabs;
-        let shown = |j: usize| !self.params.solo || self.params.highlight.is_none_or(|h| h == j);
-        let apart = |j: usize| !shown(j) || (slabs[j].offset - slabs[i].offset).abs() > 1e-9;
-        (i > 0 && apart(i - 1), i + 1 < slabs.len() && apart(i + 1))
     }
 
     /// Where the ray crosses the box and the slab, widened by a step so that boundary samples
@@ -642,14 +674,10 @@ impl Frame<'_> {
         )
     }
 
-    /// The value at voxel index point `q`: interpolated, or a label volume's nearest voxel.
+    /// The value at voxel index point `q`.
     #[inline]
     fn value(&self, q: [f64; 3]) -> f32 {
-        if self.labels {
-            self.it.data[self.it.nearest(q)]
-        } else {
-            self.it.sample(q)
-        }
+        sample(&self.it, q, self.labels)
     }
 
     /// Visits the grid samples of `range` inside `slab` in order, in voxel index coordinates
@@ -762,6 +790,17 @@ impl Frame<'_> {
             },
         );
         *best = top.get();
+    }
+}
+
+/// The value at voxel index point `q`: interpolated, or with `labels` the nearest voxel's
+/// (interpolated labels are not labels).
+#[inline]
+pub(crate) fn sample(it: &Interpolator, q: [f64; 3], labels: bool) -> f32 {
+    if labels {
+        it.data[it.nearest(q)]
+    } else {
+        it.sample(q)
     }
 }
 

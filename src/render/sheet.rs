@@ -1,11 +1,11 @@
 //! Contact sheets: many volumes on one picture, each a cell with its exploded view and its three
 //! orthogonal mid slices, numbered in order.
 
-use tiny_skia::{Color, Pixmap, PixmapPaint, Transform};
+use tiny_skia::{Color, Pixmap};
 
 use super::overlay::draw_digits;
 use super::slice::{SliceParams, slice};
-use super::{DEFAULT_SPREAD, Gap, Layout, Look, MAX_PIXELS, RenderParams, Renderer};
+use super::{DEFAULT_SPREAD, Gap, Layout, Look, MAX_PIXELS, RenderParams, Renderer, paste_centred};
 use crate::error::{Error, Result};
 use crate::geometry::min_spacing;
 use crate::partition::Partition;
@@ -75,7 +75,7 @@ pub fn cell(
     };
     let layout = Layout::exploded(partition, Gap::Similarity, DEFAULT_SPREAD);
     let view = renderer.render(&layout, &params, monitor)?;
-    paste(&mut out, &view.pixmap, (0, 0));
+    paste_centred(&mut out, &view.pixmap, (0, 0, tile, tile));
     let transfer = renderer.transfer(look, min_spacing(volume.spacing()))?;
     let half = tile / 2;
     let slice_params = SliceParams {
@@ -90,24 +90,9 @@ pub fn cell(
         let middle = (dims[m] - 1) as f64 * spacing[m] / 2.0;
         let s = slice(volume, &transfer, axis, middle, &slice_params)?;
         let (cx, cy) = (tile + (k as u32 % 2) * half, (k as u32 / 2) * half);
-        let at = (
-            cx + (half - s.pixmap.width()) / 2,
-            cy + (half - s.pixmap.height()) / 2,
-        );
-        paste(&mut out, &s.pixmap, at);
+        paste_centred(&mut out, &s.pixmap, (cx, cy, half, half));
     }
     Ok(out)
-}
-
-fn paste(canvas: &mut Pixmap, image: &Pixmap, (x, y): (u32, u32)) {
-    canvas.draw_pixmap(
-        x as i32,
-        y as i32,
-        image.as_ref(),
-        &PixmapPaint::default(),
-        Transform::identity(),
-        None,
-    );
 }
 
 /// The sheet: `cells` in order, `columns` a row, each numbered from 1 in its corner (a volume
@@ -126,7 +111,7 @@ pub fn sheet(cells: &[Option<Pixmap>], tile: u32, columns: usize) -> Result<Pixm
         let y = GAP + (i / columns) as u32 * (ch + GAP);
         let colour = match c {
             Some(image) => {
-                paste(&mut out, image, (x, y));
+                paste_centred(&mut out, image, (x, y, cw, ch));
                 NUMBER
             }
             None => FAILED,

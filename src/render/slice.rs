@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use tiny_skia::{Paint, Pixmap, Rect, Transform};
 
 use super::overlay::{Aabb, draw_digits, section};
-use super::{MAX_PIXELS, Transfer};
+use super::{MAX_PIXELS, Transfer, paste_centred, sample};
 use crate::error::{Error, Result};
 use crate::geometry::{cross, dot, min_spacing, normalize};
 use crate::render::Stack;
@@ -97,13 +97,7 @@ impl SliceFrame {
         let right = cross(up, toward);
         let up = in_plane(t.physical_direction(up, spacing)?, n)?;
         let right = in_plane(in_plane(t.physical_direction(right, spacing)?, n)?, up)?;
-        let world = |d: [f64; 3]| -> [f64; 3] {
-            let (a, b) = (
-                t.physical_point(d, spacing),
-                t.physical_point([0.0; 3], spacing),
-            );
-            std::array::from_fn(|m| a[m] - b[m])
-        };
+        let world = |d: [f64; 3]| t.world_direction(d, spacing);
         let (r, u) = (letter(world(right)), letter(world(up)));
         let opposite = |c: char| match c {
             'R' => 'L',
@@ -222,18 +216,11 @@ pub fn slice(
     }
     let corner: [f64; 3] =
         std::array::from_fn(|m| position * n[m] + u0 * frame.right[m] + v1 * frame.up[m]);
-    let image = SliceImage {
-        pixmap: Pixmap::new(w, h)
-            .ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "an image that fits"))?,
-        frame,
-        position,
-        corner,
-        pixel,
-    };
+    let mut pixmap = Pixmap::new(w, h)
+        .ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "an image that fits"))?;
     let it = Interpolator::new(volume);
     let labels = transfer.is_labels();
     let bg = params.background;
-    let mut pixmap = image.pixmap;
     pixmap
         .data_mut()
         .par_chunks_mut(w as usize * 4)
@@ -245,11 +232,7 @@ pub fn slice(
                 let colour = inside.then(|| {
                     let q: [f64; 3] =
                         std::array::from_fn(|m| p[m].clamp(0.0, extent[m]) / spacing[m]);
-                    let v = if labels {
-                        it.data[it.nearest(q)]
-                    } else {
-                        it.sample(q)
-                    };
+                    let v = sample(&it, q, labels);
                     if v.is_nan() {
                         return bg;
                     }
@@ -260,7 +243,13 @@ pub fn slice(
                 px.copy_from_slice(&[c[0], c[1], c[2], 255]);
             }
         });
-    let mut image = SliceImage { pixmap, ..image };
+    let mut image = SliceImage {
+        pixmap,
+        frame,
+        position,
+        corner,
+        pixel,
+    };
     if params.letters
         && let Some(letters) = image.frame.letters
     {
@@ -298,6 +287,11 @@ fn draw_letters(pixmap: &mut Pixmap, letters: [char; 4]) {
     }
 }
 
+/// The slices at the two faces of `slab`: its last (upper) and its first (lower).
+pub fn face_slices((a, b): (usize, usize)) -> [usize; 2] {
+    [b.saturating_sub(1).max(a), a]
+}
+
 /// The first and last slice of every slab, side by side: one column per slab, its upper face
 /// (its last slice) above its lower face (its first), each tile fit into `tile` and numbered.
 pub fn faces(
@@ -325,21 +319,17 @@ pub fn faces(
     let mut strip =
         Pixmap::new(w, h).ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "a strip"))?;
     strip.fill(tiny_skia::Color::from_rgba8(24, 24, 30, 255));
-    let centre = |s: usize| stack.offset + s as f64 * stack.thickness;
     let scale = (th as f32 / 90.0).clamp(1.0, 3.0).round();
-    for (i, &(a, b)) in slabs.iter().enumerate() {
-        for (row, s) in [b.saturating_sub(1).max(a), a].into_iter().enumerate() {
-            let image = slice(volume, transfer, stack.axis, centre(s), &params)?;
-            let x = gap + i as u32 * (tw + gap) + (tw - image.pixmap.width()) / 2;
-            let y = gap + row as u32 * (th + gap) + (th - image.pixmap.height()) / 2;
-            strip.draw_pixmap(
-                x as i32,
-                y as i32,
-                image.pixmap.as_ref(),
-                &tiny_skia::PixmapPaint::default(),
-                Transform::identity(),
-                None,
+    for (i, &slab) in slabs.iter().enumerate() {
+        for (row, s) in face_slices(slab).into_iter().enumerate() {
+            let image = slice(volume, transfer, stack.axis, stack.position(s), &params)?;
+            let area = (
+                gap + i as u32 * (tw + gap),
+                gap + row as u32 * (th + gap),
+                tw,
+                th,
             );
+            paste_centred(&mut strip, &image.pixmap, area);
         }
         let x = (gap + i as u32 * (tw + gap) + 2) as f32;
         draw_digits(

@@ -338,6 +338,7 @@ impl App {
                     .collect();
                 l.preset = next(&fits, l.preset);
                 l.window = None;
+                self.preview.window = None;
             }
             Action::CycleColormap => l.colormap = next(&Colormap::ALL, l.colormap),
             Action::ToggleGap => l.gap = next(&[Gap::Uniform, Gap::Similarity], l.gap),
@@ -424,13 +425,13 @@ impl App {
     }
 
     /// Narrows, widens or moves the window of the picture and the slices, starting from the
-    /// preset's.
+    /// one the last picture used (the preset's, worked out here only before any picture).
     fn window(&mut self, action: &Action) -> Vec<Effect> {
         let Some(volume) = self.volume.ready() else {
             return vec![];
         };
         let look = &mut self.preview.look;
-        let (lo, hi) = match look.window {
+        let (lo, hi) = match look.window.or(self.preview.window) {
             Some(w) => w,
             None => {
                 match slabscope::render::Transfer::new(volume, look.preset, look.colormap, 1.0, 1.0)
@@ -642,6 +643,7 @@ impl App {
                     self.preview.image = match result {
                         Ok(r) => {
                             self.preview.caption = r.caption;
+                            self.preview.window = Some(r.window);
                             Load::Ready(Box::new(r.image))
                         }
                         Err(e) => Load::Failed(e),

@@ -107,6 +107,8 @@ pub struct Rendered {
     pub image: TermImage,
     /// What the slice view reads at its pointer.
     pub caption: Option<String>,
+    /// The colour window the picture used, for the window and level keys to start from.
+    pub window: (f32, f32),
 }
 
 /// Everything the user can do, and what jobs report.

@@ -12,7 +12,7 @@ use image::RgbaImage;
 use slabscope::geometry::{self, min_spacing};
 use slabscope::partition::Slab;
 use slabscope::render::slice::{self, SliceParams};
-use slabscope::render::{Gap, Stack};
+use slabscope::render::{Gap, Stack, paste_centred};
 use slabscope::volume::io::{NrrdEncoding, write_atomic, write_nrrd};
 use slabscope::{
     Analysis, AnalysisReport, Histories, Layout, LoadOptions, Monitor, Partition, Progress,
@@ -342,11 +342,10 @@ fn render(
             offset: stack.offset(),
         }
     });
-    let cells = r.cells;
     // One image pixel per screen pixel, as large as the terminal takes.
-    let (width, height) = caps.image_size(cells);
+    let (width, height) = caps.image_size(r.cells);
     let (width, height) = (width.max(1), height.max(1));
-    let (pixmap, caption) = match (r.slice, &geometry) {
+    let (pixmap, caption, window) = match (r.slice, &geometry) {
         (Some(s), Some(stack)) if !r.slabs.is_empty() => {
             let highlight = r.highlight.unwrap_or(0).min(r.slabs.len() - 1);
             let view = SliceView {
@@ -355,8 +354,8 @@ fn render(
                 request: s,
                 size: (width, height),
             };
-            let (pixmap, caption) = view.draw(renderer, look)?;
-            (pixmap, Some(caption))
+            let (pixmap, caption, window) = view.draw(renderer, look)?;
+            (pixmap, Some(caption), window)
         }
         _ => {
             let layout = match (&r.histories, &geometry) {
@@ -384,21 +383,23 @@ fn render(
                 labels: height >= 120,
                 ..RenderParams::default()
             };
-            (renderer.render(&layout, &params, monitor)?.pixmap, None)
+            let image = renderer.render(&layout, &params, monitor)?;
+            (image.pixmap, None, image.window)
         }
     };
     let rgba = RgbaImage::from_raw(width, height, pixmap.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
     let cells = match caps.graphics {
-        Graphics::Blocks => cells,
+        Graphics::Blocks => r.cells,
         _ => (
-            (width.div_ceil(u32::from(caps.cell.0)) as u16).min(cells.0),
-            (height.div_ceil(u32::from(caps.cell.1)) as u16).min(cells.1),
+            (width.div_ceil(u32::from(caps.cell.0)) as u16).min(r.cells.0),
+            (height.div_ceil(u32::from(caps.cell.1)) as u16).min(r.cells.1),
         ),
     };
     Ok(Box::new(Rendered {
         image: encode(&rgba, cells, caps).map_err(|e| anyhow::anyhow!(e))?,
         caption,
+        window,
     }))
 }
 
@@ -412,8 +413,13 @@ struct SliceView<'a> {
 }
 
 impl SliceView<'_> {
-    /// The picture and the readout at the pointer: slice, voxel, world position, value.
-    fn draw(&self, renderer: &Renderer, look: &Look) -> anyhow::Result<(Pixmap, String)> {
+    /// The picture, the readout at the pointer (slice, voxel, world position, value) and the
+    /// colour window.
+    fn draw(
+        &self,
+        renderer: &Renderer,
+        look: &Look,
+    ) -> anyhow::Result<(Pixmap, String, (f32, f32))> {
         let volume = renderer.volume();
         let spacing = volume.spacing();
         let transfer = renderer.transfer(look.colours(), min_spacing(spacing))?;
@@ -422,7 +428,6 @@ impl SliceView<'_> {
         canvas.fill(tiny_skia::Color::from_rgba8(12, 12, 18, 255));
         let stack = self.stack;
         let index = self.request.index.min(stack.slices.saturating_sub(1));
-        let at = |i: usize| stack.offset + i as f64 * stack.thickness;
         // The slice takes three fifths of a wide pane, the faces the rest.
         let side = if w > h { w * 2 / 5 } else { 0 };
         let params = |fit: (u32, u32)| SliceParams {
@@ -434,18 +439,14 @@ impl SliceView<'_> {
             volume,
             &transfer,
             stack.axis,
-            at(index),
+            stack.position(index),
             &params((w - side, h)),
         )?;
-        let origin = (
-            (w - side - main.pixmap.width()) / 2,
-            (h - main.pixmap.height()) / 2,
-        );
-        paste(&mut canvas, &main.pixmap, origin);
+        let origin = paste_centred(&mut canvas, &main.pixmap, (0, 0, w - side, h));
         // The pointer, moved onto the plane.
         let n = stack.axis;
         let p = self.request.pointer;
-        let off = at(index) - geometry::dot(p, n);
+        let off = stack.position(index) - geometry::dot(p, n);
         let on_plane: [f64; 3] = std::array::from_fn(|m| p[m] + off * n[m]);
         let (px, py) = main.pixel_of(on_plane);
         cross_hair(
@@ -457,22 +458,22 @@ impl SliceView<'_> {
         );
         let (k, (a, b)) = self.slab;
         if side > 8 {
-            for (row, s) in [b.saturating_sub(1).max(a), a].into_iter().enumerate() {
+            for (row, s) in slice::face_slices((a, b)).into_iter().enumerate() {
                 let face = slice::slice(
                     volume,
                     &transfer,
                     stack.axis,
-                    at(s),
+                    stack.position(s),
                     &params((side - 4, h / 2 - 2)),
                 )?;
-                let x = w - side + 2 + (side - 4 - face.pixmap.width()) / 2;
-                let y = row as u32 * (h / 2) + 1 + (h / 2 - 2 - face.pixmap.height()) / 2;
-                paste(&mut canvas, &face.pixmap, (x, y));
+                let area = (w - side + 2, row as u32 * (h / 2) + 1, side - 4, h / 2 - 2);
+                paste_centred(&mut canvas, &face.pixmap, area);
             }
         }
         Ok((
             canvas,
             readout(volume, on_plane, index, stack.slices, k, (a, b)),
+            transfer.window(),
         ))
     }
 }
@@ -514,18 +515,6 @@ fn readout(
         slices - 1,
         b.saturating_sub(1),
     )
-}
-
-/// Draws `image` onto `canvas` with its top left at `at`.
-fn paste(canvas: &mut Pixmap, image: &Pixmap, at: (u32, u32)) {
-    canvas.draw_pixmap(
-        at.0 as i32,
-        at.1 as i32,
-        image.as_ref(),
-        &tiny_skia::PixmapPaint::default(),
-        tiny_skia::Transform::identity(),
-        None,
-    );
 }
 
 /// A yellow cross with an open centre at `(x, y)`.

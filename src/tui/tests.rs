@@ -334,6 +334,7 @@ fn rendered(w: u16, h: u16) -> Rendered {
     Rendered {
         image: tiny_protocol(w, h),
         caption: None,
+        window: (0.0, 1.0),
     }
 }
 
@@ -482,9 +483,19 @@ fn window_keys_narrow_widen_and_move_the_window() {
     let (mlo, mhi) = window(app.update(Action::WindowLevel(0.05)));
     assert!((mlo - nlo - 0.05 * (nhi - nlo)).abs() < 1e-3 * (hi - lo));
     assert!((mhi - mlo - (nhi - nlo)).abs() < 1e-3 * (hi - lo));
-    // A new transfer function starts from its own window again.
+    // A new transfer function starts from its own window again: the one its picture used.
     app.update(Action::CycleTransfer);
     assert_eq!(app.preview.look.window, None);
+    let picture = Rendered {
+        window: (10.0, 30.0),
+        ..rendered(40, 12)
+    };
+    let generation = app.preview.generation;
+    app.update(Action::Job(JobMsg::Rendered(
+        generation,
+        Ok(Box::new(picture)),
+    )));
+    assert_eq!(window(app.update(Action::WindowWidth(0.5))), (15.0, 25.0));
 }
 
 #[test]

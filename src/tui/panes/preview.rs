@@ -34,6 +34,8 @@ pub struct PreviewPane {
     pub pointer: Option<[f64; 3]>,
     /// What the slice view reads at its pointer, shown on the bottom border.
     pub caption: Option<String>,
+    /// The colour window the last picture used.
+    pub window: Option<(f32, f32)>,
     /// Colours.
     pub theme: Theme,
 }
@@ -53,6 +55,7 @@ impl PreviewPane {
             slices: false,
             pointer: None,
             caption: None,
+            window: None,
             theme,
         }
     }

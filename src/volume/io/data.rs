@@ -193,16 +193,26 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
     }
 }
 
+/// The buffered bytes of `reader`, filled again when empty (empty at the end), with reads that
+/// a signal interrupted retried.
+fn buffered(reader: &mut impl BufRead) -> std::io::Result<&[u8]> {
+    loop {
+        match reader.fill_buf() {
+            Ok(_) => break,
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    // Returns what is buffered now, without reading.
+    reader.fill_buf()
+}
+
 /// Skips one line of `reader`: the bytes skipped, and whether a newline ended them (else the
 /// file did).
 fn skip_line(reader: &mut impl BufRead) -> std::io::Result<(u64, bool)> {
     let mut skipped = 0u64;
     loop {
-        let buf = match reader.fill_buf() {
-            Ok(b) => b,
-            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-            Err(e) => return Err(e),
-        };
+        let buf = buffered(reader)?;
         if buf.is_empty() {
             return Ok((skipped, false));
         }
@@ -376,11 +386,7 @@ fn quote(token: &[u8]) -> String {
 fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std::io::Result<bool> {
     token.clear();
     loop {
-        let buf = match reader.fill_buf() {
-            Ok(b) => b,
-            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-            Err(e) => return Err(e),
-        };
+        let buf = buffered(reader)?;
         if buf.is_empty() {
             return Ok(!token.is_empty());
         }
