@@ -30,7 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "wrote {count} volumes of 128³ in {:.1} s",
         t.elapsed().as_secs_f64()
     );
-    let volumes = discover(&[dir.path().to_path_buf()])?;
+    let volumes = discover(&[dir.path().to_path_buf()], &LoadOptions::default())?;
     let describe = |_: &std::path::Path, e: Error| e.to_string();
     for (fast, workers) in [(true, 2), (true, 1), (false, 2)] {
         let how = Look {

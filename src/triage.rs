@@ -14,9 +14,9 @@ use crate::analysis::{Analysis, AnalysisParams, analyze};
 use crate::error::{Error, Result};
 use crate::progress::{Monitor, Progress};
 use crate::report::SCHEMA_VERSION;
+use crate::volume::io::{DicomSeries, Loaded, dicom, volume_name};
 pub use crate::volume::io::{Folder, folder_kind};
 use crate::volume::io::{LoadOptions, load};
-use crate::volume::io::{Loaded, volume_name};
 
 /// The most volumes a walk collects: a bound on the memory a folder tree can claim.
 pub const MAX_VOLUMES: usize = 1 << 20;
@@ -24,17 +24,82 @@ pub const MAX_VOLUMES: usize = 1 << 20;
 /// The deepest a walk goes below a folder it was given.
 pub const MAX_DEPTH: usize = 64;
 
+/// One volume triage looks at: a file or a folder, and for DICOM the series in it.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Entry {
+    /// The file, or the folder.
+    pub path: PathBuf,
+    /// The DICOM series' key (its `SeriesInstanceUID`) in a folder of DICOM files.
+    pub series: Option<String>,
+    /// How a list names the series: number and description (not in manifests).
+    pub label: Option<String>,
+}
+
+impl Entry {
+    /// The entry of a file or folder that is one volume.
+    pub fn file(path: impl Into<PathBuf>) -> Self {
+        Self {
+            path: path.into(),
+            series: None,
+            label: None,
+        }
+    }
+
+    /// The entry as a manifest line: the path, and a tab and the series key for DICOM.
+    pub fn line(&self) -> String {
+        match &self.series {
+            Some(key) => format!("{}\t{key}", self.path.display()),
+            None => self.path.display().to_string(),
+        }
+    }
+
+    /// The entry a manifest line names (as [`Entry::line`] writes it).
+    pub fn parse(line: &str) -> Self {
+        match line.rsplit_once('\t') {
+            Some((path, key)) if is_series_key(key) => Self {
+                path: path.into(),
+                series: Some(key.to_string()),
+                label: None,
+            },
+            _ => Self::file(line),
+        }
+    }
+
+    /// The entry's name in messages and lists: the path, with the series after it.
+    pub fn name(&self) -> String {
+        self.name_under(Path::new(""))
+    }
+
+    /// [`Entry::name`] with the path relative to the folder `root`.
+    pub fn name_under(&self, root: &Path) -> String {
+        let path = self.path.strip_prefix(root).unwrap_or(&self.path).display();
+        match (&self.label, &self.series) {
+            (Some(label), _) => format!("{path} [{label}]"),
+            (None, Some(key)) => format!("{path} [series {key}]"),
+            (None, None) => path.to_string(),
+        }
+    }
+}
+
+/// Whether `text` is a series key: a UID (digits and dots), maybe with `#N` after it.
+fn is_series_key(text: &str) -> bool {
+    !text.is_empty()
+        && text
+            .chars()
+            .all(|c| c.is_ascii_digit() || c == '.' || c == '#')
+}
+
 /// The volumes under `paths`, sorted and without repeats: each file named, each folder of
-/// slices, and, walked recursively, every volume in the other folders (symbolic links to
-/// folders are not followed, so that no walk loops). A path that cannot be read is kept: its
-/// row will say why.
-pub fn discover(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+/// slices, each series of a folder of DICOM files, and, walked recursively, every volume in the
+/// other folders (symbolic links to folders are not followed, so that no walk loops). A path
+/// that cannot be read is kept: its row will say why. `opts` says which DICOM images count.
+pub fn discover(paths: &[PathBuf], opts: &LoadOptions) -> Result<Vec<Entry>> {
     let mut found = Vec::new();
     for path in paths {
         let meta = std::fs::metadata(path);
         match meta {
-            Ok(m) if m.is_dir() => walk(path, 0, &mut found)?,
-            _ => push(&mut found, path.clone())?,
+            Ok(m) if m.is_dir() => walk(path, 0, opts, &mut found)?,
+            _ => push(&mut found, Entry::file(path.clone()))?,
         }
     }
     found.sort();
@@ -42,22 +107,48 @@ pub fn discover(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(found)
 }
 
-fn push(found: &mut Vec<PathBuf>, path: PathBuf) -> Result<()> {
+fn push(found: &mut Vec<Entry>, entry: Entry) -> Result<()> {
     if found.len() >= MAX_VOLUMES {
         return Err(Error::format(
-            &path,
+            &entry.path,
             format!("more than {MAX_VOLUMES} volumes: name fewer folders, or shard a manifest"),
         ));
     }
-    found.push(path);
+    found.push(entry);
     Ok(())
 }
 
-fn walk(dir: &Path, depth: usize, found: &mut Vec<PathBuf>) -> Result<()> {
+/// The series of the DICOM files in `dir`, one entry each, and each file that cannot be read
+/// (its row will say why); the folder alone when it cannot be scanned or holds no series.
+fn push_series(dir: &Path, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result<()> {
+    match dicom::list_series(dir, opts) {
+        Ok((series, failed)) if !series.is_empty() => {
+            for (file, _) in failed {
+                push(found, Entry::file(file))?;
+            }
+            for s in series {
+                push(
+                    found,
+                    Entry {
+                        path: dir.to_path_buf(),
+                        label: Some(s.label.clone()),
+                        series: Some(s.key),
+                    },
+                )?;
+            }
+            Ok(())
+        }
+        _ => push(found, Entry::file(dir)),
+    }
+}
+
+fn walk(dir: &Path, depth: usize, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result<()> {
     // The folder is read twice, to classify it and to walk it, rather than held: a folder of
     // millions of entries stays out of memory.
-    if folder_kind(dir)? == Folder::Slices {
-        return push(found, dir.to_path_buf());
+    match folder_kind(dir)? {
+        Folder::Slices => return push(found, Entry::file(dir)),
+        Folder::Dicom => return push_series(dir, opts, found),
+        Folder::Collection | Folder::Empty => {}
     }
     if depth >= MAX_DEPTH {
         return Err(Error::format(
@@ -65,15 +156,21 @@ fn walk(dir: &Path, depth: usize, found: &mut Vec<PathBuf>) -> Result<()> {
             format!("folders nest deeper than {MAX_DEPTH}"),
         ));
     }
+    let mut dicom_files = false;
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let entry = entry.map_err(|e| Error::io(dir, e))?;
         let path = entry.path();
         let Ok(t) = entry.file_type() else { continue };
         if t.is_dir() {
-            walk(&path, depth + 1, found)?;
+            walk(&path, depth + 1, opts, found)?;
         } else if volume_name(&path) {
-            push(found, path)?;
+            push(found, Entry::file(path))?;
+        } else if !dicom_files && t.is_file() && dicom::is_dicom(&path) {
+            dicom_files = true;
         }
+    }
+    if dicom_files {
+        push_series(dir, opts, found)?;
     }
     Ok(())
 }
@@ -96,6 +193,11 @@ pub struct TriageRow {
     pub schema_version: u32,
     /// The file or folder as found.
     pub path: String,
+    /// The DICOM series' key (its `SeriesInstanceUID`) in a folder of DICOM files.
+    pub series: Option<String>,
+    /// What the DICOM series is (number, description, modality, transfer syntax; patient
+    /// fields only when they were asked for).
+    pub dicom: Option<DicomSeries>,
     /// The format read (null when loading failed).
     pub format: Option<String>,
     /// `[nx, ny, nz]`.
@@ -135,6 +237,8 @@ impl TriageRow {
         Self {
             schema_version: SCHEMA_VERSION,
             path: path.to_string(),
+            series: None,
+            dicom: None,
             format: None,
             dims: None,
             spacing: None,
@@ -166,9 +270,24 @@ impl TriageRow {
             range: (s.finite > 0).then_some([s.min, s.max]),
             missing: Some(s.missing),
             problems: loaded.notes.clone(),
+            dicom: loaded.dicom.clone(),
             error: None,
             ..Self::failed(path, String::new())
         }
+    }
+
+    /// The volume's name: its path, with the DICOM series after it.
+    pub fn name(&self) -> String {
+        let series = match (&self.dicom, &self.series) {
+            (Some(d), _) => match (d.number, d.description.is_empty()) {
+                (Some(n), false) => format!(" [series {n} {:?}]", d.description),
+                (Some(n), true) => format!(" [series {n}]"),
+                (None, _) => format!(" [series {}]", d.key),
+            },
+            (None, Some(key)) => format!(" [series {key}]"),
+            (None, None) => String::new(),
+        };
+        format!("{}{series}", self.path)
     }
 
     /// Adds what the analysis found.
@@ -251,19 +370,28 @@ pub struct Looked {
 /// One volume's row: loaded and analysed as `how` says (stopped at its timeout, the progress
 /// reported as a fraction), or the error of either as `describe` words it; and its cell.
 pub fn look(
-    path: &Path,
+    entry: &Entry,
     how: &Look,
     progress: &(dyn Fn(f64) + Sync),
     describe: &dyn Fn(Error) -> String,
 ) -> Looked {
     let failed = |row: TriageRow| Looked { row, cell: None };
-    let (opts, timeout) = (&how.load, how.timeout);
-    let name = path.display().to_string();
-    let loaded = match load(path, opts) {
-        Ok(l) => l,
-        Err(e) => return failed(TriageRow::failed(&name, describe(e))),
+    let timeout = how.timeout;
+    let opts = LoadOptions {
+        series: entry.series.clone().or_else(|| how.load.series.clone()),
+        ..how.load.clone()
     };
-    let row = TriageRow::loaded(&name, &loaded);
+    let name = entry.path.display().to_string();
+    let loaded = match load(&entry.path, &opts) {
+        Ok(l) => l,
+        Err(e) => {
+            let mut row = TriageRow::failed(&name, describe(e));
+            row.series.clone_from(&entry.series);
+            return failed(row);
+        }
+    };
+    let mut row = TriageRow::loaded(&name, &loaded);
+    row.series.clone_from(&entry.series);
     // A watchdog raises the cancel flag at the timeout, unless told first that the work is done.
     let cancel = Arc::new(AtomicBool::new(false));
     let (done, finished) = std::sync::mpsc::channel::<()>();
@@ -318,7 +446,7 @@ pub fn look(
 /// each loads within its share, and one that needs more is looked at again alone, with the
 /// whole budget. `describe` words an error of a volume.
 pub fn look_all(
-    volumes: &[PathBuf],
+    volumes: &[Entry],
     how: &Look,
     workers: usize,
     describe: &(dyn Fn(&Path, Error) -> String + Sync),
@@ -342,18 +470,19 @@ pub fn look_all(
             scope.spawn(move || {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(path) = volumes.get(i) else { break };
+                    let Some(entry) = volumes.get(i) else { break };
+                    let path = entry.path.as_path();
                     let too_large = std::cell::Cell::new(false);
                     let words = |e: Error| {
                         too_large.set(too_large.get() || matches!(e, Error::TooLarge { .. }));
                         describe(path, e)
                     };
                     let reading = gate.read().unwrap_or_else(PoisonError::into_inner);
-                    let mut looked = look(path, shared, &|_| {}, &words);
+                    let mut looked = look(entry, shared, &|_| {}, &words);
                     drop(reading);
                     if too_large.get() && workers > 1 {
                         let _alone = gate.write().unwrap_or_else(PoisonError::into_inner);
-                        looked = look(path, how, &|_| {}, &|e| describe(path, e));
+                        looked = look(entry, how, &|_| {}, &|e| describe(path, e));
                     }
                     if tx.send((i, looked)).is_err() {
                         break;

@@ -655,3 +655,135 @@ fn the_tui_starts_only_where_it_can() {
         "{stderr}"
     );
 }
+
+// --- DICOM ------------------------------------------------------------------------------------
+
+/// An explicit VR little endian element.
+fn element(group: u16, elem: u16, vr: [u8; 2], value: &[u8]) -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend(group.to_le_bytes());
+    b.extend(elem.to_le_bytes());
+    b.extend(vr);
+    if matches!(&vr, b"OB" | b"OW" | b"SQ" | b"UN" | b"UT") {
+        b.extend([0, 0]);
+        b.extend((value.len() as u32).to_le_bytes());
+    } else {
+        b.extend((value.len() as u16).to_le_bytes());
+    }
+    b.extend(value);
+    b
+}
+
+/// A DICOM file: preamble, `DICM`, a meta group naming `syntax`, then `body`.
+fn dicom(syntax: &str, body: &[u8]) -> Vec<u8> {
+    let mut uid = syntax.as_bytes().to_vec();
+    if uid.len() % 2 == 1 {
+        uid.push(0);
+    }
+    let mut b = vec![0u8; 128];
+    b.extend(b"DICM");
+    b.extend(element(2, 0x10, *b"UI", &uid));
+    b.extend(body);
+    b
+}
+
+/// The image elements of a 4x4 u16 image with `frames` frames.
+fn image_header(frames: &str) -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend(element(0x28, 0x02, *b"US", &1u16.to_le_bytes()));
+    b.extend(element(0x28, 0x04, *b"CS", b"MONOCHROME2 "));
+    b.extend(element(0x28, 0x08, *b"IS", frames.as_bytes()));
+    b.extend(element(0x28, 0x10, *b"US", &4u16.to_le_bytes()));
+    b.extend(element(0x28, 0x11, *b"US", &4u16.to_le_bytes()));
+    b.extend(element(0x28, 0x100, *b"US", &16u16.to_le_bytes()));
+    b.extend(element(0x28, 0x101, *b"US", &16u16.to_le_bytes()));
+    b
+}
+
+const EXPLICIT: &str = "1.2.840.10008.1.2.1";
+
+#[test]
+fn dicom_lengths_are_checked_against_the_file_before_anything_is_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 4 GB value claimed by a file of a few hundred bytes.
+    let mut body = image_header("1 ");
+    body.extend([0x09, 0x00, 0x10, 0x10, b'O', b'B', 0, 0]);
+    body.extend(0xFFFF_FFF0u32.to_le_bytes());
+    body.extend([0u8; 16]);
+    let huge = dir.path().join("huge.dcm");
+    std::fs::write(&huge, dicom(EXPLICIT, &body)).unwrap();
+    let (out, _) = run(&["info", s(&huge), "--max-memory", "64M"], 64 << 20);
+    fails(
+        &out,
+        "huge.dcm",
+        "claims 4294967280 bytes where 16 are left",
+    );
+
+    // Sequences nested 100,000 deep (undefined lengths: 12 bytes a level).
+    let mut body = Vec::new();
+    for _ in 0..100_000 {
+        body.extend([
+            0x09, 0x00, 0x10, 0x10, b'S', b'Q', 0, 0, 0xFF, 0xFF, 0xFF, 0xFF,
+        ]);
+        body.extend([0xFE, 0xFF, 0x00, 0xE0, 0xFF, 0xFF, 0xFF, 0xFF]);
+    }
+    let deep = dir.path().join("deep.dcm");
+    std::fs::write(&deep, dicom(EXPLICIT, &body)).unwrap();
+    let (out, _) = run(&["info", s(&deep)], 64 << 20);
+    fails(&out, "deep.dcm", "sequences nest deeper than 32");
+
+    // 40,000 small elements: their parsed form is charged to the budget.
+    let mut body = Vec::new();
+    for i in 0..40_000u32 {
+        body.extend(element(0x0009, 0x1000 + (i % 0xE000) as u16, *b"LO", b"ab"));
+    }
+    let many = dir.path().join("many.dcm");
+    std::fs::write(&many, dicom(EXPLICIT, &body)).unwrap();
+    let (out, _) = run(&["info", s(&many), "--max-memory", "1M"], 1 << 20);
+    fails(&out, "many.dcm", "over the memory limit");
+}
+
+#[test]
+fn dicom_frames_and_compressed_sizes_are_checked_before_they_are_spent() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two billion frames of native pixels in a 32-byte pixel data element.
+    let mut body = image_header("2000000000");
+    body.extend(element(0x7FE0, 0x10, *b"OW", &[0u8; 32]));
+    let frames = dir.path().join("frames.dcm");
+    std::fs::write(&frames, dicom(EXPLICIT, &body)).unwrap();
+    let (out, _) = run(&["info", s(&frames), "--max-memory", "64M"], 64 << 20);
+    fails(&out, "frames.dcm", "truncated voxel data");
+
+    // A JPEG lossless fragment whose frame header claims 65535x65535 in a 4x4 image.
+    let body = fragment(&[0xC3, 16, 0xFF, 0xFF, 0xFF, 0xFF]);
+    let bomb = dir.path().join("bomb.dcm");
+    std::fs::write(&bomb, dicom("1.2.840.10008.1.2.4.70", &body)).unwrap();
+    let (out, _) = run(&["info", s(&bomb), "--max-memory", "64M"], 64 << 20);
+    fails(&out, "bomb.dcm", "a JPEG fragment of 65535x65535 pixels");
+
+    // 12-bit extended JPEG, which the pure-Rust decoder does not read: named, not attempted.
+    let twelve = dicom("1.2.840.10008.1.2.4.51", &fragment(&[0xC1, 12, 0, 4, 0, 4]));
+    let path = dir.path().join("twelve.dcm");
+    std::fs::write(&path, twelve).unwrap();
+    let (out, _) = run(&["info", s(&path)], 64 << 20);
+    fails(&out, "twelve.dcm", "12-bit extended JPEG");
+}
+
+/// The image elements and encapsulated pixel data of one fragment: a JPEG stream whose frame
+/// header is `sof` (marker, precision, height, width).
+fn fragment(sof: &[u8; 6]) -> Vec<u8> {
+    let mut body = image_header("1 ");
+    body.extend([
+        0xE0, 0x7F, 0x10, 0x00, b'O', b'B', 0, 0, 0xFF, 0xFF, 0xFF, 0xFF,
+    ]);
+    body.extend([0xFE, 0xFF, 0x00, 0xE0, 0, 0, 0, 0]);
+    let jpeg = [
+        0xFF, 0xD8, 0xFF, sof[0], 0x00, 0x0B, sof[1], sof[2], sof[3], sof[4], sof[5], 1, 1, 0x11,
+        0, 0,
+    ];
+    body.extend([0xFE, 0xFF, 0x00, 0xE0]);
+    body.extend((jpeg.len() as u32).to_le_bytes());
+    body.extend(jpeg);
+    body.extend([0xFE, 0xFF, 0xDD, 0xE0, 0, 0, 0, 0]);
+    body
+}

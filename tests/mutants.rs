@@ -59,6 +59,15 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
         ],
     ),
     ("volumeshop", &[("", "m.dat")]),
+    (
+        "dicom",
+        &[
+            ("dicom/enhanced.dcm", "m.dcm"),
+            ("dicom/jpegll/j1.dcm", "m.dcm"),
+            ("dicom/gap/slice00.dcm", "m.dcm"),
+            ("dicom/deflated.dcm", "m.dcm"),
+        ],
+    ),
     ("raw", &[("ramp_u8.raw", "m_5x4x3_uint8.raw")]),
 ];
 
@@ -105,8 +114,14 @@ const EXTREMES: [&str; 16] = [
 ];
 
 /// The header's length: the text before the blank line (NRRD), before `ElementDataFile`'s line's
-/// end (MetaImage), the 352 bytes of NIfTI, else the first 256 bytes.
+/// end (MetaImage), DICOM's elements before the pixel data, the 352 bytes of NIfTI.
 fn header_len(bytes: &[u8]) -> usize {
+    if bytes.get(128..132) == Some(b"DICM") {
+        return bytes
+            .windows(4)
+            .position(|w| w == [0xE0, 0x7F, 0x10, 0x00])
+            .unwrap_or(bytes.len());
+    }
     let text = &bytes[..bytes.len().min(4096)];
     if let Some(i) = text.windows(2).position(|w| w == b"\n\n") {
         return i + 2;

@@ -244,7 +244,13 @@ fn the_fast_path_finds_the_full_searchs_axis_on_a_body() {
             fast,
             tile: None,
         };
-        look(&path, &how, &|_| {}, &|e| e.to_string()).row
+        look(
+            &slabscope::triage::Entry::file(path.clone()),
+            &how,
+            &|_| {},
+            &|e| e.to_string(),
+        )
+        .row
     };
     let (fast, full) = (row(true), row(false));
     assert!(fast.error.is_none() && full.error.is_none());

@@ -29,9 +29,23 @@ pub struct LoadArgs {
     /// The most memory the loaded volume may take, e.g. 8G (default: half the physical memory).
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes_arg)]
     pub max_memory: Option<u64>,
-    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage) to read, from 0.
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM) to read, from 0.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub volume: usize,
+    /// Which series of a DICOM folder: its position in the list `info` gives (from 1), or its
+    /// `SeriesInstanceUID`.
+    #[arg(long, value_name = "N|UID")]
+    pub series: Option<String>,
+    /// Keep DICOM localizer (scout) and derived images, left out by default.
+    #[arg(long)]
+    pub include_localizers: bool,
+    /// Resample a DICOM series with gaps, uneven spacing or gantry tilt to an even, orthogonal
+    /// grid (otherwise kept as it is, with a warning; tilt as a sheared transform).
+    #[arg(long)]
+    pub resample: bool,
+    /// Show patient-identifying DICOM fields (name, ID, birth date, ...), hidden by default.
+    #[arg(long)]
+    pub show_phi: bool,
 }
 
 impl LoadArgs {
@@ -47,6 +61,10 @@ impl LoadArgs {
                 offset: self.offset,
             },
             volume: self.volume,
+            series: self.series.clone(),
+            include_localizers: self.include_localizers,
+            resample: self.resample,
+            show_phi: self.show_phi,
         }
     }
 }

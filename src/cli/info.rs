@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 use serde_json::json;
+use slabscope::Loaded;
 use slabscope::error::human_bytes;
 use slabscope::report::GeometryReport;
 use slabscope::triage::{Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
-use slabscope::{Format, Volume};
 
 use super::LoadArgs;
 
@@ -29,39 +29,51 @@ pub struct InfoArgs {
 }
 
 pub fn run(args: &InfoArgs) -> Result<()> {
-    // A folder of volumes is listed, one path a line (what `triage` would look at).
+    // A folder of volumes, or of several DICOM series, is listed, one a line (what `triage`
+    // would look at).
     let dir = &args.file;
-    if dir.is_dir() && folder_kind(dir)? == Folder::Collection {
-        let volumes = discover(std::slice::from_ref(dir))?;
+    let opts = args.load.options();
+    let listed = if dir.is_dir() && opts.series.is_none() {
+        match folder_kind(dir)? {
+            Folder::Collection => Some(discover(std::slice::from_ref(dir), &opts)?),
+            Folder::Dicom => {
+                Some(discover(std::slice::from_ref(dir), &opts)?).filter(|series| series.len() > 1)
+            }
+            Folder::Slices | Folder::Empty => None,
+        }
+    } else {
+        None
+    };
+    if let Some(volumes) = listed {
         if args.json {
             let out = json!({
                 "folder": dir.display().to_string(),
-                "volumes": volumes.iter().map(|v| v.display().to_string()).collect::<Vec<_>>(),
+                "volumes": volumes.iter().map(|v| json!({
+                    "path": v.path.display().to_string(),
+                    "series": v.series,
+                    "label": v.label,
+                })).collect::<Vec<_>>(),
             });
             outln!("{}", serde_json::to_string_pretty(&out)?);
         } else {
             outln!("folder      {}", dir.display());
             outln!(
-                "volumes     {} (a collection: `slabscope triage` looks at them all)",
+                "volumes     {} (a collection: `slabscope triage` looks at them all; --series \
+                 N|UID picks a DICOM series)",
                 volumes.len()
             );
             for v in &volumes {
-                outln!("            {}", v.display());
+                outln!("            {}", v.name());
             }
         }
         return Ok(());
     }
     let loaded = super::load(&args.file, &args.load)?;
-    print(
-        &args.file.display().to_string(),
-        loaded.format,
-        &loaded.volume,
-        &loaded.notes,
-        args.json,
-    )
+    print(&args.file.display().to_string(), &loaded, args.json)
 }
 
-fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -> Result<()> {
+fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
+    let (format, v, notes) = (loaded.format, &loaded.volume, &loaded.notes);
     let s = v.stats();
     let hist = v.histogram(HISTOGRAM_BINS)?;
     let geometry = GeometryReport::of(v);
@@ -83,6 +95,14 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
             "world_bounds": geometry.world_bounds,
             "histogram": hist,
             "notes": notes,
+            "dicom": loaded.dicom.as_ref().map(|d| json!({
+                "series": d.key,
+                "number": d.number,
+                "description": d.description,
+                "modality": d.modality,
+                "transfer_syntax": d.syntax,
+                "patient": d.patient.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
+            })),
         });
         outln!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
@@ -91,6 +111,15 @@ fn print(name: &str, format: Format, v: &Volume, notes: &[String], json: bool) -
     let [sx, sy, sz] = v.spacing();
     outln!("file        {name}");
     outln!("format      {}", format.name());
+    if let Some(d) = &loaded.dicom {
+        let number = d.number.map_or_else(String::new, |n| format!("{n} "));
+        outln!("series      {number}{:?} ({})", d.description, d.modality);
+        outln!("series uid  {}", d.key);
+        outln!("syntax      {}", d.syntax);
+        for (field, value) in &d.patient {
+            outln!("{field:<11} {value}");
+        }
+    }
     outln!(
         "dims        {}  ({} voxels)",
         dims_string(v.dims()),

@@ -9,7 +9,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use slabscope::render::{ImageOutput, encode, sheet};
-use slabscope::triage::{Look, Looked, TriageRow, discover, shard};
+use slabscope::triage::{Entry, Look, Looked, TriageRow, discover, shard};
 use slabscope::{Error, Progress};
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -72,8 +72,9 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
 const MAX_MANIFEST: u64 = 256 << 20;
 const MAX_LINE: usize = 4096;
 
-/// Reads a manifest: one path a line, blank lines skipped.
-fn read_manifest(path: &Path) -> Result<Vec<PathBuf>> {
+/// Reads a manifest: one volume a line (a path, and for a DICOM series a tab and its UID),
+/// blank lines skipped.
+fn read_manifest(path: &Path) -> Result<Vec<Entry>> {
     slabscope::volume::io::check_input(path)?;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
@@ -94,7 +95,7 @@ fn read_manifest(path: &Path) -> Result<Vec<PathBuf>> {
             );
         }
         if !line.trim().is_empty() {
-            paths.push(PathBuf::from(line));
+            paths.push(Entry::parse(&line));
         }
     }
     Ok(paths)
@@ -112,7 +113,7 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
     };
     if args.list {
         for v in &volumes {
-            outln!("{}", v.display());
+            outln!("{}", v.line());
         }
         return Ok(0);
     }
@@ -174,20 +175,21 @@ fn sheet_columns(count: usize) -> usize {
 }
 
 /// Before any work: the sheet can be written (a new picture, not an input) and will fit.
-fn check_sheet(args: &TriageArgs, volumes: &[PathBuf]) -> Result<()> {
+fn check_sheet(args: &TriageArgs, volumes: &[Entry]) -> Result<()> {
     if let Some(out) = &args.sheet {
         ImageOutput::for_path(out)?;
-        super::check_outputs(&[out], volumes, args.force)?;
+        let inputs: Vec<PathBuf> = volumes.iter().map(|v| v.path.clone()).collect();
+        super::check_outputs(&[out], &inputs, args.force)?;
         sheet::check_sheet(volumes.len(), args.tile, sheet_columns(volumes.len()))?;
     }
     Ok(())
 }
 
 /// The volumes a run takes: from the manifest or the walk, sorted, then its shard.
-fn volumes(args: &TriageArgs) -> Result<Vec<PathBuf>> {
+fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
     let mut all = match &args.manifest {
         Some(m) => read_manifest(m)?,
-        None => discover(&args.paths)?,
+        None => discover(&args.paths, &args.load.options())?,
     };
     all.sort();
     all.dedup();
@@ -199,7 +201,7 @@ fn volumes(args: &TriageArgs) -> Result<Vec<PathBuf>> {
 
 /// Every volume's row (and cell), looked at as `slabscope::triage::look_all` does, errors worded
 /// in the CLI's terms and without the path the row names; handed to `emit` in order.
-fn look_all(volumes: &[PathBuf], args: &TriageArgs, emit: impl FnMut(usize, Looked)) {
+fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, Looked)) {
     let how = Look {
         load: args.load.options(),
         params: args.analysis.params(false),
@@ -218,8 +220,9 @@ fn look_all(volumes: &[PathBuf], args: &TriageArgs, emit: impl FnMut(usize, Look
 /// Volumes looked at at once, on this machine's two cores.
 const WORKERS: usize = 2;
 
-const CSV_HEADER: [&str; 14] = [
+const CSV_HEADER: [&str; 15] = [
     "path",
+    "series",
     "format",
     "dims",
     "spacing",
@@ -272,6 +275,7 @@ fn csv_line(row: &TriageRow) -> String {
     let opt = |v: Option<String>| v.unwrap_or_default();
     [
         row.path.clone(),
+        opt(row.series.clone()),
         opt(row.format.clone()),
         opt(row.dims.map(|d| triple(&d, "x"))),
         opt(row.spacing.map(|s| triple(&s, "x"))),
@@ -316,7 +320,7 @@ fn table_line(row: &TriageRow) -> String {
         row.voxel_type.as_deref().unwrap_or("-"),
         format!("{axis}{verdict}"),
         slabs,
-        row.path,
+        row.name(),
         if wrong.is_empty() {
             String::new()
         } else {

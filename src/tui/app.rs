@@ -125,11 +125,11 @@ impl App {
     /// first opens, the list shows, and triage fills it in the background.
     pub fn for_folder(
         root: PathBuf,
-        paths: Vec<PathBuf>,
+        paths: Vec<slabscope::triage::Entry>,
         params: AnalysisParams,
         screen: Screen,
     ) -> (Self, Vec<Effect>) {
-        let name = paths[0].display().to_string();
+        let name = paths[0].name();
         let (mut app, mut effects) = Self::new(name, params, screen);
         effects.push(Effect::Triage(paths.clone(), Box::new(app.params.clone())));
         let files = FilesPane::new(root, paths, app.theme);
@@ -156,11 +156,7 @@ impl App {
         (files.open, files.row, files.shown) = (i, i, false);
         let look = self.preview.look;
         let cells = self.preview.cells;
-        let (fresh, effects) = Self::new(
-            path.display().to_string(),
-            self.params.clone(),
-            self.screen.clone(),
-        );
+        let (fresh, effects) = Self::new(path.name(), self.params.clone(), self.screen.clone());
         *self = fresh;
         self.preview.look = look;
         self.preview.cells = cells;

@@ -306,10 +306,13 @@ pub enum Effect {
     /// Write exports.
     Export(Box<ExportRequest>),
     /// Load this volume instead (a folder's next volume).
-    Open(std::path::PathBuf),
+    Open(slabscope::triage::Entry),
     /// Triage these volumes in the background with these parameters, one row each as it
     /// completes.
-    Triage(Vec<std::path::PathBuf>, Box<slabscope::AnalysisParams>),
+    Triage(
+        Vec<slabscope::triage::Entry>,
+        Box<slabscope::AnalysisParams>,
+    ),
     /// Cancel running jobs.
     Cancel,
     /// Leave.
@@ -324,7 +327,7 @@ impl std::fmt::Debug for Effect {
             Self::Analyze(g, axis, _) => write!(f, "Analyze({g}, {axis:?})"),
             Self::Render(r) => write!(f, "Render({})", r.generation),
             Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),
-            Self::Open(p) => write!(f, "Open({})", p.display()),
+            Self::Open(p) => write!(f, "Open({})", p.name()),
             Self::Triage(p, _) => write!(f, "Triage({} volumes)", p.len()),
             Self::Cancel => write!(f, "Cancel"),
             Self::Quit => write!(f, "Quit"),

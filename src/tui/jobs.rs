@@ -33,7 +33,7 @@ pub struct Jobs {
     renders: Option<Sender<RenderRequest>>,
     render_cancel: Arc<AtomicBool>,
     caps: Caps,
-    source: Option<PathBuf>,
+    source: Option<slabscope::triage::Entry>,
     load: LoadOptions,
     volume: Option<Arc<Volume>>,
     /// Which volume is open: one more at each [`Effect::Open`].
@@ -45,7 +45,7 @@ impl Jobs {
     pub fn new(
         events: Sender<Event>,
         caps: Caps,
-        source: Option<PathBuf>,
+        source: Option<slabscope::triage::Entry>,
         load: LoadOptions,
     ) -> Self {
         Self {
@@ -81,8 +81,13 @@ impl Jobs {
                 let (source, load) = (self.source.clone(), self.load.clone());
                 move |_| {
                     let loaded = match &source {
-                        Some(path) => {
-                            slabscope::load(path, &load).map(|l| (Arc::new(l.volume), l.notes))
+                        Some(entry) => {
+                            let load = LoadOptions {
+                                series: entry.series.clone().or(load.series),
+                                ..load
+                            };
+                            slabscope::load(&entry.path, &load)
+                                .map(|l| (Arc::new(l.volume), l.notes))
                         }
                         None => slabscope::builtin_dataset().map(|v| (Arc::new(v), Vec::new())),
                     };
@@ -128,14 +133,14 @@ impl Jobs {
                         fast: true,
                         tile: None,
                     };
-                    for (i, path) in paths.iter().enumerate() {
+                    for (i, entry) in paths.iter().enumerate() {
                         // The list names the file: its errors need not.
-                        let prefix = format!("{}: ", path.display());
+                        let prefix = format!("{}: ", entry.path.display());
                         let describe = |e: slabscope::Error| {
                             let m = e.to_string();
                             m.strip_prefix(&prefix).map_or(m.clone(), str::to_string)
                         };
-                        let row = slabscope::triage::look(path, &how, &|_| {}, &describe).row;
+                        let row = slabscope::triage::look(entry, &how, &|_| {}, &describe).row;
                         if events
                             .send(Event::Job(JobMsg::Triaged(i, Box::new(row))))
                             .is_err()
@@ -555,7 +560,7 @@ mod tests {
         let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
         let done = |epoch| JobMsg::Epoch(epoch, Box::new(JobMsg::Exported(Ok("x".into()))));
         assert!(matches!(jobs.admit(done(0)), Some(JobMsg::Exported(_))));
-        jobs.run(Effect::Open(PathBuf::from("next.nii")));
+        jobs.run(Effect::Open(slabscope::triage::Entry::file("next.nii")));
         assert!(jobs.admit(done(0)).is_none(), "the last volume's");
         assert!(matches!(jobs.admit(done(1)), Some(JobMsg::Exported(_))));
         // The folder's triage rows are for every volume: never dropped.

@@ -65,19 +65,24 @@ pub fn run(options: Options) -> Result<()> {
         slabscope::volume::io::check_input(path)?;
     }
     // A folder of volumes opens as a file list, its first volume open.
-    let folder = match &file {
-        Some(dir) if dir.is_dir() && folder_kind(dir)? != Folder::Slices => {
-            let paths = discover(std::slice::from_ref(dir))?;
+    // So does a folder of DICOM files with several series, unless one is named.
+    let kind = match &file {
+        Some(dir) if dir.is_dir() && load.series.is_none() => Some(folder_kind(dir)?),
+        _ => None,
+    };
+    let folder = match (&file, kind) {
+        (Some(dir), Some(Folder::Collection | Folder::Dicom | Folder::Empty)) => {
+            let paths = discover(std::slice::from_ref(dir), &load)?;
             if paths.is_empty() {
                 bail!("{}: holds no volume slabscope reads", dir.display());
             }
-            Some((dir.clone(), paths))
+            Some((dir.clone(), paths)).filter(|(_, p)| kind != Some(Folder::Dicom) || p.len() > 1)
         }
         _ => None,
     };
     let file = match &folder {
         Some((_, paths)) => Some(paths[0].clone()),
-        None => file,
+        None => file.map(slabscope::triage::Entry::file),
     };
     if !std::io::stdout().is_terminal() || term::tty_input().is_err() {
         bail!(

@@ -516,9 +516,9 @@ fn transfer_functions_that_do_not_fit_are_skipped() {
 
 #[test]
 fn a_folder_opens_as_a_list_whose_volumes_open_in_turn() {
-    let paths: Vec<PathBuf> = ["a.nii", "b.nrrd", "c.mha"]
+    let paths: Vec<slabscope::triage::Entry> = ["a.nii", "b.nrrd", "c.mha"]
         .iter()
-        .map(|n| PathBuf::from("/data").join(n))
+        .map(|n| slabscope::triage::Entry::file(PathBuf::from("/data").join(n)))
         .collect();
     let (mut app, effects) = App::for_folder(
         PathBuf::from("/data"),

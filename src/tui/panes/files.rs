@@ -7,7 +7,7 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Rect};
 use ratatui::style::{Color, Modifier};
 use ratatui::widgets::{Clear, Row, StatefulWidget, Table, TableState, Widget};
-use slabscope::triage::TriageRow;
+use slabscope::triage::{Entry, TriageRow};
 
 use crate::tui::theme::Theme;
 
@@ -16,7 +16,7 @@ pub struct FilesPane {
     /// The folder, for names relative to it.
     pub root: PathBuf,
     /// The volumes, sorted.
-    pub paths: Vec<PathBuf>,
+    pub paths: Vec<Entry>,
     /// Each volume's row, once triage has it.
     pub rows: Vec<Option<TriageRow>>,
     /// The cursor.
@@ -31,7 +31,7 @@ pub struct FilesPane {
 
 impl FilesPane {
     /// The list of `paths` under `root`, the first open and the list showing.
-    pub fn new(root: PathBuf, paths: Vec<PathBuf>, theme: Theme) -> Self {
+    pub fn new(root: PathBuf, paths: Vec<Entry>, theme: Theme) -> Self {
         let rows = vec![None; paths.len()];
         Self {
             root,
@@ -46,11 +46,7 @@ impl FilesPane {
 
     /// The name of volume `i`, relative to the folder.
     pub fn name(&self, i: usize) -> String {
-        let p = &self.paths[i];
-        p.strip_prefix(&self.root)
-            .unwrap_or(p)
-            .display()
-            .to_string()
+        self.paths[i].name_under(&self.root)
     }
 
     /// How many rows triage has filled.

@@ -27,11 +27,15 @@ pub(crate) fn is_tiff(path: &Path) -> bool {
 }
 
 /// What a folder is: one volume (a stack of two or more TIFF slices and no other volume file
-/// or folder), a collection of volumes, or nothing slabscope reads.
+/// or folder), DICOM files (one series or several), a collection of volumes, or nothing
+/// slabscope reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Folder {
     /// A stack of TIFF slices: one volume.
     Slices,
+    /// DICOM files and no other volume file or folder: one series is a volume, several a
+    /// collection of series.
+    Dicom,
     /// Volume files or folders (or a single TIFF file): looked at one by one.
     Collection,
     /// Neither a volume file nor a folder in it.
@@ -40,7 +44,7 @@ pub enum Folder {
 
 /// Says what the folder `dir` is.
 pub fn folder_kind(dir: &Path) -> Result<Folder> {
-    let (mut tiffs, mut others) = (0usize, 0usize);
+    let (mut tiffs, mut others, mut dicoms) = (0usize, 0usize, 0usize);
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let entry = entry.map_err(|e| Error::io(dir, e))?;
         let path = entry.path();
@@ -51,11 +55,15 @@ pub fn folder_kind(dir: &Path) -> Result<Folder> {
             tiffs += 1;
         } else if is_dir || volume_name(&path) {
             others += 1;
+        } else if entry.file_type().is_ok_and(|t| t.is_file()) && super::dicom::is_dicom(&path) {
+            dicoms += 1;
         }
     }
-    Ok(if tiffs >= 2 && others == 0 {
+    Ok(if tiffs >= 2 && others + dicoms == 0 {
         Folder::Slices
-    } else if tiffs + others == 0 {
+    } else if dicoms > 0 && tiffs + others == 0 {
+        Folder::Dicom
+    } else if tiffs + others + dicoms == 0 {
         Folder::Empty
     } else {
         Folder::Collection

@@ -2,6 +2,7 @@
 //! bytes) first and by extension second, and writers for exporting.
 
 mod data;
+pub mod dicom;
 mod folder;
 mod limits;
 mod metaimage;
@@ -48,6 +49,8 @@ pub enum Format {
     Tiff,
     /// A folder of single-page TIFF slices.
     TiffFolder,
+    /// A DICOM file or series (a folder of files).
+    Dicom,
     /// Made in memory (a phantom or the built-in dataset).
     Synthetic,
 }
@@ -64,6 +67,7 @@ impl Format {
             Self::Raw => "raw",
             Self::Tiff => "tiff",
             Self::TiffFolder => "tiff-folder",
+            Self::Dicom => "dicom",
             Self::Synthetic => "synthetic",
         }
     }
@@ -76,8 +80,16 @@ pub struct LoadOptions {
     pub max_memory: u64,
     /// Description of a headerless raw file; when `dims` is set the file is read as raw.
     pub raw: RawOptions,
-    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage) to read, from 0.
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, a DICOM series) to read, from 0.
     pub volume: usize,
+    /// Which series of a DICOM folder: its position in the list (from 1) or its UID.
+    pub series: Option<String>,
+    /// Keep DICOM localizer and derived images (left out by default).
+    pub include_localizers: bool,
+    /// Resample a DICOM series with uneven spacing or gantry tilt to an even, orthogonal grid.
+    pub resample: bool,
+    /// Read the patient-identifying DICOM fields (never read otherwise).
+    pub show_phi: bool,
 }
 
 impl Default for LoadOptions {
@@ -86,6 +98,10 @@ impl Default for LoadOptions {
             max_memory: default_max_memory(),
             raw: RawOptions::default(),
             volume: 0,
+            series: None,
+            include_localizers: false,
+            resample: false,
+            show_phi: false,
         }
     }
 }
@@ -101,6 +117,27 @@ pub struct Loaded {
     pub notes: Vec<String>,
     /// Every file read: the one named, and a detached header's data file.
     pub sources: Vec<PathBuf>,
+    /// The DICOM series read, for a DICOM file or folder.
+    pub dicom: Option<DicomSeries>,
+}
+
+/// What a DICOM volume is, beyond its geometry: never a patient-identifying field unless they
+/// were asked for.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DicomSeries {
+    /// The series' key: its `SeriesInstanceUID` (with `#2`, ... on the parts of a split series).
+    pub key: String,
+    /// `SeriesNumber`.
+    pub number: Option<i64>,
+    /// `SeriesDescription`.
+    pub description: String,
+    /// Modality.
+    pub modality: String,
+    /// The transfer syntax, named.
+    pub syntax: String,
+    /// Patient-identifying fields, read only when asked for (empty otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub patient: Vec<(String, String)>,
 }
 
 /// Loads the volume at `path` (a file, or a folder of TIFF slices).
@@ -147,7 +184,13 @@ fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
 fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let (format, mut loaded) = if meta.is_dir() {
-        match folder_kind(path)? {
+        let kind = folder_kind(path)?;
+        match kind {
+            // A series may be named in a folder of DICOM files and other volumes.
+            Folder::Dicom => (Format::Dicom, dicom::load(path, opts)?),
+            Folder::Collection if opts.series.is_some() => {
+                (Format::Dicom, dicom::load(path, opts)?)
+            }
             Folder::Collection => {
                 return Err(Error::format(
                     path,
@@ -158,18 +201,23 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             Folder::Empty => {
                 return Err(Error::format(
                     path,
-                    "folder holds no .tif or .tiff slices and no volume files",
+                    "folder holds no .tif or .tiff slices, no DICOM files and no volume files",
                 ));
             }
-            Folder::Slices => {}
+            Folder::Slices => {
+                if opts.volume > 0 {
+                    return Err(data::one_volume(path, 1, opts.volume));
+                }
+                (Format::TiffFolder, tiff::load_folder(path, opts)?)
+            }
         }
-        if opts.volume > 0 {
-            return Err(data::one_volume(path, 1, opts.volume));
-        }
-        (Format::TiffFolder, tiff::load_folder(path, opts)?)
     } else {
         let format = detect(path, opts)?;
-        if opts.volume > 0 && !matches!(format, Format::Nifti | Format::Nrrd | Format::MetaImage) {
+        let four_d = matches!(
+            format,
+            Format::Nifti | Format::Nrrd | Format::MetaImage | Format::Dicom
+        );
+        if opts.volume > 0 && !four_d {
             return Err(data::one_volume(path, 1, opts.volume));
         }
         let loaded = match format {
@@ -179,6 +227,7 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             Format::VolumeShop => volumeshop::load(path, opts)?,
             Format::Raw => raw::load(path, opts)?,
             Format::Tiff => tiff::load_stack(path, opts)?,
+            Format::Dicom => dicom::load(path, opts)?,
             Format::TiffFolder | Format::Synthetic => unreachable!("not detected from a file"),
         };
         (format, loaded)
@@ -202,6 +251,7 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         format,
         notes: loaded.notes,
         sources,
+        dicom: loaded.dicom,
     })
 }
 
@@ -211,6 +261,8 @@ pub(crate) struct Read0 {
     pub notes: Vec<String>,
     /// Files read besides the one named (a detached header's data file).
     pub sources: Vec<PathBuf>,
+    /// The DICOM series read.
+    pub dicom: Option<DicomSeries>,
 }
 
 impl Read0 {
@@ -229,6 +281,7 @@ impl Read0 {
             volume,
             notes,
             sources: Vec::new(),
+            dicom: None,
         })
     }
 
@@ -265,6 +318,9 @@ fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
     if let Some(format) = sniff(&head) {
         return Ok(format);
     }
+    if dicom::is_dicom(path) {
+        return Ok(Format::Dicom);
+    }
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_ascii_lowercase())
@@ -292,8 +348,8 @@ fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
     Err(Error::format(
         path,
         format!(
-            "{what} (slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, and \
-             headerless raw data given its dimensions and voxel type)"
+            "{what} (slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, \
+             DICOM, and headerless raw data given its dimensions and voxel type)"
         ),
     ))
 }
