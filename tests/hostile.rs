@@ -755,14 +755,14 @@ fn dicom_frames_and_compressed_sizes_are_checked_before_they_are_spent() {
     fails(&out, "frames.dcm", "truncated voxel data");
 
     // A JPEG lossless fragment whose frame header claims 65535x65535 in a 4x4 image.
-    let body = fragment(&[0xC3, 16, 0xFF, 0xFF, 0xFF, 0xFF]);
+    let body = fragment([0xC3, 16, 0xFF, 0xFF, 0xFF, 0xFF]);
     let bomb = dir.path().join("bomb.dcm");
     std::fs::write(&bomb, dicom("1.2.840.10008.1.2.4.70", &body)).unwrap();
     let (out, _) = run(&["info", s(&bomb), "--max-memory", "64M"], 64 << 20);
     fails(&out, "bomb.dcm", "a JPEG fragment of 65535x65535 pixels");
 
     // 12-bit extended JPEG, which the pure-Rust decoder does not read: named, not attempted.
-    let twelve = dicom("1.2.840.10008.1.2.4.51", &fragment(&[0xC1, 12, 0, 4, 0, 4]));
+    let twelve = dicom("1.2.840.10008.1.2.4.51", &fragment([0xC1, 12, 0, 4, 0, 4]));
     let path = dir.path().join("twelve.dcm");
     std::fs::write(&path, twelve).unwrap();
     let (out, _) = run(&["info", s(&path)], 64 << 20);
@@ -771,7 +771,7 @@ fn dicom_frames_and_compressed_sizes_are_checked_before_they_are_spent() {
 
 /// The image elements and encapsulated pixel data of one fragment: a JPEG stream whose frame
 /// header is `sof` (marker, precision, height, width).
-fn fragment(sof: &[u8; 6]) -> Vec<u8> {
+fn fragment(sof: [u8; 6]) -> Vec<u8> {
     let mut body = image_header("1 ");
     body.extend([
         0xE0, 0x7F, 0x10, 0x00, b'O', b'B', 0, 0, 0xFF, 0xFF, 0xFF, 0xFF,
