@@ -256,6 +256,20 @@ fn colour_is_read_as_luminance_with_a_note() {
 }
 
 #[test]
+fn files_as_writers_really_make_them_are_read() {
+    // A data set in implicit VR under a meta group that says explicit; a TIFF header in the
+    // preamble (the file is still DICOM); a series of derived images only (a reformat).
+    for one in ["mismatch.dcm", "tiffpreamble.dcm"] {
+        let l = load(one);
+        assert_eq!(l.format, slabscope::Format::Dicom, "{one}");
+        check_voxels(&l.volume, |i, j, _| stored(i, j, 0) - 1024.0);
+    }
+    let l = load("derived");
+    assert_eq!(l.volume.dims(), [24, 20, 3]);
+    check_voxels(&l.volume, |i, j, k| stored(i, j, k) - 1024.0);
+}
+
+#[test]
 fn an_unsupported_transfer_syntax_is_named() {
     let e = load_with("jpeg2000.dcm", |_| {}).unwrap_err().to_string();
     assert!(

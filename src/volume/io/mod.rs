@@ -356,6 +356,10 @@ fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
 
 /// Recognises a format by its first bytes.
 fn sniff(head: &[u8]) -> Option<Format> {
+    // First: some DICOM files carry a TIFF header in their preamble.
+    if head.get(128..132) == Some(b"DICM") {
+        return Some(Format::Dicom);
+    }
     if head.starts_with(&[0x1f, 0x8b]) {
         return nifti::is_gzipped_nifti(head).then_some(Format::Nifti);
     }

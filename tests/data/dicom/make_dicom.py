@@ -274,6 +274,49 @@ def rgb_folder():
         save(ds, os.path.join(d, f"c{k}.dcm"))
 
 
+def derived_folder():
+    """A series of derived images only (a reformat): kept, unlike derived images mixed into a
+    series of original ones."""
+    d = os.path.join(OUT, "derived")
+    shutil.rmtree(d, ignore_errors=True)
+    for k in range(3):
+        ds = slice_at("derived", 16, "MPR", k, (0.0, 0.0, 1.0 * k))
+        ds.ImageType = ["DERIVED", "SECONDARY", "MPR"]
+        save(ds, os.path.join(d, f"d{k}.dcm"))
+
+
+def hand_written(ds, path, meta_syntax, implicit, preamble=bytes(128)):
+    """A file written piece by piece: `preamble`, DICM, a meta group naming `meta_syntax`, and
+    the data set encoded implicit or explicit VR whatever the meta group says."""
+    from pydicom.filebase import DicomBytesIO
+    from pydicom.filewriter import write_dataset, write_file_meta_info
+
+    ds.SOPInstanceUID = uid(path)
+    body = DicomBytesIO()
+    body.is_little_endian, body.is_implicit_VR = True, implicit
+    write_dataset(body, ds)
+    meta = FileMetaDataset()
+    meta.MediaStorageSOPClassUID = ds.SOPClassUID
+    meta.MediaStorageSOPInstanceUID = ds.SOPInstanceUID
+    meta.TransferSyntaxUID = meta_syntax
+    head = DicomBytesIO()
+    head.is_little_endian, head.is_implicit_VR = True, False
+    write_file_meta_info(head, meta, enforce_standard=True)
+    with open(path, "wb") as f:
+        f.write(preamble + b"DICM" + head.getvalue() + body.getvalue())
+
+
+def odd_files():
+    """A data set in implicit VR under a meta group saying explicit (as some writers do), and a
+    file whose preamble is a TIFF header (dual-personality files)."""
+    ds = slice_at("mismatch", 17, "Mismatch", 0, (0.0, 0.0, 0.0))
+    hand_written(ds, os.path.join(OUT, "mismatch.dcm"), ExplicitVRLittleEndian, implicit=True)
+    ds = slice_at("tiffpre", 18, "TIFF preamble", 0, (0.0, 0.0, 0.0))
+    preamble = (b"II*\x00" + (600000).to_bytes(4, "little")).ljust(128, b"\x00")
+    hand_written(ds, os.path.join(OUT, "tiffpreamble.dcm"), ExplicitVRLittleEndian,
+                 implicit=False, preamble=preamble)
+
+
 def jpeg_lossless_folder():
     """Series 14 compressed by dcmcjpeg to JPEG lossless, first-order prediction (SV1)."""
     d = os.path.join(OUT, "jpegll")
@@ -304,5 +347,7 @@ if __name__ == "__main__":
     no_preamble_file()
     unsupported_file()
     rgb_folder()
+    derived_folder()
+    odd_files()
     jpeg_lossless_folder()
     print("fixtures written to", OUT)

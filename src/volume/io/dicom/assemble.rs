@@ -82,19 +82,28 @@ fn split_key(im: &Image) -> (Vec<i64>, u16, u16, Vec<i64>, String) {
     )
 }
 
-/// Groups `images` into series, sorted by UID; localizers and derived
-/// images are left out (and counted) unless `include_all`.
+/// Groups `images` into series, sorted by UID. Unless `include_all`, localizers are left out,
+/// and so are derived images in a series that also holds original ones (a screen capture among
+/// the slices); a series of derived images only (a reformat, a parameter map) is kept.
 pub(super) fn group(images: Vec<Image>, include_all: bool) -> (Vec<Series>, LeftOut) {
     let mut left = LeftOut::default();
     let mut by_uid: BTreeMap<String, Vec<Image>> = BTreeMap::new();
     for im in images {
         if !include_all && im.localizer {
             left.localizers += 1;
-        } else if !include_all && im.derived {
-            left.derived += 1;
         } else {
             by_uid.entry(im.series_uid.clone()).or_default().push(im);
         }
+    }
+    if !include_all {
+        for images in by_uid.values_mut() {
+            if images.iter().any(|im| !im.derived) {
+                let before = images.len();
+                images.retain(|im| !im.derived);
+                left.derived += before - images.len();
+            }
+        }
+        by_uid.retain(|_, images| !images.is_empty());
     }
     let mut series = Vec::new();
     for (uid, images) in by_uid {

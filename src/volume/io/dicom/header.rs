@@ -2,7 +2,7 @@
 //! frame (a classic file has one; an enhanced multi-frame file describes each frame in its
 //! functional groups), and the pixel format shared by the file's frames.
 
-use dicom_core::Tag;
+use dicom_core::{Tag, VR};
 use dicom_dictionary_std::tags;
 use dicom_object::InMemDicomObject;
 
@@ -30,12 +30,20 @@ pub(super) struct PixelFormat {
 }
 
 impl PixelFormat {
-    /// Bytes of one frame.
+    /// Bytes of one frame, as stored natively (YBR_FULL_422 keeps two samples a pixel: each
+    /// pair of pixels shares its colour).
     pub fn frame_bytes(&self) -> u64 {
-        u64::from(self.rows)
-            * u64::from(self.cols)
-            * u64::from(self.samples)
-            * u64::from(self.allocated / 8)
+        let samples = if self.subsampled() {
+            2
+        } else {
+            u64::from(self.samples)
+        };
+        u64::from(self.rows) * u64::from(self.cols) * samples * u64::from(self.allocated / 8)
+    }
+
+    /// Whether the colour is subsampled horizontally (YBR_FULL_422: Y1 Y2 Cb Cr).
+    pub fn subsampled(&self) -> bool {
+        self.samples == 3 && self.photometric == "YBR_FULL_422"
     }
 
     /// Whether the display shows the lowest value white (MONOCHROME1).
@@ -126,14 +134,33 @@ pub(super) struct Image {
     pub format: PixelFormat,
 }
 
-fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
-    let t = obj.get(tag)?.to_str().ok()?;
+/// The text of element `tag`: its value as a string, or, for a value some converter stored as
+/// UN (unknown), its bytes read as text (as dcmtk and pydicom read them).
+fn raw_text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+    let e = obj.get(tag)?;
+    let t = if e.vr() == VR::UN {
+        String::from_utf8_lossy(e.to_bytes().ok()?.as_ref()).into_owned()
+    } else {
+        e.to_str().ok()?.into_owned()
+    };
     let t = t.trim_matches(|c: char| c == '\0' || c.is_whitespace());
     (!t.is_empty()).then(|| t.to_string())
 }
 
+fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+    raw_text(obj, tag)
+}
+
 fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
-    let v = obj.get(tag)?.to_multi_float64().ok()?;
+    let e = obj.get(tag)?;
+    let v = if e.vr() == VR::UN {
+        raw_text(obj, tag)?
+            .split('\\')
+            .map(|x| x.trim().parse::<f64>().ok())
+            .collect::<Option<Vec<f64>>>()?
+    } else {
+        e.to_multi_float64().ok()?
+    };
     v.iter().all(|x| x.is_finite()).then_some(v)
 }
 
@@ -142,7 +169,11 @@ fn float(obj: &InMemDicomObject, tag: Tag) -> Option<f64> {
 }
 
 fn int(obj: &InMemDicomObject, tag: Tag) -> Option<i64> {
-    obj.get(tag)?.to_int::<i64>().ok()
+    let e = obj.get(tag)?;
+    if e.vr() == VR::UN {
+        return raw_text(obj, tag)?.split('\\').next()?.trim().parse().ok();
+    }
+    e.to_int::<i64>().ok()
 }
 
 fn uint(obj: &InMemDicomObject, tag: Tag) -> Option<u16> {

@@ -118,6 +118,8 @@ struct Scan {
     images: Vec<Image>,
     /// Files that could not be read, with why.
     skipped: Failures,
+    /// Images found, before any is left out.
+    images_found: usize,
     /// The first file's patient fields, when asked for.
     patient: Vec<(String, String)>,
 }
@@ -161,6 +163,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
         files: Vec::new(),
         images: Vec::new(),
         skipped: Vec::new(),
+        images_found: 0,
         patient: Vec::new(),
     };
     let mut spent = 0u64;
@@ -168,6 +171,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
         match r {
             Ok((scanned, images, patient)) => {
                 spent = spent.saturating_add(images.len() as u64 * IMAGE_COST);
+                out.images_found += images.len();
                 if spent > budget {
                     return Err(Error::TooLarge {
                         path: paths[i].clone(),
@@ -237,8 +241,8 @@ fn check_frames(path: &Path, format: &PixelFormat, pixels: &Pixels, budget: u64)
 /// Parses the walked data set of `part` with dicom-object.
 fn parse(path: &Path, part: &Part) -> Result<InMemDicomObject> {
     let ts = dicom_transfer_syntax_registry::TransferSyntaxRegistry
-        .get(&part.dataset_syntax)
-        .ok_or_else(|| Error::unsupported(path, read::syntax_name(&part.dataset_syntax)))?;
+        .get(part.syntax.dataset_uid())
+        .ok_or_else(|| Error::unsupported(path, read::syntax_name(part.syntax.dataset_uid())))?;
     InMemDicomObject::read_dataset_with_ts(&part.dataset[..], ts)
         .map_err(|e| Error::format(path, format!("DICOM header: {e}")))
 }
@@ -337,10 +341,6 @@ fn pick<'s>(path: &Path, series: &'s [Series], wanted: Option<&str>) -> Result<&
     };
     match wanted {
         None if series.len() == 1 => Ok(&series[0]),
-        None if series.is_empty() => Err(Error::format(
-            path,
-            "no image series (localizer and derived images are left out unless asked for)",
-        )),
         None => Err(Error::format(
             path,
             format!(
@@ -373,6 +373,16 @@ fn pick<'s>(path: &Path, series: &'s [Series], wanted: Option<&str>) -> Result<&
 pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = paths_of(path)?;
     let (scan, series, mut notes) = series_of(&files, opts)?;
+    if series.is_empty() {
+        let why = if scan.images_found == 0 && scan.skipped.is_empty() {
+            "no images: no pixel data (a report, a plan, a waveform, a directory)"
+        } else if scan.images_found == 0 {
+            "no readable images"
+        } else {
+            "no image series: localizer images are left out unless asked for"
+        };
+        return Err(Error::format(path, why));
+    }
     let series = pick(path, &series, opts.series.as_deref())?;
     let layout =
         assemble::layout(series, &|im| name(&scan, im)).map_err(|m| Error::format(path, m))?;
@@ -622,7 +632,6 @@ fn decode_fragments(
     let part = Part {
         dataset: dataset.to_vec(),
         syntax: syntax.clone(),
-        dataset_syntax: syntax.uid.clone(),
         pixels: Pixels::None,
     };
     let mut obj = parse(path, &part)?;

@@ -23,6 +23,8 @@ pub(super) struct Decode {
     pub planar: bool,
     /// Colour is YBR: the first sample is the luminance.
     pub ybr: bool,
+    /// YBR_FULL_422: pixels in pairs, `Y1 Y2 Cb Cr`.
+    pub subsampled: bool,
     /// `v * slope + intercept`.
     pub rescale: (f64, f64),
 }
@@ -39,6 +41,7 @@ impl Decode {
             samples: usize::from(format.samples),
             planar: format.planar,
             ybr: format.photometric.starts_with("YBR"),
+            subsampled: format.subsampled(),
             rescale,
         }
     }
@@ -84,6 +87,12 @@ impl Decode {
                 (_, true) => u32::from_be_bytes([s[0], s[1], s[2], s[3]]),
             }
         };
+        if self.subsampled {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = a * sample(raw(i / 2 * 4 + i % 2)) + b;
+            }
+            return;
+        }
         if self.samples == 3 {
             for (i, o) in out.iter_mut().enumerate() {
                 let at = |c: usize| {

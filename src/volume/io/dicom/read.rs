@@ -38,7 +38,8 @@ const UNDEFINED: u32 = u32::MAX;
 pub(super) struct Syntax {
     /// The transfer syntax UID.
     pub uid: String,
-    /// Explicit VR (else implicit).
+    /// The data set is explicit VR (else implicit): as it is encoded, which a few writers make
+    /// differ from what the UID says.
     pub explicit: bool,
     /// Big endian (the retired explicit VR big endian).
     pub big: bool,
@@ -73,6 +74,16 @@ impl Syntax {
             deflated,
             encapsulated,
         })
+    }
+
+    /// The syntax the data set is parsed in: how it is encoded (explicit little endian once
+    /// inflated).
+    pub fn dataset_uid(&self) -> &'static str {
+        match (self.explicit, self.big) {
+            (false, _) => "1.2.840.10008.1.2",
+            (true, false) => "1.2.840.10008.1.2.1",
+            (true, true) => "1.2.840.10008.1.2.2",
+        }
     }
 
     /// The syntax's name, as the standard gives it.
@@ -144,8 +155,6 @@ pub(super) struct Part {
     pub dataset: Vec<u8>,
     /// The transfer syntax of the file.
     pub syntax: Syntax,
-    /// The syntax `dataset` is in: the file's, or explicit little endian once inflated.
-    pub dataset_syntax: String,
     /// The pixel data.
     pub pixels: Pixels,
 }
@@ -156,6 +165,12 @@ pub(super) fn sniff(head: &[u8]) -> bool {
     head.get(128..132) == Some(b"DICM")
         || head.starts_with(b"DICM")
         || (head.len() >= 8 && head[..2] == [2, 0] && head[3] == 0 && is_vr(&head[4..6]))
+}
+
+/// Whether the bytes start like a data set with no meta group: the first tag in group 8
+/// (either byte order).
+fn bare(head: &[u8]) -> bool {
+    head.len() >= 8 && (head[..2] == [8, 0] || head[..2] == [0, 8])
 }
 
 fn is_vr(b: &[u8]) -> bool {
@@ -176,11 +191,37 @@ pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
         walk.skip(132).map_err(fail)?;
     } else if head.starts_with(b"DICM") {
         walk.skip(4).map_err(fail)?;
-    } else if !sniff(head) {
-        return Err(Error::format(path, "not a DICOM file (no DICM marker)"));
+    } else if !sniff(head) && !bare(head) {
+        return Err(Error::format(
+            path,
+            "not a DICOM file (no DICM marker, no file meta group, no data set)",
+        ));
     }
     let uid = walk.meta().map_err(fail)?;
-    let syntax = Syntax::from_uid(&uid).map_err(|m| Error::unsupported(path, m))?;
+    let mut first = [0u8; 6];
+    let got = walk.peek_into(&mut first).map_err(fail)?;
+    let looks_explicit = got == 6 && known_vr([first[4], first[5]]);
+    let syntax = match uid {
+        Some(uid) => {
+            let mut syntax = Syntax::from_uid(&uid).map_err(|m| Error::unsupported(path, m))?;
+            // A data set encoded otherwise than its meta group says (as some writers do) is
+            // read as it is encoded, as pydicom and dcmtk read it.
+            if !syntax.deflated && !syntax.big && got == 6 {
+                syntax.explicit = looks_explicit;
+            }
+            syntax
+        }
+        // No transfer syntax: the data set says how it is encoded.
+        None => {
+            let big = got >= 2 && first[0] == 0 && first[1] != 0;
+            let uid = match (big, looks_explicit) {
+                (true, _) => "1.2.840.10008.1.2.2",
+                (false, true) => "1.2.840.10008.1.2.1",
+                (false, false) => "1.2.840.10008.1.2",
+            };
+            Syntax::from_uid(uid).map_err(|m| Error::unsupported(path, m))?
+        }
+    };
     let (dataset, found) = if syntax.deflated {
         // The bytes looked ahead at are the stream's first.
         let rest = std::io::Cursor::new(walk.ahead).chain(walk.reader);
@@ -194,13 +235,11 @@ pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
             (true, true) => inner.native_in_memory().map_err(fail)?,
             (true, false) => Pixels::Deflated,
         };
-        let part = Part {
+        return Ok(Part {
             dataset: inner.kept,
             syntax,
-            dataset_syntax: "1.2.840.10008.1.2.1".into(),
             pixels,
-        };
-        return Ok(part);
+        });
     } else {
         let found = walk.dataset(syntax.explicit, syntax.big).map_err(fail)?;
         (std::mem::take(&mut walk.kept), found)
@@ -209,7 +248,7 @@ pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
         Pixels::None
     } else if syntax.encapsulated {
         if pixels {
-            walk.fragments().map_err(fail)?
+            walk.fragments(syntax.explicit).map_err(fail)?
         } else {
             Pixels::Encapsulated
         }
@@ -218,7 +257,6 @@ pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
     };
     Ok(Part {
         dataset,
-        dataset_syntax: syntax.uid.clone(),
         syntax,
         pixels,
     })
@@ -357,9 +395,9 @@ impl<R: Read> Walk<R> {
         &self.kept[self.kept.len() - n..]
     }
 
-    /// The file meta group (explicit VR little endian, group 2): its transfer syntax UID. A file
-    /// with no meta group is read as implicit VR little endian, as the standard's default.
-    fn meta(&mut self) -> Walked<String> {
+    /// The file meta group (explicit VR little endian, group 2): its transfer syntax UID, if it
+    /// states one.
+    fn meta(&mut self) -> Walked<Option<String>> {
         let start = self.kept.len();
         let mut uid = None;
         loop {
@@ -399,7 +437,7 @@ impl<R: Read> Walk<R> {
             }
         }
         self.kept.truncate(start);
-        Ok(uid.unwrap_or_else(|| "1.2.840.10008.1.2".into()))
+        Ok(uid.filter(|u| !u.is_empty()))
     }
 
     /// Walks the data set, keeping it, up to the top-level pixel data (its header left unread:
@@ -604,8 +642,8 @@ impl<R: Read> Walk<R> {
     }
 
     /// The fragments of the encapsulated pixel data that starts here.
-    fn fragments(&mut self) -> Walked<Pixels> {
-        let len = self.pixel_header(true, false)?;
+    fn fragments(&mut self, explicit: bool) -> Walked<Pixels> {
+        let len = self.pixel_header(explicit, false)?;
         if len != UNDEFINED {
             return bad("encapsulated pixel data with a defined length");
         }
