@@ -71,6 +71,17 @@ pub enum Error {
         /// What is known of the data, and any hint from its size or name.
         detail: String,
     },
+    /// A DICOM folder holds several series and none was named, the one named is not there, or
+    /// every image was a localizer left out.
+    #[error("{}: {message}", shown(path))]
+    Series {
+        /// The folder (or file).
+        path: PathBuf,
+        /// What is wrong, with the series listed.
+        message: String,
+        /// Whether localizers, left out, were all there was.
+        localizers: bool,
+    },
     /// A file that would be written exists already and overwriting was not asked for.
     #[error("{}: already exists", shown(path))]
     Exists {
@@ -152,6 +163,7 @@ impl Error {
             | Self::TooLarge { path, .. }
             | Self::Unsupported { path, .. }
             | Self::RawUndescribed { path, .. }
+            | Self::Series { path, .. }
             | Self::Exists { path } => Some(path),
             _ => None,
         }

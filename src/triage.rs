@@ -73,10 +73,16 @@ impl Entry {
     /// [`Entry::name`] with the path relative to the folder `root`.
     pub fn name_under(&self, root: &Path) -> String {
         let path = self.path.strip_prefix(root).unwrap_or(&self.path).display();
-        match (&self.label, &self.series) {
-            (Some(label), _) => format!("{path} [{label}]"),
-            (None, Some(key)) => format!("{path} [series {key}]"),
-            (None, None) => path.to_string(),
+        let series = match (&self.label, &self.series) {
+            (Some(label), _) => format!("[{label}]"),
+            (None, Some(key)) => format!("[series {key}]"),
+            (None, None) => return path.to_string(),
+        };
+        let path = path.to_string();
+        if path.is_empty() {
+            series
+        } else {
+            format!("{path} {series}")
         }
     }
 }

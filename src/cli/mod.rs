@@ -209,6 +209,10 @@ fn in_flag_terms(e: &Error) -> String {
             format!("{}: {detail}: give {}", path.display(), flags.join(" and "))
         }
         Error::Exists { .. } => format!("{e} (use --force to overwrite it)"),
+        Error::Series {
+            localizers: true, ..
+        } => format!("{e} (--include-localizers keeps them)"),
+        Error::Series { .. } => format!("{e} (pick one with --series N|UID)"),
         _ => e.to_string(),
     }
 }

@@ -341,14 +341,11 @@ fn pick<'s>(path: &Path, series: &'s [Series], wanted: Option<&str>) -> Result<&
     };
     match wanted {
         None if series.len() == 1 => Ok(&series[0]),
-        None => Err(Error::format(
-            path,
-            format!(
-                "{} series; choose one by its position or UID: {}",
-                series.len(),
-                listing()
-            ),
-        )),
+        None => Err(Error::Series {
+            path: path.to_path_buf(),
+            message: format!("{} series: {}", series.len(), listing()),
+            localizers: false,
+        }),
         Some(w) => {
             let by_key: Vec<&Series> = series.iter().filter(|s| s.key == w).collect();
             let by_uid: Vec<&Series> = series.iter().filter(|s| s.uid == w).collect();
@@ -360,10 +357,11 @@ fn pick<'s>(path: &Path, series: &'s [Series], wanted: Option<&str>) -> Result<&
             }
             match w.parse::<usize>() {
                 Ok(n) if (1..=series.len()).contains(&n) => Ok(&series[n - 1]),
-                _ => Err(Error::format(
-                    path,
-                    format!("no series {w:?}; the series are: {}", listing()),
-                )),
+                _ => Err(Error::Series {
+                    path: path.to_path_buf(),
+                    message: format!("no series {w:?}; the series are: {}", listing()),
+                    localizers: false,
+                }),
             }
         }
     }
@@ -374,14 +372,20 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = paths_of(path)?;
     let (scan, series, mut notes) = series_of(&files, opts)?;
     if series.is_empty() {
-        let why = if scan.images_found == 0 && scan.skipped.is_empty() {
-            "no images: no pixel data (a report, a plan, a waveform, a directory)"
+        return Err(if scan.images_found == 0 && scan.skipped.is_empty() {
+            Error::format(
+                path,
+                "no images: no pixel data (a report, a plan, a waveform, a directory)",
+            )
         } else if scan.images_found == 0 {
-            "no readable images"
+            Error::format(path, "no readable images")
         } else {
-            "no image series: localizer images are left out unless asked for"
-        };
-        return Err(Error::format(path, why));
+            Error::Series {
+                path: path.to_path_buf(),
+                message: "no image series: only localizer images, which are left out".into(),
+                localizers: true,
+            }
+        });
     }
     let series = pick(path, &series, opts.series.as_deref())?;
     let layout =
