@@ -30,7 +30,7 @@ pub(super) struct PixelFormat {
 }
 
 impl PixelFormat {
-    /// Bytes of one frame, as stored natively (YBR_FULL_422 keeps two samples a pixel: each
+    /// Bytes of one frame, as stored natively (`YBR_FULL_422` keeps two samples a pixel: each
     /// pair of pixels shares its colour).
     pub fn frame_bytes(&self) -> u64 {
         let samples = if self.subsampled() {
@@ -41,7 +41,7 @@ impl PixelFormat {
         u64::from(self.rows) * u64::from(self.cols) * samples * u64::from(self.allocated / 8)
     }
 
-    /// Whether the colour is subsampled horizontally (YBR_FULL_422: Y1 Y2 Cb Cr).
+    /// Whether the colour is subsampled horizontally (`YBR_FULL_422`: Y1 Y2 Cb Cr).
     pub fn subsampled(&self) -> bool {
         self.samples == 3 && self.photometric == "YBR_FULL_422"
     }

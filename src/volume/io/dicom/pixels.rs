@@ -23,7 +23,7 @@ pub(super) struct Decode {
     pub planar: bool,
     /// Colour is YBR: the first sample is the luminance.
     pub ybr: bool,
-    /// YBR_FULL_422: pixels in pairs, `Y1 Y2 Cb Cr`.
+    /// `YBR_FULL_422`: pixels in pairs, `Y1 Y2 Cb Cr`.
     pub subsampled: bool,
     /// `v * slope + intercept`.
     pub rescale: (f64, f64),
