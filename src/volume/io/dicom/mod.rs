@@ -367,25 +367,30 @@ fn pick<'s>(path: &Path, series: &'s [Series], wanted: Option<&str>) -> Result<&
     }
 }
 
+/// Why a scan found no series.
+fn no_series(path: &Path, scan: &Scan) -> Error {
+    if scan.images_found == 0 && scan.skipped.is_empty() {
+        Error::format(
+            path,
+            "no images: no pixel data (a report, a plan, a waveform, a directory)",
+        )
+    } else if scan.images_found == 0 {
+        Error::format(path, "no readable images")
+    } else {
+        Error::Series {
+            path: path.to_path_buf(),
+            message: "no image series: only localizer images, which are left out".into(),
+            localizers: true,
+        }
+    }
+}
+
 /// Loads the DICOM file or folder at `path` as a volume.
 pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = paths_of(path)?;
     let (scan, series, mut notes) = series_of(&files, opts)?;
     if series.is_empty() {
-        return Err(if scan.images_found == 0 && scan.skipped.is_empty() {
-            Error::format(
-                path,
-                "no images: no pixel data (a report, a plan, a waveform, a directory)",
-            )
-        } else if scan.images_found == 0 {
-            Error::format(path, "no readable images")
-        } else {
-            Error::Series {
-                path: path.to_path_buf(),
-                message: "no image series: only localizer images, which are left out".into(),
-                localizers: true,
-            }
-        });
+        return Err(no_series(path, &scan));
     }
     let series = pick(path, &series, opts.series.as_deref())?;
     let layout =

@@ -167,6 +167,26 @@ pub(super) fn sniff(head: &[u8]) -> bool {
         || (head.len() >= 8 && head[..2] == [2, 0] && head[3] == 0 && is_vr(&head[4..6]))
 }
 
+/// The syntax of a file whose meta group names `uid` (or none) and whose data set starts with
+/// `first`: the UID's, read as the data set is really encoded (some writers put implicit VR
+/// under an explicit UID, as pydicom and dcmtk accept), or, without a UID, as the data set says.
+fn encoding(uid: Option<&str>, first: &[u8]) -> std::result::Result<Syntax, String> {
+    let looks_explicit = first.len() == 6 && known_vr([first[4], first[5]]);
+    let Some(uid) = uid else {
+        let big = first.len() >= 2 && first[0] == 0 && first[1] != 0;
+        return Syntax::from_uid(match (big, looks_explicit) {
+            (true, _) => "1.2.840.10008.1.2.2",
+            (false, true) => "1.2.840.10008.1.2.1",
+            (false, false) => "1.2.840.10008.1.2",
+        });
+    };
+    let mut syntax = Syntax::from_uid(uid)?;
+    if !syntax.deflated && !syntax.big && first.len() == 6 {
+        syntax.explicit = looks_explicit;
+    }
+    Ok(syntax)
+}
+
 /// Whether the bytes start like a data set with no meta group: the first tag in group 8
 /// (either byte order).
 fn bare(head: &[u8]) -> bool {
@@ -200,28 +220,8 @@ pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
     let uid = walk.meta().map_err(fail)?;
     let mut first = [0u8; 6];
     let got = walk.peek_into(&mut first).map_err(fail)?;
-    let looks_explicit = got == 6 && known_vr([first[4], first[5]]);
-    let syntax = match uid {
-        Some(uid) => {
-            let mut syntax = Syntax::from_uid(&uid).map_err(|m| Error::unsupported(path, m))?;
-            // A data set encoded otherwise than its meta group says (as some writers do) is
-            // read as it is encoded, as pydicom and dcmtk read it.
-            if !syntax.deflated && !syntax.big && got == 6 {
-                syntax.explicit = looks_explicit;
-            }
-            syntax
-        }
-        // No transfer syntax: the data set says how it is encoded.
-        None => {
-            let big = got >= 2 && first[0] == 0 && first[1] != 0;
-            let uid = match (big, looks_explicit) {
-                (true, _) => "1.2.840.10008.1.2.2",
-                (false, true) => "1.2.840.10008.1.2.1",
-                (false, false) => "1.2.840.10008.1.2",
-            };
-            Syntax::from_uid(uid).map_err(|m| Error::unsupported(path, m))?
-        }
-    };
+    let syntax =
+        encoding(uid.as_deref(), &first[..got]).map_err(|m| Error::unsupported(path, m))?;
     let (dataset, found) = if syntax.deflated {
         // The bytes looked ahead at are the stream's first.
         let rest = std::io::Cursor::new(walk.ahead).chain(walk.reader);
