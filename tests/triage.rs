@@ -130,7 +130,7 @@ fn every_volume_is_a_row_and_broken_files_are_rows_with_their_error() {
     assert!(table.lines().nth(4).unwrap().starts_with("!! "));
     let (_, csv, _) = run(&["triage", root, "--csv", "--slabs", "2"]);
     assert_eq!(csv.lines().count(), 9);
-    assert!(csv.starts_with("path,format,dims,"));
+    assert!(csv.starts_with("path,series,format,dims,"));
     // Everything loads: 0.
     let good = dir.path().join("ct/deeper");
     let (code, _, stderr) = run(&["triage", good.to_str().unwrap(), "--slabs", "2"]);

@@ -108,6 +108,13 @@ def slice_at(series, number, description, k, position, orientation=(1, 0, 0, 0, 
     return ds
 
 
+def fresh(name):
+    """The fixture folder `name`, emptied."""
+    d = os.path.join(OUT, name)
+    shutil.rmtree(d, ignore_errors=True)
+    return d
+
+
 def shuffled_name(series, k):
     return "IM" + hashlib.sha1(f"{series}-{k}".encode()).hexdigest()[:8].upper()
 
@@ -115,8 +122,7 @@ def shuffled_name(series, k):
 def ct_folder():
     """Series 3 (12 axial slices 2.5 mm apart, shuffled file names, instance numbers reversed),
     series 4 (6 sagittal slices), and a localizer, in one folder."""
-    d = os.path.join(OUT, "ct")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("ct")
     for k in range(12):
         ds = slice_at("ct", 3, "Abdomen 2.5", k, (-8.0, -6.0, 40.0 + 2.5 * k), instance=12 - k)
         save(ds, os.path.join(d, shuffled_name("ct", k)))
@@ -132,8 +138,7 @@ def ct_folder():
 
 def gap_folder():
     """Implicit VR little endian; 8 positions 2 mm apart with the slice at k = 5 missing."""
-    d = os.path.join(OUT, "gap")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("gap")
     for k in range(8):
         if k == 5:
             continue
@@ -143,8 +148,7 @@ def gap_folder():
 
 def tilt_folder():
     """Gantry tilt of 15 degrees: each slice 3 mm up and 3*tan(15°) mm along y."""
-    d = os.path.join(OUT, "tilt")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("tilt")
     t = math.tan(math.radians(15.0))
     for k in range(8):
         ds = slice_at("tilt", 6, "Tilted head", k, (0.0, 3.0 * t * k, 3.0 * k))
@@ -154,8 +158,7 @@ def tilt_folder():
 
 def mono1_folder():
     """MONOCHROME1, unsigned, 12 bits stored in 16."""
-    d = os.path.join(OUT, "mono1")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("mono1")
     for k in range(4):
         ds = slice_at("mono1", 7, "Inverted", k, (0.0, 0.0, 1.5 * k))
         del ds.RescaleSlope
@@ -166,8 +169,7 @@ def mono1_folder():
 
 def rescale_folder():
     """Rescale slope and intercept that change from slice to slice."""
-    d = os.path.join(OUT, "rescale")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("rescale")
     for k in range(5):
         ds = slice_at("rescale", 8, "Rescaled", k, (0.0, 0.0, 2.0 * k))
         ds.RescaleSlope = f"{0.5 * (k + 1):g}"
@@ -178,8 +180,7 @@ def rescale_folder():
 def fourd_folder():
     """Four positions, each acquired twice (temporal positions 1 and 2): a 4D series. The second
     time point's values are the first's plus 500."""
-    d = os.path.join(OUT, "fourd")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("fourd")
     for t in range(2):
         for k in range(4):
             ds = slice_at("fourd", 9, "Dynamic", k, (0.0, 0.0, 4.0 * k), instance=t * 4 + k + 1)
@@ -255,8 +256,7 @@ def unsupported_file():
 
 def rgb_folder():
     """Two RGB slices (8 bits, interleaved): R = stored % 256, G = (2 stored) % 256, B = 255 - R."""
-    d = os.path.join(OUT, "rgb")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("rgb")
     for k in range(2):
         ds = slice_at("rgb", 15, "Colour", k, (0.0, 0.0, 2.0 * k))
         del ds.RescaleSlope
@@ -277,8 +277,7 @@ def rgb_folder():
 def derived_folder():
     """A series of derived images only (a reformat): kept, unlike derived images mixed into a
     series of original ones."""
-    d = os.path.join(OUT, "derived")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("derived")
     for k in range(3):
         ds = slice_at("derived", 16, "MPR", k, (0.0, 0.0, 1.0 * k))
         ds.ImageType = ["DERIVED", "SECONDARY", "MPR"]
@@ -319,8 +318,7 @@ def odd_files():
 
 def jpeg_lossless_folder():
     """Series 14 compressed by dcmcjpeg to JPEG lossless, first-order prediction (SV1)."""
-    d = os.path.join(OUT, "jpegll")
-    shutil.rmtree(d, ignore_errors=True)
+    d = fresh("jpegll")
     if shutil.which("dcmcjpeg") is None:
         sys.exit("dcmcjpeg (Debian package dcmtk) is needed for the JPEG lossless series")
     tmp = os.path.join(OUT, "jpegll-native")

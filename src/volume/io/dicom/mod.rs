@@ -26,7 +26,7 @@ use serde::Serialize;
 use self::assemble::Series;
 use self::header::{Image, PixelFormat};
 use self::pixels::Decode;
-use self::read::{Part, Pixels, Syntax};
+use self::read::{Pixels, Syntax};
 use super::data::{check_budget, one_volume, voxel_buffer};
 use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
@@ -133,20 +133,33 @@ pub type Failures = Vec<(PathBuf, Error)>;
 /// Walks and parses the header of each of `paths` (in parallel), stopping at the pixel data.
 fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
     let budget = opts.max_memory;
+    // The images' descriptions, charged as each file is described, before it is.
+    let spent = std::sync::atomic::AtomicU64::new(0);
     let results: Vec<Result<Described>> = paths
         .par_iter()
         .enumerate()
         .map(|(i, path)| {
             let part = read::read(path, budget, false)?;
-            let obj = parse(path, &part)?;
+            let obj = parse(path, &part.dataset, &part.syntax)?;
             // A file without pixels (a DICOMDIR, a report, a presentation state) has no image.
             let images = if matches!(part.pixels, Pixels::None) {
                 Vec::new()
             } else {
-                check_frames(path, &header::pixel_format(&obj), &part.pixels, budget)?;
+                let format = header::pixel_format(&obj);
+                check_frames(path, &format, &part.pixels)?;
+                let cost = u64::from(format.frames).saturating_mul(IMAGE_COST);
+                let total = spent.fetch_add(cost, std::sync::atomic::Ordering::Relaxed);
+                if total.saturating_add(cost) > budget {
+                    return Err(Error::TooLarge {
+                        path: path.clone(),
+                        what: format!("the descriptions of {} frames", format.frames),
+                        needed: total.saturating_add(cost),
+                        limit: budget,
+                    });
+                }
                 header::images(i, &obj)
             };
-            let patient = if opts.show_phi && i == 0 {
+            let patient = if opts.show_phi {
                 header::patient(&obj)
             } else {
                 Vec::new()
@@ -166,20 +179,10 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
         images_found: 0,
         patient: Vec::new(),
     };
-    let mut spent = 0u64;
-    for (i, r) in results.into_iter().enumerate() {
+    for (r, path) in results.into_iter().zip(paths) {
         match r {
             Ok((scanned, images, patient)) => {
-                spent = spent.saturating_add(images.len() as u64 * IMAGE_COST);
                 out.images_found += images.len();
-                if spent > budget {
-                    return Err(Error::TooLarge {
-                        path: paths[i].clone(),
-                        what: "the descriptions of its images".into(),
-                        needed: spent,
-                        limit: budget,
-                    });
-                }
                 if out.patient.is_empty() {
                     out.patient = patient;
                 }
@@ -191,18 +194,18 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
                 }));
                 out.files.push(scanned);
             }
-            // One file alone failing is the error; in a folder it is left out and said.
-            Err(e) if paths.len() == 1 => return Err(e),
-            Err(e) => out.skipped.push((paths[i].clone(), e)),
+            // One file alone failing is the error, and so is the budget running out; in a
+            // folder a file that cannot be read is left out and said.
+            Err(e) if paths.len() == 1 || matches!(e, Error::TooLarge { .. }) => return Err(e),
+            Err(e) => out.skipped.push((path.clone(), e)),
         }
     }
     Ok(out)
 }
 
 /// Checks the frames a header claims against the pixel data there is (native) or could be
-/// (each compressed frame is at least one 8-byte fragment header), and their descriptions
-/// against the budget, before one is described.
-fn check_frames(path: &Path, format: &PixelFormat, pixels: &Pixels, budget: u64) -> Result<()> {
+/// (each compressed frame is at least one 8-byte fragment header).
+fn check_frames(path: &Path, format: &PixelFormat, pixels: &Pixels) -> Result<()> {
     let frames = u64::from(format.frames);
     let bytes = frames.saturating_mul(format.frame_bytes());
     match pixels {
@@ -226,24 +229,16 @@ fn check_frames(path: &Path, format: &PixelFormat, pixels: &Pixels, budget: u64)
         }
         _ => {}
     }
-    let needed = frames.saturating_mul(IMAGE_COST);
-    if needed > budget {
-        return Err(Error::TooLarge {
-            path: path.to_path_buf(),
-            what: format!("the descriptions of {frames} frames"),
-            needed,
-            limit: budget,
-        });
-    }
     Ok(())
 }
 
-/// Parses the walked data set of `part` with dicom-object.
-fn parse(path: &Path, part: &Part) -> Result<InMemDicomObject> {
+/// Parses a walked `dataset`, encoded as `syntax` says, with dicom-object.
+fn parse(path: &Path, dataset: &[u8], syntax: &Syntax) -> Result<InMemDicomObject> {
+    let uid = syntax.dataset_uid();
     let ts = dicom_transfer_syntax_registry::TransferSyntaxRegistry
-        .get(part.syntax.dataset_uid())
-        .ok_or_else(|| Error::unsupported(path, read::syntax_name(part.syntax.dataset_uid())))?;
-    InMemDicomObject::read_dataset_with_ts(&part.dataset[..], ts)
+        .get(uid)
+        .ok_or_else(|| Error::unsupported(path, read::syntax_name(uid)))?;
+    InMemDicomObject::read_dataset_with_ts(dataset, ts)
         .map_err(|e| Error::format(path, format!("DICOM header: {e}")))
 }
 
@@ -638,12 +633,7 @@ fn decode_fragments(
 ) -> Result<()> {
     let format = &frames[0].0.format;
     check_jpeg(path, syntax, format, &fragments)?;
-    let part = Part {
-        dataset: dataset.to_vec(),
-        syntax: syntax.clone(),
-        pixels: Pixels::None,
-    };
-    let mut obj = parse(path, &part)?;
+    let mut obj = parse(path, dataset, syntax)?;
     obj.put(DataElement::new(
         tags::PIXEL_DATA,
         VR::OB,
