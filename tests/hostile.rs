@@ -787,3 +787,24 @@ fn fragment(sof: [u8; 6]) -> Vec<u8> {
     body.extend([0xFE, 0xFF, 0xDD, 0xE0, 0, 0, 0, 0]);
     body
 }
+
+#[test]
+fn dicom_errors_quote_no_header_values() {
+    // A transfer syntax whose length runs over the data set's first elements: the message
+    // must not carry them (a patient's name among them) out.
+    let dir = tempfile::tempdir().unwrap();
+    let mut uid = b"1.2.840.10008.1.2.1\0".to_vec();
+    uid.extend(element(0x10, 0x10, *b"PN", b"Secret^Patient"));
+    let path = dir.path().join("leak.dcm");
+    let mut bytes = vec![0u8; 128];
+    bytes.extend(b"DICM");
+    bytes.extend(element(2, 0x10, *b"UI", &uid));
+    std::fs::write(&path, bytes).unwrap();
+    let (out, _) = run(&["info", s(&path)], 64 << 20);
+    fails(
+        &out,
+        "leak.dcm",
+        "the transfer syntax in the file meta group is not a UID",
+    );
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("Secret"));
+}

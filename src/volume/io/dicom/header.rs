@@ -82,7 +82,8 @@ impl PixelFormat {
                     .into(),
             ),
             (s, p) => Some(format!(
-                "photometric interpretation {p:?} with {s} samples per pixel"
+                "photometric interpretation {:?} with {s} samples per pixel",
+                p.chars().take(24).collect::<String>()
             )),
         }
     }

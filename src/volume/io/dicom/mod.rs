@@ -239,7 +239,23 @@ fn parse(path: &Path, dataset: &[u8], syntax: &Syntax) -> Result<InMemDicomObjec
         .get(uid)
         .ok_or_else(|| Error::unsupported(path, read::syntax_name(uid)))?;
     InMemDicomObject::read_dataset_with_ts(dataset, ts)
-        .map_err(|e| Error::format(path, format!("DICOM header: {e}")))
+        .map_err(|e| Error::format(path, format!("DICOM header: {}", quoted(&e))))
+}
+
+/// A dicom-rs error as a message may quote it: on one line, control characters escaped, and
+/// short (it must not carry a header's values out, such as a patient's name).
+fn quoted(e: &dyn std::fmt::Display) -> String {
+    let text = e.to_string();
+    let line = text.lines().next().unwrap_or_default();
+    let mut out: String = line
+        .chars()
+        .take(120)
+        .flat_map(char::escape_default)
+        .collect();
+    if line.chars().count() > 120 {
+        out.push('…');
+    }
+    out
 }
 
 /// The series the files in `paths` hold, sorted by series number then UID; localizers and
@@ -645,17 +661,21 @@ fn decode_fragments(
         .media_storage_sop_instance_uid("2.25.0");
     let obj = obj
         .with_meta(meta)
-        .map_err(|e| Error::format(path, format!("DICOM header: {e}")))?;
+        .map_err(|e| Error::format(path, format!("DICOM header: {}", quoted(&e))))?;
     for (im, plane) in frames {
         let decoded = obj.decode_pixel_data_frame(im.frame).map_err(|e| {
             Error::format(
                 path,
-                format!("{} pixel data: {e}", read::syntax_name(&syntax.uid)),
+                format!(
+                    "{} pixel data: {}",
+                    read::syntax_name(&syntax.uid),
+                    quoted(&e)
+                ),
             )
         })?;
-        let src = decoded
-            .frame_data(0)
-            .map_err(|e| Error::format(path, format!("decoded frame {}: {e}", im.frame)))?;
+        let src = decoded.frame_data(0).map_err(|e| {
+            Error::format(path, format!("decoded frame {}: {}", im.frame, quoted(&e)))
+        })?;
         // The decoders give interleaved RGB for colour.
         let mut f = im.format.clone();
         f.planar = false;

@@ -222,7 +222,7 @@ pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
     let got = walk.peek_into(&mut first).map_err(fail)?;
     let syntax =
         encoding(uid.as_deref(), &first[..got]).map_err(|m| Error::unsupported(path, m))?;
-    let (dataset, found) = if syntax.deflated {
+    if syntax.deflated {
         // The bytes looked ahead at are the stream's first.
         let rest = std::io::Cursor::new(walk.ahead).chain(walk.reader);
         let inflated = flate2::bufread::DeflateDecoder::new(BufReader::new(rest));
@@ -240,10 +240,9 @@ pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
             syntax,
             pixels,
         });
-    } else {
-        let found = walk.dataset(syntax.explicit, syntax.big).map_err(fail)?;
-        (std::mem::take(&mut walk.kept), found)
-    };
+    }
+    let found = walk.dataset(syntax.explicit, syntax.big).map_err(fail)?;
+    let dataset = std::mem::take(&mut walk.kept);
     let pixels = if !found {
         Pixels::None
     } else if syntax.encapsulated {
@@ -433,7 +432,12 @@ impl<R: Read> Walk<R> {
             self.keep(u64::from(len), "the file meta group")?;
             if element == 0x0010 {
                 let text = String::from_utf8_lossy(&self.kept[at..]);
-                uid = Some(text.trim_end_matches(['\0', ' ']).to_string());
+                let text = text.trim_end_matches(['\0', ' ']);
+                // Quoted in messages, so checked first: a UID is at most 64 digits and dots.
+                if text.len() > 64 || !text.chars().all(|c| c.is_ascii_digit() || c == '.') {
+                    return bad("the transfer syntax in the file meta group is not a UID");
+                }
+                uid = Some(text.to_string());
             }
         }
         self.kept.truncate(start);
