@@ -144,3 +144,30 @@ fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
     tmux.keys("q");
     tmux.wait_for("EXITED 0", 30);
 }
+
+#[test]
+fn a_folder_of_dicom_series_opens_as_a_list_of_series() {
+    if Command::new("tmux").arg("-V").output().is_err() {
+        eprintln!("SKIPPED: tmux is not installed, so the DICOM folder smoke test cannot run");
+        return;
+    }
+    let ct = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/ct");
+    let command = format!(
+        "{} {} --protocol blocks --slabs 2; echo EXITED $?; sleep 60",
+        env!("CARGO_BIN_EXE_slabscope"),
+        ct.display()
+    );
+    let tmux = Tmux::start("dicom", &command, (120, 32));
+    // Two series (the localizer left out), named by number and description.
+    let screen = tmux.wait_for("(2 looked at)", 120);
+    assert!(
+        screen.contains("[series 3 \"Abdomen 2.5\"]")
+            && screen.contains("[series 4 \"Sagittal MPR\"]"),
+        "{screen}"
+    );
+    assert!(!screen.contains("Topogram"), "{screen}");
+    tmux.keys("NPage");
+    tmux.wait_for("volume 2 of 2: [series 4 \"Sagittal MPR\"]", 30);
+    tmux.keys("q");
+    tmux.wait_for("EXITED 0", 30);
+}
