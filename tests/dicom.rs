@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
+use slabscope::volume::VoxelType;
 use slabscope::{LoadOptions, Loaded, Volume};
 
 fn data(name: &str) -> PathBuf {
@@ -78,6 +79,8 @@ fn a_series_with_shuffled_names_is_sorted_along_the_normal() {
     let v = &l.volume;
     assert_eq!(v.dims(), [24, 20, 12]);
     assert_eq!(v.spacing(), [0.8, 0.7, 2.5]);
+    // Signed 16-bit samples less 1024 whose values fit in i16: i16.
+    assert_eq!(v.voxel_type(), VoxelType::I16);
     check_voxels(v, |i, j, k| stored(i, j, k) - 1024.0);
     let t = ras(
         [[0.8, 0.0, 0.0], [0.0, 0.7, 0.0], [0.0, 0.0, 2.5]],
@@ -184,12 +187,14 @@ fn gantry_tilt_is_a_sheared_transform_or_resampled_away() {
 #[test]
 fn monochrome1_is_inverted_over_its_stored_bits() {
     let l = load("mono1");
+    assert_eq!(l.volume.voxel_type(), VoxelType::U16);
     check_voxels(&l.volume, |i, j, k| 4095.0 - stored(i, j, k));
 }
 
 #[test]
 fn rescale_is_applied_slice_by_slice() {
     let l = load("rescale");
+    assert_eq!(l.volume.voxel_type(), VoxelType::F32);
     check_voxels(&l.volume, |i, j, k| {
         stored(i, j, k) * 0.5 * (k + 1) as f32 - 100.0 * k as f32
     });

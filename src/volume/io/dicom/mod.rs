@@ -460,7 +460,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
     }
     let spacing = layout.spacing;
-    let ty = voxel_type(&first.format, series);
+    let ty = voxel_type(series, &voxels);
     let mut volume = Volume::new(dims, spacing, ty, voxels).map_err(|e| e.reached_from(path))?;
     if let Some((m, origin)) = lps {
         let t = WorldTransform::lps(m, origin);
@@ -527,24 +527,42 @@ fn check_pixels(path: &Path, scan: &Scan, series: &Series, notes: &mut Vec<Strin
     Ok(())
 }
 
-/// The voxel type the values have: the stored type when no rescale or inversion makes them
-/// fractional, else f32.
-fn voxel_type(format: &PixelFormat, series: &Series) -> VoxelType {
+/// The voxel type the values have: the smallest integer type that holds them all when every
+/// rescale keeps them integers, else f32.
+fn voxel_type(series: &Series, voxels: &[f32]) -> VoxelType {
     let integral = series.images.iter().all(|im| {
-        let (s, i) = im.rescale;
-        s.fract() == 0.0 && i.fract() == 0.0 && s.abs() <= 1.0
-    }) && !format.colour();
-    match (integral, format.allocated, format.signed) {
-        (true, 8, false) => VoxelType::U8,
-        (true, 8, true) => VoxelType::I8,
-        (true, 16, false) if series.images.iter().all(|im| im.rescale == (1.0, 0.0)) => {
-            VoxelType::U16
-        }
-        (true, 16, _) => VoxelType::I16,
-        (true, _, false) => VoxelType::U32,
-        (true, _, true) => VoxelType::I32,
-        _ => VoxelType::F32,
+        let (slope, intercept) = im.rescale;
+        slope.fract() == 0.0 && intercept.fract() == 0.0 && !im.format.colour()
+    });
+    if !integral {
+        return VoxelType::F32;
     }
+    let (lo, hi) = voxels
+        .par_iter()
+        .filter(|v| v.is_finite())
+        .fold(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |(lo, hi), &v| (lo.min(v), hi.max(v)),
+        )
+        .reduce(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    let (lo, hi) = (f64::from(lo), f64::from(hi));
+    [
+        VoxelType::U8,
+        VoxelType::I8,
+        VoxelType::U16,
+        VoxelType::I16,
+        VoxelType::U32,
+        VoxelType::I32,
+    ]
+    .into_iter()
+    .find(|t| {
+        let (tlo, thi) = t.range();
+        tlo <= lo && hi <= thi
+    })
+    .unwrap_or(VoxelType::F32)
 }
 
 /// Reads the slices `order` names into planes of their own (for resampling).

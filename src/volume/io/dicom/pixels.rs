@@ -13,6 +13,8 @@ pub(super) struct Decode {
     pub stored: u32,
     /// Two's complement.
     pub signed: bool,
+    /// The smallest and largest stored value.
+    pub range: (f64, f64),
     /// Samples are big endian.
     pub big: bool,
     /// Invert (MONOCHROME1): `lo + hi - v` over the stored range.
@@ -36,6 +38,7 @@ impl Decode {
             bytes: usize::from(format.allocated / 8),
             stored: u32::from(format.stored),
             signed: format.signed,
+            range: stored_range(format),
             big,
             invert: format.inverted(),
             samples: usize::from(format.samples),
@@ -46,20 +49,10 @@ impl Decode {
         }
     }
 
-    /// The range of stored values.
-    fn range(&self) -> (f64, f64) {
-        let s = self.stored;
-        if self.signed {
-            (-(2f64.powi(s as i32 - 1)), 2f64.powi(s as i32 - 1) - 1.0)
-        } else {
-            (0.0, 2f64.powi(s as i32) - 1.0)
-        }
-    }
-
     /// Decodes the samples `src` of one frame into the values `out` (one per pixel).
     pub fn frame(&self, src: &[u8], out: &mut [f32]) {
         let n = out.len();
-        let (lo, hi) = self.range();
+        let (lo, hi) = self.range;
         let (slope, intercept) = self.rescale;
         // Inversion and rescale folded into one affine map of the stored value.
         let (a, b) = if self.invert {
@@ -129,6 +122,16 @@ impl Decode {
                 }
             }
         }
+    }
+}
+
+/// The smallest and largest value the stored bits of `format` hold.
+fn stored_range(format: &PixelFormat) -> (f64, f64) {
+    let bits = i32::from(format.stored);
+    if format.signed {
+        (-(2f64.powi(bits - 1)), 2f64.powi(bits - 1) - 1.0)
+    } else {
+        (0.0, 2f64.powi(bits) - 1.0)
     }
 }
 
