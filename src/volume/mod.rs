@@ -132,6 +132,14 @@ impl Volume {
         self
     }
 
+    /// This volume, its voxels said to be of type `ty` (a reader that learns the type from the
+    /// values, after they are read).
+    #[must_use]
+    pub(crate) fn with_voxel_type(mut self, ty: VoxelType) -> Self {
+        self.voxel_type = ty;
+        self
+    }
+
     /// The voxel-to-world transform: to RAS+ mm, or spacing on the diagonal when the file states
     /// no orientation.
     #[must_use]

@@ -460,8 +460,10 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
     }
     let spacing = layout.spacing;
-    let ty = voxel_type(series, &voxels);
-    let mut volume = Volume::new(dims, spacing, ty, voxels).map_err(|e| e.reached_from(path))?;
+    let mut volume =
+        Volume::new(dims, spacing, VoxelType::F32, voxels).map_err(|e| e.reached_from(path))?;
+    let ty = voxel_type(series, &volume.stats());
+    volume = volume.with_voxel_type(ty);
     if let Some((m, origin)) = lps {
         let t = WorldTransform::lps(m, origin);
         if t.is_usable() {
@@ -527,28 +529,14 @@ fn check_pixels(path: &Path, scan: &Scan, series: &Series, notes: &mut Vec<Strin
     Ok(())
 }
 
-/// The voxel type the values have: the smallest integer type that holds them all when every
-/// rescale keeps them integers, else f32.
-fn voxel_type(series: &Series, voxels: &[f32]) -> VoxelType {
+/// The voxel type the values have: the smallest integer type that holds them all (`stats`)
+/// when every rescale keeps them integers, else f32.
+fn voxel_type(series: &Series, stats: &crate::volume::Stats) -> VoxelType {
     let integral = series.images.iter().all(|im| {
         let (slope, intercept) = im.rescale;
         slope.fract() == 0.0 && intercept.fract() == 0.0 && !im.format.colour()
     });
-    if !integral {
-        return VoxelType::F32;
-    }
-    let (lo, hi) = voxels
-        .par_iter()
-        .filter(|v| v.is_finite())
-        .fold(
-            || (f32::INFINITY, f32::NEG_INFINITY),
-            |(lo, hi), &v| (lo.min(v), hi.max(v)),
-        )
-        .reduce(
-            || (f32::INFINITY, f32::NEG_INFINITY),
-            |a, b| (a.0.min(b.0), a.1.max(b.1)),
-        );
-    let (lo, hi) = (f64::from(lo), f64::from(hi));
+    let (lo, hi) = (f64::from(stats.min), f64::from(stats.max));
     [
         VoxelType::U8,
         VoxelType::I8,
@@ -560,7 +548,7 @@ fn voxel_type(series: &Series, voxels: &[f32]) -> VoxelType {
     .into_iter()
     .find(|t| {
         let (tlo, thi) = t.range();
-        tlo <= lo && hi <= thi
+        integral && tlo <= lo && hi <= thi
     })
     .unwrap_or(VoxelType::F32)
 }
