@@ -27,7 +27,7 @@ use self::assemble::Series;
 use self::header::{Image, PixelFormat};
 use self::pixels::Decode;
 use self::read::{Pixels, Syntax};
-use super::data::{check_budget, one_volume, voxel_buffer};
+use super::data::{check_budget, voxel_buffer};
 use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -406,9 +406,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let series = pick(path, &series, opts.series.as_deref())?;
     let layout =
         assemble::layout(series, &|im| name(&scan, im)).map_err(|m| Error::format(path, m))?;
-    if opts.volume >= layout.volumes {
-        return Err(one_volume(path, layout.volumes, opts.volume));
-    }
+    super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
     let first = &series.images[0];
     check_pixels(path, &scan, series, &mut notes)?;
     notes.extend(layout.notes.iter().cloned());
@@ -456,19 +454,12 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         fill(&scan, series, order, planes, opts.max_memory)?;
         out
     };
-    if layout.volumes > 1 {
-        super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
-    }
-    let spacing = layout.spacing;
-    let mut volume =
-        Volume::new(dims, spacing, VoxelType::F32, voxels).map_err(|e| e.reached_from(path))?;
+    let mut volume = Volume::new(dims, layout.spacing, VoxelType::F32, voxels)
+        .map_err(|e| e.reached_from(path))?;
     let ty = voxel_type(series, &volume.stats());
     volume = volume.with_voxel_type(ty);
     if let Some((m, origin)) = lps {
-        let t = WorldTransform::lps(m, origin);
-        if t.is_usable() {
-            volume = volume.with_transform(t);
-        }
+        volume = volume.with_transform(WorldTransform::lps(m, origin));
     }
     if !resample {
         notes.extend(layout.problems.iter().cloned());
