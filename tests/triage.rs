@@ -304,29 +304,24 @@ fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alon
     }
     let root = dir.path().to_str().unwrap();
     // Each 5x4x3 volume takes 240 bytes as f32: more than half of 300, less than all of it.
-    let (code, stdout, stderr) = run(&[
-        "triage",
-        root,
-        "--json",
-        "--slabs",
-        "2",
-        "--max-memory",
-        "300",
-    ]);
+    let triage = |memory: &str| {
+        run(&[
+            "triage",
+            root,
+            "--json",
+            "--slabs",
+            "2",
+            "--max-memory",
+            memory,
+        ])
+    };
+    let (code, stdout, stderr) = triage("300");
     assert_eq!(code, 0, "{stderr}");
     assert!(
         rows(&stdout).iter().all(|r| r["error"].is_null()),
         "{stdout}"
     );
-    let (code, stdout, _) = run(&[
-        "triage",
-        root,
-        "--json",
-        "--slabs",
-        "2",
-        "--max-memory",
-        "200",
-    ]);
+    let (code, stdout, _) = triage("200");
     assert_eq!(code, 1);
     let error = rows(&stdout)[0]["error"].as_str().unwrap().to_string();
     assert!(error.contains("raise it with --max-memory"), "{error}");

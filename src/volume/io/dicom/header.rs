@@ -137,7 +137,7 @@ pub(super) struct Image {
 
 /// The text of element `tag`: its value as a string, or, for a value some converter stored as
 /// UN (unknown), its bytes read as text (as dcmtk and pydicom read them).
-fn raw_text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
     let e = obj.get(tag)?;
     let t = if e.vr() == VR::UN {
         String::from_utf8_lossy(e.to_bytes().ok()?.as_ref()).into_owned()
@@ -148,14 +148,10 @@ fn raw_text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
     (!t.is_empty()).then(|| t.to_string())
 }
 
-fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
-    raw_text(obj, tag)
-}
-
 fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
     let e = obj.get(tag)?;
     let v = if e.vr() == VR::UN {
-        raw_text(obj, tag)?
+        text(obj, tag)?
             .split('\\')
             .map(|x| x.trim().parse::<f64>().ok())
             .collect::<Option<Vec<f64>>>()?
@@ -172,7 +168,7 @@ fn float(obj: &InMemDicomObject, tag: Tag) -> Option<f64> {
 fn int(obj: &InMemDicomObject, tag: Tag) -> Option<i64> {
     let e = obj.get(tag)?;
     if e.vr() == VR::UN {
-        return raw_text(obj, tag)?.split('\\').next()?.trim().parse().ok();
+        return text(obj, tag)?.split('\\').next()?.trim().parse().ok();
     }
     e.to_int::<i64>().ok()
 }
@@ -258,8 +254,9 @@ pub(super) fn pixel_format(obj: &InMemDicomObject) -> PixelFormat {
     }
 }
 
-/// The images of file number `file`, whose parsed header is `obj`: one per frame.
-pub(super) fn images(file: usize, obj: &InMemDicomObject) -> Vec<Image> {
+/// The images of a file whose parsed header is `obj`, one per frame (their `file` is 0 until
+/// the scan numbers them).
+pub(super) fn images(obj: &InMemDicomObject) -> Vec<Image> {
     let format = pixel_format(obj);
     let image_type: Vec<String> = text(obj, tags::IMAGE_TYPE)
         .map(|t| {
@@ -289,7 +286,7 @@ pub(super) fn images(file: usize, obj: &InMemDicomObject) -> Vec<Image> {
         };
         let (slope, intercept) = fields.rescale.unwrap_or((1.0, 0.0));
         out.push(Image {
-            file,
+            file: 0,
             frame,
             series_uid: text(obj, tags::SERIES_INSTANCE_UID).unwrap_or_default(),
             series_number: int(obj, tags::SERIES_NUMBER),

@@ -50,20 +50,10 @@ pub fn is_dicom(path: &Path) -> bool {
     if named {
         return true;
     }
-    let mut head = [0u8; 132];
-    let Ok(mut f) = File::open(path) else {
-        return false;
-    };
-    let mut got = 0;
-    while got < head.len() {
-        match f.read(&mut head[got..]) {
-            Ok(0) => break,
-            Ok(n) => got += n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(_) => return false,
-        }
-    }
-    read::sniff(&head[..got])
+    let mut head = Vec::with_capacity(132);
+    File::open(path)
+        .and_then(|f| f.take(132).read_to_end(&mut head))
+        .is_ok_and(|_| read::sniff(&head))
 }
 
 /// One series of a DICOM folder, as a list shows it (no patient-identifying field).
@@ -137,8 +127,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
     let spent = std::sync::atomic::AtomicU64::new(0);
     let results: Vec<Result<Described>> = paths
         .par_iter()
-        .enumerate()
-        .map(|(i, path)| {
+        .map(|path| {
             let part = read::read(path, budget, false)?;
             let obj = parse(path, &part.dataset, &part.syntax)?;
             // A file without pixels (a DICOMDIR, a report, a presentation state) has no image.
@@ -157,7 +146,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
                         limit: budget,
                     });
                 }
-                header::images(i, &obj)
+                header::images(&obj)
             };
             let patient = if opts.show_phi {
                 header::patient(&obj)
