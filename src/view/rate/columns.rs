@@ -79,6 +79,8 @@ impl Columns {
 
 /// [`entropy_rate`] of a lattice whose rays are the voxel columns along `axis` (see
 /// [`Lattice::columns`]): samples are voxels, read in memory order a row of columns at a time.
+///
+/// [`entropy_rate`]: super::entropy_rate
 pub(super) fn column_rate(
     sampler: &BinSampler,
     lattice: &Lattice,
