@@ -48,6 +48,29 @@ pub struct Options {
     pub analysis: AnalysisParams,
 }
 
+/// The folder `file` names, with the volumes it holds, when it opens as a file list: a folder of
+/// volumes does, its first volume open; so does a folder of DICOM files with several series,
+/// unless `load` names one.
+fn folder_to_list(
+    file: Option<&PathBuf>,
+    load: &LoadOptions,
+) -> Result<Option<(PathBuf, Vec<slabscope::triage::Entry>)>> {
+    let kind = match file {
+        Some(dir) if dir.is_dir() && load.series.is_none() => Some(folder_kind(dir)?),
+        _ => None,
+    };
+    Ok(match (file, kind) {
+        (Some(dir), Some(Folder::Collection | Folder::Dicom | Folder::Empty)) => {
+            let paths = discover(std::slice::from_ref(dir), load)?;
+            if paths.is_empty() {
+                bail!("{}: holds no volume slabscope reads", dir.display());
+            }
+            Some((dir.clone(), paths)).filter(|(_, p)| kind != Some(Folder::Dicom) || p.len() > 1)
+        }
+        _ => None,
+    })
+}
+
 /// Opens the TUI and runs it until the user quits.
 pub fn run(options: Options) -> Result<()> {
     let Options {
@@ -64,22 +87,7 @@ pub fn run(options: Options) -> Result<()> {
     if let Some(path) = &file {
         slabscope::volume::io::check_input(path)?;
     }
-    // A folder of volumes opens as a file list, its first volume open.
-    // So does a folder of DICOM files with several series, unless one is named.
-    let kind = match &file {
-        Some(dir) if dir.is_dir() && load.series.is_none() => Some(folder_kind(dir)?),
-        _ => None,
-    };
-    let folder = match (&file, kind) {
-        (Some(dir), Some(Folder::Collection | Folder::Dicom | Folder::Empty)) => {
-            let paths = discover(std::slice::from_ref(dir), &load)?;
-            if paths.is_empty() {
-                bail!("{}: holds no volume slabscope reads", dir.display());
-            }
-            Some((dir.clone(), paths)).filter(|(_, p)| kind != Some(Folder::Dicom) || p.len() > 1)
-        }
-        _ => None,
-    };
+    let folder = folder_to_list(file.as_ref(), &load)?;
     let file = match &folder {
         Some((_, paths)) => Some(paths[0].clone()),
         None => file.map(slabscope::triage::Entry::file),

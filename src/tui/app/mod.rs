@@ -1,22 +1,21 @@
 //! The TUI's state and its one mutator, [`App::update`]: actions in, effects out, no I/O. The app
 //! dispatches: each pane owns its state, and the app brings the panes up to date when the
-//! partition changes.
+//! partition changes. Here: the state, what the jobs' messages do to it and how the panes are kept
+//! in step; the keys are handled in `keys`.
+
+mod keys;
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use slabscope::render::{Colormap, Gap, Mode, Preset};
-use slabscope::volume::background::BackgroundRule;
 use slabscope::{AnalysisParams, Progress, Volume};
 
-use super::event::{
-    Action, Ask, Effect, ExportRequest, Job, JobMsg, Load, RenderRequest, SliceRequest,
-};
+use super::event::{Effect, ExportRequest, Job, JobMsg, Load, RenderRequest, SliceRequest};
 use super::panes::curves::{Curves, CurvesPane};
 use super::panes::files::FilesPane;
 use super::panes::preview::PreviewPane;
 use super::panes::slabs::{SlabTable, SlabsPane};
-use super::panes::status::{Prompt, StatusBar, settings_text};
+use super::panes::status::StatusBar;
 use super::panes::views::ViewsPane;
 use super::partitioning::Partitioning;
 use super::theme::Theme;
@@ -173,287 +172,6 @@ impl App {
         out
     }
 
-    /// While the file list shows, the keys move in it, open, or close it.
-    fn on_files(&mut self, action: Action) -> Result<Vec<Effect>, Action> {
-        let Some(files) = self.files.as_mut() else {
-            return Err(action);
-        };
-        match action {
-            Action::Page(by) => {
-                let next = (files.open as isize + by).clamp(0, files.paths.len() as isize - 1);
-                return if next as usize == files.open {
-                    Ok(vec![])
-                } else {
-                    Ok(self.open(next as usize))
-                };
-            }
-            Action::ToggleFiles => {
-                files.shown = !files.shown;
-                files.row = files.open;
-                let shown = files.shown;
-                self.preview.covered = shown || self.help;
-                return Ok(self.render_if(!shown));
-            }
-            _ if !files.shown => return Err(action),
-            Action::Move(by) | Action::Sideways(by) => {
-                let last = files.paths.len() as isize - 1;
-                files.row = (files.row as isize + by).clamp(0, last) as usize;
-            }
-            Action::Select => {
-                let row = files.row;
-                return Ok(self.open(row));
-            }
-            Action::Escape => {
-                files.shown = false;
-                self.preview.covered = self.help;
-                return Ok(self.render_if(true));
-            }
-            Action::Job(_) | Action::PreviewArea(..) | Action::Quit => return Err(action),
-            _ => {}
-        }
-        Ok(vec![])
-    }
-
-    /// A render when `yes` (the picture was covered and shows again).
-    fn render_if(&mut self, yes: bool) -> Vec<Effect> {
-        if yes { self.render() } else { vec![] }
-    }
-
-    /// Applies `action`; returns what the event loop must do.
-    pub fn update(&mut self, action: Action) -> Vec<Effect> {
-        let action = match self.on_prompt(action) {
-            Ok(effects) => return effects,
-            Err(action) => action,
-        };
-        let action = match self.on_files(action) {
-            Ok(effects) => return effects,
-            Err(action) => action,
-        };
-        match action {
-            Action::Quit => {
-                self.quit = true;
-                vec![Effect::Cancel, Effect::Quit]
-            }
-            Action::ToggleHelp => {
-                self.help = !self.help;
-                self.sync_focus();
-                vec![]
-            }
-            Action::Escape => self.escape(),
-            Action::Focus(by) => {
-                self.focus = self.focus.step(by);
-                self.sync_focus();
-                vec![]
-            }
-            Action::Sideways(by) if self.pointing() => self.move_pointer(by, 0),
-            Action::Move(by) | Action::Sideways(by) => self.move_cursor(by),
-            Action::Page(by) => self.move_cursor(by * 10),
-            Action::ToggleSlices => {
-                self.preview.slices = !self.preview.slices;
-                self.preview.caption = None;
-                self.render()
-            }
-            Action::WindowWidth(_) | Action::WindowLevel(_) => self.window(&action),
-            Action::Select => self.select(),
-            Action::Step(by) => match self.part.step(by) {
-                Ok(()) => self.after_step(),
-                Err(message) => {
-                    self.status.message = Some(message.into());
-                    vec![]
-                }
-            },
-            Action::StepTo(end) => {
-                self.part.step_to(end);
-                self.after_step()
-            }
-            Action::Slabs(by) => {
-                self.part.change_slabs(by);
-                self.after_step()
-            }
-            Action::CycleMethod => {
-                self.part.cycle_method();
-                self.after_step()
-            }
-            Action::Ask(ask) => {
-                self.status.prompt = Some(Prompt {
-                    ask,
-                    text: String::new(),
-                });
-                vec![]
-            }
-            Action::Type(_) | Action::Erase | Action::Submit => vec![],
-            Action::Export => self.export(),
-            Action::ToggleBackground => self.toggle_background(),
-            Action::PreviewArea(w, h) => {
-                if (w, h) == self.preview.cells {
-                    return vec![];
-                }
-                self.preview.cells = (w, h);
-                self.render()
-            }
-            Action::Job(msg) => self.on_job(msg),
-            look => self.restyle(&look),
-        }
-    }
-
-    /// While a prompt is open, keys type into it: `Ok` with the effects when the prompt took the
-    /// action, `Err` with the action when it goes on (jobs, resizes, quitting).
-    fn on_prompt(&mut self, action: Action) -> Result<Vec<Effect>, Action> {
-        let Some(prompt) = self.status.prompt.as_mut() else {
-            return Err(action);
-        };
-        match action {
-            Action::Type(c) => prompt.text.push(c),
-            Action::Erase => {
-                prompt.text.pop();
-            }
-            Action::Escape => self.status.prompt = None,
-            Action::Submit => return Ok(self.submit()),
-            Action::Job(_) | Action::PreviewArea(..) | Action::Quit => return Err(action),
-            _ => {}
-        }
-        Ok(vec![])
-    }
-
-    /// Changes the look of the preview, which re-renders.
-    fn restyle(&mut self, action: &Action) -> Vec<Effect> {
-        let l = &mut self.preview.look;
-        match *action {
-            Action::Orbit(az, el) => {
-                l.camera.azimuth = (l.camera.azimuth + az).rem_euclid(360.0);
-                l.camera.elevation = (l.camera.elevation + el).clamp(-85.0, 85.0);
-            }
-            Action::Zoom(f) => l.camera.zoom = (l.camera.zoom * f).clamp(0.25, 8.0),
-            Action::Spread(d) => l.spread = (l.spread + d).clamp(0.0, 2.0),
-            Action::ToggleMode => l.mode = next(&[Mode::Cut, Mode::Dvr, Mode::Mip], l.mode),
-            Action::CycleTransfer => {
-                // Only the presets that fit the volume: no CT windows on an MRI.
-                let fits: Vec<Preset> = Preset::ALL
-                    .into_iter()
-                    .filter(|p| self.volume.ready().is_none_or(|v| p.suits(v.stats())))
-                    .collect();
-                l.preset = next(&fits, l.preset);
-                l.window = None;
-                self.preview.window = None;
-            }
-            Action::CycleColormap => l.colormap = next(&Colormap::ALL, l.colormap),
-            Action::ToggleGap => l.gap = next(&[Gap::Uniform, Gap::Similarity], l.gap),
-            Action::ToggleSolo => l.solo = !l.solo,
-            Action::TogglePerspective => l.camera.perspective = !l.camera.perspective,
-            _ => return vec![],
-        }
-        self.render()
-    }
-
-    fn escape(&mut self) -> Vec<Effect> {
-        if self.help {
-            self.help = false;
-            self.sync_focus();
-            return vec![];
-        }
-        let busy = self.views.views.running()
-            || self.part.histories.running()
-            || self.preview.image.running()
-            || self.export.running();
-        if !busy {
-            return vec![];
-        }
-        if self.views.views.running() {
-            self.views.views = Load::Failed("cancelled".into());
-        }
-        if self.part.histories.running() {
-            self.part.histories = Load::Failed("cancelled".into());
-        }
-        self.export = Load::Idle;
-        self.status.message = Some("cancelled".into());
-        self.sync();
-        vec![Effect::Cancel]
-    }
-
-    fn move_cursor(&mut self, by: isize) -> Vec<Effect> {
-        let shift = |v: usize, len: usize| {
-            (v as isize + by).clamp(0, len.saturating_sub(1) as isize) as usize
-        };
-        match self.focus {
-            Pane::Views => {
-                self.views.row = shift(self.views.row, self.views.len());
-                vec![]
-            }
-            Pane::Slabs => {
-                self.slabs.row = shift(self.slabs.row, self.slabs.len());
-                self.render()
-            }
-            Pane::Curves => {
-                self.curves.cursor = shift(self.curves.cursor, self.curves.len());
-                if self.preview.slices {
-                    self.render()
-                } else {
-                    vec![]
-                }
-            }
-            Pane::Preview if self.pointing() => self.move_pointer(0, by),
-            Pane::Preview => self.restyle(&Action::Orbit(by as f64 * 15.0, 0.0)),
-        }
-    }
-
-    /// Whether the arrows move the slice view's pointer.
-    fn pointing(&self) -> bool {
-        self.focus == Pane::Preview && self.preview.slices
-    }
-
-    /// Moves the slice view's pointer by voxels to the right and down on the screen.
-    fn move_pointer(&mut self, right: isize, down: isize) -> Vec<Effect> {
-        let (Some(volume), Some(axis)) = (self.volume.ready(), self.part.axis) else {
-            return vec![];
-        };
-        let Ok(frame) = slabscope::render::slice::SliceFrame::new(volume, axis) else {
-            return vec![];
-        };
-        let spacing = volume.spacing();
-        let dims = volume.dims();
-        let step = slabscope::geometry::min_spacing(spacing);
-        let p = self.preview.pointer.unwrap_or_else(|| centre(volume));
-        self.preview.pointer = Some(std::array::from_fn(|m| {
-            let moved = p[m] + step * (right as f64 * frame.right[m] - down as f64 * frame.up[m]);
-            moved.clamp(0.0, (dims[m] - 1) as f64 * spacing[m])
-        }));
-        self.render()
-    }
-
-    /// Narrows, widens or moves the window of the picture and the slices, starting from the
-    /// one the last picture used (the preset's, worked out here only before any picture).
-    fn window(&mut self, action: &Action) -> Vec<Effect> {
-        let Some(volume) = self.volume.ready() else {
-            return vec![];
-        };
-        let look = &mut self.preview.look;
-        let (lo, hi) = match look.window.or(self.preview.window) {
-            Some(w) => w,
-            None => {
-                match slabscope::render::Transfer::new(volume, look.preset, look.colormap, 1.0, 1.0)
-                {
-                    Ok(t) => t.window(),
-                    Err(_) => return vec![],
-                }
-            }
-        };
-        let (level, width) = (f32::midpoint(lo, hi), (hi - lo).max(f32::EPSILON));
-        let (level, width) = match *action {
-            Action::WindowWidth(f) => (level, width * f),
-            Action::WindowLevel(f) => (level + f * width, width),
-            _ => (level, width),
-        };
-        look.window = Some((level - width / 2.0, level + width / 2.0));
-        self.render()
-    }
-
-    fn select(&mut self) -> Vec<Effect> {
-        match (self.focus, self.views.selected()) {
-            (Pane::Views, Some(axis)) => self.analyze(axis),
-            _ => vec![],
-        }
-    }
-
     /// Starts the histories along `axis`.
     fn analyze(&mut self, axis: [f64; 3]) -> Vec<Effect> {
         let effect = self.part.start(axis);
@@ -471,59 +189,6 @@ impl App {
         self.status.message = None;
         self.sync();
         self.render()
-    }
-
-    fn submit(&mut self) -> Vec<Effect> {
-        let Some(prompt) = self.status.prompt.take() else {
-            return vec![];
-        };
-        let text = prompt.text.trim();
-        match prompt.ask {
-            Ask::Axis => {
-                if let Ok(axis) = text.parse::<slabscope::Axis>() {
-                    self.analyze(axis.direction())
-                } else {
-                    self.status.message = Some(format!("{text:?} is not x, y, z or DX,DY,DZ"));
-                    vec![]
-                }
-            }
-            Ask::Threshold if text.is_empty() => {
-                self.part.set_threshold(None);
-                self.status.message = Some("threshold cleared".into());
-                self.sync();
-                vec![]
-            }
-            Ask::Threshold => match text.parse::<f64>() {
-                Ok(t) if t.is_finite() => {
-                    self.part.set_threshold(Some(t));
-                    self.after_step()
-                }
-                _ => {
-                    self.status.message = Some(format!("{text:?} is not a number"));
-                    vec![]
-                }
-            },
-        }
-    }
-
-    /// Leaves the background out of the slabs (found automatically), or counts every voxel as
-    /// the paper does; the histories along the axis are computed again.
-    fn toggle_background(&mut self) -> Vec<Effect> {
-        let rule = match self.params.background {
-            BackgroundRule::None => BackgroundRule::Auto,
-            _ => BackgroundRule::None,
-        };
-        self.params.background = rule;
-        self.part.stack.background = rule;
-        self.status.settings = settings_text(&self.params);
-        self.status.message = Some(match rule {
-            BackgroundRule::None => "background counted: every voxel is in the slabs".into(),
-            _ => "background left out: the region connected to the border, found from it".into(),
-        });
-        match self.part.axis {
-            Some(axis) => self.analyze(axis),
-            None => vec![],
-        }
     }
 
     fn export(&mut self) -> Vec<Effect> {
@@ -745,10 +410,4 @@ fn pending<T, U>(load: &Load<T>) -> Load<U> {
 fn centre(volume: &Volume) -> [f64; 3] {
     let (dims, spacing) = (volume.dims(), volume.spacing());
     std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m] / 2.0)
-}
-
-/// The element after `current` in `all`, wrapping around.
-fn next<T: Copy + PartialEq>(all: &[T], current: T) -> T {
-    let i = all.iter().position(|x| *x == current).unwrap_or(0);
-    all[(i + 1) % all.len()]
 }

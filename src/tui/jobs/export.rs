@@ -1,0 +1,81 @@
+//! The TUI's export: the view, the analysis and the labels of the partition on screen, written to
+//! the current folder under names not taken yet.
+
+use std::path::{Path, PathBuf};
+
+use slabscope::volume::io::{NrrdEncoding, write_atomic, write_nrrd};
+use slabscope::{
+    Analysis, AnalysisReport, Layout, Monitor, Partition, RenderParams, Renderer, Volume,
+    label_volume,
+};
+
+use crate::tui::event::ExportRequest;
+
+/// Writes the view (PNG), the analysis (JSON) and the labels (NRRD) of the request's partition
+/// to the current folder under names not taken yet; says what it wrote.
+pub(super) fn export(
+    volume: &Volume,
+    r: &ExportRequest,
+    monitor: &Monitor,
+) -> slabscope::Result<String> {
+    let part = Partition::new(&r.histories, r.method, r.position, monitor)?;
+    let stem = Path::new(&r.name)
+        .file_stem()
+        .map_or_else(|| "builtin".into(), |s| s.to_string_lossy().into_owned());
+    let png = free_name(&format!("{stem}-slabscope"), "png");
+    let json = free_name(&format!("{stem}-slabscope"), "json");
+    let labels = free_name(&format!("{stem}-slabscope-labels"), "nrrd");
+    let layout = Layout::exploded(&part, r.look.gap, r.look.spread);
+    let render = RenderParams {
+        width: 1280,
+        height: 960,
+        mode: r.look.mode,
+        preset: r.look.preset,
+        colormap: r.look.colormap,
+        window: r.look.window,
+        camera: r.look.camera,
+        highlight: r.highlight.filter(|&h| h < part.slabs.len()),
+        solo: r.look.solo,
+        ..RenderParams::default()
+    };
+    let image = Renderer::new(volume)?.render(&layout, &render, monitor)?;
+    write_new(&png, &image.png()?)?;
+    let analysis = Analysis {
+        views: r.views.clone(),
+        notes: slabscope::analysis::notes(volume, &r.view_params, &part),
+        partition: part,
+    };
+    let report = AnalysisReport::new(&r.name, volume, &r.view_params, &analysis)?;
+    let text = slabscope::report::to_json(&report)?;
+    write_new(&json, text.as_bytes())?;
+    monitor.start("writing labels", 1);
+    let labelled = label_volume(volume, &analysis.partition)?;
+    write_nrrd(&labels, &labelled, NrrdEncoding::Gzip, false)?;
+    Ok(format!(
+        "wrote {}, {} and {}",
+        png.display(),
+        json.display(),
+        labels.display()
+    ))
+}
+
+/// Writes `bytes` to `path`, which must not exist.
+fn write_new(path: &Path, bytes: &[u8]) -> slabscope::Result<()> {
+    use std::io::Write;
+    write_atomic(path, false, |mut file| file.write_all(bytes))
+}
+
+/// `stem.ext` in the current folder, or `stem-1.ext`, `stem-2.ext`, … when taken.
+fn free_name(stem: &str, ext: &str) -> PathBuf {
+    let name = |i: u32| {
+        if i == 0 {
+            PathBuf::from(format!("{stem}.{ext}"))
+        } else {
+            PathBuf::from(format!("{stem}-{i}.{ext}"))
+        }
+    };
+    (0..u32::MAX)
+        .map(name)
+        .find(|p| !p.exists())
+        .unwrap_or_else(|| name(u32::MAX))
+}

@@ -1,0 +1,305 @@
+//! Background work for the TUI: loading, the view search, the histories and exports each on their
+//! own thread with a shared cancellation flag, and a render worker that always takes the newest
+//! request (a newer one replaces a queued one and cancels the one in flight). Every effect
+//! carries the data it needs; nothing here reads the app.
+
+mod export;
+mod worker;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::Sender;
+
+use slabscope::{AnalysisParams, Histories, LoadOptions, Monitor, Progress, Scope, Volume, search};
+
+use super::event::{Effect, Event, Job, JobMsg, RenderRequest};
+use crate::term::Caps;
+use export::export;
+use worker::start_renderer;
+
+/// Runs effects in the background and reports through the event channel.
+pub struct Jobs {
+    events: Sender<Event>,
+    cancel: Arc<AtomicBool>,
+    renders: Option<Sender<RenderRequest>>,
+    render_cancel: Arc<AtomicBool>,
+    caps: Caps,
+    source: Option<slabscope::triage::Entry>,
+    load: LoadOptions,
+    volume: Option<Arc<Volume>>,
+    /// Which volume is open: one more at each [`Effect::Open`].
+    epoch: u64,
+}
+
+impl Jobs {
+    /// Jobs reporting to `events`, loading `source` (None: the built-in dataset).
+    pub fn new(
+        events: Sender<Event>,
+        caps: Caps,
+        source: Option<slabscope::triage::Entry>,
+        load: LoadOptions,
+    ) -> Self {
+        Self {
+            events,
+            cancel: Arc::new(AtomicBool::new(false)),
+            renders: None,
+            render_cancel: Arc::new(AtomicBool::new(false)),
+            caps,
+            source,
+            load,
+            volume: None,
+            epoch: 0,
+        }
+    }
+
+    /// Sees a message before the app does: a loaded volume starts the render worker.
+    fn observe(&mut self, msg: &JobMsg) {
+        if let JobMsg::Loaded(Ok((volume, _))) = msg {
+            self.volume = Some(Arc::clone(volume));
+            self.renders = Some(start_renderer(
+                Arc::clone(volume),
+                self.caps.clone(),
+                (self.events.clone(), self.epoch),
+                Arc::clone(&self.render_cancel),
+            ));
+        }
+    }
+
+    /// Carries out `effect`.
+    pub fn run(&mut self, effect: Effect) {
+        match effect {
+            Effect::Load => {
+                let (source, load) = (self.source.clone(), self.load.clone());
+                self.spawn(Job::Load, move |_| load_volume(source.as_ref(), load));
+            }
+            Effect::SearchViews(params) => {
+                let Some(volume) = self.volume.clone() else {
+                    return;
+                };
+                self.spawn(Job::Views, move |monitor| {
+                    JobMsg::Views(
+                        search(&volume, &params, monitor)
+                            .map(Box::new)
+                            .map_err(|e| e.to_string()),
+                    )
+                });
+            }
+            Effect::Analyze(generation, axis, params) => {
+                let Some(volume) = self.volume.clone() else {
+                    return;
+                };
+                self.spawn(Job::Analysis, move |monitor| {
+                    let result = Histories::new(&volume, axis, &params, Scope::ALL, monitor);
+                    JobMsg::Analysis(generation, result.map(Arc::new).map_err(|e| e.to_string()))
+                });
+            }
+            Effect::Open(path) => {
+                // The next volume: its own load, views, histories and renders; what the jobs of
+                // the last one still send is dropped.
+                self.epoch += 1;
+                self.source = Some(path);
+                self.volume = None;
+                self.renders = None;
+            }
+            Effect::Triage(paths, params) => self.triage(paths, *params),
+            Effect::Render(request) => {
+                if let Some(tx) = &self.renders {
+                    self.render_cancel.store(true, Ordering::Relaxed);
+                    let _ = tx.send(*request);
+                }
+            }
+            Effect::Cancel => {
+                self.cancel.store(true, Ordering::Relaxed);
+                self.render_cancel.store(true, Ordering::Relaxed);
+                self.cancel = Arc::new(AtomicBool::new(false));
+            }
+            Effect::Export(request) => {
+                if let Some(volume) = self.volume.clone() {
+                    self.spawn(Job::Export, move |monitor| {
+                        JobMsg::Exported(
+                            export(&volume, &request, monitor).map_err(|e| e.to_string()),
+                        )
+                    });
+                }
+            }
+            Effect::Quit => {}
+        }
+    }
+
+    /// Triages `paths` on a thread of its own, one row at a time to the folder's list, until
+    /// they are done or the app has gone.
+    fn triage(&self, paths: Vec<slabscope::triage::Entry>, params: AnalysisParams) {
+        let (events, load) = (self.events.clone(), self.load.clone());
+        std::thread::spawn(move || {
+            let how = slabscope::triage::Look {
+                load,
+                params,
+                timeout: std::time::Duration::from_secs(60),
+                fast: true,
+                tile: None,
+            };
+            for (i, entry) in paths.iter().enumerate() {
+                // The list names the file: its errors need not.
+                let prefix = format!("{}: ", entry.path.display());
+                let describe = |e: slabscope::Error| {
+                    let m = e.to_string();
+                    m.strip_prefix(&prefix).map_or(m.clone(), str::to_string)
+                };
+                let row = slabscope::triage::look(entry, &how, &|_| {}, &describe).row;
+                if events
+                    .send(Event::Job(JobMsg::Triaged(i, Box::new(row))))
+                    .is_err()
+                {
+                    break;
+                }
+            }
+        });
+    }
+
+    /// Runs `work` on its own thread with a monitor that reports `job`'s progress.
+    fn spawn(&self, job: Job, work: impl FnOnce(&Monitor) -> JobMsg + Send + 'static) {
+        let (events, cancel, epoch) = (self.events.clone(), Arc::clone(&self.cancel), self.epoch);
+        std::thread::spawn(move || {
+            let send = |msg: JobMsg| {
+                let _ = events.send(Event::Job(JobMsg::Epoch(epoch, Box::new(msg))));
+            };
+            let progress = |p: Progress| send(JobMsg::Progress(job, p));
+            let monitor = Monitor::new(Some(&cancel), Some(&progress));
+            send(work(&monitor));
+        });
+    }
+
+    /// The message the app should see of `msg`: none when it belongs to a volume no longer
+    /// open.
+    pub fn admit(&mut self, msg: JobMsg) -> Option<JobMsg> {
+        let msg = match msg {
+            JobMsg::Epoch(epoch, _) if epoch != self.epoch => return None,
+            JobMsg::Epoch(_, inner) => *inner,
+            msg => msg,
+        };
+        self.observe(&msg);
+        Some(msg)
+    }
+}
+
+/// Loads `source` (None: the built-in dataset) with `load`, a series in `source` taking the
+/// place of the options'.
+fn load_volume(source: Option<&slabscope::triage::Entry>, load: LoadOptions) -> JobMsg {
+    let loaded = match source {
+        Some(entry) => {
+            let load = LoadOptions {
+                series: entry.series.clone().or(load.series),
+                ..load
+            };
+            slabscope::load(&entry.path, &load).map(|l| (Arc::new(l.volume), l.notes))
+        }
+        None => slabscope::builtin_dataset().map(|v| (Arc::new(v), Vec::new())),
+    };
+    JobMsg::Loaded(loaded.map_err(|e| e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::mpsc::channel;
+    use std::time::Instant;
+
+    use slabscope::partition::Method;
+    use slabscope::{AnalysisParams, Renderer, Scope};
+
+    use super::worker::render;
+    use super::*;
+    use crate::term::{Caps, Graphics};
+    use crate::tui::event::Look;
+
+    #[test]
+    fn messages_of_a_volume_no_longer_open_are_dropped() {
+        let (tx, _rx) = channel();
+        let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
+        let done = |epoch| JobMsg::Epoch(epoch, Box::new(JobMsg::Exported(Ok("x".into()))));
+        assert!(matches!(jobs.admit(done(0)), Some(JobMsg::Exported(_))));
+        jobs.run(Effect::Open(slabscope::triage::Entry::file("next.nii")));
+        assert!(jobs.admit(done(0)).is_none(), "the last volume's");
+        assert!(matches!(jobs.admit(done(1)), Some(JobMsg::Exported(_))));
+        // The folder's triage rows are for every volume: never dropped.
+        let row = slabscope::triage::TriageRow::failed("a", "b".into());
+        assert!(jobs.admit(JobMsg::Triaged(0, Box::new(row))).is_some());
+    }
+
+    /// Not a test but a measurement: `cargo test --release --bin slabscope preview_timing --
+    /// --ignored --nocapture` prints, for the built-in dataset, the time to the first image
+    /// after start, and the time and bytes of an image after a step at 1000×600 pixels, per
+    /// protocol.
+    #[test]
+    #[ignore = "a benchmark: prints timings, asserts nothing about them"]
+    fn preview_timing() {
+        let start = Instant::now();
+        let volume = slabscope::builtin_dataset().unwrap();
+        let renderer = Renderer::new(&volume).unwrap();
+        let cells = (125, 37);
+        let sixel = Caps {
+            graphics: Graphics::Sixel,
+            cell: (8, 16),
+            ..Caps::blocks()
+        };
+        let whole = RenderRequest {
+            generation: 1,
+            slabs: Vec::new(),
+            axis: [0.0, 0.0, 1.0],
+            nmi: None,
+            histories: None,
+            look: Look::default(),
+            highlight: None,
+            cells,
+            slice: None,
+        };
+        let first = render(&renderer, &sixel, &whole, &Monitor::none()).unwrap();
+        println!(
+            "first image (load, render, sixel) {:.0} ms after start, {} KB",
+            start.elapsed().as_secs_f64() * 1e3,
+            first.image.bytes / 1024
+        );
+        let params = AnalysisParams::default();
+        let h = Arc::new(
+            Histories::new(
+                &volume,
+                [0.0, 0.0, 1.0],
+                &params.stack(),
+                Scope::ALL,
+                &Monitor::none(),
+            )
+            .unwrap(),
+        );
+        for (name, graphics) in [
+            ("sixel", Graphics::Sixel),
+            ("kitty", Graphics::Kitty),
+            ("iTerm2", Graphics::Iterm),
+            ("half-blocks", Graphics::Blocks),
+        ] {
+            let caps = Caps {
+                graphics,
+                ..sixel.clone()
+            };
+            let step = RenderRequest {
+                slabs: h.slabs(Method::TopDown, 4),
+                histories: Some(Arc::clone(&h)),
+                ..whole.clone()
+            };
+            let mut times = Vec::new();
+            let mut bytes = 0;
+            for _ in 0..5 {
+                let t = Instant::now();
+                bytes = render(&renderer, &caps, &step, &Monitor::none())
+                    .unwrap()
+                    .image
+                    .bytes;
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+            times.sort_by(f64::total_cmp);
+            println!(
+                "{name:>11}: an image after a step at 1000x592 px in {:.0} ms (median of 5), {} KB",
+                times[2],
+                bytes / 1024
+            );
+        }
+    }
+}

@@ -1,0 +1,299 @@
+//! The render worker: a thread that owns the volume and its renderer, takes the newest request,
+//! renders it (the exploded view, or the slice view with its readout) and encodes it for the
+//! terminal.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, Sender, channel};
+
+use image::RgbaImage;
+use slabscope::geometry::{self, min_spacing};
+use slabscope::partition::Slab;
+use slabscope::render::slice::{self, SliceParams};
+use slabscope::render::{Gap, Stack, paste_centred};
+use slabscope::{Layout, Monitor, RenderParams, Renderer, Volume};
+use tiny_skia::Pixmap;
+
+use crate::term::image::encode;
+use crate::term::{Caps, Graphics};
+use crate::tui::event::{Event, JobMsg, Look, RenderRequest, Rendered, SliceRequest};
+
+/// The render worker: owns the volume and its renderer, renders the newest request, encodes it
+/// for the terminal and sends it back.
+pub(super) fn start_renderer(
+    volume: Arc<Volume>,
+    caps: Caps,
+    (events, epoch): (Sender<Event>, u64),
+    cancel: Arc<AtomicBool>,
+) -> Sender<RenderRequest> {
+    let (tx, rx) = channel::<RenderRequest>();
+    std::thread::spawn(move || {
+        let events = EpochSender { events, epoch };
+        let renderer = match Renderer::new(&volume) {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = events.send(Event::Job(JobMsg::Rendered(0, Err(e.to_string()))));
+                return;
+            }
+        };
+        while let Some(request) = newest(&rx) {
+            cancel.store(false, Ordering::Relaxed);
+            let monitor = Monitor::new(Some(&cancel), None);
+            let generation = request.generation;
+            match render(&renderer, &caps, &request, &monitor) {
+                Err(e)
+                    if matches!(
+                        e.downcast_ref::<slabscope::Error>(),
+                        Some(slabscope::Error::Cancelled)
+                    ) => {}
+                result => {
+                    let _ = events.send(Event::Job(JobMsg::Rendered(
+                        generation,
+                        result.map_err(|e| format!("{e:#}")),
+                    )));
+                }
+            }
+        }
+    });
+    tx
+}
+
+/// Sends a volume's messages marked with its epoch.
+struct EpochSender {
+    events: Sender<Event>,
+    epoch: u64,
+}
+
+impl EpochSender {
+    fn send(&self, event: Event) -> Result<(), std::sync::mpsc::SendError<Event>> {
+        match event {
+            Event::Job(msg) => self
+                .events
+                .send(Event::Job(JobMsg::Epoch(self.epoch, Box::new(msg)))),
+            other => self.events.send(other),
+        }
+    }
+}
+
+/// Waits for a request, then takes the newest one queued.
+fn newest(rx: &Receiver<RenderRequest>) -> Option<RenderRequest> {
+    let mut request = rx.recv().ok()?;
+    while let Ok(newer) = rx.try_recv() {
+        request = newer;
+    }
+    Some(request)
+}
+
+/// Renders `r` with `renderer` as large as the terminal takes it (the exploded view, or the
+/// slice view when asked), encoded for the terminal of `caps`.
+pub(super) fn render(
+    renderer: &Renderer,
+    caps: &Caps,
+    r: &RenderRequest,
+    monitor: &Monitor,
+) -> anyhow::Result<Box<Rendered>> {
+    let look = &r.look;
+    let geometry = r.histories.as_ref().map(|h| {
+        let stack = h.stack();
+        Stack {
+            axis: stack.axis(),
+            slices: stack.slices(),
+            thickness: stack.thickness(),
+            offset: stack.offset(),
+        }
+    });
+    // One image pixel per screen pixel, as large as the terminal takes.
+    let (width, height) = caps.image_size(r.cells);
+    let (width, height) = (width.max(1), height.max(1));
+    let (pixmap, caption, window) = match (r.slice, &geometry) {
+        (Some(s), Some(stack)) if !r.slabs.is_empty() => {
+            let highlight = r.highlight.unwrap_or(0).min(r.slabs.len() - 1);
+            let view = SliceView {
+                stack,
+                slab: (highlight, r.slabs[highlight]),
+                request: s,
+                size: (width, height),
+            };
+            let (pixmap, caption, window) = view.draw(renderer, look)?;
+            (pixmap, Some(caption), window)
+        }
+        _ => {
+            let layout = match (&r.histories, &geometry) {
+                (Some(h), Some(stack)) if !r.slabs.is_empty() => {
+                    let nmi = match (&r.nmi, look.gap) {
+                        (Some(nmi), _) => Some(nmi.clone()),
+                        (None, Gap::Similarity) => Some(h.boundary_nmi(&r.slabs, monitor)?),
+                        (None, Gap::Uniform) => None,
+                    };
+                    Layout::from_slabs(stack, &r.slabs, nmi.as_deref(), look.gap, look.spread)
+                }
+                _ => Layout::whole(r.axis),
+            };
+            let params = RenderParams {
+                width,
+                height,
+                mode: look.mode,
+                preset: look.preset,
+                colormap: look.colormap,
+                window: look.window,
+                camera: look.camera,
+                highlight: r.highlight,
+                solo: look.solo,
+                outlines: true,
+                labels: height >= 120,
+                ..RenderParams::default()
+            };
+            let image = renderer.render(&layout, &params, monitor)?;
+            (image.pixmap, None, image.window)
+        }
+    };
+    let rgba = RgbaImage::from_raw(width, height, pixmap.data().to_vec())
+        .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
+    let cells = match caps.graphics {
+        Graphics::Blocks => r.cells,
+        _ => (
+            (width.div_ceil(u32::from(caps.cell.0)) as u16).min(r.cells.0),
+            (height.div_ceil(u32::from(caps.cell.1)) as u16).min(r.cells.1),
+        ),
+    };
+    Ok(Box::new(Rendered {
+        image: encode(&rgba, cells, caps).map_err(|e| anyhow::anyhow!(e))?,
+        caption,
+        window,
+    }))
+}
+
+/// The slice view: the slice under the cursor, large, with the pointer's cross; beside it the
+/// selected slab's faces, its last slice above its first.
+struct SliceView<'a> {
+    stack: &'a Stack,
+    slab: (usize, Slab),
+    request: SliceRequest,
+    size: (u32, u32),
+}
+
+impl SliceView<'_> {
+    /// The picture, the readout at the pointer (slice, voxel, world position, value) and the
+    /// colour window.
+    fn draw(
+        &self,
+        renderer: &Renderer,
+        look: &Look,
+    ) -> anyhow::Result<(Pixmap, String, (f32, f32))> {
+        let volume = renderer.volume();
+        let spacing = volume.spacing();
+        let transfer = renderer.transfer(look.colours(), min_spacing(spacing))?;
+        let (w, h) = self.size;
+        let mut canvas = Pixmap::new(w, h).ok_or_else(|| anyhow::anyhow!("no room for slices"))?;
+        canvas.fill(tiny_skia::Color::from_rgba8(12, 12, 18, 255));
+        let stack = self.stack;
+        let index = self.request.index.min(stack.slices.saturating_sub(1));
+        // The slice takes three fifths of a wide pane, the faces the rest.
+        let side = if w > h { w * 2 / 5 } else { 0 };
+        let params = |fit: (u32, u32)| SliceParams {
+            fit: (fit.0.max(1), fit.1.max(1)),
+            background: [0, 0, 0],
+            ..SliceParams::default()
+        };
+        let main = slice::slice(
+            volume,
+            &transfer,
+            stack.axis,
+            stack.position(index),
+            &params((w - side, h)),
+        )?;
+        let origin = paste_centred(&mut canvas, &main.pixmap, (0, 0, w - side, h));
+        // The pointer, moved onto the plane.
+        let n = stack.axis;
+        let p = self.request.pointer;
+        let off = stack.position(index) - geometry::dot(p, n);
+        let on_plane: [f64; 3] = std::array::from_fn(|m| p[m] + off * n[m]);
+        let (px, py) = main.pixel_of(on_plane);
+        cross_hair(
+            &mut canvas,
+            (
+                origin.0 as f32 + px as f32 + 0.5,
+                origin.1 as f32 + py as f32 + 0.5,
+            ),
+        );
+        let (k, (a, b)) = self.slab;
+        if side > 8 {
+            for (row, s) in slice::face_slices((a, b)).into_iter().enumerate() {
+                let face = slice::slice(
+                    volume,
+                    &transfer,
+                    stack.axis,
+                    stack.position(s),
+                    &params((side - 4, h / 2 - 2)),
+                )?;
+                let area = (w - side + 2, row as u32 * (h / 2) + 1, side - 4, h / 2 - 2);
+                paste_centred(&mut canvas, &face.pixmap, area);
+            }
+        }
+        Ok((
+            canvas,
+            readout(volume, on_plane, index, stack.slices, k, (a, b)),
+            transfer.window(),
+        ))
+    }
+}
+
+/// What the slice view reads at physical point `p`.
+fn readout(
+    volume: &Volume,
+    p: [f64; 3],
+    index: usize,
+    slices: usize,
+    k: usize,
+    (a, b): Slab,
+) -> String {
+    let (spacing, dims) = (volume.spacing(), volume.dims());
+    let ijk: [usize; 3] =
+        std::array::from_fn(|m| ((p[m] / spacing[m]).round().max(0.0) as usize).min(dims[m] - 1));
+    let value = volume.voxels()[ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])];
+    let t = volume.transform();
+    let world = t.apply(ijk.map(|i| i as f64));
+    let place = if t.known {
+        let named = |v: f64, pos: char, neg: char| {
+            format!("{}{:.1}", if v >= 0.0 { pos } else { neg }, v.abs())
+        };
+        format!(
+            "{} {} {} mm",
+            named(world[0], 'R', 'L'),
+            named(world[1], 'A', 'P'),
+            named(world[2], 'S', 'I')
+        )
+    } else {
+        format!("{:.1}, {:.1}, {:.1} mm", world[0], world[1], world[2])
+    };
+    // The reading first: the pane's border may be narrow.
+    format!(
+        "voxel {},{},{} = {value} · {place} · slice {index}/{} · slab {k}: faces {a}, {}",
+        ijk[0],
+        ijk[1],
+        ijk[2],
+        slices - 1,
+        b.saturating_sub(1),
+    )
+}
+
+/// A yellow cross with an open centre at `(x, y)`.
+fn cross_hair(canvas: &mut Pixmap, (x, y): (f32, f32)) {
+    let mut paint = tiny_skia::Paint::default();
+    paint.set_color_rgba8(255, 220, 90, 230);
+    let (gap, arm) = (3.0, 9.0);
+    let mut pb = tiny_skia::PathBuilder::new();
+    for (dx, dy) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)] {
+        pb.move_to(x + dx * gap, y + dy * gap);
+        pb.line_to(x + dx * (gap + arm), y + dy * (gap + arm));
+    }
+    if let Some(path) = pb.finish() {
+        canvas.stroke_path(
+            &path,
+            &paint,
+            &tiny_skia::Stroke::default(),
+            tiny_skia::Transform::identity(),
+            None,
+        );
+    }
+}

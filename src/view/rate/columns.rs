@@ -1,0 +1,109 @@
+//! The walk of a lattice whose rays are voxel columns: samples are voxels, read in memory order a
+//! row of columns at a time.
+
+use super::{AxisEntropy, BinSampler, count_in_parallel, work_units};
+use crate::error::Result;
+use crate::measure::{Counter, Run};
+use crate::progress::Monitor;
+use crate::view::lattice::Lattice;
+use crate::volume::cells::MIXED;
+
+/// Voxel columns along one axis, walked a few side by side (so that their work overlaps) in
+/// memory order: item `i` holds the columns starting at voxels `base·i + gap·c` for `c` in
+/// `0..width` (fewer in the last item), and a column's sample `k` lies `stride·k` further.
+struct Columns {
+    count: usize,
+    width: usize,
+    gap: usize,
+    base: usize,
+    stride: usize,
+    length: usize,
+}
+
+impl Columns {
+    /// Rows along x are walked eight at a time; columns along y or z a row of them at a time.
+    fn new([nx, ny, nz]: [usize; 3], axis: usize) -> Self {
+        let (count, width, gap, base, stride, length) = match axis {
+            0 => (ny * nz, 8, nx, 8 * nx, 1, nx),
+            1 => (nx * nz, nx, 1, nx * ny, nx, ny),
+            _ => (nx * ny, nx, 1, nx, nx * ny, nz),
+        };
+        Self {
+            count,
+            width,
+            gap,
+            base,
+            stride,
+            length,
+        }
+    }
+
+    fn items(&self) -> usize {
+        self.count.div_ceil(self.width)
+    }
+
+    /// Feeds the items `range` into `counts`; returns the number of columns.
+    fn walk(
+        &self,
+        range: std::ops::Range<usize>,
+        sampler: &BinSampler,
+        counts: &mut impl Counter,
+    ) -> u64 {
+        let bins = sampler.voxel_bins();
+        let mut runs = vec![Run::default(); self.width];
+        let mut total = 0;
+        for item in range {
+            let width = self.width.min(self.count - item * self.width);
+            total += width;
+            for k in 0..self.length {
+                let start = item * self.base + k * self.stride;
+                for (c, run) in runs[..width].iter_mut().enumerate() {
+                    let at = start + c * self.gap;
+                    let bin = match bins[at] {
+                        MIXED => sampler.voxel_bin_at(at),
+                        b => Some(b),
+                    };
+                    match bin {
+                        Some(b) => counts.push_to(run, b),
+                        None => counts.end_run(run),
+                    }
+                }
+            }
+            for run in &mut runs[..width] {
+                counts.end_run(run);
+            }
+        }
+        total as u64
+    }
+}
+
+/// [`entropy_rate`] of a lattice whose rays are the voxel columns along `axis` (see
+/// [`Lattice::columns`]): samples are voxels, read in memory order a row of columns at a time.
+///
+/// [`entropy_rate`]: super::entropy_rate
+pub(super) fn column_rate(
+    sampler: &BinSampler,
+    lattice: &Lattice,
+    axis: usize,
+    block: usize,
+    monitor: &Monitor,
+) -> Result<AxisEntropy> {
+    let columns = Columns::new(sampler.dims(), axis);
+    // As many parts as the general walk reports progress units.
+    let parts = work_units(lattice).max(1) as usize;
+    let items = columns.items();
+    let ranges = (0..parts)
+        .map(|part| part * items / parts..(part + 1) * items / parts)
+        .collect();
+    let (counts, rays) = count_in_parallel(
+        ranges,
+        sampler.bins(),
+        block,
+        monitor,
+        |range, counts| match counts.dense() {
+            Some(mut dense) => columns.walk(range, sampler, &mut dense),
+            None => columns.walk(range, sampler, counts),
+        },
+    )?;
+    Ok(AxisEntropy::new(lattice.d, &counts, rays))
+}

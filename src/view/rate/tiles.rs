@@ -1,0 +1,274 @@
+//! The tile walk: the lattice's rays in tiles of neighbouring rays, each ray's samples before and
+//! after its inner span one by one, and the inner spans walked together, by the scalar walk here
+//! or eight at a time by `lanes`.
+
+use super::{BinSampler, RaySubset};
+use crate::geometry::cross;
+use crate::measure::{Counter, Run};
+use crate::view::lattice::{Lattice, round_half_away, to_fixed};
+use crate::volume::cells::MIXED;
+
+/// Rays are walked in tiles of this many neighbouring rays, so that the memory they read stays a
+/// small neighbourhood: the scalar walk advances all rays of a tile together, one sample each in
+/// turn; the vector walk takes them eight at a time.
+const TILE_RAYS: i64 = 256;
+
+/// Cells per cache line in the cell map (one byte per cell).
+const CELLS_PER_LINE: f64 = 64.0;
+
+/// The shape of the tiles of `lattice`: how many rays along `i` and along `j`.
+///
+/// Reading memory dominates the walk, so the shape is the one whose walk crosses the fewest
+/// cache lines. A tile sweeps a prism along the axis; its cross-section's area is the same for
+/// every shape, so the lines it crosses differ by its side faces: a face spanned by a tile edge
+/// `e` and the step `s` crosses about `|(e × s)_x| + (|(e × s)_y| + |(e × s)_z|) / 64` lines per
+/// unit area (cache lines run 64 cells along x). Minimizing `ti·c_i + tj·c_j` with
+/// `ti·tj = TILE_RAYS` gives `ti = sqrt(TILE_RAYS·c_j / c_i)`, rounded to a power of two.
+/// A walk of one ray in `every` spans `every` times the rays, so that a tile still walks about
+/// `TILE_RAYS` of them.
+fn tile_shape(lattice: &Lattice, every: u64) -> (i64, i64) {
+    let rays = TILE_RAYS * every.max(1) as i64;
+    let to_index = |w: [f64; 3], length: f64| lattice.to_index(w.map(|c| c * length));
+    let step = to_index(lattice.d, lattice.sample_spacing);
+    let cost = |w: [f64; 3]| {
+        let n = cross(to_index(w, lattice.ray_spacing), step);
+        n[0].abs() + (n[1].abs() + n[2].abs()) / CELLS_PER_LINE
+    };
+    let (ci, cj) = (cost(lattice.u), cost(lattice.v));
+    let ratio = (rays as f64 * cj / ci.max(1e-12)).sqrt();
+    let max_log = rays.ilog2() as f64;
+    let ti = 1i64 << ratio.log2().round().clamp(0.0, max_log) as u32;
+    (ti, rays / ti)
+}
+
+/// A ray of a tile being walked: where it is, its block state, and how many samples it has in
+/// the tile's common walk (all inside cells, see [`BinSampler::inner_span`]) and after it.
+pub(super) struct Walker {
+    pub(super) p: [i64; 3],
+    /// During the common walk: the bin or `MIXED` of the cell of `p`, and the cell of the next
+    /// sample.
+    pub(super) bin: u8,
+    pub(super) next: usize,
+    pub(super) run: Run,
+    pub(super) inner: i64,
+    pub(super) tail: i64,
+    pub(super) grid: bool,
+}
+
+/// Whether `x` is a whole number up to rounding.
+fn is_whole(x: f64) -> bool {
+    (x - round_half_away(x) as f64).abs() < 1e-9
+}
+
+/// One sample at `w`'s position (anywhere in the volume up to rounding) into its run.
+fn edge_sample(sampler: &BinSampler, counts: &mut impl Counter, w: &mut Walker) {
+    let bin = if w.grid {
+        sampler.voxel_bin(w.p)
+    } else {
+        sampler.bin_fixed(w.p)
+    };
+    match bin {
+        Some(b) => counts.push_to(&mut w.run, b),
+        None => counts.end_run(&mut w.run),
+    }
+}
+
+/// The bin of a sample in a mixed cell: interpolated, or the voxel itself on the grid. Out of
+/// line, to keep the common path of [`walk_tile`] small.
+#[inline(never)]
+pub(super) fn mixed_bin(sampler: &BinSampler, p: [i64; 3], cell: usize, grid: bool) -> Option<u8> {
+    if grid {
+        sampler.voxel_bin(p)
+    } else {
+        sampler.inner_bin(p, cell)
+    }
+}
+
+#[inline]
+fn add(p: [i64; 3], step: [i64; 3]) -> [i64; 3] {
+    std::array::from_fn(|m| p[m] + step[m])
+}
+
+#[inline]
+fn advance(p: &mut [i64; 3], step: [i64; 3]) {
+    for m in 0..3 {
+        p[m] += step[m];
+    }
+}
+
+/// The rays of one tile: columns `is` of the rows `js.0 ..`, each row's rays that can meet the
+/// box in `rows` (see [`Lattice::row_span`]), and the subset walked.
+struct TileRays<'a> {
+    is: (i64, i64),
+    js: (i64, i64),
+    rows: &'a [Option<(i64, i64)>],
+    subset: RaySubset,
+}
+
+/// Feeds the quantized samples of the rays `(i, j)` of one tile into `counts`: each ray's
+/// samples in order, a missing sample breaking its sequence. `step` is the lattice's step in
+/// fixed point; `common` walks the rays' inner spans together. Returns the number of rays.
+fn walk_tile<C: Counter>(
+    lattice: &Lattice,
+    tile: &TileRays,
+    step: [i64; 3],
+    sampler: &BinSampler,
+    counts: &mut C,
+    walkers: &mut Vec<Walker>,
+    common: &mut impl FnMut(&mut [Walker], &mut C),
+) -> u64 {
+    let whole_step = lattice.step().iter().all(|&c| is_whole(c));
+    let spans = sampler.inner_spans(step);
+    walkers.clear();
+    for (j, row) in (tile.js.0..=tile.js.1).zip(tile.rows) {
+        let Some((a, b)) = *row else { continue };
+        for i in a.max(tile.is.0)..=b.min(tile.is.1) {
+            if !tile.subset.keeps(i, j) {
+                continue;
+            }
+            let Some(ray) = lattice.ray(i, j) else {
+                continue;
+            };
+            let start = ray.at(ray.k0);
+            let grid = whole_step && start.iter().all(|&c| is_whole(c));
+            let p = to_fixed(if grid {
+                start.map(|c| round_half_away(c) as f64)
+            } else {
+                start
+            });
+            let n = ray.k1 - ray.k0 + 1;
+            let (t0, t1) = spans.of(p, n);
+            let mut w = Walker {
+                p,
+                bin: MIXED,
+                next: 0,
+                run: Run::default(),
+                inner: t1 - t0,
+                tail: n - t1,
+                grid,
+            };
+            // The samples before the inner span, one by one.
+            for _ in 0..t0 {
+                edge_sample(sampler, counts, &mut w);
+                advance(&mut w.p, step);
+            }
+            walkers.push(w);
+        }
+    }
+    let rays = walkers.len() as u64;
+    common(walkers, counts);
+    // The samples after the inner span.
+    for w in walkers.iter_mut() {
+        for _ in 0..w.tail {
+            edge_sample(sampler, counts, w);
+            advance(&mut w.p, step);
+        }
+        counts.end_run(&mut w.run);
+    }
+    rays
+}
+
+/// The common walk of a tile's rays through their inner spans, one sample per ray in turn,
+/// leaving each at the end of its span.
+pub(super) fn scalar_walk(
+    walkers: &mut [Walker],
+    step: [i64; 3],
+    sampler: &BinSampler,
+    counts: &mut impl Counter,
+) {
+    // Longest span first, so that the rays still walking are always a prefix.
+    walkers.sort_unstable_by_key(|w| std::cmp::Reverse(w.inner));
+    for w in walkers.iter_mut().filter(|w| w.inner > 0) {
+        w.bin = sampler.cell_bin(sampler.inner_cell(w.p));
+        w.next = sampler.inner_cell(add(w.p, step));
+    }
+    let mut active = walkers.len();
+    let mut t = 0;
+    loop {
+        while active > 0 && walkers[active - 1].inner <= t {
+            active -= 1;
+        }
+        if active == 0 {
+            break;
+        }
+        for w in &mut walkers[..active] {
+            match w.bin {
+                MIXED => match mixed_bin(sampler, w.p, sampler.inner_cell(w.p), w.grid) {
+                    Some(b) => counts.push_to(&mut w.run, b),
+                    None => counts.end_run(&mut w.run),
+                },
+                b => counts.push_to(&mut w.run, b),
+            }
+            advance(&mut w.p, step);
+            // A walker comes back a whole round of the tile later, time enough for memory: ask
+            // now for the cell after next, and for the corners of the next if it is mixed.
+            if w.inner > t + 1 {
+                w.bin = sampler.cell_bin(w.next);
+                if w.bin == MIXED {
+                    sampler.prefetch_corners(w.next);
+                }
+            }
+            w.next = sampler.inner_cell(add(w.p, step));
+            sampler.prefetch_cell(w.next);
+        }
+        t += 1;
+    }
+}
+
+/// Feeds the rays of the tile row `js` that `subset` keeps into `counts`, walking their inner
+/// spans with `common`. Returns the number of rays.
+pub(super) fn walk_row<C: Counter>(
+    lattice: &Lattice,
+    js: (i64, i64),
+    subset: RaySubset,
+    step: [i64; 3],
+    sampler: &BinSampler,
+    counts: &mut C,
+    common: &mut impl FnMut(&mut [Walker], &mut C),
+) -> u64 {
+    let ((i0, i1), _) = lattice.ray_ranges();
+    let rows: Vec<Option<(i64, i64)>> = (js.0..=js.1).map(|j| lattice.row_span(j)).collect();
+    // The columns any row of the tile row can meet.
+    let (lo, hi) = rows
+        .iter()
+        .flatten()
+        .fold((i1, i0), |(lo, hi), &(a, b)| (lo.min(a), hi.max(b)));
+    let (lo, hi) = (lo.max(i0), hi.min(i1));
+    if lo > hi {
+        return 0;
+    }
+    let (ti, _) = tile_shape(lattice, subset.every);
+    let mut walkers = Vec::with_capacity(TILE_RAYS as usize);
+    (lo..=hi)
+        .step_by(ti as usize)
+        .map(|i| {
+            let tile = TileRays {
+                is: (i, (i + ti - 1).min(hi)),
+                js,
+                rows: &rows,
+                subset,
+            };
+            walk_tile(lattice, &tile, step, sampler, counts, &mut walkers, common)
+        })
+        .sum()
+}
+
+/// The step between samples of `lattice` in fixed point; a whole step is snapped, so that rays
+/// on the grid stay exactly on it.
+pub(super) fn fixed_step(lattice: &Lattice) -> [i64; 3] {
+    let step = lattice.step();
+    if step.iter().all(|&c| is_whole(c)) {
+        to_fixed(step.map(|c| round_half_away(c) as f64))
+    } else {
+        to_fixed(step)
+    }
+}
+
+/// The inclusive ranges of the tile rows of `lattice`'s rays, for a walk of one ray in `every`.
+pub(super) fn tile_rows(lattice: &Lattice, every: u64) -> impl Iterator<Item = (i64, i64)> {
+    let (_, (j0, j1)) = lattice.ray_ranges();
+    let (_, tj) = tile_shape(lattice, every);
+    (j0..=j1)
+        .step_by(tj as usize)
+        .map(move |j| (j, (j + tj - 1).min(j1)))
+}
