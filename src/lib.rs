@@ -1,14 +1,42 @@
 //! slabscope: similarity-based exploded views of 3D volumes (Ruiz, Viola, Boada, Bruckner,
 //! Feixas and Sbert, 2008), as a library.
 //!
-//! The library knows nothing of terminals; the `slabscope` binary puts a TUI and a CLI over it.
-//! Its modules, from the bottom up (each depends only on those above it):
+//! Three steps, each a call: find the most structured view (the axis of lowest entropy rate over
+//! an icosphere of viewpoints), cut the volume into slabs across it (top-down by information
+//! gain, bottom-up by NMI merges, or the optimum), and render the slabs pulled apart.
 //!
-//! - [`error`]: the [`Error`] enum, grouped by concern, with the parameter's name and value as data.
-//! - [`progress`]: the [`Monitor`] every long computation takes: phase, progress and cancellation.
+//! ```
+//! use slabscope::render::{DEFAULT_SPREAD, Gap};
+//! use slabscope::{AnalysisParams, Layout, LoadOptions, Monitor, RenderParams, Renderer};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! // A small CT-like phantom, written to a file so that it is loaded as any volume would be.
+//! let dir = tempfile::tempdir()?;
+//! let path = dir.path().join("body.nrrd");
+//! let phantom = slabscope::volume::phantom::body([32, 32, 48], 1)?;
+//! slabscope::volume::io::write_volume(&path, &phantom, false)?;
+//!
+//! let volume = slabscope::load(&path, &LoadOptions::default())?.volume;
+//! let analysis = slabscope::analyze(&volume, &AnalysisParams::default(), &Monitor::none())?;
+//! assert_eq!(analysis.partition.slabs.len(), 4);
+//!
+//! let layout = Layout::exploded(&analysis.partition, Gap::Similarity, DEFAULT_SPREAD);
+//! let params = RenderParams { width: 160, height: 120, ..RenderParams::default() };
+//! let image = Renderer::new(&volume)?.render(&layout, &params, &Monitor::none())?;
+//! std::fs::write(dir.path().join("exploded.png"), image.png()?)?;
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! The library knows nothing of terminals; the `slabscope` binary puts a TUI and a CLI over it
+//! (the repository's `README.md` and `docs/` describe them). Its modules, from the bottom up
+//! (each depends only on those above it; `docs/design.md` gives the layer order):
+//!
 //! - [`measure`]: entropy, block entropies, Jensen-Shannon divergence, MI and NMI: pure maths.
 //! - [`geometry`]: vectors, the [`Axis`] type (parsed, printed, canonical) and an axis's frame.
-//! - [`volume`]: the [`Volume`], its statistics and quantization (DESIGN §2), trilinear
+//! - [`error`]: the [`Error`] enum, grouped by concern, with the parameter's name and value as data.
+//! - [`progress`]: the [`Monitor`] every long computation takes: phase, progress and cancellation.
+//! - [`volume`]: the [`Volume`], its statistics and quantization (docs/design.md §2), trilinear
 //!   interpolation, the cell map, synthetic phantoms, and `io/` with one reader per format.
 //! - [`view`]: the most structured view (paper §3.1, §4): the icosphere, the ray lattice and the
 //!   sampling parameters, the entropy rate of an axis and the search over the sphere.
@@ -17,7 +45,8 @@
 //! - [`analysis`]: the view search and the partition together, as one call.
 //! - [`render`]: the exploded view (paper §3, step 3): camera, transfer functions, layout, the ray
 //!   caster and overlays.
-//! - [`report`]: the JSON contract (DESIGN §3) and the other exports, built from the results.
+//! - [`report`]: the JSON contract (docs/design.md §3, field by field in docs/json.md) and the
+//!   other exports, built from the results.
 //! - [`triage`]: many volumes at once: what a set of paths holds, shards of it, one row each.
 
 pub mod analysis;

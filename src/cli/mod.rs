@@ -15,6 +15,8 @@ macro_rules! out {
 
 mod analyze;
 pub mod args;
+#[cfg(test)]
+mod doc_lines;
 mod info;
 mod phantom;
 mod progress;
