@@ -5,6 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::geometry::InvalidParameter;
+
 /// Everything that can go wrong in slabscope's library.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -198,6 +200,18 @@ impl Error {
     }
 }
 
+impl From<InvalidParameter> for Error {
+    /// Geometry's rejection as the crate's: the same parameter, value and expectation, so the
+    /// same message.
+    fn from(e: InvalidParameter) -> Self {
+        Self::InvalidParameter {
+            parameter: e.parameter,
+            value: e.value,
+            expected: e.expected,
+        }
+    }
+}
+
 /// A byte count for people: "1.5 GiB (1610612736 bytes)" above a KiB, "12 bytes" below.
 #[must_use]
 pub fn human_bytes(bytes: u64) -> String {
@@ -223,6 +237,14 @@ mod tests {
         assert_eq!(human_bytes(12), "12 bytes");
         assert_eq!(human_bytes(1536), "1.5 KiB (1536 bytes)");
         assert_eq!(human_bytes(3 << 30), "3.0 GiB (3221225472 bytes)");
+    }
+
+    #[test]
+    fn geometry_rejections_keep_their_message() {
+        let e = "w".parse::<crate::geometry::Axis>().unwrap_err();
+        let text = e.to_string();
+        assert_eq!(text, "axis w: expected x, y, z or a direction DX,DY,DZ");
+        assert_eq!(Error::from(e).to_string(), text);
     }
 
     #[test]

@@ -32,8 +32,8 @@ use std::arch::x86_64::*;
 
 use super::BinSampler;
 use super::{Walker, mixed_bin};
+use crate::geometry::lattice::FIXED_BITS;
 use crate::measure::{DenseCounts, Run, RunEnds};
-use crate::view::lattice::FIXED_BITS;
 use crate::volume::cells::MIXED;
 
 /// Rays per group: eight 32-bit lanes of a 256-bit register.

@@ -15,8 +15,8 @@ mod sampler;
 
 pub use sampler::{BinSampler, InnerSpans};
 
+use crate::geometry::lattice::{Lattice, round_half_away, to_fixed};
 use crate::geometry::{WorldAxis, cross};
-use crate::view::lattice::{Lattice, round_half_away, to_fixed};
 
 /// An axis's entropy rate over lattice phases: the paper's lattice and shifted ones.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
