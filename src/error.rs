@@ -90,6 +90,16 @@ pub enum Error {
         /// The file that exists.
         path: PathBuf,
     },
+    /// A file that would be written exists and is not a regular file (a device, a FIFO, a
+    /// folder): it is never replaced, whether overwriting was asked for or not.
+    #[error(
+        "{}: not a regular file: slabscope writes only regular files",
+        shown(path)
+    )]
+    NotRegularFile {
+        /// The file that exists.
+        path: PathBuf,
+    },
     /// A parameter outside its domain, such as zero bins or a zero axis.
     #[error("{parameter} {value}: expected {expected}")]
     InvalidParameter {
@@ -166,7 +176,8 @@ impl Error {
             | Self::Unsupported { path, .. }
             | Self::RawUndescribed { path, .. }
             | Self::Series { path, .. }
-            | Self::Exists { path } => Some(path),
+            | Self::Exists { path }
+            | Self::NotRegularFile { path } => Some(path),
             _ => None,
         }
     }
