@@ -4,9 +4,9 @@
 
 use std::time::Instant;
 
+use slabscope::geometry::lattice::Lattice;
 use slabscope::progress::Monitor;
 use slabscope::view::BinSampler;
-use slabscope::view::lattice::Lattice;
 use slabscope::view::{entropy_rate, icosphere};
 use slabscope::volume::phantom;
 
@@ -14,7 +14,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let volume = phantom::body([256, 256, 415], 1)?;
     let sampler = BinSampler::new(&volume, volume.quantizer(32)?);
     for axis in icosphere::axes(1) {
-        let lattice = Lattice::for_volume(&volume, axis)?;
+        let lattice = Lattice::at_voxel_spacing(volume.dims(), volume.spacing(), axis)?;
         let t = Instant::now();
         let r = entropy_rate(&sampler, &lattice, 3, &Monitor::none())?;
         let secs = t.elapsed().as_secs_f64();

@@ -93,7 +93,7 @@ impl Analysis {
 
 /// Runs the view search (unless an axis is given) and partitions along the axis.
 pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> Result<Analysis> {
-    let chosen = params.axis.resolve(volume)?;
+    let chosen = params.axis.resolve(volume.transform(), volume.spacing())?;
     let views = if params.runs_search() {
         Some(search(volume, &params.view, monitor)?)
     } else {

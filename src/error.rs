@@ -5,6 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::geometry::InvalidParameter;
+
 /// Everything that can go wrong in slabscope's library.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -88,6 +90,16 @@ pub enum Error {
         /// The file that exists.
         path: PathBuf,
     },
+    /// A file that would be written exists and is not a regular file (a device, a FIFO, a
+    /// folder): it is never replaced, whether overwriting was asked for or not.
+    #[error(
+        "{}: not a regular file: slabscope writes only regular files",
+        shown(path)
+    )]
+    NotRegularFile {
+        /// The file that exists.
+        path: PathBuf,
+    },
     /// A parameter outside its domain, such as zero bins or a zero axis.
     #[error("{parameter} {value}: expected {expected}")]
     InvalidParameter {
@@ -164,7 +176,8 @@ impl Error {
             | Self::Unsupported { path, .. }
             | Self::RawUndescribed { path, .. }
             | Self::Series { path, .. }
-            | Self::Exists { path } => Some(path),
+            | Self::Exists { path }
+            | Self::NotRegularFile { path } => Some(path),
             _ => None,
         }
     }
@@ -198,6 +211,18 @@ impl Error {
     }
 }
 
+impl From<InvalidParameter> for Error {
+    /// Geometry's rejection as the crate's: the same parameter, value and expectation, so the
+    /// same message.
+    fn from(e: InvalidParameter) -> Self {
+        Self::InvalidParameter {
+            parameter: e.parameter,
+            value: e.value,
+            expected: e.expected,
+        }
+    }
+}
+
 /// A byte count for people: "1.5 GiB (1610612736 bytes)" above a KiB, "12 bytes" below.
 #[must_use]
 pub fn human_bytes(bytes: u64) -> String {
@@ -223,6 +248,14 @@ mod tests {
         assert_eq!(human_bytes(12), "12 bytes");
         assert_eq!(human_bytes(1536), "1.5 KiB (1536 bytes)");
         assert_eq!(human_bytes(3 << 30), "3.0 GiB (3221225472 bytes)");
+    }
+
+    #[test]
+    fn geometry_rejections_keep_their_message() {
+        let e = "w".parse::<crate::geometry::Axis>().unwrap_err();
+        let text = e.to_string();
+        assert_eq!(text, "axis w: expected x, y, z or a direction DX,DY,DZ");
+        assert_eq!(Error::from(e).to_string(), text);
     }
 
     #[test]

@@ -66,13 +66,13 @@ pub mod volume;
 pub use analysis::{Analysis, AnalysisParams, analyze};
 pub use error::{Error, Result};
 pub use geometry::Axis;
+pub use geometry::lattice::SamplingParams;
 pub use partition::{
     Histories, Method, Partition, PartitionParams, Scope, Stop, label_volume, partition,
 };
 pub use progress::{Monitor, Progress};
 pub use render::{Layout, RenderParams, Renderer};
 pub use report::{AnalysisReport, SCHEMA_VERSION, SlabsReport};
-pub use view::lattice::SamplingParams;
 pub use view::{ViewParams, ViewSearch, search};
 pub use volume::io::{Format, LoadOptions, Loaded, load};
 pub use volume::{Quantizer, Stats, Volume, VoxelType};

@@ -1,9 +1,12 @@
 //! The reports other programs read: the JSON object of `analyze --json` (DESIGN.md §3), the slab
-//! boundaries for renderers, and the curves as CSV. Built from library results only, so that the
+//! boundaries for renderers, what `info --json` says of a volume or a folder, and the curves as
+//! CSV. Built from library results only, so that the
 //! CLI, the TUI's export and triage print the same thing. Every JSON object carries
 //! [`SCHEMA_VERSION`], raised whenever a field changes meaning or goes away.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::path::Path;
 
 use serde::Serialize;
 
@@ -12,7 +15,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{WorldAxis, dot};
 use crate::partition::{BackgroundSummary, Partition};
 use crate::view::{AxisEntropy, Contender, RankedBy, ViewParams};
-use crate::volume::Volume;
+use crate::volume::io::{DicomSeries, Loaded};
+use crate::volume::{Volume, VoxelType};
 
 /// The version of the JSON contract.
 pub const SCHEMA_VERSION: u32 = 1;
@@ -127,6 +131,135 @@ impl GeometryReport {
             orientation: t.axcodes(),
             orthogonal: t.is_orthogonal(),
             world_bounds: t.world_bounds(volume.dims()),
+        }
+    }
+}
+
+/// The object `info --json` prints for one volume: what it is, where it lies, how its values
+/// spread, and for DICOM which series it is.
+#[derive(Clone, Debug, Serialize)]
+pub struct InfoReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The file as the user named it.
+    pub file: String,
+    /// The format it was read as (`nifti`, `nrrd`, `dicom`, ...).
+    pub format: &'static str,
+    /// `[nx, ny, nz]`.
+    pub dims: [usize; 3],
+    /// `[sx, sy, sz]`, mm.
+    pub spacing: [f64; 3],
+    /// The voxel type of the file (`u8`, `i16`, `f32`, ...).
+    #[serde(rename = "type")]
+    pub voxel_type: VoxelType,
+    /// Smallest and largest finite voxel, null when no voxel is finite.
+    pub range: Option<[f32; 2]>,
+    /// Mean of the finite voxels, null when no voxel is finite.
+    pub mean: Option<f64>,
+    /// Number of voxels.
+    pub voxels: usize,
+    /// Voxels that are NaN or infinite.
+    pub missing: usize,
+    /// Bytes the volume takes in memory (as f32).
+    pub memory_bytes: u64,
+    /// The voxel-to-world transform: `affine`, `orientation`, `orthogonal`, `world_bounds`.
+    #[serde(flatten)]
+    pub geometry: GeometryReport,
+    /// Voxel counts over equal bins between the smallest and largest finite voxel.
+    pub histogram: Vec<u64>,
+    /// What the loader noticed (a 4D file, a volume picked, ...).
+    pub notes: Vec<String>,
+    /// The DICOM series read, null for other formats.
+    pub dicom: Option<DicomReport>,
+}
+
+/// The DICOM series of an [`InfoReport`].
+#[derive(Clone, Debug, Serialize)]
+pub struct DicomReport {
+    /// The series' key: its `SeriesInstanceUID` (with `#2`, ... on the parts of a split series).
+    pub series: String,
+    /// `SeriesNumber`.
+    pub number: Option<i64>,
+    /// `SeriesDescription`.
+    pub description: String,
+    /// Modality.
+    pub modality: String,
+    /// The transfer syntax, named.
+    pub transfer_syntax: String,
+    /// Patient-identifying fields by name, only when they were asked for (empty otherwise).
+    pub patient: BTreeMap<String, String>,
+}
+
+impl InfoReport {
+    /// The report of `loaded`, read from the file `file`, with a histogram of `bins` bins.
+    pub fn new(file: &str, loaded: &Loaded, bins: usize) -> Result<Self> {
+        let v = &loaded.volume;
+        let s = v.stats();
+        let finite = s.finite > 0;
+        Ok(Self {
+            schema_version: SCHEMA_VERSION,
+            file: file.to_string(),
+            format: loaded.format.name(),
+            dims: v.dims(),
+            spacing: v.spacing(),
+            voxel_type: v.voxel_type(),
+            range: finite.then_some([s.min, s.max]),
+            mean: finite.then_some(s.mean),
+            voxels: v.len(),
+            missing: s.missing,
+            memory_bytes: v.memory_bytes(),
+            geometry: GeometryReport::of(v),
+            histogram: v.histogram(bins)?,
+            notes: loaded.notes.clone(),
+            dicom: loaded.dicom.as_ref().map(DicomReport::of),
+        })
+    }
+}
+
+impl DicomReport {
+    /// The report of the series `d`.
+    pub fn of(d: &DicomSeries) -> Self {
+        Self {
+            series: d.key.clone(),
+            number: d.number,
+            description: d.description.clone(),
+            modality: d.modality.clone(),
+            transfer_syntax: d.syntax.clone(),
+            patient: d.patient.iter().cloned().collect(),
+        }
+    }
+}
+
+/// The object `info --json` prints for a folder of several volumes: each one a line of the
+/// list, as `triage` would look at them.
+#[derive(Clone, Debug, Serialize)]
+pub struct FolderReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The folder as the user named it.
+    pub folder: String,
+    /// The volumes in it.
+    pub volumes: Vec<ListedVolume>,
+}
+
+/// One volume of a [`FolderReport`].
+#[derive(Clone, Debug, Serialize)]
+pub struct ListedVolume {
+    /// The file, or the folder of slices or of DICOM files.
+    pub path: String,
+    /// The DICOM series' key in a folder of DICOM files, else null.
+    pub series: Option<String>,
+    /// How a list names the series (number and description), else null.
+    pub label: Option<String>,
+}
+
+impl FolderReport {
+    /// The report of `folder`, holding `volumes`.
+    pub fn new(folder: &Path, volumes: Vec<ListedVolume>) -> Self {
+        Self {
+            schema_version: SCHEMA_VERSION,
+            folder: folder.display().to_string(),
+            volumes,
         }
     }
 }
@@ -272,6 +405,120 @@ pub fn curves_csv(p: &Partition) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The key paths of a JSON value (`.dicom.patient`, `.volumes[].path`), as the contract
+    /// snapshots list them.
+    fn key_paths(v: &serde_json::Value, prefix: &str, out: &mut Vec<String>) {
+        match v {
+            serde_json::Value::Object(o) => {
+                for (k, v) in o {
+                    let path = format!("{prefix}.{k}");
+                    out.push(path.clone());
+                    key_paths(v, &path, out);
+                }
+            }
+            serde_json::Value::Array(a) => {
+                for v in a.iter().filter(|v| v.is_object()) {
+                    key_paths(v, &format!("{prefix}[]"), out);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn keys_of(value: &impl Serialize) -> Vec<String> {
+        let text = to_json(value).unwrap();
+        let mut keys = Vec::new();
+        key_paths(&serde_json::from_str(&text).unwrap(), "", &mut keys);
+        keys.sort();
+        keys.dedup();
+        keys
+    }
+
+    #[test]
+    fn info_reports_every_key_of_the_contract() {
+        let mut loaded = Loaded {
+            volume: crate::volume::phantom::body([12, 10, 14], 1).unwrap(),
+            format: crate::volume::io::Format::Nrrd,
+            notes: vec!["a note".into()],
+            sources: Vec::new(),
+            dicom: None,
+        };
+        let plain = InfoReport::new("body.nrrd", &loaded, 32).unwrap();
+        assert_eq!(plain.histogram.len(), 32);
+        let keys = keys_of(&plain);
+        assert_eq!(
+            keys,
+            [
+                ".affine",
+                ".dicom",
+                ".dims",
+                ".file",
+                ".format",
+                ".histogram",
+                ".mean",
+                ".memory_bytes",
+                ".missing",
+                ".notes",
+                ".orientation",
+                ".orthogonal",
+                ".range",
+                ".schema_version",
+                ".spacing",
+                ".type",
+                ".voxels",
+                ".world_bounds",
+            ]
+        );
+        loaded.dicom = Some(DicomSeries {
+            key: "1.2.3".into(),
+            number: Some(4),
+            description: "Abdomen".into(),
+            modality: "CT".into(),
+            syntax: "explicit VR little endian".into(),
+            patient: vec![("patient name".into(), "Doe^J".into())],
+        });
+        let dicom = InfoReport::new("ct", &loaded, 32).unwrap();
+        let keys = keys_of(&dicom);
+        for key in [
+            ".dicom.series",
+            ".dicom.number",
+            ".dicom.description",
+            ".dicom.modality",
+            ".dicom.transfer_syntax",
+            ".dicom.patient",
+            ".dicom.patient.patient name",
+        ] {
+            assert!(keys.iter().any(|k| k == key), "{key} missing from {keys:?}");
+        }
+        let v: serde_json::Value = serde_json::from_str(&to_json(&dicom).unwrap()).unwrap();
+        assert_eq!(v["schema_version"], SCHEMA_VERSION);
+        assert_eq!(v["type"], "i16");
+        assert_eq!(v["format"], "nrrd");
+    }
+
+    #[test]
+    fn a_folder_report_lists_its_volumes() {
+        let report = FolderReport::new(
+            Path::new("scans"),
+            vec![ListedVolume {
+                path: "scans/ct".into(),
+                series: Some("1.2.3".into()),
+                label: Some("series 4 \"Abdomen\"".into()),
+            }],
+        );
+        assert_eq!(
+            keys_of(&report),
+            [
+                ".folder",
+                ".schema_version",
+                ".volumes",
+                ".volumes[].label",
+                ".volumes[].path",
+                ".volumes[].series"
+            ]
+        );
+    }
 
     #[test]
     fn no_negative_zero_is_written() {

@@ -29,3 +29,6 @@ impl Lcg {
         self.state
     }
 }
+
+/// The layer test: imports against the layer order of the design.
+mod layers;

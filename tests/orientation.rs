@@ -104,14 +104,20 @@ fn axes_are_named_by_anatomy() {
     ] {
         let c: AxisChoice = choice.parse().unwrap();
         assert_eq!(
-            c.resolve(&v).unwrap().unwrap().direction(),
+            c.resolve(v.transform(), v.spacing())
+                .unwrap()
+                .unwrap()
+                .direction(),
             axis,
             "{choice}"
         );
     }
     let unknown = read(&fixtures().join("no_orientation.nii"));
     let axial: AxisChoice = "axial".parse().unwrap();
-    let e = axial.resolve(&unknown).unwrap_err().to_string();
+    let e = axial
+        .resolve(unknown.transform(), unknown.spacing())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("the file states no orientation"), "{e}");
     assert_eq!(
         unknown

@@ -104,7 +104,9 @@ fn layers_are_best_seen_along_them() {
     let worst_on_sphere = along.views.last().unwrap().entropy_rate;
     assert!(worst_on_sphere > r.best().entropy_rate + 0.1);
     let sampler = slabscope::view::BinSampler::new(&v, v.quantizer(32).unwrap());
-    let lattice = slabscope::view::lattice::Lattice::for_volume(&v, normal).unwrap();
+    let lattice =
+        slabscope::geometry::lattice::Lattice::at_voxel_spacing(v.dims(), v.spacing(), normal)
+            .unwrap();
     let h_normal = slabscope::view::entropy_rate(&sampler, &lattice, 3, &Monitor::none())
         .unwrap()
         .entropy_rate;

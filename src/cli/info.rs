@@ -4,12 +4,11 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use serde_json::json;
-use slabscope::Loaded;
 use slabscope::error::human_bytes;
-use slabscope::report::GeometryReport;
-use slabscope::triage::{Folder, discover, folder_kind};
+use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, to_json};
+use slabscope::triage::{Entry, Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
+use slabscope::volume::io::Loaded;
 
 use super::LoadArgs;
 
@@ -46,15 +45,8 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     };
     if let Some(volumes) = listed {
         if args.json {
-            let out = json!({
-                "folder": dir.display().to_string(),
-                "volumes": volumes.iter().map(|v| json!({
-                    "path": v.path.display().to_string(),
-                    "series": v.series,
-                    "label": v.label,
-                })).collect::<Vec<_>>(),
-            });
-            outln!("{}", serde_json::to_string_pretty(&out)?);
+            let listed = volumes.iter().map(listed_volume).collect();
+            outln!("{}", to_json(&FolderReport::new(dir, listed))?);
         } else {
             outln!("folder      {}", dir.display());
             outln!(
@@ -72,41 +64,24 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     print(&args.file.display().to_string(), &loaded, args.json)
 }
 
+/// A volume of a folder as the folder's report lists it.
+fn listed_volume(entry: &Entry) -> ListedVolume {
+    ListedVolume {
+        path: entry.path.display().to_string(),
+        series: entry.series.clone(),
+        label: entry.label.clone(),
+    }
+}
+
 fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
-    let (format, v, notes) = (loaded.format, &loaded.volume, &loaded.notes);
-    let s = v.stats();
-    let hist = v.histogram(HISTOGRAM_BINS)?;
-    let geometry = GeometryReport::of(v);
+    let report = InfoReport::new(name, loaded, HISTOGRAM_BINS)?;
     if json {
-        let out = json!({
-            "file": name,
-            "format": format.name(),
-            "dims": v.dims(),
-            "spacing": v.spacing(),
-            "type": v.voxel_type(),
-            "range": (s.finite > 0).then_some([s.min, s.max]),
-            "mean": (s.finite > 0).then_some(s.mean),
-            "voxels": v.len(),
-            "missing": s.missing,
-            "memory_bytes": v.memory_bytes(),
-            "affine": geometry.affine,
-            "orientation": geometry.orientation,
-            "orthogonal": geometry.orthogonal,
-            "world_bounds": geometry.world_bounds,
-            "histogram": hist,
-            "notes": notes,
-            "dicom": loaded.dicom.as_ref().map(|d| json!({
-                "series": d.key,
-                "number": d.number,
-                "description": d.description,
-                "modality": d.modality,
-                "transfer_syntax": d.syntax,
-                "patient": d.patient.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
-            })),
-        });
-        outln!("{}", serde_json::to_string_pretty(&out)?);
+        outln!("{}", to_json(&report)?);
         return Ok(());
     }
+    let (format, v) = (loaded.format, &loaded.volume);
+    let s = v.stats();
+    let (hist, geometry) = (&report.histogram, &report.geometry);
     let [nx, ny, nz] = v.dims();
     let [sx, sy, sz] = v.spacing();
     outln!("file        {name}");
@@ -131,7 +106,7 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         sy * ny as f64,
         sz * nz as f64
     );
-    print_geometry(&geometry);
+    print_geometry(geometry);
     outln!("type        {}", v.voxel_type());
     if s.finite == 0 {
         outln!("range       none: every voxel is NaN or infinite");
@@ -145,7 +120,7 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     outln!("memory      {} as f32", human_bytes(v.memory_bytes()));
     outln!(
         "histogram   {}  ({HISTOGRAM_BINS} bins, log scale)",
-        sparkline(&hist)
+        sparkline(hist)
     );
     Ok(())
 }

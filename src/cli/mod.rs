@@ -211,6 +211,7 @@ fn in_flag_terms(e: &Error) -> String {
             format!("{}: {detail}: give {}", path.display(), flags.join(" and "))
         }
         Error::Exists { .. } => format!("{e} (use --force to overwrite it)"),
+        Error::NotRegularFile { .. } => format!("{e}, --force or not"),
         Error::Series {
             localizers: true, ..
         } => format!("{e} (--include-localizers keeps them)"),
@@ -250,6 +251,13 @@ mod tests {
         assert_eq!(
             error_message(&e),
             "out.png: already exists (use --force to overwrite it)"
+        );
+        let e = anyhow::Error::from(Error::NotRegularFile {
+            path: "pipe.json".into(),
+        });
+        assert_eq!(
+            error_message(&e),
+            "pipe.json: not a regular file: slabscope writes only regular files, --force or not"
         );
         let e = anyhow::Error::from(Error::invalid("dims", "0x1x1", "one voxel"));
         assert_eq!(error_message(&e), "dims 0x1x1: expected one voxel");

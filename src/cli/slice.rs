@@ -51,7 +51,11 @@ pub fn run(args: &SliceArgs) -> Result<()> {
     // middle slice, if not 4 slabs).
     let params = args.analysis.params(false);
     let name = args.file.display().to_string();
-    let axis = if let Some(axis) = params.axis.resolve(volume)? {
+    let axis = if let Some(axis) = params
+        .axis
+        .resolve(volume.transform(), volume.spacing())
+        .map_err(slabscope::Error::from)?
+    {
         axis.direction()
     } else {
         let views = with_bar(|monitor| search(volume, &params.view, monitor))

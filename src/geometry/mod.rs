@@ -1,7 +1,9 @@
 //! Geometry in one place: vectors in physical voxel space (millimetres, voxel (0,0,0) at the
-//! origin), the [`Axis`] type that every front end parses and prints, and the orthonormal frame
-//! of an axis that the ray lattice and the camera build on (DESIGN.md §2).
+//! origin), the [`Axis`] type that every front end parses and prints, the orthonormal frame of
+//! an axis that the camera builds on, and the ray lattice on that frame (DESIGN.md §2). It
+//! imports nothing of the crate: what it rejects it says with its own [`InvalidParameter`].
 
+pub mod lattice;
 pub mod world;
 
 use std::fmt;
@@ -11,7 +13,42 @@ use serde::{Serialize, Serializer};
 
 pub use world::{Anatomy, DisplayFrame, WorldAxis, WorldTransform};
 
-use crate::error::{Error, Result};
+/// A value geometry cannot take: a direction without length, an axis that does not parse, a
+/// spacing out of range. It carries what the crate's `InvalidParameter` error carries, and
+/// converts into it, so that a front end words it as any other parameter.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{parameter} {value}: expected {expected}")]
+pub struct InvalidParameter {
+    /// The parameter's name, as the library's parameter types spell it (`axis`, `ray_spacing`).
+    pub parameter: &'static str,
+    /// The value given, as text.
+    pub value: String,
+    /// What it must be.
+    pub expected: String,
+}
+
+impl InvalidParameter {
+    /// `parameter` was `value`, and should be `expected`.
+    pub fn new(
+        parameter: &'static str,
+        value: impl fmt::Display,
+        expected: impl Into<String>,
+    ) -> Self {
+        Self {
+            parameter,
+            value: value.to_string(),
+            expected: expected.into(),
+        }
+    }
+}
+
+/// Geometry's result type: a value, or the parameter it could not take.
+pub type Result<T, E = InvalidParameter> = std::result::Result<T, E>;
+
+/// The largest ratio between two voxel spacings (and between a lattice spacing and the smallest
+/// voxel spacing): real data reach about 200 (histology), and the work of the view search grows
+/// with the square of the ratio.
+pub const MAX_SPACING_RATIO: f64 = 1e4;
 
 /// Dot product.
 #[inline]
@@ -52,8 +89,9 @@ pub fn canonical(d: [f64; 3]) -> [f64; 3] {
 /// The orthonormal frame `(d, u, v)` of DESIGN.md §2: `e` is the coordinate axis where `|d|` has
 /// its smallest component (the first on ties), `u = normalize(e - (e·d) d)`, `v = d × u`.
 pub fn frame(d: [f64; 3]) -> Result<([f64; 3], [f64; 3], [f64; 3])> {
-    let d = normalize(d)
-        .ok_or_else(|| Error::invalid("axis", format!("{d:?}"), "a direction with a length"))?;
+    let d = normalize(d).ok_or_else(|| {
+        InvalidParameter::new("axis", format!("{d:?}"), "a direction with a length")
+    })?;
     let mut smallest = 0;
     for k in 1..3 {
         if d[k].abs() < d[smallest].abs() {
@@ -92,9 +130,9 @@ impl Axis {
 
     /// The canonical unit axis along `d`; an error for a zero or non-finite vector.
     pub fn new(d: [f64; 3]) -> Result<Self> {
-        normalize(d)
-            .map(|u| Self(canonical(u)))
-            .ok_or_else(|| Error::invalid("axis", format!("{d:?}"), "a direction with a length"))
+        normalize(d).map(|u| Self(canonical(u))).ok_or_else(|| {
+            InvalidParameter::new("axis", format!("{d:?}"), "a direction with a length")
+        })
     }
 
     /// The unit direction.
@@ -135,11 +173,11 @@ impl Serialize for Axis {
 }
 
 impl FromStr for Axis {
-    type Err = Error;
+    type Err = InvalidParameter;
 
     /// `x`, `y`, `z`, or three comma-separated numbers `DX,DY,DZ` (not all zero).
     fn from_str(text: &str) -> Result<Self> {
-        let bad = || Error::invalid("axis", text, "x, y, z or a direction DX,DY,DZ");
+        let bad = || InvalidParameter::new("axis", text, "x, y, z or a direction DX,DY,DZ");
         match text.trim() {
             "x" => Ok(Self::X),
             "y" => Ok(Self::Y),
@@ -182,18 +220,18 @@ pub enum AxisChoice {
 }
 
 impl AxisChoice {
-    /// The direction chosen in `volume`, `None` for the view search's best; an error for an
-    /// anatomical plane when the volume's orientation is unknown.
-    pub fn resolve(self, volume: &crate::Volume) -> Result<Option<Axis>> {
+    /// The direction chosen in a volume of voxel-to-world `transform` and voxel `spacing`, `None`
+    /// for the view search's best; an error for an anatomical plane when the orientation is
+    /// unknown.
+    pub fn resolve(self, transform: &WorldTransform, spacing: [f64; 3]) -> Result<Option<Axis>> {
         match self {
             Self::Best => Ok(None),
             Self::Along(a) => Ok(Some(a)),
-            Self::Anatomical(plane) => volume
-                .transform()
-                .anatomical_axis(plane, volume.spacing())
+            Self::Anatomical(plane) => transform
+                .anatomical_axis(plane, spacing)
                 .map(|m| Some([Axis::X, Axis::Y, Axis::Z][m]))
                 .ok_or_else(|| {
-                    Error::invalid(
+                    InvalidParameter::new(
                         "axis",
                         plane.name(),
                         "x, y, z or a direction, since the file states no orientation (so no \
@@ -205,7 +243,7 @@ impl AxisChoice {
 }
 
 impl FromStr for AxisChoice {
-    type Err = Error;
+    type Err = InvalidParameter;
 
     /// `best`, `axial`, `coronal`, `sagittal`, or an [`Axis`].
     fn from_str(text: &str) -> Result<Self> {
@@ -215,7 +253,7 @@ impl FromStr for AxisChoice {
             "coronal" => Self::Anatomical(Anatomy::Coronal),
             "sagittal" => Self::Anatomical(Anatomy::Sagittal),
             t => Self::Along(t.parse().map_err(|_| {
-                Error::invalid(
+                InvalidParameter::new(
                     "axis",
                     text,
                     "best, x, y, z, axial, coronal, sagittal or a direction DX,DY,DZ",

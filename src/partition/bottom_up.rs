@@ -609,7 +609,7 @@ mod tests {
             .collect();
         let v = Volume::new([14, 11, 9], [1.0; 3], VoxelType::F32, data).unwrap();
         let params = super::super::StackParams {
-            sampling: crate::SamplingParams {
+            sampling: crate::geometry::lattice::SamplingParams {
                 bins: 8,
                 ..Default::default()
             },

@@ -6,9 +6,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::geometry::lattice::{Lattice, SamplingParams};
 use crate::geometry::{WorldAxis, canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
-use crate::view::lattice::{Lattice, SamplingParams};
 use crate::volume::Volume;
 use crate::volume::background::{Background, BackgroundRule};
 use crate::volume::interpolate::Interpolator;
@@ -552,7 +552,14 @@ fn lattice_sums(
 /// The lattice of an oblique stack.
 fn oblique_lattice(volume: &Volume, d: [f64; 3], params: &StackParams) -> Result<Lattice> {
     let (x, y, _) = params.sampling.spacings(volume.dims(), volume.spacing())?;
-    Lattice::new(volume.dims(), volume.spacing(), d, x, y, [0.0; 3])
+    Ok(Lattice::new(
+        volume.dims(),
+        volume.spacing(),
+        d,
+        x,
+        y,
+        [0.0; 3],
+    )?)
 }
 
 #[cfg(test)]

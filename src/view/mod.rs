@@ -4,7 +4,6 @@
 //! optionally refined around the best.
 
 pub mod icosphere;
-pub mod lattice;
 mod rate;
 mod refine;
 
@@ -17,9 +16,9 @@ pub use rate::{
 };
 
 use crate::error::{Error, Result};
+use crate::geometry::lattice::{Lattice, SamplingParams};
 use crate::geometry::{canonical, dot, normalize};
 use crate::progress::Monitor;
-use crate::view::lattice::{Lattice, SamplingParams};
 use crate::volume::Volume;
 
 /// The lattice phases averaged by default, the paper's among them.
@@ -232,14 +231,14 @@ struct Evaluator<'a> {
 
 impl Evaluator<'_> {
     fn lattice(&self, axis: [f64; 3], n: usize) -> Result<Lattice> {
-        Lattice::new(
+        Ok(Lattice::new(
             self.volume.dims(),
             self.volume.spacing(),
             axis,
             self.params.sampling.ray_spacing.unwrap_or(1.0),
             self.params.sampling.sample_spacing.unwrap_or(1.0),
             phase(self.params.phase_seed, n),
-        )
+        )?)
     }
 
     /// The rays a shifted lattice walks, for an axis whose paper lattice counted `samples`:

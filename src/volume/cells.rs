@@ -131,8 +131,8 @@ fn with_avx2(work: impl FnOnce()) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::VoxelType;
     use crate::testing::Lcg;
+    use crate::volume::VoxelType;
 
     /// The cell map written plainly: what the branch-free passes must reproduce.
     fn plain_cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {

@@ -15,12 +15,8 @@ pub use quantize::Quantizer;
 pub use voxel::{Endian, VoxelType};
 
 use crate::error::{Error, Result};
+pub use crate::geometry::MAX_SPACING_RATIO;
 use crate::geometry::WorldTransform;
-
-/// The largest ratio between two voxel spacings (and between a lattice spacing and the smallest
-/// voxel spacing): real data reach about 200 (histology), and the work of the view search grows
-/// with the square of the ratio.
-pub const MAX_SPACING_RATIO: f64 = 1e4;
 
 /// Summary statistics over the finite voxels of a volume.
 #[derive(Clone, Copy, Debug, PartialEq)]

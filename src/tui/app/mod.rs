@@ -257,7 +257,10 @@ impl App {
             }
             JobMsg::Loaded(Ok((volume, notes))) => {
                 self.status.message = notes.first().cloned();
-                let chosen = self.params.axis.resolve(&volume);
+                let chosen = self
+                    .params
+                    .axis
+                    .resolve(volume.transform(), volume.spacing());
                 self.volume = Load::Ready(volume);
                 self.views.views = Load::started("view search");
                 let mut effects = vec![Effect::SearchViews(self.params.view.clone())];

@@ -3,9 +3,9 @@
 
 use super::{AxisEntropy, BinSampler, count_in_parallel, work_units};
 use crate::error::Result;
+use crate::geometry::lattice::Lattice;
 use crate::measure::{Counter, Run};
 use crate::progress::Monitor;
-use crate::view::lattice::Lattice;
 use crate::volume::cells::MIXED;
 
 /// Voxel columns along one axis, walked a few side by side (so that their work overlaps) in

@@ -14,9 +14,9 @@ pub use sampler::{BinSampler, InnerSpans};
 
 use crate::error::Result;
 use crate::geometry::WorldAxis;
+use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, DenseCounts};
 use crate::progress::Monitor;
-use crate::view::lattice::Lattice;
 use columns::column_rate;
 #[cfg(target_arch = "x86_64")]
 use tiles::mixed_bin;

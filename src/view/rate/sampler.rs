@@ -2,7 +2,7 @@
 //! map where a cell's eight corners share a bin, and the exact span of a ray that lies inside
 //! cells, where the walks need no clamping.
 
-use crate::view::lattice::{FIXED_BITS, FIXED_STEP, ceil_i64, to_fixed};
+use crate::geometry::lattice::{FIXED_BITS, FIXED_STEP, ceil_i64, to_fixed};
 use crate::volume::cells::{MIXED, cell_map};
 use crate::volume::interpolate::Interpolator;
 use crate::volume::{Quantizer, Volume};

@@ -41,7 +41,7 @@ fn axis_aligned_rate_equals_a_brute_force_count_over_columns() {
         .enumerate()
     {
         for block in 2..=4 {
-            let lattice = Lattice::for_volume(&v, d).unwrap();
+            let lattice = Lattice::at_voxel_spacing(v.dims(), v.spacing(), d).unwrap();
             let sampler = BinSampler::new(&v, q);
             let got = entropy_rate(&sampler, &lattice, block, &Monitor::none()).unwrap();
             let cols = columns(axis);
@@ -130,7 +130,7 @@ fn missing_voxels_break_sequences() {
     data[0] = 0.0;
     let v = Volume::new([3, 3, 3], [1.0; 3], VoxelType::F32, data).unwrap();
     let q = v.quantizer(2).unwrap();
-    let lattice = Lattice::for_volume(&v, [0.0, 0.0, 1.0]).unwrap();
+    let lattice = Lattice::at_voxel_spacing(v.dims(), v.spacing(), [0.0, 0.0, 1.0]).unwrap();
     let r = entropy_rate(&BinSampler::new(&v, q), &lattice, 2, &Monitor::none()).unwrap();
     assert_eq!(r.samples, 26);
 }

@@ -4,8 +4,8 @@
 
 use super::{BinSampler, RaySubset};
 use crate::geometry::cross;
+use crate::geometry::lattice::{Lattice, round_half_away, to_fixed};
 use crate::measure::{Counter, Run};
-use crate::view::lattice::{Lattice, round_half_away, to_fixed};
 use crate::volume::cells::MIXED;
 
 /// Rays are walked in tiles of this many neighbouring rays, so that the memory they read stays a

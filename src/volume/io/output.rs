@@ -31,10 +31,9 @@ pub fn remove_staged() {
 pub fn check_output(path: &Path, force: bool) -> Result<()> {
     match std::fs::metadata(path) {
         Ok(meta) if !meta.is_file() => {
-            return Err(Error::unsupported(
-                path,
-                "not a regular file: slabscope writes only regular files, --force or not",
-            ));
+            return Err(Error::NotRegularFile {
+                path: path.to_path_buf(),
+            });
         }
         Ok(_) if !force => {
             return Err(Error::Exists {
@@ -133,10 +132,7 @@ impl Staged {
         if let Ok(meta) = std::fs::metadata(&path)
             && !meta.is_file()
         {
-            return Err(Error::unsupported(
-                &path,
-                "not a regular file: slabscope writes only regular files, --force or not",
-            ));
+            return Err(Error::NotRegularFile { path });
         }
         let Some(file) = self.file.take() else {
             return Ok(());

@@ -6,7 +6,7 @@ use std::arch::x86_64::*;
 use super::LANES;
 use super::chunk::{CELL, Chunk, SLOT};
 use super::registers::{Narrow, bits_of};
-use crate::view::lattice::FIXED_BITS;
+use crate::geometry::lattice::FIXED_BITS;
 use crate::view::rate::BinSampler;
 
 /// What the vector walk needs to interpolate and quantize samples in mixed cells.

@@ -4,7 +4,7 @@
 use std::arch::x86_64::*;
 
 use super::LANES;
-use crate::view::lattice::FIXED_BITS;
+use crate::geometry::lattice::FIXED_BITS;
 
 /// Eight 64-bit values in memory, for moving between two registers and scalar code.
 #[derive(Clone, Copy, Default)]
