@@ -11,6 +11,7 @@ mod common;
 
 mod bad_input;
 mod cli;
+mod contract;
 mod dicom;
 mod formats;
 mod fuzz_headers;
