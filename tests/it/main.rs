@@ -18,6 +18,7 @@ mod fuzz_headers;
 mod orientation;
 mod partition;
 mod render;
+mod size;
 mod slice;
 mod triage;
 mod view;
