@@ -1,4 +1,4 @@
-"""Writes the bad-input corpus: each file is broken in one way that tests/bad_input.rs names.
+"""Writes the bad-input corpus: each file is broken in one way that tests/it/bad_input.rs names.
 
 Run from this folder: python3 make_corpus.py (standard library only).
 """

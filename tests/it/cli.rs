@@ -1,52 +1,22 @@
-//! The command line as a user runs it: the JSON contract of DESIGN.md §3, exports, overwrite
+//! The command line as a user runs it: the JSON contract (`docs/json.md`), exports, overwrite
 //! protection and errors.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
-use std::path::{Path, PathBuf};
-
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn slabscope() -> Command {
-    Command::cargo_bin("slabscope").unwrap()
-}
-
-/// Runs slabscope with `args`; returns (success, stdout, stderr).
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = slabscope().args(args).output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use crate::common::{Ran, layers, run};
 
 fn json(args: &[&str]) -> Value {
-    let (ok, stdout, stderr) = run(args);
+    let Ran {
+        ok, stdout, stderr, ..
+    } = run(args);
     assert!(ok, "{args:?}: {stderr}");
     serde_json::from_str(&stdout).unwrap()
-}
-
-/// A small layers phantom in a temporary folder.
-fn layers(dir: &Path) -> PathBuf {
-    let path = dir.join("layers.nrrd");
-    let (ok, _, stderr) = run(&[
-        "phantom",
-        "layers",
-        "-o",
-        path.to_str().unwrap(),
-        "--size",
-        "24",
-    ]);
-    assert!(ok, "{stderr}");
-    path
 }
 
 #[test]
 fn analyze_json_follows_the_contract() {
     let dir = tempfile::tempdir().unwrap();
-    let file = layers(dir.path());
+    let file = layers(dir.path(), 24);
     let d = json(&["analyze", file.to_str().unwrap(), "--json"]);
     assert_eq!(d["dims"], serde_json::json!([24, 24, 24]));
     assert_eq!(d["params"]["bins"], 32);
@@ -123,7 +93,7 @@ fn analyze_json_follows_the_contract() {
 #[test]
 fn a_named_axis_skips_the_view_search_unless_asked() {
     let dir = tempfile::tempdir().unwrap();
-    let file = layers(dir.path());
+    let file = layers(dir.path(), 24);
     let f = file.to_str().unwrap();
     let d = json(&[
         "analyze", f, "--axis", "z", "--method", "bottomup", "--slabs", "3", "--json",
@@ -152,7 +122,7 @@ fn a_named_axis_skips_the_view_search_unless_asked() {
 #[test]
 fn thresholds_stop_the_methods() {
     let dir = tempfile::tempdir().unwrap();
-    let file = layers(dir.path());
+    let file = layers(dir.path(), 24);
     let f = file.to_str().unwrap();
     let d = json(&[
         "analyze",
@@ -166,14 +136,14 @@ fn thresholds_stop_the_methods() {
     for s in d["partition"]["steps"].as_array().unwrap() {
         assert!(s["gain"].as_f64().unwrap() >= 0.01);
     }
-    let (ok, _, stderr) = run(&["analyze", f, "--slabs", "3", "--threshold", "0.1"]);
+    let Ran { ok, stderr, .. } = run(&["analyze", f, "--slabs", "3", "--threshold", "0.1"]);
     assert!(!ok && stderr.contains("cannot be used with"), "{stderr}");
 }
 
 #[test]
 fn exports_are_written_and_never_overwritten_unasked() {
     let dir = tempfile::tempdir().unwrap();
-    let file = layers(dir.path());
+    let file = layers(dir.path(), 24);
     let labels = dir.path().join("labels.nrrd");
     let slabs = dir.path().join("slabs.json");
     let curves = dir.path().join("curves.csv");
@@ -191,7 +161,7 @@ fn exports_are_written_and_never_overwritten_unasked() {
         "--curves",
         curves.to_str().unwrap(),
     ];
-    let (ok, _, stderr) = run(&args);
+    let Ran { ok, stderr, .. } = run(&args);
     assert!(ok, "{stderr}");
     let info = json(&["info", labels.to_str().unwrap(), "--json"]);
     assert_eq!(info["dims"], serde_json::json!([24, 24, 24]));
@@ -206,13 +176,15 @@ fn exports_are_written_and_never_overwritten_unasked() {
     assert_eq!(csv.lines().count(), 24, "a header and 23 cuts");
 
     let before = std::fs::read(&slabs).unwrap();
-    let (ok, stdout, stderr) = run(&args);
+    let Ran {
+        ok, stdout, stderr, ..
+    } = run(&args);
     assert!(!ok && stderr.contains("already exists"), "{stderr}");
     assert!(stdout.is_empty());
     assert_eq!(std::fs::read(&slabs).unwrap(), before);
     let mut forced = args.to_vec();
     forced.push("--force");
-    let (ok, _, stderr) = run(&forced);
+    let Ran { ok, stderr, .. } = run(&forced);
     assert!(ok, "{stderr}");
 }
 
@@ -222,7 +194,7 @@ fn phantoms_are_deterministic_and_protected() {
     let a = dir.path().join("a.nrrd");
     let b = dir.path().join("b.nrrd");
     for p in [&a, &b] {
-        let (ok, _, stderr) = run(&[
+        let Ran { ok, stderr, .. } = run(&[
             "phantom",
             "body",
             "-o",
@@ -235,7 +207,7 @@ fn phantoms_are_deterministic_and_protected() {
         assert!(ok, "{stderr}");
     }
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
-    let (ok, _, stderr) = run(&["phantom", "body", "-o", a.to_str().unwrap()]);
+    let Ran { ok, stderr, .. } = run(&["phantom", "body", "-o", a.to_str().unwrap()]);
     assert!(!ok && stderr.contains("already exists"), "{stderr}");
     let info = json(&["info", a.to_str().unwrap(), "--json"]);
     assert_eq!(info["type"], "i16");
@@ -248,13 +220,15 @@ fn analysis_errors_are_clear() {
     let constant = dir.path().join("constant.nrrd");
     std::fs::write(&constant, b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n\x05\x05\x05\x05\x05\x05\x05\x05")
         .unwrap();
-    let (ok, stdout, stderr) = run(&["analyze", constant.to_str().unwrap()]);
+    let Ran {
+        ok, stdout, stderr, ..
+    } = run(&["analyze", constant.to_str().unwrap()]);
     assert!(!ok && stdout.is_empty());
     assert!(
         stderr.contains("constant.nrrd: the volume is constant (every voxel is 5)"),
         "{stderr}"
     );
-    let file = layers(dir.path());
+    let file = layers(dir.path(), 24);
     let f = file.to_str().unwrap();
     for (args, phrase) in [
         (
@@ -280,7 +254,9 @@ fn analysis_errors_are_clear() {
         (vec!["analyze", f, "--bins", "300"], "300 is not in 2..=255"),
         (vec!["analyze", f, "--level", "9"], "9 is not in 0..=4"),
     ] {
-        let (ok, stdout, stderr) = run(&args);
+        let Ran {
+            ok, stdout, stderr, ..
+        } = run(&args);
         assert!(!ok && stdout.is_empty(), "{args:?}");
         assert!(stderr.contains(phrase), "{args:?}: {stderr}");
     }
@@ -289,11 +265,11 @@ fn analysis_errors_are_clear() {
 #[test]
 fn render_writes_a_png_of_the_asked_size() {
     let dir = tempfile::tempdir().unwrap();
-    let file = layers(dir.path());
+    let file = layers(dir.path(), 24);
     let out = dir.path().join("view.png");
     let f = file.to_str().unwrap();
     let o = out.to_str().unwrap();
-    let (ok, _, stderr) = run(&[
+    let Ran { ok, stderr, .. } = run(&[
         "render", f, "-o", o, "--size", "120x90", "--axis", "z", "--slabs", "3", "--mode", "mip",
     ]);
     assert!(ok, "{stderr}");
@@ -301,7 +277,7 @@ fn render_writes_a_png_of_the_asked_size() {
     assert_eq!((png.width(), png.height()), (120, 90));
     // A .jpg name gets a JPEG, not PNG bytes under a JPEG name.
     let jpeg = dir.path().join("view.JPG");
-    let (ok, _, stderr) = run(&[
+    let Ran { ok, stderr, .. } = run(&[
         "render",
         f,
         "-o",
@@ -316,9 +292,9 @@ fn render_writes_a_png_of_the_asked_size() {
     assert_eq!(&bytes[..3], &[0xff, 0xd8, 0xff]);
     let decoded = image::load_from_memory_with_format(&bytes, image::ImageFormat::Jpeg).unwrap();
     assert_eq!((decoded.width(), decoded.height()), (120, 90));
-    let (ok, _, stderr) = run(&["render", f, "-o", o, "--size", "120x90", "--axis", "z"]);
+    let Ran { ok, stderr, .. } = run(&["render", f, "-o", o, "--size", "120x90", "--axis", "z"]);
     assert!(!ok && stderr.contains("already exists"), "{stderr}");
-    let (ok, _, stderr) = run(&[
+    let Ran { ok, stderr, .. } = run(&[
         "render",
         f,
         "-o",
@@ -335,15 +311,17 @@ fn render_writes_a_png_of_the_asked_size() {
         !ok && stderr.contains("--highlight 5: there are only 2 slabs"),
         "{stderr}"
     );
-    let (ok, _, stderr) = run(&["render", f, "-o", o, "--force", "--size", "0x5"]);
+    let Ran { ok, stderr, .. } = run(&["render", f, "-o", o, "--force", "--size", "0x5"]);
     assert!(!ok && stderr.contains("is not a size"), "{stderr}");
 }
 
 #[test]
 fn preview_without_a_terminal_says_to_render_to_a_file() {
     let dir = tempfile::tempdir().unwrap();
-    let file = layers(dir.path());
-    let (ok, stdout, stderr) = run(&[
+    let file = layers(dir.path(), 24);
+    let Ran {
+        ok, stdout, stderr, ..
+    } = run(&[
         "preview",
         file.to_str().unwrap(),
         "--axis",
@@ -365,8 +343,8 @@ fn preview_without_a_terminal_says_to_render_to_a_file() {
 fn a_reader_that_goes_away_ends_slabscope_quietly() {
     // `slabscope analyze F | head -1`: the pipe is closed before the report is written.
     let dir = tempfile::tempdir().unwrap();
-    let path = layers(dir.path());
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("slabscope"))
+    let path = layers(dir.path(), 24);
+    let mut child = crate::common::slabscope()
         .args(["analyze", path.to_str().unwrap()])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -382,18 +360,20 @@ fn a_reader_that_goes_away_ends_slabscope_quietly() {
 #[test]
 fn slice_writes_one_slice_and_render_faces_a_strip() {
     let dir = tempfile::tempdir().unwrap();
-    let file = layers(dir.path());
+    let file = layers(dir.path(), 24);
     let f = file.to_str().unwrap();
     let out = dir.path().join("slice.png");
     let o = out.to_str().unwrap();
     // The 24-voxel cube, fit into 200x100: 100x100.
-    let (ok, stdout, stderr) = run(&[
+    let Ran {
+        ok, stdout, stderr, ..
+    } = run(&[
         "slice", f, "--axis", "z", "--index", "3", "--size", "200x100", "-o", o,
     ]);
     assert!(ok && stdout.is_empty(), "{stderr}");
     let png = tiny_skia::Pixmap::load_png(&out).unwrap();
     assert_eq!((png.width(), png.height()), (100, 100));
-    let (ok, _, stderr) = run(&[
+    let Ran { ok, stderr, .. } = run(&[
         "slice", f, "--axis", "z", "--index", "24", "-o", o, "--force",
     ]);
     assert!(!ok, "past the last slice");
@@ -401,11 +381,11 @@ fn slice_writes_one_slice_and_render_faces_a_strip() {
         stderr.contains("--index 24: there are 24 slices along this axis"),
         "{stderr}"
     );
-    let (ok, _, stderr) = run(&["slice", f, "--axis", "z", "-o", o]);
+    let Ran { ok, stderr, .. } = run(&["slice", f, "--axis", "z", "-o", o]);
     assert!(!ok && stderr.contains("already exists"), "{stderr}");
     // A volume of 3 slices has a middle slice, though not the 4 slabs a partition would ask.
     let thin = dir.path().join("thin.nrrd");
-    let (ok, _, stderr) = run(&[
+    let Ran { ok, stderr, .. } = run(&[
         "phantom",
         "layers",
         "-o",
@@ -414,10 +394,10 @@ fn slice_writes_one_slice_and_render_faces_a_strip() {
         "16x16x3",
     ]);
     assert!(ok, "{stderr}");
-    let (ok, _, stderr) = run(&["slice", thin.to_str().unwrap(), "-o", o, "--force"]);
+    let Ran { ok, stderr, .. } = run(&["slice", thin.to_str().unwrap(), "-o", o, "--force"]);
     assert!(ok, "{stderr}");
     let strip = dir.path().join("faces.png");
-    let (ok, _, stderr) = run(&[
+    let Ran { ok, stderr, .. } = run(&[
         "render",
         f,
         "--faces",

@@ -1,32 +1,11 @@
 //! `slabscope triage`: a folder mixing formats, broken files among them, one row each with the
 //! right problems; exit statuses; shards whose union is one run; manifests.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
+use std::path::Path;
 
-use std::path::{Path, PathBuf};
-
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
-
-/// Runs slabscope; returns (exit status, stdout, stderr).
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::cargo_bin("slabscope")
-        .unwrap()
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use crate::common::{Ran, data, rows, run};
 
 /// A tree of volumes in every format, a folder of slices, two broken files and a stray text
 /// file.
@@ -55,19 +34,17 @@ fn archive(root: &Path) {
     std::fs::write(root.join("README.txt"), b"notes").unwrap();
 }
 
-fn rows(stdout: &str) -> Vec<Value> {
-    stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
-
 #[test]
 fn every_volume_is_a_row_and_broken_files_are_rows_with_their_error() {
     let dir = tempfile::tempdir().unwrap();
     archive(dir.path());
     let root = dir.path().to_str().unwrap();
-    let (code, stdout, stderr) = run(&["triage", root, "--json", "--slabs", "2"]);
+    let Ran {
+        code,
+        stdout,
+        stderr,
+        ..
+    } = run(&["triage", root, "--json", "--slabs", "2"]);
     assert_eq!(code, 1, "some failed: {stderr}");
     let rows = rows(&stdout);
     let names: Vec<String> = rows
@@ -125,15 +102,19 @@ fn every_volume_is_a_row_and_broken_files_are_rows_with_their_error() {
         .to_string();
     assert!(truncated.contains("truncated"), "{truncated}");
     // The table and CSV say the same, one line a volume after a header.
-    let (code, table, _) = run(&["triage", root, "--slabs", "2"]);
+    let Ran {
+        code,
+        stdout: table,
+        ..
+    } = run(&["triage", root, "--slabs", "2"]);
     assert_eq!((code, table.lines().count()), (1, 9));
     assert!(table.lines().nth(4).unwrap().starts_with("!! "));
-    let (_, csv, _) = run(&["triage", root, "--csv", "--slabs", "2"]);
+    let Ran { stdout: csv, .. } = run(&["triage", root, "--csv", "--slabs", "2"]);
     assert_eq!(csv.lines().count(), 9);
     assert!(csv.starts_with("path,series,format,dims,"));
     // Everything loads: 0.
     let good = dir.path().join("ct/deeper");
-    let (code, _, stderr) = run(&["triage", good.to_str().unwrap(), "--slabs", "2"]);
+    let Ran { code, stderr, .. } = run(&["triage", good.to_str().unwrap(), "--slabs", "2"]);
     assert_eq!(code, 0, "{stderr}");
 }
 
@@ -142,22 +123,28 @@ fn shards_concatenate_to_one_run_and_manifests_replace_the_walk() {
     let dir = tempfile::tempdir().unwrap();
     archive(dir.path());
     let root = dir.path().to_str().unwrap();
-    let (_, whole, _) = run(&["triage", root, "--json", "--slabs", "2"]);
+    let Ran { stdout: whole, .. } = run(&["triage", root, "--json", "--slabs", "2"]);
     let mut joined = String::new();
     for k in 1..=3 {
         let shard = format!("{k}/3");
-        let (_, part, _) = run(&["triage", root, "--json", "--slabs", "2", "--shard", &shard]);
+        let Ran { stdout: part, .. } =
+            run(&["triage", root, "--json", "--slabs", "2", "--shard", &shard]);
         joined.push_str(&part);
     }
     assert_eq!(joined, whole);
-    let (code, list, _) = run(&["triage", "--list", root]);
+    let Ran {
+        code, stdout: list, ..
+    } = run(&["triage", "--list", root]);
     assert_eq!((code, list.lines().count()), (0, 8));
     let manifest = dir.path().join("manifest.txt");
     std::fs::write(&manifest, &list).unwrap();
     let m = manifest.to_str().unwrap();
-    let (_, from_manifest, _) = run(&["triage", "--manifest", m, "--json", "--slabs", "2"]);
+    let Ran {
+        stdout: from_manifest,
+        ..
+    } = run(&["triage", "--manifest", m, "--json", "--slabs", "2"]);
     assert_eq!(from_manifest, whole);
-    let (_, second, _) = run(&[
+    let Ran { stdout: second, .. } = run(&[
         "triage",
         "--manifest",
         m,
@@ -167,20 +154,26 @@ fn shards_concatenate_to_one_run_and_manifests_replace_the_walk() {
         "--shard",
         "2/3",
     ]);
-    let (_, direct, _) = run(&["triage", root, "--json", "--slabs", "2", "--shard", "2/3"]);
+    let Ran { stdout: direct, .. } =
+        run(&["triage", root, "--json", "--slabs", "2", "--shard", "2/3"]);
     assert_eq!(second, direct);
 }
 
 #[test]
 fn errors_before_any_row_exit_with_2_and_bad_shards_are_refused() {
-    let (code, stdout, stderr) = run(&["triage", "--manifest", "/nonexistent/manifest"]);
+    let Ran {
+        code,
+        stdout,
+        stderr,
+        ..
+    } = run(&["triage", "--manifest", "/nonexistent/manifest"]);
     assert_eq!(code, 2);
     assert!(
         stdout.is_empty() && stderr.contains("/nonexistent/manifest"),
         "{stderr}"
     );
     for bad in ["0/3", "4/3", "3", "a/b"] {
-        let (code, _, stderr) = run(&["triage", ".", "--shard", bad]);
+        let Ran { code, stderr, .. } = run(&["triage", ".", "--shard", bad]);
         assert_ne!(code, 0, "{bad}");
         assert!(stderr.contains("is not K/N"), "{bad}: {stderr}");
     }
@@ -188,10 +181,15 @@ fn errors_before_any_row_exit_with_2_and_bad_shards_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     archive(dir.path());
     let ct = dir.path().join("ct");
-    let (code, _, stderr) = run(&["analyze", ct.to_str().unwrap()]);
+    let Ran { code, stderr, .. } = run(&["analyze", ct.to_str().unwrap()]);
     assert_eq!(code, 1);
     assert!(stderr.contains("a folder of volumes"), "{stderr}");
-    let (code, stdout, stderr) = run(&["info", ct.to_str().unwrap(), "--json"]);
+    let Ran {
+        code,
+        stdout,
+        stderr,
+        ..
+    } = run(&["info", ct.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0, "{stderr}");
     let listed: Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(listed["volumes"].as_array().unwrap().len(), 4, "{listed}");
@@ -201,7 +199,7 @@ fn errors_before_any_row_exit_with_2_and_bad_shards_are_refused() {
 fn a_volume_past_the_timeout_is_a_row_with_that_error() {
     let dir = tempfile::tempdir().unwrap();
     let big = dir.path().join("big.nrrd");
-    let (code, _, stderr) = run(&[
+    let Ran { code, stderr, .. } = run(&[
         "phantom",
         "body",
         "--dims",
@@ -210,7 +208,7 @@ fn a_volume_past_the_timeout_is_a_row_with_that_error() {
         big.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{stderr}");
-    let (code, stdout, _) = run(&[
+    let Ran { code, stdout, .. } = run(&[
         "triage",
         big.to_str().unwrap(),
         "--json",
@@ -269,8 +267,12 @@ fn the_contact_sheet_has_a_cell_per_volume() {
     let root = dir.path().to_str().unwrap();
     let out = dir.path().join("sheet.png");
     let o = out.to_str().unwrap();
-    let (code, stdout, stderr) =
-        run(&["triage", root, "--slabs", "2", "--sheet", o, "--tile", "64"]);
+    let Ran {
+        code,
+        stdout,
+        stderr,
+        ..
+    } = run(&["triage", root, "--slabs", "2", "--sheet", o, "--tile", "64"]);
     assert_eq!(code, 1, "{stderr}");
     assert_eq!(stdout.lines().count(), 9);
     // 8 volumes, cells of 128x64 in 2 columns and 4 rows, 6 pixels apart.
@@ -288,7 +290,12 @@ fn the_contact_sheet_has_a_cell_per_volume() {
     );
     assert_ne!(pixel(6 + 64 + 20, 6 + 20), [30, 30, 38], "a drawn cell");
     // An existing sheet is not overwritten unasked, and nothing is looked at.
-    let (code, stdout, stderr) = run(&["triage", root, "--sheet", o]);
+    let Ran {
+        code,
+        stdout,
+        stderr,
+        ..
+    } = run(&["triage", root, "--sheet", o]);
     assert_eq!(code, 2);
     assert!(
         stdout.is_empty() && stderr.contains("already exists"),
@@ -315,13 +322,18 @@ fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alon
             memory,
         ])
     };
-    let (code, stdout, stderr) = triage("300");
+    let Ran {
+        code,
+        stdout,
+        stderr,
+        ..
+    } = triage("300");
     assert_eq!(code, 0, "{stderr}");
     assert!(
         rows(&stdout).iter().all(|r| r["error"].is_null()),
         "{stdout}"
     );
-    let (code, stdout, _) = triage("200");
+    let Ran { code, stdout, .. } = triage("200");
     assert_eq!(code, 1);
     let error = rows(&stdout)[0]["error"].as_str().unwrap().to_string();
     assert!(error.contains("raise it with --max-memory"), "{error}");

@@ -1,11 +1,7 @@
 //! The exploded-view ray caster on scenes with known answers, and against reference images.
 //!
-//! `UPDATE_REFERENCES=1 cargo test --test render` rewrites the reference images; look at them
+//! `UPDATE_REFERENCES=1 cargo test --test it render::` rewrites the reference images; look at them
 //! before committing.
-
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
-use std::path::PathBuf;
 
 use slabscope::partition::{Method, PartitionParams, Stop, partition};
 use slabscope::progress::Monitor;
@@ -15,6 +11,8 @@ use slabscope::render::{
 };
 use slabscope::volume::phantom;
 use slabscope::{Volume, VoxelType};
+
+use crate::common::data;
 
 fn plain(width: u32, height: u32) -> RenderParams {
     RenderParams {
@@ -197,9 +195,7 @@ fn images_do_not_depend_on_the_thread_count() {
 /// Compares a render with a committed reference image: mean absolute difference per channel
 /// below 1.5 (of 255), for small numeric differences across machines.
 fn check_reference(name: &str, pixmap: &tiny_skia::Pixmap) {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/reference")
-        .join(format!("{name}.png"));
+    let path = data("reference").join(format!("{name}.png"));
     if std::env::var_os("UPDATE_REFERENCES").is_some() {
         std::fs::write(&path, pixmap.encode_png().unwrap()).unwrap();
         return;

@@ -1,14 +1,14 @@
 //! Fuzzing every header parser through `load`: arbitrary bytes, and valid files with random
 //! edits, must give a volume or an error naming the file; never a panic or a runaway allocation.
 //!
-//! `PROPTEST_CASES=20000 cargo test --release --test fuzz_headers` runs it for longer.
-
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
+//! `PROPTEST_CASES=20000 cargo test --release --test it fuzz_headers::` runs it for longer.
 
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 use slabscope::{LoadOptions, load};
+
+use crate::common::data;
 
 /// File names that steer detection to each reader.
 const NAMES: [&str; 10] = [
@@ -38,12 +38,7 @@ const SEEDS: [&str; 9] = [
 ];
 
 fn seed_bytes(name: &str) -> Vec<u8> {
-    std::fs::read(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/data")
-            .join(name),
-    )
-    .unwrap()
+    std::fs::read(data(name)).unwrap()
 }
 
 /// Loads `bytes` saved as `name` under a 64 MiB limit and checks the outcome is well-formed.

@@ -1,8 +1,6 @@
 //! The slices themselves: drawn as radiologists read them when the orientation is known, their
 //! pixels mapped back to the volume, and the strip of slab faces.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
 use slabscope::geometry::WorldTransform;
 use slabscope::render::slice::{SliceFrame, SliceParams, faces, slice};
 use slabscope::render::{Colormap, Look, Preset, Renderer, Stack, Transfer};

@@ -1,7 +1,5 @@
 //! Slab partitioning (paper §5) on stacks and volumes with known answers.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
 use proptest::prelude::*;
 use slabscope::partition::{
     Histories, MISSING, MergeHistory, OptimalPartitions, PAIRS_KEPT, PartitionParams, Scope, Slab,

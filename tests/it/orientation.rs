@@ -2,8 +2,6 @@
 //! with the script that made them) read as those libraries read them; axes named by anatomy;
 //! slab positions in world millimetres; label exports that keep the source's geometry.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -13,8 +11,10 @@ use slabscope::partition::{Method, PartitionParams, Stop, partition};
 use slabscope::volume::io::write_volume;
 use slabscope::{AnalysisParams, LoadOptions, Monitor, Volume, analyze, label_volume, load};
 
+use crate::common::data;
+
 fn fixtures() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/orientation")
+    data("orientation")
 }
 
 /// Per fixture: the affine its writer's library reads back (null for none) and its codes.

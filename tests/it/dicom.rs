@@ -3,19 +3,10 @@
 //! `stored(i, j, k) = (3i + 5j + 11k) % 1000` (column, row, slice along the normal), so each
 //! assembled volume is checked voxel by voxel, and its transform against the positions.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
-use std::path::{Path, PathBuf};
-
-use assert_cmd::Command;
 use slabscope::volume::VoxelType;
 use slabscope::{LoadOptions, Loaded, Volume};
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/dicom")
-        .join(name)
-}
+use crate::common::{data, dicom_data, rows, run, slabscope};
 
 fn stored(i: usize, j: usize, k: usize) -> f32 {
     ((3 * i + 5 * j + 11 * k) % 1000) as f32
@@ -24,7 +15,7 @@ fn stored(i: usize, j: usize, k: usize) -> f32 {
 fn load_with(name: &str, edit: impl FnOnce(&mut LoadOptions)) -> slabscope::Result<Loaded> {
     let mut opts = LoadOptions::default();
     edit(&mut opts);
-    slabscope::load(&data(name), &opts)
+    slabscope::load(&dicom_data(name), &opts)
 }
 
 fn load(name: &str) -> Loaded {
@@ -285,18 +276,6 @@ fn an_unsupported_transfer_syntax_is_named() {
     );
 }
 
-/// Runs slabscope; returns (exit status, stdout and stderr together).
-fn run(args: &[&str]) -> (i32, String) {
-    let out = Command::cargo_bin("slabscope")
-        .unwrap()
-        .args(args)
-        .output()
-        .unwrap();
-    let mut text = String::from_utf8_lossy(&out.stdout).into_owned();
-    text.push_str(&String::from_utf8_lossy(&out.stderr));
-    (out.status.code().unwrap(), text)
-}
-
 const PHI: [&str; 6] = [
     "Zebedee",
     "Quintessa",
@@ -311,7 +290,7 @@ fn patient_fields_appear_nowhere_unless_asked_for() {
     let dir = tempfile::tempdir().unwrap();
     let picture = dir.path().join("r.png");
     let sheet = dir.path().join("sheet.png");
-    let (ct, root) = (data("ct"), data(""));
+    let (ct, root) = (dicom_data("ct"), dicom_data(""));
     let (ct, root) = (ct.to_str().unwrap(), root.to_str().unwrap());
     let commands: Vec<Vec<&str>> = vec![
         vec!["info", ct],
@@ -333,7 +312,7 @@ fn patient_fields_appear_nowhere_unless_asked_for() {
         vec!["triage", ct, "--sheet", sheet.to_str().unwrap()],
     ];
     for args in &commands {
-        let (_, text) = run(args);
+        let text = run(args).text();
         for phi in PHI {
             assert!(!text.contains(phi), "{args:?} shows {phi}:\n{text}");
         }
@@ -343,19 +322,13 @@ fn patient_fields_appear_nowhere_unless_asked_for() {
         assert!(!png.windows(phi.len()).any(|w| w == phi.as_bytes()));
     }
     // Asked for, they show.
-    let (status, text) = run(&["info", ct, "--series", "1", "--show-phi"]);
+    let ran = run(&["info", ct, "--series", "1", "--show-phi"]);
+    let (status, text) = (ran.code, ran.text());
     assert_eq!(status, 0, "{text}");
     assert!(
         text.contains("Zebedee^Quintessa") && text.contains("PID-73125-QX"),
         "{text}"
     );
-}
-
-fn rows(stdout: &str) -> Vec<serde_json::Value> {
-    stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
 }
 
 #[test]
@@ -364,22 +337,21 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
     let root = dir.path();
     for sub in ["ct", "gap"] {
         std::fs::create_dir_all(root.join(sub)).unwrap();
-        for f in std::fs::read_dir(data(sub)).unwrap() {
+        for f in std::fs::read_dir(dicom_data(sub)).unwrap() {
             let f = f.unwrap().path();
             std::fs::copy(&f, root.join(sub).join(f.file_name().unwrap())).unwrap();
         }
     }
-    std::fs::copy(data("jpeg2000.dcm"), root.join("ct/jpeg2000.dcm")).unwrap();
-    let slice = std::fs::read(data("gap/slice00.dcm")).unwrap();
+    std::fs::copy(dicom_data("jpeg2000.dcm"), root.join("ct/jpeg2000.dcm")).unwrap();
+    let slice = std::fs::read(dicom_data("gap/slice00.dcm")).unwrap();
     std::fs::write(root.join("gap/cut.dcm"), &slice[..slice.len() / 3]).unwrap();
-    std::fs::copy(data("enhanced.dcm"), root.join("enhanced.dcm")).unwrap();
+    std::fs::copy(dicom_data("enhanced.dcm"), root.join("enhanced.dcm")).unwrap();
     // Another format beside the DICOM, and a broken one.
-    let ramp = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ramp_u8.nii");
+    let ramp = data("ramp_u8.nii");
     std::fs::copy(ramp, root.join("ramp.nii")).unwrap();
     std::fs::write(root.join("broken.nii"), b"not a volume").unwrap();
     let r = root.to_str().unwrap();
-    let out = Command::cargo_bin("slabscope")
-        .unwrap()
+    let out = slabscope()
         .args(["triage", r, "--json", "--phases", "0"])
         .output()
         .unwrap();
@@ -430,18 +402,13 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
         }
     }
     // The shards, through a manifest, are the rows of one run.
-    let list = Command::cargo_bin("slabscope")
-        .unwrap()
-        .args(["triage", r, "--list"])
-        .output()
-        .unwrap();
+    let list = slabscope().args(["triage", r, "--list"]).output().unwrap();
     let manifest = root.join("manifest.txt");
     std::fs::write(&manifest, &list.stdout).unwrap();
     let mut joined = Vec::new();
     for k in 1..=3 {
         let shard = format!("{k}/3");
-        let out = Command::cargo_bin("slabscope")
-            .unwrap()
+        let out = slabscope()
             .args(["triage", "--manifest", manifest.to_str().unwrap()])
             .args(["--shard", &shard, "--json", "--phases", "0"])
             .output()

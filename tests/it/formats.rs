@@ -1,19 +1,13 @@
 //! Every format loads files written by other programs (`tests/data/make_fixtures.py`) with the
 //! right voxels, dimensions and spacing; the real volumes load as their README describes.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
 use std::path::{Path, PathBuf};
 
 use slabscope::volume::io::{NrrdEncoding, RawOptions, write_nrrd};
 use slabscope::volume::{Endian, VoxelType};
 use slabscope::{Format, LoadOptions, Loaded, Volume, load};
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
+use crate::common::data;
 
 fn open(name: &str) -> Loaded {
     load(&data(name), &LoadOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"))

@@ -8,12 +8,12 @@
 //! test says so and passes, unless `SLABSCOPE_REQUIRE_REALTERM=1`, which makes a missing tool a
 //! failure.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+use crate::common::binary;
 
 const TOOLS: [&str; 6] = ["Xvfb", "xterm", "mlterm", "tmux", "import", "xdotool"];
 const LAUNCHES: usize = 20;
@@ -182,7 +182,7 @@ fn check_terminal(display: &Display, name: &str, terminal: &[&str]) {
             start = d.join("start").display(),
             after = d.join("after").display(),
             end = d.join("end").display(),
-            bin = env!("CARGO_BIN_EXE_slabscope"),
+            bin = binary(),
         ),
     )
     .unwrap();
@@ -285,6 +285,7 @@ const XTERM: [&str; 13] = [
 
 #[test]
 fn the_tui_draws_images_and_keeps_the_keyboard_in_real_terminals() {
+    let _alone = crate::one_at_a_time();
     if !tools_present() {
         return;
     }

@@ -4,6 +4,8 @@
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use crate::common::{binary, data, dicom_data};
+
 /// A tmux server of our own, so the test never touches the user's sessions.
 struct Tmux {
     socket: String,
@@ -77,16 +79,14 @@ impl Drop for Tmux {
 
 #[test]
 fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
+    let _alone = crate::one_at_a_time();
     if Command::new("tmux").arg("-V").output().is_err() {
         eprintln!(
             "SKIPPED: tmux is not installed, so the TUI smoke test cannot run (apt-get install tmux)"
         );
         return;
     }
-    let command = format!(
-        "{} --protocol blocks; echo EXITED $?; sleep 60",
-        env!("CARGO_BIN_EXE_slabscope")
-    );
+    let command = format!("{} --protocol blocks; echo EXITED $?; sleep 60", binary());
     let tmux = Tmux::start("smoke", &command, (100, 30));
     let screen = tmux.wait_for("Slabs:", 120);
     for pane in ["axes", "Exploded view", "Curves"] {
@@ -109,19 +109,19 @@ fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
 
 #[test]
 fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
+    let _alone = crate::one_at_a_time();
     if Command::new("tmux").arg("-V").output().is_err() {
         eprintln!("SKIPPED: tmux is not installed, so the folder smoke test cannot run");
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     for name in ["ramp_u8.nii", "ramp_i16.mha", "ramp_u16_be.nrrd"] {
-        std::fs::copy(data.join(name), dir.path().join(name)).unwrap();
+        std::fs::copy(data(name), dir.path().join(name)).unwrap();
     }
     std::fs::write(dir.path().join("zz_broken.nii"), b"no volume").unwrap();
     let command = format!(
         "{} {} --protocol blocks --slabs 2; echo EXITED $?; sleep 60",
-        env!("CARGO_BIN_EXE_slabscope"),
+        binary(),
         dir.path().display()
     );
     let tmux = Tmux::start("folder", &command, (120, 32));
@@ -147,14 +147,15 @@ fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
 
 #[test]
 fn a_folder_of_dicom_series_opens_as_a_list_of_series() {
+    let _alone = crate::one_at_a_time();
     if Command::new("tmux").arg("-V").output().is_err() {
         eprintln!("SKIPPED: tmux is not installed, so the DICOM folder smoke test cannot run");
         return;
     }
-    let ct = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/ct");
+    let ct = dicom_data("ct");
     let command = format!(
         "{} {} --protocol blocks --slabs 2; echo EXITED $?; sleep 60",
-        env!("CARGO_BIN_EXE_slabscope"),
+        binary(),
         ct.display()
     );
     let tmux = Tmux::start("dicom", &command, (120, 32));

@@ -1,7 +1,5 @@
 //! The view search (paper §3.1 and §4) on volumes with known answers.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use slabscope::geometry::{canonical, dot};

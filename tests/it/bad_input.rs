@@ -2,31 +2,18 @@
 //! naming the file and the problem, a non-zero exit and an empty stdout; never a panic, never an
 //! allocation sized by an unchecked header.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
+use std::path::Path;
 
-use std::path::{Path, PathBuf};
+use crate::common::{Ran, bad, data, slabscope};
 
-use assert_cmd::Command;
-
-fn bad(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/bad")
-        .join(name)
-}
-
-/// Runs `slabscope info` on `path` with a 1 GiB memory limit and returns (success, stdout, stderr).
-fn info(path: &Path, extra: &[&str]) -> (bool, String, String) {
-    let mut cmd = Command::cargo_bin("slabscope").unwrap();
+/// Runs `slabscope info` on `path` with a 1 GiB memory limit.
+fn info(path: &Path, extra: &[&str]) -> Ran {
+    let mut cmd = slabscope();
     cmd.arg("info").arg(path).args(extra);
     if !extra.contains(&"--max-memory") {
         cmd.args(["--max-memory", "1G"]);
     }
-    let out = cmd.output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    cmd.output().unwrap().into()
 }
 
 const FAILURES: &[(&str, &str)] = &[
@@ -86,7 +73,9 @@ const FAILURES: &[(&str, &str)] = &[
 #[test]
 fn every_bad_file_gets_a_clear_one_line_error() {
     for (name, phrase) in FAILURES {
-        let (ok, stdout, stderr) = info(&bad(name), &[]);
+        let Ran {
+            ok, stdout, stderr, ..
+        } = info(&bad(name), &[]);
         assert!(!ok, "{name}: expected failure, got success");
         assert!(
             stdout.is_empty(),
@@ -126,7 +115,9 @@ fn the_corpus_is_covered() {
 
 #[test]
 fn nan_voxels_are_counted_and_treated_as_missing() {
-    let (ok, stdout, stderr) = info(&bad("nan_voxels.nrrd"), &["--json"]);
+    let Ran {
+        ok, stdout, stderr, ..
+    } = info(&bad("nan_voxels.nrrd"), &["--json"]);
     assert!(ok, "{stderr}");
     assert!(
         stderr.contains("2 NaN or infinite voxels are treated as missing"),
@@ -140,14 +131,15 @@ fn nan_voxels_are_counted_and_treated_as_missing() {
 
 #[test]
 fn an_all_nan_volume_is_described_but_not_analysed() {
-    let (ok, stdout, stderr) = info(&bad("all_nan.nrrd"), &[]);
+    let Ran {
+        ok, stdout, stderr, ..
+    } = info(&bad("all_nan.nrrd"), &[]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("range       none: every voxel is NaN or infinite"),
         "{stdout}"
     );
-    let out = Command::cargo_bin("slabscope")
-        .unwrap()
+    let out = slabscope()
         .args(["analyze", bad("all_nan.nrrd").to_str().unwrap()])
         .output()
         .unwrap();
@@ -161,7 +153,7 @@ fn an_all_nan_volume_is_described_but_not_analysed() {
 
 #[test]
 fn a_constant_volume_loads_with_a_warning() {
-    let (ok, _, stderr) = info(&bad("constant.nrrd"), &[]);
+    let Ran { ok, stderr, .. } = info(&bad("constant.nrrd"), &[]);
     assert!(ok, "{stderr}");
     assert!(
         stderr.contains("every voxel is 7: the volume is constant"),
@@ -171,8 +163,8 @@ fn a_constant_volume_loads_with_a_warning() {
 
 #[test]
 fn the_memory_limit_is_checked_before_allocating() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pyvista_channels.nrrd");
-    let (ok, _, stderr) = info(&path, &["--max-memory", "1M"]);
+    let path = data("pyvista_channels.nrrd");
+    let Ran { ok, stderr, .. } = info(&path, &["--max-memory", "1M"]);
     assert!(!ok);
     assert!(
         stderr.contains("a 250x250x100 f32 volume needs 23.8 MiB"),
@@ -186,21 +178,21 @@ fn raw_files_without_a_description_ask_for_one() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("scan.raw");
     std::fs::write(&path, vec![0u8; 2 * 27]).unwrap();
-    let (ok, _, stderr) = info(&path, &[]);
+    let Ran { ok, stderr, .. } = info(&path, &[]);
     assert!(!ok);
     assert!(
         stderr.contains("give --dims NXxNYxNZ and --type"),
         "{stderr}"
     );
-    let (ok, _, stderr) = info(&path, &["--dims", "3x3x3"]);
+    let Ran { ok, stderr, .. } = info(&path, &["--dims", "3x3x3"]);
     assert!(!ok);
     assert!(
         stderr.contains("its size suggests 2 bytes per voxel"),
         "{stderr}"
     );
-    let (ok, _, stderr) = info(&path, &["--dims", "3x3x3", "--type", "u16"]);
+    let Ran { ok, stderr, .. } = info(&path, &["--dims", "3x3x3", "--type", "u16"]);
     assert!(ok, "{stderr}");
-    let (ok, _, stderr) = info(&path, &["--dims", "3x3x3", "--type", "u32"]);
+    let Ran { ok, stderr, .. } = info(&path, &["--dims", "3x3x3", "--type", "u32"]);
     assert!(!ok);
     assert!(stderr.contains("expected 108 bytes, found 54"), "{stderr}");
 }

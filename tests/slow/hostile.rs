@@ -3,12 +3,12 @@
 //! every failure is one clear line. Where `prlimit` is there, each run gets an address-space
 //! limit, so that an allocation beyond the budget fails the test instead of passing unseen.
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
+
+use crate::common::{bounded, layers, s, slabscope};
 
 /// Address space a run may take: the budget given with `--max-memory`, four times over, and
 /// room for the program, its threads and their allocator arenas.
@@ -16,25 +16,10 @@ fn address_space(max_memory: u64) -> u64 {
     4 * max_memory + (768 << 20)
 }
 
-fn binary() -> &'static str {
-    env!("CARGO_BIN_EXE_slabscope")
-}
-
 /// Runs slabscope with `args` under an address-space limit (where `prlimit` exists) and a
 /// 20-second timeout; returns its output and how long it took.
 fn run(args: &[&str], max_memory: u64) -> (Output, Duration) {
-    let limited = Command::new("prlimit").arg("--version").output().is_ok();
-    let mut cmd = if limited {
-        let mut c = Command::new("prlimit");
-        c.arg(format!("--as={}", address_space(max_memory)))
-            .args(["timeout", "20"])
-            .arg(binary());
-        c
-    } else {
-        let mut c = Command::new("timeout");
-        c.arg("20").arg(binary());
-        c
-    };
+    let mut cmd = bounded(20, address_space(max_memory));
     cmd.args(args);
     let start = Instant::now();
     let out = cmd.output().unwrap();
@@ -61,10 +46,6 @@ fn fails(out: &Output, file: &str, phrase: &str) {
         "not one line: {stderr}"
     );
     assert!(stderr.len() < 400, "{} bytes of error", stderr.len());
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 // --- TIFF -------------------------------------------------------------------------------------
@@ -138,6 +119,7 @@ fn zlib(bytes: &[u8]) -> Vec<u8> {
 
 #[test]
 fn a_huge_second_tiff_page_is_refused_before_it_is_decoded() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("stack.tif");
     // 30000² zeros compress to under a megabyte; decoded and widened they are 3.6 GB.
@@ -173,6 +155,7 @@ fn a_huge_second_tiff_page_is_refused_before_it_is_decoded() {
 
 #[test]
 fn tiff_directories_are_checked_before_the_decoder_reads_them() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("odd.tif");
     let patched = |at: usize, bytes: &[u8]| {
@@ -202,6 +185,7 @@ fn tiff_directories_are_checked_before_the_decoder_reads_them() {
 
 #[test]
 fn tiff_samples_slabscope_does_not_read_are_named() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     for (name, bits, format, phrase) in [
         ("half.tif", 16, 3, "16-bit float samples"),
@@ -224,6 +208,7 @@ fn tiff_samples_slabscope_does_not_read_are_named() {
 
 #[test]
 fn a_tiff_folder_refuses_what_it_cannot_read() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     for i in 0..3 {
         tiff(&dir.path().join(format!("s_{i}.tif")), &[Page::gray8(8, 8)]);
@@ -272,6 +257,7 @@ fn nrrd_with_spacings(path: &Path, spacings: &str) {
 
 #[test]
 fn absurd_spacings_are_refused_at_once() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let tiny = dir.path().join("tiny.nrrd");
     nrrd_with_spacings(&tiny, "1e-300 1 1");
@@ -305,6 +291,7 @@ fn absurd_spacings_are_refused_at_once() {
 
 #[test]
 fn ascii_data_is_read_token_by_token() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("nul.nrrd");
     let mut bytes =
@@ -334,6 +321,7 @@ fn ascii_data_is_read_token_by_token() {
 
 #[test]
 fn skipped_lines_are_streamed() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("data.raw"), vec![b'x'; 96 << 20]).unwrap();
     let header = dir.path().join("skip.nhdr");
@@ -349,16 +337,6 @@ fn skipped_lines_are_streamed() {
 
 // --- outputs --------------------------------------------------------------------------------
 
-fn layers(dir: &Path) -> PathBuf {
-    let path = dir.join("layers.nrrd");
-    let out = Command::new(binary())
-        .args(["phantom", "layers", "--size", "20", "-o", s(&path)])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
-    path
-}
-
 /// The files of `dir`, sorted.
 fn listing(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -371,8 +349,9 @@ fn listing(dir: &Path) -> Vec<String> {
 
 #[test]
 fn force_never_replaces_an_input_or_a_file_that_is_not_regular() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
-    let input = layers(dir.path());
+    let input = layers(dir.path(), 20);
     let before = std::fs::read(&input).unwrap();
     let (out, _) = run(
         &[
@@ -442,8 +421,9 @@ fn force_never_replaces_an_input_or_a_file_that_is_not_regular() {
 
 #[test]
 fn outputs_are_checked_before_any_work_and_written_together() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
-    let input = layers(dir.path());
+    let input = layers(dir.path(), 20);
     let same = dir.path().join("out.json");
     let (out, _) = run(
         &[
@@ -486,10 +466,11 @@ fn outputs_are_checked_before_any_work_and_written_together() {
 #[cfg(unix)]
 #[test]
 fn an_interrupted_write_leaves_nothing_behind() {
+    let _alone = crate::one_at_a_time();
     for signal in ["INT", "TERM"] {
         let dir = tempfile::tempdir().unwrap();
         let target = dir.path().join("big.nrrd");
-        let mut child = Command::new(binary())
+        let mut child = slabscope()
             .args(["phantom", "body", "--dims", "256x256x600", "-o", s(&target)])
             .spawn()
             .unwrap();
@@ -526,8 +507,9 @@ fn an_interrupted_write_leaves_nothing_behind() {
 
 #[test]
 fn camera_values_are_checked() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
-    let input = layers(dir.path());
+    let input = layers(dir.path(), 20);
     let png = dir.path().join("v.png");
     for (flag, value) in [
         ("--spread", "inf"),
@@ -554,6 +536,7 @@ fn camera_values_are_checked() {
 
 #[test]
 fn messages_say_what_is_wrong_on_one_line() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     // A name with a newline is escaped.
     let odd = dir.path().join("two\nlines.nrrd");
@@ -618,6 +601,7 @@ fn messages_say_what_is_wrong_on_one_line() {
 #[cfg(unix)]
 #[test]
 fn fifos_are_refused_not_waited_on() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("scan.nii");
     assert!(
@@ -640,12 +624,13 @@ fn fifos_are_refused_not_waited_on() {
 
 #[test]
 fn the_tui_starts_only_where_it_can() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let missing = dir.path().join("nowhere.nrrd");
     let (out, _) = run(&[s(&missing)], 1 << 30);
     fails(&out, "nowhere.nrrd", "No such file or directory");
     // Without a terminal (as `ssh host slabscope f` runs it): what to run instead.
-    let input = layers(dir.path());
+    let input = layers(dir.path(), 20);
     let (out, _) = run(&[s(&input)], 1 << 30);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1));
@@ -704,6 +689,7 @@ const EXPLICIT: &str = "1.2.840.10008.1.2.1";
 
 #[test]
 fn dicom_lengths_are_checked_against_the_file_before_anything_is_kept() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     // A 4 GB value claimed by a file of a few hundred bytes.
     let mut body = image_header("1 ");
@@ -745,6 +731,7 @@ fn dicom_lengths_are_checked_against_the_file_before_anything_is_kept() {
 
 #[test]
 fn dicom_frames_and_compressed_sizes_are_checked_before_they_are_spent() {
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     // Two billion frames of native pixels in a 32-byte pixel data element.
     let mut body = image_header("2000000000");
@@ -790,6 +777,7 @@ fn fragment(sof: [u8; 6]) -> Vec<u8> {
 
 #[test]
 fn dicom_errors_quote_no_header_values() {
+    let _alone = crate::one_at_a_time();
     // A transfer syntax whose length runs over the data set's first elements: the message
     // must not carry them (a patient's name among them) out.
     let dir = tempfile::tempdir().unwrap();

@@ -7,15 +7,14 @@
 //! 24 MiB.
 //!
 //! `SLABSCOPE_MUTANTS=N` sets the mutants per reader (default 40; `.ci/run` runs 400, and
-//! `SLABSCOPE_MUTANTS=10000 cargo test --release --test mutants` is the full run the README
+//! `SLABSCOPE_MUTANTS=10000 cargo test --release --test slow mutants` is the full run the README
 //! reports).
 
-#![allow(clippy::unwrap_used)] // tests fail loudly by design
-
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+use crate::common::{bounded, data, prlimit_available};
 
 /// The budget every mutant is loaded under.
 const BUDGET: u64 = 64 << 20;
@@ -70,12 +69,6 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
     ),
     ("raw", &[("ramp_u8.raw", "m_5x4x3_uint8.raw")]),
 ];
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
 
 /// xorshift64*: the mutants of a seed are the same on every run.
 struct Rng(u64);
@@ -257,21 +250,10 @@ fn volumeshop_seed() -> Vec<u8> {
 }
 
 /// What went wrong with one mutant, if anything, and whether it loaded.
-fn run_one(dir: &Path, name: &str, bytes: &[u8], limited: bool) -> (Option<String>, bool) {
+fn run_one(dir: &Path, name: &str, bytes: &[u8]) -> (Option<String>, bool) {
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
-    let mut cmd = if limited {
-        let mut c = Command::new("prlimit");
-        c.arg(format!("--as={}", 4 * BUDGET + (768 << 20)))
-            .args(["timeout", "10"])
-            .arg(env!("CARGO_BIN_EXE_slabscope"));
-        c
-    } else {
-        let mut c = Command::new("timeout");
-        c.arg("10").arg(env!("CARGO_BIN_EXE_slabscope"));
-        c
-    };
-    let out = cmd
+    let out = bounded(10, 4 * BUDGET + (768 << 20))
         .args(["info", "--json", "--max-memory", "64M"])
         .arg(&path)
         .env("SLABSCOPE_REPORT_PEAK", "1")
@@ -323,12 +305,12 @@ fn run_one(dir: &Path, name: &str, bytes: &[u8], limited: bool) -> (Option<Strin
 
 #[test]
 fn mutants_of_every_reader_fail_cleanly_within_their_budget() {
+    let _alone = crate::one_at_a_time();
     let per_reader: usize = std::env::var("SLABSCOPE_MUTANTS")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(40);
-    let limited = Command::new("prlimit").arg("--version").output().is_ok();
-    if !limited {
+    if !prlimit_available() {
         eprintln!("note: prlimit not found; mutants run without an address-space limit");
     }
     let dir = tempfile::tempdir().unwrap();
@@ -373,7 +355,7 @@ fn mutants_of_every_reader_fail_cleanly_within_their_budget() {
                         Rng(0x9E37_79B9_7F4A_7C15
                             ^ (j as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03));
                     let mutant = mutate(&bytes, &mut rng);
-                    let (problem, ok) = run_one(&dir, name, &mutant, limited);
+                    let (problem, ok) = run_one(&dir, name, &mutant);
                     if ok {
                         loaded.fetch_add(1, Ordering::Relaxed);
                     }

@@ -1,0 +1,24 @@
+//! The fast integration tests, one binary for all of them (each test binary links the whole
+//! crate, so one per subject would cost a link each): a module per subject, run in parallel.
+//!
+//! `cargo test --test it` runs them all; `cargo test --test it render::` one subject. The slow
+//! process-level suites are in `tests/slow`.
+
+#![allow(clippy::unwrap_used)] // tests fail loudly by design
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bad_input;
+mod cli;
+mod contract;
+mod dicom;
+mod formats;
+mod fuzz_headers;
+mod orientation;
+mod partition;
+mod render;
+mod size;
+mod slice;
+mod triage;
+mod view;
