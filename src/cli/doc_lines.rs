@@ -416,32 +416,3 @@ fn a_renamed_flag_fails() {
     assert!(check(&invocation(&["analyze", "FILE", "--slab-count", "K"])).is_err());
     assert!(check(&invocation(&["analyze", "FILE", "--slabs", "WHAT"])).is_err());
 }
-
-/// Every key name of every JSON output (the last part of each path in
-/// `tests/contract/keys-*.txt`) appears in backticks in `docs/json.md`.
-#[test]
-fn every_json_key_is_documented() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let page = std::fs::read_to_string(root.join("docs/json.md")).expect("docs/json.md");
-    let documented = inline_code(&page.replace('\n', " "));
-    let mut missing = Vec::new();
-    for entry in std::fs::read_dir(root.join("tests/contract")).expect("tests/contract/") {
-        let path = entry.expect("tests/contract/ lists").path();
-        let name = path.file_name().unwrap_or_default().to_string_lossy();
-        if !(name.starts_with("keys-") && name.ends_with(".txt")) {
-            continue;
-        }
-        for key_path in std::fs::read_to_string(&path).expect("keys file").lines() {
-            let key = key_path.rsplit('.').next().unwrap_or_default();
-            let key = key.trim_end_matches("[]");
-            if !key.is_empty() && !documented.iter().any(|d| d == key) {
-                missing.push(format!("{name}: `{key}` ({key_path})"));
-            }
-        }
-    }
-    assert!(
-        missing.is_empty(),
-        "keys docs/json.md does not name:\n{}",
-        missing.join("\n")
-    );
-}
