@@ -160,6 +160,31 @@ fn whole_numbers(value: &str) -> Option<Vec<usize>> {
     value.split_whitespace().map(|t| t.parse().ok()).collect()
 }
 
+/// The encoding an `encoding` field names.
+fn encoding(path: &Path, value: &str) -> Result<Encoding> {
+    Ok(match value.to_ascii_lowercase().as_str() {
+        "raw" => Encoding::Raw,
+        "gzip" | "gz" => Encoding::Gzip,
+        "ascii" | "text" | "txt" => Encoding::Ascii,
+        other => {
+            return Err(Error::unsupported(path, format!("NRRD encoding {other:?}")));
+        }
+    })
+}
+
+/// The numbers of a `spacings` field (`nan` for an axis without one), or `None` when one is
+/// not a number.
+fn spacings(value: &str) -> Option<Vec<f64>> {
+    let parse = |t: &str| {
+        if t.eq_ignore_ascii_case("nan") {
+            Some(f64::NAN)
+        } else {
+            t.parse().ok()
+        }
+    };
+    value.split_whitespace().map(parse).collect()
+}
+
 /// Reads one `field: value` line into `f`.
 fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()> {
     let bad = |m: String| Error::format(path, m);
@@ -178,16 +203,7 @@ fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()>
                     .ok_or_else(|| bad(format!("sizes {value:?} are not whole numbers")))?,
             );
         }
-        "encoding" => {
-            f.encoding = Some(match value.to_ascii_lowercase().as_str() {
-                "raw" => Encoding::Raw,
-                "gzip" | "gz" => Encoding::Gzip,
-                "ascii" | "text" | "txt" => Encoding::Ascii,
-                other => {
-                    return Err(Error::unsupported(path, format!("NRRD encoding {other:?}")));
-                }
-            });
-        }
+        "encoding" => f.encoding = Some(encoding(path, value)?),
         "endian" => {
             f.endian = Some(match value.to_ascii_lowercase().as_str() {
                 "little" => Endian::Little,
@@ -196,18 +212,8 @@ fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()>
             });
         }
         "spacings" => {
-            let parse = |t: &str| {
-                if t.eq_ignore_ascii_case("nan") {
-                    Some(f64::NAN)
-                } else {
-                    t.parse().ok()
-                }
-            };
             f.spacings = Some(
-                value
-                    .split_whitespace()
-                    .map(parse)
-                    .collect::<Option<_>>()
+                spacings(value)
                     .ok_or_else(|| bad(format!("spacings {value:?} are not numbers")))?,
             );
         }
@@ -341,12 +347,11 @@ fn is_spatial(kind: &str) -> bool {
     matches!(kind, "domain" | "space" | "time" | "???" | "none")
 }
 
-pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let h = parse_header(path, &read_header_bytes(path)?)?;
-    let mut notes = Vec::new();
+/// The axes of the header that are the volume's (space, then any further ones): all of them,
+/// but a leading non-spatial axis of size 1 (a "scalar" component) is dropped; larger ones are
+/// multi-component voxels, which slabscope does not read.
+fn volume_axes(path: &Path, h: &Header) -> Result<Vec<usize>> {
     let mut axes: Vec<usize> = (0..h.sizes.len()).collect();
-    // A leading non-spatial axis of size 1 (a "scalar" component) is dropped; larger ones are
-    // multi-component voxels, which slabscope does not read.
     if let Some(kinds) = &h.kinds {
         if kinds.len() != h.sizes.len() {
             return Err(Error::format(
@@ -367,6 +372,13 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
             axes.remove(0);
         }
     }
+    Ok(axes)
+}
+
+pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+    let h = parse_header(path, &read_header_bytes(path)?)?;
+    let mut notes = Vec::new();
+    let axes = volume_axes(path, &h)?;
     let mut dims = [1usize; 3];
     let mut spacing = [1.0f64; 3];
     for (k, &axis) in axes.iter().take(3).enumerate() {
