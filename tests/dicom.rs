@@ -360,23 +360,8 @@ fn rows(stdout: &str) -> Vec<serde_json::Value> {
 
 #[test]
 fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = mixed_folder();
     let root = dir.path();
-    for sub in ["ct", "gap"] {
-        std::fs::create_dir_all(root.join(sub)).unwrap();
-        for f in std::fs::read_dir(data(sub)).unwrap() {
-            let f = f.unwrap().path();
-            std::fs::copy(&f, root.join(sub).join(f.file_name().unwrap())).unwrap();
-        }
-    }
-    std::fs::copy(data("jpeg2000.dcm"), root.join("ct/jpeg2000.dcm")).unwrap();
-    let slice = std::fs::read(data("gap/slice00.dcm")).unwrap();
-    std::fs::write(root.join("gap/cut.dcm"), &slice[..slice.len() / 3]).unwrap();
-    std::fs::copy(data("enhanced.dcm"), root.join("enhanced.dcm")).unwrap();
-    // Another format beside the DICOM, and a broken one.
-    let ramp = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ramp_u8.nii");
-    std::fs::copy(ramp, root.join("ramp.nii")).unwrap();
-    std::fs::write(root.join("broken.nii"), b"not a volume").unwrap();
     let r = root.to_str().unwrap();
     let out = Command::cargo_bin("slabscope")
         .unwrap()
@@ -429,10 +414,39 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
             assert!(row["series"].as_str().unwrap().starts_with("1.2.826."));
         }
     }
-    // The shards, through a manifest, are the rows of one run.
+    // The shards, through a manifest, are the rows of one run. Labels come from the headers,
+    // which a manifest does not carry; everything else agrees.
+    assert_eq!(sharded_rows(root), all);
+}
+
+/// A folder of two DICOM series (one with a JPEG 2000 file, one with a file cut short), an
+/// enhanced multi-frame file, and another format beside them, valid and broken.
+fn mixed_folder() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path();
+    for sub in ["ct", "gap"] {
+        std::fs::create_dir_all(root.join(sub)).unwrap();
+        for f in std::fs::read_dir(data(sub)).unwrap() {
+            let f = f.unwrap().path();
+            std::fs::copy(&f, root.join(sub).join(f.file_name().unwrap())).unwrap();
+        }
+    }
+    std::fs::copy(data("jpeg2000.dcm"), root.join("ct/jpeg2000.dcm")).unwrap();
+    let slice = std::fs::read(data("gap/slice00.dcm")).unwrap();
+    std::fs::write(root.join("gap/cut.dcm"), &slice[..slice.len() / 3]).unwrap();
+    std::fs::copy(data("enhanced.dcm"), root.join("enhanced.dcm")).unwrap();
+    // Another format beside the DICOM, and a broken one.
+    let ramp = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ramp_u8.nii");
+    std::fs::copy(ramp, root.join("ramp.nii")).unwrap();
+    std::fs::write(root.join("broken.nii"), b"not a volume").unwrap();
+    dir
+}
+
+/// The rows of triaging the folder `root` in three shards of its manifest, joined.
+fn sharded_rows(root: &Path) -> Vec<serde_json::Value> {
     let list = Command::cargo_bin("slabscope")
         .unwrap()
-        .args(["triage", r, "--list"])
+        .args(["triage", root.to_str().unwrap(), "--list"])
         .output()
         .unwrap();
     let manifest = root.join("manifest.txt");
@@ -448,6 +462,5 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
             .unwrap();
         joined.extend(rows(&String::from_utf8_lossy(&out.stdout)));
     }
-    // Labels come from the headers, which a manifest does not carry; everything else agrees.
-    assert_eq!(joined, all);
+    joined
 }
