@@ -333,23 +333,8 @@ fn patient_fields_appear_nowhere_unless_asked_for() {
 
 #[test]
 fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = mixed_folder();
     let root = dir.path();
-    for sub in ["ct", "gap"] {
-        std::fs::create_dir_all(root.join(sub)).unwrap();
-        for f in std::fs::read_dir(dicom_data(sub)).unwrap() {
-            let f = f.unwrap().path();
-            std::fs::copy(&f, root.join(sub).join(f.file_name().unwrap())).unwrap();
-        }
-    }
-    std::fs::copy(dicom_data("jpeg2000.dcm"), root.join("ct/jpeg2000.dcm")).unwrap();
-    let slice = std::fs::read(dicom_data("gap/slice00.dcm")).unwrap();
-    std::fs::write(root.join("gap/cut.dcm"), &slice[..slice.len() / 3]).unwrap();
-    std::fs::copy(dicom_data("enhanced.dcm"), root.join("enhanced.dcm")).unwrap();
-    // Another format beside the DICOM, and a broken one.
-    let ramp = data("ramp_u8.nii");
-    std::fs::copy(ramp, root.join("ramp.nii")).unwrap();
-    std::fs::write(root.join("broken.nii"), b"not a volume").unwrap();
     let r = root.to_str().unwrap();
     let out = slabscope()
         .args(["triage", r, "--json", "--phases", "0"])
@@ -401,8 +386,39 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
             assert!(row["series"].as_str().unwrap().starts_with("1.2.826."));
         }
     }
-    // The shards, through a manifest, are the rows of one run.
-    let list = slabscope().args(["triage", r, "--list"]).output().unwrap();
+    // The shards, through a manifest, are the rows of one run. Labels come from the headers,
+    // which a manifest does not carry; everything else agrees.
+    assert_eq!(sharded_rows(root), all);
+}
+
+/// A folder of two DICOM series (one with a JPEG 2000 file, one with a file cut short), an
+/// enhanced multi-frame file, and another format beside them, valid and broken.
+fn mixed_folder() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path();
+    for sub in ["ct", "gap"] {
+        std::fs::create_dir_all(root.join(sub)).unwrap();
+        for f in std::fs::read_dir(dicom_data(sub)).unwrap() {
+            let f = f.unwrap().path();
+            std::fs::copy(&f, root.join(sub).join(f.file_name().unwrap())).unwrap();
+        }
+    }
+    std::fs::copy(dicom_data("jpeg2000.dcm"), root.join("ct/jpeg2000.dcm")).unwrap();
+    let slice = std::fs::read(dicom_data("gap/slice00.dcm")).unwrap();
+    std::fs::write(root.join("gap/cut.dcm"), &slice[..slice.len() / 3]).unwrap();
+    std::fs::copy(dicom_data("enhanced.dcm"), root.join("enhanced.dcm")).unwrap();
+    // Another format beside the DICOM, and a broken one.
+    std::fs::copy(data("ramp_u8.nii"), root.join("ramp.nii")).unwrap();
+    std::fs::write(root.join("broken.nii"), b"not a volume").unwrap();
+    dir
+}
+
+/// The rows of the three shards of `root`'s triage, through a manifest `--list` wrote.
+fn sharded_rows(root: &std::path::Path) -> Vec<serde_json::Value> {
+    let list = slabscope()
+        .args(["triage", root.to_str().unwrap(), "--list"])
+        .output()
+        .unwrap();
     let manifest = root.join("manifest.txt");
     std::fs::write(&manifest, &list.stdout).unwrap();
     let mut joined = Vec::new();
@@ -415,6 +431,5 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
             .unwrap();
         joined.extend(rows(&String::from_utf8_lossy(&out.stdout)));
     }
-    // Labels come from the headers, which a manifest does not carry; everything else agrees.
-    assert_eq!(joined, all);
+    joined
 }

@@ -23,7 +23,6 @@ fn sources(dir: &Path) -> Vec<PathBuf> {
 }
 
 #[test]
-#[ignore = "enabled when #22's splits land"]
 fn no_source_file_is_over_600_lines() {
     let root = repo("");
     let long: Vec<String> = sources(&repo("src"))

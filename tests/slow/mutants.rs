@@ -128,6 +128,72 @@ fn header_len(bytes: &[u8]) -> usize {
     bytes.len().min(352)
 }
 
+/// Makes a number of the text header (its first `head` bytes) extreme.
+fn extreme_number(b: &mut Vec<u8>, head: usize, rng: &mut Rng) {
+    let text = &b[..head.min(b.len())];
+    let numbers: Vec<(usize, usize)> = text
+        .iter()
+        .enumerate()
+        .filter(|&(i, c)| c.is_ascii_digit() && (i == 0 || !text[i - 1].is_ascii_alphanumeric()))
+        .map(|(i, _)| {
+            let len = text[i..]
+                .iter()
+                .take_while(|c| c.is_ascii_digit() || **c == b'.' || **c == b'e')
+                .count();
+            (i, len)
+        })
+        .collect();
+    if !numbers.is_empty() {
+        let (at, len) = numbers[rng.below(numbers.len())];
+        let value = EXTREMES[rng.below(EXTREMES.len())].as_bytes();
+        b.splice(at..at + len, value.iter().copied());
+    }
+}
+
+/// Overwrites an aligned field of the binary header (its first `head` bytes) with an extreme.
+fn extreme_field(b: &mut [u8], head: usize, rng: &mut Rng) {
+    let at = rng.below(head.min(b.len()) / 2) * 2;
+    let values: [&[u8]; 8] = [
+        &[0xff, 0xff],
+        &[0xff, 0x7f],
+        &[0x00, 0x80],
+        &[0, 0],
+        &[0xff, 0xff, 0xff, 0x7f],
+        &[0x00, 0x00, 0xc0, 0x7f],
+        &[0x00, 0x00, 0x80, 0x7f],
+        &[0x01, 0x00, 0x00, 0x00],
+    ];
+    let v = values[rng.below(values.len())];
+    for (k, &x) in v.iter().enumerate() {
+        if at + k < b.len() {
+            b[at + k] = x;
+        }
+    }
+}
+
+/// Repeats a line of the text header (its first `head` bytes).
+fn repeat_line(b: &mut Vec<u8>, head: usize, rng: &mut Rng) {
+    let text = &b[..head.min(b.len())];
+    let starts: Vec<usize> = std::iter::once(0)
+        .chain(
+            text.iter()
+                .enumerate()
+                .filter(|(_, c)| **c == b'\n')
+                .map(|(i, _)| i + 1),
+        )
+        .filter(|&i| i < text.len())
+        .collect();
+    if !starts.is_empty() {
+        let s = starts[rng.below(starts.len())];
+        let e = text[s..]
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(text.len(), |j| s + j + 1);
+        let line = b[s..e].to_vec();
+        b.splice(e..e, line);
+    }
+}
+
 /// One mutant of `seed`.
 fn mutate(seed: &[u8], rng: &mut Rng) -> Vec<u8> {
     let mut b = seed.to_vec();
@@ -148,48 +214,9 @@ fn mutate(seed: &[u8], rng: &mut Rng) -> Vec<u8> {
                 }
             }
             // Make a number of a text header extreme.
-            1 => {
-                let text = &b[..head.min(b.len())];
-                let numbers: Vec<(usize, usize)> = text
-                    .iter()
-                    .enumerate()
-                    .filter(|&(i, c)| {
-                        c.is_ascii_digit() && (i == 0 || !text[i - 1].is_ascii_alphanumeric())
-                    })
-                    .map(|(i, _)| {
-                        let len = text[i..]
-                            .iter()
-                            .take_while(|c| c.is_ascii_digit() || **c == b'.' || **c == b'e')
-                            .count();
-                        (i, len)
-                    })
-                    .collect();
-                if !numbers.is_empty() {
-                    let (at, len) = numbers[rng.below(numbers.len())];
-                    let value = EXTREMES[rng.below(EXTREMES.len())].as_bytes();
-                    b.splice(at..at + len, value.iter().copied());
-                }
-            }
+            1 => extreme_number(&mut b, head, rng),
             // Overwrite an aligned field of a binary header with an extreme.
-            2 => {
-                let at = rng.below(head.min(b.len()) / 2) * 2;
-                let values: [&[u8]; 8] = [
-                    &[0xff, 0xff],
-                    &[0xff, 0x7f],
-                    &[0x00, 0x80],
-                    &[0, 0],
-                    &[0xff, 0xff, 0xff, 0x7f],
-                    &[0x00, 0x00, 0xc0, 0x7f],
-                    &[0x00, 0x00, 0x80, 0x7f],
-                    &[0x01, 0x00, 0x00, 0x00],
-                ];
-                let v = values[rng.below(values.len())];
-                for (k, &x) in v.iter().enumerate() {
-                    if at + k < b.len() {
-                        b[at + k] = x;
-                    }
-                }
-            }
+            2 => extreme_field(&mut b, head, rng),
             // Cut short.
             3 => b.truncate(rng.below(b.len() + 1)),
             // Lengthen with zeros or noise.
@@ -201,27 +228,7 @@ fn mutate(seed: &[u8], rng: &mut Rng) -> Vec<u8> {
                 }
             }
             // Repeat a header line.
-            5 => {
-                let text = &b[..head.min(b.len())];
-                let starts: Vec<usize> = std::iter::once(0)
-                    .chain(
-                        text.iter()
-                            .enumerate()
-                            .filter(|(_, c)| **c == b'\n')
-                            .map(|(i, _)| i + 1),
-                    )
-                    .filter(|&i| i < text.len())
-                    .collect();
-                if !starts.is_empty() {
-                    let s = starts[rng.below(starts.len())];
-                    let e = text[s..]
-                        .iter()
-                        .position(|&c| c == b'\n')
-                        .map_or(text.len(), |j| s + j + 1);
-                    let line = b[s..e].to_vec();
-                    b.splice(e..e, line);
-                }
-            }
+            5 => repeat_line(&mut b, head, rng),
             // Drop a header line.
             _ => {
                 let text = &b[..head.min(b.len())];

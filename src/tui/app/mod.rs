@@ -255,24 +255,7 @@ impl App {
                 self.on_progress(job, p);
                 vec![]
             }
-            JobMsg::Loaded(Ok((volume, notes))) => {
-                self.status.message = notes.first().cloned();
-                let chosen = self
-                    .params
-                    .axis
-                    .resolve(volume.transform(), volume.spacing());
-                self.volume = Load::Ready(volume);
-                self.views.views = Load::started("view search");
-                let mut effects = vec![Effect::SearchViews(self.params.view.clone())];
-                match chosen {
-                    Ok(Some(axis)) => effects.extend(self.analyze(axis.direction())),
-                    Ok(None) => {}
-                    Err(e) => self.status.message = Some(e.to_string()),
-                }
-                self.sync();
-                effects.extend(self.render());
-                effects
-            }
+            JobMsg::Loaded(Ok((volume, notes))) => self.on_loaded(volume, &notes),
             JobMsg::Loaded(Err(e)) => {
                 self.status.message = Some(format!("{e} (q quits)"));
                 self.views.idle = format!("cannot load the volume: {e}");
@@ -333,6 +316,26 @@ impl App {
                 vec![]
             }
         }
+    }
+
+    /// A volume loaded: the view search starts, and the partition along the axis asked for.
+    fn on_loaded(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
+        self.status.message = notes.first().cloned();
+        let chosen = self
+            .params
+            .axis
+            .resolve(volume.transform(), volume.spacing());
+        self.volume = Load::Ready(volume);
+        self.views.views = Load::started("view search");
+        let mut effects = vec![Effect::SearchViews(self.params.view.clone())];
+        match chosen {
+            Ok(Some(axis)) => effects.extend(self.analyze(axis.direction())),
+            Ok(None) => {}
+            Err(e) => self.status.message = Some(e.to_string()),
+        }
+        self.sync();
+        effects.extend(self.render());
+        effects
     }
 
     fn on_progress(&mut self, job: Job, p: Progress) {

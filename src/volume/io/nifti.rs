@@ -108,44 +108,11 @@ fn unit_to_mm(xyzt_units: u8) -> f64 {
 pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (h, gz) = read_header(path)?;
     let mut notes = Vec::new();
-    // The header's dims are signed 16-bit numbers (the crate reads them unsigned).
-    let signed = |i: usize| h.dim[i] as i16;
-    let ndim = signed(0);
-    if !(1..=7).contains(&ndim) {
-        return Err(Error::format(
-            path,
-            format!("dim[0] is {ndim}, not between 1 and 7"),
-        ));
-    }
-    let ndim = ndim as usize;
-    if let Some(i) = (1..=ndim).find(|&i| signed(i) < 1) {
-        return Err(Error::format(
-            path,
-            format!(
-                "dim[{i}] is {}: every used dimension must be at least 1",
-                signed(i)
-            ),
-        ));
-    }
-    let dim = |i: usize| if i <= ndim { usize::from(h.dim[i]) } else { 1 };
-    let dims = [dim(1), dim(2), dim(3)];
-    let extra: usize = (4..=ndim).map(dim).product();
+    let (ndim, dims, extra) = dimensions(path, &h)?;
     let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
     let ty = voxel_type(path, h.datatype)?;
     let unit = unit_to_mm(h.xyzt_units);
-    let mut spacing = [1.0; 3];
-    for (i, s) in spacing.iter_mut().enumerate() {
-        let p = f64::from(h.pixdim[i + 1]).abs() * unit;
-        if p.is_finite() && p > 0.0 {
-            *s = p;
-        } else if i < ndim {
-            notes.push(format!(
-                "pixdim[{}] is {}: using 1 mm",
-                i + 1,
-                h.pixdim[i + 1]
-            ));
-        }
-    }
+    let spacing = spacing(&h, ndim, unit, &mut notes);
     let (slope, inter) = (f64::from(h.scl_slope), f64::from(h.scl_inter));
     let scale =
         (slope != 0.0 && slope.is_finite() && inter.is_finite() && (slope, inter) != (1.0, 0.0))
@@ -190,6 +157,53 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     Ok(Read0::new(path, dims, spacing, ty, voxels, notes)?
         .with_transform(transform(&h, unit))
         .with_source(&spec.file))
+}
+
+/// The dimensions the header states: how many are used, the three spatial ones, and the
+/// product of the others (the volumes of a 4D or higher image). Fails on a count outside 1 to 7
+/// or a used dimension below 1.
+fn dimensions(path: &Path, h: &NiftiHeader) -> Result<(usize, [usize; 3], usize)> {
+    // The header's dims are signed 16-bit numbers (the crate reads them unsigned).
+    let signed = |i: usize| h.dim[i] as i16;
+    let ndim = signed(0);
+    if !(1..=7).contains(&ndim) {
+        return Err(Error::format(
+            path,
+            format!("dim[0] is {ndim}, not between 1 and 7"),
+        ));
+    }
+    let ndim = ndim as usize;
+    if let Some(i) = (1..=ndim).find(|&i| signed(i) < 1) {
+        return Err(Error::format(
+            path,
+            format!(
+                "dim[{i}] is {}: every used dimension must be at least 1",
+                signed(i)
+            ),
+        ));
+    }
+    let dim = |i: usize| if i <= ndim { usize::from(h.dim[i]) } else { 1 };
+    let extra: usize = (4..=ndim).map(dim).product();
+    Ok((ndim, [dim(1), dim(2), dim(3)], extra))
+}
+
+/// The voxel spacing in mm (`unit` mm a header unit): `pixdim`, with 1 mm (and a note) for a
+/// used dimension whose spacing is not a positive number.
+fn spacing(h: &NiftiHeader, ndim: usize, unit: f64, notes: &mut Vec<String>) -> [f64; 3] {
+    let mut spacing = [1.0; 3];
+    for (i, s) in spacing.iter_mut().enumerate() {
+        let p = f64::from(h.pixdim[i + 1]).abs() * unit;
+        if p.is_finite() && p > 0.0 {
+            *s = p;
+        } else if i < ndim {
+            notes.push(format!(
+                "pixdim[{}] is {}: using 1 mm",
+                i + 1,
+                h.pixdim[i + 1]
+            ));
+        }
+    }
+    spacing
 }
 
 /// The voxel-to-world transform the header states, in mm: the sform when its code is set, else

@@ -1,19 +1,20 @@
 //! NRRD (`.nrrd` with attached data, `.nhdr` with a detached data file): a small parser for the
 //! fields a scalar volume needs, and a writer (raw or gzip) that never overwrites unasked.
 
+mod write;
+
 use std::fs::File;
-use std::io::{BufWriter, Read, Write};
+use std::io::Read;
 use std::path::Path;
 
-use flate2::Compression;
-use flate2::write::GzEncoder;
+pub(crate) use self::write::stage;
+pub use self::write::{NrrdEncoding, write_nrrd};
 
 use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
-use super::{LoadOptions, Read0, Staged, data_file};
+use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
-use crate::volume::voxel::encode_le;
-use crate::volume::{Endian, Volume, VoxelType};
+use crate::volume::{Endian, VoxelType};
 
 /// The most bytes a header may take before we stop looking for its end.
 const MAX_HEADER: usize = 1 << 20;
@@ -160,6 +161,31 @@ fn whole_numbers(value: &str) -> Option<Vec<usize>> {
     value.split_whitespace().map(|t| t.parse().ok()).collect()
 }
 
+/// The encoding an `encoding` field names.
+fn encoding(path: &Path, value: &str) -> Result<Encoding> {
+    Ok(match value.to_ascii_lowercase().as_str() {
+        "raw" => Encoding::Raw,
+        "gzip" | "gz" => Encoding::Gzip,
+        "ascii" | "text" | "txt" => Encoding::Ascii,
+        other => {
+            return Err(Error::unsupported(path, format!("NRRD encoding {other:?}")));
+        }
+    })
+}
+
+/// The numbers of a `spacings` field (`nan` for an axis without one), or `None` when one is
+/// not a number.
+fn spacings(value: &str) -> Option<Vec<f64>> {
+    let parse = |t: &str| {
+        if t.eq_ignore_ascii_case("nan") {
+            Some(f64::NAN)
+        } else {
+            t.parse().ok()
+        }
+    };
+    value.split_whitespace().map(parse).collect()
+}
+
 /// Reads one `field: value` line into `f`.
 fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()> {
     let bad = |m: String| Error::format(path, m);
@@ -178,16 +204,7 @@ fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()>
                     .ok_or_else(|| bad(format!("sizes {value:?} are not whole numbers")))?,
             );
         }
-        "encoding" => {
-            f.encoding = Some(match value.to_ascii_lowercase().as_str() {
-                "raw" => Encoding::Raw,
-                "gzip" | "gz" => Encoding::Gzip,
-                "ascii" | "text" | "txt" => Encoding::Ascii,
-                other => {
-                    return Err(Error::unsupported(path, format!("NRRD encoding {other:?}")));
-                }
-            });
-        }
+        "encoding" => f.encoding = Some(encoding(path, value)?),
         "endian" => {
             f.endian = Some(match value.to_ascii_lowercase().as_str() {
                 "little" => Endian::Little,
@@ -196,18 +213,8 @@ fn read_field(path: &Path, f: &mut Fields, key: &str, value: &str) -> Result<()>
             });
         }
         "spacings" => {
-            let parse = |t: &str| {
-                if t.eq_ignore_ascii_case("nan") {
-                    Some(f64::NAN)
-                } else {
-                    t.parse().ok()
-                }
-            };
             f.spacings = Some(
-                value
-                    .split_whitespace()
-                    .map(parse)
-                    .collect::<Option<_>>()
+                spacings(value)
                     .ok_or_else(|| bad(format!("spacings {value:?} are not numbers")))?,
             );
         }
@@ -341,12 +348,11 @@ fn is_spatial(kind: &str) -> bool {
     matches!(kind, "domain" | "space" | "time" | "???" | "none")
 }
 
-pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let h = parse_header(path, &read_header_bytes(path)?)?;
-    let mut notes = Vec::new();
+/// The axes of the header that are the volume's (space, then any further ones): all of them,
+/// but a leading non-spatial axis of size 1 (a "scalar" component) is dropped; larger ones are
+/// multi-component voxels, which slabscope does not read.
+fn volume_axes(path: &Path, h: &Header) -> Result<Vec<usize>> {
     let mut axes: Vec<usize> = (0..h.sizes.len()).collect();
-    // A leading non-spatial axis of size 1 (a "scalar" component) is dropped; larger ones are
-    // multi-component voxels, which slabscope does not read.
     if let Some(kinds) = &h.kinds {
         if kinds.len() != h.sizes.len() {
             return Err(Error::format(
@@ -367,6 +373,13 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
             axes.remove(0);
         }
     }
+    Ok(axes)
+}
+
+pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+    let h = parse_header(path, &read_header_bytes(path)?)?;
+    let mut notes = Vec::new();
+    let axes = volume_axes(path, &h)?;
     let mut dims = [1usize; 3];
     let mut spacing = [1.0f64; 3];
     for (k, &axis) in axes.iter().take(3).enumerate() {
@@ -430,143 +443,5 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     )
 }
 
-/// How [`write_nrrd`] stores the voxels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum NrrdEncoding {
-    /// Plain little-endian bytes.
-    Raw,
-    /// gzip-compressed (smaller, slower).
-    #[default]
-    Gzip,
-}
-
-/// Writes `volume` as an attached NRRD in its voxel type (integer types are rounded and clamped),
-/// with its voxel-to-world transform as `space: left-posterior-superior`, `space directions` and
-/// `space origin` when it is known, and as `spacings` when it is not.
-///
-/// The file is written to a temporary file beside `path` and renamed into place; an existing
-/// `path` is replaced only when `force` is set.
-pub fn write_nrrd(path: &Path, volume: &Volume, encoding: NrrdEncoding, force: bool) -> Result<()> {
-    super::check_output(path, force)?;
-    stage(path, volume, encoding)?.persist(force)
-}
-
-/// `volume` as NRRD in a temporary file beside `path`, to be put in place.
-pub(crate) fn stage(path: &Path, volume: &Volume, encoding: NrrdEncoding) -> Result<Staged> {
-    super::stage(path, |file| write_to(file, volume, encoding))
-}
-
-fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Result<()> {
-    let mut out = BufWriter::new(file);
-    let [nx, ny, nz] = volume.dims();
-    let [sx, sy, sz] = volume.spacing();
-    let ty = volume.voxel_type();
-    write!(
-        out,
-        "NRRD0004\n# written by slabscope {}\ntype: {}\ndimension: 3\nsizes: {nx} {ny} {nz}\n",
-        env!("CARGO_PKG_VERSION"),
-        type_name(ty)
-    )?;
-    let t = volume.transform();
-    if t.known {
-        // LPS, as Slicer and ITK write it: x and y negated from RAS.
-        let lps = |r: usize, v: f64| if r < 2 { -v } else { v };
-        let vector = |v: [f64; 3]| format!("({},{},{})", v[0], v[1], v[2]);
-        let column = |c: usize| vector(std::array::from_fn(|r| lps(r, t.matrix[r][c]) + 0.0));
-        writeln!(
-            out,
-            "space: left-posterior-superior\nspace directions: {} {} {}\nspace origin: {}",
-            column(0),
-            column(1),
-            column(2),
-            vector(std::array::from_fn(|r| lps(r, t.matrix[r][3]) + 0.0))
-        )?;
-    } else {
-        writeln!(out, "spacings: {sx} {sy} {sz}")?;
-    }
-    writeln!(out, "kinds: domain domain domain")?;
-    if ty.size() > 1 {
-        writeln!(out, "endian: little")?;
-    }
-    let gz = encoding == NrrdEncoding::Gzip;
-    writeln!(out, "encoding: {}\n", if gz { "gzip" } else { "raw" })?;
-    let mut sink: Box<dyn Write + '_> = if gz {
-        Box::new(GzEncoder::new(&mut out, Compression::fast()))
-    } else {
-        Box::new(&mut out)
-    };
-    let mut bytes = Vec::new();
-    for chunk in volume.voxels().chunks(1 << 16) {
-        bytes.clear();
-        encode_le(chunk, ty, &mut bytes);
-        sink.write_all(&bytes)?;
-    }
-    drop(sink);
-    out.flush()
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn parse(text: &str) -> Result<Header> {
-        parse_header(Path::new("t.nrrd"), text.as_bytes())
-    }
-
-    #[test]
-    fn parses_a_full_header() {
-        let h = parse(
-            "NRRD0005\n# comment\ntype: unsigned short\ndimension: 3\nsizes: 4 5 6\n\
-             endian: big\nencoding: gz\nspace directions: (2,0,0) (0,0.5,0) (0,0,3)\n\
-             byte skip: -1\nkey:=value\n\nDATA",
-        )
-        .unwrap();
-        assert_eq!(h.voxel_type, VoxelType::U16);
-        assert_eq!(h.sizes, vec![4, 5, 6]);
-        assert_eq!(h.encoding, Encoding::Gzip);
-        assert_eq!(h.endian, Some(Endian::Big));
-        assert_eq!(
-            h.directions,
-            Some(vec![
-                Some(vec![2.0, 0.0, 0.0]),
-                Some(vec![0.0, 0.5, 0.0]),
-                Some(vec![0.0, 0.0, 3.0])
-            ])
-        );
-        assert_eq!(h.byte_skip, Skip::FromEnd);
-    }
-
-    #[test]
-    fn header_length_stops_at_the_blank_line() {
-        let text = "NRRD0004\ntype: uchar\ndimension: 1\nsizes: 3\nencoding: raw\n\nabc";
-        assert_eq!(parse(text).unwrap().len, text.len() - 3);
-    }
-
-    #[test]
-    fn rejects_bad_headers_with_reasons() {
-        let err = |t: &str| parse(t).unwrap_err().to_string();
-        assert!(
-            err("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 2\nencoding: raw\n\n")
-                .contains("dimension is 3")
-        );
-        assert!(err("NRRD0004\ntype: int64\n").contains("unsupported"));
-        assert!(err("NRRD0004\ntype: uchar\ndimension: 1\nsizes: 2\n\n").contains("\"encoding\""));
-        assert!(err("NRRD0004\ntype: uchar\nencoding: bzip2\n").contains("bzip2"));
-        assert!(err("NRRD0004\ntype: uchar\nsizes: 2 x\n").contains("whole numbers"));
-        assert!(err("NRRD0004\nno colon here\n").contains("not \"field: value\""));
-        assert!(err("PNG").contains("magic"));
-    }
-
-    #[test]
-    fn directions_accept_none_and_spaces() {
-        assert_eq!(
-            parse_directions("none (3,4,0) ( 0, 0, 2 )"),
-            Some(vec![
-                None,
-                Some(vec![3.0, 4.0, 0.0]),
-                Some(vec![0.0, 0.0, 2.0])
-            ])
-        );
-        assert_eq!(parse_directions("(1,0"), None);
-    }
-}
+mod tests;

@@ -334,6 +334,35 @@ fn tilt(
     (along, shifts, Some(degrees))
 }
 
+/// The slice plane's frame the orientation of `im` gives, when it gives one (both directions
+/// and their normal non-zero).
+fn frame_of(im: &Image) -> Option<Frame> {
+    im.orientation.and_then(|o| {
+        let r = normalize([o[0], o[1], o[2]])?;
+        let c = normalize([o[3], o[4], o[5]])?;
+        Some((r, c, normalize(cross(r, c))?))
+    })
+}
+
+/// The step and depths of `slices` slices without positions or orientation, stacked in
+/// instance order `stated` mm apart (1 mm when nothing says), noting both.
+fn unplaced(slices: usize, stated: Option<f64>, notes: &mut Vec<String>) -> (f64, Vec<f64>) {
+    notes.push(
+        "no image positions or orientation: slices ordered by instance number, without \
+         anatomical orientation"
+            .into(),
+    );
+    if slices > 1 {
+        notes.push(match stated {
+            Some(s) => format!("slice spacing {s} mm from SpacingBetweenSlices"),
+            None => "no slice positions: 1 mm between slices assumed".into(),
+        });
+    }
+    let step = stated.unwrap_or(1.0);
+    let depths = (0..slices).map(|k| k as f64 * step).collect();
+    (step, depths)
+}
+
 /// Lays `series` out as a volume; `name` names an image in messages (its file). Fails when the
 /// positions repeat unevenly (not a 4D series).
 pub(super) fn layout(
@@ -351,12 +380,7 @@ pub(super) fn layout(
         notes.push("no pixel spacing: 1 mm assumed".into());
         [1.0, 1.0]
     });
-    let frame = first.orientation.and_then(|o| {
-        let r = normalize([o[0], o[1], o[2]])?;
-        let c = normalize([o[3], o[4], o[5]])?;
-        Some((r, c, normalize(cross(r, c))?))
-    });
-    let placed = frame.filter(|_| images.iter().all(|im| im.position.is_some()));
+    let placed = frame_of(first).filter(|_| images.iter().all(|im| im.position.is_some()));
     let runs = runs(images, placed)?;
     let (slices, volumes) = (runs.len(), runs[0].len());
     let order: Vec<Vec<usize>> = (0..volumes)
@@ -372,19 +396,7 @@ pub(super) fn layout(
         let (m, problems) = spacing_between(&depths, &|k| name(lead[k]));
         (m.or(stated).unwrap_or(dx.min(dy)), problems, depths)
     } else {
-        notes.push(
-            "no image positions or orientation: slices ordered by instance number, without \
-             anatomical orientation"
-                .into(),
-        );
-        if slices > 1 {
-            notes.push(match stated {
-                Some(s) => format!("slice spacing {s} mm from SpacingBetweenSlices"),
-                None => "no slice positions: 1 mm between slices assumed".into(),
-            });
-        }
-        let step = stated.unwrap_or(1.0);
-        let depths = (0..slices).map(|k| k as f64 * step).collect();
+        let (step, depths) = unplaced(slices, stated, &mut notes);
         (step, Vec::new(), depths)
     };
     if !step.is_finite() || step <= 0.0 {

@@ -2,39 +2,33 @@
 //! (`read`), its header parsed by dicom-object and described per frame (`header`); the
 //! frames are grouped into series and laid out along the slice normal (`assemble`); native
 //! pixels are read straight from the files, compressed ones decoded by dicom-pixeldata, and
-//! both turned into values the same way (`pixels`).
+//! both turned into values the same way (`pixels`). The scan of files to series is `scan`, the
+//! reading of a series' frames into a volume's voxels `voxels`.
 
 mod assemble;
 mod header;
 mod pixels;
 mod read;
+mod scan;
+mod voxels;
 
 use std::fs::File;
-use std::io::{Read, Seek, SeekFrom};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use dicom_core::value::PixelFragmentSequence;
-use dicom_core::{DataElement, VR};
-use dicom_dictionary_std::tags;
 use dicom_encoding::TransferSyntaxIndex;
 use dicom_object::InMemDicomObject;
-use dicom_object::meta::FileMetaTableBuilder;
-use dicom_pixeldata::PixelDecoder;
-use rayon::prelude::*;
 use serde::Serialize;
 
-use self::assemble::Series;
+use self::assemble::{Layout, Series};
 use self::header::{Image, PixelFormat};
-use self::pixels::Decode;
-use self::read::{Pixels, Syntax};
-use super::data::{check_budget, voxel_buffer};
+use self::read::Syntax;
+use self::scan::{Scan, paths_of, series_of};
+use super::data::check_budget;
 use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::{Volume, VoxelType};
-
-/// Bytes charged per image (frame) described while scanning.
-const IMAGE_COST: u64 = 512;
 
 /// The most files of one folder scanned.
 pub const MAX_FILES: usize = 1 << 18;
@@ -95,131 +89,8 @@ pub fn files_in(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// A file's part of a scan: what is needed to read its pixels again.
-struct Scanned {
-    path: PathBuf,
-    syntax: Syntax,
-    pixels: Pixels,
-}
-
-/// What a scan of some files found.
-struct Scan {
-    files: Vec<Scanned>,
-    images: Vec<Image>,
-    /// Files that could not be read, with why.
-    skipped: Failures,
-    /// Images found, before any is left out.
-    images_found: usize,
-    /// The first file's patient fields, when asked for.
-    patient: Vec<(String, String)>,
-}
-
-/// A file scanned: what reads its pixels, its images, and its patient fields (when asked for).
-type Described = (Scanned, Vec<Image>, Vec<(String, String)>);
-
 /// Files that could not be read, each with its error.
 pub type Failures = Vec<(PathBuf, Error)>;
-
-/// Walks and parses the header of each of `paths` (in parallel), stopping at the pixel data.
-fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
-    let budget = opts.max_memory;
-    // The images' descriptions, charged as each file is described, before it is.
-    let spent = std::sync::atomic::AtomicU64::new(0);
-    let results: Vec<Result<Described>> = paths
-        .par_iter()
-        .map(|path| {
-            let part = read::read(path, budget, false)?;
-            let obj = parse(path, &part.dataset, &part.syntax)?;
-            // A file without pixels (a DICOMDIR, a report, a presentation state) has no image.
-            let images = if matches!(part.pixels, Pixels::None) {
-                Vec::new()
-            } else {
-                let format = header::pixel_format(&obj);
-                check_frames(path, &format, &part.pixels)?;
-                let cost = u64::from(format.frames).saturating_mul(IMAGE_COST);
-                let total = spent.fetch_add(cost, std::sync::atomic::Ordering::Relaxed);
-                if total.saturating_add(cost) > budget {
-                    return Err(Error::TooLarge {
-                        path: path.clone(),
-                        what: format!("the descriptions of {} frames", format.frames),
-                        needed: total.saturating_add(cost),
-                        limit: budget,
-                    });
-                }
-                header::images(&obj)
-            };
-            let patient = if opts.show_phi {
-                header::patient(&obj)
-            } else {
-                Vec::new()
-            };
-            let scanned = Scanned {
-                path: path.clone(),
-                syntax: part.syntax,
-                pixels: part.pixels,
-            };
-            Ok((scanned, images, patient))
-        })
-        .collect();
-    let mut out = Scan {
-        files: Vec::new(),
-        images: Vec::new(),
-        skipped: Vec::new(),
-        images_found: 0,
-        patient: Vec::new(),
-    };
-    for (r, path) in results.into_iter().zip(paths) {
-        match r {
-            Ok((scanned, images, patient)) => {
-                out.images_found += images.len();
-                if out.patient.is_empty() {
-                    out.patient = patient;
-                }
-                // Images refer to files by their index among the files kept.
-                let index = out.files.len();
-                out.images.extend(images.into_iter().map(|mut im| {
-                    im.file = index;
-                    im
-                }));
-                out.files.push(scanned);
-            }
-            // One file alone failing is the error, and so is the budget running out; in a
-            // folder a file that cannot be read is left out and said.
-            Err(e) if paths.len() == 1 || matches!(e, Error::TooLarge { .. }) => return Err(e),
-            Err(e) => out.skipped.push((path.clone(), e)),
-        }
-    }
-    Ok(out)
-}
-
-/// Checks the frames a header claims against the pixel data there is (native) or could be
-/// (each compressed frame is at least one 8-byte fragment header).
-fn check_frames(path: &Path, format: &PixelFormat, pixels: &Pixels) -> Result<()> {
-    let frames = u64::from(format.frames);
-    let bytes = frames.saturating_mul(format.frame_bytes());
-    match pixels {
-        Pixels::Native { len, .. } if bytes > *len => {
-            return Err(Error::Truncated {
-                path: path.to_path_buf(),
-                expected: bytes,
-                found: *len,
-            });
-        }
-        Pixels::Encapsulated => {
-            let size = std::fs::metadata(path)
-                .map_err(|e| Error::io(path, e))?
-                .len();
-            if frames.saturating_mul(8) > size {
-                return Err(Error::format(
-                    path,
-                    format!("{frames} frames claimed by a file of {size} bytes"),
-                ));
-            }
-        }
-        _ => {}
-    }
-    Ok(())
-}
 
 /// Parses a walked `dataset`, encoded as `syntax` says, with dicom-object.
 fn parse(path: &Path, dataset: &[u8], syntax: &Syntax) -> Result<InMemDicomObject> {
@@ -245,51 +116,6 @@ fn quoted(e: &dyn std::fmt::Display) -> String {
         out.push('…');
     }
     out
-}
-
-/// The series the files in `paths` hold, sorted by series number then UID; localizers and
-/// derived images are left out unless `opts` includes them.
-fn series_of(paths: &[PathBuf], opts: &LoadOptions) -> Result<(Scan, Vec<Series>, Vec<String>)> {
-    let mut scan = scan(paths, opts)?;
-    let images = std::mem::take(&mut scan.images);
-    let (series, left) = assemble::group(images, opts.include_localizers);
-    let mut notes = Vec::new();
-    let counted = |n: usize, what: &str| match n {
-        0 => None,
-        1 => Some(format!("1 {what} image")),
-        n => Some(format!("{n} {what} images")),
-    };
-    let left: Vec<String> = [
-        counted(left.localizers, "localizer"),
-        counted(left.derived, "derived"),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    if !left.is_empty() {
-        notes.push(format!("left out {}", left.join(" and ")));
-    }
-    if let Some((first, _)) = scan.skipped.first() {
-        let name = first.file_name().unwrap_or_default().to_string_lossy();
-        notes.push(match scan.skipped.len() {
-            1 => format!("left out {name}, which could not be read"),
-            n => format!("left out {n} files that could not be read ({name} and others)"),
-        });
-    }
-    Ok((scan, series, notes))
-}
-
-/// The files a path names: the file, or the DICOM files of the folder.
-fn paths_of(path: &Path) -> Result<Vec<PathBuf>> {
-    if path.is_dir() {
-        let files = files_in(path)?;
-        if files.is_empty() {
-            return Err(Error::format(path, "folder holds no DICOM files"));
-        }
-        Ok(files)
-    } else {
-        Ok(vec![path.to_path_buf()])
-    }
 }
 
 /// The series in the DICOM file or folder at `path`, as a list shows them, and the files that
@@ -396,7 +222,6 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let layout =
         assemble::layout(series, &|im| name(&scan, im)).map_err(|m| Error::format(path, m))?;
     super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
-    let first = &series.images[0];
     check_pixels(path, &scan, series, &mut notes)?;
     notes.extend(layout.notes.iter().cloned());
     let resample = opts.resample && layout.needs_resampling();
@@ -410,38 +235,12 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     check_budget(path, dims, opts.max_memory)?;
     let order = &layout.order[opts.volume];
     let voxels = if resample {
-        // The source slices and the resampled volume are held at once.
-        check_budget(path, [cols, rows, layout.slices + slices], opts.max_memory)?;
-        let planes = read_slices(&scan, series, order, layout.plane, opts.max_memory)?;
-        let mut out = voxel_buffer(path, dims, opts.max_memory)?;
-        let step = layout.spacing[2];
-        out.par_chunks_mut(cols * rows)
-            .enumerate()
-            .for_each(|(k, plane)| {
-                let depth = k as f64 * step;
-                pixels::resample_slice(
-                    &planes,
-                    &layout.depths,
-                    &layout.shifts,
-                    layout.plane,
-                    depth,
-                    plane,
-                );
-            });
-        let undone = if layout.tilt.is_some() {
-            ", the tilt undone"
-        } else {
-            ""
-        };
-        notes.push(format!(
-            "resampled to {slices} evenly spaced slices {step:.3} mm apart{undone}"
-        ));
-        out
+        let voxels =
+            voxels::resampled(path, &scan, series, &layout, order, slices, opts.max_memory)?;
+        notes.push(resampled_note(&layout, slices));
+        voxels
     } else {
-        let mut out = voxel_buffer(path, dims, opts.max_memory)?;
-        let planes: Vec<&mut [f32]> = out.chunks_mut(cols * rows).collect();
-        fill(&scan, series, order, planes, opts.max_memory)?;
-        out
+        voxels::as_they_lie(path, &scan, series, order, dims, opts.max_memory)?
     };
     let mut volume = Volume::new(dims, layout.spacing, VoxelType::F32, voxels)
         .map_err(|e| e.reached_from(path))?;
@@ -453,25 +252,47 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     if !resample {
         notes.extend(layout.problems.iter().cloned());
     }
-    let sources = order
+    Ok(Read0 {
+        volume,
+        notes,
+        sources: sources(&scan, series, order),
+        dicom: Some(described(&scan, series)),
+    })
+}
+
+/// What a load says of resampling `layout` to `slices` evenly spaced slices.
+fn resampled_note(layout: &Layout, slices: usize) -> String {
+    let step = layout.spacing[2];
+    let undone = if layout.tilt.is_some() {
+        ", the tilt undone"
+    } else {
+        ""
+    };
+    format!("resampled to {slices} evenly spaced slices {step:.3} mm apart{undone}")
+}
+
+/// The files slices `order` of `series` are read from, each once, sorted.
+fn sources(scan: &Scan, series: &Series, order: &[usize]) -> Vec<PathBuf> {
+    order
         .iter()
         .map(|&i| scan.files[series.images[i].file].path.clone())
         .collect::<std::collections::BTreeSet<_>>()
         .into_iter()
-        .collect();
-    Ok(Read0 {
-        volume,
-        notes,
-        sources,
-        dicom: Some(super::DicomSeries {
-            key: series.key.clone(),
-            number: series.number,
-            description: series.description.clone(),
-            modality: series.modality.clone(),
-            syntax: scan.files[first.file].syntax.name(),
-            patient: scan.patient.clone(),
-        }),
-    })
+        .collect()
+}
+
+/// What the volume loaded from `series` is, beyond its geometry: the series' fields, its first
+/// file's transfer syntax and (when asked for) the patient's fields.
+fn described(scan: &Scan, series: &Series) -> super::DicomSeries {
+    let first = &series.images[0];
+    super::DicomSeries {
+        key: series.key.clone(),
+        number: series.number,
+        description: series.description.clone(),
+        modality: series.modality.clone(),
+        syntax: scan.files[first.file].syntax.name(),
+        patient: scan.patient.clone(),
+    }
 }
 
 /// Fails unless the series' pixels can be read alike; notes how they are turned into values.
@@ -531,208 +352,4 @@ fn voxel_type(series: &Series, stats: &crate::volume::Stats) -> VoxelType {
         integral && tlo <= lo && hi <= thi
     })
     .unwrap_or(VoxelType::F32)
-}
-
-/// Reads the slices `order` names into planes of their own (for resampling).
-fn read_slices(
-    scan: &Scan,
-    series: &Series,
-    order: &[usize],
-    plane: [usize; 2],
-    budget: u64,
-) -> Result<Vec<Vec<f32>>> {
-    let mut planes: Vec<Vec<f32>> = vec![vec![0.0; plane[0] * plane[1]]; order.len()];
-    let refs: Vec<&mut [f32]> = planes.iter_mut().map(Vec::as_mut_slice).collect();
-    fill(scan, series, order, refs, budget)?;
-    Ok(planes)
-}
-
-/// Decodes slice `k` of `order` into `planes[k]`, file by file in parallel.
-fn fill(
-    scan: &Scan,
-    series: &Series,
-    order: &[usize],
-    planes: Vec<&mut [f32]>,
-    budget: u64,
-) -> Result<()> {
-    let mut by_file: std::collections::BTreeMap<usize, Vec<(&Image, &mut [f32])>> =
-        std::collections::BTreeMap::new();
-    for (&i, plane) in order.iter().zip(planes) {
-        let im = &series.images[i];
-        by_file.entry(im.file).or_default().push((im, plane));
-    }
-    by_file
-        .into_iter()
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .try_for_each(|(file, frames)| read_frames(&scan.files[file], frames, budget))
-}
-
-/// Decodes `frames` of one file.
-fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -> Result<()> {
-    let path = file.path.as_path();
-    let big = file.syntax.big;
-    match &file.pixels {
-        Pixels::None => Err(Error::format(path, "no pixel data")),
-        Pixels::Native { offset, len } => {
-            let mut f = File::open(path).map_err(|e| Error::io(path, e))?;
-            let size = f.metadata().map_err(|e| Error::io(path, e))?.len();
-            let mut buf = Vec::new();
-            for (im, plane) in frames {
-                let bytes = im.format.frame_bytes();
-                let start = u64::from(im.frame) * bytes;
-                let available = (*len).min(size.saturating_sub(*offset));
-                if start + bytes > available {
-                    return Err(Error::Truncated {
-                        path: path.to_path_buf(),
-                        expected: start + bytes,
-                        found: available,
-                    });
-                }
-                buf.resize(bytes as usize, 0);
-                f.seek(SeekFrom::Start(offset + start))
-                    .and_then(|_| f.read_exact(&mut buf))
-                    .map_err(|e| Error::io(path, e))?;
-                Decode::new(&im.format, big, im.rescale).frame(&buf, plane);
-            }
-            Ok(())
-        }
-        Pixels::Deflated | Pixels::Inflated(_) | Pixels::Encapsulated | Pixels::Fragments(..) => {
-            let part = read::read(path, budget, true)?;
-            match part.pixels {
-                Pixels::Inflated(data) => {
-                    for (im, plane) in frames {
-                        let bytes = im.format.frame_bytes();
-                        let start = u64::from(im.frame) * bytes;
-                        let src = data
-                            .get(start as usize..(start + bytes) as usize)
-                            .ok_or_else(|| Error::Truncated {
-                                path: path.to_path_buf(),
-                                expected: start + bytes,
-                                found: data.len() as u64,
-                            })?;
-                        Decode::new(&im.format, false, im.rescale).frame(src, plane);
-                    }
-                    Ok(())
-                }
-                Pixels::Fragments(table, fragments) => {
-                    decode_fragments(path, &part.dataset, &file.syntax, table, fragments, frames)
-                }
-                _ => Err(Error::format(path, "no pixel data")),
-            }
-        }
-    }
-}
-
-/// Decodes `frames` of encapsulated pixel data through dicom-pixeldata.
-fn decode_fragments(
-    path: &Path,
-    dataset: &[u8],
-    syntax: &Syntax,
-    table: Vec<u32>,
-    fragments: Vec<Vec<u8>>,
-    frames: Vec<(&Image, &mut [f32])>,
-) -> Result<()> {
-    let format = &frames[0].0.format;
-    check_jpeg(path, syntax, format, &fragments)?;
-    let mut obj = parse(path, dataset, syntax)?;
-    obj.put(DataElement::new(
-        tags::PIXEL_DATA,
-        VR::OB,
-        PixelFragmentSequence::new(table, fragments),
-    ));
-    let meta = FileMetaTableBuilder::new()
-        .transfer_syntax(syntax.uid.as_str())
-        .media_storage_sop_class_uid("1.2.840.10008.5.1.4.1.1.7")
-        .media_storage_sop_instance_uid("2.25.0");
-    let obj = obj
-        .with_meta(meta)
-        .map_err(|e| Error::format(path, format!("DICOM header: {}", quoted(&e))))?;
-    for (im, plane) in frames {
-        let decoded = obj.decode_pixel_data_frame(im.frame).map_err(|e| {
-            Error::format(
-                path,
-                format!(
-                    "{} pixel data: {}",
-                    read::syntax_name(&syntax.uid),
-                    quoted(&e)
-                ),
-            )
-        })?;
-        let src = decoded.frame_data(0).map_err(|e| {
-            Error::format(path, format!("decoded frame {}: {}", im.frame, quoted(&e)))
-        })?;
-        // The decoders give interleaved RGB for colour.
-        let mut f = im.format.clone();
-        f.planar = false;
-        if f.colour() {
-            f.photometric = "RGB".into();
-        }
-        Decode::new(&f, false, im.rescale).frame(src, plane);
-    }
-    Ok(())
-}
-
-/// Checks the frame size and precision each JPEG fragment states before a decoder sizes its
-/// buffers by them: larger than the image, or 12-bit extended JPEG, is an error.
-fn check_jpeg(
-    path: &Path,
-    syntax: &Syntax,
-    format: &PixelFormat,
-    fragments: &[Vec<u8>],
-) -> Result<()> {
-    if !syntax.uid.starts_with("1.2.840.10008.1.2.4.") {
-        return Ok(());
-    }
-    for fragment in fragments {
-        let Some((precision, height, width)) = jpeg_frame(fragment) else {
-            continue;
-        };
-        if syntax.uid == "1.2.840.10008.1.2.4.51" && precision > 8 {
-            return Err(Error::unsupported(
-                path,
-                format!(
-                    "transfer syntax {}: {precision}-bit extended JPEG, which the pure-Rust JPEG \
-                     decoder does not read",
-                    read::syntax_name(&syntax.uid)
-                ),
-            ));
-        }
-        if height > format.rows || width > format.cols || precision > 16 {
-            return Err(Error::format(
-                path,
-                format!(
-                    "a JPEG fragment of {width}x{height} pixels at {precision} bits in an image \
-                     of {}x{}",
-                    format.cols, format.rows
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// The precision, height and width a JPEG stream's start-of-frame marker states.
-fn jpeg_frame(data: &[u8]) -> Option<(u8, u16, u16)> {
-    let mut i = 2;
-    if !data.starts_with(&[0xFF, 0xD8]) {
-        return None;
-    }
-    while i + 4 <= data.len() {
-        if data[i] != 0xFF {
-            return None;
-        }
-        let marker = data[i + 1];
-        let len = usize::from(u16::from_be_bytes([data[i + 2], data[i + 3]]));
-        if (0xC0..=0xCF).contains(&marker) && !matches!(marker, 0xC4 | 0xC8 | 0xCC) {
-            let f = data.get(i + 4..i + 9)?;
-            return Some((
-                f[0],
-                u16::from_be_bytes([f[1], f[2]]),
-                u16::from_be_bytes([f[3], f[4]]),
-            ));
-        }
-        i += 2 + len;
-    }
-    None
 }

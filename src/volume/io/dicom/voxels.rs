@@ -1,0 +1,276 @@
+//! A series' voxels: its frames read from their files, file by file in parallel (native pixels
+//! straight from the file, deflated and compressed ones through a second walk and
+//! dicom-pixeldata), into the planes of a volume.
+
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
+
+use dicom_core::value::PixelFragmentSequence;
+use dicom_core::{DataElement, VR};
+use dicom_dictionary_std::tags;
+use dicom_object::meta::FileMetaTableBuilder;
+use dicom_pixeldata::PixelDecoder;
+use rayon::prelude::*;
+
+use super::assemble::{Layout, Series};
+use super::header::{Image, PixelFormat};
+use super::pixels::{self, Decode};
+use super::read::{self, Pixels, Syntax};
+use super::scan::{Scan, Scanned};
+use super::{parse, quoted};
+use crate::error::{Error, Result};
+use crate::volume::io::data::{check_budget, voxel_buffer};
+
+/// The voxels of slices `order` of `series` as they lie: a volume of `dims` columns, rows and
+/// slices, within `budget`.
+pub(super) fn as_they_lie(
+    path: &Path,
+    scan: &Scan,
+    series: &Series,
+    order: &[usize],
+    dims: [usize; 3],
+    budget: u64,
+) -> Result<Vec<f32>> {
+    let mut out = voxel_buffer(path, dims, budget)?;
+    let planes: Vec<&mut [f32]> = out.chunks_mut(dims[0] * dims[1]).collect();
+    fill(scan, series, order, planes, budget)?;
+    Ok(out)
+}
+
+/// The voxels of slices `order` of `series` resampled to `slices` evenly spaced along the
+/// normal of `layout` (the tilt undone), within `budget`.
+pub(super) fn resampled(
+    path: &Path,
+    scan: &Scan,
+    series: &Series,
+    layout: &Layout,
+    order: &[usize],
+    slices: usize,
+    budget: u64,
+) -> Result<Vec<f32>> {
+    let [cols, rows] = layout.plane;
+    // The source slices and the resampled volume are held at once.
+    check_budget(path, [cols, rows, layout.slices + slices], budget)?;
+    let planes = read_slices(scan, series, order, layout.plane, budget)?;
+    let mut out = voxel_buffer(path, [cols, rows, slices], budget)?;
+    let step = layout.spacing[2];
+    out.par_chunks_mut(cols * rows)
+        .enumerate()
+        .for_each(|(k, plane)| {
+            let depth = k as f64 * step;
+            pixels::resample_slice(
+                &planes,
+                &layout.depths,
+                &layout.shifts,
+                layout.plane,
+                depth,
+                plane,
+            );
+        });
+    Ok(out)
+}
+
+/// Reads the slices `order` names into planes of their own (for resampling).
+fn read_slices(
+    scan: &Scan,
+    series: &Series,
+    order: &[usize],
+    plane: [usize; 2],
+    budget: u64,
+) -> Result<Vec<Vec<f32>>> {
+    let mut planes: Vec<Vec<f32>> = vec![vec![0.0; plane[0] * plane[1]]; order.len()];
+    let refs: Vec<&mut [f32]> = planes.iter_mut().map(Vec::as_mut_slice).collect();
+    fill(scan, series, order, refs, budget)?;
+    Ok(planes)
+}
+
+/// Decodes slice `k` of `order` into `planes[k]`, file by file in parallel.
+fn fill(
+    scan: &Scan,
+    series: &Series,
+    order: &[usize],
+    planes: Vec<&mut [f32]>,
+    budget: u64,
+) -> Result<()> {
+    let mut by_file: std::collections::BTreeMap<usize, Vec<(&Image, &mut [f32])>> =
+        std::collections::BTreeMap::new();
+    for (&i, plane) in order.iter().zip(planes) {
+        let im = &series.images[i];
+        by_file.entry(im.file).or_default().push((im, plane));
+    }
+    by_file
+        .into_iter()
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .try_for_each(|(file, frames)| read_frames(&scan.files[file], frames, budget))
+}
+
+/// Decodes `frames` of one file.
+fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -> Result<()> {
+    let path = file.path.as_path();
+    let big = file.syntax.big;
+    match &file.pixels {
+        Pixels::None => Err(Error::format(path, "no pixel data")),
+        Pixels::Native { offset, len } => {
+            let mut f = File::open(path).map_err(|e| Error::io(path, e))?;
+            let size = f.metadata().map_err(|e| Error::io(path, e))?.len();
+            let mut buf = Vec::new();
+            for (im, plane) in frames {
+                let bytes = im.format.frame_bytes();
+                let start = u64::from(im.frame) * bytes;
+                let available = (*len).min(size.saturating_sub(*offset));
+                if start + bytes > available {
+                    return Err(Error::Truncated {
+                        path: path.to_path_buf(),
+                        expected: start + bytes,
+                        found: available,
+                    });
+                }
+                buf.resize(bytes as usize, 0);
+                f.seek(SeekFrom::Start(offset + start))
+                    .and_then(|_| f.read_exact(&mut buf))
+                    .map_err(|e| Error::io(path, e))?;
+                Decode::new(&im.format, big, im.rescale).frame(&buf, plane);
+            }
+            Ok(())
+        }
+        Pixels::Deflated | Pixels::Inflated(_) | Pixels::Encapsulated | Pixels::Fragments(..) => {
+            let part = read::read(path, budget, true)?;
+            match part.pixels {
+                Pixels::Inflated(data) => {
+                    for (im, plane) in frames {
+                        let bytes = im.format.frame_bytes();
+                        let start = u64::from(im.frame) * bytes;
+                        let src = data
+                            .get(start as usize..(start + bytes) as usize)
+                            .ok_or_else(|| Error::Truncated {
+                                path: path.to_path_buf(),
+                                expected: start + bytes,
+                                found: data.len() as u64,
+                            })?;
+                        Decode::new(&im.format, false, im.rescale).frame(src, plane);
+                    }
+                    Ok(())
+                }
+                Pixels::Fragments(table, fragments) => {
+                    decode_fragments(path, &part.dataset, &file.syntax, table, fragments, frames)
+                }
+                _ => Err(Error::format(path, "no pixel data")),
+            }
+        }
+    }
+}
+
+/// Decodes `frames` of encapsulated pixel data through dicom-pixeldata.
+fn decode_fragments(
+    path: &Path,
+    dataset: &[u8],
+    syntax: &Syntax,
+    table: Vec<u32>,
+    fragments: Vec<Vec<u8>>,
+    frames: Vec<(&Image, &mut [f32])>,
+) -> Result<()> {
+    let format = &frames[0].0.format;
+    check_jpeg(path, syntax, format, &fragments)?;
+    let mut obj = parse(path, dataset, syntax)?;
+    obj.put(DataElement::new(
+        tags::PIXEL_DATA,
+        VR::OB,
+        PixelFragmentSequence::new(table, fragments),
+    ));
+    let meta = FileMetaTableBuilder::new()
+        .transfer_syntax(syntax.uid.as_str())
+        .media_storage_sop_class_uid("1.2.840.10008.5.1.4.1.1.7")
+        .media_storage_sop_instance_uid("2.25.0");
+    let obj = obj
+        .with_meta(meta)
+        .map_err(|e| Error::format(path, format!("DICOM header: {}", quoted(&e))))?;
+    for (im, plane) in frames {
+        let decoded = obj.decode_pixel_data_frame(im.frame).map_err(|e| {
+            Error::format(
+                path,
+                format!(
+                    "{} pixel data: {}",
+                    read::syntax_name(&syntax.uid),
+                    quoted(&e)
+                ),
+            )
+        })?;
+        let src = decoded.frame_data(0).map_err(|e| {
+            Error::format(path, format!("decoded frame {}: {}", im.frame, quoted(&e)))
+        })?;
+        // The decoders give interleaved RGB for colour.
+        let mut f = im.format.clone();
+        f.planar = false;
+        if f.colour() {
+            f.photometric = "RGB".into();
+        }
+        Decode::new(&f, false, im.rescale).frame(src, plane);
+    }
+    Ok(())
+}
+
+/// Checks the frame size and precision each JPEG fragment states before a decoder sizes its
+/// buffers by them: larger than the image, or 12-bit extended JPEG, is an error.
+fn check_jpeg(
+    path: &Path,
+    syntax: &Syntax,
+    format: &PixelFormat,
+    fragments: &[Vec<u8>],
+) -> Result<()> {
+    if !syntax.uid.starts_with("1.2.840.10008.1.2.4.") {
+        return Ok(());
+    }
+    for fragment in fragments {
+        let Some((precision, height, width)) = jpeg_frame(fragment) else {
+            continue;
+        };
+        if syntax.uid == "1.2.840.10008.1.2.4.51" && precision > 8 {
+            return Err(Error::unsupported(
+                path,
+                format!(
+                    "transfer syntax {}: {precision}-bit extended JPEG, which the pure-Rust JPEG \
+                     decoder does not read",
+                    read::syntax_name(&syntax.uid)
+                ),
+            ));
+        }
+        if height > format.rows || width > format.cols || precision > 16 {
+            return Err(Error::format(
+                path,
+                format!(
+                    "a JPEG fragment of {width}x{height} pixels at {precision} bits in an image \
+                     of {}x{}",
+                    format.cols, format.rows
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The precision, height and width a JPEG stream's start-of-frame marker states.
+fn jpeg_frame(data: &[u8]) -> Option<(u8, u16, u16)> {
+    let mut i = 2;
+    if !data.starts_with(&[0xFF, 0xD8]) {
+        return None;
+    }
+    while i + 4 <= data.len() {
+        if data[i] != 0xFF {
+            return None;
+        }
+        let marker = data[i + 1];
+        let len = usize::from(u16::from_be_bytes([data[i + 2], data[i + 3]]));
+        if (0xC0..=0xCF).contains(&marker) && !matches!(marker, 0xC4 | 0xC8 | 0xCC) {
+            let f = data.get(i + 4..i + 9)?;
+            return Some((
+                f[0],
+                u16::from_be_bytes([f[1], f[2]]),
+                u16::from_be_bytes([f[3], f[4]]),
+            ));
+        }
+        i += 2 + len;
+    }
+    None
+}
