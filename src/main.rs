@@ -33,6 +33,7 @@ struct Cli {
 }
 
 fn main() -> ExitCode {
+    slabscope::volume::io::mapped::install_fault_handler();
     let args = Cli::parse();
     let result = match args.command {
         Some(command) => cli::run(command),

@@ -1,4 +1,4 @@
-//! The reports other programs read: the JSON object of `analyze --json` (DESIGN.md §3), the slab
+//! The reports other programs read: the JSON object of `analyze --json` (docs/design.md §3), the slab
 //! boundaries for renderers, what `info --json` says of a volume or a folder, and the curves as
 //! CSV. Built from library results only, so that the
 //! CLI, the TUI's export and triage print the same thing. Every JSON object carries
@@ -19,7 +19,7 @@ use crate::volume::io::{DicomSeries, Loaded};
 use crate::volume::{Volume, VoxelType};
 
 /// The version of the JSON contract.
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// The object `analyze --json` prints.
 #[derive(Clone, Debug, Serialize)]
@@ -37,6 +37,8 @@ pub struct AnalysisReport {
     /// The voxel-to-world transform: `affine`, `orientation`, `orthogonal`, `world_bounds`.
     #[serde(flatten)]
     pub geometry: GeometryReport,
+    /// The pyramid level the analysis was computed on (level 0: every voxel).
+    pub resolution: ResolutionReport,
     /// The sampling and view-search parameters, spacings resolved to millimetres.
     pub params: ViewParams,
     /// Every axis of the view search, lowest entropy rate first (absent without a search).
@@ -92,6 +94,7 @@ impl AnalysisReport {
             spacing: volume.spacing(),
             range: [s.min, s.max],
             geometry: GeometryReport::of(volume),
+            resolution: ResolutionReport::of(volume),
             params,
             views: views.map(|v| v.views.clone()),
             best_axis: views.map(|v| v.best().axis),
@@ -103,6 +106,40 @@ impl AnalysisReport {
             notes: analysis.notes.clone(),
             partition: analysis.partition.clone(),
         })
+    }
+}
+
+impl AnalysisReport {
+    /// This report of an analysis of `level`, a pyramid level of the volume it describes (whose
+    /// dimensions, spacing, range and geometry it keeps): the slab indices are `level`'s slices.
+    #[must_use]
+    pub fn computed_on(mut self, level: &Volume) -> Self {
+        self.resolution = ResolutionReport::of(level);
+        self
+    }
+}
+
+/// The pyramid level an analysis was computed on.
+#[derive(Clone, Debug, Serialize)]
+pub struct ResolutionReport {
+    /// The pyramid level: 0 is every voxel; each level halves every axis.
+    pub pyramid_level: usize,
+    /// Per axis, how many voxels of the file one voxel of the level spans.
+    pub factor: [usize; 3],
+    /// The level's dimensions.
+    pub dims: [usize; 3],
+}
+
+impl ResolutionReport {
+    /// The level `volume` is.
+    #[must_use]
+    pub fn of(volume: &Volume) -> Self {
+        let level = volume.level();
+        Self {
+            pyramid_level: level.index,
+            factor: level.factor,
+            dims: volume.dims(),
+        }
     }
 }
 
@@ -160,8 +197,15 @@ pub struct InfoReport {
     pub voxels: usize,
     /// Voxels that are NaN or infinite.
     pub missing: usize,
-    /// Bytes the volume takes in memory (as f32).
+    /// The type the voxels are held in: the file's for integers of at most 16 bits that it
+    /// does not scale, else `f32`.
+    pub held_type: VoxelType,
+    /// Bytes the voxels take in memory as held (0 when they are read in place from the file).
     pub memory_bytes: u64,
+    /// Bytes of the file read in place for the voxels, mapped, not copied (0 when in memory).
+    pub mapped_bytes: u64,
+    /// Bytes the voxels take as the file stores them.
+    pub stored_bytes: u64,
     /// The voxel-to-world transform: `affine`, `orientation`, `orthogonal`, `world_bounds`.
     #[serde(flatten)]
     pub geometry: GeometryReport,
@@ -207,7 +251,10 @@ impl InfoReport {
             mean: finite.then_some(s.mean),
             voxels: v.len(),
             missing: s.missing,
+            held_type: v.data().held(),
             memory_bytes: v.memory_bytes(),
+            mapped_bytes: v.mapped_bytes(),
+            stored_bytes: v.stored_bytes(),
             geometry: GeometryReport::of(v),
             histogram: v.histogram(bins)?,
             notes: loaded.notes.clone(),
@@ -455,7 +502,9 @@ mod tests {
                 ".dims",
                 ".file",
                 ".format",
+                ".held_type",
                 ".histogram",
+                ".mapped_bytes",
                 ".mean",
                 ".memory_bytes",
                 ".missing",
@@ -465,6 +514,7 @@ mod tests {
                 ".range",
                 ".schema_version",
                 ".spacing",
+                ".stored_bytes",
                 ".type",
                 ".voxels",
                 ".world_bounds",

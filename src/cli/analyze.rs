@@ -1,5 +1,5 @@
 //! `slabscope analyze FILE`: the view search (and, with the partition, the slabs), as a table or
-//! as the JSON object of DESIGN.md §3.
+//! as the JSON object of docs/design.md §3.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use slabscope::report::curves_csv;
+use slabscope::volume::Resolution;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
 use slabscope::{AnalysisReport, SlabsReport, label_volume};
 
@@ -23,6 +24,11 @@ pub struct AnalyzeArgs {
     /// Also run the view search when --axis names an axis.
     #[arg(long)]
     pub views: bool,
+    /// The pyramid level to compute on: full (every voxel, the paper's method), auto (the
+    /// coarsest level with at least 128 voxels along every axis), or a level number K (each
+    /// level halves every axis, averaging 2x2x2 blocks).
+    #[arg(long, value_name = "auto|full|K", default_value = "full")]
+    pub resolution: Resolution,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the slab index of every voxel as a label volume in the source's world geometry:
@@ -54,10 +60,16 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     super::check_outputs(&outputs, std::slice::from_ref(&args.file), args.force)?;
     let loaded = super::load(&args.file, &args.load)?;
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
-    let volume = &loaded.volume;
+    let full = &loaded.volume;
+    let level = args.resolution.level(full.dims(), full.coarser_levels())?;
+    let level = full.coarser(level);
+    let volume = level.as_ref();
     let name = args.file.display().to_string();
     let params = args.analysis.params(args.views);
-    let analysis = args.analysis.analyze(&name, volume, args.views)?;
+    let mut analysis = args.analysis.analyze(&name, volume, args.views)?;
+    if let Some(note) = resolution_note(volume) {
+        analysis.notes.insert(0, note);
+    }
     let part = &analysis.partition;
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
@@ -74,7 +86,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         staged.push(stage(path, |mut f| f.write_all(text.as_bytes()))?);
     }
     let report = if args.json {
-        Some(AnalysisReport::new(&name, volume, &params.view, &analysis)?)
+        Some(AnalysisReport::new(&name, full, &params.view, &analysis)?.computed_on(volume))
     } else {
         None
     };
@@ -86,4 +98,18 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         None => super::text::print_analysis(&name, volume, &analysis),
     }
     Ok(())
+}
+
+/// What an analysis on a pyramid level says of it; nothing at full resolution.
+fn resolution_note(level: &slabscope::Volume) -> Option<String> {
+    let l = level.level();
+    (l.index > 0).then(|| {
+        format!(
+            "computed on pyramid level {} ({}, {} voxels of the file a voxel): slab indices are \
+             its slices",
+            l.index,
+            slabscope::volume::dims_string(level.dims()),
+            slabscope::volume::dims_string(l.factor),
+        )
+    })
 }

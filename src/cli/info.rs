@@ -117,7 +117,19 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     if s.missing > 0 {
         outln!("missing     {} NaN/Inf voxels", s.missing);
     }
-    outln!("memory      {} as f32", human_bytes(v.memory_bytes()));
+    if v.mapped_bytes() > 0 {
+        outln!(
+            "memory      none: {} of {} read in place from the file (mapped)",
+            human_bytes(v.mapped_bytes()),
+            v.data().held()
+        );
+    } else {
+        outln!(
+            "memory      {} as {}",
+            human_bytes(v.memory_bytes()),
+            v.data().held()
+        );
+    }
     outln!(
         "histogram   {}  ({HISTOGRAM_BINS} bins, log scale)",
         sparkline(hist)

@@ -95,7 +95,19 @@ pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
     for note in &loaded.notes {
         eprintln!("slabscope: note: {}: {note}", path.display());
     }
+    test_delay();
     Ok(loaded)
+}
+
+/// With `SLABSCOPE_TEST_DELAY_MS` set, waits that long after a load: a test hook, so that a test
+/// can change the file between the load and the work (a mapped file cut short).
+fn test_delay() {
+    if let Some(ms) = std::env::var("SLABSCOPE_TEST_DELAY_MS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
 }
 
 /// The picture format the name of `out` asks for, after checking, before any work, that `out`

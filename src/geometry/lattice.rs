@@ -1,4 +1,4 @@
-//! The ray lattice of DESIGN.md §2 (paper §4): parallel rays a ray spacing apart along an axis,
+//! The ray lattice of docs/design.md §2 (paper §4): parallel rays a ray spacing apart along an axis,
 //! samples a sample spacing apart along them, counted inside the box of the voxel centres. The
 //! view search walks it ray by ray; oblique slice stacks resample the volume on it. Positions are
 //! also kept in 32.32 fixed point, so that a walk advances by exact integer additions.

@@ -1,6 +1,6 @@
 //! Geometry in one place: vectors in physical voxel space (millimetres, voxel (0,0,0) at the
 //! origin), the [`Axis`] type that every front end parses and prints, the orthonormal frame of
-//! an axis that the camera builds on, and the ray lattice on that frame (DESIGN.md §2). It
+//! an axis that the camera builds on, and the ray lattice on that frame (docs/design.md §2). It
 //! imports nothing of the crate: what it rejects it says with its own [`InvalidParameter`].
 
 pub mod lattice;
@@ -86,7 +86,7 @@ pub fn canonical(d: [f64; 3]) -> [f64; 3] {
     }
 }
 
-/// The orthonormal frame `(d, u, v)` of DESIGN.md §2: `e` is the coordinate axis where `|d|` has
+/// The orthonormal frame `(d, u, v)` of docs/design.md §2: `e` is the coordinate axis where `|d|` has
 /// its smallest component (the first on ties), `u = normalize(e - (e·d) d)`, `v = d × u`.
 pub fn frame(d: [f64; 3]) -> Result<([f64; 3], [f64; 3], [f64; 3])> {
     let d = normalize(d).ok_or_else(|| {
@@ -112,7 +112,7 @@ pub fn min_spacing(spacing: [f64; 3]) -> f64 {
 }
 
 /// A direction in physical voxel space: unit length and canonical (of `d` and `-d`, the one whose
-/// first non-zero component is positive), as DESIGN.md §2 reports axes.
+/// first non-zero component is positive), as docs/design.md §2 reports axes.
 ///
 /// Parsed from `x`, `y`, `z` or `DX,DY,DZ`; printed as `[ 0.526,-0.851, 0.000]` (the precision
 /// sets the decimals, three by default), with [`name`](Self::name) giving `x`, `y` or `z` for

@@ -1,4 +1,4 @@
-//! World coordinates (DESIGN.md §2): a volume's voxel-to-world transform, a 4×4 matrix from voxel
+//! World coordinates (docs/design.md §2): a volume's voxel-to-world transform, a 4×4 matrix from voxel
 //! indices `(i, j, k)` to RAS+ millimetres (x to the Right, y to the Anterior, z to the Superior),
 //! as NIfTI and nibabel use. Formats in LPS (NRRD's `space`, DICOM, MetaImage) are converted by
 //! negating x and y. A transform the file did not state (raw, TIFF, `.dat`, NIfTI with both codes

@@ -47,7 +47,7 @@ impl Default for PartitionParams {
     }
 }
 
-/// One step taken, as DESIGN.md §3 writes it.
+/// One step taken, as docs/design.md §3 writes it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum Step {

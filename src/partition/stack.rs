@@ -1,4 +1,4 @@
-//! Slice stacks along an axis (DESIGN.md §2): the voxel planes for a coordinate axis, planes of the
+//! Slice stacks along an axis (docs/design.md §2): the voxel planes for a coordinate axis, planes of the
 //! grid resampled on the ray lattice for an oblique one. Stored pixel-major: each pixel's column
 //! of quantized symbols across the slices is contiguous, over the slices where it is valid.
 //! How a volume is cut into a stack is `cut`; this is the stack and what it is asked.

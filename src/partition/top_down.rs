@@ -102,7 +102,7 @@ impl Gains {
 }
 
 /// A slab waiting to be split, with its best cut: ordered by gain, then (for ties) by the lowest
-/// cut, so that a max-heap pops the split DESIGN §2 takes next.
+/// cut, so that a max-heap pops the split docs/design.md §2 takes next.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Candidate {
     gain: f64,

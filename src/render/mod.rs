@@ -164,7 +164,7 @@ impl<'a> Renderer<'a> {
             volume,
             bricks: Bricks::new(volume),
             histogram: volume.histogram(HISTOGRAM_BINS)?,
-            labels: label_values(volume),
+            labels: volume.labels().map(<[_]>::to_vec),
         })
     }
 
@@ -217,25 +217,29 @@ impl<'a> Renderer<'a> {
         let extent: [f64; 3] = std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m]);
         let content = self.bricks.content(&transparent, spacing, extent);
         let camera = self.camera(layout, params, extent, &content)?;
-        let frame = Frame {
-            it: Interpolator::new(self.volume),
-            bricks: &self.bricks,
-            transparent,
-            labels: transfer.is_labels(),
-            transfer,
-            layout,
-            exposed: exposed_cuts(layout, params),
-            params,
-            spacing,
-            extent,
-            step,
-        };
-        let (pixmap, depth) = frame.cast(&camera, params, monitor)?;
+        let (labels, window) = (transfer.is_labels(), transfer.window());
+        let exposed = exposed_cuts(layout, params);
+        let (pixmap, depth) = crate::volume::with_voxels!(self.volume.data(), |data| {
+            Frame {
+                it: Interpolator::over(data, dims),
+                bricks: &self.bricks,
+                transparent,
+                labels,
+                transfer,
+                layout,
+                exposed,
+                params,
+                spacing,
+                extent,
+                step,
+            }
+            .cast(&camera, params, monitor)
+        })?;
         let mut image = Image {
             pixmap,
             camera,
             depth,
-            window: frame.transfer.window(),
+            window,
         };
         self.draw_overlays(&mut image, layout, &content, params, step);
         Ok(image)

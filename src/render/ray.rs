@@ -9,8 +9,8 @@ use super::{Camera, Layout, Mode, Placement, RenderParams, Transfer};
 use crate::error::{Error, Result};
 use crate::geometry::dot;
 use crate::progress::Monitor;
-use crate::volume::Volume;
 use crate::volume::interpolate::Interpolator;
+use crate::volume::{Volume, Voxel};
 
 /// Voxels a side of a brick of the empty-space grid.
 const BRICK: usize = 8;
@@ -33,9 +33,13 @@ pub(super) struct Bricks {
 
 impl Bricks {
     pub(super) fn new(volume: &Volume) -> Self {
-        let dims = volume.dims();
+        crate::volume::with_voxels!(volume.data(), |data| Self::of(data, volume.dims()))
+    }
+
+    /// The bricks of voxels `data` of dimensions `dims`.
+    fn of<T: Voxel>(data: &[T], dims: [usize; 3]) -> Self {
         let count = dims.map(|n| n.saturating_sub(1).max(1).div_ceil(BRICK));
-        let it = Interpolator::new(volume);
+        let it = Interpolator::over(data, dims);
         let cells: Vec<(f32, f32)> = (0..count[0] * count[1] * count[2])
             .into_par_iter()
             .map(|b| {
@@ -128,8 +132,8 @@ impl Bricks {
 }
 
 /// Everything the per-pixel loop reads.
-pub(super) struct Frame<'a> {
-    pub(super) it: Interpolator<'a>,
+pub(super) struct Frame<'a, T> {
+    pub(super) it: Interpolator<'a, T>,
     pub(super) bricks: &'a Bricks,
     pub(super) transparent: Vec<bool>,
     pub(super) transfer: Transfer,
@@ -172,7 +176,7 @@ impl Ray {
     }
 }
 
-impl Frame<'_> {
+impl<T: Voxel> Frame<'_, T> {
     /// The image of this frame through `camera`, on `params`' background, with each pixel's
     /// depth: rows in parallel, one progress unit per row to `monitor`.
     pub(super) fn cast(
@@ -447,9 +451,9 @@ impl Frame<'_> {
 /// The value at voxel index point `q`: interpolated, or with `labels` the nearest voxel's
 /// (interpolated labels are not labels).
 #[inline]
-pub(crate) fn sample(it: &Interpolator, q: [f64; 3], labels: bool) -> f32 {
+pub(crate) fn sample<T: Voxel>(it: &Interpolator<T>, q: [f64; 3], labels: bool) -> f32 {
     if labels {
-        it.data[it.nearest(q)]
+        it.at(it.nearest(q))
     } else {
         it.sample(q)
     }

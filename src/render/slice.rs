@@ -218,31 +218,33 @@ pub fn slice(
         std::array::from_fn(|m| position * n[m] + u0 * frame.right[m] + v1 * frame.up[m]);
     let mut pixmap = Pixmap::new(w, h)
         .ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "an image that fits"))?;
-    let it = Interpolator::new(volume);
     let labels = transfer.is_labels();
     let bg = params.background;
-    pixmap
-        .data_mut()
-        .par_chunks_mut(w as usize * 4)
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (x, px) in row.chunks_mut(4).enumerate() {
-                let p = image_point(&corner, &frame, pixel, x as f64, y as f64);
-                let inside = (0..3).all(|m| p[m] >= -1e-6 && p[m] <= extent[m] + 1e-6);
-                let colour = inside.then(|| {
-                    let q: [f64; 3] =
-                        std::array::from_fn(|m| p[m].clamp(0.0, extent[m]) / spacing[m]);
-                    let v = sample(&it, q, labels);
-                    if v.is_nan() {
-                        return bg;
-                    }
-                    let c = transfer.grey(v);
-                    c.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
-                });
-                let c = colour.unwrap_or(bg);
-                px.copy_from_slice(&[c[0], c[1], c[2], 255]);
-            }
-        });
+    crate::volume::with_voxels!(volume.data(), |data| {
+        let it = Interpolator::over(data, volume.dims());
+        pixmap
+            .data_mut()
+            .par_chunks_mut(w as usize * 4)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, px) in row.chunks_mut(4).enumerate() {
+                    let p = image_point(&corner, &frame, pixel, x as f64, y as f64);
+                    let inside = (0..3).all(|m| p[m] >= -1e-6 && p[m] <= extent[m] + 1e-6);
+                    let colour = inside.then(|| {
+                        let q: [f64; 3] =
+                            std::array::from_fn(|m| p[m].clamp(0.0, extent[m]) / spacing[m]);
+                        let v = sample(&it, q, labels);
+                        if v.is_nan() {
+                            return bg;
+                        }
+                        let c = transfer.grey(v);
+                        c.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+                    });
+                    let c = colour.unwrap_or(bg);
+                    px.copy_from_slice(&[c[0], c[1], c[2], 255]);
+                }
+            });
+    });
     let mut image = SliceImage {
         pixmap,
         frame,

@@ -1,5 +1,5 @@
 //! The most structured view (paper §3.1 and §4): the entropy rate of every axis of the viewpoint
-//! sphere, ranked by its mean over lattice phases (DESIGN §2: the paper's lattice favours the
+//! sphere, ranked by its mean over lattice phases (docs/design.md §2: the paper's lattice favours the
 //! coordinate axes), with the axes that cannot be told from the best named as contenders, and
 //! optionally refined around the best.
 
@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::geometry::lattice::{Lattice, SamplingParams};
 use crate::geometry::{canonical, dot, normalize};
 use crate::progress::Monitor;
-use crate::volume::Volume;
+use crate::volume::{Volume, Voxel};
 
 /// The lattice phases averaged by default, the paper's among them.
 pub const DEFAULT_PHASES: usize = 8;
@@ -102,7 +102,7 @@ pub enum RankedBy {
 }
 
 /// An axis that cannot be told from the best: its mean lies within two standard errors of the
-/// difference (DESIGN §2).
+/// difference (docs/design.md §2).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Contender {
     /// The canonical axis.
@@ -223,13 +223,13 @@ fn phase(seed: u64, n: usize) -> [f64; 3] {
 }
 
 /// Everything one search needs to evaluate an axis.
-struct Evaluator<'a> {
+struct Evaluator<'a, T> {
     volume: &'a Volume,
-    sampler: BinSampler<'a>,
+    sampler: BinSampler<'a, T>,
     params: ViewParams,
 }
 
-impl Evaluator<'_> {
+impl<T: Voxel> Evaluator<'_, T> {
     fn lattice(&self, axis: [f64; 3], n: usize) -> Result<Lattice> {
         Ok(Lattice::new(
             self.volume.dims(),
@@ -305,7 +305,19 @@ impl Evaluator<'_> {
 /// sphere's order). Fails with [`Error::Cancelled`] when the monitor's flag is raised.
 pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result<ViewSearch> {
     let params = resolve(volume, params)?;
-    let sampler = BinSampler::new(volume, volume.quantizer(params.sampling.bins)?);
+    let q = volume.quantizer(params.sampling.bins)?;
+    crate::volume::with_voxels!(volume.data(), |data| {
+        search_in(BinSampler::over(data, volume, q), volume, params, monitor)
+    })
+}
+
+/// [`search`] with the sampler of `volume`'s voxels, in their own type.
+fn search_in<T: Voxel>(
+    sampler: BinSampler<'_, T>,
+    volume: &Volume,
+    params: ViewParams,
+    monitor: &Monitor,
+) -> Result<ViewSearch> {
     let eval = Evaluator {
         volume,
         sampler,

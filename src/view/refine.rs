@@ -7,6 +7,7 @@ use super::{AxisEntropy, Evaluator, icosphere, score};
 use crate::error::Result;
 use crate::geometry::frame;
 use crate::progress::Monitor;
+use crate::volume::Voxel;
 
 /// How many of the best sphere axes [`refine`] starts from.
 const REFINE_SEEDS: usize = 3;
@@ -15,8 +16,8 @@ const REFINE_STOP_DEGREES: f64 = 1.0;
 
 /// A pattern search on the sphere from each of the best few axes: try the eight neighbours at
 /// the current angular step, move to a better one or halve the step, until the step is below 1°.
-pub(super) fn refine(
-    eval: &Evaluator,
+pub(super) fn refine<T: Voxel>(
+    eval: &Evaluator<T>,
     views: &[AxisEntropy],
     monitor: &Monitor,
 ) -> Result<AxisEntropy> {

@@ -1,11 +1,12 @@
-//! The background of a volume (beyond the paper, DESIGN §2): what lies around the object, left out
+//! The background of a volume (beyond the paper, docs/design.md §2): what lies around the object, left out
 //! of slab histograms so that slabs are not spent on air. By default it is found: the region
 //! connected to the volume's border at or below a threshold estimated from the border voxels, so
 //! that dark cavities inside the object (lungs, airways, ventricles) stay in.
 
+use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::volume::Volume;
+use crate::volume::{Volume, Voxel};
 
 /// How the background is chosen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -56,7 +57,9 @@ impl Background {
         match rule {
             BackgroundRule::None => Self::none(),
             BackgroundRule::Below(t) => {
-                let n = volume.voxels().iter().filter(|&&v| v <= t).count();
+                let n = crate::volume::with_voxels!(volume.data(), |v| {
+                    v.par_iter().filter(|&&v| v.to_f32() <= t).count()
+                });
                 Self {
                     rule,
                     value: Some(t),
@@ -100,18 +103,21 @@ impl Background {
 
 /// The voxels on the volume's six faces, finite ones only.
 fn border_values(volume: &Volume) -> Vec<f32> {
-    let [nx, ny, nz] = volume.dims();
-    let v = volume.voxels();
+    crate::volume::with_voxels!(volume.data(), |v| border_values_of(v, volume.dims()))
+}
+
+/// [`border_values`] of voxels `v` of dimensions `dims`.
+fn border_values_of<T: Voxel>(v: &[T], [nx, ny, nz]: [usize; 3]) -> Vec<f32> {
     let mut out = Vec::new();
     for z in 0..nz {
         for y in 0..ny {
             let edge_zy = z == 0 || z + 1 == nz || y == 0 || y + 1 == ny;
             let row = (z * ny + y) * nx;
             if edge_zy {
-                out.extend_from_slice(&v[row..row + nx]);
+                out.extend(v[row..row + nx].iter().map(|x| x.to_f32()));
             } else {
-                out.push(v[row]);
-                out.push(v[row + nx - 1]);
+                out.push(v[row].to_f32());
+                out.push(v[row + nx - 1].to_f32());
             }
         }
     }
@@ -146,12 +152,16 @@ fn median_of(values: &mut [f32]) -> f32 {
 /// The voxels at or below `t` connected (6-neighbours) to a border voxel at or below `t`, as a
 /// bit mask, with their count. A scanline fill: runs along x, a stack of seeds, no recursion.
 fn connected_below(volume: &Volume, t: f32) -> (Vec<u64>, usize) {
-    let [nx, ny, nz] = volume.dims();
-    let v = volume.voxels();
+    crate::volume::with_voxels!(volume.data(), |v| connected_below_of(v, volume.dims(), t))
+}
+
+/// [`connected_below`] in voxels `v` of dimensions `dims`.
+fn connected_below_of<T: Voxel>(v: &[T], [nx, ny, nz]: [usize; 3], t: f32) -> (Vec<u64>, usize) {
+    let below = |i: usize| v[i].to_f32() <= t;
     let mut mask = vec![0u64; v.len().div_ceil(64)];
     let set = |mask: &mut Vec<u64>, i: usize| mask[i / 64] |= 1 << (i % 64);
     let get = |mask: &Vec<u64>, i: usize| mask[i / 64] >> (i % 64) & 1 == 1;
-    let candidate = |mask: &Vec<u64>, i: usize| v[i] <= t && !get(mask, i);
+    let candidate = |mask: &Vec<u64>, i: usize| below(i) && !get(mask, i);
     let mut stack: Vec<usize> = Vec::new();
     let mut count = 0;
     // Seeds: every border voxel at or below t.
@@ -160,9 +170,9 @@ fn connected_below(volume: &Volume, t: f32) -> (Vec<u64>, usize) {
             let row = (z * ny + y) * nx;
             let edge = z == 0 || z + 1 == nz || y == 0 || y + 1 == ny;
             if edge {
-                stack.extend((row..row + nx).filter(|&i| v[i] <= t));
+                stack.extend((row..row + nx).filter(|&i| below(i)));
             } else {
-                stack.extend([row, row + nx - 1].into_iter().filter(|&i| v[i] <= t));
+                stack.extend([row, row + nx - 1].into_iter().filter(|&i| below(i)));
             }
         }
     }

@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::{Quantizer, Volume};
+use super::{Quantizer, Volume, Voxel};
 
 /// Voxels per parallel task.
 const CHUNK: usize = 1 << 16;
@@ -22,18 +22,23 @@ pub const MIXED: u8 = u8::MAX;
 /// Returns the map and, per voxel, the bin it safely lies in or [`MIXED`] (near a bin edge, or
 /// missing): samples on the voxel grid read that, and compute only the [`MIXED`] ones.
 pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
-    let s = volume.stats();
+    crate::volume::with_voxels!(volume.data(), |voxels| cell_map_of(voxels, volume, q))
+}
+
+/// [`cell_map`] over `voxels`, the voxels of `volume` in their own type.
+fn cell_map_of<T: Voxel>(voxels: &[T], volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
     let (scale, margin) = scale_and_margin(volume, q);
     let last = (q.bins() - 1) as f64;
-    let min = f64::from(s.min);
+    // The quantizer's range: the volume's own, or for a pyramid level that of level 0.
+    let (min, _, _) = q.formula();
     // 2^52: adding it to a number in 0..2^51 leaves that number rounded to a whole one in the
     // low bits of the sum.
     let whole = 2f64.powi(52);
     // Without branches (`&` and `|`, not `&&` and `||`), so that the compiler can work on
     // several voxels at once.
     #[allow(clippy::needless_bitwise_bool)]
-    let safe_bin = |v: f32| -> u8 {
-        let t = (f64::from(v) - min) * scale;
+    let safe_bin = |v: T| -> u8 {
+        let t = (f64::from(v.to_f32()) - min) * scale;
         // The bin is ⌊t⌋ clamped to 0..B - 1: c rounded down. A NaN voxel gives 0 here, and is
         // marked below.
         let c = if t > 0.0 { t } else { 0.0 };
@@ -50,7 +55,6 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
             MIXED
         }
     };
-    let voxels = volume.voxels();
     let mut bins: Vec<u8> = vec![0; voxels.len()];
     bins.par_chunks_mut(CHUNK)
         .zip(voxels.par_chunks(CHUNK))
@@ -93,7 +97,7 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
 /// corner magnitude, so 16 ulps in bin units.
 fn scale_and_margin(volume: &Volume, q: &Quantizer) -> (f64, f64) {
     let s = volume.stats();
-    let span = f64::from(s.max) - f64::from(s.min);
+    let (_, span, _) = q.formula();
     let scale = if span > 0.0 {
         q.bins() as f64 / span
     } else {

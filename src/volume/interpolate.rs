@@ -1,12 +1,13 @@
 //! Trilinear interpolation of a volume at voxel index coordinates: the value between voxel
 //! centres that the view search's rays, oblique slices and the renderer sample.
 
-use crate::volume::Volume;
+use crate::volume::{Volume, Voxel};
 
-/// Trilinear interpolation of a volume at voxel index coordinates.
+/// Trilinear interpolation of a volume at voxel index coordinates, reading voxels of type `T`
+/// and widening each corner to f32 (exactly), so every type gives the f32 path's values.
 #[derive(Clone, Copy)]
-pub struct Interpolator<'a> {
-    pub(crate) data: &'a [f32],
+pub struct Interpolator<'a, T = f32> {
+    pub(crate) data: &'a [T],
     pub(crate) stride: [usize; 3],
     /// Per axis: the stride to the next voxel (0 for a single-voxel axis).
     pub(crate) next: [usize; 3],
@@ -14,17 +15,33 @@ pub struct Interpolator<'a> {
     pub(crate) last: [usize; 3],
 }
 
-impl<'a> Interpolator<'a> {
-    /// An interpolator over `volume`.
+impl<'a> Interpolator<'a, f32> {
+    /// An interpolator over a volume held as f32.
+    ///
+    /// # Panics
+    /// When the volume's voxels are held in another type: use [`Interpolator::over`].
     pub fn new(volume: &'a Volume) -> Self {
-        let dims = volume.dims();
+        Self::over(volume.voxels(), volume.dims())
+    }
+}
+
+impl<'a, T: Voxel> Interpolator<'a, T> {
+    /// An interpolator over `data`, voxels of dimensions `dims` in x-fastest order.
+    pub fn over(data: &'a [T], dims: [usize; 3]) -> Self {
+        debug_assert_eq!(data.len(), dims.iter().product::<usize>());
         let stride = [1, dims[0], dims[0] * dims[1]];
         Self {
-            data: volume.voxels(),
+            data,
             stride,
             next: std::array::from_fn(|m| if dims[m] > 1 { stride[m] } else { 0 }),
             last: dims.map(|n| n.saturating_sub(2)),
         }
+    }
+
+    /// The corner at offset `at` from the lower one of the cell at `base`, as f32.
+    #[inline]
+    fn corner(c: &[T], at: usize) -> f32 {
+        c[at].to_f32()
     }
 
     /// The value at `p`, which must lie inside the volume up to rounding (lattice samples do);
@@ -56,11 +73,12 @@ impl<'a> Interpolator<'a> {
     pub(crate) fn interpolate(&self, base: usize, f: [f32; 3]) -> f32 {
         let [x1, y1, z1] = self.next;
         let c = &self.data[base..=base + x1 + y1 + z1];
+        let k = |at: usize| Self::corner(c, at);
         let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
-        let c00 = lerp(c[0], c[x1], f[0]);
-        let c10 = lerp(c[y1], c[y1 + x1], f[0]);
-        let c01 = lerp(c[z1], c[z1 + x1], f[0]);
-        let c11 = lerp(c[z1 + y1], c[z1 + y1 + x1], f[0]);
+        let c00 = lerp(k(0), k(x1), f[0]);
+        let c10 = lerp(k(y1), k(y1 + x1), f[0]);
+        let c01 = lerp(k(z1), k(z1 + x1), f[0]);
+        let c11 = lerp(k(z1 + y1), k(z1 + y1 + x1), f[0]);
         lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
     }
 
@@ -71,9 +89,10 @@ impl<'a> Interpolator<'a> {
         let (base, f) = self.cell(p);
         let [x1, y1, z1] = self.next;
         let c = &self.data[base..=base + x1 + y1 + z1];
+        let k = |at: usize| Self::corner(c, at);
         let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
-        let (c000, c100, c010, c110) = (c[0], c[x1], c[y1], c[y1 + x1]);
-        let (c001, c101, c011, c111) = (c[z1], c[z1 + x1], c[z1 + y1], c[z1 + y1 + x1]);
+        let (c000, c100, c010, c110) = (k(0), k(x1), k(y1), k(y1 + x1));
+        let (c001, c101, c011, c111) = (k(z1), k(z1 + x1), k(z1 + y1), k(z1 + y1 + x1));
         let c00 = lerp(c000, c100, f[0]);
         let c10 = lerp(c010, c110, f[0]);
         let c01 = lerp(c001, c101, f[0]);
@@ -105,7 +124,13 @@ impl<'a> Interpolator<'a> {
     /// The voxel at integer index coordinates.
     #[inline]
     pub fn voxel(&self, x: usize, y: usize, z: usize) -> f32 {
-        self.data[x * self.stride[0] + y * self.stride[1] + z * self.stride[2]]
+        self.data[x * self.stride[0] + y * self.stride[1] + z * self.stride[2]].to_f32()
+    }
+
+    /// The voxel at linear index `i`, as f32.
+    #[inline]
+    pub fn at(&self, i: usize) -> f32 {
+        self.data[i].to_f32()
     }
 }
 

@@ -1,18 +1,27 @@
-//! The volume: f32 voxels with x fastest, spacing in millimetres, statistics and quantization.
+//! The volume: voxels in their own type (see [`voxels`]) with x fastest, spacing in millimetres,
+//! statistics and quantization.
 
 pub mod background;
 pub mod cells;
 pub mod interpolate;
 pub mod io;
+pub mod labels;
 pub mod phantom;
+pub mod pyramid;
 mod quantize;
 mod voxel;
+pub mod voxels;
 
-use ndarray::{Array3, ArrayView3, ShapeBuilder};
+use std::sync::{Arc, OnceLock};
+
+use ndarray::{ArrayView3, ShapeBuilder};
 use rayon::prelude::*;
 
+pub use pyramid::Resolution;
 pub use quantize::Quantizer;
 pub use voxel::{Endian, VoxelType};
+pub(crate) use voxels::with_voxels;
+pub use voxels::{Voxel, VoxelQuantizer, Voxels};
 
 use crate::error::{Error, Result};
 pub use crate::geometry::MAX_SPACING_RATIO;
@@ -33,21 +42,46 @@ pub struct Stats {
     pub missing: usize,
 }
 
-/// A scalar volume: voxels as f32, x fastest in memory, with physical spacing.
+/// A scalar volume: voxels in the type they are held in ([`Voxels`]: integers of at most 16 bits
+/// as stored, everything else as f32), x fastest in memory, with physical spacing.
 ///
-/// Voxels that were NaN or infinite in the file are stored as NaN and count as missing: they are
+/// Voxels that were NaN or infinite in the file are held as NaN and count as missing: they are
 /// left out of statistics, histograms and every measure.
 #[derive(Clone, Debug)]
 pub struct Volume {
-    data: Array3<f32>,
+    data: Voxels,
+    dims: [usize; 3],
     spacing: [f64; 3],
     voxel_type: VoxelType,
     stats: Stats,
     transform: WorldTransform,
+    /// Where this volume sits in its pyramid (level 0 for a volume read from a file).
+    level: Level,
+    /// The distinct values with their counts when this is a label volume, found once.
+    labels: Arc<OnceLock<Option<LabelCounts>>>,
+    /// The next coarser pyramid level, built once when first asked for.
+    coarser: Arc<OnceLock<Arc<Volume>>>,
+}
+
+/// The distinct values of a label volume with their voxel counts.
+pub type LabelCounts = Vec<(f32, u64)>;
+
+/// A volume's place in its multiresolution pyramid (docs/design.md §5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Level {
+    /// The pyramid level: 0 is the volume as read.
+    pub index: usize,
+    /// Per axis, how many voxels of level 0 one voxel of this level spans.
+    pub factor: [usize; 3],
+    /// Level 0's `[min, max]`, which every level is quantized with.
+    pub range: [f32; 2],
+    /// Whether level 0 is a label volume (coarser levels then take the most frequent label).
+    pub labels: bool,
 }
 
 impl Volume {
-    /// Builds a volume from voxels in x-fastest order.
+    /// Builds a volume from f32 voxels in x-fastest order (held as f32, whatever `voxel_type`
+    /// the file stored).
     ///
     /// Fails when a dimension is zero, the voxel count does not match, a spacing is not a positive
     /// finite number or lies more than [`MAX_SPACING_RATIO`] from another. A volume with no
@@ -56,60 +90,118 @@ impl Volume {
         dims: [usize; 3],
         spacing: [f64; 3],
         voxel_type: VoxelType,
-        mut voxels: Vec<f32>,
+        voxels: Vec<f32>,
     ) -> Result<Self> {
-        if dims.contains(&0) {
-            return Err(Error::invalid(
-                "dims",
-                dims_string(dims),
-                "at least one voxel along each axis",
-            ));
-        }
-        let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
-        if count != Some(voxels.len()) {
-            return Err(Error::invalid(
-                "voxels",
-                voxels.len(),
-                format!("one per voxel of {}", dims_string(dims)),
-            ));
-        }
-        let (lo, hi) = spacing
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(lo, hi), &s| {
-                (lo.min(s), hi.max(s))
-            });
-        if spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) || hi > MAX_SPACING_RATIO * lo {
-            return Err(Error::invalid(
-                "spacing",
-                format!("{spacing:?}"),
-                format!(
-                    "three positive finite numbers within a factor of {MAX_SPACING_RATIO} of \
-                     each other"
-                ),
-            ));
-        }
-        voxels.par_iter_mut().for_each(|v| {
-            if v.is_infinite() {
-                *v = f32::NAN;
-            }
-        });
-        let stats = compute_stats(&voxels);
-        let data = Array3::from_shape_vec(dims.f(), voxels)
-            .map_err(|e| Error::invalid("dims", dims_string(dims), e.to_string()))?;
+        check_shape(dims, spacing, voxels.len())?;
+        Self::from_voxels(dims, spacing, voxel_type, Voxels::from_f32(voxels))
+    }
+
+    /// Builds a volume from voxels held in their own type (f32 ones with no infinity: a reader
+    /// stores those as NaN), under the same checks as [`Volume::new`].
+    pub fn from_voxels(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        voxel_type: VoxelType,
+        data: Voxels,
+    ) -> Result<Self> {
+        check_shape(dims, spacing, data.len())?;
+        let stats = crate::volume::with_voxels!(&data, |v| compute_stats(v));
         Ok(Self {
             data,
+            dims,
             spacing,
             voxel_type,
             stats,
             transform: WorldTransform::unknown(spacing),
+            level: Level {
+                index: 0,
+                factor: [1; 3],
+                range: [stats.min, stats.max],
+                labels: false,
+            },
+            labels: Arc::default(),
+            coarser: Arc::default(),
         })
+    }
+
+    /// The distinct values with their voxel counts when this looks like a label volume (see
+    /// [`labels::label_values`]), worked out once; for a coarser pyramid level, level 0's.
+    #[must_use]
+    pub fn labels(&self) -> Option<&[(f32, u64)]> {
+        self.labels
+            .get_or_init(|| labels::label_values(self))
+            .as_deref()
+    }
+
+    /// Where this volume sits in its pyramid.
+    #[must_use]
+    pub fn level(&self) -> Level {
+        self.level
+    }
+
+    /// Pyramid level `k` of this volume, `k` levels coarser (docs/design.md §5): each level halves
+    /// every axis longer than one voxel, a voxel the mean of the finite voxels under it (for a
+    /// label volume their most frequent value), quantized with level 0's range. Levels are built
+    /// in memory, each from the one before, the first time they are asked for, and kept.
+    #[must_use]
+    pub fn coarser(&self, k: usize) -> Arc<Volume> {
+        let mut level = Arc::new(self.clone());
+        for _ in 0..k {
+            let next = level
+                .coarser
+                .get_or_init(|| Arc::new(level.halved()))
+                .clone();
+            level = next;
+        }
+        level
+    }
+
+    /// The number of pyramid levels below this volume: halving stops when every axis is one
+    /// voxel.
+    #[must_use]
+    pub fn coarser_levels(&self) -> usize {
+        let longest = *self.dims.iter().max().unwrap_or(&1);
+        (usize::BITS - (longest - 1).leading_zeros()) as usize
+    }
+
+    /// The next coarser level.
+    fn halved(&self) -> Volume {
+        let labels = self.level.index == 0 && self.labels().is_some() || self.level.labels;
+        let (values, dims) = crate::volume::with_voxels!(&self.data, |v| {
+            pyramid::downsample(v, self.dims, labels)
+        });
+        let step = pyramid::step(self.dims);
+        let factor: [usize; 3] = std::array::from_fn(|m| self.level.factor[m] * step[m]);
+        let spacing: [f64; 3] = std::array::from_fn(|m| self.spacing[m] * step[m] as f64);
+        let data = Voxels::owned(values);
+        let stats = crate::volume::with_voxels!(&data, |v| compute_stats(v));
+        let labels_of_level0 = if labels {
+            self.labels().map(<[_]>::to_vec)
+        } else {
+            None
+        };
+        Volume {
+            data,
+            dims,
+            spacing,
+            voxel_type: self.voxel_type,
+            stats,
+            transform: pyramid::level_transform(&self.transform, step.map(|s| s as f64)),
+            level: Level {
+                index: self.level.index + 1,
+                factor,
+                labels,
+                range: self.level.range,
+            },
+            labels: Arc::new(OnceLock::from(labels_of_level0)),
+            coarser: Arc::default(),
+        }
     }
 
     /// Dimensions `[nx, ny, nz]`.
     #[must_use]
     pub fn dims(&self) -> [usize; 3] {
-        let s = self.data.shape();
-        [s[0], s[1], s[2]]
+        self.dims
     }
 
     /// Voxel spacing `[sx, sy, sz]` in millimetres.
@@ -124,15 +216,26 @@ impl Volume {
     pub fn with_transform(mut self, t: WorldTransform) -> Self {
         if t.is_usable() {
             self.transform = t;
+            self.coarser = Arc::default();
         }
         self
     }
 
     /// This volume, its voxels said to be of type `ty` (a reader that learns the type from the
-    /// values, after they are read).
+    /// values, after they are read, and has checked that they all are values of `ty`): f32
+    /// voxels in memory are then held as `ty` where it is held as stored.
     #[must_use]
     pub(crate) fn with_voxel_type(mut self, ty: VoxelType) -> Self {
         self.voxel_type = ty;
+        // Missing voxels (a resampled series' outside) have no integer to be: such a volume
+        // stays f32.
+        if self.stats.missing == 0
+            && let Voxels::F32(voxels::Store::Owned(values)) = self.data
+        {
+            self.data = Voxels::narrowed(Arc::unwrap_or_clone(values), ty);
+        }
+        self.labels = Arc::default();
+        self.coarser = Arc::default();
         self
     }
 
@@ -173,30 +276,73 @@ impl Volume {
         self.stats.min == self.stats.max
     }
 
-    /// The voxels in memory order: index `x + nx * (y + ny * z)`.
+    /// The voxels, in the type they are held in, in memory order: index `x + nx * (y + ny * z)`.
+    #[must_use]
+    pub fn data(&self) -> &Voxels {
+        &self.data
+    }
+
+    /// The voxels of a volume held as f32, in memory order.
+    ///
+    /// # Panics
+    /// When the voxels are held in another type (see [`Volume::data`]).
     #[must_use]
     pub fn voxels(&self) -> &[f32] {
-        self.data
-            .as_slice_memory_order()
-            .expect("volumes are built contiguous")
+        match &self.data {
+            Voxels::F32(s) => s.as_slice(),
+            other => panic!("voxels held as {}, not f32", other.held()),
+        }
     }
 
-    /// The voxels as an array indexed `[x, y, z]`.
+    /// The voxels of a volume held as f32, as an array indexed `[x, y, z]`.
+    ///
+    /// # Panics
+    /// When the voxels are held in another type (see [`Volume::data`]).
     #[must_use]
     pub fn array(&self) -> ArrayView3<'_, f32> {
-        self.data.view()
+        ArrayView3::from_shape(self.dims.f(), self.voxels()).expect("dims match the voxels")
     }
 
-    /// Bytes the voxels occupy in memory.
+    /// The voxel at index `[x, y, z]`, as f32.
+    #[must_use]
+    pub fn value(&self, [x, y, z]: [usize; 3]) -> f32 {
+        let [nx, ny, _] = self.dims;
+        self.data.get(x + nx * (y + ny * z))
+    }
+
+    /// Bytes the voxels take in memory as held: none when they are read in place from a
+    /// mapped file.
     #[must_use]
     pub fn memory_bytes(&self) -> u64 {
-        (self.len() * std::mem::size_of::<f32>()) as u64
+        if self.data.is_mapped() {
+            0
+        } else {
+            self.data.bytes()
+        }
     }
 
-    /// The quantizer of DESIGN.md §2 for `bins` bins over this volume's finite range.
+    /// Bytes of the file read in place for the voxels (mapped, not copied): 0 when they are in
+    /// memory.
+    #[must_use]
+    pub fn mapped_bytes(&self) -> u64 {
+        if self.data.is_mapped() {
+            self.data.bytes()
+        } else {
+            0
+        }
+    }
+
+    /// Bytes the voxels take as the file stores them (in the file's voxel type).
+    #[must_use]
+    pub fn stored_bytes(&self) -> u64 {
+        (self.len() * self.voxel_type.size()) as u64
+    }
+
+    /// The quantizer of docs/design.md §2 for `bins` bins over this volume's finite range.
     pub fn quantizer(&self, bins: usize) -> Result<Quantizer> {
         self.require_data()?;
-        Quantizer::new(self.stats.min, self.stats.max, bins)
+        let [min, max] = self.level.range;
+        Quantizer::new(min, max, bins)
     }
 
     /// Fails when no voxel is finite: such a volume can be described, not analysed or drawn.
@@ -216,26 +362,70 @@ impl Volume {
             return Ok(vec![0; bins]);
         }
         let q = self.quantizer(bins)?;
-        Ok(self
-            .voxels()
-            .par_chunks(1 << 16)
-            .map(|chunk| {
-                let mut h = vec![0u64; bins];
-                for &v in chunk {
-                    if let Some(b) = q.bin(v) {
-                        h[b as usize] += 1;
-                    }
-                }
-                h
-            })
-            .reduce(
-                || vec![0u64; bins],
-                |mut a, b| {
-                    a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
-                    a
-                },
-            ))
+        Ok(crate::volume::with_voxels!(&self.data, |voxels| {
+            histogram_of(voxels, q)
+        }))
     }
+}
+
+/// Counts of `voxels` per bin of `q`.
+fn histogram_of<T: Voxel>(voxels: &[T], q: Quantizer) -> Vec<u64> {
+    let bins = q.bins();
+    let q = VoxelQuantizer::new::<T>(q);
+    voxels
+        .par_chunks(1 << 16)
+        .map(|chunk| {
+            let mut h = vec![0u64; bins];
+            for &v in chunk {
+                if let Some(b) = q.bin(v) {
+                    h[b as usize] += 1;
+                }
+            }
+            h
+        })
+        .reduce(
+            || vec![0u64; bins],
+            |mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
+                a
+            },
+        )
+}
+
+/// Fails unless `dims` has a voxel on every axis, `count` is their product and the spacing is
+/// usable (see [`Volume::new`]).
+fn check_shape(dims: [usize; 3], spacing: [f64; 3], count: usize) -> Result<()> {
+    if dims.contains(&0) {
+        return Err(Error::invalid(
+            "dims",
+            dims_string(dims),
+            "at least one voxel along each axis",
+        ));
+    }
+    let expected = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+    if expected != Some(count) {
+        return Err(Error::invalid(
+            "voxels",
+            count,
+            format!("one per voxel of {}", dims_string(dims)),
+        ));
+    }
+    let (lo, hi) = spacing
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), &s| {
+            (lo.min(s), hi.max(s))
+        });
+    if spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) || hi > MAX_SPACING_RATIO * lo {
+        return Err(Error::invalid(
+            "spacing",
+            format!("{spacing:?}"),
+            format!(
+                "three positive finite numbers within a factor of {MAX_SPACING_RATIO} of \
+                     each other"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// `"NXxNYxNZ"`.
@@ -244,12 +434,13 @@ pub fn dims_string(dims: [usize; 3]) -> String {
     format!("{}x{}x{}", dims[0], dims[1], dims[2])
 }
 
-fn compute_stats(voxels: &[f32]) -> Stats {
+fn compute_stats<T: Voxel>(voxels: &[T]) -> Stats {
     let (min, max, sum, finite) = voxels
         .par_chunks(1 << 16)
         .map(|chunk| {
             let (mut lo, mut hi, mut sum, mut n) = (f32::INFINITY, f32::NEG_INFINITY, 0.0f64, 0);
             for &v in chunk {
+                let v = v.to_f32();
                 if v.is_finite() {
                     lo = lo.min(v);
                     hi = hi.max(v);
@@ -330,6 +521,52 @@ mod tests {
         // Range [1, 63]: bin = floor((v - 1) * 4 / 62), so 63 lands in the last bin by the clamp.
         assert_eq!(h.iter().sum::<u64>(), 63);
         assert_eq!(h, vec![16, 15, 16, 16]);
+    }
+
+    #[test]
+    fn pyramid_levels_are_block_means_on_a_coarser_grid() {
+        let data: Vec<f32> = (0..60).map(|i| ((i * 7) % 23) as f32).collect();
+        let v = Volume::new([5, 4, 3], [1.0, 2.0, 0.5], VoxelType::U8, data.clone())
+            .unwrap()
+            .with_transform(WorldTransform::ras(
+                [[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 0.5]],
+                [3.0, 4.0, 5.0],
+            ));
+        let c = v.coarser(1);
+        assert_eq!(c.dims(), [3, 2, 2]);
+        assert_eq!(c.spacing(), [2.0, 4.0, 1.0]);
+        assert_eq!(c.voxels(), pyramid::downsample(&data, [5, 4, 3], false).0);
+        let level = c.level();
+        assert_eq!((level.index, level.factor), (1, [2, 2, 2]));
+        assert_eq!(level.range, [v.stats().min, v.stats().max]);
+        assert_eq!(
+            c.quantizer(32).unwrap(),
+            v.quantizer(32).unwrap(),
+            "level 0's range"
+        );
+        let centre = v.transform().apply([0.5, 0.5, 0.5]);
+        assert_eq!(c.transform().apply([0.0; 3]), centre);
+        let top = v.coarser(v.coarser_levels());
+        assert_eq!(top.dims(), [1, 1, 1]);
+        assert_eq!(v.coarser_levels(), 3, "5 → 3 → 2 → 1");
+        assert!(Arc::ptr_eq(&v.coarser(2), &v.coarser(2)), "built once");
+    }
+
+    #[test]
+    fn label_volumes_take_the_most_frequent_label() {
+        // Two labels in halves along z, one voxel of the other in a block: the block keeps its
+        // majority, never a mean.
+        let mut data: Vec<f32> = (0..8 * 8 * 8)
+            .map(|i| if i < 256 { 1.0 } else { 7.0 })
+            .collect();
+        data[0] = 7.0;
+        let v = Volume::new([8, 8, 8], [1.0; 3], VoxelType::U8, data).unwrap();
+        assert!(v.labels().is_some());
+        let c = v.coarser(1);
+        assert!(c.level().labels);
+        assert_eq!(c.voxels()[0], 1.0);
+        assert!(c.voxels().iter().all(|&x| x == 1.0 || x == 7.0));
+        assert_eq!(c.labels(), v.labels(), "level 0's labels");
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! Quantization of intensities into B equal-width bins, exactly as DESIGN.md §2 defines it.
+//! Quantization of intensities into B equal-width bins, exactly as docs/design.md §2 defines it.
 
 use crate::error::{Error, Result};
 

@@ -2,6 +2,8 @@
 
 use serde::Serialize;
 
+use super::voxels::{Voxel, Voxels};
+
 /// The voxel type a file stores, kept so that `info` can report it and writers can restore it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -32,6 +34,15 @@ pub enum Endian {
     Little,
     /// Most significant byte first.
     Big,
+}
+
+impl Endian {
+    /// This machine's byte order.
+    pub const NATIVE: Endian = if cfg!(target_endian = "big") {
+        Endian::Big
+    } else {
+        Endian::Little
+    };
 }
 
 impl VoxelType {
@@ -157,9 +168,27 @@ pub(crate) fn decode_to(
     }
 }
 
-/// Encodes f32 voxels as `ty` in little-endian order, rounding and clamping to integer types
+/// Writes every voxel of `voxels` to `sink` as `ty` in little-endian order (see [`encode_le`]),
+/// a chunk at a time.
+pub(crate) fn write_le(
+    voxels: &Voxels,
+    ty: VoxelType,
+    sink: &mut impl std::io::Write,
+) -> std::io::Result<()> {
+    let mut bytes = Vec::new();
+    crate::volume::with_voxels!(voxels, |v| {
+        for chunk in v.chunks(1 << 16) {
+            bytes.clear();
+            encode_le(chunk, ty, &mut bytes);
+            sink.write_all(&bytes)?;
+        }
+    });
+    Ok(())
+}
+
+/// Encodes voxels as `ty` in little-endian order, rounding and clamping to integer types
 /// (missing voxels become 0 there).
-pub(crate) fn encode_le(values: &[f32], ty: VoxelType, out: &mut Vec<u8>) {
+pub(crate) fn encode_le<T: Voxel>(values: &[T], ty: VoxelType, out: &mut Vec<u8>) {
     let (lo, hi) = ty.range();
     let int = |v: f32| -> f64 {
         if v.is_finite() {
@@ -169,7 +198,8 @@ pub(crate) fn encode_le(values: &[f32], ty: VoxelType, out: &mut Vec<u8>) {
         }
     };
     out.reserve(values.len() * ty.size());
-    for &v in values {
+    for v in values {
+        let v = v.to_f32();
         match ty {
             VoxelType::U8 => out.push(int(v) as u8),
             VoxelType::I8 => out.extend((int(v) as i8).to_le_bytes()),

@@ -167,7 +167,7 @@ fn the_memory_limit_is_checked_before_allocating() {
     let Ran { ok, stderr, .. } = info(&path, &["--max-memory", "1M"]);
     assert!(!ok);
     assert!(
-        stderr.contains("a 250x250x100 f32 volume needs 23.8 MiB"),
+        stderr.contains("a 250x250x100 u8 volume needs 6.0 MiB"),
         "{stderr}"
     );
     assert!(stderr.contains("raise it with --max-memory"), "{stderr}");

@@ -22,7 +22,7 @@ fn analyze_json_follows_the_contract() {
     assert_eq!(d["params"]["bins"], 32);
     assert_eq!(d["params"]["block"], 3);
     assert_eq!(d["params"]["level"], 1);
-    assert_eq!(d["schema_version"], 1);
+    assert_eq!(d["schema_version"], 2);
     assert_eq!(d["params"]["phases"], 8);
     assert_eq!(d["ranked_by"], "phase_mean");
     let views = d["views"].as_array().unwrap();

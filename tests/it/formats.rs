@@ -20,7 +20,7 @@ fn assert_ramp(v: &Volume, offset: f64, scale: f64) {
         for y in 0..4 {
             for x in 0..5 {
                 let expect = ((x + 10 * y + 100 * z) as f64 * scale + offset) as f32;
-                let got = v.array()[[x, y, z]];
+                let got = v.value([x, y, z]);
                 assert!(
                     (got - expect).abs() < 1e-4,
                     "voxel ({x},{y},{z}): {got} != {expect}"
@@ -50,8 +50,8 @@ fn nifti_every_voxel_type() {
         // i8 is truncated by numpy's astype: (v * 0.5 - 100) as i8 keeps the integer part.
         if ty == VoxelType::I8 {
             let v = &l.volume;
-            assert_eq!(v.array()[[3, 0, 0]], -98.0);
-            assert_eq!(v.array()[[0, 0, 2]], -0.0);
+            assert_eq!(v.value([3, 0, 0]), -98.0);
+            assert_eq!(v.value([0, 0, 2]), -0.0);
         } else {
             assert_ramp(&l.volume, offset, scale);
         }
@@ -202,7 +202,7 @@ fn volumeshop_dat_is_recognised_by_size() {
     let l = load(&path, &LoadOptions::default()).unwrap();
     assert_eq!(l.format, Format::VolumeShop);
     assert_eq!(l.volume.dims(), [3, 2, 2]);
-    assert_eq!(l.volume.array()[[2, 1, 1]], 1100.0);
+    assert_eq!(l.volume.value([2, 1, 1]), 1100.0);
 }
 
 #[test]
@@ -224,14 +224,14 @@ fn raw_from_options_and_from_names() {
     let l = load(&path, &opts).unwrap();
     assert_eq!(l.format, Format::Raw);
     assert_eq!(l.volume.spacing(), [0.5, 0.5, 1.5]);
-    assert_eq!(l.volume.array()[[3, 2, 1]], 23.0);
+    assert_eq!(l.volume.value([3, 2, 1]), 23.0);
 
     let bytes: Vec<u8> = (0..24u8).collect();
     for name in ["bonsai_4x3x2_uint8.raw", "head.4x3x2.u8.raw"] {
         let (_dir, path) = temp_file(name, &bytes);
         let l = load(&path, &LoadOptions::default()).unwrap();
         assert_eq!(l.volume.dims(), [4, 3, 2], "{name}");
-        assert_eq!(l.volume.array()[[1, 1, 1]], 17.0, "{name}");
+        assert_eq!(l.volume.value([1, 1, 1]), 17.0, "{name}");
     }
 }
 
@@ -245,8 +245,8 @@ fn large_raw_file_loads_through_the_map() {
     let (_dir, path) = temp_file("big_256x256x512_u16.raw", &bytes);
     let v = load(&path, &LoadOptions::default()).unwrap().volume;
     assert_eq!(v.len(), n);
-    assert_eq!(v.voxels()[n - 1], ((n - 1) % 65_521) as f32);
-    assert_eq!(v.voxels()[70_000], (70_000 % 65_521) as f32);
+    assert_eq!(v.data().to_f32_vec()[n - 1], ((n - 1) % 65_521) as f32);
+    assert_eq!(v.data().to_f32_vec()[70_000], (70_000 % 65_521) as f32);
 }
 
 #[test]
@@ -260,7 +260,7 @@ fn nrrd_writer_round_trips_and_never_overwrites() {
         let path = dir.path().join(name);
         write_nrrd(&path, &original, encoding, false).unwrap();
         let back = load(&path, &LoadOptions::default()).unwrap().volume;
-        assert_eq!(back.voxels(), original.voxels());
+        assert_eq!(back.data().to_f32_vec(), original.data().to_f32_vec());
         assert_eq!(back.spacing(), original.spacing());
         assert_eq!(back.voxel_type(), VoxelType::I16);
         #[cfg(unix)]
@@ -356,7 +356,7 @@ fn any_volume_of_a_4d_file_can_be_read() {
         let (_dir, path) = temp_file(name, &bytes);
         for t in 0..3 {
             let l = volume_of(&path, t).unwrap_or_else(|e| panic!("{name} {t}: {e}"));
-            let got: Vec<f32> = l.volume.voxels().to_vec();
+            let got: Vec<f32> = l.volume.data().to_f32_vec();
             let want: Vec<f32> = (0..4).map(|v| (v + 10 * t) as f32).collect();
             assert_eq!(got, want, "{name}, volume {t}");
         }

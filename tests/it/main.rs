@@ -15,6 +15,7 @@ mod contract;
 mod dicom;
 mod formats;
 mod fuzz_headers;
+mod native;
 mod orientation;
 mod partition;
 mod render;

@@ -310,7 +310,8 @@ fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alon
         std::fs::copy(data("ramp_u8.nii"), dir.path().join(name)).unwrap();
     }
     let root = dir.path().to_str().unwrap();
-    // Each 5x4x3 volume takes 240 bytes as f32: more than half of 300, less than all of it.
+    // Each 5x4x3 volume takes 60 bytes, held as its u8: more than half of 100, less than all of
+    // it.
     let triage = |memory: &str| {
         run(&[
             "triage",
@@ -327,13 +328,13 @@ fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alon
         stdout,
         stderr,
         ..
-    } = triage("300");
+    } = triage("100");
     assert_eq!(code, 0, "{stderr}");
     assert!(
         rows(&stdout).iter().all(|r| r["error"].is_null()),
         "{stdout}"
     );
-    let Ran { code, stdout, .. } = triage("200");
+    let Ran { code, stdout, .. } = triage("50");
     assert_eq!(code, 1);
     let error = rows(&stdout)[0]["error"].as_str().unwrap().to_string();
     assert!(error.contains("raise it with --max-memory"), "{error}");

@@ -48,7 +48,7 @@ pub struct MergeHistory {
 pub const PAIRS_KEPT: usize = 1024;
 
 /// A pair of adjacent slabs waiting to be merged, by its NMI and then (for ties) the lowest
-/// left slab, so that a max-heap pops the merge DESIGN §2 takes next. `stamp` tells a current
+/// left slab, so that a max-heap pops the merge docs/design.md §2 takes next. `stamp` tells a current
 /// entry from a stale one left behind when a neighbour merged.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Pair {

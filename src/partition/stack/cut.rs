@@ -8,9 +8,9 @@ use super::{BackgroundSummary, Column, Lattice, MISSING, SliceStack, StackParams
 use crate::error::{Error, Result};
 use crate::geometry::{WorldAxis, canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
-use crate::volume::Volume;
 use crate::volume::background::Background;
 use crate::volume::interpolate::Interpolator;
+use crate::volume::{Volume, Voxel};
 
 /// The two axes other than `m`, in order.
 fn other_axes(m: usize) -> (usize, usize) {
@@ -88,23 +88,24 @@ impl SliceStack {
         let n = dims[m];
         let (a, b) = other_axes(m);
         let pixels = dims[a] * dims[b];
-        let voxels = volume.voxels();
         let mut symbols = vec![MISSING; pixels * n];
         monitor.start("slicing", pixels.div_ceil(4096) as u64);
-        symbols
-            .par_chunks_mut(4096 * n)
-            .enumerate()
-            .try_for_each(|(c, out)| {
-                for (k, col) in out.chunks_mut(n).enumerate() {
-                    let p = c * 4096 + k;
-                    let base = (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b];
-                    for (s, o) in col.iter_mut().enumerate() {
-                        let i = base + s * stride[m];
-                        *o = keep(i, voxels[i]);
+        crate::volume::with_voxels!(volume.data(), |voxels| {
+            symbols
+                .par_chunks_mut(4096 * n)
+                .enumerate()
+                .try_for_each(|(c, out)| {
+                    for (k, col) in out.chunks_mut(n).enumerate() {
+                        let p = c * 4096 + k;
+                        let base = (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b];
+                        for (s, o) in col.iter_mut().enumerate() {
+                            let i = base + s * stride[m];
+                            *o = keep(i, voxels[i].to_f32());
+                        }
                     }
-                }
-                monitor.advance(1)
-            })?;
+                    monitor.advance(1)
+                })
+        })?;
         let columns = (0..pixels)
             .map(|p| Column {
                 offset: p * n,
@@ -142,29 +143,30 @@ impl SliceStack {
         let (_, (j0, j1)) = lattice.ray_ranges();
         let (k_first, k_last) = lattice.sample_range();
         let slices = (k_last - k_first + 1).max(0) as usize;
-        let it = Interpolator::new(volume);
         let rows: Vec<i64> = (j0..=j1).collect();
         monitor.start("slicing", rows.len() as u64);
-        let per_row = rows
-            .par_iter()
-            .map(|&j| {
-                let mut columns = Vec::new();
-                let mut symbols = Vec::new();
-                for ray in lattice.row(j) {
-                    columns.push(Column {
-                        offset: symbols.len(),
-                        first: (ray.k0 - k_first) as u32,
-                        len: ray.len() as u32,
-                    });
-                    symbols.extend((ray.k0..=ray.k1).map(|k| {
-                        let p = ray.at(k);
-                        keep(it.nearest(p), it.sample(p))
-                    }));
-                }
-                monitor.advance(1)?;
-                Ok((columns, symbols))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let per_row = crate::volume::with_voxels!(volume.data(), |data| {
+            let it = Interpolator::over(data, volume.dims());
+            rows.par_iter()
+                .map(|&j| {
+                    let mut columns = Vec::new();
+                    let mut symbols = Vec::new();
+                    for ray in lattice.row(j) {
+                        columns.push(Column {
+                            offset: symbols.len(),
+                            first: (ray.k0 - k_first) as u32,
+                            len: ray.len() as u32,
+                        });
+                        symbols.extend((ray.k0..=ray.k1).map(|k| {
+                            let p = ray.at(k);
+                            keep(it.nearest(p), it.sample(p))
+                        }));
+                    }
+                    monitor.advance(1)?;
+                    Ok((columns, symbols))
+                })
+                .collect::<Result<Vec<_>>>()
+        })?;
         let total = per_row.iter().map(|(_, s)| s.len()).sum();
         let mut columns = Vec::with_capacity(per_row.iter().map(|(c, _)| c.len()).sum());
         let mut symbols = Vec::with_capacity(total);
@@ -301,26 +303,27 @@ fn plane_sums(
 ) -> (Vec<f64>, Vec<u64>) {
     let dims = volume.dims();
     let stride = [1, dims[0], dims[0] * dims[1]];
-    let voxels = volume.voxels();
     let (a, b) = other_axes(m);
-    (0..dims[m])
-        .into_par_iter()
-        .map(|s| {
-            let (mut sum, mut count) = (0.0, 0u64);
-            for j in 0..dims[b] {
-                let row = s * stride[m] + j * stride[b];
-                for i in 0..dims[a] {
-                    let index = row + i * stride[a];
-                    let v = voxels[index];
-                    if counted(index, v) {
-                        sum += f64::from(v);
-                        count += 1;
+    crate::volume::with_voxels!(volume.data(), |voxels| {
+        (0..dims[m])
+            .into_par_iter()
+            .map(|s| {
+                let (mut sum, mut count) = (0.0, 0u64);
+                for j in 0..dims[b] {
+                    let row = s * stride[m] + j * stride[b];
+                    for i in 0..dims[a] {
+                        let index = row + i * stride[a];
+                        let v = voxels[index].to_f32();
+                        if counted(index, v) {
+                            sum += f64::from(v);
+                            count += 1;
+                        }
                     }
                 }
-            }
-            (sum, count)
-        })
-        .unzip()
+                (sum, count)
+            })
+            .unzip()
+    })
 }
 
 /// Per lattice slice: the sum and count of the counted interpolated values.
@@ -330,31 +333,33 @@ fn lattice_sums(
     slices: usize,
     counted: &(dyn Fn(usize, f32) -> bool + Sync),
 ) -> (Vec<f64>, Vec<u64>) {
-    let it = Interpolator::new(volume);
     let (_, (j0, j1)) = lattice.ray_ranges();
     let (k_first, _) = lattice.sample_range();
     let zero = || (vec![0.0f64; slices], vec![0u64; slices]);
-    (j0..=j1)
-        .into_par_iter()
-        .fold(zero, |(mut sums, mut counts), j| {
-            for ray in lattice.row(j) {
-                for k in ray.k0..=ray.k1 {
-                    let p = ray.at(k);
-                    let v = it.sample(p);
-                    if counted(it.nearest(p), v) {
-                        let s = (k - k_first) as usize;
-                        sums[s] += f64::from(v);
-                        counts[s] += 1;
+    crate::volume::with_voxels!(volume.data(), |data| {
+        let it = Interpolator::over(data, volume.dims());
+        (j0..=j1)
+            .into_par_iter()
+            .fold(zero, |(mut sums, mut counts), j| {
+                for ray in lattice.row(j) {
+                    for k in ray.k0..=ray.k1 {
+                        let p = ray.at(k);
+                        let v = it.sample(p);
+                        if counted(it.nearest(p), v) {
+                            let s = (k - k_first) as usize;
+                            sums[s] += f64::from(v);
+                            counts[s] += 1;
+                        }
                     }
                 }
-            }
-            (sums, counts)
-        })
-        .reduce(zero, |(mut a, mut b), (c, e)| {
-            a.iter_mut().zip(c).for_each(|(x, y)| *x += y);
-            b.iter_mut().zip(e).for_each(|(x, y)| *x += y);
-            (a, b)
-        })
+                (sums, counts)
+            })
+            .reduce(zero, |(mut a, mut b), (c, e)| {
+                a.iter_mut().zip(c).for_each(|(x, y)| *x += y);
+                b.iter_mut().zip(e).for_each(|(x, y)| *x += y);
+                (a, b)
+            })
+    })
 }
 
 /// The lattice of an oblique stack.

@@ -250,7 +250,7 @@ fn readout(
     let (spacing, dims) = (volume.spacing(), volume.dims());
     let ijk: [usize; 3] =
         std::array::from_fn(|m| ((p[m] / spacing[m]).round().max(0.0) as usize).min(dims[m] - 1));
-    let value = volume.voxels()[ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])];
+    let value = volume.value(ijk);
     let t = volume.transform();
     let world = t.apply(ijk.map(|i| i as f64));
     let place = if t.known {

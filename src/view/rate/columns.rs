@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::geometry::lattice::Lattice;
 use crate::measure::{Counter, Run};
 use crate::progress::Monitor;
+use crate::volume::Voxel;
 use crate::volume::cells::MIXED;
 
 /// Voxel columns along one axis, walked a few side by side (so that their work overlaps) in
@@ -43,10 +44,10 @@ impl Columns {
     }
 
     /// Feeds the items `range` into `counts`; returns the number of columns.
-    fn walk(
+    fn walk<T: Voxel>(
         &self,
         range: std::ops::Range<usize>,
-        sampler: &BinSampler,
+        sampler: &BinSampler<T>,
         counts: &mut impl Counter,
     ) -> u64 {
         let bins = sampler.voxel_bins();
@@ -81,8 +82,8 @@ impl Columns {
 /// [`Lattice::columns`]): samples are voxels, read in memory order a row of columns at a time.
 ///
 /// [`entropy_rate`]: super::entropy_rate
-pub(super) fn column_rate(
-    sampler: &BinSampler,
+pub(super) fn column_rate<T: Voxel>(
+    sampler: &BinSampler<T>,
     lattice: &Lattice,
     axis: usize,
     block: usize,

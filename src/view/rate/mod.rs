@@ -17,6 +17,7 @@ use crate::geometry::WorldAxis;
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, DenseCounts};
 use crate::progress::Monitor;
+use crate::volume::Voxel;
 use columns::column_rate;
 #[cfg(target_arch = "x86_64")]
 use tiles::mixed_bin;
@@ -172,8 +173,8 @@ pub fn work_units_of(lattice: &Lattice, subset: RaySubset) -> u64 {
 
 /// The entropy rate along `lattice`'s axis with blocks of length `block`, reporting one unit per
 /// row of tiles to `monitor` (so it can be cancelled within a row's time).
-pub fn entropy_rate(
-    sampler: &BinSampler,
+pub fn entropy_rate<T: Voxel>(
+    sampler: &BinSampler<T>,
     lattice: &Lattice,
     block: usize,
     monitor: &Monitor,
@@ -189,8 +190,8 @@ pub fn entropy_rate(
 }
 
 /// [`entropy_rate`] over the tiles of rays `subset` keeps.
-pub fn entropy_rate_of(
-    sampler: &BinSampler,
+pub fn entropy_rate_of<T: Voxel>(
+    sampler: &BinSampler<T>,
     lattice: &Lattice,
     block: usize,
     subset: RaySubset,
@@ -210,8 +211,8 @@ enum Walk {
 }
 
 /// [`entropy_rate`], walking the rays as `walk` says.
-fn rate_with(
-    sampler: &BinSampler,
+fn rate_with<T: Voxel>(
+    sampler: &BinSampler<T>,
     lattice: &Lattice,
     block: usize,
     monitor: &Monitor,

@@ -5,14 +5,14 @@
 use crate::geometry::lattice::{FIXED_BITS, FIXED_STEP, ceil_i64, to_fixed};
 use crate::volume::cells::{MIXED, cell_map};
 use crate::volume::interpolate::Interpolator;
-use crate::volume::{Quantizer, Volume};
+use crate::volume::{Quantizer, Volume, Voxel};
 
 /// Quantized trilinear sampling: the bin of the interpolated value, as
 /// [`Quantizer::bin`]`(`[`Interpolator::sample`]`)` gives it, but answered from a cell map (see
 /// [`cell_map`]) where all eight corners of a cell lie in one bin with a margin for rounding:
 /// the map only saves work, it never changes a result.
-pub struct BinSampler<'a> {
-    it: Interpolator<'a>,
+pub struct BinSampler<'a, T = f32> {
+    it: Interpolator<'a, T>,
     q: Quantizer,
     cells: Vec<u8>,
     /// Per voxel: the bin it safely lies in, or `MIXED` (see [`cell_map`]).
@@ -20,12 +20,23 @@ pub struct BinSampler<'a> {
     dims: [usize; 3],
 }
 
-impl<'a> BinSampler<'a> {
-    /// Builds the cell map of `volume` for quantizer `q` (one byte per voxel).
+impl<'a> BinSampler<'a, f32> {
+    /// Builds the cell map of `volume`, held as f32, for quantizer `q` (one byte per voxel).
+    ///
+    /// # Panics
+    /// When the voxels are held in another type: use [`BinSampler::over`].
     pub fn new(volume: &'a Volume, q: Quantizer) -> Self {
+        Self::over(volume.voxels(), volume, q)
+    }
+}
+
+impl<'a, T: Voxel> BinSampler<'a, T> {
+    /// Builds the cell map of `volume`, whose voxels `data` are, for quantizer `q` (one byte per
+    /// voxel).
+    pub fn over(data: &'a [T], volume: &Volume, q: Quantizer) -> Self {
         let (cells, voxel_bins) = cell_map(volume, &q);
         Self {
-            it: Interpolator::new(volume),
+            it: Interpolator::over(data, volume.dims()),
             cells,
             voxel_bins,
             dims: volume.dims(),
@@ -127,7 +138,7 @@ impl<'a> BinSampler<'a> {
     #[inline]
     pub fn voxel_bin_at(&self, index: usize) -> Option<u8> {
         match self.voxel_bins[index] {
-            MIXED => self.q.bin(self.it.data[index]),
+            MIXED => self.q.bin(self.it.at(index)),
             b => Some(b),
         }
     }
@@ -138,7 +149,7 @@ impl<'a> BinSampler<'a> {
     }
 
     /// The voxels, x fastest.
-    pub fn voxels(&self) -> &'a [f32] {
+    pub fn voxels(&self) -> &'a [T] {
         self.it.data
     }
 

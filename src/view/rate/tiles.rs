@@ -6,6 +6,7 @@ use super::{BinSampler, RaySubset};
 use crate::geometry::cross;
 use crate::geometry::lattice::{Lattice, round_half_away, to_fixed};
 use crate::measure::{Counter, Run};
+use crate::volume::Voxel;
 use crate::volume::cells::MIXED;
 
 /// Rays are walked in tiles of this many neighbouring rays, so that the memory they read stays a
@@ -61,7 +62,7 @@ fn is_whole(x: f64) -> bool {
 }
 
 /// One sample at `w`'s position (anywhere in the volume up to rounding) into its run.
-fn edge_sample(sampler: &BinSampler, counts: &mut impl Counter, w: &mut Walker) {
+fn edge_sample<T: Voxel>(sampler: &BinSampler<T>, counts: &mut impl Counter, w: &mut Walker) {
     let bin = if w.grid {
         sampler.voxel_bin(w.p)
     } else {
@@ -76,7 +77,12 @@ fn edge_sample(sampler: &BinSampler, counts: &mut impl Counter, w: &mut Walker) 
 /// The bin of a sample in a mixed cell: interpolated, or the voxel itself on the grid. Out of
 /// line, to keep the common path of [`walk_tile`] small.
 #[inline(never)]
-pub(super) fn mixed_bin(sampler: &BinSampler, p: [i64; 3], cell: usize, grid: bool) -> Option<u8> {
+pub(super) fn mixed_bin<T: Voxel>(
+    sampler: &BinSampler<T>,
+    p: [i64; 3],
+    cell: usize,
+    grid: bool,
+) -> Option<u8> {
     if grid {
         sampler.voxel_bin(p)
     } else {
@@ -108,11 +114,11 @@ struct TileRays<'a> {
 /// Feeds the quantized samples of the rays `(i, j)` of one tile into `counts`: each ray's
 /// samples in order, a missing sample breaking its sequence. `step` is the lattice's step in
 /// fixed point; `common` walks the rays' inner spans together. Returns the number of rays.
-fn walk_tile<C: Counter>(
+fn walk_tile<C: Counter, T: Voxel>(
     lattice: &Lattice,
     tile: &TileRays,
     step: [i64; 3],
-    sampler: &BinSampler,
+    sampler: &BinSampler<T>,
     counts: &mut C,
     walkers: &mut Vec<Walker>,
     common: &mut impl FnMut(&mut [Walker], &mut C),
@@ -170,10 +176,10 @@ fn walk_tile<C: Counter>(
 
 /// The common walk of a tile's rays through their inner spans, one sample per ray in turn,
 /// leaving each at the end of its span.
-pub(super) fn scalar_walk(
+pub(super) fn scalar_walk<T: Voxel>(
     walkers: &mut [Walker],
     step: [i64; 3],
-    sampler: &BinSampler,
+    sampler: &BinSampler<T>,
     counts: &mut impl Counter,
 ) {
     // Longest span first, so that the rays still walking are always a prefix.
@@ -217,12 +223,12 @@ pub(super) fn scalar_walk(
 
 /// Feeds the rays of the tile row `js` that `subset` keeps into `counts`, walking their inner
 /// spans with `common`. Returns the number of rays.
-pub(super) fn walk_row<C: Counter>(
+pub(super) fn walk_row<C: Counter, T: Voxel>(
     lattice: &Lattice,
     js: (i64, i64),
     subset: RaySubset,
     step: [i64; 3],
-    sampler: &BinSampler,
+    sampler: &BinSampler<T>,
     counts: &mut C,
     common: &mut impl FnMut(&mut [Walker], &mut C),
 ) -> u64 {

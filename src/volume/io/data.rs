@@ -8,10 +8,15 @@ use std::path::{Path, PathBuf};
 use flate2::bufread::{MultiGzDecoder, ZlibDecoder};
 use rayon::prelude::*;
 
+mod ascii;
+
+use self::ascii::read_ascii;
 use super::limits::physical_memory;
+use super::mapped;
 use crate::error::{Error, Result};
 use crate::volume::voxel::decode_to;
-use crate::volume::{Endian, VoxelType, dims_string};
+use crate::volume::voxels::held_type;
+use crate::volume::{Endian, Voxel, VoxelType, Voxels, dims_string};
 
 /// How the voxel bytes are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -101,6 +106,17 @@ pub(crate) fn pick_volume(
 
 /// Checks `dims` against the memory limit for an f32 volume and returns the voxel count.
 pub(crate) fn check_budget(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<usize> {
+    check_budget_of(path, dims, VoxelType::F32, max_memory)
+}
+
+/// Checks `dims` against the memory limit for a volume held as `held` and returns the voxel
+/// count.
+fn check_budget_of(
+    path: &Path,
+    dims: [usize; 3],
+    held: VoxelType,
+    max_memory: u64,
+) -> Result<usize> {
     if dims.contains(&0) {
         return Err(Error::format(
             path,
@@ -108,7 +124,7 @@ pub(crate) fn check_budget(path: &Path, dims: [usize; 3], max_memory: u64) -> Re
         ));
     }
     let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
-    let bytes = count.and_then(|n| (n as u64).checked_mul(4));
+    let bytes = count.and_then(|n| (n as u64).checked_mul(held.size() as u64));
     // A limit above this machine's memory is this machine's memory.
     let (limit, machine) = match physical_memory() {
         Some(m) if m < max_memory => (m, true),
@@ -119,7 +135,7 @@ pub(crate) fn check_budget(path: &Path, dims: [usize; 3], max_memory: u64) -> Re
         _ => Err(Error::TooLarge {
             path: path.to_path_buf(),
             what: format!(
-                "a {} f32 volume{}",
+                "a {} {held} volume{}",
                 dims_string(dims),
                 if machine {
                     " (more than this machine has)"
@@ -133,29 +149,103 @@ pub(crate) fn check_budget(path: &Path, dims: [usize; 3], max_memory: u64) -> Re
     }
 }
 
-/// A zeroed voxel buffer of `dims`, after checking the budget; an allocation the machine cannot
-/// make is an error, not an abort.
+/// A zeroed f32 voxel buffer of `dims`, after checking the budget; an allocation the machine
+/// cannot make is an error, not an abort.
 pub(crate) fn voxel_buffer(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<Vec<f32>> {
-    let n = check_budget(path, dims, max_memory)?;
+    typed_buffer(path, dims, max_memory)
+}
+
+/// A zeroed buffer of `dims` voxels of type `T`, after checking the budget.
+fn typed_buffer<T: Voxel>(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<Vec<T>> {
+    let n = check_budget_of(path, dims, T::TYPE, max_memory)?;
     // Asked of the system first, so that a refusal is an error; then made zeroed, whose pages
     // the system provides only as they are written.
-    let mut probe: Vec<f32> = Vec::new();
+    let mut probe: Vec<T> = Vec::new();
     probe.try_reserve_exact(n).map_err(|_| Error::TooLarge {
         path: path.to_path_buf(),
-        what: format!("a {} f32 volume (the system refused it)", dims_string(dims)),
-        needed: n as u64 * 4,
+        what: format!(
+            "a {} {} volume (the system refused it)",
+            dims_string(dims),
+            T::TYPE
+        ),
+        needed: (n * T::TYPE.size()) as u64,
         limit: max_memory,
     })?;
     drop(probe);
-    Ok(vec![0.0; n])
+    Ok(bytemuck::zeroed_vec(n))
 }
 
-/// Reads the voxels `spec` describes, after checking the memory budget.
-pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> {
-    let count = check_budget(&spec.file, spec.dims, max_memory)?;
-    let out = voxel_buffer(&spec.file, spec.dims, max_memory)?;
+/// Voxel types that file bytes decode into: f32 from any type (scaled as the file says), and
+/// each integer type of at most 16 bits from itself, unscaled.
+trait Decode: Voxel {
+    /// Decodes the voxels of `bytes` (exactly `out.len()` of them) into `out`.
+    fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [Self]);
+
+    /// Values read from ascii data (always read as f32), in this type: `None` but for f32.
+    fn from_ascii(values: Vec<f32>) -> Option<Vec<Self>> {
+        let _ = values;
+        None
+    }
+}
+
+impl Decode for f32 {
+    fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [f32]) {
+        decode_to(bytes, spec.voxel_type, spec.endian, spec.scale, out);
+        // Infinities (in the file, or from scaling) are missing voxels, as NaN.
+        for v in out.iter_mut().filter(|v| v.is_infinite()) {
+            *v = f32::NAN;
+        }
+    }
+
+    fn from_ascii(mut values: Vec<f32>) -> Option<Vec<f32>> {
+        for v in values.iter_mut().filter(|v| v.is_infinite()) {
+            *v = f32::NAN;
+        }
+        Some(values)
+    }
+}
+
+macro_rules! decode_as_stored {
+    ($($t:ty),*) => {$(
+        impl Decode for $t {
+            fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [$t]) {
+                debug_assert!(spec.voxel_type == <$t>::TYPE && spec.scale.is_none());
+                let to: &mut [u8] = bytemuck::cast_slice_mut(out);
+                to.copy_from_slice(bytes);
+                if spec.endian != Endian::NATIVE {
+                    to.chunks_exact_mut(std::mem::size_of::<$t>()).for_each(<[u8]>::reverse);
+                }
+            }
+        }
+    )*};
+}
+
+decode_as_stored!(u8, i8, u16, i16);
+
+/// Reads the voxels `spec` describes, after checking the memory budget: integers of at most 16
+/// bits that the file does not scale in their own type, everything else as f32.
+pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
+    let held = if spec.encoding == Encoding::Ascii {
+        VoxelType::F32
+    } else {
+        held_type(spec.voxel_type, spec.scale.is_some())
+    };
+    match held {
+        VoxelType::U8 => read_typed::<u8>(spec, max_memory),
+        VoxelType::I8 => read_typed::<i8>(spec, max_memory),
+        VoxelType::U16 => read_typed::<u16>(spec, max_memory),
+        VoxelType::I16 => read_typed::<i16>(spec, max_memory),
+        _ => read_typed::<f32>(spec, max_memory),
+    }
+}
+
+/// [`read_voxels`] into voxels of type `T`. The budget is checked for voxels of `T` even where
+/// they are mapped, not copied, since the analysis needs memory in proportion to them.
+fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
+    let count = check_budget_of(&spec.file, spec.dims, T::TYPE, max_memory)?;
     let expected = count as u64 * spec.voxel_type.size() as u64;
     let path = spec.file.as_path();
+    let buffer = || typed_buffer::<T>(path, spec.dims, max_memory);
     let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if spec.start > len {
@@ -185,12 +275,26 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Vec<f32>> 
         }
         pos += n;
     }
-    match spec.encoding {
-        Encoding::Raw => read_raw(spec, &reader.into_inner(), (pos, len), expected, out),
-        Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, out),
-        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, out),
-        Encoding::Ascii => read_ascii(spec, reader, out),
-    }
+    let owned = match spec.encoding {
+        Encoding::Raw => {
+            return read_raw::<T>(spec, &reader.into_inner(), (pos, len), expected, buffer);
+        }
+        Encoding::Gzip => read_stream(
+            spec,
+            MultiGzDecoder::new(reader),
+            "gzip",
+            expected,
+            buffer()?,
+        )?,
+        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, buffer()?)?,
+        Encoding::Ascii => {
+            let values = read_ascii(spec, reader, voxel_buffer(path, spec.dims, max_memory)?)?;
+            // `read_voxels` reads ascii data as f32 only.
+            T::from_ascii(values)
+                .ok_or_else(|| Error::format(path, "ascii data is read as f32 only"))?
+        }
+    };
+    Ok(Voxels::owned(owned))
 }
 
 /// The buffered bytes of `reader`, filled again when empty (empty at the end), with reads that
@@ -229,13 +333,16 @@ fn skip_line(reader: &mut impl BufRead) -> std::io::Result<(u64, bool)> {
 /// Voxels decoded per parallel task.
 const CHUNK: usize = 1 << 16;
 
-fn read_raw(
+/// Raw voxels: read in place from a map of the file where they are stored as they are held (in
+/// this machine's byte order, unscaled, aligned, and for f32 without infinities), else decoded
+/// from the map into a `buffer`.
+fn read_raw<T: Decode>(
     spec: &DataSpec,
     file: &File,
     (pos, len): (u64, u64),
     expected: u64,
-    mut out: Vec<f32>,
-) -> Result<Vec<f32>> {
+    buffer: impl FnOnce() -> Result<Vec<T>>,
+) -> Result<Voxels> {
     let path = spec.file.as_path();
     // Without a skip, the data (every volume of it) is the end of the file.
     let start = if let Some(n) = spec.skip_bytes(expected) {
@@ -263,32 +370,45 @@ fn read_raw(
             ),
         ));
     }
-    let map = map_file(file).map_err(|e| Error::io(path, e))?;
+    let map = mapped::map(file, path).map_err(|e| Error::io(path, e))?;
     let start = usize::try_from(start).map_err(|_| Error::format(path, "offset beyond memory"))?;
-    let bytes = &map[start..start + expected as usize];
+    let count = expected as usize / spec.voxel_type.size();
+    let as_held =
+        T::TYPE == spec.voxel_type && spec.scale.is_none() && spec.endian == Endian::NATIVE;
+    if as_held
+        && let Some(voxels) = Voxels::mapped(map.clone(), T::TYPE, start, count)
+        && !has_infinity(&voxels)
+    {
+        return Ok(voxels);
+    }
+    let mut out = buffer()?;
+    let bytes = &map.bytes()[start..start + expected as usize];
     let size = spec.voxel_type.size();
     out.par_chunks_mut(CHUNK)
         .zip(bytes.par_chunks(CHUNK * size))
-        .for_each(|(o, b)| decode_to(b, spec.voxel_type, spec.endian, spec.scale, o));
-    Ok(out)
+        .for_each(|(o, b)| T::decode(b, spec, o));
+    Ok(Voxels::owned(out))
 }
 
-/// Maps a file read-only.
-#[allow(unsafe_code)]
-fn map_file(file: &File) -> std::io::Result<memmap2::Mmap> {
-    // SAFETY: the map is read-only and lives only while this load decodes it. If another process
-    // truncates the file meanwhile, reads may fault (SIGBUS); that is the documented price of
-    // mapping, accepted because it avoids holding a second copy of a large raw volume.
-    unsafe { memmap2::Mmap::map(file) }
+/// Whether f32 voxels hold an infinity, which a reader stores as NaN (so they cannot be read in
+/// place).
+fn has_infinity(voxels: &Voxels) -> bool {
+    match voxels {
+        Voxels::F32(s) => s
+            .as_slice()
+            .par_chunks(CHUNK)
+            .any(|c| c.iter().any(|v| v.is_infinite())),
+        _ => false,
+    }
 }
 
-fn read_stream(
+fn read_stream<T: Decode>(
     spec: &DataSpec,
     mut reader: impl Read,
     what: &str,
     expected: u64,
-    mut out: Vec<f32>,
-) -> Result<Vec<f32>> {
+    mut out: Vec<T>,
+) -> Result<Vec<T>> {
     let count = out.len();
     let path = spec.file.as_path();
     let corrupt = |e: std::io::Error, at: u64| {
@@ -319,13 +439,7 @@ fn read_stream(
         let got = fill(&mut reader, &mut buf[..want * size])
             .map_err(|e| corrupt(e, (done * size) as u64))?;
         let whole = got / size;
-        decode_to(
-            &buf[..whole * size],
-            spec.voxel_type,
-            spec.endian,
-            spec.scale,
-            &mut out[done..done + whole],
-        );
+        T::decode(&buf[..whole * size], spec, &mut out[done..done + whole]);
         if got < want * size {
             return Err(Error::Truncated {
                 path: path.to_path_buf(),
@@ -366,117 +480,6 @@ fn fill(reader: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
         }
     }
     Ok(got)
-}
-
-/// The longest token of ascii data: longer ones are not numbers slabscope reads.
-const MAX_TOKEN: usize = 64;
-
-/// Characters of a bad token an error quotes.
-const QUOTED: usize = 40;
-
-/// `token` quoted for a one-line message: at most [`QUOTED`] characters, escaped.
-fn quote(token: &[u8]) -> String {
-    let text = String::from_utf8_lossy(&token[..token.len().min(QUOTED)]);
-    let more = if token.len() > QUOTED { "…" } else { "" };
-    format!("{text:?}{more}")
-}
-
-/// The next whitespace- or comma-separated token of `reader` in `token`: `false` at the end. A
-/// token longer than [`MAX_TOKEN`] stops the reading, so that no garbage is held in memory.
-fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std::io::Result<bool> {
-    token.clear();
-    loop {
-        let buf = buffered(reader)?;
-        if buf.is_empty() {
-            return Ok(!token.is_empty());
-        }
-        let separator = |b: &u8| b.is_ascii_whitespace() || *b == b',';
-        let mut used = 0;
-        for b in buf {
-            used += 1;
-            if separator(b) {
-                if !token.is_empty() {
-                    reader.consume(used);
-                    return Ok(true);
-                }
-            } else {
-                token.push(*b);
-                if token.len() > MAX_TOKEN {
-                    reader.consume(used);
-                    return Ok(true);
-                }
-            }
-        }
-        reader.consume(used);
-    }
-}
-
-fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, mut out: Vec<f32>) -> Result<Vec<f32>> {
-    let count = out.len();
-    out.clear();
-    let path = spec.file.as_path();
-    let io = |e: std::io::Error| Error::format(path, format!("ascii data: {e}"));
-    let skip = match spec.skip {
-        Skip::Bytes(n) => n,
-        Skip::FromEnd => return Err(Error::unsupported(path, "byte skip -1 with ascii data")),
-    };
-    std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(io)?;
-    let ty = spec.voxel_type;
-    let integer = !matches!(ty, VoxelType::F32 | VoxelType::F64);
-    let (lo, hi) = ty.range();
-    let mut token = Vec::with_capacity(MAX_TOKEN + 1);
-    // The volumes before the one read.
-    let before = spec.volumes.0 * count;
-    for read in 0..before {
-        if !next_token(&mut reader, &mut token).map_err(io)? {
-            return Err(Error::format(
-                path,
-                format!(
-                    "truncated ascii data: {read} values before volume {} of {before}",
-                    spec.volumes.0
-                ),
-            ));
-        }
-    }
-    while next_token(&mut reader, &mut token).map_err(io)? {
-        if out.len() == count {
-            if spec.allow_trailing() {
-                break;
-            }
-            return Err(Error::format(
-                path,
-                format!("ascii data holds more than the {count} values the header describes"),
-            ));
-        }
-        let bad = |why: &str| {
-            Error::format(
-                path,
-                format!("ascii data, value {}: {} {why}", out.len(), quote(&token)),
-            )
-        };
-        let v: f64 = std::str::from_utf8(&token)
-            .ok()
-            .filter(|_| token.len() <= MAX_TOKEN)
-            .and_then(|t| t.parse().ok())
-            .ok_or_else(|| bad("is not a number"))?;
-        if integer && !(v.fract() == 0.0 && (lo..=hi).contains(&v)) {
-            return Err(bad(&format!("is not a {ty} value ({lo} to {hi})")));
-        }
-        out.push(match spec.scale {
-            Some((m, b)) => (v * m + b) as f32,
-            None => v as f32,
-        });
-    }
-    if out.len() < count {
-        return Err(Error::format(
-            path,
-            format!(
-                "truncated ascii data: expected {count} values, found {}",
-                out.len()
-            ),
-        ));
-    }
-    Ok(out)
 }
 
 /// The error for volume `volume` of a file that holds `count`.

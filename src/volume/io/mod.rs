@@ -5,6 +5,7 @@ mod data;
 pub mod dicom;
 mod folder;
 mod limits;
+pub mod mapped;
 mod metaimage;
 mod nifti;
 mod nrrd;
@@ -272,10 +273,10 @@ impl Read0 {
         dims: [usize; 3],
         spacing: [f64; 3],
         ty: crate::volume::VoxelType,
-        voxels: Vec<f32>,
+        voxels: crate::volume::Voxels,
         notes: Vec<String>,
     ) -> Result<Self> {
-        let volume = Volume::new(dims, spacing, ty, voxels)
+        let volume = Volume::from_voxels(dims, spacing, ty, voxels)
             .map_err(|e| Error::format(path, e.to_string()))?;
         Ok(Self {
             volume,

@@ -16,7 +16,7 @@ use super::{LoadOptions, Read0, Staged, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::geometry::world::Quaternion;
-use crate::volume::voxel::encode_le;
+use crate::volume::voxel::write_le;
 use crate::volume::{Endian, Volume, VoxelType};
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
@@ -304,13 +304,7 @@ pub(crate) fn stage(path: &Path, volume: &Volume, gzip: bool) -> Result<Staged> 
 
 fn write_body(out: &mut impl Write, header: &[u8; 352], volume: &Volume) -> std::io::Result<()> {
     out.write_all(header)?;
-    let mut bytes = Vec::new();
-    for chunk in volume.voxels().chunks(1 << 16) {
-        bytes.clear();
-        encode_le(chunk, volume.voxel_type(), &mut bytes);
-        out.write_all(&bytes)?;
-    }
-    Ok(())
+    write_le(volume.data(), volume.voxel_type(), out)
 }
 
 /// The quaternion's `(b, c, d)` as f32. Near a rotation of 180° (`a` close to 0, as for LPS or

@@ -12,7 +12,7 @@ use tiff::tags::{ResolutionUnit, Tag};
 use super::data::{check_budget, voxel_buffer};
 use super::{LoadOptions, Read0, tiff_ifd};
 use crate::error::{Error, Result};
-use crate::volume::VoxelType;
+use crate::volume::{VoxelType, Voxels};
 
 type Tiff = Decoder<BufReader<File>>;
 
@@ -233,7 +233,14 @@ pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
             .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
         dec = decode(path, (dec, len), index, first, &mut buffer, out)?.0;
     }
-    Read0::new(path, dims, spacing, first.ty, voxels, Vec::new())
+    Read0::new(
+        path,
+        dims,
+        spacing,
+        first.ty,
+        Voxels::from_f32(voxels),
+        Vec::new(),
+    )
 }
 
 /// The last run of digits in a file name, for ordering slices.
@@ -309,7 +316,14 @@ pub(crate) fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
         name(&files[0]),
         name(&files[files.len() - 1])
     )];
-    Read0::new(dir, dims, spacing, first.ty, voxels, notes)
+    Read0::new(
+        dir,
+        dims,
+        spacing,
+        first.ty,
+        Voxels::from_f32(voxels),
+        notes,
+    )
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@ use super::registers::{
 use super::{AHEAD, LANES};
 use crate::measure::{Run, RunEnds};
 use crate::view::rate::{BinSampler, Walker};
+use crate::volume::Voxel;
 use crate::volume::cells::MIXED;
 
 /// The vector constants of one walk.
@@ -127,7 +128,12 @@ impl Group {
     /// Walks `chunk.steps` steps from step `chunk.start`: reads the labels of the cells, and
     /// queues the samples in mixed cells (prefetching the cells AHEAD steps on).
     #[target_feature(enable = "avx2")]
-    pub(super) fn read(&mut self, chunk: &mut Chunk, c: &Consts, sampler: &BinSampler) {
+    pub(super) fn read<T: Voxel>(
+        &mut self,
+        chunk: &mut Chunk,
+        c: &Consts,
+        sampler: &BinSampler<T>,
+    ) {
         let cells = sampler.cells();
         chunk.missing = [0; CHUNK];
         // First the labels: no step waits for another's, so many are read at once...

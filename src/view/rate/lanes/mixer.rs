@@ -8,10 +8,11 @@ use super::chunk::{CELL, Chunk, SLOT};
 use super::registers::{Narrow, bits_of};
 use crate::geometry::lattice::FIXED_BITS;
 use crate::view::rate::BinSampler;
+use crate::volume::Voxel;
 
 /// What the vector walk needs to interpolate and quantize samples in mixed cells.
-pub(super) struct Mixer<'a> {
-    pub(super) voxels: &'a [f32],
+pub(super) struct Mixer<'a, T> {
+    pub(super) voxels: &'a [T],
     /// Offsets of a cell's eight corners from its lower one, in the order of
     /// `Interpolator::interpolate`.
     pub(super) corners: [usize; 8],
@@ -21,11 +22,11 @@ pub(super) struct Mixer<'a> {
     pub(super) last: __m256i,
 }
 
-impl<'a> Mixer<'a> {
+impl<'a, T: Voxel> Mixer<'a, T> {
     /// The mixer of `sampler`, or `None` when its quantizer has a zero range (a constant volume,
     /// whose mixed cells are left to the scalar path).
     #[target_feature(enable = "avx2")]
-    pub(super) fn new(sampler: &BinSampler<'a>) -> Option<Self> {
+    pub(super) fn new(sampler: &BinSampler<'a, T>) -> Option<Self> {
         let (min, range, bins) = sampler.quantizer().formula();
         let [x, y, z] = sampler.corner_steps();
         (range > 0.0).then(|| Self {
@@ -39,7 +40,7 @@ impl<'a> Mixer<'a> {
     }
 }
 
-impl Mixer<'_> {
+impl<T: Voxel> Mixer<'_, T> {
     /// The bins of eight trilinear samples in the cells `cell` whose coordinates have the
     /// fractional parts `low` (in fixed point), and the lanes whose sample is missing (a NaN
     /// corner): the same as `BinSampler::inner_bin`, eight at a time.
@@ -51,7 +52,7 @@ impl Mixer<'_> {
         let mut corners = [Narrow::default(); 8];
         for (l, &base) in base.0.iter().enumerate() {
             for (corner, &offset) in corners.iter_mut().zip(&self.corners) {
-                corner.0[l] = self.voxels[base as usize + offset].to_bits();
+                corner.0[l] = self.voxels[base as usize + offset].to_f32().to_bits();
             }
         }
         let c: [__m256; 8] = std::array::from_fn(|k| _mm256_castsi256_ps(corners[k].get()));

@@ -40,6 +40,7 @@ use std::arch::x86_64::*;
 use super::BinSampler;
 use super::{Walker, mixed_bin};
 use crate::measure::DenseCounts;
+use crate::volume::Voxel;
 use chunk::{CHUNK, Chunk};
 use group::{Consts, Group};
 use mixer::Mixer;
@@ -51,13 +52,18 @@ const LANES: usize = 8;
 const AHEAD: usize = 16;
 
 /// Whether this processor has AVX2, and `sampler`'s cells can be indexed by 32-bit lanes.
-pub(super) fn available(sampler: &BinSampler) -> bool {
+pub(super) fn available<T: Voxel>(sampler: &BinSampler<T>) -> bool {
     is_x86_feature_detected!("avx2") && i32::try_from(sampler.cells().len()).is_ok()
 }
 
 /// Resolves the queue of `chunk` one entry at a time, through the scalar path: for rays on the
 /// grid, and constant volumes. `walkers` are the group's, at the start of their inner spans.
-fn resolve_one_by_one(chunk: &mut Chunk, walkers: &[Walker], step: [i64; 3], sampler: &BinSampler) {
+fn resolve_one_by_one<T: Voxel>(
+    chunk: &mut Chunk,
+    walkers: &[Walker],
+    step: [i64; 3],
+    sampler: &BinSampler<T>,
+) {
     for k in 0..chunk.len {
         let (t, l) = chunk.slot(k);
         let w = &walkers[l];
@@ -73,10 +79,10 @@ fn resolve_one_by_one(chunk: &mut Chunk, walkers: &[Walker], step: [i64; 3], sam
 /// The inner spans of `walkers` (in tile order), eight neighbouring rays at a time, leaving
 /// each at the end of its span with its run up to date.
 #[target_feature(enable = "avx2")]
-pub(super) fn walk(
+pub(super) fn walk<T: Voxel>(
     walkers: &mut [Walker],
     step: [i64; 3],
-    sampler: &BinSampler,
+    sampler: &BinSampler<T>,
     counts: &mut DenseCounts,
 ) {
     // Samples left are counted in signed 32-bit lanes.

@@ -12,7 +12,7 @@ use super::super::Staged;
 use super::type_name;
 use crate::error::Result;
 use crate::volume::Volume;
-use crate::volume::voxel::encode_le;
+use crate::volume::voxel::write_le;
 
 /// How [`write_nrrd`] stores the voxels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -80,12 +80,7 @@ fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Re
     } else {
         Box::new(&mut out)
     };
-    let mut bytes = Vec::new();
-    for chunk in volume.voxels().chunks(1 << 16) {
-        bytes.clear();
-        encode_le(chunk, ty, &mut bytes);
-        sink.write_all(&bytes)?;
-    }
+    write_le(volume.data(), ty, &mut sink)?;
     drop(sink);
     out.flush()
 }

@@ -1,0 +1,175 @@
+//! Files mapped into memory, and what happens when one shrinks under the map.
+//!
+//! Uncompressed voxels stored as they are held are read in place from a read-only map of their
+//! file (docs/formats.md, "How voxels are held"): no copy, and pages the kernel can drop. The
+//! price of a map is that another process may truncate the file while it is mapped; reading a
+//! page past the new end then raises SIGBUS, which would kill the process without a word. So
+//! every map is registered here with a one-line message naming its file, and
+//! [`install_fault_handler`] (which the `slabscope` binary calls at start) turns SIGBUS on a
+//! registered map into that line on stderr and exit status 1. A library user who does not call it
+//! gets the default action of SIGBUS (the process ends) in that case.
+
+#![allow(unsafe_code)]
+
+use std::fs::File;
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicPtr, AtomicUsize, Ordering};
+
+use crate::volume::voxels::MappedFile;
+
+/// Maps registered at once: more maps than this are simply not registered (a fault in one of
+/// them gets the default action).
+const SLOTS: usize = 256;
+
+/// A registered map: its address range and the message that names its file (a leaked
+/// `Box<[u8]>`, freed when the map is dropped).
+struct Slot {
+    start: AtomicUsize,
+    len: AtomicUsize,
+    message: AtomicPtr<u8>,
+    message_len: AtomicUsize,
+}
+
+#[allow(clippy::declare_interior_mutable_const)]
+const FREE: Slot = Slot {
+    start: AtomicUsize::new(0),
+    len: AtomicUsize::new(0),
+    message: AtomicPtr::new(std::ptr::null_mut()),
+    message_len: AtomicUsize::new(0),
+};
+
+static SLOTS_IN_USE: [Slot; SLOTS] = [FREE; SLOTS];
+
+/// Maps `file` (opened from `path`) read-only and registers the map, so that a fault in it is
+/// reported naming `path`.
+pub(crate) fn map(file: &File, path: &Path) -> std::io::Result<Arc<MappedFile>> {
+    // SAFETY: the map is read-only. Another process may truncate the file while it is mapped;
+    // a read of a page past the new end then raises SIGBUS, which `install_fault_handler`
+    // reports (see the module documentation). Writes by others show through, which is no
+    // memory-safety matter for plain numbers.
+    let map = unsafe { memmap2::Mmap::map(file) }?;
+    let slot = register(&map, path);
+    Ok(MappedFile::new(map, slot))
+}
+
+/// Registers the range of `map`; the slot taken, if any.
+fn register(map: &memmap2::Mmap, path: &Path) -> Option<usize> {
+    if map.is_empty() {
+        return None;
+    }
+    let text = format!(
+        "slabscope: error: {}: the file was cut short while slabscope was reading it (it is \
+         mapped into memory, and another program truncated it)\n",
+        crate::error::shown(path)
+    );
+    let message: Box<[u8]> = text.into_bytes().into_boxed_slice();
+    let message_len = message.len();
+    let message = Box::into_raw(message).cast::<u8>();
+    for (i, slot) in SLOTS_IN_USE.iter().enumerate() {
+        if slot
+            .start
+            .compare_exchange(0, usize::MAX, Ordering::AcqRel, Ordering::Relaxed)
+            .is_ok()
+        {
+            slot.message.store(message, Ordering::Release);
+            slot.message_len.store(message_len, Ordering::Release);
+            slot.len.store(map.len(), Ordering::Release);
+            slot.start.store(map.as_ptr() as usize, Ordering::Release);
+            return Some(i);
+        }
+    }
+    // SAFETY: `message` came from `Box::into_raw` of a slice of this length just above and was
+    // not stored anywhere.
+    drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(message, message_len)) });
+    None
+}
+
+/// Frees slot `i`, taken by [`register`], before its map is dropped.
+pub(crate) fn unregister(i: usize) {
+    let slot = &SLOTS_IN_USE[i];
+    slot.start.store(usize::MAX, Ordering::Release);
+    let message = slot.message.swap(std::ptr::null_mut(), Ordering::AcqRel);
+    let len = slot.message_len.load(Ordering::Acquire);
+    if !message.is_null() {
+        // SAFETY: `register` stored a pointer from `Box::into_raw` of a slice of `len` bytes, and
+        // the swap above took it out, so it is freed once.
+        drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(message, len)) });
+    }
+    slot.start.store(0, Ordering::Release);
+}
+
+/// The message of the registered map holding `address`, as a pointer and length.
+fn message_for(address: usize) -> Option<(*const u8, usize)> {
+    SLOTS_IN_USE.iter().find_map(|slot| {
+        let start = slot.start.load(Ordering::Acquire);
+        let len = slot.len.load(Ordering::Acquire);
+        let inside = start != 0 && start != usize::MAX && (start..start + len).contains(&address);
+        let message = slot.message.load(Ordering::Acquire);
+        (inside && !message.is_null()).then(|| {
+            (
+                message.cast_const(),
+                slot.message_len.load(Ordering::Acquire),
+            )
+        })
+    })
+}
+
+/// Installs the SIGBUS handler that reports a fault in a registered map (a file truncated while
+/// mapped) as one line naming the file on stderr and ends the process with status 1. A SIGBUS
+/// anywhere else gets the default action, as without the handler. Call it once, early.
+pub fn install_fault_handler() {
+    // SAFETY: a zeroed sigaction is a valid value; the handler only reads atomics, calls write(2)
+    // and _exit(2), which are async-signal-safe, or restores the default action and returns so
+    // that the fault repeats under it.
+    unsafe {
+        let mut action: libc::sigaction = std::mem::zeroed();
+        action.sa_sigaction = on_fault as *const () as usize;
+        action.sa_flags = libc::SA_SIGINFO;
+        libc::sigemptyset(&raw mut action.sa_mask);
+        libc::sigaction(libc::SIGBUS, &raw const action, std::ptr::null_mut());
+    }
+}
+
+extern "C" fn on_fault(signal: libc::c_int, info: *mut libc::siginfo_t, _: *mut libc::c_void) {
+    // SAFETY: the kernel passes a valid siginfo for a handler installed with SA_SIGINFO.
+    let address = unsafe { (*info).si_addr() } as usize;
+    if let Some((message, len)) = message_for(address) {
+        // SAFETY: the message is a live allocation of `len` bytes (freed only after its slot is
+        // cleared); write and _exit are async-signal-safe.
+        unsafe {
+            libc::write(2, message.cast(), len);
+            libc::_exit(1);
+        }
+    }
+    // SAFETY: restoring the default action is async-signal-safe; returning re-runs the faulting
+    // instruction, which then ends the process as SIGBUS always has.
+    unsafe {
+        libc::signal(signal, libc::SIG_DFL);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn maps_are_registered_until_dropped() {
+        let mut file = tempfile::NamedTempFile::new().unwrap();
+        std::io::Write::write_all(&mut file, &[7u8; 100]).unwrap();
+        let mapped = map(file.as_file(), file.path()).unwrap();
+        let start = mapped.bytes().as_ptr() as usize;
+        let (message, len) = message_for(start + 50).expect("registered");
+        // SAFETY: the map is alive, so its message is.
+        let text = unsafe { std::slice::from_raw_parts(message, len) };
+        let text = String::from_utf8(text.to_vec()).unwrap();
+        assert!(text.contains(&file.path().display().to_string()), "{text}");
+        assert!(text.ends_with('\n') && text.matches('\n').count() == 1);
+        assert!(message_for(start + 100).is_none(), "one past the end");
+        drop(mapped);
+        assert!(
+            message_for(start + 50).is_none(),
+            "unregistered when dropped"
+        );
+    }
+}

@@ -1,0 +1,266 @@
+//! The multiresolution pyramid (docs/design.md §5): pyramid level k + 1 halves every axis of level
+//! k longer than one voxel, each coarse voxel the mean of the (up to) 2×2×2 finite voxels under
+//! it, or for label volumes their most frequent label (ties: the lowest).
+
+use rayon::prelude::*;
+
+use super::voxels::Voxel;
+use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
+
+/// The fewest voxels along every axis that `auto` keeps.
+pub const AUTO_MIN_VOXELS: usize = 128;
+
+/// Which pyramid level to compute on: every voxel, the coarsest level that keeps
+/// [`AUTO_MIN_VOXELS`] along every axis, or a level by number.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Resolution {
+    /// Level 0: every voxel (the paper's method, and the default).
+    #[default]
+    Full,
+    /// The coarsest level with at least [`AUTO_MIN_VOXELS`] voxels along every axis (level 0
+    /// when an axis has fewer at full resolution).
+    Auto,
+    /// Pyramid level K.
+    Level(usize),
+}
+
+impl std::str::FromStr for Resolution {
+    type Err = Error;
+
+    fn from_str(text: &str) -> Result<Self> {
+        match text {
+            "full" => Ok(Self::Full),
+            "auto" => Ok(Self::Auto),
+            _ => text.parse().map(Self::Level).map_err(|_| {
+                Error::invalid("resolution", text, "auto, full or a pyramid level number")
+            }),
+        }
+    }
+}
+
+impl Resolution {
+    /// The pyramid level this resolution picks for a volume of `dims` with `levels` levels below
+    /// it; a level number past the last is an error.
+    pub fn level(self, dims: [usize; 3], levels: usize) -> Result<usize> {
+        match self {
+            Self::Full => Ok(0),
+            Self::Auto => {
+                let mut level = 0;
+                let mut d = dims;
+                while level < levels && coarser_dims(d).iter().all(|&n| n >= AUTO_MIN_VOXELS) {
+                    d = coarser_dims(d);
+                    level += 1;
+                }
+                Ok(level)
+            }
+            Self::Level(k) if k <= levels => Ok(k),
+            Self::Level(k) => Err(Error::invalid(
+                "resolution",
+                k,
+                format!("a pyramid level from 0 to {levels} (each level halves every axis)"),
+            )),
+        }
+    }
+}
+
+/// The dimensions of the next pyramid level: every axis longer than one voxel halved, rounding up.
+#[must_use]
+pub fn coarser_dims(dims: [usize; 3]) -> [usize; 3] {
+    dims.map(|n| n.div_ceil(2))
+}
+
+/// Per axis, how many fine voxels one voxel of the next level spans: 2, or 1 along an axis of
+/// one voxel (which is not halved).
+#[must_use]
+pub fn step(dims: [usize; 3]) -> [usize; 3] {
+    dims.map(|n| if n > 1 { 2 } else { 1 })
+}
+
+/// The voxel-to-world transform of a level whose voxels span `factor` voxels of level 0 per
+/// axis: level 0's transform composed with that scale and a shift of `(factor - 1) / 2` voxels,
+/// so each coarse voxel sits at the centre of the fine voxels it averages (a block cut by the far
+/// edge averages fewer, and its centre may lie up to half a coarse voxel off its grid point).
+#[must_use]
+pub fn level_transform(t: &WorldTransform, factor: [f64; 3]) -> WorldTransform {
+    let mut matrix = t.matrix;
+    for (row, fine) in matrix.iter_mut().zip(t.matrix) {
+        row[3] = fine[3]
+            + (0..3)
+                .map(|k| fine[k] * (factor[k] - 1.0) / 2.0)
+                .sum::<f64>();
+        for k in 0..3 {
+            row[k] = fine[k] * factor[k];
+        }
+    }
+    WorldTransform {
+        matrix,
+        known: t.known,
+    }
+}
+
+/// The next pyramid level of the voxels `fine` (x fastest, dimensions `dims`): block means of
+/// the finite voxels, or with `labels` their most frequent value (ties: the lowest); NaN where a
+/// block has no finite voxel. Returns the voxels and their dimensions.
+#[must_use]
+pub fn downsample<T: Voxel>(fine: &[T], dims: [usize; 3], labels: bool) -> (Vec<f32>, [usize; 3]) {
+    debug_assert_eq!(fine.len(), dims.iter().product::<usize>());
+    let coarse = coarser_dims(dims);
+    let [sx, sy, sz] = step(dims);
+    let [nx, ny, nz] = dims;
+    let plane = coarse[0] * coarse[1];
+    let mut out = vec![0.0f32; plane * coarse[2]];
+    out.par_chunks_mut(plane).enumerate().for_each(|(k, row)| {
+        let mut block = [0.0f32; 8];
+        for j in 0..coarse[1] {
+            for i in 0..coarse[0] {
+                let mut n = 0;
+                for z in k * sz..(k * sz + sz).min(nz) {
+                    for y in j * sy..(j * sy + sy).min(ny) {
+                        let at = nx * (y + ny * z);
+                        for x in i * sx..(i * sx + sx).min(nx) {
+                            let v = fine[at + x];
+                            if !v.is_missing() {
+                                block[n] = v.to_f32();
+                                n += 1;
+                            }
+                        }
+                    }
+                }
+                row[i + coarse[0] * j] = if labels {
+                    mode(&mut block[..n])
+                } else {
+                    mean(&block[..n])
+                };
+            }
+        }
+    });
+    (out, coarse)
+}
+
+/// The mean of `values` (summed in f64), NaN when there are none.
+fn mean(values: &[f32]) -> f32 {
+    if values.is_empty() {
+        return f32::NAN;
+    }
+    (values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64) as f32
+}
+
+/// The most frequent of `values`, the lowest among equally frequent ones; NaN when there are none.
+fn mode(values: &mut [f32]) -> f32 {
+    values.sort_unstable_by(f32::total_cmp);
+    let mut best = (0, f32::NAN);
+    let mut run = 0;
+    for (i, &v) in values.iter().enumerate() {
+        run = if i > 0 && values[i - 1] == v {
+            run + 1
+        } else {
+            1
+        };
+        // Strictly more: the first (lowest) value to reach a count keeps it.
+        if run > best.0 {
+            best = (run, v);
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolutions_pick_levels() {
+        let parse = |t: &str| t.parse::<Resolution>().unwrap();
+        assert_eq!(parse("full").level([512; 3], 9).unwrap(), 0);
+        assert_eq!(parse("auto").level([512; 3], 9).unwrap(), 2, "128³");
+        assert_eq!(parse("auto").level([256, 256, 415], 9).unwrap(), 1);
+        assert_eq!(parse("auto").level([181, 217, 181], 8).unwrap(), 0);
+        assert_eq!(parse("auto").level([512, 512, 45], 9).unwrap(), 0);
+        assert_eq!(parse("3").level([512; 3], 9).unwrap(), 3);
+        assert!(parse("10").level([512; 3], 9).is_err());
+        assert!("coarse".parse::<Resolution>().is_err());
+    }
+
+    #[test]
+    fn means_of_whole_and_edge_blocks() {
+        // 3x2x1: x pairs (0,1) and the edge block (2) alone; z is one voxel and stays.
+        let fine = [1u8, 2, 9, 3, 4, 7];
+        let (c, dims) = downsample(&fine, [3, 2, 1], false);
+        assert_eq!(dims, [2, 1, 1]);
+        assert_eq!(c, vec![2.5, 8.0]);
+        assert_eq!(step([3, 2, 1]), [2, 2, 1]);
+    }
+
+    #[test]
+    fn blocks_of_eight_and_missing_voxels() {
+        let mut fine: Vec<f32> = (0..8).map(|i| i as f32).collect();
+        let (c, _) = downsample(&fine, [2, 2, 2], false);
+        assert_eq!(c, vec![3.5]);
+        fine[7] = f32::NAN;
+        assert_eq!(
+            downsample(&fine, [2, 2, 2], false).0,
+            vec![3.0],
+            "NaN skipped"
+        );
+        let all_missing = [f32::NAN; 8];
+        assert!(downsample(&all_missing, [2, 2, 2], false).0[0].is_nan());
+    }
+
+    #[test]
+    fn labels_take_the_mode_and_the_lowest_on_ties() {
+        let fine = [5u16, 5, 5, 2, 2, 2, 9, 9];
+        assert_eq!(
+            downsample(&fine, [2, 2, 2], true).0,
+            vec![2.0],
+            "3 fives, 3 twos: the lowest"
+        );
+        let fine = [4i16, 4, 4, 1, 1, 7, 7, 7];
+        assert_eq!(downsample(&fine, [2, 2, 2], true).0, vec![4.0]);
+        let fine = [3i16, 8, 8, 3, 3, 1, 1, 8];
+        assert_eq!(downsample(&fine, [2, 2, 2], true).0, vec![3.0]);
+    }
+
+    #[test]
+    fn exact_block_means_on_a_ramp() {
+        let dims = [5, 4, 3];
+        let fine: Vec<i16> = (0..60).map(|i| (i * 7 % 23) as i16 - 11).collect();
+        let (c, cd) = downsample(&fine, dims, false);
+        assert_eq!(cd, [3, 2, 2]);
+        for k in 0..2 {
+            for j in 0..2 {
+                for i in 0..3 {
+                    let mut vals = vec![];
+                    for z in 2 * k..(2 * k + 2).min(3) {
+                        for y in 2 * j..2 * j + 2 {
+                            for x in 2 * i..(2 * i + 2).min(5) {
+                                vals.push(f64::from(fine[x + 5 * (y + 4 * z)]));
+                            }
+                        }
+                    }
+                    let m = (vals.iter().sum::<f64>() / vals.len() as f64) as f32;
+                    assert_eq!(c[i + 3 * (j + 2 * k)], m, "({i}, {j}, {k})");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn coarse_voxels_sit_at_the_centre_of_their_block() {
+        let fine = WorldTransform::ras(
+            [[0.0, 0.0, 2.0], [-1.5, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            [10.0, 20.0, 30.0],
+        );
+        let coarse = level_transform(&fine, [2.0, 2.0, 4.0]);
+        // Coarse (0,0,0) is the mean of fine (0..2, 0..2, 0..4): its centre is (0.5, 0.5, 1.5).
+        let expect = fine.apply([0.5, 0.5, 1.5]);
+        let got = coarse.apply([0.0, 0.0, 0.0]);
+        let far = fine.apply([2.5, 4.5, 5.5]);
+        let got_far = coarse.apply([1.0, 2.0, 1.0]);
+        for m in 0..3 {
+            assert!((expect[m] - got[m]).abs() < 1e-12);
+            assert!((far[m] - got_far[m]).abs() < 1e-12);
+        }
+        assert!(coarse.known);
+    }
+}
