@@ -9,7 +9,7 @@ use std::time::Instant;
 use slabscope::partition::{PartitionParams, partition};
 use slabscope::progress::Monitor;
 use slabscope::render::{
-    DEFAULT_SPREAD, Gap, Layout, Look, Mode, Preset, RenderParams, Renderer, Stack, slice,
+    DEFAULT_SPREAD, Gap, Layout, Mode, Preset, RenderParams, Renderer, Stack, TransferChoice, slice,
 };
 use slabscope::volume::phantom;
 
@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    let look = Look {
+    let look = TransferChoice {
         preset: Preset::Auto,
         colormap: slabscope::render::Colormap::Grey,
         window: None,

@@ -8,7 +8,7 @@
 use std::time::{Duration, Instant};
 
 use slabscope::AnalysisParams;
-use slabscope::triage::{Look, discover, look_all};
+use slabscope::triage::{TriagePlan, discover, look_all};
 use slabscope::volume::io::{NrrdEncoding, write_nrrd};
 use slabscope::volume::phantom;
 use slabscope::{Error, LoadOptions};
@@ -33,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let volumes = discover(&[dir.path().to_path_buf()], &LoadOptions::default())?;
     let describe = |_: &std::path::Path, e: Error| e.to_string();
     for (fast, workers) in [(true, 2), (true, 1), (false, 2)] {
-        let how = Look {
+        let how = TriagePlan {
             load: LoadOptions::default(),
             params: AnalysisParams::default(),
             timeout: Duration::from_secs(60),

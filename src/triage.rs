@@ -349,7 +349,7 @@ pub const COARSE_PHASES: usize = 4;
 
 /// How triage looks at each volume.
 #[derive(Clone, Debug)]
-pub struct Look {
+pub struct TriagePlan {
     /// How to read files.
     pub load: LoadOptions,
     /// How to analyse them.
@@ -366,7 +366,7 @@ pub struct Look {
 
 /// What triage gives of one volume: its row, and its contact-sheet cell when asked for and the
 /// volume could be drawn.
-pub struct Looked {
+pub struct TriageOutcome {
     /// The row.
     pub row: TriageRow,
     /// The cell.
@@ -377,11 +377,11 @@ pub struct Looked {
 /// reported as a fraction), or the error of either as `describe` words it; and its cell.
 pub fn look(
     entry: &Entry,
-    how: &Look,
+    how: &TriagePlan,
     progress: &(dyn Fn(f64) + Sync),
     describe: &dyn Fn(Error) -> String,
-) -> Looked {
-    let failed = |row: TriageRow| Looked { row, cell: None };
+) -> TriageOutcome {
+    let failed = |row: TriageRow| TriageOutcome { row, cell: None };
     let timeout = how.timeout;
     let opts = LoadOptions {
         series: entry.series.clone().or_else(|| how.load.series.clone()),
@@ -435,7 +435,7 @@ pub fn look(
     let _ = done.send(());
     let _ = watchdog.join();
     match result {
-        Ok((analysis, cell)) => Looked {
+        Ok((analysis, cell)) => TriageOutcome {
             row: row.analysed(&analysis),
             cell,
         },
@@ -453,23 +453,23 @@ pub fn look(
 /// whole budget. `describe` words an error of a volume.
 pub fn look_all(
     volumes: &[Entry],
-    how: &Look,
+    how: &TriagePlan,
     workers: usize,
     describe: &(dyn Fn(&Path, Error) -> String + Sync),
-    mut emit: impl FnMut(usize, Looked),
+    mut emit: impl FnMut(usize, TriageOutcome),
 ) {
     let workers = workers.min(volumes.len()).max(1);
     let next = AtomicUsize::new(0);
     // Read: looking within a share of the budget; write: alone, with all of it.
     let gate = RwLock::new(());
-    let shared = Look {
+    let shared = TriagePlan {
         load: LoadOptions {
             max_memory: how.load.max_memory / workers as u64,
             ..how.load.clone()
         },
         ..how.clone()
     };
-    let (tx, rx) = std::sync::mpsc::channel::<(usize, Looked)>();
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, TriageOutcome)>();
     std::thread::scope(|scope| {
         for _ in 0..workers {
             let (tx, next, gate, shared) = (tx.clone(), &next, &gate, &shared);

@@ -9,8 +9,8 @@ use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
 use slabscope::geometry::min_spacing;
 use slabscope::render::{
-    CameraParams, Colormap, Gap, Layout, Look, Mode, Preset, RenderParams, Renderer, Stack, encode,
-    slice,
+    CameraParams, Colormap, Gap, Layout, Mode, Preset, RenderParams, Renderer, Stack,
+    TransferChoice, encode, slice,
 };
 use tiny_skia::Pixmap;
 
@@ -82,8 +82,8 @@ pub struct LookArgs {
 
 impl LookArgs {
     /// The library's look.
-    pub fn look(&self) -> Look {
-        Look {
+    pub fn look(&self) -> TransferChoice {
+        TransferChoice {
             preset: match self.preset {
                 PresetArg::Auto => Preset::Auto,
                 PresetArg::CtBone => Preset::CtBone,

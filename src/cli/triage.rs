@@ -9,7 +9,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use slabscope::render::{ImageOutput, encode, sheet};
-use slabscope::triage::{Entry, Look, Looked, TriageRow, discover, shard};
+use slabscope::triage::{Entry, TriageOutcome, TriagePlan, TriageRow, discover, shard};
 use slabscope::{Error, Progress};
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -135,7 +135,7 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
     let mut failed = 0;
     let mut cells = Vec::new();
     let mut result = Ok(());
-    look_all(&volumes, args, |i, Looked { row, cell }| {
+    look_all(&volumes, args, |i, TriageOutcome { row, cell }| {
         bar.set(Progress {
             phase: "triage",
             fraction: (i + 1) as f64 / volumes.len() as f64,
@@ -201,8 +201,8 @@ fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
 
 /// Every volume's row (and cell), looked at as `slabscope::triage::look_all` does, errors worded
 /// in the CLI's terms and without the path the row names; handed to `emit` in order.
-fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, Looked)) {
-    let how = Look {
+fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, TriageOutcome)) {
+    let how = TriagePlan {
         load: args.load.options(),
         params: args.analysis.params(false),
         timeout: Duration::from_secs_f64(args.timeout),

@@ -21,7 +21,9 @@ use serde::Serialize;
 pub use camera::{Camera, CameraParams};
 pub use layout::{DEFAULT_SPREAD, Gap, Layout, MIN_GAP, Placement, Stack};
 pub use output::{Image, ImageOutput, encode, paste_centred};
-pub use transfer::{Colormap, HISTOGRAM_BINS, Look, MAX_LABELS, Preset, Transfer, label_values};
+pub use transfer::{
+    Colormap, HISTOGRAM_BINS, MAX_LABELS, Preset, Transfer, TransferChoice, label_values,
+};
 
 use crate::error::{Error, Result};
 use crate::geometry::{dot, min_spacing};
@@ -175,7 +177,7 @@ impl<'a> Renderer<'a> {
 
     /// The transfer function of `look` for samples `step` mm apart: a label volume's
     /// categorical colours when `look` is the automatic preset with no window.
-    pub fn transfer(&self, look: Look, step: f64) -> Result<Transfer> {
+    pub fn transfer(&self, look: TransferChoice, step: f64) -> Result<Transfer> {
         let reference = min_spacing(self.volume.spacing());
         match &self.labels {
             Some(labels) if look.preset == Preset::Auto && look.window.is_none() => {
@@ -206,7 +208,7 @@ impl<'a> Renderer<'a> {
         params.check()?;
         let spacing = self.volume.spacing();
         let step = params.step * min_spacing(spacing);
-        let look = Look {
+        let look = TransferChoice {
             preset: params.preset,
             colormap: params.colormap,
             window: params.window,

@@ -5,7 +5,9 @@ use tiny_skia::{Color, Pixmap};
 
 use super::overlay::draw_digits;
 use super::slice::{SliceParams, slice};
-use super::{DEFAULT_SPREAD, Gap, Layout, Look, MAX_PIXELS, RenderParams, Renderer, paste_centred};
+use super::{
+    DEFAULT_SPREAD, Gap, Layout, MAX_PIXELS, RenderParams, Renderer, TransferChoice, paste_centred,
+};
 use crate::error::{Error, Result};
 use crate::geometry::min_spacing;
 use crate::partition::Partition;
@@ -58,7 +60,7 @@ pub fn cell(
     monitor: &Monitor,
 ) -> Result<Pixmap> {
     let renderer = Renderer::new(volume)?;
-    let look = Look {
+    let look = TransferChoice {
         preset: super::Preset::Auto,
         colormap: super::Colormap::Grey,
         window: None,

@@ -193,7 +193,7 @@ pub enum Ask {
 
 /// The look of the exploded view.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Look {
+pub struct PictureSettings {
     /// Camera.
     pub camera: CameraParams,
     /// Spread.
@@ -212,10 +212,10 @@ pub struct Look {
     pub solo: bool,
 }
 
-impl Look {
+impl PictureSettings {
     /// The library's look.
-    pub fn colours(&self) -> slabscope::render::Look {
-        slabscope::render::Look {
+    pub fn colours(&self) -> slabscope::render::TransferChoice {
+        slabscope::render::TransferChoice {
             preset: self.preset,
             colormap: self.colormap,
             window: self.window,
@@ -223,7 +223,7 @@ impl Look {
     }
 }
 
-impl Default for Look {
+impl Default for PictureSettings {
     fn default() -> Self {
         Self {
             camera: CameraParams::default(),
@@ -252,7 +252,7 @@ pub struct RenderRequest {
     /// The histories, for the slabs' geometry and unknown NMIs.
     pub histories: Option<Arc<Histories>>,
     /// Camera, gaps and colours.
-    pub look: Look,
+    pub look: PictureSettings,
     /// The selected slab.
     pub highlight: Option<usize>,
     /// Preview size in cells.
@@ -287,7 +287,7 @@ pub struct ExportRequest {
     /// The position in the method's history.
     pub position: usize,
     /// The look of the picture.
-    pub look: Look,
+    pub look: PictureSettings,
     /// The selected slab.
     pub highlight: Option<usize>,
 }

@@ -7,7 +7,8 @@ use slabscope::partition::{Method, PartitionParams, Stop, partition};
 use slabscope::progress::Monitor;
 use slabscope::render::slice::{self, SliceParams};
 use slabscope::render::{
-    CameraParams, Colormap, Gap, Layout, Look, Mode, Preset, RenderParams, Renderer, Stack,
+    CameraParams, Colormap, Gap, Layout, Mode, Preset, RenderParams, Renderer, Stack,
+    TransferChoice,
 };
 use slabscope::volume::phantom;
 use slabscope::{Volume, VoxelType};
@@ -278,7 +279,7 @@ fn fixed_scenes_match_their_reference_images() {
     check_reference("labels-cut", &image.pixmap);
     let transfer = renderer
         .transfer(
-            Look {
+            TransferChoice {
                 preset: Preset::Auto,
                 colormap: Colormap::Grey,
                 window: None,

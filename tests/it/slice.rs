@@ -3,7 +3,7 @@
 
 use slabscope::geometry::WorldTransform;
 use slabscope::render::slice::{SliceFrame, SliceParams, faces, slice};
-use slabscope::render::{Colormap, Look, Preset, Renderer, Stack, Transfer};
+use slabscope::render::{Colormap, Preset, Renderer, Stack, Transfer, TransferChoice};
 use slabscope::{Volume, VoxelType};
 
 const N: usize = 21;
@@ -35,7 +35,7 @@ const RAS: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 const LPS: [[f64; 3]; 3] = [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]];
 
 fn grey(v: &Volume) -> Transfer {
-    let look = Look {
+    let look = TransferChoice {
         preset: Preset::Auto,
         colormap: Colormap::Grey,
         window: Some((0.0, 1000.0)),

@@ -228,14 +228,14 @@ fn a_volume_past_the_timeout_is_a_row_with_that_error() {
 
 #[test]
 fn the_fast_path_finds_the_full_searchs_axis_on_a_body() {
-    use slabscope::triage::{Look, look};
+    use slabscope::triage::{TriagePlan, look};
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("body.nrrd");
     let v = slabscope::volume::phantom::body([64, 64, 96], 3).unwrap();
     slabscope::volume::io::write_nrrd(&path, &v, slabscope::volume::io::NrrdEncoding::Raw, false)
         .unwrap();
     let row = |fast: bool| {
-        let how = Look {
+        let how = TriagePlan {
             load: slabscope::LoadOptions::default(),
             params: slabscope::AnalysisParams::default(),
             timeout: std::time::Duration::from_secs(600),

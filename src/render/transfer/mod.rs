@@ -27,7 +27,7 @@ const FACE_RAMP: f32 = 0.04;
 /// What a transfer function is made of: a preset, a colour map and, optionally, a window that
 /// replaces the preset's.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Look {
+pub struct TransferChoice {
     /// Preset.
     pub preset: Preset,
     /// Colour map.
@@ -78,7 +78,7 @@ impl Transfer {
         reference: f64,
     ) -> Result<Self> {
         let h = volume.histogram(HISTOGRAM_BINS)?;
-        let look = Look {
+        let look = TransferChoice {
             preset,
             colormap,
             window: None,
@@ -96,11 +96,11 @@ impl Transfer {
     pub fn with_histogram(
         s: Stats,
         h: &[u64],
-        look: Look,
+        look: TransferChoice,
         step: f64,
         reference: f64,
     ) -> Result<Self> {
-        let Look {
+        let TransferChoice {
             preset,
             colormap,
             window: custom,

@@ -31,7 +31,7 @@ fn a_window_replaces_the_preset() {
     let data = (0..1000).map(|i| i as f32).collect();
     let v = Volume::new([10, 10, 10], [1.0; 3], VoxelType::F32, data).unwrap();
     let h = v.histogram(HISTOGRAM_BINS).unwrap();
-    let look = Look {
+    let look = TransferChoice {
         preset: Preset::CtBone,
         colormap: Colormap::Grey,
         window: Some((400.0, 600.0)),

@@ -131,7 +131,7 @@ impl Jobs {
     fn triage(&self, paths: Vec<slabscope::triage::Entry>, params: AnalysisParams) {
         let (events, load) = (self.events.clone(), self.load.clone());
         std::thread::spawn(move || {
-            let how = slabscope::triage::Look {
+            let how = slabscope::triage::TriagePlan {
                 load,
                 params,
                 timeout: std::time::Duration::from_secs(60),
@@ -209,7 +209,7 @@ mod tests {
     use super::worker::render;
     use super::*;
     use crate::term::{Caps, Graphics};
-    use crate::tui::event::Look;
+    use crate::tui::event::PictureSettings;
 
     #[test]
     fn messages_of_a_volume_no_longer_open_are_dropped() {
@@ -247,7 +247,7 @@ mod tests {
             axis: [0.0, 0.0, 1.0],
             nmi: None,
             histories: None,
-            look: Look::default(),
+            look: PictureSettings::default(),
             highlight: None,
             cells,
             slice: None,

@@ -16,7 +16,7 @@ use tiny_skia::Pixmap;
 
 use crate::term::image::encode;
 use crate::term::{Caps, Graphics};
-use crate::tui::event::{Event, JobMsg, Look, RenderRequest, Rendered, SliceRequest};
+use crate::tui::event::{Event, JobMsg, PictureSettings, RenderRequest, Rendered, SliceRequest};
 
 /// The render worker: owns the volume and its renderer, renders the newest request, encodes it
 /// for the terminal and sends it back.
@@ -178,7 +178,7 @@ impl SliceView<'_> {
     fn draw(
         &self,
         renderer: &Renderer,
-        look: &Look,
+        look: &PictureSettings,
     ) -> anyhow::Result<(Pixmap, String, (f32, f32))> {
         let volume = renderer.volume();
         let spacing = volume.spacing();

@@ -6,13 +6,13 @@ use ratatui::widgets::{Paragraph, Widget, Wrap};
 use slabscope::render::{Gap, Mode};
 
 use crate::term::image::{TermImage, hide};
-use crate::tui::event::{Load, Look};
+use crate::tui::event::{Load, PictureSettings};
 use crate::tui::theme::Theme;
 
 /// The preview pane's state.
 pub struct PreviewPane {
     /// Camera, gaps and colours.
-    pub look: Look,
+    pub look: PictureSettings,
     /// The image, encoded for the terminal.
     pub image: Load<Box<TermImage>>,
     /// Something (the help) covers the pane: the image is taken away until it closes, and
@@ -44,7 +44,7 @@ impl PreviewPane {
     /// An empty pane.
     pub fn new(theme: Theme) -> Self {
         Self {
-            look: Look::default(),
+            look: PictureSettings::default(),
             image: Load::Idle,
             covered: false,
             hide: String::new(),
