@@ -2,7 +2,7 @@
 //! default (cut faces, automatic transfer function) and plain DVR and MIP, and the slice strip of
 //! `render --faces`; writes the last image of each to /tmp for looking at.
 //!
-//! `cargo run --release --example render_bench`
+//! `cargo bench --bench render_bench`
 
 use std::time::Instant;
 

@@ -2,7 +2,7 @@
 //! seeds written as NRRD to a temporary folder, then walked, loaded and analysed one after the
 //! other as `slabscope triage` does (view search and a 4-slab partition each).
 //!
-//! `cargo run --release --example triage_bench` (as `slabscope triage` does: two volumes at a
+//! `cargo bench --bench triage_bench` (as `slabscope triage` does: two volumes at a
 //! time; also one at a time, and the full search)
 
 use std::time::{Duration, Instant};

@@ -2,7 +2,7 @@
 //! Table 1 sizes, beside the paper's figures: on the paper's single lattice, and at the defaults
 //! (ranked by the mean over 8 lattice phases).
 //!
-//! `cargo run --release --example view_bench [-- --quick]`
+//! `cargo bench --bench view_bench [-- --quick]`
 
 use std::time::Instant;
 

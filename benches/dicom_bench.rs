@@ -2,7 +2,7 @@
 //! (one file a slice, i16, rescaled, shuffled names) written to a temporary folder, and the same
 //! voxels as one headerless raw file. Prints the best of three loads of each (warm page cache).
 //!
-//! `cargo run --release --example dicom_bench [NX NY NZ]`
+//! `cargo bench --bench dicom_bench [-- NX NY NZ]`
 
 use std::path::Path;
 use std::time::Instant;

@@ -1,7 +1,7 @@
 //! Reproduces the paper's Table 1 on `body` phantoms of its sizes: the best view, top-down P(K)
 //! and bottom-up G(K), in seconds beside the paper's (a 2008 quad-core), and the peak memory.
 //!
-//! `cargo run --release --example table1 [-- --quick]` (`--quick`: the first volume only)
+//! `cargo bench --bench table1 [-- --quick]` (`--quick`: the first volume only)
 
 use std::time::Instant;
 

@@ -4,7 +4,7 @@
 //! (`RssAnon` of `/proc/PID/status`, sampled every 2 ms: mapped file pages the kernel can drop
 //! are not in it).
 //!
-//! `cargo build --release && cargo run --release --example big_bench -- [--sizes 256x256x415,512x512x512,1024x1024x1024]
+//! `cargo build --release && cargo bench --bench big_bench -- [--sizes 256x256x415,512x512x512,1024x1024x1024]
 //! [--runs 3] [--dir DIR] [--bin PATH ...]`
 //!
 //! The volumes are written once into `DIR` (default `target/bench-volumes`) after checking the
