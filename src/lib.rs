@@ -33,13 +33,15 @@
 //! (each depends only on those above it; `docs/design.md` gives the layer order):
 //!
 //! - [`measure`]: entropy, block entropies, Jensen-Shannon divergence, MI and NMI: pure maths.
-//! - [`geometry`]: vectors, the [`Axis`] type (parsed, printed, canonical) and an axis's frame.
+//! - [`geometry`]: vectors, the [`Axis`] type (parsed, printed, canonical), an axis's frame, the
+//!   ray lattice and its sampling parameters, world transforms.
 //! - [`error`]: the [`Error`] enum, grouped by concern, with the parameter's name and value as data.
 //! - [`progress`]: the [`Monitor`] every long computation takes: phase, progress and cancellation.
-//! - [`volume`]: the [`Volume`], its statistics and quantization (docs/design.md §2), trilinear
-//!   interpolation, the cell map, synthetic phantoms, and `io/` with one reader per format.
-//! - [`view`]: the most structured view (paper §3.1, §4): the icosphere, the ray lattice and the
-//!   sampling parameters, the entropy rate of an axis and the search over the sphere.
+//! - [`volume`]: the [`Volume`] (voxels in their own type, owned or mapped), its statistics and
+//!   quantization (docs/design.md §2), trilinear interpolation, the cell map, the pyramid,
+//!   synthetic phantoms, and `io/` with one reader per format.
+//! - [`view`]: the most structured view (paper §3.1, §4): the icosphere, the entropy rate of an
+//!   axis and the search over the sphere.
 //! - [`partition`](mod@partition): slabs along an axis (paper §5): slice stacks, top-down (§5.1), bottom-up
 //!   (§5.2), the optimum, and [`Histories`], all three step histories read at any position.
 //! - [`analysis`]: the view search and the partition together, as one call.
