@@ -48,6 +48,7 @@ pub(super) struct Group {
 }
 
 impl Group {
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn load(walkers: &[Walker], block: u64, c: &Consts) -> Self {
         let mut pos = [Wide::default(); 3];
@@ -84,6 +85,7 @@ impl Group {
 
     /// Puts the group's runs back in `walkers`, and each walker at the end of its inner span
     /// (`step` further per sample).
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn store(&self, walkers: &mut [Walker], step: [i64; 3]) {
         let (mut code, mut len) = (Narrow::default(), Narrow::default());
@@ -105,6 +107,7 @@ impl Group {
     }
 
     /// Ends the runs (`code`, `len`) of the lanes set in `lanes` (missing samples).
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn end_runs(
         mut lanes: u32,
@@ -127,6 +130,7 @@ impl Group {
 
     /// Walks `chunk.steps` steps from step `chunk.start`: reads the labels of the cells, and
     /// queues the samples in mixed cells (prefetching the cells AHEAD steps on).
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn read<T: Voxel>(
         &mut self,
@@ -176,6 +180,7 @@ impl Group {
     }
 
     /// Appends the chunk's samples to the runs, counting each complete L-block.
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn count(
         &mut self,
@@ -238,6 +243,7 @@ impl Group {
     }
 
     /// Adds all held counts to the table.
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn flush_all(&mut self, table: &mut [u64]) {
         Self::flush(_mm256_set1_epi32(-1), self.held, self.times, table);

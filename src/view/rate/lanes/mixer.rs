@@ -25,6 +25,7 @@ pub(super) struct Mixer<'a, T> {
 impl<'a, T: Voxel> Mixer<'a, T> {
     /// The mixer of `sampler`, or `None` when its quantizer has a zero range (a constant volume,
     /// whose mixed cells are left to the scalar path).
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn new(sampler: &BinSampler<'a, T>) -> Option<Self> {
         let (min, range, bins) = sampler.quantizer().formula();
@@ -98,6 +99,7 @@ impl<T: Voxel> Mixer<'_, T> {
     }
 
     /// Resolves the queue of `chunk` eight entries at a time.
+    #[inline]
     #[target_feature(enable = "avx2")]
     pub(super) fn resolve(&self, chunk: &mut Chunk, origin: &[__m256i; 3], step: &[__m256i; 3]) {
         let len = chunk.len;
