@@ -92,6 +92,13 @@ pub fn held_type(stored: VoxelType, scaled: bool) -> VoxelType {
     }
 }
 
+/// Makes the infinities of `values` missing (NaN), as every reader stores them.
+pub(crate) fn infinities_missing(values: &mut [f32]) {
+    for v in values.iter_mut().filter(|v| v.is_infinite()) {
+        *v = f32::NAN;
+    }
+}
+
 /// A read-only memory map shared by the volumes (and pyramid levels) made from one file,
 /// registered so that its file being cut short is reported (see `io::mapped`).
 pub struct MappedFile {
@@ -229,11 +236,7 @@ impl Voxels {
     #[must_use]
     pub fn from_f32(mut voxels: Vec<f32>) -> Self {
         use rayon::prelude::*;
-        voxels.par_iter_mut().for_each(|v| {
-            if v.is_infinite() {
-                *v = f32::NAN;
-            }
-        });
+        voxels.par_chunks_mut(1 << 16).for_each(infinities_missing);
         Self::owned(voxels)
     }
 

@@ -15,7 +15,7 @@ use super::limits::physical_memory;
 use super::mapped;
 use crate::error::{Error, Result};
 use crate::volume::voxel::decode_to;
-use crate::volume::voxels::held_type;
+use crate::volume::voxels::{held_type, infinities_missing};
 use crate::volume::{Endian, Voxel, VoxelType, Voxels, dims_string};
 
 /// How the voxel bytes are stored.
@@ -182,8 +182,7 @@ trait Decode: Voxel {
     fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [Self]);
 
     /// Values read from ascii data (always read as f32), in this type: `None` but for f32.
-    fn from_ascii(values: Vec<f32>) -> Option<Vec<Self>> {
-        let _ = values;
+    fn from_ascii(_values: Vec<f32>) -> Option<Vec<Self>> {
         None
     }
 }
@@ -191,16 +190,12 @@ trait Decode: Voxel {
 impl Decode for f32 {
     fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [f32]) {
         decode_to(bytes, spec.voxel_type, spec.endian, spec.scale, out);
-        // Infinities (in the file, or from scaling) are missing voxels, as NaN.
-        for v in out.iter_mut().filter(|v| v.is_infinite()) {
-            *v = f32::NAN;
-        }
+        // Infinities (in the file, or from scaling) are missing voxels.
+        infinities_missing(out);
     }
 
     fn from_ascii(mut values: Vec<f32>) -> Option<Vec<f32>> {
-        for v in values.iter_mut().filter(|v| v.is_infinite()) {
-            *v = f32::NAN;
-        }
+        infinities_missing(&mut values);
         Some(values)
     }
 }
