@@ -59,8 +59,17 @@ pub struct Volume {
     level: Level,
     /// The distinct values with their counts when this is a label volume, found once.
     labels: Arc<OnceLock<Option<LabelCounts>>>,
-    /// The next coarser pyramid level, built once when first asked for.
-    coarser: Arc<OnceLock<Arc<Volume>>>,
+    /// The coarser levels of this volume's pyramid, shared by all its levels: slot `i` holds
+    /// pyramid level `i + 1`, built once when first asked for.
+    pyramid: Arc<[OnceLock<Arc<Volume>>]>,
+}
+
+/// No coarser level built yet, for a level 0 of `dims`: a slot for each level until every axis
+/// is one voxel.
+fn empty_pyramid(dims: [usize; 3]) -> Arc<[OnceLock<Arc<Volume>>]> {
+    let longest = *dims.iter().max().unwrap_or(&1);
+    let levels = (usize::BITS - longest.saturating_sub(1).leading_zeros()) as usize;
+    (0..levels).map(|_| OnceLock::new()).collect()
 }
 
 /// The distinct values of a label volume with their voxel counts.
@@ -120,7 +129,7 @@ impl Volume {
                 labels: false,
             },
             labels: Arc::default(),
-            coarser: Arc::default(),
+            pyramid: empty_pyramid(dims),
         })
     }
 
@@ -139,40 +148,53 @@ impl Volume {
         self.level
     }
 
-    /// Pyramid level `k` of this volume, `k` levels coarser (docs/design.md §5): each level halves
-    /// every axis longer than one voxel, a voxel the mean of the finite voxels under it (for a
-    /// label volume their most frequent value), quantized with level 0's range. Levels are built
-    /// in memory, each from the one before, the first time they are asked for, and kept.
+    /// Pyramid level `k` of this volume, `k` levels coarser (docs/design.md §5; the top level
+    /// past the last): each level halves every axis longer than one voxel, a voxel the mean of
+    /// the finite voxels under it (for a label volume their most frequent value), quantized with
+    /// level 0's range. A level is built in memory the first time it is asked for, in one
+    /// streaming pass from the finest level already built above it, and kept.
     #[must_use]
     pub fn coarser(&self, k: usize) -> Arc<Volume> {
-        let mut level = Arc::new(self.clone());
-        for _ in 0..k {
-            let next = level
-                .coarser
-                .get_or_init(|| Arc::new(level.halved()))
-                .clone();
-            level = next;
+        let here = self.level.index;
+        let target = (here + k).min(self.pyramid.len());
+        if target == here {
+            return Arc::new(self.clone());
         }
-        level
+        Arc::clone(self.pyramid[target - 1].get_or_init(|| {
+            // The finest level built between this one and the target, or this one.
+            match (here + 1..target)
+                .rev()
+                .find_map(|l| self.pyramid[l - 1].get())
+            {
+                Some(finer) => Arc::new(finer.halved(target - finer.level.index)),
+                None => Arc::new(self.halved(target - here)),
+            }
+        }))
     }
 
-    /// The number of pyramid levels below this volume: halving stops when every axis is one
-    /// voxel.
+    /// The number of pyramid levels below level 0: halving stops when every axis is one voxel.
     #[must_use]
     pub fn coarser_levels(&self) -> usize {
-        let longest = *self.dims.iter().max().unwrap_or(&1);
-        (usize::BITS - (longest - 1).leading_zeros()) as usize
+        self.pyramid.len() - self.level.index
     }
 
-    /// The next coarser level.
-    fn halved(&self) -> Volume {
+    /// The level `times` levels coarser than this one.
+    fn halved(&self, times: usize) -> Volume {
         let labels = self.level.index == 0 && self.labels().is_some() || self.level.labels;
         let (values, dims) = crate::volume::with_voxels!(&self.data, |v| {
-            pyramid::downsample(v, self.dims, labels)
+            pyramid::downsample_times(v, self.dims, labels, times)
         });
-        let step = pyramid::step(self.dims);
-        let factor: [usize; 3] = std::array::from_fn(|m| self.level.factor[m] * step[m]);
-        let spacing: [f64; 3] = std::array::from_fn(|m| self.spacing[m] * step[m] as f64);
+        // Each halving doubles the span along the axes it halves.
+        let mut scale = [1usize; 3];
+        let mut d = self.dims;
+        for _ in 0..times {
+            let s = pyramid::step(d);
+            scale = std::array::from_fn(|m| scale[m] * s[m]);
+            d = pyramid::coarser_dims(d);
+        }
+        let factor: [usize; 3] = std::array::from_fn(|m| self.level.factor[m] * scale[m]);
+        let scale = scale.map(|s| s as f64);
+        let spacing: [f64; 3] = std::array::from_fn(|m| self.spacing[m] * scale[m]);
         let data = Voxels::owned(values);
         let stats = crate::volume::with_voxels!(&data, |v| compute_stats(v));
         let labels_of_level0 = if labels {
@@ -186,15 +208,15 @@ impl Volume {
             spacing,
             voxel_type: self.voxel_type,
             stats,
-            transform: pyramid::level_transform(&self.transform, step.map(|s| s as f64)),
+            transform: pyramid::level_transform(&self.transform, scale),
             level: Level {
-                index: self.level.index + 1,
+                index: self.level.index + times,
                 factor,
                 labels,
                 range: self.level.range,
             },
             labels: Arc::new(OnceLock::from(labels_of_level0)),
-            coarser: Arc::default(),
+            pyramid: Arc::clone(&self.pyramid),
         }
     }
 
@@ -216,7 +238,7 @@ impl Volume {
     pub fn with_transform(mut self, t: WorldTransform) -> Self {
         if t.is_usable() {
             self.transform = t;
-            self.coarser = Arc::default();
+            self.pyramid = empty_pyramid(self.dims);
         }
         self
     }
@@ -235,7 +257,7 @@ impl Volume {
             self.data = Voxels::narrowed(Arc::unwrap_or_clone(values), ty);
         }
         self.labels = Arc::default();
-        self.coarser = Arc::default();
+        self.pyramid = empty_pyramid(self.dims);
         self
     }
 
@@ -550,6 +572,35 @@ mod tests {
         assert_eq!(top.dims(), [1, 1, 1]);
         assert_eq!(v.coarser_levels(), 3, "5 → 3 → 2 → 1");
         assert!(Arc::ptr_eq(&v.coarser(2), &v.coarser(2)), "built once");
+    }
+
+    #[test]
+    fn a_level_built_at_once_is_the_level_built_step_by_step() {
+        let data: Vec<f32> = (0..9 * 6 * 5).map(|i| ((i * 13) % 31) as f32).collect();
+        let make = || Volume::new([9, 6, 5], [0.5, 1.0, 3.0], VoxelType::I16, data.clone());
+        let (direct, stepwise) = (make().unwrap(), make().unwrap());
+        let at_once = direct.coarser(3);
+        let mut step = Arc::new(stepwise.clone());
+        for _ in 0..3 {
+            step = step.coarser(1);
+        }
+        assert_eq!(at_once.dims(), [2, 1, 1]);
+        assert_eq!(at_once.voxels(), step.voxels());
+        assert_eq!(at_once.spacing(), [4.0, 8.0, 24.0]);
+        assert_eq!(at_once.level(), step.level());
+        assert_eq!(at_once.level().factor, [8, 8, 8]);
+        assert_eq!(at_once.transform(), step.transform());
+        // Levels of a level are the volume's: level 1's next is level 2, shared.
+        assert!(Arc::ptr_eq(
+            &stepwise.coarser(2),
+            &stepwise.coarser(1).coarser(1)
+        ));
+        assert_eq!(direct.coarser(2).voxels(), stepwise.coarser(2).voxels());
+        assert_eq!(
+            direct.coarser(99).dims(),
+            [1, 1, 1],
+            "past the top: the top"
+        );
     }
 
     #[test]
