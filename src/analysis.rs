@@ -113,11 +113,25 @@ pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> R
     })
 }
 
+/// What an analysis on a pyramid level says of it; nothing at full resolution.
+pub fn resolution_note(level: &Volume) -> Option<String> {
+    let l = level.level();
+    (l.index > 0).then(|| {
+        format!(
+            "computed on pyramid level {} ({}, {} voxels of the file a voxel): slab indices are \
+             its slices",
+            l.index,
+            crate::volume::dims_string(level.dims()),
+            crate::volume::dims_string(l.factor),
+        )
+    })
+}
+
 /// The notes of an analysis of `volume` with `view`'s sampling that gave `partition`.
 pub fn notes(volume: &Volume, view: &ViewParams, partition: &Partition) -> Vec<String> {
-    view.sampling
-        .budget_note(volume.dims(), volume.spacing())
+    resolution_note(volume)
         .into_iter()
+        .chain(view.sampling.budget_note(volume.dims(), volume.spacing()))
         .chain(partition.notes.iter().cloned())
         .collect()
 }

@@ -66,10 +66,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let volume = level.as_ref();
     let name = args.file.display().to_string();
     let params = args.analysis.params(args.views);
-    let mut analysis = args.analysis.analyze(&name, volume, args.views)?;
-    if let Some(note) = resolution_note(volume) {
-        analysis.notes.insert(0, note);
-    }
+    let analysis = args.analysis.analyze(&name, volume, args.views)?;
     let part = &analysis.partition;
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
@@ -98,18 +95,4 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         None => super::text::print_analysis(&name, volume, &analysis),
     }
     Ok(())
-}
-
-/// What an analysis on a pyramid level says of it; nothing at full resolution.
-fn resolution_note(level: &slabscope::Volume) -> Option<String> {
-    let l = level.level();
-    (l.index > 0).then(|| {
-        format!(
-            "computed on pyramid level {} ({}, {} voxels of the file a voxel): slab indices are \
-             its slices",
-            l.index,
-            slabscope::volume::dims_string(level.dims()),
-            slabscope::volume::dims_string(l.factor),
-        )
-    })
 }

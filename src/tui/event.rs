@@ -72,10 +72,10 @@ impl<T> Load<T> {
 pub enum Job {
     /// Loading the volume.
     Load,
-    /// The view search.
-    Views,
-    /// The histories along an axis.
-    Analysis,
+    /// The view search on a pyramid level (0: full resolution).
+    Views(usize),
+    /// The histories along an axis on a pyramid level (0: full resolution).
+    Analysis(usize),
     /// Writing the exports.
     Export,
 }
@@ -86,10 +86,12 @@ pub enum JobMsg {
     Progress(Job, Progress),
     /// The volume loaded (with the loader's notes), or why not.
     Loaded(Result<(Arc<Volume>, Vec<String>), String>),
-    /// The view search's result.
-    Views(Result<Box<ViewSearch>, String>),
-    /// The histories along the axis of request `generation`.
-    Analysis(u64, Result<Arc<Histories>, String>),
+    /// A coarse pyramid level of the volume is built: the preview computes on it.
+    Coarse(Arc<Volume>),
+    /// The view search's result on a pyramid level (0: full resolution).
+    Views(usize, Result<Box<ViewSearch>, String>),
+    /// The histories along the axis of request `generation`, on a pyramid level.
+    Analysis(u64, usize, Result<Arc<Histories>, String>),
     /// A render of request `generation`.
     Rendered(u64, Result<Box<Rendered>, String>),
     /// An export finished: what was written, or why not.
@@ -243,6 +245,9 @@ impl Default for PictureSettings {
 pub struct RenderRequest {
     /// Request number; only the newest result is shown.
     pub generation: u64,
+    /// The pyramid level of the volume the slabs and the slice view are on (0: full
+    /// resolution).
+    pub level: usize,
     /// The slabs (empty: the whole volume, seen around `axis`).
     pub slabs: Vec<Slab>,
     /// The axis.
@@ -286,6 +291,8 @@ pub struct ExportRequest {
     pub method: Method,
     /// The position in the method's history.
     pub position: usize,
+    /// The pyramid level the histories were computed on (0: full resolution).
+    pub level: usize,
     /// The look of the picture.
     pub look: PictureSettings,
     /// The selected slab.
@@ -297,10 +304,10 @@ pub struct ExportRequest {
 pub enum Effect {
     /// Load the volume.
     Load,
-    /// Run the view search.
-    SearchViews(ViewParams),
-    /// Compute the histories along `axis` as request `generation`.
-    Analyze(u64, [f64; 3], StackParams),
+    /// Run the view search on a pyramid level (0: full resolution).
+    SearchViews(ViewParams, usize),
+    /// Compute the histories along `axis` as request `generation`, on a pyramid level.
+    Analyze(u64, [f64; 3], StackParams, usize),
     /// Render.
     Render(Box<RenderRequest>),
     /// Write exports.
@@ -323,8 +330,8 @@ impl std::fmt::Debug for Effect {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Load => write!(f, "Load"),
-            Self::SearchViews(_) => write!(f, "SearchViews"),
-            Self::Analyze(g, axis, _) => write!(f, "Analyze({g}, {axis:?})"),
+            Self::SearchViews(_, level) => write!(f, "SearchViews(level {level})"),
+            Self::Analyze(g, axis, _, level) => write!(f, "Analyze({g}, {axis:?}, level {level})"),
             Self::Render(r) => write!(f, "Render({})", r.generation),
             Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),
             Self::Open(p) => write!(f, "Open({})", p.name()),

@@ -22,9 +22,25 @@ pub struct Partitioning {
     pub threshold: Option<f64>,
     /// How the slices are cut.
     pub stack: StackParams,
+    /// The pyramid level of `histories` (0: full resolution).
+    pub level: usize,
+    /// The same histories at full resolution, computed in the background to replace a
+    /// preview's.
+    pub refining: Load<()>,
     /// The slab count asked for, for histories still to come.
     slabs: usize,
     generation: u64,
+}
+
+/// What a job's histories did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Finished {
+    /// Nothing: they were for an older request.
+    Stale,
+    /// They are shown (or their error is).
+    Shown,
+    /// Full-resolution histories replaced a preview's.
+    Refined,
 }
 
 impl Partitioning {
@@ -41,6 +57,8 @@ impl Partitioning {
             position: slabs.saturating_sub(1),
             threshold,
             stack,
+            level: 0,
+            refining: Load::Idle,
             slabs,
             generation: 0,
         }
@@ -62,38 +80,79 @@ impl Partitioning {
             .map(|h| h.slab_count(self.method, self.position))
     }
 
-    /// Starts the histories along `axis`.
-    pub fn start(&mut self, axis: [f64; 3]) -> Effect {
-        if let Some(k) = self.slab_count() {
-            self.slabs = k;
-        }
+    /// Starts the histories along `axis` on pyramid level `level`.
+    pub fn start(&mut self, axis: [f64; 3], level: usize) -> Effect {
+        self.keep_slab_count();
         self.axis = Some(axis);
         self.generation += 1;
         self.histories = Load::started("slicing");
-        Effect::Analyze(self.generation, axis, self.stack.clone())
+        (self.level, self.refining) = (level, Load::Idle);
+        Effect::Analyze(self.generation, axis, self.stack.clone(), level)
     }
 
-    /// Takes the histories of request `generation`; false for a stale one.
-    pub fn finish(&mut self, generation: u64, result: Result<Arc<Histories>, String>) -> bool {
-        if generation != self.generation {
-            return false;
+    /// Starts the histories shown, a preview's, again at full resolution; they stay shown until
+    /// the new ones replace them.
+    pub fn refine(&mut self) -> Option<Effect> {
+        let axis = self
+            .axis
+            .filter(|_| self.level > 0 && self.ready().is_some())?;
+        self.generation += 1;
+        self.refining = Load::started("slicing");
+        Some(Effect::Analyze(
+            self.generation,
+            axis,
+            self.stack.clone(),
+            0,
+        ))
+    }
+
+    /// Whether a preview's histories are shown and no refinement has started or failed.
+    pub fn awaits_refinement(&self) -> bool {
+        self.level > 0 && self.ready().is_some() && matches!(self.refining, Load::Idle)
+    }
+
+    /// Remembers the slab count shown, for the histories that come next.
+    fn keep_slab_count(&mut self) {
+        if let Some(k) = self.slab_count() {
+            self.slabs = k;
         }
+    }
+
+    /// Takes the histories of request `generation` on pyramid level `level`.
+    pub fn finish(
+        &mut self,
+        generation: u64,
+        level: usize,
+        result: Result<Arc<Histories>, String>,
+    ) -> Finished {
+        if generation != self.generation {
+            return Finished::Stale;
+        }
+        let refined = self.refining.running() && level == 0;
         match result {
             Ok(h) => {
+                self.keep_slab_count();
                 self.position = match self.threshold {
                     Some(t) => h.position_for_threshold(self.method, t),
                     None => h.position_for(self.method, self.slabs),
                 };
-                self.histories = Load::Ready(h);
+                (self.histories, self.level, self.refining) = (Load::Ready(h), level, Load::Idle);
             }
+            Err(e) if refined => self.refining = Load::Failed(e),
             Err(e) => self.histories = Load::Failed(e),
         }
-        true
+        if refined {
+            Finished::Refined
+        } else {
+            Finished::Shown
+        }
     }
 
-    /// Records the progress of the running computation.
-    pub fn progress(&mut self, p: Progress) {
-        if self.histories.running() {
+    /// Records the progress of the computation running on pyramid level `level`.
+    pub fn progress(&mut self, p: Progress, level: usize) {
+        if self.refining.running() && level == 0 {
+            self.refining = Load::Running(p);
+        } else if self.histories.running() && level == self.level {
             self.histories = Load::Running(p);
         }
     }

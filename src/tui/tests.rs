@@ -81,15 +81,19 @@ fn ready_app_with(theme: Theme) -> App {
         vec![],
     )))));
     assert!(
-        matches!(effects[..], [Effect::SearchViews(_)]),
+        matches!(effects[..], [Effect::SearchViews(_, 0)]),
         "{effects:?}"
     );
-    let effects = app.update(Action::Job(JobMsg::Views(Ok(Box::new(views.clone())))));
+    let effects = app.update(Action::Job(JobMsg::Views(0, Ok(Box::new(views.clone())))));
     match &effects[..] {
-        [Effect::Analyze(1, axis, _)] => assert_eq!(*axis, views.best().axis),
+        [Effect::Analyze(1, axis, _, 0)] => assert_eq!(*axis, views.best().axis),
         other => panic!("{other:?}"),
     }
-    app.update(Action::Job(JobMsg::Analysis(1, Ok(Arc::clone(analysis)))));
+    app.update(Action::Job(JobMsg::Analysis(
+        1,
+        0,
+        Ok(Arc::clone(analysis)),
+    )));
     app
 }
 
@@ -169,7 +173,7 @@ fn prompts_take_an_axis_and_a_threshold() {
     app.update(Action::Erase);
     app.update(Action::Type('2'));
     match &app.update(Action::Submit)[..] {
-        [Effect::Analyze(2, axis, _)] => {
+        [Effect::Analyze(2, axis, _, 0)] => {
             assert_eq!(
                 *axis,
                 slabscope::Axis::new([0.0, 1.0, 2.0]).unwrap().direction()
@@ -211,7 +215,7 @@ fn selecting_a_viewpoint_partitions_along_it() {
     assert_eq!(app.views.row, 2);
     let axis = fixture().1.views[2].axis;
     match &app.update(Action::Select)[..] {
-        [Effect::Analyze(2, a, _)] => assert_eq!(*a, axis),
+        [Effect::Analyze(2, a, _, 0)] => assert_eq!(*a, axis),
         other => panic!("{other:?}"),
     }
     app.update(Action::Move(-10));
@@ -227,6 +231,7 @@ fn stale_results_are_dropped() {
     // A late result of the first request (generation 1) does not replace the running one.
     app.update(Action::Job(JobMsg::Analysis(
         1,
+        0,
         Ok(Arc::clone(&fixture().2)),
     )));
     assert!(app.part.histories.running());

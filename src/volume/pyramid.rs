@@ -4,7 +4,10 @@
 
 use rayon::prelude::*;
 
+use std::sync::{Arc, OnceLock};
+
 use super::voxels::Voxel;
+use super::{Level, Volume, Voxels, compute_stats};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 
@@ -62,6 +65,18 @@ impl Resolution {
             )),
         }
     }
+}
+
+/// The finest pyramid level of a volume of `dims` with at most `voxels` voxels (the top level,
+/// one voxel, when no other has so few).
+#[must_use]
+pub fn level_within(dims: [usize; 3], voxels: usize) -> usize {
+    let (mut level, mut d) = (0, dims);
+    while d.iter().product::<usize>() > voxels && d.iter().any(|&n| n > 1) {
+        d = coarser_dims(d);
+        level += 1;
+    }
+    level
 }
 
 /// The dimensions of the next pyramid level: every axis longer than one voxel halved, rounding up.
@@ -218,9 +233,99 @@ fn mode(values: &mut [f32]) -> f32 {
     best.1
 }
 
+/// The pyramid of a [`Volume`]: its levels, built when first asked for.
+impl Volume {
+    /// Where this volume sits in its pyramid.
+    #[must_use]
+    pub fn level(&self) -> Level {
+        self.level
+    }
+
+    /// Pyramid level `k` of this volume, `k` levels coarser (docs/design.md §5; the top level
+    /// past the last): each level halves every axis longer than one voxel, a voxel the mean of
+    /// the finite voxels under it (for a label volume their most frequent value), quantized with
+    /// level 0's range. A level is built in memory the first time it is asked for, in one
+    /// streaming pass from the finest level already built above it, and kept.
+    #[must_use]
+    pub fn coarser(&self, k: usize) -> Arc<Volume> {
+        let here = self.level.index;
+        let target = (here + k).min(self.pyramid.len());
+        if target == here {
+            return Arc::new(self.clone());
+        }
+        Arc::clone(self.pyramid[target - 1].get_or_init(|| {
+            // The finest level built between this one and the target, or this one.
+            match (here + 1..target)
+                .rev()
+                .find_map(|l| self.pyramid[l - 1].get())
+            {
+                Some(finer) => Arc::new(finer.halved(target - finer.level.index)),
+                None => Arc::new(self.halved(target - here)),
+            }
+        }))
+    }
+
+    /// The number of pyramid levels below level 0: halving stops when every axis is one voxel.
+    #[must_use]
+    pub fn coarser_levels(&self) -> usize {
+        self.pyramid.len() - self.level.index
+    }
+
+    /// The level `times` levels coarser than this one.
+    fn halved(&self, times: usize) -> Volume {
+        let labels = self.level.index == 0 && self.labels().is_some() || self.level.labels;
+        let (values, dims) = crate::volume::with_voxels!(&self.data, |v| {
+            downsample_times(v, self.dims, labels, times)
+        });
+        // Each halving doubles the span along the axes it halves.
+        let mut scale = [1usize; 3];
+        let mut d = self.dims;
+        for _ in 0..times {
+            let s = step(d);
+            scale = std::array::from_fn(|m| scale[m] * s[m]);
+            d = coarser_dims(d);
+        }
+        let factor: [usize; 3] = std::array::from_fn(|m| self.level.factor[m] * scale[m]);
+        let scale = scale.map(|s| s as f64);
+        let spacing: [f64; 3] = std::array::from_fn(|m| self.spacing[m] * scale[m]);
+        let data = Voxels::owned(values);
+        let stats = crate::volume::with_voxels!(&data, |v| compute_stats(v));
+        let labels_of_level0 = if labels {
+            self.labels().map(<[_]>::to_vec)
+        } else {
+            None
+        };
+        Volume {
+            data,
+            dims,
+            spacing,
+            voxel_type: self.voxel_type,
+            stats,
+            transform: level_transform(&self.transform, scale),
+            level: Level {
+                index: self.level.index + times,
+                factor,
+                labels,
+                range: self.level.range,
+            },
+            labels: Arc::new(OnceLock::from(labels_of_level0)),
+            pyramid: Arc::clone(&self.pyramid),
+        }
+    }
+}
+
+/// No coarser level built yet, for a level 0 of `dims`: a slot for each level until every axis
+/// is one voxel.
+pub(super) fn empty(dims: [usize; 3]) -> Arc<[OnceLock<Arc<Volume>>]> {
+    let longest = *dims.iter().max().unwrap_or(&1);
+    let levels = (usize::BITS - longest.saturating_sub(1).leading_zeros()) as usize;
+    (0..levels).map(|_| OnceLock::new()).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::volume::VoxelType;
 
     #[test]
     fn resolutions_pick_levels() {
@@ -259,6 +364,19 @@ mod tests {
                 assert!(same, "{dims:?} level {times}");
             }
         }
+    }
+
+    #[test]
+    fn the_finest_level_within_a_voxel_count() {
+        assert_eq!(level_within([512; 3], 1 << 21), 2, "128³ is 2²¹");
+        assert_eq!(level_within([1024; 3], 1 << 21), 3);
+        assert_eq!(
+            level_within([256, 256, 415], 1 << 21),
+            2,
+            "128×128×208 is more"
+        );
+        assert_eq!(level_within([128; 3], 1 << 21), 0);
+        assert_eq!(level_within([5, 1, 1], 0), 3, "the top: one voxel");
     }
 
     #[test]
@@ -341,5 +459,80 @@ mod tests {
             assert!((far[m] - got_far[m]).abs() < 1e-12);
         }
         assert!(coarse.known);
+    }
+
+    #[test]
+    fn pyramid_levels_are_block_means_on_a_coarser_grid() {
+        let data: Vec<f32> = (0..60).map(|i| ((i * 7) % 23) as f32).collect();
+        let v = Volume::new([5, 4, 3], [1.0, 2.0, 0.5], VoxelType::U8, data.clone())
+            .unwrap()
+            .with_transform(WorldTransform::ras(
+                [[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 0.5]],
+                [3.0, 4.0, 5.0],
+            ));
+        let c = v.coarser(1);
+        assert_eq!(c.dims(), [3, 2, 2]);
+        assert_eq!(c.spacing(), [2.0, 4.0, 1.0]);
+        assert_eq!(c.voxels(), downsample(&data, [5, 4, 3], false).0);
+        let level = c.level();
+        assert_eq!((level.index, level.factor), (1, [2, 2, 2]));
+        assert_eq!(level.range, [v.stats().min, v.stats().max]);
+        assert_eq!(
+            c.quantizer(32).unwrap(),
+            v.quantizer(32).unwrap(),
+            "level 0's range"
+        );
+        let centre = v.transform().apply([0.5, 0.5, 0.5]);
+        assert_eq!(c.transform().apply([0.0; 3]), centre);
+        let top = v.coarser(v.coarser_levels());
+        assert_eq!(top.dims(), [1, 1, 1]);
+        assert_eq!(v.coarser_levels(), 3, "5 → 3 → 2 → 1");
+        assert!(Arc::ptr_eq(&v.coarser(2), &v.coarser(2)), "built once");
+    }
+
+    #[test]
+    fn a_level_built_at_once_is_the_level_built_step_by_step() {
+        let data: Vec<f32> = (0..9 * 6 * 5).map(|i| ((i * 13) % 31) as f32).collect();
+        let make = || Volume::new([9, 6, 5], [0.5, 1.0, 3.0], VoxelType::I16, data.clone());
+        let (direct, stepwise) = (make().unwrap(), make().unwrap());
+        let at_once = direct.coarser(3);
+        let mut step = Arc::new(stepwise.clone());
+        for _ in 0..3 {
+            step = step.coarser(1);
+        }
+        assert_eq!(at_once.dims(), [2, 1, 1]);
+        assert_eq!(at_once.voxels(), step.voxels());
+        assert_eq!(at_once.spacing(), [4.0, 8.0, 24.0]);
+        assert_eq!(at_once.level(), step.level());
+        assert_eq!(at_once.level().factor, [8, 8, 8]);
+        assert_eq!(at_once.transform(), step.transform());
+        // Levels of a level are the volume's: level 1's next is level 2, shared.
+        assert!(Arc::ptr_eq(
+            &stepwise.coarser(2),
+            &stepwise.coarser(1).coarser(1)
+        ));
+        assert_eq!(direct.coarser(2).voxels(), stepwise.coarser(2).voxels());
+        assert_eq!(
+            direct.coarser(99).dims(),
+            [1, 1, 1],
+            "past the top: the top"
+        );
+    }
+
+    #[test]
+    fn label_volumes_take_the_most_frequent_label() {
+        // Two labels in halves along z, one voxel of the other in a block: the block keeps its
+        // majority, never a mean.
+        let mut data: Vec<f32> = (0..8 * 8 * 8)
+            .map(|i| if i < 256 { 1.0 } else { 7.0 })
+            .collect();
+        data[0] = 7.0;
+        let v = Volume::new([8, 8, 8], [1.0; 3], VoxelType::U8, data).unwrap();
+        assert!(v.labels().is_some());
+        let c = v.coarser(1);
+        assert!(c.level().labels);
+        assert_eq!(c.voxels()[0], 1.0);
+        assert!(c.voxels().iter().all(|&x| x == 1.0 || x == 7.0));
+        assert_eq!(c.labels(), v.labels(), "level 0's labels");
     }
 }

@@ -154,6 +154,7 @@ impl App {
 
     /// Changes the look of the preview, which re-renders.
     fn restyle(&mut self, action: &Action) -> Vec<Effect> {
+        let stats = self.shown_volume().map(|v| v.stats());
         let l = &mut self.preview.look;
         match *action {
             Action::Orbit(az, el) => {
@@ -167,7 +168,7 @@ impl App {
                 // Only the presets that fit the volume: no CT windows on an MRI.
                 let fits: Vec<Preset> = Preset::ALL
                     .into_iter()
-                    .filter(|p| self.volume.ready().is_none_or(|v| p.suits(v.stats())))
+                    .filter(|p| stats.is_none_or(|s| p.suits(s)))
                     .collect();
                 l.preset = next(&fits, l.preset);
                 l.window = None;
@@ -188,11 +189,12 @@ impl App {
             self.sync_focus();
             return vec![];
         }
+        let refining = self.cancel_refinement();
         let busy = self.views.views.running()
             || self.part.histories.running()
             || self.preview.image.running()
             || self.export.running();
-        if !busy {
+        if !busy && !refining {
             return vec![];
         }
         if self.views.views.running() {
@@ -202,7 +204,11 @@ impl App {
             self.part.histories = Load::Failed("cancelled".into());
         }
         self.export = Load::Idle;
-        self.status.message = Some("cancelled".into());
+        self.status.message = Some(if refining {
+            "cancelled: the preview stays (Enter on an axis computes it again)".into()
+        } else {
+            "cancelled".into()
+        });
         self.sync();
         vec![Effect::Cancel]
     }
@@ -240,7 +246,7 @@ impl App {
 
     /// Moves the slice view's pointer by voxels to the right and down on the screen.
     fn move_pointer(&mut self, right: isize, down: isize) -> Vec<Effect> {
-        let (Some(volume), Some(axis)) = (self.volume.ready(), self.part.axis) else {
+        let (Some(volume), Some(axis)) = (self.shown_volume(), self.part.axis) else {
             return vec![];
         };
         let Ok(frame) = slabscope::render::slice::SliceFrame::new(volume, axis) else {
@@ -260,15 +266,20 @@ impl App {
     /// Narrows, widens or moves the window of the picture and the slices, starting from the
     /// one the last picture used (the preset's, worked out here only before any picture).
     fn window(&mut self, action: &Action) -> Vec<Effect> {
-        let Some(volume) = self.volume.ready() else {
+        let Some(volume) = self.shown_volume().cloned() else {
             return vec![];
         };
         let look = &mut self.preview.look;
         let (lo, hi) = match look.window.or(self.preview.window) {
             Some(w) => w,
             None => {
-                match slabscope::render::Transfer::new(volume, look.preset, look.colormap, 1.0, 1.0)
-                {
+                match slabscope::render::Transfer::new(
+                    &volume,
+                    look.preset,
+                    look.colormap,
+                    1.0,
+                    1.0,
+                ) {
                     Ok(t) => t.window(),
                     Err(_) => return vec![],
                 }
@@ -286,7 +297,7 @@ impl App {
 
     fn select(&mut self) -> Vec<Effect> {
         match (self.focus, self.views.selected()) {
-            (Pane::Views, Some(axis)) => self.analyze(axis),
+            (Pane::Views, Some(axis)) => self.analyze_chosen(axis),
             _ => vec![],
         }
     }
@@ -299,7 +310,7 @@ impl App {
         match prompt.ask {
             Ask::Axis => {
                 if let Ok(axis) = text.parse::<slabscope::Axis>() {
-                    self.analyze(axis.direction())
+                    self.analyze_chosen(axis.direction())
                 } else {
                     self.status.message = Some(format!("{text:?} is not x, y, z or DX,DY,DZ"));
                     vec![]

@@ -4,6 +4,7 @@
 //! in step; the keys are handled in `keys`.
 
 mod keys;
+mod refine;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -89,6 +90,8 @@ pub struct App {
     pub files: Option<FilesPane>,
     /// The screen, for a fresh start on another volume.
     screen: Screen,
+    /// On a large volume, the preview and its refinement at full resolution.
+    pub refine: Option<refine::Refinement>,
 }
 
 impl App {
@@ -113,6 +116,7 @@ impl App {
             export: Load::Idle,
             files: None,
             screen: kept,
+            refine: None,
         };
         app.preview.hide = screen.hide;
         app.preview.graphics = screen.graphics;
@@ -174,7 +178,7 @@ impl App {
 
     /// Starts the histories along `axis`.
     fn analyze(&mut self, axis: [f64; 3]) -> Vec<Effect> {
-        let effect = self.part.start(axis);
+        let effect = self.part.start(axis, self.first_level());
         self.curves.cursor = 0;
         self.slabs.row = 0;
         self.sync();
@@ -203,6 +207,7 @@ impl App {
             view_params: self.params.view.clone(),
             method: self.part.method,
             position: self.part.position,
+            level: self.part.level,
             look: self.preview.look,
             highlight: Some(self.slabs.row),
         };
@@ -213,7 +218,11 @@ impl App {
 
     /// A render of the current state, when there is somewhere to show it.
     fn render(&mut self) -> Vec<Effect> {
-        let Some(volume) = self.volume.ready() else {
+        if self.volume.ready().is_none() {
+            return vec![];
+        }
+        let level = self.shown_level();
+        let Some(volume) = self.shown_volume().or(self.volume.ready()).cloned() else {
             return vec![];
         };
         let (w, h) = self.preview.cells;
@@ -235,6 +244,7 @@ impl App {
         }
         vec![Effect::Render(Box::new(RenderRequest {
             generation: self.preview.generation,
+            level,
             highlight: (!slabs.is_empty()).then_some(self.slabs.row),
             nmi: histories.and_then(|h| h.known_nmi(self.part.method, self.part.position)),
             histories: histories.cloned(),
@@ -244,7 +254,7 @@ impl App {
             cells: self.preview.cells,
             slice: (self.preview.slices && histories.is_some()).then(|| SliceRequest {
                 index: self.curves.cursor,
-                pointer: self.preview.pointer.unwrap_or_else(|| centre(volume)),
+                pointer: self.preview.pointer.unwrap_or_else(|| centre(&volume)),
             }),
         }))]
     }
@@ -262,28 +272,15 @@ impl App {
                 self.volume = Load::Failed(e);
                 vec![]
             }
-            JobMsg::Views(Ok(views)) => {
-                let best = views.best().axis;
-                self.views.views = Load::Ready(*views);
-                self.views.row = 0;
-                let effects = match self.part.axis {
-                    None => self.analyze(best),
-                    Some(_) => vec![],
-                };
-                self.sync();
-                effects
-            }
-            JobMsg::Views(Err(e)) => {
-                self.views.views = Load::Failed(e);
-                self.sync();
+            JobMsg::Coarse(volume) => {
+                if let Some(r) = self.refine.as_mut() {
+                    r.coarse = Some(volume);
+                }
                 vec![]
             }
-            JobMsg::Analysis(generation, result) => {
-                if !self.part.finish(generation, result) {
-                    return vec![];
-                }
-                self.sync();
-                self.render()
+            JobMsg::Views(level, result) => self.on_views(level, result),
+            JobMsg::Analysis(generation, level, result) => {
+                self.on_histories(generation, level, result)
             }
             JobMsg::Rendered(generation, result) => {
                 if generation == self.preview.generation {
@@ -325,9 +322,11 @@ impl App {
             .params
             .axis
             .resolve(volume.transform(), volume.spacing());
+        let level = crate::tui::preview_level(&volume);
+        self.refine = (level > 0).then(|| refine::Refinement::new(level, volume.dims()));
         self.volume = Load::Ready(volume);
         self.views.views = Load::started("view search");
-        let mut effects = vec![Effect::SearchViews(self.params.view.clone())];
+        let mut effects = vec![Effect::SearchViews(self.params.view.clone(), level)];
         match chosen {
             Ok(Some(axis)) => effects.extend(self.analyze(axis.direction())),
             Ok(None) => {}
@@ -341,13 +340,14 @@ impl App {
     fn on_progress(&mut self, job: Job, p: Progress) {
         match job {
             Job::Load if self.volume.running() => self.volume = Load::Running(p),
-            Job::Views if self.views.views.running() => self.views.views = Load::Running(p),
-            Job::Analysis => self.part.progress(p),
+            Job::Views(0) if self.refine.is_some() => self.refine_progress(p),
+            Job::Views(_) if self.views.views.running() => self.views.views = Load::Running(p),
+            Job::Analysis(level) => self.part.progress(p, level),
             Job::Export if self.export.running() => self.export = Load::Running(p),
             _ => return,
         }
         self.sync_status();
-        if job == Job::Analysis {
+        if matches!(job, Job::Analysis(_)) {
             self.sync();
         }
     }
@@ -391,6 +391,11 @@ impl App {
             if let Load::Running(p) = load {
                 s.jobs.push((job, p));
             }
+        }
+        let (label, gauges) = self.resolution_status();
+        self.status.resolution = label;
+        for p in gauges {
+            self.status.jobs.push(("full resolution", p));
         }
     }
 

@@ -14,10 +14,13 @@ use crate::tui::event::ExportRequest;
 /// Writes the view (PNG), the analysis (JSON) and the labels (NRRD) of the request's partition
 /// to the current folder under names not taken yet; says what it wrote.
 pub(super) fn export(
-    volume: &Volume,
+    full: &Volume,
     r: &ExportRequest,
     monitor: &Monitor,
 ) -> slabscope::Result<String> {
+    // A preview's partition is of its pyramid level, and says so.
+    let level = full.coarser(r.level);
+    let volume = level.as_ref();
     let part = Partition::new(&r.histories, r.method, r.position, monitor)?;
     let stem = Path::new(&r.name)
         .file_stem()
@@ -45,7 +48,7 @@ pub(super) fn export(
         notes: slabscope::analysis::notes(volume, &r.view_params, &part),
         partition: part,
     };
-    let report = AnalysisReport::new(&r.name, volume, &r.view_params, &analysis)?;
+    let report = AnalysisReport::new(&r.name, full, &r.view_params, &analysis)?.computed_on(volume);
     let text = slabscope::report::to_json(&report)?;
     write_new(&json, text.as_bytes())?;
     monitor.start("writing labels", 1);

@@ -9,10 +9,12 @@ mod worker;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
+use std::time::Duration;
 
 use slabscope::{AnalysisParams, Histories, LoadOptions, Monitor, Progress, Scope, Volume, search};
 
 use super::event::{Effect, Event, Job, JobMsg, RenderRequest};
+use super::preview_level;
 use crate::term::Caps;
 use export::export;
 use worker::start_renderer;
@@ -29,6 +31,8 @@ pub struct Jobs {
     volume: Option<Arc<Volume>>,
     /// Which volume is open: one more at each [`Effect::Open`].
     epoch: u64,
+    /// The test hook's wait before a preview is refined.
+    full_delay: Duration,
 }
 
 impl Jobs {
@@ -49,6 +53,10 @@ impl Jobs {
             load,
             volume: None,
             epoch: 0,
+            full_delay: std::env::var("SLABSCOPE_TEST_FULL_DELAY_MS")
+                .ok()
+                .and_then(|ms| ms.parse().ok())
+                .map_or(Duration::ZERO, Duration::from_millis),
         }
     }
 
@@ -70,27 +78,33 @@ impl Jobs {
         match effect {
             Effect::Load => {
                 let (source, load) = (self.source.clone(), self.load.clone());
-                self.spawn(Job::Load, move |_| load_volume(source.as_ref(), load));
+                self.spawn(Job::Load, move |_, _| load_volume(source.as_ref(), load));
             }
-            Effect::SearchViews(params) => {
+            Effect::SearchViews(params, level) => {
                 let Some(volume) = self.volume.clone() else {
                     return;
                 };
-                self.spawn(Job::Views, move |monitor| {
-                    JobMsg::Views(
-                        search(&volume, &params, monitor)
-                            .map(Box::new)
-                            .map_err(|e| e.to_string()),
-                    )
+                let delay = self.full_delay(&volume, level);
+                self.spawn(Job::Views(level), move |monitor, send| {
+                    let on = volume.coarser(level);
+                    if level > 0 {
+                        send(JobMsg::Coarse(Arc::clone(&on)));
+                    }
+                    let result = wait(delay, monitor).and_then(|()| search(&on, &params, monitor));
+                    JobMsg::Views(level, result.map(Box::new).map_err(|e| e.to_string()))
                 });
             }
-            Effect::Analyze(generation, axis, params) => {
+            Effect::Analyze(generation, axis, params, level) => {
                 let Some(volume) = self.volume.clone() else {
                     return;
                 };
-                self.spawn(Job::Analysis, move |monitor| {
-                    let result = Histories::new(&volume, axis, &params, Scope::ALL, monitor);
-                    JobMsg::Analysis(generation, result.map(Arc::new).map_err(|e| e.to_string()))
+                let delay = self.full_delay(&volume, level);
+                self.spawn(Job::Analysis(level), move |monitor, _| {
+                    let on = volume.coarser(level);
+                    let result = wait(delay, monitor)
+                        .and_then(|()| Histories::new(&on, axis, &params, Scope::ALL, monitor));
+                    let result = result.map(Arc::new).map_err(|e| e.to_string());
+                    JobMsg::Analysis(generation, level, result)
                 });
             }
             Effect::Open(path) => {
@@ -115,7 +129,7 @@ impl Jobs {
             }
             Effect::Export(request) => {
                 if let Some(volume) = self.volume.clone() {
-                    self.spawn(Job::Export, move |monitor| {
+                    self.spawn(Job::Export, move |monitor, _| {
                         JobMsg::Exported(
                             export(&volume, &request, monitor).map_err(|e| e.to_string()),
                         )
@@ -156,8 +170,13 @@ impl Jobs {
         });
     }
 
-    /// Runs `work` on its own thread with a monitor that reports `job`'s progress.
-    fn spawn(&self, job: Job, work: impl FnOnce(&Monitor) -> JobMsg + Send + 'static) {
+    /// Runs `work` on its own thread with a monitor that reports `job`'s progress and a way to
+    /// send messages before its last.
+    fn spawn(
+        &self,
+        job: Job,
+        work: impl FnOnce(&Monitor, &dyn Fn(JobMsg)) -> JobMsg + Send + 'static,
+    ) {
         let (events, cancel, epoch) = (self.events.clone(), Arc::clone(&self.cancel), self.epoch);
         std::thread::spawn(move || {
             let send = |msg: JobMsg| {
@@ -165,8 +184,18 @@ impl Jobs {
             };
             let progress = |p: Progress| send(JobMsg::Progress(job, p));
             let monitor = Monitor::new(Some(&cancel), Some(&progress));
-            send(work(&monitor));
+            send(work(&monitor, &send));
         });
+    }
+
+    /// How long a full-resolution job on `volume` waits before it starts: nothing, but with the
+    /// test hook `SLABSCOPE_TEST_FULL_DELAY_MS`, which holds back the jobs that refine a preview
+    /// so that a test sees the preview first.
+    fn full_delay(&self, volume: &Volume, level: usize) -> Duration {
+        match (level, preview_level(volume)) {
+            (0, 1..) => self.full_delay,
+            _ => Duration::ZERO,
+        }
     }
 
     /// The message the app should see of `msg`: none when it belongs to a volume no longer
@@ -180,6 +209,16 @@ impl Jobs {
         self.observe(&msg);
         Some(msg)
     }
+}
+
+/// Waits `delay` unless cancelled first.
+fn wait(delay: Duration, monitor: &Monitor) -> slabscope::Result<()> {
+    let end = std::time::Instant::now() + delay;
+    while std::time::Instant::now() < end {
+        monitor.check()?;
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    monitor.check()
 }
 
 /// Loads `source` (None: the built-in dataset) with `load`, a series in `source` taking the
@@ -243,6 +282,7 @@ mod tests {
         };
         let whole = RenderRequest {
             generation: 1,
+            level: 0,
             slabs: Vec::new(),
             axis: [0.0, 0.0, 1.0],
             nmi: None,

@@ -2,6 +2,7 @@
 //! renders it (the exploded view, or the slice view with its readout) and encodes it for the
 //! terminal.
 
+use std::cell::OnceCell;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
@@ -29,18 +30,20 @@ pub(super) fn start_renderer(
     let (tx, rx) = channel::<RenderRequest>();
     std::thread::spawn(move || {
         let events = EpochSender { events, epoch };
-        let renderer = match Renderer::new(&volume) {
-            Ok(r) => r,
-            Err(e) => {
-                let _ = events.send(Event::Job(JobMsg::Rendered(0, Err(e.to_string()))));
-                return;
-            }
-        };
+        // The preview's pyramid level and its renderer, and level 0's, each made when first
+        // asked for.
+        let coarse: OnceCell<Arc<Volume>> = OnceCell::new();
+        let (mut full, mut preview) = (None, None);
         while let Some(request) = newest(&rx) {
             cancel.store(false, Ordering::Relaxed);
             let monitor = Monitor::new(Some(&cancel), None);
             let generation = request.generation;
-            match render(&renderer, &caps, &request, &monitor) {
+            let renderer = match request.level {
+                0 => made_for(&mut full, &volume),
+                k => made_for(&mut preview, coarse.get_or_init(|| volume.coarser(k))),
+            };
+            let result = renderer.and_then(|r| render(r, &caps, &request, &monitor));
+            match result {
                 Err(e)
                     if matches!(
                         e.downcast_ref::<slabscope::Error>(),
@@ -56,6 +59,17 @@ pub(super) fn start_renderer(
         }
     });
     tx
+}
+
+/// The renderer in `slot`, made for `volume` the first time.
+fn made_for<'a, 'v>(
+    slot: &'a mut Option<Renderer<'v>>,
+    volume: &'v Volume,
+) -> anyhow::Result<&'a Renderer<'v>> {
+    if slot.is_none() {
+        *slot = Some(Renderer::new(volume)?);
+    }
+    Ok(slot.as_ref().expect("made above"))
 }
 
 /// Sends a volume's messages marked with its epoch.

@@ -42,6 +42,8 @@ pub struct StatusBar {
     pub notice: Option<String>,
     /// Which of a folder's volumes is open (`2/12 name`).
     pub volume: Option<String>,
+    /// What is shown is a preview: at which resolution (`preview: 1/4 resolution`).
+    pub resolution: Option<String>,
     /// Colours.
     pub theme: Theme,
 }
@@ -59,6 +61,7 @@ impl StatusBar {
             settings: settings_text(params),
             notice: None,
             volume: None,
+            resolution: None,
             theme,
         }
     }
@@ -94,6 +97,12 @@ impl StatusBar {
         )];
         if let Some(v) = &self.volume {
             parts.push(Span::styled(format!(" {v} "), self.theme.fg(Color::Green)));
+        }
+        if let Some(r) = &self.resolution {
+            parts.push(Span::styled(
+                format!(" {r} "),
+                self.theme.fg(Color::Yellow).add_modifier(Modifier::BOLD),
+            ));
         }
         if let Some(p) = &self.position {
             parts.push(Span::raw(format!(" {p} ")));

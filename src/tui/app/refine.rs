@@ -1,0 +1,511 @@
+//! The first answer on a large volume, then full resolution in place: the view search, the
+//! histories and the picture are computed on a coarse pyramid level (at most
+//! [`PREVIEW_VOXELS`](crate::tui::PREVIEW_VOXELS) voxels) and shown at once, labelled as a
+//! preview; the full-resolution view search and histories follow in the background and replace
+//! them, keeping the user's axis, method and slab count. Every new axis is previewed first too.
+
+use std::sync::Arc;
+
+use slabscope::partition::Slab;
+use slabscope::{Histories, Progress, ViewSearch, Volume};
+
+use super::App;
+use crate::tui::event::{Effect, Load};
+use crate::tui::partitioning::Finished;
+
+/// A preview being refined.
+pub struct Refinement {
+    /// The preview's pyramid level (at least 1).
+    pub level: usize,
+    /// How many voxels of the volume a preview voxel spans along its longest axis.
+    pub factor: usize,
+    /// The preview's volume, once built.
+    pub coarse: Option<Arc<Volume>>,
+    /// The full-resolution view search: not started until a preview's histories show.
+    pub views: Load<()>,
+    /// Whether the axis is the view search's best rather than the user's: the full search's
+    /// best then takes its place.
+    pub auto_axis: bool,
+}
+
+impl Refinement {
+    /// A preview on pyramid level `level` of a volume of `dims`.
+    pub fn new(level: usize, dims: [usize; 3]) -> Self {
+        let longest = dims.into_iter().max().unwrap_or(1);
+        let mut n = longest;
+        for _ in 0..level {
+            n = n.div_ceil(2);
+        }
+        Self {
+            level,
+            factor: longest.div_ceil(n),
+            coarse: None,
+            views: Load::Idle,
+            auto_axis: false,
+        }
+    }
+}
+
+impl App {
+    /// The pyramid level new histories start on: the preview's, or 0.
+    pub(super) fn first_level(&self) -> usize {
+        self.refine.as_ref().map_or(0, |r| r.level)
+    }
+
+    /// The pyramid level of what is shown: the histories', or before any the preview's.
+    pub(super) fn shown_level(&self) -> usize {
+        match self.part.histories {
+            Load::Idle => self.first_level(),
+            _ => self.part.level,
+        }
+    }
+
+    /// The volume (or its pyramid level) that what is shown was computed on, once there.
+    pub(super) fn shown_volume(&self) -> Option<&Arc<Volume>> {
+        match self.shown_level() {
+            0 => self.volume.ready(),
+            _ => self.refine.as_ref().and_then(|r| r.coarse.as_ref()),
+        }
+    }
+
+    /// Starts the histories along an axis the user chose: it stays when full resolution finds
+    /// another best.
+    pub(super) fn analyze_chosen(&mut self, axis: [f64; 3]) -> Vec<Effect> {
+        if let Some(r) = self.refine.as_mut() {
+            r.auto_axis = false;
+        }
+        self.analyze(axis)
+    }
+
+    /// A view search finished on pyramid level `level`.
+    pub(super) fn on_views(
+        &mut self,
+        level: usize,
+        result: Result<Box<ViewSearch>, String>,
+    ) -> Vec<Effect> {
+        let full = level == 0 && self.refine.is_some();
+        let mut effects = vec![];
+        match result {
+            Ok(views) if full => {
+                let best = views.best().axis;
+                let previous = self.views.views.ready().map(|v| v.best().axis);
+                self.views.row = self.views.row.min(views.views.len().saturating_sub(1));
+                self.views.views = Load::Ready(*views);
+                let refine = self.refine.as_mut().expect("full is a refinement");
+                refine.views = Load::Ready(());
+                let moved = refine.auto_axis && self.part.axis.is_some_and(|a| !same(a, best));
+                if moved {
+                    self.status.message = Some(format!(
+                        "full resolution: the best axis is {} (the preview's was {})",
+                        axis_text(best),
+                        previous.map_or_else(|| "another".into(), axis_text)
+                    ));
+                    effects = self.analyze(best);
+                } else {
+                    effects.extend(self.refine_histories());
+                }
+            }
+            Ok(views) => {
+                let best = views.best().axis;
+                self.views.views = Load::Ready(*views);
+                self.views.row = 0;
+                if self.part.axis.is_none() {
+                    if let Some(r) = self.refine.as_mut() {
+                        r.auto_axis = true;
+                    }
+                    effects = self.analyze(best);
+                }
+            }
+            Err(e) if full => {
+                if let Some(r) = self.refine.as_mut() {
+                    r.views = Load::Failed(e.clone());
+                }
+                self.status.message = Some(format!("full resolution: {e}"));
+            }
+            Err(e) => self.views.views = Load::Failed(e),
+        }
+        self.sync();
+        effects
+    }
+
+    /// Histories finished: shown, or a preview's replaced by full resolution.
+    pub(super) fn on_histories(
+        &mut self,
+        generation: u64,
+        level: usize,
+        result: Result<Arc<Histories>, String>,
+    ) -> Vec<Effect> {
+        let before = self.part.ready().cloned().zip(self.part.slabs());
+        let shift = self.preview_shift();
+        match self.part.finish(generation, level, result) {
+            Finished::Stale => return vec![],
+            Finished::Shown => {}
+            Finished::Refined => match (&before, self.part.ready(), &self.part.refining) {
+                (Some((preview, shown)), Some(full), Load::Idle) => {
+                    let full = Arc::clone(full);
+                    let now = self.part.slabs().unwrap_or_default();
+                    let words = compare((preview, shown), (&full, &now), shift);
+                    self.status.message = Some(words);
+                    self.carry_over(preview, &full, shift);
+                }
+                (_, _, Load::Failed(e)) => {
+                    self.status.message = Some(format!("full resolution: {e}"));
+                }
+                _ => {}
+            },
+        }
+        let mut effects = vec![];
+        // A preview shows: the full-resolution view search starts, and the histories follow it
+        // (at once along an axis the user chose).
+        if self.part.awaits_refinement()
+            && let Some(r) = self.refine.as_mut()
+            && matches!(r.views, Load::Idle)
+        {
+            r.views = Load::started("view search");
+            effects.push(Effect::SearchViews(self.params.view.clone(), 0));
+        }
+        effects.extend(self.refine_histories());
+        self.sync();
+        effects.extend(self.render());
+        effects
+    }
+
+    /// Starts the full-resolution histories when a preview's show and their axis is settled:
+    /// the user's, or the best once the full-resolution view search is done.
+    fn refine_histories(&mut self) -> Vec<Effect> {
+        let Some(r) = &self.refine else {
+            return vec![];
+        };
+        let settled = !r.auto_axis || matches!(r.views, Load::Ready(()));
+        if !(settled && self.part.awaits_refinement()) {
+            return vec![];
+        }
+        self.part.refine().into_iter().collect()
+    }
+
+    /// The progress of the full-resolution view search.
+    pub(super) fn refine_progress(&mut self, p: Progress) {
+        if let Some(r) = self.refine.as_mut().filter(|r| r.views.running()) {
+            r.views = Load::Running(p);
+        }
+    }
+
+    /// Where the preview's voxel (0, 0, 0) lies in the volume, mm from voxel (0, 0, 0).
+    fn preview_shift(&self) -> [f64; 3] {
+        match (
+            self.volume.ready(),
+            self.refine.as_ref().and_then(|r| r.coarse.as_ref()),
+        ) {
+            (Some(full), Some(coarse)) => {
+                let (s, f) = (full.spacing(), coarse.level().factor);
+                std::array::from_fn(|m| (f[m] as f64 - 1.0) / 2.0 * s[m])
+            }
+            _ => [0.0; 3],
+        }
+    }
+
+    /// Keeps the curves' cursor and the slice view's pointer where they were on the preview.
+    fn carry_over(&mut self, preview: &Histories, full: &Histories, shift: [f64; 3]) {
+        let (a, b) = (preview.slices().max(2) - 1, full.slices().max(2) - 1);
+        self.curves.cursor = (self.curves.cursor * b + a / 2) / a;
+        if let Some(p) = self.preview.pointer.as_mut() {
+            *p = std::array::from_fn(|m| p[m] + shift[m]);
+        }
+    }
+
+    /// Cancels the full-resolution jobs: the preview stays; true if any was running.
+    pub(super) fn cancel_refinement(&mut self) -> bool {
+        let mut any = false;
+        if let Some(r) = self.refine.as_mut().filter(|r| r.views.running()) {
+            r.views = Load::Failed("cancelled".into());
+            any = true;
+        }
+        if self.part.refining.running() {
+            self.part.refining = Load::Failed("cancelled".into());
+            any = true;
+        }
+        any
+    }
+
+    /// The status line's word on the resolution shown, and the full-resolution jobs' gauges.
+    pub(super) fn resolution_status(&self) -> (Option<String>, Vec<Progress>) {
+        let Some(r) = &self.refine else {
+            return (None, vec![]);
+        };
+        let label = (self.shown_level() > 0).then(|| {
+            let stopped =
+                matches!(r.views, Load::Failed(_)) || matches!(self.part.refining, Load::Failed(_));
+            format!(
+                "preview: 1/{} resolution{}",
+                r.factor,
+                if stopped {
+                    ", full resolution stopped"
+                } else {
+                    ""
+                }
+            )
+        });
+        let mut gauges = vec![];
+        for load in [r.views.status(), self.part.refining.status()] {
+            if let Load::Running(p) = load {
+                gauges.push(p);
+            }
+        }
+        (label, gauges)
+    }
+}
+
+/// Whether two unit axes are the same line.
+fn same(a: [f64; 3], b: [f64; 3]) -> bool {
+    slabscope::geometry::dot(a, b).abs() > 1.0 - 1e-9
+}
+
+/// An axis in few characters.
+fn axis_text(a: [f64; 3]) -> String {
+    slabscope::Axis::new(a).map_or_else(|_| format!("{a:?}"), |a| a.to_string())
+}
+
+/// What full resolution changed, in words: the slab count, or how far the cuts moved (in mm, the
+/// preview's moved into the volume's frame by `shift`) against a preview slice's thickness.
+fn compare(preview: (&Histories, &[Slab]), full: (&Histories, &[Slab]), shift: [f64; 3]) -> String {
+    let along = slabscope::geometry::dot(shift, preview.0.stack().axis());
+    let cuts = |(h, slabs): (&Histories, &[Slab]), offset: f64| -> Vec<f64> {
+        let s = h.stack();
+        slabs
+            .iter()
+            .skip(1)
+            .map(|&(a, _)| offset + s.offset() + (a as f64 - 0.5) * s.thickness())
+            .collect()
+    };
+    let (before, after) = (cuts(preview, along), cuts(full, 0.0));
+    if before.len() != after.len() {
+        return format!(
+            "full resolution: {} slabs where the preview had {}",
+            after.len() + 1,
+            before.len() + 1
+        );
+    }
+    let moved = before
+        .iter()
+        .zip(&after)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    if moved <= preview.0.stack().thickness() + 1e-9 {
+        format!(
+            "full resolution: the preview's {} slabs, cuts within a preview slice ({moved:.1} mm)",
+            after.len() + 1
+        )
+    } else {
+        format!("full resolution moved the cuts: up to {moved:.1} mm from the preview's")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::{Arc, OnceLock};
+
+    use slabscope::partition::{Method, StackParams};
+    use slabscope::volume::phantom;
+    use slabscope::{AnalysisParams, Histories, Monitor, Scope, ViewParams, ViewSearch, Volume};
+
+    use crate::tui::app::{App, Screen};
+    use crate::tui::event::{Action, Effect, JobMsg, Load};
+
+    /// A volume just over the preview's size, its preview level, the preview's view search and
+    /// both resolutions' histories along z.
+    struct Big {
+        volume: Arc<Volume>,
+        coarse: Arc<Volume>,
+        views: ViewSearch,
+        along_z: [Arc<Histories>; 2],
+    }
+
+    fn big() -> &'static Big {
+        static BIG: OnceLock<Big> = OnceLock::new();
+        BIG.get_or_init(|| {
+            let volume = Arc::new(phantom::body([130, 130, 132], 1).unwrap());
+            assert_eq!(crate::tui::preview_level(&volume), 1, "65×65×66");
+            let coarse = volume.coarser(1);
+            let mut views =
+                slabscope::search(&coarse, &ViewParams::default(), &Monitor::none()).unwrap();
+            // Put z first, so that both resolutions' best is the axis of the histories.
+            let z = views
+                .views
+                .iter()
+                .position(|v| v.axis == [0.0, 0.0, 1.0])
+                .unwrap();
+            views.views.swap(0, z);
+            views.refined = None;
+            let along_z = [&volume, &coarse].map(|v| {
+                let h = Histories::new(
+                    v,
+                    [0.0, 0.0, 1.0],
+                    &StackParams::default(),
+                    Scope::ALL,
+                    &Monitor::none(),
+                );
+                Arc::new(h.unwrap())
+            });
+            Big {
+                volume,
+                coarse,
+                views,
+                along_z,
+            }
+        })
+    }
+
+    fn job(app: &mut App, msg: JobMsg) -> Vec<Effect> {
+        app.update(Action::Job(msg))
+    }
+
+    /// An app on the big volume taken through its preview: loaded, the preview's views and
+    /// histories shown.
+    fn previewed() -> (App, Vec<Effect>) {
+        let b = big();
+        let (mut app, _) = App::new("big".into(), AnalysisParams::default(), Screen::default());
+        app.preview.cells = (40, 12);
+        let effects = job(
+            &mut app,
+            JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
+        );
+        assert!(
+            matches!(effects[0], Effect::SearchViews(_, 1)),
+            "{effects:?}"
+        );
+        match &effects[1] {
+            Effect::Render(r) => assert_eq!(r.level, 1, "the first picture is the preview's"),
+            other => panic!("{other:?}"),
+        }
+        job(&mut app, JobMsg::Coarse(Arc::clone(&b.coarse)));
+        let effects = job(&mut app, JobMsg::Views(1, Ok(Box::new(b.views.clone()))));
+        assert!(
+            matches!(effects[..], [Effect::Analyze(1, [0.0, 0.0, 1.0], _, 1)]),
+            "{effects:?}"
+        );
+        let effects = job(
+            &mut app,
+            JobMsg::Analysis(1, 1, Ok(Arc::clone(&b.along_z[1]))),
+        );
+        (app, effects)
+    }
+
+    #[test]
+    fn a_large_volume_shows_its_preview_then_full_resolution_in_place() {
+        let b = big();
+        let (mut app, effects) = previewed();
+        // The preview shows, labelled; the full-resolution view search starts, and a picture.
+        assert!(
+            matches!(effects[0], Effect::SearchViews(_, 0)),
+            "{effects:?}"
+        );
+        assert!(matches!(&effects[1], Effect::Render(r) if r.level == 1 && r.slabs.len() == 4));
+        assert_eq!(
+            app.status.resolution.as_deref(),
+            Some("preview: 1/2 resolution")
+        );
+        assert!(app.status.jobs.iter().any(|(j, _)| *j == "full resolution"));
+        // The user moves on while full resolution runs: bottom-up, 6 slabs.
+        app.update(Action::CycleMethod);
+        app.update(Action::Slabs(2));
+        assert_eq!(app.part.slab_count(), Some(6));
+        // The full search agrees on the axis: the full histories start, the preview stays.
+        let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(b.views.clone()))));
+        assert!(
+            matches!(effects[..], [Effect::Analyze(2, [0.0, 0.0, 1.0], _, 0)]),
+            "{effects:?}"
+        );
+        assert_eq!(app.part.level, 1);
+        assert!(
+            app.part.ready().is_some(),
+            "the preview's histories stay shown"
+        );
+        let effects = job(
+            &mut app,
+            JobMsg::Analysis(2, 0, Ok(Arc::clone(&b.along_z[0]))),
+        );
+        // Replaced in place: the method and slab count kept, the label gone, a new picture.
+        assert_eq!(app.part.level, 0);
+        assert!(Arc::ptr_eq(app.part.ready().unwrap(), &b.along_z[0]));
+        assert_eq!(
+            (app.part.method, app.part.slab_count()),
+            (Method::BottomUp, Some(6))
+        );
+        assert_eq!(app.status.resolution, None);
+        assert!(app.status.jobs.is_empty());
+        assert!(matches!(&effects[..], [Effect::Render(r)] if r.level == 0 && r.slabs.len() == 6));
+        let said = app.status.message.clone().unwrap();
+        assert!(said.starts_with("full resolution"), "{said}");
+    }
+
+    #[test]
+    fn a_new_best_axis_at_full_resolution_is_said_and_followed() {
+        let b = big();
+        let (mut app, _) = previewed();
+        let mut full = b.views.clone();
+        full.views.swap(0, 1);
+        let new_best = full.views[0].axis;
+        let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(full))));
+        // Previewed along the new axis first, then refined.
+        assert!(
+            matches!(effects[..], [Effect::Analyze(2, a, _, 1)] if a == new_best),
+            "{effects:?}"
+        );
+        let said = app.status.message.clone().unwrap();
+        assert!(
+            said.starts_with("full resolution: the best axis is"),
+            "{said}"
+        );
+    }
+
+    #[test]
+    fn an_axis_the_user_chose_is_kept_and_refined_at_once() {
+        let b = big();
+        let (mut app, _) = previewed();
+        app.update(Action::Ask(crate::tui::event::Ask::Axis));
+        app.update(Action::Type('y'));
+        let effects = app.update(Action::Submit);
+        assert!(
+            matches!(effects[..], [Effect::Analyze(2, [0.0, 1.0, 0.0], _, 1)]),
+            "{effects:?}"
+        );
+        let along_y = Histories::new(
+            &b.coarse,
+            [0.0, 1.0, 0.0],
+            &StackParams::default(),
+            Scope::ALL,
+            &Monitor::none(),
+        );
+        let effects = job(
+            &mut app,
+            JobMsg::Analysis(2, 1, Ok(Arc::new(along_y.unwrap()))),
+        );
+        // Not the best axis: no need to wait for the full view search.
+        assert!(
+            effects
+                .iter()
+                .any(|e| matches!(e, Effect::Analyze(3, [0.0, 1.0, 0.0], _, 0))),
+            "{effects:?}"
+        );
+        // The full search then keeps the user's axis.
+        let mut full = b.views.clone();
+        full.views.swap(0, 1);
+        let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(full))));
+        assert!(effects.is_empty(), "{effects:?}");
+        assert_eq!(app.part.axis, Some([0.0, 1.0, 0.0]));
+    }
+
+    #[test]
+    fn escape_cancels_full_resolution_and_the_preview_stays() {
+        let (mut app, _) = previewed();
+        let effects = app.update(Action::Escape);
+        assert!(matches!(effects[..], [Effect::Cancel]), "{effects:?}");
+        assert!(app.part.ready().is_some());
+        let label = app.status.resolution.clone().unwrap();
+        assert_eq!(label, "preview: 1/2 resolution, full resolution stopped");
+        // The cancelled search's late answer changes nothing.
+        let effects = job(&mut app, JobMsg::Views(0, Err("cancelled".into())));
+        assert!(effects.is_empty());
+        assert!(matches!(app.views.views, Load::Ready(_)));
+    }
+}
