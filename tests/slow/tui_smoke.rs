@@ -1,5 +1,6 @@
 //! The real binary in a real terminal (tmux): it opens on the built-in dataset, shows the panes,
-//! steps a merge, and quits leaving the terminal as it was. Skipped where tmux is absent.
+//! steps a merge, and quits leaving the terminal as it was; a large volume shows its preview first.
+//! Skipped where tmux is absent.
 
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -171,4 +172,86 @@ fn a_folder_of_dicom_series_opens_as_a_list_of_series() {
     tmux.wait_for("volume 2 of 2: [series 4 \"Sagittal MPR\"]", 30);
     tmux.keys("q");
     tmux.wait_for("EXITED 0", 30);
+}
+
+/// A body phantom of 192³ voxels (more than the preview's 2²¹), written by the binary.
+fn large_phantom(dir: &std::path::Path) -> std::path::PathBuf {
+    let path = dir.join("body192.nrrd");
+    let out = Command::new(binary())
+        .args(["phantom", "body", "--size", "192", "-o"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    path
+}
+
+#[test]
+fn a_large_volume_shows_a_preview_first_then_full_resolution_in_place() {
+    let _alone = crate::one_at_a_time();
+    if Command::new("tmux").arg("-V").output().is_err() {
+        eprintln!("SKIPPED: tmux is not installed, so the TUI preview test cannot run");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let file = large_phantom(dir.path());
+    // The test hook holds the full-resolution jobs back, so the preview is seen for certain.
+    let command = format!(
+        "SLABSCOPE_TEST_FULL_DELAY_MS=4000 {} {} --protocol blocks --phases 0; echo EXITED $?; \
+         sleep 60",
+        binary(),
+        file.display()
+    );
+    let tmux = Tmux::start("preview", &command, (150, 36));
+    let screen = tmux.wait_for("preview: 1/2 resolution", 120);
+    let screen = if screen.contains("of 96 slices") {
+        screen
+    } else {
+        tmux.wait_for("of 96 slices", 60)
+    };
+    assert!(screen.contains("full resolution:"), "a gauge:\n{screen}");
+    // Keys work on the preview; the slab count asked for is kept at full resolution.
+    tmux.keys("+");
+    tmux.wait_for("5 slabs", 30);
+    let screen = tmux.wait_for("of 192 slices", 300);
+    assert!(
+        !screen.contains("preview: 1/2"),
+        "the label goes:\n{screen}"
+    );
+    assert!(screen.contains("5 slabs"), "{screen}");
+    assert!(
+        screen.contains("full resolution: the preview's 5 slabs")
+            || screen.contains("full resolution moved the cuts")
+            || screen.contains("full resolution: 5 slabs"),
+        "the status says what full resolution changed:\n{screen}"
+    );
+    tmux.keys("q");
+    tmux.wait_for("EXITED 0", 30);
+}
+
+#[test]
+fn escape_stops_full_resolution_and_keeps_the_preview() {
+    let _alone = crate::one_at_a_time();
+    if Command::new("tmux").arg("-V").output().is_err() {
+        eprintln!("SKIPPED: tmux is not installed, so the TUI preview test cannot run");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let file = large_phantom(dir.path());
+    let command = format!(
+        "SLABSCOPE_TEST_FULL_DELAY_MS=600000 {} {} --protocol blocks --phases 0; echo EXITED $?; \
+         sleep 60",
+        binary(),
+        file.display()
+    );
+    let tmux = Tmux::start("cancel", &command, (150, 36));
+    tmux.wait_for("of 96 slices", 120);
+    tmux.wait_for("full resolution: ", 30);
+    tmux.keys("Escape");
+    let screen = tmux.wait_for("full resolution stopped", 30);
+    assert!(screen.contains("the preview stays"), "{screen}");
+    assert!(screen.contains("of 96 slices"), "{screen}");
+    // Quitting does not wait for the held-back job.
+    tmux.keys("q");
+    tmux.wait_for("EXITED 0", 10);
 }

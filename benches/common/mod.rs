@@ -1,0 +1,88 @@
+//! What the benchmarks share: timed whole-process runs, medians, and the body phantoms they
+//! write once as uncompressed i16 NIfTI after checking the free disk space.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use slabscope::volume::io::write_volume;
+use slabscope::volume::phantom;
+
+/// One timed run: seconds from start to exit, and the peak anonymous memory in MiB.
+pub fn run(bin: &Path, args: &[&str]) -> Result<(f64, f64), Box<dyn std::error::Error>> {
+    let start = Instant::now();
+    let mut child = Command::new(bin)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()?;
+    let status = format!("/proc/{}/status", child.id());
+    let mut peak_kib = 0u64;
+    loop {
+        if let Some(exit) = child.try_wait()? {
+            if !exit.success() {
+                return Err(format!("{} {args:?} failed: {exit}", bin.display()).into());
+            }
+            break;
+        }
+        if let Ok(text) = std::fs::read_to_string(&status)
+            && let Some(kib) = text
+                .lines()
+                .find(|l| l.starts_with("RssAnon:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        {
+            peak_kib = peak_kib.max(kib);
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    Ok((start.elapsed().as_secs_f64(), peak_kib as f64 / 1024.0))
+}
+
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Free bytes on the file system holding `dir`.
+pub fn free_bytes(dir: &Path) -> Option<u64> {
+    let out = Command::new("df")
+        .args(["--output=avail", "-B1"])
+        .arg(dir)
+        .output()
+        .ok()?;
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .nth(1)?
+        .trim()
+        .parse()
+        .ok()
+}
+
+/// The phantom of `dims` as i16 NIfTI in `dir`, written unless it is there.
+pub fn volume(dir: &Path, dims: [usize; 3]) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    let path = dir.join(format!("body_{}x{}x{}.nii", dims[0], dims[1], dims[2]));
+    if path.exists() {
+        return Ok(path);
+    }
+    let bytes = dims.iter().product::<usize>() as u64 * 2 + 352;
+    if free_bytes(dir).is_some_and(|free| free < bytes + (1 << 30)) {
+        return Err(format!("{}: not enough free disk for {bytes} bytes", dir.display()).into());
+    }
+    let t = Instant::now();
+    let v = phantom::body(dims, 1)?;
+    write_volume(&path, &v, false)?;
+    println!(
+        "wrote {} in {:.1} s",
+        path.display(),
+        t.elapsed().as_secs_f64()
+    );
+    Ok(path)
+}
+
+pub fn parse_dims(text: &str) -> Option<[usize; 3]> {
+    let mut it = text.split('x').map(|n| n.parse().ok());
+    let dims = [it.next()??, it.next()??, it.next()??];
+    it.next().is_none().then_some(dims)
+}
