@@ -1,6 +1,7 @@
-//! Which pyramid level renders read, and that reading a coarse one changes neither
+//! Which pyramid level renders and slices read, and that reading a coarse one changes neither
 //! the framing nor, for a volume that is the same at both levels, the picture.
 
+use super::slice::{SliceParams, slice};
 use super::*;
 use crate::partition::{PartitionParams, partition};
 use crate::volume::{VoxelType, phantom};
@@ -212,6 +213,55 @@ fn a_coarse_render_of_a_blocky_volume_matches_level_0_and_frames_it_the_same() {
     }
 }
 
+#[test]
+fn slices_read_the_level_their_pixels_allow() {
+    let v = blocky([64, 64, 64], 8, [1.0; 3]);
+    let renderer = Renderer::new(&v).unwrap();
+    let transfer = renderer
+        .transfer(
+            TransferChoice {
+                preset: Preset::Auto,
+                colormap: Colormap::Grey,
+                window: Some((50.0, 250.0)),
+            },
+            1.0,
+        )
+        .unwrap();
+    let draw = |fit: (u32, u32)| {
+        let params = SliceParams {
+            fit,
+            ..SliceParams::default()
+        };
+        slice(&v, &transfer, Z, 30.0, &params).unwrap()
+    };
+    // 63 mm across 64 pixels: under a voxel a pixel. Across 16: 3.9 (level 1 gives 1.97).
+    // Across 8: 7.9, level 2.
+    assert_eq!(draw((64, 64)).pyramid_level, 0);
+    let (small, smaller) = (draw((16, 16)), draw((8, 8)));
+    assert_eq!((small.pyramid_level, smaller.pyramid_level), (1, 2));
+    // Pixels map to the same mm, and every block of 2 pixels is a block of 8 voxels: each
+    // pixel at a block's inside is its value's grey.
+    assert_eq!(small.pixel, 63.0 / 16.0);
+    assert_eq!(
+        small.point(0.0, 0.0),
+        [0.5 * small.pixel, 0.5 * small.pixel, 30.0]
+    );
+    let level0 = draw((64, 64));
+    for (x, y) in [(1.0, 1.0), (5.0, 9.0), (14.0, 6.0)] {
+        let p = small.point(x, y);
+        let (px, py) = level0.pixel_of(p);
+        let grey = |image: &slice::SliceImage, (x, y): (f64, f64)| {
+            let at = 4 * (y as usize * image.pixmap.width() as usize + x as usize);
+            image.pixmap.data()[at]
+        };
+        assert_eq!(
+            grey(&small, (x, y)),
+            grey(&level0, (px.round(), py.round())),
+            "{p:?}"
+        );
+    }
+}
+
 /// The value of [`ramp_volume`] at `p`, mm.
 fn ramp(p: [f64; 3]) -> f64 {
     0.5 + p[0] + 0.5 * p[1] + 0.25 * p[2]
@@ -235,6 +285,52 @@ fn ramp_volume() -> Volume {
         }
     }
     Volume::new(dims, spacing, VoxelType::F32, data).unwrap()
+}
+
+#[test]
+fn a_coarse_slice_of_a_ramp_reads_the_values_where_level_0_has_them() {
+    // A linear ramp is its own block mean at every pyramid level, and trilinear interpolation
+    // gives it back exactly: a slice at level 1 reads the ramp's value at every pixel's point,
+    // but within half a coarse voxel of the box's low edges, where the coarse grid (its voxel 0
+    // at level 0's 0.5) stops and the value is its edge's. Greys exact to rounding.
+    let v = ramp_volume();
+    let renderer = Renderer::new(&v).unwrap();
+    let (lo, hi) = (0.5, ramp([47.0, 58.5, 62.0]) as f32);
+    let transfer = renderer
+        .transfer(
+            TransferChoice {
+                preset: Preset::Auto,
+                colormap: Colormap::Grey,
+                window: Some((lo, hi)),
+            },
+            1.0,
+        )
+        .unwrap();
+    let params = SliceParams {
+        fit: (12, 12),
+        letters: false,
+        ..SliceParams::default()
+    };
+    let image = slice(&v, &transfer, Z, 31.0, &params).unwrap();
+    assert_eq!(image.pyramid_level, 1, "{} mm a pixel", image.pixel);
+    let mut checked = 0;
+    for y in 0..image.pixmap.height() {
+        for x in 0..image.pixmap.width() {
+            let p = image.point(f64::from(x), f64::from(y));
+            if p[0] < 0.5 || p[1] < 0.75 {
+                continue;
+            }
+            let grey = (ramp(p) as f32 - lo) / (hi - lo);
+            let expect = (grey.clamp(0.0, 1.0) * 255.0).round();
+            let got = image.pixmap.data()[4 * (y * image.pixmap.width() + x) as usize];
+            assert!(
+                (f32::from(got) - expect).abs() <= 1.0,
+                "{p:?}: {got} vs {expect}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 60, "{checked}");
 }
 
 #[test]
