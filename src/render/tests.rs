@@ -72,7 +72,7 @@ fn todays_pictures_read_pyramid_level_0_unchanged() {
         assert_eq!(image.pixmap.data(), level0.pixmap.data());
     }
     // The built-in dataset as the TUI first shows it in a picture of 1000×600.
-    let v = crate::builtin_dataset().unwrap();
+    let v = phantom::body([128, 128, 208], 1).unwrap(); // crate::builtin_dataset's
     let part = partition(&v, Z, &PartitionParams::default(), &none).unwrap();
     let layout = Layout::exploded(&part, Gap::Similarity, DEFAULT_SPREAD);
     let params = RenderParams {
