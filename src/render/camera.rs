@@ -222,6 +222,34 @@ impl Camera {
         }
     }
 
+    /// The unit directions to the right and up in the image, in the scene's space.
+    pub fn axes(&self) -> ([f64; 3], [f64; 3]) {
+        (self.right, self.up)
+    }
+
+    /// How far apart neighbouring pixels' rays are where they meet the scene whose hull is
+    /// `points`: everywhere the same for an orthographic camera; for a perspective one, at the
+    /// nearest depth (along the view) of any of them, where the rays are closest, so the
+    /// smallest spacing of rays anywhere in the scene.
+    pub fn pixel_size(&self, points: &[[f64; 3]]) -> f64 {
+        let pixel = 2.0 * self.half_h / f64::from(self.height.max(1));
+        if !self.perspective {
+            return pixel;
+        }
+        let nearest = points
+            .iter()
+            .map(|p| {
+                let rel: [f64; 3] = std::array::from_fn(|m| p[m] - self.center[m]);
+                self.distance - dot(rel, self.back)
+            })
+            .fold(f64::INFINITY, f64::min);
+        if nearest.is_finite() {
+            pixel * nearest.max(0.0) / self.distance
+        } else {
+            pixel
+        }
+    }
+
     /// A direction in the image: its components to the right and up (y up), and towards the
     /// viewer.
     pub fn screen_direction(&self, d: [f64; 3]) -> (f64, f64, f64) {
@@ -273,6 +301,36 @@ mod tests {
                         "{perspective}: {py} vs {y}"
                     );
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn pixel_sizes_are_the_spacing_of_neighbouring_rays() {
+        for perspective in [false, true] {
+            let p = CameraParams {
+                perspective,
+                ..CameraParams::default()
+            };
+            let cam = Camera::new([0.0; 3], 10.0, [0.0, 0.0, 1.0], &p, 64, 48).unwrap();
+            // Where rays of the middle row cross the plane 3 mm nearer than the centre.
+            let near: [f64; 3] = cam.back.map(|c| 3.0 * c);
+            let at = |x: u32| -> [f64; 3] {
+                let (o, d) = cam.ray(x, 24);
+                let t = (3.0 - dot(o, cam.back)) / dot(d, cam.back);
+                std::array::from_fn(|m| o[m] + t * d[m])
+            };
+            let (a, b) = (at(32), at(33));
+            let apart = dot(std::array::from_fn(|m| b[m] - a[m]), cam.right);
+            let pixel = cam.pixel_size(&[near, [0.0; 3]]);
+            assert!(
+                (apart - pixel).abs() < 1e-9 * pixel,
+                "{perspective}: {apart} vs {pixel}"
+            );
+            if perspective {
+                assert!(pixel < cam.pixel_size(&[]), "nearer, closer together");
+            } else {
+                assert_eq!(pixel, cam.pixel_size(&[]));
             }
         }
     }

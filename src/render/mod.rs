@@ -11,26 +11,31 @@ mod camera;
 mod layout;
 mod output;
 mod overlay;
+mod pyramid;
 mod ray;
 pub mod sheet;
 pub mod slice;
 mod transfer;
+
+use std::sync::{Arc, OnceLock};
 
 use serde::Serialize;
 
 pub use camera::{Camera, CameraParams};
 pub use layout::{DEFAULT_SPREAD, Gap, Layout, MIN_GAP, Placement, Stack};
 pub use output::{Image, ImageOutput, encode, paste_centred};
+pub use pyramid::{VOXELS_PER_PIXEL, pyramid_level};
 pub use transfer::{
     Colormap, HISTOGRAM_BINS, MAX_LABELS, Preset, Transfer, TransferChoice, label_values,
 };
 
 use crate::error::{Error, Result};
-use crate::geometry::{dot, min_spacing};
+use crate::geometry::{DisplayFrame, dot, min_spacing};
 use crate::progress::Monitor;
 use crate::volume::Volume;
 use crate::volume::interpolate::Interpolator;
 use overlay::Aabb;
+use pyramid::Grid;
 pub(crate) use ray::sample;
 use ray::{Bricks, Frame};
 
@@ -149,25 +154,66 @@ const MARGIN: f64 = 0.04;
 /// And this fraction more on the left, for the slab numbers.
 const LABEL_ROOM: f64 = 0.05;
 
-/// What a render of one volume can reuse: the brick grid, the value histogram and, for a
-/// label volume, its labels.
+/// What a render of one volume can reuse: per pyramid level, its voxels and brick grid (made
+/// when a render first reads that level); level 0's value histogram and, for a label volume,
+/// its labels, which every level is coloured by.
 pub struct Renderer<'a> {
     volume: &'a Volume,
-    bricks: Bricks,
+    levels: Vec<OnceLock<Level>>,
     histogram: Vec<u64>,
     labels: Option<Vec<(f32, u64)>>,
 }
 
+/// A pyramid level a render reads: the level's volume (none for level 0, the renderer's own)
+/// and its bricks.
+struct Level {
+    volume: Option<Arc<Volume>>,
+    bricks: Bricks,
+}
+
+/// One pyramid level's way of drawing a render: the level's voxels, bricks and grid, the sample
+/// step there, the transfer function for that step, the bricks it leaves clear, the box of what
+/// is not (level 0's mm), the camera that frames it and the coarsest pyramid level that
+/// camera's pixels allow.
+struct Scene<'r> {
+    level: usize,
+    volume: &'r Volume,
+    bricks: &'r Bricks,
+    grid: Grid,
+    step: f64,
+    transfer: Transfer,
+    transparent: Vec<bool>,
+    content: Aabb,
+    camera: Camera,
+    allows: usize,
+}
+
 impl<'a> Renderer<'a> {
-    /// Prepares `volume` for rendering (one pass over its voxels).
+    /// Prepares `volume` for rendering (one pass over its voxels, for the histogram; the bricks
+    /// of a pyramid level are made when a render first reads it).
     pub fn new(volume: &'a Volume) -> Result<Self> {
         volume.require_data()?;
         Ok(Self {
             volume,
-            bricks: Bricks::new(volume),
+            levels: (0..=volume.coarser_levels())
+                .map(|_| OnceLock::new())
+                .collect(),
             histogram: volume.histogram(HISTOGRAM_BINS)?,
             labels: volume.labels().map(<[_]>::to_vec),
         })
+    }
+
+    /// Pyramid level `k`'s volume and bricks, made the first time they are asked for.
+    fn level(&self, k: usize) -> (&Volume, &Bricks) {
+        let level = self.levels[k].get_or_init(|| {
+            let volume = (k > 0).then(|| self.volume.coarser(k));
+            let bricks = Bricks::new(volume.as_deref().unwrap_or(self.volume));
+            Level { volume, bricks }
+        });
+        (
+            level.volume.as_deref().unwrap_or(self.volume),
+            &level.bricks,
+        )
     }
 
     /// The labels of a label volume (integers with few distinct values), with their counts.
@@ -198,40 +244,75 @@ impl<'a> Renderer<'a> {
         self.volume
     }
 
-    /// Renders `layout` with `params`; reports one unit per image row to `monitor`.
+    /// Renders `layout` with `params`; reports one unit per image row to `monitor`. The
+    /// render reads pyramid level k only where level k − 1 gives at least
+    /// [`VOXELS_PER_PIXEL`] voxels per pixel along both screen axes ([`pyramid_level`]); the
+    /// image says which it read.
     pub fn render(
         &self,
         layout: &Layout,
         params: &RenderParams,
         monitor: &Monitor,
     ) -> Result<Image> {
+        self.render_with(layout, params, None, monitor)
+    }
+
+    /// As [`render`](Self::render), reading pyramid level `k` (at most the last) whatever the
+    /// pixels allow: the same framing, for comparing levels.
+    pub fn render_at(
+        &self,
+        layout: &Layout,
+        params: &RenderParams,
+        k: usize,
+        monitor: &Monitor,
+    ) -> Result<Image> {
+        self.render_with(layout, params, Some(k.min(self.levels.len() - 1)), monitor)
+    }
+
+    fn render_with(
+        &self,
+        layout: &Layout,
+        params: &RenderParams,
+        level: Option<usize>,
+        monitor: &Monitor,
+    ) -> Result<Image> {
         params.check()?;
-        let spacing = self.volume.spacing();
-        let step = params.step * min_spacing(spacing);
         let look = TransferChoice {
             preset: params.preset,
             colormap: params.colormap,
             window: params.window,
         };
-        let transfer = self.transfer(look, step)?;
-        let transparent = self.bricks.transparent(&transfer);
-        let dims = self.volume.dims();
-        let extent: [f64; 3] = std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m]);
-        let content = self.bricks.content(&transparent, spacing, extent);
-        let camera = self.camera(layout, params, extent, &content)?;
+        let scene = match level {
+            Some(k) => self.scene(k, layout, params, look)?,
+            None => self.choose(layout, params, look)?,
+        };
+        let Scene {
+            level,
+            volume,
+            bricks,
+            grid,
+            step,
+            transfer,
+            transparent,
+            content,
+            camera,
+            ..
+        } = scene;
+        let extent = self.extent();
         let (labels, window) = (transfer.is_labels(), transfer.window());
         let exposed = exposed_cuts(layout, params);
-        let (pixmap, depth) = crate::volume::with_voxels!(self.volume.data(), |data| {
+        let dims = volume.dims();
+        let (pixmap, depth) = crate::volume::with_voxels!(volume.data(), |data| {
             Frame {
                 it: Interpolator::over(data, dims),
-                bricks: &self.bricks,
+                bricks,
                 transparent,
                 labels,
                 transfer,
                 layout,
                 exposed,
                 params,
-                spacing,
+                grid,
                 extent,
                 step,
             }
@@ -242,44 +323,81 @@ impl<'a> Renderer<'a> {
             camera,
             depth,
             window,
+            pyramid_level: level,
         };
         self.draw_overlays(&mut image, layout, &content, params, step);
         Ok(image)
     }
 
-    /// The camera of `params` around the volume of `extent` (mm) with `layout`'s slabs moved,
-    /// fitted to what is drawn: `content` (the box of what is not clear) and the labels' room.
-    /// Slabs moved absurdly far are an error.
+    /// The scene of the pyramid level the render reads. The camera that frames the whole box
+    /// has pixels at least as large as one that frames less, so the level its pixels allow is
+    /// where the search starts; it then comes down, level by level where needed, until the
+    /// camera framing what that level shows allows it. Levels are read only once chosen, so a
+    /// render that reads a coarse level never makes level 0's bricks.
+    fn choose(
+        &self,
+        layout: &Layout,
+        params: &RenderParams,
+        look: TransferChoice,
+    ) -> Result<Scene<'_>> {
+        let extent = self.extent();
+        let (_, mut level) = self.camera(layout, params, &Aabb::of(extent))?;
+        loop {
+            let scene = self.scene(level, layout, params, look)?;
+            if scene.allows >= level {
+                return Ok(scene);
+            }
+            level = scene.allows;
+        }
+    }
+
+    /// The scene of pyramid level `k`.
+    fn scene(
+        &self,
+        k: usize,
+        layout: &Layout,
+        params: &RenderParams,
+        look: TransferChoice,
+    ) -> Result<Scene<'_>> {
+        let (volume, bricks) = self.level(k);
+        let grid = Grid::of(self.volume, volume);
+        let step = params.step * min_spacing(grid.spacing);
+        let transfer = self.transfer(look, step)?;
+        let transparent = bricks.transparent(&transfer);
+        let extent = self.extent();
+        let content = bricks.content(&transparent, &grid, extent);
+        let (camera, allows) = self.camera(layout, params, &content)?;
+        Ok(Scene {
+            level: k,
+            volume,
+            bricks,
+            grid,
+            step,
+            transfer,
+            transparent,
+            content,
+            camera,
+            allows,
+        })
+    }
+
+    /// Level 0's box, mm from voxel (0, 0, 0) to the last (as [`framed`] puts it).
+    fn extent(&self) -> [f64; 3] {
+        let (dims, spacing) = (self.volume.dims(), self.volume.spacing());
+        std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m])
+    }
+
+    /// The camera of `params` around this volume with `layout`'s slabs moved, fitted to
+    /// `content`, and the coarsest pyramid level its pixels allow (see [`framed`]).
     fn camera(
         &self,
         layout: &Layout,
         params: &RenderParams,
-        extent: [f64; 3],
         content: &Aabb,
-    ) -> Result<Camera> {
-        let spacing = self.volume.spacing();
-        let reference = min_spacing(spacing);
-        let center = extent.map(|e| e / 2.0);
-        let diagonal = dot(extent, extent).sqrt();
-        if !(layout.reach().is_finite() && layout.reach() <= MAX_REACH * diagonal.max(reference)) {
-            return Err(Error::invalid(
-                "spread",
-                layout.reach(),
-                format!("slabs moved at most {MAX_REACH} times the volume's diagonal"),
-            ));
-        }
-        let radius = diagonal / 2.0 + layout.reach() + reference;
+    ) -> Result<(Camera, usize)> {
+        let (dims, spacing) = (self.volume.dims(), self.volume.spacing());
         let display = self.volume.transform().display_frame(layout.axis, spacing);
-        let (w, h) = (params.width, params.height);
-        let mut camera =
-            Camera::oriented(center, radius, layout.axis, display, &params.camera, w, h)?;
-        let room = if params.labels { LABEL_ROOM } else { 0.0 };
-        camera.fit(
-            &overlay::scene_points(layout, content, params),
-            MARGIN,
-            room,
-        );
-        Ok(camera)
+        framed((dims, spacing, display), layout, params, content)
     }
 
     /// Draws what `params` asks over `image`: outlines and slab numbers, and the orientation
@@ -302,6 +420,42 @@ impl<'a> Renderer<'a> {
         }
     }
 }
+
+/// The camera of `params` around a volume of `dims` voxels `spacing` apart (shown in the frame
+/// `display` when its orientation is known) with `layout`'s slabs moved, fitted to what is
+/// drawn: `content` (the box of what is not clear, mm) and the labels' room; and the coarsest
+/// pyramid level its pixels allow ([`pyramid_level`], at the scene's nearest depth for a
+/// perspective camera). Slabs moved absurdly far are an error.
+fn framed(
+    (dims, spacing, display): ([usize; 3], [f64; 3], Option<DisplayFrame>),
+    layout: &Layout,
+    params: &RenderParams,
+    content: &Aabb,
+) -> Result<(Camera, usize)> {
+    let extent: [f64; 3] = std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m]);
+    let reference = min_spacing(spacing);
+    let center = extent.map(|e| e / 2.0);
+    let diagonal = dot(extent, extent).sqrt();
+    if !(layout.reach().is_finite() && layout.reach() <= MAX_REACH * diagonal.max(reference)) {
+        return Err(Error::invalid(
+            "spread",
+            layout.reach(),
+            format!("slabs moved at most {MAX_REACH} times the volume's diagonal"),
+        ));
+    }
+    let radius = diagonal / 2.0 + layout.reach() + reference;
+    let (w, h) = (params.width, params.height);
+    let mut camera = Camera::oriented(center, radius, layout.axis, display, &params.camera, w, h)?;
+    let room = if params.labels { LABEL_ROOM } else { 0.0 };
+    let points = overlay::scene_points(layout, content, params);
+    camera.fit(&points, MARGIN, room);
+    let pixel = camera.pixel_size(&points);
+    let level = pyramid_level(pixel, camera.axes(), dims, spacing);
+    Ok((camera, level))
+}
+
+#[cfg(test)]
+mod tests;
 
 /// Per slab of `layout`, whether the cuts at its start and its end are exposed: pulled away
 /// from the neighbour there, or the neighbour not drawn (the first slab's start and the last

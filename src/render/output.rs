@@ -17,6 +17,8 @@ pub struct Image {
     pub depth: Vec<f32>,
     /// The colour window the transfer function used.
     pub window: (f32, f32),
+    /// The pyramid level the render read (0: every voxel; docs/design.md §5).
+    pub pyramid_level: usize,
 }
 
 impl Image {

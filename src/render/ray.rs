@@ -5,6 +5,7 @@ use rayon::prelude::*;
 use tiny_skia::Pixmap;
 
 use super::overlay::Aabb;
+use super::pyramid::Grid;
 use super::{Camera, Layout, Mode, Placement, RenderParams, Transfer};
 use crate::error::{Error, Result};
 use crate::geometry::dot;
@@ -24,7 +25,8 @@ const GHOST: f32 = 0.2;
 /// The light a cut face gets whatever its angle to the view (the rest grows with it).
 const FACE_AMBIENT: f64 = 0.75;
 
-/// Per-brick minimum and maximum of the voxels a brick's cells interpolate.
+/// Per-brick minimum and maximum of the voxels a brick's cells interpolate, over one pyramid
+/// level's voxels.
 pub(super) struct Bricks {
     count: [usize; 3],
     min: Vec<f32>,
@@ -77,14 +79,10 @@ impl Bricks {
             .collect()
     }
 
-    /// The box around the bricks that are not `transparent`, in mm: what a render shows
-    /// (the whole volume when nothing is).
-    pub(super) fn content(
-        &self,
-        transparent: &[bool],
-        spacing: [f64; 3],
-        extent: [f64; 3],
-    ) -> Aabb {
+    /// The box around the bricks that are not `transparent`, in level 0's mm (the bricks lie
+    /// on `grid`; the outer ones reach the box `[0, extent]`): what a render shows (the whole
+    /// volume when nothing is).
+    pub(super) fn content(&self, transparent: &[bool], grid: &Grid, extent: [f64; 3]) -> Aabb {
         let (mut lo, mut hi) = ([usize::MAX; 3], [0; 3]);
         for (b, _) in transparent.iter().enumerate().filter(|(_, t)| !**t) {
             let c = [
@@ -100,9 +98,16 @@ impl Bricks {
         if lo[0] == usize::MAX {
             return Aabb::of(extent);
         }
+        // A brick edge in mm: the outer edges are the box's, which a coarse level's grid
+        // does not reach (at level 0 they are where the grid puts them anyway).
+        let edge = |m: usize, b: usize| match b {
+            0 => 0.0,
+            b if b == self.count[m] => extent[m],
+            b => grid.position(m, (b * BRICK) as f64).min(extent[m]),
+        };
         Aabb {
-            lo: std::array::from_fn(|m| ((lo[m] * BRICK) as f64 * spacing[m]).min(extent[m])),
-            hi: std::array::from_fn(|m| ((hi[m] * BRICK) as f64 * spacing[m]).min(extent[m])),
+            lo: std::array::from_fn(|m| edge(m, lo[m])),
+            hi: std::array::from_fn(|m| edge(m, hi[m])),
         }
     }
 
@@ -142,8 +147,11 @@ pub(super) struct Frame<'a, T> {
     /// Per slab, whether its start and end cuts are exposed.
     pub(super) exposed: Vec<(bool, bool)>,
     pub(super) params: &'a RenderParams,
-    pub(super) spacing: [f64; 3],
+    /// The grid of the pyramid level `it` reads, in level 0's mm.
+    pub(super) grid: Grid,
+    /// Level 0's box, mm.
     pub(super) extent: [f64; 3],
+    /// Distance between samples along a ray, mm.
     pub(super) step: f64,
 }
 
@@ -346,7 +354,7 @@ impl<T: Voxel> Frame<'_, T> {
         empty: impl Fn(usize) -> bool,
         mut visit: impl FnMut([f64; 3], f64) -> bool,
     ) {
-        let dir_index: [f64; 3] = std::array::from_fn(|m| d[m] / self.spacing[m]);
+        let dir_index: [f64; 3] = std::array::from_fn(|m| d[m] / self.grid.spacing[m]);
         let (mut n, last) = self.samples(range);
         while n <= last {
             let t = n as f64 * self.step;
@@ -355,7 +363,7 @@ impl<T: Voxel> Frame<'_, T> {
             if !self.inside(p, slab) {
                 continue;
             }
-            let q: [f64; 3] = std::array::from_fn(|m| p[m] / self.spacing[m]);
+            let q = self.grid.index(p);
             let b = self.bricks.index(q);
             if empty(self.bricks.linear(b)) {
                 let skip = Bricks::exit(q, dir_index, b);
@@ -371,10 +379,8 @@ impl<T: Voxel> Frame<'_, T> {
     /// The cut face where the ray enters a slab at parameter `t`: the section there through
     /// the face colours, lit as a surface facing the axis.
     fn face(&self, (o, d): ([f64; 3], [f64; 3]), t: f64, k: f32, ray: &mut Ray) {
-        let q: [f64; 3] = std::array::from_fn(|m| {
-            ((o[m] + t * d[m]).clamp(0.0, self.extent[m])) / self.spacing[m]
-        });
-        let c = self.transfer.face(self.value(q));
+        let p: [f64; 3] = std::array::from_fn(|m| (o[m] + t * d[m]).clamp(0.0, self.extent[m]));
+        let c = self.transfer.face(self.value(self.grid.index(p)));
         if c[3] > 0.0 {
             // Faces are read, not sculpted: mostly flat light, a little from the angle.
             let light =
@@ -411,7 +417,7 @@ impl<T: Voxel> Frame<'_, T> {
                 };
                 if c[3] > 0.0 {
                     let light = if shading {
-                        shade(g, self.spacing, ray.1)
+                        shade(g, self.grid.spacing, ray.1)
                     } else {
                         1.0
                     };

@@ -13,7 +13,8 @@ use rayon::prelude::*;
 use tiny_skia::{Paint, Pixmap, Rect, Transform};
 
 use super::overlay::{Aabb, draw_digits, section};
-use super::{MAX_PIXELS, Transfer, paste_centred, sample};
+use super::pyramid::Grid;
+use super::{MAX_PIXELS, Transfer, paste_centred, pyramid_level, sample};
 use crate::error::{Error, Result};
 use crate::geometry::{cross, dot, min_spacing, normalize};
 use crate::render::Stack;
@@ -128,6 +129,8 @@ pub struct SliceImage {
     corner: [f64; 3],
     /// Millimetres per pixel.
     pub pixel: f64,
+    /// The pyramid level the picture read (0: every voxel; docs/design.md §5).
+    pub pyramid_level: usize,
 }
 
 impl SliceImage {
@@ -218,39 +221,26 @@ pub fn slice(
         std::array::from_fn(|m| position * n[m] + u0 * frame.right[m] + v1 * frame.up[m]);
     let mut pixmap = Pixmap::new(w, h)
         .ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "an image that fits"))?;
-    let labels = transfer.is_labels();
-    let bg = params.background;
-    crate::volume::with_voxels!(volume.data(), |data| {
-        let it = Interpolator::over(data, volume.dims());
-        pixmap
-            .data_mut()
-            .par_chunks_mut(w as usize * 4)
-            .enumerate()
-            .for_each(|(y, row)| {
-                for (x, px) in row.chunks_mut(4).enumerate() {
-                    let p = image_point(&corner, &frame, pixel, x as f64, y as f64);
-                    let inside = (0..3).all(|m| p[m] >= -1e-6 && p[m] <= extent[m] + 1e-6);
-                    let colour = inside.then(|| {
-                        let q: [f64; 3] =
-                            std::array::from_fn(|m| p[m].clamp(0.0, extent[m]) / spacing[m]);
-                        let v = sample(&it, q, labels);
-                        if v.is_nan() {
-                            return bg;
-                        }
-                        let c = transfer.grey(v);
-                        c.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
-                    });
-                    let c = colour.unwrap_or(bg);
-                    px.copy_from_slice(&[c[0], c[1], c[2], 255]);
-                }
-            });
-    });
+    // The picture reads the pyramid level its pixels allow (the voxel readouts of a slice
+    // view read level 0 themselves).
+    let pyramid_level = pyramid_level(pixel, (frame.right, frame.up), dims, spacing);
+    let coarse = (pyramid_level > 0).then(|| volume.coarser(pyramid_level));
+    let level = coarse.as_deref().unwrap_or(volume);
+    let plane = Plane {
+        corner,
+        frame,
+        pixel,
+        extent,
+        grid: Grid::of(volume, level),
+    };
+    plane.draw(&mut pixmap, level, transfer, params.background);
     let mut image = SliceImage {
         pixmap,
         frame,
         position,
         corner,
         pixel,
+        pyramid_level,
     };
     if params.letters
         && let Some(letters) = image.frame.letters
@@ -258,6 +248,50 @@ pub fn slice(
         draw_letters(&mut image.pixmap, letters);
     }
     Ok(image)
+}
+
+/// Where a slice picture lies: its top left corner, its frame and pixel size (level 0's mm), the
+/// volume's box, and the grid of the pyramid level it reads.
+struct Plane {
+    corner: [f64; 3],
+    frame: SliceFrame,
+    pixel: f64,
+    extent: [f64; 3],
+    grid: Grid,
+}
+
+impl Plane {
+    /// Fills `pixmap` with the plane's picture of `level` through `transfer`'s greys,
+    /// `background` outside the box and where voxels are missing.
+    fn draw(&self, pixmap: &mut Pixmap, level: &Volume, transfer: &Transfer, background: [u8; 3]) {
+        let labels = transfer.is_labels();
+        let (w, extent) = (pixmap.width() as usize, self.extent);
+        crate::volume::with_voxels!(level.data(), |data| {
+            let it = Interpolator::over(data, level.dims());
+            pixmap
+                .data_mut()
+                .par_chunks_mut(w * 4)
+                .enumerate()
+                .for_each(|(y, row)| {
+                    for (x, px) in row.chunks_mut(4).enumerate() {
+                        let p =
+                            image_point(&self.corner, &self.frame, self.pixel, x as f64, y as f64);
+                        let inside = (0..3).all(|m| p[m] >= -1e-6 && p[m] <= extent[m] + 1e-6);
+                        let colour = inside.then(|| {
+                            let p: [f64; 3] = std::array::from_fn(|m| p[m].clamp(0.0, extent[m]));
+                            let v = sample(&it, self.grid.index(p), labels);
+                            if v.is_nan() {
+                                return background;
+                            }
+                            let c = transfer.grey(v);
+                            c.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+                        });
+                        let c = colour.unwrap_or(background);
+                        px.copy_from_slice(&[c[0], c[1], c[2], 255]);
+                    }
+                });
+        });
+    }
 }
 
 /// The physical point at the centre of pixel `(x, y)` of a slice image.
