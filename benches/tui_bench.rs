@@ -77,7 +77,8 @@ fn open(bin: &Path, file: &Path, id: usize) -> Result<(f64, f64), Box<dyn std::e
 }
 
 /// Milliseconds from cancelling to the return of the view search and of the histories on
-/// `file`, each cancelled `after` its start.
+/// `file`, each cancelled `after` its start (the histories along z: slicing, the background
+/// fill, then the histories).
 fn cancel_latency(file: &Path, after: Duration) -> Result<(f64, f64), Box<dyn std::error::Error>> {
     let volume = slabscope::load(file, &LoadOptions::default())?.volume;
     let stop = |work: &(dyn Fn(&Monitor) -> bool + Sync)| {
@@ -162,11 +163,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     if let Some(path) = cancel_on {
-        let (views, histories) = cancel_latency(&path, Duration::from_millis(1500))?;
-        println!(
-            "512x512x512 cancelled 1.5 s in: the view search stops in {views:.0} ms, the \
-             histories in {histories:.0} ms"
-        );
+        for ms in [300, 1000, 2000, 4000] {
+            let (views, histories) = cancel_latency(&path, Duration::from_millis(ms))?;
+            println!(
+                "512x512x512 cancelled {ms} ms in: the view search stops in {views:.0} ms, the \
+                 histories in {histories:.0} ms"
+            );
+        }
     }
     Ok(())
 }

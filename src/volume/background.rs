@@ -6,6 +6,8 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::error::Result;
+use crate::progress::Monitor;
 use crate::volume::{Volume, Voxel};
 
 /// How the background is chosen.
@@ -52,9 +54,9 @@ impl Background {
         }
     }
 
-    /// The background `rule` finds in `volume`.
-    pub fn find(volume: &Volume, rule: BackgroundRule) -> Self {
-        match rule {
+    /// The background `rule` finds in `volume`; stops when `monitor` is cancelled.
+    pub fn find(volume: &Volume, rule: BackgroundRule, monitor: &Monitor) -> Result<Self> {
+        Ok(match rule {
             BackgroundRule::None => Self::none(),
             BackgroundRule::Below(t) => {
                 let n = crate::volume::with_voxels!(volume.data(), |v| {
@@ -69,7 +71,7 @@ impl Background {
             }
             BackgroundRule::Auto => match border_threshold(volume) {
                 Some(t) => {
-                    let (mask, count) = connected_below(volume, t);
+                    let (mask, count) = connected_below(volume, t, monitor)?;
                     Self {
                         rule,
                         value: Some(t),
@@ -82,7 +84,7 @@ impl Background {
                     ..Self::none()
                 },
             },
-        }
+        })
     }
 
     /// Whether the voxel at linear `index`, of value `v`, is background.
@@ -151,12 +153,19 @@ fn median_of(values: &mut [f32]) -> f32 {
 
 /// The voxels at or below `t` connected (6-neighbours) to a border voxel at or below `t`, as a
 /// bit mask, with their count. A scanline fill: runs along x, a stack of seeds, no recursion.
-fn connected_below(volume: &Volume, t: f32) -> (Vec<u64>, usize) {
-    crate::volume::with_voxels!(volume.data(), |v| connected_below_of(v, volume.dims(), t))
+fn connected_below(volume: &Volume, t: f32, monitor: &Monitor) -> Result<(Vec<u64>, usize)> {
+    crate::volume::with_voxels!(volume.data(), |v| {
+        connected_below_of(v, volume.dims(), t, monitor)
+    })
 }
 
 /// [`connected_below`] in voxels `v` of dimensions `dims`.
-fn connected_below_of<T: Voxel>(v: &[T], [nx, ny, nz]: [usize; 3], t: f32) -> (Vec<u64>, usize) {
+fn connected_below_of<T: Voxel>(
+    v: &[T],
+    [nx, ny, nz]: [usize; 3],
+    t: f32,
+    monitor: &Monitor,
+) -> Result<(Vec<u64>, usize)> {
     let below = |i: usize| v[i].to_f32() <= t;
     let mut mask = vec![0u64; v.len().div_ceil(64)];
     let set = |mask: &mut Vec<u64>, i: usize| mask[i / 64] |= 1 << (i % 64);
@@ -176,9 +185,16 @@ fn connected_below_of<T: Voxel>(v: &[T], [nx, ny, nz]: [usize; 3], t: f32) -> (V
             }
         }
     }
+    let mut runs = 0u32;
     while let Some(seed) = stack.pop() {
         if !candidate(&mask, seed) {
             continue;
+        }
+        // A glance at the cancel flag every few thousand runs: the fill of a large volume takes
+        // seconds, and a user who cancels waits for no more than a few milliseconds of it.
+        runs = runs.wrapping_add(1);
+        if runs % 4096 == 0 {
+            monitor.check()?;
         }
         let row = seed - seed % nx;
         let (mut a, mut b) = (seed, seed);
@@ -212,7 +228,7 @@ fn connected_below_of<T: Voxel>(v: &[T], [nx, ny, nz]: [usize; 3], t: f32) -> (V
             }
         }
     }
-    (mask, count)
+    Ok((mask, count))
 }
 
 #[cfg(test)]
@@ -244,9 +260,32 @@ mod tests {
     }
 
     #[test]
+    fn the_fill_stops_when_cancelled() {
+        // Dark all round a bright core: the fill walks 96 × 96 rows of air at least.
+        let n = 96;
+        let data = (0..n * n * n)
+            .map(|i| {
+                let c = [i % n, (i / n) % n, i / (n * n)];
+                if c.iter().all(|&x| (40..56).contains(&x)) {
+                    500.0
+                } else {
+                    (i % 3) as f32
+                }
+            })
+            .collect();
+        let v = Volume::new([n, n, n], [1.0; 3], VoxelType::F32, data).unwrap();
+        let cancel = std::sync::atomic::AtomicBool::new(true);
+        let stopped =
+            Background::find(&v, BackgroundRule::Auto, &Monitor::new(Some(&cancel), None));
+        assert!(matches!(stopped, Err(crate::Error::Cancelled)));
+        let found = Background::find(&v, BackgroundRule::Auto, &Monitor::none()).unwrap();
+        assert!(found.fraction > 0.99, "{}", found.fraction);
+    }
+
+    #[test]
     fn the_air_around_is_background_and_the_cavity_inside_is_not() {
         let v = ball_with_cavity();
-        let b = Background::find(&v, BackgroundRule::Auto);
+        let b = Background::find(&v, BackgroundRule::Auto, &Monitor::none()).unwrap();
         let t = b.value.unwrap();
         assert!((4.0..100.0).contains(&t), "{t}");
         let idx = |x: usize, y: usize, z: usize| x + 20 * (y + 20 * z);
@@ -275,11 +314,11 @@ mod tests {
                 .collect(),
         )
         .unwrap();
-        let auto = Background::find(&v, BackgroundRule::Auto);
+        let auto = Background::find(&v, BackgroundRule::Auto, &Monitor::none()).unwrap();
         assert_eq!((auto.value, auto.fraction), (None, 0.0));
-        let none = Background::find(&v, BackgroundRule::None);
+        let none = Background::find(&v, BackgroundRule::None, &Monitor::none()).unwrap();
         assert!(!none.contains(21, 0.0));
-        let below = Background::find(&v, BackgroundRule::Below(50.0));
+        let below = Background::find(&v, BackgroundRule::Below(50.0), &Monitor::none()).unwrap();
         assert!(below.contains(21, 0.0) && !below.contains(0, 51.0));
         assert!((below.fraction - 22.0 / 64.0).abs() < 1e-12);
     }

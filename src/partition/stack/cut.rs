@@ -57,7 +57,7 @@ impl SliceStack {
             Error::invalid("axis", format!("{axis:?}"), "a direction with a length")
         })?);
         let q = volume.quantizer(params.sampling.bins)?;
-        let background = Background::find(volume, params.background);
+        let background = Background::find(volume, params.background, monitor)?;
         // A sample's voxel (the nearest, for an interpolated one) and value.
         let keep = |index: usize, v: f32| -> u8 {
             if background.contains(index, v) {
