@@ -193,7 +193,7 @@ fn connected_below_of<T: Voxel>(
         // A glance at the cancel flag every few thousand runs: the fill of a large volume takes
         // seconds, and a user who cancels waits for no more than a few milliseconds of it.
         runs = runs.wrapping_add(1);
-        if runs % 4096 == 0 {
+        if runs.is_multiple_of(4096) {
             monitor.check()?;
         }
         let row = seed - seed % nx;
