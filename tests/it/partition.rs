@@ -288,7 +288,7 @@ fn voxel_at(v: &Volume, p: [f64; 3]) -> usize {
 #[test]
 fn the_body_phantom_has_air_around_it_and_lungs_inside() {
     let v = phantom::body([64, 64, 104], 1).unwrap();
-    let b = Background::find(&v, BackgroundRule::Auto);
+    let b = Background::find(&v, BackgroundRule::Auto, &slabscope::Monitor::none()).unwrap();
     let t = b.value.unwrap();
     assert!((-1000.0..-800.0).contains(&t), "threshold {t}");
     assert!((0.6..0.98).contains(&b.fraction), "{}", b.fraction);
@@ -308,7 +308,7 @@ fn a_dark_cavity_inside_a_head_is_not_background() {
     // The modified Shepp-Logan head: 0 around it, and two ellipsoids of 0 inside the brain
     // (1 - 0.8 - 0.2).
     let v = phantom::shepp_logan([65, 65, 65]).unwrap();
-    let b = Background::find(&v, BackgroundRule::Auto);
+    let b = Background::find(&v, BackgroundRule::Auto, &slabscope::Monitor::none()).unwrap();
     let idx = |x: usize, y: usize, z: usize| x + 65 * (y + 65 * z);
     assert!(b.contains(idx(0, 0, 0), 0.0), "the air border");
     // The centre of the left dark ellipsoid (0.22, 0, 0) in [-1, 1] coordinates.
