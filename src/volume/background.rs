@@ -277,7 +277,7 @@ mod tests {
         let cancel = std::sync::atomic::AtomicBool::new(true);
         let stopped =
             Background::find(&v, BackgroundRule::Auto, &Monitor::new(Some(&cancel), None));
-        assert!(matches!(stopped, Err(crate::Error::Cancelled)));
+        assert!(matches!(stopped, Err(crate::error::Error::Cancelled)));
         let found = Background::find(&v, BackgroundRule::Auto, &Monitor::none()).unwrap();
         assert!(found.fraction > 0.99, "{}", found.fraction);
     }

@@ -28,6 +28,10 @@ pub trait Voxel: Pod + PartialOrd + Send + Sync + std::fmt::Debug + 'static {
     /// types of at most 16 bits; `None` for f32.
     fn table_index(self) -> Option<usize>;
 
+    /// The value as an integer, for the integer types (whose sums are exact in integers, so that
+    /// loops over them need no floating-point chain); `None` for f32.
+    fn integer(self) -> Option<i32>;
+
     /// Voxels of this type held in `store`.
     fn wrap(store: Store<Self>) -> Voxels;
 }
@@ -45,6 +49,11 @@ macro_rules! integer_voxel {
             #[inline]
             fn table_index(self) -> Option<usize> {
                 Some((i32::from(self) - i32::from(<$t>::MIN)) as usize)
+            }
+
+            #[inline]
+            fn integer(self) -> Option<i32> {
+                Some(i32::from(self))
             }
 
             fn wrap(store: Store<Self>) -> Voxels {
@@ -74,6 +83,11 @@ impl Voxel for f32 {
 
     #[inline]
     fn table_index(self) -> Option<usize> {
+        None
+    }
+
+    #[inline]
+    fn integer(self) -> Option<i32> {
         None
     }
 
