@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
-use slabscope::volume::io::{NrrdEncoding, write_nrrd};
+use slabscope::volume::io::{NrrdEncoding, VolumeOutput, write_nrrd, write_volume};
 use slabscope::volume::phantom;
 
 /// The phantoms.
@@ -23,7 +23,7 @@ pub enum Kind {
 pub struct PhantomArgs {
     /// Which phantom.
     pub kind: Kind,
-    /// Output NRRD file.
+    /// Output file, in the format its extension names: .nrrd, .nii or .nii.gz.
     #[arg(short, long, value_name = "OUT.nrrd")]
     pub output: PathBuf,
     /// A cube of N voxels a side.
@@ -38,7 +38,7 @@ pub struct PhantomArgs {
     /// Normal of the layers, DX,DY,DZ (default: the cube diagonal).
     #[arg(long, value_name = "DX,DY,DZ", default_value = "1,1,1")]
     pub normal: String,
-    /// Store raw bytes instead of gzip.
+    /// Store raw bytes instead of gzip (.nrrd; .nii is raw and .nii.gz gzip by their names).
     #[arg(long)]
     pub raw: bool,
     /// Overwrite OUT if it exists.
@@ -48,6 +48,13 @@ pub struct PhantomArgs {
 
 pub fn run(args: &PhantomArgs) -> Result<()> {
     super::check_outputs(&[&args.output], &[], args.force)?;
+    let format = VolumeOutput::for_path(&args.output)?;
+    if args.raw && format != VolumeOutput::Nrrd {
+        bail!(
+            "--raw is for .nrrd output: {} is raw or gzip by its name",
+            args.output.display()
+        );
+    }
     let default = match args.kind {
         Kind::Body => [128, 128, 208],
         Kind::Layers | Kind::SheppLogan => [96; 3],
@@ -63,6 +70,9 @@ pub fn run(args: &PhantomArgs) -> Result<()> {
         Kind::Body => phantom::body(dims, args.seed)?,
         Kind::SheppLogan => phantom::shepp_logan(dims)?,
     };
+    if format != VolumeOutput::Nrrd {
+        return Ok(write_volume(&args.output, &volume, args.force)?);
+    }
     let encoding = if args.raw {
         NrrdEncoding::Raw
     } else {

@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 
-use crate::common::{Ran, layers, run};
+use crate::common::{Ran, layers, run, s};
 
 fn json(args: &[&str]) -> Value {
     let Ran {
@@ -212,6 +212,19 @@ fn phantoms_are_deterministic_and_protected() {
     let info = json(&["info", a.to_str().unwrap(), "--json"]);
     assert_eq!(info["type"], "i16");
     assert_eq!(info["format"], "nrrd");
+    // The extension names the format.
+    let nii = dir.path().join("c.nii");
+    let Ran { ok, stderr, .. } = run(&["phantom", "body", "--size", "8", "-o", s(&nii)]);
+    assert!(ok, "{stderr}");
+    assert_eq!(json(&["info", s(&nii), "--json"])["format"], "nifti");
+    let Ran { ok, stderr, .. } = run(&[
+        "phantom",
+        "body",
+        "--raw",
+        "-o",
+        s(&dir.path().join("d.nii.gz")),
+    ]);
+    assert!(!ok && stderr.contains("--raw is for .nrrd"), "{stderr}");
 }
 
 #[test]
