@@ -113,6 +113,70 @@ pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> R
     })
 }
 
+/// The anonymous memory an analysis of pyramid level `level` of `volume` takes at its peak, in
+/// bytes: the level's voxels where they are held in memory (none for a level 0 read in place
+/// from a mapped file; a coarser level holds f32), and two bytes a voxel for the view search's
+/// cell map, more than the slice stack's byte and the background's bit that follow it.
+#[must_use]
+pub fn memory_needed(volume: &Volume, level: usize) -> u64 {
+    let level = level.min(volume.coarser_levels());
+    let n = level_dims(volume.dims(), level)
+        .iter()
+        .map(|&d| d as u64)
+        .product::<u64>();
+    let held = if level == 0 {
+        volume.memory_bytes()
+    } else {
+        4 * n
+    };
+    held + 2 * n
+}
+
+/// The finest pyramid level at or coarser than `wanted` whose analysis fits in `max_memory`
+/// bytes ([`memory_needed`]), with a note when the budget moved it from `wanted`. A volume is
+/// never refused for its size: only a budget too small for a level of two voxels along every
+/// axis is an error.
+pub fn level_within_memory(
+    volume: &Volume,
+    wanted: usize,
+    max_memory: u64,
+) -> Result<(usize, Option<String>)> {
+    let top = volume.coarser_levels();
+    let fits = (wanted.min(top)..=top).find(|&l| memory_needed(volume, l) <= max_memory);
+    // "256.0 MiB", without the exact count in brackets that human_bytes adds.
+    let human = |b: u64| {
+        let text = crate::error::human_bytes(b);
+        text.split(" (").next().unwrap_or_default().to_string()
+    };
+    match fits {
+        Some(l) if l == wanted => Ok((l, None)),
+        Some(l) if level_dims(volume.dims(), l).iter().all(|&d| d >= 2) => Ok((
+            l,
+            Some(format!(
+                "level {wanted} needs {} for the analysis, over the memory limit of {}: computed \
+                 on pyramid level {l}, the finest that fits ({})",
+                human(memory_needed(volume, wanted)),
+                human(max_memory),
+                human(memory_needed(volume, l)),
+            )),
+        )),
+        _ => Err(crate::error::Error::invalid(
+            "max-memory",
+            human(max_memory),
+            format!(
+                "room for the analysis of a pyramid level with two voxels along every axis \
+                 (level {wanted} needs {})",
+                human(memory_needed(volume, wanted))
+            ),
+        )),
+    }
+}
+
+/// The dimensions of the level `level` levels coarser than `dims`.
+fn level_dims(dims: [usize; 3], level: usize) -> [usize; 3] {
+    (0..level).fold(dims, |d, _| crate::volume::pyramid::coarser_dims(d))
+}
+
 /// What an analysis on a pyramid level says of it; nothing at full resolution.
 pub fn resolution_note(level: &Volume) -> Option<String> {
     let l = level.level();
@@ -134,4 +198,34 @@ pub fn notes(volume: &Volume, view: &ViewParams, partition: &Partition) -> Vec<S
         .chain(view.sampling.budget_note(volume.dims(), volume.spacing()))
         .chain(partition.notes.iter().cloned())
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::VoxelType;
+
+    #[test]
+    fn the_budget_picks_the_finest_level_that_fits() {
+        // 16³ held in memory: its voxels and 8192 bytes of cell map at level 0; level 1 is 8³
+        // of f32 (2048 bytes) and its cell map (1024).
+        let data: Vec<f32> = (0..4096).map(|i| (i % 251) as f32).collect();
+        let v = Volume::new([16; 3], [1.0; 3], VoxelType::U8, data).unwrap();
+        let full = v.memory_bytes() + 8192;
+        assert!(v.memory_bytes() >= 4096);
+        assert_eq!(memory_needed(&v, 0), full);
+        assert_eq!(memory_needed(&v, 1), 6 * 512);
+        assert_eq!(level_within_memory(&v, 0, full).unwrap(), (0, None));
+        let (level, note) = level_within_memory(&v, 0, full - 1).unwrap();
+        assert_eq!(level, 1);
+        let note = note.unwrap();
+        assert!(
+            note.contains("over the memory limit") && note.contains("level 1"),
+            "{note}"
+        );
+        // A level asked for that fits is kept, and no note.
+        assert_eq!(level_within_memory(&v, 2, full - 1).unwrap(), (2, None));
+        // Levels of one voxel along an axis are not analysed.
+        assert!(level_within_memory(&v, 0, 10).is_err());
+    }
 }

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use serde::Serialize;
 
-use crate::analysis::{Analysis, AnalysisParams, analyze};
+use crate::analysis::{Analysis, AnalysisParams, analyze, level_within_memory};
 use crate::error::{Error, Result};
 use crate::progress::{Monitor, Progress};
 use crate::report::SCHEMA_VERSION;
@@ -411,7 +411,13 @@ pub fn look(
     };
     let report = |p: Progress| progress(p.fraction);
     let monitor = Monitor::new(Some(&cancel), Some(&report));
-    let v = &loaded.volume;
+    // Beyond its share of the budget, a volume is analysed on a pyramid level.
+    let (level, budget_note) = match level_within_memory(&loaded.volume, 0, opts.max_memory) {
+        Ok(fit) => fit,
+        Err(e) => return failed(row.with_error(describe(e))),
+    };
+    let level = loaded.volume.coarser(level);
+    let v = level.as_ref();
     let mut params = how.params.clone();
     let sampling = &mut params.view.sampling;
     let unset = sampling.ray_spacing.is_none() && sampling.sample_spacing.is_none();
@@ -420,7 +426,8 @@ pub fn look(
         (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
         params.view.phases = params.view.phases.min(COARSE_PHASES);
     }
-    let result = analyze(v, &params, &monitor).and_then(|analysis| {
+    let result = analyze(v, &params, &monitor).and_then(|mut analysis| {
+        analysis.notes.splice(0..0, budget_note);
         let cell = match how.tile {
             Some(tile) => Some(crate::render::sheet::cell(
                 v,

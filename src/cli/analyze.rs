@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
+use slabscope::analysis::level_within_memory;
 use slabscope::report::curves_csv;
 use slabscope::volume::Resolution;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
@@ -61,12 +62,14 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let loaded = super::load(&args.file, &args.load)?;
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let full = &loaded.volume;
-    let level = args.resolution.level(full.dims(), full.coarser_levels())?;
+    let wanted = args.resolution.level(full.dims(), full.coarser_levels())?;
+    let (level, budget_note) = level_within_memory(full, wanted, args.load.options().max_memory)?;
     let level = full.coarser(level);
     let volume = level.as_ref();
     let name = args.file.display().to_string();
     let params = args.analysis.params(args.views);
-    let analysis = args.analysis.analyze(&name, volume, args.views)?;
+    let mut analysis = args.analysis.analyze(&name, volume, args.views)?;
+    analysis.notes.splice(0..0, budget_note);
     let part = &analysis.partition;
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.

@@ -26,7 +26,9 @@ pub struct LoadArgs {
     /// Bytes to skip at the start of a raw file.
     #[arg(long, value_name = "BYTES")]
     pub offset: Option<u64>,
-    /// The most memory the loaded volume may take, e.g. 8G (default: half the physical memory).
+    /// The most memory the volume and its analysis may take, e.g. 8G (default: half the physical
+    /// memory); a file read in place (mapped) is not counted, and an analysis that would not fit
+    /// runs on the finest pyramid level that does.
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes_arg)]
     pub max_memory: Option<u64>,
     /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM) to read, from 0.

@@ -306,12 +306,13 @@ fn the_contact_sheet_has_a_cell_per_volume() {
 #[test]
 fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alone() {
     let dir = tempfile::tempdir().unwrap();
-    for name in ["a.nii", "b.nii", "c.nii"] {
-        std::fs::copy(data("ramp_u8.nii"), dir.path().join(name)).unwrap();
+    // Compressed, so decoded into memory (a mapped file is not the budget's).
+    for name in ["a.nii.gz", "b.nii.gz", "c.nii.gz"] {
+        std::fs::copy(data("ramp_u8_two_members.nii.gz"), dir.path().join(name)).unwrap();
     }
     let root = dir.path().to_str().unwrap();
     // Each 5x4x3 volume takes 60 bytes, held as its u8: more than half of 100, less than all of
-    // it.
+    // it (and its analysis runs on pyramid level 1, which fits).
     let triage = |memory: &str| {
         run(&[
             "triage",

@@ -395,7 +395,7 @@ impl App {
         let (label, gauges) = self.resolution_status();
         self.status.resolution = label;
         for p in gauges {
-            self.status.jobs.push(("full resolution", p));
+            self.status.jobs.push((self.final_words(), p));
         }
     }
 

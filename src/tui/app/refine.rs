@@ -96,7 +96,8 @@ impl App {
                 let moved = refine.auto_axis && self.part.axis.is_some_and(|a| !same(a, best));
                 if moved {
                     self.status.message = Some(format!(
-                        "full resolution: the best axis is {} (the preview's was {})",
+                        "{}: the best axis is {} (the preview's was {})",
+                        self.final_words(),
                         axis_text(best),
                         previous.map_or_else(|| "another".into(), axis_text)
                     ));
@@ -120,7 +121,7 @@ impl App {
                 if let Some(r) = self.refine.as_mut() {
                     r.views = Load::Failed(e.clone());
                 }
-                self.status.message = Some(format!("full resolution: {e}"));
+                self.status.message = Some(format!("{}: {e}", self.final_words()));
             }
             Err(e) => self.views.views = Load::Failed(e),
         }
@@ -144,12 +145,12 @@ impl App {
                 (Some((preview, shown)), Some(full), Load::Idle) => {
                     let full = Arc::clone(full);
                     let now = self.part.slabs().unwrap_or_default();
-                    let words = compare((preview, shown), (&full, &now), shift);
+                    let words = compare((preview, shown), (&full, &now), shift, self.final_words());
                     self.status.message = Some(words);
                     self.carry_over(preview, &full, shift);
                 }
                 (_, _, Load::Failed(e)) => {
-                    self.status.message = Some(format!("full resolution: {e}"));
+                    self.status.message = Some(format!("{}: {e}", self.final_words()));
                 }
                 _ => {}
             },
@@ -227,6 +228,15 @@ impl App {
         any
     }
 
+    /// What the preview is refined to, in words: full resolution, or beyond the memory budget
+    /// the pyramid level the volume was loaded at.
+    pub(super) fn final_words(&self) -> &'static str {
+        match self.volume.ready().map(|v| v.level().index) {
+            Some(l) if l > 0 => "the finest level that fits",
+            _ => "full resolution",
+        }
+    }
+
     /// The status line's word on the resolution shown, and the full-resolution jobs' gauges.
     pub(super) fn resolution_status(&self) -> (Option<String>, Vec<Progress>) {
         let Some(r) = &self.refine else {
@@ -239,9 +249,9 @@ impl App {
                 "preview: 1/{} resolution{}",
                 r.factor,
                 if stopped {
-                    ", full resolution stopped"
+                    format!(", {} stopped", self.final_words())
                 } else {
-                    ""
+                    String::new()
                 }
             )
         });
@@ -267,7 +277,12 @@ fn axis_text(a: [f64; 3]) -> String {
 
 /// What full resolution changed, in words: the slab count, or how far the cuts moved (in mm, the
 /// preview's moved into the volume's frame by `shift`) against a preview slice's thickness.
-fn compare(preview: (&Histories, &[Slab]), full: (&Histories, &[Slab]), shift: [f64; 3]) -> String {
+fn compare(
+    preview: (&Histories, &[Slab]),
+    full: (&Histories, &[Slab]),
+    shift: [f64; 3],
+    words: &str,
+) -> String {
     let along = slabscope::geometry::dot(shift, preview.0.stack().axis());
     let cuts = |(h, slabs): (&Histories, &[Slab]), offset: f64| -> Vec<f64> {
         let s = h.stack();
@@ -280,7 +295,7 @@ fn compare(preview: (&Histories, &[Slab]), full: (&Histories, &[Slab]), shift: [
     let (before, after) = (cuts(preview, along), cuts(full, 0.0));
     if before.len() != after.len() {
         return format!(
-            "full resolution: {} slabs where the preview had {}",
+            "{words}: {} slabs where the preview had {}",
             after.len() + 1,
             before.len() + 1
         );
@@ -292,11 +307,11 @@ fn compare(preview: (&Histories, &[Slab]), full: (&Histories, &[Slab]), shift: [
         .fold(0.0, f64::max);
     if moved <= preview.0.stack().thickness() + 1e-9 {
         format!(
-            "full resolution: the preview's {} slabs, cuts within a preview slice ({moved:.1} mm)",
+            "{words}: the preview's {} slabs, cuts within a preview slice ({moved:.1} mm)",
             after.len() + 1
         )
     } else {
-        format!("full resolution moved the cuts: up to {moved:.1} mm from the preview's")
+        format!("{words} moved the cuts: up to {moved:.1} mm from the preview's")
     }
 }
 

@@ -230,11 +230,29 @@ fn load_volume(source: Option<&slabscope::triage::Entry>, load: LoadOptions) -> 
                 series: entry.series.clone().or(load.series),
                 ..load
             };
-            slabscope::load(&entry.path, &load).map(|l| (Arc::new(l.volume), l.notes))
+            let max_memory = load.max_memory;
+            slabscope::load(&entry.path, &load).and_then(|l| within_memory(l, max_memory))
         }
         None => slabscope::builtin_dataset().map(|v| (Arc::new(v), Vec::new())),
     };
     JobMsg::Loaded(loaded.map_err(|e| e.to_string()))
+}
+
+/// The volume the TUI works on: `loaded`'s, or beyond the memory budget the finest pyramid level
+/// whose analysis fits, said in a note.
+fn within_memory(
+    loaded: slabscope::volume::io::Loaded,
+    max_memory: u64,
+) -> slabscope::Result<(Arc<Volume>, Vec<String>)> {
+    let (level, note) = slabscope::analysis::level_within_memory(&loaded.volume, 0, max_memory)?;
+    let mut notes = loaded.notes;
+    notes.extend(note);
+    let volume = if level == 0 {
+        Arc::new(loaded.volume)
+    } else {
+        loaded.volume.coarser(level)
+    };
+    Ok((volume, notes))
 }
 
 #[cfg(test)]

@@ -117,13 +117,7 @@ fn check_budget_of(
     held: VoxelType,
     max_memory: u64,
 ) -> Result<usize> {
-    if dims.contains(&0) {
-        return Err(Error::format(
-            path,
-            format!("dimensions {} contain a zero", dims_string(dims)),
-        ));
-    }
-    let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+    let count = voxel_count(path, dims)?;
     let bytes = count.and_then(|n| (n as u64).checked_mul(held.size() as u64));
     // A limit above this machine's memory is this machine's memory.
     let (limit, machine) = match physical_memory() {
@@ -147,6 +141,17 @@ fn check_budget_of(
             limit,
         }),
     }
+}
+
+/// The voxel count of `dims` (`None` past `usize`); dimensions with a zero are an error.
+fn voxel_count(path: &Path, dims: [usize; 3]) -> Result<Option<usize>> {
+    if dims.contains(&0) {
+        return Err(Error::format(
+            path,
+            format!("dimensions {} contain a zero", dims_string(dims)),
+        ));
+    }
+    Ok(dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d)))
 }
 
 /// A zeroed f32 voxel buffer of `dims`, after checking the budget; an allocation the machine
@@ -234,10 +239,28 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
     }
 }
 
-/// [`read_voxels`] into voxels of type `T`. The budget is checked for voxels of `T` even where
-/// they are mapped, not copied, since the analysis needs memory in proportion to them.
+/// [`read_voxels`] into voxels of type `T`. The budget is checked when the voxels are decoded
+/// into memory, not where they are mapped: mapped file pages are the kernel's to drop, and what
+/// an analysis of them needs is weighed by the analysis (`analysis::level_within_memory`).
 fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
-    let count = check_budget_of(&spec.file, spec.dims, T::TYPE, max_memory)?;
+    let count = match voxel_count(&spec.file, spec.dims)? {
+        Some(n)
+            if (n as u64)
+                .checked_mul(spec.voxel_type.size() as u64)
+                .is_some() =>
+        {
+            n
+        }
+        _ => {
+            return Err(Error::format(
+                &spec.file,
+                format!(
+                    "a {} volume has more voxels than this machine can address",
+                    dims_string(spec.dims)
+                ),
+            ));
+        }
+    };
     let expected = count as u64 * spec.voxel_type.size() as u64;
     let path = spec.file.as_path();
     let buffer = || typed_buffer::<T>(path, spec.dims, max_memory);
