@@ -13,6 +13,7 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 #[path = "../common/mod.rs"]
 mod common;
 
+mod budget;
 mod hostile;
 mod mutants;
 mod real_terminal;
