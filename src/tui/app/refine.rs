@@ -242,12 +242,19 @@ impl App {
         let Some(r) = &self.refine else {
             return (None, vec![]);
         };
+        // Against the file's resolution: the volume worked on may itself be a pyramid level
+        // (beyond the memory budget).
+        let base = self
+            .volume
+            .ready()
+            .and_then(|v| v.level().factor.into_iter().max())
+            .unwrap_or(1);
         let label = (self.shown_level() > 0).then(|| {
             let stopped =
                 matches!(r.views, Load::Failed(_)) || matches!(self.part.refining, Load::Failed(_));
             format!(
                 "preview: 1/{} resolution{}",
-                r.factor,
+                r.factor * base,
                 if stopped {
                     format!(", {} stopped", self.final_words())
                 } else {
