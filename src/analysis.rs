@@ -115,8 +115,9 @@ pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> R
 
 /// The anonymous memory an analysis of pyramid level `level` of `volume` takes at its peak, in
 /// bytes: the level's voxels where they are held in memory (none for a level 0 read in place
-/// from a mapped file; a coarser level holds f32), and two bytes a voxel for the view search's
-/// cell map, more than the slice stack's byte and the background's bit that follow it.
+/// from a mapped file; a coarser level holds f32), and the view search's cell map, a byte a
+/// voxel for integers of at most 16 bits (whose bins a table gives) and two for f32, at least
+/// the slice stack's byte and the background's bit that follow it.
 #[must_use]
 pub fn memory_needed(volume: &Volume, level: usize) -> u64 {
     let level = level.min(volume.coarser_levels());
@@ -124,12 +125,13 @@ pub fn memory_needed(volume: &Volume, level: usize) -> u64 {
         .iter()
         .map(|&d| d as u64)
         .product::<u64>();
-    let held = if level == 0 {
-        volume.memory_bytes()
+    let (held, map) = if level == 0 {
+        let integer = volume.data().held() != crate::volume::VoxelType::F32;
+        (volume.memory_bytes(), if integer { n } else { 2 * n })
     } else {
-        4 * n
+        (4 * n, 2 * n)
     };
-    held + 2 * n
+    held + map
 }
 
 /// The finest pyramid level at or coarser than `wanted` whose analysis fits in `max_memory`

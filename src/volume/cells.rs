@@ -25,8 +25,107 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
     crate::volume::with_voxels!(volume.data(), |voxels| cell_map_of(voxels, volume, q))
 }
 
+/// The cell map of [`cell_map`] alone, made a band of planes at a time so that only the map
+/// (one byte a voxel) is held whole: for voxels whose bins a table gives exactly, which need no
+/// per-voxel map.
+pub fn cells_only(volume: &Volume, q: &Quantizer) -> Vec<u8> {
+    crate::volume::with_voxels!(volume.data(), |voxels| banded_cells(voxels, volume, q))
+}
+
 /// [`cell_map`] over `voxels`, the voxels of `volume` in their own type.
 fn cell_map_of<T: Voxel>(voxels: &[T], volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
+    let safe_bin = safe_bin_of::<T>(volume, q);
+    let mut bins: Vec<u8> = vec![0; voxels.len()];
+    bins.par_chunks_mut(CHUNK)
+        .zip(voxels.par_chunks(CHUNK))
+        .for_each(|(b, v)| wide(|| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v))));
+    let corners = Corners::of(volume.dims());
+    let mut cells = vec![0; bins.len()];
+    let with_corners = corners.cells(bins.len());
+    cells[with_corners..].fill(MIXED);
+    cells[..with_corners]
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(c, out)| corners.label(out, &bins[c * CHUNK..]));
+    (cells, bins)
+}
+
+/// [`cells_only`] over `voxels`: each task makes the safe bins of its band of cells and of the
+/// corners beyond it (one plane more) in a buffer of its own.
+fn banded_cells<T: Voxel>(voxels: &[T], volume: &Volume, q: &Quantizer) -> Vec<u8> {
+    let safe_bin = safe_bin_of::<T>(volume, q);
+    let corners = Corners::of(volume.dims());
+    let [nx, ny, _] = volume.dims();
+    // Eight planes a band: the plane of corners beyond a band is made twice, an eighth more.
+    let band = CHUNK.max(8 * nx * ny);
+    let with_corners = corners.cells(voxels.len());
+    let mut cells = vec![0; voxels.len()];
+    cells[with_corners..].fill(MIXED);
+    cells[..with_corners]
+        .par_chunks_mut(band)
+        .enumerate()
+        .for_each(|(c, out)| {
+            let start = c * band;
+            let end = (start + out.len() + corners.reach).min(voxels.len());
+            let mut bins = vec![0u8; end - start];
+            wide(|| {
+                bins.iter_mut()
+                    .zip(&voxels[start..end])
+                    .for_each(|(b, &v)| *b = safe_bin(v));
+            });
+            for (k, out) in out.chunks_mut(CHUNK).enumerate() {
+                corners.label(out, &bins[k * CHUNK..]);
+            }
+        });
+    cells
+}
+
+/// The offsets from a cell's lower corner voxel to its seven other corners.
+struct Corners {
+    offsets: [usize; 7],
+    /// The farthest of them.
+    reach: usize,
+}
+
+impl Corners {
+    fn of([nx, ny, nz]: [usize; 3]) -> Self {
+        let next = |n: usize, stride: usize| if n > 1 { stride } else { 0 };
+        let (x, y, z) = (next(nx, 1), next(ny, nx), next(nz, nx * ny));
+        Self {
+            offsets: [x, y, y + x, z, z + x, z + y, z + y + x],
+            reach: z + y + x,
+        }
+    }
+
+    /// How many of `voxels` entries have a whole cell: those before the last plane's.
+    fn cells(&self, voxels: usize) -> usize {
+        voxels - self.reach
+    }
+
+    /// Labels the cells `out` whose lower corners' safe bins start `bins` (which reaches the
+    /// farthest corner of the last): a cell is uniform when its eight corners share a bin.
+    fn label(&self, out: &mut [u8], bins: &[u8]) {
+        let here = &bins[..out.len()];
+        let others = self.offsets.map(|o| &bins[o..o + out.len()]);
+        // Corner by corner, each loop simple enough to be vectorized: first the bits in which
+        // any corner differs from the lower one, then the label.
+        wide(|| {
+            out.fill(0);
+            for other in others {
+                for ((o, &b), &c) in out.iter_mut().zip(here).zip(other) {
+                    *o |= b ^ c;
+                }
+            }
+            for (o, &b) in out.iter_mut().zip(here) {
+                *o = if *o == 0 { b } else { MIXED };
+            }
+        });
+    }
+}
+
+/// The bin a voxel of `volume` safely lies in under `q`, or [`MIXED`] (near a bin edge, or
+/// missing).
+fn safe_bin_of<T: Voxel>(volume: &Volume, q: &Quantizer) -> impl Fn(T) -> u8 + Sync {
     let (scale, margin) = scale_and_margin(volume, q);
     let last = (q.bins() - 1) as f64;
     // The quantizer's range: the volume's own, or for a pyramid level that of level 0.
@@ -37,7 +136,7 @@ fn cell_map_of<T: Voxel>(voxels: &[T], volume: &Volume, q: &Quantizer) -> (Vec<u
     // Without branches (`&` and `|`, not `&&` and `||`), so that the compiler can work on
     // several voxels at once.
     #[allow(clippy::needless_bitwise_bool)]
-    let safe_bin = |v: T| -> u8 {
+    move |v: T| -> u8 {
         let t = (f64::from(v.to_f32()) - min) * scale;
         // The bin is ⌊t⌋ clamped to 0..B - 1: c rounded down. A NaN voxel gives 0 here, and is
         // marked below.
@@ -54,42 +153,7 @@ fn cell_map_of<T: Voxel>(voxels: &[T], volume: &Volume, q: &Quantizer) -> (Vec<u
         } else {
             MIXED
         }
-    };
-    let mut bins: Vec<u8> = vec![0; voxels.len()];
-    bins.par_chunks_mut(CHUNK)
-        .zip(voxels.par_chunks(CHUNK))
-        .for_each(|(b, v)| wide(|| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v))));
-    // A cell is uniform when its eight corners share a bin. Entries without a whole cell (on
-    // the last plane of an axis) are MIXED and never read.
-    let [nx, ny, nz] = volume.dims();
-    let next = |n: usize, stride: usize| if n > 1 { stride } else { 0 };
-    let (x, y, z) = (next(nx, 1), next(ny, nx), next(nz, nx * ny));
-    let corners = [x, y, y + x, z, z + x, z + y, z + y + x];
-    let cells_with_corners = bins.len() - (z + y + x);
-    let mut cells = vec![0; bins.len()];
-    cells[cells_with_corners..].fill(MIXED);
-    cells[..cells_with_corners]
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .for_each(|(c, out)| {
-            let start = c * CHUNK;
-            let here = &bins[start..start + out.len()];
-            let others = corners.map(|o| &bins[start + o..start + o + out.len()]);
-            // Corner by corner, each loop simple enough to be vectorized: first the bits in
-            // which any corner differs from the lower one, then the label.
-            wide(|| {
-                out.fill(0);
-                for other in others {
-                    for ((o, &b), &c) in out.iter_mut().zip(here).zip(other) {
-                        *o |= b ^ c;
-                    }
-                }
-                for (o, &b) in out.iter_mut().zip(here) {
-                    *o = if *o == 0 { b } else { MIXED };
-                }
-            });
-        });
-    (cells, bins)
+    }
 }
 
 /// Bins per unit of intensity, and how far (in bins) a corner must lie from a bin edge to count
@@ -136,7 +200,7 @@ fn with_avx2(work: impl FnOnce()) {
 mod tests {
     use super::*;
     use crate::testing::Lcg;
-    use crate::volume::VoxelType;
+    use crate::volume::{VoxelType, Voxels};
 
     /// The cell map written plainly: what the branch-free passes must reproduce.
     fn plain_cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
@@ -207,6 +271,30 @@ mod tests {
         })
         .unwrap();
         v
+    }
+
+    #[test]
+    fn cells_made_in_bands_are_the_whole_map() {
+        // Bands of 65536 cells: several, ending inside a plane and on one.
+        for dims in [[70, 50, 60], [64, 64, 40], [9, 7, 5], [300, 1, 400]] {
+            let n = dims.iter().product::<usize>();
+            let mut lcg = Lcg::new(3);
+            let data: Vec<i16> = (0..n)
+                .map(|i| {
+                    let r = (lcg.next_u64() >> 40) as i32;
+                    // Layers three planes thick, noise of a unit: uniform cells inside a
+                    // layer, mixed ones between.
+                    let z = (i / (dims[0] * dims[1])) as i32;
+                    (z / 3 % 9 * 400 + r % 3 - 950) as i16
+                })
+                .collect();
+            let v =
+                Volume::from_voxels(dims, [1.0; 3], VoxelType::I16, Voxels::owned(data)).unwrap();
+            let q = v.quantizer(32).unwrap();
+            let (cells, _) = cell_map(&v, &q);
+            assert!(cells.contains(&MIXED) && cells.iter().any(|&c| c != MIXED));
+            assert_eq!(cells_only(&v, &q), cells, "{dims:?}");
+        }
     }
 
     #[test]

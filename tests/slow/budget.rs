@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use crate::common::{s, slabscope};
 
 /// A 512³ u8 volume as a detached NRRD (mapped when read): six layers along z with a little
-/// texture in x and y. 128 MiB of data; its analysis at full resolution needs 256 MiB.
+/// texture in x and y. 128 MiB of data; its analysis at full resolution needs 128 MiB more.
 fn layered(dir: &Path) -> std::path::PathBuf {
     let n = 512usize;
     let mut data = vec![0u8; n * n * n];

@@ -50,7 +50,22 @@ impl Columns {
         sampler: &BinSampler<T>,
         counts: &mut impl Counter,
     ) -> u64 {
-        let bins = sampler.voxel_bins();
+        match sampler.voxel_bins() {
+            Some(bins) => self.walk_with(range, counts, |at| match bins[at] {
+                MIXED => sampler.voxel_bin_at(at),
+                b => Some(b),
+            }),
+            None => self.walk_with(range, counts, |at| sampler.voxel_bin_at(at)),
+        }
+    }
+
+    /// [`walk`](Self::walk) with the bin of voxel `at` from `bin`.
+    fn walk_with(
+        &self,
+        range: std::ops::Range<usize>,
+        counts: &mut impl Counter,
+        bin: impl Fn(usize) -> Option<u8>,
+    ) -> u64 {
         let mut runs = vec![Run::default(); self.width];
         let mut total = 0;
         for item in range {
@@ -59,12 +74,7 @@ impl Columns {
             for k in 0..self.length {
                 let start = item * self.base + k * self.stride;
                 for (c, run) in runs[..width].iter_mut().enumerate() {
-                    let at = start + c * self.gap;
-                    let bin = match bins[at] {
-                        MIXED => sampler.voxel_bin_at(at),
-                        b => Some(b),
-                    };
-                    match bin {
+                    match bin(start + c * self.gap) {
                         Some(b) => counts.push_to(run, b),
                         None => counts.end_run(run),
                     }

@@ -3,8 +3,9 @@
 //! cells, where the walks need no clamping.
 
 use crate::geometry::lattice::{FIXED_BITS, FIXED_STEP, ceil_i64, to_fixed};
-use crate::volume::cells::{MIXED, cell_map};
+use crate::volume::cells::{MIXED, cell_map, cells_only};
 use crate::volume::interpolate::Interpolator;
+use crate::volume::voxels::BinTable;
 use crate::volume::{Quantizer, Volume, Voxel};
 
 /// Quantized trilinear sampling: the bin of the interpolated value, as
@@ -15,8 +16,11 @@ pub struct BinSampler<'a, T = f32> {
     it: Interpolator<'a, T>,
     q: Quantizer,
     cells: Vec<u8>,
-    /// Per voxel: the bin it safely lies in, or `MIXED` (see [`cell_map`]).
+    /// Per voxel: the bin it safely lies in, or `MIXED` (see [`cell_map`]); empty where
+    /// `table` gives every voxel's bin.
     voxel_bins: Vec<u8>,
+    /// The bins of every value of an integer type of at most 16 bits.
+    table: Option<BinTable>,
     dims: [usize; 3],
 }
 
@@ -34,11 +38,18 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
     /// Builds the cell map of `volume`, whose voxels `data` are, for quantizer `q` (one byte per
     /// voxel).
     pub fn over(data: &'a [T], volume: &Volume, q: Quantizer) -> Self {
-        let (cells, voxel_bins) = cell_map(volume, &q);
+        // Integers are binned by table, exactly: no per-voxel map, so a byte a voxel in all.
+        let table = BinTable::new::<T>(&q);
+        let (cells, voxel_bins) = if table.is_some() {
+            (cells_only(volume, &q), Vec::new())
+        } else {
+            cell_map(volume, &q)
+        };
         Self {
             it: Interpolator::over(data, volume.dims()),
             cells,
             voxel_bins,
+            table,
             dims: volume.dims(),
             q,
         }
@@ -127,16 +138,20 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
         &self.cells
     }
 
-    /// Per voxel: the bin it safely lies in, or [`MIXED`] (then [`voxel_bin_at`] tells).
+    /// Per voxel: the bin it safely lies in, or [`MIXED`] (then [`voxel_bin_at`] tells);
+    /// `None` for integer voxels, whose bins [`voxel_bin_at`] looks up in a table.
     ///
     /// [`voxel_bin_at`]: Self::voxel_bin_at
-    pub fn voxel_bins(&self) -> &[u8] {
-        &self.voxel_bins
+    pub fn voxel_bins(&self) -> Option<&[u8]> {
+        self.table.is_none().then_some(self.voxel_bins.as_slice())
     }
 
     /// The bin of the voxel at linear index `index`, `None` when it is missing.
     #[inline]
     pub fn voxel_bin_at(&self, index: usize) -> Option<u8> {
+        if let Some(table) = &self.table {
+            return Some(table.bin(self.it.data[index]));
+        }
         match self.voxel_bins[index] {
             MIXED => self.q.bin(self.it.at(index)),
             b => Some(b),
