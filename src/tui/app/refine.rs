@@ -121,7 +121,7 @@ impl App {
                 if let Some(r) = self.refine.as_mut() {
                     r.views = Load::Failed(e.clone());
                 }
-                self.status.message = Some(format!("{}: {e}", self.final_words()));
+                self.say_failed(&e);
             }
             Err(e) => self.views.views = Load::Failed(e),
         }
@@ -150,7 +150,8 @@ impl App {
                     self.carry_over(preview, &full, shift);
                 }
                 (_, _, Load::Failed(e)) => {
-                    self.status.message = Some(format!("{}: {e}", self.final_words()));
+                    let e = e.clone();
+                    self.say_failed(&e);
                 }
                 _ => {}
             },
@@ -226,6 +227,14 @@ impl App {
             any = true;
         }
         any
+    }
+
+    /// Says that a full-resolution job failed, unless it was cancelled: whoever cancelled it
+    /// has said so, and a cancelled job's answer may come after.
+    fn say_failed(&mut self, e: &str) {
+        if e != slabscope::Error::Cancelled.to_string() {
+            self.status.message = Some(format!("{}: {e}", self.final_words()));
+        }
     }
 
     /// What the preview is refined to, in words: full resolution, or beyond the memory budget
@@ -529,5 +538,8 @@ mod tests {
         let effects = job(&mut app, JobMsg::Views(0, Err("cancelled".into())));
         assert!(effects.is_empty());
         assert!(matches!(app.views.views, Load::Ready(_)));
+        // Nor what Esc said (the answer may come before or after the key: tmux saw both).
+        let said = app.status.message.clone().unwrap_or_default();
+        assert!(said.starts_with("cancelled: the preview stays"), "{said}");
     }
 }
