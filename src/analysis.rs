@@ -1,6 +1,8 @@
 //! The whole analysis of one volume, as `analyze`, the TUI's export and triage run it: the most
 //! structured view (paper §3.1, §4), then the slabs along it (paper §5).
 
+use std::sync::Arc;
+
 use crate::error::Result;
 use crate::geometry::AxisChoice;
 use crate::partition::{Method, Partition, PartitionParams, StackParams, Stop, partition};
@@ -136,22 +138,28 @@ pub fn memory_needed(volume: &Volume, level: usize) -> u64 {
     held + map.max(stack)
 }
 
-/// The finest pyramid level at or coarser than `wanted` whose analysis fits in `max_memory`
-/// bytes ([`memory_needed`]), with a note when the budget moved it from `wanted`. A volume is
-/// never refused for its size: only a budget too small for a level of two voxels along every
-/// axis is an error.
-pub fn level_within_memory(
+/// The finest pyramid level of `volume` at or coarser than level `wanted` whose analysis fits in
+/// `max_memory` bytes ([`memory_needed`]), with a note when the budget moved it from `wanted`.
+/// A volume is never refused for its size: only a budget too small for a level of two voxels
+/// along every axis is an error.
+pub fn within_memory(
+    volume: &Volume,
+    wanted: usize,
+    max_memory: u64,
+) -> Result<(Arc<Volume>, Option<String>)> {
+    level_within_memory(volume, wanted, max_memory)
+        .map(|(level, note)| (volume.coarser(level), note))
+}
+
+/// The level [`within_memory`] picks, and its note.
+fn level_within_memory(
     volume: &Volume,
     wanted: usize,
     max_memory: u64,
 ) -> Result<(usize, Option<String>)> {
     let top = volume.coarser_levels();
     let fits = (wanted.min(top)..=top).find(|&l| memory_needed(volume, l) <= max_memory);
-    // "256.0 MiB", without the exact count in brackets that human_bytes adds.
-    let human = |b: u64| {
-        let text = crate::error::human_bytes(b);
-        text.split(" (").next().unwrap_or_default().to_string()
-    };
+    let human = crate::error::short_bytes;
     match fits {
         Some(l) if l == wanted => Ok((l, None)),
         Some(l) if level_dims(volume.dims(), l).iter().all(|&d| d >= 2) => Ok((

@@ -226,6 +226,15 @@ impl From<InvalidParameter> for Error {
 /// A byte count for people: "1.5 GiB (1610612736 bytes)" above a KiB, "12 bytes" below.
 #[must_use]
 pub fn human_bytes(bytes: u64) -> String {
+    if bytes < 1024 {
+        return format!("{bytes} bytes");
+    }
+    format!("{} ({bytes} bytes)", short_bytes(bytes))
+}
+
+/// `bytes` in the largest binary unit that keeps the value at least 1, without the exact count
+/// [`human_bytes`] adds: "1.5 GiB".
+pub fn short_bytes(bytes: u64) -> String {
     const UNITS: [&str; 5] = ["KiB", "MiB", "GiB", "TiB", "PiB"];
     if bytes < 1024 {
         return format!("{bytes} bytes");
@@ -236,7 +245,7 @@ pub fn human_bytes(bytes: u64) -> String {
         value /= 1024.0;
         unit += 1;
     }
-    format!("{value:.1} {} ({bytes} bytes)", UNITS[unit])
+    format!("{value:.1} {}", UNITS[unit])
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use serde::Serialize;
 
-use crate::analysis::{Analysis, AnalysisParams, analyze, level_within_memory};
+use crate::analysis::{Analysis, AnalysisParams, analyze, within_memory};
 use crate::error::{Error, Result};
 use crate::progress::{Monitor, Progress};
 use crate::report::SCHEMA_VERSION;
@@ -412,11 +412,10 @@ pub fn look(
     let report = |p: Progress| progress(p.fraction);
     let monitor = Monitor::new(Some(&cancel), Some(&report));
     // Beyond its share of the budget, a volume is analysed on a pyramid level.
-    let (level, budget_note) = match level_within_memory(&loaded.volume, 0, opts.max_memory) {
+    let (level, budget_note) = match within_memory(&loaded.volume, 0, opts.max_memory) {
         Ok(fit) => fit,
         Err(e) => return failed(row.with_error(describe(e))),
     };
-    let level = loaded.volume.coarser(level);
     let v = level.as_ref();
     let mut params = how.params.clone();
     let sampling = &mut params.view.sampling;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::analysis::level_within_memory;
+use slabscope::analysis::within_memory;
 use slabscope::report::curves_csv;
 use slabscope::volume::Resolution;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
@@ -63,8 +63,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let full = &loaded.volume;
     let wanted = args.resolution.level(full.dims(), full.coarser_levels())?;
-    let (level, budget_note) = level_within_memory(full, wanted, args.load.options().max_memory)?;
-    let level = full.coarser(level);
+    let (level, budget_note) = within_memory(full, wanted, args.load.options().max_memory)?;
     let volume = level.as_ref();
     let name = args.file.display().to_string();
     let params = args.analysis.params(args.views);

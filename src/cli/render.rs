@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 use image::{DynamicImage, RgbaImage};
-use slabscope::analysis::level_within_memory;
+use slabscope::analysis::within_memory;
 use slabscope::geometry::min_spacing;
 use slabscope::render::{
     CameraParams, Colormap, Gap, Layout, Mode, Preset, RenderParams, Renderer, Stack,
@@ -265,12 +265,10 @@ fn render_file(
     }
     // An analysis beyond the memory budget runs on a pyramid level, and the picture is drawn
     // from that level.
-    let (level, budget_note) =
-        level_within_memory(&loaded.volume, 0, scene.load.options().max_memory)?;
+    let (level, budget_note) = within_memory(&loaded.volume, 0, scene.load.options().max_memory)?;
     if let Some(note) = budget_note {
         eprintln!("slabscope: note: {}: {note}", file.display());
     }
-    let level = loaded.volume.coarser(level);
     let volume = level.as_ref();
     let part = scene
         .analysis

@@ -244,14 +244,9 @@ fn within_memory(
     loaded: slabscope::volume::io::Loaded,
     max_memory: u64,
 ) -> slabscope::Result<(Arc<Volume>, Vec<String>)> {
-    let (level, note) = slabscope::analysis::level_within_memory(&loaded.volume, 0, max_memory)?;
+    let (volume, note) = slabscope::analysis::within_memory(&loaded.volume, 0, max_memory)?;
     let mut notes = loaded.notes;
     notes.extend(note);
-    let volume = if level == 0 {
-        Arc::new(loaded.volume)
-    } else {
-        loaded.volume.coarser(level)
-    };
     Ok((volume, notes))
 }
 

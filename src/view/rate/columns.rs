@@ -1,7 +1,7 @@
 //! The walk of a lattice whose rays are voxel columns: samples are voxels, read in memory order a
 //! row of columns at a time.
 
-use super::{AxisEntropy, BinSampler, count_in_parallel, work_units};
+use super::{AxisEntropy, BinSampler, VoxelBins, count_in_parallel, work_units};
 use crate::error::Result;
 use crate::geometry::lattice::Lattice;
 use crate::measure::{Counter, Run};
@@ -51,11 +51,14 @@ impl Columns {
         counts: &mut impl Counter,
     ) -> u64 {
         match sampler.voxel_bins() {
-            Some(bins) => self.walk_with(range, counts, |at| match bins[at] {
+            VoxelBins::Map(map) => self.walk_with(range, counts, |at| match map[at] {
                 MIXED => sampler.voxel_bin_at(at),
                 b => Some(b),
             }),
-            None => self.walk_with(range, counts, |at| sampler.voxel_bin_at(at)),
+            VoxelBins::Table(table) => {
+                let voxels = sampler.voxels();
+                self.walk_with(range, counts, |at| Some(table.bin(voxels[at])))
+            }
         }
     }
 

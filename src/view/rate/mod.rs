@@ -10,7 +10,7 @@ mod tiles;
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use sampler::{BinSampler, InnerSpans};
+pub use sampler::{BinSampler, InnerSpans, VoxelBins};
 
 use crate::error::Result;
 use crate::geometry::WorldAxis;

@@ -16,12 +16,16 @@ pub struct BinSampler<'a, T = f32> {
     it: Interpolator<'a, T>,
     q: Quantizer,
     cells: Vec<u8>,
-    /// Per voxel: the bin it safely lies in, or `MIXED` (see [`cell_map`]); empty where
-    /// `table` gives every voxel's bin.
-    voxel_bins: Vec<u8>,
-    /// The bins of every value of an integer type of at most 16 bits.
-    table: Option<BinTable>,
+    voxel_bins: VoxelBins,
     dims: [usize; 3],
+}
+
+/// How a sampler knows the bin of a voxel.
+pub enum VoxelBins {
+    /// Per voxel: the bin it safely lies in, or [`MIXED`] (see [`cell_map`]), for f32.
+    Map(Vec<u8>),
+    /// The bins of every value of an integer type of at most 16 bits, exactly.
+    Table(BinTable),
 }
 
 impl<'a> BinSampler<'a, f32> {
@@ -39,17 +43,16 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
     /// voxel).
     pub fn over(data: &'a [T], volume: &Volume, q: Quantizer) -> Self {
         // Integers are binned by table, exactly: no per-voxel map, so a byte a voxel in all.
-        let table = BinTable::new::<T>(&q);
-        let (cells, voxel_bins) = if table.is_some() {
-            (cells_only(volume, &q), Vec::new())
+        let (cells, voxel_bins) = if let Some(table) = BinTable::new::<T>(&q) {
+            (cells_only(volume, &q), VoxelBins::Table(table))
         } else {
-            cell_map(volume, &q)
+            let (cells, map) = cell_map(volume, &q);
+            (cells, VoxelBins::Map(map))
         };
         Self {
             it: Interpolator::over(data, volume.dims()),
             cells,
             voxel_bins,
-            table,
             dims: volume.dims(),
             q,
         }
@@ -138,23 +141,23 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
         &self.cells
     }
 
-    /// Per voxel: the bin it safely lies in, or [`MIXED`] (then [`voxel_bin_at`] tells);
-    /// `None` for integer voxels, whose bins [`voxel_bin_at`] looks up in a table.
+    /// How the bin of a voxel is known: a per-voxel map whose [`MIXED`] entries
+    /// [`voxel_bin_at`] resolves, or a table.
     ///
     /// [`voxel_bin_at`]: Self::voxel_bin_at
-    pub fn voxel_bins(&self) -> Option<&[u8]> {
-        self.table.is_none().then_some(self.voxel_bins.as_slice())
+    pub fn voxel_bins(&self) -> &VoxelBins {
+        &self.voxel_bins
     }
 
     /// The bin of the voxel at linear index `index`, `None` when it is missing.
     #[inline]
     pub fn voxel_bin_at(&self, index: usize) -> Option<u8> {
-        if let Some(table) = &self.table {
-            return Some(table.bin(self.it.data[index]));
-        }
-        match self.voxel_bins[index] {
-            MIXED => self.q.bin(self.it.at(index)),
-            b => Some(b),
+        match &self.voxel_bins {
+            VoxelBins::Table(table) => Some(table.bin(self.it.data[index])),
+            VoxelBins::Map(map) => match map[index] {
+                MIXED => self.q.bin(self.it.at(index)),
+                b => Some(b),
+            },
         }
     }
 

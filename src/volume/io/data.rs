@@ -243,25 +243,17 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
 /// into memory, not where they are mapped: mapped file pages are the kernel's to drop, and what
 /// an analysis of them needs is weighed by the analysis (`analysis::level_within_memory`).
 fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
-    let count = match voxel_count(&spec.file, spec.dims)? {
-        Some(n)
-            if (n as u64)
-                .checked_mul(spec.voxel_type.size() as u64)
-                .is_some() =>
-        {
-            n
-        }
-        _ => {
-            return Err(Error::format(
+    let expected = voxel_count(&spec.file, spec.dims)?
+        .and_then(|n| (n as u64).checked_mul(spec.voxel_type.size() as u64))
+        .ok_or_else(|| {
+            Error::format(
                 &spec.file,
                 format!(
                     "a {} volume has more voxels than this machine can address",
                     dims_string(spec.dims)
                 ),
-            ));
-        }
-    };
-    let expected = count as u64 * spec.voxel_type.size() as u64;
+            )
+        })?;
     let path = spec.file.as_path();
     let buffer = || typed_buffer::<T>(path, spec.dims, max_memory);
     let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
