@@ -81,22 +81,61 @@ impl Histories {
         Ok(())
     }
 
-    /// The histories of a stack already cut.
-    pub fn of_stack(stack: SliceStack, scope: Scope, monitor: &Monitor) -> Result<Self> {
-        let n = stack.slices();
+    /// An error for fewer than two slices, which have nothing to partition.
+    pub(crate) fn check_slices(n: usize) -> Result<()> {
         if n < 2 {
             return Err(Error::Degenerate(format!(
                 "only {n} slice along the axis: nothing to partition"
             )));
         }
-        let bins = stack.bins();
+        Ok(())
+    }
+
+    /// The histories of a stack already cut.
+    pub fn of_stack(stack: SliceStack, scope: Scope, monitor: &Monitor) -> Result<Self> {
+        let n = stack.slices();
+        Self::check_slices(n)?;
         let histograms = stack.slice_histograms();
-        let top = SplitHistory::with_limit(&histograms, bins, scope.top_steps);
         let bottom = if scope.bottom_up {
             Some(MergeHistory::new(&stack, monitor)?)
         } else {
             None
         };
+        let nmi_curve = if let Some(b) = &bottom {
+            b.slice_nmi().to_vec()
+        } else {
+            let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
+            consecutive_nmi(&stack, &Columns::new(&stack), &singles, monitor)?
+        };
+        Self::of_parts(stack, histograms, nmi_curve, bottom, scope)
+    }
+
+    /// The histories of a stack whose columns were not kept ([`Cutter::summary`]): its slice
+    /// histograms and NMI curve counted strip by strip, with no bottom-up history. The NMI at
+    /// slab boundaries is then the caller's to count ([`boundary_nmi`](Self::boundary_nmi) is
+    /// an error).
+    ///
+    /// [`Cutter::summary`]: super::stack::Cutter::summary
+    pub(crate) fn of_summary(
+        summary: SliceStack,
+        histograms: Vec<u64>,
+        nmi_curve: Vec<f64>,
+        scope: Scope,
+    ) -> Result<Self> {
+        Self::of_parts(summary, histograms, nmi_curve, None, scope)
+    }
+
+    /// The histories from a stack's histograms, NMI curve and bottom-up history.
+    fn of_parts(
+        stack: SliceStack,
+        histograms: Vec<u64>,
+        nmi_curve: Vec<f64>,
+        bottom: Option<MergeHistory>,
+        scope: Scope,
+    ) -> Result<Self> {
+        let (n, bins) = (stack.slices(), stack.bins());
+        Self::check_slices(n)?;
+        let top = SplitHistory::with_limit(&histograms, bins, scope.top_steps);
         let optimal_max_slices = scope.optimal_max_slices.min(MAX_SLICES);
         let optimal = if scope.optimal_slabs > 0 && n <= optimal_max_slices {
             Some(OptimalPartitions::new(
@@ -106,12 +145,6 @@ impl Histories {
             )?)
         } else {
             None
-        };
-        let nmi_curve = if let Some(b) = &bottom {
-            b.slice_nmi().to_vec()
-        } else {
-            let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
-            consecutive_nmi(&stack, &Columns::new(&stack), &singles, monitor)?
         };
         Ok(Self {
             gains: Gains::new(&histograms, bins),
@@ -315,8 +348,16 @@ impl Histories {
         }
     }
 
-    /// The NMI of the two slabs at each boundary of `slabs` (one pass over the stack).
+    /// The NMI of the two slabs at each boundary of `slabs` (one pass over the stack); an error
+    /// for histories of a stack whose columns were not kept.
     pub fn boundary_nmi(&self, slabs: &[Slab], monitor: &Monitor) -> Result<Vec<f64>> {
+        if self.stack.pixels() == 0 {
+            return Err(Error::invalid(
+                "stack",
+                "streamed",
+                "the slices' columns, which a stack counted strip by strip does not keep",
+            ));
+        }
         consecutive_nmi(&self.stack, &Columns::new(&self.stack), slabs, monitor)
     }
 

@@ -6,6 +6,7 @@ mod histories;
 mod optimal;
 mod result;
 mod stack;
+mod streamed;
 mod top_down;
 
 use serde::Serialize;
@@ -16,6 +17,7 @@ pub use histories::{Histories, Scope};
 pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{Comparison, Partition, PartitionParams, Step, Stop, label_volume, partition};
 pub use stack::{BackgroundSummary, MISSING, SliceStack, StackParams, slice_geometry};
+pub use streamed::{partition_streamed, streamed_memory_floor};
 pub use top_down::{Split, SplitHistory};
 
 use crate::measure::entropy;

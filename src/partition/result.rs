@@ -181,10 +181,27 @@ impl Partition {
         position: usize,
         monitor: &Monitor,
     ) -> Result<Self> {
+        let slabs = histories.slabs(method, position);
+        let boundary_nmi = histories.boundary_nmi(&slabs, monitor)?;
+        Ok(Self::with_boundary_nmi(
+            histories,
+            method,
+            position,
+            boundary_nmi,
+        ))
+    }
+
+    /// The partition at `position` of `method`'s history, the NMI at its boundaries counted by
+    /// the caller.
+    pub(crate) fn with_boundary_nmi(
+        histories: &Histories,
+        method: Method,
+        position: usize,
+        boundary_nmi: Vec<f64>,
+    ) -> Self {
         let stack = histories.stack();
         let slabs = histories.slabs(method, position);
         let k = slabs.len();
-        let boundary_nmi = histories.boundary_nmi(&slabs, monitor)?;
         let top = histories.top();
         let comparison = histories
             .optimal()
@@ -201,7 +218,7 @@ impl Partition {
                     .collect()
             })
             .unwrap_or_default();
-        Ok(Self {
+        Self {
             axis: stack.axis(),
             world: stack.world().clone(),
             world_line: stack.world_line(),
@@ -221,7 +238,7 @@ impl Partition {
             comparison,
             background: stack.background(),
             notes: histories.notes(),
-        })
+        }
     }
 }
 

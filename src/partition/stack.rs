@@ -12,6 +12,7 @@ use crate::geometry::WorldAxis;
 use crate::geometry::lattice::{Lattice, SamplingParams};
 use crate::volume::background::{Background, BackgroundRule};
 
+pub(crate) use self::cut::Cutter;
 pub use self::cut::slice_geometry;
 
 /// The symbol of a sample that does not count: outside the volume, missing, or background.
@@ -150,6 +151,11 @@ impl SliceStack {
         } else {
             1.0 - counted as f64 / positions as f64
         }
+    }
+
+    /// Per slice: the samples inside the volume's box, background and missing ones included.
+    pub(crate) fn positions(&self) -> &[u64] {
+        &self.positions
     }
 
     /// What was left out as background.

@@ -97,6 +97,11 @@ impl Background {
         }
     }
 
+    /// The bytes it holds: its mask, for a found background.
+    pub fn memory_bytes(&self) -> u64 {
+        self.mask.as_ref().map_or(0, |m| 8 * m.len() as u64)
+    }
+
     /// Whether any voxel is background.
     pub fn is_empty(&self) -> bool {
         self.fraction == 0.0

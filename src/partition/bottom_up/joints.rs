@@ -66,7 +66,7 @@ impl PixelHistogram {
 const COLUMN_BLOCK: usize = 1024;
 
 /// Bytes of joint histograms one pass may hold per thread.
-const PASS_BYTES: usize = 32 << 20;
+pub(crate) const PASS_BYTES: usize = 32 << 20;
 
 /// A group of constant columns: their symbol, first slice, slices, and how many pixels.
 type ConstantGroup = (u8, usize, usize, u64);
@@ -359,7 +359,44 @@ fn joints_over_pixels(
     flat.chunks(b * b).map(<[u64]>::to_vec).collect()
 }
 
-/// NMI of every consecutive pair of `slabs`, batched so that a pass's histograms fit in memory.
+/// Adds the joint histograms of every consecutive pair of `slabs` into `joints` (`pairs × bins²`
+/// counts, pair by pair), batched so that a pass's histograms fit in memory. Joint histograms are
+/// sums over pixels, so those of a stack cut in strips of pixels add up to the whole stack's.
+pub(crate) fn add_consecutive_joints(
+    stack: &SliceStack,
+    columns: &Columns,
+    slabs: &[Slab],
+    joints: &mut [u64],
+    monitor: &Monitor,
+) -> Result<()> {
+    let b2 = stack.bins() * stack.bins();
+    debug_assert_eq!(joints.len(), slabs.len().saturating_sub(1) * b2);
+    let batch = (PASS_BYTES / (b2 * 8)).max(1);
+    let mut i = 0;
+    while i + 1 < slabs.len() {
+        let j = (i + batch + 1).min(slabs.len());
+        for (k, joint) in consecutive_joints(stack, columns, &slabs[i..j])
+            .into_iter()
+            .enumerate()
+        {
+            let into = &mut joints[(i + k) * b2..(i + k + 1) * b2];
+            into.iter_mut().zip(&joint).for_each(|(x, y)| *x += y);
+        }
+        monitor.check()?;
+        i = j - 1;
+    }
+    Ok(())
+}
+
+/// The NMI of each consecutive pair of `joints` (`bins × bins` each).
+pub(crate) fn nmi_of_joints(joints: &[u64], bins: usize) -> Vec<f64> {
+    joints
+        .chunks(bins * bins)
+        .map(|joint| normalized_mutual_information(joint, bins, bins))
+        .collect()
+}
+
+/// NMI of every consecutive pair of `slabs`.
 pub(crate) fn consecutive_nmi(
     stack: &SliceStack,
     columns: &Columns,
@@ -367,18 +404,9 @@ pub(crate) fn consecutive_nmi(
     monitor: &Monitor,
 ) -> Result<Vec<f64>> {
     let b = stack.bins();
-    let batch = (PASS_BYTES / (b * b * 8)).max(1);
-    let mut out = Vec::with_capacity(slabs.len().saturating_sub(1));
-    let mut i = 0;
-    while i + 1 < slabs.len() {
-        let j = (i + batch + 1).min(slabs.len());
-        for joint in consecutive_joints(stack, columns, &slabs[i..j]) {
-            out.push(normalized_mutual_information(&joint, b, b));
-        }
-        monitor.check()?;
-        i = j - 1;
-    }
-    Ok(out)
+    let mut joints = vec![0u64; slabs.len().saturating_sub(1) * b * b];
+    add_consecutive_joints(stack, columns, slabs, &mut joints, monitor)?;
+    Ok(nmi_of_joints(&joints, b))
 }
 
 /// The NMI between each slice and the next, along the stack.

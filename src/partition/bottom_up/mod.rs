@@ -12,7 +12,9 @@ use std::collections::BinaryHeap;
 use serde::Serialize;
 
 pub use self::joints::slice_nmi;
-pub(crate) use self::joints::{Columns, consecutive_nmi};
+pub(crate) use self::joints::{
+    Columns, PASS_BYTES, add_consecutive_joints, consecutive_nmi, nmi_of_joints,
+};
 use super::Slab;
 use super::stack::SliceStack;
 use crate::error::Result;

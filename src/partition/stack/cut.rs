@@ -2,6 +2,8 @@
 //! resampled on the ray lattice along an oblique one, each sample quantized (or left out as
 //! background) and each slice's sum and count of values kept for slab means.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use super::{BackgroundSummary, Column, Lattice, MISSING, SliceStack, StackParams};
@@ -10,7 +12,10 @@ use crate::geometry::{WorldAxis, canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
 use crate::volume::background::Background;
 use crate::volume::interpolate::Interpolator;
-use crate::volume::{Volume, Voxel};
+use crate::volume::{Quantizer, Volume, Voxel};
+
+/// Pixels a task of a cut along a coordinate axis fills.
+const CUT_BLOCK: usize = 4096;
 
 /// The two axes other than `m`, in order.
 fn other_axes(m: usize) -> (usize, usize) {
@@ -53,11 +58,127 @@ impl SliceStack {
         params: &StackParams,
         monitor: &Monitor,
     ) -> Result<Self> {
+        let cutter = Cutter::new(volume, axis, params, monitor)?;
+        let rows = 0..cutter.rows();
+        monitor.start("slicing", cutter.work(&rows));
+        let Self {
+            columns,
+            symbols,
+            positions,
+            ..
+        } = cutter.cut(rows, monitor)?;
+        Ok(Self {
+            columns,
+            symbols,
+            ..cutter.summary(positions, monitor)?
+        })
+    }
+}
+
+/// What cutting a volume into slices along one axis needs, found once: the canonical axis, the
+/// quantizer, the background, and for an oblique axis the lattice. It cuts the stack a strip of
+/// rows at a time (rows of pixels: voxel rows along the slower of the two other axes for a
+/// coordinate axis, lattice rows for an oblique one), so that a stack too large to hold can be
+/// read strip by strip; the strips' histograms and joint histograms add up to the whole's.
+pub(crate) struct Cutter<'a> {
+    volume: &'a Volume,
+    axis: [f64; 3],
+    bins: usize,
+    quantizer: Quantizer,
+    background: Background,
+    /// The lattice of an oblique axis; `None` along a coordinate axis.
+    lattice: Option<Lattice>,
+}
+
+impl<'a> Cutter<'a> {
+    /// The cutter of `volume` along `axis` (made canonical): finds the background.
+    pub(crate) fn new(
+        volume: &'a Volume,
+        axis: [f64; 3],
+        params: &StackParams,
+        monitor: &Monitor,
+    ) -> Result<Self> {
         let d = canonical(normalize(axis).ok_or_else(|| {
             Error::invalid("axis", format!("{axis:?}"), "a direction with a length")
         })?);
-        let q = volume.quantizer(params.sampling.bins)?;
+        let quantizer = volume.quantizer(params.sampling.bins)?;
+        let lattice = match coordinate_axis(d) {
+            Some(_) => None,
+            None => Some(oblique_lattice(volume, d, params)?),
+        };
         let background = Background::find(volume, params.background, monitor)?;
+        let axis = coordinate_axis(d).map_or(d, |m| std::array::from_fn(|i| f64::from(i == m)));
+        Ok(Self {
+            volume,
+            axis,
+            bins: params.sampling.bins,
+            quantizer,
+            background,
+            lattice,
+        })
+    }
+
+    /// The number of slices.
+    pub(crate) fn slices(&self) -> usize {
+        match (&self.lattice, coordinate_axis(self.axis)) {
+            (Some(l), _) => {
+                let (k_first, k_last) = l.sample_range();
+                (k_last - k_first + 1).max(0) as usize
+            }
+            (None, Some(m)) => self.volume.dims()[m],
+            (None, None) => unreachable!("a coordinate axis has no lattice"),
+        }
+    }
+
+    /// The number of rows.
+    pub(crate) fn rows(&self) -> usize {
+        match (&self.lattice, coordinate_axis(self.axis)) {
+            (Some(l), _) => {
+                let (_, (j0, j1)) = l.ray_ranges();
+                (j1 - j0 + 1).max(0) as usize
+            }
+            (None, Some(m)) => self.volume.dims()[other_axes(m).1],
+            (None, None) => unreachable!("a coordinate axis has no lattice"),
+        }
+    }
+
+    /// The most pixels a row has.
+    pub(crate) fn row_pixels(&self) -> usize {
+        match (&self.lattice, coordinate_axis(self.axis)) {
+            (Some(l), _) => {
+                let ((i0, i1), _) = l.ray_ranges();
+                (i1 - i0 + 1).max(0) as usize
+            }
+            (None, Some(m)) => self.volume.dims()[other_axes(m).0],
+            (None, None) => unreachable!("a coordinate axis has no lattice"),
+        }
+    }
+
+    /// The number of bins.
+    pub(crate) fn bins(&self) -> usize {
+        self.bins
+    }
+
+    /// The bytes the background takes (its mask, for a found one).
+    pub(crate) fn background_bytes(&self) -> u64 {
+        self.background.memory_bytes()
+    }
+
+    /// The units of work [`cut`](Self::cut) of `rows` advances its monitor by (the caller starts
+    /// the phase, so that strips cut one after another advance one phase).
+    pub(crate) fn work(&self, rows: &Range<usize>) -> u64 {
+        match coordinate_axis(self.axis) {
+            Some(m) if self.lattice.is_none() => {
+                (rows.len() * self.volume.dims()[other_axes(m).0]).div_ceil(CUT_BLOCK) as u64
+            }
+            _ => rows.len() as u64,
+        }
+    }
+
+    /// The stack of the pixels of `rows`, without the per-slice sums (a strip's positions are
+    /// its own).
+    pub(crate) fn cut(&self, rows: Range<usize>, monitor: &Monitor) -> Result<SliceStack> {
+        let (q, background) = (&self.quantizer, &self.background);
         // A sample's voxel (the nearest, for an interpolated one) and value.
         let keep = |index: usize, v: f32| -> u8 {
             if background.contains(index, v) {
@@ -66,37 +187,92 @@ impl SliceStack {
                 q.bin(v).unwrap_or(MISSING)
             }
         };
-        let mut stack = match coordinate_axis(d) {
-            Some(m) => Self::along_coordinate(volume, m, params.sampling.bins, &keep, monitor)?,
-            None => Self::along_lattice(volume, d, params, &keep, monitor)?,
+        match (&self.lattice, coordinate_axis(self.axis)) {
+            (Some(lattice), _) => self.along_lattice(lattice, rows, &keep, monitor),
+            (None, Some(m)) => self.along_coordinate(m, rows, &keep, monitor),
+            (None, None) => unreachable!("a coordinate axis has no lattice"),
+        }
+    }
+
+    /// The stack's per-slice geometry, background and sums without its columns: what a
+    /// partition reports of the stack once its histograms are counted. `positions` are the
+    /// strips' positions summed.
+    pub(crate) fn summary(&self, positions: Vec<u64>, monitor: &Monitor) -> Result<SliceStack> {
+        monitor.check()?;
+        let (volume, d) = (self.volume, self.axis);
+        let counted = |index: usize, v: f32| v.is_finite() && !self.background.contains(index, v);
+        let slices = self.slices();
+        let (sums, counts) = match (&self.lattice, coordinate_axis(d)) {
+            (Some(lattice), _) => lattice_sums(volume, lattice, slices, &counted),
+            (None, Some(m)) => plane_sums(volume, m, &counted),
+            (None, None) => unreachable!("a coordinate axis has no lattice"),
         };
-        stack.background = BackgroundSummary::of(&background);
-        stack.world = volume.transform().describe(d, volume.spacing());
-        stack.world_line = volume.transform().world_line(d, volume.spacing());
-        stack.with_sums(volume, d, params, &background, monitor)
+        let (thickness, offset) = match (&self.lattice, coordinate_axis(d)) {
+            (Some(l), _) => (
+                l.sample_spacing,
+                l.sample_range().0 as f64 * l.sample_spacing,
+            ),
+            (None, Some(m)) => (volume.spacing()[m], 0.0),
+            (None, None) => unreachable!("a coordinate axis has no lattice"),
+        };
+        Ok(SliceStack {
+            axis: d,
+            bins: self.bins,
+            slices,
+            thickness,
+            offset,
+            columns: Vec::new(),
+            symbols: Vec::new(),
+            sums,
+            counts,
+            positions,
+            background: BackgroundSummary::of(&self.background),
+            world: volume.transform().describe(d, volume.spacing()),
+            world_line: volume.transform().world_line(d, volume.spacing()),
+        })
+    }
+
+    /// A stack of columns and positions only, the rest filled by [`summary`](Self::summary).
+    fn bare(&self, columns: Vec<Column>, symbols: Vec<u8>, positions: Vec<u64>) -> SliceStack {
+        SliceStack {
+            axis: self.axis,
+            bins: self.bins,
+            slices: positions.len(),
+            thickness: 1.0,
+            offset: 0.0,
+            columns,
+            symbols,
+            sums: Vec::new(),
+            counts: Vec::new(),
+            positions,
+            background: BackgroundSummary::default(),
+            world: WorldAxis::default(),
+            world_line: (1.0, 0.0),
+        }
     }
 
     fn along_coordinate(
-        volume: &Volume,
+        &self,
         m: usize,
-        bins: usize,
+        rows: Range<usize>,
         keep: &(dyn Fn(usize, f32) -> u8 + Sync),
         monitor: &Monitor,
-    ) -> Result<Self> {
+    ) -> Result<SliceStack> {
+        let volume = self.volume;
         let dims = volume.dims();
         let stride = [1, dims[0], dims[0] * dims[1]];
         let n = dims[m];
         let (a, b) = other_axes(m);
-        let pixels = dims[a] * dims[b];
+        let first = rows.start * dims[a];
+        let pixels = rows.len() * dims[a];
         let mut symbols = vec![MISSING; pixels * n];
-        monitor.start("slicing", pixels.div_ceil(4096) as u64);
         crate::volume::with_voxels!(volume.data(), |voxels| {
             symbols
-                .par_chunks_mut(4096 * n)
+                .par_chunks_mut(CUT_BLOCK * n)
                 .enumerate()
                 .try_for_each(|(c, out)| {
                     for (k, col) in out.chunks_mut(n).enumerate() {
-                        let p = c * 4096 + k;
+                        let p = first + c * CUT_BLOCK + k;
                         let base = (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b];
                         for (s, o) in col.iter_mut().enumerate() {
                             let i = base + s * stride[m];
@@ -113,38 +289,21 @@ impl SliceStack {
                 len: n as u32,
             })
             .collect();
-        let mut axis = [0.0; 3];
-        axis[m] = 1.0;
-        Ok(Self {
-            axis,
-            bins,
-            slices: n,
-            thickness: volume.spacing()[m],
-            offset: 0.0,
-            columns,
-            symbols,
-            sums: Vec::new(),
-            counts: Vec::new(),
-            positions: vec![pixels as u64; n],
-            background: BackgroundSummary::default(),
-            world: WorldAxis::default(),
-            world_line: (1.0, 0.0),
-        })
+        Ok(self.bare(columns, symbols, vec![pixels as u64; n]))
     }
 
     fn along_lattice(
-        volume: &Volume,
-        d: [f64; 3],
-        params: &StackParams,
+        &self,
+        lattice: &Lattice,
+        rows: Range<usize>,
         keep: &(dyn Fn(usize, f32) -> u8 + Sync),
         monitor: &Monitor,
-    ) -> Result<Self> {
-        let lattice = oblique_lattice(volume, d, params)?;
-        let (_, (j0, j1)) = lattice.ray_ranges();
-        let (k_first, k_last) = lattice.sample_range();
-        let slices = (k_last - k_first + 1).max(0) as usize;
-        let rows: Vec<i64> = (j0..=j1).collect();
-        monitor.start("slicing", rows.len() as u64);
+    ) -> Result<SliceStack> {
+        let volume = self.volume;
+        let (_, (j0, _)) = lattice.ray_ranges();
+        let (k_first, _) = lattice.sample_range();
+        let slices = self.slices();
+        let rows: Vec<i64> = rows.map(|r| j0 + r as i64).collect();
         let per_row = crate::volume::with_voxels!(volume.data(), |data| {
             let it = Interpolator::over(data, volume.dims());
             rows.par_iter()
@@ -185,49 +344,11 @@ impl SliceStack {
             }));
             symbols.extend(syms);
         }
-        Ok(Self {
-            axis: d,
-            bins: params.sampling.bins,
-            slices,
-            thickness: lattice.sample_spacing,
-            offset: k_first as f64 * lattice.sample_spacing,
-            columns,
-            symbols,
-            sums: Vec::new(),
-            counts: Vec::new(),
-            positions,
-            background: BackgroundSummary::default(),
-            world: WorldAxis::default(),
-            world_line: (1.0, 0.0),
-        })
+        Ok(self.bare(columns, symbols, positions))
     }
+}
 
-    /// Adds the per-slice sums of the counted values (for slab means).
-    fn with_sums(
-        mut self,
-        volume: &Volume,
-        d: [f64; 3],
-        params: &StackParams,
-        background: &Background,
-        monitor: &Monitor,
-    ) -> Result<Self> {
-        monitor.check()?;
-        let counted = |index: usize, v: f32| v.is_finite() && !background.contains(index, v);
-        let (sums, counts) = if let Some(m) = coordinate_axis(d) {
-            plane_sums(volume, m, &counted)
-        } else {
-            lattice_sums(
-                volume,
-                &oblique_lattice(volume, d, params)?,
-                self.slices,
-                &counted,
-            )
-        };
-        self.sums = sums;
-        self.counts = counts;
-        Ok(self)
-    }
-
+impl SliceStack {
     /// Builds a stack directly from slices of symbols (each a `pixels`-long row, `MISSING` for
     /// samples that do not count), for tests and synthetic data.
     pub fn from_slices(slices: &[Vec<u8>], bins: usize) -> Result<Self> {

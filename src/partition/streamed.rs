@@ -1,0 +1,253 @@
+//! The partition of a volume whose slice stack does not fit in memory, at full resolution: the
+//! stack is cut a strip of rows at a time and each strip's slice histograms and consecutive joint
+//! histograms are added up, so that no more than one strip is held. Histograms and joint
+//! histograms are sums over the pixels, so the sums are the whole stack's, exactly: the slabs,
+//! gains and NMI are those of [`partition`](super::partition) of the same volume, bit for bit.
+//!
+//! Two passes over the volume: the first counts the slice histograms (from which the top-down
+//! history and the optimum follow) and the NMI between consecutive slices; the second, once the
+//! slabs are known, the joint histograms of consecutive slabs for the NMI at their boundaries.
+//! Bottom-up merging reads the stack once per merge and is not streamed.
+
+use std::ops::Range;
+
+use super::bottom_up::{Columns, add_consecutive_joints, nmi_of_joints};
+use super::histories::Histories;
+use super::stack::Cutter;
+use super::{Method, Partition, PartitionParams, Slab};
+use crate::error::{Error, Result, short_bytes};
+use crate::progress::Monitor;
+use crate::volume::Volume;
+
+/// Bytes a strip takes per pixel beyond its symbols: its column entry, twice while an oblique
+/// strip's rows are joined, and the run-length encoding's per-column arrays.
+const PIXEL_BYTES: u64 = 96;
+
+/// Bytes a strip takes per symbol: the symbol, and at most one run (a first slice and a symbol)
+/// in the run-length encoding.
+const SYMBOL_BYTES: u64 = 6;
+
+/// The least memory a streamed partition of `volume` asks for beyond what its voxels hold, in
+/// bytes, along any axis: the background mask, the sums, and strips of eight rows (a row and a
+/// column of slices no longer than the volume's diagonal). A budget below it is better spent on
+/// a coarser pyramid level.
+#[must_use]
+pub fn streamed_memory_floor(volume: &Volume) -> u64 {
+    let n = volume.len() as u64;
+    let diagonal2 = volume.dims().iter().map(|&d| (d * d) as u64).sum::<u64>();
+    n / 8 + 8 * diagonal2 * (SYMBOL_BYTES + PIXEL_BYTES) + (64 << 20)
+}
+
+/// Partitions `volume` along `axis` within `max_memory` bytes of working memory (beyond the
+/// voxels the volume holds), cutting its stack in strips: the same partition as
+/// [`partition`](super::partition), for the top-down and optimal methods.
+pub fn partition_streamed(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &PartitionParams,
+    max_memory: u64,
+    monitor: &Monitor,
+) -> Result<Partition> {
+    if params.method == Method::BottomUp {
+        return Err(Error::invalid(
+            "method",
+            params.method.name(),
+            "top-down or optimal for a stack counted strip by strip (bottom-up merging reads \
+             the whole stack once per merge)",
+        ));
+    }
+    Histories::check_not_constant(volume)?;
+    let cutter = Cutter::new(volume, axis, &params.stack, monitor)?;
+    let (n, bins) = (cutter.slices(), cutter.bins());
+    Histories::check_slices(n)?;
+    let strips = strips(&cutter, max_memory)?;
+    let work = strips.iter().map(|r| cutter.work(r)).sum();
+
+    monitor.start("slicing in strips (pass 1 of 2)", work);
+    let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
+    let mut histograms = vec![0u64; n * bins];
+    let mut positions = vec![0u64; n];
+    let mut joints = vec![0u64; (n - 1) * bins * bins];
+    for rows in &strips {
+        let strip = cutter.cut(rows.clone(), monitor)?;
+        add(&mut histograms, &strip.slice_histograms());
+        add(&mut positions, strip.positions());
+        add_consecutive_joints(
+            &strip,
+            &Columns::new(&strip),
+            &singles,
+            &mut joints,
+            monitor,
+        )?;
+    }
+    let nmi_curve = nmi_of_joints(&joints, bins);
+    drop(joints);
+    let summary = cutter.summary(positions, monitor)?;
+    let scope = params.scope(Some(n));
+    let histories = Histories::of_summary(summary, histograms, nmi_curve, scope)?;
+    let position = histories.position(params.method, params.stop)?;
+    let slabs = histories.slabs(params.method, position);
+
+    let boundary_nmi = if slabs.len() > 1 {
+        monitor.start("slicing in strips (pass 2 of 2)", work);
+        let mut joints = vec![0u64; (slabs.len() - 1) * bins * bins];
+        for rows in &strips {
+            let strip = cutter.cut(rows.clone(), monitor)?;
+            add_consecutive_joints(&strip, &Columns::new(&strip), &slabs, &mut joints, monitor)?;
+        }
+        nmi_of_joints(&joints, bins)
+    } else {
+        Vec::new()
+    };
+    let mut partition =
+        Partition::with_boundary_nmi(&histories, params.method, position, boundary_nmi);
+    partition.notes.insert(
+        0,
+        format!(
+            "the slice stack ({}) is over the memory limit: it was counted in {} strips of at \
+             most {} rows, in two passes over the volume",
+            short_bytes(stack_bytes(&cutter, cutter.rows())),
+            strips.len(),
+            strips[0].len(),
+        ),
+    );
+    Ok(partition)
+}
+
+/// The bytes a strip of `rows` rows of `cutter`'s stack takes at its peak.
+fn stack_bytes(cutter: &Cutter, rows: usize) -> u64 {
+    let per_row =
+        cutter.row_pixels() as u64 * (cutter.slices() as u64 * SYMBOL_BYTES + PIXEL_BYTES);
+    rows as u64 * per_row
+}
+
+/// The bytes a streamed partition holds beside its strips: the background mask, the histograms
+/// and positions, the joint histograms of consecutive slices and the per-task sums they are
+/// counted in.
+fn fixed_bytes(cutter: &Cutter) -> u64 {
+    let (n, b) = (cutter.slices() as u64, cutter.bins() as u64);
+    let threads = rayon::current_num_threads() as u64;
+    let joints = (n - 1) * b * b * 8;
+    cutter.background_bytes()
+        + n * (b + 1) * 8
+        + joints
+        + (threads + 2) * joints.min(super::bottom_up::PASS_BYTES as u64)
+}
+
+/// The strips of rows `cutter`'s stack is cut in so that one, with the sums it is added to, fits
+/// in `max_memory` bytes.
+fn strips(cutter: &Cutter, max_memory: u64) -> Result<Vec<Range<usize>>> {
+    let fixed = fixed_bytes(cutter);
+    let rows = cutter.rows();
+    let fit = max_memory.saturating_sub(fixed) / stack_bytes(cutter, 1).max(1);
+    if fit == 0 {
+        return Err(Error::invalid(
+            "max-memory",
+            short_bytes(max_memory),
+            format!(
+                "room for a strip of one row of the slice stack ({} beyond the {} its sums take)",
+                short_bytes(stack_bytes(cutter, 1)),
+                short_bytes(fixed),
+            ),
+        ));
+    }
+    let per = (fit as usize).min(rows.max(1));
+    Ok((0..rows)
+        .step_by(per)
+        .map(|r| r..(r + per).min(rows))
+        .collect())
+}
+
+/// Adds `b` into `a`, element by element.
+fn add(a: &mut [u64], b: &[u64]) {
+    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::partition::{SliceStack, Stop, partition};
+    use crate::volume::VoxelType;
+    use crate::volume::background::BackgroundRule;
+
+    /// A 24×20×28 volume of three layers along z (one bright, textured, one dark) inside a
+    /// border of air, so that the automatic background leaves something out.
+    fn layered() -> Volume {
+        let dims = [24, 20, 28];
+        let data = (0..dims[0] * dims[1] * dims[2])
+            .map(|i| {
+                let (x, y, z) = (i % 24, i / 24 % 20, i / 480);
+                if x < 2 || y < 2 || x > 21 || y > 17 {
+                    0.0
+                } else {
+                    let layer = [40.0, 120.0, 80.0][z * 3 / 28];
+                    layer + ((x * 7 + y * 3 + z * 5) % 11) as f32 * 2.0
+                }
+            })
+            .collect();
+        Volume::new(dims, [1.0, 1.2, 0.9], VoxelType::U8, data).unwrap()
+    }
+
+    fn params(method: Method, background: BackgroundRule) -> PartitionParams {
+        let mut p = PartitionParams {
+            method,
+            stop: Stop::Slabs(3),
+            ..PartitionParams::default()
+        };
+        p.stack.background = background;
+        p
+    }
+
+    /// Strips of one or two rows: the budget of the sums and one strip of `rows` rows.
+    fn budget(volume: &Volume, axis: [f64; 3], p: &PartitionParams, rows: usize) -> u64 {
+        let cutter = Cutter::new(volume, axis, &p.stack, &Monitor::none()).unwrap();
+        let one = strips(&cutter, u64::MAX).unwrap();
+        assert_eq!(one.len(), 1, "an unbounded budget cuts one strip");
+        assert!(strips(&cutter, fixed_bytes(&cutter)).is_err());
+        fixed_bytes(&cutter) + stack_bytes(&cutter, rows)
+    }
+
+    #[test]
+    fn a_stack_counted_in_strips_gives_the_whole_stacks_partition() {
+        let v = layered();
+        for axis in [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.3, 0.5, 0.8]] {
+            for background in [BackgroundRule::Auto, BackgroundRule::None] {
+                for method in [Method::TopDown, Method::Optimal] {
+                    let p = params(method, background);
+                    let budget = budget(&v, axis, &p, 2);
+                    let whole_stack =
+                        SliceStack::new(&v, axis, &p.stack, &Monitor::none()).unwrap();
+                    let expected = partition(&v, axis, &p, &Monitor::none()).unwrap();
+                    let got = partition_streamed(&v, axis, &p, budget, &Monitor::none()).unwrap();
+                    assert!(got.notes[0].contains("strips"), "{:?}", got.notes);
+                    let cutter = Cutter::new(&v, axis, &p.stack, &Monitor::none()).unwrap();
+                    assert!(strips(&cutter, budget).unwrap().len() > 2);
+                    assert_eq!(got.slices, whole_stack.slices());
+                    let json = |p: &Partition| {
+                        let mut p = p.clone();
+                        p.notes.clear();
+                        serde_json::to_string(&p).unwrap()
+                    };
+                    assert_eq!(
+                        json(&got),
+                        json(&expected),
+                        "{axis:?} {background:?} {method:?}"
+                    );
+                    assert_eq!(got.background, expected.background);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bottom_up_and_a_budget_without_room_for_a_row_are_errors() {
+        let v = layered();
+        let axis = [0.0, 0.0, 1.0];
+        let p = params(Method::BottomUp, BackgroundRule::None);
+        let e = partition_streamed(&v, axis, &p, u64::MAX, &Monitor::none()).unwrap_err();
+        assert!(e.to_string().contains("bottom-up"), "{e}");
+        let p = params(Method::TopDown, BackgroundRule::None);
+        let e = partition_streamed(&v, axis, &p, 1000, &Monitor::none()).unwrap_err();
+        assert!(e.to_string().contains("one row"), "{e}");
+    }
+}
