@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::analysis::within_memory;
+use slabscope::Plan;
 use slabscope::report::curves_csv;
 use slabscope::volume::Resolution;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
@@ -63,12 +63,12 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let full = &loaded.volume;
     let wanted = args.resolution.level(full.dims(), full.coarser_levels())?;
-    let (level, budget_note) = within_memory(full, wanted, args.load.options().max_memory)?;
-    let volume = level.as_ref();
-    let name = args.file.display().to_string();
+    let max_memory = args.load.options().max_memory;
     let params = args.analysis.params(args.views);
-    let mut analysis = args.analysis.analyze(&name, volume, args.views)?;
-    analysis.notes.splice(0..0, budget_note);
+    let plan = Plan::within(full, wanted, max_memory, &params)?;
+    let volume = plan.partition.as_ref();
+    let name = args.file.display().to_string();
+    let analysis = args.analysis.analyze(&name, &plan, args.views)?;
     let part = &analysis.partition;
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.

@@ -27,15 +27,19 @@ const PIXEL_BYTES: u64 = 96;
 /// in the run-length encoding.
 const SYMBOL_BYTES: u64 = 6;
 
-/// The least memory a streamed partition of `volume` asks for beyond what its voxels hold, in
-/// bytes, along any axis: the background mask, the sums, and strips of eight rows (a row and a
-/// column of slices no longer than the volume's diagonal). A budget below it is better spent on
-/// a coarser pyramid level.
+/// The least memory a streamed partition of `volume` with `bins` bins asks for beyond what its
+/// voxels hold, in bytes, along any axis: its background mask and sums, and a strip of one row, for
+/// a row and a column of slices as long as the volume's diagonal in steps of its finest spacing
+/// (the lattice's default). A budget below it is better spent on a coarser pyramid level.
 #[must_use]
-pub fn streamed_memory_floor(volume: &Volume) -> u64 {
-    let n = volume.len() as u64;
-    let diagonal2 = volume.dims().iter().map(|&d| (d * d) as u64).sum::<u64>();
-    n / 8 + 8 * diagonal2 * (SYMBOL_BYTES + PIXEL_BYTES) + (64 << 20)
+pub fn streamed_memory_floor(volume: &Volume, bins: usize) -> u64 {
+    let step = crate::geometry::min_spacing(volume.spacing());
+    let extent2: f64 = (0..3)
+        .map(|i| (volume.dims()[i] as f64 * volume.spacing()[i] / step).powi(2))
+        .sum();
+    let diagonal = extent2.sqrt().ceil() as u64;
+    let mask = volume.len() as u64 / 8;
+    mask + sums_bytes(diagonal, bins as u64) + diagonal * (diagonal * SYMBOL_BYTES + PIXEL_BYTES)
 }
 
 /// Partitions `volume` along `axis` within `max_memory` bytes of working memory (beyond the
@@ -121,15 +125,18 @@ fn stack_bytes(cutter: &Cutter, rows: usize) -> u64 {
     rows as u64 * per_row
 }
 
-/// The bytes a streamed partition holds beside its strips: the background mask, the histograms
-/// and positions, the joint histograms of consecutive slices and the per-task sums they are
-/// counted in.
+/// The bytes a streamed partition holds beside its strips: the background mask and the sums.
 fn fixed_bytes(cutter: &Cutter) -> u64 {
-    let (n, b) = (cutter.slices() as u64, cutter.bins() as u64);
+    cutter.background_bytes() + sums_bytes(cutter.slices() as u64, cutter.bins() as u64)
+}
+
+/// The bytes of the sums a streamed partition of `slices` slices and `bins` bins adds strips
+/// into: the histograms and positions, the joint histograms of consecutive slices and the
+/// per-task sums they are counted in.
+fn sums_bytes(slices: u64, bins: u64) -> u64 {
     let threads = rayon::current_num_threads() as u64;
-    let joints = (n - 1) * b * b * 8;
-    cutter.background_bytes()
-        + n * (b + 1) * 8
+    let joints = slices.saturating_sub(1) * bins * bins * 8;
+    slices * (bins + 1) * 8
         + joints
         + (threads + 2) * joints.min(super::bottom_up::PASS_BYTES as u64)
 }
