@@ -5,7 +5,9 @@ use std::sync::Arc;
 
 use crate::error::Result;
 use crate::geometry::AxisChoice;
-use crate::partition::{Method, Partition, PartitionParams, StackParams, Stop, partition};
+use crate::partition::{
+    Method, Partition, PartitionParams, StackParams, Stop, partition, partition_streamed,
+};
 use crate::progress::Monitor;
 use crate::view::{ViewParams, ViewSearch, search};
 use crate::volume::Volume;
@@ -95,9 +97,91 @@ impl Analysis {
 
 /// Runs the view search (unless an axis is given) and partitions along the axis.
 pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> Result<Analysis> {
+    analyze_planned(&Plan::at(Arc::new(volume.clone())), params, monitor)
+}
+
+/// Where an analysis runs within a memory budget: the pyramid level the view search runs on,
+/// the level partitioned, and whether the partition's slice stack is counted strip by strip.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The level the view search runs on.
+    pub views: Arc<Volume>,
+    /// The level partitioned; its slices are the partition's.
+    pub partition: Arc<Volume>,
+    /// When the slice stack is counted strip by strip: the working memory it may take, bytes.
+    pub streamed: Option<u64>,
+    /// What the user should know of the plan (nothing when everything runs on the level asked
+    /// for, in memory).
+    pub note: Option<String>,
+}
+
+impl Plan {
+    /// Everything on `level`, in memory.
+    #[must_use]
+    pub fn at(level: Arc<Volume>) -> Self {
+        Self {
+            views: Arc::clone(&level),
+            partition: level,
+            streamed: None,
+            note: None,
+        }
+    }
+
+    /// The plan for analysing pyramid level `wanted` of `volume` by `params` within
+    /// `max_memory` bytes. Both parts run on the finest level at or coarser than `wanted` that
+    /// fits ([`memory_needed`]), except that a full-resolution partition by top-down or optimal
+    /// splitting whose stack does not fit is counted strip by strip when the voxels are read in
+    /// place (or held) and room is left beside the view search's level for the strips: the
+    /// slabs are then those of every voxel, the best axis that of the coarser level.
+    pub fn within(
+        volume: &Volume,
+        wanted: usize,
+        max_memory: u64,
+        params: &AnalysisParams,
+    ) -> Result<Self> {
+        let (level, note) = level_within_memory(volume, wanted, max_memory)?;
+        let views = volume.coarser(level);
+        let held = |v: &Volume| v.memory_bytes();
+        let room =
+            max_memory.saturating_sub(held(volume) + if level > 0 { held(&views) } else { 0 });
+        let streams = level != wanted
+            && wanted == 0
+            && params.method != Method::BottomUp
+            && room >= crate::partition::streamed_memory_floor(volume, params.view.sampling.bins);
+        if !streams {
+            return Ok(Self {
+                note,
+                ..Self::at(views)
+            });
+        }
+        let human = crate::error::short_bytes;
+        Ok(Self {
+            note: Some(format!(
+                "level 0 needs {} for the analysis in memory, over the memory limit of {}: the \
+                 view search runs on pyramid level {level}, the finest that fits ({}), and the \
+                 slabs are counted on every voxel, strip by strip",
+                human(memory_needed(volume, 0)),
+                human(max_memory),
+                human(memory_needed(volume, level)),
+            )),
+            views,
+            partition: Arc::new(volume.clone()),
+            streamed: Some(room),
+        })
+    }
+}
+
+/// Runs the view search (unless an axis is given) on `plan`'s view level and partitions its
+/// partition level along the axis.
+pub fn analyze_planned(
+    plan: &Plan,
+    params: &AnalysisParams,
+    monitor: &Monitor,
+) -> Result<Analysis> {
+    let volume = plan.partition.as_ref();
     let chosen = params.axis.resolve(volume.transform(), volume.spacing())?;
     let views = if params.runs_search() {
-        Some(search(volume, &params.view, monitor)?)
+        Some(search(&plan.views, &params.view, monitor)?)
     } else {
         None
     };
@@ -106,8 +190,16 @@ pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> R
         (None, Some(v)) => v.best().axis,
         (None, None) => unreachable!("the view search runs when no axis is given"),
     };
-    let partition = partition(volume, axis, &params.partition(), monitor)?;
-    let notes = notes(volume, &params.view, &partition);
+    let partition = match plan.streamed {
+        Some(room) => partition_streamed(volume, axis, &params.partition(), room, monitor)?,
+        None => partition(volume, axis, &params.partition(), monitor)?,
+    };
+    let notes = plan
+        .note
+        .iter()
+        .cloned()
+        .chain(notes(&plan.views, volume, &params.view, &partition))
+        .collect();
     Ok(Analysis {
         views,
         partition,
@@ -203,11 +295,17 @@ pub fn resolution_note(level: &Volume) -> Option<String> {
     })
 }
 
-/// The notes of an analysis of `volume` with `view`'s sampling that gave `partition`.
-pub fn notes(volume: &Volume, view: &ViewParams, partition: &Partition) -> Vec<String> {
+/// The notes of an analysis whose view search ran on `views` with `view`'s sampling and whose
+/// partition of `volume` gave `partition` (a [`Plan`]'s note says when the two differ).
+pub fn notes(
+    views: &Volume,
+    volume: &Volume,
+    view: &ViewParams,
+    partition: &Partition,
+) -> Vec<String> {
     resolution_note(volume)
         .into_iter()
-        .chain(view.sampling.budget_note(volume.dims(), volume.spacing()))
+        .chain(view.sampling.budget_note(views.dims(), views.spacing()))
         .chain(partition.notes.iter().cloned())
         .collect()
 }

@@ -65,7 +65,7 @@ pub mod triage;
 pub mod view;
 pub mod volume;
 
-pub use analysis::{Analysis, AnalysisParams, analyze};
+pub use analysis::{Analysis, AnalysisParams, Plan, analyze, analyze_planned};
 pub use error::{Error, Result};
 pub use geometry::Axis;
 pub use geometry::lattice::SamplingParams;

@@ -39,6 +39,10 @@ pub struct AnalysisReport {
     pub geometry: GeometryReport,
     /// The pyramid level the analysis was computed on (level 0: every voxel).
     pub resolution: ResolutionReport,
+    /// The pyramid level the view search ran on, when it is not `resolution`'s (a full-resolution
+    /// partition within a memory limit searches the views on a coarser level).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub views_resolution: Option<ResolutionReport>,
     /// The sampling and view-search parameters, spacings resolved to millimetres.
     pub params: ViewParams,
     /// Every axis of the view search, lowest entropy rate first (absent without a search).
@@ -95,6 +99,7 @@ impl AnalysisReport {
             range: [s.min, s.max],
             geometry: GeometryReport::of(volume),
             resolution: ResolutionReport::of(volume),
+            views_resolution: None,
             params,
             views: views.map(|v| v.views.clone()),
             best_axis: views.map(|v| v.best().axis),
@@ -115,6 +120,17 @@ impl AnalysisReport {
     #[must_use]
     pub fn computed_on(mut self, level: &Volume) -> Self {
         self.resolution = ResolutionReport::of(level);
+        self
+    }
+
+    /// This report of an analysis whose view search ran on `level`: `views_resolution` says so
+    /// when it is not the level partitioned (and nothing is said without a view search).
+    #[must_use]
+    pub fn views_on(mut self, level: &Volume) -> Self {
+        let views = ResolutionReport::of(level);
+        if self.views.is_some() && views.pyramid_level != self.resolution.pyramid_level {
+            self.views_resolution = Some(views);
+        }
         self
     }
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::analysis::within_memory;
+use slabscope::Plan;
 use slabscope::report::curves_csv;
 use slabscope::volume::Resolution;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
@@ -63,13 +63,20 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let full = &loaded.volume;
     let wanted = args.resolution.level(full.dims(), full.coarser_levels())?;
-    let (level, budget_note) = within_memory(full, wanted, args.load.options().max_memory)?;
-    let volume = level.as_ref();
-    let name = args.file.display().to_string();
+    let max_memory = args.load.options().max_memory;
     let params = args.analysis.params(args.views);
-    let mut analysis = args.analysis.analyze(&name, volume, args.views)?;
-    analysis.notes.splice(0..0, budget_note);
+    let plan = Plan::within(full, wanted, max_memory, &params)?;
+    let volume = plan.partition.as_ref();
+    if args.export_labels.is_some() {
+        // A byte a voxel at least: refused before the analysis rather than after it.
+        check_labels_fit(&args.file, &plan, 1)?;
+    }
+    let name = args.file.display().to_string();
+    let analysis = args.analysis.analyze(&name, &plan, args.views)?;
     let part = &analysis.partition;
+    if args.export_labels.is_some() {
+        check_labels_fit(&args.file, &plan, label_bytes(part.slabs.len()))?;
+    }
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
     let mut staged = Vec::new();
@@ -85,7 +92,11 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         staged.push(stage(path, |mut f| f.write_all(text.as_bytes()))?);
     }
     let report = if args.json {
-        Some(AnalysisReport::new(&name, full, &params.view, &analysis)?.computed_on(volume))
+        Some(
+            AnalysisReport::new(&name, full, &params.view, &analysis)?
+                .computed_on(volume)
+                .views_on(&plan.views),
+        )
     } else {
         None
     };
@@ -95,6 +106,31 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     match report {
         Some(report) => outln!("{}", slabscope::report::to_json(&report)?),
         None => super::text::print_analysis(&name, volume, &analysis),
+    }
+    Ok(())
+}
+
+/// Bytes a voxel of the label volume of `slabs` slabs takes.
+fn label_bytes(slabs: usize) -> u64 {
+    if slabs <= 256 { 1 } else { 2 }
+}
+
+/// That a label volume of `plan`'s partition level, `bytes` a voxel, fits in the room a streamed
+/// plan left (a plan in memory has already counted it).
+fn check_labels_fit(file: &Path, plan: &Plan, bytes: u64) -> Result<()> {
+    let Some(room) = plan.streamed else {
+        return Ok(());
+    };
+    let needed = plan.partition.len() as u64 * bytes;
+    if needed > room {
+        let human = slabscope::error::short_bytes;
+        anyhow::bail!(
+            "{}: --export-labels of every voxel needs {}, more than the {} left within the \
+             memory limit: export the labels at a coarser --resolution, or raise --max-memory",
+            file.display(),
+            human(needed),
+            human(room)
+        );
     }
     Ok(())
 }

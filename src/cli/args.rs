@@ -143,11 +143,11 @@ impl AnalysisArgs {
     pub fn analyze(
         &self,
         name: &str,
-        volume: &slabscope::Volume,
+        plan: &slabscope::Plan,
         search_views: bool,
     ) -> anyhow::Result<slabscope::Analysis> {
         let params = self.params(search_views);
-        super::progress::with_bar(|monitor| slabscope::analyze(volume, &params, monitor))
+        super::progress::with_bar(|monitor| slabscope::analyze_planned(plan, &params, monitor))
             .map_err(|e| match (&e, self.slabs, self.threshold) {
                 (
                     slabscope::Error::InvalidParameter {

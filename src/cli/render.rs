@@ -3,6 +3,7 @@
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
@@ -272,7 +273,11 @@ fn render_file(
     let volume = level.as_ref();
     let part = scene
         .analysis
-        .analyze(&file.display().to_string(), volume, false)?
+        .analyze(
+            &file.display().to_string(),
+            &slabscope::Plan::at(Arc::clone(&level)),
+            false,
+        )?
         .partition;
     let options = &scene.options;
     if faces {

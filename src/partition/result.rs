@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::geometry::{WorldAxis, dot};
 use crate::progress::Monitor;
 use crate::volume::background::BackgroundRule;
-use crate::volume::{Volume, VoxelType};
+use crate::volume::{Volume, VoxelType, Voxels};
 
 /// When to stop splitting or merging.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -257,18 +257,40 @@ pub fn partition(
     Partition::new(&histories, params.method, position, monitor)
 }
 
-/// A label volume: the index of the slab each voxel lies in (u8, or u16 above 255 slabs), with
-/// the volume's dimensions and spacing. A voxel belongs to the slice whose centre is nearest
-/// along the axis.
+/// A label volume: the index of the slab each voxel lies in (u8, or u16 above 256 slabs: a byte
+/// or two a voxel), with the volume's dimensions and spacing. A voxel belongs to the slice whose
+/// centre is nearest along the axis.
 pub fn label_volume(volume: &Volume, p: &Partition) -> Result<Volume> {
     let mut slab_of = vec![0u16; p.slices];
     for (i, &(a, b)) in p.slabs.iter().enumerate() {
         slab_of[a..b].fill(i as u16);
     }
+    let (ty, data) = if p.slabs.len() <= 256 {
+        let labels = labels(volume, p, &slab_of, |l| l as u8);
+        (VoxelType::U8, Voxels::owned(labels))
+    } else {
+        (
+            VoxelType::U16,
+            Voxels::owned(labels(volume, p, &slab_of, |l| l)),
+        )
+    };
+    Ok(
+        Volume::from_voxels(volume.dims(), volume.spacing(), ty, data)?
+            .with_transform(*volume.transform()),
+    )
+}
+
+/// The label of every voxel of `volume`: `slab_of` its nearest slice, as `T`.
+fn labels<T: Copy + Default + Send>(
+    volume: &Volume,
+    p: &Partition,
+    slab_of: &[u16],
+    label: impl Fn(u16) -> T + Sync,
+) -> Vec<T> {
     let [nx, ny, _] = volume.dims();
     let s = volume.spacing();
     let last = p.slices as f64 - 1.0;
-    let mut labels = vec![0.0f32; volume.len()];
+    let mut labels = vec![T::default(); volume.len()];
     labels
         .par_chunks_mut(nx * ny)
         .enumerate()
@@ -282,14 +304,8 @@ pub fn label_volume(volume: &Volume, p: &Partition) -> Result<Volume> {
                 let k = ((dot(pos, p.axis) - p.offset) / p.thickness)
                     .round()
                     .clamp(0.0, last);
-                *l = f32::from(slab_of[k as usize]);
+                *l = label(slab_of[k as usize]);
             }
         });
-    let ty = if p.slabs.len() <= 256 {
-        VoxelType::U8
-    } else {
-        VoxelType::U16
-    };
-    Ok(Volume::new(volume.dims(), volume.spacing(), ty, labels)?
-        .with_transform(*volume.transform()))
+    labels
 }

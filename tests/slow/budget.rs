@@ -77,3 +77,45 @@ fn a_volume_beyond_the_budget_is_analysed_within_it() {
     let slabs = report["partition"]["slabs"].as_array().unwrap();
     assert_eq!(slabs.len(), 4, "{report}");
 }
+
+#[test]
+fn a_full_resolution_partition_beyond_the_budget_is_counted_in_strips_exactly() {
+    let _alone = crate::one_at_a_time();
+    if !Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read the anonymous memory from");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let header = layered(dir.path());
+    // Level 0 in memory needs 160 MiB; level 1 (96 MiB) fits beside the mapped file, and the
+    // partition of every voxel is counted strip by strip in the room left.
+    let budget = 128u64 << 20;
+    let (stdout, peak) = peak_of(&["analyze", s(&header), "--json", "--max-memory", "128M"]);
+    let streamed: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(streamed["resolution"]["pyramid_level"], 0, "{streamed}");
+    assert_eq!(
+        streamed["views_resolution"]["pyramid_level"], 1,
+        "{streamed}"
+    );
+    assert_eq!(streamed["partition"]["slices"], 512, "{streamed}");
+    assert!(
+        peak <= budget + (64 << 20),
+        "peak anonymous memory {} MiB over the budget of 128 MiB and 64 MiB",
+        peak >> 20
+    );
+    // The slabs are those of the whole stack in memory along the same axis.
+    let axis = streamed["best_axis"].as_array().unwrap();
+    let axis: Vec<String> = axis
+        .iter()
+        .map(|c| c.as_f64().unwrap().to_string())
+        .collect();
+    let (stdout, _) = peak_of(&["analyze", s(&header), "--json", "--axis", &axis.join(",")]);
+    let in_memory: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert!(in_memory.get("views_resolution").is_none(), "{in_memory}");
+    for key in ["slabs", "boundary_nmi", "nmi_curve", "gain_curve"] {
+        assert_eq!(
+            streamed["partition"][key], in_memory["partition"][key],
+            "{key}"
+        );
+    }
+}

@@ -45,7 +45,7 @@ pub(super) fn export(
     write_new(&png, &image.png()?)?;
     let analysis = Analysis {
         views: r.views.clone(),
-        notes: slabscope::analysis::notes(volume, &r.view_params, &part),
+        notes: slabscope::analysis::notes(volume, volume, &r.view_params, &part),
         partition: part,
     };
     let report = AnalysisReport::new(&r.name, full, &r.view_params, &analysis)?.computed_on(volume);
