@@ -16,6 +16,7 @@ mod dicom;
 mod formats;
 mod fuzz_headers;
 mod native;
+mod nifti2;
 mod orientation;
 mod partition;
 mod render;

@@ -34,6 +34,14 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
         ],
     ),
     (
+        "nifti2",
+        &[
+            ("nifti2/ramp_i16_oblique.nii", "m.nii"),
+            ("nifti2/ramp_f32_be.nii.gz", "m.nii.gz"),
+            ("nifti2/ramp_4d_um.nii", "m.nii"),
+        ],
+    ),
+    (
         "nrrd",
         &[
             ("ramp_u16_be.nrrd", "m.nrrd"),

@@ -364,7 +364,7 @@ fn sniff(head: &[u8]) -> Option<Format> {
     if head.starts_with(&[0x1f, 0x8b]) {
         return nifti::is_gzipped_nifti(head).then_some(Format::Nifti);
     }
-    if head.len() >= 348 && (&head[344..348] == b"n+1\0" || &head[344..348] == b"ni1\0") {
+    if nifti::looks_like(head) {
         return Some(Format::Nifti);
     }
     if head.starts_with(b"NRRD000") {

@@ -1,6 +1,9 @@
-//! NIfTI-1 (`.nii`, `.nii.gz`, `.hdr`/`.img`): the `nifti` crate parses the header (it detects the
-//! byte order); the voxels go through the shared checked reader, so gzip is recognised by its magic
-//! and multi-member gzip streams are accepted.
+//! NIfTI-1 and NIfTI-2 (`.nii`, `.nii.gz`, `.hdr`/`.img`): [`header`] reads either version's
+//! header (the `nifti` crate parses version 1 and detects its byte order; version 2 is parsed
+//! there); the voxels go through the shared checked reader, so gzip is recognised by its magic
+//! and multi-member gzip streams are accepted. Written files are NIfTI-1.
+
+mod header;
 
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -9,7 +12,8 @@ use std::path::{Path, PathBuf};
 use flate2::Compression;
 use flate2::bufread::MultiGzDecoder;
 use flate2::write::GzEncoder;
-use nifti::{Endianness, NiftiHeader};
+
+use header::Header;
 
 use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
 use super::{LoadOptions, Read0, Staged, data_file};
@@ -17,15 +21,21 @@ use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::geometry::world::Quaternion;
 use crate::volume::voxel::write_le;
-use crate::volume::{Endian, Volume, VoxelType};
+use crate::volume::{Volume, VoxelType};
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
-/// Whether gzip-compressed bytes start with a NIfTI-1 header.
+/// Whether bytes start with a NIfTI-1 or NIfTI-2 header.
+pub(crate) fn looks_like(head: &[u8]) -> bool {
+    matches!(head.get(344..348), Some(b"n+1\0" | b"ni1\0")) || header::looks_like_2(head)
+}
+
+/// Whether gzip-compressed bytes start with a NIfTI-1 or NIfTI-2 header.
 pub(crate) fn is_gzipped_nifti(head: &[u8]) -> bool {
-    let mut buf = [0u8; 348];
-    let mut dec = MultiGzDecoder::new(head);
-    dec.read_exact(&mut buf).is_ok() && (&buf[344..] == b"n+1\0" || &buf[344..] == b"ni1\0")
+    let mut buf = Vec::with_capacity(540);
+    // A truncated stream still shows its first bytes.
+    let _ = MultiGzDecoder::new(head).take(540).read_to_end(&mut buf);
+    looks_like(&buf)
 }
 
 fn open(path: &Path) -> Result<(Box<dyn Read>, bool)> {
@@ -41,24 +51,10 @@ fn open(path: &Path) -> Result<(Box<dyn Read>, bool)> {
     })
 }
 
-/// Reads and checks the header of a NIfTI-1 file.
-pub(crate) fn read_header(path: &Path) -> Result<(NiftiHeader, bool)> {
+/// Reads and checks the header of a NIfTI file of either version, and whether it is gzipped.
+fn read_header(path: &Path) -> Result<(Header, bool)> {
     let (reader, gz) = open(path)?;
-    let header = NiftiHeader::from_reader(reader)
-        .map_err(|e| Error::format(path, format!("not a valid NIfTI-1 header: {e}")))?;
-    if header.sizeof_hdr != 348 {
-        return Err(Error::format(
-            path,
-            format!("NIfTI-1 header size is {}, not 348", header.sizeof_hdr),
-        ));
-    }
-    if &header.magic != b"n+1\0" && &header.magic != b"ni1\0" {
-        return Err(Error::format(
-            path,
-            format!("NIfTI magic is {:?}, not \"n+1\" or \"ni1\"", header.magic),
-        ));
-    }
-    Ok((header, gz))
+    Ok((Header::read(path, reader)?, gz))
 }
 
 /// NIfTI `datatype` codes of the voxel types slabscope reads and writes.
@@ -108,27 +104,31 @@ fn unit_to_mm(xyzt_units: u8) -> f64 {
 pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (h, gz) = read_header(path)?;
     let mut notes = Vec::new();
+    check_intent(path, &h)?;
     let (ndim, dims, extra) = dimensions(path, &h)?;
     let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
     let ty = voxel_type(path, h.datatype)?;
     let unit = unit_to_mm(h.xyzt_units);
     let spacing = spacing(&h, ndim, unit, &mut notes);
-    let (slope, inter) = (f64::from(h.scl_slope), f64::from(h.scl_inter));
+    let (slope, inter) = (h.scl_slope, h.scl_inter);
     let scale =
         (slope != 0.0 && slope.is_finite() && inter.is_finite() && (slope, inter) != (1.0, 0.0))
             .then_some((slope, inter));
-    let offset = f64::from(h.vox_offset);
+    let offset = h.vox_offset;
     if !(0.0..1e15).contains(&offset) {
         return Err(Error::format(
             path,
             format!("vox_offset {offset} is not a byte offset"),
         ));
     }
-    let single = &h.magic == b"n+1\0";
-    if single && offset < 348.0 {
+    let single = h.single;
+    if single && offset < h.size() as f64 {
         return Err(Error::format(
             path,
-            format!("vox_offset {offset} lies inside the 348-byte header"),
+            format!(
+                "vox_offset {offset} lies inside the {}-byte header",
+                h.size()
+            ),
         ));
     }
     let (file, gz) = if single {
@@ -146,10 +146,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         encoding: if gz { Encoding::Gzip } else { Encoding::Raw },
         dims,
         voxel_type: ty,
-        endian: match h.endianness {
-            Endianness::Little => Endian::Little,
-            Endianness::Big => Endian::Big,
-        },
+        endian: h.endian,
         scale,
         volumes,
     };
@@ -159,13 +156,27 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         .with_source(&spec.file))
 }
 
+/// A CIFTI-2 file is a NIfTI-2 file whose intent code is 3000-3099: a matrix over brain
+/// ordinates (surface vertices and voxels) and time or parcels, not a volume.
+fn check_intent(path: &Path, h: &Header) -> Result<()> {
+    if (3000..3100).contains(&h.intent_code) {
+        return Err(Error::unsupported(
+            path,
+            format!(
+                "a CIFTI-2 file (NIfTI intent code {}): a matrix over brain ordinates, not a \
+                 volume of voxels",
+                h.intent_code
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The dimensions the header states: how many are used, the three spatial ones, and the
-/// product of the others (the volumes of a 4D or higher image). Fails on a count outside 1 to 7
-/// or a used dimension below 1.
-fn dimensions(path: &Path, h: &NiftiHeader) -> Result<(usize, [usize; 3], usize)> {
-    // The header's dims are signed 16-bit numbers (the crate reads them unsigned).
-    let signed = |i: usize| h.dim[i] as i16;
-    let ndim = signed(0);
+/// product of the others (the volumes of a 4D or higher image). Fails on a count outside 1 to 7,
+/// a used dimension below 1, or dimensions whose product no address can reach.
+fn dimensions(path: &Path, h: &Header) -> Result<(usize, [usize; 3], usize)> {
+    let ndim = h.dim[0];
     if !(1..=7).contains(&ndim) {
         return Err(Error::format(
             path,
@@ -173,26 +184,36 @@ fn dimensions(path: &Path, h: &NiftiHeader) -> Result<(usize, [usize; 3], usize)
         ));
     }
     let ndim = ndim as usize;
-    if let Some(i) = (1..=ndim).find(|&i| signed(i) < 1) {
+    if let Some(i) = (1..=ndim).find(|&i| h.dim[i] < 1) {
         return Err(Error::format(
             path,
             format!(
                 "dim[{i}] is {}: every used dimension must be at least 1",
-                signed(i)
+                h.dim[i]
             ),
         ));
     }
-    let dim = |i: usize| if i <= ndim { usize::from(h.dim[i]) } else { 1 };
+    let used = &h.dim[1..=ndim];
+    let count = used.iter().try_fold(1usize, |n, &d| {
+        usize::try_from(d).ok().and_then(|d| n.checked_mul(d))
+    });
+    if count.is_none() {
+        return Err(Error::format(
+            path,
+            format!("dimensions {used:?} hold more voxels than any file can"),
+        ));
+    }
+    let dim = |i: usize| if i <= ndim { h.dim[i] as usize } else { 1 };
     let extra: usize = (4..=ndim).map(dim).product();
     Ok((ndim, [dim(1), dim(2), dim(3)], extra))
 }
 
 /// The voxel spacing in mm (`unit` mm a header unit): `pixdim`, with 1 mm (and a note) for a
 /// used dimension whose spacing is not a positive number.
-fn spacing(h: &NiftiHeader, ndim: usize, unit: f64, notes: &mut Vec<String>) -> [f64; 3] {
+fn spacing(h: &Header, ndim: usize, unit: f64, notes: &mut Vec<String>) -> [f64; 3] {
     let mut spacing = [1.0; 3];
     for (i, s) in spacing.iter_mut().enumerate() {
-        let p = f64::from(h.pixdim[i + 1]).abs() * unit;
+        let p = h.pixdim[i + 1].abs() * unit;
         if p.is_finite() && p > 0.0 {
             *s = p;
         } else if i < ndim {
@@ -208,21 +229,16 @@ fn spacing(h: &NiftiHeader, ndim: usize, unit: f64, notes: &mut Vec<String>) -> 
 
 /// The voxel-to-world transform the header states, in mm: the sform when its code is set, else
 /// the qform (quaternion, offsets and `pixdim`, with `pixdim[0]` the handedness), else none.
-fn transform(h: &NiftiHeader, unit: f64) -> Option<WorldTransform> {
+fn transform(h: &Header, unit: f64) -> Option<WorldTransform> {
     if h.sform_code > 0 {
-        let rows = [h.srow_x, h.srow_y, h.srow_z];
-        let linear = rows.map(|r| [r[0], r[1], r[2]].map(|v| f64::from(v) * unit));
-        let origin = rows.map(|r| f64::from(r[3]) * unit);
+        let linear = h.srow.map(|r| [r[0], r[1], r[2]].map(|v| v * unit));
+        let origin = h.srow.map(|r| r[3] * unit);
         return Some(WorldTransform::ras(linear, origin));
     }
     if h.qform_code <= 0 {
         return None;
     }
-    let (b, c, d) = (
-        f64::from(h.quatern_b),
-        f64::from(h.quatern_c),
-        f64::from(h.quatern_d),
-    );
+    let [b, c, d] = h.quatern;
     // As nifti1_io: a rotation of 180° has a = 0, which the rounding of b, c and d to f32 can
     // leave a little above or below.
     let (a, b, c, d) = match 1.0 - (b * b + c * c + d * d) {
@@ -250,13 +266,9 @@ fn transform(h: &NiftiHeader, unit: f64) -> Option<WorldTransform> {
         ],
     ];
     let qfac = if h.pixdim[0] < 0.0 { -1.0 } else { 1.0 };
-    let zoom = [
-        f64::from(h.pixdim[1]),
-        f64::from(h.pixdim[2]),
-        qfac * f64::from(h.pixdim[3]),
-    ];
+    let zoom = [h.pixdim[1], h.pixdim[2], qfac * h.pixdim[3]];
     let linear = r.map(|row| std::array::from_fn(|k| row[k] * zoom[k] * unit));
-    let origin = [h.quatern_x, h.quatern_y, h.quatern_z].map(|v| f64::from(v) * unit);
+    let origin = h.qoffset.map(|v| v * unit);
     Some(WorldTransform::ras(linear, origin))
 }
 
@@ -266,7 +278,12 @@ fn image_file(path: &Path, gz: bool) -> Result<PathBuf> {
     let stem = name
         .strip_suffix(".hdr.gz")
         .or_else(|| name.strip_suffix(".hdr"))
-        .ok_or_else(|| Error::format(path, "a two-file NIfTI header (ni1) should be named .hdr"))?;
+        .ok_or_else(|| {
+            Error::format(
+                path,
+                "a two-file NIfTI header (ni1, ni2) should be named .hdr",
+            )
+        })?;
     data_file(
         path,
         &format!("{stem}{}", if gz { ".img.gz" } else { ".img" }),
