@@ -4,24 +4,24 @@
 //! and multi-member gzip streams are accepted. Written files are NIfTI-1.
 
 mod header;
+mod write;
+
+pub(crate) use write::stage;
+pub use write::write_nifti;
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use flate2::Compression;
 use flate2::bufread::MultiGzDecoder;
-use flate2::write::GzEncoder;
 
 use header::Header;
 
 use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
-use super::{LoadOptions, Read0, Staged, data_file};
+use super::{LoadOptions, Read0, data_file};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
-use crate::geometry::world::Quaternion;
-use crate::volume::voxel::write_le;
-use crate::volume::{Volume, VoxelType};
+use crate::volume::VoxelType;
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
@@ -288,111 +288,4 @@ fn image_file(path: &Path, gz: bool) -> Result<PathBuf> {
         path,
         &format!("{stem}{}", if gz { ".img.gz" } else { ".img" }),
     )
-}
-
-/// Writes `volume` as a single-file NIfTI-1 (`.nii`, or gzip-compressed when `gzip`) in its voxel
-/// type (integer types rounded and clamped), with its voxel-to-world transform as both the sform
-/// and the qform (code 1, scanner), so that every reader places it alike; a sheared transform has
-/// no quaternion and is written as the sform alone. A volume of unknown orientation gets both
-/// codes 0 and its spacing in `pixdim`.
-///
-/// The file is written to a temporary file beside `path` and renamed into place; an existing
-/// `path` is replaced only when `force` is set.
-pub fn write_nifti(path: &Path, volume: &Volume, gzip: bool, force: bool) -> Result<()> {
-    super::check_output(path, force)?;
-    stage(path, volume, gzip)?.persist(force)
-}
-
-/// `volume` as NIfTI-1 in a temporary file beside `path`, to be put in place.
-pub(crate) fn stage(path: &Path, volume: &Volume, gzip: bool) -> Result<Staged> {
-    let header = header_bytes(volume);
-    super::stage(path, |file| {
-        let mut out = BufWriter::new(file);
-        if gzip {
-            let mut gz = GzEncoder::new(&mut out, Compression::fast());
-            write_body(&mut gz, &header, volume)?;
-            gz.finish()?;
-        } else {
-            write_body(&mut out, &header, volume)?;
-        }
-        out.flush()
-    })
-}
-
-fn write_body(out: &mut impl Write, header: &[u8; 352], volume: &Volume) -> std::io::Result<()> {
-    out.write_all(header)?;
-    write_le(volume.data(), volume.voxel_type(), out)
-}
-
-/// The quaternion's `(b, c, d)` as f32. Near a rotation of 180° (`a` close to 0, as for LPS or
-/// LSA axes) they are rounded so that `b² + c² + d²` is not below 1, so that readers (`nifti1_io`,
-/// nibabel, ITK) take `a` as 0 rather than the square root of a rounding error, which would
-/// turn the axes by up to a milliradian.
-fn stored_quaternion(q: Quaternion) -> [f32; 3] {
-    let sum = |v: &[f32; 3]| v.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>();
-    let mut v = [q.b, q.c, q.d].map(|x| x as f32);
-    if 1.0 - (q.b * q.b + q.c * q.c + q.d * q.d) >= 1e-6 {
-        return v;
-    }
-    let largest = (0..3)
-        .max_by(|&i, &j| v[i].abs().total_cmp(&v[j].abs()))
-        .unwrap_or(0);
-    for _ in 0..8 {
-        if sum(&v) >= 1.0 {
-            break;
-        }
-        // One unit in the last place away from zero.
-        let x = v[largest];
-        v[largest] = f32::from_bits(x.to_bits() + 1);
-    }
-    v
-}
-
-/// The 348-byte little-endian NIfTI-1 header of `volume` and the 4 zero bytes that say no
-/// extension follows.
-fn header_bytes(volume: &Volume) -> [u8; 352] {
-    let mut h = [0u8; 352];
-    let mut put = |at: usize, bytes: &[u8]| h[at..at + bytes.len()].copy_from_slice(bytes);
-    let ty = volume.voxel_type();
-    let code = DATATYPES.iter().find(|d| d.1 == ty).map_or(16, |d| d.0);
-    let [nx, ny, nz] = volume.dims().map(|n| n as i16);
-    let t = volume.transform();
-    let known = t.known;
-    let zooms = if known { t.zooms() } else { volume.spacing() };
-    let quaternion = if known { t.quaternion() } else { None };
-    put(0, &348i32.to_le_bytes());
-    put(38, b"r");
-    for (k, d) in [3, nx, ny, nz, 1, 1, 1, 1].iter().enumerate() {
-        put(40 + 2 * k, &d.to_le_bytes());
-    }
-    put(70, &code.to_le_bytes());
-    put(72, &(8 * ty.size() as i16).to_le_bytes());
-    let qfac = quaternion.map_or(1.0, |q| q.qfac);
-    let pixdim = [qfac, zooms[0], zooms[1], zooms[2], 1.0, 1.0, 1.0, 1.0];
-    for (k, p) in pixdim.iter().enumerate() {
-        put(76 + 4 * k, &(*p as f32).to_le_bytes());
-    }
-    put(108, &352f32.to_le_bytes()); // vox_offset
-    put(112, &1f32.to_le_bytes()); // scl_slope
-    put(123, &[2]); // xyzt_units: mm
-    let description = format!("slabscope {}", env!("CARGO_PKG_VERSION"));
-    put(148, &description.as_bytes()[..description.len().min(79)]);
-    if known {
-        let qform_code = i16::from(quaternion.is_some());
-        put(252, &qform_code.to_le_bytes());
-        put(254, &1i16.to_le_bytes()); // sform_code: scanner
-        if let Some(q) = quaternion {
-            for (k, v) in stored_quaternion(q).iter().enumerate() {
-                put(256 + 4 * k, &v.to_le_bytes());
-            }
-        }
-        for r in 0..3 {
-            put(268 + 4 * r, &(t.matrix[r][3] as f32).to_le_bytes());
-            for c in 0..4 {
-                put(280 + 16 * r + 4 * c, &(t.matrix[r][c] as f32).to_le_bytes());
-            }
-        }
-    }
-    put(344, b"n+1\0");
-    h
 }
