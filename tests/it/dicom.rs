@@ -266,11 +266,62 @@ fn files_as_writers_really_make_them_are_read() {
 
 #[test]
 fn an_unsupported_transfer_syntax_is_named() {
-    let e = load_with("jpeg2000.dcm", |_| {}).unwrap_err().to_string();
+    let e = load_with("jpegls.dcm", |_| {}).unwrap_err().to_string();
     assert!(
-        e.contains("jpeg2000.dcm")
-            && e.contains("JPEG 2000")
-            && e.contains("1.2.840.10008.1.2.4.90"),
+        e.contains("jpegls.dcm") && e.contains("JPEG-LS") && e.contains("1.2.840.10008.1.2.4.80"),
+        "{e}"
+    );
+}
+
+#[test]
+fn jpeg_2000_lossless_is_exact_and_lossy_is_openjpeg_s_decoding() {
+    let l = load("j2k-lossless");
+    assert_eq!(l.volume.dims(), [64, 64, 3]);
+    check_voxels(&l.volume, |i, j, k| stored(i, j, k) - 1024.0);
+    // OpenJPEG's decoding of the lossy series, stored values slice after slice.
+    let raw = std::fs::read(dicom_data("j2k-lossy/expected.raw")).unwrap();
+    let expected: Vec<f32> = raw
+        .chunks_exact(2)
+        .map(|b| f32::from(i16::from_le_bytes([b[0], b[1]])) - 1024.0)
+        .collect();
+    let l = load("j2k-lossy");
+    assert_eq!(l.volume.dims(), [64, 64, 3]);
+    let mut worst_loss = 0f32;
+    for k in 0..3 {
+        for j in 0..64 {
+            for i in 0..64 {
+                let got = l.volume.value([i, j, k]);
+                let want = expected[(k * 64 + j) * 64 + i];
+                assert!(
+                    (got - want).abs() <= 1.0,
+                    "({i}, {j}, {k}): {got}, OpenJPEG {want}"
+                );
+                worst_loss = worst_loss.max((got - (stored(i, j, k) - 1024.0)).abs());
+            }
+        }
+    }
+    assert!(worst_loss > 10.0, "the lossy series is lossy: {worst_loss}");
+}
+
+#[test]
+fn a_jpeg_2000_frame_larger_than_its_image_is_refused() {
+    // The first slice, its SIZ marker segment claiming 65536x65536 pixels.
+    let mut bytes = std::fs::read(dicom_data("j2k-lossless/s0.dcm")).unwrap();
+    let soc = bytes
+        .windows(4)
+        .position(|w| w == [0xFF, 0x4F, 0xFF, 0x51])
+        .unwrap();
+    for at in [soc + 8, soc + 12] {
+        bytes[at..at + 4].copy_from_slice(&65_536u32.to_be_bytes());
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("big.dcm");
+    std::fs::write(&file, bytes).unwrap();
+    let e = slabscope::load(&file, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("big.dcm") && e.contains("65536x65536") && e.contains("image of 64x64"),
         "{e}"
     );
 }
@@ -359,7 +410,7 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
             "broken.nii -",
             "ct Abdomen 2.5",
             "ct Sagittal MPR",
-            "ct/jpeg2000.dcm -",
+            "ct/jpegls.dcm -",
             "gap Gap",
             "gap/cut.dcm -",
             "ramp.nii -",
@@ -368,7 +419,7 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
     );
     let error = |i: usize| all[i]["error"].as_str().unwrap_or("").to_string();
     assert!(error(1).contains("does not start like one"), "{}", error(1));
-    assert!(error(4).contains("JPEG 2000"), "{}", error(4));
+    assert!(error(4).contains("JPEG-LS"), "{}", error(4));
     let cut = error(6);
     assert!(cut.contains("claims 56 bytes where 26 are left"), "{cut}");
     assert_eq!(
@@ -390,7 +441,7 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
     assert_eq!(sharded_rows(root), all);
 }
 
-/// A folder of two DICOM series (one with a JPEG 2000 file, one with a file cut short), an
+/// A folder of two DICOM series (one with a JPEG-LS file, one with a file cut short), an
 /// enhanced multi-frame file, and another format beside them, valid and broken.
 fn mixed_folder() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
@@ -402,7 +453,7 @@ fn mixed_folder() -> tempfile::TempDir {
             std::fs::copy(&f, root.join(sub).join(f.file_name().unwrap())).unwrap();
         }
     }
-    std::fs::copy(dicom_data("jpeg2000.dcm"), root.join("ct/jpeg2000.dcm")).unwrap();
+    std::fs::copy(dicom_data("jpegls.dcm"), root.join("ct/jpegls.dcm")).unwrap();
     let slice = std::fs::read(dicom_data("gap/slice00.dcm")).unwrap();
     std::fs::write(root.join("gap/cut.dcm"), &slice[..slice.len() / 3]).unwrap();
     std::fs::copy(dicom_data("enhanced.dcm"), root.join("enhanced.dcm")).unwrap();

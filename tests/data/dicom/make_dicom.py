@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Writes the DICOM fixtures of tests/dicom.rs (pydicom 3; dcmtk's dcmcjpeg for JPEG lossless).
+"""Writes the DICOM fixtures of tests/dicom.rs (pydicom 3; dcmtk's dcmcjpeg for JPEG lossless;
+OpenJPEG through pylibjpeg-openjpeg for JPEG 2000).
 
 Every image holds the same known values, so that the tests can check the assembled volumes
 voxel by voxel without reading anything but the DICOM files:
@@ -9,7 +10,8 @@ voxel by voxel without reading anything but the DICOM files:
 Every file carries made-up patient details (PATIENT_* below) that must never appear in any
 output unless --show-phi is given.
 
-Run from the repository root:  python3 tests/data/dicom/make_dicom.py
+Run from the repository root:  python3 tests/data/dicom/make_dicom.py [FUNCTION...]
+(pip install pydicom pylibjpeg pylibjpeg-openjpeg numpy; dcmtk for JPEG lossless)
 """
 
 import hashlib
@@ -27,7 +29,9 @@ from pydicom.uid import (
     DeflatedExplicitVRLittleEndian,
     ExplicitVRLittleEndian,
     ImplicitVRLittleEndian,
+    JPEG2000,
     JPEG2000Lossless,
+    JPEGLSLossless,
     generate_uid,
 )
 
@@ -246,12 +250,42 @@ def no_preamble_file():
 
 
 def unsupported_file():
-    """A file whose transfer syntax is JPEG 2000 (the fragment is not real JPEG 2000)."""
-    ds = slice_at("j2k", 13, "J2K", 0, (0.0, 0.0, 0.0))
+    """A file whose transfer syntax is JPEG-LS (the fragment is not real JPEG-LS)."""
+    ds = slice_at("jls", 13, "JPEG-LS", 0, (0.0, 0.0, 0.0))
     from pydicom.encaps import encapsulate
-    ds.PixelData = encapsulate([b"\xff\x4f\xff\x51" + bytes(60)])
+    ds.PixelData = encapsulate([b"\xff\xd8\xff\xf7" + bytes(60)])
     ds["PixelData"].VR = "OB"
-    save(ds, os.path.join(OUT, "jpeg2000.dcm"), syntax=JPEG2000Lossless)
+    save(ds, os.path.join(OUT, "jpegls.dcm"), syntax=JPEGLSLossless)
+
+
+def j2k_folders():
+    """Series 15 and 16: three slices of 64x64 pixels each compressed to JPEG 2000 by OpenJPEG
+    (through pydicom's pylibjpeg plugin), lossless and lossy (a compression ratio of 50, errors
+    of up to about 70). `j2k-lossy/expected.raw` is the lossy series as OpenJPEG decodes it
+    (little-endian i16 stored values, slice after slice), for a test that allows a difference
+    of 1 between decoders."""
+    from pydicom.pixels import pixel_array
+
+    for name, number, syntax, kwargs in [
+        ("j2k-lossless", 15, JPEG2000Lossless, {}),
+        ("j2k-lossy", 16, JPEG2000, {"compression_ratios": [50]}),
+    ]:
+        d = fresh(name)
+        decoded = []
+        for k in range(3):
+            ds = slice_at(name, number, name, k, (0.0, 0.0, 2.0 * k))
+            image(ds, stored(k, 64, 64))  # OpenJPEG's encoder needs more than 24x20 pixels
+            ds.file_meta = FileMetaDataset()
+            ds.file_meta.TransferSyntaxUID = ExplicitVRLittleEndian
+            ds.compress(syntax, encoding_plugin="pylibjpeg", **kwargs)
+            path = os.path.join(d, f"s{k}.dcm")
+            save(ds, path, syntax=syntax)
+            decoded.append(pixel_array(path, decoding_plugin="pylibjpeg").astype("<i2"))
+        if syntax == JPEG2000:
+            with open(os.path.join(d, "expected.raw"), "wb") as f:
+                f.write(np.stack(decoded).tobytes())
+        else:
+            assert all((a == stored(k, 64, 64)).all() for k, a in enumerate(decoded)), name
 
 
 def rgb_folder():
@@ -334,18 +368,12 @@ def jpeg_lossless_folder():
 
 
 if __name__ == "__main__":
-    ct_folder()
-    gap_folder()
-    tilt_folder()
-    mono1_folder()
-    rescale_folder()
-    fourd_folder()
-    enhanced_file()
-    deflated_file()
-    no_preamble_file()
-    unsupported_file()
-    rgb_folder()
-    derived_folder()
-    odd_files()
-    jpeg_lossless_folder()
+    # Every fixture, or only those named: python3 make_dicom.py j2k_folders
+    ALL = [ct_folder, gap_folder, tilt_folder, mono1_folder, rescale_folder, fourd_folder,
+           enhanced_file, deflated_file, no_preamble_file, unsupported_file, rgb_folder,
+           derived_folder, odd_files, jpeg_lossless_folder, j2k_folders]
+    names = sys.argv[1:]
+    for make in ALL:
+        if not names or make.__name__ in names:
+            make()
     print("fixtures written to", OUT)

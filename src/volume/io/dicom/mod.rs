@@ -6,6 +6,7 @@
 //! reading of a series' frames into a volume's voxels `voxels`.
 
 mod assemble;
+mod codestream;
 mod header;
 mod pixels;
 mod read;

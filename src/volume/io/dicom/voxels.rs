@@ -14,7 +14,7 @@ use dicom_pixeldata::PixelDecoder;
 use rayon::prelude::*;
 
 use super::assemble::{Layout, Series};
-use super::header::{Image, PixelFormat};
+use super::header::Image;
 use super::pixels::{self, Decode};
 use super::read::{self, Pixels, Syntax};
 use super::scan::{Scan, Scanned};
@@ -172,7 +172,7 @@ fn decode_fragments(
     frames: Vec<(&Image, &mut [f32])>,
 ) -> Result<()> {
     let format = &frames[0].0.format;
-    check_jpeg(path, syntax, format, &fragments)?;
+    super::codestream::check(path, syntax, format, &fragments)?;
     let mut obj = parse(path, dataset, syntax)?;
     obj.put(DataElement::new(
         tags::PIXEL_DATA,
@@ -209,68 +209,4 @@ fn decode_fragments(
         Decode::new(&f, false, im.rescale).frame(src, plane);
     }
     Ok(())
-}
-
-/// Checks the frame size and precision each JPEG fragment states before a decoder sizes its
-/// buffers by them: larger than the image, or 12-bit extended JPEG, is an error.
-fn check_jpeg(
-    path: &Path,
-    syntax: &Syntax,
-    format: &PixelFormat,
-    fragments: &[Vec<u8>],
-) -> Result<()> {
-    if !syntax.uid.starts_with("1.2.840.10008.1.2.4.") {
-        return Ok(());
-    }
-    for fragment in fragments {
-        let Some((precision, height, width)) = jpeg_frame(fragment) else {
-            continue;
-        };
-        if syntax.uid == "1.2.840.10008.1.2.4.51" && precision > 8 {
-            return Err(Error::unsupported(
-                path,
-                format!(
-                    "transfer syntax {}: {precision}-bit extended JPEG, which the pure-Rust JPEG \
-                     decoder does not read",
-                    read::syntax_name(&syntax.uid)
-                ),
-            ));
-        }
-        if height > format.rows || width > format.cols || precision > 16 {
-            return Err(Error::format(
-                path,
-                format!(
-                    "a JPEG fragment of {width}x{height} pixels at {precision} bits in an image \
-                     of {}x{}",
-                    format.cols, format.rows
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// The precision, height and width a JPEG stream's start-of-frame marker states.
-fn jpeg_frame(data: &[u8]) -> Option<(u8, u16, u16)> {
-    let mut i = 2;
-    if !data.starts_with(&[0xFF, 0xD8]) {
-        return None;
-    }
-    while i + 4 <= data.len() {
-        if data[i] != 0xFF {
-            return None;
-        }
-        let marker = data[i + 1];
-        let len = usize::from(u16::from_be_bytes([data[i + 2], data[i + 3]]));
-        if (0xC0..=0xCF).contains(&marker) && !matches!(marker, 0xC4 | 0xC8 | 0xCC) {
-            let f = data.get(i + 4..i + 9)?;
-            return Some((
-                f[0],
-                u16::from_be_bytes([f[1], f[2]]),
-                u16::from_be_bytes([f[3], f[4]]),
-            ));
-        }
-        i += 2 + len;
-    }
-    None
 }
