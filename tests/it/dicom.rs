@@ -278,34 +278,68 @@ fn jpeg_2000_lossless_is_exact_and_lossy_is_openjpeg_s_decoding() {
     let l = load("j2k-lossless");
     assert_eq!(l.volume.dims(), [64, 64, 3]);
     check_voxels(&l.volume, |i, j, k| stored(i, j, k) - 1024.0);
-    // OpenJPEG's decoding of the lossy series, stored values slice after slice.
-    let raw = std::fs::read(dicom_data("j2k-lossy/expected.raw")).unwrap();
+    let loss = within_one_of(&load("j2k-lossy").volume, "j2k-lossy/expected.raw", true);
+    assert!(loss > 10.0, "the lossy series is lossy: {loss}");
+}
+
+/// Checks `volume` against a decoder's own decoding of the same series, `raw` (little-endian
+/// stored values, i16 when `signed`, else u16, slice after slice), within 1; returns the largest
+/// difference from the values before compression.
+fn within_one_of(volume: &Volume, raw: &str, signed: bool) -> f32 {
+    let raw = std::fs::read(dicom_data(raw)).unwrap();
     let expected: Vec<f32> = raw
         .chunks_exact(2)
-        .map(|b| f32::from(i16::from_le_bytes([b[0], b[1]])) - 1024.0)
+        .map(|b| {
+            let v = if signed {
+                f32::from(i16::from_le_bytes([b[0], b[1]]))
+            } else {
+                f32::from(u16::from_le_bytes([b[0], b[1]]))
+            };
+            v - 1024.0
+        })
         .collect();
-    let l = load("j2k-lossy");
-    assert_eq!(l.volume.dims(), [64, 64, 3]);
+    assert_eq!(volume.dims(), [64, 64, 3]);
     let mut worst_loss = 0f32;
     for k in 0..3 {
         for j in 0..64 {
             for i in 0..64 {
-                let got = l.volume.value([i, j, k]);
+                let got = volume.value([i, j, k]);
                 let want = expected[(k * 64 + j) * 64 + i];
                 assert!(
                     (got - want).abs() <= 1.0,
-                    "({i}, {j}, {k}): {got}, OpenJPEG {want}"
+                    "({i}, {j}, {k}): {got}, the reference {want}"
                 );
                 worst_loss = worst_loss.max((got - (stored(i, j, k) - 1024.0)).abs());
             }
         }
     }
-    assert!(worst_loss > 10.0, "the lossy series is lossy: {worst_loss}");
+    worst_loss
 }
 
 #[test]
-fn a_jpeg_2000_frame_larger_than_its_image_is_refused() {
-    // The first slice, its SIZ marker segment claiming 65536x65536 pixels.
+fn jpeg_xl_lossless_is_exact_and_lossy_is_libjxl_s_decoding() {
+    let l = load("jxl-lossless");
+    assert_eq!(l.volume.dims(), [64, 64, 3]);
+    check_voxels(&l.volume, |i, j, k| stored(i, j, k) - 1024.0);
+    let loss = within_one_of(&load("jxl-lossy").volume, "jxl-lossy/expected.raw", false);
+    assert!(loss > 10.0, "the lossy series is lossy: {loss}");
+}
+
+/// The error loading `bytes` as `name`.
+fn load_error(name: &str, bytes: &[u8]) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join(name);
+    std::fs::write(&file, bytes).unwrap();
+    let e = slabscope::load(&file, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(name), "{e}");
+    e
+}
+
+#[test]
+fn a_compressed_frame_larger_than_its_image_is_refused() {
+    // The first JPEG 2000 slice, its SIZ marker segment claiming 65536x65536 pixels.
     let mut bytes = std::fs::read(dicom_data("j2k-lossless/s0.dcm")).unwrap();
     let soc = bytes
         .windows(4)
@@ -314,14 +348,25 @@ fn a_jpeg_2000_frame_larger_than_its_image_is_refused() {
     for at in [soc + 8, soc + 12] {
         bytes[at..at + 4].copy_from_slice(&65_536u32.to_be_bytes());
     }
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("big.dcm");
-    std::fs::write(&file, bytes).unwrap();
-    let e = slabscope::load(&file, &LoadOptions::default())
-        .unwrap_err()
-        .to_string();
+    let e = load_error("big.dcm", &bytes);
     assert!(
-        e.contains("big.dcm") && e.contains("65536x65536") && e.contains("image of 64x64"),
+        e.contains("65536x65536") && e.contains("image of 64x64"),
+        "{e}"
+    );
+    // The first JPEG XL slice, its SizeHeader claiming 64x32768 pixels: not small, a height of
+    // 32767 + 1 in 18 bits (selector 2), ratio 0, a width of 63 + 1 in 9 bits (selector 0).
+    let mut bytes = std::fs::read(dicom_data("jxl-lossless/s0.dcm")).unwrap();
+    let start = bytes.windows(2).position(|w| w == [0xFF, 0x0A]).unwrap() + 2;
+    let mut v: u64 = 0;
+    let mut at = 0;
+    for (value, width) in [(0, 1), (2, 2), (32_767, 18), (0, 3), (0, 2), (63, 9)] {
+        v |= value << at;
+        at += width;
+    }
+    bytes[start..start + 5].copy_from_slice(&v.to_le_bytes()[..5]);
+    let e = load_error("tall.dcm", &bytes);
+    assert!(
+        e.contains("64x32768") && e.contains("image of 64x64"),
         "{e}"
     );
 }

@@ -74,6 +74,7 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
             ("dicom/gap/slice00.dcm", "m.dcm"),
             ("dicom/deflated.dcm", "m.dcm"),
             ("dicom/j2k-lossy/s0.dcm", "m.dcm"),
+            ("dicom/jxl-lossy/s0.dcm", "m.dcm"),
         ],
     ),
     ("raw", &[("ramp_u8.raw", "m_5x4x3_uint8.raw")]),

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the DICOM fixtures of tests/dicom.rs (pydicom 3; dcmtk's dcmcjpeg for JPEG lossless;
-OpenJPEG through pylibjpeg-openjpeg for JPEG 2000).
+OpenJPEG through pylibjpeg-openjpeg for JPEG 2000, libjxl through imagecodecs for JPEG XL).
 
 Every image holds the same known values, so that the tests can check the assembled volumes
 voxel by voxel without reading anything but the DICOM files:
@@ -11,7 +11,7 @@ Every file carries made-up patient details (PATIENT_* below) that must never app
 output unless --show-phi is given.
 
 Run from the repository root:  python3 tests/data/dicom/make_dicom.py [FUNCTION...]
-(pip install pydicom pylibjpeg pylibjpeg-openjpeg numpy; dcmtk for JPEG lossless)
+(pip install pydicom pylibjpeg pylibjpeg-openjpeg imagecodecs numpy; dcmtk for JPEG lossless)
 """
 
 import hashlib
@@ -288,6 +288,39 @@ def j2k_folders():
             assert all((a == stored(k, 64, 64)).all() for k, a in enumerate(decoded)), name
 
 
+def jxl_folders():
+    """Series 17 and 18: three unsigned slices of 64x64 pixels each compressed to a bare JPEG XL
+    codestream by libjxl (through imagecodecs), lossless and lossy (distance 4).
+    `jxl-lossy/expected.raw` is the lossy series as libjxl decodes it (little-endian u16 stored
+    values, slice after slice)."""
+    import imagecodecs
+    from pydicom.encaps import encapsulate
+
+    for name, number, syntax, kwargs in [
+        ("jxl-lossless", 17, "1.2.840.10008.1.2.4.110", {"lossless": True}),
+        ("jxl-lossy", 18, "1.2.840.10008.1.2.4.112", {"distance": 4.0}),
+    ]:
+        d = fresh(name)
+        os.makedirs(d)
+        decoded = []
+        for k in range(3):
+            ds = slice_at(name, number, name, k, (0.0, 0.0, 2.0 * k))
+            pixels = stored(k, 64, 64).astype("<u2")
+            image(ds, pixels, signed=False)
+            code = imagecodecs.jpegxl_encode(pixels, usecontainer=False, **kwargs)
+            ds.PixelData = encapsulate([code])
+            ds["PixelData"].VR = "OB"
+            ds["PixelData"].is_undefined_length = True
+            # pydicom 3.0 does not know JPEG XL's UIDs, so the file is written piece by piece.
+            hand_written(ds, os.path.join(d, f"s{k}.dcm"), syntax, implicit=False)
+            decoded.append(imagecodecs.jpegxl_decode(code).astype("<u2"))
+        if "distance" in kwargs:
+            with open(os.path.join(d, "expected.raw"), "wb") as f:
+                f.write(np.stack(decoded).tobytes())
+        else:
+            assert all((a == stored(k, 64, 64)).all() for k, a in enumerate(decoded)), name
+
+
 def rgb_folder():
     """Two RGB slices (8 bits, interleaved): R = stored % 256, G = (2 stored) % 256, B = 255 - R."""
     d = fresh("rgb")
@@ -371,7 +404,7 @@ if __name__ == "__main__":
     # Every fixture, or only those named: python3 make_dicom.py j2k_folders
     ALL = [ct_folder, gap_folder, tilt_folder, mono1_folder, rescale_folder, fourd_folder,
            enhanced_file, deflated_file, no_preamble_file, unsupported_file, rgb_folder,
-           derived_folder, odd_files, jpeg_lossless_folder, j2k_folders]
+           derived_folder, odd_files, jpeg_lossless_folder, j2k_folders, jxl_folders]
     names = sys.argv[1:]
     for make in ALL:
         if not names or make.__name__ in names:

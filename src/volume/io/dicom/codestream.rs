@@ -1,4 +1,5 @@
-//! What a compressed frame's own header states (its size, precision and components), read
+//! What a compressed frame's own header states (its size, and for JPEG and JPEG 2000 its
+//! precision and components), read
 //! before a decoder sizes its buffers by it: a fragment claiming more than the image it belongs
 //! to is an error, not an allocation.
 
@@ -14,17 +15,19 @@ use crate::error::{Error, Result};
 struct Frame {
     width: u32,
     height: u32,
-    /// Bits a sample.
+    /// Bits a sample (0: not read, as for JPEG XL, whose decoder checks it against its own
+    /// limits).
     precision: u8,
+    /// Components (0: not read).
     components: u16,
-    /// JPEG 2000 tiles (1 for JPEG).
+    /// JPEG 2000 tiles (1 for JPEG and JPEG XL).
     tiles: u64,
 }
 
 /// JPEG 2000's limit on tiles: tile indices are 16-bit, 65535 excluded.
 const MAX_TILES: u64 = 65_535;
 
-/// Checks the frame each JPEG or JPEG 2000 fragment starts states against the image `format`
+/// Checks the frame each JPEG, JPEG 2000 or JPEG XL fragment starts states against the image `format`
 /// describes: not larger, at most 16 bits and the image's samples, and for JPEG 2000 a tile
 /// count within the standard's. 12-bit extended JPEG, which the decoder does not read, is named
 /// as unsupported.
@@ -38,7 +41,10 @@ pub(super) fn check(
         return Ok(());
     }
     for fragment in fragments {
-        let Some(f) = jpeg_frame(fragment).or_else(|| j2k_frame(fragment)) else {
+        let frame = jpeg_frame(fragment)
+            .or_else(|| j2k_frame(fragment))
+            .or_else(|| jxl_frame(fragment));
+        let Some(f) = frame else {
             continue;
         };
         if syntax.uid == "1.2.840.10008.1.2.4.51" && f.precision > 8 {
@@ -58,19 +64,20 @@ pub(super) fn check(
             || f.components > format.samples.max(3)
             || f.tiles > MAX_TILES
         {
+            let detail = if f.precision > 0 {
+                format!(
+                    ", {} components of {} bits in {} tiles,",
+                    f.components, f.precision, f.tiles
+                )
+            } else {
+                String::new()
+            };
             return Err(Error::format(
                 path,
                 format!(
-                    "a compressed frame of {}x{} pixels, {} components of {} bits in {} tiles, \
-                     in an image of {}x{} with {} samples a pixel",
-                    f.width,
-                    f.height,
-                    f.components,
-                    f.precision,
-                    f.tiles,
-                    format.cols,
-                    format.rows,
-                    format.samples
+                    "a compressed frame of {}x{} pixels{detail} in an image of {}x{} with {} \
+                     samples a pixel",
+                    f.width, f.height, format.cols, format.rows, format.samples
                 ),
             ));
         }
@@ -147,10 +154,16 @@ fn jp2_codestream(data: &[u8]) -> Option<&[u8]> {
     if !data.starts_with(&SIGNATURE) {
         return None;
     }
+    boxed(data, *b"jp2c")
+}
+
+/// The contents of the first top-level box of type `kind` of an ISO base media file (JP2 and
+/// JPEG XL containers alike).
+fn boxed(data: &[u8], kind: [u8; 4]) -> Option<&[u8]> {
     let mut at = 0usize;
     while at + 8 <= data.len() {
         let len = u32::from_be_bytes(data[at..at + 4].try_into().ok()?) as usize;
-        let kind = &data[at + 4..at + 8];
+        let this = &data[at + 4..at + 8];
         let (header, len) = match len {
             0 => (8, data.len() - at),
             1 => {
@@ -159,7 +172,7 @@ fn jp2_codestream(data: &[u8]) -> Option<&[u8]> {
             }
             n => (8, n),
         };
-        if kind == b"jp2c" {
+        if this == kind.as_slice() {
             return data.get(at + header..);
         }
         if len < header {
@@ -168,6 +181,70 @@ fn jp2_codestream(data: &[u8]) -> Option<&[u8]> {
         at = at.checked_add(len)?;
     }
     None
+}
+
+/// The image size a JPEG XL codestream's `SizeHeader` states (the codestream bare, or inside a
+/// container's `jxlc` box).
+fn jxl_frame(data: &[u8]) -> Option<Frame> {
+    const CONTAINER: [u8; 12] = [0, 0, 0, 12, b'J', b'X', b'L', b' ', 0x0D, 0x0A, 0x87, 0x0A];
+    let code = if data.starts_with(&CONTAINER) {
+        boxed(data, *b"jxlc")?
+    } else {
+        data
+    };
+    if !code.starts_with(&[0xFF, 0x0A]) {
+        return None;
+    }
+    let mut bits = Bits {
+        data: &code[2..],
+        at: 0,
+    };
+    // One of the four widths a U32 field's two-bit selector names, plus one.
+    let size = |bits: &mut Bits| -> Option<u64> {
+        let width = [9, 13, 18, 30][bits.read(2)? as usize];
+        Some(bits.read(width)? + 1)
+    };
+    let small = bits.read(1)? == 1;
+    let height = if small {
+        (bits.read(5)? + 1) * 8
+    } else {
+        size(&mut bits)?
+    };
+    let ratio = bits.read(3)?;
+    let width = match ratio {
+        0 if small => (bits.read(5)? + 1) * 8,
+        0 => size(&mut bits)?,
+        r => {
+            let (num, den) =
+                [(1, 1), (12, 10), (4, 3), (3, 2), (16, 9), (5, 4), (2, 1)][r as usize - 1];
+            height * num / den
+        }
+    };
+    Some(Frame {
+        width: u32::try_from(width).unwrap_or(u32::MAX),
+        height: u32::try_from(height).unwrap_or(u32::MAX),
+        precision: 0,
+        components: 0,
+        tiles: 1,
+    })
+}
+
+/// A reader of bits, least significant first in each byte, as JPEG XL packs them.
+struct Bits<'a> {
+    data: &'a [u8],
+    at: usize,
+}
+
+impl Bits<'_> {
+    fn read(&mut self, n: usize) -> Option<u64> {
+        let mut v = 0u64;
+        for k in 0..n {
+            let byte = *self.data.get(self.at / 8)?;
+            v |= u64::from((byte >> (self.at % 8)) & 1) << k;
+            self.at += 1;
+        }
+        Some(v)
+    }
 }
 
 #[cfg(test)]
@@ -211,5 +288,31 @@ mod tests {
         // Cut short, or not a codestream.
         assert_eq!(j2k_frame(&code[..30]), None);
         assert_eq!(j2k_frame(b"\xff\xd8\xff\xe0"), None);
+    }
+
+    #[test]
+    fn jxl_size_header_is_read() {
+        let frame = |w, h| Frame {
+            width: w,
+            height: h,
+            precision: 0,
+            components: 0,
+            tiles: 1,
+        };
+        // Small: height (3 + 1) * 8 = 32; ratio 0; width (7 + 1) * 8 = 64. Bits, low first:
+        // 1, then 3, 0 and 7 in 5, 3 and 5 bits.
+        let small = [0xFF, 0x0A, 0b0000_0111, 0b0000_1110];
+        assert_eq!(jxl_frame(&small), Some(frame(64, 32)));
+        // Not small: height by the 13-bit width (selector 1), 4999 + 1; ratio 7: twice as wide.
+        let mut v: u64 = 0;
+        let mut at = 0;
+        for (value, width) in [(0, 1), (1, 2), (4999, 13), (7, 3)] {
+            v |= value << at;
+            at += width;
+        }
+        let mut large = vec![0xFF, 0x0A];
+        large.extend_from_slice(&v.to_le_bytes()[..3]);
+        assert_eq!(jxl_frame(&large), Some(frame(10_000, 5_000)));
+        assert_eq!(jxl_frame(&large[..3]), None, "cut short");
     }
 }

@@ -30,13 +30,17 @@ impl Syntax {
             "1.2.840.10008.1.2.2" => (true, true, false, false),
             "1.2.840.10008.1.2.1.99" => (true, false, true, false),
             // JPEG baseline, extended (8 bits), lossless (process 14 and its first-order
-            // prediction), JPEG 2000 (lossless only, and lossy), RLE, encapsulated uncompressed.
+            // prediction), JPEG 2000 (lossless only, and lossy), JPEG XL (lossless, JPEG
+            // recompression, and lossy), RLE, encapsulated uncompressed.
             "1.2.840.10008.1.2.4.50"
             | "1.2.840.10008.1.2.4.51"
             | "1.2.840.10008.1.2.4.57"
             | "1.2.840.10008.1.2.4.70"
             | "1.2.840.10008.1.2.4.90"
             | "1.2.840.10008.1.2.4.91"
+            | "1.2.840.10008.1.2.4.110"
+            | "1.2.840.10008.1.2.4.111"
+            | "1.2.840.10008.1.2.4.112"
             | "1.2.840.10008.1.2.5"
             | "1.2.840.10008.1.2.1.98" => (true, false, false, true),
             _ => return Err(unsupported_syntax(uid)),
@@ -80,14 +84,13 @@ fn unsupported_syntax(uid: &str) -> String {
         "1.2.840.10008.1.2.4.80" | "1.2.840.10008.1.2.4.81" => "JPEG-LS",
         "1.2.840.10008.1.2.4.92" | "1.2.840.10008.1.2.4.93" => "JPEG 2000 Part 2",
         u if u.starts_with("1.2.840.10008.1.2.4.20") => "High-Throughput JPEG 2000",
-        u if u.starts_with("1.2.840.10008.1.2.4.11") => "JPEG XL",
         u if u.starts_with("1.2.840.10008.1.2.4.10") => "video (MPEG or HEVC)",
         _ => "",
     };
     let name = syntax_name(uid);
     format!(
         "transfer syntax {name}{}: slabscope decodes native (uncompressed), deflated, RLE, JPEG \
-         baseline, 8-bit extended and lossless JPEG, and JPEG 2000",
+         baseline, 8-bit extended and lossless JPEG, JPEG 2000 and JPEG XL",
         if known.is_empty() || name.contains(known) {
             String::new()
         } else {
