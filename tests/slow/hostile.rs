@@ -746,7 +746,7 @@ fn dicom_frames_and_compressed_sizes_are_checked_before_they_are_spent() {
     let bomb = dir.path().join("bomb.dcm");
     std::fs::write(&bomb, dicom("1.2.840.10008.1.2.4.70", &body)).unwrap();
     let (out, _) = run(&["info", s(&bomb), "--max-memory", "64M"], 64 << 20);
-    fails(&out, "bomb.dcm", "a JPEG fragment of 65535x65535 pixels");
+    fails(&out, "bomb.dcm", "a compressed frame of 65535x65535 pixels");
 
     // 12-bit extended JPEG, which the pure-Rust decoder does not read: named, not attempted.
     let twelve = dicom("1.2.840.10008.1.2.4.51", &fragment([0xC1, 12, 0, 4, 0, 4]));
