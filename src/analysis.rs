@@ -141,9 +141,8 @@ impl Plan {
     ) -> Result<Self> {
         let (level, note) = level_within_memory(volume, wanted, max_memory)?;
         let views = volume.coarser(level);
-        let held = |v: &Volume| v.memory_bytes();
-        let room =
-            max_memory.saturating_sub(held(volume) + if level > 0 { held(&views) } else { 0 });
+        let coarse = if level > 0 { views.memory_bytes() } else { 0 };
+        let room = max_memory.saturating_sub(volume.memory_bytes() + coarse);
         let streams = level != wanted
             && wanted == 0
             && params.method != Method::BottomUp

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use slabscope::Plan;
+use slabscope::partition::label_bytes;
 use slabscope::report::curves_csv;
 use slabscope::volume::Resolution;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
@@ -108,11 +109,6 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         None => super::text::print_analysis(&name, volume, &analysis),
     }
     Ok(())
-}
-
-/// Bytes a voxel of the label volume of `slabs` slabs takes.
-fn label_bytes(slabs: usize) -> u64 {
-    if slabs <= 256 { 1 } else { 2 }
 }
 
 /// That a label volume of `plan`'s partition level, `bytes` a voxel, fits in the room a streamed

@@ -15,7 +15,9 @@ pub use crate::geometry::coordinate_axis;
 pub use bottom_up::{Merge, MergeHistory, PAIRS_KEPT, slice_nmi};
 pub use histories::{Histories, Scope};
 pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
-pub use result::{Comparison, Partition, PartitionParams, Step, Stop, label_volume, partition};
+pub use result::{
+    Comparison, Partition, PartitionParams, Step, Stop, label_bytes, label_volume, partition,
+};
 pub use stack::{BackgroundSummary, MISSING, SliceStack, StackParams, slice_geometry};
 pub use streamed::{partition_streamed, streamed_memory_floor};
 pub use top_down::{Split, SplitHistory};

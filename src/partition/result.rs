@@ -265,7 +265,7 @@ pub fn label_volume(volume: &Volume, p: &Partition) -> Result<Volume> {
     for (i, &(a, b)) in p.slabs.iter().enumerate() {
         slab_of[a..b].fill(i as u16);
     }
-    let (ty, data) = if p.slabs.len() <= 256 {
+    let (ty, data) = if label_bytes(p.slabs.len()) == 1 {
         let labels = labels(volume, p, &slab_of, |l| l as u8);
         (VoxelType::U8, Voxels::owned(labels))
     } else {
@@ -278,6 +278,12 @@ pub fn label_volume(volume: &Volume, p: &Partition) -> Result<Volume> {
         Volume::from_voxels(volume.dims(), volume.spacing(), ty, data)?
             .with_transform(*volume.transform()),
     )
+}
+
+/// Bytes a voxel of [`label_volume`] takes for a partition of `slabs` slabs.
+#[must_use]
+pub fn label_bytes(slabs: usize) -> u64 {
+    if slabs <= 256 { 1 } else { 2 }
 }
 
 /// The label of every voxel of `volume`: `slab_of` its nearest slice, as `T`.

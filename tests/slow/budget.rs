@@ -27,6 +27,18 @@ fn layered(dir: &Path) -> std::path::PathBuf {
     header
 }
 
+/// The layered volume in a temporary folder (kept while the folder is), or nothing, with a
+/// message, where there is no /proc to read the anonymous memory from.
+fn layered_where_memory_is_read() -> Option<(tempfile::TempDir, std::path::PathBuf)> {
+    if !Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read the anonymous memory from");
+        return None;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let header = layered(dir.path());
+    Some((dir, header))
+}
+
 /// Runs `slabscope args`, sampling its anonymous memory every 2 ms: its standard output and
 /// the peak in bytes.
 fn peak_of(args: &[&str]) -> (String, u64) {
@@ -57,12 +69,9 @@ fn peak_of(args: &[&str]) -> (String, u64) {
 #[test]
 fn a_volume_beyond_the_budget_is_analysed_within_it() {
     let _alone = crate::one_at_a_time();
-    if !Path::new("/proc/self/status").exists() {
-        eprintln!("skipped: no /proc to read the anonymous memory from");
+    let Some((_dir, header)) = layered_where_memory_is_read() else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let header = layered(dir.path());
+    };
     let budget = 32u64 << 20;
     let (stdout, peak) = peak_of(&["analyze", s(&header), "--json", "--max-memory", "32M"]);
     let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
@@ -81,12 +90,9 @@ fn a_volume_beyond_the_budget_is_analysed_within_it() {
 #[test]
 fn a_full_resolution_partition_beyond_the_budget_is_counted_in_strips_exactly() {
     let _alone = crate::one_at_a_time();
-    if !Path::new("/proc/self/status").exists() {
-        eprintln!("skipped: no /proc to read the anonymous memory from");
+    let Some((_dir, header)) = layered_where_memory_is_read() else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let header = layered(dir.path());
+    };
     // Level 0 in memory needs 160 MiB; level 1 (96 MiB) fits beside the mapped file, and the
     // partition of every voxel is counted strip by strip in the room left.
     let budget = 128u64 << 20;
