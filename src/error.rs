@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 
 use crate::geometry::InvalidParameter;
 
+pub mod names;
+
 /// Everything that can go wrong in slabscope's library.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -122,15 +124,10 @@ pub enum Error {
     Cancelled,
 }
 
-/// A path as messages show it: on one line, with control characters (a newline in a file
-/// name) escaped as Rust escapes them.
+/// A path as messages show it: escaped by the one rule of [`names`] (on one line, nothing raw
+/// that a terminal would act on, non-UTF-8 bytes as `\xHH`).
 pub fn shown(path: &Path) -> String {
-    let text = path.display().to_string();
-    if text.chars().any(char::is_control) {
-        text.chars().flat_map(char::escape_default).collect()
-    } else {
-        text
-    }
+    names::path(path)
 }
 
 /// The library's result type.

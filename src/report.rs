@@ -321,7 +321,7 @@ impl FolderReport {
     pub fn new(folder: &Path, volumes: Vec<ListedVolume>) -> Self {
         Self {
             schema_version: SCHEMA_VERSION,
-            folder: folder.display().to_string(),
+            folder: crate::error::shown(folder),
             volumes,
         }
     }

@@ -72,13 +72,12 @@ impl Entry {
 
     /// [`Entry::name`] with the path relative to the folder `root`.
     pub fn name_under(&self, root: &Path) -> String {
-        let path = self.path.strip_prefix(root).unwrap_or(&self.path).display();
+        let path = crate::error::shown(self.path.strip_prefix(root).unwrap_or(&self.path));
         let series = match (&self.label, &self.series) {
             (Some(label), _) => format!("[{label}]"),
             (None, Some(key)) => format!("[series {key}]"),
-            (None, None) => return path.to_string(),
+            (None, None) => return path,
         };
-        let path = path.to_string();
         if path.is_empty() {
             series
         } else {
@@ -197,7 +196,7 @@ pub fn shard<T>(items: &[T], k: usize, n: usize) -> &[T] {
 pub struct TriageRow {
     /// [`SCHEMA_VERSION`].
     pub schema_version: u32,
-    /// The file or folder as found.
+    /// The file or folder as found, escaped by the one rule of [`crate::error::names`].
     pub path: String,
     /// The DICOM series' key (its `SeriesInstanceUID`) in a folder of DICOM files.
     pub series: Option<String>,
@@ -286,7 +285,7 @@ impl TriageRow {
     pub fn name(&self) -> String {
         let series = match (&self.dicom, &self.series) {
             (Some(d), _) => match (d.number, d.description.is_empty()) {
-                (Some(n), false) => format!(" [series {n} {:?}]", d.description),
+                (Some(n), false) => format!(" [series {n} \"{}\"]", d.description),
                 (Some(n), true) => format!(" [series {n}]"),
                 (None, _) => format!(" [series {}]", d.key),
             },
@@ -387,7 +386,7 @@ pub fn look(
         series: entry.series.clone().or_else(|| how.load.series.clone()),
         ..how.load.clone()
     };
-    let name = entry.path.display().to_string();
+    let name = crate::error::shown(&entry.path);
     let loaded = match load(&entry.path, &opts) {
         Ok(l) => l,
         Err(e) => {

@@ -72,7 +72,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         // A byte a voxel at least: refused before the analysis rather than after it.
         check_labels_fit(&args.file, &plan, 1)?;
     }
-    let name = args.file.display().to_string();
+    let name = slabscope::error::shown(&args.file);
     let analysis = args.analysis.analyze(&name, &plan, args.views)?;
     let part = &analysis.partition;
     if args.export_labels.is_some() {

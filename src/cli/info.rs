@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::error::human_bytes;
+use slabscope::error::{human_bytes, shown};
 use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, to_json};
 use slabscope::triage::{Entry, Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
@@ -48,7 +48,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
             let listed = volumes.iter().map(listed_volume).collect();
             outln!("{}", to_json(&FolderReport::new(dir, listed))?);
         } else {
-            outln!("folder      {}", dir.display());
+            outln!("folder      {}", shown(dir));
             outln!(
                 "volumes     {} (a collection: `slabscope triage` looks at them all; --series \
                  N|UID picks a DICOM series)",
@@ -61,13 +61,13 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         return Ok(());
     }
     let loaded = super::load(&args.file, &args.load)?;
-    print(&args.file.display().to_string(), &loaded, args.json)
+    print(&shown(&args.file), &loaded, args.json)
 }
 
 /// A volume of a folder as the folder's report lists it.
 fn listed_volume(entry: &Entry) -> ListedVolume {
     ListedVolume {
-        path: entry.path.display().to_string(),
+        path: shown(&entry.path),
         series: entry.series.clone(),
         label: entry.label.clone(),
     }
@@ -88,7 +88,7 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     outln!("format      {}", format.name());
     if let Some(d) = &loaded.dicom {
         let number = d.number.map_or_else(String::new, |n| format!("{n} "));
-        outln!("series      {number}{:?} ({})", d.description, d.modality);
+        outln!("series      {number}\"{}\" ({})", d.description, d.modality);
         outln!("series uid  {}", d.key);
         outln!("syntax      {}", d.syntax);
         for (field, value) in &d.patient {

@@ -29,6 +29,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::Subcommand;
+use slabscope::error::names::controls;
 use slabscope::error::shown;
 use slabscope::volume::io::{check_output, same_file};
 use slabscope::{Error, Loaded};
@@ -92,11 +93,16 @@ fn remove_staged_on_signals() {
 /// Loads `path`, printing the loader's notes to stderr.
 pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
     let loaded = slabscope::load(path, &args.options())?;
-    for note in &loaded.notes {
-        eprintln!("slabscope: note: {}: {note}", path.display());
+    for n in &loaded.notes {
+        note(path, n);
     }
     test_delay();
     Ok(loaded)
+}
+
+/// Prints a note about `path` to stderr, on one line, nothing in it raw.
+pub fn note(path: &Path, text: &str) {
+    eprintln!("slabscope: note: {}: {}", shown(path), controls(text));
 }
 
 /// With `SLABSCOPE_TEST_DELAY_MS` set, waits that long after a load: a test hook, so that a test
@@ -181,15 +187,18 @@ const FLAGS: &[(&str, &str)] = &[
 ];
 
 /// One error for people, on one line: each cause in the chain, library errors worded in the
-/// CLI's terms (the flag for a parameter, the flag that lifts a limit or allows an overwrite).
+/// CLI's terms (the flag for a parameter, the flag that lifts a limit or allows an overwrite),
+/// control characters escaped whatever a cause quotes.
 pub fn error_message(e: &anyhow::Error) -> String {
-    e.chain()
+    let message = e
+        .chain()
         .map(|cause| match cause.downcast_ref::<Error>() {
             Some(e) => in_flag_terms(e),
             None => cause.to_string(),
         })
         .collect::<Vec<_>>()
-        .join(": ")
+        .join(": ");
+    controls(&message).into_owned()
 }
 
 fn in_flag_terms(e: &Error) -> String {
@@ -220,7 +229,7 @@ fn in_flag_terms(e: &Error) -> String {
                     _ => "--type u8|i8|u16|i16|u32|i32|f32|f64",
                 })
                 .collect();
-            format!("{}: {detail}: give {}", path.display(), flags.join(" and "))
+            format!("{}: {detail}: give {}", shown(path), flags.join(" and "))
         }
         Error::Exists { .. } => format!("{e} (use --force to overwrite it)"),
         Error::NotRegularFile { .. } => format!("{e}, --force or not"),

@@ -268,13 +268,13 @@ fn render_file(
     // from that level.
     let (level, budget_note) = within_memory(&loaded.volume, 0, scene.load.options().max_memory)?;
     if let Some(note) = budget_note {
-        eprintln!("slabscope: note: {}: {note}", file.display());
+        super::note(file, &note);
     }
     let volume = level.as_ref();
     let part = scene
         .analysis
         .analyze(
-            &file.display().to_string(),
+            &slabscope::error::shown(file),
             &slabscope::Plan::at(Arc::clone(&level)),
             false,
         )?

@@ -50,7 +50,7 @@ pub fn run(args: &SliceArgs) -> Result<()> {
     // The axis, and where its slices lie: no partition is needed (a 3-slice volume has a
     // middle slice, if not 4 slabs).
     let params = args.analysis.params(false);
-    let name = args.file.display().to_string();
+    let name = slabscope::error::shown(&args.file);
     let axis = if let Some(axis) = params
         .axis
         .resolve(volume.transform(), volume.spacing())

@@ -292,6 +292,6 @@ fn print_notes(notes: &[String]) {
         outln!();
     }
     for n in notes {
-        outln!("note     {n}");
+        outln!("note     {}", slabscope::error::names::controls(n));
     }
 }

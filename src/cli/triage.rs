@@ -8,6 +8,8 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use slabscope::error::names::controls;
+use slabscope::error::shown;
 use slabscope::render::{ImageOutput, encode, sheet};
 use slabscope::triage::{Entry, TriageOutcome, TriagePlan, TriageRow, discover, shard};
 use slabscope::{Error, Progress};
@@ -81,16 +83,16 @@ fn read_manifest(path: &Path) -> Result<Vec<Entry>> {
     if len > MAX_MANIFEST {
         bail!(
             "{}: a manifest of {len} bytes; at most {MAX_MANIFEST} are read",
-            path.display()
+            shown(path)
         );
     }
     let mut paths = Vec::new();
     for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
-        let line = line.with_context(|| format!("{}: line {}", path.display(), i + 1))?;
+        let line = line.with_context(|| format!("{}: line {}", shown(path), i + 1))?;
         if line.len() > MAX_LINE {
             bail!(
                 "{}: line {} is longer than {MAX_LINE} characters",
-                path.display(),
+                shown(path),
                 i + 1
             );
         }
@@ -211,7 +213,7 @@ fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, Triage
     };
     let describe = |path: &Path, e: Error| {
         let m = super::error_message(&e.into());
-        m.strip_prefix(&format!("{}: ", path.display()))
+        m.strip_prefix(&format!("{}: ", shown(path)))
             .map_or(m.clone(), str::to_string)
     };
     slabscope::triage::look_all(volumes, &how, WORKERS, &describe, emit);
@@ -254,20 +256,24 @@ fn slabs_text(slabs: &[[usize; 2]]) -> String {
         .join(" ")
 }
 
-/// What is wrong: the error, else the problems.
+/// What is wrong: the error, else the problems (control characters escaped, whatever they quote).
 fn problems(row: &TriageRow) -> String {
-    match &row.error {
+    let text = match &row.error {
         Some(e) => format!("error: {e}"),
         None => row.problems.join("; "),
-    }
+    };
+    controls(&text).into_owned()
 }
 
-/// A CSV field, quoted when it holds a comma, a quote or a line break.
+/// A CSV field as RFC 4180 writes it: quoted when it holds a comma, a quote or a line break
+/// (its quotes doubled), control characters escaped first (names are escaped already), so that
+/// none reaches the file raw.
 fn field(s: &str) -> String {
+    let s = controls(s);
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
-        s.to_string()
+        s.into_owned()
     }
 }
 

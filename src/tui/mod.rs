@@ -74,7 +74,10 @@ fn folder_to_list(
         (Some(dir), Some(Folder::Collection | Folder::Dicom | Folder::Empty)) => {
             let paths = discover(std::slice::from_ref(dir), load)?;
             if paths.is_empty() {
-                bail!("{}: holds no volume slabscope reads", dir.display());
+                bail!(
+                    "{}: holds no volume slabscope reads",
+                    slabscope::error::shown(dir)
+                );
             }
             Some((dir.clone(), paths)).filter(|(_, p)| kind != Some(Folder::Dicom) || p.len() > 1)
         }
@@ -92,7 +95,7 @@ pub fn run(options: Options) -> Result<()> {
     } = options;
     let name = file.as_ref().map_or_else(
         || slabscope::BUILTIN_NAME.to_string(),
-        |p| p.display().to_string(),
+        |p| slabscope::error::shown(p),
     );
     // A file that cannot be opened is an error before the screen changes.
     if let Some(path) = &file {

@@ -56,9 +56,9 @@ pub(super) fn export(
     write_nrrd(&labels, &labelled, NrrdEncoding::Gzip, false)?;
     Ok(format!(
         "wrote {}, {} and {}",
-        png.display(),
-        json.display(),
-        labels.display()
+        slabscope::error::shown(&png),
+        slabscope::error::shown(&json),
+        slabscope::error::shown(&labels)
     ))
 }
 

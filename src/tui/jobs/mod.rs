@@ -154,7 +154,7 @@ impl Jobs {
             };
             for (i, entry) in paths.iter().enumerate() {
                 // The list names the file: its errors need not.
-                let prefix = format!("{}: ", entry.path.display());
+                let prefix = format!("{}: ", slabscope::error::shown(&entry.path));
                 let describe = |e: slabscope::Error| {
                     let m = e.to_string();
                     m.strip_prefix(&prefix).map_or(m.clone(), str::to_string)

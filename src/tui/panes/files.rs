@@ -65,7 +65,7 @@ impl FilesPane {
                     .map(|d| format!("{}x{}x{}", d[0], d[1], d[2]))
                     .unwrap_or_default();
                 let axis = match &r.error {
-                    Some(e) => format!("error: {e}"),
+                    Some(e) => format!("error: {}", slabscope::error::names::controls(e)),
                     None => r.axis_name().unwrap_or_default(),
                 };
                 let status = if r.error.is_some() { "!!" } else { "ok" };
@@ -100,7 +100,7 @@ impl Widget for &FilesPane {
         let title = format!(
             " {} volumes in {} ({} looked at) · Enter opens, PgUp PgDn step, Esc or F closes ",
             self.paths.len(),
-            self.root.display(),
+            slabscope::error::shown(&self.root),
             self.done()
         );
         let rows = (0..self.paths.len()).map(|i| self.line(i));

@@ -304,12 +304,7 @@ pub(crate) fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
         pages_agree(file, 0, first, describe(file, &mut dec, 0)?)?;
         decode(file, (dec, len), 0, first, &mut buffer, out)?;
     }
-    let name = |p: &PathBuf| {
-        p.file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned()
-    };
+    let name = |p: &PathBuf| crate::error::shown(Path::new(p.file_name().unwrap_or_default()));
     let notes = vec![format!(
         "{} slices from {} to {}",
         files.len(),

@@ -15,9 +15,9 @@ const QUOTED: usize = 40;
 
 /// `token` quoted for a one-line message: at most [`QUOTED`] characters, escaped.
 fn quote(token: &[u8]) -> String {
-    let text = String::from_utf8_lossy(&token[..token.len().min(QUOTED)]);
+    let text = crate::error::names::bytes(&token[..token.len().min(QUOTED)]);
     let more = if token.len() > QUOTED { "…" } else { "" };
-    format!("{text:?}{more}")
+    format!("\"{text}\"{more}")
 }
 
 /// The next whitespace- or comma-separated token of `reader` in `token`: `false` at the end. A

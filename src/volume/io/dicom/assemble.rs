@@ -46,9 +46,9 @@ impl Series {
             .number
             .map_or_else(String::new, |n| format!("series {n}"));
         match (number.is_empty(), self.description.is_empty()) {
-            (false, false) => format!("{number} {:?}", self.description),
+            (false, false) => format!("{number} \"{}\"", self.description),
             (false, true) => number,
-            (true, false) => format!("{:?}", self.description),
+            (true, false) => format!("\"{}\"", self.description),
             (true, true) => format!("series {}", self.key),
         }
     }

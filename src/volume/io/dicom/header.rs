@@ -148,6 +148,12 @@ fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
     (!t.is_empty()).then(|| t.to_string())
 }
 
+/// [`text`] as outputs show it: escaped by the one rule of [`crate::error::names`], so that a
+/// field's control characters never reach a terminal (and keys and labels agree everywhere).
+fn shown_text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+    text(obj, tag).map(|t| crate::error::names::text(&t))
+}
+
 fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
     let e = obj.get(tag)?;
     let v = if e.vr() == VR::UN {
@@ -288,12 +294,12 @@ pub(super) fn images(obj: &InMemDicomObject) -> Vec<Image> {
         out.push(Image {
             file: 0,
             frame,
-            series_uid: text(obj, tags::SERIES_INSTANCE_UID).unwrap_or_default(),
+            series_uid: shown_text(obj, tags::SERIES_INSTANCE_UID).unwrap_or_default(),
             series_number: int(obj, tags::SERIES_NUMBER),
-            description: text(obj, tags::SERIES_DESCRIPTION)
-                .or_else(|| text(obj, tags::PROTOCOL_NAME))
+            description: shown_text(obj, tags::SERIES_DESCRIPTION)
+                .or_else(|| shown_text(obj, tags::PROTOCOL_NAME))
                 .unwrap_or_default(),
-            modality: text(obj, tags::MODALITY).unwrap_or_default(),
+            modality: shown_text(obj, tags::MODALITY).unwrap_or_default(),
             orientation: fields.orientation,
             position: fields.position,
             pixel_spacing: fields.pixel_spacing,
@@ -344,6 +350,6 @@ pub(super) fn patient(obj: &InMemDicomObject) -> Vec<(String, String)> {
         ("study date", tags::STUDY_DATE),
     ]
     .into_iter()
-    .filter_map(|(name, tag)| Some((name.to_string(), text(obj, tag)?)))
+    .filter_map(|(name, tag)| Some((name.to_string(), shown_text(obj, tag)?)))
     .collect()
 }

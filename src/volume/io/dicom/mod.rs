@@ -108,11 +108,8 @@ fn parse(path: &Path, dataset: &[u8], syntax: &Syntax) -> Result<InMemDicomObjec
 fn quoted(e: &dyn std::fmt::Display) -> String {
     let text = e.to_string();
     let line = text.lines().next().unwrap_or_default();
-    let mut out: String = line
-        .chars()
-        .take(120)
-        .flat_map(char::escape_default)
-        .collect();
+    let short: String = line.chars().take(120).collect();
+    let mut out = crate::error::names::text(&short);
     if line.chars().count() > 120 {
         out.push('…');
     }
@@ -144,10 +141,7 @@ pub fn list_series(path: &Path, opts: &LoadOptions) -> Result<(Vec<SeriesSummary
 
 fn name(scan: &Scan, im: &Image) -> String {
     let path = &scan.files[im.file].path;
-    let file = path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into(),
-    );
+    let file = crate::error::shown(path.file_name().map_or(path.as_path(), Path::new));
     if im.format.frames > 1 {
         format!("{file} frame {}", im.frame)
     } else {

@@ -169,7 +169,7 @@ pub(super) fn series_of(
         notes.push(format!("left out {}", left.join(" and ")));
     }
     if let Some((first, _)) = scan.skipped.first() {
-        let name = first.file_name().unwrap_or_default().to_string_lossy();
+        let name = crate::error::shown(Path::new(first.file_name().unwrap_or_default()));
         notes.push(match scan.skipped.len() {
             1 => format!("left out {name}, which could not be read"),
             n => format!("left out {n} files that could not be read ({name} and others)"),
