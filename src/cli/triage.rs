@@ -2,16 +2,18 @@
 //! Lines or CSV), a broken file a row with its error; shards for clusters, and a manifest so that
 //! shards need not walk the folders again.
 
-use std::io::BufRead;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use slabscope::error::names::controls;
 use slabscope::error::shown;
 use slabscope::render::{ImageOutput, encode, sheet};
-use slabscope::triage::{Entry, TriageOutcome, TriagePlan, TriageRow, discover, shard};
+use slabscope::triage::{
+    Entry, TriageOutcome, TriagePlan, TriageRow, discover, manifest_lines, parse_manifest, shard,
+};
 use slabscope::{Error, Progress};
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -29,11 +31,12 @@ pub struct TriageArgs {
     /// Comma-separated values, with a header line.
     #[arg(long)]
     pub csv: bool,
-    /// Print the sorted list of volumes, one path a line, and stop (a manifest for --manifest).
+    /// Print the sorted list of volumes and stop: a manifest for --manifest (a header line, then
+    /// one volume a line, names escaped).
     #[arg(long, conflicts_with_all = ["json", "csv"])]
     pub list: bool,
-    /// Read the list of volumes from FILE (one path a line, as --list writes it) instead of
-    /// walking folders.
+    /// Read the list of volumes from FILE (as --list writes it, or one path a line as it is)
+    /// instead of walking folders.
     #[arg(long, value_name = "FILE", conflicts_with = "paths")]
     pub manifest: Option<PathBuf>,
     /// Take the K-th of N contiguous blocks of the sorted volumes (K from 1), e.g.
@@ -70,12 +73,11 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
         .ok_or_else(|| format!("{s:?} is not K/N with 1 <= K <= N, e.g. 3/10"))
 }
 
-/// The longest manifest read, bytes, and its longest line.
+/// The longest manifest read, bytes.
 const MAX_MANIFEST: u64 = 256 << 20;
-const MAX_LINE: usize = 4096;
 
-/// Reads a manifest: one volume a line (a path, and for a DICOM series a tab and its UID),
-/// blank lines skipped.
+/// Reads a manifest (as `--list` writes it, or one path a line, for a DICOM series a tab and its
+/// UID): see `slabscope::triage::parse_manifest`.
 fn read_manifest(path: &Path) -> Result<Vec<Entry>> {
     slabscope::volume::io::check_input(path)?;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
@@ -86,21 +88,11 @@ fn read_manifest(path: &Path) -> Result<Vec<Entry>> {
             shown(path)
         );
     }
-    let mut paths = Vec::new();
-    for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
-        let line = line.with_context(|| format!("{}: line {}", shown(path), i + 1))?;
-        if line.len() > MAX_LINE {
-            bail!(
-                "{}: line {} is longer than {MAX_LINE} characters",
-                shown(path),
-                i + 1
-            );
-        }
-        if !line.trim().is_empty() {
-            paths.push(Entry::parse(&line));
-        }
-    }
-    Ok(paths)
+    let mut text = Vec::new();
+    file.take(MAX_MANIFEST)
+        .read_to_end(&mut text)
+        .map_err(|e| Error::io(path, e))?;
+    Ok(parse_manifest(path, &text)?)
 }
 
 /// Runs triage; the exit status: 0 when every volume was looked at, 1 when some failed (their
@@ -114,8 +106,8 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
         }
     };
     if args.list {
-        for v in &volumes {
-            outln!("{}", v.line());
+        for line in manifest_lines(&volumes) {
+            outln!("{line}");
         }
         return Ok(0);
     }

@@ -168,3 +168,124 @@ fn info_listings_notes_and_errors_escape_every_name() {
     nothing_raw("error", &info.stderr);
     assert!(String::from_utf8_lossy(&info.stderr).contains("gone\\u{1b}\\n.nii"));
 }
+
+/// Names a manifest must carry: line breaks, tabs (one before a UID-like tail), ESC, invalid
+/// UTF-8, leading dashes, backslashes and escape-like text, a leading `#`, spaces at the ends.
+const HOSTILE: [&[u8]; 14] = [
+    b"new\nline.nii",
+    b"cr\rhere.nii",
+    b"tab\there.nii",
+    b"looks\t1.2.3.nii",
+    b"esc\x1b[2J.nii",
+    b"bell\x07.nii",
+    b"p\xff.nii",
+    b"p\xfe.nii",
+    b"-lead.nii",
+    b"--help.nii",
+    b"back\\slash\\x41.nii",
+    b"#hash.nii",
+    b" spaced .nii",
+    b"\xe2\x80\xaeright-to-left.nii",
+];
+
+/// `slabscope triage ARGS...` and its standard output (which must be all there is, exit 0).
+fn triage_ok(args: &[&OsStr]) -> Vec<u8> {
+    let out = run_os(&[&[OsStr::new("triage")], args].concat());
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out.stdout
+}
+
+#[test]
+fn a_listed_manifest_reads_back_to_exactly_the_same_volumes_whatever_their_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("archive");
+    std::fs::create_dir(&root).unwrap();
+    for name in HOSTILE {
+        std::fs::copy(data("ramp_u8.nii"), named(&root, name)).unwrap();
+    }
+    // A DICOM series in a folder with a hostile name: a line with a tab and its UID.
+    let series = named(&root, b"se\nries\t\x1b\xff");
+    std::fs::create_dir(&series).unwrap();
+    for f in std::fs::read_dir(dicom_data("rescale")).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::copy(&f, series.join(f.file_name().unwrap())).unwrap();
+    }
+    let list = triage_ok(&[OsStr::new("--list"), root.as_os_str()]);
+    let text = String::from_utf8(list.clone()).unwrap();
+    let tabs: Vec<&str> = text.lines().filter(|l| l.contains('\t')).collect();
+    assert_eq!(
+        tabs.len(),
+        1,
+        "the tab before the series' UID alone: {tabs:?}"
+    );
+    nothing_raw("--list", text.replace('\t', " ").as_bytes());
+    assert_eq!(text.lines().count(), 1 + HOSTILE.len() + 1, "{text}");
+    assert!(text.starts_with("# slabscope manifest 2"), "{text}");
+    let manifest = dir.path().join("manifest.txt");
+    std::fs::write(&manifest, &list).unwrap();
+    let m = manifest.as_os_str();
+    let relisted = triage_ok(&[OsStr::new("--manifest"), m, OsStr::new("--list")]);
+    assert_eq!(relisted, list, "the same entries, the same order");
+    let json = ["--json", "--phases", "0", "--slabs", "2"].map(OsStr::new);
+    let walked = triage_ok(&[&[root.as_os_str()][..], &json].concat());
+    let read = triage_ok(&[&[OsStr::new("--manifest"), m][..], &json].concat());
+    assert_eq!(read, walked, "every volume found, none lost");
+    let rows: Vec<Value> = String::from_utf8(read)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), HOSTILE.len() + 1);
+    let mut paths: Vec<PathBuf> = rows
+        .iter()
+        .map(|r| {
+            assert!(r["error"].is_null(), "{r}");
+            slabscope::error::names::unescape_path(r["path"].as_str().unwrap()).unwrap()
+        })
+        .collect();
+    paths.dedup();
+    let mut want: Vec<PathBuf> = HOSTILE.iter().map(|n| named(&root, n)).collect();
+    want.push(series.clone());
+    want.sort();
+    paths.sort();
+    assert_eq!(paths, want, "each JSON path reads back to its file's bytes");
+}
+
+#[test]
+fn the_plain_tab_separated_manifest_still_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path();
+    let back = named(root, b"back\\slash.nii");
+    let odd = named(root, b"odd\xff.nii");
+    std::fs::copy(data("ramp_u8.nii"), &back).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), &odd).unwrap();
+    let series = root.join("series");
+    std::fs::create_dir(&series).unwrap();
+    for f in std::fs::read_dir(dicom_data("rescale")).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::copy(&f, series.join(f.file_name().unwrap())).unwrap();
+    }
+    let json = ["--json", "--phases", "0", "--slabs", "2"].map(OsStr::new);
+    let walked = triage_ok(&[&[root.as_os_str()][..], &json].concat());
+    let uid = serde_json::from_slice::<Value>(walked.split(|&b| b == b'\n').nth(2).unwrap())
+        .unwrap()["series"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    // As `find` and older lists write it: paths as they are, a tab before a UID.
+    let mut plain = Vec::new();
+    for p in [&back, &odd] {
+        plain.extend_from_slice(p.as_os_str().as_bytes());
+        plain.push(b'\n');
+    }
+    plain.extend_from_slice(format!("{}\t{uid}\r\n\n", series.display()).as_bytes());
+    let manifest = root.join("plain.txt");
+    std::fs::write(&manifest, plain).unwrap();
+    let read = triage_ok(&[&[OsStr::new("--manifest"), manifest.as_os_str()][..], &json].concat());
+    assert_eq!(read, walked);
+}

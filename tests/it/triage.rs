@@ -135,7 +135,11 @@ fn shards_concatenate_to_one_run_and_manifests_replace_the_walk() {
     let Ran {
         code, stdout: list, ..
     } = run(&["triage", "--list", root]);
-    assert_eq!((code, list.lines().count()), (0, 8));
+    assert_eq!(
+        (code, list.lines().count()),
+        (0, 1 + 8),
+        "a header, then a volume a line"
+    );
     let manifest = dir.path().join("manifest.txt");
     std::fs::write(&manifest, &list).unwrap();
     let m = manifest.to_str().unwrap();

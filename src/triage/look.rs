@@ -1,0 +1,190 @@
+//! Looking at volumes: each loaded and analysed within its timeout and share of the budget.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, PoisonError, RwLock};
+use std::time::Duration;
+
+use super::{Entry, TriageRow};
+use crate::analysis::{AnalysisParams, analyze, within_memory};
+use crate::error::Error;
+use crate::progress::{Monitor, Progress};
+use crate::volume::io::{LoadOptions, load};
+
+/// The coarse lattice of the fast path: rays and samples this many smallest voxel spacings
+/// apart, an eighth of the samples.
+pub const COARSE: f64 = 2.0;
+
+/// The fast path applies to volumes at least this many voxels along every axis.
+pub const COARSE_MIN_DIM: usize = 32;
+
+/// The most lattice phases the fast path ranks by.
+pub const COARSE_PHASES: usize = 4;
+
+/// How triage looks at each volume.
+#[derive(Clone, Debug)]
+pub struct TriagePlan {
+    /// How to read files.
+    pub load: LoadOptions,
+    /// How to analyse them.
+    pub params: AnalysisParams,
+    /// The most time an analysis may take.
+    pub timeout: Duration,
+    /// The fast path: the view search on a lattice [`COARSE`] times coarser than the voxels,
+    /// ranked over at most [`COARSE_PHASES`] phases (where the parameters name no spacing and
+    /// the volume has [`COARSE_MIN_DIM`] voxels a side); the partition at full resolution.
+    pub fast: bool,
+    /// Draw each volume's contact-sheet cell, with tiles of this many pixels.
+    pub tile: Option<u32>,
+}
+
+/// What triage gives of one volume: its row, and its contact-sheet cell when asked for and the
+/// volume could be drawn.
+pub struct TriageOutcome {
+    /// The row.
+    pub row: TriageRow,
+    /// The cell.
+    pub cell: Option<tiny_skia::Pixmap>,
+}
+
+/// One volume's row: loaded and analysed as `how` says (stopped at its timeout, the progress
+/// reported as a fraction), or the error of either as `describe` words it; and its cell.
+pub fn look(
+    entry: &Entry,
+    how: &TriagePlan,
+    progress: &(dyn Fn(f64) + Sync),
+    describe: &dyn Fn(Error) -> String,
+) -> TriageOutcome {
+    let failed = |row: TriageRow| TriageOutcome { row, cell: None };
+    let timeout = how.timeout;
+    let opts = LoadOptions {
+        series: entry.series.clone().or_else(|| how.load.series.clone()),
+        ..how.load.clone()
+    };
+    let name = crate::error::shown(&entry.path);
+    let loaded = match load(&entry.path, &opts) {
+        Ok(l) => l,
+        Err(e) => {
+            let mut row = TriageRow::failed(&name, describe(e));
+            row.series.clone_from(&entry.series);
+            return failed(row);
+        }
+    };
+    let mut row = TriageRow::loaded(&name, &loaded);
+    row.series.clone_from(&entry.series);
+    // A watchdog raises the cancel flag at the timeout, unless told first that the work is done.
+    let cancel = Arc::new(AtomicBool::new(false));
+    let (done, finished) = std::sync::mpsc::channel::<()>();
+    let watchdog = {
+        let cancel = Arc::clone(&cancel);
+        std::thread::spawn(move || {
+            if finished.recv_timeout(timeout).is_err() {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        })
+    };
+    let report = |p: Progress| progress(p.fraction);
+    let monitor = Monitor::new(Some(&cancel), Some(&report));
+    // Beyond its share of the budget, a volume is analysed on a pyramid level.
+    let (level, budget_note) = match within_memory(&loaded.volume, 0, opts.max_memory) {
+        Ok(fit) => fit,
+        Err(e) => return failed(row.with_error(describe(e))),
+    };
+    let v = level.as_ref();
+    let mut params = how.params.clone();
+    let sampling = &mut params.view.sampling;
+    let unset = sampling.ray_spacing.is_none() && sampling.sample_spacing.is_none();
+    if how.fast && unset && v.dims().iter().all(|&n| n >= COARSE_MIN_DIM) {
+        let coarse = COARSE * crate::geometry::min_spacing(v.spacing());
+        (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
+        params.view.phases = params.view.phases.min(COARSE_PHASES);
+    }
+    let result = analyze(v, &params, &monitor).and_then(|mut analysis| {
+        analysis.notes.splice(0..0, budget_note);
+        let cell = match how.tile {
+            Some(tile) => Some(crate::render::sheet::cell(
+                v,
+                &analysis.partition,
+                tile,
+                &monitor,
+            )?),
+            None => None,
+        };
+        Ok((analysis, cell))
+    });
+    let _ = done.send(());
+    let _ = watchdog.join();
+    match result {
+        Ok((analysis, cell)) => TriageOutcome {
+            row: row.analysed(&analysis),
+            cell,
+        },
+        Err(Error::Cancelled) => failed(row.with_error(format!(
+            "the analysis took longer than the {} s timeout",
+            timeout.as_secs_f64()
+        ))),
+        Err(e) => failed(row.with_error(describe(e))),
+    }
+}
+
+/// Looks at every one of `volumes` as `how` says, `workers` at a time, and hands the results to
+/// `emit` in order, as they complete. The volumes looked at together share the memory budget:
+/// each loads within its share, and one that needs more is looked at again alone, with the
+/// whole budget. `describe` words an error of a volume.
+pub fn look_all(
+    volumes: &[Entry],
+    how: &TriagePlan,
+    workers: usize,
+    describe: &(dyn Fn(&Path, Error) -> String + Sync),
+    mut emit: impl FnMut(usize, TriageOutcome),
+) {
+    let workers = workers.min(volumes.len()).max(1);
+    let next = AtomicUsize::new(0);
+    // Read: looking within a share of the budget; write: alone, with all of it.
+    let gate = RwLock::new(());
+    let shared = TriagePlan {
+        load: LoadOptions {
+            max_memory: how.load.max_memory / workers as u64,
+            ..how.load.clone()
+        },
+        ..how.clone()
+    };
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, TriageOutcome)>();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            let (tx, next, gate, shared) = (tx.clone(), &next, &gate, &shared);
+            scope.spawn(move || {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(entry) = volumes.get(i) else { break };
+                    let path = entry.path.as_path();
+                    let too_large = std::cell::Cell::new(false);
+                    let words = |e: Error| {
+                        too_large.set(too_large.get() || matches!(e, Error::TooLarge { .. }));
+                        describe(path, e)
+                    };
+                    let reading = gate.read().unwrap_or_else(PoisonError::into_inner);
+                    let mut looked = look(entry, shared, &|_| {}, &words);
+                    drop(reading);
+                    if too_large.get() && workers > 1 {
+                        let _alone = gate.write().unwrap_or_else(PoisonError::into_inner);
+                        looked = look(entry, how, &|_| {}, &|e| describe(path, e));
+                    }
+                    if tx.send((i, looked)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut waiting = std::collections::BTreeMap::new();
+        let mut due = 0;
+        for (i, looked) in rx {
+            waiting.insert(i, looked);
+            while let Some(looked) = waiting.remove(&due) {
+                emit(due, looked);
+                due += 1;
+            }
+        }
+    });
+}
