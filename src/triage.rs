@@ -67,13 +67,42 @@ impl Entry {
 }
 
 /// Block `k` (from 1) of `n` contiguous blocks of `items`: the volumes one machine of `n` takes,
-/// so that the blocks of `k = 1..=n` are the whole list, each item in exactly one.
-pub fn shard<T>(items: &[T], k: usize, n: usize) -> &[T] {
+/// so that the blocks of `k = 1..=n` are the whole list, each item in exactly one, for any `k`
+/// and `n` up to `u64::MAX` (block `k` is `[(k-1)·len/n, k·len/n)`, computed in 128 bits, so
+/// the last block ends at the last item). Empty when `k` is not in `1..=n`.
+pub fn shard<T>(items: &[T], k: u64, n: u64) -> &[T] {
     if n == 0 || k == 0 || k > n {
         return &[];
     }
-    let len = items.len();
-    &items[(k - 1) * len / n..k * len / n]
+    let len = items.len() as u128;
+    let at = |k: u64| (u128::from(k) * len / u128::from(n)) as usize;
+    &items[at(k - 1)..at(k)]
+}
+
+/// `entries` sorted, with one entry per file however it was spelled (`DIR/a.nii`, `./DIR/a.nii`
+/// and its absolute path are one file: the same device and inode), the first spelling in sorted
+/// order kept. A path that cannot be looked up is told apart by its spelling.
+pub fn dedupe(entries: &mut Vec<Entry>) {
+    entries.sort();
+    entries.dedup();
+    let mut seen = std::collections::HashSet::new();
+    entries.retain(|e| seen.insert((identity(&e.path), e.series.clone())));
+}
+
+/// What a file is, whatever its spelling: its device and inode (its canonical path where there
+/// are no inodes), else its path as spelled.
+fn identity(path: &Path) -> Result<(u64, u64), PathBuf> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(path)
+            .map(|m| (m.dev(), m.ino()))
+            .map_err(|_| path.to_path_buf())
+    }
+    #[cfg(not(unix))]
+    {
+        Err(path.canonicalize().unwrap_or_else(|_| path.to_path_buf()))
+    }
 }
 
 #[cfg(test)]
@@ -100,5 +129,69 @@ mod tests {
             assert_eq!(joined, items, "{n} shards");
         }
         assert!(shard(&items, 0, 3).is_empty() && shard(&items, 4, 3).is_empty());
+        let big = 1 << 63;
+        assert_eq!(
+            shard(&items, big, big),
+            &[9],
+            "the last shard holds the last volume"
+        );
+        assert_eq!(shard(&items, u64::MAX, u64::MAX), &[9]);
+        assert_eq!(shard(&items, 1, u64::MAX), &[] as &[usize]);
+    }
+
+    proptest::proptest! {
+        /// Shard `k` begins where shard `k - 1` ends, the first at 0 and the last ends at the
+        /// end, each holding ⌊len/n⌋ or ⌈len/n⌉ items: by induction, an exact partition of the
+        /// set, for any `n` up to `u64::MAX`.
+        #[test]
+        fn shards_partition_the_set_for_any_k_and_n(
+            len in 0usize..300,
+            n in proptest::prop_oneof![1u64..40, 1u64..=u64::MAX],
+            k in 1u64..=u64::MAX,
+        ) {
+            let items: Vec<usize> = (0..len).collect();
+            let k = (k - 1) % n + 1;
+            // Where a block lies in `items`, as [start, end).
+            let span = |k: u64| {
+                let block = shard(&items, k, n);
+                let start = (block.as_ptr() as usize - items.as_ptr() as usize)
+                    / std::mem::size_of::<usize>();
+                (start, start + block.len())
+            };
+            let (start, end) = span(k);
+            let (lo, hi) = (len as u64 / n, (len as u64).div_ceil(n));
+            proptest::prop_assert!((lo..=hi).contains(&((end - start) as u64)));
+            let before = if k == 1 { 0 } else { span(k - 1).1 };
+            proptest::prop_assert_eq!(start, before);
+            proptest::prop_assert_eq!(span(n).1, len);
+            if n <= 40 {
+                let joined: Vec<usize> =
+                    (1..=n).flat_map(|k| shard(&items, k, n).to_vec()).collect();
+                proptest::prop_assert_eq!(joined, items);
+            }
+        }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn one_entry_per_file_however_spelled() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.nii");
+        std::fs::write(&a, b"x").unwrap();
+        std::os::unix::fs::symlink(dir.path(), dir.path().join("link")).unwrap();
+        let linked = dir.path().join("link/a.nii");
+        let mut entries = vec![
+            Entry::file(&linked),
+            Entry::file(&a),
+            Entry::file(dir.path().join("./a.nii")),
+            Entry::file(dir.path().join("gone.nii")),
+            Entry::file(dir.path().join("gone2.nii")),
+        ];
+        dedupe(&mut entries);
+        let names: Vec<&std::ffi::OsStr> = entries
+            .iter()
+            .map(|e| e.path.strip_prefix(dir.path()).unwrap().as_os_str())
+            .collect();
+        assert_eq!(names, ["a.nii", "gone.nii", "gone2.nii"]);
     }
 }

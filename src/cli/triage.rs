@@ -12,7 +12,8 @@ use slabscope::error::names::controls;
 use slabscope::error::shown;
 use slabscope::render::{ImageOutput, encode, sheet};
 use slabscope::triage::{
-    Entry, TriageOutcome, TriagePlan, TriageRow, discover, manifest_lines, parse_manifest, shard,
+    Entry, TriageOutcome, TriagePlan, TriageRow, dedupe, discover, manifest_lines, parse_manifest,
+    shard,
 };
 use slabscope::{Error, Progress};
 
@@ -42,7 +43,7 @@ pub struct TriageArgs {
     /// Take the K-th of N contiguous blocks of the sorted volumes (K from 1), e.g.
     /// `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
     #[arg(long, value_name = "K/N", value_parser = parse_shard)]
-    pub shard: Option<(usize, usize)>,
+    pub shard: Option<(u64, u64)>,
     /// The view search on the voxels' own lattice over every phase, not the fast path's twice
     /// coarser lattice over 4 phases (used unless --ray-spacing or --sample-spacing is given, on
     /// volumes of 32 voxels a side or more).
@@ -67,8 +68,8 @@ pub struct TriageArgs {
     pub load: LoadArgs,
 }
 
-fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    super::args::pair::<usize>(s, &['/'])
+fn parse_shard(s: &str) -> Result<(u64, u64), String> {
+    super::args::pair::<u64>(s, &['/'])
         .filter(|&(k, n)| (1..=n).contains(&k))
         .ok_or_else(|| format!("{s:?} is not K/N with 1 <= K <= N, e.g. 3/10"))
 }
@@ -109,6 +110,9 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
         for line in manifest_lines(&volumes) {
             outln!("{line}");
         }
+        return Ok(0);
+    }
+    if volumes.is_empty() {
         return Ok(0);
     }
     if args.csv {
@@ -179,18 +183,32 @@ fn check_sheet(args: &TriageArgs, volumes: &[Entry]) -> Result<()> {
     Ok(())
 }
 
-/// The volumes a run takes: from the manifest or the walk, sorted, then its shard.
+/// The volumes a run takes: from the manifest or the walk, sorted, one entry per file, then its
+/// shard. No volumes at all is an error; an empty shard of some is said in a note.
 fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
     let mut all = match &args.manifest {
         Some(m) => read_manifest(m)?,
         None => discover(&args.paths, &args.load.options())?,
     };
-    all.sort();
-    all.dedup();
-    Ok(match args.shard {
-        Some((k, n)) => shard(&all, k, n).to_vec(),
-        None => all,
-    })
+    dedupe(&mut all);
+    if all.is_empty() {
+        if let Some(m) = &args.manifest {
+            bail!("{}: no volumes found in the manifest", shown(m));
+        }
+        let paths: Vec<String> = args.paths.iter().map(|p| shown(p)).collect();
+        bail!("no volumes found under {}", paths.join(", "));
+    }
+    let Some((k, n)) = args.shard else {
+        return Ok(all);
+    };
+    let part = shard(&all, k, n).to_vec();
+    if part.is_empty() {
+        eprintln!(
+            "slabscope: note: shard {k}/{n} of {} volumes is empty (more shards than volumes)",
+            all.len()
+        );
+    }
+    Ok(part)
 }
 
 /// Every volume's row (and cell), looked at as `slabscope::triage::look_all` does, errors worded

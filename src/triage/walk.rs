@@ -19,8 +19,7 @@ pub fn discover(paths: &[PathBuf], opts: &LoadOptions) -> Result<Vec<Entry>> {
             _ => push(&mut found, Entry::file(path.clone()))?,
         }
     }
-    found.sort();
-    found.dedup();
+    super::dedupe(&mut found);
     Ok(found)
 }
 

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::common::{Ran, data, rows, run};
+use crate::common::{Ran, data, rows, run, s};
 
 /// A tree of volumes in every format, a folder of slices, two broken files and a stray text
 /// file.
@@ -343,4 +343,99 @@ fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alon
     assert_eq!(code, 1);
     let error = rows(&stdout)[0]["error"].as_str().unwrap().to_string();
     assert!(error.contains("raise it with --max-memory"), "{error}");
+}
+
+#[test]
+fn triage_shards_any_k_of_n_up_to_u64_max_and_an_empty_shard_is_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["a.nii", "b.nii", "c.nii"] {
+        std::fs::copy(data("ramp_u8.nii"), dir.path().join(name)).unwrap();
+    }
+    let root = dir.path().to_str().unwrap();
+    for (k_n, want) in [
+        ("9223372036854775808/9223372036854775808", Some("c.nii")),
+        ("18446744073709551615/18446744073709551615", Some("c.nii")),
+        ("18446744073709551614/18446744073709551615", None),
+        ("1/18446744073709551615", None),
+        ("3/3", Some("c.nii")),
+    ] {
+        let shard = format!("--shard={k_n}");
+        let Ran {
+            code,
+            stdout,
+            stderr,
+            ..
+        } = run(&["triage", root, "--list", &shard]);
+        assert_eq!(code, 0, "{k_n}: {stderr}");
+        let listed: Vec<&str> = stdout.lines().skip(1).collect();
+        if let Some(name) = want {
+            assert_eq!(listed, [format!("{root}/{name}")], "{k_n}");
+            assert!(stderr.is_empty(), "{k_n}: {stderr}");
+        } else {
+            assert!(listed.is_empty(), "{k_n}: {stdout}");
+            assert!(
+                stderr.contains(&format!("note: shard {k_n} of 3 volumes is empty")),
+                "{k_n}: {stderr}"
+            );
+        }
+    }
+    let Ran { code, stdout, .. } = run(&["triage", root, "--json", "--shard=1/9"]);
+    assert_eq!(
+        (code, stdout.as_str()),
+        (0, ""),
+        "an empty shard: no rows, exit 0"
+    );
+}
+
+#[test]
+fn triage_gives_one_row_per_file_however_spelled_and_nothing_found_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let archive = dir.path().join("archive");
+    std::fs::create_dir(&archive).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), archive.join("a.nii")).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), archive.join("b.nii")).unwrap();
+    let absolute = archive.join("a.nii");
+    let out = crate::common::slabscope()
+        .current_dir(dir.path())
+        .args(["triage", "--list", "archive", "./archive/a.nii"])
+        .arg(&absolute)
+        .output()
+        .unwrap();
+    let listed = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(
+        listed.lines().count(),
+        1 + 2,
+        "a.nii once, b.nii once: {listed}"
+    );
+    // The same through a manifest that names a file twice.
+    let manifest = dir.path().join("m.txt");
+    let twice = format!(
+        "{0}\n{0}\n{1}/./a.nii\n",
+        absolute.display(),
+        archive.display()
+    );
+    std::fs::write(&manifest, twice).unwrap();
+    let Ran { code, stdout, .. } = run(&["triage", "--manifest", s(&manifest), "--list"]);
+    assert_eq!((code, stdout.lines().count()), (0, 2), "{stdout}");
+    // Nothing at all: an error, exit 2, not a silent success.
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let Ran {
+        code,
+        stdout,
+        stderr,
+        ..
+    } = run(&["triage", s(&empty)]);
+    assert_eq!((code, stdout.as_str()), (2, ""));
+    assert!(
+        stderr.contains(&format!("no volumes found under {}", empty.display())),
+        "{stderr}"
+    );
+    std::fs::write(&manifest, "\n\n").unwrap();
+    let Ran { code, stderr, .. } = run(&["triage", "--manifest", s(&manifest)]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("no volumes found in the manifest"),
+        "{stderr}"
+    );
 }
