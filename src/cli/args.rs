@@ -2,6 +2,7 @@
 //! partition). `slabscope [FILE]` takes the same analysis flags as `analyze`.
 
 use clap::{Args, ValueEnum};
+use slabscope::analysis::AxisBy;
 use slabscope::geometry::AxisChoice;
 use slabscope::volume::background::BackgroundRule;
 use slabscope::volume::io::{RawOptions, default_max_memory, parse_bytes, parse_dims};
@@ -103,6 +104,13 @@ pub struct AnalysisArgs {
     /// sagittal (the volume axis nearest that plane's normal; needs a stated orientation).
     #[arg(long, default_value = "best", value_parser = parse_axis)]
     pub axis: AxisChoice,
+    /// Which ranking picks the axis: entropy (the lowest entropy rate, the paper's most
+    /// structured view) or gain (the axes ranked by the information their top-down slabs keep).
+    #[arg(long, value_enum, default_value_t = AxisByArg::Entropy)]
+    pub axis_by: AxisByArg,
+    /// Rank the axes by partition gain too, without changing which ranking picks the axis.
+    #[arg(long)]
+    pub gain: bool,
     /// How to find the slabs.
     #[arg(long, value_enum, default_value_t = MethodArg::Topdown)]
     pub method: MethodArg,
@@ -124,6 +132,15 @@ fn parse_axis(s: &str) -> Result<AxisChoice, String> {
     s.parse().map_err(|_| {
         format!("{s:?} is not best, x, y, z, axial, coronal, sagittal or a direction DX,DY,DZ")
     })
+}
+
+/// The rankings that can pick the axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AxisByArg {
+    /// The lowest entropy rate (paper §4).
+    Entropy,
+    /// The most information kept by the axis's top-down slabs.
+    Gain,
 }
 
 /// The partition methods.
@@ -195,6 +212,11 @@ impl AnalysisArgs {
                 (k, None) => Stop::Slabs(k.unwrap_or(4)),
             },
             background: self.background,
+            axis_by: match self.axis_by {
+                AxisByArg::Entropy => AxisBy::Entropy,
+                AxisByArg::Gain => AxisBy::Gain,
+            },
+            gain: self.gain,
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The analysis as text for people: the views with the verdict on the best, then the slabs.
 //! Slab ranges read `slices 0–44`, inclusive; the JSON keeps half-open `[start, end)`.
 
+use slabscope::analysis::{AxisBy, GainRanking};
 use slabscope::geometry::WorldAxis;
 use slabscope::partition::{Step, slab_text};
 use slabscope::view::{AxisEntropy, RankedBy, ViewSearch, icosphere, score};
@@ -10,7 +11,15 @@ use slabscope::{Analysis, Axis, Partition, Volume};
 /// Prints the whole analysis of `volume`, read from `name`.
 pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
     if let Some(v) = &analysis.views {
-        print_views(name, volume, v);
+        let gain_pick = analysis
+            .gain
+            .as_ref()
+            .filter(|_| analysis.axis_by == Some(AxisBy::Gain));
+        print_views(name, volume, v, gain_pick);
+        if let Some(g) = &analysis.gain {
+            outln!();
+            print_gain(v, g, analysis.axis_by);
+        }
         outln!();
     }
     print_partition(&analysis.partition);
@@ -51,7 +60,7 @@ fn count(n: usize, one: &str, many: &str) -> String {
     }
 }
 
-fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
+fn print_views(name: &str, volume: &Volume, v: &ViewSearch, gain_pick: Option<&GainRanking>) {
     let p = &v.params;
     let [sx, sy, sz] = volume.spacing();
     let orientation = volume.transform().axcodes().map_or_else(
@@ -85,13 +94,16 @@ fn print_views(name: &str, volume: &Volume, v: &ViewSearch) {
     }
     outln!();
     let known = volume.transform().known;
-    print_view_table(v, known);
+    print_view_table(v, known, gain_pick);
     outln!();
     print_verdict(v);
 }
 
-fn print_view_table(v: &ViewSearch, known: bool) {
+/// The table of the views, the chosen axis marked: the entropy rate's best, or the gain's
+/// (`gain_pick`, whose order the rows take) when the gain ranking picked the axis.
+fn print_view_table(v: &ViewSearch, known: bool, gain_pick: Option<&GainRanking>) {
     let phases = v.ranked_by == RankedBy::PhaseMean;
+    let gains = v.views.iter().any(|a| a.partition_gain.is_some());
     let anatomy = if known {
         format!("{:<15}", "anatomy")
     } else {
@@ -100,7 +112,15 @@ fn print_view_table(v: &ViewSearch, known: bool) {
     out!(
         "  rank    axis                          {anatomy}azim    elev   h (bits)   H(X^1)  H(X^L)/L"
     );
-    outln!("{}", if phases { "   mean h ± se" } else { "" });
+    out!("{}", if phases { "   mean h ± se" } else { "" });
+    outln!(
+        "{}",
+        if gains {
+            "     gain (bits)  mean ± se"
+        } else {
+            ""
+        }
+    );
     let show = |rank: String, mark: &str, a: &AxisEntropy| {
         let anatomy = if known {
             format!("{:<15}", a.world.anatomy_text())
@@ -126,21 +146,24 @@ fn print_view_table(v: &ViewSearch, known: bool) {
             a.h1,
             a.per_symbol
         );
-        match a.phases {
-            Some(s) => outln!("   {:.4} ± {:.4}", s.mean, s.se()),
-            None => outln!(),
+        if let Some(s) = a.phases {
+            out!("   {:.4} ± {:.4}", s.mean, s.se());
+        }
+        match (a.partition_gain, a.gain_phases) {
+            (Some(g), Some(s)) => outln!("   {g:9.4}  {:.4} ± {:.4}", s.mean, s.se()),
+            _ => outln!(),
         }
     };
-    for (i, a) in v.views.iter().enumerate() {
-        let mark = if i == 0 && v.refined.is_none() {
-            "*"
-        } else {
-            ""
+    let rows = gain_pick.map_or_else(|| v.views.clone(), |g| g.sorted(&v.views));
+    for (i, a) in rows.iter().enumerate() {
+        let chosen = match gain_pick {
+            Some(g) => a.axis == g.refined.axis,
+            None => i == 0 && v.refined.is_none(),
         };
-        show((i + 1).to_string(), mark, a);
+        show((i + 1).to_string(), if chosen { "*" } else { "" }, a);
     }
     if let Some(r) = &v.refined {
-        show("ref".into(), "*", r);
+        show("ref".into(), if gain_pick.is_none() { "*" } else { "" }, r);
     }
 }
 
@@ -194,6 +217,76 @@ fn print_verdict(v: &ViewSearch) {
         }
     }
 }
+
+/// The gain ranking's verdict: its best axis, how sure, and whether the entropy rate agrees.
+fn print_gain(v: &ViewSearch, g: &GainRanking, axis_by: Option<AxisBy>) {
+    let best = &g.refined;
+    let s = g.sampling;
+    let sphere = &g.views[0];
+    let from = if best.axis == sphere.axis {
+        String::new()
+    } else {
+        format!(
+            ", refined from the best sphere axis {} ({:.4} bits)",
+            axis_text(sphere.axis),
+            sphere.gain_phases.mean
+        )
+    };
+    outln!(
+        "by gain  {}\n         keeps {:.4} bits in {}{from}",
+        world_axis_text(best.axis, &best.world),
+        best.partition_gain,
+        count(s.slabs, "top-down slab", "top-down slabs"),
+    );
+    let pixels = if s.every == 1 {
+        "every pixel of each slice".to_string()
+    } else {
+        format!("one pixel in {} along each direction of a slice", s.every)
+    };
+    outln!(
+        "         mean {:.4} ± {:.4} over {} of {pixels}",
+        best.gain_phases.mean,
+        best.gain_phases.se(),
+        count(best.gain_phases.n, "phase", "phases"),
+    );
+    if g.uncertain() {
+        outln!(
+            "         uncertain: {} within two standard errors of the difference:",
+            count(
+                g.contenders.len() - 1,
+                "other axis keeps",
+                "other axes keep"
+            )
+        );
+        for other in &g.contenders[1..] {
+            outln!(
+                "           {}  mean gain {:.4} ± {:.4}",
+                axis_text(other.axis),
+                other.mean,
+                other.se
+            );
+        }
+    } else {
+        outln!("         clear: no other axis keeps as much within two standard errors");
+    }
+    let entropy = v.best().axis;
+    let apart = slabscope::view::axis_angle(entropy, best.axis);
+    if apart > AGREE_DEGREES {
+        outln!(
+            "         entropy rate prefers {}; slabs keep most along {} ({apart:.1}° apart)",
+            axis_text(entropy),
+            axis_text(best.axis),
+        );
+    } else {
+        outln!("         the entropy rate agrees ({apart:.1}° apart)");
+    }
+    if let Some(by) = axis_by {
+        outln!("         the axis partitioned is chosen by {}", by.name());
+    }
+}
+
+/// Two rankings whose best axes lie within this angle agree, degrees.
+const AGREE_DEGREES: f64 = 5.0;
 
 fn print_partition(p: &Partition) {
     outln!(

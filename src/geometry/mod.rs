@@ -106,6 +106,15 @@ pub fn frame(d: [f64; 3]) -> Result<([f64; 3], [f64; 3], [f64; 3])> {
     Ok((d, u, cross(d, u)))
 }
 
+/// A unit direction's azimuth (the angle of its projection on the x-y plane from +x) and
+/// elevation (its angle above the x-y plane), degrees; never -0, for display.
+pub fn azimuth_elevation(d: [f64; 3]) -> (f64, f64) {
+    (
+        d[1].atan2(d[0]).to_degrees() + 0.0,
+        d[2].clamp(-1.0, 1.0).asin().to_degrees() + 0.0,
+    )
+}
+
 /// The smallest of three spacings.
 pub fn min_spacing(spacing: [f64; 3]) -> f64 {
     spacing.iter().copied().fold(f64::INFINITY, f64::min)

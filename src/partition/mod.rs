@@ -18,7 +18,9 @@ pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{
     Comparison, Partition, PartitionParams, Step, Stop, label_bytes, label_volume, partition,
 };
-pub use stack::{BackgroundSummary, MISSING, SliceStack, StackParams, slice_geometry};
+pub use stack::{
+    BackgroundSummary, InPlane, MISSING, SliceStack, StackParams, sampled_gain, slice_geometry,
+};
 pub use streamed::{partition_streamed, streamed_memory_floor};
 pub use top_down::{Split, SplitHistory};
 

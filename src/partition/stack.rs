@@ -13,7 +13,7 @@ use crate::geometry::lattice::{Lattice, SamplingParams};
 use crate::volume::background::{Background, BackgroundRule};
 
 pub(crate) use self::cut::Cutter;
-pub use self::cut::slice_geometry;
+pub use self::cut::{InPlane, sampled_gain, slice_geometry};
 
 /// The symbol of a sample that does not count: outside the volume, missing, or background.
 pub const MISSING: u8 = u8::MAX;

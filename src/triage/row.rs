@@ -46,6 +46,16 @@ pub struct TriageRow {
     pub entropy_rate: Option<f64>,
     /// Whether another axis is a contender (null on the paper's single lattice).
     pub uncertain: Option<bool>,
+    /// With the gain ranking (`--gain`, `--axis-by gain`): the axis whose top-down slabs keep
+    /// the most.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gain_axis: Option<[f64; 3]>,
+    /// With the gain ranking: the information its slabs keep, bits.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub partition_gain: Option<f64>,
+    /// With the gain ranking: whether another axis keeps as much within two standard errors.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gain_uncertain: Option<bool>,
     /// The axis partitioned along.
     pub axis: Option<[f64; 3]>,
     /// The slabs along it, `[start, end)` slice indices.
@@ -73,6 +83,9 @@ impl TriageRow {
             anatomy: None,
             entropy_rate: None,
             uncertain: None,
+            gain_axis: None,
+            partition_gain: None,
+            gain_uncertain: None,
             axis: None,
             slabs: None,
         }
@@ -120,6 +133,11 @@ impl TriageRow {
             self.anatomy.clone_from(&best.world.anatomy);
             self.entropy_rate = Some(crate::view::score(best));
             self.uncertain = views.uncertain;
+        }
+        if let Some(g) = &analysis.gain {
+            self.gain_axis = Some(g.refined.axis);
+            self.partition_gain = Some(g.refined.partition_gain);
+            self.gain_uncertain = Some(g.uncertain());
         }
         let p = &analysis.partition;
         if self.anatomy.is_none() {

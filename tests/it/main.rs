@@ -15,6 +15,7 @@ mod contract;
 mod dicom;
 mod formats;
 mod fuzz_headers;
+mod gain;
 mod names;
 mod native;
 mod nifti2;

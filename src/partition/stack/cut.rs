@@ -2,6 +2,7 @@
 //! resampled on the ray lattice along an oblique one, each sample quantized (or left out as
 //! background) and each slice's sum and count of values kept for slab means.
 
+use std::borrow::Cow;
 use std::ops::Range;
 
 use rayon::prelude::*;
@@ -13,6 +14,10 @@ use crate::progress::Monitor;
 use crate::volume::background::Background;
 use crate::volume::interpolate::Interpolator;
 use crate::volume::{Quantizer, Volume, Voxel};
+
+mod sparse;
+
+pub use self::sparse::{InPlane, sampled_gain};
 
 /// Pixels a task of a cut along a coordinate axis fills.
 const CUT_BLOCK: usize = 4096;
@@ -85,7 +90,7 @@ pub(crate) struct Cutter<'a> {
     axis: [f64; 3],
     bins: usize,
     quantizer: Quantizer,
-    background: Background,
+    background: Cow<'a, Background>,
     /// The lattice of an oblique axis; `None` along a coordinate axis.
     lattice: Option<Lattice>,
 }
@@ -98,15 +103,29 @@ impl<'a> Cutter<'a> {
         params: &StackParams,
         monitor: &Monitor,
     ) -> Result<Self> {
+        let background = Background::find(volume, params.background, monitor)?;
+        Self::with(volume, axis, params, Cow::Owned(background), |d| {
+            oblique_lattice(volume, d, params)
+        })
+    }
+
+    /// The cutter of `volume` along `axis` (made canonical) with `background`, and `lattice`
+    /// of the canonical direction for an oblique axis.
+    fn with(
+        volume: &'a Volume,
+        axis: [f64; 3],
+        params: &StackParams,
+        background: Cow<'a, Background>,
+        lattice: impl FnOnce([f64; 3]) -> Result<Lattice>,
+    ) -> Result<Self> {
         let d = canonical(normalize(axis).ok_or_else(|| {
             Error::invalid("axis", format!("{axis:?}"), "a direction with a length")
         })?);
         let quantizer = volume.quantizer(params.sampling.bins)?;
         let lattice = match coordinate_axis(d) {
             Some(_) => None,
-            None => Some(oblique_lattice(volume, d, params)?),
+            None => Some(lattice(d)?),
         };
-        let background = Background::find(volume, params.background, monitor)?;
         let axis = coordinate_axis(d).map_or(d, |m| std::array::from_fn(|i| f64::from(i == m)));
         Ok(Self {
             volume,
@@ -175,18 +194,21 @@ impl<'a> Cutter<'a> {
         }
     }
 
+    /// The symbol of a sample of value `v` whose voxel (the nearest, for an interpolated one)
+    /// is at linear `index`: its bin, or [`MISSING`] for background and values that do not count.
+    #[inline]
+    fn symbol(&self, index: usize, v: f32) -> u8 {
+        if self.background.contains(index, v) {
+            MISSING
+        } else {
+            self.quantizer.bin(v).unwrap_or(MISSING)
+        }
+    }
+
     /// The stack of the pixels of `rows`, without the per-slice sums (a strip's positions are
     /// its own).
     pub(crate) fn cut(&self, rows: Range<usize>, monitor: &Monitor) -> Result<SliceStack> {
-        let (q, background) = (&self.quantizer, &self.background);
-        // A sample's voxel (the nearest, for an interpolated one) and value.
-        let keep = |index: usize, v: f32| -> u8 {
-            if background.contains(index, v) {
-                MISSING
-            } else {
-                q.bin(v).unwrap_or(MISSING)
-            }
-        };
+        let keep = |index: usize, v: f32| self.symbol(index, v);
         match (&self.lattice, coordinate_axis(self.axis)) {
             (Some(lattice), _) => self.along_lattice(lattice, rows, &keep, monitor),
             (None, Some(m)) => self.along_coordinate(m, rows, &keep, monitor),

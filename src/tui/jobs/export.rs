@@ -45,6 +45,8 @@ pub(super) fn export(
     write_new(&png, &image.png()?)?;
     let analysis = Analysis {
         views: r.views.clone(),
+        gain: None,
+        axis_by: None,
         notes: slabscope::analysis::notes(volume, volume, &r.view_params, &part),
         partition: part,
     };

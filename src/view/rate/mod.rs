@@ -124,11 +124,20 @@ pub struct AxisEntropy {
     /// The entropy rate over lattice phases, when asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub phases: Option<PhaseStats>,
+    /// With the gain ranking: `I(slab; value)`, bits, kept by the top-down partition into K
+    /// slabs along this axis, on the ranking's unshifted pixels (for the axis partitioned, on
+    /// every voxel: the partition's `information`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub partition_gain: Option<f64>,
+    /// With the gain ranking: the gain over its phases, whose mean ranks the axes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gain_phases: Option<PhaseStats>,
 }
 
 impl AxisEntropy {
     fn new(axis: [f64; 3], counts: &BlockCounts, rays: u64) -> Self {
         let (h1, h_short, h_long) = counts.entropies();
+        let (azimuth, elevation) = crate::geometry::azimuth_elevation(axis);
         Self {
             axis,
             world: WorldAxis {
@@ -136,9 +145,8 @@ impl AxisEntropy {
                 anatomy: None,
                 oriented: false,
             },
-            // `+ 0.0` turns -0 into 0 for display.
-            azimuth: axis[1].atan2(axis[0]).to_degrees() + 0.0,
-            elevation: axis[2].clamp(-1.0, 1.0).asin().to_degrees() + 0.0,
+            azimuth,
+            elevation,
             entropy_rate: (h_long - h_short).max(0.0),
             h1,
             h_short,
@@ -148,6 +156,8 @@ impl AxisEntropy {
             samples: counts.symbols(),
             blocks: counts.blocks(),
             phases: None,
+            partition_gain: None,
+            gain_phases: None,
         }
     }
 

@@ -1,7 +1,14 @@
 //! The whole analysis of one volume, as `analyze`, the TUI's export and triage run it: the most
 //! structured view (paper §3.1, §4), then the slabs along it (paper §5).
 
+mod gain;
+
 use std::sync::Arc;
+
+pub use gain::{
+    AxisBy, AxisGain, GainRanking, GainSampling, MAX_EVERY, MIN_PIXELS, THRESHOLD_SLABS,
+    gain_slabs, rank_by_gain, ranking_every,
+};
 
 use crate::error::Result;
 use crate::geometry::AxisChoice;
@@ -29,6 +36,10 @@ pub struct AnalysisParams {
     pub stop: Stop,
     /// The background, left out of every slab histogram.
     pub background: BackgroundRule,
+    /// Which ranking picks the axis (when no axis is given).
+    pub axis_by: AxisBy,
+    /// Rank the axes by partition gain even when the entropy rate picks the axis.
+    pub gain: bool,
 }
 
 impl Default for AnalysisParams {
@@ -40,6 +51,8 @@ impl Default for AnalysisParams {
             method: Method::TopDown,
             stop: Stop::Slabs(4),
             background: BackgroundRule::Auto,
+            axis_by: AxisBy::Entropy,
+            gain: false,
         }
     }
 }
@@ -71,17 +84,27 @@ impl AnalysisParams {
         }
     }
 
-    /// Whether the view search runs.
+    /// Whether the view search runs: the gain ranking's views are its views.
     pub fn runs_search(&self) -> bool {
-        self.axis == AxisChoice::Best || self.search_views
+        self.axis == AxisChoice::Best || self.search_views || self.ranks_by_gain()
+    }
+
+    /// Whether the axes are ranked by partition gain.
+    pub fn ranks_by_gain(&self) -> bool {
+        self.gain || self.axis_by == AxisBy::Gain
     }
 }
 
 /// The result of an analysis.
 #[derive(Clone, Debug)]
 pub struct Analysis {
-    /// The view search, when it ran.
+    /// The view search, when it ran (each axis with its partition gain when that ranking ran;
+    /// [`GainRanking::sorted`] gives them in that ranking's order).
     pub views: Option<ViewSearch>,
+    /// The ranking by partition gain, when asked for.
+    pub gain: Option<GainRanking>,
+    /// Which ranking picked the axis (`None` when the axis was given).
+    pub axis_by: Option<AxisBy>,
     /// The partition along the chosen axis.
     pub partition: Partition,
     /// What the user should know: spacings coarsened to the sample budget, histories cut short.
@@ -179,20 +202,37 @@ pub fn analyze_planned(
 ) -> Result<Analysis> {
     let volume = plan.partition.as_ref();
     let chosen = params.axis.resolve(volume.transform(), volume.spacing())?;
-    let views = if params.runs_search() {
+    let mut views = if params.runs_search() {
         Some(search(&plan.views, &params.view, monitor)?)
     } else {
         None
     };
-    let axis = match (chosen, &views) {
-        (Some(a), _) => a.direction(),
-        (None, Some(v)) => v.best().axis,
-        (None, None) => unreachable!("the view search runs when no axis is given"),
+    let mut gain = if params.ranks_by_gain() {
+        Some(rank_by_gain(&plan.views, params, monitor)?)
+    } else {
+        None
+    };
+    let by_gain = chosen.is_none() && params.axis_by == AxisBy::Gain;
+    if let (Some(g), Some(v)) = (&gain, &mut views) {
+        g.annotate(v);
+    }
+    let axis = match (chosen, &views, &gain) {
+        (Some(a), _, _) => a.direction(),
+        (None, _, Some(g)) if by_gain => g.refined.axis,
+        (None, Some(v), _) => v.best().axis,
+        (None, None, _) => unreachable!("the view search runs when no axis is given"),
     };
     let partition = match plan.streamed {
         Some(room) => partition_streamed(volume, axis, &params.partition(), room, monitor)?,
         None => partition(volume, axis, &params.partition(), monitor)?,
     };
+    if let Some(g) = &mut gain
+        && params.method == Method::TopDown
+        && params.stop == Stop::Slabs(g.sampling.slabs)
+    {
+        // The axis partitioned, counted on every voxel: its gain is the partition's.
+        g.exact(partition.axis, partition.information, views.as_mut());
+    }
     let notes = plan
         .note
         .iter()
@@ -201,6 +241,8 @@ pub fn analyze_planned(
         .collect();
     Ok(Analysis {
         views,
+        gain,
+        axis_by: chosen.is_none().then_some(params.axis_by),
         partition,
         notes,
     })

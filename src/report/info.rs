@@ -1,0 +1,150 @@
+//! The reports of `info`: one volume, with its DICOM series, and the volumes of a folder.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::{GeometryReport, SCHEMA_VERSION};
+use crate::error::Result;
+use crate::volume::VoxelType;
+use crate::volume::io::{DicomSeries, Loaded};
+
+/// The object `info --json` prints for one volume: what it is, where it lies, how its values
+/// spread, and for DICOM which series it is.
+#[derive(Clone, Debug, Serialize)]
+pub struct InfoReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The file as the user named it.
+    pub file: String,
+    /// The format it was read as (`nifti`, `nrrd`, `dicom`, ...).
+    pub format: &'static str,
+    /// `[nx, ny, nz]`.
+    pub dims: [usize; 3],
+    /// `[sx, sy, sz]`, mm.
+    pub spacing: [f64; 3],
+    /// The voxel type of the file (`u8`, `i16`, `f32`, ...).
+    #[serde(rename = "type")]
+    pub voxel_type: VoxelType,
+    /// Smallest and largest finite voxel, null when no voxel is finite.
+    pub range: Option<[f32; 2]>,
+    /// Mean of the finite voxels, null when no voxel is finite.
+    pub mean: Option<f64>,
+    /// Number of voxels.
+    pub voxels: usize,
+    /// Voxels that are NaN or infinite.
+    pub missing: usize,
+    /// The type the voxels are held in: the file's for integers of at most 16 bits that it
+    /// does not scale, else `f32`.
+    pub held_type: VoxelType,
+    /// Bytes the voxels take in memory as held (0 when they are read in place from the file).
+    pub memory_bytes: u64,
+    /// Bytes of the file read in place for the voxels, mapped, not copied (0 when in memory).
+    pub mapped_bytes: u64,
+    /// Bytes the voxels take as the file stores them.
+    pub stored_bytes: u64,
+    /// The voxel-to-world transform: `affine`, `orientation`, `orthogonal`, `world_bounds`.
+    #[serde(flatten)]
+    pub geometry: GeometryReport,
+    /// Voxel counts over equal bins between the smallest and largest finite voxel.
+    pub histogram: Vec<u64>,
+    /// What the loader noticed (a 4D file, a volume picked, ...).
+    pub notes: Vec<String>,
+    /// The DICOM series read, null for other formats.
+    pub dicom: Option<DicomReport>,
+}
+
+/// The DICOM series of an [`InfoReport`].
+#[derive(Clone, Debug, Serialize)]
+pub struct DicomReport {
+    /// The series' key: its `SeriesInstanceUID` (with `#2`, ... on the parts of a split series).
+    pub series: String,
+    /// `SeriesNumber`.
+    pub number: Option<i64>,
+    /// `SeriesDescription`.
+    pub description: String,
+    /// Modality.
+    pub modality: String,
+    /// The transfer syntax, named.
+    pub transfer_syntax: String,
+    /// Patient-identifying fields by name, only when they were asked for (empty otherwise).
+    pub patient: BTreeMap<String, String>,
+}
+
+impl InfoReport {
+    /// The report of `loaded`, read from the file `file`, with a histogram of `bins` bins.
+    pub fn new(file: &str, loaded: &Loaded, bins: usize) -> Result<Self> {
+        let v = &loaded.volume;
+        let s = v.stats();
+        let finite = s.finite > 0;
+        Ok(Self {
+            schema_version: SCHEMA_VERSION,
+            file: file.to_string(),
+            format: loaded.format.name(),
+            dims: v.dims(),
+            spacing: v.spacing(),
+            voxel_type: v.voxel_type(),
+            range: finite.then_some([s.min, s.max]),
+            mean: finite.then_some(s.mean),
+            voxels: v.len(),
+            missing: s.missing,
+            held_type: v.data().held(),
+            memory_bytes: v.memory_bytes(),
+            mapped_bytes: v.mapped_bytes(),
+            stored_bytes: v.stored_bytes(),
+            geometry: GeometryReport::of(v),
+            histogram: v.histogram(bins)?,
+            notes: loaded.notes.clone(),
+            dicom: loaded.dicom.as_ref().map(DicomReport::of),
+        })
+    }
+}
+
+impl DicomReport {
+    /// The report of the series `d`.
+    pub fn of(d: &DicomSeries) -> Self {
+        Self {
+            series: d.key.clone(),
+            number: d.number,
+            description: d.description.clone(),
+            modality: d.modality.clone(),
+            transfer_syntax: d.syntax.clone(),
+            patient: d.patient.iter().cloned().collect(),
+        }
+    }
+}
+
+/// The object `info --json` prints for a folder of several volumes: each one a line of the
+/// list, as `triage` would look at them.
+#[derive(Clone, Debug, Serialize)]
+pub struct FolderReport {
+    /// [`SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The folder as the user named it.
+    pub folder: String,
+    /// The volumes in it.
+    pub volumes: Vec<ListedVolume>,
+}
+
+/// One volume of a [`FolderReport`].
+#[derive(Clone, Debug, Serialize)]
+pub struct ListedVolume {
+    /// The file, or the folder of slices or of DICOM files.
+    pub path: String,
+    /// The DICOM series' key in a folder of DICOM files, else null.
+    pub series: Option<String>,
+    /// How a list names the series (number and description), else null.
+    pub label: Option<String>,
+}
+
+impl FolderReport {
+    /// The report of `folder`, holding `volumes`.
+    pub fn new(folder: &Path, volumes: Vec<ListedVolume>) -> Self {
+        Self {
+            schema_version: SCHEMA_VERSION,
+            folder: crate::error::shown(folder),
+            volumes,
+        }
+    }
+}
