@@ -76,6 +76,8 @@ pub enum Job {
     Views(usize),
     /// The histories along an axis on a pyramid level (0: full resolution).
     Analysis(usize),
+    /// Ranking the axes by partition gain.
+    Gain,
     /// Writing the exports.
     Export,
 }
@@ -92,6 +94,8 @@ pub enum JobMsg {
     Views(usize, Result<Box<ViewSearch>, String>),
     /// The histories along the axis of request `generation`, on a pyramid level.
     Analysis(u64, usize, Result<Arc<Histories>, String>),
+    /// The axes ranked by partition gain.
+    Gain(Result<Box<slabscope::analysis::GainRanking>, String>),
     /// A render of request `generation`.
     Rendered(u64, Result<Box<Rendered>, String>),
     /// An export finished: what was written, or why not.
@@ -176,6 +180,9 @@ pub enum Action {
     TogglePerspective,
     /// Leave the background out of the slabs, or count every voxel.
     ToggleBackground,
+    /// Rank the axes by partition gain, once ranked switch the list's order and the sphere's
+    /// colours between the entropy rate and the gain.
+    RankGain,
     /// Write the view (PNG), the analysis (JSON) and the labels (NRRD).
     Export,
     /// The preview pane's size in cells changed.
@@ -285,6 +292,12 @@ pub struct ExportRequest {
     pub histories: Arc<Histories>,
     /// The view search, when done.
     pub views: Option<ViewSearch>,
+    /// The gain ranking, when done, and the ranking that picked the axis (none when the user
+    /// did).
+    pub gain: Option<(
+        slabscope::analysis::GainRanking,
+        Option<slabscope::analysis::AxisBy>,
+    )>,
     /// The view search's parameters.
     pub view_params: ViewParams,
     /// The method and position in its history.
@@ -308,6 +321,8 @@ pub enum Effect {
     SearchViews(ViewParams, usize),
     /// Compute the histories along `axis` as request `generation`, on a pyramid level.
     Analyze(u64, [f64; 3], StackParams, usize),
+    /// Rank every axis by partition gain with these parameters.
+    RankGain(Box<slabscope::AnalysisParams>),
     /// Render.
     Render(Box<RenderRequest>),
     /// Write exports.
@@ -332,6 +347,7 @@ impl std::fmt::Debug for Effect {
             Self::Load => write!(f, "Load"),
             Self::SearchViews(_, level) => write!(f, "SearchViews(level {level})"),
             Self::Analyze(g, axis, _, level) => write!(f, "Analyze({g}, {axis:?}, level {level})"),
+            Self::RankGain(_) => write!(f, "RankGain"),
             Self::Render(r) => write!(f, "Render({})", r.generation),
             Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),
             Self::Open(p) => write!(f, "Open({})", p.name()),

@@ -66,6 +66,7 @@ pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {
         KeyCode::Char('P') => Action::TogglePerspective,
         KeyCode::Char('e') => Action::Export,
         KeyCode::Char('b') => Action::ToggleBackground,
+        KeyCode::Char('i') => Action::RankGain,
         _ => return None,
     })
 }
@@ -81,7 +82,7 @@ pub const HELP: &[(&str, &str)] = &[
     ("Home End", "start / end of the history"),
     ("+ -", "one slab more / fewer"),
     ("t", "threshold (empty clears)"),
-    ("b", "background: left out (auto) / counted"),
+    ("b  i", "background out / counted; rank by gain, h / gain"),
     ("[ ] { }", "orbit: azimuth, elevation"),
     ("z Z", "zoom in / out"),
     ("s S", "spread less / more"),
@@ -102,6 +103,7 @@ pub const GLOSSARY: &[(&str, &str)] = &[
     ("", "lower is more structured; mean over lattice phases"),
     ("H(X^L)", "entropy of L samples in a row, bits"),
     ("* ≈", "the best axis; a contender within 2 std. errors"),
+    ("gain", "information K top-down slabs along an axis keep"),
     ("ΔI", "information a cut gains (JS divergence, weighted)"),
     ("I", "information the slabs keep about the intensity"),
     ("NMI", "normalized mutual information of two slabs"),

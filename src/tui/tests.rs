@@ -101,6 +101,8 @@ fn key(c: char) -> Event {
     Event::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE))
 }
 
+mod gain;
+
 #[test]
 fn the_analysis_opens_on_four_top_down_slabs() {
     let app = ready_app();

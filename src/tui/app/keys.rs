@@ -75,6 +75,7 @@ impl App {
             Action::Type(_) | Action::Erase | Action::Submit => vec![],
             Action::Export => self.export(),
             Action::ToggleBackground => self.toggle_background(),
+            Action::RankGain => self.rank_gain(),
             Action::PreviewArea(w, h) => {
                 if (w, h) == self.preview.cells {
                     return vec![];

@@ -3,6 +3,7 @@
 //! partition changes. Here: the state, what the jobs' messages do to it and how the panes are kept
 //! in step; the keys are handled in `keys`.
 
+mod gain;
 mod keys;
 mod refine;
 
@@ -204,6 +205,10 @@ impl App {
             name: self.name.clone(),
             histories: Arc::clone(histories),
             views: self.views.views.ready().cloned(),
+            gain: self.views.gain.ready().cloned().map(|g| {
+                let by = self.picked_by(&g);
+                (g, by)
+            }),
             view_params: self.params.view.clone(),
             method: self.part.method,
             position: self.part.position,
@@ -279,6 +284,7 @@ impl App {
                 vec![]
             }
             JobMsg::Views(level, result) => self.on_views(level, result),
+            JobMsg::Gain(result) => self.on_gain(result),
             JobMsg::Analysis(generation, level, result) => {
                 self.on_histories(generation, level, result)
             }
@@ -327,6 +333,9 @@ impl App {
         self.volume = Load::Ready(volume);
         self.views.views = Load::started("view search");
         let mut effects = vec![Effect::SearchViews(self.params.view.clone(), level)];
+        if self.params.ranks_by_gain() {
+            effects.extend(self.start_gain());
+        }
         match chosen {
             Ok(Some(axis)) => effects.extend(self.analyze(axis.direction())),
             Ok(None) => {}
@@ -344,6 +353,7 @@ impl App {
             Job::Views(_) if self.views.views.running() => self.views.views = Load::Running(p),
             Job::Analysis(level) => self.part.progress(p, level),
             Job::Export if self.export.running() => self.export = Load::Running(p),
+            Job::Gain if self.views.gain.running() => self.views.gain = Load::Running(p),
             _ => return,
         }
         self.sync_status();
@@ -385,6 +395,7 @@ impl App {
         s.jobs.clear();
         for (job, load) in [
             ("views", self.views.views.status()),
+            ("gain", self.views.gain.status()),
             ("histories", self.part.histories.status()),
             ("export", self.export.status()),
         ] {

@@ -86,14 +86,19 @@ impl App {
         let full = level == 0 && self.refine.is_some();
         let mut effects = vec![];
         match result {
-            Ok(views) if full => {
+            Ok(mut views) if full => {
+                if let Load::Ready(g) = &self.views.gain {
+                    g.annotate(&mut views);
+                }
                 let best = views.best().axis;
                 let previous = self.views.views.ready().map(|v| v.best().axis);
                 self.views.row = self.views.row.min(views.views.len().saturating_sub(1));
                 self.views.views = Load::Ready(*views);
                 let refine = self.refine.as_mut().expect("full is a refinement");
                 refine.views = Load::Ready(());
-                let moved = refine.auto_axis && self.part.axis.is_some_and(|a| !same(a, best));
+                let moved = refine.auto_axis
+                    && !self.gain_picks()
+                    && self.part.axis.is_some_and(|a| !same(a, best));
                 if moved {
                     self.status.message = Some(format!(
                         "{}: the best axis is {} (the preview's was {})",
@@ -106,11 +111,14 @@ impl App {
                     effects.extend(self.refine_histories());
                 }
             }
-            Ok(views) => {
+            Ok(mut views) => {
+                if let Load::Ready(g) = &self.views.gain {
+                    g.annotate(&mut views);
+                }
                 let best = views.best().axis;
                 self.views.views = Load::Ready(*views);
                 self.views.row = 0;
-                if self.part.axis.is_none() {
+                if self.part.axis.is_none() && !self.gain_picks() {
                     if let Some(r) = self.refine.as_mut() {
                         r.auto_axis = true;
                     }
@@ -282,12 +290,12 @@ impl App {
 }
 
 /// Whether two unit axes are the same line.
-fn same(a: [f64; 3], b: [f64; 3]) -> bool {
+pub(super) fn same(a: [f64; 3], b: [f64; 3]) -> bool {
     slabscope::geometry::dot(a, b).abs() > 1.0 - 1e-9
 }
 
 /// An axis in few characters.
-fn axis_text(a: [f64; 3]) -> String {
+pub(super) fn axis_text(a: [f64; 3]) -> String {
     slabscope::Axis::new(a).map_or_else(|_| format!("{a:?}"), |a| a.to_string())
 }
 

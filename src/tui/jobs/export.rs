@@ -45,8 +45,8 @@ pub(super) fn export(
     write_new(&png, &image.png()?)?;
     let analysis = Analysis {
         views: r.views.clone(),
-        gain: None,
-        axis_by: None,
+        gain: r.gain.as_ref().map(|(g, _)| g.clone()),
+        axis_by: r.gain.as_ref().and_then(|&(_, by)| by),
         notes: slabscope::analysis::notes(volume, volume, &r.view_params, &part),
         partition: part,
     };

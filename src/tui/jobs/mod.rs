@@ -107,6 +107,15 @@ impl Jobs {
                     JobMsg::Analysis(generation, level, result)
                 });
             }
+            Effect::RankGain(params) => {
+                let Some(volume) = self.volume.clone() else {
+                    return;
+                };
+                self.spawn(Job::Gain, move |monitor, _| {
+                    let result = slabscope::analysis::rank_by_gain(&volume, &params, monitor);
+                    JobMsg::Gain(result.map(Box::new).map_err(|e| e.to_string()))
+                });
+            }
             Effect::Open(path) => {
                 // The next volume: its own load, views, histories and renders; what the jobs of
                 // the last one still send is dropped.

@@ -15,6 +15,8 @@ use crate::tui::theme::Theme;
 pub struct SphereMap<'a> {
     /// The axes.
     pub views: &'a [AxisEntropy],
+    /// Colour by the mean partition gain (high is good: drawn as low) instead of the score.
+    pub by_gain: bool,
     /// The axis being partitioned.
     pub current: Option<[f64; 3]>,
     /// Colours.
@@ -61,7 +63,7 @@ impl Widget for SphereMap<'_> {
             .views
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(score(v)), b.max(score(v)))
+                (a.min(self.value(v)), b.max(self.value(v)))
             });
         let span = (hi - lo).max(1e-12);
         // The last row is the legend.
@@ -78,7 +80,10 @@ impl Widget for SphereMap<'_> {
                     .iter()
                     .max_by(|a, b| dot(a.axis, d).abs().total_cmp(&dot(b.axis, d).abs()));
                 let Some(v) = nearest else { continue };
-                self.shade(&mut buf[(map.x + x, map.y + y)], (score(v) - lo) / span);
+                self.shade(
+                    &mut buf[(map.x + x, map.y + y)],
+                    (self.value(v) - lo) / span,
+                );
             }
         }
         if let Some(a) = self.current {
@@ -92,16 +97,26 @@ impl Widget for SphereMap<'_> {
                 buf[(map.x + x, map.y + y)].set_char('◆').set_style(style);
             }
         }
+        // The legend reads the gain itself, highest (the colour of the lowest value) first.
+        let (left, right) = if self.by_gain { (-lo, -hi) } else { (lo, hi) };
         self.legend(
             Rect::new(area.x, area.bottom() - 1, area.width, 1),
-            lo,
-            hi,
+            left,
+            right,
             buf,
         );
     }
 }
 
 impl SphereMap<'_> {
+    /// What a cell's colour shows of its axis, low for the best: the score, or the gain negated.
+    fn value(&self, v: &AxisEntropy) -> f64 {
+        match (self.by_gain, v.gain_phases) {
+            (true, Some(g)) => -g.mean,
+            _ => score(v),
+        }
+    }
+
     /// A cell of the map at `t` (0 for the lowest score, 1 for the highest).
     fn shade(&self, cell: &mut ratatui::buffer::Cell, t: f64) {
         if self.theme.color {

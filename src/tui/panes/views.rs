@@ -1,10 +1,12 @@
-//! The viewpoints pane: every axis with its entropy rate, lowest first, and a sphere map.
+//! The viewpoints pane: every axis with its entropy rate, lowest first, and a sphere map; once
+//! the axes are ranked by partition gain, both scores, in either ranking's order.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
+use slabscope::analysis::GainRanking;
 use slabscope::view::{AxisEntropy, RankedBy, score};
 use slabscope::{Axis, ViewSearch};
 
@@ -23,10 +25,20 @@ const LIST_SHORT: u16 = 42;
 /// The list's width with the anatomical name, when the orientation is known.
 const LIST_WIDE: u16 = 51;
 
+/// The compact row with both scores and its rank: mark, rank, axis and two scores.
+const COMPACT_RANKED: u16 = 35;
+
+/// What the gain's column adds to the list's width.
+const GAIN_COLUMN: u16 = 7;
+
 /// The viewpoints pane's state.
 pub struct ViewsPane {
-    /// The view search.
+    /// The view search (each axis with its gain once that ranking is in).
     pub views: Load<ViewSearch>,
+    /// The axes ranked by partition gain, when asked for.
+    pub gain: Load<GainRanking>,
+    /// Whether the list and the sphere follow the gain ranking (once it is in).
+    pub by_gain: bool,
     /// The selected row.
     pub row: usize,
     /// The axis being partitioned.
@@ -44,6 +56,8 @@ impl ViewsPane {
     pub fn new(name: &str, theme: Theme) -> Self {
         Self {
             views: Load::Idle,
+            gain: Load::Idle,
+            by_gain: false,
             row: 0,
             current: None,
             idle: format!("loading {name}…"),
@@ -59,23 +73,43 @@ impl ViewsPane {
 
     /// The axis of the selected row.
     pub fn selected(&self) -> Option<[f64; 3]> {
-        self.views
-            .ready()
-            .and_then(|v| v.views.get(self.row))
-            .map(|v| v.axis)
+        self.rows().get(self.row).map(|v| v.axis)
     }
 
-    /// One row: a mark (● the axis partitioned, * the best, ≈ a contender of the best), the
-    /// rank, the axis and its score, compact in a narrow list.
+    /// The gain ranking the list follows, when it does.
+    fn ordered_by_gain(&self) -> Option<&GainRanking> {
+        self.gain.ready().filter(|_| self.by_gain)
+    }
+
+    /// The rows in the order shown: the entropy rate's, or the gain ranking's.
+    fn rows(&self) -> Vec<AxisEntropy> {
+        match (self.views.ready(), self.ordered_by_gain()) {
+            (Some(v), Some(g)) => g.sorted(&v.views),
+            (Some(v), None) => v.views.clone(),
+            (None, _) => Vec::new(),
+        }
+    }
+
+    /// One row: a mark (● the axis partitioned, * the best, ≈ a contender of the best, by the
+    /// ranking the list follows), the rank, the axis and its score (and its gain, once ranked),
+    /// compact in a narrow list.
     fn line(&self, views: &ViewSearch, i: usize, v: &AxisEntropy, width: u16) -> Line<'static> {
         let axis = Axis::new(v.axis).unwrap_or(Axis::Z);
         let current = self
             .current
             .is_some_and(|a| Axis::new(a).is_ok_and(|a| a.angle(axis) < 1e-6));
-        let contender = views
-            .contenders
-            .as_ref()
-            .is_some_and(|c| c.iter().skip(1).any(|c| c.axis == v.axis));
+        let contender = match self.ordered_by_gain() {
+            Some(g) => g.contenders.iter().skip(1).any(|c| c.axis == v.axis),
+            None => views
+                .contenders
+                .as_ref()
+                .is_some_and(|c| c.iter().skip(1).any(|c| c.axis == v.axis)),
+        };
+        let gain = v.gain_phases.map(|g| g.mean);
+        let (width, column) = match gain {
+            Some(g) if width >= LIST + GAIN_COLUMN => (width - GAIN_COLUMN, format!(" {g:>6.4}")),
+            _ => (width, String::new()),
+        };
         let mark = match (current, i == 0, contender) {
             (true, ..) => "●",
             (_, true, _) => "*",
@@ -105,12 +139,22 @@ impl ViewsPane {
                 i + 1,
                 score(v)
             )
-        } else if width >= LIST {
+        } else if width >= LIST && column.is_empty() == gain.is_none() {
             let name = axis.name().map_or(String::new(), |n| format!(" {n}"));
             format!("{mark}{:>3} {axis}{name} {:.4}", i + 1, score(v))
         } else {
-            format!("{mark}{:>2} {axis:.2} {:.3}", i + 1, score(v))
+            // Both scores to three places once the gain is in, the rank left out where even
+            // that does not fit.
+            let h = score(v);
+            match gain {
+                Some(g) if width >= COMPACT_RANKED => {
+                    format!("{mark}{:>2} {axis:.2} {h:.3} {g:.3}", i + 1)
+                }
+                Some(g) => format!("{mark}{axis:.2} {h:.3} {g:.3}"),
+                None => format!("{mark}{:>2} {axis:.2} {h:.3}", i + 1),
+            }
         };
+        let text = text + &column;
         let mut style = if current {
             self.theme.fg(Color::Yellow)
         } else {
@@ -126,12 +170,14 @@ impl ViewsPane {
 
     /// The list's area and the sphere map's, which takes the right part of a wide pane or the
     /// bottom of a tall one.
-    fn split(inner: Rect, oriented: bool) -> (Rect, Option<Rect>) {
-        let list = match inner.width {
-            w if oriented && w >= LIST_WIDE + 32 => LIST_WIDE,
-            w if oriented && w >= LIST_SHORT + 32 => LIST_SHORT,
-            _ => LIST,
-        };
+    fn split(inner: Rect, oriented: bool, gain: bool) -> (Rect, Option<Rect>) {
+        let extra = if gain { GAIN_COLUMN } else { 0 };
+        let list = extra
+            + match inner.width.saturating_sub(extra) {
+                w if oriented && w >= LIST_WIDE + 32 => LIST_WIDE,
+                w if oriented && w >= LIST_SHORT + 32 => LIST_SHORT,
+                _ => LIST,
+            };
         if inner.width >= list + 32 {
             let [l, m] =
                 Layout::horizontal([Constraint::Length(list), Constraint::Min(0)]).areas(inner);
@@ -166,12 +212,23 @@ fn verdict(v: &ViewSearch) -> String {
 
 impl Widget for &ViewsPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let title = match self.views.ready() {
-            Some(v) if area.width >= 44 => {
+        let title = match (self.views.ready(), self.ordered_by_gain()) {
+            (Some(v), Some(g)) if area.width >= 44 => format!(
+                " {} axes by the gain of {} slabs, h beside{} ",
+                v.views.len(),
+                g.sampling.slabs,
+                if g.uncertain() {
+                    format!(": uncertain ({} ≈)", g.contenders.len() - 1)
+                } else {
+                    ": clear".into()
+                }
+            ),
+            (Some(v), Some(_)) => format!(" {} axes by gain ", v.views.len()),
+            (Some(v), None) if area.width >= 44 => {
                 format!(" {} axes by {}{} ", v.views.len(), what(v), verdict(v))
             }
-            Some(v) => format!(" {} axes, h{} ", v.views.len(), verdict(v)),
-            None => " Viewpoints ".into(),
+            (Some(v), None) => format!(" {} axes, h{} ", v.views.len(), verdict(v)),
+            (None, _) => " Viewpoints ".into(),
         };
         let block = self.theme.block(title, self.focused);
         let inner = block.inner(area);
@@ -188,11 +245,12 @@ impl Widget for &ViewsPane {
             return;
         };
         let oriented = views.views.first().is_some_and(|v| v.world.oriented);
-        let (list, map) = ViewsPane::split(inner, oriented);
+        let gain = views.views.iter().any(|v| v.gain_phases.is_some());
+        let (list, map) = ViewsPane::split(inner, oriented, gain);
         let rows = usize::from(list.height);
         let first = self.row.saturating_sub(rows.saturating_sub(1));
-        let lines: Vec<Line> = views
-            .views
+        let ordered = self.rows();
+        let lines: Vec<Line> = ordered
             .iter()
             .enumerate()
             .skip(first)
@@ -205,6 +263,7 @@ impl Widget for &ViewsPane {
         if let Some(map) = map {
             SphereMap {
                 views: &views.views,
+                by_gain: self.ordered_by_gain().is_some(),
                 current: self.current,
                 theme: self.theme,
             }

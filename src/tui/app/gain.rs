@@ -1,0 +1,121 @@
+//! The axes ranked by partition gain (`i`, or `--gain` and `--axis-by gain` at the start), in
+//! the background: once ranked, the viewpoints list shows both scores and `i` switches its order
+//! and the sphere's colours between them; with `--axis-by gain` the partition follows the gain's
+//! best.
+
+use slabscope::analysis::{AxisBy, GainRanking};
+use slabscope::geometry::AxisChoice;
+
+use super::App;
+use super::refine::{axis_text, same};
+use crate::tui::event::{Effect, Load};
+
+/// Two rankings whose best axes lie within this angle agree, degrees.
+const AGREE_DEGREES: f64 = 5.0;
+
+impl App {
+    /// `i`: ranks the axes by gain, or once ranked switches the order the list and the sphere
+    /// follow.
+    pub(super) fn rank_gain(&mut self) -> Vec<Effect> {
+        match &self.views.gain {
+            Load::Ready(_) => {
+                self.views.by_gain = !self.views.by_gain;
+                self.views.row = 0;
+                self.status.message = Some(
+                    if self.views.by_gain {
+                        "axes by partition gain, highest first (i: by entropy rate)"
+                    } else {
+                        "axes by entropy rate, lowest first (i: by partition gain)"
+                    }
+                    .into(),
+                );
+                vec![]
+            }
+            Load::Running(_) => vec![],
+            Load::Idle | Load::Failed(_) => self.start_gain(),
+        }
+    }
+
+    /// Starts the gain ranking on the volume, once it is loaded.
+    pub(super) fn start_gain(&mut self) -> Vec<Effect> {
+        if self.volume.ready().is_none() {
+            return vec![];
+        }
+        self.views.gain = Load::started("ranking axes by partition gain");
+        self.sync_status();
+        vec![Effect::RankGain(Box::new(self.params.clone()))]
+    }
+
+    /// Whether the gain ranking picks the axis: `--axis-by gain` with no axis named.
+    pub(super) fn gain_picks(&self) -> bool {
+        self.params.axis_by == AxisBy::Gain && self.params.axis == AxisChoice::Best
+    }
+
+    /// Which ranking picked the axis partitioned: none when the user chose another.
+    pub(super) fn picked_by(&self, gain: &GainRanking) -> Option<AxisBy> {
+        let axis = self.part.axis?;
+        let entropy = self.views.views.ready().map(|v| v.best().axis);
+        if self.gain_picks() && same(axis, gain.refined.axis) {
+            Some(AxisBy::Gain)
+        } else if entropy.is_some_and(|e| same(axis, e)) {
+            Some(AxisBy::Entropy)
+        } else {
+            None
+        }
+    }
+
+    /// The gain ranking finished: both scores in the list, ordered by the gain, the verdict on
+    /// the status line, and with `--axis-by gain` the partition along its best.
+    pub(super) fn on_gain(&mut self, result: Result<Box<GainRanking>, String>) -> Vec<Effect> {
+        let gain = match result {
+            Ok(g) => *g,
+            Err(e) => {
+                self.status.message = Some(format!("gain ranking failed: {e}"));
+                self.views.gain = Load::Failed(e);
+                self.sync_status();
+                return vec![];
+            }
+        };
+        if let Load::Ready(views) = &mut self.views.views {
+            gain.annotate(views);
+        }
+        let best = gain.refined.axis;
+        self.status.message = Some(self.gain_verdict(&gain));
+        self.views.gain = Load::Ready(gain);
+        self.views.by_gain = true;
+        self.views.row = 0;
+        let effects = if self.gain_picks() && !self.part.axis.is_some_and(|a| same(a, best)) {
+            self.analyze_chosen(best)
+        } else {
+            vec![]
+        };
+        self.sync_status();
+        effects
+    }
+
+    /// The gain's best, its margin of certainty, and whether the entropy rate agrees.
+    fn gain_verdict(&self, gain: &GainRanking) -> String {
+        let best = &gain.refined;
+        let sure = if gain.uncertain() {
+            format!("uncertain ({} ≈)", gain.contenders.len() - 1)
+        } else {
+            "clear".into()
+        };
+        let keeps = format!(
+            "{:.4} bits in {} slabs, {sure}",
+            best.gain_phases.mean, gain.sampling.slabs
+        );
+        match self.views.views.ready().map(|v| v.best().axis) {
+            Some(h) if slabscope::view::axis_angle(h, best.axis) > AGREE_DEGREES => format!(
+                "entropy rate prefers {}; slabs keep most along {} ({keeps})",
+                axis_text(h),
+                axis_text(best.axis)
+            ),
+            Some(_) => format!(
+                "by gain {} ({keeps}): the entropy rate agrees",
+                axis_text(best.axis)
+            ),
+            None => format!("by gain {} ({keeps})", axis_text(best.axis)),
+        }
+    }
+}

@@ -1,0 +1,84 @@
+//! The gain ranking in the TUI: `i` starts it, its result orders the list and the sphere by the
+//! gain with both scores shown, `i` again switches back; `--axis-by gain` partitions along it.
+
+use std::sync::Arc;
+
+use slabscope::analysis::{AxisBy, rank_by_gain};
+use slabscope::{AnalysisParams, Monitor};
+
+use super::{PLAIN, fixture, pane, ready_app};
+use crate::tui::app::{App, Screen};
+use crate::tui::event::{Action, Effect, JobMsg, Load};
+
+fn gain_result() -> JobMsg {
+    let ranking = rank_by_gain(&fixture().0, &AnalysisParams::default(), &Monitor::none());
+    JobMsg::Gain(ranking.map(Box::new).map_err(|e| e.to_string()))
+}
+
+#[test]
+fn i_ranks_by_gain_then_switches_the_order() {
+    let mut app = ready_app();
+    let entropy_best = fixture().1.best().axis;
+    assert!(matches!(
+        app.update(Action::RankGain)[..],
+        [Effect::RankGain(_)]
+    ));
+    assert!(app.views.gain.running());
+    assert!(
+        app.update(Action::RankGain).is_empty(),
+        "one ranking at a time"
+    );
+    app.update(Action::Job(gain_result()));
+    let Load::Ready(gain) = &app.views.gain else {
+        panic!("the ranking is in")
+    };
+    let gain_best = gain.views[0].axis;
+    assert!(app.views.by_gain);
+    assert_eq!(app.views.selected(), Some(gain_best));
+    let message = app.status.message.clone().unwrap();
+    assert!(message.contains("bits in 4 slabs"), "{message}");
+    let text = pane(&app.views, 60, 12);
+    assert!(text.contains("axes by the gain of 4 slabs"), "{text}");
+    // Both scores on every row.
+    let views = app.views.views.ready().unwrap();
+    assert!(views.views.iter().all(|v| v.gain_phases.is_some()));
+    app.update(Action::RankGain);
+    assert!(!app.views.by_gain);
+    assert_eq!(app.views.selected(), Some(entropy_best));
+    // The axis partitioned did not change.
+    assert_eq!(app.part.axis, Some(entropy_best));
+}
+
+#[test]
+fn axis_by_gain_partitions_along_the_gains_best() {
+    let (volume, views, _) = fixture();
+    let params = AnalysisParams {
+        axis_by: AxisBy::Gain,
+        ..AnalysisParams::default()
+    };
+    let screen = Screen {
+        theme: PLAIN,
+        ..Screen::default()
+    };
+    let (mut app, _) = App::new("body.nrrd".into(), params, screen);
+    let effects = app.update(Action::Job(JobMsg::Loaded(Ok((
+        Arc::clone(volume),
+        vec![],
+    )))));
+    assert!(
+        effects.iter().any(|e| matches!(e, Effect::RankGain(_))),
+        "{effects:?}"
+    );
+    // The view search's best does not start the partition: the gain's does.
+    let effects = app.update(Action::Job(JobMsg::Views(0, Ok(Box::new(views.clone())))));
+    assert!(
+        !effects.iter().any(|e| matches!(e, Effect::Analyze(..))),
+        "{effects:?}"
+    );
+    let effects = app.update(Action::Job(gain_result()));
+    let best = app.views.gain.ready().unwrap().refined.axis;
+    assert!(
+        matches!(effects[..], [Effect::Analyze(_, a, _, 0)] if a == best),
+        "{effects:?}"
+    );
+}
