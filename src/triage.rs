@@ -33,6 +33,9 @@ pub struct Entry {
     pub series: Option<String>,
     /// How a list names the series: number and description (not in manifests).
     pub label: Option<String>,
+    /// Why the walk could not look inside it (a folder it cannot read, or past the depth
+    /// limit): its row says so, and nothing is loaded.
+    pub problem: Option<String>,
 }
 
 impl Entry {
@@ -42,6 +45,15 @@ impl Entry {
             path: path.into(),
             series: None,
             label: None,
+            problem: None,
+        }
+    }
+
+    /// The entry of a path the walk could not look inside, and why.
+    pub fn failed(path: impl Into<PathBuf>, problem: impl Into<String>) -> Self {
+        Self {
+            problem: Some(problem.into()),
+            ..Self::file(path)
         }
     }
 

@@ -81,7 +81,7 @@ const MAX_MANIFEST: u64 = 256 << 20;
 /// UID): see `slabscope::triage::parse_manifest`.
 fn read_manifest(path: &Path) -> Result<Vec<Entry>> {
     slabscope::volume::io::check_input(path)?;
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = slabscope::volume::io::open_regular(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if len > MAX_MANIFEST {
         bail!(

@@ -62,6 +62,10 @@ pub fn look(
         ..how.load.clone()
     };
     let name = crate::error::shown(&entry.path);
+    if let Some(problem) = &entry.problem {
+        let e = Error::format(&entry.path, problem.clone());
+        return failed(TriageRow::failed(&name, describe(e)));
+    }
     let loaded = match load(&entry.path, &opts) {
         Ok(l) => l,
         Err(e) => {

@@ -84,6 +84,7 @@ fn escaped_entry(line: &[u8]) -> std::result::Result<Entry, String> {
         path: names::unescape_path(path)?,
         series,
         label: None,
+        problem: None,
     })
 }
 
@@ -97,6 +98,7 @@ fn plain_entry(line: &[u8]) -> Entry {
                 path: raw_path(&line[..tab]),
                 series: Some(key.to_string()),
                 label: None,
+                problem: None,
             };
         }
     }
@@ -135,6 +137,7 @@ mod tests {
             path: "dir\\x".into(),
             series: Some("1.2.3#2".into()),
             label: None,
+            problem: None,
         };
         let text = manifest_lines(&[hostile.clone(), series.clone()])
             .collect::<Vec<_>>()

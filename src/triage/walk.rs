@@ -35,10 +35,11 @@ fn push(found: &mut Vec<Entry>, entry: Entry) -> Result<()> {
 }
 
 /// The series of the DICOM files in `dir`, one entry each, and each file that cannot be read
-/// (its row will say why); the folder alone when it cannot be scanned or holds no series.
+/// (its row will say why); the folder alone when it holds no file at all that reads as DICOM,
+/// or with its problem when it cannot be scanned.
 fn push_series(dir: &Path, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result<()> {
     match dicom::list_series(dir, opts) {
-        Ok((series, failed)) if !series.is_empty() => {
+        Ok((series, failed)) if !(series.is_empty() && failed.is_empty()) => {
             for (file, _) in failed {
                 push(found, Entry::file(file))?;
             }
@@ -49,32 +50,76 @@ fn push_series(dir: &Path, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result
                         path: dir.to_path_buf(),
                         label: Some(s.label.clone()),
                         series: Some(s.key),
+                        problem: None,
                     },
                 )?;
             }
             Ok(())
         }
-        _ => push(found, Entry::file(dir)),
+        Ok(_) => push(found, Entry::file(dir)),
+        Err(e) => {
+            // No series at all: each file that looks like DICOM is a row of its own, which says
+            // what is wrong with it; the folder is the row when it cannot even be listed.
+            let files: Vec<PathBuf> = match std::fs::read_dir(dir) {
+                Ok(entries) => entries
+                    .filter_map(Result::ok)
+                    .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+                    .map(|e| e.path())
+                    .filter(|p| !volume_name(p) && dicom::is_dicom(p))
+                    .collect(),
+                Err(_) => Vec::new(),
+            };
+            if files.is_empty() {
+                return push(found, Entry::failed(dir, problem(&e)));
+            }
+            files
+                .into_iter()
+                .try_for_each(|file| push(found, Entry::file(file)))
+        }
     }
 }
 
+/// What keeps the walk out of a folder, without the folder's name (the row names it).
+fn problem(e: &Error) -> String {
+    match e {
+        Error::Io { error, .. } => format!("cannot read this folder: {error}"),
+        other => other.to_string(),
+    }
+}
+
+/// Walks `dir`: every volume in it and below. A folder it cannot read or nested past the limit
+/// is a row of its own, and the walk goes on with the rest.
 fn walk(dir: &Path, depth: usize, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result<()> {
     // The folder is read twice, to classify it and to walk it, rather than held: a folder of
     // millions of entries stays out of memory.
-    match folder_kind(dir)? {
-        Folder::Slices => return push(found, Entry::file(dir)),
-        Folder::Dicom => return push_series(dir, opts, found),
-        Folder::Collection | Folder::Empty => {}
+    match folder_kind(dir) {
+        Ok(Folder::Slices) => return push(found, Entry::file(dir)),
+        Ok(Folder::Dicom) => return push_series(dir, opts, found),
+        Ok(Folder::Collection | Folder::Empty) => {}
+        Err(e) => return push(found, Entry::failed(dir, problem(&e))),
     }
     if depth >= MAX_DEPTH {
-        return Err(Error::format(
-            dir,
-            format!("folders nest deeper than {MAX_DEPTH}"),
-        ));
+        return push(
+            found,
+            Entry::failed(
+                dir,
+                format!("folders nest deeper than {MAX_DEPTH}: not walked below it"),
+            ),
+        );
     }
+    let entries = match std::fs::read_dir(dir) {
+        Ok(entries) => entries,
+        Err(e) => return push(found, Entry::failed(dir, problem(&Error::io(dir, e)))),
+    };
     let mut dicom_files = false;
-    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-        let entry = entry.map_err(|e| Error::io(dir, e))?;
+    for entry in entries {
+        let entry = match entry {
+            Ok(entry) => entry,
+            Err(e) => {
+                push(found, Entry::failed(dir, problem(&Error::io(dir, e))))?;
+                break;
+            }
+        };
         let path = entry.path();
         let Ok(t) = entry.file_type() else { continue };
         if t.is_dir() {

@@ -439,3 +439,144 @@ fn triage_gives_one_row_per_file_however_spelled_and_nothing_found_is_an_error()
         "{stderr}"
     );
 }
+
+/// A FIFO mounted over a file's name (in a private mount namespace: the directory listing says
+/// a regular file, the name opens a FIFO) does not block the walk: it is looked at without
+/// waiting and the volumes beside it are listed and triaged. Skipped where `unshare` cannot make
+/// a mount namespace (not root, or no user namespaces).
+#[test]
+fn the_walk_is_never_blocked_by_a_fifo_mounted_over_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("scans");
+    std::fs::create_dir(&folder).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), folder.join("ramp.nii")).unwrap();
+    std::fs::write(folder.join("scan0001"), b"").unwrap();
+    let fifo = dir.path().join("pipe");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    let works = std::process::Command::new("unshare")
+        .args(["--mount", "true"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !made.is_ok_and(|s| s.success()) || !works {
+        eprintln!(
+            "skipped: mkfifo or a private mount namespace (unshare --mount) is not available"
+        );
+        return;
+    }
+    let script = format!(
+        "mount --bind '{}' '{}/scan0001' && exec timeout 20 '{}' triage --json '{}'",
+        s(&fifo),
+        s(&folder),
+        crate::common::binary(),
+        s(&folder)
+    );
+    let out = std::process::Command::new("unshare")
+        .args(["--mount", "sh", "-c", &script])
+        .output()
+        .unwrap();
+    assert_ne!(out.status.code(), Some(124), "the walk blocked");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let rows = rows(&stdout);
+    assert!(
+        rows.iter()
+            .any(|r| r["path"].as_str().unwrap().ends_with("ramp.nii") && r["error"].is_null()),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A folder nested past the walk's limit, a folder that cannot be read and a broken DICOM file
+/// beside a volume are each a row naming them and their problem; the good volumes are rows too,
+/// and the run exits 1. The unreadable folder needs an unprivileged user: as root the walk runs
+/// under `setpriv` as nobody, and that part is skipped without it.
+#[test]
+fn a_bad_folder_or_file_is_a_row_and_the_walk_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("archive");
+    std::fs::create_dir(&root).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), root.join("good.nii")).unwrap();
+    let mut deep = root.join("deep");
+    for _ in 0..70 {
+        deep = deep.join("d");
+    }
+    std::fs::create_dir_all(&deep).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), deep.join("buried.nii")).unwrap();
+    let mixed = root.join("mixed");
+    std::fs::create_dir(&mixed).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), mixed.join("ok.nii")).unwrap();
+    std::fs::write(mixed.join("bad.dcm"), b"").unwrap();
+    let locked = root.join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::copy(data("ramp_u8.nii"), locked.join("hidden.nii")).unwrap();
+    let unprivileged = as_nobody(&[&dir.path().to_path_buf(), &root, &locked]);
+    if unprivileged.is_some() {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o000)).unwrap();
+    }
+    let args = ["triage", s(&root), "--json", "--slabs", "2"];
+    let out = if let Some(command) = &unprivileged {
+        let out = std::process::Command::new(command[0])
+            .args(&command[1..])
+            .arg(crate::common::binary())
+            .args(args)
+            .output()
+            .unwrap();
+        Ran::from(out)
+    } else {
+        eprintln!(
+            "skipped the unreadable folder: not root, no setpriv, or nobody cannot run the binary"
+        );
+        run(&args)
+    };
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    let rows = rows(&out.stdout);
+    let row = |suffix: &str| {
+        rows.iter()
+            .find(|r| r["path"].as_str().unwrap().ends_with(suffix))
+            .unwrap_or_else(|| panic!("no row for {suffix}: {}", out.stdout))
+    };
+    for good in ["archive/good.nii", "mixed/ok.nii"] {
+        assert!(row(good)["error"].is_null(), "{good}: {}", row(good));
+    }
+    let error = |suffix: &str| row(suffix)["error"].as_str().unwrap().to_string();
+    assert!(
+        error("/d").contains("nest deeper than 64"),
+        "{}",
+        error("/d")
+    );
+    let bad = error("mixed/bad.dcm");
+    assert!(bad.contains("not a DICOM file"), "{bad}");
+    if unprivileged.is_some() {
+        let e = error("archive/locked");
+        assert!(e.contains("Permission denied"), "{e}");
+    }
+}
+
+/// The command that runs a program as nobody, when the tests run as root, `setpriv` is there
+/// and nobody can run slabscope, with `paths` opened to everyone so that nobody can walk them.
+fn as_nobody(paths: &[&std::path::PathBuf]) -> Option<Vec<&'static str>> {
+    use std::os::unix::fs::PermissionsExt;
+    let root = std::process::Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| o.stdout.trim_ascii() == b"0");
+    // Nobody must be able to run the binary itself (a clone under a private home cannot).
+    let setpriv = std::process::Command::new("setpriv")
+        .args(["--reuid=65534", "--regid=65534", "--clear-groups"])
+        .arg(crate::common::binary())
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !(root && setpriv) {
+        return None;
+    }
+    for p in paths {
+        std::fs::set_permissions(p, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    Some(vec![
+        "setpriv",
+        "--reuid=65534",
+        "--regid=65534",
+        "--clear-groups",
+    ])
+}

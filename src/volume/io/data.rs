@@ -256,7 +256,7 @@ fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
         })?;
     let path = spec.file.as_path();
     let buffer = || typed_buffer::<T>(path, spec.dims, max_memory);
-    let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if spec.start > len {
         return Err(Error::format(

@@ -1,7 +1,6 @@
 //! MetaImage (`.mha` with local data, `.mhd` with a data file): `Key = Value` lines ending with
 //! `ElementDataFile`.
 
-use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 
@@ -202,7 +201,7 @@ pub(crate) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
 
 pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let mut bytes = Vec::new();
-    File::open(path)
+    super::open_regular(path)
         .and_then(|f| f.take(MAX_HEADER).read_to_end(&mut bytes))
         .map_err(|e| Error::io(path, e))?;
     let h = parse_header(path, &bytes)?;

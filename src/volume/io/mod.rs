@@ -160,6 +160,34 @@ pub fn check_input(path: &Path) -> Result<()> {
     }
 }
 
+/// Opens `path` for reading, only if it is a regular file, without ever blocking: the open does
+/// not wait (`O_NONBLOCK`: a FIFO or a device, even one mounted over a file's name, opens at once
+/// instead of waiting for a writer) and the opened handle's own type is checked (not the name's,
+/// which a directory listing or an earlier `stat` may have seen differently). Every input file
+/// is opened through it.
+pub fn open_regular(path: &Path) -> std::io::Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY);
+    }
+    let file = options.open(path)?;
+    let meta = file.metadata()?;
+    match kind(&meta) {
+        None if meta.is_file() => Ok(file),
+        None => Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "a folder, where a file was expected",
+        )),
+        Some(kind) => Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{kind}: slabscope reads regular files and folders"),
+        )),
+    }
+}
+
 /// What a path that is neither a regular file nor a folder is, in words.
 fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
     if meta.is_file() || meta.is_dir() {
@@ -313,7 +341,7 @@ fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
         return Ok(Format::Raw);
     }
     let mut head = Vec::with_capacity(4096);
-    File::open(path)
+    open_regular(path)
         .and_then(|f| f.take(4096).read_to_end(&mut head))
         .map_err(|e| Error::io(path, e))?;
     if let Some(format) = sniff(&head) {
@@ -461,6 +489,38 @@ pub(crate) fn data_file(header: &Path, name: &str) -> Result<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A FIFO opens at once and is refused by its handle's own type, never waiting for a writer
+    /// (a plain `File::open` would wait forever); a folder is refused too.
+    #[test]
+    #[cfg(unix)]
+    fn only_regular_files_open_and_a_fifo_never_blocks() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("scan0001");
+        if !std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success())
+        {
+            eprintln!("skipped: no mkfifo");
+            return;
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let path = fifo.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(open_regular(&path).map(drop).map_err(|e| e.to_string()));
+        });
+        let opened = rx
+            .recv_timeout(std::time::Duration::from_secs(10))
+            .expect("the open returned at once");
+        let e = opened.unwrap_err();
+        assert!(e.contains("a FIFO"), "{e}");
+        let e = open_regular(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("a folder"), "{e}");
+        let file = dir.path().join("a.nii");
+        std::fs::write(&file, b"x").unwrap();
+        assert!(open_regular(&file).is_ok());
+    }
 
     #[test]
     fn sniffs_magic_bytes() {

@@ -3,7 +3,6 @@
 
 mod write;
 
-use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 
@@ -328,7 +327,7 @@ pub(crate) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
 
 /// Reads the header bytes: up to the first blank line, or the whole (detached) header file.
 fn read_header_bytes(path: &Path) -> Result<Vec<u8>> {
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
     let mut bytes = Vec::new();
     let mut reader = file.take(MAX_HEADER as u64);
     let mut chunk = [0u8; 8192];

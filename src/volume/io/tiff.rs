@@ -20,7 +20,7 @@ type Tiff = Decoder<BufReader<File>>;
 /// its length in bytes.
 fn open(path: &Path) -> Result<(Tiff, u64)> {
     tiff_ifd::check(path)?;
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let dec = Decoder::new(BufReader::new(file))
         .map_err(|e| Error::format(path, format!("not a readable TIFF: {e}")))?;

@@ -3,7 +3,6 @@
 //! buffer from a count no file could hold (its 0.11 reader allocates an ASCII value of any count
 //! up to its decoding limit, and prints a debugging line above it).
 
-use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -35,7 +34,7 @@ fn uint(r: &mut impl Read, n: usize, big: bool) -> std::io::Result<u64> {
 
 /// Checks the directories of the TIFF at `path`; returns how many pages it has.
 pub(crate) fn check(path: &Path) -> Result<usize> {
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let mut r = BufReader::new(file);
     let bad = |m: String| Error::format(path, format!("not a readable TIFF: {m}"));

@@ -1,7 +1,6 @@
 //! VolumeShop / TU Wien `.dat`: three little-endian u16 dimensions, then u16 voxels, recognised by
 //! the file size being exactly 6 + 2·nx·ny·nz.
 
-use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 
@@ -35,7 +34,7 @@ pub(crate) fn check_header(path: &Path, head: &[u8], len: u64) -> Result<[usize;
 }
 
 pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let mut head = [0u8; 6];
     let n = file.read(&mut head).map_err(|e| Error::io(path, e))?;

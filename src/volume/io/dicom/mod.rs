@@ -13,7 +13,6 @@ mod read;
 mod scan;
 mod voxels;
 
-use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -46,7 +45,7 @@ pub fn is_dicom(path: &Path) -> bool {
         return true;
     }
     let mut head = Vec::with_capacity(132);
-    File::open(path)
+    super::open_regular(path)
         .and_then(|f| f.take(132).read_to_end(&mut head))
         .is_ok_and(|_| read::sniff(&head))
 }

@@ -2,7 +2,6 @@
 //! straight from the file, deflated and compressed ones through a second walk and
 //! dicom-pixeldata), into the planes of a volume.
 
-use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -113,7 +112,7 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
     match &file.pixels {
         Pixels::None => Err(Error::format(path, "no pixel data")),
         Pixels::Native { offset, len } => {
-            let mut f = File::open(path).map_err(|e| Error::io(path, e))?;
+            let mut f = crate::volume::io::open_regular(path).map_err(|e| Error::io(path, e))?;
             let size = f.metadata().map_err(|e| Error::io(path, e))?.len();
             let mut buf = Vec::new();
             for (im, plane) in frames {

@@ -9,7 +9,6 @@ mod write;
 pub(crate) use write::stage;
 pub use write::write_nifti;
 
-use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
@@ -39,7 +38,7 @@ pub(crate) fn is_gzipped_nifti(head: &[u8]) -> bool {
 }
 
 fn open(path: &Path) -> Result<(Box<dyn Read>, bool)> {
-    let mut file = BufReader::new(File::open(path).map_err(|e| Error::io(path, e))?);
+    let mut file = BufReader::new(super::open_regular(path).map_err(|e| Error::io(path, e))?);
     let mut magic = [0u8; 2];
     let n = file.read(&mut magic).map_err(|e| Error::io(path, e))?;
     let file = std::io::Cursor::new(magic[..n].to_vec()).chain(file);
