@@ -89,6 +89,36 @@ impl AnalysisParams {
         self.axis == AxisChoice::Best || self.search_views || self.ranks_by_gain()
     }
 
+    /// The view search's work on a volume of `dims` and `spacing`, as a multiple of the
+    /// default parameters' on the same volume: axes on the sphere, samples per axis (the
+    /// lattice's spacings), lattices per axis (the shifted phases walk a subset of their rays)
+    /// and the refinement's evaluations. A rough count, to warn of a request that will take long
+    /// before it starts; 0 when no view search runs.
+    pub fn work_ratio(&self, dims: [usize; 3], spacing: [f64; 3]) -> f64 {
+        let work = |view: &ViewParams| {
+            let axes = crate::view::icosphere::axes(view.level).len() as f64;
+            let (x, y, _) = view
+                .sampling
+                .spacings(dims, spacing)
+                .unwrap_or((1.0, 1.0, 1.0));
+            let s = crate::geometry::min_spacing(spacing);
+            let samples = (s / x).powi(2) * (s / y);
+            let phases = 1.0 + view.phases.saturating_sub(1) as f64 / view.phase_subset as f64;
+            let refine = if view.refine {
+                let start = crate::view::icosphere::spacing_degrees(view.level) / 2.0;
+                (3 * 8 * crate::view::refine_steps(start)) as f64
+            } else {
+                0.0
+            };
+            (axes + refine) * samples * phases
+        };
+        if self.runs_search() {
+            work(&self.view) / work(&ViewParams::default())
+        } else {
+            0.0
+        }
+    }
+
     /// Whether the axes are ranked by partition gain.
     pub fn ranks_by_gain(&self) -> bool {
         self.gain || self.axis_by == AxisBy::Gain

@@ -46,11 +46,17 @@ pub struct AnalyzeArgs {
     /// Overwrite export files that exist.
     #[arg(long)]
     pub force: bool,
+    /// Stop after this many seconds, with an error saying so.
+    #[arg(long, value_name = "SECONDS", value_parser = super::args::within(0.1, 86400.0))]
+    pub timeout: Option<f64>,
     #[command(flatten)]
     pub load: LoadArgs,
 }
 
 pub fn run(args: &AnalyzeArgs) -> Result<()> {
+    if let Some(t) = args.timeout {
+        super::progress::stop_after(t);
+    }
     if let Some(path) = &args.export_labels {
         VolumeOutput::for_path(path)?;
     }

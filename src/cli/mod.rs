@@ -203,6 +203,7 @@ pub fn error_message(e: &anyhow::Error) -> String {
 
 fn in_flag_terms(e: &Error) -> String {
     match e {
+        Error::Cancelled => progress::timed_out().unwrap_or_else(|| e.to_string()),
         Error::InvalidParameter {
             parameter,
             value,

@@ -1,7 +1,9 @@
 //! A progress bar on stderr, drawn only when stderr is a terminal, naming the phase under way.
 
 use std::io::{IsTerminal, Write};
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, OnceLock};
+use std::time::Duration;
 
 use slabscope::{Monitor, Progress};
 
@@ -57,9 +59,34 @@ impl Drop for Bar {
     }
 }
 
-/// Runs `work` with a monitor that draws its progress in a bar on stderr.
+/// Raised at the `--timeout`: every long computation of the command stops.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// The `--timeout` in force, seconds.
+static TIMEOUT: OnceLock<f64> = OnceLock::new();
+
+/// Stops the command's long computations `seconds` from now (`--timeout`): they end with
+/// [`slabscope::Error::Cancelled`], which [`timed_out`] words.
+pub fn stop_after(seconds: f64) {
+    if TIMEOUT.set(seconds).is_ok() {
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_secs_f64(seconds));
+            STOP.store(true, Ordering::Relaxed);
+        });
+    }
+}
+
+/// The words for a computation the `--timeout` stopped, when it did.
+pub fn timed_out() -> Option<String> {
+    let t = TIMEOUT.get()?;
+    STOP.load(Ordering::Relaxed)
+        .then(|| format!("stopped at the --timeout of {t} s"))
+}
+
+/// Runs `work` with a monitor that draws its progress in a bar on stderr and stops at the
+/// `--timeout`.
 pub fn with_bar<T>(work: impl FnOnce(&Monitor) -> T) -> T {
     let bar = Bar::new();
     let report = |p: Progress| bar.set(p);
-    work(&Monitor::new(None, Some(&report)))
+    work(&Monitor::new(Some(&STOP), Some(&report)))
 }

@@ -207,6 +207,9 @@ pub struct RenderArgs {
     /// a column a slab, fit into the size.
     #[arg(long)]
     pub faces: bool,
+    /// Stop after this many seconds, with an error saying so.
+    #[arg(long, value_name = "SECONDS", value_parser = super::args::within(0.1, 86400.0))]
+    pub timeout: Option<f64>,
     #[command(flatten)]
     pub scene: SceneArgs,
 }
@@ -315,6 +318,9 @@ fn render_file(
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {
+    if let Some(t) = args.timeout {
+        super::progress::stop_after(t);
+    }
     let format = super::picture_output(&args.output, &args.file, args.force)?;
     let image = render_file(
         &args.file,

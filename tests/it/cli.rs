@@ -478,3 +478,45 @@ fn a_mapped_volume_beyond_the_budget_is_analysed_on_the_finest_level_that_fits()
         "{stderr}"
     );
 }
+
+/// `--timeout` stops `analyze` and `render` with an error that says so, and a view search far
+/// heavier than the default's is announced on stderr before it starts (the default is not).
+#[test]
+fn a_timeout_stops_the_work_and_a_heavy_request_is_announced() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path(), 64);
+    let heavy = [
+        "--level",
+        "4",
+        "--phases",
+        "64",
+        "--refine",
+        "--timeout",
+        "0.3",
+    ];
+    let ran = run(&[&["analyze", s(&file)][..], &heavy[..]].concat());
+    assert_eq!(ran.code, 1, "{}", ran.stderr);
+    assert!(
+        ran.stderr
+            .contains("times the default's work (icosphere level 4, 64 phases"),
+        "{}",
+        ran.stderr
+    );
+    assert!(
+        ran.stderr.contains("stopped at the --timeout of 0.3 s"),
+        "{}",
+        ran.stderr
+    );
+    assert!(ran.stdout.is_empty());
+    let png = dir.path().join("x.png");
+    let ran = run(&[&["render", s(&file), "-o", s(&png)][..], &heavy[..]].concat());
+    assert!(
+        ran.stderr.contains("stopped at the --timeout"),
+        "{}",
+        ran.stderr
+    );
+    assert!(!png.exists(), "nothing written when stopped");
+    let plain = run(&["analyze", s(&file), "--timeout", "600"]);
+    assert!(plain.ok, "{}", plain.stderr);
+    assert!(!plain.stderr.contains("default's work"), "{}", plain.stderr);
+}
