@@ -15,7 +15,7 @@ pub use self::look::{
 };
 pub use self::manifest::{MANIFEST_HEADER, MAX_LINE, manifest_lines, parse_manifest};
 pub use self::row::TriageRow;
-pub use self::walk::discover;
+pub use self::walk::{discover, restrict_to_series, series_positions};
 pub use crate::volume::io::{Folder, folder_kind};
 
 /// The most volumes a walk collects: a bound on the memory a folder tree can claim.

@@ -35,8 +35,9 @@ pub struct LoadArgs {
     /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM) to read, from 0.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub volume: usize,
-    /// Which series of a DICOM folder: its position in the list `info` gives (from 1), or its
-    /// `SeriesInstanceUID`.
+    /// Which series of a DICOM folder: its position in the folder's list `info` gives (from 1,
+    /// shown as `--series N` there), or its `SeriesInstanceUID`; `triage` then gives that
+    /// series' rows only.
     #[arg(long, value_name = "N|UID")]
     pub series: Option<String>,
     /// Keep DICOM localizer (scout) and derived images, left out by default.

@@ -54,8 +54,12 @@ pub fn run(args: &InfoArgs) -> Result<()> {
                  N|UID picks a DICOM series)",
                 volumes.len()
             );
-            for v in &volumes {
-                outln!("            {}", v.name());
+            let positions = slabscope::triage::series_positions(&volumes, &args.load.options());
+            for (v, at) in volumes.iter().zip(positions) {
+                match at {
+                    Some(n) => outln!("            {}  (--series {n})", v.name()),
+                    None => outln!("            {}", v.name()),
+                }
             }
         }
         return Ok(());

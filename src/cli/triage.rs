@@ -191,12 +191,20 @@ fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
         None => discover(&args.paths, &args.load.options())?,
     };
     dedupe(&mut all);
+    let series = args.load.series.as_deref();
+    if let Some(wanted) = series {
+        all = slabscope::triage::restrict_to_series(all, wanted, &args.load.options());
+    }
     if all.is_empty() {
+        let what = series.map_or_else(
+            || "volumes".to_string(),
+            |w| format!("DICOM series {}", slabscope::error::names::text(w)),
+        );
         if let Some(m) = &args.manifest {
-            bail!("{}: no volumes found in the manifest", shown(m));
+            bail!("{}: no {what} found in the manifest", shown(m));
         }
         let paths: Vec<String> = args.paths.iter().map(|p| shown(p)).collect();
-        bail!("no volumes found under {}", paths.join(", "));
+        bail!("no {what} found under {}", paths.join(", "));
     }
     let Some((k, n)) = args.shard else {
         return Ok(all);

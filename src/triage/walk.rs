@@ -135,3 +135,44 @@ fn walk(dir: &Path, depth: usize, opts: &LoadOptions, found: &mut Vec<Entry>) ->
     }
     Ok(())
 }
+
+/// For each of `entries`, its position (from 1) in its folder's list of DICOM series, the
+/// order `--series N` counts in (`info` and `analyze` alike); `None` for other volumes.
+pub fn series_positions(entries: &[Entry], opts: &LoadOptions) -> Vec<Option<usize>> {
+    let mut listed = std::collections::HashMap::<&Path, Vec<String>>::new();
+    entries
+        .iter()
+        .map(|e| {
+            let key = e.series.as_deref()?;
+            let keys = listed.entry(&e.path).or_insert_with(|| {
+                dicom::list_series(&e.path, opts)
+                    .map(|(s, _)| s.into_iter().map(|s| s.key).collect())
+                    .unwrap_or_default()
+            });
+            keys.iter().position(|k| k == key).map(|i| i + 1)
+        })
+        .collect()
+}
+
+/// The entries of `entries` that are the DICOM series `wanted` names in their folder, as
+/// `--series` names one for `info` and `analyze`: its key, its `SeriesInstanceUID`, or its
+/// position in the folder's list ([`series_positions`]). Other volumes are left out.
+pub fn restrict_to_series(entries: Vec<Entry>, wanted: &str, opts: &LoadOptions) -> Vec<Entry> {
+    let position = wanted.parse::<usize>().ok();
+    let positions = if position.is_some() {
+        series_positions(&entries, opts)
+    } else {
+        vec![None; entries.len()]
+    };
+    entries
+        .into_iter()
+        .zip(positions)
+        .filter(|(e, at)| {
+            e.series.as_deref().is_some_and(|key| {
+                let uid = key.split('#').next().unwrap_or(key);
+                key == wanted || uid == wanted || (position.is_some() && *at == position)
+            })
+        })
+        .map(|(e, _)| e)
+        .collect()
+}

@@ -580,3 +580,43 @@ fn as_nobody(paths: &[&std::path::PathBuf]) -> Option<Vec<&'static str>> {
         "--clear-groups",
     ])
 }
+
+/// `--series` means in `triage` what it means in `info` and `analyze`: the position `info`
+/// shows (`--series N`) or the UID, and only that series' rows.
+#[test]
+fn triage_series_takes_what_info_lists() {
+    let ct = crate::common::dicom_data("ct");
+    let listing = run(&["info", s(&ct)]);
+    assert!(listing.ok, "{}", listing.stderr);
+    let line = listing
+        .stdout
+        .lines()
+        .find(|l| l.contains("Sagittal MPR"))
+        .unwrap()
+        .to_string();
+    let n = line
+        .rsplit("--series ")
+        .next()
+        .unwrap()
+        .trim_end_matches(')');
+    let by_position = run(&["triage", s(&ct), "--json", "--series", n]);
+    assert!(by_position.ok, "{}", by_position.stderr);
+    let rows = rows(&by_position.stdout);
+    assert_eq!(rows.len(), 1, "{}", by_position.stdout);
+    assert_eq!(rows[0]["dicom"]["description"], "Sagittal MPR");
+    let uid = rows[0]["series"].as_str().unwrap().to_string();
+    let by_uid = run(&["triage", s(&ct), "--json", "--series", &uid]);
+    assert_eq!(
+        crate::common::rows(&by_uid.stdout)[0]["series"],
+        uid.as_str()
+    );
+    let analyzed = run(&["analyze", s(&ct), "--json", "--series", n, "--axis", "z"]);
+    assert!(analyzed.ok, "{}", analyzed.stderr);
+    let none = run(&["triage", s(&ct), "--series", "9"]);
+    assert_eq!(none.code, 2);
+    assert!(
+        none.stderr.contains("no DICOM series 9 found under"),
+        "{}",
+        none.stderr
+    );
+}
