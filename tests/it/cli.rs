@@ -520,3 +520,33 @@ fn a_timeout_stops_the_work_and_a_heavy_request_is_announced() {
     assert!(plain.ok, "{}", plain.stderr);
     assert!(!plain.stderr.contains("default's work"), "{}", plain.stderr);
 }
+
+/// A write stages its output as `.NAME.slabscope-PID-XXXXXX.tmp` beside it, and removes the
+/// staging files of the same target that a killed run (a process that no longer runs) left;
+/// a running process's, and other targets', stay.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_runs_staging_files_are_removed_by_the_next_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let stale = dir.path().join(".out.nrrd.slabscope-4194305-a1b2c3.tmp");
+    let live = dir.path().join(format!(
+        ".out.nrrd.slabscope-{}-d4e5f6.tmp",
+        std::process::id()
+    ));
+    let other = dir.path().join(".other.nrrd.slabscope-4194305-g7h8i9.tmp");
+    for f in [&stale, &live, &other] {
+        std::fs::write(f, b"partial").unwrap();
+    }
+    let out = dir.path().join("out.nrrd");
+    let ran = run(&["phantom", "layers", "--size", "8", "-o", s(&out)]);
+    assert!(ran.ok, "{}", ran.stderr);
+    assert!(out.exists());
+    assert!(!stale.exists(), "the killed run's staging file is gone");
+    assert!(live.exists() && other.exists());
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 3, "nothing else left: {names:?}");
+}

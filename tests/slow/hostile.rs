@@ -477,7 +477,7 @@ fn an_interrupted_write_leaves_nothing_behind() {
         let start = Instant::now();
         let staged = loop {
             let names = listing(dir.path());
-            if names.iter().any(|n| n.starts_with(".slabscope-")) {
+            if names.iter().any(|n| n.starts_with(".big.nrrd.slabscope-")) {
                 // Wait for bytes, past the writability probe's empty file.
                 let path = dir.path().join(&names[0]);
                 if std::fs::metadata(&path).is_ok_and(|m| m.len() > 0) {

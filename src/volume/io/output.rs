@@ -78,10 +78,64 @@ fn folder(path: &Path) -> &Path {
     }
 }
 
-/// A new temporary file beside `path`, with the usual permissions (0644 on Unix).
+/// What the staging files of `path` are named before their process id: `.NAME.slabscope-`
+/// (`.slabscope-` alone for a name too long to carry).
+fn staging_prefix(path: &Path) -> std::ffi::OsString {
+    let mut prefix = std::ffi::OsString::from(".");
+    match path.file_name() {
+        Some(name) if name.len() <= 200 => {
+            prefix.push(name);
+            prefix.push(".slabscope-");
+        }
+        _ => prefix = ".slabscope-".into(),
+    }
+    prefix
+}
+
+/// Removes the staging files of `path` that a killed run left beside it: named after it, by a
+/// process that no longer runs (`/proc/PID` is gone; where there is no `/proc` nothing is
+/// removed), and regular files. A run still writing the same target keeps its own.
+#[cfg(unix)]
+fn remove_stale(path: &Path) {
+    use std::os::unix::ffi::OsStrExt;
+    let prefix = staging_prefix(path);
+    let prefix = prefix.as_bytes();
+    if prefix == b".slabscope-" || !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(folder(path)) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(rest) = name.as_bytes().strip_prefix(prefix) else {
+            continue;
+        };
+        let pid = rest.split(|&b| b == b'-').next().unwrap_or_default();
+        let Some(pid) = std::str::from_utf8(pid)
+            .ok()
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let regular = entry.file_type().is_ok_and(|t| t.is_file());
+        let gone = pid != std::process::id() && !Path::new("/proc").join(pid.to_string()).exists();
+        if regular && gone && name.as_bytes().ends_with(b".tmp") {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
+/// A new temporary file beside `path`, named after it and this process
+/// (`.NAME.slabscope-PID-XXXXXX.tmp`), with the usual permissions (0644 on Unix); the staging
+/// files of `path` a killed run left are removed first.
 fn temporary(path: &Path) -> Result<NamedTempFile> {
+    #[cfg(unix)]
+    remove_stale(path);
+    let mut prefix = staging_prefix(path);
+    prefix.push(format!("{}-", std::process::id()));
     let mut builder = tempfile::Builder::new();
-    builder.prefix(".slabscope-").suffix(".tmp");
+    builder.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
