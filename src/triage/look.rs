@@ -183,12 +183,31 @@ pub fn look_all(
         drop(tx);
         let mut waiting = std::collections::BTreeMap::new();
         let mut due = 0;
+        // The folder whose notes a series row gave last: its other series do not repeat them.
+        let mut noted: Option<&Path> = None;
         for (i, looked) in rx {
             waiting.insert(i, looked);
-            while let Some(looked) = waiting.remove(&due) {
+            while let Some(mut looked) = waiting.remove(&due) {
+                let entry = &volumes[due];
+                if entry.series.is_some() {
+                    if noted == Some(entry.path.as_path()) {
+                        looked.row.problems.retain(|p| !folder_note(p));
+                    }
+                    noted = Some(entry.path.as_path());
+                }
                 emit(due, looked);
                 due += 1;
             }
         }
     });
+}
+
+/// Whether a loader's note is about the DICOM folder rather than the series loaded from it
+/// (images left out: localizers, derived images, files that could not be read), said once for
+/// the folder, on its first series' row.
+fn folder_note(note: &str) -> bool {
+    note.starts_with("left out ")
+        && (note.contains(" localizer image")
+            || note.contains(" derived image")
+            || note.contains("could not be read"))
 }

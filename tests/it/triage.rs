@@ -620,3 +620,24 @@ fn triage_series_takes_what_info_lists() {
         none.stderr
     );
 }
+
+/// A folder's localizer is counted once: on its first series' row, not repeated on the others.
+#[test]
+fn a_folders_localizer_is_noted_once() {
+    let ct = crate::common::dicom_data("ct");
+    let out = run(&["triage", s(&ct), "--json"]);
+    assert!(out.ok, "{}", out.stderr);
+    let rows = rows(&out.stdout);
+    assert_eq!(rows.len(), 2, "{}", out.stdout);
+    let noting: Vec<bool> = rows
+        .iter()
+        .map(|r| {
+            r["problems"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|p| p.as_str().unwrap().contains("localizer"))
+        })
+        .collect();
+    assert_eq!(noting, [true, false], "{}", out.stdout);
+}
