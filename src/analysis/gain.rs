@@ -3,9 +3,9 @@
 //! into K slabs along it, beside the paper's entropy rate. On layered data the entropy rate is
 //! lowest inside the layers, so its slabs cut across them; the gain is highest across them.
 //!
-//! Each axis is scored on a subset of its stack's pixels (every `e`-th along both in-plane
-//! directions, so that ranking costs a fraction of cutting every stack) over four shifts of that
-//! subset; their mean ranks the axes, their standard error names the contenders (§2's rule, the
+//! Each axis is scored on a subset of the voxels (every `e`-th along the two grid axes most
+//! across it), each counted in the slice of the axis's stack its centre lies in
+//! ([`sampled_gain`]), so that ranking costs a fraction of cutting every stack, over four shifts; their mean ranks the axes, their standard error names the contenders (§2's rule, the
 //! highest gain best), and a pattern search refines the best sphere axis between the vertices.
 
 use serde::Serialize;
@@ -45,21 +45,21 @@ impl AxisBy {
 /// The slab count the gain is measured at when the partition stops by a threshold.
 pub const THRESHOLD_SLABS: usize = 4;
 
-/// A ranking subset keeps at least this many pixels of a stack's area per phase.
+/// A ranking subset keeps at least this many voxels of a slice's typical area per phase.
 pub const MIN_PIXELS: f64 = 4096.0;
 
-/// The sparsest subset the ranking takes: one pixel in this many along each direction.
+/// The sparsest subset the ranking takes: one voxel in this many along each of two grid axes.
 pub const MAX_EVERY: usize = 4;
 
-/// Which pixels the ranking counted, for the report: `{"slabs": 4, "every": 3, "phases": 4}`.
+/// Which voxels the ranking counted, for the report: `{"slabs": 4, "every": 3, "phases": 4}`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct GainSampling {
     /// The slab count K the gain is measured at.
     pub slabs: usize,
-    /// One pixel in this many along both in-plane directions of each stack (1: every pixel).
+    /// One voxel in this many along the two grid axes most across each axis (1: every voxel).
     pub every: usize,
     /// The shifts of the subset averaged on oblique axes (coordinate axes counted on every
-    /// pixel have one).
+    /// voxel have one).
     pub phases: usize,
 }
 
@@ -149,9 +149,9 @@ pub fn gain_slabs(stop: Stop) -> usize {
     }
 }
 
-/// One pixel in how many the ranking of `volume` keeps along each in-plane direction: as few as
-/// keep [`MIN_PIXELS`] of a stack's typical area (the voxel count to the power 2/3), at most
-/// [`MAX_EVERY`], the same for every axis so that their gains compare.
+/// One voxel in how many the ranking of `volume` keeps along the two grid axes most across each
+/// axis: as few as keep [`MIN_PIXELS`] of a slice's typical area (the voxel count to the power
+/// 2/3), at most [`MAX_EVERY`], the same for every axis so that their gains compare.
 pub fn ranking_every(volume: &Volume) -> usize {
     let area = (volume.len() as f64).powf(2.0 / 3.0);
     ((area / MIN_PIXELS).sqrt().floor() as usize).clamp(1, MAX_EVERY)

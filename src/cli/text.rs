@@ -238,13 +238,16 @@ fn print_gain(v: &ViewSearch, g: &GainRanking, axis_by: Option<AxisBy>) {
         best.partition_gain,
         count(s.slabs, "top-down slab", "top-down slabs"),
     );
-    let pixels = if s.every == 1 {
-        "every pixel of each slice".to_string()
+    let voxels = if s.every == 1 {
+        "every voxel".to_string()
     } else {
-        format!("one pixel in {} along each direction of a slice", s.every)
+        format!(
+            "one voxel in {} along the two grid axes most across each axis",
+            s.every
+        )
     };
     outln!(
-        "         mean {:.4} ± {:.4} over {} of {pixels}",
+        "         mean {:.4} ± {:.4} over {} of {voxels}",
         best.gain_phases.mean,
         best.gain_phases.se(),
         count(best.gain_phases.n, "phase", "phases"),
