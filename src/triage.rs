@@ -33,6 +33,9 @@ pub struct Entry {
     pub series: Option<String>,
     /// How a list names the series: number and description (not in manifests).
     pub label: Option<String>,
+    /// Its position (from 1) in its folder's list of series, as the walk found it: what
+    /// `--series N` takes (not in manifests).
+    pub position: Option<usize>,
     /// Why the walk could not look inside it (a folder it cannot read, or past the depth
     /// limit): its row says so, and nothing is loaded.
     pub problem: Option<String>,
@@ -45,6 +48,7 @@ impl Entry {
             path: path.into(),
             series: None,
             label: None,
+            position: None,
             problem: None,
         }
     }

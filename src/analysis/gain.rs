@@ -42,6 +42,9 @@ impl AxisBy {
     }
 }
 
+/// Two rankings whose best axes lie within this angle agree, degrees.
+pub const AGREE_DEGREES: f64 = 5.0;
+
 /// The slab count the gain is measured at when the partition stops by a threshold.
 pub const THRESHOLD_SLABS: usize = 4;
 
@@ -100,6 +103,13 @@ impl GainRanking {
         self.contenders.len() > 1
     }
 
+    /// The angle between the gain's best axis and `entropy`'s (the entropy rate's best), when
+    /// the two rankings disagree: more than [`AGREE_DEGREES`] apart.
+    pub fn disagrees_with(&self, entropy: [f64; 3]) -> Option<f64> {
+        let apart = crate::view::axis_angle(entropy, self.refined.axis);
+        (apart > AGREE_DEGREES).then_some(apart)
+    }
+
     /// Sets the gain of `axis`, wherever the ranking and `views` hold it, to `information`:
     /// the partition's along it, counted on every voxel.
     pub fn exact(&mut self, axis: [f64; 3], information: f64, views: Option<&mut ViewSearch>) {
@@ -128,14 +138,14 @@ impl GainRanking {
     }
 
     /// `views` in the gain ranking's order, best first (axes it did not rank last).
-    pub fn sorted(&self, views: &[AxisEntropy]) -> Vec<AxisEntropy> {
+    pub fn sorted<'v>(&self, views: &'v [AxisEntropy]) -> Vec<&'v AxisEntropy> {
         let place = |axis: [f64; 3]| {
             self.views
                 .iter()
                 .position(|g| g.axis == axis)
                 .unwrap_or(usize::MAX)
         };
-        let mut out = views.to_vec();
+        let mut out: Vec<&AxisEntropy> = views.iter().collect();
         out.sort_by_key(|v| place(v.axis));
         out
     }

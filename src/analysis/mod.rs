@@ -6,8 +6,8 @@ mod gain;
 use std::sync::Arc;
 
 pub use gain::{
-    AxisBy, AxisGain, GainRanking, GainSampling, MAX_EVERY, MIN_PIXELS, THRESHOLD_SLABS,
-    gain_slabs, rank_by_gain, ranking_every,
+    AGREE_DEGREES, AxisBy, AxisGain, GainRanking, GainSampling, MAX_EVERY, MIN_PIXELS,
+    THRESHOLD_SLABS, gain_slabs, rank_by_gain, ranking_every,
 };
 
 use crate::error::Result;
@@ -105,8 +105,7 @@ impl AnalysisParams {
             let samples = (s / x).powi(2) * (s / y);
             let phases = 1.0 + view.phases.saturating_sub(1) as f64 / view.phase_subset as f64;
             let refine = if view.refine {
-                let start = crate::view::icosphere::spacing_degrees(view.level) / 2.0;
-                (3 * 8 * crate::view::refine_steps(start)) as f64
+                crate::view::refine_evaluations(view.level) as f64
             } else {
                 0.0
             };

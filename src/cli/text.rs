@@ -154,7 +154,7 @@ fn print_view_table(v: &ViewSearch, known: bool, gain_pick: Option<&GainRanking>
             _ => outln!(),
         }
     };
-    let rows = gain_pick.map_or_else(|| v.views.clone(), |g| g.sorted(&v.views));
+    let rows = gain_pick.map_or_else(|| v.views.iter().collect(), |g| g.sorted(&v.views));
     for (i, a) in rows.iter().enumerate() {
         let chosen = match gain_pick {
             Some(g) => a.axis == g.refined.axis,
@@ -273,23 +273,21 @@ fn print_gain(v: &ViewSearch, g: &GainRanking, axis_by: Option<AxisBy>) {
         outln!("         clear: no other axis keeps as much within two standard errors");
     }
     let entropy = v.best().axis;
-    let apart = slabscope::view::axis_angle(entropy, best.axis);
-    if apart > AGREE_DEGREES {
-        outln!(
+    match g.disagrees_with(entropy) {
+        Some(apart) => outln!(
             "         entropy rate prefers {}; slabs keep most along {} ({apart:.1}° apart)",
             axis_text(entropy),
             axis_text(best.axis),
-        );
-    } else {
-        outln!("         the entropy rate agrees ({apart:.1}° apart)");
+        ),
+        None => outln!(
+            "         the entropy rate agrees ({:.1}° apart)",
+            slabscope::view::axis_angle(entropy, best.axis)
+        ),
     }
     if let Some(by) = axis_by {
         outln!("         the axis partitioned is chosen by {}", by.name());
     }
 }
-
-/// Two rankings whose best axes lie within this angle agree, degrees.
-const AGREE_DEGREES: f64 = 5.0;
 
 fn print_partition(p: &Partition) {
     outln!(

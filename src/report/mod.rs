@@ -120,7 +120,7 @@ impl AnalysisReport {
             views_resolution: None,
             params,
             views: views.map(|v| match (gain, analysis.axis_by) {
-                (Some(g), Some(AxisBy::Gain)) => g.sorted(&v.views),
+                (Some(g), Some(AxisBy::Gain)) => g.sorted(&v.views).into_iter().cloned().collect(),
                 _ => v.views.clone(),
             }),
             best_axis: match (&analysis.gain, analysis.axis_by) {

@@ -84,6 +84,7 @@ fn escaped_entry(line: &[u8]) -> std::result::Result<Entry, String> {
         path: names::unescape_path(path)?,
         series,
         label: None,
+        position: None,
         problem: None,
     })
 }
@@ -98,6 +99,7 @@ fn plain_entry(line: &[u8]) -> Entry {
                 path: raw_path(&line[..tab]),
                 series: Some(key.to_string()),
                 label: None,
+                position: None,
                 problem: None,
             };
         }
@@ -137,6 +139,7 @@ mod tests {
             path: "dir\\x".into(),
             series: Some("1.2.3#2".into()),
             label: None,
+            position: None,
             problem: None,
         };
         let text = manifest_lines(&[hostile.clone(), series.clone()])

@@ -43,13 +43,14 @@ fn push_series(dir: &Path, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result
             for (file, _) in failed {
                 push(found, Entry::file(file))?;
             }
-            for s in series {
+            for (i, s) in series.into_iter().enumerate() {
                 push(
                     found,
                     Entry {
                         path: dir.to_path_buf(),
                         label: Some(s.label.clone()),
                         series: Some(s.key),
+                        position: Some(i + 1),
                         problem: None,
                     },
                 )?;
@@ -137,13 +138,17 @@ fn walk(dir: &Path, depth: usize, opts: &LoadOptions, found: &mut Vec<Entry>) ->
 }
 
 /// For each of `entries`, its position (from 1) in its folder's list of DICOM series, the
-/// order `--series N` counts in (`info` and `analyze` alike); `None` for other volumes.
+/// order `--series N` counts in (`info` and `analyze` alike): as the walk found it, else (an
+/// entry of a manifest) from the folder's list; `None` for other volumes.
 pub fn series_positions(entries: &[Entry], opts: &LoadOptions) -> Vec<Option<usize>> {
     let mut listed = std::collections::HashMap::<&Path, Vec<String>>::new();
     entries
         .iter()
         .map(|e| {
             let key = e.series.as_deref()?;
+            if e.position.is_some() {
+                return e.position;
+            }
             let keys = listed.entry(&e.path).or_insert_with(|| {
                 dicom::list_series(&e.path, opts)
                     .map(|(s, _)| s.into_iter().map(|s| s.key).collect())

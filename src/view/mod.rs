@@ -14,7 +14,7 @@ pub use rate::{
     AxisEntropy, BinSampler, InnerSpans, PhaseStats, RaySubset, entropy_rate, entropy_rate_of,
     work_units, work_units_of,
 };
-pub use refine::{REFINE_STOP_DEGREES, pattern_search, refine_steps};
+pub use refine::{REFINE_STOP_DEGREES, pattern_search, refine_evaluations, refine_steps};
 
 use crate::error::{Error, Result};
 use crate::geometry::lattice::{Lattice, SamplingParams};

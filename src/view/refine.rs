@@ -20,6 +20,13 @@ pub fn refine_steps(start: f64) -> u64 {
     (start / REFINE_STOP_DEGREES).log2().ceil() as u64 + 4
 }
 
+/// The axes [`refine`] evaluates at most on icosphere level `level`: eight a step of the pattern
+/// search from each seed, for a progress bar and a work estimate.
+pub fn refine_evaluations(level: usize) -> u64 {
+    let start = icosphere::spacing_degrees(level) / 2.0;
+    REFINE_SEEDS as u64 * 8 * refine_steps(start)
+}
+
 /// A pattern search on the sphere from `seed`, whose axis `axis_of` gives: try the eight
 /// neighbours at the current angular step (from `start` degrees), move to the one `better` than
 /// the others and than here, or halve the step, until the step is below

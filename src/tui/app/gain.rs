@@ -10,9 +10,6 @@ use super::App;
 use super::refine::{axis_text, same};
 use crate::tui::event::{Effect, Load};
 
-/// Two rankings whose best axes lie within this angle agree, degrees.
-const AGREE_DEGREES: f64 = 5.0;
-
 impl App {
     /// `i`: ranks the axes by gain, or once ranked switches the order the list and the sphere
     /// follow.
@@ -106,7 +103,7 @@ impl App {
             best.gain_phases.mean, gain.sampling.slabs
         );
         match self.views.views.ready().map(|v| v.best().axis) {
-            Some(h) if slabscope::view::axis_angle(h, best.axis) > AGREE_DEGREES => format!(
+            Some(h) if gain.disagrees_with(h).is_some() => format!(
                 "entropy rate prefers {}; slabs keep most along {} ({keeps})",
                 axis_text(h),
                 axis_text(best.axis)

@@ -85,11 +85,15 @@ impl App {
     ) -> Vec<Effect> {
         let full = level == 0 && self.refine.is_some();
         let mut effects = vec![];
+        // Views that come after the gain ranking carry its scores too.
+        let result = result.map(|mut views| {
+            if let Load::Ready(g) = &self.views.gain {
+                g.annotate(&mut views);
+            }
+            views
+        });
         match result {
-            Ok(mut views) if full => {
-                if let Load::Ready(g) = &self.views.gain {
-                    g.annotate(&mut views);
-                }
+            Ok(views) if full => {
                 let best = views.best().axis;
                 let previous = self.views.views.ready().map(|v| v.best().axis);
                 self.views.row = self.views.row.min(views.views.len().saturating_sub(1));
@@ -111,10 +115,7 @@ impl App {
                     effects.extend(self.refine_histories());
                 }
             }
-            Ok(mut views) => {
-                if let Load::Ready(g) = &self.views.gain {
-                    g.annotate(&mut views);
-                }
+            Ok(views) => {
                 let best = views.best().axis;
                 self.views.views = Load::Ready(*views);
                 self.views.row = 0;

@@ -82,10 +82,10 @@ impl ViewsPane {
     }
 
     /// The rows in the order shown: the entropy rate's, or the gain ranking's.
-    fn rows(&self) -> Vec<AxisEntropy> {
+    fn rows(&self) -> Vec<&AxisEntropy> {
         match (self.views.ready(), self.ordered_by_gain()) {
             (Some(v), Some(g)) => g.sorted(&v.views),
-            (Some(v), None) => v.views.clone(),
+            (Some(v), None) => v.views.iter().collect(),
             (None, _) => Vec::new(),
         }
     }
