@@ -213,17 +213,24 @@ fn verdict(v: &ViewSearch) -> String {
 impl Widget for &ViewsPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
         let title = match (self.views.ready(), self.ordered_by_gain()) {
-            (Some(v), Some(g)) if area.width >= 44 => format!(
-                " {} axes by the gain of {} slabs, h beside{} ",
-                v.views.len(),
-                g.sampling.slabs,
-                if g.uncertain() {
+            (Some(v), Some(g)) => {
+                let sure = if g.uncertain() {
                     format!(": uncertain ({} ≈)", g.contenders.len() - 1)
                 } else {
                     ": clear".into()
+                };
+                let wide = format!(
+                    " {} axes by the gain of {} slabs{sure} ",
+                    v.views.len(),
+                    g.sampling.slabs
+                );
+                // The long form where it fits between the corners, else the short one.
+                if wide.chars().count() + 2 <= usize::from(area.width) {
+                    wide
+                } else {
+                    format!(" {} axes by gain{sure} ", v.views.len())
                 }
-            ),
-            (Some(v), Some(_)) => format!(" {} axes by gain ", v.views.len()),
+            }
             (Some(v), None) if area.width >= 44 => {
                 format!(" {} axes by {}{} ", v.views.len(), what(v), verdict(v))
             }
