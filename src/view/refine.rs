@@ -9,7 +9,7 @@ use crate::geometry::frame;
 use crate::progress::Monitor;
 use crate::volume::Voxel;
 
-/// How many of the best sphere axes [`refine`] starts from.
+/// How many of the best sphere axes the refinement starts from.
 const REFINE_SEEDS: usize = 3;
 /// The pattern search stops when its step falls below this angle, degrees.
 pub const REFINE_STOP_DEGREES: f64 = 1.0;
@@ -20,7 +20,7 @@ pub fn refine_steps(start: f64) -> u64 {
     (start / REFINE_STOP_DEGREES).log2().ceil() as u64 + 4
 }
 
-/// The axes [`refine`] evaluates at most on icosphere level `level`: eight a step of the pattern
+/// The axes the refinement evaluates at most on icosphere level `level`: eight a step of the pattern
 /// search from each seed, for a progress bar and a work estimate.
 pub fn refine_evaluations(level: usize) -> u64 {
     let start = icosphere::spacing_degrees(level) / 2.0;
