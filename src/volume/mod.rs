@@ -21,7 +21,7 @@ pub use pyramid::Resolution;
 pub use quantize::Quantizer;
 pub use voxel::{Endian, VoxelType};
 pub(crate) use voxels::with_voxels;
-pub use voxels::{Voxel, VoxelQuantizer, Voxels};
+pub use voxels::{LentBytes, Voxel, VoxelQuantizer, Voxels};
 
 use crate::error::{Error, Result};
 pub use crate::geometry::MAX_SPACING_RATIO;

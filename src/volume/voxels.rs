@@ -147,11 +147,22 @@ impl std::fmt::Debug for MappedFile {
     }
 }
 
-/// Where a volume's voxels live: a vector of their own, or a stretch of a mapped file.
+/// Memory a volume reads its voxels from in place without owning it: a buffer another program
+/// lends (a NumPy array's, through the Python package), kept alive as long as any volume made
+/// from it. The bytes must not change while a volume reads them (its statistics are taken once).
+pub trait LentBytes: Send + Sync + std::fmt::Debug {
+    /// The lent bytes.
+    fn bytes(&self) -> &[u8];
+}
+
+/// Where a volume's voxels live: a vector of their own, a stretch of a mapped file, or memory
+/// lent by its owner.
 #[derive(Clone, Debug)]
 pub enum Store<T> {
     /// Decoded into memory.
     Owned(Arc<Vec<T>>),
+    /// Read in place from memory another program owns (counted as memory, not as a map).
+    Lent(Arc<dyn LentBytes>),
     /// Read in place from a mapped file: `len` voxels from byte `offset`, aligned for `T`.
     Mapped {
         /// The file's map.
@@ -170,6 +181,7 @@ impl<T: Voxel> Store<T> {
     pub fn as_slice(&self) -> &[T] {
         match self {
             Self::Owned(v) => v,
+            Self::Lent(bytes) => bytemuck::cast_slice(bytes.bytes()),
             Self::Mapped { file, offset, len } => bytemuck::cast_slice(
                 &file.bytes()[*offset..*offset + *len * std::mem::size_of::<T>()],
             ),
@@ -270,6 +282,23 @@ impl Voxels {
             VoxelType::I16 => to(&values, |v| v as i16),
             _ => Self::from_f32(values),
         }
+    }
+
+    /// Voxels of type `T` read in place from `bytes`, in this machine's byte order; `None` when
+    /// the bytes are not a whole number of voxels aligned for `T`, or (for f32) hold an
+    /// infinity, which a volume holds as missing (NaN) and lent memory cannot be changed to.
+    #[must_use]
+    pub fn lent<T: Voxel>(bytes: Arc<dyn LentBytes>) -> Option<Self> {
+        use rayon::prelude::*;
+        let voxels: &[T] = bytemuck::try_cast_slice(bytes.bytes()).ok()?;
+        if T::TYPE == VoxelType::F32
+            && voxels
+                .par_iter()
+                .any(|v| !v.is_missing() && !v.to_f32().is_finite())
+        {
+            return None;
+        }
+        Some(T::wrap(Store::Lent(bytes)))
     }
 
     /// Voxels read in place from `file`: `len` voxels of type `ty` (held as they are, see
@@ -504,6 +533,49 @@ mod tests {
         assert!(
             Voxels::mapped(file, VoxelType::F64, 0, 0).is_none(),
             "not held as stored"
+        );
+    }
+
+    /// Memory lent as a byte vector: what the Python package does with a NumPy array's buffer.
+    #[derive(Debug)]
+    struct Buffer(Vec<u8>);
+
+    impl LentBytes for Buffer {
+        fn bytes(&self) -> &[u8] {
+            &self.0
+        }
+    }
+
+    #[test]
+    fn lent_memory_is_read_in_place_and_counted_as_memory() {
+        let values: Vec<i16> = vec![-3, 0, 7, 1200, -32768, 32767, 5, 5];
+        let bytes: Vec<u8> = bytemuck::cast_slice(&values).to_vec();
+        let lent = Voxels::lent::<i16>(Arc::new(Buffer(bytes))).unwrap();
+        assert_eq!(lent.held(), VoxelType::I16);
+        assert!(!lent.is_mapped(), "lent memory is memory, not a map");
+        let owned = Voxels::owned(values);
+        assert_eq!(lent.to_f32_vec(), owned.to_f32_vec());
+        let a = crate::Volume::from_voxels([2, 2, 2], [1.0; 3], VoxelType::I16, lent).unwrap();
+        let b = crate::Volume::from_voxels([2, 2, 2], [1.0; 3], VoxelType::I16, owned).unwrap();
+        assert_eq!(a.stats(), b.stats());
+        assert_eq!(a.histogram(32).unwrap(), b.histogram(32).unwrap());
+        assert_eq!(a.memory_bytes(), 16);
+    }
+
+    #[test]
+    fn lent_memory_that_is_not_whole_voxels_or_holds_an_infinity_is_refused() {
+        let odd = Arc::new(Buffer(vec![0; 3]));
+        assert!(
+            Voxels::lent::<u16>(odd).is_none(),
+            "3 bytes are not u16 voxels"
+        );
+        let with_inf: Vec<u8> = bytemuck::cast_slice(&[1.0f32, f32::INFINITY]).to_vec();
+        assert!(Voxels::lent::<f32>(Arc::new(Buffer(with_inf))).is_none());
+        let with_nan: Vec<u8> = bytemuck::cast_slice(&[1.0f32, f32::NAN]).to_vec();
+        let v = Voxels::lent::<f32>(Arc::new(Buffer(with_nan))).unwrap();
+        assert!(
+            v.get(1).is_nan(),
+            "NaN is missing, as every reader holds it"
         );
     }
 }
