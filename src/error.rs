@@ -119,6 +119,9 @@ pub enum Error {
     /// The volume cannot be analysed as asked: it is constant, or one slice thick along the axis.
     #[error("{0}")]
     Degenerate(String),
+    /// Nothing to work on was found where the user pointed (no volume under the folders given).
+    #[error("{0}")]
+    NotFound(String),
     /// The computation was cancelled through its cancellation flag.
     #[error("cancelled")]
     Cancelled,

@@ -6,6 +6,7 @@
 mod look;
 mod manifest;
 mod row;
+mod select;
 mod walk;
 
 use std::path::{Path, PathBuf};
@@ -15,6 +16,7 @@ pub use self::look::{
 };
 pub use self::manifest::{MANIFEST_HEADER, MAX_LINE, manifest_lines, parse_manifest};
 pub use self::row::TriageRow;
+pub use self::select::{MAX_MANIFEST, Selection, Source, read_manifest, select};
 pub use self::walk::{discover, restrict_to_series, series_positions};
 pub use crate::volume::io::{Folder, folder_kind};
 

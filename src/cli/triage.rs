@@ -2,18 +2,16 @@
 //! Lines or CSV), a broken file a row with its error; shards for clusters, and a manifest so that
 //! shards need not walk the folders again.
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use slabscope::error::names::controls;
 use slabscope::error::shown;
 use slabscope::render::{ImageOutput, encode, sheet};
 use slabscope::triage::{
-    Entry, TriageOutcome, TriagePlan, TriageRow, dedupe, discover, manifest_lines, parse_manifest,
-    shard,
+    Entry, Source, TriageOutcome, TriagePlan, TriageRow, manifest_lines, select,
 };
 use slabscope::{Error, Progress};
 
@@ -72,28 +70,6 @@ fn parse_shard(s: &str) -> Result<(u64, u64), String> {
     super::args::pair::<u64>(s, &['/'])
         .filter(|&(k, n)| (1..=n).contains(&k))
         .ok_or_else(|| format!("{s:?} is not K/N with 1 <= K <= N, e.g. 3/10"))
-}
-
-/// The longest manifest read, bytes.
-const MAX_MANIFEST: u64 = 256 << 20;
-
-/// Reads a manifest (as `--list` writes it, or one path a line, for a DICOM series a tab and its
-/// UID): see `slabscope::triage::parse_manifest`.
-fn read_manifest(path: &Path) -> Result<Vec<Entry>> {
-    slabscope::volume::io::check_input(path)?;
-    let file = slabscope::volume::io::open_regular(path).map_err(|e| Error::io(path, e))?;
-    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    if len > MAX_MANIFEST {
-        bail!(
-            "{}: a manifest of {len} bytes; at most {MAX_MANIFEST} are read",
-            shown(path)
-        );
-    }
-    let mut text = Vec::new();
-    file.take(MAX_MANIFEST)
-        .read_to_end(&mut text)
-        .map_err(|e| Error::io(path, e))?;
-    Ok(parse_manifest(path, &text)?)
 }
 
 /// Runs triage; the exit status: 0 when every volume was looked at, 1 when some failed (their
@@ -183,40 +159,17 @@ fn check_sheet(args: &TriageArgs, volumes: &[Entry]) -> Result<()> {
     Ok(())
 }
 
-/// The volumes a run takes: from the manifest or the walk, sorted, one entry per file, then its
-/// shard. No volumes at all is an error; an empty shard of some is said in a note.
+/// The volumes a run takes (see `slabscope::triage::select`); an empty shard is said in a note.
 fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
-    let mut all = match &args.manifest {
-        Some(m) => read_manifest(m)?,
-        None => discover(&args.paths, &args.load.options())?,
+    let source = match &args.manifest {
+        Some(m) => Source::Manifest(m),
+        None => Source::Paths(&args.paths),
     };
-    dedupe(&mut all);
-    let series = args.load.series.as_deref();
-    if let Some(wanted) = series {
-        all = slabscope::triage::restrict_to_series(all, wanted, &args.load.options());
+    let selection = select(source, &args.load.options(), args.shard)?;
+    if let Some(note) = selection.note {
+        eprintln!("slabscope: note: {note}");
     }
-    if all.is_empty() {
-        let what = series.map_or_else(
-            || "volumes".to_string(),
-            |w| format!("DICOM series {}", slabscope::error::names::text(w)),
-        );
-        if let Some(m) = &args.manifest {
-            bail!("{}: no {what} found in the manifest", shown(m));
-        }
-        let paths: Vec<String> = args.paths.iter().map(|p| shown(p)).collect();
-        bail!("no {what} found under {}", paths.join(", "));
-    }
-    let Some((k, n)) = args.shard else {
-        return Ok(all);
-    };
-    let part = shard(&all, k, n).to_vec();
-    if part.is_empty() {
-        eprintln!(
-            "slabscope: note: shard {k}/{n} of {} volumes is empty (more shards than volumes)",
-            all.len()
-        );
-    }
-    Ok(part)
+    Ok(selection.volumes)
 }
 
 /// Every volume's row (and cell), looked at as `slabscope::triage::look_all` does, errors worded
