@@ -152,6 +152,21 @@ pub fn analyze(volume: &Volume, params: &AnalysisParams, monitor: &Monitor) -> R
     analyze_planned(&Plan::at(Arc::new(volume.clone())), params, monitor)
 }
 
+/// The axis `params` asks for, a unit physical direction: the one it names, or the best of the
+/// view search by entropy rate (no partition is made).
+pub fn chosen_axis(
+    volume: &Volume,
+    params: &AnalysisParams,
+    monitor: &Monitor,
+) -> Result<[f64; 3]> {
+    match params.axis.resolve(volume.transform(), volume.spacing())? {
+        Some(axis) => Ok(axis.direction()),
+        None => Ok(crate::view::search(volume, &params.view, monitor)?
+            .best()
+            .axis),
+    }
+}
+
 /// Where an analysis runs within a memory budget: the pyramid level the view search runs on,
 /// the level partitioned, and whether the partition's slice stack is counted strip by strip.
 #[derive(Clone, Debug)]

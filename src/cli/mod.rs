@@ -184,6 +184,7 @@ const FLAGS: &[(&str, &str)] = &[
     ("size", "--size"),
     ("spacing", "--spacing"),
     ("volume", "--volume"),
+    ("index", "--index"),
 ];
 
 /// One error for people, on one line: each cause in the chain, library errors worded in the

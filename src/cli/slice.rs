@@ -3,12 +3,10 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
-use slabscope::geometry::min_spacing;
-use slabscope::partition::slice_geometry;
-use slabscope::render::{Renderer, Stack, encode, slice};
-use slabscope::view::search;
+use slabscope::analysis::chosen_axis;
+use slabscope::render::{encode, slice};
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::progress::with_bar;
@@ -51,39 +49,20 @@ pub fn run(args: &SliceArgs) -> Result<()> {
     // middle slice, if not 4 slabs).
     let params = args.analysis.params(false);
     let name = slabscope::error::shown(&args.file);
-    let axis = if let Some(axis) = params
-        .axis
-        .resolve(volume.transform(), volume.spacing())
-        .map_err(slabscope::Error::from)?
-    {
-        axis.direction()
-    } else {
-        let views = with_bar(|monitor| search(volume, &params.view, monitor))
-            .map_err(|e| anyhow::Error::from(e).context(name))?;
-        views.best().axis
-    };
-    let (axis, slices, thickness, offset) = slice_geometry(volume, axis, &params.stack())?;
-    let stack = Stack {
-        axis,
-        slices,
-        thickness,
-        offset,
-    };
-    let index = args.index.unwrap_or(stack.slices / 2);
-    if index >= stack.slices {
-        bail!(
-            "--index {index}: there are {} slices along this axis (numbered from 0)",
-            stack.slices
-        );
-    }
-    let transfer =
-        Renderer::new(volume)?.transfer(args.look.look(), min_spacing(volume.spacing()))?;
-    let params = slice::SliceParams {
+    let axis = with_bar(|monitor| chosen_axis(volume, &params, monitor))
+        .map_err(|e| anyhow::Error::from(e).context(name))?;
+    let slice_params = slice::SliceParams {
         fit: args.size,
         letters: !args.no_letters,
         ..slice::SliceParams::default()
     };
-    let position = stack.position(index);
-    let image = slice::slice(volume, &transfer, stack.axis, position, &params)?;
+    let image = slice::numbered(
+        volume,
+        axis,
+        &params.stack(),
+        args.index,
+        args.look.look(),
+        &slice_params,
+    )?;
     super::write_new(&args.output, &encode(&image.pixmap, format)?, args.force)
 }

@@ -328,6 +328,40 @@ pub fn face_slices((a, b): (usize, usize)) -> [usize; 2] {
     [b.saturating_sub(1).max(a), a]
 }
 
+/// Slice `index` (the middle one when `None`) of the stack across `axis` (a unit physical
+/// direction) that a partition along it would cut with `stack`, drawn with `look`: what
+/// `slabscope slice` writes. An index past the stack is an error naming the slices there are.
+pub fn numbered(
+    volume: &Volume,
+    axis: [f64; 3],
+    stack: &crate::partition::StackParams,
+    index: Option<usize>,
+    look: super::TransferChoice,
+    params: &SliceParams,
+) -> Result<SliceImage> {
+    let (axis, slices, thickness, offset) = crate::partition::slice_geometry(volume, axis, stack)?;
+    let stack = Stack {
+        axis,
+        slices,
+        thickness,
+        offset,
+    };
+    let index = index.unwrap_or(stack.slices / 2);
+    if index >= stack.slices {
+        return Err(Error::invalid(
+            "index",
+            index,
+            format!(
+                "a slice from 0 to {} (there are {} slices along this axis)",
+                stack.slices - 1,
+                stack.slices
+            ),
+        ));
+    }
+    let transfer = super::Renderer::new(volume)?.transfer(look, min_spacing(volume.spacing()))?;
+    slice(volume, &transfer, stack.axis, stack.position(index), params)
+}
+
 /// The first and last slice of every slab, side by side: one column per slab, its upper face
 /// (its last slice) above its lower face (its first), each tile fit into `tile` and numbered.
 pub fn faces(

@@ -391,7 +391,9 @@ fn slice_writes_one_slice_and_render_faces_a_strip() {
     ]);
     assert!(!ok, "past the last slice");
     assert!(
-        stderr.contains("--index 24: there are 24 slices along this axis"),
+        stderr.contains(
+            "--index 24: expected a slice from 0 to 23 (there are 24 slices along this axis)"
+        ),
         "{stderr}"
     );
     let Ran { ok, stderr, .. } = run(&["slice", f, "--axis", "z", "-o", o]);
