@@ -126,8 +126,14 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
             Ok(table_line(&row))
         };
         match line {
-            Ok(line) => outln!("{line}"),
-            Err(e) => result = Err(e),
+            Ok(line) => {
+                outln!("{line}");
+                true
+            }
+            Err(e) => {
+                result = Err(e);
+                false
+            }
         }
     });
     result?;
@@ -174,7 +180,7 @@ fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
 
 /// Every volume's row (and cell), looked at as `slabscope::triage::look_all` does, errors worded
 /// in the CLI's terms and without the path the row names; handed to `emit` in order.
-fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, TriageOutcome)) {
+fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, TriageOutcome) -> bool) {
     let how = TriagePlan {
         load: args.load.options(),
         params: args.analysis.params(false),

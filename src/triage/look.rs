@@ -132,7 +132,8 @@ pub fn look(
 }
 
 /// Looks at every one of `volumes` as `how` says, `workers` at a time, and hands the results to
-/// `emit` in order, as they complete. The volumes looked at together share the memory budget:
+/// `emit` in order, as they complete, until `emit` returns false (the looks under way then
+/// finish, and no other starts). The volumes looked at together share the memory budget:
 /// each loads within its share, and one that needs more is looked at again alone, with the
 /// whole budget. `describe` words an error of a volume.
 pub fn look_all(
@@ -140,7 +141,7 @@ pub fn look_all(
     how: &TriagePlan,
     workers: usize,
     describe: &(dyn Fn(&Path, Error) -> String + Sync),
-    mut emit: impl FnMut(usize, TriageOutcome),
+    mut emit: impl FnMut(usize, TriageOutcome) -> bool,
 ) {
     let workers = workers.min(volumes.len()).max(1);
     let next = AtomicUsize::new(0);
@@ -185,7 +186,7 @@ pub fn look_all(
         let mut due = 0;
         // The folder whose notes a series row gave last: its other series do not repeat them.
         let mut noted: Option<&Path> = None;
-        for (i, looked) in rx {
+        'rows: for (i, looked) in rx {
             waiting.insert(i, looked);
             while let Some(mut looked) = waiting.remove(&due) {
                 let entry = &volumes[due];
@@ -195,7 +196,10 @@ pub fn look_all(
                     }
                     noted = Some(entry.path.as_path());
                 }
-                emit(due, looked);
+                if !emit(due, looked) {
+                    next.store(volumes.len(), Ordering::Relaxed);
+                    break 'rows;
+                }
                 due += 1;
             }
         }

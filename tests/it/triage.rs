@@ -641,3 +641,27 @@ fn a_folders_localizer_is_noted_once() {
         .collect();
     assert_eq!(noting, [true, false], "{}", out.stdout);
 }
+
+#[test]
+fn a_run_stops_when_its_reader_stops_taking_rows() {
+    use slabscope::triage::{Source, TriagePlan, look_all, select};
+    let dir = tempfile::tempdir().unwrap();
+    archive(dir.path());
+    let opts = slabscope::LoadOptions::default();
+    let paths = [dir.path().to_path_buf()];
+    let all = select(Source::Paths(&paths), &opts, None).unwrap().volumes;
+    assert!(all.len() >= 6, "{all:?}");
+    let how = TriagePlan {
+        load: opts,
+        params: slabscope::AnalysisParams::default(),
+        timeout: std::time::Duration::from_secs(60),
+        fast: true,
+        tile: None,
+    };
+    let mut seen = Vec::new();
+    look_all(&all, &how, 2, &|_, e| e.to_string(), |i, _| {
+        seen.push(i);
+        seen.len() < 2
+    });
+    assert_eq!(seen, [0, 1], "rows in order, none after the reader stopped");
+}
