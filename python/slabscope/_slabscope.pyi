@@ -1,0 +1,202 @@
+"""Type stubs of slabscope's extension module: every call, its keywords and their defaults."""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Callable, Iterator, Literal, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+SCHEMA_VERSION: int
+
+PathLike = Union[str, "os.PathLike[str]"]
+Progress = Callable[[str, float], Any]
+Axis = Union[str, Tuple[float, float, float]]
+
+class VolumeError(Exception):
+    """A file slabscope cannot read as a volume, or a volume it cannot analyse."""
+
+class Volume:
+    """A volume: voxels indexed [x, y, z], spacing in mm, a voxel-to-world affine."""
+
+    copied: bool
+    format: str
+    notes: list[str]
+    @staticmethod
+    def from_array(
+        array: npt.ArrayLike,
+        spacing: Optional[Tuple[float, float, float]] = None,
+        affine: Optional[npt.ArrayLike] = None,
+    ) -> Volume:
+        """A volume of a NumPy array indexed [x, y, z]: read in place when Fortran-ordered
+        uint8, int8, uint16, int16 or float32 in native byte order, else copied once."""
+    @property
+    def array(self) -> np.ndarray: ...
+    @property
+    def shape(self) -> Tuple[int, int, int]: ...
+    @property
+    def spacing(self) -> Tuple[float, float, float]: ...
+    @property
+    def affine(self) -> np.ndarray: ...
+    @property
+    def orientation(self) -> Optional[str]: ...
+    @property
+    def dtype(self) -> str: ...
+    @property
+    def range(self) -> Tuple[float, float]: ...
+    @property
+    def missing(self) -> int: ...
+
+def load(
+    path: PathLike,
+    *,
+    dims: Optional[Tuple[int, int, int]] = None,
+    dtype: Any = None,
+    spacing: Optional[Tuple[float, float, float]] = None,
+    endian: Optional[Literal["little", "big"]] = None,
+    offset: Optional[int] = None,
+    max_memory: Union[int, str, None] = None,
+    volume: int = 0,
+    series: Union[int, str, None] = None,
+    include_localizers: bool = False,
+    resample: bool = False,
+    show_phi: bool = False,
+) -> Volume:
+    """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), VolumeShop, raw."""
+
+class Analysis:
+    """The views with their scores, the best axis and the slabs along it."""
+
+    @property
+    def views(self) -> list[dict[str, Any]]: ...
+    @property
+    def best_axis(self) -> Tuple[float, float, float]: ...
+    @property
+    def uncertain(self) -> bool: ...
+    @property
+    def contenders(self) -> list[dict[str, Any]]: ...
+    @property
+    def slabs(self) -> list[Tuple[int, int]]: ...
+    @property
+    def steps(self) -> list[dict[str, Any]]: ...
+    @property
+    def information(self) -> float: ...
+    @property
+    def partition(self) -> dict[str, Any]: ...
+    @property
+    def notes(self) -> list[str]: ...
+    def to_dict(self) -> dict[str, Any]:
+        """The object `slabscope analyze --json` prints."""
+    def to_json(self) -> str: ...
+    def labels(self) -> np.ndarray:
+        """The slab index of every voxel, [x, y, z], uint8 (uint16 beyond 256 slabs)."""
+
+def analyze(
+    volume: Volume,
+    progress: Optional[Progress] = None,
+    *,
+    bins: int = 32,
+    block: int = 3,
+    level: int = 1,
+    ray_spacing: Optional[float] = None,
+    sample_spacing: Optional[float] = None,
+    phases: int = 8,
+    phase_subset: int = 12,
+    refine: bool = False,
+    axis: Axis = "best",
+    axis_by: Literal["entropy", "gain"] = "entropy",
+    gain: bool = False,
+    method: Literal["topdown", "bottomup", "optimal"] = "topdown",
+    slabs: Optional[int] = None,
+    threshold: Optional[float] = None,
+    background: Union[Literal["auto", "none"], float] = "auto",
+    views: bool = False,
+    resolution: Union[Literal["full", "auto"], int] = "full",
+    max_memory: Union[int, str, None] = None,
+) -> Analysis:
+    """The most structured view and the slabs along it, as `slabscope analyze` finds them."""
+
+class Image:
+    """A picture; a notebook shows it."""
+
+    @property
+    def array(self) -> np.ndarray:
+        """(height, width, 4) uint8 RGBA."""
+    @property
+    def size(self) -> Tuple[int, int]: ...
+    def png(self) -> bytes: ...
+    def _repr_png_(self) -> bytes: ...
+    def save(self, path: PathLike, force: bool = False) -> None: ...
+
+def render(
+    volume: Volume,
+    analysis: Optional[Analysis] = None,
+    progress: Optional[Progress] = None,
+    *,
+    size: Tuple[int, int] = (640, 480),
+    mode: Literal["cut", "dvr", "mip"] = "cut",
+    tf: Literal["auto", "ct-bone", "ct-soft", "mri"] = "auto",
+    colormap: Literal["grey", "bone", "hot", "viridis"] = "grey",
+    window: Optional[Tuple[float, float]] = None,
+    azimuth: float = 30.0,
+    elevation: float = 20.0,
+    zoom: float = 1.0,
+    perspective: bool = False,
+    gap: Literal["uniform", "similarity"] = "similarity",
+    spread: float = 0.5,
+    highlight: Optional[int] = None,
+    solo: bool = False,
+    step: float = 1.0,
+    no_shading: bool = False,
+    no_outlines: bool = False,
+    no_labels: bool = False,
+) -> Image:
+    """The exploded view of the slabs, as `slabscope render` draws it."""
+
+def slice(
+    volume: Volume,
+    analysis: Optional[Analysis] = None,
+    index: Optional[int] = None,
+    progress: Optional[Progress] = None,
+    *,
+    size: Tuple[int, int] = (512, 512),
+    no_letters: bool = False,
+    tf: Literal["auto", "ct-bone", "ct-soft", "mri"] = "auto",
+    colormap: Literal["grey", "bone", "hot", "viridis"] = "grey",
+    window: Optional[Tuple[float, float]] = None,
+    axis: Axis = "best",
+    **analysis: Any,
+) -> Image:
+    """One slice across the slab axis, oriented as radiologists read it."""
+
+class Triage(Iterator[dict[str, Any]]):
+    """The rows of a triage run, in order."""
+
+    def __iter__(self) -> Triage: ...
+    def __next__(self) -> dict[str, Any]: ...
+    def __len__(self) -> int: ...
+    def close(self) -> None: ...
+
+def triage(
+    paths: Union[PathLike, Sequence[PathLike], None] = None,
+    *,
+    manifest: Optional[PathLike] = None,
+    entries: Optional[Sequence[str]] = None,
+    shard: Optional[Tuple[int, int]] = None,
+    full: bool = False,
+    timeout: float = 60.0,
+    **options: Any,
+) -> Triage:
+    """Every volume, one row each, as `slabscope triage --json` prints them."""
+
+def list_volumes(
+    paths: Union[PathLike, Sequence[PathLike], None] = None,
+    *,
+    manifest: Optional[PathLike] = None,
+    entries: Optional[Sequence[str]] = None,
+    shard: Optional[Tuple[int, int]] = None,
+    **load_options: Any,
+) -> list[str]:
+    """The volumes triage would take, as the lines `triage --list` prints."""

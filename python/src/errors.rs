@@ -1,0 +1,107 @@
+//! Library errors as Python exceptions, worded in keyword arguments where the CLI names flags.
+
+use pyo3::exceptions::{
+    PyException, PyFileExistsError, PyFileNotFoundError, PyKeyboardInterrupt, PyOSError,
+    PyPermissionError, PyRuntimeError, PyValueError,
+};
+use pyo3::prelude::*;
+use slabscope::Error;
+use slabscope::error::names::controls;
+use slabscope::error::shown;
+
+pyo3::create_exception!(
+    slabscope,
+    VolumeError,
+    PyException,
+    "A file slabscope cannot read as a volume, or a volume it cannot analyse: the message names \
+     the file and the problem."
+);
+
+/// The keyword argument a library parameter is given by.
+fn keyword(parameter: &str) -> &str {
+    match parameter {
+        "voxel_type" | "type" => "dtype",
+        p => p,
+    }
+}
+
+/// The one-line message of `e`, with the keyword that lifts a limit or allows an overwrite.
+pub fn message(e: &Error) -> String {
+    let text = match e {
+        Error::InvalidParameter {
+            parameter,
+            value,
+            expected,
+        } => format!("{}={value}: expected {expected}", keyword(parameter)),
+        Error::TooLarge { what, .. }
+            if what.contains("this machine") || what.contains("system") =>
+        {
+            e.to_string()
+        }
+        Error::TooLarge { .. } => format!("{e} (raise it with max_memory=)"),
+        Error::RawUndescribed {
+            path,
+            missing,
+            detail,
+        } => {
+            let keywords: Vec<&str> = missing
+                .iter()
+                .map(|m| match *m {
+                    "dims" => "dims=(NX, NY, NZ)",
+                    _ => "dtype= (u8, i8, u16, i16, u32, i32, f32 or f64)",
+                })
+                .collect();
+            format!("{}: {detail}: give {}", shown(path), keywords.join(" and "))
+        }
+        Error::Exists { .. } => format!("{e} (force=True overwrites it)"),
+        Error::Series {
+            localizers: true, ..
+        } => format!("{e} (include_localizers=True keeps them)"),
+        Error::Series { .. } => format!("{e} (pick one with series=N or series=UID)"),
+        _ => e.to_string(),
+    };
+    controls(&text).into_owned()
+}
+
+/// `e` as the Python exception a user catches: `FileNotFoundError` and the other `OSError`s for
+/// files that cannot be opened, `ValueError` for bad parameters, `KeyboardInterrupt` for a
+/// cancelled call, [`VolumeError`] for a file or volume slabscope cannot work with.
+pub fn to_py(e: Error) -> PyErr {
+    let text = message(&e);
+    match &e {
+        Error::Io { error, .. } => match error.kind() {
+            std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(text),
+            std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(text),
+            _ => PyOSError::new_err(text),
+        },
+        Error::NotFound(_) => PyFileNotFoundError::new_err(text),
+        Error::Exists { .. } => PyFileExistsError::new_err(text),
+        Error::NotRegularFile { .. } => PyOSError::new_err(text),
+        Error::InvalidParameter { .. } => PyValueError::new_err(text),
+        Error::Cancelled => PyKeyboardInterrupt::new_err("cancelled"),
+        Error::Encode(_) => PyRuntimeError::new_err(text),
+        _ => VolumeError::new_err(text),
+    }
+}
+
+/// A `ValueError` for keyword `name` given `value`, which should be `expected`.
+pub fn invalid(name: &str, value: impl std::fmt::Display, expected: &str) -> PyErr {
+    PyValueError::new_err(controls(&format!("{name}={value}: expected {expected}")).into_owned())
+}
+
+/// Results of the library as Python results.
+pub trait OrPy<T> {
+    /// The error as a Python exception.
+    fn or_py(self) -> PyResult<T>;
+}
+
+impl<T> OrPy<T> for slabscope::Result<T> {
+    fn or_py(self) -> PyResult<T> {
+        self.map_err(to_py)
+    }
+}
+
+/// How Python shows `o`, for messages.
+pub fn repr(o: &Bound<'_, PyAny>) -> String {
+    o.repr().map_or_else(|_| "?".into(), |r| r.to_string())
+}

@@ -1,0 +1,181 @@
+//! `slabscope.render` and `slabscope.slice`: pictures as RGBA arrays in a small wrapper that a
+//! notebook shows (`_repr_png_`) and that saves as `render -o` and `slice -o` write.
+
+use std::path::PathBuf;
+
+use numpy::PyArray3;
+use numpy::ndarray::Array3;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use slabscope::render::{ImageOutput, Layout, Renderer, encode, slice as slices};
+use tiny_skia::Pixmap;
+
+use crate::analysis::{Analysis, analyze};
+use crate::errors::OrPy;
+use crate::params::{Kwargs, analysis_params, look, render_params, size};
+use crate::run;
+use crate::volume::Volume;
+
+/// A picture: `array` is its pixels, `(height, width, 4)` uint8 RGBA; a notebook shows it.
+#[pyclass(module = "slabscope", frozen)]
+pub struct Image {
+    pixmap: Pixmap,
+    /// The files the picture was made from, never written over.
+    sources: Vec<PathBuf>,
+}
+
+#[pymethods]
+impl Image {
+    /// The pixels, `(height, width, 4)` uint8 RGBA (a copy).
+    #[getter]
+    fn array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        let (w, h) = (self.pixmap.width() as usize, self.pixmap.height() as usize);
+        let pixels = Array3::from_shape_vec((h, w, 4), self.pixmap.data().to_vec())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(PyArray3::from_owned_array(py, pixels))
+    }
+
+    /// `(width, height)` in pixels.
+    #[getter]
+    fn size(&self) -> (u32, u32) {
+        (self.pixmap.width(), self.pixmap.height())
+    }
+
+    /// The picture as PNG bytes.
+    fn png<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let bytes = encode(&self.pixmap, ImageOutput::Png).or_py()?;
+        Ok(PyBytes::new(py, &bytes))
+    }
+
+    fn _repr_png_<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        self.png(py)
+    }
+
+    /// Writes the picture to `path`: PNG, or JPEG for a `.jpg` or `.jpeg` name. An existing file
+    /// is replaced only with `force=True`; never a file the picture was made from, nor one
+    /// that is not a regular file.
+    #[pyo3(signature = (path, force=false))]
+    fn save(&self, py: Python<'_>, path: &Bound<'_, PyAny>, force: bool) -> PyResult<()> {
+        let out = crate::params::path(path)?;
+        let format = ImageOutput::for_path(&out).or_py()?;
+        slabscope::volume::io::check_output(&out, force).or_py()?;
+        if self
+            .sources
+            .iter()
+            .any(|s| slabscope::volume::io::same_file(s, &out))
+        {
+            return Err(PyValueError::new_err(format!(
+                "{}: is an input of this picture; slabscope never writes over its input",
+                slabscope::error::shown(&out)
+            )));
+        }
+        let bytes = encode(&self.pixmap, format).or_py()?;
+        run::quick(py, || {
+            slabscope::volume::io::write_atomic(&out, force, |mut file| {
+                std::io::Write::write_all(&mut file, &bytes)
+            })
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<slabscope.Image {}x{}>",
+            self.pixmap.width(),
+            self.pixmap.height()
+        )
+    }
+}
+
+/// The exploded view of `volume`'s slabs in `analysis` (analysed with the defaults when None),
+/// drawn from the level the analysis partitioned, with `render`'s keywords: `size=(640, 480)`,
+/// `mode="cut"`, `tf`, `colormap`, `window`, `azimuth=30`, `elevation=20`, `zoom=1`,
+/// `perspective`, `gap="similarity"`, `spread`, `highlight`, `solo`, `step=1`, `no_shading`,
+/// `no_outlines`, `no_labels`.
+#[pyfunction]
+#[pyo3(signature = (volume, analysis=None, progress=None, **options))]
+pub fn render(
+    py: Python<'_>,
+    volume: &Volume,
+    analysis: Option<&Analysis>,
+    progress: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Image> {
+    let kw = Kwargs::new(py, "render", options)?;
+    let size = size(&kw, (640, 480))?;
+    let (params, gap, spread) = render_params(&kw, size)?;
+    kw.finish()?;
+    let made;
+    let analysis = match analysis {
+        Some(a) => {
+            a.check_volume(volume)?;
+            a
+        }
+        None => {
+            made = analyze(py, volume, progress, None)?;
+            &made
+        }
+    };
+    let part = &analysis.analysis.partition;
+    if let Some(h) = params.highlight
+        && h >= part.slabs.len()
+    {
+        return Err(PyValueError::new_err(format!(
+            "highlight={h}: there are only {} slabs (numbered from 0)",
+            part.slabs.len()
+        )));
+    }
+    let layout = Layout::exploded(part, gap, spread);
+    let level = &analysis.level;
+    let image = run::long(py, progress, |monitor| {
+        Renderer::new(level)?.render(&layout, &params, monitor)
+    })?;
+    Ok(Image {
+        pixmap: image.pixmap,
+        sources: volume.sources.clone(),
+    })
+}
+
+/// One slice across the slab axis, oriented as radiologists read it, as `slabscope slice`
+/// writes it: the axis of `analysis` when given, else the one the analysis keywords name
+/// (`axis="best"`: the view search's); `index` (the middle slice when None), `size=(512,
+/// 512)`, `no_letters`, `tf`, `colormap`, `window`.
+#[pyfunction]
+#[pyo3(signature = (volume, analysis=None, index=None, progress=None, **options))]
+pub fn slice(
+    py: Python<'_>,
+    volume: &Volume,
+    analysis: Option<&Analysis>,
+    index: Option<usize>,
+    progress: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Image> {
+    let kw = Kwargs::new(py, "slice", options)?;
+    let fit = size(&kw, (512, 512))?;
+    let letters = !kw.or("no_letters", false)?;
+    let look = look(&kw)?;
+    let params = analysis_params(&kw)?;
+    kw.finish()?;
+    let full = &volume.inner;
+    let axis = match analysis {
+        Some(a) => {
+            a.check_volume(volume)?;
+            a.analysis.axis()
+        }
+        None => run::long(py, progress, |monitor| {
+            slabscope::analysis::chosen_axis(full, &params, monitor)
+        })?,
+    };
+    let slice_params = slices::SliceParams {
+        fit,
+        letters,
+        ..slices::SliceParams::default()
+    };
+    let image = run::quick(py, || {
+        slices::numbered(full, axis, &params.stack(), index, look, &slice_params)
+    })?;
+    Ok(Image {
+        pixmap: image.pixmap,
+        sources: volume.sources.clone(),
+    })
+}

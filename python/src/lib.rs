@@ -1,0 +1,33 @@
+//! `slabscope._slabscope`: the Python face of the slabscope library. Every call is a thin layer
+//! over the library, worded as the CLI is (its flags as keyword arguments, its defaults), and
+//! every long call runs with the GIL released, reports progress and stops on Ctrl-C (`run`).
+//! The pure-Python package `slabscope` re-exports it and adds what needs only Python.
+
+mod analysis;
+mod errors;
+mod image;
+mod params;
+mod run;
+mod triage;
+mod volume;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("VolumeError", py.get_type::<errors::VolumeError>())?;
+    m.add("SCHEMA_VERSION", slabscope::SCHEMA_VERSION)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<volume::Volume>()?;
+    m.add_class::<analysis::Analysis>()?;
+    m.add_class::<image::Image>()?;
+    m.add_class::<triage::Triage>()?;
+    m.add_function(wrap_pyfunction!(volume::load, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(image::render, m)?)?;
+    m.add_function(wrap_pyfunction!(image::slice, m)?)?;
+    m.add_function(wrap_pyfunction!(triage::triage, m)?)?;
+    m.add_function(wrap_pyfunction!(triage::list_volumes, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,194 @@
+//! `slabscope.triage` and `slabscope.list_volumes`: many volumes, one row each, as
+//! `slabscope triage --json` prints them (rows as dicts, in the same order), and the volumes a
+//! run would take as the lines `triage --list` prints (for spreading a run over a cluster).
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::sync::mpsc::{Receiver, RecvTimeoutError, sync_channel};
+use std::time::Duration;
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use slabscope::error::shown;
+use slabscope::triage::{
+    Entry, MANIFEST_HEADER, Source, TriagePlan, look_all, parse_manifest, select,
+};
+
+use crate::analysis::parse;
+use crate::errors::{OrPy, message};
+use crate::params::{Kwargs, analysis_params, load_options};
+
+/// Volumes looked at at once, as the CLI does.
+const WORKERS: usize = 2;
+
+/// The rows of a triage run as they come, in order: an iterator of dicts (`len()` is the
+/// number of volumes). Closing it early (or dropping it) stops the run after the volumes under
+/// way.
+#[pyclass(module = "slabscope")]
+pub struct Triage {
+    rows: Mutex<Receiver<String>>,
+    count: usize,
+}
+
+/// The paths of `given`: one path, or a list of them.
+fn paths(given: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
+    if let Ok(one) = crate::params::path(given) {
+        return Ok(vec![one]);
+    }
+    given
+        .try_iter()?
+        .map(|p| crate::params::path(&p?))
+        .collect()
+}
+
+/// The entries a run takes: from `entries` (lines as `list_volumes` gives them), a manifest
+/// file, or the paths walked; then the shard.
+fn entries(
+    py: Python<'_>,
+    kw: &Kwargs<'_>,
+    given: Option<&Bound<'_, PyAny>>,
+    opts: &slabscope::LoadOptions,
+) -> PyResult<Vec<Entry>> {
+    let manifest: Option<PathBuf> = kw.get("manifest")?;
+    let lines: Option<Vec<String>> = kw.get("entries")?;
+    let shard: Option<(u64, u64)> = kw.get("shard")?;
+    if let Some((k, n)) = shard
+        && (n == 0 || k == 0 || k > n)
+    {
+        return Err(crate::errors::invalid(
+            "shard",
+            format!("({k}, {n})"),
+            "(K, N) with K from 1 to N",
+        ));
+    }
+    let given = given.map(paths).transpose()?;
+    match (given, manifest, lines) {
+        (None, None, Some(lines)) => {
+            let text = std::iter::once(MANIFEST_HEADER.to_string())
+                .chain(lines)
+                .collect::<Vec<_>>()
+                .join("\n");
+            let mut all =
+                parse_manifest(std::path::Path::new("entries"), text.as_bytes()).or_py()?;
+            if let Some((k, n)) = shard {
+                all = slabscope::triage::shard(&all, k, n).to_vec();
+            }
+            Ok(all)
+        }
+        (Some(paths), None, None) => Ok(py
+            .detach(|| select(Source::Paths(&paths), opts, shard))
+            .or_py()?
+            .volumes),
+        (None, Some(m), None) => Ok(py
+            .detach(|| select(Source::Manifest(&m), opts, shard))
+            .or_py()?
+            .volumes),
+        _ => Err(PyValueError::new_err(
+            "give one of paths, manifest= or entries=",
+        )),
+    }
+}
+
+/// Every volume under `paths` (folders walked, files, or a list of both), or those of
+/// `manifest=` or `entries=`, one row each, as `triage --json` gives them: an iterator of
+/// dicts. Keywords as the CLI's: `shard=(K, N)`, `full`, `timeout=60`, the loader's and the
+/// analysis' (`series`, `max_memory`, `slabs`, `method`, ...).
+#[pyfunction]
+#[pyo3(signature = (paths=None, **options))]
+pub fn triage(
+    py: Python<'_>,
+    paths: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Triage> {
+    let kw = Kwargs::new(py, "triage", options)?;
+    let load = load_options(&kw)?;
+    let params = analysis_params(&kw)?;
+    let timeout: f64 = kw.or("timeout", 60.0)?;
+    if !(timeout.is_finite() && (0.1..=86400.0).contains(&timeout)) {
+        return Err(crate::errors::invalid(
+            "timeout",
+            timeout,
+            "seconds from 0.1 to 86400",
+        ));
+    }
+    let fast = !kw.or("full", false)?;
+    let volumes = entries(py, &kw, paths, &load)?;
+    kw.finish()?;
+    let how = TriagePlan {
+        load,
+        params,
+        timeout: Duration::from_secs_f64(timeout),
+        fast,
+        tile: None,
+    };
+    let count = volumes.len();
+    let (tx, rx) = sync_channel::<String>(WORKERS);
+    std::thread::spawn(move || {
+        let describe = |path: &std::path::Path, e: slabscope::Error| {
+            let m = message(&e);
+            m.strip_prefix(&format!("{}: ", shown(path)))
+                .map_or(m.clone(), str::to_string)
+        };
+        look_all(&volumes, &how, WORKERS, &describe, |_, looked| {
+            serde_json::to_string(&looked.row).is_ok_and(|row| tx.send(row).is_ok())
+        });
+    });
+    Ok(Triage {
+        rows: Mutex::new(rx),
+        count,
+    })
+}
+
+/// The volumes `triage` would take, as the lines `triage --list` prints after its header (names
+/// escaped, so that no name is lost): for `entries=` of runs spread over many workers.
+#[pyfunction]
+#[pyo3(signature = (paths=None, **options))]
+pub fn list_volumes(
+    py: Python<'_>,
+    paths: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Vec<String>> {
+    let kw = Kwargs::new(py, "list_volumes", options)?;
+    let load = load_options(&kw)?;
+    let volumes = entries(py, &kw, paths, &load)?;
+    kw.finish()?;
+    Ok(volumes.iter().map(Entry::line).collect())
+}
+
+#[pymethods]
+impl Triage {
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        loop {
+            let next = py.detach(|| {
+                self.rows
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+                    .recv_timeout(Duration::from_millis(50))
+            });
+            match next {
+                Ok(row) => return parse(py, &row).map(Some),
+                Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+                Err(RecvTimeoutError::Disconnected) => return Ok(None),
+            }
+        }
+    }
+
+    fn __len__(&self) -> usize {
+        self.count
+    }
+
+    /// Stops the run after the volumes under way; the rows not yet taken are dropped.
+    fn close(&self) {
+        let mut rows = self
+            .rows
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let (_, empty) = sync_channel(0);
+        *rows = empty;
+    }
+}

@@ -1,0 +1,392 @@
+//! `slabscope.load` and `slabscope.Volume`: a volume read by slabscope's own readers, or made
+//! from a NumPy array indexed `[x, y, z]` as nibabel gives it (read in place when its memory is
+//! already as slabscope holds voxels: Fortran order, a type held as stored, native byte order).
+
+use std::sync::Arc;
+
+use numpy::ndarray::{ArrayView3, ShapeBuilder};
+use numpy::{Element, PyArray2, PyArray3, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use slabscope::geometry::world::WorldTransform;
+use slabscope::volume::{LentBytes, Voxel, VoxelType, Voxels};
+
+use crate::params::{Kwargs, load_options, numpy_name, numpy_type};
+use crate::run;
+
+/// A volume: its voxels (`array`, `[x, y, z]`), spacing in mm, voxel-to-world `affine` and
+/// `orientation`. Made by `slabscope.load(path)` or `Volume.from_array(array)`.
+#[pyclass(module = "slabscope", frozen)]
+pub struct Volume {
+    /// The volume.
+    pub inner: Arc<slabscope::Volume>,
+    /// How reports name it: the path as given, or `array`.
+    pub name: String,
+    /// The memory budget its analyses run within, bytes.
+    pub max_memory: u64,
+    /// The files it was read from, which slabscope never writes over.
+    pub sources: Vec<std::path::PathBuf>,
+    /// The NumPy array whose memory holds the voxels, for a volume made from one.
+    array: Option<Py<PyAny>>,
+    /// Whether making it copied the array's voxels.
+    #[pyo3(get)]
+    copied: bool,
+    /// The format it was read as (`nifti`, `nrrd`, `dicom`, ...), `array` for an array.
+    #[pyo3(get)]
+    format: &'static str,
+    /// What a user should know about the file (a 4D file's volume taken, a series' gaps...).
+    #[pyo3(get)]
+    notes: Vec<String>,
+}
+
+/// Reads the volume at `path` (a file, a folder of TIFF slices or of DICOM files) with the CLI's
+/// loader options as keywords: `dims`, `dtype`, `spacing`, `endian`, `offset` (raw files),
+/// `max_memory`, `volume`, `series`, `include_localizers`, `resample`, `show_phi`.
+#[pyfunction]
+#[pyo3(signature = (path, **options))]
+pub fn load(
+    py: Python<'_>,
+    path: &Bound<'_, PyAny>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Volume> {
+    let file = crate::params::path(path)?;
+    let kw = Kwargs::new(py, "load", options)?;
+    let opts = load_options(&kw)?;
+    kw.finish()?;
+    let loaded = run::quick(py, || slabscope::load(&file, &opts))?;
+    Ok(Volume {
+        inner: Arc::new(loaded.volume),
+        name: slabscope::error::shown(&file),
+        max_memory: opts.max_memory,
+        sources: loaded.sources,
+        array: None,
+        copied: false,
+        format: loaded.format.name(),
+        notes: loaded.notes,
+    })
+}
+
+/// A NumPy array's memory lent to a volume: the array is kept alive as long as the volume.
+struct ArrayBytes {
+    _array: Py<PyAny>,
+    data: *const u8,
+    len: usize,
+}
+
+// SAFETY: the bytes are read only, and the array they belong to is kept alive (its reference
+// is released through PyO3's pool when dropped without the GIL).
+unsafe impl Send for ArrayBytes {}
+// SAFETY: as above: shared reads of memory nobody frees while the volume lives.
+unsafe impl Sync for ArrayBytes {}
+
+impl std::fmt::Debug for ArrayBytes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ArrayBytes({} bytes)", self.len)
+    }
+}
+
+impl LentBytes for ArrayBytes {
+    fn bytes(&self) -> &[u8] {
+        // SAFETY: `data` points at `len` bytes of the array's buffer, which `_array` keeps
+        // alive; the volume only reads them.
+        unsafe { std::slice::from_raw_parts(self.data, self.len) }
+    }
+}
+
+/// The voxels of `array` read in place, when it is a Fortran-ordered, aligned array of `T`
+/// in native byte order (and, for f32, without infinities).
+fn lend<T: Voxel + Element>(array: &Bound<'_, PyAny>) -> Option<Voxels> {
+    let typed = array.cast::<PyArray3<T>>().ok()?;
+    if !typed.is_fortran_contiguous() || !typed.is_aligned() {
+        return None;
+    }
+    let bytes = ArrayBytes {
+        _array: array.clone().unbind(),
+        data: typed.data().cast::<u8>().cast_const(),
+        len: typed.len() * std::mem::size_of::<T>(),
+    };
+    Voxels::lent::<T>(Arc::new(bytes))
+}
+
+/// The voxels of `array` in place, where its type is held as stored.
+fn lend_any(array: &Bound<'_, PyAny>, ty: VoxelType) -> Option<Voxels> {
+    match ty {
+        VoxelType::U8 => lend::<u8>(array),
+        VoxelType::I8 => lend::<i8>(array),
+        VoxelType::U16 => lend::<u16>(array),
+        VoxelType::I16 => lend::<i16>(array),
+        VoxelType::F32 => lend::<f32>(array),
+        _ => None,
+    }
+}
+
+/// The voxel type a NumPy array of `dtype` stands for, and the type it is held in: its own for
+/// the types held as stored, float32 (with the file type it would have had) for the others.
+fn array_type(dtype: &Bound<'_, PyAny>) -> PyResult<(VoxelType, &'static str)> {
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    let name: String = dtype.getattr("name")?.extract()?;
+    let stored = match kind.as_str() {
+        "u" | "i" | "f" => numpy_type(&name).unwrap_or(if kind == "f" && name == "float16" {
+            VoxelType::F32
+        } else {
+            VoxelType::F64
+        }),
+        "b" => {
+            return Err(PyTypeError::new_err(
+                "a bool array is not a volume: give numbers (e.g. array.astype(numpy.uint8))",
+            ));
+        }
+        "c" => {
+            return Err(PyTypeError::new_err(format!(
+                "a {name} array is not a volume: slabscope reads real numbers (take .real or abs())"
+            )));
+        }
+        _ => {
+            return Err(PyTypeError::new_err(format!(
+                "a {name} array is not a volume: slabscope reads real numbers"
+            )));
+        }
+    };
+    let held = slabscope::volume::voxels::held_type(stored, false);
+    Ok((stored, numpy_name(held)))
+}
+
+/// The voxel-to-world transform of `affine` (rows, voxel index to RAS+ mm, as nibabel's) and
+/// `spacing`, which must agree with each other.
+fn geometry(
+    affine: Option<[[f64; 4]; 4]>,
+    spacing: Option<[f64; 3]>,
+) -> PyResult<([f64; 3], WorldTransform)> {
+    let Some(m) = affine else {
+        let spacing = spacing.unwrap_or([1.0; 3]);
+        return Ok((spacing, WorldTransform::unknown(spacing)));
+    };
+    if m.iter().flatten().any(|v| !v.is_finite()) || m[3] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(PyValueError::new_err(
+            "affine: expected a finite 4x4 matrix whose last row is 0, 0, 0, 1",
+        ));
+    }
+    let linear = [
+        [m[0][0], m[0][1], m[0][2]],
+        [m[1][0], m[1][1], m[1][2]],
+        [m[2][0], m[2][1], m[2][2]],
+    ];
+    let t = WorldTransform::ras(linear, [m[0][3], m[1][3], m[2][3]]);
+    if !t.is_usable() {
+        return Err(PyValueError::new_err(
+            "affine: the matrix is singular (its 3x3 part has no inverse)",
+        ));
+    }
+    let zooms = t.zooms();
+    if let Some(s) = spacing
+        && s.iter()
+            .zip(zooms)
+            .any(|(a, b)| (a - b).abs() > 1e-6 * b.abs().max(1.0))
+    {
+        return Err(PyValueError::new_err(format!(
+            "spacing=({}, {}, {}) disagrees with the affine's voxel sizes ({:.6}, {:.6}, {:.6}): give one of them",
+            s[0], s[1], s[2], zooms[0], zooms[1], zooms[2]
+        )));
+    }
+    Ok((zooms, t))
+}
+
+/// Runs `$body` with `$data` bound to the voxels as a slice of their own type.
+macro_rules! with_voxels {
+    ($voxels:expr, |$data:ident| $body:expr) => {
+        match $voxels {
+            Voxels::U8(s) => {
+                let $data = s.as_slice();
+                $body
+            }
+            Voxels::I8(s) => {
+                let $data = s.as_slice();
+                $body
+            }
+            Voxels::U16(s) => {
+                let $data = s.as_slice();
+                $body
+            }
+            Voxels::I16(s) => {
+                let $data = s.as_slice();
+                $body
+            }
+            Voxels::F32(s) => {
+                let $data = s.as_slice();
+                $body
+            }
+        }
+    };
+}
+
+/// A read-only NumPy view of `data` (a volume's voxels, `[x, y, z]` in Fortran order) that
+/// keeps `owner` alive.
+fn view<'py, T: Element>(
+    data: &[T],
+    dims: [usize; 3],
+    owner: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let shaped =
+        ArrayView3::from_shape(dims.f(), data).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    // SAFETY: the view borrows voxels the frozen `Volume` object `owner` holds and never
+    // changes; the array keeps `owner` alive and is made read-only.
+    let array = unsafe { PyArray3::borrow_from_array(&shaped, owner.clone()) };
+    array.getattr("flags")?.setattr("writeable", false)?;
+    Ok(array.into_any())
+}
+
+#[pymethods]
+impl Volume {
+    /// A volume of `array`'s voxels, indexed `[x, y, z]` (nibabel's order: x fastest in a
+    /// Fortran-ordered array). An array of uint8, int8, uint16, int16 or float32 in Fortran
+    /// order is read in place (`copied` is False: do not write to it while the volume is in
+    /// use); any other real array is copied once. `affine` (4x4, voxel index to RAS+ mm) gives
+    /// the orientation; `spacing` (mm) must then agree with it.
+    #[staticmethod]
+    #[pyo3(signature = (array, spacing=None, affine=None))]
+    fn from_array(
+        py: Python<'_>,
+        array: &Bound<'_, PyAny>,
+        spacing: Option<[f64; 3]>,
+        affine: Option<[[f64; 4]; 4]>,
+    ) -> PyResult<Self> {
+        let numpy = py.import("numpy")?;
+        let original = if array.cast::<PyUntypedArray>().is_ok() {
+            array.clone()
+        } else {
+            numpy.call_method1("asarray", (array,))?
+        };
+        let untyped = original.cast::<PyUntypedArray>()?;
+        let (stored, held_name) = array_type(untyped.dtype().as_any())?;
+        let shape = untyped.shape().to_vec();
+        let [nx, ny, nz] = shape[..] else {
+            return Err(PyValueError::new_err(format!(
+                "an array of shape {shape:?}: a volume has 3 dimensions, [x, y, z] (take one volume of a 4D image with array[..., t])"
+            )));
+        };
+        let dims = [nx, ny, nz];
+        if dims.contains(&0) {
+            return Err(PyValueError::new_err(format!(
+                "an array of shape {shape:?}: a volume has at least one voxel"
+            )));
+        }
+        let (spacing, transform) = geometry(affine, spacing)?;
+        let held = slabscope::volume::voxels::held_type(stored, false);
+        let (voxels, kept, copied) = match lend_any(&original, held) {
+            Some(v) => (v, original.clone(), false),
+            None => {
+                let kwargs = PyDict::new(py);
+                kwargs.set_item("dtype", held_name)?;
+                kwargs.set_item("order", "F")?;
+                let copy = numpy.call_method("array", (&original,), Some(&kwargs))?;
+                if held == VoxelType::F32 {
+                    // Infinities are missing, as every reader holds them.
+                    let where_ = PyDict::new(py);
+                    where_.set_item("where", numpy.call_method1("isinf", (&copy,))?)?;
+                    numpy.call_method("copyto", (&copy, numpy.getattr("nan")?), Some(&where_))?;
+                }
+                let v = lend_any(&copy, held)
+                    .ok_or_else(|| PyValueError::new_err("the copied array could not be read"))?;
+                (v, copy, true)
+            }
+        };
+        let volume = run::quick(py, || {
+            slabscope::Volume::from_voxels(dims, spacing, stored, voxels)
+        })?
+        .with_transform(transform);
+        Ok(Self {
+            inner: Arc::new(volume),
+            name: "array".into(),
+            max_memory: slabscope::volume::io::default_max_memory(),
+            sources: Vec::new(),
+            array: Some(kept.unbind()),
+            copied,
+            format: "array",
+            notes: Vec::new(),
+        })
+    }
+
+    /// The voxels as a read-only NumPy array indexed `[x, y, z]`, sharing the volume's memory
+    /// (for a volume made from an array, that array or its one copy).
+    #[getter]
+    fn array<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let this = slf.get();
+        if let Some(a) = &this.array {
+            return Ok(a.bind(slf.py()).clone());
+        }
+        let dims = this.inner.dims();
+        with_voxels!(this.inner.data(), |data| view(data, dims, slf.as_any()))
+    }
+
+    /// Dimensions `(nx, ny, nz)`.
+    #[getter]
+    fn shape(&self) -> (usize, usize, usize) {
+        let [x, y, z] = self.inner.dims();
+        (x, y, z)
+    }
+
+    /// Voxel spacing `(sx, sy, sz)` in mm.
+    #[getter]
+    fn spacing(&self) -> (f64, f64, f64) {
+        let [x, y, z] = self.inner.spacing();
+        (x, y, z)
+    }
+
+    /// The 4x4 voxel-to-world matrix (voxel index to RAS+ mm); spacing on the diagonal when the
+    /// file states no orientation.
+    #[getter]
+    fn affine<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let rows: Vec<Vec<f64>> = self
+            .inner
+            .transform()
+            .matrix
+            .iter()
+            .map(|r| r.to_vec())
+            .collect();
+        PyArray2::from_vec2(py, &rows).map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// The orientation codes as nibabel's `aff2axcodes` gives them (`"LPS"`, `"RAS"`, ...), or
+    /// None when the file states no orientation.
+    #[getter]
+    fn orientation(&self) -> Option<String> {
+        self.inner.transform().axcodes()
+    }
+
+    /// The voxel type of the file (or array), as a NumPy dtype name: the CLI's `--type`.
+    #[getter]
+    fn dtype(&self) -> &'static str {
+        numpy_name(self.inner.voxel_type())
+    }
+
+    /// `(min, max)` of the finite voxels.
+    #[getter]
+    fn range(&self) -> (f32, f32) {
+        let s = self.inner.stats();
+        (s.min, s.max)
+    }
+
+    /// How many voxels are missing (NaN).
+    #[getter]
+    fn missing(&self) -> u64 {
+        self.inner.stats().missing as u64
+    }
+
+    fn __repr__(&self) -> String {
+        let [x, y, z] = self.inner.dims();
+        let [sx, sy, sz] = self.inner.spacing();
+        format!(
+            "<slabscope.Volume {} {x}x{y}x{z} {} spacing ({sx}, {sy}, {sz}) mm{}>",
+            repr_name(&self.name),
+            self.dtype(),
+            self.orientation()
+                .map_or_else(String::new, |o| format!(" {o}"))
+        )
+    }
+}
+
+/// A name for `__repr__`: quoted as Python quotes strings.
+fn repr_name(name: &str) -> String {
+    format!("{name:?}")
+}
