@@ -20,7 +20,7 @@ use crate::volume::Volume;
 #[pyclass(module = "slabscope", frozen)]
 pub struct Analysis {
     /// The library's analysis.
-    pub analysis: slabscope::Analysis,
+    pub inner: slabscope::Analysis,
     /// The volume analysed, as read.
     pub source: Arc<slabscope::Volume>,
     /// The pyramid level partitioned (the volume itself at full resolution).
@@ -69,7 +69,7 @@ pub fn analyze(
     let json = slabscope::report::to_json(&report).or_py()?;
     let report = parse(py, &json)?.cast_into::<PyDict>()?.unbind();
     Ok(Analysis {
-        analysis,
+        inner: analysis,
         source: full,
         level: Arc::clone(&plan.partition),
         json,
@@ -142,7 +142,7 @@ impl Analysis {
     /// The axis the slabs are cut across, a unit vector `(x, y, z)` in voxel space.
     #[getter]
     fn best_axis(&self) -> (f64, f64, f64) {
-        let [x, y, z] = self.analysis.axis();
+        let [x, y, z] = self.inner.axis();
         (x, y, z)
     }
 
@@ -161,7 +161,7 @@ impl Analysis {
     /// The slabs as `(first, end)` slice ranges along the axis, end exclusive.
     #[getter]
     fn slabs(&self) -> Vec<(usize, usize)> {
-        self.analysis.partition.slabs.clone()
+        self.inner.partition.slabs.clone()
     }
 
     /// The partition's steps, splits or merges in order (dicts as in the JSON).
@@ -173,7 +173,7 @@ impl Analysis {
     /// The information the slabs keep about the values, bits.
     #[getter]
     fn information(&self) -> f64 {
-        self.analysis.partition.information
+        self.inner.partition.information
     }
 
     /// The whole partition object of the JSON (slabs, steps, curves, per-slab information).
@@ -192,7 +192,7 @@ impl Analysis {
     /// beyond 256 slabs), as `analyze --export-labels` writes it.
     fn labels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let labels = run::quick(py, || {
-            slabscope::label_volume(&self.level, &self.analysis.partition)
+            slabscope::label_volume(&self.level, &self.inner.partition)
         })?;
         let dims = labels.dims();
         let shaped = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
@@ -220,11 +220,11 @@ impl Analysis {
     }
 
     fn __repr__(&self) -> String {
-        let [x, y, z] = self.analysis.axis();
+        let [x, y, z] = self.inner.axis();
         format!(
             "<slabscope.Analysis axis ({x:.3}, {y:.3}, {z:.3}), {} slabs, {:.4} bits>",
-            self.analysis.partition.slabs.len(),
-            self.analysis.partition.information
+            self.inner.partition.slabs.len(),
+            self.inner.partition.information
         )
     }
 }

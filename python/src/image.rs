@@ -1,8 +1,6 @@
 //! `slabscope.render` and `slabscope.slice`: pictures as RGBA arrays in a small wrapper that a
 //! notebook shows (`_repr_png_`) and that saves as `render -o` and `slice -o` write.
 
-use std::path::PathBuf;
-
 use numpy::PyArray3;
 use numpy::ndarray::Array3;
 use pyo3::exceptions::PyValueError;
@@ -21,8 +19,6 @@ use crate::volume::Volume;
 #[pyclass(module = "slabscope", frozen)]
 pub struct Image {
     pixmap: Pixmap,
-    /// The files the picture was made from, never written over.
-    sources: Vec<PathBuf>,
 }
 
 #[pymethods]
@@ -53,23 +49,14 @@ impl Image {
     }
 
     /// Writes the picture to `path`: PNG, or JPEG for a `.jpg` or `.jpeg` name. An existing file
-    /// is replaced only with `force=True`; never a file the picture was made from, nor one
-    /// that is not a regular file.
+    /// is replaced only with `force=True`, never one that is not a regular file.
     #[pyo3(signature = (path, force=false))]
     fn save(&self, py: Python<'_>, path: &Bound<'_, PyAny>, force: bool) -> PyResult<()> {
         let out = crate::params::path(path)?;
-        let format = ImageOutput::for_path(&out).or_py()?;
+        // Only picture names are taken, so no volume is ever written over.
+        let format = ImageOutput::for_path(&out)
+            .map_err(|e| PyValueError::new_err(crate::errors::message(&e)))?;
         slabscope::volume::io::check_output(&out, force).or_py()?;
-        if self
-            .sources
-            .iter()
-            .any(|s| slabscope::volume::io::same_file(s, &out))
-        {
-            return Err(PyValueError::new_err(format!(
-                "{}: is an input of this picture; slabscope never writes over its input",
-                slabscope::error::shown(&out)
-            )));
-        }
         let bytes = encode(&self.pixmap, format).or_py()?;
         run::quick(py, || {
             slabscope::volume::io::write_atomic(&out, force, |mut file| {
@@ -106,17 +93,14 @@ pub fn render(
     let (params, gap, spread) = render_params(&kw, size)?;
     kw.finish()?;
     let made;
-    let analysis = match analysis {
-        Some(a) => {
-            a.check_volume(volume)?;
-            a
-        }
-        None => {
-            made = analyze(py, volume, progress, None)?;
-            &made
-        }
+    let analysis = if let Some(a) = analysis {
+        a.check_volume(volume)?;
+        a
+    } else {
+        made = analyze(py, volume, progress, None)?;
+        &made
     };
-    let part = &analysis.analysis.partition;
+    let part = &analysis.inner.partition;
     if let Some(h) = params.highlight
         && h >= part.slabs.len()
     {
@@ -132,7 +116,6 @@ pub fn render(
     })?;
     Ok(Image {
         pixmap: image.pixmap,
-        sources: volume.sources.clone(),
     })
 }
 
@@ -160,7 +143,7 @@ pub fn slice(
     let axis = match analysis {
         Some(a) => {
             a.check_volume(volume)?;
-            a.analysis.axis()
+            a.inner.axis()
         }
         None => run::long(py, progress, |monitor| {
             slabscope::analysis::chosen_axis(full, &params, monitor)
@@ -176,6 +159,5 @@ pub fn slice(
     })?;
     Ok(Image {
         pixmap: image.pixmap,
-        sources: volume.sources.clone(),
     })
 }

@@ -25,12 +25,19 @@ pub fn long<T: Send>(
 ) -> PyResult<T> {
     let cancel = AtomicBool::new(false);
     let latest: Mutex<Option<Progress>> = Mutex::new(None);
-    let report = |p: Progress| *latest.lock().unwrap_or_else(|e| e.into_inner()) = Some(p);
+    let report = |p: Progress| {
+        *latest
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(p);
+    };
     let (result, raised) = std::thread::scope(|s| {
         let worker = s.spawn(|| work(&Monitor::new(Some(&cancel), Some(&report))));
         let mut raised: Option<PyErr> = None;
         let tell = |raised: &mut Option<PyErr>| {
-            let last = latest.lock().unwrap_or_else(|e| e.into_inner()).take();
+            let last = latest
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .take();
             if let (Some(callback), Some(p), None) = (progress, last, raised.as_ref())
                 && let Err(e) = callback.call1((p.phase, p.fraction))
             {

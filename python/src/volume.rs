@@ -25,8 +25,6 @@ pub struct Volume {
     pub name: String,
     /// The memory budget its analyses run within, bytes.
     pub max_memory: u64,
-    /// The files it was read from, which slabscope never writes over.
-    pub sources: Vec<std::path::PathBuf>,
     /// The NumPy array whose memory holds the voxels, for a volume made from one.
     array: Option<Py<PyAny>>,
     /// Whether making it copied the array's voxels.
@@ -59,7 +57,6 @@ pub fn load(
         inner: Arc::new(loaded.volume),
         name: slabscope::error::shown(&file),
         max_memory: opts.max_memory,
-        sources: loaded.sources,
         array: None,
         copied: false,
         format: loaded.format.name(),
@@ -121,9 +118,9 @@ fn lend_any(array: &Bound<'_, PyAny>, ty: VoxelType) -> Option<Voxels> {
     }
 }
 
-/// The voxel type a NumPy array of `dtype` stands for, and the type it is held in: its own for
-/// the types held as stored, float32 (with the file type it would have had) for the others.
-fn array_type(dtype: &Bound<'_, PyAny>) -> PyResult<(VoxelType, &'static str)> {
+/// The voxel type a NumPy array of `dtype` stands for (a file of it would have): its own, or
+/// for the types no file holds, f32 (float16) or f64 (the 64-bit integers, long doubles).
+fn array_type(dtype: &Bound<'_, PyAny>) -> PyResult<VoxelType> {
     let kind: String = dtype.getattr("kind")?.extract()?;
     let name: String = dtype.getattr("name")?.extract()?;
     let stored = match kind.as_str() {
@@ -148,8 +145,7 @@ fn array_type(dtype: &Bound<'_, PyAny>) -> PyResult<(VoxelType, &'static str)> {
             )));
         }
     };
-    let held = slabscope::volume::voxels::held_type(stored, false);
-    Ok((stored, numpy_name(held)))
+    Ok(stored)
 }
 
 /// The voxel-to-world transform of `affine` (rows, voxel index to RAS+ mm, as nibabel's) and
@@ -190,6 +186,28 @@ fn geometry(
         )));
     }
     Ok((zooms, t))
+}
+
+/// One copy of `array` in Fortran order as `held` (infinities made missing, as every reader
+/// holds them), and its voxels read in place.
+fn copy_of<'py>(
+    array: &Bound<'py, PyAny>,
+    held: VoxelType,
+) -> PyResult<(Voxels, Bound<'py, PyAny>)> {
+    let py = array.py();
+    let numpy = py.import("numpy")?;
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", numpy_name(held))?;
+    kwargs.set_item("order", "F")?;
+    let copy = numpy.call_method("array", (array,), Some(&kwargs))?;
+    if held == VoxelType::F32 {
+        let at = PyDict::new(py);
+        at.set_item("where", numpy.call_method1("isinf", (&copy,))?)?;
+        numpy.call_method("copyto", (&copy, numpy.getattr("nan")?), Some(&at))?;
+    }
+    let voxels = lend_any(&copy, held)
+        .ok_or_else(|| PyValueError::new_err("the copied array could not be read in place"))?;
+    Ok((voxels, copy))
 }
 
 /// Runs `$body` with `$data` bound to the voxels as a slice of their own type.
@@ -258,7 +276,7 @@ impl Volume {
             numpy.call_method1("asarray", (array,))?
         };
         let untyped = original.cast::<PyUntypedArray>()?;
-        let (stored, held_name) = array_type(untyped.dtype().as_any())?;
+        let stored = array_type(untyped.dtype().as_any())?;
         let shape = untyped.shape().to_vec();
         let [nx, ny, nz] = shape[..] else {
             return Err(PyValueError::new_err(format!(
@@ -273,23 +291,11 @@ impl Volume {
         }
         let (spacing, transform) = geometry(affine, spacing)?;
         let held = slabscope::volume::voxels::held_type(stored, false);
-        let (voxels, kept, copied) = match lend_any(&original, held) {
-            Some(v) => (v, original.clone(), false),
-            None => {
-                let kwargs = PyDict::new(py);
-                kwargs.set_item("dtype", held_name)?;
-                kwargs.set_item("order", "F")?;
-                let copy = numpy.call_method("array", (&original,), Some(&kwargs))?;
-                if held == VoxelType::F32 {
-                    // Infinities are missing, as every reader holds them.
-                    let where_ = PyDict::new(py);
-                    where_.set_item("where", numpy.call_method1("isinf", (&copy,))?)?;
-                    numpy.call_method("copyto", (&copy, numpy.getattr("nan")?), Some(&where_))?;
-                }
-                let v = lend_any(&copy, held)
-                    .ok_or_else(|| PyValueError::new_err("the copied array could not be read"))?;
-                (v, copy, true)
-            }
+        let (voxels, kept, copied) = if let Some(v) = lend_any(&original, held) {
+            (v, original.clone(), false)
+        } else {
+            let (v, copy) = copy_of(&original, held)?;
+            (v, copy, true)
         };
         let volume = run::quick(py, || {
             slabscope::Volume::from_voxels(dims, spacing, stored, voxels)
@@ -299,7 +305,6 @@ impl Volume {
             inner: Arc::new(volume),
             name: "array".into(),
             max_memory: slabscope::volume::io::default_max_memory(),
-            sources: Vec::new(),
             array: Some(kept.unbind()),
             copied,
             format: "array",
@@ -308,12 +313,16 @@ impl Volume {
     }
 
     /// The voxels as a read-only NumPy array indexed `[x, y, z]`, sharing the volume's memory
-    /// (for a volume made from an array, that array or its one copy).
+    /// (for a volume made from an array, a view of that array or of its one copy).
     #[getter]
     fn array<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
         let this = slf.get();
         if let Some(a) = &this.array {
-            return Ok(a.bind(slf.py()).clone());
+            // A read-only view of the array lent (or of its copy): the volume's voxels do not
+            // change through it.
+            let view = a.bind(slf.py()).call_method0("view")?;
+            view.getattr("flags")?.setattr("writeable", false)?;
+            return Ok(view);
         }
         let dims = this.inner.dims();
         with_voxels!(this.inner.data(), |data| view(data, dims, slf.as_any()))

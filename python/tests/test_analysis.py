@@ -1,0 +1,94 @@
+"""The package gives the CLI's numbers: the same report for the same file and keywords, the
+same analysis for the same voxels however they arrive (slabscope's reader, nibabel, an array)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import slabscope
+
+from conftest import DATA
+
+
+@pytest.mark.parametrize(
+    "keywords,flags",
+    [
+        ({}, []),
+        ({"slabs": 3, "method": "bottomup"}, ["--slabs", "3", "--method", "bottomup"]),
+        ({"axis": "z", "views": True}, ["--axis", "z", "--views"]),
+        ({"threshold": 0.01, "background": "none"}, ["--threshold", "0.01", "--background", "none"]),
+        ({"gain": True, "phases": 0}, ["--gain", "--phases", "0"]),
+    ],
+)
+def test_the_report_is_analyze_json(phantoms, cli_json, keywords, flags):
+    path = str(phantoms["body"])
+    ours = slabscope.analyze(slabscope.load(path), **keywords).to_dict()
+    assert ours == cli_json("analyze", path, "--json", *flags)
+
+
+@pytest.mark.parametrize("name", ["ramp_i16.nii", "ramp_f64.nii", "ramp_u16_be.nrrd", "nilearn_image_10426.nii.gz"])
+def test_every_format_and_type_gives_the_cli_report(cli_json, name):
+    path = str(DATA / name)
+    ours = slabscope.analyze(slabscope.load(path), slabs=2).to_dict()
+    assert ours == cli_json("analyze", path, "--json", "--slabs", "2")
+
+
+def test_the_analysis_reads_as_its_report(phantoms):
+    analysis = slabscope.analyze(slabscope.load(str(phantoms["body"])))
+    report = analysis.to_dict()
+    assert list(analysis.best_axis) == report["best_axis"]
+    assert [list(s) for s in analysis.slabs] == report["partition"]["slabs"]
+    assert analysis.steps == report["partition"]["steps"]
+    assert analysis.information == report["partition"]["information"]
+    assert analysis.uncertain is report["uncertain"]
+    assert analysis.views == report["views"]
+    assert report["schema_version"] == slabscope.SCHEMA_VERSION
+    assert analysis.to_dict() is not analysis.to_dict(), "a new dict each call"
+
+
+def test_labels_number_every_voxel_by_its_slab(phantoms):
+    volume = slabscope.load(str(phantoms["body"]))
+    analysis = slabscope.analyze(volume, axis="z")
+    labels = analysis.labels()
+    assert labels.shape == volume.shape and labels.dtype == np.uint8
+    for i, (first, end) in enumerate(analysis.slabs):
+        assert (labels[:, :, first:end] == i).all()
+
+
+def test_nibabel_arrays_give_slabscopes_own_analysis(phantoms):
+    nibabel = pytest.importorskip("nibabel")
+    path = str(phantoms["body"])
+    image = nibabel.load(path)
+    array = np.asanyarray(image.dataobj)
+    assert array.dtype == np.int16 and array.flags.f_contiguous
+    from_nibabel = slabscope.Volume.from_array(array, affine=image.affine)
+    assert not from_nibabel.copied, "an unscaled integer NIfTI is read in place"
+    ours = slabscope.load(path)
+    np.testing.assert_allclose(from_nibabel.affine, ours.affine, atol=1e-6)
+    a = slabscope.analyze(from_nibabel).to_dict()
+    b = slabscope.analyze(ours).to_dict()
+    a.pop("file"), b.pop("file")
+    assert a == b
+
+
+def test_parameters_are_checked_and_named_as_keywords(phantoms):
+    volume = slabscope.load(str(phantoms["body"]))
+    with pytest.raises(ValueError, match=r"^bins=1: expected 2 to 255$"):
+        slabscope.analyze(volume, bins=1)
+    with pytest.raises(ValueError, match=r"^block=5: expected 2, 3 or 4$"):
+        slabscope.analyze(volume, block=5)
+    with pytest.raises(ValueError, match=r"method=.*expected one of topdown, bottomup, optimal"):
+        slabscope.analyze(volume, method="sideways")
+    with pytest.raises(ValueError, match="slabs= and threshold= cannot both be given"):
+        slabscope.analyze(volume, slabs=3, threshold=0.1)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'bin'"):
+        slabscope.analyze(volume, bin=3)
+    with pytest.raises(TypeError, match="slabs='four'"):
+        slabscope.analyze(volume, slabs="four")
+
+
+def test_the_default_slab_count_is_not_blamed_on_slabs(cli):
+    thin = slabscope.Volume.from_array(np.arange(2 * 2 * 3, dtype=np.uint8).reshape((2, 2, 3), order="F"))
+    with pytest.raises(ValueError, match=r"the default of 4 slabs does not fit: .*\(slabs=K asks for fewer\)"):
+        slabscope.analyze(thin, axis="z", background="none")

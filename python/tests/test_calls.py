@@ -1,0 +1,128 @@
+"""Long calls: the GIL released, progress reported, Ctrl-C honoured; files: errors as Python
+exceptions with one-line messages, hostile fixtures never crash the interpreter; pictures."""
+
+from __future__ import annotations
+
+import _thread
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import slabscope
+
+from conftest import BAD, DATA
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def test_other_threads_run_during_an_analysis(phantoms):
+    volume = slabscope.load(str(phantoms["big"]))
+    ticks = 0
+    done = threading.Event()
+
+    def count():
+        nonlocal ticks
+        while not done.is_set():
+            ticks += 1
+            time.sleep(0.001)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    started = time.perf_counter()
+    slabscope.analyze(volume, level=2)
+    took = time.perf_counter() - started
+    done.set()
+    counter.join()
+    # With the GIL held throughout, the counter would not tick at all until the call returned.
+    assert ticks > 0.3 * took / 0.0011, (ticks, took)
+
+
+def test_progress_reaches_the_callback_in_order(phantoms):
+    seen = []
+    slabscope.analyze(slabscope.load(str(phantoms["body"])), progress=lambda phase, f: seen.append((phase, f)))
+    assert seen, "progress was reported"
+    phases = [p for p, _ in seen]
+    assert "view search" in phases
+    for (p, f), (q, g) in zip(seen, seen[1:]):
+        assert 0.0 <= f <= 1.0
+        if p == q:
+            assert g >= f, seen
+
+
+def test_an_exception_in_the_callback_stops_the_call(phantoms):
+    def fail(phase, fraction):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        slabscope.analyze(slabscope.load(str(phantoms["big"])), progress=fail)
+
+
+def test_ctrl_c_stops_a_long_search_within_a_second(phantoms):
+    volume = slabscope.load(str(phantoms["big"]))
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    started = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        slabscope.analyze(volume, level=4, phases=64, phase_subset=1, refine=True)
+    assert time.perf_counter() - started < 1.5
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in BAD.iterdir() if p.name != "make_corpus.py"))
+def test_every_hostile_fixture_is_an_exception(name):
+    with pytest.raises((slabscope.VolumeError, OSError, ValueError)) as raised:
+        slabscope.analyze(slabscope.load(str(BAD / name)))
+    message = str(raised.value)
+    assert "\n" not in message and message, message
+
+
+def test_files_errors_are_the_exceptions_users_catch(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nowhere.nii"):
+        slabscope.load(str(tmp_path / "nowhere.nii"))
+    with pytest.raises(slabscope.VolumeError, match=r"not a volume file"):
+        slabscope.load(str(BAD / "not_a_volume.txt"))
+    raw = tmp_path / "data.raw"
+    raw.write_bytes(bytes(64))
+    with pytest.raises(slabscope.VolumeError, match=r"give dims=\(NX, NY, NZ\)"):
+        slabscope.load(str(raw))
+    volume = slabscope.load(raw, dims=(4, 4, 4), dtype=np.uint8)
+    assert volume.shape == (4, 4, 4) and volume.format == "raw"
+    with pytest.raises(slabscope.VolumeError, match=r"raise it with max_memory="):
+        slabscope.load(str(DATA / "ramp_u8_two_members.nii.gz"), max_memory=10)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'dim'"):
+        slabscope.load(raw, dim=(4, 4, 4))
+
+
+def test_render_and_slice_give_rgba_pictures_a_notebook_shows(phantoms, tmp_path):
+    volume = slabscope.load(str(phantoms["body"]))
+    analysis = slabscope.analyze(volume)
+    image = slabscope.render(volume, analysis, size=(320, 240), azimuth=45)
+    assert image.size == (320, 240)
+    assert image.array.shape == (240, 320, 4) and image.array.dtype == np.uint8
+    assert (image.array[..., 3] == 255).all(), "opaque"
+    assert image._repr_png_().startswith(PNG)
+    assert len(np.unique(image.array[..., :3].reshape(-1, 3), axis=0)) > 50, "a picture, not a blank"
+    cut = slabscope.slice(volume, analysis, size=(128, 128))
+    assert cut.array.shape[2] == 4 and max(cut.size) == 128
+    out = tmp_path / "view.png"
+    image.save(out)
+    assert out.read_bytes() == image.png()
+    with pytest.raises(FileExistsError, match="force=True"):
+        image.save(out)
+    image.save(out, force=True)
+    with pytest.raises(ValueError, match=r"pictures are written as \.png, \.jpg or \.jpeg"):
+        image.save(phantoms["body"], force=True)
+    with pytest.raises(ValueError, match="highlight=9"):
+        slabscope.render(volume, analysis, highlight=9)
+    other = slabscope.load(str(phantoms["body"]))
+    with pytest.raises(ValueError, match="another volume"):
+        slabscope.render(other, analysis)
+
+
+def test_render_matches_the_cli_picture(phantoms, cli, tmp_path):
+    path = str(phantoms["body"])
+    out = tmp_path / "cli.png"
+    cli("render", path, "-o", str(out), "--size", "200x150", "--mode", "mip")
+    ours = slabscope.render(slabscope.load(path), size=(200, 150), mode="mip")
+    assert ours.png() == out.read_bytes()
