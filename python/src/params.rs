@@ -169,27 +169,12 @@ pub fn voxel_type(given: &Bound<'_, PyAny>) -> PyResult<VoxelType> {
         .call1((given,))
         .and_then(|d| d.getattr("name")?.extract())
         .map_err(|_| invalid("dtype", repr(given), "a NumPy dtype"))?;
-    numpy_type(&name).ok_or_else(|| {
+    VoxelType::parse(&name).ok_or_else(|| {
         invalid(
             "dtype",
             &name,
             "uint8, int8, uint16, int16, uint32, int32, float32 or float64",
         )
-    })
-}
-
-/// The voxel type of a NumPy dtype name.
-pub fn numpy_type(name: &str) -> Option<VoxelType> {
-    Some(match name {
-        "uint8" => VoxelType::U8,
-        "int8" => VoxelType::I8,
-        "uint16" => VoxelType::U16,
-        "int16" => VoxelType::I16,
-        "uint32" => VoxelType::U32,
-        "int32" => VoxelType::I32,
-        "float32" => VoxelType::F32,
-        "float64" => VoxelType::F64,
-        _ => return None,
     })
 }
 

@@ -12,7 +12,7 @@ use pyo3::types::PyDict;
 use slabscope::geometry::world::WorldTransform;
 use slabscope::volume::{LentBytes, Voxel, VoxelType, Voxels};
 
-use crate::params::{Kwargs, load_options, numpy_name, numpy_type};
+use crate::params::{Kwargs, load_options, numpy_name};
 use crate::run;
 
 /// A volume: its voxels (`array`, `[x, y, z]`), spacing in mm, voxel-to-world `affine` and
@@ -124,7 +124,7 @@ fn array_type(dtype: &Bound<'_, PyAny>) -> PyResult<VoxelType> {
     let kind: String = dtype.getattr("kind")?.extract()?;
     let name: String = dtype.getattr("name")?.extract()?;
     let stored = match kind.as_str() {
-        "u" | "i" | "f" => numpy_type(&name).unwrap_or(if kind == "f" && name == "float16" {
+        "u" | "i" | "f" => VoxelType::parse(&name).unwrap_or(if kind == "f" && name == "float16" {
             VoxelType::F32
         } else {
             VoxelType::F64
