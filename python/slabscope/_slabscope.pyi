@@ -59,6 +59,7 @@ def load(
     offset: Optional[int] = None,
     max_memory: Union[int, str, None] = None,
     volume: int = 0,
+    channel: int = 0,
     series: Union[int, str, None] = None,
     include_localizers: bool = False,
     resample: bool = False,

@@ -28,6 +28,7 @@ LOAD_KEYWORDS = (
     "offset",
     "max_memory",
     "volume",
+    "channel",
     "series",
     "include_localizers",
     "resample",

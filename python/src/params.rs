@@ -97,7 +97,7 @@ impl<'py> Kwargs<'py> {
 }
 
 /// The load options: `dims`, `dtype`, `spacing`, `endian`, `offset` for raw files,
-/// `max_memory`, `volume`, `series`, `include_localizers`, `resample`, `show_phi`.
+/// `max_memory`, `volume`, `channel`, `series`, `include_localizers`, `resample`, `show_phi`.
 pub fn load_options(kw: &Kwargs<'_>) -> PyResult<LoadOptions> {
     let voxel_type = match kw.get::<Bound<'_, PyAny>>("dtype")? {
         None => None,
@@ -128,6 +128,7 @@ pub fn load_options(kw: &Kwargs<'_>) -> PyResult<LoadOptions> {
             offset: kw.get("offset")?,
         },
         volume: kw.or("volume", 0)?,
+        channel: kw.or("channel", 0)?,
         series,
         include_localizers: kw.or("include_localizers", false)?,
         resample: kw.or("resample", false)?,

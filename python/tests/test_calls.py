@@ -126,3 +126,12 @@ def test_render_matches_the_cli_picture(phantoms, cli, tmp_path):
     cli("render", path, "-o", str(out), "--size", "200x150", "--mode", "mip")
     ours = slabscope.render(slabscope.load(path), size=(200, 150), mode="mip")
     assert ours.png() == out.read_bytes()
+
+
+def test_an_ome_tiffs_channel_and_time_point_are_keywords():
+    volume = slabscope.load(DATA / "ome" / "zct.ome.tif", channel=1, volume=1)
+    assert volume.range == (4000.0, 4234.0)
+    assert volume.notes == ["OME-TIFF of 2 channels and 2 time points: read channel 1 at time point 1"]
+    assert volume.spacing == pytest.approx((0.0005, 0.00025, 0.002))
+    with pytest.raises(slabscope.VolumeError, match="holds 2 channels .* no channel 2"):
+        slabscope.load(DATA / "ome" / "zct.ome.tif", channel=2)

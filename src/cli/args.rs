@@ -32,9 +32,13 @@ pub struct LoadArgs {
     /// runs on the finest pyramid level that does.
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes_arg)]
     pub max_memory: Option<u64>,
-    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM) to read, from 0.
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM; an OME-TIFF's time point) to
+    /// read, from 0.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub volume: usize,
+    /// Which channel of a multichannel file (OME-TIFF), from 0.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub channel: usize,
     /// Which series of a DICOM folder: its position in the folder's list `info` gives (from 1,
     /// shown as `--series N` there), or its `SeriesInstanceUID`; `triage` then gives that
     /// series' rows only.
@@ -65,6 +69,7 @@ impl LoadArgs {
                 offset: self.offset,
             },
             volume: self.volume,
+            channel: self.channel,
             series: self.series.clone(),
             include_localizers: self.include_localizers,
             resample: self.resample,

@@ -105,10 +105,10 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         v.len()
     );
     outln!(
-        "spacing     {sx} x {sy} x {sz} mm  (extent {:.1} x {:.1} x {:.1} mm)",
-        sx * nx as f64,
-        sy * ny as f64,
-        sz * nz as f64
+        "spacing     {sx} x {sy} x {sz} mm  (extent {} x {} x {} mm)",
+        extent(sx * nx as f64),
+        extent(sy * ny as f64),
+        extent(sz * nz as f64)
     );
     print_geometry(geometry);
     outln!("type        {}", v.voxel_type());
@@ -214,6 +214,17 @@ pub fn sparkline(counts: &[u64]) -> String {
         .collect()
 }
 
+/// An extent in mm: to a tenth of a millimetre, or to three significant digits below that
+/// (a microscope's stack is micrometres across).
+fn extent(mm: f64) -> String {
+    if mm >= 0.1 || mm <= 0.0 {
+        format!("{mm:.1}")
+    } else {
+        let digits = (2 - mm.log10().floor() as i32).max(0) as usize;
+        format!("{mm:.digits$}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -223,5 +234,13 @@ mod tests {
         assert_eq!(sparkline(&[0, 1, 1_000_000]), " ▁█");
         assert_eq!(sparkline(&[100, 1_000_000]), "▃█");
         assert_eq!(sparkline(&[0, 0]), "  ");
+    }
+
+    #[test]
+    fn extents_keep_three_digits_below_a_tenth_of_a_millimetre() {
+        assert_eq!(super::extent(181.0), "181.0");
+        assert_eq!(super::extent(0.1), "0.1");
+        assert_eq!(super::extent(0.0025), "0.00250");
+        assert_eq!(super::extent(0.06), "0.0600");
     }
 }

@@ -368,3 +368,78 @@ fn any_volume_of_a_4d_file_can_be_read() {
     let e = volume_of(&data("ramp_slices"), 1).unwrap_err().to_string();
     assert!(e.contains("holds 1 volume"), "{e}");
 }
+
+/// An OME-TIFF fixture of `tests/data/ome/` (tifffile's; see its `make.py`) read at `channel`
+/// and time point `volume`.
+fn ome(name: &str, channel: usize, volume: usize) -> slabscope::Result<Loaded> {
+    let opts = LoadOptions {
+        channel,
+        volume,
+        ..LoadOptions::default()
+    };
+    load(&data(&format!("ome/{name}")), &opts)
+}
+
+#[test]
+fn ome_tiff_pages_are_ordered_by_the_ome_xml_and_sized_by_it() {
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(data("ome/expected.json")).unwrap()).unwrap();
+    // v = x + 10 y + 100 z + 1000 c + 3000 t; spacing 0.5 x 0.25 x 2 µm, in mm.
+    for name in ["zct.ome.tif", "ztc_nm.ome.tif"] {
+        let e = &expected[name];
+        assert_eq!(e["pages"], 12);
+        for (c, t) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let loaded = ome(name, c, t).unwrap();
+            let v = &loaded.volume;
+            assert_eq!(v.dims(), [5, 4, 3], "{name}");
+            let s = v.spacing();
+            assert!(
+                (s[0] - 5e-4).abs() < 1e-12 && (s[1] - 2.5e-4).abs() < 1e-12,
+                "{s:?}"
+            );
+            assert!((s[2] - 2e-3).abs() < 1e-12, "{s:?}");
+            assert_ramp(v, (1000 * c + 3000 * t) as f64, 1.0);
+            assert_eq!(
+                loaded.notes,
+                [format!(
+                    "OME-TIFF of 2 channels and 2 time points: read channel {c} at time point {t}"
+                )]
+            );
+        }
+    }
+    let plain = ome("plain_z.ome.tif", 0, 0).unwrap();
+    assert_eq!(plain.volume.spacing(), [0.5, 0.5, 1.5]);
+    assert_ramp(&plain.volume, 0.0, 1.0);
+    assert!(plain.notes.is_empty(), "{:?}", plain.notes);
+}
+
+#[test]
+fn an_ome_tiff_channel_or_time_point_it_lacks_is_an_error_naming_what_it_has() {
+    let e = ome("zct.ome.tif", 2, 0).unwrap_err().to_string();
+    assert!(
+        e.ends_with("zct.ome.tif: holds 2 channels (numbered from 0), so there is no channel 2"),
+        "{e}"
+    );
+    let e = ome("zct.ome.tif", 0, 5).unwrap_err().to_string();
+    assert!(
+        e.ends_with("zct.ome.tif: holds 2 volumes (numbered from 0), so there is no volume 5"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_channel_of_a_file_of_one_channel_is_an_error() {
+    let opts = LoadOptions {
+        channel: 1,
+        ..LoadOptions::default()
+    };
+    for name in ["ramp_u8.nii", "ramp_u16_stack.tif", "ramp_slices"] {
+        let e = load(&data(name), &opts).unwrap_err().to_string();
+        assert!(
+            e.ends_with(&format!(
+                "{name}: holds 1 channel (numbered from 0), so there is no channel 1"
+            )),
+            "{e}"
+        );
+    }
+}

@@ -63,6 +63,7 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
         &[
             ("ramp_u16_stack.tif", "m.tif"),
             ("ramp_f32_stack.tif", "m.tif"),
+            ("ome/zct.ome.tif", "m.ome.tif"),
         ],
     ),
     ("volumeshop", &[("", "m.dat")]),

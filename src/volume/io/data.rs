@@ -502,3 +502,14 @@ pub(crate) fn one_volume(path: &Path, count: usize, volume: usize) -> Error {
         ),
     )
 }
+
+/// The error for channel `channel` of a file that holds `count`.
+pub(crate) fn one_channel(path: &Path, count: usize, channel: usize) -> Error {
+    Error::format(
+        path,
+        format!(
+            "holds {count} channel{} (numbered from 0), so there is no channel {channel}",
+            if count == 1 { "" } else { "s" }
+        ),
+    )
+}

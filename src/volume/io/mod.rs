@@ -9,6 +9,7 @@ pub mod mapped;
 mod metaimage;
 mod nifti;
 mod nrrd;
+mod ome;
 mod output;
 mod raw;
 mod tiff;
@@ -83,6 +84,8 @@ pub struct LoadOptions {
     pub raw: RawOptions,
     /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, a DICOM series) to read, from 0.
     pub volume: usize,
+    /// Which channel of a multichannel file (an OME-TIFF's `C`), from 0.
+    pub channel: usize,
     /// Which series of a DICOM folder: its position in the list (from 1) or its UID.
     pub series: Option<String>,
     /// Keep DICOM localizer and derived images (left out by default).
@@ -99,6 +102,7 @@ impl Default for LoadOptions {
             max_memory: default_max_memory(),
             raw: RawOptions::default(),
             volume: 0,
+            channel: 0,
             series: None,
             include_localizers: false,
             resample: false,
@@ -213,6 +217,10 @@ fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
 fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     let (format, mut loaded) = if meta.is_dir() {
+        // Only an OME-TIFF file holds channels.
+        if opts.channel > 0 {
+            return Err(data::one_channel(path, 1, opts.channel));
+        }
         let kind = folder_kind(path)?;
         match kind {
             // A series may be named in a folder of DICOM files and other volumes.
@@ -244,10 +252,13 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         let format = detect(path, opts)?;
         let four_d = matches!(
             format,
-            Format::Nifti | Format::Nrrd | Format::MetaImage | Format::Dicom
+            Format::Nifti | Format::Nrrd | Format::MetaImage | Format::Dicom | Format::Tiff
         );
         if opts.volume > 0 && !four_d {
             return Err(data::one_volume(path, 1, opts.volume));
+        }
+        if opts.channel > 0 && format != Format::Tiff {
+            return Err(data::one_channel(path, 1, opts.channel));
         }
         let loaded = match format {
             Format::Nifti => nifti::load(path, opts)?,

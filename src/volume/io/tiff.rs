@@ -1,5 +1,6 @@
 //! TIFF: a multi-page grayscale stack (8/16/32-bit integers or 32/64-bit floats), or a folder of
-//! single-page slices sorted by the number in their names. Spacing comes from ImageJ's description
+//! single-page slices sorted by the number in their names. Spacing comes from an OME-TIFF's
+//! OME-XML (which also orders its pages over z, channel and time), else from ImageJ's description
 //! (`spacing=`) and the resolution tags when present.
 
 use std::fs::File;
@@ -9,8 +10,8 @@ use std::path::{Path, PathBuf};
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
 
-use super::data::{check_budget, voxel_buffer};
-use super::{LoadOptions, Read0, tiff_ifd};
+use super::data::{self, check_budget, voxel_buffer};
+use super::{LoadOptions, Read0, ome, tiff_ifd};
 use crate::error::{Error, Result};
 use crate::volume::{VoxelType, Voxels};
 
@@ -204,31 +205,39 @@ fn spacing(dec: &mut Tiff) -> [f64; 3] {
 
 pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (mut dec, len) = open(path)?;
-    let spacing = spacing(&mut dec);
-    // Every page is described and checked against the first, and the whole stack against the
+    let description = dec
+        .get_tag_ascii_string(Tag::ImageDescription)
+        .unwrap_or_default();
+    let ome = ome::parse(&description).map_err(|m| Error::format(path, m))?;
+    let mut notes = Vec::new();
+    let spacing = match &ome {
+        Some(o) => ome_spacing(o, &mut notes),
+        None => spacing(&mut dec),
+    };
+    // Every page is described and checked against the first, and what is read against the
     // budget, before a single one is decoded.
     let first = describe(path, &mut dec, 0)?;
+    let wanted = |pages: usize| ome.as_ref().map_or(pages, |o| o.size_zct[0]);
     let mut pages = 1usize;
-    check_budget(
-        path,
-        [first.width as usize, first.height as usize, 1],
-        opts.max_memory,
-    )?;
+    let plane = |pages: usize| [first.width as usize, first.height as usize, pages];
+    check_budget(path, plane(wanted(pages)), opts.max_memory)?;
     while dec.more_images() {
         dec.next_image()
             .map_err(|e| Error::format(path, format!("page {pages}: {e}")))?;
         pages_agree(path, pages, first, describe(path, &mut dec, pages)?)?;
         pages += 1;
-        check_budget(
-            path,
-            [first.width as usize, first.height as usize, pages],
-            opts.max_memory,
-        )?;
+        check_budget(path, plane(wanted(pages)), opts.max_memory)?;
     }
-    let dims = [first.width as usize, first.height as usize, pages];
+    let indices: Vec<usize> = match &ome {
+        Some(o) => ome_pages(path, o, first, pages, opts, &mut notes)?,
+        None if opts.volume > 0 => return Err(data::one_volume(path, 1, opts.volume)),
+        None if opts.channel > 0 => return Err(data::one_channel(path, 1, opts.channel)),
+        None => (0..pages).collect(),
+    };
+    let dims = plane(indices.len());
     let mut voxels = voxel_buffer(path, dims, opts.max_memory)?;
     let mut buffer = DecodingResult::U8(Vec::new());
-    for (index, out) in voxels.chunks_mut(first.voxels()).enumerate() {
+    for (&index, out) in indices.iter().zip(voxels.chunks_mut(first.voxels())) {
         dec.seek_to_image(index)
             .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
         dec = decode(path, (dec, len), index, first, &mut buffer, out)?.0;
@@ -239,8 +248,77 @@ pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         spacing,
         first.ty,
         Voxels::from_f32(voxels),
-        Vec::new(),
+        notes,
     )
+}
+
+/// An OME-TIFF's voxel sizes in mm; an axis without one is 1, and a note says so.
+fn ome_spacing(o: &ome::OmePixels, notes: &mut Vec<String>) -> [f64; 3] {
+    let missing: Vec<&str> = ["x", "y", "z"]
+        .into_iter()
+        .zip(o.spacing)
+        .filter_map(|(a, s)| s.is_none().then_some(a))
+        .collect();
+    if !missing.is_empty() {
+        notes.push(format!(
+            "the OME-XML gives no physical size along {}: taken as 1 mm",
+            missing.join(", ")
+        ));
+    }
+    o.spacing.map(|s| s.unwrap_or(1.0))
+}
+
+/// The pages of an OME-TIFF that hold channel `opts.channel` at time point `opts.volume`, in z
+/// order, after checking the OME-XML against the pages the file holds; notes say which were read.
+fn ome_pages(
+    path: &Path,
+    o: &ome::OmePixels,
+    first: Page,
+    pages: usize,
+    opts: &LoadOptions,
+    notes: &mut Vec<String>,
+) -> Result<Vec<usize>> {
+    let [z, c, t] = o.size_zct;
+    if o.size_xy != [first.width as usize, first.height as usize] {
+        return Err(Error::format(
+            path,
+            format!(
+                "the OME-XML says {}x{} planes but the pages are {}x{}",
+                o.size_xy[0], o.size_xy[1], first.width, first.height
+            ),
+        ));
+    }
+    if o.pages() > pages {
+        return Err(Error::format(
+            path,
+            format!(
+                "the OME-XML says {z} planes x {c} channels x {t} time points ({} pages) but the \
+                 file holds {pages}",
+                o.pages()
+            ),
+        ));
+    }
+    if opts.channel >= c {
+        return Err(data::one_channel(path, c, opts.channel));
+    }
+    if opts.volume >= t {
+        return Err(data::one_volume(path, t, opts.volume));
+    }
+    if c > 1 || t > 1 {
+        notes.push(format!(
+            "OME-TIFF of {c} channel{} and {t} time point{}: read channel {} at time point {}",
+            if c == 1 { "" } else { "s" },
+            if t == 1 { "" } else { "s" },
+            opts.channel,
+            opts.volume
+        ));
+    }
+    if o.images > 1 {
+        notes.push(format!("OME-TIFF of {} images: read the first", o.images));
+    }
+    Ok((0..z)
+        .map(|k| o.page([k, opts.channel, opts.volume]))
+        .collect())
 }
 
 /// The last run of digits in a file name, for ordering slices.
