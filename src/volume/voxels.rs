@@ -555,8 +555,10 @@ mod tests {
         assert!(!lent.is_mapped(), "lent memory is memory, not a map");
         let owned = Voxels::owned(values);
         assert_eq!(lent.to_f32_vec(), owned.to_f32_vec());
-        let a = crate::Volume::from_voxels([2, 2, 2], [1.0; 3], VoxelType::I16, lent).unwrap();
-        let b = crate::Volume::from_voxels([2, 2, 2], [1.0; 3], VoxelType::I16, owned).unwrap();
+        let a =
+            crate::volume::Volume::from_voxels([2, 2, 2], [1.0; 3], VoxelType::I16, lent).unwrap();
+        let b =
+            crate::volume::Volume::from_voxels([2, 2, 2], [1.0; 3], VoxelType::I16, owned).unwrap();
         assert_eq!(a.stats(), b.stats());
         assert_eq!(a.histogram(32).unwrap(), b.histogram(32).unwrap());
         assert_eq!(a.memory_bytes(), 16);
