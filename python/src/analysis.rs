@@ -44,9 +44,14 @@ pub fn analyze(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Analysis> {
     let kw = Kwargs::new(py, "analyze", params)?;
-    let slabs_given = params.is_some_and(|p| {
-        p.contains("slabs").unwrap_or(false) || p.contains("threshold").unwrap_or(false)
-    });
+    // As the CLI words it: a slab count the user did not give (None is not given) is not blamed
+    // on `slabs=`.
+    let given = |key: &str| {
+        params
+            .and_then(|p| p.get_item(key).ok().flatten())
+            .is_some_and(|v| !v.is_none())
+    };
+    let slabs_given = given("slabs") || given("threshold");
     let analysis_params = analysis_params(&kw)?;
     let resolution = resolution(&kw)?;
     let max_memory = crate::params::max_memory(&kw, volume.max_memory)?;

@@ -17,14 +17,6 @@ pyo3::create_exception!(
      the file and the problem."
 );
 
-/// The keyword argument a library parameter is given by.
-fn keyword(parameter: &str) -> &str {
-    match parameter {
-        "voxel_type" | "type" => "dtype",
-        p => p,
-    }
-}
-
 /// The one-line message of `e`, with the keyword that lifts a limit or allows an overwrite.
 pub fn message(e: &Error) -> String {
     let text = match e {
@@ -32,7 +24,7 @@ pub fn message(e: &Error) -> String {
             parameter,
             value,
             expected,
-        } => format!("{}={value}: expected {expected}", keyword(parameter)),
+        } => format!("{parameter}={value}: expected {expected}"),
         Error::TooLarge { what, .. }
             if what.contains("this machine") || what.contains("system") =>
         {

@@ -386,16 +386,11 @@ impl Volume {
         let [x, y, z] = self.inner.dims();
         let [sx, sy, sz] = self.inner.spacing();
         format!(
-            "<slabscope.Volume {} {x}x{y}x{z} {} spacing ({sx}, {sy}, {sz}) mm{}>",
-            repr_name(&self.name),
+            "<slabscope.Volume {:?} {x}x{y}x{z} {} spacing ({sx}, {sy}, {sz}) mm{}>",
+            self.name,
             self.dtype(),
             self.orientation()
                 .map_or_else(String::new, |o| format!(" {o}"))
         )
     }
-}
-
-/// A name for `__repr__`: quoted as Python quotes strings.
-fn repr_name(name: &str) -> String {
-    format!("{name:?}")
 }
