@@ -32,11 +32,11 @@ pub struct LoadArgs {
     /// runs on the finest pyramid level that does.
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes_arg)]
     pub max_memory: Option<u64>,
-    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM; an OME-TIFF's time point) to
-    /// read, from 0.
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM; an OME-TIFF's or OME-Zarr's
+    /// time point) to read, from 0.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub volume: usize,
-    /// Which channel of a multichannel file (OME-TIFF), from 0.
+    /// Which channel of a multichannel file (OME-TIFF, OME-Zarr), from 0.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub channel: usize,
     /// Which series of a DICOM folder: its position in the folder's list `info` gives (from 1,
@@ -54,6 +54,9 @@ pub struct LoadArgs {
     /// Show patient-identifying DICOM fields (name, ID, birth date, ...), hidden by default.
     #[arg(long)]
     pub show_phi: bool,
+    /// Read the label image NAME of an OME-Zarr store (its `labels/NAME`) instead of its image.
+    #[arg(long, value_name = "NAME")]
+    pub label_image: Option<String>,
 }
 
 impl LoadArgs {
@@ -74,6 +77,7 @@ impl LoadArgs {
             include_localizers: self.include_localizers,
             resample: self.resample,
             show_phi: self.show_phi,
+            label_image: self.label_image.clone(),
         }
     }
 }

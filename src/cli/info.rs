@@ -38,7 +38,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
             Folder::Dicom => {
                 Some(discover(std::slice::from_ref(dir), &opts)?).filter(|series| series.len() > 1)
             }
-            Folder::Slices | Folder::Empty => None,
+            Folder::Slices | Folder::Zarr | Folder::Empty => None,
         }
     } else {
         None

@@ -399,6 +399,7 @@ mod tests {
             notes: vec!["a note".into()],
             sources: Vec::new(),
             dicom: None,
+            zarr: None,
         };
         let plain = InfoReport::new("body.nrrd", &loaded, 32).unwrap();
         assert_eq!(plain.histogram.len(), 32);

@@ -21,6 +21,21 @@ type Seen = (Vec<(f32, u64)>, u64);
 /// integer voxels with between 2 and [`MAX_LABELS`] distinct values, in regions (most voxels
 /// equal to their neighbour).
 pub fn label_values(volume: &Volume) -> Option<Vec<(f32, u64)>> {
+    let (values, runs) = counted(volume)?;
+    let total: u64 = values.iter().map(|v| v.1).sum();
+    (values.len() >= 2 && runs as f64 >= LABEL_RUNS * total as f64).then_some(values)
+}
+
+/// The distinct values of `volume` with their voxel counts, for a volume its file declares a
+/// label image (an OME-Zarr `labels/` image): integer voxels with at most [`MAX_LABELS`]
+/// distinct values, however they lie.
+pub fn declared_label_values(volume: &Volume) -> Option<Vec<(f32, u64)>> {
+    counted(volume).map(|(values, _)| values)
+}
+
+/// The distinct values of an integer volume with their counts (sorted by first appearance),
+/// and how many voxels equal the one before them; `None` past [`MAX_LABELS`] values.
+fn counted(volume: &Volume) -> Option<Seen> {
     if !volume.voxel_type().is_integer() {
         return None;
     }
@@ -33,14 +48,11 @@ pub fn label_values(volume: &Volume) -> Option<Vec<(f32, u64)>> {
         }
         (a.len() <= MAX_LABELS).then_some((a, ra + rb))
     };
-    let values = crate::volume::with_voxels!(volume.data(), |data| {
+    crate::volume::with_voxels!(volume.data(), |data| {
         data.par_chunks(1 << 16)
             .map(seen_in)
             .try_reduce(|| (Vec::new(), 0), merge)
-    })?;
-    let (values, runs) = values;
-    let total: u64 = values.iter().map(|v| v.1).sum();
-    (values.len() >= 2 && runs as f64 >= LABEL_RUNS * total as f64).then_some(values)
+    })
 }
 
 /// The distinct values of `chunk` with their counts, and how many equal the one before them;

@@ -175,6 +175,15 @@ impl Volume {
         self
     }
 
+    /// This volume, declared a label volume by its file (an OME-Zarr label image): its distinct
+    /// values are its labels however they lie, when it has integer voxels of at most
+    /// [`labels::MAX_LABELS`] values.
+    #[must_use]
+    pub(crate) fn declared_labels(mut self) -> Self {
+        self.labels = Arc::new(OnceLock::from(labels::declared_label_values(&self)));
+        self
+    }
+
     /// The voxel-to-world transform: to RAS+ mm, or spacing on the diagonal when the file states
     /// no orientation.
     #[must_use]

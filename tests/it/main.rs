@@ -26,3 +26,4 @@ mod size;
 mod slice;
 mod triage;
 mod view;
+mod zarr;

@@ -161,7 +161,11 @@ pub(crate) fn voxel_buffer(path: &Path, dims: [usize; 3], max_memory: u64) -> Re
 }
 
 /// A zeroed buffer of `dims` voxels of type `T`, after checking the budget.
-fn typed_buffer<T: Voxel>(path: &Path, dims: [usize; 3], max_memory: u64) -> Result<Vec<T>> {
+pub(crate) fn typed_buffer<T: Voxel>(
+    path: &Path,
+    dims: [usize; 3],
+    max_memory: u64,
+) -> Result<Vec<T>> {
     let n = check_budget_of(path, dims, T::TYPE, max_memory)?;
     // Asked of the system first, so that a refusal is an error; then made zeroed, whose pages
     // the system provides only as they are written.

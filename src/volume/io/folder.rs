@@ -26,8 +26,8 @@ pub(crate) fn is_tiff(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"))
 }
 
-/// What a folder is: one volume (a stack of two or more TIFF slices and no other volume file
-/// or folder), DICOM files (one series or several), a collection of volumes, or nothing
+/// What a folder is: one volume (a Zarr store, or a stack of two or more TIFF slices and no
+/// other volume file or folder), DICOM files (one series or several), a collection of volumes, or nothing
 /// slabscope reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Folder {
@@ -40,10 +40,15 @@ pub enum Folder {
     Collection,
     /// Neither a volume file nor a folder in it.
     Empty,
+    /// A Zarr store (an OME-Zarr image or a plain array): one volume, never walked into.
+    Zarr,
 }
 
 /// Says what the folder `dir` is.
 pub fn folder_kind(dir: &Path) -> Result<Folder> {
+    if super::zarr::is_store(dir) {
+        return Ok(Folder::Zarr);
+    }
     let (mut tiffs, mut others, mut dicoms) = (0usize, 0usize, 0usize);
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let entry = entry.map_err(|e| Error::io(dir, e))?;

@@ -15,6 +15,7 @@ mod raw;
 mod tiff;
 mod tiff_ifd;
 mod volumeshop;
+pub mod zarr;
 
 use std::fs::File;
 use std::io::Read;
@@ -53,6 +54,8 @@ pub enum Format {
     TiffFolder,
     /// A DICOM file or series (a folder of files).
     Dicom,
+    /// An OME-Zarr image or a plain Zarr array (a folder).
+    OmeZarr,
     /// Made in memory (a phantom or the built-in dataset).
     Synthetic,
 }
@@ -70,6 +73,7 @@ impl Format {
             Self::Tiff => "tiff",
             Self::TiffFolder => "tiff-folder",
             Self::Dicom => "dicom",
+            Self::OmeZarr => "ome-zarr",
             Self::Synthetic => "synthetic",
         }
     }
@@ -94,6 +98,8 @@ pub struct LoadOptions {
     pub resample: bool,
     /// Read the patient-identifying DICOM fields (never read otherwise).
     pub show_phi: bool,
+    /// Which label image of an OME-Zarr store to read (`labels/NAME`) instead of its image.
+    pub label_image: Option<String>,
 }
 
 impl Default for LoadOptions {
@@ -107,6 +113,7 @@ impl Default for LoadOptions {
             include_localizers: false,
             resample: false,
             show_phi: false,
+            label_image: None,
         }
     }
 }
@@ -124,6 +131,8 @@ pub struct Loaded {
     pub sources: Vec<PathBuf>,
     /// The DICOM series read, for a DICOM file or folder.
     pub dicom: Option<DicomSeries>,
+    /// The store's image, levels, chunking and codecs, for an OME-Zarr store.
+    pub zarr: Option<zarr::ZarrInfo>,
 }
 
 /// What a DICOM volume is, beyond its geometry: never a patient-identifying field unless they
@@ -216,38 +225,14 @@ fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
 
 fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if opts.label_image.is_some() && !(meta.is_dir() && zarr::is_store(path)) {
+        return Err(Error::format(
+            path,
+            "--label-image names a label image of an OME-Zarr store, and this is none",
+        ));
+    }
     let (format, mut loaded) = if meta.is_dir() {
-        // Only an OME-TIFF file holds channels.
-        if opts.channel > 0 {
-            return Err(data::one_channel(path, 1, opts.channel));
-        }
-        let kind = folder_kind(path)?;
-        match kind {
-            // A series may be named in a folder of DICOM files and other volumes.
-            Folder::Dicom => (Format::Dicom, dicom::load(path, opts)?),
-            Folder::Collection if opts.series.is_some() => {
-                (Format::Dicom, dicom::load(path, opts)?)
-            }
-            Folder::Collection => {
-                return Err(Error::format(
-                    path,
-                    "a folder of volumes, not one stack of TIFF slices: name a volume in it, or \
-                     triage the folder",
-                ));
-            }
-            Folder::Empty => {
-                return Err(Error::format(
-                    path,
-                    "folder holds no .tif or .tiff slices, no DICOM files and no volume files",
-                ));
-            }
-            Folder::Slices => {
-                if opts.volume > 0 {
-                    return Err(data::one_volume(path, 1, opts.volume));
-                }
-                (Format::TiffFolder, tiff::load_folder(path, opts)?)
-            }
-        }
+        load_folder(path, opts)?
     } else {
         let format = detect(path, opts)?;
         let four_d = matches!(
@@ -268,7 +253,9 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             Format::Raw => raw::load(path, opts)?,
             Format::Tiff => tiff::load_stack(path, opts)?,
             Format::Dicom => dicom::load(path, opts)?,
-            Format::TiffFolder | Format::Synthetic => unreachable!("not detected from a file"),
+            Format::TiffFolder | Format::OmeZarr | Format::Synthetic => {
+                unreachable!("not detected from a file")
+            }
         };
         (format, loaded)
     };
@@ -292,6 +279,41 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         notes: loaded.notes,
         sources,
         dicom: loaded.dicom,
+        zarr: loaded.zarr,
+    })
+}
+
+/// Reads the folder `path`: a Zarr store, a DICOM series, or a stack of TIFF slices.
+fn load_folder(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
+    let kind = folder_kind(path)?;
+    // Only an OME-TIFF file or an OME-Zarr store holds channels.
+    if opts.channel > 0 && kind != Folder::Zarr {
+        return Err(data::one_channel(path, 1, opts.channel));
+    }
+    Ok(match kind {
+        Folder::Zarr => (Format::OmeZarr, zarr::load(path, opts)?),
+        // A series may be named in a folder of DICOM files and other volumes.
+        Folder::Dicom => (Format::Dicom, dicom::load(path, opts)?),
+        Folder::Collection if opts.series.is_some() => (Format::Dicom, dicom::load(path, opts)?),
+        Folder::Collection => {
+            return Err(Error::format(
+                path,
+                "a folder of volumes, not one stack of TIFF slices: name a volume in it, or \
+                 triage the folder",
+            ));
+        }
+        Folder::Empty => {
+            return Err(Error::format(
+                path,
+                "folder holds no .tif or .tiff slices, no DICOM files and no volume files",
+            ));
+        }
+        Folder::Slices => {
+            if opts.volume > 0 {
+                return Err(data::one_volume(path, 1, opts.volume));
+            }
+            (Format::TiffFolder, tiff::load_folder(path, opts)?)
+        }
     })
 }
 
@@ -303,6 +325,8 @@ pub(crate) struct Read0 {
     pub sources: Vec<PathBuf>,
     /// The DICOM series read.
     pub dicom: Option<DicomSeries>,
+    /// The store read, for an OME-Zarr store.
+    pub zarr: Option<zarr::ZarrInfo>,
 }
 
 impl Read0 {
@@ -322,6 +346,7 @@ impl Read0 {
             notes,
             sources: Vec::new(),
             dicom: None,
+            zarr: None,
         })
     }
 

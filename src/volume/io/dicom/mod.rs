@@ -251,6 +251,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         notes,
         sources: sources(&scan, series, order),
         dicom: Some(described(&scan, series)),
+        zarr: None,
     })
 }
 

@@ -1,0 +1,505 @@
+//! OME-Zarr images (NGFF 0.4 on Zarr v2, 0.5 on Zarr v3) and plain Zarr arrays, from a local
+//! folder. The group's metadata is read here ([`meta`]); the arrays, their codecs (Blosc, zstd,
+//! gzip, ...) and sharding by `zarrs`, through a store of our own ([`store`]) that opens every
+//! file as other inputs are opened and weighs it first.
+//!
+//! The first dataset of the first multiscales image is the volume: its spatial axes (z, y, x in
+//! the array's order, or y and x) become the volume's x fastest, its scale and translation the
+//! spacing and origin in mm; `--volume N` picks the time point and `--channel N` the channel.
+
+pub(crate) mod meta;
+mod store;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use serde::Serialize;
+use zarrs::array::{Array, ArraySubset, ElementOwned};
+
+use self::meta::{ArrayMeta, AxisKind, Image};
+use self::store::LocalStore;
+use super::Read0;
+use super::data::{one_channel, one_volume, typed_buffer};
+use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
+use crate::volume::voxels::{held_type, infinities_missing};
+use crate::volume::{Voxel, VoxelType, Voxels};
+
+use super::LoadOptions;
+
+/// What `info` shows of a store: the image read, its axes, levels, chunking and codecs.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ZarrInfo {
+    /// The NGFF version (`0.4`, `0.5`), or `none` for a plain Zarr array.
+    pub version: String,
+    /// The Zarr format: 2 or 3.
+    pub zarr_format: u8,
+    /// The image read, relative to the store (`""`, or `labels/NAME`).
+    pub image: String,
+    /// The axes in the arrays' order.
+    pub axes: Vec<ZarrAxis>,
+    /// The resolution levels, finest first.
+    pub levels: Vec<ZarrLevel>,
+    /// The data type as the file names it.
+    pub data_type: String,
+    /// The chunk shape of the level read (the shard's, when sharded), in the axes' order.
+    pub chunks: Vec<u64>,
+    /// The inner chunk shape of a sharded array.
+    pub inner_chunks: Option<Vec<u64>>,
+    /// The codecs of the level read, in the order they were applied when writing.
+    pub codecs: Vec<String>,
+    /// The label images of the store (`--label-image NAME` reads one).
+    pub labels: Vec<String>,
+}
+
+/// One axis of a store's image.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ZarrAxis {
+    /// Its name.
+    pub name: String,
+    /// `space`, `time`, `channel` or another type as written.
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// Its unit as written.
+    pub unit: Option<String>,
+}
+
+/// One resolution level of a store's image.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ZarrLevel {
+    /// The array's path in the image.
+    pub path: String,
+    /// Its shape, in the axes' order.
+    pub shape: Vec<u64>,
+    /// Its scale per axis, in the axes' units.
+    pub scale: Vec<f64>,
+}
+
+/// Whether the folder `dir` is a Zarr store (a group or an array, of Zarr v2 or v3).
+pub fn is_store(dir: &Path) -> bool {
+    ["zarr.json", ".zattrs", ".zgroup", ".zarray"]
+        .iter()
+        .any(|f| dir.join(f).is_file())
+}
+
+/// The image a load reads: the store, or one of its label images.
+fn image_dir(dir: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
+    let Some(name) = &opts.label_image else {
+        return Ok((dir.to_path_buf(), String::new()));
+    };
+    let names = meta::label_names(dir);
+    if !names.contains(name) {
+        let listed = if names.is_empty() {
+            "the store has no label images".to_string()
+        } else {
+            format!("its label images: {}", names.join(", "))
+        };
+        return Err(Error::format(
+            dir,
+            format!("no label image {name:?} ({listed})"),
+        ));
+    }
+    Ok((dir.join("labels").join(name), format!("labels/{name}")))
+}
+
+/// The image at `dir`: an OME-Zarr group's first image, or a plain array as an image of one
+/// level with unit scale (axes named by `dimension_names`, else z, y, x from the last).
+fn read_image(dir: &Path) -> Result<(Image, Vec<ArrayMeta>)> {
+    let fail = |m: String| Error::format(dir, m);
+    let (zarr_format, attrs) = meta::attributes(dir)
+        .map_err(fail)?
+        .ok_or_else(|| fail("not a Zarr store (no zarr.json, .zattrs or .zgroup)".into()))?;
+    let image = match meta::array(dir) {
+        // A plain array: no OME metadata to read.
+        Ok(array) => plain_image(&array, zarr_format).map_err(fail)?,
+        Err(_) => meta::image(&attrs, zarr_format).map_err(fail)?,
+    };
+    let arrays = image
+        .datasets
+        .iter()
+        .map(|d| {
+            let array = meta::array(&dir.join(&d.path))
+                .map_err(|m| fail(format!("dataset {:?}: {m}", d.path)))?;
+            if array.shape.len() != image.axes.len() {
+                return Err(fail(format!(
+                    "dataset {:?} has {} dimensions but the image {} axes",
+                    d.path,
+                    array.shape.len(),
+                    image.axes.len()
+                )));
+            }
+            Ok(array)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((image, arrays))
+}
+
+/// A plain Zarr array as an image of one level.
+fn plain_image(array: &ArrayMeta, zarr_format: u8) -> std::result::Result<Image, String> {
+    let n = array.shape.len();
+    if !(2..=5).contains(&n) {
+        return Err(format!(
+            "a Zarr array of {n} dimensions (a volume has 2 to 5: [t, c,] z, y, x)"
+        ));
+    }
+    let names = ["t", "c", "z", "y", "x"];
+    let axes = names[5 - n..]
+        .iter()
+        .map(|name| meta::Axis {
+            name: (*name).to_string(),
+            kind: match *name {
+                "t" => AxisKind::Time,
+                "c" => AxisKind::Channel,
+                _ => AxisKind::Space,
+            },
+            unit: None,
+        })
+        .collect();
+    Ok(Image {
+        version: "none".into(),
+        zarr_format,
+        multiscales: 1,
+        axes,
+        datasets: vec![meta::Dataset {
+            path: String::new(),
+            scale: vec![1.0; n],
+            translation: vec![0.0; n],
+        }],
+        label: false,
+    })
+}
+
+/// What `info` shows of the store at `dir` for `opts`.
+fn describe(image: &Image, arrays: &[ArrayMeta], dir: &Path, name: String) -> ZarrInfo {
+    let first = &arrays[0];
+    ZarrInfo {
+        version: image.version.clone(),
+        zarr_format: image.zarr_format,
+        image: name,
+        axes: image
+            .axes
+            .iter()
+            .map(|a| ZarrAxis {
+                name: a.name.clone(),
+                kind: match &a.kind {
+                    AxisKind::Time => "time".into(),
+                    AxisKind::Channel => "channel".into(),
+                    AxisKind::Space => "space".into(),
+                    AxisKind::Other(t) => t.clone(),
+                },
+                unit: a.unit.clone(),
+            })
+            .collect(),
+        levels: image
+            .datasets
+            .iter()
+            .zip(arrays)
+            .map(|(d, a)| ZarrLevel {
+                path: d.path.clone(),
+                shape: a.shape.clone(),
+                scale: d.scale.clone(),
+            })
+            .collect(),
+        data_type: first.dtype.clone(),
+        chunks: first.chunks.clone(),
+        inner_chunks: first.inner.clone(),
+        codecs: first.codecs.clone(),
+        labels: meta::label_names(dir),
+    }
+}
+
+/// Where the image's axes are: which is time, which channel, and the spatial ones (z, y, x as
+/// stored; `None` for the z of a 2-D image).
+struct Layout {
+    time: Option<usize>,
+    channel: Option<usize>,
+    spatial: [Option<usize>; 3],
+}
+
+impl Layout {
+    fn of(image: &Image, shape: &[u64]) -> std::result::Result<Self, String> {
+        let find = |kind: AxisKind| image.axes.iter().position(|a| a.kind == kind);
+        let first_space = image
+            .axes
+            .iter()
+            .position(|a| a.kind == AxisKind::Space)
+            .unwrap_or(0);
+        let n = image.axes.len();
+        let spatial = if n - first_space == 3 {
+            [Some(n - 3), Some(n - 2), Some(n - 1)]
+        } else {
+            [None, Some(n - 2), Some(n - 1)]
+        };
+        for (axis, &len) in image.axes.iter().zip(shape) {
+            if let AxisKind::Other(kind) = &axis.kind
+                && len > 1
+            {
+                return Err(format!(
+                    "axis {:?} ({}) of {len} is neither time, channel nor space",
+                    axis.name,
+                    if kind.is_empty() { "no type" } else { kind }
+                ));
+            }
+        }
+        Ok(Self {
+            time: find(AxisKind::Time),
+            channel: find(AxisKind::Channel),
+            spatial,
+        })
+    }
+
+    /// The volume's dimensions (x fastest) of an array of `shape`.
+    fn dims(&self, shape: &[u64]) -> [usize; 3] {
+        let [z, y, x] = self.spatial.map(|a| a.map_or(1, |a| shape[a] as usize));
+        [x, y, z]
+    }
+}
+
+/// Loads the image of the store at `dir` (or the label image `opts` names).
+pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
+    let (image_path, name) = image_dir(dir, opts)?;
+    let (image, arrays) = read_image(&image_path)?;
+    let info = describe(&image, &arrays, dir, name);
+    let fail = |m: String| Error::format(&image_path, m);
+    let array = &arrays[0];
+    let dataset = &image.datasets[0];
+    let layout = Layout::of(&image, &array.shape).map_err(fail)?;
+    let mut notes = Vec::new();
+    let count = |axis: Option<usize>| axis.map_or(1, |a| array.shape[a] as usize);
+    let (times, channels) = (count(layout.time), count(layout.channel));
+    if opts.volume >= times {
+        return Err(one_volume(dir, times, opts.volume));
+    }
+    if opts.channel >= channels {
+        return Err(one_channel(dir, channels, opts.channel));
+    }
+    if times > 1 || channels > 1 {
+        notes.push(format!(
+            "OME-Zarr image of {channels} channel{} and {times} time point{}: read channel {} \
+             at time point {}",
+            plural(channels),
+            plural(times),
+            opts.channel,
+            opts.volume
+        ));
+    }
+    if image.multiscales > 1 {
+        notes.push(format!(
+            "the store holds {} images (multiscales): read the first",
+            image.multiscales
+        ));
+    }
+    let (spacing, origin) = geometry(&image, dataset, &layout, &mut notes);
+    let dims = layout.dims(&array.shape);
+    let stored = array.voxel_type().map_err(fail)?;
+    check_chunks(&image_path, array, stored, opts.max_memory)?;
+    let store = Arc::new(LocalStore::new(&image_path, opts.max_memory));
+    let zarr = Array::open(store, &format!("/{}", dataset.path))
+        .map_err(|e| fail(format!("dataset {:?}: {e}", dataset.path)))?;
+    let at = [opts.volume as u64, opts.channel as u64];
+    let read = Reader {
+        path: &image_path,
+        array: &zarr,
+        layout: &layout,
+        at,
+        step: array.inner.as_ref().unwrap_or(&array.chunks),
+        chunks: &array.chunks,
+        dims,
+        max_memory: opts.max_memory,
+    };
+    let voxels = read.voxels(stored)?;
+    let mut t = WorldTransform::unknown(spacing);
+    for k in 0..3 {
+        t.matrix[k][3] = origin[k];
+    }
+    let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
+    read0.volume = read0.volume.with_transform(t);
+    if image.label {
+        read0.volume = read0.volume.declared_labels();
+    }
+    read0.zarr = Some(info);
+    Ok(read0)
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
+/// The spacing and origin (mm, x first) of `dataset`, with notes on units not known.
+fn geometry(
+    image: &Image,
+    dataset: &meta::Dataset,
+    layout: &Layout,
+    notes: &mut Vec<String>,
+) -> ([f64; 3], [f64; 3]) {
+    let (mut spacing, mut origin) = ([1.0; 3], [0.0; 3]);
+    let mut unknown = Vec::new();
+    for (k, axis) in layout.spatial.iter().rev().enumerate() {
+        let Some(a) = *axis else { continue };
+        let unit = image.axes[a].unit.as_deref();
+        let mm = if let Some(Some(mm)) = unit.map(meta::mm_per) {
+            mm
+        } else {
+            unknown.push(format!(
+                "{} ({})",
+                image.axes[a].name,
+                unit.map_or_else(|| "no unit".to_string(), |u| format!("unit {u:?}"))
+            ));
+            1.0
+        };
+        spacing[k] = dataset.scale[a] * mm;
+        origin[k] = dataset.translation[a] * mm;
+    }
+    if !unknown.is_empty() {
+        unknown.reverse();
+        notes.push(format!(
+            "axes {} have no known length unit: their scale is read as mm",
+            unknown.join(", ")
+        ));
+    }
+    (spacing, origin)
+}
+
+/// Fails when one chunk, decoded, would claim more than a quarter of the budget (a hostile
+/// chunk shape claims memory a small array never needs).
+fn check_chunks(path: &Path, array: &ArrayMeta, ty: VoxelType, max_memory: u64) -> Result<()> {
+    for (what, shape) in [
+        ("chunk", Some(&array.chunks)),
+        ("inner chunk", array.inner.as_ref()),
+    ] {
+        let Some(shape) = shape else { continue };
+        let bytes = shape
+            .iter()
+            .try_fold(ty.size() as u64, |a, &n| a.checked_mul(n.max(1)));
+        let limit = max_memory / 4;
+        match bytes {
+            Some(b) if b <= limit => {}
+            _ => {
+                let dims: Vec<String> = shape.iter().map(u64::to_string).collect();
+                return Err(Error::TooLarge {
+                    path: path.to_path_buf(),
+                    what: format!("one {what} of {} {ty} voxels", dims.join("x")),
+                    needed: bytes.unwrap_or(u64::MAX),
+                    limit,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// How the voxels of one time point and channel are read, chunk by chunk, into the volume.
+struct Reader<'a> {
+    path: &'a Path,
+    array: &'a Array<LocalStore>,
+    layout: &'a Layout,
+    /// The time point and channel read.
+    at: [u64; 2],
+    /// The chunk shape reads step by, in the axes' order (the inner chunk's when sharded).
+    step: &'a [u64],
+    /// The chunk (or shard) shape, in the axes' order.
+    chunks: &'a [u64],
+    dims: [usize; 3],
+    max_memory: u64,
+}
+
+impl Reader<'_> {
+    /// The voxels, held as integers of at most 16 bits are, everything else as f32.
+    fn voxels(&self, stored: VoxelType) -> Result<Voxels> {
+        Ok(match held_type(stored, false) {
+            VoxelType::U8 => Voxels::owned(self.read::<u8, u8>(|v| v)?),
+            VoxelType::I8 => Voxels::owned(self.read::<i8, i8>(|v| v)?),
+            VoxelType::U16 => Voxels::owned(self.read::<u16, u16>(|v| v)?),
+            VoxelType::I16 => Voxels::owned(self.read::<i16, i16>(|v| v)?),
+            _ => {
+                let mut values = match stored {
+                    VoxelType::U32 => self.read::<u32, f32>(|v| v as f32)?,
+                    VoxelType::I32 => self.read::<i32, f32>(|v| v as f32)?,
+                    VoxelType::F64 => self.read::<f64, f32>(|v| v as f32)?,
+                    _ => self.read::<f32, f32>(|v| v)?,
+                };
+                infinities_missing(&mut values);
+                Voxels::from_f32(values)
+            }
+        })
+    }
+
+    /// Reads elements of type `E` into a volume of `T`, converting each with `to`: slabs of one
+    /// chunk's depth along z in parallel, each chunk of a slab in turn.
+    fn read<E: ElementOwned + Copy + Send + Sync, T: Voxel>(
+        &self,
+        to: fn(E) -> T,
+    ) -> Result<Vec<T>> {
+        let mut out = typed_buffer::<T>(self.path, self.dims, self.max_memory)?;
+        let [nx, ny, nz] = self.dims;
+        let step = |axis: Option<usize>| axis.map_or(1, |a| self.step[a].max(1) as usize);
+        let [sz, sy, sx] = self.layout.spatial.map(step);
+        let slab = nx * ny * sz.min(nz);
+        out.par_chunks_mut(slab)
+            .enumerate()
+            .try_for_each(|(k, out)| {
+                let z0 = k * sz;
+                let z1 = (z0 + sz).min(nz);
+                for y0 in (0..ny).step_by(sy) {
+                    for x0 in (0..nx).step_by(sx) {
+                        let box3 = [z0..z1, y0..(y0 + sy).min(ny), x0..(x0 + sx).min(nx)];
+                        self.chunk(&box3, z0, out, to)?;
+                    }
+                }
+                Ok::<(), Error>(())
+            })?;
+        Ok(out)
+    }
+
+    /// Reads the box `[z, y, x]` of the volume into `out`, the slab that starts at slice `z0`.
+    fn chunk<E: ElementOwned + Copy, T: Voxel>(
+        &self,
+        [z, y, x]: &[std::ops::Range<usize>; 3],
+        z0: usize,
+        out: &mut [T],
+        to: fn(E) -> T,
+    ) -> Result<()> {
+        let [nx, ny, _] = self.dims;
+        let ranges: Vec<std::ops::Range<u64>> = (0..self.array.dimensionality())
+            .map(|a| {
+                let span = |r: &std::ops::Range<usize>| r.start as u64..r.end as u64;
+                if Some(a) == self.layout.time {
+                    self.at[0]..self.at[0] + 1
+                } else if Some(a) == self.layout.channel {
+                    self.at[1]..self.at[1] + 1
+                } else if Some(a) == self.layout.spatial[0] {
+                    span(z)
+                } else if Some(a) == self.layout.spatial[1] {
+                    span(y)
+                } else if Some(a) == self.layout.spatial[2] {
+                    span(x)
+                } else {
+                    0..1
+                }
+            })
+            .collect();
+        let values: Vec<E> = self
+            .array
+            .retrieve_array_subset(&ArraySubset::new_with_ranges(&ranges))
+            .map_err(|e| {
+                // The chunk (or shard) that holds the box, by its key.
+                let chunk: Vec<u64> = ranges
+                    .iter()
+                    .zip(self.chunks)
+                    .map(|(r, &c)| r.start / c.max(1))
+                    .collect();
+                let key = self.array.chunk_key(&chunk);
+                Error::format(self.path, format!("chunk {key}: {e}"))
+            })?;
+        let width = x.len();
+        for (i, row) in values.chunks_exact(width).enumerate() {
+            let (dz, dy) = (i / y.len(), i % y.len());
+            let at = ((z.start - z0 + dz) * ny + y.start + dy) * nx + x.start;
+            for (o, &v) in out[at..at + width].iter_mut().zip(row) {
+                *o = to(v);
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,145 @@
+//! The store a Zarr array is read from: the files of a local folder, each opened as every input
+//! file is (never blocking, regular files only: a FIFO named like a chunk cannot hang the
+//! read) and weighed before it is read (a file larger than the budget is an error, not an
+//! allocation).
+
+use std::os::unix::fs::FileExt;
+use std::path::{Component, Path, PathBuf};
+
+use zarrs::storage::byte_range::{ByteRange, ByteRangeIterator};
+use zarrs::storage::{Bytes, MaybeBytesIterator, ReadableStorageTraits, StorageError, StoreKey};
+
+use crate::error::human_bytes;
+
+/// A read-only Zarr store over the folder `root`.
+#[derive(Debug)]
+pub struct LocalStore {
+    root: PathBuf,
+    /// The most bytes one file of the store may hold.
+    max_file: u64,
+}
+
+impl LocalStore {
+    /// The store of the folder `root`, whose files may each hold at most `max_file` bytes.
+    pub fn new(root: &Path, max_file: u64) -> Self {
+        Self {
+            root: root.to_path_buf(),
+            max_file,
+        }
+    }
+
+    /// The file of `key`, which must stay inside the store's folder.
+    fn path(&self, key: &StoreKey) -> Result<PathBuf, StorageError> {
+        let relative = Path::new(key.as_str());
+        if !relative
+            .components()
+            .all(|c| matches!(c, Component::Normal(_)))
+        {
+            return Err(StorageError::Other(format!(
+                "key {key} leaves the store's folder"
+            )));
+        }
+        Ok(self.root.join(relative))
+    }
+
+    /// The file of `key` opened with its size; `None` when there is none.
+    fn open(&self, key: &StoreKey) -> Result<Option<(std::fs::File, u64)>, StorageError> {
+        let path = self.path(key)?;
+        let file = match crate::volume::io::open_regular(&path) {
+            Ok(file) => file,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(StorageError::Other(format!("{key}: {e}"))),
+        };
+        let size = file
+            .metadata()
+            .map_err(|e| StorageError::Other(format!("{key}: {e}")))?
+            .len();
+        if size > self.max_file {
+            return Err(StorageError::Other(format!(
+                "{key} holds {}, more than the memory limit of {}",
+                human_bytes(size),
+                human_bytes(self.max_file)
+            )));
+        }
+        Ok(Some((file, size)))
+    }
+}
+
+impl ReadableStorageTraits for LocalStore {
+    fn get_partial_many<'a>(
+        &'a self,
+        key: &StoreKey,
+        byte_ranges: ByteRangeIterator<'a>,
+    ) -> Result<MaybeBytesIterator<'a>, StorageError> {
+        let Some((file, size)) = self.open(key)? else {
+            return Ok(None);
+        };
+        let out: Vec<Result<Bytes, StorageError>> = byte_ranges
+            .map(|range| read_range(&file, size, key, range))
+            .collect();
+        Ok(Some(Box::new(out.into_iter())))
+    }
+
+    fn size_key(&self, key: &StoreKey) -> Result<Option<u64>, StorageError> {
+        Ok(self.open(key)?.map(|(_, size)| size))
+    }
+
+    fn supports_get_partial(&self) -> bool {
+        true
+    }
+}
+
+/// The bytes of `range` of `file` (of `size` bytes), which must lie within it.
+fn read_range(
+    file: &std::fs::File,
+    size: u64,
+    key: &StoreKey,
+    range: ByteRange,
+) -> Result<Bytes, StorageError> {
+    let (start, end) = match range {
+        ByteRange::FromStart(start, None) => (start, size),
+        ByteRange::FromStart(start, Some(length)) => (start, start.saturating_add(length)),
+        ByteRange::Suffix(length) => (size.saturating_sub(length), size),
+    };
+    if start > end || end > size {
+        return Err(StorageError::Other(format!(
+            "{key}: bytes {start}..{end} asked of a file of {size}"
+        )));
+    }
+    // Within the file, which is within the budget.
+    let mut buffer = vec![0u8; (end - start) as usize];
+    file.read_exact_at(&mut buffer, start)
+        .map_err(|e| StorageError::Other(format!("{key}: {e}")))?;
+    Ok(Bytes::from(buffer))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_stay_in_the_folder_and_files_within_the_limit() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("small"), b"0123456789").unwrap();
+        let store = LocalStore::new(dir.path(), 16);
+        let key = |k: &str| StoreKey::new(k).unwrap();
+        let got = store.get(&key("small")).unwrap().unwrap();
+        assert_eq!(&got[..], b"0123456789");
+        let tail = store
+            .get_partial(&key("small"), ByteRange::Suffix(3))
+            .unwrap()
+            .unwrap();
+        assert_eq!(&tail[..], b"789");
+        assert!(store.get(&key("absent")).unwrap().is_none());
+        assert!(
+            store
+                .get_partial(&key("small"), ByteRange::FromStart(8, Some(5)))
+                .is_err(),
+            "past the end"
+        );
+        std::fs::write(dir.path().join("big"), [0u8; 17]).unwrap();
+        let err = store.get(&key("big")).unwrap_err().to_string();
+        assert!(err.contains("more than the memory limit"), "{err}");
+        assert!(store.path(&key("a/../../etc")).is_err());
+    }
+}

@@ -1,0 +1,315 @@
+//! OME-Zarr stores written by zarr-python and ome-zarr-py (`tests/data/zarr/make.py`) read with
+//! the voxels zarr-python reads back, the spacing and origin of their transforms in mm, their
+//! time points, channels and label images; broken and hostile stores are clear errors.
+
+use std::path::{Path, PathBuf};
+
+use slabscope::volume::VoxelType;
+use slabscope::{Format, LoadOptions, Loaded, load};
+
+use crate::common::data;
+
+fn path(name: &str) -> PathBuf {
+    data(&format!("zarr/{name}"))
+}
+
+fn open_with(path: &Path, opts: &LoadOptions) -> Loaded {
+    load(path, opts).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn open(name: &str) -> Loaded {
+    open_with(&path(name), &LoadOptions::default())
+}
+
+/// `make.py`'s voxel at index `idx` (t/c/z/y/x, any trailing subset) before its type's offset.
+fn formula(idx: &[usize]) -> usize {
+    let weights = [211, 101, 29, 13, 7];
+    idx.iter()
+        .zip(&weights[5 - idx.len()..])
+        .map(|(i, w)| i * w)
+        .sum()
+}
+
+/// What zarr-python read back of array `key` of store `name`.
+fn expected(name: &str, key: &str) -> serde_json::Value {
+    let text = std::fs::read_to_string(path("expected.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json[name][key].clone()
+}
+
+/// The sum and the weighted sum (weights `i % 101` over the C-order index) zarr-python gives.
+fn sums(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.enumerate().fold((0.0, 0.0), |(s, w), (i, v)| {
+        (s + v, w + v * (i % 101) as f64)
+    })
+}
+
+/// The volume's voxels in zarr's C order (z slowest, x fastest: the volume's own order).
+fn voxels(l: &Loaded) -> Vec<f64> {
+    let [nx, ny, nz] = l.volume.dims();
+    let mut out = Vec::with_capacity(nx * ny * nz);
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                out.push(f64::from(l.volume.value([x, y, z])));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn ngff_04_blosc_reads_every_voxel_in_micrometres() {
+    let l = open("v04_blosc.ome.zarr");
+    assert_eq!(l.format, Format::OmeZarr);
+    let v = &l.volume;
+    assert_eq!(v.dims(), [14, 12, 10]);
+    assert_eq!(v.voxel_type(), VoxelType::U16);
+    for (z, y, x) in [(0, 0, 0), (9, 11, 13), (4, 5, 6), (3, 10, 12)] {
+        assert_eq!(
+            v.value([x, y, z]),
+            (formula(&[z, y, x]) % 997) as f32,
+            "({x},{y},{z})"
+        );
+    }
+    let e = expected("v04_blosc.ome.zarr", "s0");
+    let (sum, weighted) = sums(voxels(&l).into_iter());
+    assert_eq!(sum, e["sum"].as_f64().unwrap());
+    assert_eq!(weighted, e["weighted"].as_f64().unwrap());
+    // Scale [2, 0.5, 0.25] µm over z, y, x; translation [10, 20, 30] µm.
+    let s = v.spacing();
+    for (got, want) in s.iter().zip([0.25e-3, 0.5e-3, 2e-3]) {
+        assert!((got - want).abs() < 1e-15, "{s:?}");
+    }
+    let m = v.transform().matrix;
+    for (k, want) in [30e-3, 20e-3, 10e-3].into_iter().enumerate() {
+        assert!((m[k][3] - want).abs() < 1e-15, "{m:?}");
+    }
+    assert!(!v.transform().known, "no anatomical orientation");
+    let info = l.zarr.as_ref().unwrap();
+    assert_eq!((info.version.as_str(), info.zarr_format), ("0.4", 2));
+    assert_eq!(info.levels.len(), 3);
+    assert_eq!(info.levels[1].shape, vec![5, 6, 7]);
+    assert_eq!(info.chunks, vec![4, 5, 6]);
+    assert_eq!(info.codecs, vec!["blosc/lz4"]);
+}
+
+#[test]
+fn ngff_05_time_points_and_channels_in_nanometres() {
+    let name = "v05_tczyx.ome.zarr";
+    let first = open(name);
+    assert!(
+        first
+            .notes
+            .iter()
+            .any(|n| n.contains("3 channels and 2 time points")),
+        "{:?}",
+        first.notes
+    );
+    let s = first.volume.spacing();
+    for (got, want) in s.iter().zip([0.25, 0.25, 0.5]) {
+        assert!((got - want).abs() < 1e-12, "{s:?}");
+    }
+    // Every time point and channel, in zarr's order, make up the whole array.
+    let mut all = Vec::new();
+    for t in 0..2 {
+        for c in 0..3 {
+            let opts = LoadOptions {
+                volume: t,
+                channel: c,
+                ..LoadOptions::default()
+            };
+            let l = open_with(&path(name), &opts);
+            assert_eq!(l.volume.dims(), [8, 7, 6]);
+            assert_eq!(l.volume.voxel_type(), VoxelType::I16);
+            let (z, y, x) = (5, 6, 7);
+            let want = (formula(&[t, c, z, y, x]) % 997) as f32 - 300.0;
+            assert_eq!(l.volume.value([x, y, z]), want, "t {t} c {c}");
+            all.extend(voxels(&l));
+        }
+    }
+    let e = expected(name, "s0");
+    let (sum, weighted) = sums(all.into_iter());
+    assert_eq!(sum, e["sum"].as_f64().unwrap());
+    assert_eq!(weighted, e["weighted"].as_f64().unwrap());
+    let err = |volume, channel| {
+        let opts = LoadOptions {
+            volume,
+            channel,
+            ..LoadOptions::default()
+        };
+        load(&path(name), &opts).unwrap_err().to_string()
+    };
+    assert!(err(2, 0).contains("holds 2 volumes (numbered from 0), so there is no volume 2"));
+    assert!(err(0, 3).contains("holds 3 channels (numbered from 0), so there is no channel 3"));
+}
+
+#[test]
+fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
+    let name = "v05_sharded.ome.zarr";
+    let l = open(name);
+    let v = &l.volume;
+    assert_eq!(v.dims(), [11, 10, 9]);
+    assert_eq!(v.voxel_type(), VoxelType::F32);
+    // The corner chunk is the fill value, and was never written.
+    assert_eq!(v.value([1, 2, 3]), 0.0);
+    let want = (formula(&[8, 9, 10]) % 997) as f32 * 0.25 - 50.0;
+    assert_eq!(v.value([10, 9, 8]), want);
+    let (sum, weighted) = sums(voxels(&l).into_iter());
+    let e = expected(name, "s0");
+    assert_eq!(sum, e["sum"].as_f64().unwrap());
+    assert_eq!(weighted, e["weighted"].as_f64().unwrap());
+    let info = l.zarr.as_ref().unwrap();
+    assert_eq!(info.inner_chunks, Some(vec![4, 4, 4]));
+    assert_eq!(info.chunks, vec![8, 8, 8]);
+    assert_eq!(info.labels, vec!["cells"]);
+    assert_eq!(info.codecs, vec!["sharding(bytes, gzip)"]);
+
+    let opts = LoadOptions {
+        label_image: Some("cells".into()),
+        ..LoadOptions::default()
+    };
+    let cells = open_with(&path(name), &opts);
+    assert_eq!(cells.volume.voxel_type(), VoxelType::U8);
+    assert_eq!(cells.zarr.as_ref().unwrap().image, "labels/cells");
+    assert_eq!(
+        cells.volume.value([10, 9, 8]),
+        (formula(&[8, 9, 10]) / 40 % 5) as f32
+    );
+    assert!(cells.volume.labels().is_some(), "read as a label volume");
+    let (sum, _) = sums(voxels(&cells).into_iter());
+    assert_eq!(
+        sum,
+        expected(name, "labels/cells/s0")["sum"].as_f64().unwrap()
+    );
+
+    let wrong = LoadOptions {
+        label_image: Some("nuclei".into()),
+        ..LoadOptions::default()
+    };
+    let e = load(&path(name), &wrong).unwrap_err().to_string();
+    assert!(
+        e.contains("no label image \"nuclei\" (its label images: cells)"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_plane_without_units_is_one_slice_with_a_note() {
+    let l = open("v04_yx.ome.zarr");
+    assert_eq!(l.volume.dims(), [9, 12, 1]);
+    assert_eq!(l.volume.spacing(), [0.5, 0.5, 1.0]);
+    assert!(l.notes.iter().any(|n| n.contains("no known length unit")));
+    assert_eq!(l.volume.value([8, 11, 0]), (formula(&[11, 8]) % 997) as f32);
+}
+
+/// A copy of fixture store `name` in a temporary folder, to break.
+fn copy(name: &str) -> (tempfile::TempDir, PathBuf) {
+    fn walk(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap() {
+            let e = e.unwrap();
+            let target = to.join(e.file_name());
+            if e.file_type().unwrap().is_dir() {
+                walk(&e.path(), &target);
+            } else {
+                std::fs::copy(e.path(), target).unwrap();
+            }
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join(name);
+    walk(&path(name), &store);
+    (dir, store)
+}
+
+fn error_of(store: &Path) -> String {
+    let e = load(store, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(&store.display().to_string()),
+        "the error names the store: {e}"
+    );
+    assert!(!e.contains('\n'), "one line: {e}");
+    e
+}
+
+#[test]
+fn broken_stores_are_one_line_errors() {
+    let (_keep, store) = copy("v04_blosc.ome.zarr");
+    let zarray = store.join("s0/.zarray");
+    let meta = std::fs::read_to_string(&zarray).unwrap();
+
+    std::fs::write(store.join("s0/0/0/0"), b"not blosc at all").unwrap();
+    assert!(error_of(&store).contains("s0"), "a corrupt chunk");
+
+    let huge = meta.replace(
+        "\"chunks\": [\n    4,\n    5,\n    6\n  ]",
+        "\"chunks\": [100000, 100000, 100000]",
+    );
+    assert_ne!(huge, meta);
+    std::fs::write(&zarray, &huge).unwrap();
+    let e = error_of(&store);
+    assert!(
+        e.contains("one chunk of 100000x100000x100000 u16 voxels"),
+        "{e}"
+    );
+
+    std::fs::write(&zarray, "{\"shape\": [").unwrap();
+    assert!(error_of(&store).contains(".zarray: not JSON"));
+
+    std::fs::remove_file(&zarray).unwrap();
+    assert!(error_of(&store).contains("no array metadata"));
+
+    std::fs::write(store.join(".zattrs"), "{\"multiscales\": []}").unwrap();
+    assert!(error_of(&store).contains("`multiscales` is empty"));
+}
+
+#[cfg(unix)]
+#[test]
+fn a_fifo_named_like_a_chunk_cannot_block_the_read() {
+    let (_keep, store) = copy("v04_blosc.ome.zarr");
+    let chunk = store.join("s0/1/1/1");
+    std::fs::remove_file(&chunk).unwrap();
+    let made = std::process::Command::new("mkfifo").arg(&chunk).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("skipped: mkfifo is not available");
+        return;
+    }
+    let e = error_of(&store);
+    assert!(e.contains("FIFO"), "{e}");
+}
+
+#[test]
+fn a_plain_zarr_array_reads_with_unit_spacing() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("grid.zarr");
+    std::fs::create_dir_all(store.join("0/0")).unwrap();
+    std::fs::write(
+        store.join(".zarray"),
+        r#"{"zarr_format": 2, "shape": [2, 3, 4], "chunks": [2, 3, 4], "dtype": "<i2",
+            "compressor": null, "fill_value": 0, "order": "C", "filters": null,
+            "dimension_separator": "/"}"#,
+    )
+    .unwrap();
+    let bytes: Vec<u8> = (0..24i16).flat_map(|v| (v * 3 - 7).to_le_bytes()).collect();
+    std::fs::write(store.join("0/0/0"), bytes).unwrap();
+    let l = open_with(&store, &LoadOptions::default());
+    assert_eq!(l.volume.dims(), [4, 3, 2]);
+    assert_eq!(l.volume.value([3, 2, 1]), (23 * 3 - 7) as f32);
+    assert_eq!(l.zarr.as_ref().unwrap().version, "none");
+}
+
+#[test]
+fn triage_takes_a_store_as_one_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_keep, store) = copy("v05_sharded.ome.zarr");
+    let inside = dir.path().join("scans");
+    std::fs::create_dir(&inside).unwrap();
+    std::fs::rename(&store, inside.join("s.ome.zarr")).unwrap();
+    let found = slabscope::triage::discover(std::slice::from_ref(&inside), &LoadOptions::default())
+        .unwrap();
+    let paths: Vec<&Path> = found.iter().map(|e| e.path.as_path()).collect();
+    assert_eq!(paths, [inside.join("s.ome.zarr").as_path()]);
+}
