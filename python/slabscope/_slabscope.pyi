@@ -153,8 +153,10 @@ def render(
     no_shading: bool = False,
     no_outlines: bool = False,
     no_labels: bool = False,
+    faces: bool = False,
 ) -> Image:
-    """The exploded view of the slabs, as `slabscope render` draws it."""
+    """The exploded view of the slabs, as `slabscope render` draws it; with `faces=True` the
+    strip of every slab's faces, as `render --faces` (only `size` and the look apply)."""
 
 def slice(
     volume: Volume,

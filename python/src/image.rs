@@ -6,7 +6,10 @@ use numpy::ndarray::Array3;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use slabscope::render::{ImageOutput, Layout, Renderer, encode, slice as slices};
+use slabscope::geometry::min_spacing;
+use slabscope::render::{
+    ImageOutput, Layout, Renderer, Stack, TransferChoice, encode, slice as slices,
+};
 use tiny_skia::Pixmap;
 
 use crate::analysis::{Analysis, analyze};
@@ -78,7 +81,9 @@ impl Image {
 /// drawn from the level the analysis partitioned, with `render`'s keywords: `size=(640, 480)`,
 /// `mode="cut"`, `tf`, `colormap`, `window`, `azimuth=30`, `elevation=20`, `zoom=1`,
 /// `perspective`, `gap="similarity"`, `spread`, `highlight`, `solo`, `step=1`, `no_shading`,
-/// `no_outlines`, `no_labels`.
+/// `no_outlines`, `no_labels`. With `faces=True` (`render --faces`), instead the faces of every
+/// slab, its last slice above its first, a column a slab, fit into the size: of the keywords
+/// only `size` and the look (`tf`, `colormap`, `window`) apply, as on the CLI.
 #[pyfunction]
 #[pyo3(signature = (volume, analysis=None, progress=None, **options))]
 pub fn render(
@@ -91,6 +96,7 @@ pub fn render(
     let kw = Kwargs::new(py, "render", options)?;
     let size = size(&kw, (640, 480))?;
     let (params, gap, spread) = render_params(&kw, size)?;
+    let faces: bool = kw.or("faces", false)?;
     kw.finish()?;
     let made;
     let analysis = if let Some(a) = analysis {
@@ -101,6 +107,16 @@ pub fn render(
         &made
     };
     let part = &analysis.inner.partition;
+    let level = &analysis.level;
+    if faces {
+        let look = TransferChoice {
+            preset: params.preset,
+            colormap: params.colormap,
+            window: params.window,
+        };
+        let pixmap = slab_faces(py, level, part, look, size)?;
+        return Ok(Image { pixmap });
+    }
     if let Some(h) = params.highlight
         && h >= part.slabs.len()
     {
@@ -110,12 +126,37 @@ pub fn render(
         )));
     }
     let layout = Layout::exploded(part, gap, spread);
-    let level = &analysis.level;
     let image = run::long(py, progress, |monitor| {
         Renderer::new(level)?.render(&layout, &params, monitor)
     })?;
     Ok(Image {
         pixmap: image.pixmap,
+    })
+}
+
+/// The strip of `part`'s slab faces in `look`, fit into `(width, height)`, as `render --faces`
+/// draws it: a column a slab, its last slice above its first, each fit into a tile.
+fn slab_faces(
+    py: Python<'_>,
+    level: &slabscope::Volume,
+    part: &slabscope::Partition,
+    look: TransferChoice,
+    (width, height): (u32, u32),
+) -> PyResult<Pixmap> {
+    let k = part.slabs.len() as u32;
+    let tile = (
+        width.saturating_sub(4 * (k + 1)) / k.max(1),
+        height.saturating_sub(12) / 2,
+    );
+    if tile.0 < 8 || tile.1 < 8 {
+        return Err(PyValueError::new_err(format!(
+            "size=({width}, {height}): too small for the faces of {k} slabs"
+        )));
+    }
+    run::quick(py, || {
+        let renderer = Renderer::new(level)?;
+        let transfer = renderer.transfer(look, min_spacing(level.spacing()))?;
+        slices::faces(level, &transfer, &Stack::of(part), &part.slabs, tile)
     })
 }
 

@@ -128,6 +128,21 @@ def test_render_matches_the_cli_picture(phantoms, cli, tmp_path):
     assert ours.png() == out.read_bytes()
 
 
+def test_render_faces_matches_the_cli_picture(phantoms, cli, tmp_path):
+    path = str(phantoms["body"])
+    out = tmp_path / "faces.png"
+    cli("render", path, "-o", str(out), "--faces", "--slabs", "3", "--size", "300x160", "--colormap", "bone")
+    volume = slabscope.load(path)
+    analysis = slabscope.analyze(volume, slabs=3)
+    faces = slabscope.render(volume, analysis, faces=True, size=(300, 160), colormap="bone")
+    assert faces.png() == out.read_bytes()
+    # Three columns of 94-pixel tiles and two rows of 74, with 4-pixel gaps: not the exploded view.
+    assert faces.size == (298, 160)
+    assert faces.png() != slabscope.render(volume, analysis, size=(300, 160), colormap="bone").png()
+    with pytest.raises(ValueError, match=r"^size=\(30, 30\): too small for the faces of 3 slabs$"):
+        slabscope.render(volume, analysis, faces=True, size=(30, 30))
+
+
 def test_an_ome_tiffs_channel_and_time_point_are_keywords():
     volume = slabscope.load(DATA / "ome" / "zct.ome.tif", channel=1, volume=1)
     assert volume.range == (4000.0, 4234.0)
