@@ -83,16 +83,6 @@ def read_back(path):
     return out
 
 
-def scales(levels, base, spatial_factor):
-    """coordinateTransformations per level: scale (spatial axes doubled per level) and
-    translation."""
-    out = []
-    for k in range(levels):
-        s = [b * (spatial_factor ** k if i >= len(base) - 3 else 1) for i, b in enumerate(base["s"])] if False else None
-        out.append(s)
-    return out
-
-
 def transforms(scale, translation, levels, spatial):
     out = []
     for k in range(levels):
