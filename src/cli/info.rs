@@ -9,6 +9,7 @@ use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, 
 use slabscope::triage::{Entry, Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
 use slabscope::volume::io::Loaded;
+use slabscope::volume::io::zarr::ZarrInfo;
 
 use super::LoadArgs;
 
@@ -18,7 +19,8 @@ const HISTOGRAM_BINS: usize = 32;
 /// Arguments of `slabscope info`.
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// The volume: a file, or a folder of TIFF slices (a folder of volumes is listed).
+    /// The volume: a file, a folder of TIFF slices or DICOM files, or an OME-Zarr store (a
+    /// folder of volumes is listed).
     pub file: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -89,7 +91,23 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     let [nx, ny, nz] = v.dims();
     let [sx, sy, sz] = v.spacing();
     outln!("file        {name}");
-    outln!("format      {}", format.name());
+    match (&loaded.format_version, &loaded.zarr) {
+        (Some(version), Some(z)) => outln!(
+            "format      {} (OME-Zarr {version} on Zarr v{})",
+            format.name(),
+            z.zarr_format
+        ),
+        (None, Some(z)) => outln!(
+            "format      {} (a plain Zarr v{} array)",
+            format.name(),
+            z.zarr_format
+        ),
+        (Some(version), None) => outln!("format      {} (version {version})", format.name()),
+        (None, None) => outln!("format      {}", format.name()),
+    }
+    if let Some(z) = &loaded.zarr {
+        print_zarr(z);
+    }
     if let Some(d) = &loaded.dicom {
         let number = d.number.map_or_else(String::new, |n| format!("{n} "));
         outln!("series      {number}\"{}\" ({})", d.description, d.modality);
@@ -139,6 +157,55 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         sparkline(hist)
     );
     Ok(())
+}
+
+/// What an OME-Zarr store holds: the image read, its axes, levels, chunking, codecs and labels.
+fn print_zarr(z: &ZarrInfo) {
+    let shape = |s: &[u64]| s.iter().map(u64::to_string).collect::<Vec<_>>().join("x");
+    if !z.image.is_empty() {
+        outln!("image       {}", z.image);
+    }
+    let axes: Vec<String> = z
+        .axes
+        .iter()
+        .map(|a| match &a.unit {
+            Some(unit) => format!("{} ({}, {unit})", a.name, a.kind),
+            None => format!("{} ({})", a.name, a.kind),
+        })
+        .collect();
+    outln!("axes        {}", axes.join(", "));
+    let levels: Vec<String> = z
+        .levels
+        .iter()
+        .map(|l| {
+            format!(
+                "{} {}",
+                if l.path.is_empty() { "." } else { &l.path },
+                shape(&l.shape)
+            )
+        })
+        .collect();
+    outln!("levels      {} (the first is read)", levels.join(", "));
+    match &z.inner_chunks {
+        Some(inner) => outln!(
+            "chunks      {} in shards of {}",
+            shape(inner),
+            shape(&z.chunks)
+        ),
+        None => outln!("chunks      {}", shape(&z.chunks)),
+    }
+    let codecs = if z.codecs.is_empty() {
+        "none".to_string()
+    } else {
+        z.codecs.join(", ")
+    };
+    outln!("codecs      {codecs} ({})", z.data_type);
+    if !z.labels.is_empty() {
+        outln!(
+            "labels      {}  (--label-image NAME reads one)",
+            z.labels.join(", ")
+        );
+    }
 }
 
 /// The orientation, the transform and the world box.

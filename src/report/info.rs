@@ -8,6 +8,7 @@ use serde::Serialize;
 use super::{GeometryReport, SCHEMA_VERSION};
 use crate::error::Result;
 use crate::volume::VoxelType;
+use crate::volume::io::zarr::ZarrInfo;
 use crate::volume::io::{DicomSeries, Loaded};
 
 /// The object `info --json` prints for one volume: what it is, where it lies, how its values
@@ -20,6 +21,9 @@ pub struct InfoReport {
     pub file: String,
     /// The format it was read as (`nifti`, `nrrd`, `dicom`, ...).
     pub format: &'static str,
+    /// The format's version where readers tell versions apart (NIfTI `1` or `2`, OME-Zarr
+    /// `0.4` or `0.5`), null otherwise.
+    pub format_version: Option<String>,
     /// `[nx, ny, nz]`.
     pub dims: [usize; 3],
     /// `[sx, sy, sz]`, mm.
@@ -53,6 +57,8 @@ pub struct InfoReport {
     pub notes: Vec<String>,
     /// The DICOM series read, null for other formats.
     pub dicom: Option<DicomReport>,
+    /// The OME-Zarr store's image, axes, levels, chunking and codecs, null for other formats.
+    pub ome_zarr: Option<ZarrInfo>,
 }
 
 /// The DICOM series of an [`InfoReport`].
@@ -82,6 +88,7 @@ impl InfoReport {
             schema_version: SCHEMA_VERSION,
             file: file.to_string(),
             format: loaded.format.name(),
+            format_version: loaded.format_version.clone(),
             dims: v.dims(),
             spacing: v.spacing(),
             voxel_type: v.voxel_type(),
@@ -97,6 +104,7 @@ impl InfoReport {
             histogram: v.histogram(bins)?,
             notes: loaded.notes.clone(),
             dicom: loaded.dicom.as_ref().map(DicomReport::of),
+            ome_zarr: loaded.zarr.clone(),
         })
     }
 }

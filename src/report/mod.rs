@@ -400,6 +400,7 @@ mod tests {
             sources: Vec::new(),
             dicom: None,
             zarr: None,
+            format_version: None,
         };
         let plain = InfoReport::new("body.nrrd", &loaded, 32).unwrap();
         assert_eq!(plain.histogram.len(), 32);
@@ -412,6 +413,7 @@ mod tests {
                 ".dims",
                 ".file",
                 ".format",
+                ".format_version",
                 ".held_type",
                 ".histogram",
                 ".mapped_bytes",
@@ -419,6 +421,7 @@ mod tests {
                 ".memory_bytes",
                 ".missing",
                 ".notes",
+                ".ome_zarr",
                 ".orientation",
                 ".orthogonal",
                 ".range",

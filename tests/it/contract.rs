@@ -148,8 +148,9 @@ fn printed() -> &'static [Printed] {
         let dir = tempfile::tempdir().unwrap();
         let [body, folder, manifest] = fixtures(dir.path());
         let (derived, ct, dicom) = (dicom_data("derived"), dicom_data("ct"), dicom_data(""));
+        let zarr = data("zarr/v05_sharded.ome.zarr");
         let (b, f, m) = (body.as_str(), folder.as_str(), manifest.as_str());
-        let commands: [(&str, Vec<&str>); 11] = [
+        let commands: [(&str, Vec<&str>); 12] = [
             ("analyze", vec!["analyze", b]),
             (
                 "analyze-bottomup",
@@ -171,6 +172,7 @@ fn printed() -> &'static [Printed] {
             ),
             ("info", vec!["info", b]),
             ("info-dicom", vec!["info", s(&derived), "--show-phi"]),
+            ("info-zarr", vec!["info", s(&zarr)]),
             ("info-folder", vec!["info", f]),
             ("info-folder-dicom", vec!["info", s(&ct)]),
             ("triage", vec!["triage", f]),

@@ -528,3 +528,25 @@ fn sharded_rows(root: &std::path::Path) -> Vec<serde_json::Value> {
     }
     joined
 }
+
+#[test]
+fn a_pixel_spacing_of_zero_is_assumed_1_mm_with_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("zero.dcm");
+    let mut bytes = std::fs::read(dicom_data("gap/slice00.dcm")).unwrap();
+    let at = bytes
+        .windows(8)
+        .position(|w| w == b"0.7\\0.8 ")
+        .expect("the fixture's PixelSpacing");
+    bytes[at..at + 8].copy_from_slice(b"0.7\\0.0 ");
+    std::fs::write(&file, bytes).unwrap();
+    let l = slabscope::load(&file, &LoadOptions::default()).unwrap();
+    assert_eq!(&l.volume.spacing()[..2], &[1.0, 1.0]);
+    assert!(
+        l.notes
+            .iter()
+            .any(|n| n.contains("pixel spacing 0.7 x 0 mm is not two positive numbers")),
+        "{:?}",
+        l.notes
+    );
+}

@@ -87,7 +87,10 @@ fn ngff_04_blosc_reads_every_voxel_in_micrometres() {
     }
     assert!(!v.transform().known, "no anatomical orientation");
     let info = l.zarr.as_ref().unwrap();
-    assert_eq!((info.version.as_str(), info.zarr_format), ("0.4", 2));
+    assert_eq!(
+        (info.version.as_deref(), info.zarr_format),
+        (Some("0.4"), 2)
+    );
     assert_eq!(info.levels.len(), 3);
     assert_eq!(info.levels[1].shape, vec![5, 6, 7]);
     assert_eq!(info.chunks, vec![4, 5, 6]);
@@ -298,7 +301,8 @@ fn a_plain_zarr_array_reads_with_unit_spacing() {
     let l = open_with(&store, &LoadOptions::default());
     assert_eq!(l.volume.dims(), [4, 3, 2]);
     assert_eq!(l.volume.value([3, 2, 1]), (23 * 3 - 7) as f32);
-    assert_eq!(l.zarr.as_ref().unwrap().version, "none");
+    assert_eq!(l.zarr.as_ref().unwrap().version, None);
+    assert_eq!(l.format_version, None);
 }
 
 #[test]

@@ -79,6 +79,20 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
         ],
     ),
     ("raw", &[("ramp_u8.raw", "m_5x4x3_uint8.raw")]),
+    // A folder format: the store is copied whole and one of its files (after `//`) mutated.
+    (
+        "zarr",
+        &[
+            ("zarr/v04_blosc.ome.zarr//.zattrs", "m.ome.zarr"),
+            ("zarr/v04_blosc.ome.zarr//s0/.zarray", "m.ome.zarr"),
+            ("zarr/v04_blosc.ome.zarr//s0/1/1/1", "m.ome.zarr"),
+            ("zarr/v05_sharded.ome.zarr//zarr.json", "m.ome.zarr"),
+            ("zarr/v05_sharded.ome.zarr//s0/zarr.json", "m.ome.zarr"),
+            ("zarr/v05_sharded.ome.zarr//s0/c/1/1/1", "m.ome.zarr"),
+            ("zarr/v05_tczyx.ome.zarr//s0/zarr.json", "m.ome.zarr"),
+            ("zarr/v05_tczyx.ome.zarr//s0/c/1/2/1/1/1", "m.ome.zarr"),
+        ],
+    ),
 ];
 
 /// xorshift64*: the mutants of a seed are the same on every run.
@@ -120,6 +134,10 @@ const EXTREMES: [&str; 16] = [
 /// The header's length: the text before the blank line (NRRD), before `ElementDataFile`'s line's
 /// end (MetaImage), DICOM's elements before the pixel data, the 352 bytes of NIfTI.
 fn header_len(bytes: &[u8]) -> usize {
+    // JSON metadata (Zarr's) is all header.
+    if bytes.first() == Some(&b'{') {
+        return bytes.len();
+    }
     if bytes.get(128..132) == Some(b"DICM") {
         return bytes
             .windows(4)
@@ -267,10 +285,40 @@ fn volumeshop_seed() -> Vec<u8> {
     b
 }
 
-/// What went wrong with one mutant, if anything, and whether it loaded.
-fn run_one(dir: &Path, name: &str, bytes: &[u8]) -> (Option<String>, bool) {
+/// The bytes of `seed`: a file of `tests/data`, a member of a store (`STORE//MEMBER`), or
+/// (empty) the VolumeShop seed.
+fn seed_bytes(seed: &str) -> Vec<u8> {
+    match seed.split_once("//") {
+        _ if seed.is_empty() => volumeshop_seed(),
+        Some((store, member)) => std::fs::read(data(store).join(member)).unwrap(),
+        None => std::fs::read(data(seed)).unwrap(),
+    }
+}
+
+/// Copies the folder `from` to `to`, whole.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_dir() {
+            copy_tree(&e.path(), &to.join(e.file_name()));
+        } else {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+/// Writes the mutant `bytes` of `seed` as `name` in `dir` (for a seed inside a folder store,
+/// `STORE//MEMBER`, a fresh copy of the store with that member replaced) and runs it.
+fn run_one(dir: &Path, seed: &str, name: &str, bytes: &[u8]) -> (Option<String>, bool) {
     let path = dir.join(name);
-    std::fs::write(&path, bytes).unwrap();
+    if let Some((store, member)) = seed.split_once("//") {
+        let _ = std::fs::remove_dir_all(&path);
+        copy_tree(&data(store), &path);
+        std::fs::write(path.join(member), bytes).unwrap();
+    } else {
+        std::fs::write(&path, bytes).unwrap();
+    }
     let out = bounded(10, 4 * BUDGET + (768 << 20))
         .args(["info", "--json", "--max-memory", "64M"])
         .arg(&path)
@@ -364,22 +412,22 @@ fn mutants_of_every_reader_fail_cleanly_within_their_budget() {
                     let Some(&(reader, seed, name, i)) = jobs.get(j) else {
                         break;
                     };
-                    let bytes = if seed.is_empty() {
-                        volumeshop_seed()
-                    } else {
-                        std::fs::read(data(seed)).unwrap()
-                    };
+                    let bytes = seed_bytes(seed);
                     let mut rng =
                         Rng(0x9E37_79B9_7F4A_7C15
                             ^ (j as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03));
                     let mutant = mutate(&bytes, &mut rng);
-                    let (problem, ok) = run_one(&dir, name, &mutant);
+                    let (problem, ok) = run_one(&dir, seed, name, &mutant);
                     if ok {
                         loaded.fetch_add(1, Ordering::Relaxed);
                     }
                     if let Some(problem) = problem {
                         let kept = dir.join(format!("failed-{reader}-{i}-{name}"));
-                        std::fs::write(&kept, &mutant).unwrap();
+                        if seed.contains("//") {
+                            std::fs::rename(dir.join(name), &kept).unwrap();
+                        } else {
+                            std::fs::write(&kept, &mutant).unwrap();
+                        }
                         failures
                             .lock()
                             .unwrap()

@@ -133,6 +133,9 @@ pub struct Loaded {
     pub dicom: Option<DicomSeries>,
     /// The store's image, levels, chunking and codecs, for an OME-Zarr store.
     pub zarr: Option<zarr::ZarrInfo>,
+    /// The version of the format the file is written in, where the format has versions that
+    /// readers tell apart (NIfTI `1` or `2`, OME-Zarr `0.4` or `0.5`).
+    pub format_version: Option<String>,
 }
 
 /// What a DICOM volume is, beyond its geometry: never a patient-identifying field unless they
@@ -280,6 +283,7 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         sources,
         dicom: loaded.dicom,
         zarr: loaded.zarr,
+        format_version: loaded.format_version,
     })
 }
 
@@ -327,6 +331,8 @@ pub(crate) struct Read0 {
     pub dicom: Option<DicomSeries>,
     /// The store read, for an OME-Zarr store.
     pub zarr: Option<zarr::ZarrInfo>,
+    /// The format's version (see [`Loaded::format_version`]).
+    pub format_version: Option<String>,
 }
 
 impl Read0 {
@@ -339,14 +345,25 @@ impl Read0 {
         voxels: crate::volume::Voxels,
         notes: Vec<String>,
     ) -> Result<Self> {
-        let volume = Volume::from_voxels(dims, spacing, ty, voxels)
-            .map_err(|e| Error::format(path, e.to_string()))?;
+        // The file's values, not a parameter the user gave: said as the file's.
+        let volume = Volume::from_voxels(dims, spacing, ty, voxels).map_err(|e| match e {
+            Error::InvalidParameter {
+                parameter,
+                value,
+                expected,
+            } => Error::format(
+                path,
+                format!("the file's voxel {parameter} {value}: expected {expected}"),
+            ),
+            other => Error::format(path, other.to_string()),
+        })?;
         Ok(Self {
             volume,
             notes,
             sources: Vec::new(),
             dicom: None,
             zarr: None,
+            format_version: None,
         })
     }
 

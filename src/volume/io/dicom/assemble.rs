@@ -363,6 +363,24 @@ fn unplaced(slices: usize, stated: Option<f64>, notes: &mut Vec<String>) -> (f64
     (step, depths)
 }
 
+/// The first image's pixel spacing (rows, columns), 1 mm with a note where it is missing or
+/// not positive.
+fn pixel_spacing(first: &Image, notes: &mut Vec<String>) -> [f64; 2] {
+    match first.pixel_spacing {
+        Some(s) if s.iter().all(|v| v.is_finite() && *v > 0.0) => s,
+        Some([dy, dx]) => {
+            notes.push(format!(
+                "pixel spacing {dy} x {dx} mm is not two positive numbers: 1 mm assumed"
+            ));
+            [1.0, 1.0]
+        }
+        None => {
+            notes.push("no pixel spacing: 1 mm assumed".into());
+            [1.0, 1.0]
+        }
+    }
+}
+
 /// Lays `series` out as a volume; `name` names an image in messages (its file). Fails when the
 /// positions repeat unevenly (not a 4D series).
 pub(super) fn layout(
@@ -376,10 +394,7 @@ pub(super) fn layout(
         usize::from(first.format.rows),
     ];
     let mut notes = Vec::new();
-    let [dy, dx] = first.pixel_spacing.unwrap_or_else(|| {
-        notes.push("no pixel spacing: 1 mm assumed".into());
-        [1.0, 1.0]
-    });
+    let [dy, dx] = pixel_spacing(first, &mut notes);
     let placed = frame_of(first).filter(|_| images.iter().all(|im| im.position.is_some()));
     let runs = runs(images, placed)?;
     let (slices, volumes) = (runs.len(), runs[0].len());

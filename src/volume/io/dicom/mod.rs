@@ -252,6 +252,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         sources: sources(&scan, series, order),
         dicom: Some(described(&scan, series)),
         zarr: None,
+        format_version: None,
     })
 }
 

@@ -150,9 +150,11 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         volumes,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
-    Ok(Read0::new(path, dims, spacing, ty, voxels, notes)?
+    let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?
         .with_transform(transform(&h, unit))
-        .with_source(&spec.file))
+        .with_source(&spec.file);
+    read.format_version = Some(h.version.to_string());
+    Ok(read)
 }
 
 /// A CIFTI-2 file is a NIfTI-2 file whose intent code is 3000-3099: a matrix over brain

@@ -31,8 +31,8 @@ use super::LoadOptions;
 /// What `info` shows of a store: the image read, its axes, levels, chunking and codecs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ZarrInfo {
-    /// The NGFF version (`0.4`, `0.5`), or `none` for a plain Zarr array.
-    pub version: String,
+    /// The NGFF version (`0.4`, `0.5`), null for a plain Zarr array.
+    pub version: Option<String>,
     /// The Zarr format: 2 or 3.
     pub zarr_format: u8,
     /// The image read, relative to the store (`""`, or `labels/NAME`).
@@ -174,7 +174,7 @@ fn plain_image(array: &ArrayMeta, zarr_format: u8) -> std::result::Result<Image,
 fn describe(image: &Image, arrays: &[ArrayMeta], dir: &Path, name: String) -> ZarrInfo {
     let first = &arrays[0];
     ZarrInfo {
-        version: image.version.clone(),
+        version: (image.version != "none").then(|| image.version.clone()),
         zarr_format: image.zarr_format,
         image: name,
         axes: image
@@ -318,6 +318,7 @@ pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     if image.label {
         read0.volume = read0.volume.declared_labels();
     }
+    read0.format_version.clone_from(&info.version);
     read0.zarr = Some(info);
     Ok(read0)
 }
