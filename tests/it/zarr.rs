@@ -269,6 +269,27 @@ fn broken_stores_are_one_line_errors() {
     assert!(error_of(&store).contains("`multiscales` is empty"));
 }
 
+#[test]
+fn chunks_that_would_decode_past_their_size_are_refused_before_decoding() {
+    use std::io::Write;
+    // gzip: 1 MiB of zeros in a chunk of 5x4 u8.
+    let (_keep, store) = copy("v04_yx.ome.zarr");
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    e.write_all(&vec![0u8; 1 << 20]).unwrap();
+    std::fs::write(store.join("s0/1/1"), e.finish().unwrap()).unwrap();
+    let err = error_of(&store);
+    assert!(
+        err.contains("chunk s0/1/1 decodes to more, more than the 20 bytes of its chunk"),
+        "{err}"
+    );
+    // zstd: a frame that says 1 GiB, in a chunk of 60 i16.
+    let (_keep, store) = copy("v05_tczyx.ome.zarr");
+    let frame = zstd::bulk::compress(&vec![0u8; 1 << 20], 19).unwrap();
+    std::fs::write(store.join("s0/c/0/0/0/0/0"), frame).unwrap();
+    let err = error_of(&store);
+    assert!(err.contains("says it decodes to 1048576 bytes"), "{err}");
+}
+
 #[cfg(unix)]
 #[test]
 fn a_fifo_named_like_a_chunk_cannot_block_the_read() {

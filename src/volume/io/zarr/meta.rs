@@ -81,6 +81,10 @@ pub struct ArrayMeta {
     pub inner: Option<Vec<u64>>,
     /// The codecs (or v2 filters and compressor), by name, in the order applied when writing.
     pub codecs: Vec<String>,
+    /// The codecs of a sharded array's inner chunks, by name.
+    pub inner_codecs: Vec<String>,
+    /// Whether a sharded array's shard index is at the start of each shard (else the end).
+    pub index_at_start: bool,
 }
 
 impl ArrayMeta {
@@ -371,6 +375,8 @@ pub fn array(dir: &Path) -> Result<ArrayMeta, String> {
         chunks: list("chunks")?,
         inner: None,
         codecs,
+        inner_codecs: Vec::new(),
+        index_at_start: false,
     })
 }
 
@@ -394,18 +400,29 @@ fn array_v3(node: &Value) -> Result<ArrayMeta, String> {
     let list = node.get("codecs").and_then(Value::as_array);
     let mut inner = None;
     let mut codecs = Vec::new();
+    let mut inner_codecs = Vec::new();
+    let mut index_at_start = false;
     for c in list.into_iter().flatten() {
         let name = c.get("name").and_then(Value::as_str).unwrap_or("?");
         if name == "sharding_indexed" {
             inner = numbers(c.pointer("/configuration/chunk_shape"));
-            let names = c
+            inner_codecs = c
                 .pointer("/configuration/codecs")
                 .and_then(Value::as_array)
                 .into_iter()
                 .flatten()
-                .map(|i| i.get("name").and_then(Value::as_str).unwrap_or("?"))
+                .map(|i| {
+                    i.get("name")
+                        .and_then(Value::as_str)
+                        .unwrap_or("?")
+                        .to_string()
+                })
                 .collect::<Vec<_>>();
-            codecs.push(format!("sharding({})", names.join(", ")));
+            index_at_start = c
+                .pointer("/configuration/index_location")
+                .and_then(Value::as_str)
+                == Some("start");
+            codecs.push(format!("sharding({})", inner_codecs.join(", ")));
         } else {
             codecs.push(name.to_string());
         }
@@ -419,6 +436,8 @@ fn array_v3(node: &Value) -> Result<ArrayMeta, String> {
         chunks,
         inner,
         codecs,
+        inner_codecs,
+        index_at_start,
     })
 }
 
@@ -526,6 +545,8 @@ mod tests {
             chunks: vec![1],
             inner: None,
             codecs: vec![],
+            inner_codecs: vec![],
+            index_at_start: false,
         };
         assert_eq!(meta("<u2").voxel_type(), Ok(VoxelType::U16));
         assert_eq!(meta("int16").voxel_type(), Ok(VoxelType::I16));

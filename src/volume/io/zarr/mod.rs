@@ -7,6 +7,7 @@
 //! the array's order, or y and x) become the volume's x fastest, its scale and translation the
 //! spacing and origin in mm; `--volume N` picks the time point and `--channel N` the channel.
 
+mod guard;
 pub(crate) mod meta;
 mod store;
 
@@ -294,7 +295,8 @@ pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let dims = layout.dims(&array.shape);
     let stored = array.voxel_type().map_err(fail)?;
     check_chunks(&image_path, array, stored, opts.max_memory)?;
-    let store = Arc::new(LocalStore::new(&image_path, opts.max_memory));
+    let guard = guard::Guard::new(&dataset.path, array, stored.size() as u64);
+    let store = Arc::new(LocalStore::new(&image_path, opts.max_memory).with_guard(guard));
     let zarr = Array::open(store, &format!("/{}", dataset.path))
         .map_err(|e| fail(format!("dataset {:?}: {e}", dataset.path)))?;
     let at = [opts.volume as u64, opts.channel as u64];

@@ -9,6 +9,7 @@ use std::path::{Component, Path, PathBuf};
 use zarrs::storage::byte_range::{ByteRange, ByteRangeIterator};
 use zarrs::storage::{Bytes, MaybeBytesIterator, ReadableStorageTraits, StorageError, StoreKey};
 
+use super::guard::Guard;
 use crate::error::human_bytes;
 
 /// A read-only Zarr store over the folder `root`.
@@ -17,6 +18,8 @@ pub struct LocalStore {
     root: PathBuf,
     /// The most bytes one file of the store may hold.
     max_file: u64,
+    /// What the chunks of the array read may decode to.
+    guard: Option<Guard>,
 }
 
 impl LocalStore {
@@ -25,7 +28,14 @@ impl LocalStore {
         Self {
             root: root.to_path_buf(),
             max_file,
+            guard: None,
         }
+    }
+
+    /// This store, each chunk of the array `guard` describes weighed before it is decoded.
+    pub fn with_guard(mut self, guard: Guard) -> Self {
+        self.guard = Some(guard);
+        self
     }
 
     /// The file of `key`, which must stay inside the store's folder.
@@ -75,7 +85,15 @@ impl ReadableStorageTraits for LocalStore {
             return Ok(None);
         };
         let out: Vec<Result<Bytes, StorageError>> = byte_ranges
-            .map(|range| read_range(&file, size, key, range))
+            .map(|range| {
+                let (bytes, span) = read_range(&file, size, key, range)?;
+                if let Some(guard) = &self.guard {
+                    guard
+                        .check(key.as_str(), span, size, &bytes)
+                        .map_err(StorageError::Other)?;
+                }
+                Ok(bytes)
+            })
             .collect();
         Ok(Some(Box::new(out.into_iter())))
     }
@@ -89,13 +107,14 @@ impl ReadableStorageTraits for LocalStore {
     }
 }
 
-/// The bytes of `range` of `file` (of `size` bytes), which must lie within it.
+/// The bytes of `range` of `file` (of `size` bytes), which must lie within it, with where they
+/// lie.
 fn read_range(
     file: &std::fs::File,
     size: u64,
     key: &StoreKey,
     range: ByteRange,
-) -> Result<Bytes, StorageError> {
+) -> Result<(Bytes, (u64, u64)), StorageError> {
     let (start, end) = match range {
         ByteRange::FromStart(start, None) => (start, size),
         ByteRange::FromStart(start, Some(length)) => (start, start.saturating_add(length)),
@@ -110,7 +129,7 @@ fn read_range(
     let mut buffer = vec![0u8; (end - start) as usize];
     file.read_exact_at(&mut buffer, start)
         .map_err(|e| StorageError::Other(format!("{key}: {e}")))?;
-    Ok(Bytes::from(buffer))
+    Ok((Bytes::from(buffer), (start, end)))
 }
 
 #[cfg(test)]
