@@ -64,8 +64,10 @@ def load(
     include_localizers: bool = False,
     resample: bool = False,
     show_phi: bool = False,
+    label_image: Optional[str] = None,
 ) -> Volume:
-    """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), VolumeShop, raw."""
+    """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), OME-Zarr,
+    VolumeShop, raw."""
 
 class Analysis:
     """The views with their scores, the best axis and the slabs along it."""

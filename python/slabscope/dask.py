@@ -33,6 +33,7 @@ LOAD_KEYWORDS = (
     "include_localizers",
     "resample",
     "show_phi",
+    "label_image",
 )
 
 

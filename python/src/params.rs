@@ -97,7 +97,8 @@ impl<'py> Kwargs<'py> {
 }
 
 /// The load options: `dims`, `dtype`, `spacing`, `endian`, `offset` for raw files,
-/// `max_memory`, `volume`, `channel`, `series`, `include_localizers`, `resample`, `show_phi`.
+/// `max_memory`, `volume`, `channel`, `series`, `include_localizers`, `resample`, `show_phi`,
+/// `label_image`.
 pub fn load_options(kw: &Kwargs<'_>) -> PyResult<LoadOptions> {
     let voxel_type = match kw.get::<Bound<'_, PyAny>>("dtype")? {
         None => None,
@@ -133,6 +134,7 @@ pub fn load_options(kw: &Kwargs<'_>) -> PyResult<LoadOptions> {
         include_localizers: kw.or("include_localizers", false)?,
         resample: kw.or("resample", false)?,
         show_phi: kw.or("show_phi", false)?,
+        label_image: kw.get("label_image")?,
     })
 }
 

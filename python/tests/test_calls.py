@@ -143,6 +143,23 @@ def test_render_faces_matches_the_cli_picture(phantoms, cli, tmp_path):
         slabscope.render(volume, analysis, faces=True, size=(30, 30))
 
 
+def test_an_ome_zarr_store_and_its_label_image():
+    store = DATA / "zarr" / "v05_sharded.ome.zarr"
+    image = slabscope.load(store)
+    assert image.format == "ome-zarr"
+    assert image.shape == (11, 10, 9)
+    assert image.spacing == (1.0, 1.0, 1.5)
+    cells = slabscope.load(store, label_image="cells")
+    assert cells.dtype == "uint8"
+    assert cells.array.max() == 4
+    with pytest.raises(slabscope.VolumeError, match='no label image "nuclei"'):
+        slabscope.load(store, label_image="nuclei")
+    timed = slabscope.load(DATA / "zarr" / "v05_tczyx.ome.zarr", channel=2, volume=1)
+    assert timed.notes == [
+        "OME-Zarr image of 3 channels and 2 time points: read channel 2 at time point 1"
+    ]
+
+
 def test_an_ome_tiffs_channel_and_time_point_are_keywords():
     volume = slabscope.load(DATA / "ome" / "zct.ome.tif", channel=1, volume=1)
     assert volume.range == (4000.0, 4234.0)
