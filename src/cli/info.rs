@@ -178,14 +178,14 @@ fn print_zarr(z: &ZarrInfo) {
         .levels
         .iter()
         .map(|l| {
-            format!(
-                "{} {}",
-                if l.path.is_empty() { "." } else { &l.path },
-                shape(&l.shape)
-            )
+            let path = if l.path.is_empty() { "." } else { &l.path };
+            match l.pyramid_level {
+                Some(k) => format!("{path} {} (pyramid level {k})", shape(&l.shape)),
+                None => format!("{path} {} (not on the pyramid's grid)", shape(&l.shape)),
+            }
         })
         .collect();
-    outln!("levels      {} (the first is read)", levels.join(", "));
+    outln!("levels      {}", levels.join(", "));
     match &z.inner_chunks {
         Some(inner) => outln!(
             "chunks      {} in shards of {}",

@@ -61,7 +61,7 @@ pub struct Volume {
     labels: Arc<OnceLock<Option<LabelCounts>>>,
     /// The coarser levels of this volume's pyramid, shared by all its levels: slot `i` holds
     /// pyramid level `i + 1`, built once when first asked for.
-    pyramid: Arc<[OnceLock<Arc<Volume>>]>,
+    pyramid: Arc<pyramid::Pyramid>,
 }
 
 /// The distinct values of a label volume with their voxel counts.

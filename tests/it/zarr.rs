@@ -98,6 +98,60 @@ fn ngff_04_blosc_reads_every_voxel_in_micrometres() {
 }
 
 #[test]
+fn the_store_s_coarser_datasets_are_the_pyramid_s_levels() {
+    let l = open("v04_blosc.ome.zarr");
+    let levels: Vec<Option<usize>> = l
+        .zarr
+        .as_ref()
+        .unwrap()
+        .levels
+        .iter()
+        .map(|l| l.pyramid_level)
+        .collect();
+    assert_eq!(levels, [Some(0), Some(1), Some(2)]);
+    for (k, key) in [(1, "s1"), (2, "s2")] {
+        let level = l.volume.coarser(k);
+        assert_eq!(level.level().index, k);
+        // The store's voxels (make.py rounds its block means to u16), not slabscope's means.
+        let [nx, ny, nz] = level.dims();
+        let mut read = Vec::new();
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    read.push(f64::from(level.value([x, y, z])));
+                }
+            }
+        }
+        let e = expected("v04_blosc.ome.zarr", key);
+        let (sum, weighted) = sums(read.into_iter());
+        assert_eq!(sum, e["sum"].as_f64().unwrap(), "{key}");
+        assert_eq!(weighted, e["weighted"].as_f64().unwrap(), "{key}");
+        assert!(read_is_whole(&level), "{key}: integers as stored");
+    }
+    // A label image whose levels keep z is off the grid: its levels are computed.
+    let opts = LoadOptions {
+        label_image: Some("cells".into()),
+        ..LoadOptions::default()
+    };
+    let cells = open_with(&path("v05_sharded.ome.zarr"), &opts);
+    let off: Vec<Option<usize>> = cells
+        .zarr
+        .as_ref()
+        .unwrap()
+        .levels
+        .iter()
+        .map(|l| l.pyramid_level)
+        .collect();
+    assert_eq!(off, [Some(0), None, None, None, None]);
+    assert_eq!(cells.volume.coarser(1).dims(), [6, 5, 5]);
+}
+
+/// Whether every voxel of `v` is a whole number.
+fn read_is_whole(v: &slabscope::Volume) -> bool {
+    (0..v.len()).all(|i| v.data().get(i).fract() == 0.0)
+}
+
+#[test]
 fn ngff_05_time_points_and_channels_in_nanometres() {
     let name = "v05_tczyx.ome.zarr";
     let first = open(name);

@@ -8,26 +8,21 @@
 //! spacing and origin in mm; `--volume N` picks the time point and `--channel N` the channel.
 
 mod guard;
+mod levels;
 pub(crate) mod meta;
+mod read;
 mod store;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use rayon::prelude::*;
 use serde::Serialize;
-use zarrs::array::{Array, ArraySubset, ElementOwned};
 
 use self::meta::{ArrayMeta, AxisKind, Image};
-use self::store::LocalStore;
-use super::Read0;
-use super::data::{one_channel, one_volume, typed_buffer};
+use super::data::{one_channel, one_volume};
+use super::{LoadOptions, Read0};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
-use crate::volume::voxels::{held_type, infinities_missing};
-use crate::volume::{Voxel, VoxelType, Voxels};
-
-use super::LoadOptions;
 
 /// What `info` shows of a store: the image read, its axes, levels, chunking and codecs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -75,6 +70,9 @@ pub struct ZarrLevel {
     pub shape: Vec<u64>,
     /// Its scale per axis, in the axes' units.
     pub scale: Vec<f64>,
+    /// The pyramid level it is read as (0 for the first), null when it does not lie on the
+    /// pyramid's grid (another downsampling), and is not used.
+    pub pyramid_level: Option<usize>,
 }
 
 /// Whether the folder `dir` is a Zarr store (a group or an array, of Zarr v2 or v3).
@@ -171,8 +169,14 @@ fn plain_image(array: &ArrayMeta, zarr_format: u8) -> std::result::Result<Image,
     })
 }
 
-/// What `info` shows of the store at `dir` for `opts`.
-fn describe(image: &Image, arrays: &[ArrayMeta], dir: &Path, name: String) -> ZarrInfo {
+/// What `info` shows of the store at `dir`, whose image `image` has its axes as `layout` says.
+fn describe(
+    image: &Image,
+    arrays: &[ArrayMeta],
+    layout: &Layout,
+    dir: &Path,
+    name: String,
+) -> ZarrInfo {
     let first = &arrays[0];
     ZarrInfo {
         version: (image.version != "none").then(|| image.version.clone()),
@@ -196,10 +200,15 @@ fn describe(image: &Image, arrays: &[ArrayMeta], dir: &Path, name: String) -> Za
             .datasets
             .iter()
             .zip(arrays)
-            .map(|(d, a)| ZarrLevel {
+            .enumerate()
+            .map(|(i, (d, a))| ZarrLevel {
                 path: d.path.clone(),
                 shape: a.shape.clone(),
                 scale: d.scale.clone(),
+                pyramid_level: match i {
+                    0 => Some(0),
+                    _ => levels::pyramid_level(image, arrays, layout, i),
+                },
             })
             .collect(),
         data_type: first.dtype.clone(),
@@ -212,6 +221,7 @@ fn describe(image: &Image, arrays: &[ArrayMeta], dir: &Path, name: String) -> Za
 
 /// Where the image's axes are: which is time, which channel, and the spatial ones (z, y, x as
 /// stored; `None` for the z of a 2-D image).
+#[derive(Clone, Debug)]
 struct Layout {
     time: Option<usize>,
     channel: Option<usize>,
@@ -261,11 +271,11 @@ impl Layout {
 pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (image_path, name) = image_dir(dir, opts)?;
     let (image, arrays) = read_image(&image_path)?;
-    let info = describe(&image, &arrays, dir, name);
     let fail = |m: String| Error::format(&image_path, m);
     let array = &arrays[0];
     let dataset = &image.datasets[0];
     let layout = Layout::of(&image, &array.shape).map_err(fail)?;
+    let info = describe(&image, &arrays, &layout, dir, name);
     let mut notes = Vec::new();
     let count = |axis: Option<usize>| axis.map_or(1, |a| array.shape[a] as usize);
     let (times, channels) = (count(layout.time), count(layout.channel));
@@ -294,29 +304,26 @@ pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (spacing, origin) = geometry(&image, dataset, &layout, &mut notes);
     let dims = layout.dims(&array.shape);
     let stored = array.voxel_type().map_err(fail)?;
-    check_chunks(&image_path, array, stored, opts.max_memory)?;
-    let guard = guard::Guard::new(&dataset.path, array, stored.size() as u64);
-    let store = Arc::new(LocalStore::new(&image_path, opts.max_memory).with_guard(guard));
-    let zarr = Array::open(store, &format!("/{}", dataset.path))
-        .map_err(|e| fail(format!("dataset {:?}: {e}", dataset.path)))?;
     let at = [opts.volume as u64, opts.channel as u64];
-    let read = Reader {
-        path: &image_path,
-        array: &zarr,
+    let dataset0 = read::Dataset {
+        image: &image_path,
+        path: &dataset.path,
+        meta: array,
         layout: &layout,
         at,
-        step: array.inner.as_ref().unwrap_or(&array.chunks),
-        chunks: &array.chunks,
-        dims,
         max_memory: opts.max_memory,
     };
-    let voxels = read.voxels(stored)?;
+    let voxels = dataset0.voxels(dims)?;
+    let source = levels::StoreLevels::new(&image, &arrays, &dataset0);
     let mut t = WorldTransform::unknown(spacing);
     for k in 0..3 {
         t.matrix[k][3] = origin[k];
     }
     let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
     read0.volume = read0.volume.with_transform(t);
+    if let Some(source) = source {
+        read0.volume = read0.volume.with_level_source(Arc::new(source));
+    }
     if image.label {
         read0.volume = read0.volume.declared_labels();
     }
@@ -362,147 +369,4 @@ fn geometry(
         ));
     }
     (spacing, origin)
-}
-
-/// Fails when one chunk, decoded, would claim more than a quarter of the budget (a hostile
-/// chunk shape claims memory a small array never needs).
-fn check_chunks(path: &Path, array: &ArrayMeta, ty: VoxelType, max_memory: u64) -> Result<()> {
-    for (what, shape) in [
-        ("chunk", Some(&array.chunks)),
-        ("inner chunk", array.inner.as_ref()),
-    ] {
-        let Some(shape) = shape else { continue };
-        let bytes = shape
-            .iter()
-            .try_fold(ty.size() as u64, |a, &n| a.checked_mul(n.max(1)));
-        let limit = max_memory / 4;
-        match bytes {
-            Some(b) if b <= limit => {}
-            _ => {
-                let dims: Vec<String> = shape.iter().map(u64::to_string).collect();
-                return Err(Error::TooLarge {
-                    path: path.to_path_buf(),
-                    what: format!("one {what} of {} {ty} voxels", dims.join("x")),
-                    needed: bytes.unwrap_or(u64::MAX),
-                    limit,
-                });
-            }
-        }
-    }
-    Ok(())
-}
-
-/// How the voxels of one time point and channel are read, chunk by chunk, into the volume.
-struct Reader<'a> {
-    path: &'a Path,
-    array: &'a Array<LocalStore>,
-    layout: &'a Layout,
-    /// The time point and channel read.
-    at: [u64; 2],
-    /// The chunk shape reads step by, in the axes' order (the inner chunk's when sharded).
-    step: &'a [u64],
-    /// The chunk (or shard) shape, in the axes' order.
-    chunks: &'a [u64],
-    dims: [usize; 3],
-    max_memory: u64,
-}
-
-impl Reader<'_> {
-    /// The voxels, held as integers of at most 16 bits are, everything else as f32.
-    fn voxels(&self, stored: VoxelType) -> Result<Voxels> {
-        Ok(match held_type(stored, false) {
-            VoxelType::U8 => Voxels::owned(self.read::<u8, u8>(|v| v)?),
-            VoxelType::I8 => Voxels::owned(self.read::<i8, i8>(|v| v)?),
-            VoxelType::U16 => Voxels::owned(self.read::<u16, u16>(|v| v)?),
-            VoxelType::I16 => Voxels::owned(self.read::<i16, i16>(|v| v)?),
-            _ => {
-                let mut values = match stored {
-                    VoxelType::U32 => self.read::<u32, f32>(|v| v as f32)?,
-                    VoxelType::I32 => self.read::<i32, f32>(|v| v as f32)?,
-                    VoxelType::F64 => self.read::<f64, f32>(|v| v as f32)?,
-                    _ => self.read::<f32, f32>(|v| v)?,
-                };
-                infinities_missing(&mut values);
-                Voxels::from_f32(values)
-            }
-        })
-    }
-
-    /// Reads elements of type `E` into a volume of `T`, converting each with `to`: slabs of one
-    /// chunk's depth along z in parallel, each chunk of a slab in turn.
-    fn read<E: ElementOwned + Copy + Send + Sync, T: Voxel>(
-        &self,
-        to: fn(E) -> T,
-    ) -> Result<Vec<T>> {
-        let mut out = typed_buffer::<T>(self.path, self.dims, self.max_memory)?;
-        let [nx, ny, nz] = self.dims;
-        let step = |axis: Option<usize>| axis.map_or(1, |a| self.step[a].max(1) as usize);
-        let [sz, sy, sx] = self.layout.spatial.map(step);
-        let slab = nx * ny * sz.min(nz);
-        out.par_chunks_mut(slab)
-            .enumerate()
-            .try_for_each(|(k, out)| {
-                let z0 = k * sz;
-                let z1 = (z0 + sz).min(nz);
-                for y0 in (0..ny).step_by(sy) {
-                    for x0 in (0..nx).step_by(sx) {
-                        let box3 = [z0..z1, y0..(y0 + sy).min(ny), x0..(x0 + sx).min(nx)];
-                        self.chunk(&box3, z0, out, to)?;
-                    }
-                }
-                Ok::<(), Error>(())
-            })?;
-        Ok(out)
-    }
-
-    /// Reads the box `[z, y, x]` of the volume into `out`, the slab that starts at slice `z0`.
-    fn chunk<E: ElementOwned + Copy, T: Voxel>(
-        &self,
-        [z, y, x]: &[std::ops::Range<usize>; 3],
-        z0: usize,
-        out: &mut [T],
-        to: fn(E) -> T,
-    ) -> Result<()> {
-        let [nx, ny, _] = self.dims;
-        let ranges: Vec<std::ops::Range<u64>> = (0..self.array.dimensionality())
-            .map(|a| {
-                let span = |r: &std::ops::Range<usize>| r.start as u64..r.end as u64;
-                if Some(a) == self.layout.time {
-                    self.at[0]..self.at[0] + 1
-                } else if Some(a) == self.layout.channel {
-                    self.at[1]..self.at[1] + 1
-                } else if Some(a) == self.layout.spatial[0] {
-                    span(z)
-                } else if Some(a) == self.layout.spatial[1] {
-                    span(y)
-                } else if Some(a) == self.layout.spatial[2] {
-                    span(x)
-                } else {
-                    0..1
-                }
-            })
-            .collect();
-        let values: Vec<E> = self
-            .array
-            .retrieve_array_subset(&ArraySubset::new_with_ranges(&ranges))
-            .map_err(|e| {
-                // The chunk (or shard) that holds the box, by its key.
-                let chunk: Vec<u64> = ranges
-                    .iter()
-                    .zip(self.chunks)
-                    .map(|(r, &c)| r.start / c.max(1))
-                    .collect();
-                let key = self.array.chunk_key(&chunk);
-                Error::format(self.path, format!("chunk {key}: {e}"))
-            })?;
-        let width = x.len();
-        for (i, row) in values.chunks_exact(width).enumerate() {
-            let (dz, dy) = (i / y.len(), i % y.len());
-            let at = ((z.start - z0 + dz) * ny + y.start + dy) * nx + x.start;
-            for (o, &v) in out[at..at + width].iter_mut().zip(row) {
-                *o = to(v);
-            }
-        }
-        Ok(())
-    }
 }

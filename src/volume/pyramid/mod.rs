@@ -4,10 +4,12 @@
 
 use rayon::prelude::*;
 
-use std::sync::{Arc, OnceLock};
+mod levels;
+
+pub use levels::LevelSource;
+pub(super) use levels::{Pyramid, empty};
 
 use super::voxels::Voxel;
-use super::{Level, Volume, Voxels, compute_stats};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 
@@ -249,99 +251,12 @@ fn mode(values: &mut [f32]) -> f32 {
     best.1
 }
 
-/// The pyramid of a [`Volume`]: its levels, built when first asked for.
-impl Volume {
-    /// Where this volume sits in its pyramid.
-    #[must_use]
-    pub fn level(&self) -> Level {
-        self.level
-    }
-
-    /// Pyramid level `k` of this volume, `k` levels coarser (docs/design.md §5; the top level
-    /// past the last): each level halves every axis longer than one voxel, a voxel the mean of
-    /// the finite voxels under it (for a label volume their most frequent value), quantized with
-    /// level 0's range. A level is built in memory the first time it is asked for, in one
-    /// streaming pass from the finest level already built above it, and kept.
-    #[must_use]
-    pub fn coarser(&self, k: usize) -> Arc<Volume> {
-        let here = self.level.index;
-        let target = (here + k).min(self.pyramid.len());
-        if target == here {
-            return Arc::new(self.clone());
-        }
-        Arc::clone(self.pyramid[target - 1].get_or_init(|| {
-            // The finest level built between this one and the target, or this one.
-            match (here + 1..target)
-                .rev()
-                .find_map(|l| self.pyramid[l - 1].get())
-            {
-                Some(finer) => Arc::new(finer.halved(target - finer.level.index)),
-                None => Arc::new(self.halved(target - here)),
-            }
-        }))
-    }
-
-    /// The number of pyramid levels below level 0: halving stops when every axis is one voxel.
-    #[must_use]
-    pub fn coarser_levels(&self) -> usize {
-        self.pyramid.len() - self.level.index
-    }
-
-    /// The level `times` levels coarser than this one.
-    fn halved(&self, times: usize) -> Volume {
-        let labels = self.level.index == 0 && self.labels().is_some() || self.level.labels;
-        let (values, dims) = crate::volume::with_voxels!(&self.data, |v| {
-            downsample_times(v, self.dims, labels, times)
-        });
-        // Each halving doubles the span along the axes it halves.
-        let mut scale = [1usize; 3];
-        let mut d = self.dims;
-        for _ in 0..times {
-            let s = step(d);
-            scale = std::array::from_fn(|m| scale[m] * s[m]);
-            d = coarser_dims(d);
-        }
-        let factor: [usize; 3] = std::array::from_fn(|m| self.level.factor[m] * scale[m]);
-        let scale = scale.map(|s| s as f64);
-        let spacing: [f64; 3] = std::array::from_fn(|m| self.spacing[m] * scale[m]);
-        let data = Voxels::owned(values);
-        let stats = crate::volume::with_voxels!(&data, |v| compute_stats(v));
-        let labels_of_level0 = if labels {
-            self.labels().map(<[_]>::to_vec)
-        } else {
-            None
-        };
-        Volume {
-            data,
-            dims,
-            spacing,
-            voxel_type: self.voxel_type,
-            stats,
-            transform: level_transform(&self.transform, scale),
-            level: Level {
-                index: self.level.index + times,
-                factor,
-                labels,
-                range: self.level.range,
-            },
-            labels: Arc::new(OnceLock::from(labels_of_level0)),
-            pyramid: Arc::clone(&self.pyramid),
-        }
-    }
-}
-
-/// No coarser level built yet, for a level 0 of `dims`: a slot for each level until every axis
-/// is one voxel.
-pub(super) fn empty(dims: [usize; 3]) -> Arc<[OnceLock<Arc<Volume>>]> {
-    let longest = *dims.iter().max().unwrap_or(&1);
-    let levels = (usize::BITS - longest.saturating_sub(1).leading_zeros()) as usize;
-    (0..levels).map(|_| OnceLock::new()).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::VoxelType;
+    use std::sync::Arc;
+
+    use crate::volume::{Volume, VoxelType};
 
     #[test]
     fn resolutions_pick_levels() {

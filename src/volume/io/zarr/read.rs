@@ -1,0 +1,202 @@
+//! Reading one dataset (one resolution level) of a store: the voxels of one time point and
+//! channel, chunk by chunk, into the volume's buffer.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use zarrs::array::{Array, ArraySubset, ElementOwned};
+
+use super::Layout;
+use super::guard::Guard;
+use super::meta::ArrayMeta;
+use super::store::LocalStore;
+use crate::error::{Error, Result};
+use crate::volume::io::data::typed_buffer;
+use crate::volume::voxels::{held_type, infinities_missing};
+use crate::volume::{Voxel, VoxelType, Voxels};
+
+/// One dataset of an image, and which time point and channel of it to read.
+#[derive(Clone, Copy, Debug)]
+pub struct Dataset<'a> {
+    /// The image's folder.
+    pub image: &'a Path,
+    /// The dataset's path in the image.
+    pub path: &'a str,
+    /// Its array's metadata.
+    pub meta: &'a ArrayMeta,
+    /// Where its axes are.
+    pub layout: &'a Layout,
+    /// The time point and channel read.
+    pub at: [u64; 2],
+    /// The memory budget.
+    pub max_memory: u64,
+}
+
+impl Dataset<'_> {
+    /// The voxels of the dataset, of dimensions `dims` (x fastest): integers of at most 16 bits
+    /// in their type, everything else as f32.
+    pub fn voxels(&self, dims: [usize; 3]) -> Result<Voxels> {
+        let fail = |m: String| Error::format(self.image, m);
+        let stored = self.meta.voxel_type().map_err(fail)?;
+        check_chunks(self.image, self.meta, stored, self.max_memory)?;
+        let guard = Guard::new(self.path, self.meta, stored.size() as u64);
+        let store = Arc::new(LocalStore::new(self.image, self.max_memory).with_guard(guard));
+        let array = Array::open(store, &format!("/{}", self.path))
+            .map_err(|e| fail(format!("dataset {:?}: {e}", self.path)))?;
+        Reader {
+            path: self.image,
+            array: &array,
+            layout: self.layout,
+            at: self.at,
+            step: self.meta.inner.as_ref().unwrap_or(&self.meta.chunks),
+            chunks: &self.meta.chunks,
+            dims,
+            max_memory: self.max_memory,
+        }
+        .voxels(stored)
+    }
+}
+
+/// Fails when one chunk, decoded, would claim more than a quarter of the budget (a hostile
+/// chunk shape claims memory a small array never needs).
+fn check_chunks(path: &Path, array: &ArrayMeta, ty: VoxelType, max_memory: u64) -> Result<()> {
+    for (what, shape) in [
+        ("chunk", Some(&array.chunks)),
+        ("inner chunk", array.inner.as_ref()),
+    ] {
+        let Some(shape) = shape else { continue };
+        let bytes = shape
+            .iter()
+            .try_fold(ty.size() as u64, |a, &n| a.checked_mul(n.max(1)));
+        let limit = max_memory / 4;
+        match bytes {
+            Some(b) if b <= limit => {}
+            _ => {
+                let dims: Vec<String> = shape.iter().map(u64::to_string).collect();
+                return Err(Error::TooLarge {
+                    path: path.to_path_buf(),
+                    what: format!("one {what} of {} {ty} voxels", dims.join("x")),
+                    needed: bytes.unwrap_or(u64::MAX),
+                    limit,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// How the voxels of one time point and channel are read, chunk by chunk, into the volume.
+struct Reader<'a> {
+    path: &'a Path,
+    array: &'a Array<LocalStore>,
+    layout: &'a Layout,
+    /// The time point and channel read.
+    at: [u64; 2],
+    /// The chunk shape reads step by, in the axes' order (the inner chunk's when sharded).
+    step: &'a [u64],
+    /// The chunk (or shard) shape, in the axes' order.
+    chunks: &'a [u64],
+    dims: [usize; 3],
+    max_memory: u64,
+}
+
+impl Reader<'_> {
+    /// The voxels, held as integers of at most 16 bits are, everything else as f32.
+    fn voxels(&self, stored: VoxelType) -> Result<Voxels> {
+        Ok(match held_type(stored, false) {
+            VoxelType::U8 => Voxels::owned(self.read::<u8, u8>(|v| v)?),
+            VoxelType::I8 => Voxels::owned(self.read::<i8, i8>(|v| v)?),
+            VoxelType::U16 => Voxels::owned(self.read::<u16, u16>(|v| v)?),
+            VoxelType::I16 => Voxels::owned(self.read::<i16, i16>(|v| v)?),
+            _ => {
+                let mut values = match stored {
+                    VoxelType::U32 => self.read::<u32, f32>(|v| v as f32)?,
+                    VoxelType::I32 => self.read::<i32, f32>(|v| v as f32)?,
+                    VoxelType::F64 => self.read::<f64, f32>(|v| v as f32)?,
+                    _ => self.read::<f32, f32>(|v| v)?,
+                };
+                infinities_missing(&mut values);
+                Voxels::from_f32(values)
+            }
+        })
+    }
+
+    /// Reads elements of type `E` into a volume of `T`, converting each with `to`: slabs of one
+    /// chunk's depth along z in parallel, each chunk of a slab in turn.
+    fn read<E: ElementOwned + Copy + Send + Sync, T: Voxel>(
+        &self,
+        to: fn(E) -> T,
+    ) -> Result<Vec<T>> {
+        let mut out = typed_buffer::<T>(self.path, self.dims, self.max_memory)?;
+        let [nx, ny, nz] = self.dims;
+        let step = |axis: Option<usize>| axis.map_or(1, |a| self.step[a].max(1) as usize);
+        let [sz, sy, sx] = self.layout.spatial.map(step);
+        let slab = nx * ny * sz.min(nz);
+        out.par_chunks_mut(slab)
+            .enumerate()
+            .try_for_each(|(k, out)| {
+                let z0 = k * sz;
+                let z1 = (z0 + sz).min(nz);
+                for y0 in (0..ny).step_by(sy) {
+                    for x0 in (0..nx).step_by(sx) {
+                        let box3 = [z0..z1, y0..(y0 + sy).min(ny), x0..(x0 + sx).min(nx)];
+                        self.chunk(&box3, z0, out, to)?;
+                    }
+                }
+                Ok::<(), Error>(())
+            })?;
+        Ok(out)
+    }
+
+    /// Reads the box `[z, y, x]` of the volume into `out`, the slab that starts at slice `z0`.
+    fn chunk<E: ElementOwned + Copy, T: Voxel>(
+        &self,
+        [z, y, x]: &[std::ops::Range<usize>; 3],
+        z0: usize,
+        out: &mut [T],
+        to: fn(E) -> T,
+    ) -> Result<()> {
+        let [nx, ny, _] = self.dims;
+        let ranges: Vec<std::ops::Range<u64>> = (0..self.array.dimensionality())
+            .map(|a| {
+                let span = |r: &std::ops::Range<usize>| r.start as u64..r.end as u64;
+                if Some(a) == self.layout.time {
+                    self.at[0]..self.at[0] + 1
+                } else if Some(a) == self.layout.channel {
+                    self.at[1]..self.at[1] + 1
+                } else if Some(a) == self.layout.spatial[0] {
+                    span(z)
+                } else if Some(a) == self.layout.spatial[1] {
+                    span(y)
+                } else if Some(a) == self.layout.spatial[2] {
+                    span(x)
+                } else {
+                    0..1
+                }
+            })
+            .collect();
+        let values: Vec<E> = self
+            .array
+            .retrieve_array_subset(&ArraySubset::new_with_ranges(&ranges))
+            .map_err(|e| {
+                // The chunk (or shard) that holds the box, by its key.
+                let chunk: Vec<u64> = ranges
+                    .iter()
+                    .zip(self.chunks)
+                    .map(|(r, &c)| r.start / c.max(1))
+                    .collect();
+                let key = self.array.chunk_key(&chunk);
+                Error::format(self.path, format!("chunk {key}: {e}"))
+            })?;
+        let width = x.len();
+        for (i, row) in values.chunks_exact(width).enumerate() {
+            let (dz, dy) = (i / y.len(), i % y.len());
+            let at = ((z.start - z0 + dz) * ny + y.start + dy) * nx + x.start;
+            for (o, &v) in out[at..at + width].iter_mut().zip(row) {
+                *o = to(v);
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,196 @@
+//! The pyramid of a [`Volume`]: its coarser levels, each built the first time it is asked for,
+//! from the file where the file holds it (an OME-Zarr store's coarser datasets, used as the file
+//! gives them) or else computed from the finest level already built above it.
+
+use std::sync::{Arc, OnceLock};
+
+use super::{coarser_dims, downsample_times, level_transform, step};
+use crate::volume::{Level, Volume, Voxels, compute_stats};
+
+/// Pyramid levels a file holds itself, on the pyramid's grid (docs/design.md §5).
+pub trait LevelSource: Send + Sync + std::fmt::Debug {
+    /// The voxels (x fastest) of pyramid level `k`, whose dimensions are `dims`; `None` when the
+    /// file holds no such level or it cannot be read (the level is then computed).
+    fn level(&self, k: usize, dims: [usize; 3]) -> Option<Voxels>;
+}
+
+/// The coarser levels of a volume's pyramid, shared by all its levels: slot `i` holds pyramid
+/// level `i + 1`.
+#[derive(Debug)]
+pub struct Pyramid {
+    slots: Box<[OnceLock<Arc<Volume>>]>,
+    /// The levels the file holds, read in place of computing them.
+    source: Option<Arc<dyn LevelSource>>,
+}
+
+impl std::ops::Deref for Pyramid {
+    type Target = [OnceLock<Arc<Volume>>];
+
+    fn deref(&self) -> &Self::Target {
+        &self.slots
+    }
+}
+
+/// No coarser level built yet, for a level 0 of `dims`: a slot for each level until every axis
+/// is one voxel.
+pub fn empty(dims: [usize; 3]) -> Arc<Pyramid> {
+    let longest = *dims.iter().max().unwrap_or(&1);
+    let levels = (usize::BITS - longest.saturating_sub(1).leading_zeros()) as usize;
+    Arc::new(Pyramid {
+        slots: (0..levels).map(|_| OnceLock::new()).collect(),
+        source: None,
+    })
+}
+
+impl Volume {
+    /// Where this volume sits in its pyramid.
+    #[must_use]
+    pub fn level(&self) -> Level {
+        self.level
+    }
+
+    /// This volume (level 0, just read) with the coarser levels its file holds, read in place of
+    /// computing them when first asked for.
+    #[must_use]
+    pub(crate) fn with_level_source(mut self, source: Arc<dyn LevelSource>) -> Self {
+        let slots = empty(self.dims).slots.len();
+        self.pyramid = Arc::new(Pyramid {
+            slots: (0..slots).map(|_| OnceLock::new()).collect(),
+            source: Some(source),
+        });
+        self
+    }
+
+    /// Pyramid level `k` of this volume, `k` levels coarser (docs/design.md §5; the top level
+    /// past the last): each level halves every axis longer than one voxel, a voxel the mean of
+    /// the finite voxels under it (for a label volume their most frequent value), quantized with
+    /// level 0's range. A level is made the first time it is asked for and kept: read from the
+    /// file where it holds the level, else in one streaming pass from the finest level already
+    /// built above it.
+    #[must_use]
+    pub fn coarser(&self, k: usize) -> Arc<Volume> {
+        let here = self.level.index;
+        let target = (here + k).min(self.pyramid.len());
+        if target == here {
+            return Arc::new(self.clone());
+        }
+        Arc::clone(self.pyramid[target - 1].get_or_init(|| {
+            let (_, dims) = self.scale_to(target - here);
+            let read = self
+                .pyramid
+                .source
+                .as_ref()
+                .and_then(|s| s.level(target, dims));
+            if let Some(data) = read {
+                return Arc::new(self.level_of(target - here, data));
+            }
+            // The finest level built between this one and the target, or this one.
+            match (here + 1..target)
+                .rev()
+                .find_map(|l| self.pyramid[l - 1].get())
+            {
+                Some(finer) => Arc::new(finer.halved(target - finer.level.index)),
+                None => Arc::new(self.halved(target - here)),
+            }
+        }))
+    }
+
+    /// The number of pyramid levels below level 0: halving stops when every axis is one voxel.
+    #[must_use]
+    pub fn coarser_levels(&self) -> usize {
+        self.pyramid.len() - self.level.index
+    }
+
+    /// Per axis, how many voxels of this level one voxel `times` levels coarser spans, and that
+    /// level's dimensions.
+    fn scale_to(&self, times: usize) -> ([usize; 3], [usize; 3]) {
+        let mut scale = [1usize; 3];
+        let mut d = self.dims;
+        for _ in 0..times {
+            let s = step(d);
+            scale = std::array::from_fn(|m| scale[m] * s[m]);
+            d = coarser_dims(d);
+        }
+        (scale, d)
+    }
+
+    /// Whether this level's coarser levels take the most frequent label.
+    fn labelled(&self) -> bool {
+        self.level.index == 0 && self.labels().is_some() || self.level.labels
+    }
+
+    /// The level `times` levels coarser than this one, computed.
+    fn halved(&self, times: usize) -> Volume {
+        let labels = self.labelled();
+        let (values, _) = crate::volume::with_voxels!(&self.data, |v| {
+            downsample_times(v, self.dims, labels, times)
+        });
+        self.level_of(times, Voxels::owned(values))
+    }
+
+    /// The level `times` levels coarser than this one, of voxels `data`.
+    fn level_of(&self, times: usize, data: Voxels) -> Volume {
+        let labels = self.labelled();
+        let (scale, dims) = self.scale_to(times);
+        // Each halving doubles the span along the axes it halves.
+        let factor: [usize; 3] = std::array::from_fn(|m| self.level.factor[m] * scale[m]);
+        let scale = scale.map(|s| s as f64);
+        let spacing: [f64; 3] = std::array::from_fn(|m| self.spacing[m] * scale[m]);
+        let stats = crate::volume::with_voxels!(&data, |v| compute_stats(v));
+        let labels_of_level0 = if labels {
+            self.labels().map(<[_]>::to_vec)
+        } else {
+            None
+        };
+        Volume {
+            data,
+            dims,
+            spacing,
+            voxel_type: self.voxel_type,
+            stats,
+            transform: level_transform(&self.transform, scale),
+            level: Level {
+                index: self.level.index + times,
+                factor,
+                labels,
+                range: self.level.range,
+            },
+            labels: Arc::new(OnceLock::from(labels_of_level0)),
+            pyramid: Arc::clone(&self.pyramid),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::VoxelType;
+
+    /// A file that holds pyramid level 2 only, every voxel 7.
+    #[derive(Debug)]
+    struct Sevens;
+
+    impl LevelSource for Sevens {
+        fn level(&self, k: usize, dims: [usize; 3]) -> Option<Voxels> {
+            (k == 2).then(|| Voxels::owned(vec![7u8; dims.iter().product()]))
+        }
+    }
+
+    #[test]
+    fn levels_the_file_holds_are_read_the_others_computed() {
+        let data: Vec<f32> = (0..8 * 6 * 4).map(|i| (i % 5) as f32).collect();
+        let plain = Volume::new([8, 6, 4], [1.0, 2.0, 3.0], VoxelType::U8, data).unwrap();
+        let v = plain.clone().with_level_source(Arc::new(Sevens));
+        let (read, computed) = (v.coarser(2), plain.coarser(2));
+        assert_eq!(read.dims(), computed.dims());
+        assert_eq!(read.transform(), computed.transform(), "the pyramid's grid");
+        assert_eq!(read.level(), computed.level());
+        assert!((0..read.len()).all(|i| read.data().get(i) == 7.0));
+        assert_eq!(read.stats().max, 7.0);
+        // Level 1 the file lacks: computed, the same as without a source.
+        let (a, b) = (v.coarser(1), plain.coarser(1));
+        assert_eq!(a.data().to_f32_vec(), b.data().to_f32_vec());
+        // Level 3 from level 2, which the file gave.
+        assert!((0..v.coarser(3).len()).all(|i| v.coarser(3).data().get(i) == 7.0));
+    }
+}
