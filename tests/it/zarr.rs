@@ -44,14 +44,14 @@ fn sums(values: impl Iterator<Item = f64>) -> (f64, f64) {
     })
 }
 
-/// The volume's voxels in zarr's C order (z slowest, x fastest: the volume's own order).
-fn voxels(l: &Loaded) -> Vec<f64> {
-    let [nx, ny, nz] = l.volume.dims();
+/// The voxels of `v` in zarr's C order (z slowest, x fastest: the volume's own order).
+fn voxels(v: &slabscope::Volume) -> Vec<f64> {
+    let [nx, ny, nz] = v.dims();
     let mut out = Vec::with_capacity(nx * ny * nz);
     for z in 0..nz {
         for y in 0..ny {
             for x in 0..nx {
-                out.push(f64::from(l.volume.value([x, y, z])));
+                out.push(f64::from(v.value([x, y, z])));
             }
         }
     }
@@ -73,7 +73,7 @@ fn ngff_04_blosc_reads_every_voxel_in_micrometres() {
         );
     }
     let e = expected("v04_blosc.ome.zarr", "s0");
-    let (sum, weighted) = sums(voxels(&l).into_iter());
+    let (sum, weighted) = sums(voxels(&l.volume).into_iter());
     assert_eq!(sum, e["sum"].as_f64().unwrap());
     assert_eq!(weighted, e["weighted"].as_f64().unwrap());
     // Scale [2, 0.5, 0.25] µm over z, y, x; translation [10, 20, 30] µm.
@@ -100,28 +100,13 @@ fn ngff_04_blosc_reads_every_voxel_in_micrometres() {
 #[test]
 fn the_store_s_coarser_datasets_are_the_pyramid_s_levels() {
     let l = open("v04_blosc.ome.zarr");
-    let levels: Vec<Option<usize>> = l
-        .zarr
-        .as_ref()
-        .unwrap()
-        .levels
-        .iter()
-        .map(|l| l.pyramid_level)
-        .collect();
+    let levels = pyramid_levels(&l);
     assert_eq!(levels, [Some(0), Some(1), Some(2)]);
     for (k, key) in [(1, "s1"), (2, "s2")] {
         let level = l.volume.coarser(k);
         assert_eq!(level.level().index, k);
         // The store's voxels (make.py rounds its block means to u16), not slabscope's means.
-        let [nx, ny, nz] = level.dims();
-        let mut read = Vec::new();
-        for z in 0..nz {
-            for y in 0..ny {
-                for x in 0..nx {
-                    read.push(f64::from(level.value([x, y, z])));
-                }
-            }
-        }
+        let read = voxels(&level);
         let e = expected("v04_blosc.ome.zarr", key);
         let (sum, weighted) = sums(read.into_iter());
         assert_eq!(sum, e["sum"].as_f64().unwrap(), "{key}");
@@ -134,16 +119,15 @@ fn the_store_s_coarser_datasets_are_the_pyramid_s_levels() {
         ..LoadOptions::default()
     };
     let cells = open_with(&path("v05_sharded.ome.zarr"), &opts);
-    let off: Vec<Option<usize>> = cells
-        .zarr
-        .as_ref()
-        .unwrap()
-        .levels
-        .iter()
-        .map(|l| l.pyramid_level)
-        .collect();
+    let off = pyramid_levels(&cells);
     assert_eq!(off, [Some(0), None, None, None, None]);
     assert_eq!(cells.volume.coarser(1).dims(), [6, 5, 5]);
+}
+
+/// The pyramid level each of the store's datasets is read as.
+fn pyramid_levels(l: &Loaded) -> Vec<Option<usize>> {
+    let info = l.zarr.as_ref().unwrap();
+    info.levels.iter().map(|l| l.pyramid_level).collect()
 }
 
 /// Whether every voxel of `v` is a whole number.
@@ -182,7 +166,7 @@ fn ngff_05_time_points_and_channels_in_nanometres() {
             let (z, y, x) = (5, 6, 7);
             let want = (formula(&[t, c, z, y, x]) % 997) as f32 - 300.0;
             assert_eq!(l.volume.value([x, y, z]), want, "t {t} c {c}");
-            all.extend(voxels(&l));
+            all.extend(voxels(&l.volume));
         }
     }
     let e = expected(name, "s0");
@@ -212,7 +196,7 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     assert_eq!(v.value([1, 2, 3]), 0.0);
     let want = (formula(&[8, 9, 10]) % 997) as f32 * 0.25 - 50.0;
     assert_eq!(v.value([10, 9, 8]), want);
-    let (sum, weighted) = sums(voxels(&l).into_iter());
+    let (sum, weighted) = sums(voxels(&l.volume).into_iter());
     let e = expected(name, "s0");
     assert_eq!(sum, e["sum"].as_f64().unwrap());
     assert_eq!(weighted, e["weighted"].as_f64().unwrap());
@@ -234,7 +218,7 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
         (formula(&[8, 9, 10]) / 40 % 5) as f32
     );
     assert!(cells.volume.labels().is_some(), "read as a label volume");
-    let (sum, _) = sums(voxels(&cells).into_iter());
+    let (sum, _) = sums(voxels(&cells.volume).into_iter());
     assert_eq!(
         sum,
         expected(name, "labels/cells/s0")["sum"].as_f64().unwrap()
