@@ -65,7 +65,7 @@ const FAILURES: &[(&str, &str)] = &[
     ),
     (
         "nifti_header_only.nii",
-        "the content does not start like one",
+        "the name says NIfTI but the content does not start like a NIfTI file",
     ),
     ("volumeshop_wrong_size.dat", "not a VolumeShop .dat file"),
     ("empty.nrrd", "the file is empty"),

@@ -463,7 +463,11 @@ fn triage_gives_a_row_per_series_and_per_broken_file_and_shards_add_up() {
         "{all:#?}"
     );
     let error = |i: usize| all[i]["error"].as_str().unwrap_or("").to_string();
-    assert!(error(1).contains("does not start like one"), "{}", error(1));
+    assert!(
+        error(1).contains("does not start like a NIfTI file"),
+        "{}",
+        error(1)
+    );
     assert!(error(4).contains("JPEG-LS"), "{}", error(4));
     let cut = error(6);
     assert!(cut.contains("claims 56 bytes where 26 are left"), "{cut}");

@@ -133,7 +133,7 @@ fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
         "{screen}"
     );
     assert!(
-        screen.contains("zz_broken.nii  error: the name says volume"),
+        screen.contains("zz_broken.nii  error: the name says NIfTI"),
         "{screen}"
     );
     // Enter on the second line opens it; PgDn the next.

@@ -414,24 +414,28 @@ fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
     if ext(".raw") || ext(".bin") || ext(".vol") || ext(".img") || parse_raw_name(&name).is_some() {
         return Ok(Format::Raw);
     }
-    let what = if head.is_empty() {
-        "the file is empty".to_string()
-    } else if ext(".nii")
-        || ext(".nii.gz")
-        || ext(".nrrd")
-        || ext(".nhdr")
-        || ext(".mha")
-        || ext(".mhd")
-    {
-        "the name says volume but the content does not start like one".to_string()
-    } else {
-        "not a volume file".to_string()
+    let claimed = [
+        (".nii", "NIfTI"),
+        (".nii.gz", "NIfTI"),
+        (".nrrd", "NRRD"),
+        (".nhdr", "NRRD"),
+        (".mha", "MetaImage"),
+        (".mhd", "MetaImage"),
+    ]
+    .into_iter()
+    .find(|(e, _)| ext(e));
+    let what = match claimed {
+        _ if head.is_empty() => "the file is empty".to_string(),
+        Some((_, format)) => {
+            format!("the name says {format} but the content does not start like a {format} file")
+        }
+        None => "not a volume file".to_string(),
     };
     Err(Error::format(
         path,
         format!(
             "{what} (slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, \
-             DICOM, and headerless raw data given its dimensions and voxel type)"
+             DICOM, OME-Zarr stores, and headerless raw data given its dimensions and voxel type)"
         ),
     ))
 }
