@@ -62,6 +62,17 @@ READERS = [
         ("dicom/jxl-lossy/s0.dcm", "m.dcm"),
     ]),
     ("raw", [("ramp_u8.raw", "m_5x4x3_uint8.raw")]),
+    # A folder format: the store is copied whole and one of its files (after `//`) mutated.
+    ("zarr", [
+        ("zarr/v04_blosc.ome.zarr//.zattrs", "m.ome.zarr"),
+        ("zarr/v04_blosc.ome.zarr//s0/.zarray", "m.ome.zarr"),
+        ("zarr/v04_blosc.ome.zarr//s0/1/1/1", "m.ome.zarr"),
+        ("zarr/v05_sharded.ome.zarr//zarr.json", "m.ome.zarr"),
+        ("zarr/v05_sharded.ome.zarr//s0/zarr.json", "m.ome.zarr"),
+        ("zarr/v05_sharded.ome.zarr//s0/c/1/1/1", "m.ome.zarr"),
+        ("zarr/v05_tczyx.ome.zarr//s0/zarr.json", "m.ome.zarr"),
+        ("zarr/v05_tczyx.ome.zarr//s0/c/1/2/1/1/1", "m.ome.zarr"),
+    ]),
 ]
 
 # The data files of the detached seeds, beside every mutant.
@@ -111,7 +122,10 @@ class Rng:
 
 def header_len(b: bytes) -> int:
     """The header's length: DICOM's elements before the pixel data, the text before NRRD's blank
-    line or up to the end of MetaImage's `ElementDataFile` line, else NIfTI's 352 bytes."""
+    line or up to the end of MetaImage's `ElementDataFile` line, all of JSON (Zarr's metadata),
+    else NIfTI's 352 bytes."""
+    if b[:1] == b"{":
+        return len(b)
     if b[128:132] == b"DICM":
         at = b.find(b"\xe0\x7f\x10\x00")
         return at if at >= 0 else len(b)
@@ -201,15 +215,39 @@ def volumeshop_seed() -> bytes:
     return dims + b"".join((i * 7).to_bytes(2, "little") for i in range(60))
 
 
+def seed_bytes(seed: str) -> bytes:
+    """The bytes of `seed`: a file of tests/data, a member of a store (`STORE//MEMBER`), or
+    (empty) the VolumeShop seed."""
+    if not seed:
+        return volumeshop_seed()
+    store, _, member = seed.partition("//")
+    return (DATA / store / member).read_bytes() if member else (DATA / seed).read_bytes()
+
+
+def place(folder: Path, seed: str, name: str, data: bytes) -> str:
+    """Writes `data` as `name` in `folder` (for a store's member, a copy of the store with that
+    member replaced), with the detached seeds' data files beside it; its path."""
+    folder.mkdir()
+    store, _, member = seed.partition("//")
+    if member:
+        shutil.copytree(DATA / store, folder / name)
+        (folder / name / member).write_bytes(data)
+    else:
+        (folder / name).write_bytes(data)
+    for f in DETACHED:
+        shutil.copy(DATA / f, folder / f)
+    return str(folder / name)
+
+
 def mutants(per_reader: int):
     """(reader, index, seed file, name, bytes) of every mutant, in the Rust harness's order."""
     j = 0
     for reader, seeds in READERS:
         for i in range(per_reader):
             seed, name = seeds[i % len(seeds)]
-            data = (DATA / seed).read_bytes() if seed else volumeshop_seed()
+            data = seed_bytes(seed)
             rng = Rng(0x9E3779B97F4A7C15 ^ (((j + 1) * 0xD1B54A32D192ED03) & MASK))
-            yield reader, i, seed or "volumeshop", name, mutate(data, rng)
+            yield reader, i, seed, name, mutate(data, rng)
             j += 1
 
 
@@ -305,19 +343,9 @@ def test_mutants_of_every_reader_never_crash_the_interpreter(tmp_path):
     for reader, listed in READERS:
         for seed, name in listed:
             folder = tmp_path / f"{reader}-seed-{len(seeds)}"
-            folder.mkdir()
-            data = (DATA / seed).read_bytes() if seed else volumeshop_seed()
-            (folder / name).write_bytes(data)
-            for f in DETACHED:
-                shutil.copy(DATA / f, folder / f)
-            seeds.append(str(folder / name))
+            seeds.append(place(folder, seed, name, seed_bytes(seed)))
     for reader, i, seed, name, data in mutants(per_reader):
-        folder = tmp_path / f"{reader}-{i}"
-        folder.mkdir()
-        (folder / name).write_bytes(data)
-        for f in DETACHED:
-            shutil.copy(DATA / f, folder / f)
-        paths.append(str(folder / name))
+        paths.append(place(tmp_path / f"{reader}-{i}", seed, name, data))
     rows, failures = run_children(seeds + paths, tmp_path)
     assert not failures, "\n".join(f"{p}: {why}" for p, why in failures.items())
     unread = [p for p in seeds if "loaded" not in rows[p]]
