@@ -16,6 +16,7 @@ mod dicom;
 mod formats;
 mod fuzz_headers;
 mod gain;
+mod mosaic;
 mod names;
 mod native;
 mod nifti2;

@@ -68,13 +68,12 @@ fn rounded(v: f64, step: f64) -> i64 {
 }
 
 /// What splits a series: orientation, matrix, pixel spacing, echo.
-fn split_key(im: &Image) -> (Vec<i64>, u16, u16, Vec<i64>, String) {
+fn split_key(im: &Image) -> (Vec<i64>, [usize; 2], Vec<i64>, String) {
     (
         im.orientation
             .map(|o| o.iter().map(|&v| rounded(v, 1e-3)).collect())
             .unwrap_or_default(),
-        im.format.rows,
-        im.format.cols,
+        im.plane(),
         im.pixel_spacing
             .map(|s| s.iter().map(|&v| rounded(v, 1e-4)).collect())
             .unwrap_or_default(),
@@ -381,6 +380,17 @@ fn pixel_spacing(first: &Image, notes: &mut Vec<String>) -> [f64; 2] {
     }
 }
 
+/// What a load says of a series cut from Siemens mosaics of `first`'s kind.
+fn mosaic_note(first: &Image, t: &super::mosaic::Tile) -> String {
+    let [tc, tr] = t.plane;
+    let (mc, mr) = (first.format.cols, first.format.rows);
+    format!(
+        "a Siemens mosaic: {} slices of {tc}x{tr} cut from each {mc}x{mr} image (slice \
+         spacing: {})",
+        t.of, t.step_from
+    )
+}
+
 /// Lays `series` out as a volume; `name` names an image in messages (its file). Fails when the
 /// positions repeat unevenly (not a 4D series).
 pub(super) fn layout(
@@ -389,11 +399,11 @@ pub(super) fn layout(
 ) -> std::result::Result<Layout, String> {
     let images = &series.images;
     let first = &images[0];
-    let plane = [
-        usize::from(first.format.cols),
-        usize::from(first.format.rows),
-    ];
+    let plane = first.plane();
     let mut notes = Vec::new();
+    if let Some(t) = &first.tile {
+        notes.push(mosaic_note(first, t));
+    }
     let [dy, dx] = pixel_spacing(first, &mut notes);
     let placed = frame_of(first).filter(|_| images.iter().all(|im| im.position.is_some()));
     let runs = runs(images, placed)?;

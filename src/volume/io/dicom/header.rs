@@ -1,10 +1,13 @@
 //! What series assembly needs of a DICOM file, read from its parsed header: one [`Image`] per
 //! frame (a classic file has one; an enhanced multi-frame file describes each frame in its
-//! functional groups), and the pixel format shared by the file's frames.
+//! functional groups; a Siemens mosaic one per tile of each frame), and the pixel format shared
+//! by the file's frames.
 
 use dicom_core::{Tag, VR};
 use dicom_dictionary_std::tags;
 use dicom_object::InMemDicomObject;
+
+use super::mosaic::{Mosaic, Tile};
 
 /// How a file's samples are stored and meant to be seen.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -133,11 +136,23 @@ pub(super) struct Image {
     pub tilt: Option<f64>,
     /// The file's pixel format.
     pub format: PixelFormat,
+    /// The tile of a Siemens mosaic frame this image is (its format is the whole frame's).
+    pub tile: Option<Tile>,
+}
+
+impl Image {
+    /// Columns and rows of the image: its tile's, or its frame's.
+    pub fn plane(&self) -> [usize; 2] {
+        match &self.tile {
+            Some(t) => t.plane.map(usize::from),
+            None => [usize::from(self.format.cols), usize::from(self.format.rows)],
+        }
+    }
 }
 
 /// The text of element `tag`: its value as a string, or, for a value some converter stored as
 /// UN (unknown), its bytes read as text (as dcmtk and pydicom read them).
-fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+pub(super) fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
     let e = obj.get(tag)?;
     let t = if e.vr() == VR::UN {
         String::from_utf8_lossy(e.to_bytes().ok()?.as_ref()).into_owned()
@@ -154,7 +169,7 @@ fn shown_text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
     text(obj, tag).map(|t| crate::error::names::text(&t))
 }
 
-fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
+pub(super) fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
     let e = obj.get(tag)?;
     let v = if e.vr() == VR::UN {
         text(obj, tag)?
@@ -167,7 +182,7 @@ fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
     v.iter().all(|x| x.is_finite()).then_some(v)
 }
 
-fn float(obj: &InMemDicomObject, tag: Tag) -> Option<f64> {
+pub(super) fn float(obj: &InMemDicomObject, tag: Tag) -> Option<f64> {
     floats(obj, tag)?.first().copied()
 }
 
@@ -260,9 +275,9 @@ pub(super) fn pixel_format(obj: &InMemDicomObject) -> PixelFormat {
     }
 }
 
-/// The images of a file whose parsed header is `obj`, one per frame (their `file` is 0 until
-/// the scan numbers them).
-pub(super) fn images(obj: &InMemDicomObject) -> Vec<Image> {
+/// The images of a file whose parsed header is `obj`, one per frame, or one per tile of each
+/// frame of a `mosaic` (their `file` is 0 until the scan numbers them).
+pub(super) fn images(obj: &InMemDicomObject, mosaic: Option<&Mosaic>) -> Vec<Image> {
     let format = pixel_format(obj);
     let image_type: Vec<String> = text(obj, tags::IMAGE_TYPE)
         .map(|t| {
@@ -291,7 +306,7 @@ pub(super) fn images(obj: &InMemDicomObject) -> Vec<Image> {
             None => shared.clone(),
         };
         let (slope, intercept) = fields.rescale.unwrap_or((1.0, 0.0));
-        out.push(Image {
+        let image = Image {
             file: 0,
             frame,
             series_uid: shown_text(obj, tags::SERIES_INSTANCE_UID).unwrap_or_default(),
@@ -314,9 +329,29 @@ pub(super) fn images(obj: &InMemDicomObject) -> Vec<Image> {
             rescale: (slope, intercept),
             tilt: float(obj, tags::GANTRY_DETECTOR_TILT),
             format: format.clone(),
-        });
+            tile: None,
+        };
+        match mosaic {
+            Some(m) => out.extend(tiles(&image, m)),
+            None => out.push(image),
+        }
     }
     out
+}
+
+/// The slices of the mosaic frame `im`: an image a tile, each where it lies.
+fn tiles<'a>(im: &'a Image, m: &'a Mosaic) -> impl Iterator<Item = Image> + 'a {
+    (0..m.tiles).map(move |k| {
+        let mut t = im.clone();
+        let mosaic = [im.format.cols, im.format.rows];
+        let spacing = im.pixel_spacing.unwrap_or([1.0, 1.0]);
+        t.position = match (im.position, im.orientation) {
+            (Some(p), Some(o)) => m.position(k, mosaic, p, o, spacing),
+            _ => None,
+        };
+        t.tile = Some(m.tile(k));
+        t
+    })
 }
 
 /// Frame `frame` of a classic multi-frame file: the file's position moved along the normal.

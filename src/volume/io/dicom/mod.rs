@@ -1,13 +1,16 @@
 //! DICOM: a file, or a folder of files, read as a volume. Each file is walked safely first
 //! (`read`), its header parsed by dicom-object and described per frame (`header`); the
-//! frames are grouped into series and laid out along the slice normal (`assemble`); native
-//! pixels are read straight from the files, compressed ones decoded by dicom-pixeldata, and
-//! both turned into values the same way (`pixels`). The scan of files to series is `scan`, the
+//! frames (a Siemens mosaic's tiles, `mosaic`, from its CSA header, `csa`) are grouped into
+//! series and laid out along the slice normal (`assemble`); native pixels are read straight
+//! from the files, compressed ones decoded by dicom-pixeldata, and both turned into values the
+//! same way (`pixels`). The scan of files to series is `scan`, the
 //! reading of a series' frames into a volume's voxels `voxels`.
 
 mod assemble;
 mod codestream;
+mod csa;
 mod header;
+mod mosaic;
 mod pixels;
 mod read;
 mod scan;
@@ -141,7 +144,9 @@ pub fn list_series(path: &Path, opts: &LoadOptions) -> Result<(Vec<SeriesSummary
 fn name(scan: &Scan, im: &Image) -> String {
     let path = &scan.files[im.file].path;
     let file = crate::error::shown(path.file_name().map_or(path.as_path(), Path::new));
-    if im.format.frames > 1 {
+    if let Some(tile) = &im.tile {
+        format!("{file} tile {}", tile.index)
+    } else if im.format.frames > 1 {
         format!("{file} frame {}", im.frame)
     } else {
         file

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use super::assemble::{self, Series};
 use super::header::{self, Image, PixelFormat};
+use super::mosaic;
 use super::read::{self, Pixels, Syntax};
 use super::{Failures, LoadOptions, files_in, parse};
 use crate::error::{Error, Result};
@@ -58,17 +59,20 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
             } else {
                 let format = header::pixel_format(&obj);
                 check_frames(path, &format, &part.pixels)?;
-                let cost = u64::from(format.frames).saturating_mul(IMAGE_COST);
+                let mosaic = mosaic::of(&obj, &format).map_err(|m| Error::format(path, m))?;
+                let tiles = mosaic.as_ref().map_or(1, |m| m.tiles);
+                let images = u64::from(format.frames).saturating_mul(u64::from(tiles));
+                let cost = images.saturating_mul(IMAGE_COST);
                 let total = spent.fetch_add(cost, std::sync::atomic::Ordering::Relaxed);
                 if total.saturating_add(cost) > budget {
                     return Err(Error::TooLarge {
                         path: path.clone(),
-                        what: format!("the descriptions of {} frames", format.frames),
+                        what: format!("the descriptions of {images} images"),
                         needed: total.saturating_add(cost),
                         limit: budget,
                     });
                 }
-                header::images(&obj)
+                header::images(&obj, mosaic.as_ref())
             };
             let patient = if opts.show_phi {
                 header::patient(&obj)

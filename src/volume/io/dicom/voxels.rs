@@ -1,6 +1,7 @@
 //! A series' voxels: its frames read from their files, file by file in parallel (native pixels
 //! straight from the file, deflated and compressed ones through a second walk and
-//! dicom-pixeldata), into the planes of a volume.
+//! dicom-pixeldata), into the planes of a volume; a Siemens mosaic frame decoded once and its
+//! tiles cut from it.
 
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -114,23 +115,26 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
         Pixels::Native { offset, len } => {
             let mut f = crate::volume::io::open_regular(path).map_err(|e| Error::io(path, e))?;
             let size = f.metadata().map_err(|e| Error::io(path, e))?.len();
-            let mut buf = Vec::new();
+            let (mut buf, mut mosaic) = (Vec::new(), MosaicFrame::new(path, budget));
             for (im, plane) in frames {
-                let bytes = im.format.frame_bytes();
-                let start = u64::from(im.frame) * bytes;
-                let available = (*len).min(size.saturating_sub(*offset));
-                if start + bytes > available {
-                    return Err(Error::Truncated {
-                        path: path.to_path_buf(),
-                        expected: start + bytes,
-                        found: available,
-                    });
-                }
-                buf.resize(bytes as usize, 0);
-                f.seek(SeekFrom::Start(offset + start))
-                    .and_then(|_| f.read_exact(&mut buf))
-                    .map_err(|e| Error::io(path, e))?;
-                Decode::new(&im.format, big, im.rescale).frame(&buf, plane);
+                mosaic.put(im, plane, |out| {
+                    let bytes = im.format.frame_bytes();
+                    let start = u64::from(im.frame) * bytes;
+                    let available = (*len).min(size.saturating_sub(*offset));
+                    if start + bytes > available {
+                        return Err(Error::Truncated {
+                            path: path.to_path_buf(),
+                            expected: start + bytes,
+                            found: available,
+                        });
+                    }
+                    buf.resize(bytes as usize, 0);
+                    f.seek(SeekFrom::Start(offset + start))
+                        .and_then(|_| f.read_exact(&mut buf))
+                        .map_err(|e| Error::io(path, e))?;
+                    Decode::new(&im.format, big, im.rescale).frame(&buf, out);
+                    Ok(())
+                })?;
             }
             Ok(())
         }
@@ -138,22 +142,28 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
             let part = read::read(path, budget, true)?;
             match part.pixels {
                 Pixels::Inflated(data) => {
+                    let mut mosaic = MosaicFrame::new(path, budget);
                     for (im, plane) in frames {
-                        let bytes = im.format.frame_bytes();
-                        let start = u64::from(im.frame) * bytes;
-                        let src = data
-                            .get(start as usize..(start + bytes) as usize)
-                            .ok_or_else(|| Error::Truncated {
-                                path: path.to_path_buf(),
-                                expected: start + bytes,
-                                found: data.len() as u64,
-                            })?;
-                        Decode::new(&im.format, false, im.rescale).frame(src, plane);
+                        mosaic.put(im, plane, |out| {
+                            let bytes = im.format.frame_bytes();
+                            let start = u64::from(im.frame) * bytes;
+                            let src = data
+                                .get(start as usize..(start + bytes) as usize)
+                                .ok_or_else(|| Error::Truncated {
+                                    path: path.to_path_buf(),
+                                    expected: start + bytes,
+                                    found: data.len() as u64,
+                                })?;
+                            Decode::new(&im.format, false, im.rescale).frame(src, out);
+                            Ok(())
+                        })?;
                     }
                     Ok(())
                 }
                 Pixels::Fragments(table, fragments) => {
-                    decode_fragments(path, &part.dataset, &file.syntax, table, fragments, frames)
+                    let mosaic = MosaicFrame::new(path, budget);
+                    let (dataset, syntax) = (&part.dataset, &file.syntax);
+                    decode_fragments(path, dataset, syntax, table, fragments, frames, mosaic)
                 }
                 _ => Err(Error::format(path, "no pixel data")),
             }
@@ -169,6 +179,7 @@ fn decode_fragments(
     table: Vec<u32>,
     fragments: Vec<Vec<u8>>,
     frames: Vec<(&Image, &mut [f32])>,
+    mut mosaic: MosaicFrame,
 ) -> Result<()> {
     let format = &frames[0].0.format;
     super::codestream::check(path, syntax, format, &fragments)?;
@@ -186,26 +197,74 @@ fn decode_fragments(
         .with_meta(meta)
         .map_err(|e| Error::format(path, format!("DICOM header: {}", quoted(&e))))?;
     for (im, plane) in frames {
-        let decoded = obj.decode_pixel_data_frame(im.frame).map_err(|e| {
-            Error::format(
-                path,
-                format!(
-                    "{} pixel data: {}",
-                    read::syntax_name(&syntax.uid),
-                    quoted(&e)
-                ),
-            )
+        mosaic.put(im, plane, |out| {
+            let decoded = obj.decode_pixel_data_frame(im.frame).map_err(|e| {
+                Error::format(
+                    path,
+                    format!(
+                        "{} pixel data: {}",
+                        read::syntax_name(&syntax.uid),
+                        quoted(&e)
+                    ),
+                )
+            })?;
+            let src = decoded.frame_data(0).map_err(|e| {
+                Error::format(path, format!("decoded frame {}: {}", im.frame, quoted(&e)))
+            })?;
+            // The decoders give interleaved RGB for colour.
+            let mut f = im.format.clone();
+            f.planar = false;
+            if f.colour() {
+                f.photometric = "RGB".into();
+            }
+            Decode::new(&f, false, im.rescale).frame(src, out);
+            Ok(())
         })?;
-        let src = decoded.frame_data(0).map_err(|e| {
-            Error::format(path, format!("decoded frame {}: {}", im.frame, quoted(&e)))
-        })?;
-        // The decoders give interleaved RGB for colour.
-        let mut f = im.format.clone();
-        f.planar = false;
-        if f.colour() {
-            f.photometric = "RGB".into();
-        }
-        Decode::new(&f, false, im.rescale).frame(src, plane);
     }
     Ok(())
+}
+
+/// The frame of a Siemens mosaic last decoded, kept while its tiles are cut from it (each frame
+/// is decoded once, however many slices it holds).
+struct MosaicFrame<'p> {
+    path: &'p Path,
+    budget: u64,
+    frame: Option<u32>,
+    values: Vec<f32>,
+}
+
+impl<'p> MosaicFrame<'p> {
+    fn new(path: &'p Path, budget: u64) -> Self {
+        Self {
+            path,
+            budget,
+            frame: None,
+            values: Vec::new(),
+        }
+    }
+
+    /// Puts the pixels of `im` into `plane`: a whole frame `decode`d into it, or a tile cut
+    /// from its mosaic frame, `decode`d once into a buffer of its own (charged to the budget).
+    fn put(
+        &mut self,
+        im: &Image,
+        plane: &mut [f32],
+        decode: impl FnOnce(&mut [f32]) -> Result<()>,
+    ) -> Result<()> {
+        let Some(tile) = &im.tile else {
+            return decode(plane);
+        };
+        let cols = usize::from(im.format.cols);
+        if self.frame != Some(im.frame) {
+            self.frame = None;
+            let dims = [cols, usize::from(im.format.rows), 1];
+            if self.values.len() != dims[0] * dims[1] {
+                self.values = voxel_buffer(self.path, dims, self.budget)?;
+            }
+            decode(&mut self.values)?;
+            self.frame = Some(im.frame);
+        }
+        tile.cut(&self.values, cols, plane);
+        Ok(())
+    }
 }

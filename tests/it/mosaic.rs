@@ -1,0 +1,253 @@
+//! Siemens mosaics: the fixtures `tests/data/dicom/mosaic/make.py` writes (pydicom), cut into
+//! slices and placed as dcm2niix places them (its NIfTI output frozen in `<series>.json`), over
+//! time points, and refused or read by a fallback when the CSA header is gone or wrong. Tile
+//! `k` of time point `t` holds `3i + 5j + 11k + 100t + 1`.
+
+use slabscope::{LoadOptions, Loaded, Volume};
+
+use crate::common::dicom_data;
+
+fn stored(i: usize, j: usize, k: usize, t: usize) -> f32 {
+    (3 * i + 5 * j + 11 * k + 100 * t + 1) as f32
+}
+
+fn load(name: &str, volume: usize) -> slabscope::Result<Loaded> {
+    let opts = LoadOptions {
+        volume,
+        ..LoadOptions::default()
+    };
+    slabscope::load(&dicom_data(&format!("mosaic/{name}")), &opts)
+}
+
+/// What dcm2niix made of a series: dims, sform (RAS) and voxels (x fastest).
+struct Frozen {
+    dims: Vec<usize>,
+    sform: [[f64; 4]; 3],
+    values: Vec<f32>,
+}
+
+fn frozen(name: &str) -> Frozen {
+    let text = std::fs::read_to_string(dicom_data(&format!("mosaic/{name}.json"))).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(json["sform_code"], 1);
+    let dims = json["dims"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_u64().unwrap() as usize)
+        .collect();
+    let sform =
+        std::array::from_fn(|r| std::array::from_fn(|c| json["sform"][r][c].as_f64().unwrap()));
+    let values = json["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect();
+    Frozen {
+        dims,
+        sform,
+        values,
+    }
+}
+
+/// The inverse of the linear part of `m` applied to `world` less its offset.
+fn to_index(m: &[[f64; 4]], world: [f64; 3]) -> [f64; 3] {
+    let a = |r: usize, c: usize| m[r][c];
+    let det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1))
+        - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
+        + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
+    let d: [f64; 3] = std::array::from_fn(|r| world[r] - m[r][3]);
+    // Cramer's rule.
+    std::array::from_fn(|c| {
+        let col = |r: usize, k: usize| if k == c { d[r] } else { a(r, k) };
+        (col(0, 0) * (col(1, 1) * col(2, 2) - col(1, 2) * col(2, 1))
+            - col(0, 1) * (col(1, 0) * col(2, 2) - col(1, 2) * col(2, 0))
+            + col(0, 2) * (col(1, 0) * col(2, 1) - col(1, 1) * col(2, 0)))
+            / det
+    })
+}
+
+/// Checks that every voxel of `v` lies on a voxel of dcm2niix's volume `t` and holds its value,
+/// and that the two transforms differ only by the flips dcm2niix makes: rows upside down, and
+/// (`reversed`) slices in tile order where ours go along the normal.
+fn same_as_dcm2niix(v: &Volume, f: &Frozen, t: usize, reversed: bool) {
+    let [nx, ny, nz] = v.dims();
+    assert_eq!(f.dims[..3], [nx, ny, nz]);
+    let ours = v.transform().matrix;
+    let plane = nx * ny * nz;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let world = v.transform().apply([i as f64, j as f64, k as f64]);
+                let theirs = to_index(&f.sform, world);
+                let kk = if reversed { nz - 1 - k } else { k };
+                let want = [i as f64, (ny - 1 - j) as f64, kk as f64];
+                for a in 0..3 {
+                    assert!(
+                        (theirs[a] - want[a]).abs() < 1e-3,
+                        "voxel ({i}, {j}, {k}) is at dcm2niix's {theirs:?}, not {want:?}"
+                    );
+                }
+                let at = t * plane + (kk * ny + (ny - 1 - j)) * nx + i;
+                assert_eq!(v.value([i, j, k]), f.values[at], "voxel ({i}, {j}, {k})");
+            }
+        }
+    }
+    // Ours times the flips is dcm2niix's sform.
+    for r in 0..3 {
+        let col = |c: usize| ours[r][c];
+        let dz = if reversed { -1.0 } else { 1.0 };
+        let flipped = [
+            col(0),
+            -col(1),
+            dz * col(2),
+            col(3)
+                + col(1) * (ny - 1) as f64
+                + if reversed {
+                    col(2) * (nz - 1) as f64
+                } else {
+                    0.0
+                },
+        ];
+        for c in 0..4 {
+            assert!(
+                (flipped[c] - f.sform[r][c]).abs() < 1e-3,
+                "row {r}: {flipped:?} != {:?}",
+                f.sform[r]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_mosaic_is_cut_into_its_slices_where_dcm2niix_places_them() {
+    let f = frozen("asc");
+    assert_eq!(f.dims, [6, 5, 7, 3]);
+    let l = load("asc", 0).unwrap();
+    let v = &l.volume;
+    assert_eq!(v.dims(), [6, 5, 7]);
+    let spacing = v.spacing();
+    assert_eq!(spacing[..2], [2.0, 2.5]);
+    assert!((spacing[2] - 3.3).abs() < 1e-9, "{spacing:?}");
+    for k in 0..7 {
+        for j in 0..5 {
+            for i in 0..6 {
+                assert_eq!(v.value([i, j, k]), stored(i, j, k, 0), "({i}, {j}, {k})");
+            }
+        }
+    }
+    same_as_dcm2niix(v, &f, 0, false);
+    assert!(
+        l.notes.iter().any(|n| n
+            == "a Siemens mosaic: 7 slices of 6x5 cut from each 18x15 image (slice spacing: \
+                SpacingBetweenSlices)"),
+        "{:?}",
+        l.notes
+    );
+    assert!(
+        l.notes
+            .iter()
+            .any(|n| n.contains("4D series of 3 volumes of 7 slices"))
+    );
+}
+
+#[test]
+fn each_time_point_is_a_volume() {
+    let f = frozen("asc");
+    for t in 1..3 {
+        let v = load("asc", t).unwrap().volume;
+        assert_eq!(v.dims(), [6, 5, 7]);
+        assert_eq!(v.value([5, 4, 6]), stored(5, 4, 6, t));
+        same_as_dcm2niix(&v, &f, t, false);
+    }
+    let e = load("asc", 3).unwrap_err().to_string();
+    assert!(e.contains('3'), "{e}");
+}
+
+#[test]
+fn a_slice_normal_against_the_orientation_reverses_the_tiles() {
+    // The CSA block here is reserved at (0029,0011), after another creator's block at 10.
+    let f = frozen("desc");
+    let l = load("desc", 0).unwrap();
+    let v = &l.volume;
+    assert_eq!(v.dims(), [6, 5, 7]);
+    // No SpacingBetweenSlices: SliceThickness.
+    assert_eq!(v.spacing(), [2.0, 2.5, 4.0]);
+    assert_eq!(v.value([0, 0, 0]), stored(0, 0, 6, 0));
+    assert_eq!(v.value([0, 0, 6]), stored(0, 0, 0, 0));
+    same_as_dcm2niix(v, &f, 0, true);
+    assert!(
+        l.notes
+            .iter()
+            .any(|n| n.contains("(slice spacing: SliceThickness)"))
+    );
+}
+
+/// The first file of `asc` with `from` replaced by `to` (of the same length) once.
+fn patched(from: &[u8], to: &[u8]) -> (tempfile::TempDir, std::path::PathBuf) {
+    assert_eq!(from.len(), to.len());
+    let mut bytes = std::fs::read(dicom_data("mosaic/asc/t0.dcm")).unwrap();
+    let at = bytes.windows(from.len()).position(|w| w == from).unwrap();
+    bytes[at..at + to.len()].copy_from_slice(to);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("patched.dcm");
+    std::fs::write(&file, bytes).unwrap();
+    (dir, file)
+}
+
+fn error_of(from: &[u8], to: &[u8]) -> String {
+    let (_dir, file) = patched(from, to);
+    let e = slabscope::load(&file, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("patched.dcm"), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+    e
+}
+
+#[test]
+fn a_bad_csa_header_is_an_error_and_a_missing_one_falls_back() {
+    // A hostile tag count (the header holds 4).
+    let e = error_of(
+        b"SV10\x04\x03\x02\x01\x04\0\0\0",
+        b"SV10\x04\x03\x02\x01\x40\x42\x0f\0",
+    );
+    assert!(e.contains("CSA image header: 1000000 tags claimed"), "{e}");
+    // Too many images, and a count the mosaic cannot hold.
+    let e = error_of(b"7\0\0\0", b"2000");
+    assert!(e.contains("NumberOfImagesInMosaic 2000 (1 to 1024"), "{e}");
+    let e = error_of(b"7\0\0\0", b"10\0\0");
+    assert!(
+        e.contains("10 slices take 4x4 tiles, which do not divide its 18x15"),
+        "{e}"
+    );
+    // No CSA header (its block renamed): NumberOfImagesInMosaic from (0019,100A), the slices
+    // along the orientation's normal.
+    let (_dir, file) = patched(b"SIEMENS CSA HEADER", b"SIEMENS XYZ HEADER");
+    let v = slabscope::load(&file, &LoadOptions::default())
+        .unwrap()
+        .volume;
+    assert_eq!(v.dims(), [6, 5, 7]);
+    assert_eq!(v.value([1, 2, 3]), stored(1, 2, 3, 0));
+    let with_csa = load("asc", 0).unwrap().volume;
+    for r in 0..4 {
+        for c in 0..4 {
+            let d = v.transform().matrix[r][c] - with_csa.transform().matrix[r][c];
+            assert!(d.abs() < 1e-9);
+        }
+    }
+    // Neither: an error.
+    let (_dir, file) = patched(b"SIEMENS CSA HEADER", b"SIEMENS XYZ HEADER");
+    let mut bytes = std::fs::read(&file).unwrap();
+    let at = bytes
+        .windows(17)
+        .position(|w| w == b"SIEMENS MR HEADER")
+        .unwrap();
+    bytes[at..at + 7].copy_from_slice(b"OTHERS ");
+    std::fs::write(&file, bytes).unwrap();
+    let e = slabscope::load(&file, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("ImageType says MOSAIC, but neither"), "{e}");
+}
