@@ -61,6 +61,11 @@ READERS = [
         ("dicom/j2k-lossy/s0.dcm", "m.dcm"),
         ("dicom/jxl-lossy/s0.dcm", "m.dcm"),
     ]),
+    # Siemens mosaics: their CSA image headers among the header bytes mutated.
+    ("mosaic", [
+        ("dicom/mosaic/asc/t0.dcm", "m.dcm"),
+        ("dicom/mosaic/desc/t0.dcm", "m.dcm"),
+    ]),
     ("raw", [("ramp_u8.raw", "m_5x4x3_uint8.raw")]),
     # A folder format: the store is copied whole and one of its files (after `//`) mutated.
     ("zarr", [
