@@ -123,7 +123,10 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         v.len()
     );
     outln!(
-        "spacing     {sx} x {sy} x {sz} mm  (extent {} x {} x {} mm)",
+        "spacing     {} x {} x {} mm  (extent {} x {} x {} mm)",
+        significant(sx),
+        significant(sy),
+        significant(sz),
         extent(sx * nx as f64),
         extent(sy * ny as f64),
         extent(sz * nz as f64)
@@ -255,6 +258,13 @@ fn side(code: char) -> &'static str {
 }
 
 /// `x` with at most 4 decimals and no trailing zeros.
+/// `x` to 12 significant digits, as short as that allows: a spacing computed from positions
+/// (3.3000000000000007) reads as it was meant (3.3).
+fn significant(x: f64) -> String {
+    let rounded: f64 = format!("{x:.11e}").parse().unwrap_or(x);
+    format!("{rounded}")
+}
+
 fn number(x: f64) -> String {
     let s = format!("{:.4}", x + 0.0);
     let s = s.trim_end_matches('0').trim_end_matches('.');
@@ -301,6 +311,13 @@ mod tests {
         assert_eq!(sparkline(&[0, 1, 1_000_000]), " ▁█");
         assert_eq!(sparkline(&[100, 1_000_000]), "▃█");
         assert_eq!(sparkline(&[0, 0]), "  ");
+    }
+
+    #[test]
+    fn spacings_keep_twelve_significant_digits() {
+        assert_eq!(significant(3.300_000_000_000_000_7), "3.3");
+        assert_eq!(significant(0.000_25), "0.00025");
+        assert_eq!(significant(0.781_25), "0.78125");
     }
 
     #[test]
