@@ -103,7 +103,7 @@ fn image_dir(dir: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
 }
 
 /// The image at `dir`: an OME-Zarr group's first image, or a plain array as an image of one
-/// level with unit scale (axes named by `dimension_names`, else z, y, x from the last).
+/// level with unit scale (its axes t, c, z, y, x counted from the last).
 fn read_image(dir: &Path) -> Result<(Image, Vec<ArrayMeta>)> {
     let fail = |m: String| Error::format(dir, m);
     let (zarr_format, attrs) = meta::attributes(dir)
