@@ -1,6 +1,6 @@
 //! OME-Zarr images (NGFF 0.4 on Zarr v2, 0.5 on Zarr v3) and plain Zarr arrays, from a local
-//! folder. The group's metadata is read here ([`meta`]); the arrays, their codecs (Blosc, zstd,
-//! gzip, ...) and sharding by `zarrs`, through a store of our own ([`store`]) that opens every
+//! folder. The group's metadata is read here (`meta.rs`); the arrays, their codecs (Blosc, zstd,
+//! gzip, ...) and sharding by `zarrs`, through a store of our own (`store.rs`) that opens every
 //! file as other inputs are opened and weighs it first.
 //!
 //! The first dataset of the first multiscales image is the volume: its spatial axes (z, y, x in
