@@ -45,6 +45,7 @@
 //! - [`partition`](mod@partition): slabs along an axis (paper §5): slice stacks, top-down (§5.1), bottom-up
 //!   (§5.2), the optimum, and [`Histories`], all three step histories read at any position.
 //! - [`analysis`]: the view search and the partition together, as one call.
+//! - [`explain`]: the numbers behind the chosen axis and each step, for teaching.
 //! - [`render`]: the exploded view (paper §3, step 3): camera, transfer functions, layout, the ray
 //!   caster and overlays.
 //! - [`report`]: the JSON contract (docs/design.md §3, field by field in docs/json.md) and the
@@ -53,6 +54,7 @@
 
 pub mod analysis;
 pub mod error;
+pub mod explain;
 pub mod geometry;
 pub mod measure;
 pub mod partition;

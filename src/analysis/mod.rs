@@ -11,9 +11,11 @@ pub use gain::{
 };
 
 use crate::error::Result;
+use crate::explain::{Explain, StepsShown};
 use crate::geometry::AxisChoice;
 use crate::partition::{
-    Method, Partition, PartitionParams, StackParams, Stop, partition, partition_streamed,
+    Histories, Method, Partition, PartitionParams, StackParams, Stop, partition, partition_kept,
+    partition_streamed, partition_streamed_kept,
 };
 use crate::progress::Monitor;
 use crate::view::{ViewParams, ViewSearch, search};
@@ -40,6 +42,8 @@ pub struct AnalysisParams {
     pub axis_by: AxisBy,
     /// Rank the axes by partition gain even when the entropy rate picks the axis.
     pub gain: bool,
+    /// Keep the numbers behind the axis and these steps ([`crate::explain`]).
+    pub explain: Option<StepsShown>,
 }
 
 impl Default for AnalysisParams {
@@ -53,6 +57,7 @@ impl Default for AnalysisParams {
             background: BackgroundRule::Auto,
             axis_by: AxisBy::Entropy,
             gain: false,
+            explain: None,
         }
     }
 }
@@ -138,6 +143,8 @@ pub struct Analysis {
     pub partition: Partition,
     /// What the user should know: spacings coarsened to the sample budget, histories cut short.
     pub notes: Vec<String>,
+    /// The numbers behind the axis and the steps, when asked for.
+    pub explain: Option<Explain>,
 }
 
 impl Analysis {
@@ -266,9 +273,21 @@ pub fn analyze_planned(
         (None, Some(v), _) => v.best().axis,
         (None, None, _) => unreachable!("the view search runs when no axis is given"),
     };
-    let partition = match plan.streamed {
-        Some(room) => partition_streamed(volume, axis, &params.partition(), room, monitor)?,
-        None => partition(volume, axis, &params.partition(), monitor)?,
+    let (partition, explain) = match params.explain {
+        None => (partitioned(plan, axis, params, monitor)?, None),
+        Some(shown) => {
+            let (partition, histories) = partitioned_kept(plan, axis, params, monitor)?;
+            let explained = crate::explain::explain(
+                &plan.views,
+                views.as_ref(),
+                &params.view,
+                &histories,
+                &partition,
+                shown,
+                monitor,
+            )?;
+            (partition, Some(explained))
+        }
     };
     if let Some(g) = &mut gain
         && params.method == Method::TopDown
@@ -289,7 +308,36 @@ pub fn analyze_planned(
         axis_by: chosen.is_none().then_some(params.axis_by),
         partition,
         notes,
+        explain,
     })
+}
+
+/// The partition of `plan`'s partition level along `axis`: in memory or strip by strip.
+fn partitioned(
+    plan: &Plan,
+    axis: [f64; 3],
+    params: &AnalysisParams,
+    monitor: &Monitor,
+) -> Result<Partition> {
+    let volume = plan.partition.as_ref();
+    match plan.streamed {
+        Some(room) => partition_streamed(volume, axis, &params.partition(), room, monitor),
+        None => partition(volume, axis, &params.partition(), monitor),
+    }
+}
+
+/// [`partitioned`], with the histories it came from.
+fn partitioned_kept(
+    plan: &Plan,
+    axis: [f64; 3],
+    params: &AnalysisParams,
+    monitor: &Monitor,
+) -> Result<(Partition, Histories)> {
+    let volume = plan.partition.as_ref();
+    match plan.streamed {
+        Some(room) => partition_streamed_kept(volume, axis, &params.partition(), room, monitor),
+        None => partition_kept(volume, axis, &params.partition(), monitor),
+    }
 }
 
 /// The anonymous memory an analysis of pyramid level `level` of `volume` takes at its peak, in

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use slabscope::Plan;
+use slabscope::explain::StepsShown;
 use slabscope::partition::label_bytes;
 use slabscope::report::curves_csv;
 use slabscope::volume::Resolution;
@@ -26,6 +27,13 @@ pub struct AnalyzeArgs {
     /// Also run the view search when --axis names an axis.
     #[arg(long)]
     pub views: bool,
+    /// Explain the chosen axis and the steps taken: the block counts behind the entropy rates
+    /// of the chosen and the worst axis, each split's part histograms, JS and gain, each
+    /// merge's joint histogram and NMI, the optimum beside greedy. For the last 32 steps, the
+    /// last N, or all (put FILE first: --explain takes an optional value).
+    #[arg(long, value_name = "all|N", num_args = 0..=1, default_missing_value = "32",
+          value_parser = parse_explain)]
+    pub explain: Option<StepsShown>,
     /// The pyramid level to compute on: full (every voxel, the paper's method), auto (the
     /// coarsest level with at least 128 voxels along every axis), or a level number K (each
     /// level halves every axis, averaging 2x2x2 blocks).
@@ -71,7 +79,8 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let full = &loaded.volume;
     let wanted = args.resolution.level(full.dims(), full.coarser_levels())?;
     let max_memory = args.load.options().max_memory;
-    let params = args.analysis.params(args.views);
+    let mut params = args.analysis.params(args.views);
+    params.explain = args.explain;
     let plan = Plan::within(full, wanted, max_memory, &params)?;
     let volume = plan.partition.as_ref();
     if args.export_labels.is_some() {
@@ -79,7 +88,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         check_labels_fit(&args.file, &plan, 1)?;
     }
     let name = slabscope::error::shown(&args.file);
-    let analysis = args.analysis.analyze(&name, &plan, args.views)?;
+    let analysis = args.analysis.analyze_with(&name, &plan, &params)?;
     let part = &analysis.partition;
     if args.export_labels.is_some() {
         check_labels_fit(&args.file, &plan, label_bytes(part.slabs.len()))?;
@@ -110,11 +119,29 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     for s in staged {
         s.persist(args.force)?;
     }
-    match report {
-        Some(report) => outln!("{}", slabscope::report::to_json(&report)?),
-        None => super::text::print_analysis(&name, volume, &analysis),
+    if let Some(report) = report {
+        outln!("{}", slabscope::report::to_json(&report)?);
+    } else {
+        super::text::print_analysis(&name, volume, &analysis);
+        if let Some(explain) = &analysis.explain {
+            super::explain::print(explain);
+        }
     }
     Ok(())
+}
+
+/// `all`, or a number of steps (at least 1).
+fn parse_explain(s: &str) -> Result<StepsShown, String> {
+    match s.trim() {
+        "all" => Ok(StepsShown::All),
+        t => match t.parse::<usize>() {
+            Ok(n) if n >= 1 => Ok(StepsShown::Last(n)),
+            _ => Err(format!(
+                "{s:?} is not all or a number of steps (--explain takes an optional value: put \
+                 FILE before it)"
+            )),
+        },
+    }
 }
 
 /// That a label volume of `plan`'s partition level, `bytes` a voxel, fits in the room a streamed

@@ -176,7 +176,16 @@ impl AnalysisArgs {
         plan: &slabscope::Plan,
         search_views: bool,
     ) -> anyhow::Result<slabscope::Analysis> {
-        let params = self.params(search_views);
+        self.analyze_with(name, plan, &self.params(search_views))
+    }
+
+    /// [`analyze`](Self::analyze) with these arguments' `params`, amended by the caller.
+    pub fn analyze_with(
+        &self,
+        name: &str,
+        plan: &slabscope::Plan,
+        params: &AnalysisParams,
+    ) -> anyhow::Result<slabscope::Analysis> {
         let views = plan.views.as_ref();
         let ratio = params.work_ratio(views.dims(), views.spacing());
         if ratio >= HEAVY {
@@ -189,7 +198,7 @@ impl AnalysisArgs {
                 if params.view.refine { "on" } else { "off" },
             );
         }
-        super::progress::with_bar(|monitor| slabscope::analyze_planned(plan, &params, monitor))
+        super::progress::with_bar(|monitor| slabscope::analyze_planned(plan, params, monitor))
             .map_err(|e| match (&e, self.slabs, self.threshold) {
                 (
                     slabscope::Error::InvalidParameter {
@@ -242,6 +251,7 @@ impl AnalysisArgs {
                 AxisByArg::Gain => AxisBy::Gain,
             },
             gain: self.gain,
+            explain: None,
         }
     }
 }

@@ -17,6 +17,7 @@ mod analyze;
 pub mod args;
 #[cfg(test)]
 mod doc_lines;
+mod explain;
 mod info;
 mod phantom;
 mod progress;

@@ -27,7 +27,7 @@ pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
 }
 
 /// `[ 0.000, 0.000, 1.000] (z)`, or without the name for an oblique axis.
-fn axis_text(axis: [f64; 3]) -> String {
+pub(super) fn axis_text(axis: [f64; 3]) -> String {
     match Axis::new(axis) {
         Ok(a) => match a.name() {
             Some(n) => format!("{a} ({n})"),

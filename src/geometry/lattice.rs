@@ -245,6 +245,15 @@ impl Lattice {
         )
     }
 
+    /// The ray `(i, j)` passing nearest the volume's centre: the one a lesson shows.
+    pub fn central_ray(&self) -> (i64, i64) {
+        let centre = self.extent.map(|e| e / 2.0);
+        let index = |w: [f64; 3], phase: f64| {
+            round_half_away(crate::geometry::dot(centre, w) / self.ray_spacing - phase)
+        };
+        (index(self.u, self.phase[0]), index(self.v, self.phase[1]))
+    }
+
     /// Inclusive ranges of the ray indices `i` and `j` that can meet the box.
     pub fn ray_ranges(&self) -> ((i64, i64), (i64, i64)) {
         (

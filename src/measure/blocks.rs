@@ -351,6 +351,46 @@ impl BlockCounts {
     }
 }
 
+impl BlockCounts {
+    /// The non-zero counts of the blocks of length `k` (1, L-1 or L), each block's symbols in
+    /// sequence order, most frequent first (ties by the symbols): the tables the entropies of
+    /// [`entropies`](Self::entropies) are taken over. `None` for another length.
+    pub fn table(&self, k: usize) -> Option<Vec<(Vec<u8>, u64)>> {
+        let block = self.block();
+        if k != 1 && k + 1 != block && k != block {
+            return None;
+        }
+        let bits = self.packing.bits;
+        let mask = (1u64 << bits) - 1;
+        let mut codes: HashMap<u64, u64> = HashMap::new();
+        let mut add = |code: u64, n: u64| *codes.entry(code).or_insert(0) += n;
+        let short_bits = bits * (block as u32 - 1);
+        if k == block {
+            self.long.for_each(&mut add);
+        } else if k == 1 {
+            let mut single = *self.ends.single;
+            self.long
+                .for_each(|code, n| single[(code >> short_bits) as usize] += n);
+            for (s, &n) in single.iter().enumerate().filter(|(_, n)| **n > 0) {
+                add(s as u64, n);
+            }
+        } else {
+            self.ends.short.for_each(&mut add);
+            self.long.for_each(|code, n| add(code >> bits, n));
+        }
+        let symbols = |code: u64| -> Vec<u8> {
+            (0..k)
+                .rev()
+                .map(|i| ((code >> (bits * i as u32)) & mask) as u8)
+                .collect()
+        };
+        let mut out: Vec<(Vec<u8>, u64)> =
+            codes.into_iter().map(|(c, n)| (symbols(c), n)).collect();
+        out.sort_unstable_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+        Some(out)
+    }
+}
+
 /// `(H(X^1), H(X^(L-1)), H(X^L))` of the given sequences, each a slice of symbols below `bins`.
 pub fn block_entropies<'a>(
     sequences: impl IntoIterator<Item = &'a [u8]>,
@@ -442,6 +482,32 @@ mod tests {
             assert!((got.1 - expect.1).abs() < EPS, "L = {block}");
             assert!((got.2 - expect.2).abs() < EPS, "L = {block}");
         }
+    }
+
+    #[test]
+    fn tables_list_every_block_with_its_count() {
+        // a b a b c and a b: 3-blocks aba, bab, abc; 2-blocks ab ×3, ba, bc; symbols a ×3, b ×3, c.
+        let mut x = BlockCounts::new(4, 3);
+        for seq in [&[0u8, 1, 0, 1, 2][..], &[0, 1][..]] {
+            for &s in seq {
+                x.push(s);
+            }
+            x.end_sequence();
+        }
+        let three = vec![(vec![0, 1, 0], 1), (vec![0, 1, 2], 1), (vec![1, 0, 1], 1)];
+        assert_eq!(x.table(3).unwrap(), three);
+        let two = vec![(vec![0, 1], 3), (vec![1, 0], 1), (vec![1, 2], 1)];
+        assert_eq!(x.table(2).unwrap(), two);
+        assert_eq!(
+            x.table(1).unwrap(),
+            vec![(vec![0], 3), (vec![1], 3), (vec![2], 1)]
+        );
+        assert_eq!(x.table(4), None);
+        let (h1, h2, h3) = x.entropies();
+        let h = |t: Vec<(Vec<u8>, u64)>| entropy(t.into_iter().map(|(_, n)| n).collect::<Vec<_>>());
+        assert!((h(x.table(1).unwrap()) - h1).abs() < EPS);
+        assert!((h(x.table(2).unwrap()) - h2).abs() < EPS);
+        assert!((h(x.table(3).unwrap()) - h3).abs() < EPS);
     }
 
     #[test]

@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use super::bottom_up::{Columns, consecutive_nmi};
+use super::bottom_up::{Columns, add_consecutive_joints, consecutive_nmi};
 use super::top_down::Gains;
 use super::{
     COMPARE_MAX_SLICES, MAX_SLICES, MergeHistory, Method, OptimalPartitions, Slab, SlabInfo,
@@ -351,6 +351,46 @@ impl Histories {
     /// The NMI of the two slabs at each boundary of `slabs` (one pass over the stack); an error
     /// for histories of a stack whose columns were not kept.
     pub fn boundary_nmi(&self, slabs: &[Slab], monitor: &Monitor) -> Result<Vec<f64>> {
+        self.require_columns()?;
+        consecutive_nmi(&self.stack, &Columns::new(&self.stack), slabs, monitor)
+    }
+
+    /// The histogram of slab `[a, b)`'s samples, the background left out (`bins` counts): what
+    /// top-down's gains are computed from.
+    pub fn slab_histogram(&self, (a, b): Slab) -> Vec<u64> {
+        let bins = self.stack.bins();
+        let mut h = vec![0u64; bins];
+        for slice in self.histograms[a * bins..b * bins].chunks_exact(bins) {
+            h.iter_mut().zip(slice).for_each(|(t, c)| *t += c);
+        }
+        h
+    }
+
+    /// `ΔI` of every cut strictly inside `slab`, bits: the cut at `slab.0 + 1 + i` is entry `i`.
+    pub fn cut_gains(&self, (a, b): Slab) -> Vec<f64> {
+        self.gains.curve(a, b)
+    }
+
+    /// The joint histogram of two adjacent slabs (`bins × bins`, row-major: rows are `first`'s
+    /// symbol, columns `second`'s), summed over every pair of their slices at corresponding
+    /// pixels: what bottom-up's NMI is computed from (one pass over the stack). An error for
+    /// histories of a stack whose columns were not kept.
+    pub fn joint_histogram(
+        &self,
+        first: Slab,
+        second: Slab,
+        monitor: &Monitor,
+    ) -> Result<Vec<u64>> {
+        self.require_columns()?;
+        let bins = self.stack.bins();
+        let mut joint = vec![0u64; bins * bins];
+        let columns = Columns::new(&self.stack);
+        add_consecutive_joints(&self.stack, &columns, &[first, second], &mut joint, monitor)?;
+        Ok(joint)
+    }
+
+    /// An error for histories of a stack whose columns were not kept.
+    fn require_columns(&self) -> Result<()> {
         if self.stack.pixels() == 0 {
             return Err(Error::invalid(
                 "stack",
@@ -358,7 +398,7 @@ impl Histories {
                 "the slices' columns, which a stack counted strip by strip does not keep",
             ));
         }
-        consecutive_nmi(&self.stack, &Columns::new(&self.stack), slabs, monitor)
+        Ok(())
     }
 
     /// What the histories leave out, for the user: the optimum on a stack too long for it, a

@@ -17,11 +17,12 @@ pub use histories::{Histories, Scope};
 pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{
     Comparison, Partition, PartitionParams, Step, Stop, label_bytes, label_volume, partition,
+    partition_kept,
 };
 pub use stack::{
     BackgroundSummary, InPlane, MISSING, SliceStack, StackParams, sampled_gain, slice_geometry,
 };
-pub use streamed::{partition_streamed, streamed_memory_floor};
+pub use streamed::{partition_streamed, partition_streamed_kept, streamed_memory_floor};
 pub use top_down::{Split, SplitHistory};
 
 use crate::measure::entropy;

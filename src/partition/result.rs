@@ -249,12 +249,23 @@ pub fn partition(
     params: &PartitionParams,
     monitor: &Monitor,
 ) -> Result<Partition> {
+    partition_kept(volume, axis, params, monitor).map(|(p, _)| p)
+}
+
+/// [`partition`], with the histories it was taken from (for the numbers behind its steps).
+pub fn partition_kept(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &PartitionParams,
+    monitor: &Monitor,
+) -> Result<(Partition, Histories)> {
     Histories::check_not_constant(volume)?;
     let stack = SliceStack::new(volume, axis, &params.stack, monitor)?;
     let scope = params.scope(Some(stack.slices()));
     let histories = Histories::of_stack(stack, scope, monitor)?;
     let position = histories.position(params.method, params.stop)?;
-    Partition::new(&histories, params.method, position, monitor)
+    let partition = Partition::new(&histories, params.method, position, monitor)?;
+    Ok((partition, histories))
 }
 
 /// A label volume: the index of the slab each voxel lies in (u8, or u16 above 256 slabs: a byte

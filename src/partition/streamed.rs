@@ -52,6 +52,18 @@ pub fn partition_streamed(
     max_memory: u64,
     monitor: &Monitor,
 ) -> Result<Partition> {
+    partition_streamed_kept(volume, axis, params, max_memory, monitor).map(|(p, _)| p)
+}
+
+/// [`partition_streamed`], with the histories it was taken from (whose stack keeps no
+/// columns: its splits and optimum can be explained, not merges).
+pub fn partition_streamed_kept(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &PartitionParams,
+    max_memory: u64,
+    monitor: &Monitor,
+) -> Result<(Partition, Histories)> {
     if params.method == Method::BottomUp {
         return Err(Error::invalid(
             "method",
@@ -115,7 +127,7 @@ pub fn partition_streamed(
             strips[0].len(),
         ),
     );
-    Ok(partition)
+    Ok((partition, histories))
 }
 
 /// The bytes a strip of `rows` rows of `cutter`'s stack takes at its peak.

@@ -90,7 +90,7 @@ impl Gains {
     }
 
     /// `ΔI` of every cut strictly inside `[a, b)`.
-    fn curve(&self, a: usize, b: usize) -> Vec<f64> {
+    pub(crate) fn curve(&self, a: usize, b: usize) -> Vec<f64> {
         if self.total == 0.0 {
             return vec![0.0; b.saturating_sub(a + 1)];
         }

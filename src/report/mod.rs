@@ -10,6 +10,7 @@ use serde::Serialize;
 
 use crate::analysis::{Analysis, AxisBy, AxisGain, GainRanking, GainSampling};
 use crate::error::{Error, Result};
+use crate::explain::Explain;
 use crate::geometry::{WorldAxis, dot};
 use crate::partition::{BackgroundSummary, Partition};
 use crate::view::{AxisEntropy, Contender, RankedBy, ViewParams};
@@ -88,6 +89,9 @@ pub struct AnalysisReport {
     pub notes: Vec<String>,
     /// The partition along the axis.
     pub partition: Partition,
+    /// With `--explain`: the numbers behind the axis and the steps (docs/json.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub explain: Option<Explain>,
 }
 
 impl AnalysisReport {
@@ -139,6 +143,7 @@ impl AnalysisReport {
             background: Some(analysis.partition.background).filter(|b| b.mode != "none"),
             notes: analysis.notes.clone(),
             partition: analysis.partition.clone(),
+            explain: analysis.explain.clone(),
         })
     }
 }

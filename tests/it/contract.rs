@@ -150,13 +150,18 @@ fn printed() -> &'static [Printed] {
         let (derived, ct, dicom) = (dicom_data("derived"), dicom_data("ct"), dicom_data(""));
         let zarr = data("zarr/v05_sharded.ome.zarr");
         let (b, f, m) = (body.as_str(), folder.as_str(), manifest.as_str());
-        let commands: [(&str, Vec<&str>); 12] = [
+        let commands: [(&str, Vec<&str>); 14] = [
             ("analyze", vec!["analyze", b]),
             (
                 "analyze-bottomup",
                 vec!["analyze", b, "--method", "bottomup"],
             ),
             ("analyze-optimal", vec!["analyze", b, "--method", "optimal"]),
+            ("analyze-explain", vec!["analyze", b, "--explain", "4"]),
+            (
+                "analyze-explain-bottomup",
+                vec!["analyze", b, "--method", "bottomup", "--explain", "4"],
+            ),
             (
                 "analyze-axis",
                 vec![

@@ -13,6 +13,7 @@ mod bad_input;
 mod cli;
 mod contract;
 mod dicom;
+mod explain;
 mod formats;
 mod fuzz_headers;
 mod gain;

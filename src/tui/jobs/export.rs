@@ -49,6 +49,7 @@ pub(super) fn export(
         axis_by: r.gain.as_ref().and_then(|&(_, by)| by),
         notes: slabscope::analysis::notes(volume, volume, &r.view_params, &part),
         partition: part,
+        explain: None,
     };
     let report = AnalysisReport::new(&r.name, full, &r.view_params, &analysis)?.computed_on(volume);
     let text = slabscope::report::to_json(&report)?;

@@ -1,10 +1,10 @@
 //! The walk of a lattice whose rays are voxel columns: samples are voxels, read in memory order a
 //! row of columns at a time.
 
-use super::{AxisEntropy, BinSampler, VoxelBins, count_in_parallel, work_units};
+use super::{BinSampler, VoxelBins, count_in_parallel, work_units};
 use crate::error::Result;
 use crate::geometry::lattice::Lattice;
-use crate::measure::{Counter, Run};
+use crate::measure::{BlockCounts, Counter, Run};
 use crate::progress::Monitor;
 use crate::volume::Voxel;
 use crate::volume::cells::MIXED;
@@ -91,17 +91,18 @@ impl Columns {
     }
 }
 
-/// [`entropy_rate`] of a lattice whose rays are the voxel columns along `axis` (see
-/// [`Lattice::columns`]): samples are voxels, read in memory order a row of columns at a time.
+/// The block counts of [`entropy_rate`] (and the rays) of a lattice whose rays are the voxel
+/// columns along `axis` (see [`Lattice::columns`]): samples are voxels, read in memory order a
+/// row of columns at a time.
 ///
 /// [`entropy_rate`]: super::entropy_rate
-pub(super) fn column_rate<T: Voxel>(
+pub(super) fn column_counts<T: Voxel>(
     sampler: &BinSampler<T>,
     lattice: &Lattice,
     axis: usize,
     block: usize,
     monitor: &Monitor,
-) -> Result<AxisEntropy> {
+) -> Result<(BlockCounts, u64)> {
     let columns = Columns::new(sampler.dims(), axis);
     // As many parts as the general walk reports progress units.
     let parts = work_units(lattice).max(1) as usize;
@@ -109,7 +110,7 @@ pub(super) fn column_rate<T: Voxel>(
     let ranges = (0..parts)
         .map(|part| part * items / parts..(part + 1) * items / parts)
         .collect();
-    let (counts, rays) = count_in_parallel(
+    count_in_parallel(
         ranges,
         sampler.bins(),
         block,
@@ -118,6 +119,5 @@ pub(super) fn column_rate<T: Voxel>(
             Some(mut dense) => columns.walk(range, sampler, &mut dense),
             None => columns.walk(range, sampler, counts),
         },
-    )?;
-    Ok(AxisEntropy::new(lattice.d, &counts, rays))
+    )
 }

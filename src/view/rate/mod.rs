@@ -18,9 +18,10 @@ use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, DenseCounts};
 use crate::progress::Monitor;
 use crate::volume::Voxel;
-use columns::column_rate;
+use columns::column_counts;
 #[cfg(target_arch = "x86_64")]
 use tiles::mixed_bin;
+pub use tiles::ray_bins;
 use tiles::{Walker, fixed_step, scalar_walk, tile_rows, walk_row};
 
 /// An axis's entropy rate over lattice phases: the paper's lattice and shifted ones.
@@ -220,6 +221,25 @@ enum Walk {
     Tiles { vector: bool },
 }
 
+/// The counts behind [`entropy_rate`], kept: the L-blocks, (L-1)-blocks and symbols of every
+/// ray of the lattice, by the same walk, and the number of rays that met the volume. The
+/// entropies of its tables give the rate exactly (the lesson's numbers are these).
+pub fn block_counts<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattice: &Lattice,
+    block: usize,
+    monitor: &Monitor,
+) -> Result<(BlockCounts, u64)> {
+    counts_with(
+        sampler,
+        lattice,
+        block,
+        monitor,
+        Walk::Fastest,
+        RaySubset::ALL,
+    )
+}
+
 /// [`entropy_rate`], walking the rays as `walk` says.
 fn rate_with<T: Voxel>(
     sampler: &BinSampler<T>,
@@ -229,16 +249,29 @@ fn rate_with<T: Voxel>(
     walk: Walk,
     subset: RaySubset,
 ) -> Result<AxisEntropy> {
+    let (counts, rays) = counts_with(sampler, lattice, block, monitor, walk, subset)?;
+    Ok(AxisEntropy::new(lattice.d, &counts, rays))
+}
+
+/// The block counts and rays of [`rate_with`].
+fn counts_with<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattice: &Lattice,
+    block: usize,
+    monitor: &Monitor,
+    walk: Walk,
+    subset: RaySubset,
+) -> Result<(BlockCounts, u64)> {
     if walk == Walk::Fastest
         && subset == RaySubset::ALL
         && let Some(axis) = lattice.columns()
     {
-        return column_rate(sampler, lattice, axis, block, monitor);
+        return column_counts(sampler, lattice, axis, block, monitor);
     }
     let vector = walk != (Walk::Tiles { vector: false });
     let rows: Vec<(i64, i64)> = tile_rows(lattice, subset.every).collect();
     let step = fixed_step(lattice);
-    let (counts, rays) = count_in_parallel(rows, sampler.bins(), block, monitor, |js, counts| {
+    count_in_parallel(rows, sampler.bins(), block, monitor, |js, counts| {
         match counts.dense() {
             #[cfg(target_arch = "x86_64")]
             Some(mut dense) if vector && lanes::available(sampler) => {
@@ -265,8 +298,7 @@ fn rate_with<T: Voxel>(
                 walk_row(lattice, js, subset, step, sampler, counts, &mut common)
             }
         }
-    })?;
-    Ok(AxisEntropy::new(lattice.d, &counts, rays))
+    })
 }
 
 /// Block counts of `parts` of the work, counted in parallel by `count` (which returns its

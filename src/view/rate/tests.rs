@@ -124,6 +124,44 @@ fn every_walk_counts_what_the_scalar_walk_counts() {
 }
 
 #[test]
+fn one_ray_at_a_time_counts_what_the_walks_count() {
+    // The lesson's strip of samples is the walk's: every ray's bins, counted, give the tables.
+    for (dims, spacing) in [
+        ([23, 19, 31], [1.0, 1.0, 1.0]),
+        ([40, 9, 17], [0.7, 1.3, 2.1]),
+    ] {
+        let v = awkward_volume(dims, spacing, 5);
+        let sampler = BinSampler::new(&v, v.quantizer(32).unwrap());
+        for axis in [[0.0, 0.0, 1.0], [0.3, -0.5, 0.81], [1.0, 1.0, 1.0]] {
+            let s = min_spacing(v.spacing());
+            let lattice = Lattice::new(dims, v.spacing(), axis, s, s, [0.0; 3]).unwrap();
+            let (walked, rays) = block_counts(&sampler, &lattice, 3, &Monitor::none()).unwrap();
+            let mut one = BlockCounts::new(32, 3);
+            let ((i0, i1), (j0, j1)) = lattice.ray_ranges();
+            let mut met = 0;
+            for (i, j) in (i0..=i1).flat_map(|i| (j0..=j1).map(move |j| (i, j))) {
+                let Some(bins) = ray_bins(&sampler, &lattice, i, j) else {
+                    continue;
+                };
+                met += 1;
+                for b in bins {
+                    match b {
+                        Some(b) => one.push(b),
+                        None => one.end_sequence(),
+                    }
+                }
+                one.end_sequence();
+            }
+            assert_eq!(met, rays, "{dims:?} {axis:?}");
+            assert_eq!(one.table(3), walked.table(3), "{dims:?} {axis:?}");
+            assert_eq!(one.table(2), walked.table(2), "{dims:?} {axis:?}");
+            assert_eq!(one.table(1), walked.table(1), "{dims:?} {axis:?}");
+            assert!(walked.blocks() > 1000);
+        }
+    }
+}
+
+#[test]
 fn missing_voxels_break_sequences() {
     let mut data = vec![1.0f32; 27];
     data[13] = f32::NAN; // the centre

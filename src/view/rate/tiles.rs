@@ -4,7 +4,7 @@
 
 use super::{BinSampler, RaySubset};
 use crate::geometry::cross;
-use crate::geometry::lattice::{Lattice, round_half_away, to_fixed};
+use crate::geometry::lattice::{Lattice, Ray, round_half_away, to_fixed};
 use crate::measure::{Counter, Run};
 use crate::volume::Voxel;
 use crate::volume::cells::MIXED;
@@ -102,6 +102,45 @@ fn advance(p: &mut [i64; 3], step: [i64; 3]) {
     }
 }
 
+/// Where a ray's walk starts, in fixed point, and whether its samples lie on the voxel grid
+/// (`whole_step`: the lattice's step is whole): then they are the voxels themselves.
+fn ray_start(ray: &Ray, whole_step: bool) -> ([i64; 3], bool) {
+    let start = ray.at(ray.k0);
+    let grid = whole_step && start.iter().all(|&c| is_whole(c));
+    let p = to_fixed(if grid {
+        start.map(|c| round_half_away(c) as f64)
+    } else {
+        start
+    });
+    (p, grid)
+}
+
+/// The quantized samples of ray `(i, j)` of `lattice`, in order (`None` for a missing one), as
+/// every walk of the entropy rate counts them; `None` when the ray misses the volume. One ray
+/// at a time, for showing: the walks count whole tiles.
+pub fn ray_bins<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattice: &Lattice,
+    i: i64,
+    j: i64,
+) -> Option<Vec<Option<u8>>> {
+    let ray = lattice.ray(i, j)?;
+    let (mut p, grid) = ray_start(&ray, lattice.step().iter().all(|&c| is_whole(c)));
+    let step = fixed_step(lattice);
+    let bins = (ray.k0..=ray.k1)
+        .map(|_| {
+            let bin = if grid {
+                sampler.voxel_bin(p)
+            } else {
+                sampler.bin_fixed(p)
+            };
+            advance(&mut p, step);
+            bin
+        })
+        .collect();
+    Some(bins)
+}
+
 /// The rays of one tile: columns `is` of the rows `js.0 ..`, each row's rays that can meet the
 /// box in `rows` (see [`Lattice::row_span`]), and the subset walked.
 struct TileRays<'a> {
@@ -135,13 +174,7 @@ fn walk_tile<C: Counter, T: Voxel>(
             let Some(ray) = lattice.ray(i, j) else {
                 continue;
             };
-            let start = ray.at(ray.k0);
-            let grid = whole_step && start.iter().all(|&c| is_whole(c));
-            let p = to_fixed(if grid {
-                start.map(|c| round_half_away(c) as f64)
-            } else {
-                start
-            });
+            let (p, grid) = ray_start(&ray, whole_step);
             let n = ray.k1 - ray.k0 + 1;
             let (t0, t1) = spans.of(p, n);
             let mut w = Walker {

@@ -1,0 +1,168 @@
+//! The numbers behind one axis's entropy rate (paper eq. 2 to 4): the block counts on the paper's
+//! single lattice, the block entropies taken over them, and one ray's run of samples.
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::geometry::lattice::Lattice;
+use crate::geometry::{WorldAxis, canonical, normalize};
+use crate::measure::{BlockCounts, entropy};
+use crate::progress::Monitor;
+use crate::view::{BinSampler, ViewParams, block_counts, ray_bins};
+use crate::volume::Volume;
+
+/// One block of symbols (quantized samples in sequence order) and how often it occurs.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct BlockCount {
+    /// The bins of the block's samples, first sample first.
+    pub symbols: Vec<u8>,
+    /// How many times it occurs along the rays.
+    pub count: u64,
+}
+
+/// Why an axis has the entropy rate it has: every count behind `h = H(X^L) - H(X^(L-1))`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AxisLesson {
+    /// The canonical unit axis, physical space.
+    pub axis: [f64; 3],
+    /// The axis in world coordinates.
+    #[serde(flatten)]
+    pub world: WorldAxis,
+    /// Block length L.
+    pub block: usize,
+    /// Quantization bins.
+    pub bins: usize,
+    /// Rays of the paper's lattice that met the volume.
+    pub rays: u64,
+    /// Samples counted (missing ones left out).
+    pub samples: u64,
+    /// `H(X^1) … H(X^L)`, bits: entry `k - 1` is `H(X^k)`.
+    pub block_entropies: Vec<f64>,
+    /// `h = H(X^L) - H(X^(L-1))`, bits per sample: the view's `entropy_rate`.
+    pub entropy_rate: f64,
+    /// Every L-block that occurs, most frequent first (ties by symbols).
+    pub blocks: Vec<BlockCount>,
+    /// Every (L-1)-block that occurs, most frequent first.
+    pub short_blocks: Vec<BlockCount>,
+}
+
+impl AxisLesson {
+    /// `H(X^L)`, bits.
+    pub fn h_long(&self) -> f64 {
+        self.block_entropies[self.block - 1]
+    }
+
+    /// `H(X^(L-1))`, bits.
+    pub fn h_short(&self) -> f64 {
+        self.block_entropies[self.block - 2]
+    }
+}
+
+/// The run of quantized samples along one ray, as the entropy rate counts them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RaySamples {
+    /// The ray's indices on the lattice.
+    pub ray: (i64, i64),
+    /// Its samples' bins, first to last (`None`: missing, which breaks the blocks).
+    pub bins: Vec<Option<u8>>,
+    /// The first and last sample's positions, voxel index coordinates.
+    pub ends: ([f64; 3], [f64; 3]),
+}
+
+/// The paper's lattice along `axis` (phase 0, every ray) with `params`' spacings.
+fn paper_lattice(volume: &Volume, axis: [f64; 3], params: &ViewParams) -> Result<Lattice> {
+    let sampling = params.sampling.resolved(volume.dims(), volume.spacing())?;
+    Ok(Lattice::new(
+        volume.dims(),
+        volume.spacing(),
+        canonical_axis(axis)?,
+        sampling.ray_spacing.unwrap_or(1.0),
+        sampling.sample_spacing.unwrap_or(1.0),
+        [0.0; 3],
+    )?)
+}
+
+fn canonical_axis(axis: [f64; 3]) -> Result<[f64; 3]> {
+    normalize(axis)
+        .map(canonical)
+        .ok_or_else(|| Error::invalid("axis", "[0, 0, 0]", "a direction with a length"))
+}
+
+/// The lesson of `axis` on `volume` by the view search's `params`: the same lattice, walk and
+/// counts that gave the axis its entropy rate, so `entropy_rate` is the view's to the bit.
+pub fn axis_lesson(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &ViewParams,
+    monitor: &Monitor,
+) -> Result<AxisLesson> {
+    let lattice = paper_lattice(volume, axis, params)?;
+    let block = params.block;
+    let bins = params.sampling.bins;
+    let q = volume.quantizer(bins)?;
+    let walk = |block: usize| -> Result<(BlockCounts, u64)> {
+        crate::volume::with_voxels!(volume.data(), |data| {
+            block_counts(&BinSampler::over(data, volume, q), &lattice, block, monitor)
+        })
+    };
+    let (counts, rays) = walk(block)?;
+    let (h1, h_short, h_long) = counts.entropies();
+    let mut block_entropies = vec![h1];
+    // L = 4 has a middle length its counts do not give: the walk with blocks of 2 does.
+    for k in 2..block.saturating_sub(1) {
+        block_entropies.push(walk(k)?.0.entropies().2);
+    }
+    block_entropies.extend([h_short, h_long]);
+    let table = |k: usize| -> Vec<BlockCount> {
+        counts
+            .table(k)
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(symbols, count)| BlockCount { symbols, count })
+            .collect()
+    };
+    let d = lattice.d;
+    Ok(AxisLesson {
+        axis: d,
+        world: volume.transform().describe(d, volume.spacing()),
+        block,
+        bins,
+        rays,
+        samples: counts.symbols(),
+        entropy_rate: (h_long - h_short).max(0.0),
+        block_entropies,
+        blocks: table(block),
+        short_blocks: table(block - 1),
+    })
+}
+
+/// `H` of a block table, bits: what the lesson's entropies are, recomputed from its counts.
+pub fn table_entropy(table: &[BlockCount]) -> f64 {
+    entropy(table.iter().map(|b| b.count).collect::<Vec<_>>())
+}
+
+/// The samples of the ray `offset` rays from the one through the volume's centre (along the
+/// lattice's two in-plane directions) on the paper's lattice along `axis`; `None` when that
+/// ray misses the volume.
+pub fn ray_samples(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &ViewParams,
+    offset: (i64, i64),
+) -> Result<Option<RaySamples>> {
+    let lattice = paper_lattice(volume, axis, params)?;
+    let (ci, cj) = lattice.central_ray();
+    let (i, j) = (ci + offset.0, cj + offset.1);
+    let q = volume.quantizer(params.sampling.bins)?;
+    let bins = crate::volume::with_voxels!(volume.data(), |data| {
+        ray_bins(&BinSampler::over(data, volume, q), &lattice, i, j)
+    });
+    Ok(bins.map(|bins| {
+        let ray = lattice.ray(i, j).expect("ray_bins found the ray");
+        RaySamples {
+            ray: (i, j),
+            bins,
+            ends: (ray.at(ray.k0), ray.at(ray.k1)),
+        }
+    }))
+}
