@@ -49,6 +49,8 @@ pub struct MergeLesson {
     pub step: usize,
     /// The two adjacent slabs merged.
     pub merge: (Slab, Slab),
+    /// Quantization bins: the joint histogram is `bins × bins`.
+    pub bins: usize,
     /// The non-zero cells of their joint histogram: `[x, y, count]`, x the first slab's bin
     /// and y the second's at corresponding pixels, in order of x then y.
     pub joint: Vec<[u64; 3]>,
@@ -161,6 +163,7 @@ pub fn merge_lesson(histories: &Histories, step: usize, monitor: &Monitor) -> Re
     Ok(MergeLesson {
         step,
         merge: (x, y),
+        bins,
         joint: cells,
         h_x: entropy(rows),
         h_y: entropy(columns),

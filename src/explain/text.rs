@@ -49,7 +49,7 @@ pub fn axis_lines(title: &str, a: &AxisLesson, top: usize) -> Vec<String> {
         .collect();
     vec![
         format!(
-            "{title}: {} rays of the paper's lattice, {} samples in {} bins, blocks of L = {l}",
+            "{title}: {} rays, {} samples, {} bins, L = {l}",
             grouped(a.rays),
             grouped(a.samples),
             a.bins
@@ -76,17 +76,20 @@ pub fn axis_lines(title: &str, a: &AxisLesson, top: usize) -> Vec<String> {
     ]
 }
 
-/// Why the lower rate means more structure, for the chosen axis beside the worst.
-pub fn rate_sentence(chosen: &AxisLesson, worst: &AxisLesson) -> String {
-    let l = chosen.block;
+/// Why the lower rate means more structure: `a` (called `a_name`) beside `b`.
+pub fn rate_sentence(a_name: &str, a: &AxisLesson, b_name: &str, b: &AxisLesson) -> String {
     format!(
-        "h is the uncertainty left about a sample once the {} before it along the ray are known: \
-         {:.4} bits along the chosen axis against {:.4} along the worst. The lower the rate, the \
-         better each sample is predicted from its neighbours, so the volume is more structured \
-         along that axis, and slabs cut across it follow the structure.",
-        l - 1,
-        chosen.entropy_rate,
-        worst.entropy_rate
+        "The lower h, the better a sample is predicted from the {} before it along its ray: the \
+         {a_name} axis has {:.4} bits per sample, the {b_name} {:.4}, so the volume is more \
+         structured along the {}.",
+        a.block - 1,
+        a.entropy_rate,
+        b.entropy_rate,
+        if a.entropy_rate <= b.entropy_rate {
+            a_name
+        } else {
+            b_name
+        }
     )
 }
 
@@ -242,7 +245,12 @@ pub fn lines(explain: &Explain, axis_title: impl Fn(&AxisLesson) -> String) -> V
         ));
     }
     if let [chosen, worst] = &explain.axes[..] {
-        out.push(rate_sentence(&chosen.lesson, &worst.lesson));
+        out.push(rate_sentence(
+            "chosen",
+            &chosen.lesson,
+            "worst",
+            &worst.lesson,
+        ));
     }
     let taken = explain.steps_taken;
     let shown = explain.splits.len() + explain.merges.len();

@@ -80,6 +80,8 @@ pub enum Job {
     Gain,
     /// Writing the exports.
     Export,
+    /// Computing the lesson's numbers.
+    Lesson,
 }
 
 /// A job's message back to the UI.
@@ -100,6 +102,8 @@ pub enum JobMsg {
     Rendered(u64, Result<Box<Rendered>, String>),
     /// An export finished: what was written, or why not.
     Exported(Result<String, String>),
+    /// The lesson of request `generation`.
+    Lesson(u64, Result<Box<crate::tui::lesson::Lesson>, String>),
     /// Background triage's row of volume `index` of the folder.
     Triaged(usize, Box<slabscope::triage::TriageRow>),
     /// A message of a job started for the volume open in `epoch` (the jobs drop it once
@@ -183,6 +187,8 @@ pub enum Action {
     /// Rank the axes by partition gain, once ranked switch the list's order and the sphere's
     /// colours between the entropy rate and the gain.
     RankGain,
+    /// Show or hide the lesson: the numbers behind the selected viewpoint or the step shown.
+    ToggleLesson,
     /// Write the view (PNG), the analysis (JSON) and the labels (NRRD).
     Export,
     /// The preview pane's size in cells changed.
@@ -323,6 +329,8 @@ pub enum Effect {
     Analyze(u64, [f64; 3], StackParams, usize),
     /// Rank every axis by partition gain with these parameters.
     RankGain(Box<slabscope::AnalysisParams>),
+    /// Compute a lesson's numbers.
+    Lesson(Box<crate::tui::lesson::LessonRequest>),
     /// Render.
     Render(Box<RenderRequest>),
     /// Write exports.
@@ -348,6 +356,7 @@ impl std::fmt::Debug for Effect {
             Self::SearchViews(_, level) => write!(f, "SearchViews(level {level})"),
             Self::Analyze(g, axis, _, level) => write!(f, "Analyze({g}, {axis:?}, level {level})"),
             Self::RankGain(_) => write!(f, "RankGain"),
+            Self::Lesson(r) => write!(f, "Lesson({}, {:?})", r.generation, r.subject),
             Self::Render(r) => write!(f, "Render({})", r.generation),
             Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),
             Self::Open(p) => write!(f, "Open({})", p.name()),

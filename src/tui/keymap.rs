@@ -67,6 +67,7 @@ pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {
         KeyCode::Char('e') => Action::Export,
         KeyCode::Char('b') => Action::ToggleBackground,
         KeyCode::Char('i') => Action::RankGain,
+        KeyCode::Char('x') => Action::ToggleLesson,
         _ => return None,
     })
 }
@@ -84,8 +85,7 @@ pub const HELP: &[(&str, &str)] = &[
     ("t", "threshold (empty clears)"),
     ("b  i", "background out / counted; rank by gain, h / gain"),
     ("[ ] { }", "orbit: azimuth, elevation"),
-    ("z Z", "zoom in / out"),
-    ("s S", "spread less / more"),
+    ("z Z  s S", "zoom in / out; spread less / more"),
     ("g", "gaps: similarity / uniform"),
     ("r", "render: cut faces / DVR / MIP"),
     ("v", "slice view: slice at the cursor, slab's faces"),
@@ -93,6 +93,7 @@ pub const HELP: &[(&str, &str)] = &[
     ("f c", "transfer function (those that fit), colours"),
     ("o P", "selected slab alone; perspective"),
     ("e  F", "export; a folder's file list (PgUp PgDn: volumes)"),
+    ("x", "lesson: the numbers behind the axis or the step"),
     ("Esc", "cancel work, close help"),
     ("? q", "help, quit"),
 ];

@@ -7,6 +7,7 @@ pub mod app;
 pub mod event;
 pub mod jobs;
 pub mod keymap;
+pub mod lesson;
 pub mod panes;
 pub mod partitioning;
 pub mod theme;

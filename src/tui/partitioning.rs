@@ -64,6 +64,11 @@ impl Partitioning {
         }
     }
 
+    /// The number of the newest histories requested.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
     /// The histories, when ready.
     pub fn ready(&self) -> Option<&Arc<Histories>> {
         self.histories.ready()

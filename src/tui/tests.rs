@@ -102,6 +102,7 @@ fn key(c: char) -> Event {
 }
 
 mod gain;
+mod lesson;
 
 #[test]
 fn the_analysis_opens_on_four_top_down_slabs() {

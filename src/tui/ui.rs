@@ -84,6 +84,13 @@ pub fn draw(frame: &mut Frame, app: &App) {
     frame.render_widget(&app.curves, a.curves);
     frame.render_widget(&app.preview, a.preview);
     frame.render_widget(&app.status, a.status);
+    if app.lesson.open {
+        let body = Rect {
+            height: area.height.saturating_sub(a.status.height),
+            ..area
+        };
+        frame.render_widget(&app.lesson, body);
+    }
     if let Some(files) = app.files.as_ref().filter(|f| f.shown) {
         frame.render_widget(files, area);
     }

@@ -10,8 +10,16 @@ use crate::tui::event::{Action, Ask, Effect, Load};
 use crate::tui::panes::status::{Prompt, settings_text};
 
 impl App {
-    /// Applies `action`; returns what the event loop must do.
+    /// Applies `action`; returns what the event loop must do (and the lesson's numbers when
+    /// what it explains changed).
     pub fn update(&mut self, action: Action) -> Vec<Effect> {
+        let mut effects = self.apply(action);
+        effects.extend(self.sync_lesson());
+        effects
+    }
+
+    /// [`update`](Self::update) but for the lesson.
+    fn apply(&mut self, action: Action) -> Vec<Effect> {
         let action = match self.on_prompt(action) {
             Ok(effects) => return effects,
             Err(action) => action,
@@ -36,6 +44,7 @@ impl App {
                 self.sync_focus();
                 vec![]
             }
+            Action::Sideways(by) if self.moves_ray() => self.move_ray(by),
             Action::Sideways(by) if self.pointing() => self.move_pointer(by, 0),
             Action::Move(by) | Action::Sideways(by) => self.move_cursor(by),
             Action::Page(by) => self.move_cursor(by * 10),
@@ -76,6 +85,7 @@ impl App {
             Action::Export => self.export(),
             Action::ToggleBackground => self.toggle_background(),
             Action::RankGain => self.rank_gain(),
+            Action::ToggleLesson => self.toggle_lesson(),
             Action::PreviewArea(w, h) => {
                 if (w, h) == self.preview.cells {
                     return vec![];
@@ -189,6 +199,9 @@ impl App {
             self.help = false;
             self.sync_focus();
             return vec![];
+        }
+        if self.lesson.open {
+            return self.toggle_lesson();
         }
         let refining = self.cancel_refinement();
         let busy = self.views.views.running()

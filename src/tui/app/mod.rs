@@ -5,6 +5,7 @@
 
 mod gain;
 mod keys;
+mod lesson;
 mod refine;
 
 use std::path::PathBuf;
@@ -15,6 +16,7 @@ use slabscope::{AnalysisParams, Progress, Volume};
 use super::event::{Effect, ExportRequest, Job, JobMsg, Load, RenderRequest, SliceRequest};
 use super::panes::curves::{Curves, CurvesPane};
 use super::panes::files::FilesPane;
+use super::panes::lesson::LessonPane;
 use super::panes::preview::PreviewPane;
 use super::panes::slabs::{SlabTable, SlabsPane};
 use super::panes::status::StatusBar;
@@ -93,6 +95,10 @@ pub struct App {
     screen: Screen,
     /// On a large volume, the preview and its refinement at full resolution.
     pub refine: Option<refine::Refinement>,
+    /// The lesson: the numbers behind the selected viewpoint or the step.
+    pub lesson: LessonPane,
+    /// The lesson's ray: its offset from the central one.
+    ray: (i64, i64),
 }
 
 impl App {
@@ -118,6 +124,8 @@ impl App {
             files: None,
             screen: kept,
             refine: None,
+            lesson: LessonPane::new(theme),
+            ray: (0, 0),
         };
         app.preview.hide = screen.hide;
         app.preview.graphics = screen.graphics;
@@ -285,6 +293,10 @@ impl App {
             }
             JobMsg::Views(level, result) => self.on_views(level, result),
             JobMsg::Gain(result) => self.on_gain(result),
+            JobMsg::Lesson(generation, result) => {
+                self.on_lesson(generation, result);
+                vec![]
+            }
             JobMsg::Analysis(generation, level, result) => {
                 self.on_histories(generation, level, result)
             }
@@ -415,7 +427,8 @@ impl App {
         self.slabs.focused = self.focus == Pane::Slabs;
         self.curves.focused = self.focus == Pane::Curves;
         self.preview.focused = self.focus == Pane::Preview;
-        self.preview.covered = self.help || self.files.as_ref().is_some_and(|f| f.shown);
+        self.preview.covered =
+            self.help || self.lesson.open || self.files.as_ref().is_some_and(|f| f.shown);
     }
 }
 

@@ -116,6 +116,12 @@ impl Jobs {
                     JobMsg::Gain(result.map(Box::new).map_err(|e| e.to_string()))
                 });
             }
+            Effect::Lesson(request) => {
+                self.spawn(Job::Lesson, move |monitor, _| {
+                    let result = request.compute(monitor).map(Box::new);
+                    JobMsg::Lesson(request.generation, result)
+                });
+            }
             Effect::Open(path) => {
                 // The next volume: its own load, views, histories and renders; what the jobs of
                 // the last one still send is dropped.

@@ -3,6 +3,7 @@
 pub mod curves;
 pub mod files;
 pub mod help;
+pub mod lesson;
 pub mod preview;
 pub mod slabs;
 pub mod sphere;

@@ -1,0 +1,360 @@
+//! The lesson pane (key `x`): the numbers behind the selected viewpoint or the step shown, as
+//! text (the library's sentences, so they read the same with half-blocks as with images), with a
+//! strip of one ray's samples, bar charts of a split's histograms and its gain at every cut, and
+//! a merge's joint histogram as a heat map. Drawn over the panes; condensed on a small terminal.
+
+use ratatui::buffer::Buffer;
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Clear, Paragraph, Sparkline, Widget, Wrap};
+use slabscope::explain::text;
+use slabscope::explain::{AxisLesson, MergeLesson, RaySamples, SplitLesson};
+
+use super::placeholder;
+use crate::tui::event::Load;
+use crate::tui::lesson::{Lesson, Subject};
+use crate::tui::theme::Theme;
+
+/// The lesson pane's state.
+pub struct LessonPane {
+    /// Whether it shows.
+    pub open: bool,
+    /// What the lesson asked for last is about.
+    pub subject: Option<Subject>,
+    /// The number of the newest request.
+    pub generation: u64,
+    /// The numbers, or the gauge of their job.
+    pub lesson: Load<Box<Lesson>>,
+    /// Colours.
+    pub theme: Theme,
+}
+
+/// Terminals at least this tall get the full sentences and the taller charts.
+const ROOMY_HEIGHT: u16 = 36;
+
+impl LessonPane {
+    /// A closed pane.
+    pub fn new(theme: Theme) -> Self {
+        Self {
+            open: false,
+            subject: None,
+            generation: 0,
+            lesson: Load::Idle,
+            theme,
+        }
+    }
+
+    fn title(&self) -> String {
+        let what = match &self.subject {
+            Some(Subject::Axis { .. }) => "why this viewpoint (← → another ray)",
+            Some(Subject::Step { .. }) => "why this step (n p step)",
+            None => "",
+        };
+        format!(" Lesson: {what}  x closes ")
+    }
+}
+
+impl Widget for &LessonPane {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        Clear.render(area, buf);
+        let block = self.theme.block(self.title(), true);
+        let inner = block.inner(area);
+        block.render(area, buf);
+        let roomy = area.height >= ROOMY_HEIGHT;
+        match &self.lesson {
+            Load::Ready(lesson) => match lesson.as_ref() {
+                Lesson::Axis {
+                    selected,
+                    ray,
+                    best,
+                } => {
+                    let lines = axis(selected, ray.as_ref(), best, roomy, inner.width, self.theme);
+                    paragraph(lines, inner, buf);
+                }
+                Lesson::Split(s) => split(s, self.theme, inner, buf),
+                Lesson::Merge(m) => merge(m, self.theme, inner, buf),
+                Lesson::Optimal(o) => paragraph(
+                    text::optimal_lines(o).into_iter().map(Line::from).collect(),
+                    inner,
+                    buf,
+                ),
+                Lesson::Nothing(why) => paragraph(vec![Line::from(why.clone())], inner, buf),
+            },
+            Load::Running(_) | Load::Failed(_) | Load::Idle => {
+                let load = self.lesson.status();
+                placeholder(&load, "lesson", "", self.theme, inner, buf);
+            }
+        }
+    }
+}
+
+fn paragraph(lines: Vec<Line<'static>>, area: Rect, buf: &mut Buffer) {
+    Paragraph::new(lines)
+        .wrap(Wrap { trim: false })
+        .render(area, buf);
+}
+
+/// The colour of bin `b` of `bins`: a grey ramp, dark to light.
+fn bin_color(b: u8, bins: usize) -> Color {
+    let v = 40 + (215 * usize::from(b) / bins.saturating_sub(1).max(1)) as u8;
+    Color::Rgb(v, v, v)
+}
+
+/// A cell for bin `b`: a coloured block, or without colours a shade by the bin.
+fn bin_span(b: Option<u8>, bins: usize, theme: Theme) -> Span<'static> {
+    match b {
+        None => Span::raw("·"),
+        Some(b) if theme.color => Span::styled("█", Style::default().fg(bin_color(b, bins))),
+        Some(b) => {
+            const SHADES: [&str; 5] = [" ", "░", "▒", "▓", "█"];
+            Span::raw(SHADES[usize::from(b) * SHADES.len() / bins.max(1)])
+        }
+    }
+}
+
+/// `[ 0.000, 0.000, 1.000] (z)`.
+fn axis_name(axis: [f64; 3]) -> String {
+    match slabscope::Axis::new(axis) {
+        Ok(a) => a
+            .name()
+            .map_or_else(|| a.to_string(), |n| format!("{a} ({n})")),
+        Err(_) => format!("{axis:?}"),
+    }
+}
+
+/// The selected axis's ray and numbers beside the best's (once, when it is the best).
+fn axis(
+    selected: &AxisLesson,
+    ray: Option<&RaySamples>,
+    best: &AxisLesson,
+    roomy: bool,
+    width: u16,
+    theme: Theme,
+) -> Vec<Line<'static>> {
+    let top = if roomy { 5 } else { 1 };
+    let mut lines = Vec::new();
+    if let Some(ray) = ray {
+        lines.extend(ray_lines(ray, selected.bins, width, roomy, theme));
+    } else {
+        lines.push(Line::from(
+            "This ray misses the volume: ← → move to another.",
+        ));
+    }
+    let mut words = text::axis_lines(
+        &format!("Selected {}", axis_name(selected.axis)),
+        selected,
+        top,
+    );
+    if selected.axis == best.axis {
+        words.push("It is the best axis: no other has a lower h.".to_string());
+    } else {
+        words.extend(text::axis_lines(
+            &format!("Best {}", axis_name(best.axis)),
+            best,
+            top,
+        ));
+        words.push(text::rate_sentence("selected", selected, "best", best));
+    }
+    lines.extend(words.into_iter().map(Line::from));
+    lines
+}
+
+/// The ray as a strip of its samples coloured by bin, its bins as numbers, and where it runs;
+/// on a small terminal the strip takes at most two lines and the numbers one.
+fn ray_lines(
+    ray: &RaySamples,
+    bins: usize,
+    width: u16,
+    roomy: bool,
+    theme: Theme,
+) -> Vec<Line<'static>> {
+    let width = usize::from(width.max(8));
+    let (strip_rows, number_rows) = if roomy { (usize::MAX, 4) } else { (2, 1) };
+    let shown = ray.bins.len().min(width.saturating_mul(strip_rows));
+    let (a, b) = ray.ends;
+    let at = |p: [f64; 3]| format!("({:.1}, {:.1}, {:.1})", p[0], p[1], p[2]);
+    let part = if shown < ray.bins.len() {
+        format!(", the first {shown}")
+    } else {
+        String::new()
+    };
+    let mut lines = vec![Line::from(format!(
+        "Ray ({}, {}): {} samples from voxel {} to {}{part}, a cell each by bin:",
+        ray.ray.0,
+        ray.ray.1,
+        ray.bins.len(),
+        at(a),
+        at(b)
+    ))];
+    for chunk in ray.bins[..shown].chunks(width) {
+        lines.push(Line::from(
+            chunk
+                .iter()
+                .map(|&b| bin_span(b, bins, theme))
+                .collect::<Vec<_>>(),
+        ));
+    }
+    let mut numbers = String::from("bins:");
+    for b in &ray.bins {
+        let next = b.map_or(" ·".to_string(), |b| format!(" {b}"));
+        if numbers.chars().count() + next.len() + 2 > width * number_rows {
+            numbers.push_str(" …");
+            break;
+        }
+        numbers.push_str(&next);
+    }
+    lines.push(Line::from(numbers));
+    lines
+}
+
+/// Rows `lines` take wrapped at `width`.
+fn wrapped_rows(lines: &[String], width: u16) -> u16 {
+    let w = usize::from(width.max(1));
+    lines
+        .iter()
+        .map(|l| l.chars().count().div_ceil(w).max(1) as u16)
+        .sum()
+}
+
+/// A split: its sentences, the two parts' and their union's histograms as bars (log counts),
+/// and the gain at every cut of the slab with the one taken marked; the bars take the rows the
+/// sentences leave.
+fn split(s: &SplitLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let mut words = text::split_lines(s, s.step.max(1));
+    words[0] = format!(
+        "Split {}: slices {}–{} cut at slice {}",
+        s.step,
+        s.split.0,
+        s.split.1 - 1,
+        s.at
+    );
+    let used = wrapped_rows(&words, area.width);
+    let bar = (area.height.saturating_sub(used + 1) / 4).clamp(1, 6);
+    let [top, rest] =
+        Layout::vertical([Constraint::Min(3), Constraint::Length(4 * bar + 1)]).areas(area);
+    paragraph(words.into_iter().map(Line::from).collect(), top, buf);
+    let rows = Layout::vertical([
+        Constraint::Length(bar),
+        Constraint::Length(bar),
+        Constraint::Length(bar),
+        Constraint::Length(bar),
+        Constraint::Length(1),
+    ])
+    .split(rest);
+    for (row, (label, counts)) in rows.iter().zip([
+        ("part 1", &s.first),
+        ("part 2", &s.second),
+        ("union", &s.union),
+    ]) {
+        bars(label, counts, theme, *row, buf);
+    }
+    gains(s, theme, rows[3], rows[4], buf);
+}
+
+/// A labelled bar chart of `counts` on a log scale, as many columns a bin as fit.
+fn bars(label: &str, counts: &[u64], theme: Theme, area: Rect, buf: &mut Buffer) {
+    let [l, chart] = Layout::horizontal([Constraint::Length(11), Constraint::Min(0)]).areas(area);
+    Paragraph::new(format!("{label} log")).render(l, buf);
+    let each = (usize::from(chart.width) / counts.len().max(1)).clamp(1, 3);
+    let data: Vec<u64> = counts
+        .iter()
+        .flat_map(|&c| std::iter::repeat_n(((c as f64).ln_1p() * 1000.0) as u64, each))
+        .collect();
+    Sparkline::default()
+        .data(&data)
+        .style(theme.fg(Color::Cyan))
+        .render(chart, buf);
+}
+
+/// The gain at every cut of the slab, squeezed to the width (the largest of each column's cuts),
+/// and a mark under the cut taken.
+fn gains(s: &SplitLesson, theme: Theme, area: Rect, mark: Rect, buf: &mut Buffer) {
+    let [l, chart] = Layout::horizontal([Constraint::Length(11), Constraint::Min(0)]).areas(area);
+    Paragraph::new("ΔI cuts".to_string()).render(l, buf);
+    let n = s.gains.len().max(1);
+    let columns = usize::from(chart.width).clamp(1, n);
+    let column = |i: usize| i * columns / n;
+    let mut squeezed = vec![0u64; columns];
+    let top = s.gains.iter().copied().fold(0.0f64, f64::max).max(1e-300);
+    for (i, &g) in s.gains.iter().enumerate() {
+        let v = (g / top * 1e6) as u64;
+        let c = &mut squeezed[column(i)];
+        *c = (*c).max(v);
+    }
+    Sparkline::default()
+        .data(&squeezed)
+        .style(theme.fg(Color::Yellow))
+        .render(chart, buf);
+    let at = usize::from(chart.x - area.x) + column(s.at - s.split.0 - 1);
+    let said = format!("cut at {} (ΔI {:.4})", s.at, s.gain);
+    let line = if at + 2 + said.chars().count() <= usize::from(mark.width) {
+        format!("{}▲ {said}", " ".repeat(at))
+    } else {
+        let pad = (at + 1).saturating_sub(said.chars().count() + 2);
+        format!("{}{said} ▲", " ".repeat(pad))
+    };
+    Paragraph::new(line).render(mark, buf);
+}
+
+/// A merge: its sentences and, in the rows they leave, the joint histogram as a heat map.
+fn merge(m: &MergeLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let words = text::merge_lines(m, m.step.max(1));
+    let used = wrapped_rows(&words, area.width).min(area.height);
+    let [top, map] = Layout::vertical([Constraint::Length(used), Constraint::Min(0)]).areas(area);
+    paragraph(words.into_iter().map(Line::from).collect(), top, buf);
+    heat_map(m, m.bins, theme, map, buf);
+}
+
+/// The joint histogram, x (the first slab's bin) down and y across, two rows of bins a line
+/// (half blocks), bins grouped where the area is smaller; shades without colours.
+fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, buf: &mut Buffer) {
+    if area.height < 2 || area.width < 12 {
+        return;
+    }
+    let label = "X↓ Y→ ";
+    let rows = usize::from(area.height - 1) * 2;
+    let cols = usize::from(area.width) - label.len();
+    let group = bins.div_ceil(rows).max(bins.div_ceil(cols)).max(1);
+    let n = bins.div_ceil(group);
+    let mut cells = vec![0u64; n * n];
+    for &[x, y, c] in &m.joint {
+        cells[x as usize / group * n + y as usize / group] += c;
+    }
+    let top = cells.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let level = |c: u64| {
+        if c == 0 {
+            0.0
+        } else {
+            (1.0 + (c as f64).ln()) / (1.0 + top.ln())
+        }
+    };
+    let shade = |v: f64| Color::Rgb((40.0 + 215.0 * v) as u8, (30.0 + 120.0 * v) as u8, 60);
+    Paragraph::new(format!("joint histogram, log counts, {group} bin a cell"))
+        .render(Rect { height: 1, ..area }, buf);
+    for r in 0..n.div_ceil(2) {
+        let mut spans = vec![Span::raw(if r == 0 { label } else { "      " })];
+        for y in 0..n {
+            let upper = level(cells[2 * r * n + y]);
+            let lower = if 2 * r + 1 < n {
+                level(cells[(2 * r + 1) * n + y])
+            } else {
+                0.0
+            };
+            spans.push(if theme.color {
+                Span::styled("▀", Style::default().fg(shade(upper)).bg(shade(lower)))
+            } else {
+                const SHADES: [&str; 5] = [" ", "░", "▒", "▓", "█"];
+                Span::raw(SHADES[((upper.max(lower)) * 4.0).round() as usize])
+            });
+        }
+        let line = Rect {
+            y: area.y + 1 + r as u16,
+            height: 1,
+            ..area
+        };
+        if line.y < area.y + area.height {
+            Paragraph::new(Line::from(spans)).render(line, buf);
+        }
+    }
+}
