@@ -21,29 +21,77 @@ use clap::Parser;
 struct Cli {
     /// Volume to open in the TUI (default: the built-in dataset).
     file: Option<PathBuf>,
-    /// Terminal image protocol of the preview (default: asked of the terminal).
-    #[arg(long, value_enum, default_value_t = term::Protocol::Auto)]
-    protocol: term::Protocol,
+    #[command(flatten)]
+    look: TuiLook,
     #[command(flatten)]
     analysis: cli::AnalysisArgs,
     #[command(flatten)]
     load: cli::LoadArgs,
     #[command(subcommand)]
-    command: Option<cli::Command>,
+    command: Option<Command>,
+}
+
+/// How the TUI draws.
+#[derive(Clone, Copy, Debug, clap::Args)]
+struct TuiLook {
+    /// Terminal image protocol of the preview (default: asked of the terminal).
+    #[arg(long, value_enum, default_value_t = term::Protocol::Auto)]
+    protocol: term::Protocol,
+    /// Colours: default, or contrast (white and bright colours on black, every text colour at
+    /// least 7:1, for projectors).
+    #[arg(long, value_enum, default_value_t = tui::theme::ThemeChoice::Default)]
+    theme: tui::theme::ThemeChoice,
+}
+
+/// The subcommands: the CLI's, and the tour, which opens the TUI.
+#[derive(Debug, clap::Subcommand)]
+enum Command {
+    #[command(flatten)]
+    Cli(cli::Command),
+    /// A guided tour of the paper's method in 12 pages on the TUI's live panes (Space or → next,
+    /// ← back, q quits)
+    Tour(TourArgs),
+}
+
+/// Arguments of `slabscope tour`: the TUI's.
+#[derive(Debug, clap::Args)]
+struct TourArgs {
+    /// Volume to tour (default: the built-in dataset).
+    file: Option<PathBuf>,
+    #[command(flatten)]
+    look: TuiLook,
+    #[command(flatten)]
+    analysis: cli::AnalysisArgs,
+    #[command(flatten)]
+    load: cli::LoadArgs,
+}
+
+/// Opens the TUI on `file`, with the tour when `tour`.
+fn open_tui(
+    file: Option<PathBuf>,
+    look: TuiLook,
+    analysis: &cli::AnalysisArgs,
+    load: &cli::LoadArgs,
+    tour: bool,
+) -> anyhow::Result<u8> {
+    tui::run(tui::Options {
+        file,
+        load: load.options(),
+        protocol: look.protocol,
+        analysis: analysis.params(true),
+        theme: look.theme,
+        tour,
+    })
+    .map(|()| 0)
 }
 
 fn main() -> ExitCode {
     slabscope::volume::io::mapped::install_fault_handler();
     let args = Cli::parse();
     let result = match args.command {
-        Some(command) => cli::run(command),
-        None => tui::run(tui::Options {
-            file: args.file,
-            load: args.load.options(),
-            protocol: args.protocol,
-            analysis: args.analysis.params(true),
-        })
-        .map(|()| 0),
+        Some(Command::Cli(command)) => cli::run(command),
+        Some(Command::Tour(t)) => open_tui(t.file, t.look, &t.analysis, &t.load, true),
+        None => open_tui(args.file, args.look, &args.analysis, &args.load, false),
     };
     let code = match result {
         Ok(code) => ExitCode::from(code),

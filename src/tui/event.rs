@@ -189,6 +189,8 @@ pub enum Action {
     RankGain,
     /// Show or hide the lesson: the numbers behind the selected viewpoint or the step shown.
     ToggleLesson,
+    /// Turn the tour's page forward or back.
+    TurnPage(isize),
     /// Write the view (PNG), the analysis (JSON) and the labels (NRRD).
     Export,
     /// The preview pane's size in cells changed.

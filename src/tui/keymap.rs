@@ -4,8 +4,9 @@ use crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
 use super::event::{Action, Ask};
 
-/// The action of `key`, if any; `typing` when a prompt is open.
-pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {
+/// The action of `key`, if any; `typing` when a prompt is open, `touring` in the tour (where
+/// Space and → turn to the next page and ← to the one before).
+pub fn action(key: KeyEvent, typing: bool, touring: bool) -> Option<Action> {
     if key.kind == KeyEventKind::Release {
         return None;
     }
@@ -21,6 +22,13 @@ pub fn action(key: KeyEvent, typing: bool) -> Option<Action> {
             KeyCode::Esc => Some(Action::Escape),
             _ => None,
         };
+    }
+    if touring {
+        match key.code {
+            KeyCode::Char(' ') | KeyCode::Right => return Some(Action::TurnPage(1)),
+            KeyCode::Left => return Some(Action::TurnPage(-1)),
+            _ => {}
+        }
     }
     Some(match key.code {
         KeyCode::Char('q') => Action::Quit,

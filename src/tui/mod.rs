@@ -11,6 +11,7 @@ pub mod lesson;
 pub mod panes;
 pub mod partitioning;
 pub mod theme;
+pub mod tour;
 pub mod ui;
 
 #[cfg(test)]
@@ -58,6 +59,10 @@ pub struct Options {
     pub protocol: Protocol,
     /// How to analyse it.
     pub analysis: AnalysisParams,
+    /// The colours.
+    pub theme: theme::ThemeChoice,
+    /// Run the guided tour.
+    pub tour: bool,
 }
 
 /// The folder `file` names, with the volumes it holds, when it opens as a file list: a folder of
@@ -93,6 +98,8 @@ pub fn run(options: Options) -> Result<()> {
         load,
         protocol,
         analysis,
+        theme,
+        tour,
     } = options;
     let name = file.as_ref().map_or_else(
         || slabscope::BUILTIN_NAME.to_string(),
@@ -143,7 +150,7 @@ pub fn run(options: Options) -> Result<()> {
         }
         spawn_input(tx.clone());
         let screen = Screen {
-            theme: Theme::from_env(),
+            theme: Theme::from_env().with(theme),
             hide: hide.clone(),
             note: caps.note.clone(),
             graphics: caps.graphics.name(),
@@ -153,6 +160,9 @@ pub fn run(options: Options) -> Result<()> {
             Some((root, paths)) => App::for_folder(root, paths, analysis, screen),
             None => App::new(name.clone(), analysis, screen),
         };
+        if tour {
+            app.tour = Some(tour::Tour::new());
+        }
         run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)?;
         // The user saw why; the exit status says so too.
         match &app.volume {
@@ -227,9 +237,10 @@ where
     B::Error: Send + Sync + 'static,
 {
     let size = terminal.size()?;
-    if let Some((w, h)) =
-        ui::preview_cells(ratatui::layout::Rect::new(0, 0, size.width, size.height))
-    {
+    if let Some((w, h)) = ui::preview_cells(
+        ratatui::layout::Rect::new(0, 0, size.width, size.height),
+        app.tour.is_some(),
+    ) {
         dispatch(app, runner, Action::PreviewArea(w, h));
     }
     terminal.draw(|frame| ui::draw(frame, app))?;
@@ -239,7 +250,7 @@ where
 /// Applies one event.
 pub fn handle(app: &mut App, runner: &mut impl Runner, event: Event) {
     let action = match event {
-        Event::Key(key) => keymap::action(key, app.status.prompt.is_some()),
+        Event::Key(key) => keymap::action(key, app.status.prompt.is_some(), app.tour.is_some()),
         Event::Resize => None,
         Event::Job(msg) => runner.admit(msg).map(Action::Job),
     };

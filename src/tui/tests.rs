@@ -37,7 +37,10 @@ impl Runner for Recorder {
     }
 }
 
-const PLAIN: Theme = Theme { color: false };
+const PLAIN: Theme = Theme {
+    color: false,
+    contrast: false,
+};
 
 /// A small volume, its view search and its histories along the best axis, computed once for all
 /// tests.
@@ -103,6 +106,7 @@ fn key(c: char) -> Event {
 
 mod gain;
 mod lesson;
+mod tour;
 
 #[test]
 fn the_analysis_opens_on_four_top_down_slabs() {
@@ -398,7 +402,7 @@ fn screens(app: &mut App, w: u16, h: u16, events: Vec<Event>) -> Vec<String> {
 #[test]
 fn whole_app_snapshots() {
     let mut app = ready_app();
-    let cells = super::ui::preview_cells(Rect::new(0, 0, 100, 30)).unwrap();
+    let cells = super::ui::preview_cells(Rect::new(0, 0, 100, 30), false).unwrap();
     let events = vec![
         Event::Job(JobMsg::Rendered(
             1,
@@ -425,7 +429,10 @@ fn whole_app_snapshots() {
 #[ignore = "a benchmark: prints timings, asserts nothing about them"]
 fn tui_step_timing() {
     for (w, h) in [(80, 24), (200, 60)] {
-        let mut app = ready_app_with(Theme { color: true });
+        let mut app = ready_app_with(Theme {
+            color: true,
+            contrast: false,
+        });
         let mut terminal = Terminal::new(TestBackend::new(w, h)).unwrap();
         let mut runner = Recorder::default();
         redraw(&mut terminal, &mut app, &mut runner).unwrap();

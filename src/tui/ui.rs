@@ -23,14 +23,27 @@ pub struct Areas {
     pub preview: Rect,
     /// The two status lines.
     pub status: Rect,
+    /// The tour's page, above the status lines (no rows outside a tour).
+    pub tour: Rect,
 }
 
-/// The layout of a screen of size `area`, or `None` when it is too small.
-pub fn areas(area: Rect) -> Option<Areas> {
+/// The layout of a screen of size `area` (with room for the tour's page when `tour`), or
+/// `None` when it is too small.
+pub fn areas(area: Rect, tour: bool) -> Option<Areas> {
     if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
         return None;
     }
-    let [body, status] = Layout::vertical([Constraint::Min(0), Constraint::Length(2)]).areas(area);
+    let page = match (tour, area.height) {
+        (false, _) => 0,
+        (true, ..36) => 6,
+        (true, _) => 8,
+    };
+    let [body, tour, status] = Layout::vertical([
+        Constraint::Min(0),
+        Constraint::Length(page),
+        Constraint::Length(2),
+    ])
+    .areas(area);
     let [top, bottom] =
         Layout::vertical([Constraint::Percentage(56), Constraint::Percentage(44)]).areas(body);
     let left = if area.width >= 140 { 34 } else { 42 };
@@ -53,12 +66,13 @@ pub fn areas(area: Rect) -> Option<Areas> {
         curves,
         preview,
         status,
+        tour,
     })
 }
 
-/// The cells the preview image fills, for a screen of size `area`.
-pub fn preview_cells(area: Rect) -> Option<(u16, u16)> {
-    let a = areas(area)?;
+/// The cells the preview image fills, for a screen of size `area` (and the tour's page).
+pub fn preview_cells(area: Rect, tour: bool) -> Option<(u16, u16)> {
+    let a = areas(area, tour)?;
     let inner = Block::default().borders(Borders::ALL).inner(a.preview);
     Some((inner.width, inner.height))
 }
@@ -66,7 +80,8 @@ pub fn preview_cells(area: Rect) -> Option<(u16, u16)> {
 /// Draws the whole screen.
 pub fn draw(frame: &mut Frame, app: &App) {
     let area = frame.area();
-    let Some(a) = areas(area) else {
+    frame.render_widget(Block::default().style(app.theme.base()), area);
+    let Some(a) = areas(area, app.tour.is_some()) else {
         let text = format!(
             "The terminal is {}x{}: slabscope needs at least {}x{}. Enlarge it, or press q to quit.",
             area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
@@ -86,10 +101,19 @@ pub fn draw(frame: &mut Frame, app: &App) {
     frame.render_widget(&app.status, a.status);
     if app.lesson.open {
         let body = Rect {
-            height: area.height.saturating_sub(a.status.height),
+            height: area.height - a.status.height - a.tour.height,
             ..area
         };
         frame.render_widget(&app.lesson, body);
+    }
+    if let Some(tour) = &app.tour {
+        frame.render_widget(
+            panes::tour::TourPage {
+                tour,
+                theme: app.theme,
+            },
+            a.tour,
+        );
     }
     if let Some(files) = app.files.as_ref().filter(|f| f.shown) {
         frame.render_widget(files, area);

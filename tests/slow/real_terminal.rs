@@ -283,6 +283,67 @@ const XTERM: [&str; 13] = [
     "10",
 ];
 
+/// The tour in tmux inside xterm, keys typed into the xterm: it turns from its first page to its
+/// last, paints the high-contrast theme's black (xterm's own background is white), and q quits
+/// it with status 0.
+#[test]
+fn the_tour_runs_to_its_last_page_in_a_real_terminal() {
+    let _alone = crate::one_at_a_time();
+    if !tools_present() {
+        return;
+    }
+    let display = Display::start();
+    let dir = tempfile::tempdir().unwrap();
+    let exit = dir.path().join("exit");
+    let socket = format!("slabscope-tour-{}", std::process::id());
+    let tour = format!(
+        "{} tour --theme contrast; echo $? > {}; sleep 600",
+        binary(),
+        exit.display()
+    );
+    let tmux = format!("tmux -L {socket} -f /dev/null new-session -s tour '{tour}'");
+    let mut xterm: Vec<&str> = XTERM.to_vec();
+    xterm.extend(["-e", "sh", "-c", &tmux]);
+    let mut term = display
+        .command(xterm[0])
+        .args(&xterm[1..])
+        .spawn()
+        .expect("xterm starts");
+    let screen = || {
+        let out = Command::new("tmux")
+            .args(["-L", &socket, "capture-pane", "-p", "-t", "tour"])
+            .output()
+            .expect("tmux runs");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    wait_until(
+        120,
+        || screen().contains("page 1 of 12"),
+        "the tour's first page",
+    );
+    for page in 2..=12 {
+        display.key("space");
+        let want = format!("page {page} of 12");
+        wait_until(60, || screen().contains(&want), &want);
+    }
+    // Inside the xterm (at the screen's corner, 150×45 cells): black, not xterm's white.
+    let shot = display.screenshot(&dir.path().join("tour.png"));
+    let corner = image::imageops::crop_imm(&shot, 0, 0, 600, 400).to_image();
+    let black = corner.pixels().filter(|p| p.0 == [0, 0, 0]).count();
+    assert!(
+        black * 2 > corner.pixels().count(),
+        "the contrast theme paints the terminal black: {black} black pixels of {}",
+        corner.pixels().count()
+    );
+    display.key("q");
+    wait_until(30, || read(&exit) == "0", "the tour's exit status 0");
+    let _ = Command::new("tmux")
+        .args(["-L", &socket, "kill-server"])
+        .status();
+    let _ = term.kill();
+    let _ = term.wait();
+}
+
 #[test]
 fn the_tui_draws_images_and_keeps_the_keyboard_in_real_terminals() {
     let _alone = crate::one_at_a_time();

@@ -109,6 +109,41 @@ fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
 }
 
 #[test]
+fn the_tour_runs_from_its_first_page_to_its_last_and_quits_with_0() {
+    let _alone = crate::one_at_a_time();
+    if Command::new("tmux").arg("-V").output().is_err() {
+        eprintln!(
+            "SKIPPED: tmux is not installed, so the tour test cannot run (apt-get install tmux)"
+        );
+        return;
+    }
+    let command = format!(
+        "{} tour --protocol blocks --theme contrast; echo EXITED $?; sleep 60",
+        binary()
+    );
+    let tmux = Tmux::start("tour", &command, (80, 24));
+    tmux.wait_for("page 1 of 12", 120);
+    for page in 2..=12 {
+        tmux.keys(if page % 2 == 0 { "Space" } else { "Right" });
+        tmux.wait_for(&format!("page {page} of 12"), 60);
+    }
+    let screen = tmux.wait_for("The exploded view", 10);
+    assert!(screen.contains("Exploded view"), "{screen}");
+    tmux.keys("Space");
+    std::thread::sleep(Duration::from_millis(300));
+    tmux.wait_for("page 12 of 12", 10);
+    tmux.keys("Left");
+    tmux.wait_for("page 11 of 12", 10);
+    tmux.wait_for("Optimum into 4 slabs", 60);
+    tmux.keys("q");
+    let screen = tmux.wait_for("EXITED 0", 30);
+    assert!(
+        !screen.contains("Tour,"),
+        "the alternate screen is gone:\n{screen}"
+    );
+}
+
+#[test]
 fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
     let _alone = crate::one_at_a_time();
     if Command::new("tmux").arg("-V").output().is_err() {

@@ -14,6 +14,7 @@ impl App {
     /// what it explains changed).
     pub fn update(&mut self, action: Action) -> Vec<Effect> {
         let mut effects = self.apply(action);
+        effects.extend(self.sync_tour());
         effects.extend(self.sync_lesson());
         effects
     }
@@ -86,6 +87,7 @@ impl App {
             Action::ToggleBackground => self.toggle_background(),
             Action::RankGain => self.rank_gain(),
             Action::ToggleLesson => self.toggle_lesson(),
+            Action::TurnPage(by) => self.turn_page(by),
             Action::PreviewArea(w, h) => {
                 if (w, h) == self.preview.cells {
                     return vec![];

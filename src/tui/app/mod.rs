@@ -7,6 +7,7 @@ mod gain;
 mod keys;
 mod lesson;
 mod refine;
+mod tour;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -99,6 +100,8 @@ pub struct App {
     pub lesson: LessonPane,
     /// The lesson's ray: its offset from the central one.
     ray: (i64, i64),
+    /// The guided tour, when the app runs it.
+    pub tour: Option<crate::tui::tour::Tour>,
 }
 
 impl App {
@@ -126,6 +129,7 @@ impl App {
             refine: None,
             lesson: LessonPane::new(theme),
             ray: (0, 0),
+            tour: None,
         };
         app.preview.hide = screen.hide;
         app.preview.graphics = screen.graphics;

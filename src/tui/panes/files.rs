@@ -97,6 +97,7 @@ impl Widget for &FilesPane {
             height: h,
         };
         Clear.render(list, buf);
+        buf.set_style(list, self.theme.base());
         let title = format!(
             " {} volumes in {} ({} looked at) · Enter opens, PgUp PgDn step, Esc or F closes ",
             self.paths.len(),

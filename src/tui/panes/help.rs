@@ -21,6 +21,7 @@ const WIDTH: u16 = 64;
 impl Help {
     fn table(&self, title: &str, rows: &[(&str, &str)], area: Rect, buf: &mut Buffer) {
         Clear.render(area, buf);
+        buf.set_style(area, self.theme.base());
         let rows = rows
             .iter()
             .map(|(k, v)| Row::new([k.to_string(), v.to_string()]));

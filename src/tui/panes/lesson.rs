@@ -58,6 +58,7 @@ impl LessonPane {
 impl Widget for &LessonPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
         Clear.render(area, buf);
+        buf.set_style(area, self.theme.base());
         let block = self.theme.block(self.title(), true);
         let inner = block.inner(area);
         block.render(area, buf);

@@ -8,6 +8,7 @@ pub mod preview;
 pub mod slabs;
 pub mod sphere;
 pub mod status;
+pub mod tour;
 pub mod views;
 
 use ratatui::buffer::Buffer;
