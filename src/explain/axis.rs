@@ -69,6 +69,75 @@ pub struct RaySamples {
     pub ends: ([f64; 3], [f64; 3]),
 }
 
+/// The plane of rays a lesson's ray lies in: the lattice's rays `(i, j)` for every `i` of the
+/// ray's row `j`, each a row of quantized samples, aligned by sample index, so that the ray is
+/// one row of a picture of the volume's bins.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RayPlane {
+    /// The row of rays, `j`.
+    pub j: i64,
+    /// The rays' `i`, in order.
+    pub rays: Vec<i64>,
+    /// The sample index `k` of the first column.
+    pub first_k: i64,
+    /// Per ray, its bins by column: `None` outside the volume or missing.
+    pub bins: Vec<Vec<Option<u8>>>,
+    /// The index in `rays` of the lesson's ray.
+    pub selected: Option<usize>,
+}
+
+/// The plane of rays holding the ray `offset` rays from the central one (see [`ray_samples`]),
+/// on the paper's lattice along `axis`.
+pub fn ray_plane(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &ViewParams,
+    offset: (i64, i64),
+) -> Result<Option<RayPlane>> {
+    let lattice = paper_lattice(volume, axis, params)?;
+    let (ci, cj) = lattice.central_ray();
+    let (si, j) = (ci + offset.0, cj + offset.1);
+    let Some((i0, i1)) = lattice.row_span(j) else {
+        return Ok(None);
+    };
+    let q = volume.quantizer(params.sampling.bins)?;
+    let rays: Vec<(i64, i64, Vec<Option<u8>>)> =
+        crate::volume::with_voxels!(volume.data(), |data| {
+            let sampler = BinSampler::over(data, volume, q);
+            (i0..=i1)
+                .filter_map(|i| {
+                    let k0 = lattice.ray(i, j)?.k0;
+                    Some((i, k0, ray_bins(&sampler, &lattice, i, j)?))
+                })
+                .collect()
+        });
+    let Some(first_k) = rays.iter().map(|r| r.1).min() else {
+        return Ok(None);
+    };
+    let last_k = rays
+        .iter()
+        .map(|(_, k0, b)| k0 + b.len() as i64)
+        .max()
+        .unwrap_or(first_k);
+    let width = (last_k - first_k) as usize;
+    let bins = rays
+        .iter()
+        .map(|(_, k0, b)| {
+            let mut row = vec![None; width];
+            let at = (k0 - first_k) as usize;
+            row[at..at + b.len()].copy_from_slice(b);
+            row
+        })
+        .collect();
+    Ok(Some(RayPlane {
+        j,
+        selected: rays.iter().position(|r| r.0 == si),
+        rays: rays.iter().map(|r| r.0).collect(),
+        first_k,
+        bins,
+    }))
+}
+
 /// The paper's lattice along `axis` (phase 0, every ray) with `params`' spacings.
 fn paper_lattice(volume: &Volume, axis: [f64; 3], params: &ViewParams) -> Result<Lattice> {
     let sampling = params.sampling.resolved(volume.dims(), volume.spacing())?;

@@ -10,7 +10,10 @@ pub mod text;
 
 use serde::Serialize;
 
-pub use axis::{AxisLesson, BlockCount, RaySamples, axis_lesson, ray_samples, table_entropy};
+pub use axis::{
+    AxisLesson, BlockCount, RayPlane, RaySamples, axis_lesson, ray_plane, ray_samples,
+    table_entropy,
+};
 pub use steps::{
     MergeLesson, OptimalLesson, RunnerUp, SplitLesson, merge_lesson, optimal_lesson, split_lesson,
 };

@@ -4,8 +4,8 @@
 use std::sync::Arc;
 
 use slabscope::explain::{
-    AxisLesson, MergeLesson, OptimalLesson, RaySamples, SplitLesson, axis_lesson, merge_lesson,
-    optimal_lesson, ray_samples, split_lesson,
+    AxisLesson, MergeLesson, OptimalLesson, RayPlane, RaySamples, SplitLesson, axis_lesson,
+    merge_lesson, optimal_lesson, ray_plane, ray_samples, split_lesson,
 };
 use slabscope::partition::Method;
 use slabscope::{Histories, Monitor, ViewParams, Volume};
@@ -57,6 +57,8 @@ pub enum Lesson {
         selected: Box<AxisLesson>,
         /// Its ray.
         ray: Option<RaySamples>,
+        /// The plane of rays the ray lies in.
+        plane: Option<RayPlane>,
         /// The best axis's numbers.
         best: Box<AxisLesson>,
     },
@@ -88,6 +90,7 @@ impl LessonRequest {
                 Ok(Lesson::Axis {
                     selected: lesson(*selected).map_err(text)?,
                     ray: ray_samples(volume, *selected, &self.view, *offset).map_err(text)?,
+                    plane: ray_plane(volume, *selected, &self.view, *offset).map_err(text)?,
                     best: lesson(*best).map_err(text)?,
                 })
             }

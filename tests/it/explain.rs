@@ -213,3 +213,29 @@ fn analyze_explain_prints_the_numbers_and_the_json_carries_them() {
     assert!(!bad.ok);
     assert!(bad.stderr.contains("put FILE before it"), "{}", bad.stderr);
 }
+
+#[test]
+fn a_lessons_ray_is_its_row_of_the_plane_of_rays() {
+    let v = body();
+    let params = slabscope::ViewParams::default();
+    for axis in [[0.0, 0.0, 1.0], [0.3, -0.5, 0.81]] {
+        for offset in [(0, 0), (3, -2)] {
+            let ray = slabscope::explain::ray_samples(&v, axis, &params, offset)
+                .unwrap()
+                .unwrap();
+            let plane = slabscope::explain::ray_plane(&v, axis, &params, offset)
+                .unwrap()
+                .unwrap();
+            let row = plane.selected.expect("the ray is in its plane");
+            assert_eq!(plane.rays[row], ray.ray.0);
+            assert_eq!(plane.j, ray.ray.1);
+            // Its samples, at their columns, and nothing else on its row.
+            let shown: Vec<Option<u8>> = plane.bins[row].iter().copied().collect();
+            let first = shown.iter().position(Option::is_some).unwrap();
+            assert_eq!(&shown[first..first + ray.bins.len()], &ray.bins[..]);
+            assert!(shown[first + ray.bins.len()..].iter().all(Option::is_none));
+            assert!(plane.bins.iter().all(|r| r.len() == shown.len()));
+            assert!(plane.rays.windows(2).all(|w| w[0] < w[1]));
+        }
+    }
+}

@@ -9,7 +9,7 @@ use ratatui::style::{Color, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Clear, Paragraph, Sparkline, Widget, Wrap};
 use slabscope::explain::text;
-use slabscope::explain::{AxisLesson, MergeLesson, RaySamples, SplitLesson};
+use slabscope::explain::{AxisLesson, MergeLesson, RayPlane, RaySamples, SplitLesson};
 
 use super::placeholder;
 use crate::tui::event::Load;
@@ -68,10 +68,33 @@ impl Widget for &LessonPane {
                 Lesson::Axis {
                     selected,
                     ray,
+                    plane,
                     best,
                 } => {
-                    let lines = axis(selected, ray.as_ref(), best, roomy, inner.width, self.theme);
-                    paragraph(lines, inner, buf);
+                    // The plane of rays beside the words where the terminal is wide, below
+                    // them where it is tall, else not at all.
+                    let (words, picture) = match plane.as_ref().filter(|_| self.theme.color) {
+                        Some(p) if inner.width >= 130 => {
+                            let [w, p_area] = Layout::horizontal([
+                                Constraint::Min(80),
+                                Constraint::Percentage(35),
+                            ])
+                            .areas(inner);
+                            (w, Some((p, p_area)))
+                        }
+                        Some(p) if roomy => {
+                            let [w, p_area] =
+                                Layout::vertical([Constraint::Min(20), Constraint::Percentage(30)])
+                                    .areas(inner);
+                            (w, Some((p, p_area)))
+                        }
+                        _ => (inner, None),
+                    };
+                    let lines = axis(selected, ray.as_ref(), best, roomy, words.width, self.theme);
+                    paragraph(lines, words, buf);
+                    if let Some((p, area)) = picture {
+                        plane_picture(p, selected.bins, area, buf);
+                    }
                 }
                 Lesson::Split(s) => split(s, self.theme, inner, buf),
                 Lesson::Merge(m) => merge(m, self.theme, inner, buf),
@@ -159,6 +182,79 @@ fn axis(
     }
     lines.extend(words.into_iter().map(Line::from));
     lines
+}
+
+/// The plane of rays holding the lesson's ray: a pixel row a ray (half blocks), a column a
+/// sample, grey by bin, the lesson's ray in yellow and marked ▶; rays and samples picked
+/// evenly where there are more than fit.
+fn plane_picture(plane: &RayPlane, bins: usize, area: Rect, buf: &mut Buffer) {
+    if area.height < 3 || area.width < 12 {
+        return;
+    }
+    let title = format!(
+        "The plane of rays j = {}: a row a ray, the lesson's in yellow",
+        plane.j
+    );
+    Paragraph::new(title)
+        .wrap(Wrap { trim: true })
+        .render(Rect { height: 2, ..area }, buf);
+    let (rows, cols) = (
+        usize::from(area.height - 2) * 2,
+        usize::from(area.width - 1),
+    );
+    let (n, k) = (plane.rays.len(), plane.bins[0].len());
+    let (shown_rows, shown_cols) = (n.min(rows), k.min(cols));
+    let pick = |y: usize| -> usize {
+        let r = y * n / shown_rows;
+        // The lesson's ray always shows: its nearest pixel row is it.
+        match plane.selected {
+            Some(s) if s * shown_rows / n == y => s,
+            _ => r,
+        }
+    };
+    let colour = |r: usize, x: usize| -> Color {
+        match plane.bins[r][x * k / shown_cols] {
+            None => Color::Rgb(0, 0, 0),
+            Some(b) => {
+                let Color::Rgb(v, _, _) = bin_color(b, bins) else {
+                    return Color::Reset;
+                };
+                if Some(r) == plane.selected {
+                    Color::Rgb(v, v, v / 4)
+                } else {
+                    Color::Rgb(v, v, v)
+                }
+            }
+        }
+    };
+    for line in 0..shown_rows.div_ceil(2) {
+        let (top, bottom) = (
+            pick(2 * line),
+            (2 * line + 1 < shown_rows).then(|| pick(2 * line + 1)),
+        );
+        let marked = plane
+            .selected
+            .is_some_and(|s| s == top || Some(s) == bottom);
+        let mut spans = vec![Span::raw(if marked { "▶" } else { " " })];
+        for x in 0..shown_cols {
+            let bg = bottom.map_or(Color::Rgb(0, 0, 0), |b| colour(b, x));
+            spans.push(Span::styled(
+                "▀",
+                Style::default().fg(colour(top, x)).bg(bg),
+            ));
+        }
+        let y = area.y + 2 + line as u16;
+        if y < area.y + area.height {
+            Paragraph::new(Line::from(spans)).render(
+                Rect {
+                    y,
+                    height: 1,
+                    ..area
+                },
+                buf,
+            );
+        }
+    }
 }
 
 /// The ray as a strip of its samples coloured by bin, its bins as numbers, and where it runs;
