@@ -65,11 +65,13 @@ fn a_viewpoints_lesson_shows_its_blocks_beside_the_best() {
         selected: s,
         best: b,
         ray,
+        plane,
     } = lesson(&app)
     else {
         panic!("an axis lesson")
     };
     assert!(ray.as_ref().is_some_and(|r| !r.bins.is_empty()));
+    assert!(plane.as_ref().is_some_and(|p| p.selected.is_some()));
     let numbers: Vec<f64> = [s, b]
         .iter()
         .flat_map(|l| l.block_entropies.iter().copied().chain([l.entropy_rate]))
