@@ -230,7 +230,7 @@ fn a_lessons_ray_is_its_row_of_the_plane_of_rays() {
             assert_eq!(plane.rays[row], ray.ray.0);
             assert_eq!(plane.j, ray.ray.1);
             // Its samples, at their columns, and nothing else on its row.
-            let shown: Vec<Option<u8>> = plane.bins[row].iter().copied().collect();
+            let shown = &plane.bins[row];
             let first = shown.iter().position(Option::is_some).unwrap();
             assert_eq!(&shown[first..first + ray.bins.len()], &ray.bins[..]);
             assert!(shown[first + ray.bins.len()..].iter().all(Option::is_none));
