@@ -116,6 +116,7 @@ def analyze(
     threshold: Optional[float] = None,
     background: Union[Literal["auto", "none"], float] = "auto",
     views: bool = False,
+    explain: Union[bool, Literal["all"], int, None] = None,
     resolution: Union[Literal["full", "auto"], int] = "full",
     max_memory: Union[int, str, None] = None,
 ) -> Analysis:

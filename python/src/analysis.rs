@@ -8,12 +8,37 @@ use numpy::ndarray::{ArrayView3, ShapeBuilder};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use slabscope::explain::StepsShown;
 use slabscope::{AnalysisReport, Error, Plan};
 
 use crate::errors::{OrPy, to_py};
 use crate::params::{Kwargs, analysis_params, resolution};
 use crate::run;
 use crate::volume::Volume;
+
+/// `explain=`: `None` or `False` (nothing), `True` (the last 32 steps), `"all"`, or a number of
+/// steps, as `analyze --explain [all|N]`.
+fn explain(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<StepsShown>> {
+    let Some(v) = value.filter(|v| !v.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(b) = v.extract::<bool>() {
+        return Ok(b.then(StepsShown::default));
+    }
+    if let Ok(word) = v.extract::<String>()
+        && word == "all"
+    {
+        return Ok(Some(StepsShown::All));
+    }
+    match v.extract::<usize>() {
+        Ok(n) if n >= 1 => Ok(Some(StepsShown::Last(n))),
+        _ => Err(crate::errors::invalid(
+            "explain",
+            v.repr().map_or_else(|_| "?".to_string(), |r| r.to_string()),
+            "True, \"all\" or a number of steps",
+        )),
+    }
+}
 
 /// The result of `analyze`: the views with their scores, the best axis, the partition's slabs
 /// and steps; `to_dict()` is the object `slabscope analyze --json` prints.
@@ -52,7 +77,8 @@ pub fn analyze(
             .is_some_and(|v| !v.is_none())
     };
     let slabs_given = given("slabs") || given("threshold");
-    let analysis_params = analysis_params(&kw)?;
+    let mut analysis_params = analysis_params(&kw)?;
+    analysis_params.explain = explain(kw.get::<Bound<'_, PyAny>>("explain")?.as_ref())?;
     let resolution = resolution(&kw)?;
     let max_memory = crate::params::max_memory(&kw, volume.max_memory)?;
     kw.finish()?;

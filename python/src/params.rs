@@ -259,6 +259,7 @@ pub fn analysis_params(kw: &Kwargs<'_>) -> PyResult<AnalysisParams> {
             AxisBy::Entropy,
         )?,
         gain: kw.or("gain", false)?,
+        explain: None,
     })
 }
 

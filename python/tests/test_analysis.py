@@ -19,6 +19,9 @@ from conftest import DATA
         ({"axis": "z", "views": True}, ["--axis", "z", "--views"]),
         ({"threshold": 0.01, "background": "none"}, ["--threshold", "0.01", "--background", "none"]),
         ({"gain": True, "phases": 0}, ["--gain", "--phases", "0"]),
+        ({"explain": True}, ["--explain"]),
+        ({"explain": "all", "method": "bottomup"}, ["--explain", "all", "--method", "bottomup"]),
+        ({"explain": 2, "method": "optimal"}, ["--explain", "2", "--method", "optimal"]),
     ],
 )
 def test_the_report_is_analyze_json(phantoms, cli_json, keywords, flags):
@@ -32,6 +35,19 @@ def test_every_format_and_type_gives_the_cli_report(cli_json, name):
     path = str(DATA / name)
     ours = slabscope.analyze(slabscope.load(path), slabs=2).to_dict()
     assert ours == cli_json("analyze", path, "--json", "--slabs", "2")
+
+
+def test_explain_carries_the_numbers_behind_the_axis(phantoms):
+    analysis = slabscope.analyze(slabscope.load(str(phantoms["body"])), explain=True)
+    report = analysis.to_dict()
+    chosen, worst = report["explain"]["axes"]
+    assert (chosen["role"], worst["role"]) == ("chosen", "worst")
+    assert chosen["entropy_rate"] == report["views"][0]["entropy_rate"]
+    assert worst["entropy_rate"] == report["views"][-1]["entropy_rate"]
+    assert len(report["explain"]["splits"]) == len(report["partition"]["steps"])
+    assert "explain" not in slabscope.analyze(slabscope.load(str(phantoms["body"]))).to_dict()
+    with pytest.raises(ValueError, match="explain="):
+        slabscope.analyze(slabscope.load(str(phantoms["body"])), explain="some")
 
 
 def test_the_analysis_reads_as_its_report(phantoms):

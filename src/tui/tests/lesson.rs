@@ -149,7 +149,14 @@ fn a_steps_lesson_follows_the_steps_and_the_method() {
     let Lesson::Optimal(o) = lesson(&app) else {
         panic!("the optimum's lesson")
     };
-    assert_shows(&shown(&app, 80, 22), &[o.optimal, o.greedy]);
+    let (small, large) = (shown(&app, 80, 22), shown(&app, 160, 48));
+    assert_shows(&small, &[o.optimal, o.greedy]);
+    assert_shows(&large, &[o.optimal, o.greedy]);
+    for b in &o.optimal_boundaries {
+        assert!(small.contains(&b.to_string()));
+    }
+    insta::assert_snapshot!("lesson_optimal_80x22", small);
+    insta::assert_snapshot!("lesson_optimal_160x48", large);
     // Esc closes the lesson, and nothing more is asked for.
     assert!(app.update(Action::Escape).is_empty());
     assert!(!app.lesson.open);
