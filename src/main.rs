@@ -19,6 +19,15 @@ use clap::Parser;
     args_conflicts_with_subcommands = true
 )]
 struct Cli {
+    #[command(flatten)]
+    tui: TuiArgs,
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+/// What the TUI opens and how: the TUI's arguments, and the tour's.
+#[derive(Debug, clap::Args)]
+struct TuiArgs {
     /// Volume to open in the TUI (default: the built-in dataset).
     file: Option<PathBuf>,
     #[command(flatten)]
@@ -27,8 +36,6 @@ struct Cli {
     analysis: cli::AnalysisArgs,
     #[command(flatten)]
     load: cli::LoadArgs,
-    #[command(subcommand)]
-    command: Option<Command>,
 }
 
 /// How the TUI draws.
@@ -50,36 +57,17 @@ enum Command {
     Cli(cli::Command),
     /// A guided tour of the paper's method in 12 pages on the TUI's live panes (Space or → next,
     /// ← back, q quits)
-    Tour(TourArgs),
+    Tour(TuiArgs),
 }
 
-/// Arguments of `slabscope tour`: the TUI's.
-#[derive(Debug, clap::Args)]
-struct TourArgs {
-    /// Volume to tour (default: the built-in dataset).
-    file: Option<PathBuf>,
-    #[command(flatten)]
-    look: TuiLook,
-    #[command(flatten)]
-    analysis: cli::AnalysisArgs,
-    #[command(flatten)]
-    load: cli::LoadArgs,
-}
-
-/// Opens the TUI on `file`, with the tour when `tour`.
-fn open_tui(
-    file: Option<PathBuf>,
-    look: TuiLook,
-    analysis: &cli::AnalysisArgs,
-    load: &cli::LoadArgs,
-    tour: bool,
-) -> anyhow::Result<u8> {
+/// Opens the TUI as `args` say, with the tour when `tour`.
+fn open_tui(args: TuiArgs, tour: bool) -> anyhow::Result<u8> {
     tui::run(tui::Options {
-        file,
-        load: load.options(),
-        protocol: look.protocol,
-        analysis: analysis.params(true),
-        theme: look.theme,
+        load: args.load.options(),
+        analysis: args.analysis.params(true),
+        file: args.file,
+        protocol: args.look.protocol,
+        theme: args.look.theme,
         tour,
     })
     .map(|()| 0)
@@ -90,8 +78,8 @@ fn main() -> ExitCode {
     let args = Cli::parse();
     let result = match args.command {
         Some(Command::Cli(command)) => cli::run(command),
-        Some(Command::Tour(t)) => open_tui(t.file, t.look, &t.analysis, &t.load, true),
-        None => open_tui(args.file, args.look, &args.analysis, &args.load, false),
+        Some(Command::Tour(t)) => open_tui(t, true),
+        None => open_tui(args.tui, false),
     };
     let code = match result {
         Ok(code) => ExitCode::from(code),

@@ -94,9 +94,7 @@ pub fn ray_plane(
     params: &ViewParams,
     offset: (i64, i64),
 ) -> Result<Option<RayPlane>> {
-    let lattice = paper_lattice(volume, axis, params)?;
-    let (ci, cj) = lattice.central_ray();
-    let (si, j) = (ci + offset.0, cj + offset.1);
+    let (lattice, (si, j)) = offset_ray(volume, axis, params, offset)?;
     let Some((i0, i1)) = lattice.row_span(j) else {
         return Ok(None);
     };
@@ -149,6 +147,18 @@ fn paper_lattice(volume: &Volume, axis: [f64; 3], params: &ViewParams) -> Result
         sampling.sample_spacing.unwrap_or(1.0),
         [0.0; 3],
     )?)
+}
+
+/// The paper's lattice along `axis` and the ray `offset` rays from its central one.
+fn offset_ray(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &ViewParams,
+    offset: (i64, i64),
+) -> Result<(Lattice, (i64, i64))> {
+    let lattice = paper_lattice(volume, axis, params)?;
+    let (ci, cj) = lattice.central_ray();
+    Ok((lattice, (ci + offset.0, cj + offset.1)))
 }
 
 fn canonical_axis(axis: [f64; 3]) -> Result<[f64; 3]> {
@@ -219,9 +229,7 @@ pub fn ray_samples(
     params: &ViewParams,
     offset: (i64, i64),
 ) -> Result<Option<RaySamples>> {
-    let lattice = paper_lattice(volume, axis, params)?;
-    let (ci, cj) = lattice.central_ray();
-    let (i, j) = (ci + offset.0, cj + offset.1);
+    let (lattice, (i, j)) = offset_ray(volume, axis, params, offset)?;
     let q = volume.quantizer(params.sampling.bins)?;
     let bins = crate::volume::with_voxels!(volume.data(), |data| {
         ray_bins(&BinSampler::over(data, volume, q), &lattice, i, j)
