@@ -13,6 +13,7 @@ mod bad_input;
 mod cli;
 mod contract;
 mod dicom;
+mod dicom_tree;
 mod formats;
 mod fuzz_headers;
 mod gain;
