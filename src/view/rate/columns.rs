@@ -1,7 +1,7 @@
 //! The walk of a lattice whose rays are voxel columns: samples are voxels, read in memory order a
 //! row of columns at a time.
 
-use super::{AxisEntropy, BinSampler, VoxelBins, count_in_parallel, work_units};
+use super::{AxisEntropy, BinSampler, SERIAL_VOXELS, VoxelBins, count_in_parallel, work_units};
 use crate::error::Result;
 use crate::geometry::lattice::Lattice;
 use crate::measure::{Counter, Run};
@@ -111,8 +111,8 @@ pub(super) fn column_rate<T: Voxel>(
         .collect();
     let (counts, rays) = count_in_parallel(
         ranges,
-        sampler.bins(),
-        block,
+        (sampler.bins(), block),
+        sampler.voxels().len() < SERIAL_VOXELS,
         monitor,
         |range, counts| match counts.dense() {
             Some(mut dense) => columns.walk(range, sampler, &mut dense),
