@@ -66,19 +66,7 @@ pub fn look(
         let e = Error::format(&entry.path, problem.clone());
         return failed(TriageRow::failed(&name, describe(e)));
     }
-    let loaded = match &entry.series {
-        // A series whose files the walk (or a manifest's resolution) found is read from them
-        // alone, with what its folder left out said as the entry says it: once for the folder.
-        Some(key) if !entry.files.is_empty() => {
-            dicom::load_series(&entry.path, &entry.files, key, &opts).map(|mut l| {
-                l.notes.retain(|n| !folder_note(n));
-                l.notes.splice(0..0, entry.notes.iter().cloned());
-                l
-            })
-        }
-        _ => load(&entry.path, &opts),
-    };
-    let loaded = match loaded {
+    let loaded = match load_entry(entry, &opts) {
         Ok(l) => l,
         Err(e) => {
             let mut row = TriageRow::failed(&name, describe(e));
@@ -140,6 +128,22 @@ pub fn look(
             timeout.as_secs_f64()
         ))),
         Err(e) => failed(row.with_error(describe(e))),
+    }
+}
+
+/// Loads `entry`: a series whose files the walk (or a manifest's resolution) found is read
+/// from them alone, with what its folder left out said as the entry says it (once for the
+/// folder).
+fn load_entry(entry: &Entry, opts: &LoadOptions) -> crate::error::Result<crate::Loaded> {
+    match &entry.series {
+        Some(key) if !entry.files.is_empty() => {
+            dicom::load_series(&entry.path, &entry.files, key, opts).map(|mut l| {
+                l.notes.retain(|n| !folder_note(n));
+                l.notes.splice(0..0, entry.notes.iter().cloned());
+                l
+            })
+        }
+        _ => load(&entry.path, opts),
     }
 }
 

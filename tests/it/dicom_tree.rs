@@ -127,17 +127,21 @@ fn a_series_split_across_two_folders_is_one_volume_with_its_slices_in_order() {
     // A folder alone holds half of it.
     let half = slabscope::load(&study.join("b"), &opts).unwrap();
     assert_eq!(half.volume.dims(), [24, 20, 6]);
-    // The list names the series by study/, and the manifest gives the walk's rows.
-    let list = run(&["triage", s(&study), "--list"]);
+    lists_and_reads_back(dir.path(), &study, &uid, &all);
+}
+
+/// The list names the series by `study` with `uid`, and its manifest gives the walk's rows.
+fn lists_and_reads_back(dir: &Path, study: &Path, uid: &str, all: &[serde_json::Value]) {
+    let list = run(&["triage", s(study), "--list"]);
     assert!(list.ok, "{}", list.stderr);
     assert!(
         list.stdout
             .lines()
-            .any(|l| l == format!("{}\t{uid}", s(&study))),
+            .any(|l| l == format!("{}\t{uid}", s(study))),
         "{}",
         list.stdout
     );
-    let manifest = dir.path().join("manifest.txt");
+    let manifest = dir.join("manifest.txt");
     std::fs::write(&manifest, &list.stdout).unwrap();
     let again = run(&[
         "triage",
