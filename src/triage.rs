@@ -7,6 +7,7 @@ mod look;
 mod manifest;
 mod row;
 mod select;
+mod series;
 mod walk;
 
 use std::path::{Path, PathBuf};
@@ -17,6 +18,7 @@ pub use self::look::{
 pub use self::manifest::{MANIFEST_HEADER, MAX_LINE, manifest_lines, parse_manifest};
 pub use self::row::TriageRow;
 pub use self::select::{MAX_MANIFEST, Selection, Source, read_manifest, select};
+pub use self::series::resolve;
 pub use self::walk::{discover, restrict_to_series, series_positions};
 pub use crate::volume::io::{Folder, folder_kind};
 
@@ -41,6 +43,12 @@ pub struct Entry {
     /// Why the walk could not look inside it (a folder it cannot read, or past the depth
     /// limit): its row says so, and nothing is loaded.
     pub problem: Option<String>,
+    /// The DICOM series' files, sorted, as the walk's scan found them: the series is read from
+    /// them alone (empty: unknown, as in a manifest, which [`select`] then resolves).
+    pub files: std::sync::Arc<[PathBuf]>,
+    /// What its folder's scan left out (localizers, derived images, unreadable files), said
+    /// once for the folder: on its first series' entry.
+    pub notes: Vec<String>,
 }
 
 impl Entry {
@@ -52,6 +60,8 @@ impl Entry {
             label: None,
             position: None,
             problem: None,
+            files: std::sync::Arc::default(),
+            notes: Vec::new(),
         }
     }
 

@@ -357,6 +357,19 @@ impl Lattice {
         self.per_ray.step
     }
 
+    /// Whether some ray of a lattice along `d` with this sample spacing, in any phase, could
+    /// hold `block` samples in the box: the longest chord of the box along `d` (the box's
+    /// tolerance included) is at least `block - 1` sample spacings. Never false where one could
+    /// (a volume one voxel thick is too thin along every axis that crosses it).
+    pub fn could_hold(&self, block: usize) -> bool {
+        let chord = (0..3)
+            .filter(|&m| self.d[m].abs() > 1e-12)
+            .map(|m| (self.extent[m] + 4e-9 * (1.0 + self.extent[m])) / self.d[m].abs())
+            .fold(f64::INFINITY, f64::min);
+        let need = block.saturating_sub(1) as f64 * self.sample_spacing;
+        chord >= need * (1.0 - 1e-9)
+    }
+
     /// Ray `(i, j)`, or `None` when it misses the box.
     pub fn ray(&self, i: i64, j: i64) -> Option<Ray> {
         let base = self.point(i, j, 0);

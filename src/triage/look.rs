@@ -9,7 +9,7 @@ use super::{Entry, TriageRow};
 use crate::analysis::{AnalysisParams, analyze, within_memory};
 use crate::error::Error;
 use crate::progress::{Monitor, Progress};
-use crate::volume::io::{LoadOptions, load};
+use crate::volume::io::{LoadOptions, dicom, load};
 
 /// The coarse lattice of the fast path: rays and samples this many smallest voxel spacings
 /// apart, an eighth of the samples.
@@ -66,7 +66,7 @@ pub fn look(
         let e = Error::format(&entry.path, problem.clone());
         return failed(TriageRow::failed(&name, describe(e)));
     }
-    let loaded = match load(&entry.path, &opts) {
+    let loaded = match load_entry(entry, &opts) {
         Ok(l) => l,
         Err(e) => {
             let mut row = TriageRow::failed(&name, describe(e));
@@ -131,6 +131,22 @@ pub fn look(
     }
 }
 
+/// Loads `entry`: a series whose files the walk (or a manifest's resolution) found is read
+/// from them alone, with what its folder left out said as the entry says it (once for the
+/// folder).
+fn load_entry(entry: &Entry, opts: &LoadOptions) -> crate::error::Result<crate::Loaded> {
+    match &entry.series {
+        Some(key) if !entry.files.is_empty() => {
+            dicom::load_series(&entry.path, &entry.files, key, opts).map(|mut l| {
+                l.notes.retain(|n| !folder_note(n));
+                l.notes.splice(0..0, entry.notes.iter().cloned());
+                l
+            })
+        }
+        _ => load(&entry.path, opts),
+    }
+}
+
 /// Looks at every one of `volumes` as `how` says, `workers` at a time, and hands the results to
 /// `emit` in order, as they complete, until `emit` returns false (the looks under way then
 /// finish, and no other starts). The volumes looked at together share the memory budget:
@@ -184,18 +200,9 @@ pub fn look_all(
         drop(tx);
         let mut waiting = std::collections::BTreeMap::new();
         let mut due = 0;
-        // The folder whose notes a series row gave last: its other series do not repeat them.
-        let mut noted: Option<&Path> = None;
         'rows: for (i, looked) in rx {
             waiting.insert(i, looked);
-            while let Some(mut looked) = waiting.remove(&due) {
-                let entry = &volumes[due];
-                if entry.series.is_some() {
-                    if noted == Some(entry.path.as_path()) {
-                        looked.row.problems.retain(|p| !folder_note(p));
-                    }
-                    noted = Some(entry.path.as_path());
-                }
+            while let Some(looked) = waiting.remove(&due) {
                 if !emit(due, looked) {
                     next.store(volumes.len(), Ordering::Relaxed);
                     break 'rows;
@@ -206,9 +213,9 @@ pub fn look_all(
     });
 }
 
-/// Whether a loader's note is about the DICOM folder rather than the series loaded from it
-/// (images left out: localizers, derived images, files that could not be read), said once for
-/// the folder, on its first series' row.
+/// Whether a loader's note is about the DICOM files around the series loaded rather than the
+/// series (images left out: localizers, derived images, files that could not be read), said
+/// once for the folder, on its first series' row ([`Entry::notes`]).
 fn folder_note(note: &str) -> bool {
     note.starts_with("left out ")
         && (note.contains(" localizer image")

@@ -81,11 +81,8 @@ fn escaped_entry(line: &[u8]) -> std::result::Result<Entry, String> {
         None => None,
     };
     Ok(Entry {
-        path: names::unescape_path(path)?,
         series,
-        label: None,
-        position: None,
-        problem: None,
+        ..Entry::file(names::unescape_path(path)?)
     })
 }
 
@@ -96,11 +93,8 @@ fn plain_entry(line: &[u8]) -> Entry {
         let key = std::str::from_utf8(&line[tab + 1..]).unwrap_or_default();
         if is_series_key(key) {
             return Entry {
-                path: raw_path(&line[..tab]),
                 series: Some(key.to_string()),
-                label: None,
-                position: None,
-                problem: None,
+                ..Entry::file(raw_path(&line[..tab]))
             };
         }
     }
@@ -136,11 +130,8 @@ mod tests {
     fn both_forms_read_and_the_escaped_one_keeps_everything() {
         let hostile = Entry::file(names::unescape_path("a\\tb\\n\\xff\\u{1b}\t1.2").unwrap());
         let series = Entry {
-            path: "dir\\x".into(),
             series: Some("1.2.3#2".into()),
-            label: None,
-            position: None,
-            problem: None,
+            ..Entry::file("dir\\x")
         };
         let text = manifest_lines(&[hostile.clone(), series.clone()])
             .collect::<Vec<_>>()

@@ -5,7 +5,7 @@
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use super::{Entry, dedupe, discover, parse_manifest, restrict_to_series, shard};
+use super::{Entry, dedupe, discover, parse_manifest, resolve, restrict_to_series, shard};
 use crate::error::{Error, Result, names, shown};
 use crate::volume::io::LoadOptions;
 
@@ -33,7 +33,8 @@ pub struct Selection {
 }
 
 /// The volumes of `source` (a series of each folder only, with `opts.series`), then block `k`
-/// of `n` of them (see [`shard`]) with `shard_of = Some((k, n))`. No volume at all is an error
+/// of `n` of them (see [`shard`]) with `shard_of = Some((k, n))`, a manifest's DICOM series
+/// given their files ([`resolve`]). No volume at all is an error
 /// naming the source; an empty shard of some is said in [`Selection::note`].
 pub fn select(
     source: Source<'_>,
@@ -64,13 +65,15 @@ pub fn select(
     }
     let total = all.len();
     let Some((k, n)) = shard_of else {
+        resolve(&mut all, opts);
         return Ok(Selection {
             volumes: all,
             total,
             note: None,
         });
     };
-    let volumes = shard(&all, k, n).to_vec();
+    let mut volumes = shard(&all, k, n).to_vec();
+    resolve(&mut volumes, opts);
     let note = volumes
         .is_empty()
         .then(|| format!("shard {k}/{n} of {total} volumes is empty (more shards than volumes)"));

@@ -7,15 +7,22 @@ use crate::error::{Error, Result};
 use crate::volume::io::{Folder, LoadOptions, dicom, folder_kind, volume_name};
 
 /// The volumes under `paths`, sorted and without repeats: each file named, each folder of
-/// slices, each series of a folder of DICOM files, and, walked recursively, every volume in the
-/// other folders (symbolic links to folders are not followed, so that no walk loops). A path
-/// that cannot be read is kept: its row will say why. `opts` says which DICOM images count.
+/// slices, each DICOM series, and, walked recursively, every volume in the other folders
+/// (symbolic links to folders are not followed, so that no walk loops). A DICOM series is
+/// assembled from its files in every folder of the tree walked (each path given is a tree): a
+/// series in one folder is named by that folder, one in several folders by the deepest folder
+/// holding them all. A path that cannot be read is kept: its row will say why. `opts` says
+/// which DICOM images count.
 pub fn discover(paths: &[PathBuf], opts: &LoadOptions) -> Result<Vec<Entry>> {
     let mut found = Vec::new();
     for path in paths {
         let meta = std::fs::metadata(path);
         match meta {
-            Ok(m) if m.is_dir() => walk(path, 0, opts, &mut found)?,
+            Ok(m) if m.is_dir() => {
+                let start = found.len();
+                walk(path, 0, opts, &mut found)?;
+                super::series::join_spanning(&mut found, start, opts);
+            }
             _ => push(&mut found, Entry::file(path.clone()))?,
         }
     }
@@ -39,19 +46,21 @@ fn push(found: &mut Vec<Entry>, entry: Entry) -> Result<()> {
 /// or with its problem when it cannot be scanned.
 fn push_series(dir: &Path, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result<()> {
     match dicom::list_series(dir, opts) {
-        Ok((series, failed)) if !(series.is_empty() && failed.is_empty()) => {
-            for (file, _) in failed {
+        Ok(listing) if !(listing.series.is_empty() && listing.failed.is_empty()) => {
+            for (file, _) in listing.failed {
                 push(found, Entry::file(file))?;
             }
-            for (i, s) in series.into_iter().enumerate() {
+            let mut notes = listing.notes;
+            for (i, s) in listing.series.into_iter().enumerate() {
                 push(
                     found,
                     Entry {
-                        path: dir.to_path_buf(),
-                        label: Some(s.label.clone()),
+                        label: Some(s.label),
                         series: Some(s.key),
                         position: Some(i + 1),
-                        problem: None,
+                        files: s.files.into(),
+                        notes: std::mem::take(&mut notes),
+                        ..Entry::file(dir)
                     },
                 )?;
             }
@@ -151,7 +160,7 @@ pub fn series_positions(entries: &[Entry], opts: &LoadOptions) -> Vec<Option<usi
             }
             let keys = listed.entry(&e.path).or_insert_with(|| {
                 dicom::list_series(&e.path, opts)
-                    .map(|(s, _)| s.into_iter().map(|s| s.key).collect())
+                    .map(|l| l.series.into_iter().map(|s| s.key).collect())
                     .unwrap_or_default()
             });
             keys.iter().position(|k| k == key).map(|i| i + 1)
@@ -169,15 +178,18 @@ pub fn restrict_to_series(entries: Vec<Entry>, wanted: &str, opts: &LoadOptions)
     } else {
         vec![None; entries.len()]
     };
-    entries
-        .into_iter()
-        .zip(positions)
-        .filter(|(e, at)| {
-            e.series.as_deref().is_some_and(|key| {
-                let uid = key.split('#').next().unwrap_or(key);
-                key == wanted || uid == wanted || (position.is_some() && *at == position)
-            })
+    let (kept, left): (Vec<_>, Vec<_>) = entries.into_iter().zip(positions).partition(|(e, at)| {
+        e.series.as_deref().is_some_and(|key| {
+            let uid = key.split('#').next().unwrap_or(key);
+            key == wanted || uid == wanted || (position.is_some() && *at == position)
         })
-        .map(|(e, _)| e)
-        .collect()
+    });
+    let mut kept: Vec<Entry> = kept.into_iter().map(|(e, _)| e).collect();
+    // What a folder left out is said on the first of its series kept.
+    for (e, _) in left.into_iter().filter(|(e, _)| !e.notes.is_empty()) {
+        if let Some(first) = kept.iter_mut().find(|k| k.path == e.path) {
+            first.notes.splice(0..0, e.notes);
+        }
+    }
+    kept
 }

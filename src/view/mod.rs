@@ -285,8 +285,14 @@ impl<T: Voxel> Evaluator<'_, T> {
                 .then_some(result.entropy_rate)
                 .into_iter()
                 .collect();
+            // An axis too thin for a block in any phase: the other phases would say nothing.
+            let thin = !self.lattice(axis, 0)?.could_hold(block);
             for n in 1..self.params.phases {
                 let lattice = self.lattice(axis, n)?;
+                if thin {
+                    monitor.advance(work_units(&lattice))?;
+                    continue;
+                }
                 let subset = self.subset(result.samples, n);
                 let r = entropy_rate_of(&self.sampler, &lattice, block, subset, monitor)?;
                 // A subset walks fewer rows of tiles: the progress of the rest.

@@ -13,6 +13,7 @@ mod bad_input;
 mod cli;
 mod contract;
 mod dicom;
+mod dicom_tree;
 mod explain;
 mod formats;
 mod fuzz_headers;

@@ -203,3 +203,37 @@ fn a_lattice_finer_than_the_budget_is_coarsened_finest_first() {
     );
     assert!(sampling(None, None).budget_note(dims, [1.0; 3]).is_none());
 }
+
+/// `could_hold` is false only where no ray of any phase holds `block` samples: checked against
+/// every ray of shifted lattices over thin and flat boxes, and false across a one-voxel-thick
+/// volume along every axis that crosses it.
+#[test]
+fn a_lattice_too_thin_for_a_block_holds_none_in_any_phase() {
+    let flat = Lattice::new([8, 8, 1], [1.0; 3], [0.6, 0.0, 0.8], 1.0, 1.0, [0.0; 3]).unwrap();
+    assert!(!flat.could_hold(3) && flat.could_hold(1));
+    let along = Lattice::new([8, 8, 1], [1.0; 3], [0.6, 0.8, 0.0], 1.0, 1.0, [0.0; 3]).unwrap();
+    assert!(along.could_hold(3));
+    let mut rng = Lcg::new(7);
+    for case in 0..300 {
+        let dims = [1 + (case % 3), 2 + (case % 5), 1 + (case % 2) * 3];
+        let mut unit = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let axis = crate::geometry::normalize(std::array::from_fn(|_| unit() * 2.0 - 1.0)).unwrap();
+        let phase = std::array::from_fn(|_| unit());
+        let Ok(l) = Lattice::new(dims, [0.7, 1.0, 1.3], axis, 0.5, 0.6, phase) else {
+            continue;
+        };
+        let ((i0, i1), (j0, j1)) = l.ray_ranges();
+        let longest = (i0..=i1)
+            .flat_map(|i| (j0..=j1).map(move |j| (i, j)))
+            .filter_map(|(i, j)| l.ray(i, j))
+            .map(|r| (r.k1 - r.k0 + 1) as usize)
+            .max()
+            .unwrap_or(0);
+        for block in 1..6 {
+            assert!(
+                l.could_hold(block) || longest < block,
+                "{dims:?} {axis:?}: a ray of {longest} samples, block {block}"
+            );
+        }
+    }
+}

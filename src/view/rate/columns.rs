@@ -1,7 +1,7 @@
 //! The walk of a lattice whose rays are voxel columns: samples are voxels, read in memory order a
 //! row of columns at a time.
 
-use super::{BinSampler, VoxelBins, count_in_parallel, work_units};
+use super::{BinSampler, SERIAL_VOXELS, VoxelBins, count_in_parallel, work_units};
 use crate::error::Result;
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, Counter, Run};
@@ -112,8 +112,8 @@ pub(super) fn column_counts<T: Voxel>(
         .collect();
     count_in_parallel(
         ranges,
-        sampler.bins(),
-        block,
+        (sampler.bins(), block),
+        sampler.voxels().len() < SERIAL_VOXELS,
         monitor,
         |range, counts| match counts.dense() {
             Some(mut dense) => columns.walk(range, sampler, &mut dense),

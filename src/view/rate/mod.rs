@@ -271,7 +271,9 @@ fn counts_with<T: Voxel>(
     let vector = walk != (Walk::Tiles { vector: false });
     let rows: Vec<(i64, i64)> = tile_rows(lattice, subset.every).collect();
     let step = fixed_step(lattice);
-    count_in_parallel(rows, sampler.bins(), block, monitor, |js, counts| {
+    let serial = sampler.voxels().len() < SERIAL_VOXELS;
+    let table = (sampler.bins(), block);
+    count_in_parallel(rows, table, serial, monitor, |js, counts| {
         match counts.dense() {
             #[cfg(target_arch = "x86_64")]
             Some(mut dense) if vector && lanes::available(sampler) => {
@@ -301,15 +303,29 @@ fn counts_with<T: Voxel>(
     })
 }
 
-/// Block counts of `parts` of the work, counted in parallel by `count` (which returns its
-/// rays), one progress unit per part.
+/// Volumes of fewer voxels than this are counted on one thread, into one table: each parallel
+/// split zeroes and merges a table of its own (256 KiB at the default bins and block), which
+/// costs more than counting a small volume (a single DICOM image took 20 ms so, mostly zeroing
+/// tables). Counts are integer sums, the same in any order, so every result is unchanged.
+pub(crate) const SERIAL_VOXELS: usize = 1 << 16;
+
+/// Block counts of `parts` of the work, counted by `count` (which returns its rays), one
+/// progress unit per part: in parallel, unless `serial`.
 fn count_in_parallel<P: Send>(
     parts: Vec<P>,
-    bins: usize,
-    block: usize,
+    (bins, block): (usize, usize),
+    serial: bool,
     monitor: &Monitor,
     count: impl Fn(P, &mut BlockCounts) -> u64 + Sync,
 ) -> Result<(BlockCounts, u64)> {
+    if serial {
+        let (mut counts, mut rays) = (BlockCounts::new(bins, block), 0);
+        for part in parts {
+            rays += count(part, &mut counts);
+            monitor.advance(1)?;
+        }
+        return Ok((counts, rays));
+    }
     let empty = || (BlockCounts::new(bins, block), 0);
     parts
         .into_par_iter()

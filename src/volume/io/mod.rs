@@ -234,7 +234,7 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             "--label-image names a label image of an OME-Zarr store, and this is none",
         ));
     }
-    let (format, mut loaded) = if meta.is_dir() {
+    let (format, loaded) = if meta.is_dir() {
         load_folder(path, opts)?
     } else {
         let format = detect(path, opts)?;
@@ -262,6 +262,11 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         };
         (format, loaded)
     };
+    Ok(finish(path, format, loaded))
+}
+
+/// The volume a reader read from `path`, with the notes every format shares.
+fn finish(path: &Path, format: Format, mut loaded: Read0) -> Loaded {
     let missing = loaded.volume.stats().missing;
     if missing > 0 {
         loaded.notes.push(format!(
@@ -276,7 +281,7 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     }
     let mut sources = vec![path.to_path_buf()];
     sources.extend(loaded.sources.into_iter().filter(|s| s != path));
-    Ok(Loaded {
+    Loaded {
         volume: loaded.volume,
         format,
         notes: loaded.notes,
@@ -284,7 +289,7 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         dicom: loaded.dicom,
         zarr: loaded.zarr,
         format_version: loaded.format_version,
-    })
+    }
 }
 
 /// Reads the folder `path`: a Zarr store, a DICOM series, or a stack of TIFF slices.

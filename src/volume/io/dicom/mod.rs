@@ -71,25 +71,75 @@ pub struct SeriesSummary {
     pub images: usize,
     /// Columns, rows and slices (positions), when it lays out as a volume.
     pub dims: Option<[usize; 3]>,
+    /// `SeriesInstanceUID` (the key without its `#N`).
+    #[serde(skip)]
+    pub uid: String,
+    /// The files its images are read from, sorted: what [`load_series`] reads it from again.
+    #[serde(skip)]
+    pub files: Vec<PathBuf>,
 }
+
+/// What a scan of DICOM files found: their series, the files that could not be read, and what
+/// the scan left out (localizers, derived images, unreadable files) in notes, said once for
+/// all the files.
+#[derive(Debug)]
+pub struct Listing {
+    /// The series, as a list shows them (sorted by UID: the order `--series N` counts in).
+    pub series: Vec<SeriesSummary>,
+    /// Files that could not be read, each with its error.
+    pub failed: Failures,
+    /// What was left out.
+    pub notes: Vec<String>,
+}
+
+/// The deepest [`files_under`] goes below the folder it is given.
+pub const MAX_DEPTH: usize = 64;
 
 /// The DICOM files directly in folder `dir` (other files ignored), sorted.
 pub fn files_in(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
+    collect(dir, dir, 0, false, &mut files)?;
+    files.sort();
+    Ok(files)
+}
+
+/// The DICOM files in folder `dir` and in every folder below it (symbolic links to folders not
+/// followed, at most [`MAX_DEPTH`] deep, at most [`MAX_FILES`] in all), sorted: where a series
+/// named by its UID is looked for, since one series may lie in several folders.
+pub fn files_under(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    collect(dir, dir, 0, true, &mut files)?;
+    files.sort();
+    Ok(files)
+}
+
+/// Adds the DICOM files of `dir` (below `root`) to `files`, and with `deep` those below it.
+fn collect(
+    root: &Path,
+    dir: &Path,
+    depth: usize,
+    deep: bool,
+    files: &mut Vec<PathBuf>,
+) -> Result<()> {
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let entry = entry.map_err(|e| Error::io(dir, e))?;
-        if entry.file_type().is_ok_and(|t| t.is_file()) && is_dicom(&entry.path()) {
+        let Ok(t) = entry.file_type() else { continue };
+        if deep && t.is_dir() && depth < MAX_DEPTH {
+            collect(root, &entry.path(), depth + 1, deep, files)?;
+        } else if t.is_file() && is_dicom(&entry.path()) {
             if files.len() >= MAX_FILES {
                 return Err(Error::format(
-                    dir,
-                    format!("more than {MAX_FILES} DICOM files in one folder"),
+                    root,
+                    format!(
+                        "more than {MAX_FILES} DICOM files {}",
+                        ["in one folder", "below"][usize::from(deep)]
+                    ),
                 ));
             }
             files.push(entry.path());
         }
     }
-    files.sort();
-    Ok(files)
+    Ok(())
 }
 
 /// Files that could not be read, each with its error.
@@ -118,11 +168,16 @@ fn quoted(e: &dyn std::fmt::Display) -> String {
     out
 }
 
-/// The series in the DICOM file or folder at `path`, as a list shows them, and the files that
-/// could not be read, each with its error.
-pub fn list_series(path: &Path, opts: &LoadOptions) -> Result<(Vec<SeriesSummary>, Failures)> {
-    let files = paths_of(path)?;
-    let (mut scan, series, _) = series_of(&files, opts)?;
+/// The series in the DICOM file or folder at `path` (the files directly in it), as a list
+/// shows them, with what was left out.
+pub fn list_series(path: &Path, opts: &LoadOptions) -> Result<Listing> {
+    list_files(&paths_of(path, false)?, opts)
+}
+
+/// The series the DICOM files `files` hold, as a list shows them, with what was left out:
+/// each file's header read once.
+pub fn list_files(files: &[PathBuf], opts: &LoadOptions) -> Result<Listing> {
+    let (mut scan, series, notes) = series_of(files, opts)?;
     let failed = std::mem::take(&mut scan.skipped);
     let summaries = series
         .iter()
@@ -136,9 +191,44 @@ pub fn list_series(path: &Path, opts: &LoadOptions) -> Result<(Vec<SeriesSummary
             dims: assemble::layout(s, &|im| name(&scan, im))
                 .ok()
                 .map(|l| [l.plane[0], l.plane[1], l.slices]),
+            uid: s.uid.clone(),
+            files: sources(&scan, s, &(0..s.images.len()).collect::<Vec<_>>()),
         })
         .collect();
-    Ok((summaries, failed))
+    Ok(Listing {
+        series: summaries,
+        failed,
+        notes,
+    })
+}
+
+/// Loads the series `key` from the DICOM files `files` alone (as a listing gave them), named
+/// `path` (its folder) in messages: the same volume as [`crate::load`] of `path` with that
+/// series, without reading the other files of the folder. Notes say nothing of images of
+/// other files left out (a listing of the folder says that).
+pub fn load_series(
+    path: &Path,
+    files: &[PathBuf],
+    key: &str,
+    opts: &LoadOptions,
+) -> Result<super::Loaded> {
+    super::check_input(path)?;
+    // The files of one part of a split series group alone as that UID's only part.
+    let uid = key.split('#').next().unwrap_or(key);
+    let opts = LoadOptions {
+        series: Some(uid.to_string()),
+        ..opts.clone()
+    };
+    let mut read = load_from(path, files, &opts).map_err(|e| e.reached_from(path))?;
+    if let Some(d) = &mut read.dicom {
+        d.key = key.to_string();
+    }
+    Ok(super::finish(path, super::Format::Dicom, read))
+}
+
+/// Whether `series` names a series by its position in a folder's list, not by UID.
+fn by_position(series: &str) -> bool {
+    series.bytes().all(|b| b.is_ascii_digit())
 }
 
 fn name(scan: &Scan, im: &Image) -> String {
@@ -210,10 +300,17 @@ fn no_series(path: &Path, scan: &Scan) -> Error {
     }
 }
 
-/// Loads the DICOM file or folder at `path` as a volume.
+/// Loads the DICOM file or folder at `path` as a volume: of a folder, the files directly in
+/// it, or, for a series named by its UID, every DICOM file below it too (a series may lie in
+/// several folders).
 pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let files = paths_of(path)?;
-    let (scan, series, mut notes) = series_of(&files, opts)?;
+    let deep = opts.series.as_deref().is_some_and(|s| !by_position(s));
+    load_from(path, &paths_of(path, deep)?, opts)
+}
+
+/// Loads the series `opts` picks of the DICOM files `files`, named `path` in messages.
+fn load_from(path: &Path, files: &[PathBuf], opts: &LoadOptions) -> Result<Read0> {
+    let (scan, series, mut notes) = series_of(files, opts)?;
     if series.is_empty() {
         return Err(no_series(path, &scan));
     }

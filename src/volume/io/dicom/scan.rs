@@ -10,7 +10,7 @@ use super::assemble::{self, Series};
 use super::header::{self, Image, PixelFormat};
 use super::mosaic;
 use super::read::{self, Pixels, Syntax};
-use super::{Failures, LoadOptions, files_in, parse};
+use super::{Failures, LoadOptions, files_in, files_under, parse};
 use crate::error::{Error, Result};
 
 /// Bytes charged per image (frame) described while scanning.
@@ -182,10 +182,15 @@ pub(super) fn series_of(
     Ok((scan, series, notes))
 }
 
-/// The files a path names: the file, or the DICOM files of the folder.
-pub(super) fn paths_of(path: &Path) -> Result<Vec<PathBuf>> {
+/// The files a path names: the file, or the DICOM files of the folder (with `deep`, of its
+/// whole tree).
+pub(super) fn paths_of(path: &Path, deep: bool) -> Result<Vec<PathBuf>> {
     if path.is_dir() {
-        let files = files_in(path)?;
+        let files = if deep {
+            files_under(path)?
+        } else {
+            files_in(path)?
+        };
         if files.is_empty() {
             return Err(Error::format(path, "folder holds no DICOM files"));
         }
