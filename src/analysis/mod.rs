@@ -123,11 +123,32 @@ impl AnalysisParams {
         }
     }
 
+    /// The words of a view search that asks for at least [`HEAVY_WORK`] times the default's
+    /// work on a volume of `dims` and `spacing`, to say before it starts: `this view search asks
+    /// for about 263 times the default's work (icosphere level 4, 64 phases, refinement on)`;
+    /// `None` for a lighter one.
+    pub fn heavy_work(&self, dims: [usize; 3], spacing: [f64; 3]) -> Option<String> {
+        let ratio = self.work_ratio(dims, spacing);
+        (ratio >= HEAVY_WORK).then(|| {
+            format!(
+                "this view search asks for about {ratio:.0} times the default's work (icosphere \
+                 level {}, {} phases, refinement {})",
+                self.view.level,
+                self.view.phases,
+                if self.view.refine { "on" } else { "off" },
+            )
+        })
+    }
+
     /// Whether the axes are ranked by partition gain.
     pub fn ranks_by_gain(&self) -> bool {
         self.gain || self.axis_by == AxisBy::Gain
     }
 }
+
+/// A view search asking for this many times the default's work is announced before it starts
+/// ([`AnalysisParams::heavy_work`]).
+pub const HEAVY_WORK: f64 = 50.0;
 
 /// The result of an analysis.
 #[derive(Clone, Debug)]

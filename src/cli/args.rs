@@ -82,9 +82,6 @@ impl LoadArgs {
     }
 }
 
-/// A view search asking for this many times the default's work is announced before it starts.
-pub const HEAVY: f64 = 50.0;
-
 /// How to find the most structured view and the slabs along it.
 #[derive(Debug, Args, Clone)]
 pub struct AnalysisArgs {
@@ -187,15 +184,9 @@ impl AnalysisArgs {
         params: &AnalysisParams,
     ) -> anyhow::Result<slabscope::Analysis> {
         let views = plan.views.as_ref();
-        let ratio = params.work_ratio(views.dims(), views.spacing());
-        if ratio >= HEAVY {
+        if let Some(heavy) = params.heavy_work(views.dims(), views.spacing()) {
             eprintln!(
-                "slabscope: note: {name}: this view search asks for about {ratio:.0} times the \
-                 default's work (icosphere level {}, {} phases, refinement {}): it may take long; \
-                 --timeout SECONDS bounds it",
-                params.view.level,
-                params.view.phases,
-                if params.view.refine { "on" } else { "off" },
+                "slabscope: note: {name}: {heavy}: it may take long; --timeout SECONDS bounds it"
             );
         }
         super::progress::with_bar(|monitor| slabscope::analyze_planned(plan, params, monitor))

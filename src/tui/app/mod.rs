@@ -340,6 +340,9 @@ impl App {
     /// A volume loaded: the view search starts, and the partition along the axis asked for.
     fn on_loaded(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
         self.status.message = notes.first().cloned();
+        if let Some(heavy) = self.params.heavy_work(volume.dims(), volume.spacing()) {
+            self.status.message = Some(format!("{heavy}: it may take long; Esc cancels it"));
+        }
         let chosen = self
             .params
             .axis

@@ -82,3 +82,34 @@ fn axis_by_gain_partitions_along_the_gains_best() {
         "{effects:?}"
     );
 }
+
+#[test]
+fn a_heavy_view_search_is_said_in_the_status_line() {
+    let mut params = AnalysisParams::default();
+    (params.view.level, params.view.phases, params.view.refine) = (4, 64, true);
+    let screen = Screen {
+        theme: PLAIN,
+        ..Screen::default()
+    };
+    let (mut app, _) = App::new("body.nrrd".into(), params, screen);
+    app.update(Action::Job(JobMsg::Loaded(Ok((
+        Arc::clone(&fixture().0),
+        vec![],
+    )))));
+    let message = app.status.message.clone().unwrap_or_default();
+    assert!(
+        message.contains("times the default's work") && message.contains("Esc cancels"),
+        "{message}"
+    );
+    // The default is not heavy.
+    let (mut app, _) = App::new(
+        "body.nrrd".into(),
+        AnalysisParams::default(),
+        Screen::default(),
+    );
+    app.update(Action::Job(JobMsg::Loaded(Ok((
+        Arc::clone(&fixture().0),
+        vec![],
+    )))));
+    assert!(app.status.message.is_none(), "{:?}", app.status.message);
+}
