@@ -134,7 +134,10 @@ pub fn look(
 /// Loads `entry`: a series whose files the walk (or a manifest's resolution) found is read
 /// from them alone, with what its folder left out said as the entry says it (once for the
 /// folder).
-fn load_entry(entry: &Entry, opts: &LoadOptions) -> crate::error::Result<crate::Loaded> {
+fn load_entry(
+    entry: &Entry,
+    opts: &LoadOptions,
+) -> crate::error::Result<crate::volume::io::Loaded> {
     match &entry.series {
         Some(key) if !entry.files.is_empty() => {
             dicom::load_series(&entry.path, &entry.files, key, opts).map(|mut l| {
