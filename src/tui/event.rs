@@ -96,8 +96,8 @@ pub enum JobMsg {
     Views(usize, Result<Box<ViewSearch>, String>),
     /// The histories along the axis of request `generation`, on a pyramid level.
     Analysis(u64, usize, Result<Arc<Histories>, String>),
-    /// The axes ranked by partition gain.
-    Gain(Result<Box<slabscope::analysis::GainRanking>, String>),
+    /// The axes ranked by partition gain on a pyramid level (0: full resolution).
+    Gain(usize, Result<Box<slabscope::analysis::GainRanking>, String>),
     /// A render of request `generation`.
     Rendered(u64, Result<Box<Rendered>, String>),
     /// An export finished: what was written, or why not.
@@ -329,8 +329,8 @@ pub enum Effect {
     SearchViews(ViewParams, usize),
     /// Compute the histories along `axis` as request `generation`, on a pyramid level.
     Analyze(u64, [f64; 3], StackParams, usize),
-    /// Rank every axis by partition gain with these parameters.
-    RankGain(Box<slabscope::AnalysisParams>),
+    /// Rank every axis by partition gain with these parameters, on a pyramid level.
+    RankGain(Box<slabscope::AnalysisParams>, usize),
     /// Compute a lesson's numbers.
     Lesson(Box<crate::tui::lesson::LessonRequest>),
     /// Render.
@@ -357,7 +357,7 @@ impl std::fmt::Debug for Effect {
             Self::Load => write!(f, "Load"),
             Self::SearchViews(_, level) => write!(f, "SearchViews(level {level})"),
             Self::Analyze(g, axis, _, level) => write!(f, "Analyze({g}, {axis:?}, level {level})"),
-            Self::RankGain(_) => write!(f, "RankGain"),
+            Self::RankGain(_, level) => write!(f, "RankGain(level {level})"),
             Self::Lesson(r) => write!(f, "Lesson({}, {:?})", r.generation, r.subject),
             Self::Render(r) => write!(f, "Render({})", r.generation),
             Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),

@@ -33,14 +33,41 @@ impl App {
         }
     }
 
-    /// Starts the gain ranking on the volume, once it is loaded.
+    /// Starts the gain ranking on the volume, once it is loaded: on the level shown (a
+    /// preview's first, whose views it scores; full resolution follows with the full views).
     pub(super) fn start_gain(&mut self) -> Vec<Effect> {
+        self.start_gain_at(self.views_level())
+    }
+
+    /// The pyramid level of the views shown: a preview's until full resolution's are in.
+    fn views_level(&self) -> usize {
+        match &self.refine {
+            Some(r) if !matches!(r.views, Load::Ready(())) => r.level,
+            _ => 0,
+        }
+    }
+
+    /// Starts the gain ranking on pyramid level `level`.
+    pub(super) fn start_gain_at(&mut self, level: usize) -> Vec<Effect> {
         if self.volume.ready().is_none() {
             return vec![];
         }
+        self.gain_level = level;
         self.views.gain = Load::started("ranking axes by partition gain");
         self.sync_status();
-        vec![Effect::RankGain(Box::new(self.params.clone()))]
+        vec![Effect::RankGain(Box::new(self.params.clone()), level)]
+    }
+
+    /// Whether the gain ranking shown (or under way) is a preview's while full resolution's
+    /// views are in: it is then ranked again at full resolution.
+    pub(super) fn gain_behind(&self) -> bool {
+        self.gain_level > self.views_level()
+            && !matches!(self.views.gain, Load::Idle | Load::Failed(_))
+    }
+
+    /// Whether a ranking of pyramid level `level` scores the views shown.
+    pub(super) fn gain_fits(&self, level: usize) -> bool {
+        level == self.gain_level
     }
 
     /// Whether the gain ranking picks the axis: `--axis-by gain` with no axis named.
@@ -63,7 +90,14 @@ impl App {
 
     /// The gain ranking finished: both scores in the list, ordered by the gain, the verdict on
     /// the status line, and with `--axis-by gain` the partition along its best.
-    pub(super) fn on_gain(&mut self, result: Result<Box<GainRanking>, String>) -> Vec<Effect> {
+    pub(super) fn on_gain(
+        &mut self,
+        level: usize,
+        result: Result<Box<GainRanking>, String>,
+    ) -> Vec<Effect> {
+        if !self.gain_fits(level) {
+            return vec![];
+        }
         let gain = match result {
             Ok(g) => *g,
             Err(e) => {
@@ -81,11 +115,14 @@ impl App {
         self.views.gain = Load::Ready(gain);
         self.views.by_gain = true;
         self.views.row = 0;
-        let effects = if self.gain_picks() && !self.part.axis.is_some_and(|a| same(a, best)) {
+        let mut effects = if self.gain_picks() && !self.part.axis.is_some_and(|a| same(a, best)) {
             self.analyze_chosen(best)
         } else {
             vec![]
         };
+        if self.gain_behind() {
+            effects.extend(self.start_gain_at(0));
+        }
         self.sync_status();
         effects
     }

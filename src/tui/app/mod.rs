@@ -102,6 +102,8 @@ pub struct App {
     ray: (i64, i64),
     /// The guided tour, when the app runs it.
     pub tour: Option<crate::tui::tour::Tour>,
+    /// The pyramid level of the gain ranking shown or under way.
+    gain_level: usize,
 }
 
 impl App {
@@ -130,6 +132,7 @@ impl App {
             lesson: LessonPane::new(theme),
             ray: (0, 0),
             tour: None,
+            gain_level: 0,
         };
         app.preview.hide = screen.hide;
         app.preview.graphics = screen.graphics;
@@ -296,7 +299,7 @@ impl App {
                 vec![]
             }
             JobMsg::Views(level, result) => self.on_views(level, result),
-            JobMsg::Gain(result) => self.on_gain(result),
+            JobMsg::Gain(level, result) => self.on_gain(level, result),
             JobMsg::Lesson(generation, result) => {
                 self.on_lesson(generation, result);
                 vec![]

@@ -87,7 +87,9 @@ impl App {
         let mut effects = vec![];
         // Views that come after the gain ranking carry its scores too.
         let result = result.map(|mut views| {
-            if let Load::Ready(g) = &self.views.gain {
+            if let Load::Ready(g) = &self.views.gain
+                && self.gain_fits(level)
+            {
                 g.annotate(&mut views);
             }
             views
@@ -103,6 +105,10 @@ impl App {
                 let moved = refine.auto_axis
                     && !self.gain_picks()
                     && self.part.axis.is_some_and(|a| !same(a, best));
+                // A preview's gain ranking scored the preview's views: rank these too.
+                if self.gain_behind() {
+                    effects.extend(self.start_gain_at(0));
+                }
                 if moved {
                     self.status.message = Some(format!(
                         "{}: the best axis is {} (the preview's was {})",
@@ -110,7 +116,7 @@ impl App {
                         axis_text(best),
                         previous.map_or_else(|| "another".into(), axis_text)
                     ));
-                    effects = self.analyze(best);
+                    effects.extend(self.analyze(best));
                 } else {
                     effects.extend(self.refine_histories());
                 }

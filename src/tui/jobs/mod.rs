@@ -107,13 +107,14 @@ impl Jobs {
                     JobMsg::Analysis(generation, level, result)
                 });
             }
-            Effect::RankGain(params) => {
+            Effect::RankGain(params, level) => {
                 let Some(volume) = self.volume.clone() else {
                     return;
                 };
                 self.spawn(Job::Gain, move |monitor, _| {
-                    let result = slabscope::analysis::rank_by_gain(&volume, &params, monitor);
-                    JobMsg::Gain(result.map(Box::new).map_err(|e| e.to_string()))
+                    let on = volume.coarser(level);
+                    let result = slabscope::analysis::rank_by_gain(&on, &params, monitor);
+                    JobMsg::Gain(level, result.map(Box::new).map_err(|e| e.to_string()))
                 });
             }
             Effect::Lesson(request) => {

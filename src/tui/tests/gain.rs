@@ -12,7 +12,7 @@ use crate::tui::event::{Action, Effect, JobMsg, Load};
 
 fn gain_result() -> JobMsg {
     let ranking = rank_by_gain(&fixture().0, &AnalysisParams::default(), &Monitor::none());
-    JobMsg::Gain(ranking.map(Box::new).map_err(|e| e.to_string()))
+    JobMsg::Gain(0, ranking.map(Box::new).map_err(|e| e.to_string()))
 }
 
 #[test]
@@ -21,7 +21,7 @@ fn i_ranks_by_gain_then_switches_the_order() {
     let entropy_best = fixture().1.best().axis;
     assert!(matches!(
         app.update(Action::RankGain)[..],
-        [Effect::RankGain(_)]
+        [Effect::RankGain(_, 0)]
     ));
     assert!(app.views.gain.running());
     assert!(
@@ -66,7 +66,7 @@ fn axis_by_gain_partitions_along_the_gains_best() {
         vec![],
     )))));
     assert!(
-        effects.iter().any(|e| matches!(e, Effect::RankGain(_))),
+        effects.iter().any(|e| matches!(e, Effect::RankGain(_, 0))),
         "{effects:?}"
     );
     // The view search's best does not start the partition: the gain's does.
@@ -112,4 +112,60 @@ fn a_heavy_view_search_is_said_in_the_status_line() {
         vec![],
     )))));
     assert!(app.status.message.is_none(), "{:?}", app.status.message);
+}
+
+#[test]
+fn a_previews_gain_ranking_is_ranked_again_with_full_resolutions_views() {
+    use slabscope::volume::phantom;
+    use slabscope::{ViewParams, search};
+    let volume = Arc::new(phantom::body([160, 128, 128], 2).unwrap());
+    let params = AnalysisParams {
+        gain: true,
+        ..AnalysisParams::default()
+    };
+    let screen = Screen {
+        theme: PLAIN,
+        ..Screen::default()
+    };
+    let (mut app, _) = App::new("big.nrrd".into(), params.clone(), screen);
+    let effects = app.update(Action::Job(JobMsg::Loaded(Ok((
+        Arc::clone(&volume),
+        vec![],
+    )))));
+    // The preview's level is searched and ranked first.
+    assert!(
+        effects.iter().any(|e| matches!(e, Effect::RankGain(_, 1))),
+        "{effects:?}"
+    );
+    let coarse = volume.coarser(1);
+    let views = search(&coarse, &ViewParams::default(), &Monitor::none()).unwrap();
+    app.update(Action::Job(JobMsg::Coarse(Arc::clone(&coarse))));
+    app.update(Action::Job(JobMsg::Views(1, Ok(Box::new(views.clone())))));
+    let ranking = rank_by_gain(&coarse, &params, &Monitor::none()).map_err(|e| e.to_string());
+    app.update(Action::Job(JobMsg::Gain(1, ranking.map(Box::new))));
+    assert!(matches!(app.views.gain, Load::Ready(_)));
+    assert!(
+        app.views.views.ready().unwrap().views[0]
+            .partition_gain
+            .is_some()
+    );
+    // A stale ranking of another level is dropped.
+    let other = rank_by_gain(&coarse, &params, &Monitor::none()).map_err(|e| e.to_string());
+    assert!(
+        app.update(Action::Job(JobMsg::Gain(2, other.map(Box::new))))
+            .is_empty()
+    );
+    // Full resolution's views come (here, the same numbers stand in for them): they are ranked
+    // again, at full resolution, and until then carry no preview's gains.
+    let effects = app.update(Action::Job(JobMsg::Views(0, Ok(Box::new(views)))));
+    assert!(
+        effects.iter().any(|e| matches!(e, Effect::RankGain(_, 0))),
+        "{effects:?}"
+    );
+    assert!(app.views.gain.running());
+    assert!(
+        app.views.views.ready().unwrap().views[0]
+            .partition_gain
+            .is_none()
+    );
 }
