@@ -11,22 +11,9 @@ use slabscope::volume::io::RawOptions;
 use slabscope::volume::{Endian, VoxelType};
 use slabscope::{Error, LoadOptions};
 
-fn element(group: u16, elem: u16, vr: [u8; 2], value: &[u8], out: &mut Vec<u8>) {
-    let mut value = value.to_vec();
-    if value.len() % 2 == 1 {
-        value.push(if &vr == b"UI" { 0 } else { b' ' });
-    }
-    out.extend(group.to_le_bytes());
-    out.extend(elem.to_le_bytes());
-    out.extend(vr);
-    if matches!(&vr, b"OB" | b"OW" | b"SQ" | b"UN" | b"UT") {
-        out.extend([0, 0]);
-        out.extend((value.len() as u32).to_le_bytes());
-    } else {
-        out.extend((value.len() as u16).to_le_bytes());
-    }
-    out.extend(value);
-}
+mod common;
+
+use common::element;
 
 /// One CT slice: explicit VR little endian, elements in tag order.
 fn slice(k: usize, dims: [usize; 3], pixels: &[u8]) -> Vec<u8> {

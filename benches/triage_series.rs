@@ -14,24 +14,11 @@ use slabscope::AnalysisParams;
 use slabscope::triage::{TriagePlan, discover, look_all};
 use slabscope::{Error, LoadOptions};
 
-const SIDE: usize = 64;
+mod common;
 
-fn element(group: u16, elem: u16, vr: [u8; 2], value: &[u8], out: &mut Vec<u8>) {
-    let mut value = value.to_vec();
-    if value.len() % 2 == 1 {
-        value.push(if &vr == b"UI" { 0 } else { b' ' });
-    }
-    out.extend(group.to_le_bytes());
-    out.extend(elem.to_le_bytes());
-    out.extend(vr);
-    if matches!(&vr, b"OB" | b"OW" | b"SQ" | b"UN" | b"UT") {
-        out.extend([0, 0]);
-        out.extend((value.len() as u32).to_le_bytes());
-    } else {
-        out.extend((value.len() as u16).to_le_bytes());
-    }
-    out.extend(value);
-}
+use common::element;
+
+const SIDE: usize = 64;
 
 /// Image `k`: explicit VR little endian, elements in tag order, series `k + 1` of its own
 /// (a localizer when `localizer`).
