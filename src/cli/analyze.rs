@@ -137,7 +137,7 @@ fn parse_explain(s: &str) -> Result<StepsShown, String> {
         t => match t.parse::<usize>() {
             Ok(n) if n >= 1 => Ok(StepsShown::Last(n)),
             _ => Err(format!(
-                "{s:?} is not all or a number of steps (--explain takes an optional value: put \
+                "{s:?} is not all or a number of steps from 1 (--explain takes an optional value: put \
                  FILE before it)"
             )),
         },
