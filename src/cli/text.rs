@@ -28,13 +28,7 @@ pub fn print_analysis(name: &str, volume: &Volume, analysis: &Analysis) {
 
 /// `[ 0.000, 0.000, 1.000] (z)`, or without the name for an oblique axis.
 pub(super) fn axis_text(axis: [f64; 3]) -> String {
-    match Axis::new(axis) {
-        Ok(a) => match a.name() {
-            Some(n) => format!("{a} ({n})"),
-            None => a.to_string(),
-        },
-        Err(_) => format!("{axis:?}"),
-    }
+    Axis::new(axis).map_or_else(|_| format!("{axis:?}"), Axis::labelled)
 }
 
 /// The axis with its anatomical name and world normal when the orientation is known:

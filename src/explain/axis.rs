@@ -8,7 +8,7 @@ use crate::geometry::lattice::Lattice;
 use crate::geometry::{WorldAxis, canonical, normalize};
 use crate::measure::{BlockCounts, entropy};
 use crate::progress::Monitor;
-use crate::view::{BinSampler, ViewParams, block_counts, ray_bins};
+use crate::view::{BinSampler, ViewParams, block_counts, ray_bins, work_units};
 use crate::volume::Volume;
 
 /// One block of symbols (quantized samples in sequence order) and how often it occurs.
@@ -184,11 +184,16 @@ pub fn axis_lesson(
             block_counts(&BinSampler::over(data, volume, q), &lattice, block, monitor)
         })
     };
+    // L = 4 has a middle length its counts do not give: the walk with blocks of 2 does.
+    let middle = 2..block.saturating_sub(1);
+    monitor.start(
+        "counting blocks",
+        work_units(&lattice) * (1 + middle.len() as u64),
+    );
     let (counts, rays) = walk(block)?;
     let (h1, h_short, h_long) = counts.entropies();
     let mut block_entropies = vec![h1];
-    // L = 4 has a middle length its counts do not give: the walk with blocks of 2 does.
-    for k in 2..block.saturating_sub(1) {
+    for k in middle {
         block_entropies.push(walk(k)?.0.entropies().2);
     }
     block_entropies.extend([h_short, h_long]);

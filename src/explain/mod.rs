@@ -15,7 +15,8 @@ pub use axis::{
     table_entropy,
 };
 pub use steps::{
-    MergeLesson, OptimalLesson, RunnerUp, SplitLesson, merge_lesson, optimal_lesson, split_lesson,
+    MergeLesson, OptimalLesson, RunnerUp, SplitLesson, merge_lesson, merge_lessons, optimal_lesson,
+    split_lesson,
 };
 
 use crate::error::Result;
@@ -127,9 +128,7 @@ pub fn explain(
                 .collect::<Result<_>>()?;
         }
         Method::BottomUp => {
-            out.merges = (first + 1..=taken)
-                .map(|s| merge_lesson(histories, s, monitor))
-                .collect::<Result<_>>()?;
+            out.merges = merge_lessons(histories, first + 1..=taken, monitor)?;
         }
         Method::Optimal => {}
     }

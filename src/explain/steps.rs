@@ -135,43 +135,66 @@ pub fn split_lesson(histories: &Histories, step: usize) -> Result<SplitLesson> {
     })
 }
 
-/// The lesson of bottom-up's merge number `step` (from 1): one pass over the stack for the
-/// joint histogram.
-pub fn merge_lesson(histories: &Histories, step: usize, monitor: &Monitor) -> Result<MergeLesson> {
+/// The lessons of bottom-up's merges number `steps` (from 1): the stack's columns sorted once,
+/// then one pass over them a merge for its joint histogram.
+pub fn merge_lessons(
+    histories: &Histories,
+    steps: std::ops::RangeInclusive<usize>,
+    monitor: &Monitor,
+) -> Result<Vec<MergeLesson>> {
     let bottom = histories
         .bottom()
         .ok_or_else(|| Error::invalid("method", "bottom-up", "a history that was computed"))?;
     let taken = bottom.steps.len();
-    let merge = step
-        .checked_sub(1)
-        .and_then(|i| bottom.steps.get(i))
-        .ok_or_else(|| Error::invalid("step", step, format!("1 to {taken} (the merges taken)")))?;
-    let (x, y) = merge.merge;
-    let joint = histories.joint_histogram(x, y, monitor)?;
+    let merges = steps
+        .clone()
+        .map(|step| {
+            step.checked_sub(1)
+                .and_then(|i| bottom.steps.get(i))
+                .ok_or_else(|| {
+                    Error::invalid("step", step, format!("1 to {taken} (the merges taken)"))
+                })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    monitor.start("joint histograms", merges.len() as u64);
+    let pairs: Vec<(Slab, Slab)> = merges.iter().map(|m| m.merge).collect();
+    let joints = histories.joint_histograms(&pairs, monitor)?;
     let bins = histories.stack().bins();
-    let (mi, h_xy) = mutual_information(&joint, bins, bins);
-    let rows: Vec<u64> = joint.chunks_exact(bins).map(|r| r.iter().sum()).collect();
-    let columns: Vec<u64> = (0..bins)
-        .map(|c| joint.iter().skip(c).step_by(bins).sum())
-        .collect();
-    let cells = joint
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| **n > 0)
-        .map(|(k, &n)| [(k / bins) as u64, (k % bins) as u64, n])
-        .collect();
-    Ok(MergeLesson {
-        step,
-        merge: (x, y),
-        bins,
-        joint: cells,
-        h_x: entropy(rows),
-        h_y: entropy(columns),
-        h_xy,
-        mi,
-        nmi: merge.nmi,
-        runner_up: runner_up(histories, step - 1),
-    })
+    Ok(steps
+        .zip(merges)
+        .zip(joints)
+        .map(|((step, merge), joint)| {
+            let (mi, h_xy) = mutual_information(&joint, bins, bins);
+            let rows: Vec<u64> = joint.chunks_exact(bins).map(|r| r.iter().sum()).collect();
+            let columns: Vec<u64> = (0..bins)
+                .map(|c| joint.iter().skip(c).step_by(bins).sum())
+                .collect();
+            let cells = joint
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| **n > 0)
+                .map(|(k, &n)| [(k / bins) as u64, (k % bins) as u64, n])
+                .collect();
+            MergeLesson {
+                step,
+                merge: merge.merge,
+                bins,
+                joint: cells,
+                h_x: entropy(rows),
+                h_y: entropy(columns),
+                h_xy,
+                mi,
+                nmi: merge.nmi,
+                runner_up: runner_up(histories, step - 1),
+            }
+        })
+        .collect())
+}
+
+/// The lesson of bottom-up's merge number `step` (from 1): one pass over the stack for the
+/// joint histogram.
+pub fn merge_lesson(histories: &Histories, step: usize, monitor: &Monitor) -> Result<MergeLesson> {
+    Ok(merge_lessons(histories, step..=step, monitor)?.remove(0))
 }
 
 /// The pair with the second largest NMI just before merge `index` (from 0), from the pairs the

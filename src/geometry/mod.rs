@@ -159,6 +159,15 @@ impl Axis {
         self.coordinate().map(|m| ["x", "y", "z"][m])
     }
 
+    /// `[ 0.000, 0.000, 1.000] (z)`: the axis with its coordinate name, or without one for an
+    /// oblique axis.
+    pub fn labelled(self) -> String {
+        match self.name() {
+            Some(n) => format!("{self} ({n})"),
+            None => self.to_string(),
+        }
+    }
+
     /// The angle between two axes in degrees, ignoring their sign.
     pub fn angle(self, other: Self) -> f64 {
         dot(self.0, other.0)
@@ -322,6 +331,11 @@ mod tests {
         assert_eq!(a.to_string(), "[ 0.000, 0.600,-0.800]");
         assert_eq!(format!("{a:.2}"), "[ 0.00, 0.60,-0.80]");
         assert_eq!(a.name(), None);
+        assert_eq!(a.labelled(), a.to_string());
+        assert_eq!(
+            Axis::new([0.0, 0.0, 2.0]).unwrap().labelled(),
+            "[ 0.000, 0.000, 1.000] (z)"
+        );
         assert_eq!(
             Axis::new([-1e-5, 0.0, -1.0]).unwrap().to_string(),
             "[ 0.000, 0.000, 1.000]"

@@ -371,22 +371,34 @@ impl Histories {
         self.gains.curve(a, b)
     }
 
-    /// The joint histogram of two adjacent slabs (`bins × bins`, row-major: rows are `first`'s
-    /// symbol, columns `second`'s), summed over every pair of their slices at corresponding
-    /// pixels: what bottom-up's NMI is computed from (one pass over the stack). An error for
+    /// The joint histograms of pairs of adjacent slabs (`bins × bins` each, row-major: rows are
+    /// the first slab's symbol, columns the second's), each summed over every pair of their
+    /// slices at corresponding pixels: what bottom-up's NMI is computed from. The stack's columns
+    /// are sorted once, then one pass over them a pair, reporting a unit a pair. An error for
     /// histories of a stack whose columns were not kept.
-    pub fn joint_histogram(
+    pub fn joint_histograms(
         &self,
-        first: Slab,
-        second: Slab,
+        pairs: &[(Slab, Slab)],
         monitor: &Monitor,
-    ) -> Result<Vec<u64>> {
+    ) -> Result<Vec<Vec<u64>>> {
         self.require_columns()?;
         let bins = self.stack.bins();
-        let mut joint = vec![0u64; bins * bins];
         let columns = Columns::new(&self.stack);
-        add_consecutive_joints(&self.stack, &columns, &[first, second], &mut joint, monitor)?;
-        Ok(joint)
+        pairs
+            .iter()
+            .map(|&(first, second)| {
+                let mut joint = vec![0u64; bins * bins];
+                add_consecutive_joints(
+                    &self.stack,
+                    &columns,
+                    &[first, second],
+                    &mut joint,
+                    monitor,
+                )?;
+                monitor.advance(1)?;
+                Ok(joint)
+            })
+            .collect()
     }
 
     /// An error for histories of a stack whose columns were not kept.

@@ -4,6 +4,8 @@
 use slabscope::Histories;
 use slabscope::partition::Method;
 
+use super::app::Pane;
+
 /// The tour's place: the page shown, and whether the panes were set for it (they are once the
 /// page's data is in).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -33,19 +35,6 @@ pub fn page_numbers(page: usize, histories: &Histories, slabs: usize) -> Option<
     }
 }
 
-/// The panes a page focuses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Focus {
-    /// The viewpoint list.
-    Views,
-    /// The slab table.
-    Slabs,
-    /// The curves.
-    Curves,
-    /// The exploded view.
-    Preview,
-}
-
 /// Which viewpoint a page selects.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Row {
@@ -59,7 +48,7 @@ pub enum Row {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Setup {
     /// The pane focused.
-    pub focus: Focus,
+    pub focus: Pane,
     /// Whether the lesson shows.
     pub lesson: bool,
     /// The viewpoint selected.
@@ -80,7 +69,7 @@ pub struct Page {
     pub setup: Setup,
 }
 
-const fn setup(focus: Focus, lesson: bool, row: Row, method: Method, slabs: usize) -> Setup {
+const fn setup(focus: Pane, lesson: bool, row: Row, method: Method, slabs: usize) -> Setup {
     Setup {
         focus,
         lesson,
@@ -98,84 +87,84 @@ pub const PAGES: [Page; 12] = [
                into slabs across that direction so that each slab holds alike content? The \
                answer is drawn on the right: the slabs pulled apart, an exploded view \
                (Ruiz et al., Similarity-based exploded views, 2008).",
-        setup: setup(Focus::Preview, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "The viewpoint sphere",
         text: "The candidate directions are the vertices of a subdivided icosahedron (an axis \
                and its opposite are one). The list ranks them by their entropy rate, lowest \
                first; in a wide terminal the sphere map shows where they point.",
-        setup: setup(Focus::Views, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "One ray and its samples",
         text: "Along an axis, parallel rays cross the volume one voxel apart (the paper's \
                lattice); each samples it one voxel apart, and every sample is quantized to one \
                of B bins. The strip is the ray through the centre, a cell a sample, grey by bin.",
-        setup: setup(Focus::Views, true, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "Blocks and H(X^L)",
         text: "A block is L samples in a row on one ray. Counted over every ray, blocks have a \
                distribution p; its entropy is H(X^L) = -Σ p(x1..xL) log2 p(x1..xL) bits \
                (eq. 2). The lesson lists the most frequent blocks and H(X^1) … H(X^L).",
-        setup: setup(Focus::Views, true, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "The entropy rate of the best and the worst axis",
         text: "h = H(X^L) - H(X^(L-1)) (eq. 4) is what is left uncertain about a sample once \
                the L-1 before it are known. The most structured view has the lowest h: here \
                the worst axis is selected, beside the best.",
-        setup: setup(Focus::Views, true, Row::Worst, Method::TopDown, 4),
+        setup: setup(Pane::Views, true, Row::Worst, Method::TopDown, 4),
     },
     Page {
         title: "Slicing along the best axis",
         text: "Across the best axis the volume is cut into slices; each slice's histogram of \
                bins is all the partition needs. The curves: the NMI of each slice with the \
                next, and the gain of one cut of the whole stack at each slice.",
-        setup: setup(Focus::Curves, false, Row::Best, Method::TopDown, 1),
+        setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 1),
     },
     Page {
         title: "The first split",
         text: "Top-down splitting takes the cut that keeps the most information: ΔI = (v1 + v2) \
                / vT · JS, with JS = H(p1 + p2) - π1 H(p1) - π2 H(p2), the Jensen-Shannon \
                divergence of the two parts' histograms (eq. 5, 6).",
-        setup: setup(Focus::Slabs, true, Row::Best, Method::TopDown, 2),
+        setup: setup(Pane::Slabs, true, Row::Best, Method::TopDown, 2),
     },
     Page {
         title: "Further splits and the gain curve",
         text: "Each step takes the best cut over all slabs, so I(slab; value), the information \
                the slabs keep about the values, grows with every split. n and p step through \
                the history; + and - change the slab count.",
-        setup: setup(Focus::Curves, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "A merge",
         text: "Bottom-up merging starts from single slices and joins the two neighbours most \
                alike: the largest NMI = MI / H(X,Y) of their joint histogram over corresponding \
                pixels, MI = H(X) + H(Y) - H(X,Y) (eq. 7, 8).",
-        setup: setup(Focus::Slabs, true, Row::Best, Method::BottomUp, 4),
+        setup: setup(Pane::Slabs, true, Row::Best, Method::BottomUp, 4),
     },
     Page {
         title: "Top-down against bottom-up",
         text: "The two greedy methods answer different questions: top-down keeps the most \
                information about the values, bottom-up keeps alike slices together. Their slab \
                tables and the information each keeps differ; m switches the method.",
-        setup: setup(Focus::Slabs, false, Row::Best, Method::BottomUp, 4),
+        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, 4),
     },
     Page {
         title: "The optimum",
         text: "Dynamic programming over every placement of the boundaries finds the partition \
                that keeps the most information for a slab count. Greedy top-down is usually \
                within a few per cent of it; the lesson says by how much and where they differ.",
-        setup: setup(Focus::Slabs, true, Row::Best, Method::Optimal, 4),
+        setup: setup(Pane::Slabs, true, Row::Best, Method::Optimal, 4),
     },
     Page {
         title: "The exploded view",
         text: "Finally the slabs are drawn pulled apart along the axis, the gaps by how unlike \
                neighbouring slabs are. Orbit with [ ] { }, change the look with r f c; q ends \
                the tour.",
-        setup: setup(Focus::Preview, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
     },
 ];
 

@@ -376,6 +376,7 @@ impl App {
             Job::Analysis(level) => self.part.progress(p, level),
             Job::Export if self.export.running() => self.export = Load::Running(p),
             Job::Gain if self.views.gain.running() => self.views.gain = Load::Running(p),
+            Job::Lesson if self.lesson.lesson.running() => self.lesson.lesson = Load::Running(p),
             _ => return,
         }
         self.sync_status();

@@ -2,9 +2,9 @@
 //! pane, selects the best or the worst viewpoint, shows a method at a slab count and opens or
 //! closes the lesson; the user may then do anything, and the next page sets them again.
 
-use super::{App, Pane};
+use super::App;
 use crate::tui::event::{Effect, Load};
-use crate::tui::tour::{self, Focus, Row};
+use crate::tui::tour::{self, Row};
 
 impl App {
     /// Turns the tour's page.
@@ -43,12 +43,7 @@ impl App {
             Row::Best => 0,
             Row::Worst => worst,
         };
-        self.focus = match s.focus {
-            Focus::Views => Pane::Views,
-            Focus::Slabs => Pane::Slabs,
-            Focus::Curves => Pane::Curves,
-            Focus::Preview => Pane::Preview,
-        };
+        self.focus = s.focus;
         (self.part.method, self.part.position) = (method, position);
         self.part.set_threshold(None);
         if self.lesson.open != s.lesson {

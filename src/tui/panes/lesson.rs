@@ -139,12 +139,7 @@ fn bin_span(b: Option<u8>, bins: usize, theme: Theme) -> Span<'static> {
 
 /// `[ 0.000, 0.000, 1.000] (z)`.
 fn axis_name(axis: [f64; 3]) -> String {
-    match slabscope::Axis::new(axis) {
-        Ok(a) => a
-            .name()
-            .map_or_else(|| a.to_string(), |n| format!("{a} ({n})")),
-        Err(_) => format!("{axis:?}"),
-    }
+    slabscope::Axis::new(axis).map_or_else(|_| format!("{axis:?}"), slabscope::Axis::labelled)
 }
 
 /// The selected axis's ray and numbers beside the best's (once, when it is the best).

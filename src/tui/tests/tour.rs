@@ -4,7 +4,6 @@
 use slabscope::partition::Method;
 
 use super::{ready_app, screens};
-use crate::tui::app::Pane;
 use crate::tui::event::{Action, Effect};
 use crate::tui::tour::{PAGES, Tour};
 
@@ -19,13 +18,7 @@ fn every_page_sets_the_panes_it_speaks_of() {
         let tour = app.tour.as_ref().unwrap();
         assert_eq!((tour.page, tour.applied), (i, true), "page {}", i + 1);
         let s = page.setup;
-        let focus = match s.focus {
-            crate::tui::tour::Focus::Views => Pane::Views,
-            crate::tui::tour::Focus::Slabs => Pane::Slabs,
-            crate::tui::tour::Focus::Curves => Pane::Curves,
-            crate::tui::tour::Focus::Preview => Pane::Preview,
-        };
-        assert_eq!(app.focus, focus, "page {}", i + 1);
+        assert_eq!(app.focus, s.focus, "page {}", i + 1);
         assert_eq!(app.lesson.open, s.lesson, "page {}", i + 1);
         assert_eq!(app.part.method, s.method, "page {}", i + 1);
         assert_eq!(app.part.slab_count(), Some(s.slabs), "page {}", i + 1);

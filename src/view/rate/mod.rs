@@ -190,14 +190,7 @@ pub fn entropy_rate<T: Voxel>(
     block: usize,
     monitor: &Monitor,
 ) -> Result<AxisEntropy> {
-    rate_with(
-        sampler,
-        lattice,
-        block,
-        monitor,
-        Walk::Fastest,
-        RaySubset::ALL,
-    )
+    entropy_rate_of(sampler, lattice, block, RaySubset::ALL, monitor)
 }
 
 /// [`entropy_rate`] over the tiles of rays `subset` keeps.
@@ -208,10 +201,11 @@ pub fn entropy_rate_of<T: Voxel>(
     subset: RaySubset,
     monitor: &Monitor,
 ) -> Result<AxisEntropy> {
-    rate_with(sampler, lattice, block, monitor, Walk::Fastest, subset)
+    let (counts, rays) = counts_with(sampler, lattice, block, monitor, Walk::Fastest, subset)?;
+    Ok(AxisEntropy::new(lattice.d, &counts, rays))
 }
 
-/// How [`rate_with`] walks the rays; every way counts the same.
+/// How [`counts_with`] walks the rays; every way counts the same.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Walk {
     /// Voxel columns where the rays are columns, else the vector walk where the processor has
@@ -240,20 +234,8 @@ pub fn block_counts<T: Voxel>(
     )
 }
 
-/// [`entropy_rate`], walking the rays as `walk` says.
-fn rate_with<T: Voxel>(
-    sampler: &BinSampler<T>,
-    lattice: &Lattice,
-    block: usize,
-    monitor: &Monitor,
-    walk: Walk,
-    subset: RaySubset,
-) -> Result<AxisEntropy> {
-    let (counts, rays) = counts_with(sampler, lattice, block, monitor, walk, subset)?;
-    Ok(AxisEntropy::new(lattice.d, &counts, rays))
-}
-
-/// The block counts and rays of [`rate_with`].
+/// The block counts, and the rays that met the volume, of the lattice's rays `subset` keeps,
+/// walked as `walk` says.
 fn counts_with<T: Voxel>(
     sampler: &BinSampler<T>,
     lattice: &Lattice,

@@ -105,8 +105,11 @@ fn every_walk_counts_what_the_scalar_walk_counts() {
                     let lattice =
                         Lattice::new(dims, v.spacing(), axis, s, s * along, phase).unwrap();
                     let none = Monitor::none();
-                    let walk =
-                        |walk| rate_with(&sampler, &lattice, block, &none, walk, RaySubset::ALL);
+                    let walk = |walk| {
+                        let (counts, rays) =
+                            counts_with(&sampler, &lattice, block, &none, walk, RaySubset::ALL)?;
+                        Ok::<_, crate::error::Error>(AxisEntropy::new(lattice.d, &counts, rays))
+                    };
                     let fast = walk(Walk::Fastest).unwrap();
                     let vector = walk(Walk::Tiles { vector: true }).unwrap();
                     let scalar = walk(Walk::Tiles { vector: false }).unwrap();
