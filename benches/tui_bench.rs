@@ -6,10 +6,11 @@
 //! ask.
 //!
 //! `cargo build --release && cargo bench --bench tui_bench -- [--sizes 256x256x256,512x512x512,1024x1024x1024]
-//! [--runs 3] [--dir DIR] [--bin PATH ...]`
+//! [--files PATH,...] [--runs 3] [--dir DIR] [--bin PATH ...]`
 //!
 //! Needs tmux. The volumes are those of `big_bench` (body phantoms, i16 NIfTI in `DIR`, default
-//! `target/bench-volumes`), written once. Each `--bin` is run in turns with the others.
+//! `target/bench-volumes`), written once, then each of `--files` (`--sizes ''` for only those:
+//! an OME-Zarr store's own levels, say). Each `--bin` is run in turns with the others.
 
 mod common;
 
@@ -137,12 +138,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{runs} runs each, medians; tmux 160x45, half-block pictures");
     let mut id = 0;
     let mut cancel_on = None;
-    for text in sizes.split(',') {
+    let mut files = Vec::new();
+    for text in sizes.split(',').filter(|t| !t.is_empty()) {
         let dims = parse_dims(text).ok_or_else(|| format!("--sizes: {text:?} is not NXxNYxNZ"))?;
         let path = volume(&dir, dims)?;
         if dims == [512; 3] {
             cancel_on = Some(path.clone());
         }
+        files.push((text.to_string(), path));
+    }
+    for path in value("--files").into_iter().flat_map(|f| f.split(',')) {
+        let name = Path::new(path)
+            .file_name()
+            .map_or(path.into(), |n| n.to_string_lossy());
+        files.push((name.into_owned(), PathBuf::from(path)));
+    }
+    for (text, path) in files {
         let mut first = vec![Vec::new(); bins.len()];
         let mut full = vec![Vec::new(); bins.len()];
         for _ in 0..runs {

@@ -92,6 +92,9 @@ pub enum JobMsg {
     Loaded(Result<(Arc<Volume>, Vec<String>), String>),
     /// A coarse pyramid level of the volume is built: the preview computes on it.
     Coarse(Arc<Volume>),
+    /// A coarse pyramid level the file holds (an OME-Zarr store's), read before level 0 (with
+    /// the loader's notes): the preview computes on it while level 0 loads.
+    Preview(Arc<Volume>, Vec<String>),
     /// The view search's result on a pyramid level (0: full resolution).
     Views(usize, Result<Box<ViewSearch>, String>),
     /// The histories along the axis of request `generation`, on a pyramid level.
@@ -347,6 +350,9 @@ pub enum Effect {
     ),
     /// Cancel running jobs.
     Cancel,
+    /// Drop what the jobs started for the open volume still send, and the file's preview level:
+    /// the app starts afresh on the volume loaded.
+    Forget,
     /// Leave.
     Quit,
 }
@@ -364,6 +370,7 @@ impl std::fmt::Debug for Effect {
             Self::Open(p) => write!(f, "Open({})", p.name()),
             Self::Triage(p, _) => write!(f, "Triage({} volumes)", p.len()),
             Self::Cancel => write!(f, "Cancel"),
+            Self::Forget => write!(f, "Forget"),
             Self::Quit => write!(f, "Quit"),
         }
     }

@@ -106,6 +106,7 @@ fn key(c: char) -> Event {
 
 mod gain;
 mod lesson;
+mod refine;
 mod tour;
 
 #[test]

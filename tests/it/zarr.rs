@@ -124,6 +124,41 @@ fn the_store_s_coarser_datasets_are_the_pyramid_s_levels() {
     assert_eq!(cells.volume.coarser(1).dims(), [6, 5, 5]);
 }
 
+#[test]
+fn a_coarse_dataset_is_read_alone_as_its_pyramid_level() {
+    let store = path("v04_blosc.ome.zarr");
+    let opts = LoadOptions::default();
+    let full = open_with(&store, &opts).volume;
+    let preview = |max| slabscope::volume::io::zarr::load_preview(&store, &opts, max).unwrap();
+    let s1 = full.coarser(1);
+    for (max, k) in [(s1.len(), 1), (s1.len() - 1, 2)] {
+        let p = preview(max).unwrap_or_else(|| panic!("a preview within {max} voxels"));
+        let (read, level) = (&p.volume, full.coarser(k));
+        assert_eq!(p.format, Format::OmeZarr);
+        assert_eq!(read.level().index, k, "within {max} voxels");
+        assert_eq!(read.level().factor, level.level().factor);
+        assert_eq!(read.dims(), level.dims());
+        assert_eq!(read.transform(), level.transform(), "the pyramid's grid");
+        assert_eq!(voxels(read), voxels(&level), "the store's voxels");
+        // Level 0 is not read: the preview is quantized with its own range.
+        let stats = read.stats();
+        assert_eq!(read.level().range, [stats.min, stats.max]);
+        assert!(read.level().range[0] >= full.level().range[0]);
+        // Its own coarser levels are the pyramid's next ones.
+        assert_eq!(read.coarser(1).dims(), full.coarser(k + 1).dims());
+    }
+    // Level 0 small enough, or no dataset as coarse as asked: nothing to preview.
+    assert!(preview(full.len()).is_none());
+    assert!(preview(full.coarser(2).len() - 1).is_none());
+    // Not a store: nothing to preview.
+    let nifti = data("ramp_u8.nii");
+    assert!(
+        slabscope::volume::io::zarr::load_preview(&nifti, &opts, 1)
+            .unwrap()
+            .is_none()
+    );
+}
+
 /// The pyramid level each of the store's datasets is read as.
 fn pyramid_levels(l: &Loaded) -> Vec<Option<usize>> {
     let info = l.zarr.as_ref().unwrap();

@@ -49,7 +49,7 @@ impl App {
 
     /// Starts the gain ranking on pyramid level `level`.
     pub(super) fn start_gain_at(&mut self, level: usize) -> Vec<Effect> {
-        if self.volume.ready().is_none() {
+        if !self.has_level(level) {
             return vec![];
         }
         self.gain_level = level;

@@ -173,23 +173,32 @@ impl App {
         }
         let path = files.paths[i].clone();
         (files.open, files.row, files.shown) = (i, i, false);
-        let look = self.preview.look;
-        let cells = self.preview.cells;
-        let (fresh, effects) = Self::new(path.name(), self.params.clone(), self.screen.clone());
-        *self = fresh;
-        self.preview.look = look;
-        self.preview.cells = cells;
-        self.status.volume = Some(format!(
-            "volume {} of {}: {}",
-            i + 1,
-            files.paths.len(),
-            files.name(i)
-        ));
         self.files = Some(files);
-        self.sync_focus();
+        let effects = self.start_afresh(path.name());
+        if let Some(files) = &self.files {
+            self.status.volume = Some(format!(
+                "volume {} of {}: {}",
+                i + 1,
+                files.paths.len(),
+                files.name(i)
+            ));
+        }
         let mut out = vec![Effect::Cancel, Effect::Open(path)];
         out.extend(effects);
         out
+    }
+
+    /// Every pane afresh for the volume called `name` (the look, the list and the volume's
+    /// place in it stay); the effects that load it.
+    fn start_afresh(&mut self, name: String) -> Vec<Effect> {
+        let (fresh, effects) = Self::new(name, self.params.clone(), self.screen.clone());
+        let old = std::mem::replace(self, fresh);
+        self.preview.look = old.preview.look;
+        self.preview.cells = old.preview.cells;
+        self.status.volume = old.status.volume;
+        self.files = old.files;
+        self.sync_focus();
+        effects
     }
 
     /// Starts the histories along `axis`.
@@ -212,6 +221,10 @@ impl App {
     }
 
     fn export(&mut self) -> Vec<Effect> {
+        if self.volume.ready().is_none() {
+            self.status.message = Some("nothing to export until the volume has loaded".into());
+            return vec![];
+        }
         let Some(histories) = self.part.ready() else {
             self.status.message = Some("nothing to export yet: the partition is not ready".into());
             return vec![];
@@ -238,9 +251,6 @@ impl App {
 
     /// A render of the current state, when there is somewhere to show it.
     fn render(&mut self) -> Vec<Effect> {
-        if self.volume.ready().is_none() {
-            return vec![];
-        }
         let level = self.shown_level();
         let Some(volume) = self.shown_volume().or(self.volume.ready()).cloned() else {
             return vec![];
@@ -290,8 +300,10 @@ impl App {
                 self.status.message = Some(format!("{e} (q quits)"));
                 self.views.idle = format!("cannot load the volume: {e}");
                 self.volume = Load::Failed(e);
+                self.sync_status();
                 vec![]
             }
+            JobMsg::Preview(volume, notes) => self.on_preview(&volume, &notes),
             JobMsg::Coarse(volume) => {
                 if let Some(r) = self.refine.as_mut() {
                     r.coarse = Some(volume);
@@ -340,19 +352,30 @@ impl App {
         }
     }
 
-    /// A volume loaded: the view search starts, and the partition along the axis asked for.
+    /// A volume loaded: the view search starts, and the partition along the axis asked for;
+    /// or the file's preview level shows, and is refined.
     fn on_loaded(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
+        if self.refine.as_ref().is_some_and(|r| r.from_file) {
+            return self.adopt(volume, notes);
+        }
         self.status.message = notes.first().cloned();
         if let Some(heavy) = self.params.heavy_work(volume.dims(), volume.spacing()) {
             self.status.message = Some(format!("{heavy}: it may take long; Esc cancels it"));
         }
+        let level = crate::tui::preview_level(&volume);
+        self.refine = (level > 0).then(|| refine::Refinement::new(level, volume.dims()));
+        self.volume = Load::Ready(Arc::clone(&volume));
+        self.begin(&volume, level)
+    }
+
+    /// The first jobs on `volume`, which is pyramid level `level` of what is open: the view
+    /// search, the gain ranking when it picks the axis, the histories along an axis asked for,
+    /// and a picture.
+    fn begin(&mut self, volume: &Volume, level: usize) -> Vec<Effect> {
         let chosen = self
             .params
             .axis
             .resolve(volume.transform(), volume.spacing());
-        let level = crate::tui::preview_level(&volume);
-        self.refine = (level > 0).then(|| refine::Refinement::new(level, volume.dims()));
-        self.volume = Load::Ready(volume);
         self.views.views = Load::started("view search");
         let mut effects = vec![Effect::SearchViews(self.params.view.clone(), level)];
         if self.params.ranks_by_gain() {

@@ -26,6 +26,9 @@ pub struct Refinement {
     /// Whether the axis is the view search's best rather than the user's: the full search's
     /// best then takes its place.
     pub auto_axis: bool,
+    /// Whether the preview is a level the file holds, read before level 0 (and quantized with
+    /// its own range).
+    pub from_file: bool,
 }
 
 impl Refinement {
@@ -42,11 +45,71 @@ impl Refinement {
             coarse: None,
             views: Load::Idle,
             auto_axis: false,
+            from_file: false,
+        }
+    }
+
+    /// A preview on `coarse`, a pyramid level the file holds, read before level 0.
+    pub fn of_file(coarse: Arc<Volume>) -> Self {
+        let level = coarse.level();
+        Self {
+            level: level.index,
+            factor: level.factor.into_iter().max().unwrap_or(1),
+            coarse: Some(coarse),
+            views: Load::Idle,
+            auto_axis: false,
+            from_file: true,
         }
     }
 }
 
 impl App {
+    /// A pyramid level the file holds, read before level 0: the preview computes on it while
+    /// level 0 loads.
+    pub(super) fn on_preview(&mut self, volume: &Arc<Volume>, notes: &[String]) -> Vec<Effect> {
+        if !self.volume.running() || self.refine.is_some() || volume.level().index == 0 {
+            return vec![];
+        }
+        self.status.message = notes.first().cloned();
+        let level = volume.level().index;
+        self.refine = Some(Refinement::of_file(Arc::clone(volume)));
+        self.begin(volume, level)
+    }
+
+    /// Level 0 loaded under the file's preview: the preview is refined as any other. Beyond
+    /// the memory budget the volume worked on is itself a pyramid level, of which the file's
+    /// is no preview: everything starts afresh on it.
+    pub(super) fn adopt(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
+        if volume.level().index > 0 {
+            let mut effects = vec![Effect::Cancel, Effect::Forget];
+            effects.extend(
+                self.start_afresh(self.name.clone())
+                    .into_iter()
+                    .filter(|e| !matches!(e, Effect::Load)),
+            );
+            effects.extend(self.on_loaded(volume, notes));
+            return effects;
+        }
+        // The preview's notes were said; what full resolution will cost was not.
+        if let Some(heavy) = self.params.heavy_work(volume.dims(), volume.spacing()) {
+            self.status.message = Some(format!("{heavy}: it may take long; Esc cancels it"));
+        }
+        self.volume = Load::Ready(volume);
+        let effects = self.start_refinement();
+        self.sync_status();
+        effects
+    }
+
+    /// Whether pyramid level `level` can be worked on: level 0 is loaded, or it is the file's
+    /// preview.
+    pub(super) fn has_level(&self, level: usize) -> bool {
+        self.volume.ready().is_some()
+            || self
+                .refine
+                .as_ref()
+                .is_some_and(|r| r.from_file && r.level == level)
+    }
+
     /// The pyramid level new histories start on: the preview's, or 0.
     pub(super) fn first_level(&self) -> usize {
         self.refine.as_ref().map_or(0, |r| r.level)
@@ -171,10 +234,18 @@ impl App {
                 _ => {}
             },
         }
+        let mut effects = self.start_refinement();
+        self.sync();
+        effects.extend(self.render());
+        effects
+    }
+
+    /// Once a preview shows and level 0 is loaded, the full-resolution view search starts, and
+    /// the histories follow it (at once along an axis the user chose).
+    fn start_refinement(&mut self) -> Vec<Effect> {
         let mut effects = vec![];
-        // A preview shows: the full-resolution view search starts, and the histories follow it
-        // (at once along an axis the user chose).
         if self.part.awaits_refinement()
+            && self.volume.ready().is_some()
             && let Some(r) = self.refine.as_mut()
             && matches!(r.views, Load::Idle)
         {
@@ -182,8 +253,6 @@ impl App {
             effects.push(Effect::SearchViews(self.params.view.clone(), 0));
         }
         effects.extend(self.refine_histories());
-        self.sync();
-        effects.extend(self.render());
         effects
     }
 
@@ -194,7 +263,7 @@ impl App {
             return vec![];
         };
         let settled = !r.auto_axis || matches!(r.views, Load::Ready(()));
-        if !(settled && self.part.awaits_refinement()) {
+        if !(settled && self.part.awaits_refinement() && self.volume.ready().is_some()) {
             return vec![];
         }
         self.part.refine().into_iter().collect()
@@ -274,11 +343,18 @@ impl App {
             .and_then(|v| v.level().factor.into_iter().max())
             .unwrap_or(1);
         let label = (self.shown_level() > 0).then(|| {
-            let stopped =
-                matches!(r.views, Load::Failed(_)) || matches!(self.part.refining, Load::Failed(_));
+            let stopped = matches!(self.volume, Load::Failed(_))
+                || matches!(r.views, Load::Failed(_))
+                || matches!(self.part.refining, Load::Failed(_));
             format!(
-                "preview: 1/{} resolution{}",
+                "preview: 1/{} resolution{}{}",
                 r.factor * base,
+                // Quantized with its own range: level 0's is not known before it loads.
+                if r.from_file {
+                    format!(" (the file's level {}, its own value range)", r.level)
+                } else {
+                    String::new()
+                },
                 if stopped {
                     format!(", {} stopped", self.final_words())
                 } else {
@@ -287,7 +363,11 @@ impl App {
             )
         });
         let mut gauges = vec![];
-        for load in [r.views.status(), self.part.refining.status()] {
+        for load in [
+            self.volume.status(),
+            r.views.status(),
+            self.part.refining.status(),
+        ] {
             if let Load::Running(p) = load {
                 gauges.push(p);
             }
@@ -343,218 +423,5 @@ fn compare(
         )
     } else {
         format!("{words} moved the cuts: up to {moved:.1} mm from the preview's")
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use std::sync::{Arc, OnceLock};
-
-    use slabscope::partition::{Method, StackParams};
-    use slabscope::volume::phantom;
-    use slabscope::{AnalysisParams, Histories, Monitor, Scope, ViewParams, ViewSearch, Volume};
-
-    use crate::tui::app::{App, Screen};
-    use crate::tui::event::{Action, Effect, JobMsg, Load};
-
-    /// A volume just over the preview's size, its preview level, the preview's view search and
-    /// both resolutions' histories along z.
-    struct Big {
-        volume: Arc<Volume>,
-        coarse: Arc<Volume>,
-        views: ViewSearch,
-        along_z: [Arc<Histories>; 2],
-    }
-
-    fn big() -> &'static Big {
-        static BIG: OnceLock<Big> = OnceLock::new();
-        BIG.get_or_init(|| {
-            let volume = Arc::new(phantom::body([130, 130, 132], 1).unwrap());
-            assert_eq!(crate::tui::preview_level(&volume), 1, "65×65×66");
-            let coarse = volume.coarser(1);
-            let mut views =
-                slabscope::search(&coarse, &ViewParams::default(), &Monitor::none()).unwrap();
-            // Put z first, so that both resolutions' best is the axis of the histories.
-            let z = views
-                .views
-                .iter()
-                .position(|v| v.axis == [0.0, 0.0, 1.0])
-                .unwrap();
-            views.views.swap(0, z);
-            views.refined = None;
-            let along_z = [&volume, &coarse].map(|v| {
-                let h = Histories::new(
-                    v,
-                    [0.0, 0.0, 1.0],
-                    &StackParams::default(),
-                    Scope::ALL,
-                    &Monitor::none(),
-                );
-                Arc::new(h.unwrap())
-            });
-            Big {
-                volume,
-                coarse,
-                views,
-                along_z,
-            }
-        })
-    }
-
-    fn job(app: &mut App, msg: JobMsg) -> Vec<Effect> {
-        app.update(Action::Job(msg))
-    }
-
-    /// An app on the big volume taken through its preview: loaded, the preview's views and
-    /// histories shown.
-    fn previewed() -> (App, Vec<Effect>) {
-        let b = big();
-        let (mut app, _) = App::new("big".into(), AnalysisParams::default(), Screen::default());
-        app.preview.cells = (40, 12);
-        let effects = job(
-            &mut app,
-            JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
-        );
-        assert!(
-            matches!(effects[0], Effect::SearchViews(_, 1)),
-            "{effects:?}"
-        );
-        match &effects[1] {
-            Effect::Render(r) => assert_eq!(r.level, 1, "the first picture is the preview's"),
-            other => panic!("{other:?}"),
-        }
-        job(&mut app, JobMsg::Coarse(Arc::clone(&b.coarse)));
-        let effects = job(&mut app, JobMsg::Views(1, Ok(Box::new(b.views.clone()))));
-        assert!(
-            matches!(effects[..], [Effect::Analyze(1, [0.0, 0.0, 1.0], _, 1)]),
-            "{effects:?}"
-        );
-        let effects = job(
-            &mut app,
-            JobMsg::Analysis(1, 1, Ok(Arc::clone(&b.along_z[1]))),
-        );
-        (app, effects)
-    }
-
-    #[test]
-    fn a_large_volume_shows_its_preview_then_full_resolution_in_place() {
-        let b = big();
-        let (mut app, effects) = previewed();
-        // The preview shows, labelled; the full-resolution view search starts, and a picture.
-        assert!(
-            matches!(effects[0], Effect::SearchViews(_, 0)),
-            "{effects:?}"
-        );
-        assert!(matches!(&effects[1], Effect::Render(r) if r.level == 1 && r.slabs.len() == 4));
-        assert_eq!(
-            app.status.resolution.as_deref(),
-            Some("preview: 1/2 resolution")
-        );
-        assert!(app.status.jobs.iter().any(|(j, _)| *j == "full resolution"));
-        // The user moves on while full resolution runs: bottom-up, 6 slabs.
-        app.update(Action::CycleMethod);
-        app.update(Action::Slabs(2));
-        assert_eq!(app.part.slab_count(), Some(6));
-        // The full search agrees on the axis: the full histories start, the preview stays.
-        let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(b.views.clone()))));
-        assert!(
-            matches!(effects[..], [Effect::Analyze(2, [0.0, 0.0, 1.0], _, 0)]),
-            "{effects:?}"
-        );
-        assert_eq!(app.part.level, 1);
-        assert!(
-            app.part.ready().is_some(),
-            "the preview's histories stay shown"
-        );
-        let effects = job(
-            &mut app,
-            JobMsg::Analysis(2, 0, Ok(Arc::clone(&b.along_z[0]))),
-        );
-        // Replaced in place: the method and slab count kept, the label gone, a new picture.
-        assert_eq!(app.part.level, 0);
-        assert!(Arc::ptr_eq(app.part.ready().unwrap(), &b.along_z[0]));
-        assert_eq!(
-            (app.part.method, app.part.slab_count()),
-            (Method::BottomUp, Some(6))
-        );
-        assert_eq!(app.status.resolution, None);
-        assert!(app.status.jobs.is_empty());
-        assert!(matches!(&effects[..], [Effect::Render(r)] if r.level == 0 && r.slabs.len() == 6));
-        let said = app.status.message.clone().unwrap();
-        assert!(said.starts_with("full resolution"), "{said}");
-    }
-
-    #[test]
-    fn a_new_best_axis_at_full_resolution_is_said_and_followed() {
-        let b = big();
-        let (mut app, _) = previewed();
-        let mut full = b.views.clone();
-        full.views.swap(0, 1);
-        let new_best = full.views[0].axis;
-        let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(full))));
-        // Previewed along the new axis first, then refined.
-        assert!(
-            matches!(effects[..], [Effect::Analyze(2, a, _, 1)] if a == new_best),
-            "{effects:?}"
-        );
-        let said = app.status.message.clone().unwrap();
-        assert!(
-            said.starts_with("full resolution: the best axis is"),
-            "{said}"
-        );
-    }
-
-    #[test]
-    fn an_axis_the_user_chose_is_kept_and_refined_at_once() {
-        let b = big();
-        let (mut app, _) = previewed();
-        app.update(Action::Ask(crate::tui::event::Ask::Axis));
-        app.update(Action::Type('y'));
-        let effects = app.update(Action::Submit);
-        assert!(
-            matches!(effects[..], [Effect::Analyze(2, [0.0, 1.0, 0.0], _, 1)]),
-            "{effects:?}"
-        );
-        let along_y = Histories::new(
-            &b.coarse,
-            [0.0, 1.0, 0.0],
-            &StackParams::default(),
-            Scope::ALL,
-            &Monitor::none(),
-        );
-        let effects = job(
-            &mut app,
-            JobMsg::Analysis(2, 1, Ok(Arc::new(along_y.unwrap()))),
-        );
-        // Not the best axis: no need to wait for the full view search.
-        assert!(
-            effects
-                .iter()
-                .any(|e| matches!(e, Effect::Analyze(3, [0.0, 1.0, 0.0], _, 0))),
-            "{effects:?}"
-        );
-        // The full search then keeps the user's axis.
-        let mut full = b.views.clone();
-        full.views.swap(0, 1);
-        let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(full))));
-        assert!(effects.is_empty(), "{effects:?}");
-        assert_eq!(app.part.axis, Some([0.0, 1.0, 0.0]));
-    }
-
-    #[test]
-    fn escape_cancels_full_resolution_and_the_preview_stays() {
-        let (mut app, _) = previewed();
-        let effects = app.update(Action::Escape);
-        assert!(matches!(effects[..], [Effect::Cancel]), "{effects:?}");
-        assert!(app.part.ready().is_some());
-        let label = app.status.resolution.clone().unwrap();
-        assert_eq!(label, "preview: 1/2 resolution, full resolution stopped");
-        // The cancelled search's late answer changes nothing.
-        let effects = job(&mut app, JobMsg::Views(0, Err("cancelled".into())));
-        assert!(effects.is_empty());
-        assert!(matches!(app.views.views, Load::Ready(_)));
-        // Nor what Esc said (the answer may come before or after the key: tmux saw both).
-        let said = app.status.message.clone().unwrap_or_default();
-        assert!(said.starts_with("cancelled: the preview stays"), "{said}");
     }
 }

@@ -14,7 +14,7 @@ use std::time::Duration;
 use slabscope::{AnalysisParams, Histories, LoadOptions, Monitor, Progress, Scope, Volume, search};
 
 use super::event::{Effect, Event, Job, JobMsg, RenderRequest};
-use super::preview_level;
+use super::{PREVIEW_VOXELS, preview_level};
 use crate::term::Caps;
 use export::export;
 use worker::start_renderer;
@@ -28,7 +28,7 @@ pub struct Jobs {
     caps: Caps,
     source: Option<slabscope::triage::Entry>,
     load: LoadOptions,
-    volume: Option<Arc<Volume>>,
+    open: Open,
     /// Which volume is open: one more at each [`Effect::Open`].
     epoch: u64,
     /// The test hook's wait before a preview is refined.
@@ -51,7 +51,7 @@ impl Jobs {
             caps,
             source,
             load,
-            volume: None,
+            open: Open::default(),
             epoch: 0,
             full_delay: std::env::var("SLABSCOPE_TEST_FULL_DELAY_MS")
                 .ok()
@@ -60,17 +60,24 @@ impl Jobs {
         }
     }
 
-    /// Sees a message before the app does: a loaded volume starts the render worker.
+    /// Sees a message before the app does: a loaded volume, or the file's preview level read
+    /// before it, (re)starts the render worker.
     fn observe(&mut self, msg: &JobMsg) {
-        if let JobMsg::Loaded(Ok((volume, _))) = msg {
-            self.volume = Some(Arc::clone(volume));
-            self.renders = Some(start_renderer(
-                Arc::clone(volume),
-                self.caps.clone(),
-                (self.events.clone(), self.epoch),
-                Arc::clone(&self.render_cancel),
-            ));
+        match msg {
+            JobMsg::Loaded(Ok((volume, _))) => self.open.full = Some(Arc::clone(volume)),
+            JobMsg::Preview(volume, _) => self.open.preview = Some(Arc::clone(volume)),
+            _ => return,
         }
+        self.start_renderer();
+    }
+
+    fn start_renderer(&mut self) {
+        self.renders = Some(start_renderer(
+            self.open.clone(),
+            self.caps.clone(),
+            (self.events.clone(), self.epoch),
+            Arc::clone(&self.render_cancel),
+        ));
     }
 
     /// Carries out `effect`.
@@ -78,15 +85,17 @@ impl Jobs {
         match effect {
             Effect::Load => {
                 let (source, load) = (self.source.clone(), self.load.clone());
-                self.spawn(Job::Load, move |_, _| load_volume(source.as_ref(), load));
+                self.spawn(Job::Load, move |_, send| {
+                    load_volume(source.as_ref(), load, send)
+                });
             }
             Effect::SearchViews(params, level) => {
-                let Some(volume) = self.volume.clone() else {
+                let Some(source) = self.open.level(level) else {
                     return;
                 };
-                let delay = self.full_delay(&volume, level);
+                let delay = self.full_delay(level);
                 self.spawn(Job::Views(level), move |monitor, send| {
-                    let on = volume.coarser(level);
+                    let on = source.get();
                     if level > 0 {
                         send(JobMsg::Coarse(Arc::clone(&on)));
                     }
@@ -95,12 +104,12 @@ impl Jobs {
                 });
             }
             Effect::Analyze(generation, axis, params, level) => {
-                let Some(volume) = self.volume.clone() else {
+                let Some(source) = self.open.level(level) else {
                     return;
                 };
-                let delay = self.full_delay(&volume, level);
+                let delay = self.full_delay(level);
                 self.spawn(Job::Analysis(level), move |monitor, _| {
-                    let on = volume.coarser(level);
+                    let on = source.get();
                     let result = wait(delay, monitor)
                         .and_then(|()| Histories::new(&on, axis, &params, Scope::ALL, monitor));
                     let result = result.map(Arc::new).map_err(|e| e.to_string());
@@ -108,11 +117,11 @@ impl Jobs {
                 });
             }
             Effect::RankGain(params, level) => {
-                let Some(volume) = self.volume.clone() else {
+                let Some(source) = self.open.level(level) else {
                     return;
                 };
                 self.spawn(Job::Gain, move |monitor, _| {
-                    let on = volume.coarser(level);
+                    let on = source.get();
                     let result = slabscope::analysis::rank_by_gain(&on, &params, monitor);
                     JobMsg::Gain(level, result.map(Box::new).map_err(|e| e.to_string()))
                 });
@@ -123,14 +132,8 @@ impl Jobs {
                     JobMsg::Lesson(request.generation, result)
                 });
             }
-            Effect::Open(path) => {
-                // The next volume: its own load, views, histories and renders; what the jobs of
-                // the last one still send is dropped.
-                self.epoch += 1;
-                self.source = Some(path);
-                self.volume = None;
-                self.renders = None;
-            }
+            Effect::Open(path) => self.open_next(path),
+            Effect::Forget => self.forget(),
             Effect::Triage(paths, params) => self.triage(paths, *params),
             Effect::Render(request) => {
                 if let Some(tx) = &self.renders {
@@ -144,7 +147,7 @@ impl Jobs {
                 self.cancel = Arc::new(AtomicBool::new(false));
             }
             Effect::Export(request) => {
-                if let Some(volume) = self.volume.clone() {
+                if let Some(volume) = self.open.full.clone() {
                     self.spawn(Job::Export, move |monitor, _| {
                         JobMsg::Exported(
                             export(&volume, &request, monitor).map_err(|e| e.to_string()),
@@ -153,6 +156,25 @@ impl Jobs {
                 }
             }
             Effect::Quit => {}
+        }
+    }
+
+    /// The next volume: its own load, views, histories and renders; what the jobs of the last
+    /// one still send is dropped.
+    fn open_next(&mut self, path: slabscope::triage::Entry) {
+        self.epoch += 1;
+        self.source = Some(path);
+        self.open = Open::default();
+        self.renders = None;
+    }
+
+    /// The file's preview level dropped, and what the jobs started before still send: the app
+    /// starts afresh on the volume loaded.
+    fn forget(&mut self) {
+        self.epoch += 1;
+        self.open.preview = None;
+        if self.open.full.is_some() {
+            self.start_renderer();
         }
     }
 
@@ -207,9 +229,9 @@ impl Jobs {
     /// How long a full-resolution job on `volume` waits before it starts: nothing, but with the
     /// test hook `SLABSCOPE_TEST_FULL_DELAY_MS`, which holds back the jobs that refine a preview
     /// so that a test sees the preview first.
-    fn full_delay(&self, volume: &Volume, level: usize) -> Duration {
-        match (level, preview_level(volume)) {
-            (0, 1..) => self.full_delay,
+    fn full_delay(&self, level: usize) -> Duration {
+        match (level, self.open.full.as_deref().map(preview_level)) {
+            (0, Some(1..)) => self.full_delay,
             _ => Duration::ZERO,
         }
     }
@@ -227,6 +249,49 @@ impl Jobs {
     }
 }
 
+/// The volume the jobs work on: level 0 once loaded, and the pyramid level the file holds that
+/// was read before it (an OME-Zarr store's preview).
+#[derive(Clone, Default)]
+pub(super) struct Open {
+    full: Option<Arc<Volume>>,
+    preview: Option<Arc<Volume>>,
+}
+
+impl Open {
+    /// Where pyramid level `level` comes from: the file's preview where it is that level, else
+    /// level 0 once loaded.
+    pub(super) fn level(&self, level: usize) -> Option<Source> {
+        match (&self.preview, &self.full) {
+            (Some(p), _) if p.level().index == level => Some(Source::Held(Arc::clone(p))),
+            (_, Some(full)) => Some(Source::Coarser(Arc::clone(full), level)),
+            _ => None,
+        }
+    }
+
+    /// Level 0, once loaded.
+    pub(super) fn full(&self) -> Option<&Arc<Volume>> {
+        self.full.as_ref()
+    }
+}
+
+/// Where a job's pyramid level comes from.
+pub(super) enum Source {
+    /// A level held as it is.
+    Held(Arc<Volume>),
+    /// A level of this volume, read or built when first asked for.
+    Coarser(Arc<Volume>, usize),
+}
+
+impl Source {
+    /// The level (building it may take long: on a job's thread).
+    pub(super) fn get(self) -> Arc<Volume> {
+        match self {
+            Self::Held(v) => v,
+            Self::Coarser(v, k) => v.coarser(k),
+        }
+    }
+}
+
 /// Waits `delay` unless cancelled first.
 fn wait(delay: Duration, monitor: &Monitor) -> slabscope::Result<()> {
     let end = std::time::Instant::now() + delay;
@@ -238,14 +303,24 @@ fn wait(delay: Duration, monitor: &Monitor) -> slabscope::Result<()> {
 }
 
 /// Loads `source` (None: the built-in dataset) with `load`, a series in `source` taking the
-/// place of the options'.
-fn load_volume(source: Option<&slabscope::triage::Entry>, load: LoadOptions) -> JobMsg {
+/// place of the options'. A coarse pyramid level the file holds is sent first, as a preview.
+fn load_volume(
+    source: Option<&slabscope::triage::Entry>,
+    load: LoadOptions,
+    send: &dyn Fn(JobMsg),
+) -> JobMsg {
     let loaded = match source {
         Some(entry) => {
             let load = LoadOptions {
                 series: entry.series.clone().or(load.series),
                 ..load
             };
+            // A preview that cannot be read is no error: level 0's load says what is wrong.
+            let preview =
+                slabscope::volume::io::zarr::load_preview(&entry.path, &load, PREVIEW_VOXELS);
+            if let Ok(Some(p)) = preview {
+                send(JobMsg::Preview(Arc::new(p.volume), p.notes));
+            }
             let max_memory = load.max_memory;
             slabscope::load(&entry.path, &load).and_then(|l| within_memory(l, max_memory))
         }
@@ -291,6 +366,31 @@ mod tests {
         // The folder's triage rows are for every volume: never dropped.
         let row = slabscope::triage::TriageRow::failed("a", "b".into());
         assert!(jobs.admit(JobMsg::Triaged(0, Box::new(row))).is_some());
+    }
+
+    #[test]
+    fn a_file_preview_serves_its_level_until_forgotten() {
+        let (tx, _rx) = channel();
+        let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
+        assert!(jobs.open.level(1).is_none(), "nothing read yet");
+        let full = Arc::new(slabscope::volume::phantom::body([8, 8, 8], 1).unwrap());
+        let coarse = full.coarser(1);
+        jobs.observe(&JobMsg::Preview(Arc::clone(&coarse), vec![]));
+        assert!(matches!(jobs.open.level(1), Some(Source::Held(v)) if Arc::ptr_eq(&v, &coarse)));
+        assert!(jobs.open.level(0).is_none() && jobs.open.level(2).is_none());
+        jobs.observe(&JobMsg::Loaded(Ok((Arc::clone(&full), vec![]))));
+        assert!(
+            matches!(jobs.open.level(1), Some(Source::Held(_))),
+            "kept for level 1"
+        );
+        assert!(matches!(jobs.open.level(2), Some(Source::Coarser(_, 2))));
+        // Forgotten: level 1 comes from level 0, and what the jobs sent before is dropped.
+        let done = |epoch| JobMsg::Epoch(epoch, Box::new(JobMsg::Exported(Ok("x".into()))));
+        jobs.run(Effect::Forget);
+        assert!(matches!(jobs.open.level(1), Some(Source::Coarser(_, 1))));
+        assert!(jobs.admit(done(0)).is_none());
+        assert!(jobs.admit(done(1)).is_some());
+        assert_eq!(jobs.open.level(1).unwrap().get().dims(), coarse.dims());
     }
 
     /// Not a test but a measurement: `cargo test --release --bin slabscope preview_timing --

@@ -15,6 +15,7 @@ use slabscope::render::{Gap, Stack, paste_centred};
 use slabscope::{Layout, Monitor, RenderParams, Renderer, Volume};
 use tiny_skia::Pixmap;
 
+use super::Open;
 use crate::term::image::encode;
 use crate::term::{Caps, Graphics};
 use crate::tui::event::{Event, JobMsg, PictureSettings, RenderRequest, Rendered, SliceRequest};
@@ -22,7 +23,7 @@ use crate::tui::event::{Event, JobMsg, PictureSettings, RenderRequest, Rendered,
 /// The render worker: owns the volume and its renderer, renders the newest request, encodes it
 /// for the terminal and sends it back.
 pub(super) fn start_renderer(
-    volume: Arc<Volume>,
+    open: Open,
     caps: Caps,
     (events, epoch): (Sender<Event>, u64),
     cancel: Arc<AtomicBool>,
@@ -38,9 +39,15 @@ pub(super) fn start_renderer(
             cancel.store(false, Ordering::Relaxed);
             let monitor = Monitor::new(Some(&cancel), None);
             let generation = request.generation;
-            let renderer = match request.level {
-                0 => made_for(&mut full, &volume),
-                k => made_for(&mut preview, coarse.get_or_init(|| volume.coarser(k))),
+            let renderer = match (request.level, open.full(), open.level(request.level)) {
+                (0, Some(volume), _) => made_for(&mut full, volume),
+                (k, _, Some(source)) if k > 0 => {
+                    made_for(&mut preview, coarse.get_or_init(|| source.get()))
+                }
+                _ => Err(anyhow::anyhow!(
+                    "pyramid level {} is not loaded yet",
+                    request.level
+                )),
             };
             let result = renderer.and_then(|r| render(r, &caps, &request, &monitor));
             match result {

@@ -61,6 +61,24 @@ impl Volume {
         self
     }
 
+    /// This volume, read from a file that holds it as pyramid level `k` of a level 0 of `dims0`
+    /// not read (an OME-Zarr store's coarser dataset, on the pyramid's grid): it takes that
+    /// place in the pyramid, and is quantized with its own range, level 0's being unknown. Its
+    /// coarser levels are computed from it.
+    #[must_use]
+    pub(crate) fn into_pyramid_level(mut self, k: usize, dims0: [usize; 3]) -> Self {
+        let (factor, _) = scale_of(dims0, k);
+        let labels = self.labels().is_some();
+        self.level = Level {
+            index: k,
+            factor,
+            range: [self.stats.min, self.stats.max],
+            labels,
+        };
+        self.pyramid = empty(dims0);
+        self
+    }
+
     /// Pyramid level `k` of this volume, `k` levels coarser (docs/design.md §5; the top level
     /// past the last): each level halves every axis longer than one voxel, a voxel the mean of
     /// the finite voxels under it (for a label volume their most frequent value), quantized with
@@ -104,14 +122,7 @@ impl Volume {
     /// Per axis, how many voxels of this level one voxel `times` levels coarser spans, and that
     /// level's dimensions.
     fn scale_to(&self, times: usize) -> ([usize; 3], [usize; 3]) {
-        let mut scale = [1usize; 3];
-        let mut d = self.dims;
-        for _ in 0..times {
-            let s = step(d);
-            scale = std::array::from_fn(|m| scale[m] * s[m]);
-            d = coarser_dims(d);
-        }
-        (scale, d)
+        scale_of(self.dims, times)
     }
 
     /// Whether this level's coarser levels take the most frequent label.
@@ -159,6 +170,19 @@ impl Volume {
             pyramid: Arc::clone(&self.pyramid),
         }
     }
+}
+
+/// Per axis, how many voxels of a level of `dims` one voxel `times` levels coarser spans, and
+/// that level's dimensions.
+fn scale_of(dims: [usize; 3], times: usize) -> ([usize; 3], [usize; 3]) {
+    let mut scale = [1usize; 3];
+    let mut d = dims;
+    for _ in 0..times {
+        let s = step(d);
+        scale = std::array::from_fn(|m| scale[m] * s[m]);
+        d = coarser_dims(d);
+    }
+    (scale, d)
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@ use serde::Serialize;
 
 use self::meta::{ArrayMeta, AxisKind, Image};
 use super::data::{one_channel, one_volume};
-use super::{LoadOptions, Read0};
+use super::{Format, LoadOptions, Loaded, Read0};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 
@@ -267,69 +267,147 @@ impl Layout {
     }
 }
 
+/// A store's image opened: its metadata read and checked against the options, nothing of its
+/// voxels read yet.
+struct Opened {
+    image_path: PathBuf,
+    image: Image,
+    arrays: Vec<ArrayMeta>,
+    layout: Layout,
+    info: ZarrInfo,
+    notes: Vec<String>,
+}
+
+impl Opened {
+    /// Opens the image of the store at `dir` (or the label image `opts` names).
+    fn new(dir: &Path, opts: &LoadOptions) -> Result<Self> {
+        let (image_path, name) = image_dir(dir, opts)?;
+        let (image, arrays) = read_image(&image_path)?;
+        let array = &arrays[0];
+        let layout = Layout::of(&image, &array.shape).map_err(|m| Error::format(&image_path, m))?;
+        let info = describe(&image, &arrays, &layout, dir, name);
+        let mut notes = Vec::new();
+        let count = |axis: Option<usize>| axis.map_or(1, |a| array.shape[a] as usize);
+        let (times, channels) = (count(layout.time), count(layout.channel));
+        if opts.volume >= times {
+            return Err(one_volume(dir, times, opts.volume));
+        }
+        if opts.channel >= channels {
+            return Err(one_channel(dir, channels, opts.channel));
+        }
+        if times > 1 || channels > 1 {
+            notes.push(format!(
+                "OME-Zarr image of {channels} channel{} and {times} time point{}: read channel {} \
+                 at time point {}",
+                plural(channels),
+                plural(times),
+                opts.channel,
+                opts.volume
+            ));
+        }
+        if image.multiscales > 1 {
+            notes.push(format!(
+                "the store holds {} images (multiscales): read the first",
+                image.multiscales
+            ));
+        }
+        Ok(Self {
+            image_path,
+            image,
+            arrays,
+            layout,
+            info,
+            notes,
+        })
+    }
+
+    /// Dataset `i`, to read the time point and channel `opts` picks.
+    fn dataset(&self, i: usize, opts: &LoadOptions) -> read::Dataset<'_> {
+        read::Dataset {
+            image: &self.image_path,
+            path: &self.image.datasets[i].path,
+            meta: &self.arrays[i],
+            layout: &self.layout,
+            at: [opts.volume as u64, opts.channel as u64],
+            max_memory: opts.max_memory,
+        }
+    }
+
+    /// The volume of dataset `i`, with its spacing and origin, and the notes.
+    fn read(&self, dir: &Path, i: usize, opts: &LoadOptions) -> Result<Read0> {
+        let fail = |m: String| Error::format(&self.image_path, m);
+        let mut notes = self.notes.clone();
+        let (spacing, origin) = geometry(
+            &self.image,
+            &self.image.datasets[i],
+            &self.layout,
+            &mut notes,
+        );
+        let dims = self.layout.dims(&self.arrays[i].shape);
+        let stored = self.arrays[i].voxel_type().map_err(fail)?;
+        let voxels = self.dataset(i, opts).voxels(dims)?;
+        let mut t = WorldTransform::unknown(spacing);
+        for k in 0..3 {
+            t.matrix[k][3] = origin[k];
+        }
+        let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
+        read0.volume = read0.volume.with_transform(t);
+        if self.image.label {
+            read0.volume = read0.volume.declared_labels();
+        }
+        read0.format_version.clone_from(&self.info.version);
+        read0.zarr = Some(self.info.clone());
+        Ok(read0)
+    }
+}
+
 /// Loads the image of the store at `dir` (or the label image `opts` names).
 pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let (image_path, name) = image_dir(dir, opts)?;
-    let (image, arrays) = read_image(&image_path)?;
-    let fail = |m: String| Error::format(&image_path, m);
-    let array = &arrays[0];
-    let dataset = &image.datasets[0];
-    let layout = Layout::of(&image, &array.shape).map_err(fail)?;
-    let info = describe(&image, &arrays, &layout, dir, name);
-    let mut notes = Vec::new();
-    let count = |axis: Option<usize>| axis.map_or(1, |a| array.shape[a] as usize);
-    let (times, channels) = (count(layout.time), count(layout.channel));
-    if opts.volume >= times {
-        return Err(one_volume(dir, times, opts.volume));
-    }
-    if opts.channel >= channels {
-        return Err(one_channel(dir, channels, opts.channel));
-    }
-    if times > 1 || channels > 1 {
-        notes.push(format!(
-            "OME-Zarr image of {channels} channel{} and {times} time point{}: read channel {} \
-             at time point {}",
-            plural(channels),
-            plural(times),
-            opts.channel,
-            opts.volume
-        ));
-    }
-    if image.multiscales > 1 {
-        notes.push(format!(
-            "the store holds {} images (multiscales): read the first",
-            image.multiscales
-        ));
-    }
-    let (spacing, origin) = geometry(&image, dataset, &layout, &mut notes);
-    let dims = layout.dims(&array.shape);
-    let stored = array.voxel_type().map_err(fail)?;
-    let at = [opts.volume as u64, opts.channel as u64];
-    let dataset0 = read::Dataset {
-        image: &image_path,
-        path: &dataset.path,
-        meta: array,
-        layout: &layout,
-        at,
-        max_memory: opts.max_memory,
-    };
-    let voxels = dataset0.voxels(dims)?;
-    let source = levels::StoreLevels::new(&image, &arrays, &dataset0);
-    let mut t = WorldTransform::unknown(spacing);
-    for k in 0..3 {
-        t.matrix[k][3] = origin[k];
-    }
-    let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
-    read0.volume = read0.volume.with_transform(t);
-    if let Some(source) = source {
+    let opened = Opened::new(dir, opts)?;
+    let mut read0 = opened.read(dir, 0, opts)?;
+    if let Some(source) =
+        levels::StoreLevels::new(&opened.image, &opened.arrays, &opened.dataset(0, opts))
+    {
         read0.volume = read0.volume.with_level_source(Arc::new(source));
     }
-    if image.label {
-        read0.volume = read0.volume.declared_labels();
-    }
-    read0.format_version.clone_from(&info.version);
-    read0.zarr = Some(info);
     Ok(read0)
+}
+
+/// A coarse pyramid level of the volume at `path`, read without reading level 0, where the file
+/// holds one on the pyramid's grid of at most `max_voxels` voxels (an OME-Zarr store's coarser
+/// dataset): the finest such, its [`Volume::level`](crate::Volume::level) saying which,
+/// quantized with its own range (level 0's is not known until level 0 is read). `None` for every
+/// other file, and when level 0 itself has at most `max_voxels` voxels. A first picture while
+/// [`load`](super::load) reads level 0.
+pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Loaded>> {
+    super::check_input(path)?;
+    if !(path.is_dir() && is_store(path)) {
+        return Ok(None);
+    }
+    let read = read_preview(path, opts, max_voxels).map_err(|e| e.reached_from(path))?;
+    Ok(read.map(|r| super::finish(path, Format::OmeZarr, r)))
+}
+
+/// The finest of the store's coarser datasets on the pyramid's grid with at most `max_voxels`
+/// voxels, read as that pyramid level of the image without reading level 0 (so quantized with
+/// its own range); `None` when level 0 itself has at most `max_voxels` voxels or no such dataset
+/// exists.
+fn read_preview(dir: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Read0>> {
+    let opened = Opened::new(dir, opts)?;
+    let dims0 = opened.layout.dims(&opened.arrays[0].shape);
+    let wanted = crate::volume::pyramid::level_within(dims0, max_voxels);
+    let best = (1..opened.arrays.len())
+        .filter_map(|i| {
+            let k = levels::pyramid_level(&opened.image, &opened.arrays, &opened.layout, i)?;
+            (k >= wanted).then_some((k, i))
+        })
+        .min();
+    let (Some((k, i)), 1..) = (best, wanted) else {
+        return Ok(None);
+    };
+    let mut read0 = opened.read(dir, i, opts)?;
+    read0.volume = read0.volume.into_pyramid_level(k, dims0);
+    Ok(Some(read0))
 }
 
 fn plural(n: usize) -> &'static str {

@@ -1,0 +1,347 @@
+//! A large volume's preview in the TUI: a coarse pyramid level shows first, and full resolution
+//! replaces it in place.
+
+use std::sync::{Arc, OnceLock};
+
+use slabscope::partition::{Method, StackParams};
+use slabscope::volume::phantom;
+use slabscope::{AnalysisParams, Histories, Monitor, Scope, ViewParams, ViewSearch, Volume};
+
+use crate::tui::app::{App, Screen};
+use crate::tui::event::{Action, Effect, JobMsg, Load};
+
+/// A volume just over the preview's size, its preview level, the preview's view search and
+/// both resolutions' histories along z.
+struct Big {
+    volume: Arc<Volume>,
+    coarse: Arc<Volume>,
+    views: ViewSearch,
+    along_z: [Arc<Histories>; 2],
+}
+
+fn big() -> &'static Big {
+    static BIG: OnceLock<Big> = OnceLock::new();
+    BIG.get_or_init(|| {
+        let volume = Arc::new(phantom::body([130, 130, 132], 1).unwrap());
+        assert_eq!(crate::tui::preview_level(&volume), 1, "65×65×66");
+        let coarse = volume.coarser(1);
+        let mut views =
+            slabscope::search(&coarse, &ViewParams::default(), &Monitor::none()).unwrap();
+        // Put z first, so that both resolutions' best is the axis of the histories.
+        let z = views
+            .views
+            .iter()
+            .position(|v| v.axis == [0.0, 0.0, 1.0])
+            .unwrap();
+        views.views.swap(0, z);
+        views.refined = None;
+        let along_z = [&volume, &coarse].map(|v| {
+            let h = Histories::new(
+                v,
+                [0.0, 0.0, 1.0],
+                &StackParams::default(),
+                Scope::ALL,
+                &Monitor::none(),
+            );
+            Arc::new(h.unwrap())
+        });
+        Big {
+            volume,
+            coarse,
+            views,
+            along_z,
+        }
+    })
+}
+
+fn job(app: &mut App, msg: JobMsg) -> Vec<Effect> {
+    app.update(Action::Job(msg))
+}
+
+/// An app on the big volume taken through its preview: loaded, the preview's views and
+/// histories shown.
+fn previewed() -> (App, Vec<Effect>) {
+    let b = big();
+    let (mut app, _) = App::new("big".into(), AnalysisParams::default(), Screen::default());
+    app.preview.cells = (40, 12);
+    let effects = job(
+        &mut app,
+        JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
+    );
+    assert!(
+        matches!(effects[0], Effect::SearchViews(_, 1)),
+        "{effects:?}"
+    );
+    match &effects[1] {
+        Effect::Render(r) => assert_eq!(r.level, 1, "the first picture is the preview's"),
+        other => panic!("{other:?}"),
+    }
+    job(&mut app, JobMsg::Coarse(Arc::clone(&b.coarse)));
+    let effects = job(&mut app, JobMsg::Views(1, Ok(Box::new(b.views.clone()))));
+    assert!(
+        matches!(effects[..], [Effect::Analyze(1, [0.0, 0.0, 1.0], _, 1)]),
+        "{effects:?}"
+    );
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(1, 1, Ok(Arc::clone(&b.along_z[1]))),
+    );
+    (app, effects)
+}
+
+#[test]
+fn a_large_volume_shows_its_preview_then_full_resolution_in_place() {
+    let b = big();
+    let (mut app, effects) = previewed();
+    // The preview shows, labelled; the full-resolution view search starts, and a picture.
+    assert!(
+        matches!(effects[0], Effect::SearchViews(_, 0)),
+        "{effects:?}"
+    );
+    assert!(matches!(&effects[1], Effect::Render(r) if r.level == 1 && r.slabs.len() == 4));
+    assert_eq!(
+        app.status.resolution.as_deref(),
+        Some("preview: 1/2 resolution")
+    );
+    assert!(app.status.jobs.iter().any(|(j, _)| *j == "full resolution"));
+    // The user moves on while full resolution runs: bottom-up, 6 slabs.
+    app.update(Action::CycleMethod);
+    app.update(Action::Slabs(2));
+    assert_eq!(app.part.slab_count(), Some(6));
+    // The full search agrees on the axis: the full histories start, the preview stays.
+    let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(b.views.clone()))));
+    assert!(
+        matches!(effects[..], [Effect::Analyze(2, [0.0, 0.0, 1.0], _, 0)]),
+        "{effects:?}"
+    );
+    assert_eq!(app.part.level, 1);
+    assert!(
+        app.part.ready().is_some(),
+        "the preview's histories stay shown"
+    );
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(2, 0, Ok(Arc::clone(&b.along_z[0]))),
+    );
+    // Replaced in place: the method and slab count kept, the label gone, a new picture.
+    assert_eq!(app.part.level, 0);
+    assert!(Arc::ptr_eq(app.part.ready().unwrap(), &b.along_z[0]));
+    assert_eq!(
+        (app.part.method, app.part.slab_count()),
+        (Method::BottomUp, Some(6))
+    );
+    assert_eq!(app.status.resolution, None);
+    assert!(app.status.jobs.is_empty());
+    assert!(matches!(&effects[..], [Effect::Render(r)] if r.level == 0 && r.slabs.len() == 6));
+    let said = app.status.message.clone().unwrap();
+    assert!(said.starts_with("full resolution"), "{said}");
+}
+
+#[test]
+fn a_new_best_axis_at_full_resolution_is_said_and_followed() {
+    let b = big();
+    let (mut app, _) = previewed();
+    let mut full = b.views.clone();
+    full.views.swap(0, 1);
+    let new_best = full.views[0].axis;
+    let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(full))));
+    // Previewed along the new axis first, then refined.
+    assert!(
+        matches!(effects[..], [Effect::Analyze(2, a, _, 1)] if a == new_best),
+        "{effects:?}"
+    );
+    let said = app.status.message.clone().unwrap();
+    assert!(
+        said.starts_with("full resolution: the best axis is"),
+        "{said}"
+    );
+}
+
+#[test]
+fn an_axis_the_user_chose_is_kept_and_refined_at_once() {
+    let b = big();
+    let (mut app, _) = previewed();
+    app.update(Action::Ask(crate::tui::event::Ask::Axis));
+    app.update(Action::Type('y'));
+    let effects = app.update(Action::Submit);
+    assert!(
+        matches!(effects[..], [Effect::Analyze(2, [0.0, 1.0, 0.0], _, 1)]),
+        "{effects:?}"
+    );
+    let along_y = Histories::new(
+        &b.coarse,
+        [0.0, 1.0, 0.0],
+        &StackParams::default(),
+        Scope::ALL,
+        &Monitor::none(),
+    );
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(2, 1, Ok(Arc::new(along_y.unwrap()))),
+    );
+    // Not the best axis: no need to wait for the full view search.
+    assert!(
+        effects
+            .iter()
+            .any(|e| matches!(e, Effect::Analyze(3, [0.0, 1.0, 0.0], _, 0))),
+        "{effects:?}"
+    );
+    // The full search then keeps the user's axis.
+    let mut full = b.views.clone();
+    full.views.swap(0, 1);
+    let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(full))));
+    assert!(effects.is_empty(), "{effects:?}");
+    assert_eq!(app.part.axis, Some([0.0, 1.0, 0.0]));
+}
+
+#[test]
+fn escape_cancels_full_resolution_and_the_preview_stays() {
+    let (mut app, _) = previewed();
+    let effects = app.update(Action::Escape);
+    assert!(matches!(effects[..], [Effect::Cancel]), "{effects:?}");
+    assert!(app.part.ready().is_some());
+    let label = app.status.resolution.clone().unwrap();
+    assert_eq!(label, "preview: 1/2 resolution, full resolution stopped");
+    // The cancelled search's late answer changes nothing.
+    let effects = job(&mut app, JobMsg::Views(0, Err("cancelled".into())));
+    assert!(effects.is_empty());
+    assert!(matches!(app.views.views, Load::Ready(_)));
+    // Nor what Esc said (the answer may come before or after the key: tmux saw both).
+    let said = app.status.message.clone().unwrap_or_default();
+    assert!(said.starts_with("cancelled: the preview stays"), "{said}");
+}
+
+#[test]
+fn a_level_the_file_holds_shows_before_level_0_has_loaded() {
+    let b = big();
+    let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
+    app.preview.cells = (40, 12);
+    // An OME-Zarr store's level 1, read before its level 0.
+    let effects = job(
+        &mut app,
+        JobMsg::Preview(Arc::clone(&b.coarse), vec!["a note".into()]),
+    );
+    assert!(
+        matches!(effects[0], Effect::SearchViews(_, 1)),
+        "{effects:?}"
+    );
+    assert!(matches!(&effects[1], Effect::Render(r) if r.level == 1));
+    assert_eq!(app.status.message.as_deref(), Some("a note"));
+    let label = app.status.resolution.clone().unwrap();
+    assert_eq!(
+        label,
+        "preview: 1/2 resolution (the file's level 1, its own value range)"
+    );
+    assert!(app.status.jobs.iter().any(|(j, _)| *j == "full resolution"));
+    // The preview's views and histories: nothing at full resolution before level 0 is loaded.
+    let effects = job(&mut app, JobMsg::Views(1, Ok(Box::new(b.views.clone()))));
+    assert!(
+        matches!(effects[..], [Effect::Analyze(1, [0.0, 0.0, 1.0], _, 1)]),
+        "{effects:?}"
+    );
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(1, 1, Ok(Arc::clone(&b.along_z[1]))),
+    );
+    assert!(
+        !effects.iter().any(|e| matches!(e, Effect::SearchViews(..))),
+        "{effects:?}"
+    );
+    assert!(matches!(&effects[..], [Effect::Render(r)] if r.level == 1 && r.slabs.len() == 4));
+    assert!(app.update(Action::Export).is_empty());
+    let said = app.status.message.clone().unwrap();
+    assert!(said.starts_with("nothing to export until"), "{said}");
+    // Level 0 arrives: the full view search starts; the preview stays until it is refined.
+    let effects = job(
+        &mut app,
+        JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
+    );
+    assert!(
+        matches!(effects[..], [Effect::SearchViews(_, 0)]),
+        "{effects:?}"
+    );
+    assert_eq!(app.part.level, 1);
+    let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(b.views.clone()))));
+    assert!(
+        matches!(effects[..], [Effect::Analyze(2, [0.0, 0.0, 1.0], _, 0)]),
+        "{effects:?}"
+    );
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(2, 0, Ok(Arc::clone(&b.along_z[0]))),
+    );
+    assert_eq!(app.part.level, 0);
+    assert_eq!(app.status.resolution, None);
+    assert!(app.status.jobs.is_empty());
+    assert!(matches!(&effects[..], [Effect::Render(r)] if r.level == 0));
+}
+
+#[test]
+fn a_file_preview_after_level_0_or_on_level_0_is_ignored() {
+    let b = big();
+    let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
+    job(
+        &mut app,
+        JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
+    );
+    let effects = job(&mut app, JobMsg::Preview(Arc::clone(&b.coarse), vec![]));
+    assert!(effects.is_empty(), "{effects:?}");
+    assert!(!app.refine.as_ref().unwrap().from_file);
+    let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
+    let effects = job(&mut app, JobMsg::Preview(Arc::clone(&b.volume), vec![]));
+    assert!(effects.is_empty(), "{effects:?}");
+    assert!(app.refine.is_none());
+}
+
+#[test]
+fn level_0_failing_under_a_file_preview_says_so_and_the_preview_stays() {
+    let b = big();
+    let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
+    job(&mut app, JobMsg::Preview(Arc::clone(&b.coarse), vec![]));
+    job(&mut app, JobMsg::Views(1, Ok(Box::new(b.views.clone()))));
+    job(
+        &mut app,
+        JobMsg::Analysis(1, 1, Ok(Arc::clone(&b.along_z[1]))),
+    );
+    job(
+        &mut app,
+        JobMsg::Loaded(Err("store: chunk 0/0/0 is cut short".into())),
+    );
+    assert!(app.part.ready().is_some());
+    let label = app.status.resolution.clone().unwrap();
+    assert!(label.ends_with(", full resolution stopped"), "{label}");
+    let said = app.status.message.clone().unwrap();
+    assert!(
+        said.starts_with("store: chunk 0/0/0 is cut short"),
+        "{said}"
+    );
+}
+
+#[test]
+fn a_level_0_beyond_the_budget_starts_afresh_without_the_file_preview() {
+    let b = big();
+    let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
+    app.preview.cells = (40, 12);
+    job(&mut app, JobMsg::Preview(Arc::clone(&b.coarse), vec![]));
+    job(&mut app, JobMsg::Views(1, Ok(Box::new(b.views.clone()))));
+    // Level 0 did not fit: what loaded is itself level 1, of which the file's is no preview.
+    let effects = job(
+        &mut app,
+        JobMsg::Loaded(Ok((Arc::clone(&b.coarse), vec![]))),
+    );
+    assert!(
+        matches!(
+            effects[..],
+            [
+                Effect::Cancel,
+                Effect::Forget,
+                Effect::SearchViews(_, 0),
+                ..
+            ]
+        ),
+        "{effects:?}"
+    );
+    assert!(app.refine.is_none());
+    assert!(matches!(app.views.views, Load::Running(_)));
+    assert_eq!(app.status.resolution, None);
+}
