@@ -307,6 +307,17 @@ impl BlockCounts {
         self.run = run;
     }
 
+    /// Appends `sample` to the run `run` without counting anything (a missing sample starts it
+    /// afresh): the state a run would have, for counting what follows.
+    pub fn prime(&self, run: &mut Run, sample: Option<u8>) {
+        match sample {
+            Some(s) => {
+                self.packing.push(run, s);
+            }
+            None => *run = Run::default(),
+        }
+    }
+
     /// Adds `other`'s counts to these (both with no sequence under way).
     pub fn merge(&mut self, other: &Self) {
         self.long.merge(&other.long);

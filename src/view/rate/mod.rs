@@ -1,6 +1,7 @@
 //! The entropy rate of one axis (paper §4): parallel rays on the lattice, trilinear samples,
 //! quantized, with L-block and (L-1)-block counts pooled over all rays.
 
+mod bricks;
 mod columns;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
@@ -10,6 +11,7 @@ mod tiles;
 use rayon::prelude::*;
 use serde::Serialize;
 
+pub use bricks::{BRICK_CELLS, Bricks, counts_of_bricks};
 pub use sampler::{BinSampler, InnerSpans, VoxelBins};
 
 use crate::error::Result;
@@ -205,14 +207,25 @@ pub fn entropy_rate_of<T: Voxel>(
     Ok(AxisEntropy::new(lattice.d, &counts, rays))
 }
 
-/// How [`counts_with`] walks the rays; every way counts the same.
+/// How the rays of a lattice are walked; every way counts the same (see [`block_counts_by`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Walk {
-    /// Voxel columns where the rays are columns, else the vector walk where the processor has
-    /// it, else the scalar walk.
+pub enum Walk {
+    /// Voxel columns where the rays are columns, else the tile walk (vector where the processor
+    /// has it). The bricked walk is not chosen: on the machines measured it is slower (see
+    /// docs/performance.md).
     Fastest,
-    /// The tile walk, vector or scalar.
-    Tiles { vector: bool },
+    /// The tile walk.
+    Tiles {
+        /// Eight rays at a time where the processor has AVX2, else one by one.
+        vector: bool,
+    },
+    /// The bricked walk.
+    Bricks {
+        /// Cells along each side of a brick, or the cube root of its cells when `shaped`.
+        size: usize,
+        /// Whether the bricks are shaped for the lattice's axis (see [`Bricks::along`]).
+        shaped: bool,
+    },
 }
 
 /// The counts behind [`entropy_rate`], kept: the L-blocks, (L-1)-blocks and symbols of every
@@ -234,6 +247,17 @@ pub fn block_counts<T: Voxel>(
     )
 }
 
+/// [`block_counts`] by the walk `walk`: for comparing the walks (every one counts the same).
+pub fn block_counts_by<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattice: &Lattice,
+    block: usize,
+    walk: Walk,
+    monitor: &Monitor,
+) -> Result<(BlockCounts, u64)> {
+    counts_with(sampler, lattice, block, monitor, walk, RaySubset::ALL)
+}
+
 /// The block counts, and the rays that met the volume, of the lattice's rays `subset` keeps,
 /// walked as `walk` says.
 fn counts_with<T: Voxel>(
@@ -249,6 +273,9 @@ fn counts_with<T: Voxel>(
         && let Some(axis) = lattice.columns()
     {
         return column_counts(sampler, lattice, axis, block, monitor);
+    }
+    if let Walk::Bricks { size, shaped } = walk {
+        return bricks::bricked_counts(sampler, lattice, block, (size, shaped), monitor);
     }
     let vector = walk != (Walk::Tiles { vector: false });
     let rows: Vec<(i64, i64)> = tile_rows(lattice, subset.every).collect();

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::geometry::min_spacing;
-use crate::measure::block_entropies;
+use crate::measure::{PartialCounts, block_entropies};
 use crate::testing::Lcg;
 use crate::volume::Volume;
 use crate::volume::VoxelType;
@@ -116,6 +116,11 @@ fn every_walk_counts_what_the_scalar_walk_counts() {
                     let at = format!("{dims:?} {bins} bins, L {block}, {axis:?} {phase:?}");
                     assert_eq!(fast, scalar, "{at}");
                     assert_eq!(vector, scalar, "{at}");
+                    // Bricks of one cell, ragged ones, and one larger than the volume.
+                    for (size, shaped) in [(1, false), (5, false), (8, true), (64, false)] {
+                        let bricked = walk(Walk::Bricks { size, shaped }).unwrap();
+                        assert_eq!(bricked, scalar, "bricks of {size} ({shaped}): {at}");
+                    }
                     columns += usize::from(lattice.columns().is_some());
                     samples += fast.samples;
                 }
@@ -174,4 +179,60 @@ fn missing_voxels_break_sequences() {
     let lattice = Lattice::at_voxel_spacing(v.dims(), v.spacing(), [0.0, 0.0, 1.0]).unwrap();
     let r = entropy_rate(&BinSampler::new(&v, q), &lattice, 2, &Monitor::none()).unwrap();
     assert_eq!(r.samples, 26);
+}
+
+#[test]
+fn bricks_counted_apart_in_random_groups_add_up_to_the_whole() {
+    let mut lcg = Lcg::new(17);
+    let mut next = move |n: usize| (lcg.next_u64() >> 33) as usize % n.max(1);
+    let mut open = 0;
+    for (dims, spacing, size) in [
+        ([23, 19, 31], [1.0, 1.0, 1.0], 6),
+        ([40, 9, 17], [0.7, 1.3, 2.1], 4),
+        ([1, 20, 20], [1.0, 1.0, 1.0], 3),
+        ([9, 2, 12], [1.0, 1.0, 1.0], 2),
+    ] {
+        let v = awkward_volume(dims, spacing, 23);
+        for (bins, block) in [(32, 3), (8, 4), (5, 2)] {
+            let sampler = BinSampler::new(&v, v.quantizer(bins).unwrap());
+            for (axis, phase) in [
+                ([0.0, 0.0, 1.0], [0.0; 3]),
+                ([0.3, -0.5, 0.81], [0.0; 3]),
+                ([1.0, 1.0, 1.0], [0.31, 0.77, 0.5]),
+                ([-0.2, 0.9, 0.1], [0.5, 0.0, 0.25]),
+            ] {
+                let s = min_spacing(v.spacing());
+                let lattice = Lattice::new(dims, v.spacing(), axis, s, s, phase).unwrap();
+                let (whole, rays) =
+                    block_counts(&sampler, &lattice, block, &Monitor::none()).unwrap();
+                let grid = Bricks::new(dims, size);
+                // The bricks shuffled and dealt into random groups, each counted apart.
+                let mut order: Vec<usize> = (0..grid.len()).collect();
+                for i in (1..order.len()).rev() {
+                    order.swap(i, next(i + 1));
+                }
+                let groups = 1 + next(order.len().min(7));
+                let mut sets = vec![Vec::new(); groups];
+                for b in order {
+                    sets[next(groups)].push(b);
+                }
+                let mut parts: Vec<PartialCounts> = sets
+                    .iter()
+                    .map(|set| counts_of_bricks(&sampler, &lattice, block, grid, set))
+                    .collect();
+                let at = format!("{dims:?} bricks of {size}, {bins} bins, L {block}, {axis:?}");
+                open += parts.iter().map(|p| p.fragments().len()).sum::<usize>();
+                let mut total = PartialCounts::new(bins, block);
+                while !parts.is_empty() {
+                    total.add(parts.swap_remove(next(parts.len())));
+                }
+                assert!(total.is_complete(), "{at}");
+                assert_eq!(total.rays, rays, "{at}");
+                for k in [1, block - 1, block] {
+                    assert_eq!(total.counts.table(k), whole.table(k), "{k}-blocks, {at}");
+                }
+            }
+        }
+    }
+    assert!(open > 10_000, "{open} pieces of rays stitched");
 }

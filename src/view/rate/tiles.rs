@@ -54,21 +54,45 @@ pub(super) struct Walker {
     pub(super) inner: i64,
     pub(super) tail: i64,
     pub(super) grid: bool,
+    /// Which ray it is, for a walk that keeps rays between common walks.
+    pub(super) id: usize,
+}
+
+impl Walker {
+    /// A walker with nothing to walk, to be filled in.
+    pub(super) fn idle() -> Self {
+        Self {
+            p: [0; 3],
+            bin: MIXED,
+            next: 0,
+            run: Run::default(),
+            inner: 0,
+            tail: 0,
+            grid: false,
+            id: 0,
+        }
+    }
 }
 
 /// Whether `x` is a whole number up to rounding.
-fn is_whole(x: f64) -> bool {
+pub(super) fn is_whole(x: f64) -> bool {
     (x - round_half_away(x) as f64).abs() < 1e-9
+}
+
+/// The bin of the sample at `p` (anywhere in the volume up to rounding), the voxel itself when
+/// the ray lies on the `grid`: what every walk counts there.
+#[inline]
+pub(super) fn sample_bin<T: Voxel>(sampler: &BinSampler<T>, p: [i64; 3], grid: bool) -> Option<u8> {
+    if grid {
+        sampler.voxel_bin(p)
+    } else {
+        sampler.bin_fixed(p)
+    }
 }
 
 /// One sample at `w`'s position (anywhere in the volume up to rounding) into its run.
 fn edge_sample<T: Voxel>(sampler: &BinSampler<T>, counts: &mut impl Counter, w: &mut Walker) {
-    let bin = if w.grid {
-        sampler.voxel_bin(w.p)
-    } else {
-        sampler.bin_fixed(w.p)
-    };
-    match bin {
+    match sample_bin(sampler, w.p, w.grid) {
         Some(b) => counts.push_to(&mut w.run, b),
         None => counts.end_run(&mut w.run),
     }
@@ -96,7 +120,7 @@ fn add(p: [i64; 3], step: [i64; 3]) -> [i64; 3] {
 }
 
 #[inline]
-fn advance(p: &mut [i64; 3], step: [i64; 3]) {
+pub(super) fn advance(p: &mut [i64; 3], step: [i64; 3]) {
     for m in 0..3 {
         p[m] += step[m];
     }
@@ -104,7 +128,7 @@ fn advance(p: &mut [i64; 3], step: [i64; 3]) {
 
 /// Where a ray's walk starts, in fixed point, and whether its samples lie on the voxel grid
 /// (`whole_step`: the lattice's step is whole): then they are the voxels themselves.
-fn ray_start(ray: &Ray, whole_step: bool) -> ([i64; 3], bool) {
+pub(super) fn ray_start(ray: &Ray, whole_step: bool) -> ([i64; 3], bool) {
     let start = ray.at(ray.k0);
     let grid = whole_step && start.iter().all(|&c| is_whole(c));
     let p = to_fixed(if grid {
@@ -129,11 +153,7 @@ pub fn ray_bins<T: Voxel>(
     let step = fixed_step(lattice);
     let bins = (ray.k0..=ray.k1)
         .map(|_| {
-            let bin = if grid {
-                sampler.voxel_bin(p)
-            } else {
-                sampler.bin_fixed(p)
-            };
+            let bin = sample_bin(sampler, p, grid);
             advance(&mut p, step);
             bin
         })
@@ -185,6 +205,7 @@ fn walk_tile<C: Counter, T: Voxel>(
                 inner: t1 - t0,
                 tail: n - t1,
                 grid,
+                id: 0,
             };
             // The samples before the inner span, one by one.
             for _ in 0..t0 {

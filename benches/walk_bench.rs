@@ -1,0 +1,136 @@
+//! The view search's walks side by side, and the floor they are held to: for each volume (body
+//! phantoms held as f32), the 21 axes of the paper's 42 viewpoints on the paper's lattice, walked
+//! by the tile walk and by the bricked walk (bricks of each size asked for; `sN` for about N³ cells shaped for the
+//! axis), in turns, and 21
+//! passes over the cell map in memory order counting 3-blocks of its rows as the walks count
+//! them (no interpolation, no mixed cells): the cost of reading the map 21 times. Prints the
+//! median seconds of each and its nanoseconds per voxel.
+//!
+//! `cargo bench --bench walk_bench -- [--sizes 256x256x415,512x512x512] [--bricks 64,s64]
+//! [--runs 3] [--no-tiles]`
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use slabscope::geometry::lattice::Lattice;
+use slabscope::measure::BlockCounts;
+use slabscope::progress::Monitor;
+use slabscope::view::{BinSampler, Walk, block_counts_by, icosphere};
+use slabscope::volume::phantom;
+
+fn arg(name: &str) -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1).cloned())
+}
+
+fn parse_dims(text: &str) -> Option<[usize; 3]> {
+    let v: Vec<usize> = text
+        .split('x')
+        .map(|t| t.parse().ok())
+        .collect::<Option<_>>()?;
+    v.try_into().ok()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// 21 passes over `cells` in memory order, rows of `nx` cells, counting 3-blocks into a table
+/// per thread; the blocks counted, so that the work is not optimized away.
+fn floor(cells: &[u8], nx: usize) -> u64 {
+    (0..21)
+        .map(|_| {
+            cells
+                .par_chunks(nx * 64)
+                .fold(
+                    || BlockCounts::new(32, 3),
+                    |mut counts, rows| {
+                        for row in rows.chunks(nx) {
+                            for &c in row {
+                                counts.push(c & 31);
+                            }
+                            counts.end_sequence();
+                        }
+                        counts
+                    },
+                )
+                .map(|counts| counts.blocks())
+                .sum::<u64>()
+        })
+        .sum()
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let sizes = arg("--sizes").unwrap_or_else(|| "256x256x415,512x512x512".into());
+    // A size `sN` is bricks of about N³ cells shaped for each axis.
+    let bricks: Vec<(usize, bool)> = arg("--bricks")
+        .unwrap_or_else(|| "64,s64".into())
+        .split(',')
+        .map(|b| {
+            Ok::<_, std::num::ParseIntError>((
+                b.trim_start_matches('s').parse()?,
+                b.starts_with('s'),
+            ))
+        })
+        .collect::<Result<_, _>>()?;
+    let runs: usize = arg("--runs").map_or(Ok(3), |r| r.parse())?;
+    let axes = icosphere::axes(1);
+    println!(
+        "threads: {}, {} axes, {runs} runs in turns, medians",
+        rayon::current_num_threads(),
+        axes.len()
+    );
+    println!(
+        "{:<14} {:<12} {:>9} {:>12}",
+        "volume", "walk", "s", "ns/voxel"
+    );
+    for text in sizes.split(',') {
+        let dims = parse_dims(text).ok_or_else(|| format!("--sizes: {text:?} is not NXxNYxNZ"))?;
+        let volume = phantom::body(dims, 1)?;
+        let sampler = BinSampler::new(&volume, volume.quantizer(32)?);
+        let mut walks = Vec::new();
+        if !std::env::args().any(|a| a == "--no-tiles") {
+            walks.push(("tiles".to_string(), Walk::Tiles { vector: true }));
+        }
+        for &(size, shaped) in &bricks {
+            let name = format!("bricks {}{size}", if shaped { "s" } else { "" });
+            walks.push((name, Walk::Bricks { size, shaped }));
+        }
+        let lattices: Vec<Lattice> = axes
+            .iter()
+            .map(|&a| Lattice::at_voxel_spacing(dims, volume.spacing(), a))
+            .collect::<Result<_, _>>()?;
+        let mut times = vec![Vec::new(); walks.len() + 1];
+        let mut check = vec![0u64; walks.len()];
+        for _ in 0..runs {
+            for (k, (_, walk)) in walks.iter().enumerate() {
+                let t = Instant::now();
+                let mut blocks = 0;
+                for lattice in &lattices {
+                    let (counts, _) =
+                        block_counts_by(&sampler, lattice, 3, *walk, &Monitor::none())?;
+                    blocks += counts.blocks();
+                }
+                times[k].push(t.elapsed().as_secs_f64());
+                check[k] = blocks;
+            }
+            let t = Instant::now();
+            std::hint::black_box(floor(sampler.cells(), dims[0]));
+            times[walks.len()].push(t.elapsed().as_secs_f64());
+        }
+        assert!(
+            check.iter().all(|&c| c == check[0]),
+            "every walk counts the same blocks"
+        );
+        let voxels = volume.len() as f64;
+        let names = walks.iter().map(|(n, _)| n.as_str()).chain(["floor"]);
+        for (name, t) in names.zip(times) {
+            let s = median(t);
+            println!("{text:<14} {name:<12} {s:>9.3} {:>12.2}", s * 1e9 / voxels);
+        }
+    }
+    Ok(())
+}

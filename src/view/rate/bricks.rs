@@ -1,0 +1,513 @@
+//! The bricked walk: the cell map visited brick by brick, and while a brick is in cache, every
+//! stretch of every ray of the lattice that crosses it walked. A ray carries its run (its last
+//! L-1 symbols) from brick to brick, so the counts are those of the tile walk, bit for bit.
+//!
+//! The tile walk takes a few hundred neighbouring rays through the whole volume together: along
+//! an oblique axis each step reads new cache lines, a few cells of each used, and once the cell
+//! map outgrows the cache every axis reads it from memory several times over. Here each brick
+//! of the map (a cube of [`BRICK_CELLS`] cells a side: 256 KiB, within a core's L2 cache) is
+//! read once per axis and pass over the rays, and all its cells are used while it is there.
+//!
+//! Bricks are visited in an order every ray meets them in (coordinates rising or falling with
+//! the ray's step, z slowest), so a ray's stretches come in order. Counted apart, any set of
+//! bricks gives [`PartialCounts`]: what its stretches determine, and the fragments of rays that
+//! enter or leave it, which [`PartialCounts::add`] stitches with the neighbours' — so bricks can
+//! be counted on any thread, in any order, in any process.
+
+use super::BinSampler;
+use super::tiles::{Walker, advance, is_whole, ray_start, sample_bin, scalar_walk, tile_rows};
+use crate::error::{Error, Result};
+use crate::geometry::lattice::{FIXED_BITS, Lattice};
+use crate::measure::{BlockCounts, Fragment, PartialCounts, ray_key};
+use crate::progress::Monitor;
+use crate::volume::Voxel;
+
+/// Cells along each side of a brick: 64³ one-byte cells, 256 KiB.
+pub const BRICK_CELLS: usize = 64;
+
+/// A grid of bricks over a volume's cells (the cell between voxels `x` and `x + 1` along each
+/// axis, one cell along an axis of one voxel), `size` cells along each axis, the last ones cut
+/// short.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bricks {
+    cells: [i64; 3],
+    size: [i64; 3],
+    count: [i64; 3],
+}
+
+impl Bricks {
+    /// The bricks of `size` cells a side over a volume of `dims` voxels.
+    pub fn new(dims: [usize; 3], size: usize) -> Self {
+        Self::shaped(dims, [size; 3])
+    }
+
+    /// The bricks of `size[m]` cells along axis `m` over a volume of `dims` voxels.
+    pub fn shaped(dims: [usize; 3], size: [usize; 3]) -> Self {
+        let cells = dims.map(|n| n.saturating_sub(1).max(1) as i64);
+        let size = size.map(|s| s.max(1) as i64);
+        Self {
+            cells,
+            size,
+            count: std::array::from_fn(|m| (cells[m] + size[m] - 1) / size[m]),
+        }
+    }
+
+    /// Bricks of about `cells³` cells for rays along `step`: longest along the axes the rays
+    /// run most along, so that a ray's stretch in a brick is long (its mean is the brick's
+    /// volume over its area seen along the ray, which this shape makes least), each side at
+    /// least a quarter of `cells`.
+    pub fn along(dims: [usize; 3], cells: usize, step: [i64; 3]) -> Self {
+        let norm = step
+            .iter()
+            .map(|&s| (s as f64).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            .max(1.0);
+        let w = step.map(|s| (s.unsigned_abs() as f64 / norm).max(0.25));
+        let k = (cells as f64).powi(3) / w.iter().product::<f64>();
+        let k = k.cbrt();
+        Self::shaped(dims, w.map(|w| ((k * w / 8.0).round() as usize).max(1) * 8))
+    }
+
+    /// Number of bricks.
+    pub fn len(&self) -> usize {
+        self.count.iter().product::<i64>() as usize
+    }
+
+    /// Always false: a volume has a cell.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn coords(&self, b: usize) -> [i64; 3] {
+        let b = b as i64;
+        let [nx, ny, _] = self.count;
+        [b % nx, (b / nx) % ny, b / (nx * ny)]
+    }
+
+    /// The cells of brick `b`: `lo..hi` along each axis.
+    pub fn cells_of(&self, b: usize) -> ([i64; 3], [i64; 3]) {
+        let c = self.coords(b);
+        let lo = std::array::from_fn(|m| c[m] * self.size[m]);
+        let hi = std::array::from_fn(|m| ((c[m] + 1) * self.size[m]).min(self.cells[m]));
+        (lo, hi)
+    }
+
+    /// The box of brick `b` in fixed-point index coordinates: `lo..hi` along each axis.
+    fn bounds(&self, b: usize) -> ([i64; 3], [i64; 3]) {
+        let (lo, hi) = self.cells_of(b);
+        (lo.map(|x| x << FIXED_BITS), hi.map(|x| x << FIXED_BITS))
+    }
+
+    /// The brick holding the sample at `p` (fixed point), clamped into the grid.
+    fn holding(&self, p: [i64; 3]) -> usize {
+        let c: [i64; 3] = std::array::from_fn(|m| {
+            (p[m].max(0) >> FIXED_BITS).min(self.cells[m] - 1) / self.size[m]
+        });
+        let [nx, ny, _] = self.count;
+        (c[0] + nx * (c[1] + ny * c[2])) as usize
+    }
+
+    /// Every brick, in an order in which each ray along `step` meets the bricks it crosses:
+    /// coordinates rising where the step rises and falling where it falls, z slowest.
+    pub fn sweep(&self, step: [i64; 3]) -> Vec<usize> {
+        let along = |m: usize| -> Vec<i64> {
+            let n = self.count[m];
+            if step[m] < 0 {
+                (0..n).rev().collect()
+            } else {
+                (0..n).collect()
+            }
+        };
+        let [nx, ny, _] = self.count;
+        let mut out = Vec::with_capacity(self.len());
+        for z in along(2) {
+            for y in along(1) {
+                for x in along(0) {
+                    out.push((x + nx * (y + ny * z)) as usize);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Where one ray of a band stands.
+struct Slot {
+    /// Sample 0's position, fixed point, and whether the samples are voxels.
+    p0: [i64; 3],
+    grid: bool,
+    /// Samples in all, and the inner span `t0..t1` (samples inside cells).
+    n: i64,
+    t0: i64,
+    t1: i64,
+    /// The next sample, and its position.
+    t: i64,
+    p: [i64; 3],
+    key: u64,
+    /// The fragment being counted.
+    open: Option<Fragment>,
+}
+
+/// The rays of a band of rows walked together, and per brick the rays whose next sample lies in
+/// it (by index in `slots`), in the order they were set up.
+struct Band {
+    slots: Vec<Slot>,
+    waiting: Vec<Vec<u32>>,
+}
+
+/// Exact `⌊a / b⌋` for `b > 0`.
+fn floor_div(a: i64, b: i64) -> i64 {
+    a.div_euclid(b)
+}
+
+/// How many samples from `p` on, `step` apart, stay in the box `lo..hi` (fixed point), where
+/// `p` lies in it.
+#[inline]
+fn steps_in(p: [i64; 3], step: [i64; 3], lo: [i64; 3], hi: [i64; 3]) -> i64 {
+    let mut n = i64::MAX;
+    for m in 0..3 {
+        let s = step[m];
+        let k = match s.signum() {
+            1 => floor_div(hi[m] - p[m] - 1, s) + 1,
+            -1 => floor_div(p[m] - lo[m], -s) + 1,
+            _ => continue,
+        };
+        n = n.min(k);
+    }
+    n
+}
+
+#[inline]
+fn at(p0: [i64; 3], step: [i64; 3], t: i64) -> [i64; 3] {
+    std::array::from_fn(|m| p0[m] + t * step[m])
+}
+
+/// The walk of one lattice brick by brick: what every band shares.
+struct BrickWalk<'a, T: Voxel> {
+    sampler: &'a BinSampler<'a, T>,
+    lattice: &'a Lattice,
+    bricks: Bricks,
+    block: usize,
+    step: [i64; 3],
+    /// Which bricks are walked (all when `None`).
+    member: Option<Vec<bool>>,
+}
+
+impl<'a, T: Voxel> BrickWalk<'a, T> {
+    fn new(
+        sampler: &'a BinSampler<'a, T>,
+        lattice: &'a Lattice,
+        block: usize,
+        bricks: Bricks,
+        member: Option<Vec<bool>>,
+    ) -> Self {
+        Self {
+            sampler,
+            lattice,
+            bricks,
+            block,
+            step: super::fixed_step(lattice),
+            member,
+        }
+    }
+
+    fn walked(&self, b: usize) -> bool {
+        self.member.as_ref().is_none_or(|m| m[b])
+    }
+
+    /// The rays of rows `j0..=j1`, each waiting in the brick of its first sample inside a cell
+    /// that is walked; rays with no sample inside a cell are counted whole into `out` if the
+    /// brick of their first sample is walked.
+    fn band(&self, (j0, j1): (i64, i64), out: &mut PartialCounts) -> Band {
+        let ((i0, i1), _) = self.lattice.ray_ranges();
+        let whole_step = self.lattice.step().iter().all(|&c| is_whole(c));
+        let spans = self.sampler.inner_spans(self.step);
+        let mut band = Band {
+            slots: Vec::new(),
+            waiting: vec![Vec::new(); self.bricks.len()],
+        };
+        for j in j0..=j1 {
+            let Some((a, b)) = self.lattice.row_span(j) else {
+                continue;
+            };
+            for i in a.max(i0)..=b.min(i1) {
+                let Some(ray) = self.lattice.ray(i, j) else {
+                    continue;
+                };
+                let (p0, grid) = ray_start(&ray, whole_step);
+                let n = ray.k1 - ray.k0 + 1;
+                let (t0, t1) = spans.of(p0, n);
+                let key = ray_key(i, j);
+                if t0 >= t1 {
+                    // No sample inside a cell: the whole ray with the brick of its first.
+                    if self.walked(self.bricks.holding(p0)) {
+                        let mut f = Fragment::new(key, 0);
+                        let mut p = p0;
+                        for _ in 0..n {
+                            f.push(&mut out.counts, sample_bin(self.sampler, p, grid));
+                            advance(&mut p, self.step);
+                        }
+                        out.rays += 1;
+                        let _ = f.close(&mut out.counts, true);
+                    }
+                    continue;
+                }
+                let mut slot = Slot {
+                    p0,
+                    grid,
+                    n,
+                    t0,
+                    t1,
+                    t: t0,
+                    p: at(p0, self.step, t0),
+                    key,
+                    open: None,
+                };
+                if let Some(b) = self.locate(&mut slot, out) {
+                    band.waiting[b].push(band.slots.len() as u32);
+                }
+                band.slots.push(slot);
+            }
+        }
+        band
+    }
+
+    /// The brick walked that holds `slot`'s next sample, moving the ray on past bricks not
+    /// walked (closing its fragment as it leaves them); `None` when its inner span has ended.
+    fn locate(&self, slot: &mut Slot, out: &mut PartialCounts) -> Option<usize> {
+        while slot.t < slot.t1 {
+            let b = self.bricks.holding(slot.p);
+            if self.walked(b) {
+                return Some(b);
+            }
+            if let Some(f) = slot.open.take() {
+                let left = f.close(&mut out.counts, false);
+                out.push_fragment(left);
+            }
+            let (lo, hi) = self.bricks.bounds(b);
+            slot.t += steps_in(slot.p, self.step, lo, hi);
+            slot.p = at(slot.p0, self.step, slot.t);
+        }
+        None
+    }
+
+    /// Walks `band`'s rays through the bricks `order` (the walked ones, in sweep order),
+    /// counting into `out`, and ends them.
+    fn walk(&self, band: &mut Band, order: &[usize], out: &mut PartialCounts) {
+        let (mut walkers, mut sorted, mut tally) = (Vec::new(), Vec::new(), Vec::new());
+        for &b in order {
+            let ids = std::mem::take(&mut band.waiting[b]);
+            if ids.is_empty() {
+                continue;
+            }
+            walkers.clear();
+            for &id in &ids {
+                if let Some(w) = self.enter(&mut band.slots[id as usize], b, out) {
+                    walkers.push(Walker {
+                        id: id as usize,
+                        ..w
+                    });
+                }
+            }
+            // Stretches of like lengths side by side: the walk eight at a time takes each group
+            // as many steps as its longest (stretches in a brick run from one sample to its
+            // diameter; every cell they read is in cache).
+            by_length(&mut walkers, &mut sorted, &mut tally);
+            common_walk(&mut sorted, self.step, self.sampler, &mut out.counts);
+            for w in &sorted {
+                let slot = &mut band.slots[w.id];
+                slot.p = w.p;
+                slot.t += w.inner;
+                if let Some(f) = slot.open.as_mut() {
+                    f.walked(w.inner as u64, w.run);
+                }
+            }
+            for &id in &ids {
+                if let Some(next) = self.locate(&mut band.slots[id as usize], out) {
+                    band.waiting[next].push(id);
+                }
+            }
+        }
+        // Rays end: the samples after the inner span where the ray reached its end here.
+        for slot in &mut band.slots {
+            let Some(mut f) = slot.open.take() else {
+                continue;
+            };
+            let last = slot.t == slot.t1;
+            if last {
+                let mut p = slot.p;
+                for _ in slot.t1..slot.n {
+                    f.push(&mut out.counts, sample_bin(self.sampler, p, slot.grid));
+                    advance(&mut p, self.step);
+                }
+            }
+            let left = f.close(&mut out.counts, last);
+            out.push_fragment(left);
+        }
+    }
+
+    /// The stretch of `slot`'s ray in brick `b`, where its next sample lies, to walk with the
+    /// others, after its fragment's head (taken one sample at a time); `None` when the stretch
+    /// was all head.
+    fn enter(&self, slot: &mut Slot, b: usize, out: &mut PartialCounts) -> Option<Walker> {
+        let f = slot.open.get_or_insert_with(|| {
+            let mut f = Fragment::new(slot.key, if slot.t == slot.t0 { 0 } else { slot.t as u64 });
+            if f.first {
+                out.rays += 1;
+                // The samples before the inner span.
+                let mut p = slot.p0;
+                for _ in 0..slot.t0 {
+                    f.push(&mut out.counts, sample_bin(self.sampler, p, slot.grid));
+                    advance(&mut p, self.step);
+                }
+            }
+            f
+        });
+        let (lo, hi) = self.bricks.bounds(b);
+        let mut m = steps_in(slot.p, self.step, lo, hi).min(slot.t1 - slot.t);
+        // The head of a fragment that does not start its ray, one sample at a time.
+        while m > 0 && f.in_head(self.block) {
+            f.push(&mut out.counts, sample_bin(self.sampler, slot.p, slot.grid));
+            advance(&mut slot.p, self.step);
+            slot.t += 1;
+            m -= 1;
+        }
+        (m > 0).then(|| Walker {
+            p: slot.p,
+            run: f.run(),
+            inner: m,
+            grid: slot.grid,
+            ..Walker::idle()
+        })
+    }
+}
+
+/// `walkers` moved into `sorted`, longest stretch first (a counting sort: the lengths are
+/// small numbers, bounded by a brick's diameter).
+fn by_length(walkers: &mut Vec<Walker>, sorted: &mut Vec<Walker>, tally: &mut Vec<usize>) {
+    let longest = walkers.iter().map(|w| w.inner).max().unwrap_or(0) as usize;
+    tally.clear();
+    tally.resize(longest + 2, 0);
+    for w in walkers.iter() {
+        tally[longest - w.inner as usize + 1] += 1;
+    }
+    for k in 1..tally.len() {
+        tally[k] += tally[k - 1];
+    }
+    sorted.clear();
+    sorted.resize_with(walkers.len(), Walker::idle);
+    for w in walkers.drain(..) {
+        let slot = &mut tally[longest - w.inner as usize];
+        sorted[*slot] = w;
+        *slot += 1;
+    }
+}
+
+/// The inner spans of `walkers` walked together, into `counts`: eight at a time with AVX2 on a
+/// dense table, else one by one.
+fn common_walk<T: Voxel>(
+    walkers: &mut [Walker],
+    step: [i64; 3],
+    sampler: &BinSampler<T>,
+    counts: &mut BlockCounts,
+) {
+    if walkers.is_empty() {
+        return;
+    }
+    match counts.dense() {
+        #[cfg(target_arch = "x86_64")]
+        Some(mut dense) if super::lanes::available(sampler) => {
+            #[allow(unsafe_code)]
+            // SAFETY: `lanes::available` found AVX2 on this processor.
+            unsafe {
+                super::lanes::walk(walkers, step, sampler, &mut dense);
+            }
+        }
+        Some(mut dense) => scalar_walk(walkers, step, sampler, &mut dense),
+        None => scalar_walk(walkers, step, sampler, counts),
+    }
+}
+
+/// Rows of tiles per band: about four bricks thick, so that few bricks are read by two bands.
+fn band_rows(lattice: &Lattice, size: usize) -> usize {
+    let rays = 4.0 * size as f64 * lattice.sample_spacing / lattice.ray_spacing;
+    let tile = tile_rows(lattice, 1)
+        .next()
+        .map_or(1, |(a, b)| (b - a + 1).max(1));
+    ((rays / tile as f64).ceil() as usize).max(1)
+}
+
+/// The block counts of every ray of `lattice`, and the rays that met the volume, by the bricked
+/// walk with bricks of `size` cells a side (or as many cells, shaped for the axis, when
+/// `shaped`): bands of rows of rays in parallel, each band's
+/// bricks in sweep order. One progress unit per row of tiles, as the tile walk reports.
+pub(super) fn bricked_counts<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattice: &Lattice,
+    block: usize,
+    (size, shaped): (usize, bool),
+    monitor: &Monitor,
+) -> Result<(BlockCounts, u64)> {
+    use rayon::prelude::*;
+    let bricks = if shaped {
+        Bricks::along(sampler.dims(), size, super::fixed_step(lattice))
+    } else {
+        Bricks::new(sampler.dims(), size)
+    };
+    let walk = BrickWalk::new(sampler, lattice, block, bricks, None);
+    let order = walk.bricks.sweep(walk.step);
+    let rows: Vec<(i64, i64)> = tile_rows(lattice, 1).collect();
+    let bands: Vec<&[(i64, i64)]> = rows.chunks(band_rows(lattice, size)).collect();
+    let empty = || PartialCounts::new(sampler.bins(), block);
+    let total = bands
+        .into_par_iter()
+        .try_fold(empty, |mut out, tiles| {
+            let js = (tiles[0].0, tiles[tiles.len() - 1].1);
+            let mut band = walk.band(js, &mut out);
+            walk.walk(&mut band, &order, &mut out);
+            monitor.advance(tiles.len() as u64)?;
+            Ok::<_, Error>(out)
+        })
+        .try_reduce(empty, |mut a, b| {
+            a.add(b);
+            Ok(a)
+        })?;
+    if !total.is_complete() {
+        return Err(Error::Degenerate(format!(
+            "the bricked walk left {} pieces of rays unjoined",
+            total.fragments().len()
+        )));
+    }
+    Ok((total.counts, total.rays))
+}
+
+/// The block counts of the bricks `set` of `bricks` (a grid over `sampler`'s volume) along
+/// `lattice`: what their stretches of rays determine, and the fragments of the rays that enter
+/// or leave them. The counts of all the bricks, added in any grouping and order, are those of
+/// [`block_counts`](super::block_counts), bit for bit.
+pub fn counts_of_bricks<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattice: &Lattice,
+    block: usize,
+    bricks: Bricks,
+    set: &[usize],
+) -> PartialCounts {
+    let mut member = vec![false; bricks.len()];
+    for &b in set {
+        if let Some(m) = member.get_mut(b) {
+            *m = true;
+        }
+    }
+    let walk = BrickWalk::new(sampler, lattice, block, bricks, Some(member));
+    let order: Vec<usize> = bricks
+        .sweep(walk.step)
+        .into_iter()
+        .filter(|&b| walk.walked(b))
+        .collect();
+    let mut out = PartialCounts::new(sampler.bins(), block);
+    let (_, js) = lattice.ray_ranges();
+    let mut band = walk.band(js, &mut out);
+    walk.walk(&mut band, &order, &mut out);
+    out
+}
