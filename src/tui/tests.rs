@@ -105,6 +105,7 @@ fn key(c: char) -> Event {
 }
 
 mod gain;
+mod keys;
 mod lesson;
 mod refine;
 mod tour;
