@@ -7,7 +7,7 @@ mod gain;
 mod keys;
 mod lesson;
 mod refine;
-mod tour;
+pub mod tour;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -101,7 +101,7 @@ pub struct App {
     /// The lesson's ray: its offset from the central one.
     ray: (i64, i64),
     /// The guided tour, when the app runs it.
-    pub tour: Option<crate::tui::tour::Tour>,
+    pub tour: Option<tour::Tour>,
     /// The pyramid level of the gain ranking shown or under way.
     gain_level: usize,
 }

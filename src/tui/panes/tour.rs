@@ -4,9 +4,9 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::widgets::{Paragraph, Widget, Wrap};
 
+use crate::tui::app::tour::Tour;
 use crate::tui::keymap;
 use crate::tui::theme::Theme;
-use crate::tui::tour::Tour;
 
 /// The page shown.
 pub struct TourPage<'a> {

@@ -6,9 +6,9 @@ use std::collections::HashSet;
 
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 
+use crate::tui::app::tour::PAGES;
 use crate::tui::event::Action;
 use crate::tui::keymap::{self, BINDINGS, Binding, Key, PROMPT, TOUR};
-use crate::tui::tour::PAGES;
 
 /// The key a word names (`Tab`, `PgUp`, `Ctrl-C`, …), if it names one.
 fn named(word: &str) -> Option<Key> {
