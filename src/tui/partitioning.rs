@@ -26,7 +26,7 @@ pub struct Partitioning {
     pub level: usize,
     /// The same histories at full resolution, computed in the background to replace a
     /// preview's.
-    pub refining: Load<()>,
+    pub upgrading: Load<()>,
     /// The slab count asked for, for histories still to come.
     slabs: usize,
     generation: u64,
@@ -40,7 +40,7 @@ pub enum Finished {
     /// They are shown (or their error is).
     Shown,
     /// Full-resolution histories replaced a preview's.
-    Refined,
+    Upgraded,
 }
 
 impl Partitioning {
@@ -58,7 +58,7 @@ impl Partitioning {
             threshold,
             stack,
             level: 0,
-            refining: Load::Idle,
+            upgrading: Load::Idle,
             slabs,
             generation: 0,
         }
@@ -91,18 +91,18 @@ impl Partitioning {
         self.axis = Some(axis);
         self.generation += 1;
         self.histories = Load::started("slicing");
-        (self.level, self.refining) = (level, Load::Idle);
+        (self.level, self.upgrading) = (level, Load::Idle);
         Effect::Analyze(self.generation, axis, self.stack.clone(), level)
     }
 
     /// Starts the histories shown, a preview's, again at full resolution; they stay shown until
     /// the new ones replace them.
-    pub fn refine(&mut self) -> Option<Effect> {
+    pub fn upgrade(&mut self) -> Option<Effect> {
         let axis = self
             .axis
             .filter(|_| self.level > 0 && self.ready().is_some())?;
         self.generation += 1;
-        self.refining = Load::started("slicing");
+        self.upgrading = Load::started("slicing");
         Some(Effect::Analyze(
             self.generation,
             axis,
@@ -111,9 +111,9 @@ impl Partitioning {
         ))
     }
 
-    /// Whether a preview's histories are shown and no refinement has started or failed.
-    pub fn awaits_refinement(&self) -> bool {
-        self.level > 0 && self.ready().is_some() && matches!(self.refining, Load::Idle)
+    /// Whether a preview's histories are shown and no upgrade has started or failed.
+    pub fn awaits_upgrade(&self) -> bool {
+        self.level > 0 && self.ready().is_some() && matches!(self.upgrading, Load::Idle)
     }
 
     /// Remembers the slab count shown, for the histories that come next.
@@ -133,7 +133,7 @@ impl Partitioning {
         if generation != self.generation {
             return Finished::Stale;
         }
-        let refined = self.refining.running() && level == 0;
+        let upgraded = self.upgrading.running() && level == 0;
         match result {
             Ok(h) => {
                 self.keep_slab_count();
@@ -141,13 +141,13 @@ impl Partitioning {
                     Some(t) => h.position_for_threshold(self.method, t),
                     None => h.position_for(self.method, self.slabs),
                 };
-                (self.histories, self.level, self.refining) = (Load::Ready(h), level, Load::Idle);
+                (self.histories, self.level, self.upgrading) = (Load::Ready(h), level, Load::Idle);
             }
-            Err(e) if refined => self.refining = Load::Failed(e),
+            Err(e) if upgraded => self.upgrading = Load::Failed(e),
             Err(e) => self.histories = Load::Failed(e),
         }
-        if refined {
-            Finished::Refined
+        if upgraded {
+            Finished::Upgraded
         } else {
             Finished::Shown
         }
@@ -155,8 +155,8 @@ impl Partitioning {
 
     /// Records the progress of the computation running on pyramid level `level`.
     pub fn progress(&mut self, p: Progress, level: usize) {
-        if self.refining.running() && level == 0 {
-            self.refining = Load::Running(p);
+        if self.upgrading.running() && level == 0 {
+            self.upgrading = Load::Running(p);
         } else if self.histories.running() && level == self.level {
             self.histories = Load::Running(p);
         }

@@ -107,8 +107,8 @@ fn key(c: char) -> Event {
 mod gain;
 mod keys;
 mod lesson;
-mod refine;
 mod tour;
+mod upgrade;
 
 #[test]
 fn the_analysis_opens_on_four_top_down_slabs() {

@@ -7,7 +7,7 @@ use slabscope::analysis::{AxisBy, GainRanking};
 use slabscope::geometry::AxisChoice;
 
 use super::App;
-use super::refine::{axis_text, same};
+use super::upgrade::{axis_text, same};
 use crate::tui::event::{Effect, Load};
 
 impl App {
@@ -41,7 +41,7 @@ impl App {
 
     /// The pyramid level of the views shown: a preview's until full resolution's are in.
     fn views_level(&self) -> usize {
-        match &self.refine {
+        match &self.upgrade {
             Some(r) if !matches!(r.views, Load::Ready(())) => r.level,
             _ => 0,
         }

@@ -205,12 +205,12 @@ impl App {
         if self.lesson.open {
             return self.toggle_lesson();
         }
-        let refining = self.cancel_refinement();
+        let upgrading = self.cancel_upgrade();
         let busy = self.views.views.running()
             || self.part.histories.running()
             || self.preview.image.running()
             || self.export.running();
-        if !busy && !refining {
+        if !busy && !upgrading {
             return vec![];
         }
         if self.views.views.running() {
@@ -220,7 +220,7 @@ impl App {
             self.part.histories = Load::Failed("cancelled".into());
         }
         self.export = Load::Idle;
-        self.status.message = Some(if refining {
+        self.status.message = Some(if upgrading {
             "cancelled: the preview stays (Enter on an axis computes it again)".into()
         } else {
             "cancelled".into()

@@ -6,8 +6,8 @@
 mod gain;
 mod keys;
 mod lesson;
-mod refine;
 pub mod tour;
+mod upgrade;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -94,8 +94,8 @@ pub struct App {
     pub files: Option<FilesPane>,
     /// The screen, for a fresh start on another volume.
     screen: Screen,
-    /// On a large volume, the preview and its refinement at full resolution.
-    pub refine: Option<refine::Refinement>,
+    /// On a large volume, the preview and its upgrade to full resolution.
+    pub upgrade: Option<upgrade::Upgrade>,
     /// The lesson: the numbers behind the selected viewpoint or the step.
     pub lesson: LessonPane,
     /// The lesson's ray: its offset from the central one.
@@ -128,7 +128,7 @@ impl App {
             export: Load::Idle,
             files: None,
             screen: kept,
-            refine: None,
+            upgrade: None,
             lesson: LessonPane::new(theme),
             ray: (0, 0),
             tour: None,
@@ -305,7 +305,7 @@ impl App {
             }
             JobMsg::Preview(volume, notes) => self.on_preview(&volume, &notes),
             JobMsg::Coarse(volume) => {
-                if let Some(r) = self.refine.as_mut() {
+                if let Some(r) = self.upgrade.as_mut() {
                     r.coarse = Some(volume);
                 }
                 vec![]
@@ -353,9 +353,9 @@ impl App {
     }
 
     /// A volume loaded: the view search starts, and the partition along the axis asked for;
-    /// or the file's preview level shows, and is refined.
+    /// or the file's preview level shows, and is upgraded.
     fn on_loaded(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
-        if self.refine.as_ref().is_some_and(|r| r.from_file) {
+        if self.upgrade.as_ref().is_some_and(|r| r.from_file) {
             return self.adopt(volume, notes);
         }
         self.status.message = notes.first().cloned();
@@ -363,7 +363,7 @@ impl App {
             self.status.message = Some(format!("{heavy}: it may take long; Esc cancels it"));
         }
         let level = crate::tui::preview_level(&volume);
-        self.refine = (level > 0).then(|| refine::Refinement::new(level, volume.dims()));
+        self.upgrade = (level > 0).then(|| upgrade::Upgrade::new(level, volume.dims()));
         self.volume = Load::Ready(Arc::clone(&volume));
         self.begin(&volume, level)
     }
@@ -394,7 +394,7 @@ impl App {
     fn on_progress(&mut self, job: Job, p: Progress) {
         match job {
             Job::Load if self.volume.running() => self.volume = Load::Running(p),
-            Job::Views(0) if self.refine.is_some() => self.refine_progress(p),
+            Job::Views(0) if self.upgrade.is_some() => self.upgrade_progress(p),
             Job::Views(_) if self.views.views.running() => self.views.views = Load::Running(p),
             Job::Analysis(level) => self.part.progress(p, level),
             Job::Export if self.export.running() => self.export = Load::Running(p),
