@@ -166,7 +166,7 @@ pub fn run(options: Options) -> Result<()> {
         // The user saw why; the exit status says so too.
         match &app.volume {
             // A folder's volumes are browsed: one that fails is a line in the list.
-            event::Load::Failed(e) if app.files.is_none() => bail!("{e}"),
+            event::Task::Failed(e) if app.files.is_none() => bail!("{e}"),
             _ => Ok(()),
         }
     })();

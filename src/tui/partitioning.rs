@@ -6,12 +6,12 @@ use std::sync::Arc;
 use slabscope::partition::{Method, Slab, StackParams, Stop, slab_text};
 use slabscope::{Histories, Progress};
 
-use super::event::{Effect, Load};
+use super::event::{Effect, Task};
 
 /// The partition being stepped through.
 pub struct Partitioning {
     /// The histories along the axis.
-    pub histories: Load<Arc<Histories>>,
+    pub histories: Task<Arc<Histories>>,
     /// The axis being partitioned.
     pub axis: Option<[f64; 3]>,
     /// Partition method.
@@ -26,7 +26,7 @@ pub struct Partitioning {
     pub level: usize,
     /// The same histories at full resolution, computed in the background to replace a
     /// preview's.
-    pub upgrading: Load<()>,
+    pub upgrading: Task<()>,
     /// The slab count asked for, for histories still to come.
     slabs: usize,
     generation: u64,
@@ -51,14 +51,14 @@ impl Partitioning {
             Stop::Threshold(t) => (4, Some(t)),
         };
         Self {
-            histories: Load::Idle,
+            histories: Task::Idle,
             axis: None,
             method,
             position: slabs.saturating_sub(1),
             threshold,
             stack,
             level: 0,
-            upgrading: Load::Idle,
+            upgrading: Task::Idle,
             slabs,
             generation: 0,
         }
@@ -90,8 +90,8 @@ impl Partitioning {
         self.keep_slab_count();
         self.axis = Some(axis);
         self.generation += 1;
-        self.histories = Load::started("slicing");
-        (self.level, self.upgrading) = (level, Load::Idle);
+        self.histories = Task::started("slicing");
+        (self.level, self.upgrading) = (level, Task::Idle);
         Effect::Analyze(self.generation, axis, self.stack.clone(), level)
     }
 
@@ -102,7 +102,7 @@ impl Partitioning {
             .axis
             .filter(|_| self.level > 0 && self.ready().is_some())?;
         self.generation += 1;
-        self.upgrading = Load::started("slicing");
+        self.upgrading = Task::started("slicing");
         Some(Effect::Analyze(
             self.generation,
             axis,
@@ -113,7 +113,7 @@ impl Partitioning {
 
     /// Whether a preview's histories are shown and no upgrade has started or failed.
     pub fn awaits_upgrade(&self) -> bool {
-        self.level > 0 && self.ready().is_some() && matches!(self.upgrading, Load::Idle)
+        self.level > 0 && self.ready().is_some() && matches!(self.upgrading, Task::Idle)
     }
 
     /// Remembers the slab count shown, for the histories that come next.
@@ -141,10 +141,10 @@ impl Partitioning {
                     Some(t) => h.position_for_threshold(self.method, t),
                     None => h.position_for(self.method, self.slabs),
                 };
-                (self.histories, self.level, self.upgrading) = (Load::Ready(h), level, Load::Idle);
+                (self.histories, self.level, self.upgrading) = (Task::Ready(h), level, Task::Idle);
             }
-            Err(e) if upgraded => self.upgrading = Load::Failed(e),
-            Err(e) => self.histories = Load::Failed(e),
+            Err(e) if upgraded => self.upgrading = Task::Failed(e),
+            Err(e) => self.histories = Task::Failed(e),
         }
         if upgraded {
             Finished::Upgraded
@@ -156,9 +156,9 @@ impl Partitioning {
     /// Records the progress of the computation running on pyramid level `level`.
     pub fn progress(&mut self, p: Progress, level: usize) {
         if self.upgrading.running() && level == 0 {
-            self.upgrading = Load::Running(p);
+            self.upgrading = Task::Running(p);
         } else if self.histories.running() && level == self.level {
-            self.histories = Load::Running(p);
+            self.histories = Task::Running(p);
         }
     }
 

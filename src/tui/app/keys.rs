@@ -6,7 +6,7 @@ use slabscope::render::{Colormap, Gap, Mode, Preset};
 use slabscope::volume::background::BackgroundRule;
 
 use super::{App, Pane, centre};
-use crate::tui::event::{Action, Ask, Effect, Load};
+use crate::tui::event::{Action, Ask, Effect, Task};
 use crate::tui::panes::status::{Prompt, settings_text};
 
 impl App {
@@ -214,12 +214,12 @@ impl App {
             return vec![];
         }
         if self.views.views.running() {
-            self.views.views = Load::Failed("cancelled".into());
+            self.views.views = Task::Failed("cancelled".into());
         }
         if self.part.histories.running() {
-            self.part.histories = Load::Failed("cancelled".into());
+            self.part.histories = Task::Failed("cancelled".into());
         }
-        self.export = Load::Idle;
+        self.export = Task::Idle;
         self.status.message = Some(if upgrading {
             "cancelled: the preview stays (Enter on an axis computes it again)".into()
         } else {

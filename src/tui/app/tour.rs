@@ -9,7 +9,7 @@ use slabscope::Histories;
 use slabscope::partition::Method;
 
 use super::{App, Pane};
-use crate::tui::event::{Effect, Load};
+use crate::tui::event::{Effect, Task};
 
 /// The tour's place: the page shown, and whether the panes were set for it (they are once the
 /// page's data is in).
@@ -252,7 +252,7 @@ impl App {
         self.part.set_threshold(None);
         if self.lesson.open != s.lesson {
             self.lesson.open = s.lesson;
-            (self.lesson.subject, self.lesson.lesson) = (None, Load::Idle);
+            (self.lesson.subject, self.lesson.lesson) = (None, Task::Idle);
         }
         self.ray = (0, 0);
         if let Some(t) = self.tour.as_mut() {

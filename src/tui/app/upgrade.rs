@@ -10,7 +10,7 @@ use slabscope::partition::Slab;
 use slabscope::{Histories, Progress, ViewSearch, Volume};
 
 use super::App;
-use crate::tui::event::{Effect, Load};
+use crate::tui::event::{Effect, Task};
 use crate::tui::partitioning::Finished;
 
 /// A preview being upgraded to full resolution.
@@ -22,7 +22,7 @@ pub struct Upgrade {
     /// The preview's volume, once built.
     pub coarse: Option<Arc<Volume>>,
     /// The full-resolution view search: not started until a preview's histories show.
-    pub views: Load<()>,
+    pub views: Task<()>,
     /// Whether the axis is the view search's best rather than the user's: the full search's
     /// best then takes its place.
     pub auto_axis: bool,
@@ -43,7 +43,7 @@ impl Upgrade {
             level,
             factor: longest.div_ceil(n),
             coarse: None,
-            views: Load::Idle,
+            views: Task::Idle,
             auto_axis: false,
             from_file: false,
         }
@@ -56,7 +56,7 @@ impl Upgrade {
             level: level.index,
             factor: level.factor.into_iter().max().unwrap_or(1),
             coarse: Some(coarse),
-            views: Load::Idle,
+            views: Task::Idle,
             auto_axis: false,
             from_file: true,
         }
@@ -94,7 +94,7 @@ impl App {
         if let Some(heavy) = self.params.heavy_work(volume.dims(), volume.spacing()) {
             self.status.message = Some(format!("{heavy}: it may take long; Esc cancels it"));
         }
-        self.volume = Load::Ready(volume);
+        self.volume = Task::Ready(volume);
         let effects = self.start_upgrade();
         self.sync_status();
         effects
@@ -118,7 +118,7 @@ impl App {
     /// The pyramid level of what is shown: the histories', or before any the preview's.
     pub(super) fn shown_level(&self) -> usize {
         match self.part.histories {
-            Load::Idle => self.first_level(),
+            Task::Idle => self.first_level(),
             _ => self.part.level,
         }
     }
@@ -150,7 +150,7 @@ impl App {
         let mut effects = vec![];
         // Views that come after the gain ranking carry its scores too.
         let result = result.map(|mut views| {
-            if let Load::Ready(g) = &self.views.gain
+            if let Task::Ready(g) = &self.views.gain
                 && self.gain_fits(level)
             {
                 g.annotate(&mut views);
@@ -162,9 +162,9 @@ impl App {
                 let best = views.best().axis;
                 let previous = self.views.views.ready().map(|v| v.best().axis);
                 self.views.row = self.views.row.min(views.views.len().saturating_sub(1));
-                self.views.views = Load::Ready(*views);
+                self.views.views = Task::Ready(*views);
                 let upgrade = self.upgrade.as_mut().expect("full is an upgrade");
-                upgrade.views = Load::Ready(());
+                upgrade.views = Task::Ready(());
                 let moved = upgrade.auto_axis
                     && !self.gain_picks()
                     && self.part.axis.is_some_and(|a| !same(a, best));
@@ -186,7 +186,7 @@ impl App {
             }
             Ok(views) => {
                 let best = views.best().axis;
-                self.views.views = Load::Ready(*views);
+                self.views.views = Task::Ready(*views);
                 self.views.row = 0;
                 if self.part.axis.is_none() && !self.gain_picks() {
                     if let Some(r) = self.upgrade.as_mut() {
@@ -197,11 +197,11 @@ impl App {
             }
             Err(e) if full => {
                 if let Some(r) = self.upgrade.as_mut() {
-                    r.views = Load::Failed(e.clone());
+                    r.views = Task::Failed(e.clone());
                 }
                 self.say_failed(&e);
             }
-            Err(e) => self.views.views = Load::Failed(e),
+            Err(e) => self.views.views = Task::Failed(e),
         }
         self.sync();
         effects
@@ -220,14 +220,14 @@ impl App {
             Finished::Stale => return vec![],
             Finished::Shown => {}
             Finished::Upgraded => match (&before, self.part.ready(), &self.part.upgrading) {
-                (Some((preview, shown)), Some(full), Load::Idle) => {
+                (Some((preview, shown)), Some(full), Task::Idle) => {
                     let full = Arc::clone(full);
                     let now = self.part.slabs().unwrap_or_default();
                     let words = compare((preview, shown), (&full, &now), shift, self.final_words());
                     self.status.message = Some(words);
                     self.carry_over(preview, &full, shift);
                 }
-                (_, _, Load::Failed(e)) => {
+                (_, _, Task::Failed(e)) => {
                     let e = e.clone();
                     self.say_failed(&e);
                 }
@@ -247,9 +247,9 @@ impl App {
         if self.part.awaits_upgrade()
             && self.volume.ready().is_some()
             && let Some(r) = self.upgrade.as_mut()
-            && matches!(r.views, Load::Idle)
+            && matches!(r.views, Task::Idle)
         {
-            r.views = Load::started("view search");
+            r.views = Task::started("view search");
             effects.push(Effect::SearchViews(self.params.view.clone(), 0));
         }
         effects.extend(self.upgrade_histories());
@@ -262,7 +262,7 @@ impl App {
         let Some(r) = &self.upgrade else {
             return vec![];
         };
-        let settled = !r.auto_axis || matches!(r.views, Load::Ready(()));
+        let settled = !r.auto_axis || matches!(r.views, Task::Ready(()));
         if !(settled && self.part.awaits_upgrade() && self.volume.ready().is_some()) {
             return vec![];
         }
@@ -272,7 +272,7 @@ impl App {
     /// The progress of the full-resolution view search.
     pub(super) fn upgrade_progress(&mut self, p: Progress) {
         if let Some(r) = self.upgrade.as_mut().filter(|r| r.views.running()) {
-            r.views = Load::Running(p);
+            r.views = Task::Running(p);
         }
     }
 
@@ -303,11 +303,11 @@ impl App {
     pub(super) fn cancel_upgrade(&mut self) -> bool {
         let mut any = false;
         if let Some(r) = self.upgrade.as_mut().filter(|r| r.views.running()) {
-            r.views = Load::Failed("cancelled".into());
+            r.views = Task::Failed("cancelled".into());
             any = true;
         }
         if self.part.upgrading.running() {
-            self.part.upgrading = Load::Failed("cancelled".into());
+            self.part.upgrading = Task::Failed("cancelled".into());
             any = true;
         }
         any
@@ -343,9 +343,9 @@ impl App {
             .and_then(|v| v.level().factor.into_iter().max())
             .unwrap_or(1);
         let label = (self.shown_level() > 0).then(|| {
-            let stopped = matches!(self.volume, Load::Failed(_))
-                || matches!(r.views, Load::Failed(_))
-                || matches!(self.part.upgrading, Load::Failed(_));
+            let stopped = matches!(self.volume, Task::Failed(_))
+                || matches!(r.views, Task::Failed(_))
+                || matches!(self.part.upgrading, Task::Failed(_));
             format!(
                 "preview: 1/{} resolution{}{}",
                 r.factor * base,
@@ -368,7 +368,7 @@ impl App {
             r.views.status(),
             self.part.upgrading.status(),
         ] {
-            if let Load::Running(p) = load {
+            if let Task::Running(p) = load {
                 gauges.push(p);
             }
         }

@@ -8,7 +8,7 @@ use slabscope::volume::phantom;
 use slabscope::{AnalysisParams, Histories, Monitor, Scope, ViewParams, ViewSearch, Volume};
 
 use crate::tui::app::{App, Screen};
-use crate::tui::event::{Action, Effect, JobMsg, Load};
+use crate::tui::event::{Action, Effect, JobMsg, Task};
 
 /// A volume just over the preview's size, its preview level, the preview's view search and
 /// both resolutions' histories along z.
@@ -205,7 +205,7 @@ fn escape_cancels_full_resolution_and_the_preview_stays() {
     // The cancelled search's late answer changes nothing.
     let effects = job(&mut app, JobMsg::Views(0, Err("cancelled".into())));
     assert!(effects.is_empty());
-    assert!(matches!(app.views.views, Load::Ready(_)));
+    assert!(matches!(app.views.views, Task::Ready(_)));
     // Nor what Esc said (the answer may come before or after the key: tmux saw both).
     let said = app.status.message.clone().unwrap_or_default();
     assert!(said.starts_with("cancelled: the preview stays"), "{said}");
@@ -342,6 +342,6 @@ fn a_level_0_beyond_the_budget_starts_afresh_without_the_file_preview() {
         "{effects:?}"
     );
     assert!(app.upgrade.is_none());
-    assert!(matches!(app.views.views, Load::Running(_)));
+    assert!(matches!(app.views.views, Task::Running(_)));
     assert_eq!(app.status.resolution, None);
 }
