@@ -74,7 +74,7 @@ fn open_tui(args: TuiArgs, tour: bool) -> anyhow::Result<u8> {
 }
 
 fn main() -> ExitCode {
-    slabscope::volume::io::mapped::install_fault_handler();
+    slabscope::volume::mapped::install_fault_handler();
     let args = Cli::parse();
     let result = match args.command {
         Some(Command::Cli(command)) => cli::run(command),

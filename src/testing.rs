@@ -30,5 +30,7 @@ impl Lcg {
     }
 }
 
+/// The circle test: no two files import each other.
+mod circles;
 /// The layer test: imports against the layer order of the design.
 mod layers;

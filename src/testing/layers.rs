@@ -8,9 +8,9 @@ use std::path::Path;
 /// A file of the crate: its path under `src/` (with `/` between components) and its code with
 /// comments and the contents of string and character literals blanked out, so that only real
 /// paths are read.
-struct Source {
-    path: String,
-    code: String,
+pub(super) struct Source {
+    pub(super) path: String,
+    pub(super) code: String,
 }
 
 /// One path to one of our modules: the crate it goes through (`crate` or `slabscope`), the first
@@ -48,7 +48,7 @@ fn layer_lines(design: &str) -> Option<BTreeMap<String, usize>> {
 
 /// `text` with comments removed and string and character literals emptied (`"…"` becomes
 /// `""`), so that braces and paths inside them are not read as code.
-fn code_only(text: &str) -> String {
+pub(super) fn code_only(text: &str) -> String {
     let c: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len());
     let mut i = 0;
@@ -84,7 +84,7 @@ fn skipped(c: &[char], i: usize) -> Option<(usize, &'static str)> {
     }
 }
 
-fn is_ident(c: char) -> bool {
+pub(super) fn is_ident(c: char) -> bool {
     c.is_alphanumeric() || c == '_'
 }
 
@@ -146,7 +146,7 @@ fn char_literal_end(c: &[char], i: usize) -> Option<usize> {
 
 /// The byte ranges of `code` that only tests compile: each item after `#[cfg(test)]`, to its
 /// `;` or its closing brace.
-fn test_ranges(code: &str) -> Vec<(usize, usize)> {
+pub(super) fn test_ranges(code: &str) -> Vec<(usize, usize)> {
     let bytes = code.as_bytes();
     let mut ranges = Vec::new();
     for (start, _) in code.match_indices("#[cfg(test)]") {
@@ -391,7 +391,7 @@ fn violations(sources: &[Source], line: BTreeMap<String, usize>) -> (BTreeSet<St
 }
 
 /// Every `.rs` file under `dir`, its path relative to `root`, sorted.
-fn rust_files(root: &Path, dir: &Path, out: &mut Vec<Source>) {
+pub(super) fn rust_files(root: &Path, dir: &Path, out: &mut Vec<Source>) {
     let mut entries: Vec<_> = std::fs::read_dir(dir)
         .expect("src/ is readable")
         .map(|e| e.expect("src/ is readable").path())

@@ -23,7 +23,7 @@ pub enum Event {
 }
 
 /// Something computed in the background: not asked for yet, under way, done, or failed.
-pub enum Load<T> {
+pub enum Task<T> {
     /// Not asked for.
     Idle,
     /// Under way, with its phase and the fraction done.
@@ -34,7 +34,7 @@ pub enum Load<T> {
     Failed(String),
 }
 
-impl<T> Load<T> {
+impl<T> Task<T> {
     /// Under way, at the start of `phase`.
     pub fn started(phase: &'static str) -> Self {
         Self::Running(Progress {
@@ -57,12 +57,12 @@ impl<T> Load<T> {
     }
 
     /// The same state without the value, for a pane that shows only the gauge or the error.
-    pub fn status(&self) -> Load<()> {
+    pub fn status(&self) -> Task<()> {
         match self {
-            Self::Idle => Load::Idle,
-            Self::Running(p) => Load::Running(*p),
-            Self::Ready(_) => Load::Ready(()),
-            Self::Failed(e) => Load::Failed(e.clone()),
+            Self::Idle => Task::Idle,
+            Self::Running(p) => Task::Running(*p),
+            Self::Ready(_) => Task::Ready(()),
+            Self::Failed(e) => Task::Failed(e.clone()),
         }
     }
 }

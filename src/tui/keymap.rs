@@ -1,110 +1,311 @@
-//! Keys to actions. While a prompt is open, keys type into it.
+//! The keys, written once: each mode's table of bindings (keys, what they do in words, and the
+//! action of each key), from which [`action`] answers a key, the help overlay ([`help`]) and the
+//! tour's hints ([`TOUR`]) are made, and against which a test checks docs/tui.md's key table.
+//! While a prompt is open, keys type into it.
 
 use crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
 use super::event::{Action, Ask};
 
-/// The action of `key`, if any; `typing` when a prompt is open, `touring` in the tour (where
-/// Space and → turn to the next page and ← to the one before).
+/// A key: its code, and whether Ctrl is held (a key bound without Ctrl answers with any
+/// modifier).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Key {
+    /// The key's code.
+    pub code: KeyCode,
+    /// Whether it is bound with Ctrl held.
+    pub ctrl: bool,
+}
+
+/// A key bound and its action (a function, as an action is made anew each time).
+pub type Bound = (Key, fn() -> Action);
+
+/// One row of a table of bindings: its keys as the help shows them, what they do in words, and
+/// the action of each key bound (the shown ones and any alias, such as `=` for `+`).
+pub struct Binding {
+    /// The keys, as the help shows them.
+    pub keys: &'static str,
+    /// What they do, in words.
+    pub help: &'static str,
+    /// Each key bound and its action.
+    pub does: &'static [Bound],
+}
+
+const fn ch(c: char) -> Key {
+    code(KeyCode::Char(c))
+}
+
+const fn code(code: KeyCode) -> Key {
+    Key { code, ctrl: false }
+}
+
+const fn ctrl(c: char) -> Key {
+    Key {
+        code: KeyCode::Char(c),
+        ctrl: true,
+    }
+}
+
+const fn row(keys: &'static str, help: &'static str, does: &'static [Bound]) -> Binding {
+    Binding { keys, help, does }
+}
+
+/// The keys of the panes, in the order the help lists them.
+pub const BINDINGS: &[Binding] = &[
+    row(
+        "Tab / S-Tab",
+        "next / previous pane",
+        &[
+            (code(KeyCode::Tab), || Action::Focus(1)),
+            (code(KeyCode::BackTab), || Action::Focus(-1)),
+        ],
+    ),
+    row(
+        "↑↓←→ hjkl",
+        "move in the pane: axis, slab, slice, pointer",
+        &[
+            (code(KeyCode::Up), || Action::Move(-1)),
+            (ch('k'), || Action::Move(-1)),
+            (code(KeyCode::Down), || Action::Move(1)),
+            (ch('j'), || Action::Move(1)),
+            (code(KeyCode::Left), || Action::Sideways(-1)),
+            (ch('h'), || Action::Sideways(-1)),
+            (code(KeyCode::Right), || Action::Sideways(1)),
+            (ch('l'), || Action::Sideways(1)),
+        ],
+    ),
+    row(
+        "Enter",
+        "partition along the selected axis",
+        &[(code(KeyCode::Enter), || Action::Select)],
+    ),
+    row(
+        "a",
+        "type an axis: x, y, z or DX,DY,DZ",
+        &[(ch('a'), || Action::Ask(Ask::Axis))],
+    ),
+    row(
+        "m",
+        "method: top-down, bottom-up, optimal",
+        &[(ch('m'), || Action::CycleMethod)],
+    ),
+    row(
+        "n p  . ,",
+        "one split or merge forward / back",
+        &[
+            (ch('n'), || Action::Step(1)),
+            (ch('p'), || Action::Step(-1)),
+            (ch('.'), || Action::Step(1)),
+            (ch(','), || Action::Step(-1)),
+        ],
+    ),
+    row(
+        "Home End",
+        "start / end of the history",
+        &[
+            (code(KeyCode::Home), || Action::StepTo(false)),
+            (code(KeyCode::End), || Action::StepTo(true)),
+        ],
+    ),
+    row(
+        "+ -",
+        "one slab more / fewer",
+        &[
+            (ch('+'), || Action::Slabs(1)),
+            (ch('-'), || Action::Slabs(-1)),
+            (ch('='), || Action::Slabs(1)),
+            (ch('_'), || Action::Slabs(-1)),
+        ],
+    ),
+    row(
+        "t",
+        "threshold (empty clears)",
+        &[(ch('t'), || Action::Ask(Ask::Threshold))],
+    ),
+    row(
+        "b  i",
+        "background out / counted; rank by gain, h / gain",
+        &[
+            (ch('b'), || Action::ToggleBackground),
+            (ch('i'), || Action::RankGain),
+        ],
+    ),
+    row(
+        "[ ] { }",
+        "orbit: azimuth, elevation",
+        &[
+            (ch('['), || Action::Orbit(-15.0, 0.0)),
+            (ch(']'), || Action::Orbit(15.0, 0.0)),
+            (ch('{'), || Action::Orbit(0.0, -10.0)),
+            (ch('}'), || Action::Orbit(0.0, 10.0)),
+        ],
+    ),
+    row(
+        "z Z  s S",
+        "zoom in / out; spread less / more",
+        &[
+            (ch('z'), || Action::Zoom(1.25)),
+            (ch('Z'), || Action::Zoom(0.8)),
+            (ch('s'), || Action::Spread(-0.1)),
+            (ch('S'), || Action::Spread(0.1)),
+        ],
+    ),
+    row(
+        "g",
+        "gaps: similarity / uniform",
+        &[(ch('g'), || Action::ToggleGap)],
+    ),
+    row(
+        "r",
+        "render: cut faces / DVR / MIP",
+        &[(ch('r'), || Action::ToggleMode)],
+    ),
+    row(
+        "v",
+        "slice view: slice at the cursor, slab's faces",
+        &[(ch('v'), || Action::ToggleSlices)],
+    ),
+    row(
+        "w W < >",
+        "window narrower / wider, level lower / higher",
+        &[
+            (ch('w'), || Action::WindowWidth(0.8)),
+            (ch('W'), || Action::WindowWidth(1.25)),
+            (ch('<'), || Action::WindowLevel(-0.05)),
+            (ch('>'), || Action::WindowLevel(0.05)),
+        ],
+    ),
+    row(
+        "f c",
+        "transfer function (those that fit), colours",
+        &[
+            (ch('f'), || Action::CycleTransfer),
+            (ch('c'), || Action::CycleColormap),
+        ],
+    ),
+    row(
+        "o P",
+        "selected slab alone; perspective",
+        &[
+            (ch('o'), || Action::ToggleSolo),
+            (ch('P'), || Action::TogglePerspective),
+        ],
+    ),
+    row(
+        "e  F",
+        "export; a folder's file list (PgUp PgDn: volumes)",
+        &[
+            (ch('e'), || Action::Export),
+            (ch('F'), || Action::ToggleFiles),
+            (code(KeyCode::PageUp), || Action::Page(-1)),
+            (code(KeyCode::PageDown), || Action::Page(1)),
+        ],
+    ),
+    row(
+        "x",
+        "lesson: the numbers behind the axis or the step",
+        &[(ch('x'), || Action::ToggleLesson)],
+    ),
+    row(
+        "Esc",
+        "cancel work, close help",
+        &[(code(KeyCode::Esc), || Action::Escape)],
+    ),
+    row(
+        "? q",
+        "help, quit",
+        &[
+            (ch('?'), || Action::ToggleHelp),
+            (code(KeyCode::F(1)), || Action::ToggleHelp),
+            (ch('q'), || Action::Quit),
+            (ctrl('c'), || Action::Quit),
+            (ctrl('d'), || Action::Quit),
+        ],
+    ),
+];
+
+/// The tour's keys, before those of the panes; its page's title shows them as hints.
+pub const TOUR: &[Binding] = &[
+    row(
+        "Space or →",
+        "next",
+        &[
+            (ch(' '), || Action::TurnPage(1)),
+            (code(KeyCode::Right), || Action::TurnPage(1)),
+        ],
+    ),
+    row(
+        "←",
+        "back",
+        &[(code(KeyCode::Left), || Action::TurnPage(-1))],
+    ),
+    row("q", "quits", &[(ch('q'), || Action::Quit)]),
+];
+
+/// The keys of an open prompt: these, and any other character types itself.
+pub const PROMPT: &[Binding] = &[row(
+    "Backspace Enter Esc",
+    "erase, accept, close",
+    &[
+        (code(KeyCode::Backspace), || Action::Erase),
+        (code(KeyCode::Enter), || Action::Submit),
+        (code(KeyCode::Esc), || Action::Escape),
+    ],
+)];
+
+/// The action `table` binds to `key`.
+fn find(table: &[Binding], key: Key) -> Option<Action> {
+    table
+        .iter()
+        .flat_map(|b| b.does)
+        .find(|(k, _)| *k == key)
+        .map(|(_, action)| action())
+}
+
+/// The action of `key`, if any; `typing` when a prompt is open, `touring` in the tour (whose
+/// keys come before the panes'). A key bound with Ctrl works everywhere, a prompt included.
 pub fn action(key: KeyEvent, typing: bool, touring: bool) -> Option<Action> {
     if key.kind == KeyEventKind::Release {
         return None;
     }
-    if key.modifiers.contains(KeyModifiers::CONTROL) && matches!(key.code, KeyCode::Char('c' | 'd'))
+    if key.modifiers.contains(KeyModifiers::CONTROL)
+        && let Some(action) = [BINDINGS, TOUR, PROMPT].into_iter().find_map(|t| {
+            find(
+                t,
+                Key {
+                    code: key.code,
+                    ctrl: true,
+                },
+            )
+        })
     {
-        return Some(Action::Quit);
+        return Some(action);
     }
+    let plain = code(key.code);
     if typing {
-        return match key.code {
+        return find(PROMPT, plain).or(match key.code {
             KeyCode::Char(c) => Some(Action::Type(c)),
-            KeyCode::Backspace => Some(Action::Erase),
-            KeyCode::Enter => Some(Action::Submit),
-            KeyCode::Esc => Some(Action::Escape),
             _ => None,
-        };
+        });
     }
-    if touring {
-        match key.code {
-            KeyCode::Char(' ') | KeyCode::Right => return Some(Action::TurnPage(1)),
-            KeyCode::Left => return Some(Action::TurnPage(-1)),
-            _ => {}
-        }
-    }
-    Some(match key.code {
-        KeyCode::Char('q') => Action::Quit,
-        KeyCode::Char('?') | KeyCode::F(1) => Action::ToggleHelp,
-        KeyCode::Esc => Action::Escape,
-        KeyCode::Tab => Action::Focus(1),
-        KeyCode::BackTab => Action::Focus(-1),
-        KeyCode::Up | KeyCode::Char('k') => Action::Move(-1),
-        KeyCode::Down | KeyCode::Char('j') => Action::Move(1),
-        KeyCode::Left | KeyCode::Char('h') => Action::Sideways(-1),
-        KeyCode::Right | KeyCode::Char('l') => Action::Sideways(1),
-        KeyCode::PageUp => Action::Page(-1),
-        KeyCode::PageDown => Action::Page(1),
-        KeyCode::Enter => Action::Select,
-        KeyCode::Char('n' | '.') => Action::Step(1),
-        KeyCode::Char('p' | ',') => Action::Step(-1),
-        KeyCode::Home => Action::StepTo(false),
-        KeyCode::End => Action::StepTo(true),
-        KeyCode::Char('+' | '=') => Action::Slabs(1),
-        KeyCode::Char('-' | '_') => Action::Slabs(-1),
-        KeyCode::Char('m') => Action::CycleMethod,
-        KeyCode::Char('a') => Action::Ask(Ask::Axis),
-        KeyCode::Char('t') => Action::Ask(Ask::Threshold),
-        KeyCode::Char('[') => Action::Orbit(-15.0, 0.0),
-        KeyCode::Char(']') => Action::Orbit(15.0, 0.0),
-        KeyCode::Char('{') => Action::Orbit(0.0, -10.0),
-        KeyCode::Char('}') => Action::Orbit(0.0, 10.0),
-        KeyCode::Char('z') => Action::Zoom(1.25),
-        KeyCode::Char('Z') => Action::Zoom(0.8),
-        KeyCode::Char('s') => Action::Spread(-0.1),
-        KeyCode::Char('S') => Action::Spread(0.1),
-        KeyCode::Char('r') => Action::ToggleMode,
-        KeyCode::Char('v') => Action::ToggleSlices,
-        KeyCode::Char('F') => Action::ToggleFiles,
-        KeyCode::Char('w') => Action::WindowWidth(0.8),
-        KeyCode::Char('W') => Action::WindowWidth(1.25),
-        KeyCode::Char('<') => Action::WindowLevel(-0.05),
-        KeyCode::Char('>') => Action::WindowLevel(0.05),
-        KeyCode::Char('f') => Action::CycleTransfer,
-        KeyCode::Char('c') => Action::CycleColormap,
-        KeyCode::Char('g') => Action::ToggleGap,
-        KeyCode::Char('o') => Action::ToggleSolo,
-        KeyCode::Char('P') => Action::TogglePerspective,
-        KeyCode::Char('e') => Action::Export,
-        KeyCode::Char('b') => Action::ToggleBackground,
-        KeyCode::Char('i') => Action::RankGain,
-        KeyCode::Char('x') => Action::ToggleLesson,
-        _ => return None,
-    })
+    touring
+        .then(|| find(TOUR, plain))
+        .flatten()
+        .or_else(|| find(BINDINGS, plain))
 }
 
-/// The key help: (keys, what they do).
-pub const HELP: &[(&str, &str)] = &[
-    ("Tab / S-Tab", "next / previous pane"),
-    ("↑↓←→ hjkl", "move in the pane: axis, slab, slice, pointer"),
-    ("Enter", "partition along the selected axis"),
-    ("a", "type an axis: x, y, z or DX,DY,DZ"),
-    ("m", "method: top-down, bottom-up, optimal"),
-    ("n p  . ,", "one split or merge forward / back"),
-    ("Home End", "start / end of the history"),
-    ("+ -", "one slab more / fewer"),
-    ("t", "threshold (empty clears)"),
-    ("b  i", "background out / counted; rank by gain, h / gain"),
-    ("[ ] { }", "orbit: azimuth, elevation"),
-    ("z Z  s S", "zoom in / out; spread less / more"),
-    ("g", "gaps: similarity / uniform"),
-    ("r", "render: cut faces / DVR / MIP"),
-    ("v", "slice view: slice at the cursor, slab's faces"),
-    ("w W < >", "window narrower / wider, level lower / higher"),
-    ("f c", "transfer function (those that fit), colours"),
-    ("o P", "selected slab alone; perspective"),
-    ("e  F", "export; a folder's file list (PgUp PgDn: volumes)"),
-    ("x", "lesson: the numbers behind the axis or the step"),
-    ("Esc", "cancel work, close help"),
-    ("? q", "help, quit"),
-];
+/// The key help: (keys, what they do), a row a binding of the panes.
+pub fn help() -> Vec<(&'static str, &'static str)> {
+    BINDINGS.iter().map(|b| (b.keys, b.help)).collect()
+}
+
+/// The tour's hints: `Space or → next, ← back, q quits`.
+pub fn tour_hints() -> String {
+    TOUR.iter()
+        .map(|b| format!("{} {}", b.keys, b.help))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// The words on the screen: (term, what it means).
 pub const GLOSSARY: &[(&str, &str)] = &[

@@ -11,7 +11,6 @@ pub mod lesson;
 pub mod panes;
 pub mod partitioning;
 pub mod theme;
-pub mod tour;
 pub mod ui;
 
 #[cfg(test)]
@@ -161,13 +160,13 @@ pub fn run(options: Options) -> Result<()> {
             None => App::new(name.clone(), analysis, screen),
         };
         if tour {
-            app.tour = Some(tour::Tour::new());
+            app.tour = Some(app::tour::Tour::new());
         }
         run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)?;
         // The user saw why; the exit status says so too.
         match &app.volume {
             // A folder's volumes are browsed: one that fails is a line in the list.
-            event::Load::Failed(e) if app.files.is_none() => bail!("{e}"),
+            event::Task::Failed(e) if app.files.is_none() => bail!("{e}"),
             _ => Ok(()),
         }
     })();

@@ -6,12 +6,12 @@ use std::sync::Arc;
 use slabscope::partition::{Method, Slab, StackParams, Stop, slab_text};
 use slabscope::{Histories, Progress};
 
-use super::event::{Effect, Load};
+use super::event::{Effect, Task};
 
 /// The partition being stepped through.
 pub struct Partitioning {
     /// The histories along the axis.
-    pub histories: Load<Arc<Histories>>,
+    pub histories: Task<Arc<Histories>>,
     /// The axis being partitioned.
     pub axis: Option<[f64; 3]>,
     /// Partition method.
@@ -26,7 +26,7 @@ pub struct Partitioning {
     pub level: usize,
     /// The same histories at full resolution, computed in the background to replace a
     /// preview's.
-    pub refining: Load<()>,
+    pub upgrading: Task<()>,
     /// The slab count asked for, for histories still to come.
     slabs: usize,
     generation: u64,
@@ -40,7 +40,7 @@ pub enum Finished {
     /// They are shown (or their error is).
     Shown,
     /// Full-resolution histories replaced a preview's.
-    Refined,
+    Upgraded,
 }
 
 impl Partitioning {
@@ -51,14 +51,14 @@ impl Partitioning {
             Stop::Threshold(t) => (4, Some(t)),
         };
         Self {
-            histories: Load::Idle,
+            histories: Task::Idle,
             axis: None,
             method,
             position: slabs.saturating_sub(1),
             threshold,
             stack,
             level: 0,
-            refining: Load::Idle,
+            upgrading: Task::Idle,
             slabs,
             generation: 0,
         }
@@ -90,19 +90,19 @@ impl Partitioning {
         self.keep_slab_count();
         self.axis = Some(axis);
         self.generation += 1;
-        self.histories = Load::started("slicing");
-        (self.level, self.refining) = (level, Load::Idle);
+        self.histories = Task::started("slicing");
+        (self.level, self.upgrading) = (level, Task::Idle);
         Effect::Analyze(self.generation, axis, self.stack.clone(), level)
     }
 
     /// Starts the histories shown, a preview's, again at full resolution; they stay shown until
     /// the new ones replace them.
-    pub fn refine(&mut self) -> Option<Effect> {
+    pub fn upgrade(&mut self) -> Option<Effect> {
         let axis = self
             .axis
             .filter(|_| self.level > 0 && self.ready().is_some())?;
         self.generation += 1;
-        self.refining = Load::started("slicing");
+        self.upgrading = Task::started("slicing");
         Some(Effect::Analyze(
             self.generation,
             axis,
@@ -111,9 +111,9 @@ impl Partitioning {
         ))
     }
 
-    /// Whether a preview's histories are shown and no refinement has started or failed.
-    pub fn awaits_refinement(&self) -> bool {
-        self.level > 0 && self.ready().is_some() && matches!(self.refining, Load::Idle)
+    /// Whether a preview's histories are shown and no upgrade has started or failed.
+    pub fn awaits_upgrade(&self) -> bool {
+        self.level > 0 && self.ready().is_some() && matches!(self.upgrading, Task::Idle)
     }
 
     /// Remembers the slab count shown, for the histories that come next.
@@ -133,7 +133,7 @@ impl Partitioning {
         if generation != self.generation {
             return Finished::Stale;
         }
-        let refined = self.refining.running() && level == 0;
+        let upgraded = self.upgrading.running() && level == 0;
         match result {
             Ok(h) => {
                 self.keep_slab_count();
@@ -141,13 +141,13 @@ impl Partitioning {
                     Some(t) => h.position_for_threshold(self.method, t),
                     None => h.position_for(self.method, self.slabs),
                 };
-                (self.histories, self.level, self.refining) = (Load::Ready(h), level, Load::Idle);
+                (self.histories, self.level, self.upgrading) = (Task::Ready(h), level, Task::Idle);
             }
-            Err(e) if refined => self.refining = Load::Failed(e),
-            Err(e) => self.histories = Load::Failed(e),
+            Err(e) if upgraded => self.upgrading = Task::Failed(e),
+            Err(e) => self.histories = Task::Failed(e),
         }
-        if refined {
-            Finished::Refined
+        if upgraded {
+            Finished::Upgraded
         } else {
             Finished::Shown
         }
@@ -155,10 +155,10 @@ impl Partitioning {
 
     /// Records the progress of the computation running on pyramid level `level`.
     pub fn progress(&mut self, p: Progress, level: usize) {
-        if self.refining.running() && level == 0 {
-            self.refining = Load::Running(p);
+        if self.upgrading.running() && level == 0 {
+            self.upgrading = Task::Running(p);
         } else if self.histories.running() && level == self.level {
-            self.histories = Load::Running(p);
+            self.histories = Task::Running(p);
         }
     }
 

@@ -20,7 +20,7 @@ use slabscope::volume::phantom;
 use slabscope::{AnalysisParams, Histories, Monitor, Progress, Scope, Volume};
 
 use super::app::{App, Pane, Screen};
-use super::event::{Action, Ask, Effect, Event, Job, JobMsg, Load, Rendered};
+use super::event::{Action, Ask, Effect, Event, Job, JobMsg, Rendered, Task};
 use super::panes;
 use super::theme::Theme;
 use super::{Runner, handle, redraw};
@@ -105,9 +105,10 @@ fn key(c: char) -> Event {
 }
 
 mod gain;
+mod keys;
 mod lesson;
-mod refine;
 mod tour;
+mod upgrade;
 
 #[test]
 fn the_analysis_opens_on_four_top_down_slabs() {
@@ -249,7 +250,7 @@ fn stale_results_are_dropped() {
     let image = Box::new(rendered(20, 8));
     app.update(Action::Job(JobMsg::Rendered(1, Ok(image))));
     assert!(
-        !matches!(app.preview.image, Load::Ready(_)),
+        !matches!(app.preview.image, Task::Ready(_)),
         "an older render is not shown"
     );
 }
@@ -257,12 +258,12 @@ fn stale_results_are_dropped() {
 #[test]
 fn escape_cancels_running_work_and_quit_quits() {
     let (mut app, _) = new_app("x", PLAIN);
-    app.views.views = Load::Running(Progress {
+    app.views.views = Task::Running(Progress {
         phase: "view search",
         fraction: 0.4,
     });
     assert!(matches!(app.update(Action::Escape)[..], [Effect::Cancel]));
-    assert!(matches!(app.views.views, Load::Failed(_)));
+    assert!(matches!(app.views.views, Task::Failed(_)));
     app.update(Action::ToggleHelp);
     assert!(app.help);
     assert!(app.update(Action::Escape).is_empty());
@@ -327,9 +328,9 @@ fn progress_updates_the_gauges() {
         fraction: 0.5,
     };
     app.update(Action::Job(JobMsg::Progress(Job::Load, half)));
-    assert!(matches!(app.volume, Load::Running(p) if p == half));
+    assert!(matches!(app.volume, Task::Running(p) if p == half));
     app.update(Action::Job(JobMsg::Loaded(Err("x: truncated".into()))));
-    assert!(matches!(app.volume, Load::Failed(_)));
+    assert!(matches!(app.volume, Task::Failed(_)));
 }
 
 /// A half-blocks image of `w × h` cells: a diagonal gradient.

@@ -6,6 +6,7 @@ pub mod cells;
 pub mod interpolate;
 pub mod io;
 pub mod labels;
+pub mod mapped;
 pub mod phantom;
 pub mod pyramid;
 mod quantize;

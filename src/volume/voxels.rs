@@ -7,6 +7,7 @@ use std::sync::Arc;
 use bytemuck::Pod;
 
 use super::VoxelType;
+use super::mapped::MappedFile;
 use super::quantize::Quantizer;
 
 /// A voxel value as stored: a type the algorithms read directly and widen to f32 where they
@@ -110,40 +111,6 @@ pub fn held_type(stored: VoxelType, scaled: bool) -> VoxelType {
 pub(crate) fn infinities_missing(values: &mut [f32]) {
     for v in values.iter_mut().filter(|v| v.is_infinite()) {
         *v = f32::NAN;
-    }
-}
-
-/// A read-only memory map shared by the volumes (and pyramid levels) made from one file,
-/// registered so that its file being cut short is reported (see `io::mapped`).
-pub struct MappedFile {
-    map: memmap2::Mmap,
-    slot: Option<usize>,
-}
-
-impl MappedFile {
-    /// Wraps a map of a whole file, registered in `slot`.
-    pub(crate) fn new(map: memmap2::Mmap, slot: Option<usize>) -> Arc<Self> {
-        Arc::new(Self { map, slot })
-    }
-
-    /// The mapped bytes.
-    #[must_use]
-    pub fn bytes(&self) -> &[u8] {
-        &self.map
-    }
-}
-
-impl Drop for MappedFile {
-    fn drop(&mut self) {
-        if let Some(slot) = self.slot {
-            super::io::mapped::unregister(slot);
-        }
-    }
-}
-
-impl std::fmt::Debug for MappedFile {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "MappedFile({} bytes)", self.map.len())
     }
 }
 
@@ -515,7 +482,7 @@ mod tests {
     fn mapped_stores_need_alignment_and_room() {
         let mut file = tempfile::tempfile().unwrap();
         std::io::Write::write_all(&mut file, &[0, 1, 0, 2, 0, 3, 0]).unwrap();
-        let file = crate::volume::io::mapped::map(&file, std::path::Path::new("t")).unwrap();
+        let file = crate::volume::mapped::map(&file, std::path::Path::new("t")).unwrap();
         let v = Voxels::mapped(file.clone(), VoxelType::U16, 2, 2).unwrap();
         assert!(v.is_mapped());
         assert_eq!(

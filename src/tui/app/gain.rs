@@ -7,15 +7,15 @@ use slabscope::analysis::{AxisBy, GainRanking};
 use slabscope::geometry::AxisChoice;
 
 use super::App;
-use super::refine::{axis_text, same};
-use crate::tui::event::{Effect, Load};
+use super::upgrade::{axis_text, same};
+use crate::tui::event::{Effect, Task};
 
 impl App {
     /// `i`: ranks the axes by gain, or once ranked switches the order the list and the sphere
     /// follow.
     pub(super) fn rank_gain(&mut self) -> Vec<Effect> {
         match &self.views.gain {
-            Load::Ready(_) => {
+            Task::Ready(_) => {
                 self.views.by_gain = !self.views.by_gain;
                 self.views.row = 0;
                 self.status.message = Some(
@@ -28,8 +28,8 @@ impl App {
                 );
                 vec![]
             }
-            Load::Running(_) => vec![],
-            Load::Idle | Load::Failed(_) => self.start_gain(),
+            Task::Running(_) => vec![],
+            Task::Idle | Task::Failed(_) => self.start_gain(),
         }
     }
 
@@ -41,8 +41,8 @@ impl App {
 
     /// The pyramid level of the views shown: a preview's until full resolution's are in.
     fn views_level(&self) -> usize {
-        match &self.refine {
-            Some(r) if !matches!(r.views, Load::Ready(())) => r.level,
+        match &self.upgrade {
+            Some(r) if !matches!(r.views, Task::Ready(())) => r.level,
             _ => 0,
         }
     }
@@ -53,7 +53,7 @@ impl App {
             return vec![];
         }
         self.gain_level = level;
-        self.views.gain = Load::started("ranking axes by partition gain");
+        self.views.gain = Task::started("ranking axes by partition gain");
         self.sync_status();
         vec![Effect::RankGain(Box::new(self.params.clone()), level)]
     }
@@ -62,7 +62,7 @@ impl App {
     /// views are in: it is then ranked again at full resolution.
     pub(super) fn gain_behind(&self) -> bool {
         self.gain_level > self.views_level()
-            && !matches!(self.views.gain, Load::Idle | Load::Failed(_))
+            && !matches!(self.views.gain, Task::Idle | Task::Failed(_))
     }
 
     /// Whether a ranking of pyramid level `level` scores the views shown.
@@ -102,17 +102,17 @@ impl App {
             Ok(g) => *g,
             Err(e) => {
                 self.status.message = Some(format!("gain ranking failed: {e}"));
-                self.views.gain = Load::Failed(e);
+                self.views.gain = Task::Failed(e);
                 self.sync_status();
                 return vec![];
             }
         };
-        if let Load::Ready(views) = &mut self.views.views {
+        if let Task::Ready(views) = &mut self.views.views {
             gain.annotate(views);
         }
         let best = gain.refined.axis;
         self.status.message = Some(self.gain_verdict(&gain));
-        self.views.gain = Load::Ready(gain);
+        self.views.gain = Task::Ready(gain);
         self.views.by_gain = true;
         self.views.row = 0;
         let mut effects = if self.gain_picks() && !self.part.axis.is_some_and(|a| same(a, best)) {

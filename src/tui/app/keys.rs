@@ -6,7 +6,7 @@ use slabscope::render::{Colormap, Gap, Mode, Preset};
 use slabscope::volume::background::BackgroundRule;
 
 use super::{App, Pane, centre};
-use crate::tui::event::{Action, Ask, Effect, Load};
+use crate::tui::event::{Action, Ask, Effect, Task};
 use crate::tui::panes::status::{Prompt, settings_text};
 
 impl App {
@@ -205,22 +205,22 @@ impl App {
         if self.lesson.open {
             return self.toggle_lesson();
         }
-        let refining = self.cancel_refinement();
+        let upgrading = self.cancel_upgrade();
         let busy = self.views.views.running()
             || self.part.histories.running()
             || self.preview.image.running()
             || self.export.running();
-        if !busy && !refining {
+        if !busy && !upgrading {
             return vec![];
         }
         if self.views.views.running() {
-            self.views.views = Load::Failed("cancelled".into());
+            self.views.views = Task::Failed("cancelled".into());
         }
         if self.part.histories.running() {
-            self.part.histories = Load::Failed("cancelled".into());
+            self.part.histories = Task::Failed("cancelled".into());
         }
-        self.export = Load::Idle;
-        self.status.message = Some(if refining {
+        self.export = Task::Idle;
+        self.status.message = Some(if upgrading {
             "cancelled: the preview stays (Enter on an axis computes it again)".into()
         } else {
             "cancelled".into()

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use super::{App, Pane};
-use crate::tui::event::{Effect, Load};
+use crate::tui::event::{Effect, Task};
 use crate::tui::lesson::{Lesson, LessonRequest, Subject};
 
 impl App {
@@ -13,7 +13,7 @@ impl App {
     pub(super) fn toggle_lesson(&mut self) -> Vec<Effect> {
         let lesson = &mut self.lesson;
         lesson.open = !lesson.open;
-        (lesson.subject, lesson.lesson) = (None, Load::Idle);
+        (lesson.subject, lesson.lesson) = (None, Task::Idle);
         self.ray = (0, 0);
         self.sync_focus();
         vec![]
@@ -61,7 +61,7 @@ impl App {
                 "The partition is not ready yet: its steps follow it."
             };
             self.lesson.subject = None;
-            self.lesson.lesson = Load::Ready(Box::new(Lesson::Nothing(why.into())));
+            self.lesson.lesson = Task::Ready(Box::new(Lesson::Nothing(why.into())));
             return vec![];
         };
         if self.lesson.subject.as_ref() == Some(&subject) {
@@ -69,7 +69,7 @@ impl App {
         }
         self.lesson.generation += 1;
         self.lesson.subject = Some(subject.clone());
-        self.lesson.lesson = Load::started("explaining");
+        self.lesson.lesson = Task::started("explaining");
         let view = self
             .views
             .views
@@ -88,8 +88,8 @@ impl App {
     pub(super) fn on_lesson(&mut self, generation: u64, result: Result<Box<Lesson>, String>) {
         if generation == self.lesson.generation {
             self.lesson.lesson = match result {
-                Ok(lesson) => Load::Ready(lesson),
-                Err(e) => Load::Failed(e),
+                Ok(lesson) => Task::Ready(lesson),
+                Err(e) => Task::Failed(e),
             };
         }
     }

@@ -6,15 +6,15 @@
 mod gain;
 mod keys;
 mod lesson;
-mod refine;
-mod tour;
+pub mod tour;
+mod upgrade;
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use slabscope::{AnalysisParams, Progress, Volume};
 
-use super::event::{Effect, ExportRequest, Job, JobMsg, Load, RenderRequest, SliceRequest};
+use super::event::{Effect, ExportRequest, Job, JobMsg, RenderRequest, SliceRequest, Task};
 use super::panes::curves::{Curves, CurvesPane};
 use super::panes::files::FilesPane;
 use super::panes::lesson::LessonPane;
@@ -69,7 +69,7 @@ pub struct App {
     /// Colours.
     pub theme: Theme,
     /// The volume.
-    pub volume: Load<Arc<Volume>>,
+    pub volume: Task<Arc<Volume>>,
     /// The partition being stepped through.
     pub part: Partitioning,
     /// The focused pane.
@@ -89,19 +89,19 @@ pub struct App {
     /// The status lines.
     pub status: StatusBar,
     /// An export under way, with its progress.
-    export: Load<()>,
+    export: Task<()>,
     /// A folder's volumes, when the TUI was opened on one.
     pub files: Option<FilesPane>,
     /// The screen, for a fresh start on another volume.
     screen: Screen,
-    /// On a large volume, the preview and its refinement at full resolution.
-    pub refine: Option<refine::Refinement>,
+    /// On a large volume, the preview and its upgrade to full resolution.
+    pub upgrade: Option<upgrade::Upgrade>,
     /// The lesson: the numbers behind the selected viewpoint or the step.
     pub lesson: LessonPane,
     /// The lesson's ray: its offset from the central one.
     ray: (i64, i64),
     /// The guided tour, when the app runs it.
-    pub tour: Option<crate::tui::tour::Tour>,
+    pub tour: Option<tour::Tour>,
     /// The pyramid level of the gain ranking shown or under way.
     gain_level: usize,
 }
@@ -121,14 +121,14 @@ impl App {
             name,
             params,
             theme,
-            volume: Load::started("loading"),
+            volume: Task::started("loading"),
             focus: Pane::Views,
             help: false,
             quit: false,
-            export: Load::Idle,
+            export: Task::Idle,
             files: None,
             screen: kept,
-            refine: None,
+            upgrade: None,
             lesson: LessonPane::new(theme),
             ray: (0, 0),
             tour: None,
@@ -244,7 +244,7 @@ impl App {
             look: self.preview.look,
             highlight: Some(self.slabs.row),
         };
-        self.export = Load::started("exporting");
+        self.export = Task::started("exporting");
         self.sync();
         vec![Effect::Export(Box::new(request))]
     }
@@ -269,8 +269,8 @@ impl App {
                 [0.0, 1.0, 0.0]
             }
         });
-        if !matches!(self.preview.image, Load::Ready(_)) {
-            self.preview.image = Load::started("rendering");
+        if !matches!(self.preview.image, Task::Ready(_)) {
+            self.preview.image = Task::started("rendering");
         }
         vec![Effect::Render(Box::new(RenderRequest {
             generation: self.preview.generation,
@@ -299,13 +299,13 @@ impl App {
             JobMsg::Loaded(Err(e)) => {
                 self.status.message = Some(format!("{e} (q quits)"));
                 self.views.idle = format!("cannot load the volume: {e}");
-                self.volume = Load::Failed(e);
+                self.volume = Task::Failed(e);
                 self.sync_status();
                 vec![]
             }
             JobMsg::Preview(volume, notes) => self.on_preview(&volume, &notes),
             JobMsg::Coarse(volume) => {
-                if let Some(r) = self.refine.as_mut() {
+                if let Some(r) = self.upgrade.as_mut() {
                     r.coarse = Some(volume);
                 }
                 vec![]
@@ -325,9 +325,9 @@ impl App {
                         Ok(r) => {
                             self.preview.caption = r.caption;
                             self.preview.window = Some(r.window);
-                            Load::Ready(Box::new(r.image))
+                            Task::Ready(Box::new(r.image))
                         }
-                        Err(e) => Load::Failed(e),
+                        Err(e) => Task::Failed(e),
                     };
                 }
                 vec![]
@@ -341,7 +341,7 @@ impl App {
                 vec![]
             }
             JobMsg::Exported(result) => {
-                self.export = Load::Idle;
+                self.export = Task::Idle;
                 self.status.message = Some(match result {
                     Ok(m) => m,
                     Err(e) => format!("export failed: {e}"),
@@ -353,9 +353,9 @@ impl App {
     }
 
     /// A volume loaded: the view search starts, and the partition along the axis asked for;
-    /// or the file's preview level shows, and is refined.
+    /// or the file's preview level shows, and is upgraded.
     fn on_loaded(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
-        if self.refine.as_ref().is_some_and(|r| r.from_file) {
+        if self.upgrade.as_ref().is_some_and(|r| r.from_file) {
             return self.adopt(volume, notes);
         }
         self.status.message = notes.first().cloned();
@@ -363,8 +363,8 @@ impl App {
             self.status.message = Some(format!("{heavy}: it may take long; Esc cancels it"));
         }
         let level = crate::tui::preview_level(&volume);
-        self.refine = (level > 0).then(|| refine::Refinement::new(level, volume.dims()));
-        self.volume = Load::Ready(Arc::clone(&volume));
+        self.upgrade = (level > 0).then(|| upgrade::Upgrade::new(level, volume.dims()));
+        self.volume = Task::Ready(Arc::clone(&volume));
         self.begin(&volume, level)
     }
 
@@ -376,7 +376,7 @@ impl App {
             .params
             .axis
             .resolve(volume.transform(), volume.spacing());
-        self.views.views = Load::started("view search");
+        self.views.views = Task::started("view search");
         let mut effects = vec![Effect::SearchViews(self.params.view.clone(), level)];
         if self.params.ranks_by_gain() {
             effects.extend(self.start_gain());
@@ -393,13 +393,13 @@ impl App {
 
     fn on_progress(&mut self, job: Job, p: Progress) {
         match job {
-            Job::Load if self.volume.running() => self.volume = Load::Running(p),
-            Job::Views(0) if self.refine.is_some() => self.refine_progress(p),
-            Job::Views(_) if self.views.views.running() => self.views.views = Load::Running(p),
+            Job::Load if self.volume.running() => self.volume = Task::Running(p),
+            Job::Views(0) if self.upgrade.is_some() => self.upgrade_progress(p),
+            Job::Views(_) if self.views.views.running() => self.views.views = Task::Running(p),
             Job::Analysis(level) => self.part.progress(p, level),
-            Job::Export if self.export.running() => self.export = Load::Running(p),
-            Job::Gain if self.views.gain.running() => self.views.gain = Load::Running(p),
-            Job::Lesson if self.lesson.lesson.running() => self.lesson.lesson = Load::Running(p),
+            Job::Export if self.export.running() => self.export = Task::Running(p),
+            Job::Gain if self.views.gain.running() => self.views.gain = Task::Running(p),
+            Job::Lesson if self.lesson.lesson.running() => self.lesson.lesson = Task::Running(p),
             _ => return,
         }
         self.sync_status();
@@ -412,12 +412,12 @@ impl App {
     fn sync(&mut self) {
         let part = &self.part;
         match &part.histories {
-            Load::Ready(h) => {
+            Task::Ready(h) => {
                 let table = SlabTable::new(h, part.method, part.position);
                 let boundaries = table.info.iter().skip(1).map(|s| s.slices.0).collect();
                 self.slabs.row = self.slabs.row.min(table.info.len().saturating_sub(1));
-                self.slabs.table = Load::Ready(table);
-                self.curves.curves = Load::Ready(Curves {
+                self.slabs.table = Task::Ready(table);
+                self.curves.curves = Task::Ready(Curves {
                     histories: Arc::clone(h),
                     boundaries,
                 });
@@ -445,7 +445,7 @@ impl App {
             ("histories", self.part.histories.status()),
             ("export", self.export.status()),
         ] {
-            if let Load::Running(p) = load {
+            if let Task::Running(p) = load {
                 s.jobs.push((job, p));
             }
         }
@@ -467,11 +467,11 @@ impl App {
 }
 
 /// The state of something not ready, for a pane that shows its gauge or error.
-fn pending<T, U>(load: &Load<T>) -> Load<U> {
+fn pending<T, U>(load: &Task<T>) -> Task<U> {
     match load {
-        Load::Running(p) => Load::Running(*p),
-        Load::Failed(e) => Load::Failed(e.clone()),
-        Load::Idle | Load::Ready(_) => Load::Idle,
+        Task::Running(p) => Task::Running(*p),
+        Task::Failed(e) => Task::Failed(e.clone()),
+        Task::Idle | Task::Ready(_) => Task::Idle,
     }
 }
 

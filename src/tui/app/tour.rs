@@ -1,10 +1,214 @@
-//! The tour's pages set the panes: once the views and the histories are in, each page focuses a
-//! pane, selects the best or the worst viewpoint, shows a method at a slab count and opens or
-//! closes the lesson; the user may then do anything, and the next page sets them again.
+//! The guided tour (`slabscope tour`): the paper in twelve short pages, each with the live panes
+//! set to show what it says. Space or → the next page, ← the one before, q quits.
+//!
+//! Once the views and the histories are in, each page focuses a pane, selects the best or the
+//! worst viewpoint, shows a method at a slab count and opens or closes the lesson; the user may
+//! then do anything, and the next page sets them again.
 
-use super::App;
-use crate::tui::event::{Effect, Load};
-use crate::tui::tour::{self, Row};
+use slabscope::Histories;
+use slabscope::partition::Method;
+
+use super::{App, Pane};
+use crate::tui::event::{Effect, Task};
+
+/// The tour's place: the page shown, and whether the panes were set for it (they are once the
+/// page's data is in).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Tour {
+    /// The page, from 0.
+    pub page: usize,
+    /// Whether the panes are set for the page.
+    pub applied: bool,
+    /// What the page adds from the volume's own numbers.
+    pub numbers: Option<String>,
+}
+
+/// The numbers a page adds to its paragraph, from the histories shown.
+pub fn page_numbers(page: usize, histories: &Histories, slabs: usize) -> Option<String> {
+    let kept = |method| {
+        let position = position(histories, method, slabs)?;
+        Some(histories.information(&histories.slabs(method, position)))
+    };
+    match page {
+        9 => Some(format!(
+            "Here {slabs} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
+            kept(Method::TopDown)?,
+            kept(Method::BottomUp)?,
+            histories.entropy()
+        )),
+        _ => None,
+    }
+}
+
+/// Which viewpoint a page selects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Row {
+    /// The best.
+    Best,
+    /// The worst.
+    Worst,
+}
+
+/// What a page sets the panes to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Setup {
+    /// The pane focused.
+    pub focus: Pane,
+    /// Whether the lesson shows.
+    pub lesson: bool,
+    /// The viewpoint selected.
+    pub row: Row,
+    /// The method shown.
+    pub method: Method,
+    /// The slab count shown.
+    pub slabs: usize,
+}
+
+/// One page: its title, its paragraph, and what the panes show.
+pub struct Page {
+    /// The title.
+    pub title: &'static str,
+    /// The paragraph (the paper's equation in plain text).
+    pub text: &'static str,
+    /// The panes.
+    pub setup: Setup,
+}
+
+const fn setup(focus: Pane, lesson: bool, row: Row, method: Method, slabs: usize) -> Setup {
+    Setup {
+        focus,
+        lesson,
+        row,
+        method,
+        slabs,
+    }
+}
+
+/// The tour's pages, in order.
+pub const PAGES: [Page; 12] = [
+    Page {
+        title: "The volume and the question",
+        text: "Along which direction is this volume most structured, and how should it be cut \
+               into slabs across that direction so that each slab holds alike content? The \
+               answer is drawn on the right: the slabs pulled apart, an exploded view \
+               (Ruiz et al., Similarity-based exploded views, 2008).",
+        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
+    },
+    Page {
+        title: "The viewpoint sphere",
+        text: "The candidate directions are the vertices of a subdivided icosahedron (an axis \
+               and its opposite are one). The list ranks them by their entropy rate, lowest \
+               first; in a wide terminal the sphere map shows where they point.",
+        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
+    },
+    Page {
+        title: "One ray and its samples",
+        text: "Along an axis, parallel rays cross the volume one voxel apart (the paper's \
+               lattice); each samples it one voxel apart, and every sample is quantized to one \
+               of B bins. The strip is the ray through the centre, a cell a sample, grey by bin.",
+        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
+    },
+    Page {
+        title: "Blocks and H(X^L)",
+        text: "A block is L samples in a row on one ray. Counted over every ray, blocks have a \
+               distribution p; its entropy is H(X^L) = -Σ p(x1..xL) log2 p(x1..xL) bits \
+               (eq. 2). The lesson lists the most frequent blocks and H(X^1) … H(X^L).",
+        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
+    },
+    Page {
+        title: "The entropy rate of the best and the worst axis",
+        text: "h = H(X^L) - H(X^(L-1)) (eq. 4) is what is left uncertain about a sample once \
+               the L-1 before it are known. The most structured view has the lowest h: here \
+               the worst axis is selected, beside the best.",
+        setup: setup(Pane::Views, true, Row::Worst, Method::TopDown, 4),
+    },
+    Page {
+        title: "Slicing along the best axis",
+        text: "Across the best axis the volume is cut into slices; each slice's histogram of \
+               bins is all the partition needs. The curves: the NMI of each slice with the \
+               next, and the gain of one cut of the whole stack at each slice.",
+        setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 1),
+    },
+    Page {
+        title: "The first split",
+        text: "Top-down splitting takes the cut that keeps the most information: ΔI = (v1 + v2) \
+               / vT · JS, with JS = H(p1 + p2) - π1 H(p1) - π2 H(p2), the Jensen-Shannon \
+               divergence of the two parts' histograms (eq. 5, 6).",
+        setup: setup(Pane::Slabs, true, Row::Best, Method::TopDown, 2),
+    },
+    Page {
+        title: "Further splits and the gain curve",
+        text: "Each step takes the best cut over all slabs, so I(slab; value), the information \
+               the slabs keep about the values, grows with every split. n and p step through \
+               the history; + and - change the slab count.",
+        setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 4),
+    },
+    Page {
+        title: "A merge",
+        text: "Bottom-up merging starts from single slices and joins the two neighbours most \
+               alike: the largest NMI = MI / H(X,Y) of their joint histogram over corresponding \
+               pixels, MI = H(X) + H(Y) - H(X,Y) (eq. 7, 8).",
+        setup: setup(Pane::Slabs, true, Row::Best, Method::BottomUp, 4),
+    },
+    Page {
+        title: "Top-down against bottom-up",
+        text: "The two greedy methods answer different questions: top-down keeps the most \
+               information about the values, bottom-up keeps alike slices together. Their slab \
+               tables and the information each keeps differ; m switches the method.",
+        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, 4),
+    },
+    Page {
+        title: "The optimum",
+        text: "Dynamic programming over every placement of the boundaries finds the partition \
+               that keeps the most information for a slab count. Greedy top-down is usually \
+               within a few per cent of it; the lesson says by how much and where they differ.",
+        setup: setup(Pane::Slabs, true, Row::Best, Method::Optimal, 4),
+    },
+    Page {
+        title: "The exploded view",
+        text: "Finally the slabs are drawn pulled apart along the axis, the gaps by how unlike \
+               neighbouring slabs are. Orbit with [ ] { }, change the look with r f c; q ends \
+               the tour.",
+        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
+    },
+];
+
+impl Tour {
+    /// The first page.
+    pub fn new() -> Self {
+        Self {
+            page: 0,
+            applied: false,
+            numbers: None,
+        }
+    }
+
+    /// Turns `by` pages, within the tour.
+    pub fn turn(&mut self, by: isize) {
+        let page = self.page.saturating_add_signed(by).min(PAGES.len() - 1);
+        if page != self.page {
+            self.page = page;
+            (self.applied, self.numbers) = (false, None);
+        }
+    }
+
+    /// The page shown.
+    pub fn current(&self) -> &'static Page {
+        &PAGES[self.page]
+    }
+
+    /// `page 3 of 12`.
+    pub fn counter(&self) -> String {
+        format!("page {} of {}", self.page + 1, PAGES.len())
+    }
+}
+
+/// The position of `method`'s history with `slabs` slabs, where the histories have it.
+pub fn position(histories: &Histories, method: Method, slabs: usize) -> Option<usize> {
+    histories
+        .has(method)
+        .then(|| histories.position_for(method, slabs))
+}
 
 impl App {
     /// Turns the tour's page.
@@ -25,14 +229,14 @@ impl App {
         };
         let h = h.as_ref();
         let s = t.current().setup;
-        let numbers = tour::page_numbers(t.page, h, s.slabs);
+        let numbers = page_numbers(t.page, h, s.slabs);
         let worst = views
             .views
             .iter()
             .rposition(slabscope::view::AxisEntropy::measured)
             .unwrap_or(0);
         // The optimum is not computed for a very long stack: the page shows top-down then.
-        let (method, position) = match tour::position(h, s.method, s.slabs) {
+        let (method, position) = match position(h, s.method, s.slabs) {
             Some(p) => (s.method, p),
             None => (
                 slabscope::partition::Method::TopDown,
@@ -48,7 +252,7 @@ impl App {
         self.part.set_threshold(None);
         if self.lesson.open != s.lesson {
             self.lesson.open = s.lesson;
-            (self.lesson.subject, self.lesson.lesson) = (None, Load::Idle);
+            (self.lesson.subject, self.lesson.lesson) = (None, Task::Idle);
         }
         self.ray = (0, 0);
         if let Some(t) = self.tour.as_mut() {

@@ -31,7 +31,7 @@ pub struct Jobs {
     open: Open,
     /// Which volume is open: one more at each [`Effect::Open`].
     epoch: u64,
-    /// The test hook's wait before a preview is refined.
+    /// The test hook's wait before a preview is upgraded to full resolution.
     full_delay: Duration,
 }
 
@@ -227,7 +227,7 @@ impl Jobs {
     }
 
     /// How long a full-resolution job on `volume` waits before it starts: nothing, but with the
-    /// test hook `SLABSCOPE_TEST_FULL_DELAY_MS`, which holds back the jobs that refine a preview
+    /// test hook `SLABSCOPE_TEST_FULL_DELAY_MS`, which holds back the jobs that upgrade a preview
     /// so that a test sees the preview first.
     fn full_delay(&self, level: usize) -> Duration {
         match (level, self.open.full.as_deref().map(preview_level)) {

@@ -11,7 +11,7 @@ use ratatui::widgets::{Axis, Chart, Dataset, GraphType, Widget};
 use slabscope::Histories;
 
 use super::placeholder;
-use crate::tui::event::Load;
+use crate::tui::event::Task;
 use crate::tui::theme::Theme;
 
 /// The curves along the axis and where the slabs meet.
@@ -25,7 +25,7 @@ pub struct Curves {
 /// The curves pane's state.
 pub struct CurvesPane {
     /// The curves, or the gauge of the histories behind them.
-    pub curves: Load<Curves>,
+    pub curves: Task<Curves>,
     /// The slice under the cursor.
     pub cursor: usize,
     /// Whether it has the focus.
@@ -38,7 +38,7 @@ impl CurvesPane {
     /// An empty pane.
     pub fn new(theme: Theme) -> Self {
         Self {
-            curves: Load::Idle,
+            curves: Task::Idle,
             cursor: 0,
             focused: false,
             theme,
@@ -114,7 +114,7 @@ fn chart(
 
 impl Widget for &CurvesPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let Load::Ready(curves) = &self.curves else {
+        let Task::Ready(curves) = &self.curves else {
             let block = self.theme.block(" Curves ".into(), self.focused);
             let inner = block.inner(area);
             block.render(area, buf);

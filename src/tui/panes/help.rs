@@ -6,7 +6,7 @@ use ratatui::layout::{Constraint, Rect};
 use ratatui::style::{Color, Modifier};
 use ratatui::widgets::{Clear, Row, Table, Widget};
 
-use crate::tui::keymap::{GLOSSARY, HELP};
+use crate::tui::keymap::{BINDINGS, GLOSSARY, help};
 use crate::tui::theme::Theme;
 
 /// The help overlay, centred over the screen.
@@ -34,7 +34,8 @@ impl Help {
 
 impl Widget for &Help {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let (keys, words) = (HELP.len() as u16 + 2, GLOSSARY.len() as u16 + 2);
+        let (keys, words) = (BINDINGS.len() as u16 + 2, GLOSSARY.len() as u16 + 2);
+        let help = help();
         let width = WIDTH.min(area.width);
         let centred = |w: u16, h: u16| Rect {
             x: area.x + (area.width - w) / 2,
@@ -48,7 +49,7 @@ impl Widget for &Help {
             let both = centred(2 * WIDTH + 1, keys.max(words));
             self.table(
                 key_title,
-                HELP,
+                &help,
                 Rect {
                     width: WIDTH,
                     ..both
@@ -66,7 +67,7 @@ impl Widget for &Help {
             let both = centred(width, keys + words);
             self.table(
                 key_title,
-                HELP,
+                &help,
                 Rect {
                     height: keys,
                     ..both
@@ -80,7 +81,7 @@ impl Widget for &Help {
             };
             self.table(word_title, GLOSSARY, below, buf);
         } else {
-            self.table(key_title, HELP, centred(width, keys), buf);
+            self.table(key_title, &help, centred(width, keys), buf);
         }
     }
 }

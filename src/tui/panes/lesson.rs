@@ -12,7 +12,7 @@ use slabscope::explain::text;
 use slabscope::explain::{AxisLesson, MergeLesson, RayPlane, RaySamples, SplitLesson};
 
 use super::placeholder;
-use crate::tui::event::Load;
+use crate::tui::event::Task;
 use crate::tui::lesson::{Lesson, Subject};
 use crate::tui::theme::Theme;
 
@@ -25,7 +25,7 @@ pub struct LessonPane {
     /// The number of the newest request.
     pub generation: u64,
     /// The numbers, or the gauge of their job.
-    pub lesson: Load<Box<Lesson>>,
+    pub lesson: Task<Box<Lesson>>,
     /// Colours.
     pub theme: Theme,
 }
@@ -40,7 +40,7 @@ impl LessonPane {
             open: false,
             subject: None,
             generation: 0,
-            lesson: Load::Idle,
+            lesson: Task::Idle,
             theme,
         }
     }
@@ -64,7 +64,7 @@ impl Widget for &LessonPane {
         block.render(area, buf);
         let roomy = area.height >= ROOMY_HEIGHT;
         match &self.lesson {
-            Load::Ready(lesson) => match lesson.as_ref() {
+            Task::Ready(lesson) => match lesson.as_ref() {
                 Lesson::Axis {
                     selected,
                     ray,
@@ -105,7 +105,7 @@ impl Widget for &LessonPane {
                 ),
                 Lesson::Nothing(why) => paragraph(vec![Line::from(why.clone())], inner, buf),
             },
-            Load::Running(_) | Load::Failed(_) | Load::Idle => {
+            Task::Running(_) | Task::Failed(_) | Task::Idle => {
                 let load = self.lesson.status();
                 placeholder(&load, "lesson", "", self.theme, inner, buf);
             }

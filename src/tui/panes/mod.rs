@@ -16,13 +16,13 @@ use ratatui::layout::Rect;
 use ratatui::style::Color;
 use ratatui::widgets::{Gauge, Paragraph, Widget, Wrap};
 
-use super::event::Load;
+use super::event::Task;
 use super::theme::Theme;
 
 /// Draws the placeholder of something not ready: a gauge naming its phase while it runs, its
 /// error, or a hint.
 pub fn placeholder(
-    load: &Load<()>,
+    load: &Task<()>,
     what: &str,
     idle: &str,
     theme: Theme,
@@ -30,7 +30,7 @@ pub fn placeholder(
     buf: &mut Buffer,
 ) {
     match load {
-        Load::Running(p) => {
+        Task::Running(p) => {
             let gauge_area = Rect {
                 height: area.height.min(1),
                 ..area
@@ -42,11 +42,11 @@ pub fn placeholder(
                 .label(format!("{phase} {:.0}%  (Esc cancels)", p.fraction * 100.0))
                 .render(gauge_area, buf);
         }
-        Load::Failed(e) => Paragraph::new(format!("{what}: {e}"))
+        Task::Failed(e) => Paragraph::new(format!("{what}: {e}"))
             .style(theme.fg(Color::Red))
             .wrap(Wrap { trim: true })
             .render(area, buf),
-        Load::Idle | Load::Ready(()) => Paragraph::new(idle.to_string())
+        Task::Idle | Task::Ready(()) => Paragraph::new(idle.to_string())
             .wrap(Wrap { trim: true })
             .render(area, buf),
     }

@@ -6,7 +6,7 @@ use ratatui::widgets::{Paragraph, Widget, Wrap};
 use slabscope::render::{Gap, Mode};
 
 use crate::term::image::{TermImage, hide};
-use crate::tui::event::{Load, PictureSettings};
+use crate::tui::event::{PictureSettings, Task};
 use crate::tui::theme::Theme;
 
 /// The preview pane's state.
@@ -14,7 +14,7 @@ pub struct PreviewPane {
     /// Camera, gaps and colours.
     pub look: PictureSettings,
     /// The image, encoded for the terminal.
-    pub image: Load<Box<TermImage>>,
+    pub image: Task<Box<TermImage>>,
     /// Something (the help) covers the pane: the image is taken away until it closes, and
     /// sent again then.
     pub covered: bool,
@@ -45,7 +45,7 @@ impl PreviewPane {
     pub fn new(theme: Theme) -> Self {
         Self {
             look: PictureSettings::default(),
-            image: Load::Idle,
+            image: Task::Idle,
             covered: false,
             hide: String::new(),
             graphics: "",
@@ -64,7 +64,7 @@ impl PreviewPane {
     fn title(&self) -> String {
         let l = &self.look;
         let bytes = match &self.image {
-            Load::Ready(i) if !self.graphics.is_empty() => {
+            Task::Ready(i) if !self.graphics.is_empty() => {
                 format!(" [{} {} KB]", self.graphics, i.bytes.div_ceil(1024))
             }
             _ => String::new(),
@@ -122,13 +122,13 @@ impl Widget for &PreviewPane {
         let inner = block.inner(area);
         block.render(area, buf);
         match &self.image {
-            Load::Ready(_) if self.covered => hide(&self.hide, inner, buf),
-            Load::Ready(image) => image.as_ref().render(inner, buf),
-            Load::Running(_) => Paragraph::new("rendering…").render(inner, buf),
-            Load::Failed(e) => Paragraph::new(format!("render failed: {e}"))
+            Task::Ready(_) if self.covered => hide(&self.hide, inner, buf),
+            Task::Ready(image) => image.as_ref().render(inner, buf),
+            Task::Running(_) => Paragraph::new("rendering…").render(inner, buf),
+            Task::Failed(e) => Paragraph::new(format!("render failed: {e}"))
                 .wrap(Wrap { trim: true })
                 .render(inner, buf),
-            Load::Idle => {}
+            Task::Idle => {}
         }
     }
 }

@@ -10,7 +10,7 @@ use slabscope::geometry::WorldAxis;
 use slabscope::partition::{BackgroundSummary, Method, SlabInfo, slab_text};
 
 use super::placeholder;
-use crate::tui::event::Load;
+use crate::tui::event::Task;
 use crate::tui::theme::Theme;
 
 /// The partition as the table shows it.
@@ -52,7 +52,7 @@ impl SlabTable {
 /// The slabs pane's state.
 pub struct SlabsPane {
     /// The table, or the gauge of the histories behind it.
-    pub table: Load<SlabTable>,
+    pub table: Task<SlabTable>,
     /// The selected slab.
     pub row: usize,
     /// Whether it has the focus.
@@ -65,7 +65,7 @@ impl SlabsPane {
     /// An empty pane.
     pub fn new(theme: Theme) -> Self {
         Self {
-            table: Load::Idle,
+            table: Task::Idle,
             row: 0,
             focused: false,
             theme,
@@ -154,7 +154,7 @@ impl Columns {
 
 impl Widget for &SlabsPane {
     fn render(self, area: Rect, buf: &mut Buffer) {
-        let Load::Ready(table) = &self.table else {
+        let Task::Ready(table) = &self.table else {
             let block = self.theme.block(" Slabs ".into(), self.focused);
             let inner = block.inner(area);
             block.render(area, buf);

@@ -4,8 +4,9 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::widgets::{Paragraph, Widget, Wrap};
 
+use crate::tui::app::tour::Tour;
+use crate::tui::keymap;
 use crate::tui::theme::Theme;
-use crate::tui::tour::Tour;
 
 /// The page shown.
 pub struct TourPage<'a> {
@@ -19,9 +20,10 @@ impl Widget for TourPage<'_> {
     fn render(self, area: Rect, buf: &mut Buffer) {
         let page = self.tour.current();
         let title = format!(
-            " Tour, {}: {}  (Space or → next, ← back, q quits) ",
+            " Tour, {}: {}  ({}) ",
             self.tour.counter(),
-            page.title
+            page.title,
+            keymap::tour_hints()
         );
         let text = match &self.tour.numbers {
             Some(n) => format!("{} {n}", page.text),

@@ -12,7 +12,7 @@ use slabscope::{Axis, ViewSearch};
 
 use super::placeholder;
 use super::sphere::SphereMap;
-use crate::tui::event::Load;
+use crate::tui::event::Task;
 use crate::tui::theme::Theme;
 
 /// The list's width: rank, axis, name and score.
@@ -34,9 +34,9 @@ const GAIN_COLUMN: u16 = 7;
 /// The viewpoints pane's state.
 pub struct ViewsPane {
     /// The view search (each axis with its gain once that ranking is in).
-    pub views: Load<ViewSearch>,
+    pub views: Task<ViewSearch>,
     /// The axes ranked by partition gain, when asked for.
-    pub gain: Load<GainRanking>,
+    pub gain: Task<GainRanking>,
     /// Whether the list and the sphere follow the gain ranking (once it is in).
     pub by_gain: bool,
     /// The selected row.
@@ -55,8 +55,8 @@ impl ViewsPane {
     /// A pane waiting for the volume called `name`.
     pub fn new(name: &str, theme: Theme) -> Self {
         Self {
-            views: Load::Idle,
-            gain: Load::Idle,
+            views: Task::Idle,
+            gain: Task::Idle,
             by_gain: false,
             row: 0,
             current: None,
@@ -240,7 +240,7 @@ impl Widget for &ViewsPane {
         let block = self.theme.block(title, self.focused);
         let inner = block.inner(area);
         block.render(area, buf);
-        let Load::Ready(views) = &self.views else {
+        let Task::Ready(views) = &self.views else {
             placeholder(
                 &self.views.status(),
                 "view search",

@@ -8,7 +8,7 @@ use slabscope::{AnalysisParams, Monitor};
 
 use super::{PLAIN, fixture, pane, ready_app};
 use crate::tui::app::{App, Screen};
-use crate::tui::event::{Action, Effect, JobMsg, Load};
+use crate::tui::event::{Action, Effect, JobMsg, Task};
 
 fn gain_result() -> JobMsg {
     let ranking = rank_by_gain(&fixture().0, &AnalysisParams::default(), &Monitor::none());
@@ -29,7 +29,7 @@ fn i_ranks_by_gain_then_switches_the_order() {
         "one ranking at a time"
     );
     app.update(Action::Job(gain_result()));
-    let Load::Ready(gain) = &app.views.gain else {
+    let Task::Ready(gain) = &app.views.gain else {
         panic!("the ranking is in")
     };
     let gain_best = gain.views[0].axis;
@@ -143,7 +143,7 @@ fn a_previews_gain_ranking_is_ranked_again_with_full_resolutions_views() {
     app.update(Action::Job(JobMsg::Views(1, Ok(Box::new(views.clone())))));
     let ranking = rank_by_gain(&coarse, &params, &Monitor::none()).map_err(|e| e.to_string());
     app.update(Action::Job(JobMsg::Gain(1, ranking.map(Box::new))));
-    assert!(matches!(app.views.gain, Load::Ready(_)));
+    assert!(matches!(app.views.gain, Task::Ready(_)));
     assert!(
         app.views.views.ready().unwrap().views[0]
             .partition_gain

@@ -6,7 +6,7 @@ use slabscope::partition::Method;
 
 use super::{pane, ready_app};
 use crate::tui::app::{App, Pane};
-use crate::tui::event::{Action, Effect, JobMsg, Load};
+use crate::tui::event::{Action, Effect, JobMsg, Task};
 use crate::tui::lesson::{Lesson, Subject};
 
 /// Runs the lesson request among `effects` as the jobs would and hands the app its answer;
@@ -31,8 +31,8 @@ fn shown(app: &App, w: u16, h: u16) -> String {
 
 fn lesson(app: &App) -> &Lesson {
     match &app.lesson.lesson {
-        Load::Ready(l) => l,
-        Load::Failed(e) => panic!("the lesson failed: {e}"),
+        Task::Ready(l) => l,
+        Task::Failed(e) => panic!("the lesson failed: {e}"),
         _ => panic!("no lesson yet"),
     }
 }

@@ -4,8 +4,8 @@
 use slabscope::partition::Method;
 
 use super::{ready_app, screens};
+use crate::tui::app::tour::{PAGES, Row, Tour};
 use crate::tui::event::{Action, Effect};
-use crate::tui::tour::{PAGES, Tour};
 
 #[test]
 fn every_page_sets_the_panes_it_speaks_of() {
@@ -23,8 +23,8 @@ fn every_page_sets_the_panes_it_speaks_of() {
         assert_eq!(app.part.method, s.method, "page {}", i + 1);
         assert_eq!(app.part.slab_count(), Some(s.slabs), "page {}", i + 1);
         let row = match s.row {
-            crate::tui::tour::Row::Best => 0,
-            crate::tui::tour::Row::Worst => last_view,
+            Row::Best => 0,
+            Row::Worst => last_view,
         };
         assert_eq!(app.views.row, row, "page {}", i + 1);
         let effects = app.update(Action::TurnPage(1));

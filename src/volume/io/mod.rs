@@ -5,7 +5,6 @@ mod data;
 pub mod dicom;
 mod folder;
 mod limits;
-pub mod mapped;
 mod metaimage;
 mod nifti;
 mod nrrd;

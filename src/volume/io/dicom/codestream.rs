@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use super::header::PixelFormat;
+use super::format::PixelFormat;
 use super::read;
 use super::read::Syntax;
 use crate::error::{Error, Result};

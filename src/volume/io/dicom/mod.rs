@@ -1,5 +1,6 @@
 //! DICOM: a file, or a folder of files, read as a volume. Each file is walked safely first
-//! (`read`), its header parsed by dicom-object and described per frame (`header`); the
+//! (`read`), its header parsed by dicom-object (its elements' values read by `elements`, the
+//! pixel format by `format`) and described per frame (`header`); the
 //! frames (a Siemens mosaic's tiles, `mosaic`, from its CSA header, `csa`) are grouped into
 //! series and laid out along the slice normal (`assemble`); native pixels are read straight
 //! from the files, compressed ones decoded by dicom-pixeldata, and both turned into values the
@@ -9,6 +10,8 @@
 mod assemble;
 mod codestream;
 mod csa;
+mod elements;
+mod format;
 mod header;
 mod mosaic;
 mod pixels;
@@ -24,7 +27,8 @@ use dicom_object::InMemDicomObject;
 use serde::Serialize;
 
 use self::assemble::{Layout, Series};
-use self::header::{Image, PixelFormat};
+use self::format::PixelFormat;
+use self::header::Image;
 use self::read::Syntax;
 use self::scan::{Scan, paths_of, series_of};
 use super::data::check_budget;

@@ -11,7 +11,8 @@ use dicom_object::InMemDicomObject;
 use dicom_object::mem::InMemElement;
 
 use super::csa;
-use super::header::{PixelFormat, float, text};
+use super::elements::{float, floats, text};
+use super::format::PixelFormat;
 use crate::geometry::{cross, dot, normalize};
 
 /// The most slices a mosaic may hold (dcm2niix's limit for slices of one volume).
@@ -164,7 +165,7 @@ pub(super) fn of(obj: &InMemDicomObject, format: &PixelFormat) -> Result<Option<
 
 /// The cross product of `ImageOrientationPatient`'s directions, normalised.
 fn orientation_normal(obj: &InMemDicomObject) -> Option<[f64; 3]> {
-    let o = super::header::floats(obj, dicom_dictionary_std::tags::IMAGE_ORIENTATION_PATIENT)?;
+    let o = floats(obj, dicom_dictionary_std::tags::IMAGE_ORIENTATION_PATIENT)?;
     let (r, c) = (o.get(..3)?, o.get(3..6)?);
     normalize(cross([r[0], r[1], r[2]], [c[0], c[1], c[2]]))
 }

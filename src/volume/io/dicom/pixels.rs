@@ -2,7 +2,7 @@
 //! colour turned into luminance, `RescaleSlope` and `RescaleIntercept` applied; and resampling a
 //! stack of slices onto an even, orthogonal grid.
 
-use super::header::PixelFormat;
+use super::format::PixelFormat;
 
 /// How to turn one frame's samples into values.
 #[derive(Clone, Copy, Debug)]

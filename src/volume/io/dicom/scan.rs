@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use super::assemble::{self, Series};
-use super::header::{self, Image, PixelFormat};
+use super::format::{self, PixelFormat};
+use super::header::{self, Image};
 use super::mosaic;
 use super::read::{self, Pixels, Syntax};
 use super::{Failures, LoadOptions, files_in, files_under, parse};
@@ -57,7 +58,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
             let images = if matches!(part.pixels, Pixels::None) {
                 Vec::new()
             } else {
-                let format = header::pixel_format(&obj);
+                let format = format::pixel_format(&obj);
                 check_frames(path, &format, &part.pixels)?;
                 let mosaic = mosaic::of(&obj, &format).map_err(|m| Error::format(path, m))?;
                 let tiles = mosaic.as_ref().map_or(1, |m| m.tiles);

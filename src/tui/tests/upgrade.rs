@@ -8,7 +8,7 @@ use slabscope::volume::phantom;
 use slabscope::{AnalysisParams, Histories, Monitor, Scope, ViewParams, ViewSearch, Volume};
 
 use crate::tui::app::{App, Screen};
-use crate::tui::event::{Action, Effect, JobMsg, Load};
+use crate::tui::event::{Action, Effect, JobMsg, Task};
 
 /// A volume just over the preview's size, its preview level, the preview's view search and
 /// both resolutions' histories along z.
@@ -145,7 +145,7 @@ fn a_new_best_axis_at_full_resolution_is_said_and_followed() {
     full.views.swap(0, 1);
     let new_best = full.views[0].axis;
     let effects = job(&mut app, JobMsg::Views(0, Ok(Box::new(full))));
-    // Previewed along the new axis first, then refined.
+    // Previewed along the new axis first, then upgraded.
     assert!(
         matches!(effects[..], [Effect::Analyze(2, a, _, 1)] if a == new_best),
         "{effects:?}"
@@ -158,7 +158,7 @@ fn a_new_best_axis_at_full_resolution_is_said_and_followed() {
 }
 
 #[test]
-fn an_axis_the_user_chose_is_kept_and_refined_at_once() {
+fn an_axis_the_user_chose_is_kept_and_upgraded_at_once() {
     let b = big();
     let (mut app, _) = previewed();
     app.update(Action::Ask(crate::tui::event::Ask::Axis));
@@ -205,7 +205,7 @@ fn escape_cancels_full_resolution_and_the_preview_stays() {
     // The cancelled search's late answer changes nothing.
     let effects = job(&mut app, JobMsg::Views(0, Err("cancelled".into())));
     assert!(effects.is_empty());
-    assert!(matches!(app.views.views, Load::Ready(_)));
+    assert!(matches!(app.views.views, Task::Ready(_)));
     // Nor what Esc said (the answer may come before or after the key: tmux saw both).
     let said = app.status.message.clone().unwrap_or_default();
     assert!(said.starts_with("cancelled: the preview stays"), "{said}");
@@ -251,7 +251,7 @@ fn a_level_the_file_holds_shows_before_level_0_has_loaded() {
     assert!(app.update(Action::Export).is_empty());
     let said = app.status.message.clone().unwrap();
     assert!(said.starts_with("nothing to export until"), "{said}");
-    // Level 0 arrives: the full view search starts; the preview stays until it is refined.
+    // Level 0 arrives: the full view search starts; the preview stays until it is upgraded.
     let effects = job(
         &mut app,
         JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
@@ -286,11 +286,11 @@ fn a_file_preview_after_level_0_or_on_level_0_is_ignored() {
     );
     let effects = job(&mut app, JobMsg::Preview(Arc::clone(&b.coarse), vec![]));
     assert!(effects.is_empty(), "{effects:?}");
-    assert!(!app.refine.as_ref().unwrap().from_file);
+    assert!(!app.upgrade.as_ref().unwrap().from_file);
     let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
     let effects = job(&mut app, JobMsg::Preview(Arc::clone(&b.volume), vec![]));
     assert!(effects.is_empty(), "{effects:?}");
-    assert!(app.refine.is_none());
+    assert!(app.upgrade.is_none());
 }
 
 #[test]
@@ -341,7 +341,7 @@ fn a_level_0_beyond_the_budget_starts_afresh_without_the_file_preview() {
         ),
         "{effects:?}"
     );
-    assert!(app.refine.is_none());
-    assert!(matches!(app.views.views, Load::Running(_)));
+    assert!(app.upgrade.is_none());
+    assert!(matches!(app.views.views, Task::Running(_)));
     assert_eq!(app.status.resolution, None);
 }

@@ -10,11 +10,11 @@ use slabscope::partition::Slab;
 use slabscope::{Histories, Progress, ViewSearch, Volume};
 
 use super::App;
-use crate::tui::event::{Effect, Load};
+use crate::tui::event::{Effect, Task};
 use crate::tui::partitioning::Finished;
 
-/// A preview being refined.
-pub struct Refinement {
+/// A preview being upgraded to full resolution.
+pub struct Upgrade {
     /// The preview's pyramid level (at least 1).
     pub level: usize,
     /// How many voxels of the volume a preview voxel spans along its longest axis.
@@ -22,7 +22,7 @@ pub struct Refinement {
     /// The preview's volume, once built.
     pub coarse: Option<Arc<Volume>>,
     /// The full-resolution view search: not started until a preview's histories show.
-    pub views: Load<()>,
+    pub views: Task<()>,
     /// Whether the axis is the view search's best rather than the user's: the full search's
     /// best then takes its place.
     pub auto_axis: bool,
@@ -31,7 +31,7 @@ pub struct Refinement {
     pub from_file: bool,
 }
 
-impl Refinement {
+impl Upgrade {
     /// A preview on pyramid level `level` of a volume of `dims`.
     pub fn new(level: usize, dims: [usize; 3]) -> Self {
         let longest = dims.into_iter().max().unwrap_or(1);
@@ -43,7 +43,7 @@ impl Refinement {
             level,
             factor: longest.div_ceil(n),
             coarse: None,
-            views: Load::Idle,
+            views: Task::Idle,
             auto_axis: false,
             from_file: false,
         }
@@ -56,7 +56,7 @@ impl Refinement {
             level: level.index,
             factor: level.factor.into_iter().max().unwrap_or(1),
             coarse: Some(coarse),
-            views: Load::Idle,
+            views: Task::Idle,
             auto_axis: false,
             from_file: true,
         }
@@ -67,16 +67,16 @@ impl App {
     /// A pyramid level the file holds, read before level 0: the preview computes on it while
     /// level 0 loads.
     pub(super) fn on_preview(&mut self, volume: &Arc<Volume>, notes: &[String]) -> Vec<Effect> {
-        if !self.volume.running() || self.refine.is_some() || volume.level().index == 0 {
+        if !self.volume.running() || self.upgrade.is_some() || volume.level().index == 0 {
             return vec![];
         }
         self.status.message = notes.first().cloned();
         let level = volume.level().index;
-        self.refine = Some(Refinement::of_file(Arc::clone(volume)));
+        self.upgrade = Some(Upgrade::of_file(Arc::clone(volume)));
         self.begin(volume, level)
     }
 
-    /// Level 0 loaded under the file's preview: the preview is refined as any other. Beyond
+    /// Level 0 loaded under the file's preview: the preview is upgraded as any other. Beyond
     /// the memory budget the volume worked on is itself a pyramid level, of which the file's
     /// is no preview: everything starts afresh on it.
     pub(super) fn adopt(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
@@ -94,8 +94,8 @@ impl App {
         if let Some(heavy) = self.params.heavy_work(volume.dims(), volume.spacing()) {
             self.status.message = Some(format!("{heavy}: it may take long; Esc cancels it"));
         }
-        self.volume = Load::Ready(volume);
-        let effects = self.start_refinement();
+        self.volume = Task::Ready(volume);
+        let effects = self.start_upgrade();
         self.sync_status();
         effects
     }
@@ -105,20 +105,20 @@ impl App {
     pub(super) fn has_level(&self, level: usize) -> bool {
         self.volume.ready().is_some()
             || self
-                .refine
+                .upgrade
                 .as_ref()
                 .is_some_and(|r| r.from_file && r.level == level)
     }
 
     /// The pyramid level new histories start on: the preview's, or 0.
     pub(super) fn first_level(&self) -> usize {
-        self.refine.as_ref().map_or(0, |r| r.level)
+        self.upgrade.as_ref().map_or(0, |r| r.level)
     }
 
     /// The pyramid level of what is shown: the histories', or before any the preview's.
     pub(super) fn shown_level(&self) -> usize {
         match self.part.histories {
-            Load::Idle => self.first_level(),
+            Task::Idle => self.first_level(),
             _ => self.part.level,
         }
     }
@@ -127,14 +127,14 @@ impl App {
     pub(super) fn shown_volume(&self) -> Option<&Arc<Volume>> {
         match self.shown_level() {
             0 => self.volume.ready(),
-            _ => self.refine.as_ref().and_then(|r| r.coarse.as_ref()),
+            _ => self.upgrade.as_ref().and_then(|r| r.coarse.as_ref()),
         }
     }
 
     /// Starts the histories along an axis the user chose: it stays when full resolution finds
     /// another best.
     pub(super) fn analyze_chosen(&mut self, axis: [f64; 3]) -> Vec<Effect> {
-        if let Some(r) = self.refine.as_mut() {
+        if let Some(r) = self.upgrade.as_mut() {
             r.auto_axis = false;
         }
         self.analyze(axis)
@@ -146,11 +146,11 @@ impl App {
         level: usize,
         result: Result<Box<ViewSearch>, String>,
     ) -> Vec<Effect> {
-        let full = level == 0 && self.refine.is_some();
+        let full = level == 0 && self.upgrade.is_some();
         let mut effects = vec![];
         // Views that come after the gain ranking carry its scores too.
         let result = result.map(|mut views| {
-            if let Load::Ready(g) = &self.views.gain
+            if let Task::Ready(g) = &self.views.gain
                 && self.gain_fits(level)
             {
                 g.annotate(&mut views);
@@ -162,10 +162,10 @@ impl App {
                 let best = views.best().axis;
                 let previous = self.views.views.ready().map(|v| v.best().axis);
                 self.views.row = self.views.row.min(views.views.len().saturating_sub(1));
-                self.views.views = Load::Ready(*views);
-                let refine = self.refine.as_mut().expect("full is a refinement");
-                refine.views = Load::Ready(());
-                let moved = refine.auto_axis
+                self.views.views = Task::Ready(*views);
+                let upgrade = self.upgrade.as_mut().expect("full is an upgrade");
+                upgrade.views = Task::Ready(());
+                let moved = upgrade.auto_axis
                     && !self.gain_picks()
                     && self.part.axis.is_some_and(|a| !same(a, best));
                 // A preview's gain ranking scored the preview's views: rank these too.
@@ -181,27 +181,27 @@ impl App {
                     ));
                     effects.extend(self.analyze(best));
                 } else {
-                    effects.extend(self.refine_histories());
+                    effects.extend(self.upgrade_histories());
                 }
             }
             Ok(views) => {
                 let best = views.best().axis;
-                self.views.views = Load::Ready(*views);
+                self.views.views = Task::Ready(*views);
                 self.views.row = 0;
                 if self.part.axis.is_none() && !self.gain_picks() {
-                    if let Some(r) = self.refine.as_mut() {
+                    if let Some(r) = self.upgrade.as_mut() {
                         r.auto_axis = true;
                     }
                     effects = self.analyze(best);
                 }
             }
             Err(e) if full => {
-                if let Some(r) = self.refine.as_mut() {
-                    r.views = Load::Failed(e.clone());
+                if let Some(r) = self.upgrade.as_mut() {
+                    r.views = Task::Failed(e.clone());
                 }
                 self.say_failed(&e);
             }
-            Err(e) => self.views.views = Load::Failed(e),
+            Err(e) => self.views.views = Task::Failed(e),
         }
         self.sync();
         effects
@@ -219,22 +219,22 @@ impl App {
         match self.part.finish(generation, level, result) {
             Finished::Stale => return vec![],
             Finished::Shown => {}
-            Finished::Refined => match (&before, self.part.ready(), &self.part.refining) {
-                (Some((preview, shown)), Some(full), Load::Idle) => {
+            Finished::Upgraded => match (&before, self.part.ready(), &self.part.upgrading) {
+                (Some((preview, shown)), Some(full), Task::Idle) => {
                     let full = Arc::clone(full);
                     let now = self.part.slabs().unwrap_or_default();
                     let words = compare((preview, shown), (&full, &now), shift, self.final_words());
                     self.status.message = Some(words);
                     self.carry_over(preview, &full, shift);
                 }
-                (_, _, Load::Failed(e)) => {
+                (_, _, Task::Failed(e)) => {
                     let e = e.clone();
                     self.say_failed(&e);
                 }
                 _ => {}
             },
         }
-        let mut effects = self.start_refinement();
+        let mut effects = self.start_upgrade();
         self.sync();
         effects.extend(self.render());
         effects
@@ -242,37 +242,37 @@ impl App {
 
     /// Once a preview shows and level 0 is loaded, the full-resolution view search starts, and
     /// the histories follow it (at once along an axis the user chose).
-    fn start_refinement(&mut self) -> Vec<Effect> {
+    fn start_upgrade(&mut self) -> Vec<Effect> {
         let mut effects = vec![];
-        if self.part.awaits_refinement()
+        if self.part.awaits_upgrade()
             && self.volume.ready().is_some()
-            && let Some(r) = self.refine.as_mut()
-            && matches!(r.views, Load::Idle)
+            && let Some(r) = self.upgrade.as_mut()
+            && matches!(r.views, Task::Idle)
         {
-            r.views = Load::started("view search");
+            r.views = Task::started("view search");
             effects.push(Effect::SearchViews(self.params.view.clone(), 0));
         }
-        effects.extend(self.refine_histories());
+        effects.extend(self.upgrade_histories());
         effects
     }
 
     /// Starts the full-resolution histories when a preview's show and their axis is settled:
     /// the user's, or the best once the full-resolution view search is done.
-    fn refine_histories(&mut self) -> Vec<Effect> {
-        let Some(r) = &self.refine else {
+    fn upgrade_histories(&mut self) -> Vec<Effect> {
+        let Some(r) = &self.upgrade else {
             return vec![];
         };
-        let settled = !r.auto_axis || matches!(r.views, Load::Ready(()));
-        if !(settled && self.part.awaits_refinement() && self.volume.ready().is_some()) {
+        let settled = !r.auto_axis || matches!(r.views, Task::Ready(()));
+        if !(settled && self.part.awaits_upgrade() && self.volume.ready().is_some()) {
             return vec![];
         }
-        self.part.refine().into_iter().collect()
+        self.part.upgrade().into_iter().collect()
     }
 
     /// The progress of the full-resolution view search.
-    pub(super) fn refine_progress(&mut self, p: Progress) {
-        if let Some(r) = self.refine.as_mut().filter(|r| r.views.running()) {
-            r.views = Load::Running(p);
+    pub(super) fn upgrade_progress(&mut self, p: Progress) {
+        if let Some(r) = self.upgrade.as_mut().filter(|r| r.views.running()) {
+            r.views = Task::Running(p);
         }
     }
 
@@ -280,7 +280,7 @@ impl App {
     fn preview_shift(&self) -> [f64; 3] {
         match (
             self.volume.ready(),
-            self.refine.as_ref().and_then(|r| r.coarse.as_ref()),
+            self.upgrade.as_ref().and_then(|r| r.coarse.as_ref()),
         ) {
             (Some(full), Some(coarse)) => {
                 let (s, f) = (full.spacing(), coarse.level().factor);
@@ -300,14 +300,14 @@ impl App {
     }
 
     /// Cancels the full-resolution jobs: the preview stays; true if any was running.
-    pub(super) fn cancel_refinement(&mut self) -> bool {
+    pub(super) fn cancel_upgrade(&mut self) -> bool {
         let mut any = false;
-        if let Some(r) = self.refine.as_mut().filter(|r| r.views.running()) {
-            r.views = Load::Failed("cancelled".into());
+        if let Some(r) = self.upgrade.as_mut().filter(|r| r.views.running()) {
+            r.views = Task::Failed("cancelled".into());
             any = true;
         }
-        if self.part.refining.running() {
-            self.part.refining = Load::Failed("cancelled".into());
+        if self.part.upgrading.running() {
+            self.part.upgrading = Task::Failed("cancelled".into());
             any = true;
         }
         any
@@ -321,7 +321,7 @@ impl App {
         }
     }
 
-    /// What the preview is refined to, in words: full resolution, or beyond the memory budget
+    /// What the preview is upgraded to, in words: full resolution, or beyond the memory budget
     /// the pyramid level the volume was loaded at.
     pub(super) fn final_words(&self) -> &'static str {
         match self.volume.ready().map(|v| v.level().index) {
@@ -332,7 +332,7 @@ impl App {
 
     /// The status line's word on the resolution shown, and the full-resolution jobs' gauges.
     pub(super) fn resolution_status(&self) -> (Option<String>, Vec<Progress>) {
-        let Some(r) = &self.refine else {
+        let Some(r) = &self.upgrade else {
             return (None, vec![]);
         };
         // Against the file's resolution: the volume worked on may itself be a pyramid level
@@ -343,9 +343,9 @@ impl App {
             .and_then(|v| v.level().factor.into_iter().max())
             .unwrap_or(1);
         let label = (self.shown_level() > 0).then(|| {
-            let stopped = matches!(self.volume, Load::Failed(_))
-                || matches!(r.views, Load::Failed(_))
-                || matches!(self.part.refining, Load::Failed(_));
+            let stopped = matches!(self.volume, Task::Failed(_))
+                || matches!(r.views, Task::Failed(_))
+                || matches!(self.part.upgrading, Task::Failed(_));
             format!(
                 "preview: 1/{} resolution{}{}",
                 r.factor * base,
@@ -366,9 +366,9 @@ impl App {
         for load in [
             self.volume.status(),
             r.views.status(),
-            self.part.refining.status(),
+            self.part.upgrading.status(),
         ] {
-            if let Load::Running(p) = load {
+            if let Task::Running(p) = load {
                 gauges.push(p);
             }
         }

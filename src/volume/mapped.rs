@@ -16,7 +16,39 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicPtr, AtomicUsize, Ordering};
 
-use crate::volume::voxels::MappedFile;
+/// A read-only memory map shared by the volumes (and pyramid levels) made from one file,
+/// registered so that its file being cut short is reported (see the module's documentation).
+pub struct MappedFile {
+    map: memmap2::Mmap,
+    slot: Option<usize>,
+}
+
+impl MappedFile {
+    /// Wraps a map of a whole file, registered in `slot`.
+    fn new(map: memmap2::Mmap, slot: Option<usize>) -> Arc<Self> {
+        Arc::new(Self { map, slot })
+    }
+
+    /// The mapped bytes.
+    #[must_use]
+    pub fn bytes(&self) -> &[u8] {
+        &self.map
+    }
+}
+
+impl Drop for MappedFile {
+    fn drop(&mut self) {
+        if let Some(slot) = self.slot {
+            unregister(slot);
+        }
+    }
+}
+
+impl std::fmt::Debug for MappedFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "MappedFile({} bytes)", self.map.len())
+    }
+}
 
 /// Maps registered at once: more maps than this are simply not registered (a fault in one of
 /// them gets the default action).
@@ -86,7 +118,7 @@ fn register(map: &memmap2::Mmap, path: &Path) -> Option<usize> {
 }
 
 /// Frees slot `i`, taken by [`register`], before its map is dropped.
-pub(crate) fn unregister(i: usize) {
+fn unregister(i: usize) {
     let slot = &SLOTS_IN_USE[i];
     slot.start.store(usize::MAX, Ordering::Release);
     let message = slot.message.swap(std::ptr::null_mut(), Ordering::AcqRel);
