@@ -7,13 +7,13 @@ use std::time::Duration;
 
 use anyhow::Result;
 use clap::Args;
+use slabscope::Error;
 use slabscope::error::names::controls;
 use slabscope::error::shown;
 use slabscope::render::{ImageOutput, encode, sheet};
 use slabscope::triage::{
     Entry, Source, TriageOutcome, TriagePlan, TriageRow, manifest_lines, select,
 };
-use slabscope::{Error, Progress};
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::progress::Bar;
@@ -105,15 +105,12 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
             "K"
         );
     }
-    let bar = Bar::new();
+    let bar = Bar::volumes(volumes.len());
     let mut failed = 0;
     let mut cells = Vec::new();
     let mut result = Ok(());
     look_all(&volumes, args, |i, TriageOutcome { row, cell }| {
-        bar.set(Progress {
-            phase: "triage",
-            fraction: (i + 1) as f64 / volumes.len() as f64,
-        });
+        bar.set_done(i + 1);
         failed += usize::from(row.error.is_some());
         if args.sheet.is_some() {
             cells.push(cell);
@@ -127,7 +124,7 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
         };
         match line {
             Ok(line) => {
-                outln!("{line}");
+                bar.suspend(|| outln!("{line}"));
                 true
             }
             Err(e) => {
