@@ -1,8 +1,9 @@
 //! The slow process-level suites, one binary for all of them: the TUI in real terminals and in
-//! tmux, hostile files and options, and the mutation harness. Each runs the real binary under a
-//! timeout, so they run one at a time: on a 2-core machine, tests running side by side would
-//! starve each other's timeouts. Every test here starts with [`one_at_a_time`], which makes that
-//! hold under plain `cargo test` (no `--test-threads=1` needed, and filters still work).
+//! tmux, the CLI's progress line in tmux, hostile files and options, and the mutation harness.
+//! Each runs the real binary under a timeout, so they run one at a time: on a 2-core machine,
+//! tests running side by side would starve each other's timeouts. Every test here starts with
+//! [`one_at_a_time`], which makes that hold under plain `cargo test` (no `--test-threads=1`
+//! needed, and filters still work).
 //!
 //! `cargo test --test slow` runs them all; `cargo test --test slow mutants` one suite.
 
@@ -14,6 +15,7 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 mod common;
 
 mod budget;
+mod cli_progress;
 mod hostile;
 mod mutants;
 mod real_terminal;

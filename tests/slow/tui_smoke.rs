@@ -8,13 +8,13 @@ use std::time::{Duration, Instant};
 use crate::common::{binary, data, dicom_data};
 
 /// A tmux server of our own, so the test never touches the user's sessions.
-struct Tmux {
+pub(crate) struct Tmux {
     socket: String,
 }
 
 impl Tmux {
     /// A server of our own named for `name`, running `command` in a `cols`×`rows` window.
-    fn start(name: &str, command: &str, (cols, rows): (u16, u16)) -> Self {
+    pub(crate) fn start(name: &str, command: &str, (cols, rows): (u16, u16)) -> Self {
         let tmux = Tmux {
             socket: format!("slabscope-{name}-{}", std::process::id()),
         };
@@ -43,12 +43,12 @@ impl Tmux {
         String::from_utf8_lossy(&out.stdout).into_owned()
     }
 
-    fn screen(&self) -> String {
+    pub(crate) fn screen(&self) -> String {
         self.run(&["capture-pane", "-p", "-t", "smoke"])
     }
 
     /// Waits until the screen shows `text`, for at most `secs` seconds.
-    fn wait_for(&self, text: &str, secs: u64) -> String {
+    pub(crate) fn wait_for(&self, text: &str, secs: u64) -> String {
         let start = Instant::now();
         loop {
             let screen = self.screen();
@@ -210,7 +210,7 @@ fn a_folder_of_dicom_series_opens_as_a_list_of_series() {
 }
 
 /// A body phantom of 192³ voxels (more than the preview's 2²¹), written by the binary.
-fn large_phantom(dir: &std::path::Path) -> std::path::PathBuf {
+pub(crate) fn large_phantom(dir: &std::path::Path) -> std::path::PathBuf {
     let path = dir.join("body192.nrrd");
     let out = Command::new(binary())
         .args(["phantom", "body", "--size", "192", "-o"])
