@@ -23,16 +23,17 @@ enum Counting {
 }
 
 /// Draws `[########............]  43% view search  12.3 s elapsed, ~16 s left` (or
-/// `[###.....]  5/12 volumes  1m 03s elapsed, 4.8/min, ~1m 28s left`) on stderr, redrawn in
-/// place and ticking while the work stalls; nothing when stderr is not a terminal. The line is
-/// cleared when the bar is dropped.
+/// `[########............] 5/12 volumes  1m 03s elapsed, 4.8/min, ~1m 28s left`) on stderr,
+/// redrawn in place and ticking while the work stalls; nothing when stderr is not a terminal.
+/// The line is cleared when the bar is dropped.
 pub struct Bar {
     bar: Option<ProgressBar>,
     /// The phase shown, and the fraction of it last reported.
     phase: Mutex<(&'static str, f64)>,
 }
 
-/// Redraws a second: enough for tenths of a second to move, cheap beside the work.
+/// Between redraws while the work stalls: five a second, enough for the tenths of the time
+/// elapsed to move, and nothing beside the work.
 const TICK: Duration = Duration::from_millis(200);
 
 impl Bar {
