@@ -193,7 +193,7 @@ pub const BINDINGS: &[Binding] = &[
     ),
     row(
         "e  F",
-        "export; a folder's file list (PgUp PgDn: volumes)",
+        "export; folder's files, PgUp PgDn: volumes",
         &[
             (ch('e'), || Action::Export),
             (ch('F'), || Action::ToggleFiles),
