@@ -13,6 +13,10 @@
 //! bricks gives [`PartialCounts`]: what its stretches determine, and the fragments of rays that
 //! enter or leave it, which [`PartialCounts::add`] stitches with the neighbours' — so bricks can
 //! be counted on any thread, in any order, in any process.
+//!
+//! Not the default walk: its stretches are short (a brick's mean chord), and the eight-lane
+//! walk's fixed cost per stretch makes it slower than the tile walk on the machines measured
+//! (docs/performance.md, "The bricked walk").
 
 use super::BinSampler;
 use super::tiles::{Walker, advance, is_whole, ray_start, sample_bin, scalar_walk, tile_rows};
