@@ -80,20 +80,23 @@ impl Bar {
         }
     }
 
-    /// Redraws the bar at `progress`; a new phase (another name, or the fraction going back)
-    /// starts its clock afresh.
+    /// Redraws the bar at `progress`; a phase starting (another name, or a phase's start at
+    /// exactly 0, which only `Monitor::start` reports) starts its clock afresh. Threads report
+    /// as they finish, so a fraction below the last one is late, and ignored.
     pub fn set(&self, progress: Progress) {
         let Some(bar) = &self.bar else { return };
         let mut phase = self
             .phase
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        if phase.0 != progress.phase || progress.fraction < phase.1 {
+        if phase.0 != progress.phase || progress.fraction == 0.0 {
             if phase.0.is_empty() {
                 bar.enable_steady_tick(TICK);
             }
             bar.reset();
             bar.set_message(progress.phase);
+        } else if progress.fraction < phase.1 {
+            return;
         }
         *phase = (progress.phase, progress.fraction);
         let units = bar.length().unwrap_or(1) as f64;

@@ -197,6 +197,12 @@ impl App {
         self.preview.cells = old.preview.cells;
         self.status.volume = old.status.volume;
         self.files = old.files;
+        // A tour goes on at its page, set again for the new volume.
+        self.tour = old.tour.map(|t| tour::Tour {
+            applied: false,
+            numbers: None,
+            ..t
+        });
         self.sync_focus();
         effects
     }

@@ -81,12 +81,9 @@ impl App {
     /// is no preview: everything starts afresh on it.
     pub(super) fn adopt(&mut self, volume: Arc<Volume>, notes: &[String]) -> Vec<Effect> {
         if volume.level().index > 0 {
+            // The volume is here: the fresh app's own load is not needed.
+            let _ = self.start_afresh(self.name.clone());
             let mut effects = vec![Effect::Cancel, Effect::Forget];
-            effects.extend(
-                self.start_afresh(self.name.clone())
-                    .into_iter()
-                    .filter(|e| !matches!(e, Effect::Load)),
-            );
             effects.extend(self.on_loaded(volume, notes));
             return effects;
         }

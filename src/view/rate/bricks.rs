@@ -19,7 +19,7 @@
 //! (docs/performance.md, "The bricked walk").
 
 use super::BinSampler;
-use super::tiles::{Walker, advance, is_whole, ray_start, sample_bin, scalar_walk, tile_rows};
+use super::tiles::{RayStart, RayStarts, Walker, advance, sample_bin, scalar_walk, tile_rows};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::{FIXED_BITS, Lattice};
 use crate::measure::{BlockCounts, Fragment, PartialCounts, ray_key};
@@ -225,8 +225,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
     /// brick of their first sample is walked.
     fn band(&self, (j0, j1): (i64, i64), out: &mut PartialCounts) -> Band {
         let ((i0, i1), _) = self.lattice.ray_ranges();
-        let whole_step = self.lattice.step().iter().all(|&c| is_whole(c));
-        let spans = self.sampler.inner_spans(self.step);
+        let starts = RayStarts::new(self.lattice, self.sampler, self.step);
         let mut band = Band {
             slots: Vec::new(),
             waiting: vec![Vec::new(); self.bricks.len()],
@@ -236,22 +235,22 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
                 continue;
             };
             for i in a.max(i0)..=b.min(i1) {
-                let Some(ray) = self.lattice.ray(i, j) else {
+                let Some(RayStart {
+                    p: p0,
+                    grid,
+                    n,
+                    t0,
+                    t1,
+                }) = starts.of(i, j)
+                else {
                     continue;
                 };
-                let (p0, grid) = ray_start(&ray, whole_step);
-                let n = ray.k1 - ray.k0 + 1;
-                let (t0, t1) = spans.of(p0, n);
                 let key = ray_key(i, j);
                 if t0 >= t1 {
                     // No sample inside a cell: the whole ray with the brick of its first.
                     if self.walked(self.bricks.holding(p0)) {
                         let mut f = Fragment::new(key, 0);
-                        let mut p = p0;
-                        for _ in 0..n {
-                            f.push(&mut out.counts, sample_bin(self.sampler, p, grid));
-                            advance(&mut p, self.step);
-                        }
+                        self.feed(&mut f, &mut out.counts, p0, grid, n);
                         out.rays += 1;
                         let _ = f.close(&mut out.counts, true);
                     }
@@ -275,6 +274,21 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             }
         }
         band
+    }
+
+    /// Appends the `count` samples of a ray from `p` on to `f`, one by one.
+    fn feed(
+        &self,
+        f: &mut Fragment,
+        counts: &mut BlockCounts,
+        mut p: [i64; 3],
+        grid: bool,
+        count: i64,
+    ) {
+        for _ in 0..count {
+            f.push(counts, sample_bin(self.sampler, p, grid));
+            advance(&mut p, self.step);
+        }
     }
 
     /// The brick walked that holds `slot`'s next sample, moving the ray on past bricks not
@@ -340,11 +354,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             };
             let last = slot.t == slot.t1;
             if last {
-                let mut p = slot.p;
-                for _ in slot.t1..slot.n {
-                    f.push(&mut out.counts, sample_bin(self.sampler, p, slot.grid));
-                    advance(&mut p, self.step);
-                }
+                self.feed(&mut f, &mut out.counts, slot.p, slot.grid, slot.n - slot.t1);
             }
             let left = f.close(&mut out.counts, last);
             out.push_fragment(left);
@@ -360,11 +370,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             if f.first {
                 out.rays += 1;
                 // The samples before the inner span.
-                let mut p = slot.p0;
-                for _ in 0..slot.t0 {
-                    f.push(&mut out.counts, sample_bin(self.sampler, p, slot.grid));
-                    advance(&mut p, self.step);
-                }
+                self.feed(&mut f, &mut out.counts, slot.p0, slot.grid, slot.t0);
             }
             f
         });

@@ -2,7 +2,7 @@
 //! after its inner span one by one, and the inner spans walked together, by the scalar walk here
 //! or eight at a time by `lanes`.
 
-use super::{BinSampler, RaySubset};
+use super::{BinSampler, InnerSpans, RaySubset};
 use crate::geometry::cross;
 use crate::geometry::lattice::{Lattice, Ray, round_half_away, to_fixed};
 use crate::measure::{Counter, Run};
@@ -75,7 +75,7 @@ impl Walker {
 }
 
 /// Whether `x` is a whole number up to rounding.
-pub(super) fn is_whole(x: f64) -> bool {
+fn is_whole(x: f64) -> bool {
     (x - round_half_away(x) as f64).abs() < 1e-9
 }
 
@@ -128,7 +128,7 @@ pub(super) fn advance(p: &mut [i64; 3], step: [i64; 3]) {
 
 /// Where a ray's walk starts, in fixed point, and whether its samples lie on the voxel grid
 /// (`whole_step`: the lattice's step is whole): then they are the voxels themselves.
-pub(super) fn ray_start(ray: &Ray, whole_step: bool) -> ([i64; 3], bool) {
+fn ray_start(ray: &Ray, whole_step: bool) -> ([i64; 3], bool) {
     let start = ray.at(ray.k0);
     let grid = whole_step && start.iter().all(|&c| is_whole(c));
     let p = to_fixed(if grid {
@@ -137,6 +137,48 @@ pub(super) fn ray_start(ray: &Ray, whole_step: bool) -> ([i64; 3], bool) {
         start
     });
     (p, grid)
+}
+
+/// A ray set up for a walk: its first sample's position (fixed point), whether its samples are
+/// voxels, how many it has, and its inner span `t0..t1` (the samples inside cells).
+pub(super) struct RayStart {
+    pub(super) p: [i64; 3],
+    pub(super) grid: bool,
+    pub(super) n: i64,
+    pub(super) t0: i64,
+    pub(super) t1: i64,
+}
+
+/// What setting up the rays of one lattice for a walk needs, worked out once.
+pub(super) struct RayStarts<'a> {
+    lattice: &'a Lattice,
+    spans: InnerSpans,
+    whole_step: bool,
+}
+
+impl<'a> RayStarts<'a> {
+    /// For the rays of `lattice` walked with `sampler`, `step` (fixed point) apart.
+    pub(super) fn new<T: Voxel>(
+        lattice: &'a Lattice,
+        sampler: &BinSampler<T>,
+        step: [i64; 3],
+    ) -> Self {
+        Self {
+            lattice,
+            spans: sampler.inner_spans(step),
+            whole_step: lattice.step().iter().all(|&c| is_whole(c)),
+        }
+    }
+
+    /// Ray `(i, j)` set up, or `None` when it misses the box.
+    #[inline]
+    pub(super) fn of(&self, i: i64, j: i64) -> Option<RayStart> {
+        let ray = self.lattice.ray(i, j)?;
+        let (p, grid) = ray_start(&ray, self.whole_step);
+        let n = ray.k1 - ray.k0 + 1;
+        let (t0, t1) = self.spans.of(p, n);
+        Some(RayStart { p, grid, n, t0, t1 })
+    }
 }
 
 /// The quantized samples of ray `(i, j)` of `lattice`, in order (`None` for a missing one), as
@@ -182,8 +224,7 @@ fn walk_tile<C: Counter, T: Voxel>(
     walkers: &mut Vec<Walker>,
     common: &mut impl FnMut(&mut [Walker], &mut C),
 ) -> u64 {
-    let whole_step = lattice.step().iter().all(|&c| is_whole(c));
-    let spans = sampler.inner_spans(step);
+    let starts = RayStarts::new(lattice, sampler, step);
     walkers.clear();
     for (j, row) in (tile.js.0..=tile.js.1).zip(tile.rows) {
         let Some((a, b)) = *row else { continue };
@@ -191,12 +232,9 @@ fn walk_tile<C: Counter, T: Voxel>(
             if !tile.subset.keeps(i, j) {
                 continue;
             }
-            let Some(ray) = lattice.ray(i, j) else {
+            let Some(RayStart { p, grid, n, t0, t1 }) = starts.of(i, j) else {
                 continue;
             };
-            let (p, grid) = ray_start(&ray, whole_step);
-            let n = ray.k1 - ray.k0 + 1;
-            let (t0, t1) = spans.of(p, n);
             let mut w = Walker {
                 p,
                 bin: MIXED,
