@@ -13,28 +13,14 @@
 
 mod common;
 
-use std::path::PathBuf;
-
 use common::{median, parse_dims, run, volume};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-    };
-    let sizes = value("--sizes").map_or("256x256x415,512x512x512", String::as_str);
-    let runs: usize = value("--runs").map_or(Ok(3), |r| r.parse())?;
-    let dir = PathBuf::from(value("--dir").map_or("target/bench-volumes", String::as_str));
-    let mut bins: Vec<PathBuf> = args
-        .windows(2)
-        .filter(|w| w[0] == "--bin")
-        .map(|w| PathBuf::from(&w[1]))
-        .collect();
-    if bins.is_empty() {
-        bins.push(PathBuf::from("target/release/slabscope"));
-    }
+    let args = common::Args::from_env();
+    let sizes = args.value("--sizes").unwrap_or("256x256x415,512x512x512");
+    let runs = args.runs()?;
+    let dir = args.dir();
+    let bins = args.bins();
     std::fs::create_dir_all(&dir)?;
     let commands: [(&str, &[&str]); 3] = [
         ("info", &["info"]),

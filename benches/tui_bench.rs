@@ -114,23 +114,11 @@ fn cancel_latency(file: &Path, after: Duration) -> Result<(f64, f64), Box<dyn st
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-    };
-    let sizes = value("--sizes").map_or("256x256x256,512x512x512", String::as_str);
-    let runs: usize = value("--runs").map_or(Ok(3), |r| r.parse())?;
-    let dir = PathBuf::from(value("--dir").map_or("target/bench-volumes", String::as_str));
-    let mut bins: Vec<PathBuf> = args
-        .windows(2)
-        .filter(|w| w[0] == "--bin")
-        .map(|w| PathBuf::from(&w[1]))
-        .collect();
-    if bins.is_empty() {
-        bins.push(PathBuf::from("target/release/slabscope"));
-    }
+    let args = common::Args::from_env();
+    let sizes = args.value("--sizes").unwrap_or("256x256x256,512x512x512");
+    let runs = args.runs()?;
+    let dir = args.dir();
+    let bins = args.bins();
     if Command::new("tmux").arg("-V").output().is_err() {
         return Err("tui_bench needs tmux (apt-get install tmux)".into());
     }
@@ -147,7 +135,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         files.push((text.to_string(), path));
     }
-    for path in value("--files").into_iter().flat_map(|f| f.split(',')) {
+    for path in args.value("--files").into_iter().flat_map(|f| f.split(',')) {
         let name = Path::new(path)
             .file_name()
             .map_or(path.into(), |n| n.to_string_lossy());

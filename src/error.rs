@@ -56,6 +56,9 @@ pub enum Error {
         needed: u64,
         /// Bytes allowed.
         limit: u64,
+        /// Whether the limit is the machine's own (its memory, or the system refused the
+        /// allocation), which no memory budget lifts.
+        machine: bool,
     },
     /// The format is recognised but this variant of it is not supported.
     #[error("{}: unsupported: {message}", shown(path))]
@@ -112,6 +115,41 @@ pub enum Error {
         value: String,
         /// What it must be, e.g. "between 2 and 255".
         expected: String,
+    },
+    /// A parameter left at its default whose default does not fit the volume (the default of 4
+    /// slabs in a volume 3 slices thick): the front end says how to give another value.
+    #[error("the default of {value} {parameter} does not fit: {expected}")]
+    DefaultUnfit {
+        /// The parameter's name.
+        parameter: &'static str,
+        /// Its default, as text.
+        value: String,
+        /// What would fit.
+        expected: String,
+    },
+    /// Two parameters given together that exclude each other.
+    #[error("{} and {} cannot both be given", parameters[0], parameters[1])]
+    Conflicting {
+        /// The two parameters' names.
+        parameters: [&'static str; 2],
+    },
+    /// A parameter given without another that it needs (`solo` without `highlight`).
+    #[error("{parameter} needs {needed}")]
+    Needs {
+        /// The parameter given.
+        parameter: &'static str,
+        /// The parameter it needs.
+        needed: &'static str,
+    },
+    /// A parameter that does not fit the pyramid level the memory budget moved the analysis to
+    /// (4 slabs of a level 3 slices thick), though it fits the level asked for: the budget is
+    /// the cause, and the front end says how to raise it.
+    #[error("{cause}, because {note}")]
+    TooCoarse {
+        /// What the budget said of the level it chose.
+        note: String,
+        /// The parameter's error on that level.
+        cause: Box<Error>,
     },
     /// Encoding an output (a PNG) failed.
     #[error("encoding failed: {0}")]

@@ -53,10 +53,12 @@
 //! - [`triage`]: many volumes at once: what a set of paths holds, shards of it, one row each.
 
 pub mod analysis;
+pub mod budget;
 pub mod error;
 pub mod explain;
 pub mod geometry;
 pub mod measure;
+pub mod params;
 pub mod partition;
 pub mod progress;
 pub mod render;

@@ -63,8 +63,8 @@ enum Command {
 /// Opens the TUI as `args` say, with the tour when `tour`.
 fn open_tui(args: TuiArgs, tour: bool) -> anyhow::Result<u8> {
     tui::run(tui::Options {
-        load: args.load.options(),
-        analysis: args.analysis.params(true),
+        load: args.load.options()?,
+        analysis: args.analysis.params(true)?,
         file: args.file,
         protocol: args.look.protocol,
         theme: args.look.theme,

@@ -10,6 +10,49 @@ use std::time::{Duration, Instant};
 use slabscope::volume::io::write_volume;
 use slabscope::volume::phantom;
 
+/// The command line the whole-process benchmarks share: `--runs N`, `--dir DIR` (where their
+/// volumes are written), any number of `--bin PATH` (the builds compared in turns; the release
+/// build when none), and flags of their own read by [`Args::value`].
+pub struct Args(Vec<String>);
+
+impl Args {
+    /// The process's arguments.
+    pub fn from_env() -> Self {
+        Self(std::env::args().skip(1).collect())
+    }
+
+    /// The value after `flag`, if given.
+    pub fn value(&self, flag: &str) -> Option<&str> {
+        let i = self.0.iter().position(|a| a == flag)?;
+        self.0.get(i + 1).map(String::as_str)
+    }
+
+    /// `--runs`, 3 by default.
+    pub fn runs(&self) -> Result<usize, Box<dyn std::error::Error>> {
+        Ok(self.value("--runs").map_or(Ok(3), str::parse)?)
+    }
+
+    /// `--dir`, `target/bench-volumes` by default.
+    pub fn dir(&self) -> PathBuf {
+        PathBuf::from(self.value("--dir").unwrap_or("target/bench-volumes"))
+    }
+
+    /// Every `--bin`, or the release build.
+    pub fn bins(&self) -> Vec<PathBuf> {
+        let bins: Vec<PathBuf> = self
+            .0
+            .windows(2)
+            .filter(|w| w[0] == "--bin")
+            .map(|w| PathBuf::from(&w[1]))
+            .collect();
+        if bins.is_empty() {
+            vec![PathBuf::from("target/release/slabscope")]
+        } else {
+            bins
+        }
+    }
+}
+
 /// One timed run: seconds from start to exit, and the peak anonymous memory in MiB.
 pub fn run(bin: &Path, args: &[&str]) -> Result<(f64, f64), Box<dyn std::error::Error>> {
     let start = Instant::now();

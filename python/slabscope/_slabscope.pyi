@@ -3,21 +3,46 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Iterator, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Iterator, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import TypeAlias
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "Analysis",
+    "Image",
+    "Triage",
+    "Volume",
+    "VolumeError",
+    "__version__",
+    "analyze",
+    "list_volumes",
+    "load",
+    "parameters",
+    "render",
+    "slice",
+    "triage",
+    "_volume_from_file",
+    "_volume_from_voxels",
+    "_analysis_of",
+    "_image_of",
+    "_triage_of",
+]
 
 __version__: str
 SCHEMA_VERSION: int
 
-PathLike = Union[str, "os.PathLike[str]"]
-Progress = Callable[[str, float], Any]
-Axis = Union[str, Tuple[float, float, float]]
+# Private: the stubs' own names, absent at runtime.
+_PathLike: TypeAlias = Union[str, "os.PathLike[str]"]
+_Progress: TypeAlias = Union[Callable[[str, float], Any], bool]
+_Axis: TypeAlias = Union[str, int, Tuple[float, float, float]]
 
 class VolumeError(Exception):
     """A file slabscope cannot read as a volume, or a volume it cannot analyse."""
 
+@final
 class Volume:
     """A volume: voxels indexed [x, y, z], spacing in mm, a voxel-to-world affine."""
 
@@ -48,9 +73,17 @@ class Volume:
     def range(self) -> Tuple[float, float]: ...
     @property
     def missing(self) -> int: ...
+    def __array__(self, dtype: Any = None, copy: Optional[bool] = None) -> np.ndarray:
+        """The voxels for NumPy: `np.asarray(volume)` is `array`; `copy=False` never copies."""
+    def carrying_voxels(self) -> Volume:
+        """This volume, pickled with its voxels (a file's volume otherwise pickles as its path
+        and `load` keywords)."""
+    def __reduce__(self) -> Tuple[Any, ...]: ...
+    def __copy__(self) -> Volume: ...
+    def __deepcopy__(self, memo: Any, /) -> Volume: ...
 
 def load(
-    path: PathLike,
+    path: _PathLike,
     *,
     dims: Optional[Tuple[int, int, int]] = None,
     dtype: Any = None,
@@ -69,6 +102,7 @@ def load(
     """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), OME-Zarr,
     VolumeShop, raw."""
 
+@final
 class Analysis:
     """The views with their scores, the best axis and the slabs along it."""
 
@@ -95,10 +129,15 @@ class Analysis:
     def to_json(self) -> str: ...
     def labels(self) -> np.ndarray:
         """The slab index of every voxel, [x, y, z], uint8 (uint16 beyond 256 slabs)."""
+    @property
+    def volume(self) -> Volume: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
+    def __copy__(self) -> Analysis: ...
+    def __deepcopy__(self, memo: Any, /) -> Analysis: ...
 
 def analyze(
     volume: Volume,
-    progress: Optional[Progress] = None,
+    progress: Optional[_Progress] = None,
     *,
     bins: int = 32,
     block: int = 3,
@@ -108,7 +147,7 @@ def analyze(
     phases: int = 8,
     phase_subset: int = 12,
     refine: bool = False,
-    axis: Axis = "best",
+    axis: _Axis = "best",
     axis_by: Literal["entropy", "gain"] = "entropy",
     gain: bool = False,
     method: Literal["topdown", "bottomup", "optimal"] = "topdown",
@@ -122,6 +161,7 @@ def analyze(
 ) -> Analysis:
     """The most structured view and the slabs along it, as `slabscope analyze` finds them."""
 
+@final
 class Image:
     """A picture; a notebook shows it."""
 
@@ -131,13 +171,18 @@ class Image:
     @property
     def size(self) -> Tuple[int, int]: ...
     def png(self) -> bytes: ...
+    def __array__(self, dtype: Any = None, copy: Optional[bool] = None) -> np.ndarray:
+        """The pixels for NumPy: `np.asarray(image)`, (height, width, 4) uint8 RGBA."""
     def _repr_png_(self) -> bytes: ...
-    def save(self, path: PathLike, force: bool = False) -> None: ...
+    def save(self, path: _PathLike, force: bool = False) -> None: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
+    def __copy__(self) -> Image: ...
+    def __deepcopy__(self, memo: Any, /) -> Image: ...
 
 def render(
     volume: Volume,
     analysis: Optional[Analysis] = None,
-    progress: Optional[Progress] = None,
+    progress: Optional[_Progress] = None,
     *,
     size: Tuple[int, int] = (640, 480),
     mode: Literal["cut", "dvr", "mip"] = "cut",
@@ -165,18 +210,19 @@ def slice(
     volume: Volume,
     analysis: Optional[Analysis] = None,
     index: Optional[int] = None,
-    progress: Optional[Progress] = None,
+    progress: Optional[_Progress] = None,
     *,
     size: Tuple[int, int] = (512, 512),
     no_letters: bool = False,
     tf: Literal["auto", "ct-bone", "ct-soft", "mri"] = "auto",
     colormap: Literal["grey", "bone", "hot", "viridis"] = "grey",
     window: Optional[Tuple[float, float]] = None,
-    axis: Axis = "best",
-    **analysis: Any,
+    axis: _Axis = "best",
+    **params: Any,
 ) -> Image:
     """One slice across the slab axis, oriented as radiologists read it."""
 
+@final
 class Triage(Iterator[dict[str, Any]]):
     """The rows of a triage run, in order."""
 
@@ -184,11 +230,12 @@ class Triage(Iterator[dict[str, Any]]):
     def __next__(self) -> dict[str, Any]: ...
     def __len__(self) -> int: ...
     def close(self) -> None: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
 
 def triage(
-    paths: Union[PathLike, Sequence[PathLike], None] = None,
+    paths: Union[_PathLike, Sequence[_PathLike], None] = None,
     *,
-    manifest: Optional[PathLike] = None,
+    manifest: Optional[_PathLike] = None,
     entries: Optional[Sequence[str]] = None,
     shard: Optional[Tuple[int, int]] = None,
     full: bool = False,
@@ -198,11 +245,23 @@ def triage(
     """Every volume, one row each, as `slabscope triage --json` prints them."""
 
 def list_volumes(
-    paths: Union[PathLike, Sequence[PathLike], None] = None,
+    paths: Union[_PathLike, Sequence[_PathLike], None] = None,
     *,
-    manifest: Optional[PathLike] = None,
+    manifest: Optional[_PathLike] = None,
     entries: Optional[Sequence[str]] = None,
     shard: Optional[Tuple[int, int]] = None,
     **load_options: Any,
 ) -> list[str]:
     """The volumes triage would take, as the lines `triage --list` prints."""
+
+def parameters(call: str) -> list[dict[str, Any]]:
+    """The keywords `call` takes from the library's table of parameters: `keyword`, `flag`,
+    `default`, `kind`, `min`, `max`, `words`, `expected`, `help`, `conflicts`."""
+    ...
+
+# What pickles unpickle with (private).
+def _volume_from_file(path: _PathLike, options: dict[str, Any], name: str) -> Volume: ...
+def _volume_from_voxels(array: np.ndarray, state: dict[str, Any]) -> Volume: ...
+def _analysis_of(volume: Volume, params: dict[str, Any], json: str) -> Analysis: ...
+def _image_of(width: int, height: int, pixels: bytes) -> Image: ...
+def _triage_of(rows: Sequence[str], count: int) -> Triage: ...

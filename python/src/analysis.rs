@@ -1,15 +1,17 @@
 //! `slabscope.analyze` and `slabscope.Analysis`: the view search and the partition, as
 //! `slabscope analyze` runs them, with the report `analyze --json` prints.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use numpy::PyArray3;
 use numpy::ndarray::{ArrayView3, ShapeBuilder};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use slabscope::budget::{Budget, Purpose};
 use slabscope::explain::StepsShown;
-use slabscope::{AnalysisReport, Error, Plan};
+use slabscope::volume::Voxels;
+use slabscope::{AnalysisReport, Error};
 
 use crate::errors::{OrPy, to_py};
 use crate::params::{Kwargs, analysis_params, resolution};
@@ -41,19 +43,29 @@ fn explain(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<StepsShown>> {
 }
 
 /// The result of `analyze`: the views with their scores, the best axis, the partition's slabs
-/// and steps; `to_dict()` is the object `slabscope analyze --json` prints.
+/// and steps; `to_dict()` is the object `slabscope analyze --json` prints. It pickles as its
+/// volume, keywords and report: unpickled, what needs the partition analyses again when first
+/// asked (and fails if that no longer gives the report, its file having changed).
 #[pyclass(module = "slabscope", frozen)]
 pub struct Analysis {
-    /// The library's analysis.
-    pub inner: slabscope::Analysis,
-    /// The volume analysed, as read.
-    pub source: Arc<slabscope::Volume>,
-    /// The pyramid level partitioned (the volume itself at full resolution).
-    pub level: Arc<slabscope::Volume>,
+    /// The volume analysed.
+    volume: Py<Volume>,
+    /// The keywords it was analysed with.
+    params: Py<PyDict>,
+    /// The library's analysis and the level partitioned; empty when unpickled, until needed.
+    computed: OnceLock<Computed>,
     /// The report as JSON text.
     json: String,
     /// The report, parsed once for the properties.
     report: Py<PyDict>,
+}
+
+/// The library's analysis and the pyramid level it partitioned.
+pub struct Computed {
+    /// The library's analysis.
+    pub inner: slabscope::Analysis,
+    /// The pyramid level partitioned (the volume itself at full resolution).
+    pub level: Arc<slabscope::Volume>,
 }
 
 /// Finds the most structured view of `volume` and the slabs along it, with the CLI's analysis
@@ -64,20 +76,36 @@ pub struct Analysis {
 #[pyo3(signature = (volume, progress=None, **params))]
 pub fn analyze(
     py: Python<'_>,
-    volume: &Volume,
+    volume: &Bound<'_, Volume>,
     progress: Option<&Bound<'_, PyAny>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Analysis> {
-    let kw = Kwargs::new(py, "analyze", params)?;
-    // As the CLI words it: a slab count the user did not give (None is not given) is not blamed
-    // on `slabs=`.
-    let given = |key: &str| {
-        params
-            .and_then(|p| p.get_item(key).ok().flatten())
-            .is_some_and(|v| !v.is_none())
+    let reporter = run::Reporter::new("analyze", progress)?;
+    let (computed, json) = compute(py, volume.get(), reporter.callback(), params)?;
+    drop(reporter);
+    let report = parse(py, &json)?.cast_into::<PyDict>()?.unbind();
+    let params = match params {
+        Some(d) => d.copy()?,
+        None => PyDict::new(py),
     };
-    let slabs_given = given("slabs") || given("threshold");
-    let mut analysis_params = analysis_params(&kw)?;
+    Ok(Analysis {
+        volume: volume.clone().unbind(),
+        params: params.unbind(),
+        computed: OnceLock::from(computed),
+        json,
+        report,
+    })
+}
+
+/// The analysis of `volume` with the keywords `params`, and its report as JSON text.
+fn compute(
+    py: Python<'_>,
+    volume: &Volume,
+    progress: Option<&Bound<'_, PyAny>>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<(Computed, String)> {
+    let kw = Kwargs::new(py, "analyze", params)?;
+    let (mut analysis_params, given) = analysis_params(&kw)?;
     analysis_params.explain = explain(kw.get::<Bound<'_, PyAny>>("explain")?.as_ref())?;
     let resolution = resolution(&kw)?;
     let max_memory = crate::params::max_memory(&kw, volume.max_memory)?;
@@ -87,41 +115,44 @@ pub fn analyze(
         .level(full.dims(), full.coarser_levels())
         .or_py()?;
     let plan = run::quick(py, || {
-        Plan::within(&full, wanted, max_memory, &analysis_params)
+        Budget::new(max_memory).plan(
+            &full,
+            Purpose::Analysis {
+                wanted,
+                params: &analysis_params,
+            },
+        )
     })?;
-    let result = run::long(py, progress, |monitor| {
+    // A slab count the user did not give is not blamed on `slabs=`.
+    let analysis = run::long(py, progress, |monitor| {
         slabscope::analyze_planned(&plan, &analysis_params, monitor)
-    });
-    let analysis = result.map_err(|e| slabs_default(e, slabs_given))?;
+            .map_err(|e| slabscope::budget::blame(&plan, given.blame(e)))
+    })?;
     let report = AnalysisReport::new(&volume.name, &full, &analysis_params.view, &analysis)
         .or_py()?
         .computed_on(&plan.partition)
         .views_on(&plan.views);
     let json = slabscope::report::to_json(&report).or_py()?;
-    let report = parse(py, &json)?.cast_into::<PyDict>()?.unbind();
-    Ok(Analysis {
+    let computed = Computed {
         inner: analysis,
-        source: full,
         level: Arc::clone(&plan.partition),
-        json,
-        report,
-    })
+    };
+    Ok((computed, json))
 }
 
-/// A slab count the user did not give is not blamed on `slabs=`, as the CLI words it.
-fn slabs_default(e: PyErr, given: bool) -> PyErr {
-    Python::attach(|py| {
-        if given || !e.is_instance_of::<PyValueError>(py) {
-            return e;
+/// Whether two volumes hold the same voxels (NaN equal to NaN).
+fn same_voxels(a: &Voxels, b: &Voxels) -> bool {
+    match (a, b) {
+        (Voxels::U8(x), Voxels::U8(y)) => x.as_slice() == y.as_slice(),
+        (Voxels::I8(x), Voxels::I8(y)) => x.as_slice() == y.as_slice(),
+        (Voxels::U16(x), Voxels::U16(y)) => x.as_slice() == y.as_slice(),
+        (Voxels::I16(x), Voxels::I16(y)) => x.as_slice() == y.as_slice(),
+        (Voxels::F32(x), Voxels::F32(y)) => {
+            let (x, y) = (x.as_slice(), y.as_slice());
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits())
         }
-        let text = e.value(py).to_string();
-        match text.strip_prefix("slabs=4: expected ") {
-            Some(expected) => PyValueError::new_err(format!(
-                "the default of 4 slabs does not fit: {expected} (slabs=K asks for fewer)"
-            )),
-            None => e,
-        }
-    })
+        _ => false,
+    }
 }
 
 /// JSON text as Python objects.
@@ -138,9 +169,60 @@ impl Analysis {
         self.key(py, "partition")?.get_item(key)
     }
 
-    /// That `volume` is the one analysed.
-    pub fn check_volume(&self, volume: &Volume) -> PyResult<()> {
-        if Arc::ptr_eq(&self.source, &volume.inner) {
+    /// The axis the slabs are cut across, as the report gives it (the partition's).
+    pub fn axis(&self, py: Python<'_>) -> PyResult<[f64; 3]> {
+        self.partition_key(py, "axis")?.extract()
+    }
+
+    /// An unpickled analysis: of `volume` with `params`, whose report is `json`.
+    pub fn pending(
+        py: Python<'_>,
+        volume: Py<Volume>,
+        params: Py<PyDict>,
+        json: String,
+    ) -> PyResult<Self> {
+        let report = parse(py, &json)?.cast_into::<PyDict>()?.unbind();
+        Ok(Self {
+            volume,
+            params,
+            computed: OnceLock::new(),
+            json,
+            report,
+        })
+    }
+
+    /// The library's analysis and the level it partitioned: analysed again, once, for an
+    /// unpickled analysis, which must then give the same report.
+    pub fn computed(&self, py: Python<'_>) -> PyResult<&Computed> {
+        if let Some(done) = self.computed.get() {
+            return Ok(done);
+        }
+        let params = self.params.bind(py);
+        let (computed, json) = compute(py, self.volume.get(), None, Some(params))?;
+        if json != self.json {
+            return Err(PyValueError::new_err(format!(
+                "analysis of {:?}: analysing its volume again gives another report (its file changed since it was pickled?): analyze it again",
+                self.volume.get().name
+            )));
+        }
+        let _ = self.computed.set(computed);
+        self.computed
+            .get()
+            .ok_or_else(|| PyValueError::new_err("analysis: its partition could not be kept"))
+    }
+
+    /// That `volume` is the one analysed: the same object, or (read again, or pickled apart
+    /// from it) a volume of the same shape, spacing, type, geometry and voxels.
+    pub fn check_volume(&self, py: Python<'_>, volume: &Volume) -> PyResult<()> {
+        let (a, b) = (&self.volume.get().inner, &volume.inner);
+        let same = Arc::ptr_eq(a, b)
+            || (a.dims() == b.dims()
+                && a.spacing() == b.spacing()
+                && a.voxel_type() == b.voxel_type()
+                && a.transform() == b.transform()
+                && a.stats() == b.stats()
+                && py.detach(|| same_voxels(a.data(), b.data())));
+        if same {
             Ok(())
         } else {
             Err(PyValueError::new_err(
@@ -172,9 +254,9 @@ impl Analysis {
 
     /// The axis the slabs are cut across, a unit vector `(x, y, z)` in voxel space.
     #[getter]
-    fn best_axis(&self) -> (f64, f64, f64) {
-        let [x, y, z] = self.inner.axis();
-        (x, y, z)
+    fn best_axis(&self, py: Python<'_>) -> PyResult<(f64, f64, f64)> {
+        let [x, y, z] = self.axis(py)?;
+        Ok((x, y, z))
     }
 
     /// Whether other axes rank within two standard errors of the best (see `contenders`).
@@ -191,8 +273,9 @@ impl Analysis {
 
     /// The slabs as `(first, end)` slice ranges along the axis, end exclusive.
     #[getter]
-    fn slabs(&self) -> Vec<(usize, usize)> {
-        self.inner.partition.slabs.clone()
+    fn slabs(&self, py: Python<'_>) -> PyResult<Vec<(usize, usize)>> {
+        let slabs: Vec<[usize; 2]> = self.partition_key(py, "slabs")?.extract()?;
+        Ok(slabs.into_iter().map(|[first, end]| (first, end)).collect())
     }
 
     /// The partition's steps, splits or merges in order (dicts as in the JSON).
@@ -203,8 +286,8 @@ impl Analysis {
 
     /// The information the slabs keep about the values, bits.
     #[getter]
-    fn information(&self) -> f64 {
-        self.inner.partition.information
+    fn information(&self, py: Python<'_>) -> PyResult<f64> {
+        self.partition_key(py, "information")?.extract()
     }
 
     /// The whole partition object of the JSON (slabs, steps, curves, per-slab information).
@@ -222,20 +305,19 @@ impl Analysis {
     /// The slab index of every voxel of the level partitioned, `[x, y, z]` (uint8, or uint16
     /// beyond 256 slabs), as `analyze --export-labels` writes it.
     fn labels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let labels = run::quick(py, || {
-            slabscope::label_volume(&self.level, &self.inner.partition)
-        })?;
+        let Computed { inner, level } = self.computed(py)?;
+        let labels = run::quick(py, || slabscope::label_volume(level, &inner.partition))?;
         let dims = labels.dims();
         let shaped = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
         Ok(match labels.data() {
-            slabscope::volume::Voxels::U8(s) => PyArray3::from_owned_array(
+            Voxels::U8(s) => PyArray3::from_owned_array(
                 py,
                 ArrayView3::from_shape(dims.f(), s.as_slice())
                     .map_err(shaped)?
                     .to_owned(),
             )
             .into_any(),
-            slabscope::volume::Voxels::U16(s) => PyArray3::from_owned_array(
+            Voxels::U16(s) => PyArray3::from_owned_array(
                 py,
                 ArrayView3::from_shape(dims.f(), s.as_slice())
                     .map_err(shaped)?
@@ -250,12 +332,56 @@ impl Analysis {
         })
     }
 
-    fn __repr__(&self) -> String {
-        let [x, y, z] = self.inner.axis();
-        format!(
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let (x, y, z) = self.best_axis(py)?;
+        Ok(format!(
             "<slabscope.Analysis axis ({x:.3}, {y:.3}, {z:.3}), {} slabs, {:.4} bits>",
-            self.inner.partition.slabs.len(),
-            self.inner.partition.information
-        )
+            self.slabs(py)?.len(),
+            self.information(py)?
+        ))
+    }
+
+    /// The volume analysed.
+    #[getter]
+    fn volume(&self, py: Python<'_>) -> Py<Volume> {
+        self.volume.clone_ref(py)
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let args = (
+            self.volume.clone_ref(py),
+            self.params.bind(py).copy()?,
+            self.json.clone(),
+        );
+        crate::pickle::reduced(py, "_analysis_of", args)
+    }
+
+    fn __copy__<'py>(slf: &Bound<'py, Self>) -> Bound<'py, Self> {
+        slf.clone()
+    }
+
+    /// The analysis itself (it never changes) when a deep copy of its volume is the volume
+    /// itself; else an analysis of that copy, analysed again when its partition is needed.
+    fn __deepcopy__<'py>(
+        slf: &Bound<'py, Self>,
+        memo: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let this = slf.get();
+        let volume = this.volume.bind(py);
+        let copy = py
+            .import("copy")?
+            .call_method1("deepcopy", (volume, memo))?;
+        if copy.is(volume) {
+            return Ok(slf.clone().into_any());
+        }
+        let params = this.params.bind(py).copy()?.unbind();
+        let again = Self::pending(
+            py,
+            copy.cast_into::<Volume>()?.unbind(),
+            params,
+            this.json.clone(),
+        )?;
+        Ok(Bound::new(py, again)?.into_any())
     }
 }

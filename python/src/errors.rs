@@ -17,6 +17,12 @@ pyo3::create_exception!(
      the file and the problem."
 );
 
+/// The keyword of the library's parameter `name` (`ray_spacing`, `dtype` for `type`), or the
+/// name itself when no keyword stands for it.
+fn keyword(name: &str) -> &str {
+    slabscope::params::find(name).map_or(name, |p| p.keyword)
+}
+
 /// The one-line message of `e`, with the keyword that lifts a limit or allows an overwrite.
 pub fn message(e: &Error) -> String {
     let text = match e {
@@ -24,23 +30,42 @@ pub fn message(e: &Error) -> String {
             parameter,
             value,
             expected,
-        } => format!("{parameter}={value}: expected {expected}"),
-        Error::TooLarge { what, .. }
-            if what.contains("this machine") || what.contains("system") =>
-        {
-            e.to_string()
+        } => format!("{}={value}: expected {expected}", keyword(parameter)),
+        Error::DefaultUnfit { parameter, .. } => {
+            let placeholder = slabscope::params::find(parameter)
+                .and_then(|p| p.value_name)
+                .unwrap_or("VALUE");
+            format!(
+                "{e} ({}={placeholder} asks for another)",
+                keyword(parameter)
+            )
         }
-        Error::TooLarge { .. } => format!("{e} (raise it with max_memory=)"),
+        Error::Conflicting { parameters: [a, b] } => {
+            format!("{}= and {}= cannot both be given", keyword(a), keyword(b))
+        }
+        Error::Needs { parameter, needed } => {
+            format!("{}= needs {}= too", keyword(parameter), keyword(needed))
+        }
+        Error::TooCoarse { note, cause } => format!(
+            "{}, because {note} (raise it with {}=)",
+            message(cause),
+            keyword("max_memory")
+        ),
+        Error::TooLarge { machine: true, .. } => e.to_string(),
+        Error::TooLarge { .. } => format!("{e} (raise it with {}=)", keyword("max_memory")),
         Error::RawUndescribed {
             path,
             missing,
             detail,
         } => {
-            let keywords: Vec<&str> = missing
+            let keywords: Vec<String> = missing
                 .iter()
-                .map(|m| match *m {
-                    "dims" => "dims=(NX, NY, NZ)",
-                    _ => "dtype= (u8, i8, u16, i16, u32, i32, f32 or f64)",
+                .filter_map(|m| slabscope::params::find(m))
+                .map(|p| match p.value_name {
+                    Some(v) if v.contains([',', 'x']) => {
+                        format!("{}=({})", p.keyword, v.replace(['x', ','], ", "))
+                    }
+                    _ => format!("{}= ({})", p.keyword, p.expected()),
                 })
                 .collect();
             format!("{}: {detail}: give {}", shown(path), keywords.join(" and "))
@@ -48,8 +73,8 @@ pub fn message(e: &Error) -> String {
         Error::Exists { .. } => format!("{e} (force=True overwrites it)"),
         Error::Series {
             localizers: true, ..
-        } => format!("{e} (include_localizers=True keeps them)"),
-        Error::Series { .. } => format!("{e} (pick one with series=N or series=UID)"),
+        } => format!("{e} ({}=True keeps them)", keyword("include_localizers")),
+        Error::Series { .. } => format!("{e} (pick one with {0}=N or {0}=UID)", keyword("series")),
         _ => e.to_string(),
     };
     controls(&text).into_owned()
@@ -69,7 +94,11 @@ pub fn to_py(e: Error) -> PyErr {
         Error::NotFound(_) => PyFileNotFoundError::new_err(text),
         Error::Exists { .. } => PyFileExistsError::new_err(text),
         Error::NotRegularFile { .. } => PyOSError::new_err(text),
-        Error::InvalidParameter { .. } => PyValueError::new_err(text),
+        Error::InvalidParameter { .. }
+        | Error::DefaultUnfit { .. }
+        | Error::Conflicting { .. }
+        | Error::Needs { .. }
+        | Error::TooCoarse { .. } => PyValueError::new_err(text),
         Error::Cancelled => PyKeyboardInterrupt::new_err("cancelled"),
         Error::Encode(_) => PyRuntimeError::new_err(text),
         _ => VolumeError::new_err(text),

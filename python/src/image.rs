@@ -2,7 +2,7 @@
 //! notebook shows (`_repr_png_`) and that saves as `render -o` and `slice -o` write.
 
 use numpy::PyArray3;
-use numpy::ndarray::Array3;
+use numpy::ndarray::{Array3, ArrayView3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -12,7 +12,7 @@ use slabscope::render::{
 };
 use tiny_skia::Pixmap;
 
-use crate::analysis::{Analysis, analyze};
+use crate::analysis::{Analysis, Computed, analyze};
 use crate::errors::OrPy;
 use crate::params::{Kwargs, analysis_params, look, render_params, size};
 use crate::run;
@@ -68,6 +68,42 @@ impl Image {
         })
     }
 
+    /// The pixels for NumPy (`np.asarray(image)`): `(height, width, 4)` uint8 RGBA, a read-only
+    /// view of the picture's memory unless `dtype` or `copy=True` asks for a copy (`copy=False`
+    /// with another `dtype` is a `ValueError`).
+    #[pyo3(signature = (dtype=None, copy=None))]
+    fn __array__<'py>(
+        slf: &Bound<'py, Self>,
+        dtype: Option<&Bound<'py, PyAny>>,
+        copy: Option<bool>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let pixmap = &slf.get().pixmap;
+        let (w, h) = (pixmap.width() as usize, pixmap.height() as usize);
+        let shaped = ArrayView3::from_shape((h, w, 4), pixmap.data())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        // SAFETY: the view borrows the pixels of the frozen `Image` `slf`, which never change;
+        // the array keeps `slf` alive and is made read-only.
+        let view = unsafe { PyArray3::borrow_from_array(&shaped, slf.clone().into_any()) };
+        view.getattr("flags")?.setattr("writeable", false)?;
+        crate::pickle::numpy_array("Image", view.into_any(), dtype, copy)
+    }
+
+    /// Pickled as its size and pixels.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let pixels = PyBytes::new(py, self.pixmap.data());
+        let args = (self.pixmap.width(), self.pixmap.height(), pixels);
+        crate::pickle::reduced(py, "_image_of", args)
+    }
+
+    fn __copy__<'py>(slf: &Bound<'py, Self>) -> Bound<'py, Self> {
+        slf.clone()
+    }
+
+    /// The picture itself: it never changes.
+    fn __deepcopy__<'py>(slf: &Bound<'py, Self>, _memo: &Bound<'py, PyAny>) -> Bound<'py, Self> {
+        slf.clone()
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "<slabscope.Image {}x{}>",
@@ -75,6 +111,19 @@ impl Image {
             self.pixmap.height()
         )
     }
+}
+
+/// Unpickles a picture: `width` x `height` pixels, RGBA bytes as the pixmap holds them.
+#[pyfunction]
+pub fn _image_of(width: u32, height: u32, pixels: Vec<u8>) -> PyResult<Image> {
+    tiny_skia::IntSize::from_wh(width, height)
+        .and_then(|size| Pixmap::from_vec(pixels, size))
+        .map(|pixmap| Image { pixmap })
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "a pickled Image of {width}x{height} pixels: its bytes are not that many RGBA pixels"
+            ))
+        })
 }
 
 /// The exploded view of `volume`'s slabs in `analysis` (analysed with the defaults when None),
@@ -88,26 +137,31 @@ impl Image {
 #[pyo3(signature = (volume, analysis=None, progress=None, **options))]
 pub fn render(
     py: Python<'_>,
-    volume: &Volume,
+    volume: &Bound<'_, Volume>,
     analysis: Option<&Analysis>,
     progress: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Image> {
+    let reporter = run::Reporter::new("render", progress)?;
     let kw = Kwargs::new(py, "render", options)?;
-    let size = size(&kw, (640, 480))?;
-    let (params, gap, spread) = render_params(&kw, size)?;
+    let size = size(&kw, &slabscope::params::table::RENDER_SIZE)?;
+    let slabscope::params::Scene {
+        params,
+        gap,
+        spread,
+    } = render_params(&kw, size)?;
     let faces: bool = kw.or("faces", false)?;
     kw.finish()?;
     let made;
     let analysis = if let Some(a) = analysis {
-        a.check_volume(volume)?;
+        a.check_volume(py, volume.get())?;
         a
     } else {
         made = analyze(py, volume, progress, None)?;
         &made
     };
-    let part = &analysis.inner.partition;
-    let level = &analysis.level;
+    let Computed { inner, level } = analysis.computed(py)?;
+    let part = &inner.partition;
     if faces {
         let look = TransferChoice {
             preset: params.preset,
@@ -126,7 +180,7 @@ pub fn render(
         )));
     }
     let layout = Layout::exploded(part, gap, spread);
-    let image = run::long(py, progress, |monitor| {
+    let image = run::long(py, reporter.callback(), |monitor| {
         Renderer::new(level)?.render(&layout, &params, monitor)
     })?;
     Ok(Image {
@@ -162,7 +216,8 @@ fn slab_faces(
 
 /// One slice across the slab axis, oriented as radiologists read it, as `slabscope slice`
 /// writes it: the axis of `analysis` when given, else the one the analysis keywords name
-/// (`axis="best"`: the view search's); `index` (the middle slice when None), `size=(512,
+/// (`axis="best"`: the view search's); `index` (the middle slice when None; negative counts
+/// from the end, `-1` the last slice), `size=(512,
 /// 512)`, `no_letters`, `tf`, `colormap`, `window`.
 #[pyfunction]
 #[pyo3(signature = (volume, analysis=None, index=None, progress=None, **options))]
@@ -170,23 +225,24 @@ pub fn slice(
     py: Python<'_>,
     volume: &Volume,
     analysis: Option<&Analysis>,
-    index: Option<usize>,
+    index: Option<i64>,
     progress: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Image> {
+    let reporter = run::Reporter::new("slice", progress)?;
     let kw = Kwargs::new(py, "slice", options)?;
-    let fit = size(&kw, (512, 512))?;
+    let fit = size(&kw, &slabscope::params::table::SLICE_SIZE)?;
     let letters = !kw.or("no_letters", false)?;
     let look = look(&kw)?;
-    let params = analysis_params(&kw)?;
+    let (params, _) = analysis_params(&kw)?;
     kw.finish()?;
     let full = &volume.inner;
     let axis = match analysis {
         Some(a) => {
-            a.check_volume(volume)?;
-            a.inner.axis()
+            a.check_volume(py, volume)?;
+            a.axis(py)?
         }
-        None => run::long(py, progress, |monitor| {
+        None => run::long(py, reporter.callback(), |monitor| {
             slabscope::analysis::chosen_axis(full, &params, monitor)
         })?,
     };
@@ -195,10 +251,43 @@ pub fn slice(
         letters,
         ..slices::SliceParams::default()
     };
+    let stack = params.stack();
+    let index = match index {
+        Some(i) if i < 0 => Some(from_end(py, full, axis, &stack, i)?),
+        Some(i) => Some(usize::try_from(i).unwrap_or(usize::MAX)),
+        None => None,
+    };
     let image = run::quick(py, || {
-        slices::numbered(full, axis, &params.stack(), index, look, &slice_params)
+        slices::numbered(full, axis, &stack, index, look, &slice_params)
     })?;
     Ok(Image {
         pixmap: image.pixmap,
     })
+}
+
+/// The slice a negative `index` names, counting from the end as Python's sequences do
+/// (`-1` is the last slice along `axis`).
+fn from_end(
+    py: Python<'_>,
+    volume: &slabscope::Volume,
+    axis: [f64; 3],
+    stack: &slabscope::partition::StackParams,
+    index: i64,
+) -> PyResult<usize> {
+    let (_, slices, _, _) = run::quick(py, || {
+        slabscope::partition::slice_geometry(volume, axis, stack)
+    })?;
+    let n = i64::try_from(slices).unwrap_or(i64::MAX);
+    if index < -n {
+        return Err(crate::errors::invalid(
+            "index",
+            index,
+            &format!(
+                "a slice from 0 to {}, or from -{n} to -1 counting from the end (there are {n} \
+                 slices along this axis)",
+                n - 1
+            ),
+        ));
+    }
+    Ok(usize::try_from(n + index).unwrap_or(0))
 }

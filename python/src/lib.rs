@@ -7,6 +7,7 @@ mod analysis;
 mod errors;
 mod image;
 mod params;
+mod pickle;
 mod run;
 mod triage;
 mod volume;
@@ -29,5 +30,11 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(image::slice, m)?)?;
     m.add_function(wrap_pyfunction!(triage::triage, m)?)?;
     m.add_function(wrap_pyfunction!(triage::list_volumes, m)?)?;
+    m.add_function(wrap_pyfunction!(params::parameters, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_volume_from_file, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_volume_from_voxels, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_analysis_of, m)?)?;
+    m.add_function(wrap_pyfunction!(image::_image_of, m)?)?;
+    m.add_function(wrap_pyfunction!(triage::_triage_of, m)?)?;
     Ok(())
 }

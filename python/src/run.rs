@@ -7,11 +7,67 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use pyo3::exceptions::PyRuntimeError;
+use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
+use pyo3::types::PyBool;
 use slabscope::{Monitor, Progress};
 
-use crate::errors::to_py;
+use crate::errors::{repr, to_py};
+
+/// What `progress=` asks for: the user's `progress(phase, fraction)`, a bar (`True`: tqdm's when
+/// installed, else a line on stderr; closed when this is dropped), or nothing (`None`, `False`).
+pub struct Reporter<'py> {
+    callback: Option<Bound<'py, PyAny>>,
+    bar: bool,
+}
+
+impl<'py> Reporter<'py> {
+    /// The reporter of `call`'s `progress` argument: anything else than a callable, a bool or
+    /// `None` is a `TypeError` naming the keyword.
+    pub fn new(call: &str, progress: Option<&Bound<'py, PyAny>>) -> PyResult<Self> {
+        let none = Self {
+            callback: None,
+            bar: false,
+        };
+        let Some(p) = progress.filter(|p| !p.is_none()) else {
+            return Ok(none);
+        };
+        if p.is_instance_of::<PyBool>() {
+            if !p.is_truthy()? {
+                return Ok(none);
+            }
+            let bar = p.py().import("slabscope._progress")?.getattr("Bar")?;
+            return Ok(Self {
+                callback: Some(bar.call0()?),
+                bar: true,
+            });
+        }
+        if p.is_callable() {
+            return Ok(Self {
+                callback: Some(p.clone()),
+                bar: false,
+            });
+        }
+        Err(PyTypeError::new_err(format!(
+            "{call}(): progress={}: expected a function progress(phase, fraction), True or None",
+            repr(p)
+        )))
+    }
+
+    /// The function to call with the progress, if any.
+    pub fn callback(&self) -> Option<&Bound<'py, PyAny>> {
+        self.callback.as_ref()
+    }
+}
+
+impl Drop for Reporter<'_> {
+    fn drop(&mut self) {
+        if let (true, Some(bar)) = (self.bar, &self.callback) {
+            // Closing a bar only writes to stderr: nothing to report if it fails.
+            let _ = bar.call_method0("close");
+        }
+    }
+}
 
 /// How often the watching thread looks at the work.
 const LOOK: Duration = Duration::from_millis(20);

@@ -24,7 +24,8 @@ const WORKERS: usize = 2;
 
 /// The rows of a triage run as they come, in order: an iterator of dicts (`len()` is the
 /// number of volumes). Closing it early (or dropping it) stops the run after the volumes under
-/// way.
+/// way. Pickling (or a deep copy) waits for the run to end and carries the rows not yet taken:
+/// both it and its copy then give them.
 #[pyclass(module = "slabscope")]
 pub struct Triage {
     rows: Mutex<Receiver<String>>,
@@ -40,6 +41,21 @@ fn paths(given: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
         .try_iter()?
         .map(|p| crate::params::path(&p?))
         .collect()
+}
+
+/// `Err` (`FileNotFoundError` in Python) when not one of `paths` exists: there is no volume under
+/// them. A missing path beside others is a row of its own, as on the CLI.
+fn none_missing(paths: &[PathBuf]) -> slabscope::Result<()> {
+    let missing =
+        |p: &PathBuf| std::fs::metadata(p).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound);
+    if paths.is_empty() || !paths.iter().all(missing) {
+        return Ok(());
+    }
+    let shown: Vec<String> = paths.iter().map(|p| shown(p)).collect();
+    Err(slabscope::Error::NotFound(format!(
+        "no volumes found under {}: no such file or folder",
+        shown.join(", ")
+    )))
 }
 
 /// The entries a run takes: from `entries` (lines as `list_volumes` gives them), a manifest
@@ -77,7 +93,10 @@ fn entries(
             Ok(all)
         }
         (Some(paths), None, None) => Ok(py
-            .detach(|| select(Source::Paths(&paths), opts, shard))
+            .detach(|| {
+                none_missing(&paths)?;
+                select(Source::Paths(&paths), opts, shard)
+            })
             .or_py()?
             .volumes),
         (None, Some(m), None) => Ok(py
@@ -103,7 +122,7 @@ pub fn triage(
 ) -> PyResult<Triage> {
     let kw = Kwargs::new(py, "triage", options)?;
     let load = load_options(&kw)?;
-    let params = analysis_params(&kw)?;
+    let (params, _) = analysis_params(&kw)?;
     let timeout: f64 = kw.or("timeout", 60.0)?;
     if !(timeout.is_finite() && (0.1..=86400.0).contains(&timeout)) {
         return Err(crate::errors::invalid(
@@ -131,7 +150,7 @@ pub fn triage(
                 .map_or(m.clone(), str::to_string)
         };
         look_all(&volumes, &how, WORKERS, &describe, |_, looked| {
-            serde_json::to_string(&looked.row).is_ok_and(|row| tx.send(row).is_ok())
+            slabscope::report::to_json_line(&looked.row).is_ok_and(|row| tx.send(row).is_ok())
         });
     });
     Ok(Triage {
@@ -156,13 +175,29 @@ pub fn list_volumes(
     Ok(volumes.iter().map(Entry::line).collect())
 }
 
-#[pymethods]
-impl Triage {
-    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
-        slf
+/// The rows `rows` as a receiver that ends after them.
+fn replay(rows: Vec<String>) -> Receiver<String> {
+    let (tx, rx) = sync_channel::<String>(rows.len());
+    for row in rows {
+        // The channel holds every row: no send blocks or fails while `rx` lives.
+        let _ = tx.send(row);
     }
+    rx
+}
 
-    fn __next__<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+/// Unpickles a triage run: the rows not yet taken (JSON lines) of a run of `count` volumes.
+#[pyfunction]
+pub fn _triage_of(rows: Vec<String>, count: usize) -> Triage {
+    Triage {
+        rows: Mutex::new(replay(rows)),
+        count,
+    }
+}
+
+impl Triage {
+    /// The next row's JSON line, waiting for it with the GIL released; `None` when the run is
+    /// over. Ctrl-C raises `KeyboardInterrupt` meanwhile.
+    fn next_line(&self, py: Python<'_>) -> PyResult<Option<String>> {
         loop {
             let next = py.detach(|| {
                 self.rows
@@ -171,11 +206,47 @@ impl Triage {
                     .recv_timeout(Duration::from_millis(50))
             });
             match next {
-                Ok(row) => return parse(py, &row).map(Some),
+                Ok(row) => return Ok(Some(row)),
                 Err(RecvTimeoutError::Timeout) => py.check_signals()?,
                 Err(RecvTimeoutError::Disconnected) => return Ok(None),
             }
         }
+    }
+}
+
+#[pymethods]
+impl Triage {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let mut rows = Vec::new();
+        let put_back = |rows: Vec<String>| {
+            *self
+                .rows
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner) = replay(rows);
+        };
+        loop {
+            match self.next_line(py) {
+                Ok(Some(row)) => rows.push(row),
+                Ok(None) => break,
+                // Interrupted: the rows taken so far stay this run's (the rest are dropped, as
+                // by `close()`).
+                Err(e) => {
+                    put_back(rows);
+                    return Err(e);
+                }
+            }
+        }
+        put_back(rows.clone());
+        let args = (rows, self.count);
+        crate::pickle::reduced(py, "_triage_of", args)
+    }
+
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.next_line(py)?.map(|row| parse(py, &row)).transpose()
     }
 
     fn __len__(&self) -> usize {

@@ -2,6 +2,7 @@
 //! from a NumPy array indexed `[x, y, z]` as nibabel gives it (read in place when its memory is
 //! already as slabscope holds voxels: Fortran order, a type held as stored, native byte order).
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use numpy::ndarray::{ArrayView3, ShapeBuilder};
@@ -12,6 +13,7 @@ use pyo3::types::PyDict;
 use slabscope::geometry::world::WorldTransform;
 use slabscope::volume::{LentBytes, Voxel, VoxelType, Voxels};
 
+use crate::errors::repr;
 use crate::params::{Kwargs, load_options, numpy_name};
 use crate::run;
 
@@ -32,10 +34,15 @@ pub struct Volume {
     copied: bool,
     /// The format it was read as (`nifti`, `nrrd`, `dicom`, ...), `array` for an array.
     #[pyo3(get)]
-    format: &'static str,
+    format: String,
     /// What a user should know about the file (a 4D file's volume taken, a series' gaps...).
     #[pyo3(get)]
     notes: Vec<String>,
+    /// The file it was read from (absolute) and the keywords it was read with: what it pickles
+    /// as, unless `carry` (None for a volume made from an array).
+    file: Option<(PathBuf, Py<PyDict>)>,
+    /// Whether it pickles as its voxels even when read from a file (`carrying_voxels()`).
+    carry: bool,
 }
 
 /// Reads the volume at `path` (a file, a folder of TIFF slices or of DICOM files, an OME-Zarr
@@ -50,18 +57,33 @@ pub fn load(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Volume> {
     let file = crate::params::path(path)?;
+    load_file(py, file, options)
+}
+
+/// The volume at `file` read with the keywords `options` (`load`'s), named as the path given.
+pub fn load_file(
+    py: Python<'_>,
+    file: PathBuf,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Volume> {
     let kw = Kwargs::new(py, "load", options)?;
     let opts = load_options(&kw)?;
     kw.finish()?;
     let loaded = run::quick(py, || slabscope::load(&file, &opts))?;
+    let kept = match options {
+        Some(d) => d.copy()?,
+        None => PyDict::new(py),
+    };
     Ok(Volume {
         inner: Arc::new(loaded.volume),
         name: slabscope::error::shown(&file),
         max_memory: opts.max_memory,
         array: None,
         copied: false,
-        format: loaded.format.name(),
+        format: loaded.format.name().to_string(),
         notes: loaded.notes,
+        file: Some((std::path::absolute(&file).unwrap_or(file), kept.unbind())),
+        carry: false,
     })
 }
 
@@ -108,7 +130,7 @@ fn lend<T: Voxel + Element>(array: &Bound<'_, PyAny>) -> Option<Voxels> {
 }
 
 /// The voxels of `array` in place, where its type is held as stored.
-fn lend_any(array: &Bound<'_, PyAny>, ty: VoxelType) -> Option<Voxels> {
+pub fn lend_any(array: &Bound<'_, PyAny>, ty: VoxelType) -> Option<Voxels> {
     match ty {
         VoxelType::U8 => lend::<u8>(array),
         VoxelType::I8 => lend::<i8>(array),
@@ -147,6 +169,15 @@ fn array_type(dtype: &Bound<'_, PyAny>) -> PyResult<VoxelType> {
         }
     };
     Ok(stored)
+}
+
+/// `spacing=` as `load` takes it (three positive numbers, a sequence or `"SX,SY,SZ"`), else a
+/// `ValueError` naming the keyword and showing the value as given.
+fn given_spacing(value: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
+    let entry = &slabscope::params::table::SPACING;
+    let invalid = || crate::errors::invalid(entry.keyword, repr(value), &entry.expected());
+    let text = crate::params::as_text(entry, value).map_err(|_| invalid())?;
+    slabscope::params::text::spacing(&text).ok_or_else(invalid)
 }
 
 /// The voxel-to-world transform of `affine` (rows, voxel index to RAS+ mm, as nibabel's) and
@@ -191,7 +222,7 @@ fn geometry(
 
 /// One copy of `array` in Fortran order as `held` (infinities made missing, as every reader
 /// holds them), and its voxels read in place.
-fn copy_of<'py>(
+pub fn copy_of<'py>(
     array: &Bound<'py, PyAny>,
     held: VoxelType,
 ) -> PyResult<(Voxels, Bound<'py, PyAny>)> {
@@ -255,8 +286,136 @@ fn view<'py, T: Element>(
     Ok(array.into_any())
 }
 
+/// What a volume restored from its voxels is called and was: the rest of a pickled volume.
+pub struct About {
+    pub name: String,
+    pub format: String,
+    pub notes: Vec<String>,
+    pub max_memory: u64,
+    pub copied: bool,
+}
+
+impl Volume {
+    /// The volume of `array`, the voxels a pickled volume carried (in the type they were held
+    /// in, Fortran order: read in place), stored in files as `stored`, with its geometry.
+    pub fn restore(
+        array: &Bound<'_, PyAny>,
+        stored: VoxelType,
+        spacing: [f64; 3],
+        transform: WorldTransform,
+        about: About,
+    ) -> PyResult<Self> {
+        let untyped = array.cast::<PyUntypedArray>()?;
+        let shape = untyped.shape().to_vec();
+        let [nx, ny, nz] = shape[..] else {
+            return Err(PyValueError::new_err(format!(
+                "a pickled Volume of shape {shape:?}: expected 3 dimensions"
+            )));
+        };
+        let name: String = untyped.dtype().getattr("name")?.extract()?;
+        let held = VoxelType::parse(&name)
+            .unwrap_or_else(|| slabscope::volume::voxels::held_type(stored, false));
+        let (voxels, kept) = match lend_any(array, held) {
+            Some(v) => (v, array.clone()),
+            None => copy_of(array, held)?,
+        };
+        let volume = run::quick(array.py(), || {
+            slabscope::Volume::from_voxels([nx, ny, nz], spacing, stored, voxels)
+        })?
+        .with_transform(transform);
+        Ok(Self {
+            inner: Arc::new(volume),
+            name: about.name,
+            max_memory: about.max_memory,
+            array: Some(kept.unbind()),
+            copied: about.copied,
+            format: about.format,
+            notes: about.notes,
+            file: None,
+            carry: true,
+        })
+    }
+
+    /// What pickling needs of this volume: its file and load keywords unless it carries its
+    /// voxels, and what `restore` takes.
+    pub fn file(&self) -> Option<&(PathBuf, Py<PyDict>)> {
+        self.file.as_ref().filter(|_| !self.carry)
+    }
+
+    /// The rest of the volume for `restore`.
+    pub fn about(&self) -> About {
+        About {
+            name: self.name.clone(),
+            format: self.format.clone(),
+            notes: self.notes.clone(),
+            max_memory: self.max_memory,
+            copied: self.copied,
+        }
+    }
+
+    /// Whether its voxels are a user's array, read in place (a deep copy copies them).
+    pub fn lends(&self) -> bool {
+        self.array.is_some() && !self.copied
+    }
+
+    fn clone_ref(&self, py: Python<'_>) -> Self {
+        Self {
+            inner: Arc::clone(&self.inner),
+            name: self.name.clone(),
+            max_memory: self.max_memory,
+            array: self.array.as_ref().map(|a| a.clone_ref(py)),
+            copied: self.copied,
+            format: self.format.clone(),
+            notes: self.notes.clone(),
+            file: self
+                .file
+                .as_ref()
+                .map(|(p, d)| (p.clone(), d.clone_ref(py))),
+            carry: self.carry,
+        }
+    }
+}
+
 #[pymethods]
 impl Volume {
+    /// This volume, pickled with its voxels: a volume read from a file otherwise pickles as its
+    /// path and `load` keywords (small, and read again where it is unpickled, which needs the
+    /// file there); a volume made from an array always carries its voxels.
+    fn carrying_voxels(&self, py: Python<'_>) -> Self {
+        Self {
+            carry: true,
+            ..self.clone_ref(py)
+        }
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        crate::pickle::reduce_volume(slf)
+    }
+
+    /// The voxels for NumPy (`np.asarray(volume)`): `array`, the read-only view, unless `dtype`
+    /// or `copy=True` asks for a copy (`copy=False` with another `dtype` is a `ValueError`).
+    #[pyo3(signature = (dtype=None, copy=None))]
+    fn __array__<'py>(
+        slf: &Bound<'py, Self>,
+        dtype: Option<&Bound<'py, PyAny>>,
+        copy: Option<bool>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        crate::pickle::numpy_array("Volume", slf.getattr("array")?, dtype, copy)
+    }
+
+    fn __copy__<'py>(slf: &Bound<'py, Self>) -> Bound<'py, Self> {
+        slf.clone()
+    }
+
+    /// The volume itself (it never changes), or, when its voxels are a user's array read in
+    /// place, a volume of a copy of them.
+    fn __deepcopy__<'py>(
+        slf: &Bound<'py, Self>,
+        _memo: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        crate::pickle::deepcopy_volume(slf)
+    }
+
     /// A volume of `array`'s voxels, indexed `[x, y, z]` (nibabel's order: x fastest in a
     /// Fortran-ordered array). An array of uint8, int8, uint16, int16 or float32 in Fortran
     /// order is read in place (`copied` is False: do not write to it while the volume is in
@@ -267,9 +426,10 @@ impl Volume {
     fn from_array(
         py: Python<'_>,
         array: &Bound<'_, PyAny>,
-        spacing: Option<[f64; 3]>,
+        spacing: Option<&Bound<'_, PyAny>>,
         affine: Option<[[f64; 4]; 4]>,
     ) -> PyResult<Self> {
+        let spacing = spacing.map(given_spacing).transpose()?;
         let numpy = py.import("numpy")?;
         let original = if array.cast::<PyUntypedArray>().is_ok() {
             array.clone()
@@ -308,8 +468,10 @@ impl Volume {
             max_memory: slabscope::volume::io::default_max_memory(),
             array: Some(kept.unbind()),
             copied,
-            format: "array",
+            format: "array".into(),
             notes: Vec::new(),
+            file: None,
+            carry: true,
         })
     }
 
@@ -366,7 +528,7 @@ impl Volume {
 
     /// The voxel type of the file (or array), as a NumPy dtype name: the CLI's `--type`.
     #[getter]
-    fn dtype(&self) -> &'static str {
+    pub fn dtype(&self) -> &'static str {
         numpy_name(self.inner.voxel_type())
     }
 

@@ -97,3 +97,40 @@ def test_an_array_outlives_its_name():
     gc.collect()
     assert volume.array[5, 4, 6] == 5 + 40 + 600
     assert slabscope.analyze(volume, slabs=2).slabs
+
+
+def test_numpy_takes_a_volume_as_its_voxels():
+    from conftest import DATA
+
+    array = ramp(np.int16)
+    volume = slabscope.Volume.from_array(array)
+    view = np.asarray(volume)
+    assert view.dtype == np.int16 and view.shape == (6, 5, 7) and np.array_equal(view, array)
+    assert np.shares_memory(view, array) and not view.flags.writeable
+    assert np.asarray(volume, copy=False) is not None and np.shares_memory(np.asarray(volume, copy=False), array)
+    owned = np.array(volume, copy=True)
+    assert not np.shares_memory(owned, array) and owned.flags.writeable and np.array_equal(owned, array)
+    as_float = np.asarray(volume, dtype=np.float64)
+    assert as_float.dtype == np.float64 and np.array_equal(as_float, array)
+    assert np.asarray(volume, dtype="int16").dtype == np.int16
+    with pytest.raises(ValueError, match=r"Volume.__array__: dtype=.*float64.*copy=False"):
+        np.asarray(volume, dtype=np.float64, copy=False)
+    read = slabscope.load(DATA / "ramp_i16.nii")
+    assert np.array_equal(np.asarray(read), read.array) and np.shares_memory(np.asarray(read), read.array)
+    assert float(np.mean(read)) == float(read.array.mean())  # NumPy functions take a volume
+
+
+def test_numpy_takes_a_picture_as_its_rgba_pixels():
+    volume = slabscope.Volume.from_array(ramp(np.uint8))
+    picture = slabscope.render(volume, size=(40, 30))
+    pixels = np.asarray(picture)
+    assert pixels.shape == (30, 40, 4) and pixels.dtype == np.uint8 and not pixels.flags.writeable
+    assert np.array_equal(pixels, picture.array)
+    assert np.shares_memory(np.asarray(picture, copy=False), pixels)  # the picture's own memory
+    copied = np.array(picture, copy=True)
+    assert copied.flags.writeable and not np.shares_memory(copied, pixels)
+    assert np.asarray(picture, dtype=np.float32).dtype == np.float32
+    with pytest.raises(ValueError, match="Image.__array__"):
+        np.asarray(picture, dtype=np.float32, copy=False)
+    del picture
+    assert pixels.sum() > 0  # the array keeps the picture alive

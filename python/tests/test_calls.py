@@ -115,9 +115,12 @@ def test_render_and_slice_give_rgba_pictures_a_notebook_shows(phantoms, tmp_path
         image.save(phantoms["body"], force=True)
     with pytest.raises(ValueError, match="highlight=9"):
         slabscope.render(volume, analysis, highlight=9)
-    other = slabscope.load(str(phantoms["body"]))
+    other = slabscope.load(str(phantoms["layers"]))
     with pytest.raises(ValueError, match="another volume"):
         slabscope.render(other, analysis)
+    # The same file read again is the same voxels and geometry: its analysis draws it.
+    again = slabscope.load(str(phantoms["body"]))
+    assert slabscope.render(again, analysis, size=(64, 48)).png() == slabscope.render(volume, analysis, size=(64, 48)).png()
 
 
 def test_render_matches_the_cli_picture(phantoms, cli, tmp_path):
@@ -167,3 +170,16 @@ def test_an_ome_tiffs_channel_and_time_point_are_keywords():
     assert volume.spacing == pytest.approx((0.0005, 0.00025, 0.002))
     with pytest.raises(slabscope.VolumeError, match="holds 2 channels .* no channel 2"):
         slabscope.load(DATA / "ome" / "zct.ome.tif", channel=2)
+
+
+def test_a_star_import_leaves_the_builtin_slice_alone():
+    scope: dict = {}
+    exec("from slabscope import *", scope)
+    assert "slice" not in scope and "load" in scope and "triage_frame" in scope
+    assert "slice" not in slabscope.__all__
+    from slabscope import slice as picture_slice
+
+    assert picture_slice is slabscope.slice
+    # The package's function lists its keywords (its signature) and calls the extension's.
+    assert slabscope.slice.__wrapped__ is slabscope._slabscope.slice
+    assert all(hasattr(slabscope, name) for name in slabscope.__all__)

@@ -54,3 +54,25 @@ def test_analyses_on_a_cluster_are_the_reports(client, cli):
     assert reports[0] == json.loads(cli("analyze", paths[0], "--json", "--slabs", "2"))
     assert reports[1] == json.loads(cli("analyze", paths[1], "--json", "--slabs", "2"))
     assert reports[2]["file"] == paths[2] and "truncated voxel data" in reports[2]["error"]
+
+
+def test_volumes_and_analyses_travel_to_and_from_worker_processes(client, cli_json):
+    import numpy as np
+
+    path = str(DATA / "ramp_i16.nii")
+    # A volume a worker read comes back (as its path, read again here).
+    volume = client.submit(slabscope.load, path, pure=False).result()
+    assert isinstance(volume, slabscope.Volume) and volume.shape == (5, 4, 3) and volume.orientation == "RAS"
+    # An analysis made on a worker comes back whole: its report, its labels, drawn with the volume
+    # read here.
+    analysis = client.submit(lambda p: slabscope.analyze(slabscope.load(p), slabs=2), path, pure=False).result()
+    assert analysis.to_dict() == cli_json("analyze", path, "--json", "--slabs", "2")
+    local = slabscope.analyze(volume, slabs=2)
+    assert np.array_equal(analysis.labels(), local.labels())
+    size = {"size": (48, 32)}
+    assert slabscope.render(volume, analysis, **size).png() == slabscope.render(volume, local, **size).png()
+    # A volume sent to a worker: read from its path there, or carried with its voxels.
+    array = np.asfortranarray(np.arange(8 * 9 * 10, dtype=np.float32).reshape(8, 9, 10))
+    sent = [volume, volume.carrying_voxels(), slabscope.Volume.from_array(array)]
+    shapes = client.gather([client.submit(lambda v: (v.shape, float(v.array.sum())), v, pure=False) for v in sent])
+    assert shapes == [((5, 4, 3), float(volume.array.sum()))] * 2 + [((8, 9, 10), float(array.sum()))]

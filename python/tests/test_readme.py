@@ -1,6 +1,8 @@
 """The walk-through of python/README.md runs as written, block after block, in a folder holding
 the brain it names (the repository's nilearn image): in this interpreter, and as a notebook of one
-cell a block in a real Jupyter kernel, where the picture the README says is shown inline is."""
+cell a block in a real Jupyter kernel, where the picture the README says is shown inline is; and
+its Dask block runs as a script, as `python script.py` runs it (worker processes import it
+again)."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import json
 import os
 import re
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -31,7 +34,7 @@ def test_the_walk_through_runs(tmp_path, monkeypatch):
     pytest.importorskip("distributed")
     shutil.copy(DATA / "nilearn_image_10426.nii.gz", tmp_path / "brain.nii.gz")
     monkeypatch.chdir(tmp_path)
-    scope: dict = {}
+    scope: dict = {"__name__": "__main__"}  # as a script's or a notebook's
     for block in walk_through():
         exec(compile(block, str(README), "exec"), scope)
     assert (tmp_path / "exploded.png").is_file()
@@ -78,3 +81,18 @@ def test_the_walk_through_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
     assert output.output_type == "execute_result", "the cell's value, as Jupyter shows one"
     # The picture shown is the Image's PNG: the one the same cell saved.
     assert base64.b64decode(output["data"]["image/png"]) == (work / "exploded.png").read_bytes()
+
+
+def test_the_dask_block_runs_as_a_script(tmp_path):
+    pytest.importorskip("distributed")
+    (block,) = [b for b in walk_through() if "LocalCluster" in b]
+    assert 'if __name__ == "__main__":' in block
+    script = tmp_path / "cluster.py"
+    check = '\nif __name__ == "__main__":\n    print("rows:", len(rows), rows[0]["error"], rows[0]["format"])\n'
+    script.write_text(block + check)
+    shutil.copy(DATA / "nilearn_image_10426.nii.gz", tmp_path / "brain.nii.gz")
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "rows: 1 None nifti", done.stdout

@@ -59,6 +59,17 @@ def test_selection_errors_name_the_keyword(archive, tmp_path):
         slabscope.triage(str(empty))
 
 
+def test_paths_none_of_which_exist_are_file_not_found(archive, tmp_path):
+    nowhere = str(tmp_path / "nowhere")
+    with pytest.raises(FileNotFoundError, match=r"^no volumes found under .*nowhere: no such file"):
+        slabscope.triage(nowhere)
+    with pytest.raises(FileNotFoundError, match="no such file or folder"):
+        slabscope.list_volumes([nowhere, str(tmp_path / "nor_here")])
+    # Beside a path that exists, a missing one is a row of its own, as on the CLI.
+    rows = list(slabscope.triage([nowhere, str(archive / "ramp_u8.nii")], slabs=2))
+    assert [row["error"] is None for row in rows] == [False, True], rows
+
+
 def test_a_run_closed_early_stops(archive):
     rows = slabscope.triage(str(archive))
     first = next(rows)

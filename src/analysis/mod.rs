@@ -228,13 +228,14 @@ impl Plan {
     /// splitting whose stack does not fit is counted strip by strip when the voxels are read in
     /// place (or held) and room is left beside the view search's level for the strips: the
     /// slabs are then those of every voxel, the best axis that of the coarser level.
-    pub fn within(
+    pub(crate) fn within(
         volume: &Volume,
         wanted: usize,
         max_memory: u64,
         params: &AnalysisParams,
     ) -> Result<Self> {
-        let (level, note) = level_within_memory(volume, wanted, max_memory)?;
+        let bins = params.view.sampling.bins;
+        let (level, note) = level_within_memory(volume, wanted, max_memory, bins)?;
         let views = volume.coarser(level);
         let coarse = if level > 0 { views.memory_bytes() } else { 0 };
         let room = max_memory.saturating_sub(volume.memory_bytes() + coarse);
@@ -254,9 +255,9 @@ impl Plan {
                 "level 0 needs {} for the analysis in memory, over the memory limit of {}: the \
                  view search runs on pyramid level {level}, the finest that fits ({}), and the \
                  slabs are counted on every voxel, strip by strip",
-                human(memory_needed(volume, 0)),
+                human(memory_needed_with(volume, 0, bins)),
                 human(max_memory),
-                human(memory_needed(volume, level)),
+                human(memory_needed_with(volume, level, bins)),
             )),
             views,
             partition: Arc::new(volume.clone()),
@@ -366,21 +367,33 @@ fn partitioned_kept(
 /// from a mapped file; a coarser level holds f32), and the larger of the view search's cell map
 /// (a byte a voxel for integers of at most 16 bits, whose bins a table gives, two for f32) and
 /// the partition's slice stack with the background mask and their columns (a byte, a bit and
-/// an eighth more: measured, 1281 MiB at the peak of a 1024³ analysis, 1280 by this count).
+/// an eighth more: measured, 1281 MiB at the peak of a 1024³ analysis, 1280 by this count) with
+/// its per-slice histograms and curves for the longest stack the level can have
+/// ([`slice_bytes`](crate::partition::slice_bytes) a slice at the default 32 bins: next to
+/// nothing on a cube, most of it on a long thin volume, 200,000 voxels along and one across).
 #[must_use]
 pub fn memory_needed(volume: &Volume, level: usize) -> u64 {
+    memory_needed_with(
+        volume,
+        level,
+        crate::geometry::lattice::SamplingParams::default().bins,
+    )
+}
+
+/// [`memory_needed`] for a partition in `bins` bins.
+#[must_use]
+pub fn memory_needed_with(volume: &Volume, level: usize, bins: usize) -> u64 {
     let level = level.min(volume.coarser_levels());
-    let n = level_dims(volume.dims(), level)
-        .iter()
-        .map(|&d| d as u64)
-        .product::<u64>();
+    let (dims, spacing) = level_grid(volume, level);
+    let n = dims.iter().map(|&d| d as u64).product::<u64>();
     let (held, map) = if level == 0 {
         let integer = volume.data().held() != crate::volume::VoxelType::F32;
         (volume.memory_bytes(), if integer { n } else { 2 * n })
     } else {
         (4 * n, 2 * n)
     };
-    let stack = n + n / 4;
+    let slices = crate::partition::most_slices(dims, spacing);
+    let stack = n + n / 4 + slices * crate::partition::slice_bytes(bins);
     held + map.max(stack)
 }
 
@@ -388,23 +401,30 @@ pub fn memory_needed(volume: &Volume, level: usize) -> u64 {
 /// `max_memory` bytes ([`memory_needed`]), with a note when the budget moved it from `wanted`.
 /// A volume is never refused for its size: only a budget too small for a level of two voxels
 /// along every axis is an error.
-pub fn within_memory(
+pub(crate) fn within_memory(
     volume: &Volume,
     wanted: usize,
     max_memory: u64,
 ) -> Result<(Arc<Volume>, Option<String>)> {
-    level_within_memory(volume, wanted, max_memory)
-        .map(|(level, note)| (volume.coarser(level), note))
+    level_within_memory(
+        volume,
+        wanted,
+        max_memory,
+        crate::geometry::lattice::SamplingParams::default().bins,
+    )
+    .map(|(level, note)| (volume.coarser(level), note))
 }
 
-/// The level [`within_memory`] picks, and its note.
-fn level_within_memory(
+/// The level [`within_memory`] picks for a partition in `bins` bins, and its note.
+pub(crate) fn level_within_memory(
     volume: &Volume,
     wanted: usize,
     max_memory: u64,
+    bins: usize,
 ) -> Result<(usize, Option<String>)> {
+    let memory_needed = |l| memory_needed_with(volume, l, bins);
     let top = volume.coarser_levels();
-    let fits = (wanted.min(top)..=top).find(|&l| memory_needed(volume, l) <= max_memory);
+    let fits = (wanted.min(top)..=top).find(|&l| memory_needed(l) <= max_memory);
     let human = crate::error::short_bytes;
     match fits {
         Some(l) if l == wanted => Ok((l, None)),
@@ -413,18 +433,18 @@ fn level_within_memory(
             Some(format!(
                 "level {wanted} needs {} for the analysis, over the memory limit of {}: computed \
                  on pyramid level {l}, the finest that fits ({})",
-                human(memory_needed(volume, wanted)),
+                human(memory_needed(wanted)),
                 human(max_memory),
-                human(memory_needed(volume, l)),
+                human(memory_needed(l)),
             )),
         )),
         _ => Err(crate::error::Error::invalid(
-            "max-memory",
+            "max_memory",
             human(max_memory),
             format!(
                 "room for the analysis of a pyramid level with two voxels along every axis \
                  (level {wanted} needs {})",
-                human(memory_needed(volume, wanted))
+                human(memory_needed(wanted))
             ),
         )),
     }
@@ -433,6 +453,18 @@ fn level_within_memory(
 /// The dimensions of the level `level` levels coarser than `dims`.
 fn level_dims(dims: [usize; 3], level: usize) -> [usize; 3] {
     (0..level).fold(dims, |d, _| crate::volume::pyramid::coarser_dims(d))
+}
+
+/// The dimensions and spacing of pyramid level `level` of `volume` (an axis of one voxel is
+/// not halved, nor its spacing doubled).
+fn level_grid(volume: &Volume, level: usize) -> ([usize; 3], [f64; 3]) {
+    (0..level).fold((volume.dims(), volume.spacing()), |(d, s), _| {
+        let step = crate::volume::pyramid::step(d);
+        (
+            crate::volume::pyramid::coarser_dims(d),
+            [0, 1, 2].map(|i| s[i] * step[i] as f64),
+        )
+    })
 }
 
 /// What an analysis on a pyramid level says of it; nothing at full resolution.
@@ -471,16 +503,18 @@ mod tests {
 
     #[test]
     fn the_budget_picks_the_finest_level_that_fits() {
-        // 16³ held in memory: its voxels and 8192 bytes of cell map at level 0; level 1 is 8³
-        // of f32 (2048 bytes) and its cell map (1024).
+        // 16³ held in memory: its voxels, then the larger of 8192 bytes of cell map and the
+        // slice stack (5120 bytes) with the per-slice sums of the longest stack (the diagonal,
+        // 28 slices of 576 bytes at 32 bins); level 1 is 8³ of f32 (2048 bytes), its stack (640)
+        // and 14 slices of sums.
         let data: Vec<f32> = (0..4096).map(|i| (i % 251) as f32).collect();
         let v = Volume::new([16; 3], [1.0; 3], VoxelType::U8, data).unwrap();
-        let full = v.memory_bytes() + 8192;
+        let full = v.memory_bytes() + 5120 + 28 * 576;
         assert!(v.memory_bytes() >= 4096);
         assert_eq!(memory_needed(&v, 0), full);
-        assert_eq!(memory_needed(&v, 1), 6 * 512);
-        assert_eq!(level_within_memory(&v, 0, full).unwrap(), (0, None));
-        let (level, note) = level_within_memory(&v, 0, full - 1).unwrap();
+        assert_eq!(memory_needed(&v, 1), 2048 + 640 + 14 * 576);
+        assert_eq!(level_within_memory(&v, 0, full, 32).unwrap(), (0, None));
+        let (level, note) = level_within_memory(&v, 0, full - 1, 32).unwrap();
         assert_eq!(level, 1);
         let note = note.unwrap();
         assert!(
@@ -488,9 +522,9 @@ mod tests {
             "{note}"
         );
         // A level asked for that fits is kept, and no note.
-        assert_eq!(level_within_memory(&v, 2, full - 1).unwrap(), (2, None));
+        assert_eq!(level_within_memory(&v, 2, full - 1, 32).unwrap(), (2, None));
         // Integers need no per-voxel map: the slice stack and its background (a byte and a
-        // quarter a voxel) are the peak.
+        // quarter a voxel) and the per-slice sums are the peak.
         let bytes: Vec<u8> = (0..4096).map(|i| (i % 251) as u8).collect();
         let u8s = Volume::from_voxels(
             [16; 3],
@@ -499,8 +533,37 @@ mod tests {
             crate::volume::Voxels::owned(bytes),
         )
         .unwrap();
-        assert_eq!(memory_needed(&u8s, 0), 4096 + 5120);
+        assert_eq!(memory_needed(&u8s, 0), 4096 + 5120 + 28 * 576);
         // Levels of one voxel along an axis are not analysed.
-        assert!(level_within_memory(&v, 0, 10).is_err());
+        assert!(level_within_memory(&v, 0, 10, 32).is_err());
+    }
+
+    #[test]
+    fn a_long_thin_volume_needs_its_per_slice_sums() {
+        // One voxel across, 200,000 along (#47): 200 KB of voxels, but a stack of 200,000 slices
+        // whose histograms and prefix sums take 115 MB at 32 bins, 8 times that at 255. The
+        // budget weighs them: 64 MB is refused (no coarser level is two voxels across), 200 MB
+        // fits.
+        for dims in [[1, 1, 200_000], [200_000, 1, 1], [1, 200_000, 1]] {
+            let bytes = (0..200_000).map(|i| (i * 7 % 251) as u8).collect();
+            let v = Volume::from_voxels(
+                dims,
+                [1.0; 3],
+                VoxelType::U8,
+                crate::volume::Voxels::owned(bytes),
+            )
+            .unwrap();
+            let need = memory_needed(&v, 0);
+            assert!(need >= 200_000 * 576, "{dims:?}: {need}");
+            assert!(memory_needed_with(&v, 0, 255) > 7 * need, "{dims:?}");
+            assert!(
+                level_within_memory(&v, 0, 64 << 20, 32).is_err(),
+                "{dims:?}"
+            );
+            assert_eq!(
+                level_within_memory(&v, 0, 200 << 20, 32).unwrap(),
+                (0, None)
+            );
+        }
     }
 }

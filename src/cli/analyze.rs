@@ -7,14 +7,15 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use slabscope::Plan;
+use slabscope::budget::{Budget, Purpose};
 use slabscope::explain::StepsShown;
 use slabscope::partition::label_bytes;
 use slabscope::report::curves_csv;
-use slabscope::volume::Resolution;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
 use slabscope::{AnalysisReport, SlabsReport, label_volume};
 
 use super::args::{AnalysisArgs, LoadArgs};
+use super::params::{self, Flags};
 
 /// Arguments of `slabscope analyze`.
 #[derive(Debug, Args)]
@@ -24,9 +25,8 @@ pub struct AnalyzeArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Also run the view search when --axis names an axis.
-    #[arg(long)]
-    pub views: bool,
+    #[command(flatten)]
+    pub views: Flags<params::Views>,
     /// Explain the chosen axis and the steps taken: the block counts behind the entropy rates
     /// of the chosen and the worst axis, each split's part histograms, JS and gain, each
     /// merge's joint histogram and NMI, the optimum beside greedy. For the last 32 steps, the
@@ -34,11 +34,8 @@ pub struct AnalyzeArgs {
     #[arg(long, value_name = "all|N", num_args = 0..=1, default_missing_value = "32",
           value_parser = parse_explain)]
     pub explain: Option<StepsShown>,
-    /// The pyramid level to compute on: full (every voxel, the paper's method), auto (the
-    /// coarsest level with at least 128 voxels along every axis), or a level number K (each
-    /// level halves every axis, averaging 2x2x2 blocks).
-    #[arg(long, value_name = "auto|full|K", default_value = "full")]
-    pub resolution: Resolution,
+    #[command(flatten)]
+    pub resolution: Flags<params::Resolution>,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the slab index of every voxel as a label volume in the source's world geometry:
@@ -77,17 +74,30 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let loaded = super::load(&args.file, &args.load)?;
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let full = &loaded.volume;
-    let wanted = args.resolution.level(full.dims(), full.coarser_levels())?;
-    let max_memory = args.load.options().max_memory;
-    let mut params = args.analysis.params(args.views);
+    let name = slabscope::error::shown(&args.file);
+    let wanted = args
+        .resolution
+        .given
+        .resolution()
+        .and_then(|r| r.level(full.dims(), full.coarser_levels()))
+        .map_err(|e| anyhow::Error::from(e).context(name.clone()))?;
+    let max_memory = args.load.options()?.max_memory;
+    let mut params = args
+        .analysis
+        .params(args.views.given.switch(&slabscope::params::table::VIEWS)?)?;
     params.explain = args.explain;
-    let plan = Plan::within(full, wanted, max_memory, &params)?;
+    let plan = Budget::new(max_memory).plan(
+        full,
+        Purpose::Analysis {
+            wanted,
+            params: &params,
+        },
+    )?;
     let volume = plan.partition.as_ref();
     if args.export_labels.is_some() {
         // A byte a voxel at least: refused before the analysis rather than after it.
         check_labels_fit(&args.file, &plan, 1)?;
     }
-    let name = slabscope::error::shown(&args.file);
     let analysis = args.analysis.analyze_with(&name, &plan, &params)?;
     let part = &analysis.partition;
     if args.export_labels.is_some() {

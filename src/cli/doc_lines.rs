@@ -207,14 +207,18 @@ fn words(text: &str) -> Vec<String> {
 }
 
 /// Where an invocation starts in `words`: the index of its first argument, after `slabscope`
-/// (or a path ending in `/slabscope`, but not the target of `cargo test --bin slabscope`) or
-/// `cargo run --release --`.
+/// (or a path ending in `/slabscope`, but not the target of `cargo test --bin slabscope` nor
+/// Python's `from slabscope import *`) or `cargo run --release --`.
 fn starts(words: &[String]) -> Vec<usize> {
     let mut starts = Vec::new();
     for i in 0..words.len() {
         let w = words[i].as_str();
-        let named_by_cargo = i > 0 && matches!(words[i - 1].as_str(), "--bin" | "-p" | "--package");
-        if (w == "slabscope" || w.ends_with("/slabscope")) && !named_by_cargo {
+        let named = i > 0
+            && matches!(
+                words[i - 1].as_str(),
+                "--bin" | "-p" | "--package" | "from" | "import"
+            );
+        if (w == "slabscope" || w.ends_with("/slabscope")) && !named {
             starts.push(i + 1);
         } else if words[i..].starts_with(&["cargo", "run", "--release", "--"].map(String::from)) {
             starts.push(i + 4);

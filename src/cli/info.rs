@@ -4,12 +4,13 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
+use slabscope::error::names::{controls, text};
 use slabscope::error::{human_bytes, shown};
 use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, to_json};
 use slabscope::triage::{Entry, Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
-use slabscope::volume::io::Loaded;
 use slabscope::volume::io::zarr::ZarrInfo;
+use slabscope::volume::io::{DicomSeries, Loaded};
 
 use super::LoadArgs;
 
@@ -33,7 +34,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     // A folder of volumes, or of several DICOM series, is listed, one a line (what `triage`
     // would look at).
     let dir = &args.file;
-    let opts = args.load.options();
+    let opts = args.load.options()?;
     let listed = if dir.is_dir() && opts.series.is_none() {
         match folder_kind(dir)? {
             Folder::Collection => Some(discover(std::slice::from_ref(dir), &opts)?),
@@ -56,7 +57,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
                  N|UID picks a DICOM series)",
                 volumes.len()
             );
-            let positions = slabscope::triage::series_positions(&volumes, &args.load.options());
+            let positions = slabscope::triage::series_positions(&volumes, &args.load.options()?);
             for (v, at) in volumes.iter().zip(positions) {
                 match at {
                     Some(n) => outln!("            {}  (--series {n})", v.name()),
@@ -109,13 +110,7 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         print_zarr(z);
     }
     if let Some(d) = &loaded.dicom {
-        let number = d.number.map_or_else(String::new, |n| format!("{n} "));
-        outln!("series      {number}\"{}\" ({})", d.description, d.modality);
-        outln!("series uid  {}", d.key);
-        outln!("syntax      {}", d.syntax);
-        for (field, value) in &d.patient {
-            outln!("{field:<11} {value}");
-        }
+        print_dicom(d);
     }
     outln!(
         "dims        {}  ({} voxels)",
@@ -162,18 +157,36 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     Ok(())
 }
 
-/// What an OME-Zarr store holds: the image read, its axes, levels, chunking, codecs and labels.
+/// The DICOM series read: its fields escaped as they were read (`controls` leaves them so and
+/// keeps anything else out).
+fn print_dicom(d: &DicomSeries) {
+    let number = d.number.map_or_else(String::new, |n| format!("{n} "));
+    outln!(
+        "series      {number}\"{}\" ({})",
+        controls(&d.description),
+        controls(&d.modality)
+    );
+    outln!("series uid  {}", controls(&d.key));
+    outln!("syntax      {}", controls(&d.syntax));
+    for (field, value) in &d.patient {
+        outln!("{field:<11} {}", controls(value));
+    }
+}
+
+/// What an OME-Zarr store holds: the image read, its axes, levels, chunking, codecs and labels,
+/// every name the store's metadata gives escaped by the one rule (`names::text`).
 fn print_zarr(z: &ZarrInfo) {
     let shape = |s: &[u64]| s.iter().map(u64::to_string).collect::<Vec<_>>().join("x");
+    let list = |names: &[String]| names.iter().map(|n| text(n)).collect::<Vec<_>>().join(", ");
     if !z.image.is_empty() {
-        outln!("image       {}", z.image);
+        outln!("image       {}", text(&z.image));
     }
     let axes: Vec<String> = z
         .axes
         .iter()
         .map(|a| match &a.unit {
-            Some(unit) => format!("{} ({}, {unit})", a.name, a.kind),
-            None => format!("{} ({})", a.name, a.kind),
+            Some(unit) => format!("{} ({}, {})", text(&a.name), text(&a.kind), text(unit)),
+            None => format!("{} ({})", text(&a.name), text(&a.kind)),
         })
         .collect();
     outln!("axes        {}", axes.join(", "));
@@ -181,7 +194,11 @@ fn print_zarr(z: &ZarrInfo) {
         .levels
         .iter()
         .map(|l| {
-            let path = if l.path.is_empty() { "." } else { &l.path };
+            let path = if l.path.is_empty() {
+                ".".into()
+            } else {
+                text(&l.path)
+            };
             match l.pyramid_level {
                 Some(k) => format!("{path} {} (pyramid level {k})", shape(&l.shape)),
                 None => format!("{path} {} (not on the pyramid's grid)", shape(&l.shape)),
@@ -200,13 +217,13 @@ fn print_zarr(z: &ZarrInfo) {
     let codecs = if z.codecs.is_empty() {
         "none".to_string()
     } else {
-        z.codecs.join(", ")
+        list(&z.codecs)
     };
-    outln!("codecs      {codecs} ({})", z.data_type);
+    outln!("codecs      {codecs} ({})", text(&z.data_type));
     if !z.labels.is_empty() {
         outln!(
             "labels      {}  (--label-image NAME reads one)",
-            z.labels.join(", ")
+            list(&z.labels)
         );
     }
 }

@@ -19,6 +19,7 @@ pub mod args;
 mod doc_lines;
 mod explain;
 mod info;
+pub mod params;
 mod phantom;
 mod progress;
 mod render;
@@ -93,7 +94,7 @@ fn remove_staged_on_signals() {
 
 /// Loads `path`, printing the loader's notes to stderr.
 pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
-    let loaded = slabscope::load(path, &args.options())?;
+    let loaded = slabscope::load(path, &args.options()?)?;
     for n in &loaded.notes {
         note(path, n);
     }
@@ -170,24 +171,6 @@ pub fn write_new(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
     Ok(())
 }
 
-/// The flags the library's parameter names stand for on the command line.
-const FLAGS: &[(&str, &str)] = &[
-    ("bins", "--bins"),
-    ("block", "--block"),
-    ("level", "--level"),
-    ("phases", "--phases"),
-    ("ray_spacing", "--ray-spacing"),
-    ("sample_spacing", "--sample-spacing"),
-    ("slabs", "--slabs"),
-    ("threshold", "--threshold"),
-    ("axis", "--axis"),
-    ("step", "--step"),
-    ("size", "--size"),
-    ("spacing", "--spacing"),
-    ("volume", "--volume"),
-    ("index", "--index"),
-];
-
 /// One error for people, on one line: each cause in the chain, library errors worded in the
 /// CLI's terms (the flag for a parameter, the flag that lifts a limit or allows an overwrite),
 /// control characters escaped whatever a cause quotes.
@@ -203,6 +186,12 @@ pub fn error_message(e: &anyhow::Error) -> String {
     controls(&message).into_owned()
 }
 
+/// The flag of the library's parameter `name` (`--ray-spacing`), or the name itself when no
+/// flag stands for it.
+fn flag(name: &str) -> String {
+    slabscope::params::find(name).map_or_else(|| name.to_string(), |p| format!("--{}", p.flag))
+}
+
 fn in_flag_terms(e: &Error) -> String {
     match e {
         Error::Cancelled => progress::timed_out().unwrap_or_else(|| e.to_string()),
@@ -210,26 +199,35 @@ fn in_flag_terms(e: &Error) -> String {
             parameter,
             value,
             expected,
-        } => match FLAGS.iter().find(|(p, _)| p == parameter) {
-            Some((_, flag)) => format!("{flag} {value}: expected {expected}"),
-            None => e.to_string(),
-        },
-        Error::TooLarge { what, .. }
-            if what.contains("this machine") || what.contains("system") =>
-        {
-            e.to_string()
+        } => format!("{} {value}: expected {expected}", flag(parameter)),
+        Error::DefaultUnfit { parameter, .. } => {
+            let placeholder = slabscope::params::find(parameter)
+                .and_then(|p| p.value_name)
+                .unwrap_or("VALUE");
+            format!("{e} ({} {placeholder} asks for another)", flag(parameter))
         }
-        Error::TooLarge { .. } => format!("{e} (raise it with --max-memory)"),
+        Error::Conflicting { parameters: [a, b] } => {
+            format!("{} and {} cannot both be given", flag(a), flag(b))
+        }
+        Error::Needs { parameter, needed } => format!("{} needs {}", flag(parameter), flag(needed)),
+        Error::TooCoarse { note, cause } => format!(
+            "{}, because {note} (raise it with {})",
+            in_flag_terms(cause),
+            flag("max_memory")
+        ),
+        Error::TooLarge { machine: true, .. } => e.to_string(),
+        Error::TooLarge { .. } => format!("{e} (raise it with {})", flag("max_memory")),
         Error::RawUndescribed {
             path,
             missing,
             detail,
         } => {
-            let flags: Vec<&str> = missing
+            let flags: Vec<String> = missing
                 .iter()
-                .map(|m| match *m {
-                    "dims" => "--dims NXxNYxNZ",
-                    _ => "--type u8|i8|u16|i16|u32|i32|f32|f64",
+                .filter_map(|m| slabscope::params::find(m))
+                .map(|p| match p.value_name {
+                    Some(v) if v != p.name.to_uppercase() => format!("--{} {v}", p.flag),
+                    _ => format!("--{} ({})", p.flag, p.expected()),
                 })
                 .collect();
             format!("{}: {detail}: give {}", shown(path), flags.join(" and "))
@@ -238,8 +236,8 @@ fn in_flag_terms(e: &Error) -> String {
         Error::NotRegularFile { .. } => format!("{e}, --force or not"),
         Error::Series {
             localizers: true, ..
-        } => format!("{e} (--include-localizers keeps them)"),
-        Error::Series { .. } => format!("{e} (pick one with --series N|UID)"),
+        } => format!("{e} ({} keeps them)", flag("include_localizers")),
+        Error::Series { .. } => format!("{e} (pick one with {} N|UID)", flag("series")),
         _ => e.to_string(),
     }
 }
@@ -284,6 +282,6 @@ mod tests {
             "pipe.json: not a regular file: slabscope writes only regular files, --force or not"
         );
         let e = anyhow::Error::from(Error::invalid("dims", "0x1x1", "one voxel"));
-        assert_eq!(error_message(&e), "dims 0x1x1: expected one voxel");
+        assert_eq!(error_message(&e), "--dims 0x1x1: expected one voxel");
     }
 }

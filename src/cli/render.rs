@@ -3,189 +3,38 @@
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
-use std::sync::Arc;
 
 use anyhow::{Result, bail};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use image::{DynamicImage, RgbaImage};
-use slabscope::analysis::within_memory;
+use slabscope::budget::{Budget, Purpose};
 use slabscope::geometry::min_spacing;
-use slabscope::render::{
-    CameraParams, Colormap, Gap, Layout, Mode, Preset, RenderParams, Renderer, Stack,
-    TransferChoice, encode, slice,
-};
+use slabscope::params::Scene;
+use slabscope::render::{Layout, Renderer, Stack, TransferChoice, encode, slice};
 use tiny_skia::Pixmap;
 
-use super::args::{AnalysisArgs, LoadArgs, pair, within};
+use super::args::{AnalysisArgs, LoadArgs};
+use super::params::{self, Flags};
 use super::progress::with_bar;
 use crate::term::{self, Graphics, Protocol};
 
-/// What the render shows and how.
-#[derive(Debug, Args, Clone)]
-pub struct ViewOptions {
-    /// Cut faces (the cross-section at every cut, the volume rendered behind), plain direct
-    /// volume rendering, or maximum intensity projection.
-    #[arg(long, value_enum, default_value_t = ModeArg::Cut)]
-    pub mode: ModeArg,
-    #[command(flatten)]
-    pub look: LookArgs,
-    /// Camera angle around the slab axis, degrees.
-    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true, value_parser = within(-360.0, 360.0))]
-    pub azimuth: f64,
-    /// Camera angle above the slab planes, degrees.
-    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true, value_parser = within(-90.0, 90.0))]
-    pub elevation: f64,
-    /// Magnification (1 fits the scene).
-    #[arg(long, default_value_t = 1.0, value_parser = within(0.05, 50.0))]
-    pub zoom: f64,
-    /// Perspective projection instead of orthographic.
-    #[arg(long)]
-    pub perspective: bool,
-    /// Gaps between slabs: all equal, or wider where neighbouring slabs are less alike.
-    #[arg(long, value_enum, default_value_t = GapArg::Similarity)]
-    pub gap: GapArg,
-    /// Total gap as a fraction of the stack's length.
-    #[arg(long, default_value_t = slabscope::render::DEFAULT_SPREAD, value_parser = within(0.0, 10.0))]
-    pub spread: f64,
-    /// Show this slab normally and the others faint.
-    #[arg(long, value_name = "SLAB")]
-    pub highlight: Option<usize>,
-    /// Show only the highlighted slab.
-    #[arg(long, requires = "highlight")]
-    pub solo: bool,
-    /// Sample distance along rays, in smallest voxel spacings.
-    #[arg(long, default_value_t = 1.0, value_parser = within(0.05, 10.0))]
-    pub step: f64,
-    /// No gradient shading.
-    #[arg(long)]
-    pub no_shading: bool,
-    /// No slab outlines.
-    #[arg(long)]
-    pub no_outlines: bool,
-    /// No slab numbers.
-    #[arg(long)]
-    pub no_labels: bool,
-}
+/// What the render shows and how: the library's scene entries, made flags.
+pub type ViewOptions = Flags<params::Scene>;
 
 /// How values become colours.
-#[derive(Debug, Args, Clone)]
-pub struct LookArgs {
-    /// Transfer function (auto: windowed on what is not background, CT in a soft-tissue
-    /// window, label volumes in distinct colours).
-    #[arg(long = "tf", value_enum, default_value_t = PresetArg::Auto)]
-    pub preset: PresetArg,
-    /// Colour map.
-    #[arg(long, value_enum, default_value_t = ColormapArg::Grey)]
-    pub colormap: ColormapArg,
-    /// Window LO,HI: grey from LO to HI and opacity rising across it (replaces the preset's).
-    #[arg(long, value_name = "LO,HI", value_parser = parse_window, allow_hyphen_values = true)]
-    pub window: Option<(f32, f32)>,
-}
+pub type LookArgs = Flags<params::Look>;
 
 impl LookArgs {
     /// The library's look.
-    pub fn look(&self) -> TransferChoice {
-        TransferChoice {
-            preset: match self.preset {
-                PresetArg::Auto => Preset::Auto,
-                PresetArg::CtBone => Preset::CtBone,
-                PresetArg::CtSoft => Preset::CtSoft,
-                PresetArg::Mri => Preset::Mri,
-            },
-            colormap: match self.colormap {
-                ColormapArg::Grey => Colormap::Grey,
-                ColormapArg::Bone => Colormap::Bone,
-                ColormapArg::Hot => Colormap::Hot,
-                ColormapArg::Viridis => Colormap::Viridis,
-            },
-            window: self.window,
-        }
+    pub fn look(&self) -> slabscope::Result<TransferChoice> {
+        self.given.look()
     }
-}
-
-/// Render modes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ModeArg {
-    /// Direct volume rendering with each slab's cut faces showing the cross-section there.
-    Cut,
-    /// Direct volume rendering.
-    Dvr,
-    /// Maximum intensity projection.
-    Mip,
-}
-
-/// Transfer function presets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum PresetArg {
-    /// From the histogram.
-    Auto,
-    /// CT bone (Hounsfield units).
-    CtBone,
-    /// CT soft tissue (Hounsfield units).
-    CtSoft,
-    /// MRI, from percentiles.
-    Mri,
-}
-
-/// Colour maps.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ColormapArg {
-    /// Black to white.
-    Grey,
-    /// Grey with a cool tint.
-    Bone,
-    /// Black, red, yellow, white.
-    Hot,
-    /// Dark blue to yellow.
-    Viridis,
-}
-
-/// Gap sizing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum GapArg {
-    /// All gaps equal.
-    Uniform,
-    /// Proportional to 1 - NMI of the slabs at each boundary.
-    Similarity,
 }
 
 impl ViewOptions {
-    /// The library's render parameters for a `width × height` image.
-    pub fn params(&self, width: u32, height: u32) -> RenderParams {
-        let look = self.look.look();
-        RenderParams {
-            width,
-            height,
-            mode: match self.mode {
-                ModeArg::Cut => Mode::Cut,
-                ModeArg::Dvr => Mode::Dvr,
-                ModeArg::Mip => Mode::Mip,
-            },
-            preset: look.preset,
-            colormap: look.colormap,
-            window: look.window,
-            camera: CameraParams {
-                azimuth: self.azimuth,
-                elevation: self.elevation,
-                zoom: self.zoom,
-                perspective: self.perspective,
-            },
-            shading: !self.no_shading,
-            step: self.step,
-            outlines: !self.no_outlines,
-            labels: !self.no_labels,
-            highlight: self.highlight,
-            fade: self.highlight.is_some(),
-            solo: self.solo,
-            ..RenderParams::default()
-        }
-    }
-
-    fn gap(&self) -> Gap {
-        match self.gap {
-            GapArg::Uniform => Gap::Uniform,
-            GapArg::Similarity => Gap::Similarity,
-        }
+    /// The library's scene for a `width × height` image.
+    pub fn scene(&self, width: u32, height: u32) -> Result<Scene> {
+        Ok(self.given.scene(width, height)?)
     }
 }
 
@@ -197,9 +46,8 @@ pub struct RenderArgs {
     /// Output picture: PNG, or JPEG for a .jpg or .jpeg name.
     #[arg(short, long, value_name = "OUT.png")]
     pub output: PathBuf,
-    /// Image size.
-    #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
-    pub size: (u32, u32),
+    #[command(flatten)]
+    pub size: Flags<params::RenderSize>,
     /// Overwrite OUT if it exists.
     #[arg(long)]
     pub force: bool,
@@ -237,23 +85,6 @@ pub struct PreviewArgs {
     pub scene: SceneArgs,
 }
 
-fn parse_window(s: &str) -> Result<(f32, f32), String> {
-    pair::<f32>(s, &[','])
-        .filter(|&(lo, hi)| lo.is_finite() && hi.is_finite() && lo < hi)
-        .ok_or_else(|| format!("{s:?} is not LO,HI with LO below HI, e.g. -200,1500"))
-}
-
-pub(super) fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    if !s.contains(['x', 'X']) {
-        return Err(format!("{s:?} is not WxH, e.g. 640x480"));
-    }
-    pair::<u32>(s, &['x', 'X'])
-        .filter(|&(w, h)| {
-            w > 0 && h > 0 && u64::from(w) * u64::from(h) <= slabscope::render::MAX_PIXELS
-        })
-        .ok_or_else(|| format!("{s:?} is not a size between 1x1 and 8192x8192"))
-}
-
 /// Loads, finds the axis and the slabs, and renders `width × height`: the exploded view, or
 /// with `faces` the strip of slab faces.
 fn render_file(
@@ -269,23 +100,25 @@ fn render_file(
     }
     // An analysis beyond the memory budget runs on a pyramid level, and the picture is drawn
     // from that level.
-    let (level, budget_note) = within_memory(&loaded.volume, 0, scene.load.options().max_memory)?;
-    if let Some(note) = budget_note {
-        super::note(file, &note);
+    let plan =
+        Budget::new(scene.load.options()?.max_memory).plan(&loaded.volume, Purpose::Picture)?;
+    if let Some(note) = &plan.note {
+        super::note(file, note);
     }
-    let volume = level.as_ref();
+    let volume = plan.partition.as_ref();
     let part = scene
         .analysis
-        .analyze(
-            &slabscope::error::shown(file),
-            &slabscope::Plan::at(Arc::clone(&level)),
-            false,
-        )?
+        .analyze(&slabscope::error::shown(file), &plan, false)?
         .partition;
-    let options = &scene.options;
+    let options = scene.options.scene(width, height)?;
     if faces {
         let renderer = Renderer::new(volume)?;
-        let transfer = renderer.transfer(options.look.look(), min_spacing(volume.spacing()))?;
+        let look = TransferChoice {
+            preset: options.params.preset,
+            colormap: options.params.colormap,
+            window: options.params.window,
+        };
+        let transfer = renderer.transfer(look, min_spacing(volume.spacing()))?;
         let k = part.slabs.len() as u32;
         let tile = (
             width.saturating_sub(4 * (k + 1)) / k.max(1),
@@ -302,7 +135,7 @@ fn render_file(
             tile,
         )?);
     }
-    if let Some(h) = options.highlight
+    if let Some(h) = options.params.highlight
         && h >= part.slabs.len()
     {
         bail!(
@@ -310,10 +143,9 @@ fn render_file(
             part.slabs.len()
         );
     }
-    let layout = Layout::exploded(&part, options.gap(), options.spread);
+    let layout = Layout::exploded(&part, options.gap, options.spread);
     let renderer = Renderer::new(volume)?;
-    let image =
-        with_bar(|monitor| renderer.render(&layout, &options.params(width, height), monitor))?;
+    let image = with_bar(|monitor| renderer.render(&layout, &options.params, monitor))?;
     Ok(image.pixmap)
 }
 
@@ -325,7 +157,9 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     let image = render_file(
         &args.file,
         &args.scene,
-        args.size,
+        args.size
+            .given
+            .size(&slabscope::params::table::RENDER_SIZE)?,
         Some((&args.output, args.force)),
         args.faces,
     )?;
@@ -349,7 +183,10 @@ pub fn run_preview(args: &PreviewArgs) -> Result<()> {
     crossterm::terminal::disable_raw_mode()?;
     let caps = caps?;
     if let Some(note) = &caps.note {
-        eprintln!("slabscope: note: {note}");
+        eprintln!(
+            "slabscope: note: {}",
+            slabscope::error::names::controls(note)
+        );
     }
     let cells = (cols, rows - 2);
     let image = render_file(&args.file, &args.scene, caps.image_size(cells), None, false)?;

@@ -10,7 +10,10 @@ use slabscope::render::{encode, slice};
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::progress::with_bar;
-use super::render::{LookArgs, parse_size};
+use slabscope::params::table;
+
+use super::params::{self, Flags};
+use super::render::LookArgs;
 
 /// Arguments of `slabscope slice`.
 #[derive(Debug, Args)]
@@ -20,12 +23,10 @@ pub struct SliceArgs {
     /// Output picture: PNG, or JPEG for a .jpg or .jpeg name.
     #[arg(short, long, value_name = "OUT.png")]
     pub output: PathBuf,
-    /// The slice, counted from 0 along the axis (default: the middle one).
-    #[arg(long, value_name = "I")]
-    pub index: Option<usize>,
-    /// The size the slice is scaled to fit, keeping its shape.
-    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
-    pub size: (u32, u32),
+    #[command(flatten)]
+    pub index: Flags<params::Index>,
+    #[command(flatten)]
+    pub size: Flags<params::SliceSize>,
     /// Overwrite OUT if it exists.
     #[arg(long)]
     pub force: bool,
@@ -47,12 +48,12 @@ pub fn run(args: &SliceArgs) -> Result<()> {
     let volume = &loaded.volume;
     // The axis, and where its slices lie: no partition is needed (a 3-slice volume has a
     // middle slice, if not 4 slabs).
-    let params = args.analysis.params(false);
+    let params = args.analysis.params(false)?;
     let name = slabscope::error::shown(&args.file);
     let axis = with_bar(|monitor| chosen_axis(volume, &params, monitor))
         .map_err(|e| anyhow::Error::from(e).context(name))?;
     let slice_params = slice::SliceParams {
-        fit: args.size,
+        fit: args.size.given.size(&table::SLICE_SIZE)?,
         letters: !args.no_letters,
         ..slice::SliceParams::default()
     };
@@ -60,8 +61,8 @@ pub fn run(args: &SliceArgs) -> Result<()> {
         volume,
         axis,
         &params.stack(),
-        args.index,
-        args.look.look(),
+        args.index.given.value(&table::INDEX)?,
+        args.look.look()?,
         &slice_params,
     )?;
     super::write_new(&args.output, &encode(&image.pixmap, format)?, args.force)

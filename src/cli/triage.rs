@@ -116,7 +116,7 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
             cells.push(cell);
         }
         let line = if args.json {
-            serde_json::to_string(&row).map_err(anyhow::Error::from)
+            slabscope::report::to_json_line(&row).map_err(anyhow::Error::from)
         } else if args.csv {
             Ok(csv_line(&row))
         } else {
@@ -132,7 +132,7 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
                 false
             }
         }
-    });
+    })?;
     result?;
     drop(bar);
     if let Some(out) = &args.sheet {
@@ -168,19 +168,23 @@ fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
         Some(m) => Source::Manifest(m),
         None => Source::Paths(&args.paths),
     };
-    let selection = select(source, &args.load.options(), args.shard)?;
+    let selection = select(source, &args.load.options()?, args.shard)?;
     if let Some(note) = selection.note {
-        eprintln!("slabscope: note: {note}");
+        eprintln!("slabscope: note: {}", controls(&note));
     }
     Ok(selection.volumes)
 }
 
 /// Every volume's row (and cell), looked at as `slabscope::triage::look_all` does, errors worded
 /// in the CLI's terms and without the path the row names; handed to `emit` in order.
-fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, TriageOutcome) -> bool) {
+fn look_all(
+    volumes: &[Entry],
+    args: &TriageArgs,
+    emit: impl FnMut(usize, TriageOutcome) -> bool,
+) -> Result<()> {
     let how = TriagePlan {
-        load: args.load.options(),
-        params: args.analysis.params(false),
+        load: args.load.options()?,
+        params: args.analysis.params(false)?,
         timeout: Duration::from_secs_f64(args.timeout),
         fast: !args.full,
         tile: args.sheet.as_ref().map(|_| args.tile),
@@ -191,6 +195,7 @@ fn look_all(volumes: &[Entry], args: &TriageArgs, emit: impl FnMut(usize, Triage
             .map_or(m.clone(), str::to_string)
     };
     slabscope::triage::look_all(volumes, &how, WORKERS, &describe, emit);
+    Ok(())
 }
 
 /// Volumes looked at at once, on this machine's two cores.

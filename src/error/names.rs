@@ -3,19 +3,33 @@
 //!
 //! A name is written as its bytes: printable UTF-8 as it is; a backslash as `\\`; a line feed,
 //! tab and carriage return as `\n`, `\t` and `\r`; every other control character (U+0000–U+001F,
-//! U+007F–U+009F) and every bidirectional formatting character (U+061C, U+200E, U+200F,
-//! U+202A–U+202E, U+2066–U+2069) as `\u{HEX}`; and each byte that is not part of valid UTF-8 as
-//! `\xHH` (two lowercase hex digits). The escaped form is reversible ([`unescape`]), so two
-//! names never print the same and a name printed can be read back to the same bytes.
+//! U+007F–U+009F), every bidirectional formatting character (U+061C, U+200E, U+200F,
+//! U+202A–U+202E, U+2066–U+2069) and the line and paragraph separators (U+2028, U+2029) as
+//! `\u{HEX}`; and each byte that is not part of valid UTF-8 as `\xHH` (two lowercase hex
+//! digits). The escaped form is reversible ([`unescape`]), so two names never print the same and
+//! a name printed can be read back to the same bytes.
+//!
+//! Text read from a file's metadata (an axis name, a unit, a label name, a dataset path, a
+//! note or an error quoting one) is written by the same rule in text ([`text`] for a value,
+//! [`controls`] for a message); JSON keeps the text itself and [`json`] writes those characters
+//! as JSON's own `\uXXXX` escapes, so that it reads back to the same text.
 
 use std::borrow::Cow;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-/// Whether `c` is never written raw: a control or a bidirectional formatting character.
+/// Whether `c` is never written raw: a control or a bidirectional formatting character, or a
+/// line or paragraph separator.
 fn hidden(c: char) -> bool {
     c.is_control()
-        || matches!(c, '\u{061c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+        || matches!(
+            c,
+            '\u{061c}'
+                | '\u{200e}'
+                | '\u{200f}'
+                | '\u{2028}'..='\u{202e}'
+                | '\u{2066}'..='\u{2069}'
+        )
 }
 
 /// Appends `c` as the rule writes it; a backslash doubled when `backslash` is set.
@@ -68,12 +82,35 @@ pub fn text(text: &str) -> String {
 /// backslashes left as they are: for a message whose names are escaped already (it is unchanged
 /// then), so that nothing raw reaches a terminal whatever the message quotes.
 pub fn controls(text: &str) -> Cow<'_, str> {
-    if !text.chars().any(hidden) {
+    escape_hidden(text, false)
+}
+
+/// JSON text (as `serde_json` writes it) with every control and bidirectional character that is
+/// not its own layout written as a JSON `\uXXXX` escape: `serde_json` escapes U+0000–U+001F
+/// inside strings by itself, not DEL, the C1 controls (U+0080–U+009F) nor the bidirectional
+/// formatting characters, which can only stand inside strings. The JSON stays valid and reads
+/// back to the same text; nothing raw reaches a terminal. The line feeds of pretty JSON stay.
+pub fn json(text: &str) -> Cow<'_, str> {
+    escape_hidden(text, true)
+}
+
+/// The one pass of [`controls`] and [`json`]: `text` with every character the rule hides
+/// escaped, as the rule writes it or (`json`) as JSON does, `\n` of JSON's layout kept.
+fn escape_hidden(text: &str, json: bool) -> Cow<'_, str> {
+    let escaped = |c: char| hidden(c) && !(json && c == '\n');
+    if !text.chars().any(escaped) {
         return Cow::Borrowed(text);
     }
     let mut out = String::with_capacity(text.len() + 8);
     for c in text.chars() {
-        push(c, false, &mut out);
+        if json && escaped(c) {
+            // Every hidden character is in the Basic Multilingual Plane: one escape each.
+            let _ = write!(out, "\\u{:04x}", c as u32);
+        } else if json {
+            out.push(c);
+        } else {
+            push(c, false, &mut out);
+        }
     }
     Cow::Owned(out)
 }
@@ -165,6 +202,28 @@ mod tests {
         let once = bytes(b"a\\b\x1bc\n");
         assert_eq!(controls(&once), once);
         assert_eq!(controls("x\x1by\\z"), "x\\u{1b}y\\z");
+    }
+
+    #[test]
+    fn json_escapes_what_serde_json_leaves_raw_and_reads_back() {
+        let hostile =
+            "a\u{1b}[2J\u{7}\u{1b}]0;pwned\u{7}\u{7f}\u{9b}\u{85}\u{202e}\u{2066}\u{200e}\\\"z";
+        let value = serde_json::json!({ "name": hostile, "list": [hostile] });
+        for text in [
+            serde_json::to_string(&value).unwrap(),
+            serde_json::to_string_pretty(&value).unwrap(),
+        ] {
+            let out = json(&text);
+            assert!(
+                !out.chars().any(|c| hidden(c) && c != '\n'),
+                "nothing raw: {out}"
+            );
+            assert!(out.contains("\\u007f") && out.contains("\\u202e"), "{out}");
+            let back: serde_json::Value = serde_json::from_str(&out).unwrap();
+            assert_eq!(back, value, "the same text read back");
+        }
+        assert!(matches!(json("{\n  \"a\": 1\n}"), Cow::Borrowed(_)));
+        assert_eq!(controls("\u{9b}\u{2066}"), "\\u{9b}\\u{2066}");
     }
 
     #[test]

@@ -33,13 +33,30 @@ const SYMBOL_BYTES: u64 = 6;
 /// (the lattice's default). A budget below it is better spent on a coarser pyramid level.
 #[must_use]
 pub fn streamed_memory_floor(volume: &Volume, bins: usize) -> u64 {
-    let step = crate::geometry::min_spacing(volume.spacing());
-    let extent2: f64 = (0..3)
-        .map(|i| (volume.dims()[i] as f64 * volume.spacing()[i] / step).powi(2))
-        .sum();
-    let diagonal = extent2.sqrt().ceil() as u64;
+    let diagonal = most_slices(volume.dims(), volume.spacing());
     let mask = volume.len() as u64 / 8;
     mask + sums_bytes(diagonal, bins as u64) + diagonal * (diagonal * SYMBOL_BYTES + PIXEL_BYTES)
+}
+
+/// The most slices a stack of a volume of `dims` voxels spaced `spacing` mm can have along any
+/// axis: its diagonal in steps of its finest spacing (the lattice's default sample spacing; a
+/// coordinate axis has one slice a voxel, never more).
+#[must_use]
+pub fn most_slices(dims: [usize; 3], spacing: [f64; 3]) -> u64 {
+    let step = crate::geometry::min_spacing(spacing);
+    let extent2: f64 = (0..3)
+        .map(|i| (dims[i] as f64 * spacing[i] / step).powi(2))
+        .sum();
+    extent2.sqrt().ceil() as u64
+}
+
+/// The bytes a partition holds per slice beside its stack's columns, with `bins` bins: the
+/// slice's histogram and its row of prefix sums (`bins` counts each), and its entries in the
+/// per-slice curves and sums (position, sample sums and counts, NMI, gain). On a long thin
+/// volume (one voxel across, 200,000 along) they, not the voxels, are most of the memory.
+#[must_use]
+pub fn slice_bytes(bins: usize) -> u64 {
+    (2 * bins as u64 + 8) * 8
 }
 
 /// Partitions `volume` along `axis` within `max_memory` bytes of working memory (beyond the
@@ -161,7 +178,7 @@ fn strips(cutter: &Cutter, max_memory: u64) -> Result<Vec<Range<usize>>> {
     let fit = max_memory.saturating_sub(fixed) / stack_bytes(cutter, 1).max(1);
     if fit == 0 {
         return Err(Error::invalid(
-            "max-memory",
+            "max_memory",
             short_bytes(max_memory),
             format!(
                 "room for a strip of one row of the slice stack ({} beyond the {} its sums take)",

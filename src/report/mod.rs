@@ -326,7 +326,8 @@ impl SlabsReport {
 }
 
 /// `value` as pretty JSON, with every `-0.0` written as `0.0` (a direction component that is
-/// zero has no sign worth printing).
+/// zero has no sign worth printing), nothing in it raw: its control and bidirectional characters
+/// written as `\uXXXX` escapes ([`names::json`](crate::error::names::json)).
 pub fn to_json(value: &impl Serialize) -> Result<String> {
     fn unsign(v: &mut serde_json::Value) {
         match v {
@@ -340,7 +341,15 @@ pub fn to_json(value: &impl Serialize) -> Result<String> {
     }
     let mut v = serde_json::to_value(value).map_err(|e| Error::Encode(e.to_string()))?;
     unsign(&mut v);
-    serde_json::to_string_pretty(&v).map_err(|e| Error::Encode(e.to_string()))
+    let text = serde_json::to_string_pretty(&v).map_err(|e| Error::Encode(e.to_string()))?;
+    Ok(crate::error::names::json(&text).into_owned())
+}
+
+/// `value` as one line of JSON (a row of JSON Lines), nothing in it raw: its control and
+/// bidirectional characters written as `\uXXXX` escapes ([`names::json`](crate::error::names::json)).
+pub fn to_json_line(value: &impl Serialize) -> Result<String> {
+    let text = serde_json::to_string(value).map_err(|e| Error::Encode(e.to_string()))?;
+    Ok(crate::error::names::json(&text).into_owned())
 }
 
 /// `cut,mm,world_mm,nmi,gain`: for each boundary between slice c-1 and c, its position along the

@@ -6,7 +6,8 @@ use std::sync::{Arc, PoisonError, RwLock};
 use std::time::Duration;
 
 use super::{Entry, TriageRow};
-use crate::analysis::{AnalysisParams, analyze, within_memory};
+use crate::analysis::{AnalysisParams, analyze};
+use crate::budget::{Budget, Purpose};
 use crate::error::Error;
 use crate::progress::{Monitor, Progress};
 use crate::volume::io::{LoadOptions, dicom, load};
@@ -90,10 +91,11 @@ pub fn look(
     let report = |p: Progress| progress(p.fraction);
     let monitor = Monitor::new(Some(&cancel), Some(&report));
     // Beyond its share of the budget, a volume is analysed on a pyramid level.
-    let (level, budget_note) = match within_memory(&loaded.volume, 0, opts.max_memory) {
-        Ok(fit) => fit,
+    let plan = match Budget::new(opts.max_memory).plan(&loaded.volume, Purpose::Picture) {
+        Ok(plan) => plan,
         Err(e) => return failed(row.with_error(describe(e))),
     };
+    let (level, budget_note) = (plan.partition, plan.note);
     let v = level.as_ref();
     let mut params = how.params.clone();
     let sampling = &mut params.view.sampling;

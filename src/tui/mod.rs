@@ -37,15 +37,10 @@ use event::{Action, Effect, Event, JobMsg};
 use jobs::Jobs;
 use theme::Theme;
 
-/// The most voxels the first answer on a large volume is computed on: the view search, the
-/// histories and the picture come from the finest pyramid level this small, at once, and the full
-/// resolution follows in the background.
-pub const PREVIEW_VOXELS: usize = 1 << 21;
-
-/// The pyramid level of `volume`'s preview: 0 when it is small enough to compute at full
-/// resolution at once.
+/// The pyramid level of `volume`'s preview (the budget planner's glance): 0 when it is small
+/// enough to compute at full resolution at once.
 pub fn preview_level(volume: &slabscope::Volume) -> usize {
-    slabscope::volume::pyramid::level_within(volume.dims(), PREVIEW_VOXELS)
+    slabscope::budget::glance_level(volume.dims())
 }
 
 /// What the TUI opens and how.

@@ -117,3 +117,17 @@ pub fn bounded(seconds: u32, address_space: u64) -> Command {
     cmd.arg(seconds).arg(binary());
     cmd
 }
+
+/// Copies the folder `from` and everything under it to `to` (made as needed).
+pub fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_tree(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), target).unwrap();
+        }
+    }
+}

@@ -371,6 +371,25 @@ fn a_compressed_frame_larger_than_its_image_is_refused() {
     );
 }
 
+#[test]
+fn a_jpeg_2000_frame_stating_tiles_it_does_not_hold_is_refused() {
+    // #47: the first JPEG 2000 slice (one 64x64 tile), its SIZ marker segment claiming tiles of
+    // one pixel: 4096 tiles, of which the codestream holds one. It decoded to zeros, exit 0.
+    let mut bytes = std::fs::read(dicom_data("j2k-lossless/s0.dcm")).unwrap();
+    let soc = bytes
+        .windows(4)
+        .position(|w| w == [0xFF, 0x4F, 0xFF, 0x51])
+        .unwrap();
+    for at in [soc + 24, soc + 28] {
+        bytes[at..at + 4].copy_from_slice(&1u32.to_be_bytes());
+    }
+    let e = load_error("tiles.dcm", &bytes);
+    assert!(
+        e.contains("states 4096 tiles and holds data for 1") && !e.contains('\n'),
+        "{e}"
+    );
+}
+
 const PHI: [&str; 6] = [
     "Zebedee",
     "Quintessa",

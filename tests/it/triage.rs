@@ -311,12 +311,17 @@ fn the_contact_sheet_has_a_cell_per_volume() {
 fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alone() {
     let dir = tempfile::tempdir().unwrap();
     // Compressed, so decoded into memory (a mapped file is not the budget's).
+    let data: Vec<f32> = (0..64_000)
+        .map(|i| ((i / 1600) * 6 + i % 5) as f32)
+        .collect();
+    let volume = slabscope::Volume::new([40; 3], [1.0; 3], slabscope::VoxelType::U8, data).unwrap();
     for name in ["a.nii.gz", "b.nii.gz", "c.nii.gz"] {
-        std::fs::copy(data("ramp_u8_two_members.nii.gz"), dir.path().join(name)).unwrap();
+        slabscope::volume::io::write_nifti(&dir.path().join(name), &volume, true, false).unwrap();
     }
     let root = dir.path().to_str().unwrap();
-    // Each 5x4x3 volume takes 60 bytes, held as its u8: more than half of 100, less than all of
-    // it (and its analysis runs on pyramid level 1, which fits).
+    // Each 40³ volume takes 64,000 bytes, held as its u8: more than half of 100,000, less than
+    // all of it (and its analysis runs on pyramid level 1, which fits: 20³ f32, its stack and
+    // 35 slices' sums, 62,160 bytes).
     let triage = |memory: &str| {
         run(&[
             "triage",
@@ -333,13 +338,13 @@ fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alon
         stdout,
         stderr,
         ..
-    } = triage("100");
+    } = triage("100000");
     assert_eq!(code, 0, "{stderr}");
     assert!(
         rows(&stdout).iter().all(|r| r["error"].is_null()),
         "{stdout}"
     );
-    let Ran { code, stdout, .. } = triage("50");
+    let Ran { code, stdout, .. } = triage("50000");
     assert_eq!(code, 1);
     let error = rows(&stdout)[0]["error"].as_str().unwrap().to_string();
     assert!(error.contains("raise it with --max-memory"), "{error}");

@@ -281,21 +281,9 @@ fn a_plane_without_units_is_one_slice_with_a_note() {
 
 /// A copy of fixture store `name` in a temporary folder, to break.
 fn copy(name: &str) -> (tempfile::TempDir, PathBuf) {
-    fn walk(from: &Path, to: &Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for e in std::fs::read_dir(from).unwrap() {
-            let e = e.unwrap();
-            let target = to.join(e.file_name());
-            if e.file_type().unwrap().is_dir() {
-                walk(&e.path(), &target);
-            } else {
-                std::fs::copy(e.path(), target).unwrap();
-            }
-        }
-    }
     let dir = tempfile::tempdir().unwrap();
     let store = dir.path().join(name);
-    walk(&path(name), &store);
+    crate::common::copy_tree(&path(name), &store);
     (dir, store)
 }
 
@@ -360,7 +348,14 @@ fn chunks_that_would_decode_past_their_size_are_refused_before_decoding() {
     let frame = zstd::bulk::compress(&vec![0u8; 1 << 20], 19).unwrap();
     std::fs::write(store.join("s0/c/0/0/0/0/0"), frame).unwrap();
     let err = error_of(&store);
-    assert!(err.contains("says it decodes to 1048576 bytes"), "{err}");
+    assert!(
+        err.contains("says it decodes to more, more than the 120 bytes"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("1048576"),
+        "no error quotes a file's bytes: {err}"
+    );
 }
 
 #[cfg(unix)]
@@ -410,4 +405,107 @@ fn triage_takes_a_store_as_one_volume() {
         .unwrap();
     let paths: Vec<&Path> = found.iter().map(|e| e.path.as_path()).collect();
     assert_eq!(paths, [inside.join("s.ome.zarr").as_path()]);
+}
+
+/// Fails unless loading `store` (with `opts`) is refused as a symbolic link out of the store,
+/// naming the store and `entry`; the error.
+#[cfg(unix)]
+fn refused_out(store: &Path, opts: &LoadOptions, entry: &str) -> String {
+    let e = load(store, opts).unwrap_err().to_string();
+    assert!(
+        e.contains(&store.display().to_string()),
+        "names the store: {e}"
+    );
+    assert!(e.contains(entry), "names {entry}: {e}");
+    assert!(
+        e.contains("a symbolic link that leads out of the store"),
+        "{e}"
+    );
+    assert!(!e.contains('\n'), "one line: {e}");
+    e
+}
+
+#[cfg(unix)]
+#[test]
+fn symbolic_links_out_of_the_store_are_refused_and_links_inside_it_read() {
+    use std::os::unix::fs::symlink;
+    let opts = LoadOptions::default();
+    let want = voxels(&open("v04_blosc.ome.zarr").volume);
+    // A chunk linked to a file elsewhere, whose bytes 4..8 a Blosc header would read as a size.
+    let (keep, store) = copy("v04_blosc.ome.zarr");
+    let secret = keep.path().join("secret");
+    std::fs::write(&secret, b"\x02\x01\x01\x01ABCDEFGHIJKL").unwrap();
+    let chunk = store.join("s0/0/0/0");
+    std::fs::remove_file(&chunk).unwrap();
+    symlink(&secret, &chunk).unwrap();
+    let e = refused_out(&store, &opts, "s0/0/0/0");
+    let quoted = u32::from_le_bytes(*b"ABCD").to_string();
+    assert!(
+        !e.contains(&quoted) && !e.contains("ABCD"),
+        "no byte of it: {e}"
+    );
+    // Linked inside the store, by a relative or an absolute link: read as ever.
+    std::fs::remove_file(&chunk).unwrap();
+    std::fs::create_dir(store.join("moved")).unwrap();
+    std::fs::copy(path("v04_blosc.ome.zarr/s0/0/0/0"), store.join("moved/c")).unwrap();
+    symlink("../../../moved/c", &chunk).unwrap();
+    assert_eq!(voxels(&open_with(&store, &opts).volume), want);
+    std::fs::remove_file(&chunk).unwrap();
+    symlink(store.join("moved/c"), &chunk).unwrap();
+    assert_eq!(voxels(&open_with(&store, &opts).volume), want);
+    // A folder of chunks linked out of the store.
+    let elsewhere = keep.path().join("elsewhere");
+    std::fs::rename(store.join("s0/1"), &elsewhere).unwrap();
+    symlink(&elsewhere, store.join("s0/1")).unwrap();
+    refused_out(&store, &opts, "s0/1/");
+    // The store itself named through a link: its tree is where the link leads.
+    let (keep, store) = copy("v04_blosc.ome.zarr");
+    let alias = keep.path().join("alias.zarr");
+    symlink(&store, &alias).unwrap();
+    assert_eq!(voxels(&open_with(&alias, &opts).volume), want);
+}
+
+#[cfg(unix)]
+#[test]
+fn metadata_and_label_images_out_of_the_store_are_refused() {
+    use std::os::unix::fs::symlink;
+    let opts = LoadOptions::default();
+    // The group's attributes, and a dataset's array metadata, linked to another store's.
+    let (_keep, other) = copy("v04_blosc.ome.zarr");
+    let (_keep2, store) = copy("v04_blosc.ome.zarr");
+    std::fs::remove_file(store.join(".zattrs")).unwrap();
+    symlink(other.join(".zattrs"), store.join(".zattrs")).unwrap();
+    refused_out(&store, &opts, ".zattrs");
+    let (_keep3, store) = copy("v04_blosc.ome.zarr");
+    std::fs::remove_file(store.join("s0/.zarray")).unwrap();
+    symlink(other.join("s0/.zarray"), store.join("s0/.zarray")).unwrap();
+    refused_out(&store, &opts, "dataset \"s0\": .zarray");
+    // A label image, and the whole labels group, that lead to another store.
+    let cells = LoadOptions {
+        label_image: Some("cells".into()),
+        ..LoadOptions::default()
+    };
+    let (_keep4, other) = copy("v05_sharded.ome.zarr");
+    let (_keep5, store) = copy("v05_sharded.ome.zarr");
+    std::fs::remove_dir_all(store.join("labels/cells")).unwrap();
+    symlink(other.join("labels/cells"), store.join("labels/cells")).unwrap();
+    refused_out(&store, &cells, "labels/cells");
+    // The same through the command line: one line on stderr, nothing on stdout.
+    let ran = crate::common::run(&["info", store.to_str().unwrap(), "--label-image", "cells"]);
+    assert!(!ran.ok && ran.stdout.is_empty(), "{}", ran.stdout);
+    assert_eq!(ran.stderr.lines().count(), 1, "{}", ran.stderr);
+    assert!(
+        ran.stderr.contains("leads out of the store"),
+        "{}",
+        ran.stderr
+    );
+    let (_keep6, store) = copy("v05_sharded.ome.zarr");
+    std::fs::remove_dir_all(store.join("labels")).unwrap();
+    symlink(other.join("labels"), store.join("labels")).unwrap();
+    refused_out(&store, &cells, "labels/zarr.json");
+    // A label image linked inside the store reads.
+    let (_keep7, store) = copy("v05_sharded.ome.zarr");
+    std::fs::rename(store.join("labels/cells"), store.join("cells_moved")).unwrap();
+    symlink("../cells_moved", store.join("labels/cells")).unwrap();
+    assert!(open_with(&store, &cells).volume.labels().is_some());
 }

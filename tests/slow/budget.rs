@@ -40,11 +40,14 @@ fn layered_where_memory_is_read() -> Option<(tempfile::TempDir, std::path::PathB
 }
 
 /// Runs `slabscope args`, sampling its anonymous memory every 2 ms: its standard output and
-/// the peak in bytes.
+/// the peak in bytes. The output goes to a file, not a pipe, which a report larger than the
+/// pipe (a curve of 200,000 slices) would fill while nothing reads it.
 fn peak_of(args: &[&str]) -> (String, u64) {
+    use std::io::{Read, Seek};
+    let mut stdout = tempfile::tempfile().unwrap();
     let mut child = slabscope()
         .args(args)
-        .stdout(Stdio::piped())
+        .stdout(stdout.try_clone().unwrap())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
@@ -63,7 +66,10 @@ fn peak_of(args: &[&str]) -> (String, u64) {
     }
     let out = child.wait_with_output().unwrap();
     assert!(out.status.success(), "{out:?}");
-    (String::from_utf8(out.stdout).unwrap(), peak)
+    let mut text = String::new();
+    stdout.rewind().unwrap();
+    stdout.read_to_string(&mut text).unwrap();
+    (text, peak)
 }
 
 #[test]
@@ -123,5 +129,69 @@ fn a_full_resolution_partition_beyond_the_budget_is_counted_in_strips_exactly() 
             streamed["partition"][key], in_memory["partition"][key],
             "{key}"
         );
+    }
+}
+
+/// A line of `dims` (one voxel across, 200,000 along) of pseudo-random u8, as an NRRD in `dir`.
+fn line(dir: &Path, dims: [usize; 3]) -> std::path::PathBuf {
+    let n: usize = dims.iter().product();
+    let mut state = 7u64;
+    let data: Vec<u8> = (0..n)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 56) as u8
+        })
+        .collect();
+    let path = dir.join(format!("line_{}_{}_{}.nrrd", dims[0], dims[1], dims[2]));
+    let mut bytes = format!(
+        "NRRD0004\ntype: uint8\ndimension: 3\nsizes: {} {} {}\nencoding: raw\n\n",
+        dims[0], dims[1], dims[2]
+    )
+    .into_bytes();
+    bytes.extend(data);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+#[test]
+fn a_long_thin_volume_is_analysed_within_its_old_memory_and_the_budget() {
+    // #47: a 1×1×200000 line took 1.7 GB (its 200,000 slice pairs' joint histograms, 8 KiB
+    // each, held at once), 166 MB in the build of 2026-12-02, whatever `--max-memory` said.
+    let _alone = crate::one_at_a_time();
+    if !Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read the anonymous memory from");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (dims, axis) in [([1, 1, 200_000], "z"), ([200_000, 1, 1], "x")] {
+        let path = line(dir.path(), dims);
+        let args = [
+            "analyze",
+            s(&path),
+            "--axis",
+            axis,
+            "--json",
+            "--max-memory",
+            "200M",
+        ];
+        let (stdout, peak) = peak_of(&args);
+        let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        assert_eq!(report["partition"]["slices"], 200_000, "{dims:?}");
+        assert!(
+            peak <= 166 << 20,
+            "{dims:?}: peak anonymous memory {} MiB over the old build's 166 MB",
+            peak >> 20
+        );
+        // A budget below what its 200,000 slices' histograms need is refused, not overrun: a
+        // line has no coarser level two voxels across to fall back on.
+        let out = slabscope()
+            .args(["analyze", s(&path), "--axis", axis, "--max-memory", "64M"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{dims:?}: {stderr}");
+        assert!(stderr.contains("max-memory 64.0 MiB"), "{dims:?}: {stderr}");
     }
 }

@@ -3,18 +3,8 @@
 //! Skipped where tmux is absent. The work is bounded by `--timeout`, not timed: a view search of
 //! 2562 viewpoints on 192³ voxels runs far longer than the few seconds it is given.
 
-use std::process::Command;
-
 use crate::common::{binary, data};
 use crate::tui_smoke::{Tmux, large_phantom};
-
-fn have_tmux(what: &str) -> bool {
-    let have = Command::new("tmux").arg("-V").output().is_ok();
-    if !have {
-        eprintln!("SKIPPED: tmux is not installed, so {what} cannot run");
-    }
-    have
-}
 
 /// Whether a line of `screen` is the progress bar.
 fn bar_line(screen: &str) -> Option<&str> {
@@ -26,7 +16,7 @@ fn bar_line(screen: &str) -> Option<&str> {
 #[test]
 fn analyze_shows_the_phase_and_its_time_then_clears_the_line() {
     let _alone = crate::one_at_a_time();
-    if !have_tmux("the analyze progress test") {
+    if !crate::have_tmux("the analyze progress test") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -53,7 +43,7 @@ fn analyze_shows_the_phase_and_its_time_then_clears_the_line() {
 #[test]
 fn triage_counts_the_volumes_and_prints_rows_clear_of_the_bar() {
     let _alone = crate::one_at_a_time();
-    if !have_tmux("the triage progress test") {
+    if !crate::have_tmux("the triage progress test") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -27,3 +27,15 @@ pub fn one_at_a_time() -> MutexGuard<'static, ()> {
     static ALONE: Mutex<()> = Mutex::new(());
     ALONE.lock().unwrap_or_else(PoisonError::into_inner)
 }
+
+/// Whether tmux is installed; when not, says which test is skipped (`what`) and how to install it.
+fn have_tmux(what: &str) -> bool {
+    let have = std::process::Command::new("tmux")
+        .arg("-V")
+        .output()
+        .is_ok();
+    if !have {
+        eprintln!("SKIPPED: tmux is not installed, so {what} cannot run (apt-get install tmux)");
+    }
+    have
+}

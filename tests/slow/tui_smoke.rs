@@ -81,10 +81,7 @@ impl Drop for Tmux {
 #[test]
 fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
     let _alone = crate::one_at_a_time();
-    if Command::new("tmux").arg("-V").output().is_err() {
-        eprintln!(
-            "SKIPPED: tmux is not installed, so the TUI smoke test cannot run (apt-get install tmux)"
-        );
+    if !crate::have_tmux("the TUI smoke test") {
         return;
     }
     let command = format!("{} --protocol blocks; echo EXITED $?; sleep 60", binary());
@@ -111,10 +108,7 @@ fn the_tui_opens_steps_a_merge_and_quits_cleanly() {
 #[test]
 fn the_tour_runs_from_its_first_page_to_its_last_and_quits_with_0() {
     let _alone = crate::one_at_a_time();
-    if Command::new("tmux").arg("-V").output().is_err() {
-        eprintln!(
-            "SKIPPED: tmux is not installed, so the tour test cannot run (apt-get install tmux)"
-        );
+    if !crate::have_tmux("the tour test") {
         return;
     }
     let command = format!(
@@ -146,8 +140,7 @@ fn the_tour_runs_from_its_first_page_to_its_last_and_quits_with_0() {
 #[test]
 fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
     let _alone = crate::one_at_a_time();
-    if Command::new("tmux").arg("-V").output().is_err() {
-        eprintln!("SKIPPED: tmux is not installed, so the folder smoke test cannot run");
+    if !crate::have_tmux("the folder smoke test") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -184,8 +177,7 @@ fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
 #[test]
 fn a_folder_of_dicom_series_opens_as_a_list_of_series() {
     let _alone = crate::one_at_a_time();
-    if Command::new("tmux").arg("-V").output().is_err() {
-        eprintln!("SKIPPED: tmux is not installed, so the DICOM folder smoke test cannot run");
+    if !crate::have_tmux("the DICOM folder smoke test") {
         return;
     }
     let ct = dicom_data("ct");
@@ -224,8 +216,7 @@ pub(crate) fn large_phantom(dir: &std::path::Path) -> std::path::PathBuf {
 #[test]
 fn a_large_volume_shows_a_preview_first_then_full_resolution_in_place() {
     let _alone = crate::one_at_a_time();
-    if Command::new("tmux").arg("-V").output().is_err() {
-        eprintln!("SKIPPED: tmux is not installed, so the TUI preview test cannot run");
+    if !crate::have_tmux("the TUI preview test") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -267,8 +258,7 @@ fn a_large_volume_shows_a_preview_first_then_full_resolution_in_place() {
 #[test]
 fn escape_stops_full_resolution_and_keeps_the_preview() {
     let _alone = crate::one_at_a_time();
-    if Command::new("tmux").arg("-V").output().is_err() {
-        eprintln!("SKIPPED: tmux is not installed, so the TUI preview test cannot run");
+    if !crate::have_tmux("the TUI preview test") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -68,6 +68,13 @@ const COLUMN_BLOCK: usize = 1024;
 /// Bytes of joint histograms one pass may hold per thread.
 pub(crate) const PASS_BYTES: usize = 32 << 20;
 
+/// Bytes of joint histograms one pass holds for `stack`: at most [`PASS_BYTES`], and at most a
+/// mebibyte or the stack's own samples, so that a stack of many small slices (a long thin
+/// volume: 200,000 slices of one pixel) holds histograms in proportion to its samples.
+fn pass_bytes(stack: &SliceStack) -> usize {
+    (stack.pixels().saturating_mul(stack.slices())).clamp(1 << 20, PASS_BYTES)
+}
+
 /// A group of constant columns: their symbol, first slice, slices, and how many pixels.
 type ConstantGroup = (u8, usize, usize, u64);
 
@@ -371,7 +378,7 @@ pub(crate) fn add_consecutive_joints(
 ) -> Result<()> {
     let b2 = stack.bins() * stack.bins();
     debug_assert_eq!(joints.len(), slabs.len().saturating_sub(1) * b2);
-    let batch = (PASS_BYTES / (b2 * 8)).max(1);
+    let batch = (pass_bytes(stack) / (b2 * 8)).max(1);
     let mut i = 0;
     while i + 1 < slabs.len() {
         let j = (i + batch + 1).min(slabs.len());
@@ -396,7 +403,11 @@ pub(crate) fn nmi_of_joints(joints: &[u64], bins: usize) -> Vec<f64> {
         .collect()
 }
 
-/// NMI of every consecutive pair of `slabs`.
+/// NMI of every consecutive pair of `slabs`, a batch of pairs at a time (as
+/// [`add_consecutive_joints`] batches them), each batch's joint histograms reduced to their NMI
+/// before the next: the memory is a pass's, however many pairs there are (a stack of 200,000
+/// slices would otherwise hold 200,000 joint histograms of `bins²` counts at once, 1.6 GB at 32
+/// bins).
 pub(crate) fn consecutive_nmi(
     stack: &SliceStack,
     columns: &Columns,
@@ -404,9 +415,17 @@ pub(crate) fn consecutive_nmi(
     monitor: &Monitor,
 ) -> Result<Vec<f64>> {
     let b = stack.bins();
-    let mut joints = vec![0u64; slabs.len().saturating_sub(1) * b * b];
-    add_consecutive_joints(stack, columns, slabs, &mut joints, monitor)?;
-    Ok(nmi_of_joints(&joints, b))
+    let batch = (pass_bytes(stack) / (b * b * 8)).max(1);
+    let mut nmi = Vec::with_capacity(slabs.len().saturating_sub(1));
+    let mut i = 0;
+    while i + 1 < slabs.len() {
+        let j = (i + batch + 1).min(slabs.len());
+        let mut joints = vec![0u64; (j - i - 1) * b * b];
+        add_consecutive_joints(stack, columns, &slabs[i..j], &mut joints, monitor)?;
+        nmi.extend(nmi_of_joints(&joints, b));
+        i = j - 1;
+    }
+    Ok(nmi)
 }
 
 /// The NMI between each slice and the next, along the stack.

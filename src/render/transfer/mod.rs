@@ -36,6 +36,17 @@ pub struct TransferChoice {
     pub window: Option<(f32, f32)>,
 }
 
+impl Default for TransferChoice {
+    /// The preset from the histogram, in grey, with the preset's window.
+    fn default() -> Self {
+        Self {
+            preset: Preset::Auto,
+            colormap: Colormap::Grey,
+            window: None,
+        }
+    }
+}
+
 /// Bins of the histogram the presets read percentiles from.
 pub const HISTOGRAM_BINS: usize = 255;
 

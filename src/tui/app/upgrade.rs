@@ -1,6 +1,6 @@
 //! The first answer on a large volume, then full resolution in place: the view search, the
 //! histories and the picture are computed on a coarse pyramid level (at most
-//! [`PREVIEW_VOXELS`](crate::tui::PREVIEW_VOXELS) voxels) and shown at once, labelled as a
+//! [`GLANCE_VOXELS`](slabscope::budget::GLANCE_VOXELS) voxels) and shown at once, labelled as a
 //! preview; the full-resolution view search and histories follow in the background and replace
 //! them, keeping the user's axis, method and slab count. Every new axis is previewed first too.
 

@@ -11,10 +11,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
 use std::time::Duration;
 
+use slabscope::budget::{Budget, GLANCE_VOXELS, Purpose};
 use slabscope::{AnalysisParams, Histories, LoadOptions, Monitor, Progress, Scope, Volume, search};
 
 use super::event::{Effect, Event, Job, JobMsg, RenderRequest};
-use super::{PREVIEW_VOXELS, preview_level};
+use super::preview_level;
 use crate::term::Caps;
 use export::export;
 use worker::start_renderer;
@@ -317,7 +318,7 @@ fn load_volume(
             };
             // A preview that cannot be read is no error: level 0's load says what is wrong.
             let preview =
-                slabscope::volume::io::zarr::load_preview(&entry.path, &load, PREVIEW_VOXELS);
+                slabscope::volume::io::zarr::load_preview(&entry.path, &load, GLANCE_VOXELS);
             if let Ok(Some(p)) = preview {
                 send(JobMsg::Preview(Arc::new(p.volume), p.notes));
             }
@@ -335,10 +336,10 @@ fn within_memory(
     loaded: slabscope::volume::io::Loaded,
     max_memory: u64,
 ) -> slabscope::Result<(Arc<Volume>, Vec<String>)> {
-    let (volume, note) = slabscope::analysis::within_memory(&loaded.volume, 0, max_memory)?;
+    let plan = Budget::new(max_memory).plan(&loaded.volume, Purpose::Picture)?;
     let mut notes = loaded.notes;
-    notes.extend(note);
-    Ok((volume, notes))
+    notes.extend(plan.note);
+    Ok((plan.partition, notes))
 }
 
 #[cfg(test)]

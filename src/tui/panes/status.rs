@@ -77,7 +77,9 @@ impl StatusBar {
                 Span::raw(format!("{}█", p.text)),
             ])
         } else if let Some(m) = &self.message {
-            Line::from(Span::styled(m.clone(), self.theme.fg(Color::Yellow)))
+            // A note or an error may quote a file's metadata: nothing of it drawn raw.
+            let m = slabscope::error::names::controls(m).into_owned();
+            Line::from(Span::styled(m, self.theme.fg(Color::Yellow)))
         } else if let Some(e) = &self.explanation {
             Line::from(Span::styled(e.clone(), self.theme.fg(Color::Green)))
         } else {
@@ -158,5 +160,29 @@ pub fn settings_text(p: &AnalysisParams) -> String {
 impl Widget for &StatusBar {
     fn render(self, area: Rect, buf: &mut Buffer) {
         Paragraph::new(vec![self.first_line(), self.second_line(area.width)]).render(area, buf);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_message_quoting_metadata_is_drawn_escaped() {
+        let mut bar = StatusBar::new(&AnalysisParams::default(), Theme::default());
+        let hostile = "axes z\u{1b}]0;pwned\u{7}\u{202e}\u{9b}\u{7f} have no known length unit";
+        bar.message = Some(hostile.into());
+        let mut buf = Buffer::empty(Rect::new(0, 0, 160, 2));
+        (&bar).render(Rect::new(0, 0, 160, 2), &mut buf);
+        let drawn: String = buf
+            .content()
+            .iter()
+            .map(ratatui::buffer::Cell::symbol)
+            .collect();
+        assert!(
+            drawn.contains("z\\u{1b}]0;pwned\\u{7}\\u{202e}\\u{9b}\\u{7f} have"),
+            "{drawn}"
+        );
+        assert!(!drawn.chars().any(|c| c.is_control() || c == '\u{202e}'));
     }
 }

@@ -139,6 +139,7 @@ fn check_budget_of(
             ),
             needed: bytes.unwrap_or(u64::MAX),
             limit,
+            machine,
         }),
     }
 }
@@ -179,6 +180,7 @@ pub(crate) fn typed_buffer<T: Voxel>(
         ),
         needed: (n * T::TYPE.size()) as u64,
         limit: max_memory,
+        machine: true,
     })?;
     drop(probe);
     Ok(bytemuck::zeroed_vec(n))

@@ -10,6 +10,7 @@ mod nifti;
 mod nrrd;
 mod ome;
 mod output;
+mod placement;
 mod raw;
 mod tiff;
 mod tiff_ifd;
@@ -261,11 +262,13 @@ fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         };
         (format, loaded)
     };
-    Ok(finish(path, format, loaded))
+    finish(path, format, loaded)
 }
 
-/// The volume a reader read from `path`, with the notes every format shares.
-fn finish(path: &Path, format: Format, mut loaded: Read0) -> Loaded {
+/// The volume a reader read from `path`, its spacing checked (for every reader, here once:
+/// [`placement`]), with the notes every format shares.
+fn finish(path: &Path, format: Format, mut loaded: Read0) -> Result<Loaded> {
+    placement::check_spacing(path, &loaded.volume)?;
     let missing = loaded.volume.stats().missing;
     if missing > 0 {
         loaded.notes.push(format!(
@@ -280,7 +283,7 @@ fn finish(path: &Path, format: Format, mut loaded: Read0) -> Loaded {
     }
     let mut sources = vec![path.to_path_buf()];
     sources.extend(loaded.sources.into_iter().filter(|s| s != path));
-    Loaded {
+    Ok(Loaded {
         volume: loaded.volume,
         format,
         notes: loaded.notes,
@@ -288,7 +291,7 @@ fn finish(path: &Path, format: Format, mut loaded: Read0) -> Loaded {
         dicom: loaded.dicom,
         zarr: loaded.zarr,
         format_version: loaded.format_version,
-    }
+    })
 }
 
 /// Reads the folder `path`: a Zarr store, a DICOM series, or a stack of TIFF slices.
@@ -377,18 +380,11 @@ impl Read0 {
         self
     }
 
-    /// With the voxel-to-world transform the file states, when it states one; a note when it is
-    /// unusable (not finite, or singular).
+    /// With the voxel-to-world transform the file states, when it states one, held to bounds
+    /// ([`placement::place`]: an origin out of them replaced with 0, an unusable orientation
+    /// left out, each with a note).
     pub(crate) fn with_transform(mut self, t: Option<WorldTransform>) -> Self {
-        if let Some(t) = t {
-            if t.is_usable() {
-                self.volume = self.volume.with_transform(t);
-            } else {
-                self.notes.push(
-                    "the orientation in the header is singular or not finite: ignored".into(),
-                );
-            }
-        }
+        self.volume = placement::place(self.volume, t, &mut self.notes);
         self
     }
 }

@@ -10,8 +10,9 @@ use crate::volume::{Level, Volume, Voxels, compute_stats};
 /// Pyramid levels a file holds itself, on the pyramid's grid (docs/design.md §5).
 pub trait LevelSource: Send + Sync + std::fmt::Debug {
     /// The voxels (x fastest) of pyramid level `k`, whose dimensions are `dims`; `None` when the
-    /// file holds no such level or it cannot be read (the level is then computed).
-    fn level(&self, k: usize, dims: [usize; 3]) -> Option<Voxels>;
+    /// file holds no such level (it is then computed); an error when it holds the level and it
+    /// cannot be read (computed instead, unless asked for: [`Volume::asked_level`]).
+    fn level(&self, k: usize, dims: [usize; 3]) -> Option<crate::error::Result<Voxels>>;
 }
 
 /// The coarser levels of a volume's pyramid, shared by all its levels: slot `i` holds pyramid
@@ -98,7 +99,8 @@ impl Volume {
                 .pyramid
                 .source
                 .as_ref()
-                .and_then(|s| s.level(target, dims));
+                .and_then(|s| s.level(target, dims))
+                .and_then(Result::ok);
             if let Some(data) = read {
                 return Arc::new(self.level_of(target - here, data));
             }
@@ -111,6 +113,32 @@ impl Volume {
                 None => Arc::new(self.halved(target - here)),
             }
         }))
+    }
+
+    /// Pyramid level `k` of this volume as [`Volume::coarser`] gives it, asked for by the user
+    /// (`--resolution K`): a level the file holds that cannot be read is an error, not computed
+    /// in its place.
+    pub fn asked_level(&self, k: usize) -> crate::error::Result<Arc<Volume>> {
+        let here = self.level.index;
+        let target = (here + k).min(self.pyramid.len());
+        if target == here || self.pyramid[target - 1].get().is_some() {
+            return Ok(self.coarser(k));
+        }
+        let (_, dims) = self.scale_to(target - here);
+        let read = self
+            .pyramid
+            .source
+            .as_ref()
+            .and_then(|s| s.level(target, dims));
+        match read {
+            Some(Err(e)) => Err(e),
+            Some(Ok(data)) => {
+                Ok(Arc::clone(self.pyramid[target - 1].get_or_init(|| {
+                    Arc::new(self.level_of(target - here, data))
+                })))
+            }
+            None => Ok(self.coarser(k)),
+        }
     }
 
     /// The number of pyramid levels below level 0: halving stops when every axis is one voxel.
@@ -195,8 +223,15 @@ mod tests {
     struct Sevens;
 
     impl LevelSource for Sevens {
-        fn level(&self, k: usize, dims: [usize; 3]) -> Option<Voxels> {
-            (k == 2).then(|| Voxels::owned(vec![7u8; dims.iter().product()]))
+        fn level(&self, k: usize, dims: [usize; 3]) -> Option<crate::error::Result<Voxels>> {
+            match k {
+                2 => Some(Ok(Voxels::owned(vec![7u8; dims.iter().product()]))),
+                3 => Some(Err(crate::error::Error::format(
+                    std::path::Path::new("f"),
+                    "level 3 unreadable",
+                ))),
+                _ => None,
+            }
         }
     }
 
@@ -216,5 +251,13 @@ mod tests {
         assert_eq!(a.data().to_f32_vec(), b.data().to_f32_vec());
         // Level 3 from level 2, which the file gave.
         assert!((0..v.coarser(3).len()).all(|i| v.coarser(3).data().get(i) == 7.0));
+        // Level 3 the file holds but cannot give: computed when the budget picks it (above,
+        // from level 2), an error when asked for.
+        let fresh = plain.clone().with_level_source(Arc::new(Sevens));
+        let asked = fresh.asked_level(3).err().map(|e| e.to_string());
+        assert!(asked.is_some_and(|e| e.contains("unreadable")));
+        let two = fresh.asked_level(2).ok().map(|l| l.data().get(0));
+        assert_eq!(two, Some(7.0));
+        assert_eq!(fresh.coarser(3).dims(), plain.coarser(3).dims());
     }
 }

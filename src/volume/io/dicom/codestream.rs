@@ -81,8 +81,74 @@ pub(super) fn check(
                 ),
             ));
         }
+        // Tiles a codestream states and holds no tile-part of would decode as zeros, silently.
+        if let Some(code) = j2k_code(fragment)
+            && let Some(held) = j2k_tiles_held(code, f.tiles, fragments.len() == 1)
+            && held < f.tiles
+        {
+            return Err(Error::format(
+                path,
+                format!(
+                    "a JPEG 2000 frame states {} tiles and holds data for {held}: the others \
+                     would decode as zeros",
+                    f.tiles
+                ),
+            ));
+        }
     }
     Ok(())
+}
+
+/// A JPEG 2000 codestream from its SOC marker: `data` bare, as DICOM stores it, or inside a
+/// JP2 file's `jp2c` box.
+fn j2k_code(data: &[u8]) -> Option<&[u8]> {
+    let code = if data.starts_with(&[0xFF, 0x4F, 0xFF, 0x51]) {
+        data
+    } else {
+        jp2_codestream(data)?
+    };
+    code.starts_with(&[0xFF, 0x4F, 0xFF, 0x51]).then_some(code)
+}
+
+/// How many of the `tiles` a JPEG 2000 codestream states have a tile-part in it, walking its
+/// main header's marker segments and then its tile-parts (SOT: `Isot`, the tile, and `Psot`,
+/// the length to the next). Known only when the walk ends in `code`, at the EOC marker, a
+/// last tile-part running to the end, or `code`'s own end when it is the `whole` codestream;
+/// `None` when the codestream goes on past `code` (a frame in several fragments) or cannot be
+/// walked.
+fn j2k_tiles_held(code: &[u8], tiles: u64, whole: bool) -> Option<u64> {
+    let be16 = |at: usize| Some(u16::from_be_bytes(code.get(at..at + 2)?.try_into().ok()?));
+    let ended = |at: usize| match code.get(at..at + 2) {
+        Some([0xFF, 0xD9]) => Some(true),
+        Some([0xFF, 0x90]) => Some(false),
+        None if whole && at == code.len() => Some(true),
+        _ => None,
+    };
+    let mut held = vec![false; usize::try_from(tiles).ok()?];
+    let mut at = 2;
+    while code.get(at..at + 2) != Some(&[0xFF, 0x90]) {
+        if ended(at) == Some(true) {
+            return Some(0);
+        }
+        if code.get(at) != Some(&0xFF) {
+            return None;
+        }
+        at = at.checked_add(2 + usize::from(be16(at + 2)?))?;
+    }
+    loop {
+        if let Some(h) = held.get_mut(usize::from(be16(at + 4)?)) {
+            *h = true;
+        }
+        let psot = u32::from_be_bytes(code.get(at + 6..at + 10)?.try_into().ok()?);
+        if psot == 0 {
+            break;
+        }
+        at = at.checked_add(usize::try_from(psot).ok()?)?;
+        if ended(at)? {
+            break;
+        }
+    }
+    Some(held.iter().filter(|&&h| h).count() as u64)
 }
 
 /// The frame a JPEG stream's start-of-frame marker states.
@@ -115,14 +181,7 @@ fn jpeg_frame(data: &[u8]) -> Option<Frame> {
 /// The frame a JPEG 2000 codestream's SIZ marker segment states (the codestream bare, as DICOM
 /// stores it, or inside a JP2 file's `jp2c` box).
 fn j2k_frame(data: &[u8]) -> Option<Frame> {
-    let code = if data.starts_with(&[0xFF, 0x4F, 0xFF, 0x51]) {
-        data
-    } else {
-        jp2_codestream(data)?
-    };
-    if !code.starts_with(&[0xFF, 0x4F, 0xFF, 0x51]) {
-        return None;
-    }
+    let code = j2k_code(data)?;
     let be32 = |at: usize| -> Option<u32> {
         Some(u32::from_be_bytes(code.get(at..at + 4)?.try_into().ok()?))
     };
@@ -288,6 +347,55 @@ mod tests {
         // Cut short, or not a codestream.
         assert_eq!(j2k_frame(&code[..30]), None);
         assert_eq!(j2k_frame(b"\xff\xd8\xff\xe0"), None);
+    }
+
+    /// A tile-part of tile `tile`: SOT (`Lsot` 10, `Isot`, `Psot`, `TPsot` 0, `TNsot` 1), SOD and `data`
+    /// bytes, `last` with Psot 0 (running to the end).
+    fn tile_part(tile: u16, data: usize, last: bool) -> Vec<u8> {
+        let psot = if last { 0 } else { (14 + data) as u32 };
+        let mut b = vec![0xFF, 0x90, 0, 10];
+        b.extend_from_slice(&tile.to_be_bytes());
+        b.extend_from_slice(&psot.to_be_bytes());
+        b.extend_from_slice(&[0, 1, 0xFF, 0x93]);
+        b.extend(std::iter::repeat_n(0x5A, data));
+        b
+    }
+
+    #[test]
+    fn j2k_tiles_without_a_tile_part_are_counted() {
+        // 4 tiles stated (64x48 in 32x32), with a COD-like segment before the first SOT.
+        let mut head = siz(64, 48, 32, 16);
+        head.extend_from_slice(&[0xFF, 0x52, 0, 4, 1, 2]);
+        let with = |parts: &[Vec<u8>], eoc: bool| {
+            let mut b = head.clone();
+            for p in parts {
+                b.extend_from_slice(p);
+            }
+            if eoc {
+                b.extend_from_slice(&[0xFF, 0xD9]);
+            }
+            b
+        };
+        let all: Vec<_> = (0..4).map(|t| tile_part(t, 7, false)).collect();
+        assert_eq!(j2k_tiles_held(&with(&all, true), 4, false), Some(4));
+        assert_eq!(j2k_tiles_held(&with(&all, false), 4, true), Some(4));
+        // The header alone, or one tile of the four: the rest would be zeros.
+        assert_eq!(j2k_tiles_held(&with(&[], true), 4, false), Some(0));
+        assert_eq!(j2k_tiles_held(&with(&[], false), 4, true), Some(0));
+        let one = [tile_part(2, 7, false), tile_part(2, 3, false)];
+        assert_eq!(j2k_tiles_held(&with(&one, true), 4, false), Some(1));
+        // A last tile-part running to the end.
+        let last = [tile_part(0, 5, false), tile_part(1, 9, true)];
+        assert_eq!(j2k_tiles_held(&with(&last, false), 4, false), Some(2));
+        // Going on in a later fragment, or not walkable: not known.
+        assert_eq!(j2k_tiles_held(&with(&all[..2], false), 4, false), None);
+        let mut cut = with(&all, true);
+        cut.truncate(cut.len() - 20);
+        assert_eq!(j2k_tiles_held(&cut, 4, false), None);
+        assert_eq!(
+            j2k_code(&with(&all, true)).map(<[u8]>::len),
+            Some(with(&all, true).len())
+        );
     }
 
     #[test]

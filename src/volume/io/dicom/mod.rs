@@ -227,7 +227,7 @@ pub fn load_series(
     if let Some(d) = &mut read.dicom {
         d.key = key.to_string();
     }
-    Ok(super::finish(path, super::Format::Dicom, read))
+    super::finish(path, super::Format::Dicom, read)
 }
 
 /// Whether `series` names a series by its position in a folder's list, not by UID.
@@ -347,7 +347,8 @@ fn load_from(path: &Path, files: &[PathBuf], opts: &LoadOptions) -> Result<Read0
     let ty = voxel_type(series, &volume.stats());
     volume = volume.with_voxel_type(ty);
     if let Some((m, origin)) = lps {
-        volume = volume.with_transform(WorldTransform::lps(m, origin));
+        let lps = Some(WorldTransform::lps(m, origin));
+        volume = super::placement::place(volume, lps, &mut notes);
     }
     if !resample {
         notes.extend(layout.problems.iter().cloned());

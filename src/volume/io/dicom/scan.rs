@@ -71,6 +71,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
                         what: format!("the descriptions of {images} images"),
                         needed: total.saturating_add(cost),
                         limit: budget,
+                        machine: false,
                     });
                 }
                 header::images(&obj, mosaic.as_ref())

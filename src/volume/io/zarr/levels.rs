@@ -15,6 +15,7 @@ use crate::volume::pyramid::{LevelSource, coarser_dims, step};
 /// The datasets of a store that are pyramid levels, by level.
 #[derive(Debug)]
 pub struct StoreLevels {
+    tree: PathBuf,
     image: PathBuf,
     layout: Layout,
     at: [u64; 2],
@@ -34,6 +35,7 @@ impl StoreLevels {
             })
             .collect();
         (!levels.is_empty()).then(|| Self {
+            tree: first.tree.to_path_buf(),
             image: first.image.to_path_buf(),
             layout: first.layout.clone(),
             at: first.at,
@@ -85,9 +87,10 @@ pub fn pyramid_level(
 }
 
 impl LevelSource for StoreLevels {
-    fn level(&self, k: usize, dims: [usize; 3]) -> Option<Voxels> {
+    fn level(&self, k: usize, dims: [usize; 3]) -> Option<crate::error::Result<Voxels>> {
         let (_, path, meta) = self.levels.iter().find(|(level, _, _)| *level == k)?;
         let dataset = Dataset {
+            tree: &self.tree,
             image: &self.image,
             path,
             meta,
@@ -95,7 +98,7 @@ impl LevelSource for StoreLevels {
             at: self.at,
             max_memory: self.max_memory,
         };
-        // A level that cannot be read is computed instead, as for any other file.
-        dataset.voxels(dims).ok()
+        // A level that cannot be read is computed instead unless asked for (`asked_level`).
+        Some(dataset.voxels(dims))
     }
 }

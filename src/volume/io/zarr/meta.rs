@@ -111,9 +111,10 @@ impl ArrayMeta {
     }
 }
 
-/// The JSON of the metadata file `path`; `None` when there is none.
-pub fn read_json(path: &Path) -> Result<Option<Value>, String> {
-    let file = match crate::volume::io::open_regular(path) {
+/// The JSON of the metadata file `path` of the store whose tree is `tree` (a file outside it is
+/// not read); `None` when there is none.
+pub fn read_json(tree: &Path, path: &Path) -> Result<Option<Value>, String> {
+    let file = match super::store::open_inside(tree, path) {
         Ok(file) => file,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(format!("{}: {e}", name(path))),
@@ -142,12 +143,12 @@ fn name(path: &Path) -> String {
 
 /// The attributes of the group or array at `dir`, with its Zarr format: `zarr.json`'s
 /// `attributes` (v3) or `.zattrs` (v2); `None` when `dir` is no Zarr node.
-pub fn attributes(dir: &Path) -> Result<Option<(u8, Value)>, String> {
-    if let Some(node) = read_json(&dir.join("zarr.json"))? {
+pub fn attributes(tree: &Path, dir: &Path) -> Result<Option<(u8, Value)>, String> {
+    if let Some(node) = read_json(tree, &dir.join("zarr.json"))? {
         let attrs = node.get("attributes").cloned().unwrap_or(Value::Null);
         return Ok(Some((3, attrs)));
     }
-    let attrs = read_json(&dir.join(".zattrs"))?;
+    let attrs = read_json(tree, &dir.join(".zattrs"))?;
     let is_v2 = attrs.is_some() || dir.join(".zgroup").exists() || dir.join(".zarray").exists();
     Ok(is_v2.then(|| (2, attrs.unwrap_or(Value::Null))))
 }
@@ -157,12 +158,15 @@ fn ome_fields(attrs: &Value) -> &Value {
     attrs.get("ome").unwrap_or(attrs)
 }
 
-/// The label images a group of labels lists (`labels/`'s `labels`).
-pub fn label_names(image_dir: &Path) -> Vec<String> {
-    let Ok(Some((_, attrs))) = attributes(&image_dir.join("labels")) else {
-        return Vec::new();
+/// The label images a group of labels lists (`labels/`'s `labels`); none when there is no such
+/// group, an error when it cannot be read.
+pub fn label_names(tree: &Path, image_dir: &Path) -> Result<Vec<String>, String> {
+    let attrs = match attributes(tree, &image_dir.join("labels")) {
+        Ok(Some((_, attrs))) => attrs,
+        Ok(None) => return Ok(Vec::new()),
+        Err(e) => return Err(format!("labels/{e}")),
     };
-    ome_fields(&attrs)
+    Ok(ome_fields(&attrs)
         .get("labels")
         .and_then(Value::as_array)
         .map(|names| {
@@ -172,7 +176,7 @@ pub fn label_names(image_dir: &Path) -> Vec<String> {
                 .map(str::to_owned)
                 .collect()
         })
-        .unwrap_or_default()
+        .unwrap_or_default())
 }
 
 /// What a Zarr group that is not an image is, when it is a known container: said so that the
@@ -352,11 +356,12 @@ fn transforms(list: Option<&Value>, n: usize) -> Result<(Vec<f64>, Vec<f64>), St
 }
 
 /// The metadata of the array at `dir`, of Zarr format 2 (`.zarray`) or 3 (`zarr.json`).
-pub fn array(dir: &Path) -> Result<ArrayMeta, String> {
-    if let Some(v3) = read_json(&dir.join("zarr.json"))? {
+pub fn array(tree: &Path, dir: &Path) -> Result<ArrayMeta, String> {
+    if let Some(v3) = read_json(tree, &dir.join("zarr.json"))? {
         return array_v3(&v3);
     }
-    let v2 = read_json(&dir.join(".zarray"))?.ok_or("no array metadata (zarr.json or .zarray)")?;
+    let v2 =
+        read_json(tree, &dir.join(".zarray"))?.ok_or("no array metadata (zarr.json or .zarray)")?;
     let list = |field: &str| numbers(v2.get(field)).ok_or(format!(".zarray has no {field}"));
     let mut codecs: Vec<String> = v2
         .get("filters")

@@ -7,6 +7,7 @@
 //! the array's order, or y and x) become the volume's x fastest, its scale and translation the
 //! spacing and origin in mm; `--volume N` picks the time point and `--channel N` the channel.
 
+mod chain;
 mod guard;
 mod levels;
 pub(crate) mod meta;
@@ -82,12 +83,13 @@ pub fn is_store(dir: &Path) -> bool {
         .any(|f| dir.join(f).is_file())
 }
 
-/// The image a load reads: the store, or one of its label images.
-fn image_dir(dir: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
+/// The image a load reads: the store, or one of its label images (which must lie in the store's
+/// tree `tree`, as every file read does).
+fn image_dir(dir: &Path, tree: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
     let Some(name) = &opts.label_image else {
         return Ok((dir.to_path_buf(), String::new()));
     };
-    let names = meta::label_names(dir);
+    let names = meta::label_names(tree, dir).map_err(|m| Error::format(dir, m))?;
     if !names.contains(name) {
         let listed = if names.is_empty() {
             "the store has no label images".to_string()
@@ -104,12 +106,12 @@ fn image_dir(dir: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
 
 /// The image at `dir`: an OME-Zarr group's first image, or a plain array as an image of one
 /// level with unit scale (its axes t, c, z, y, x counted from the last).
-fn read_image(dir: &Path) -> Result<(Image, Vec<ArrayMeta>)> {
+fn read_image(dir: &Path, tree: &Path) -> Result<(Image, Vec<ArrayMeta>)> {
     let fail = |m: String| Error::format(dir, m);
-    let (zarr_format, attrs) = meta::attributes(dir)
+    let (zarr_format, attrs) = meta::attributes(tree, dir)
         .map_err(fail)?
         .ok_or_else(|| fail("not a Zarr store (no zarr.json, .zattrs or .zgroup)".into()))?;
-    let image = match meta::array(dir) {
+    let image = match meta::array(tree, dir) {
         // A plain array: no OME metadata to read.
         Ok(array) => plain_image(&array, zarr_format).map_err(fail)?,
         Err(_) => meta::image(&attrs, zarr_format).map_err(fail)?,
@@ -118,7 +120,7 @@ fn read_image(dir: &Path) -> Result<(Image, Vec<ArrayMeta>)> {
         .datasets
         .iter()
         .map(|d| {
-            let array = meta::array(&dir.join(&d.path))
+            let array = meta::array(tree, &dir.join(&d.path))
                 .map_err(|m| fail(format!("dataset {:?}: {m}", d.path)))?;
             if array.shape.len() != image.axes.len() {
                 return Err(fail(format!(
@@ -169,12 +171,14 @@ fn plain_image(array: &ArrayMeta, zarr_format: u8) -> std::result::Result<Image,
     })
 }
 
-/// What `info` shows of the store at `dir`, whose image `image` has its axes as `layout` says.
+/// What `info` shows of the store at `dir` (of tree `tree`), whose image `image` has its axes as
+/// `layout` says.
 fn describe(
     image: &Image,
     arrays: &[ArrayMeta],
     layout: &Layout,
     dir: &Path,
+    tree: &Path,
     name: String,
 ) -> ZarrInfo {
     let first = &arrays[0];
@@ -215,7 +219,8 @@ fn describe(
         chunks: first.chunks.clone(),
         inner_chunks: first.inner.clone(),
         codecs: first.codecs.clone(),
-        labels: meta::label_names(dir),
+        // Labels that cannot be listed are not: reading one names what is wrong.
+        labels: meta::label_names(tree, dir).unwrap_or_default(),
     }
 }
 
@@ -270,6 +275,8 @@ impl Layout {
 /// A store's image opened: its metadata read and checked against the options, nothing of its
 /// voxels read yet.
 struct Opened {
+    /// The store's tree: every file read lies in it.
+    tree: PathBuf,
     image_path: PathBuf,
     image: Image,
     arrays: Vec<ArrayMeta>,
@@ -281,11 +288,12 @@ struct Opened {
 impl Opened {
     /// Opens the image of the store at `dir` (or the label image `opts` names).
     fn new(dir: &Path, opts: &LoadOptions) -> Result<Self> {
-        let (image_path, name) = image_dir(dir, opts)?;
-        let (image, arrays) = read_image(&image_path)?;
+        let tree = store::tree(dir)?;
+        let (image_path, name) = image_dir(dir, &tree, opts)?;
+        let (image, arrays) = read_image(&image_path, &tree)?;
         let array = &arrays[0];
         let layout = Layout::of(&image, &array.shape).map_err(|m| Error::format(&image_path, m))?;
-        let info = describe(&image, &arrays, &layout, dir, name);
+        let info = describe(&image, &arrays, &layout, dir, &tree, name);
         let mut notes = Vec::new();
         let count = |axis: Option<usize>| axis.map_or(1, |a| array.shape[a] as usize);
         let (times, channels) = (count(layout.time), count(layout.channel));
@@ -312,6 +320,7 @@ impl Opened {
             ));
         }
         Ok(Self {
+            tree,
             image_path,
             image,
             arrays,
@@ -324,6 +333,7 @@ impl Opened {
     /// Dataset `i`, to read the time point and channel `opts` picks.
     fn dataset(&self, i: usize, opts: &LoadOptions) -> read::Dataset<'_> {
         read::Dataset {
+            tree: &self.tree,
             image: &self.image_path,
             path: &self.image.datasets[i].path,
             meta: &self.arrays[i],
@@ -351,7 +361,7 @@ impl Opened {
             t.matrix[k][3] = origin[k];
         }
         let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
-        read0.volume = read0.volume.with_transform(t);
+        read0 = read0.with_transform(Some(t));
         if self.image.label {
             read0.volume = read0.volume.declared_labels();
         }
@@ -385,7 +395,8 @@ pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Resul
         return Ok(None);
     }
     let read = read_preview(path, opts, max_voxels).map_err(|e| e.reached_from(path))?;
-    Ok(read.map(|r| super::finish(path, Format::OmeZarr, r)))
+    read.map(|r| super::finish(path, Format::OmeZarr, r))
+        .transpose()
 }
 
 /// The finest of the store's coarser datasets on the pyramid's grid with at most `max_voxels`

@@ -19,6 +19,8 @@ use crate::volume::{Voxel, VoxelType, Voxels};
 /// One dataset of an image, and which time point and channel of it to read.
 #[derive(Clone, Copy, Debug)]
 pub struct Dataset<'a> {
+    /// The store's tree: every file read lies in it.
+    pub tree: &'a Path,
     /// The image's folder.
     pub image: &'a Path,
     /// The dataset's path in the image.
@@ -40,8 +42,10 @@ impl Dataset<'_> {
         let fail = |m: String| Error::format(self.image, m);
         let stored = self.meta.voxel_type().map_err(fail)?;
         check_chunks(self.image, self.meta, stored, self.max_memory)?;
-        let guard = Guard::new(self.path, self.meta, stored.size() as u64);
-        let store = Arc::new(LocalStore::new(self.image, self.max_memory).with_guard(guard));
+        let guard = Guard::new(self.path, self.meta, stored.size() as u64)
+            .map_err(|e| fail(format!("dataset {:?}: {e}", self.path)))?;
+        let store =
+            Arc::new(LocalStore::new(self.image, self.tree, self.max_memory).with_guard(guard));
         let array = Array::open(store, &format!("/{}", self.path))
             .map_err(|e| fail(format!("dataset {:?}: {e}", self.path)))?;
         Reader {
@@ -79,6 +83,7 @@ fn check_chunks(path: &Path, array: &ArrayMeta, ty: VoxelType, max_memory: u64) 
                     what: format!("one {what} of {} {ty} voxels", dims.join("x")),
                     needed: bytes.unwrap_or(u64::MAX),
                     limit,
+                    machine: false,
                 });
             }
         }
@@ -187,7 +192,11 @@ impl Reader<'_> {
                     .map(|(r, &c)| r.start / c.max(1))
                     .collect();
                 let key = self.array.chunk_key(&chunk);
-                Error::format(self.path, format!("chunk {key}: {e}"))
+                let text = e.to_string();
+                if text.starts_with(&format!("chunk {key} ")) {
+                    return Error::format(self.path, text); // the guard's, naming it already
+                }
+                Error::format(self.path, format!("chunk {key}: {text}"))
             })?;
         let width = x.len();
         for (i, row) in values.chunks_exact(width).enumerate() {

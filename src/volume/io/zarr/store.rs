@@ -12,10 +12,33 @@ use zarrs::storage::{Bytes, MaybeBytesIterator, ReadableStorageTraits, StorageEr
 use super::guard::Guard;
 use crate::error::human_bytes;
 
-/// A read-only Zarr store over the folder `root`.
+/// The store's tree: the folder given, canonical (its symbolic links resolved), that every file
+/// read must lie in.
+pub fn tree(dir: &Path) -> crate::error::Result<PathBuf> {
+    dir.canonicalize()
+        .map_err(|e| crate::error::Error::io(dir, e))
+}
+
+/// The file `path` of the store whose tree is `tree` ([`tree`]), opened as every input is: an
+/// error (of kind `PermissionDenied`, naming nothing of the file) when it, or a folder on its
+/// way, is a symbolic link that leads out of the tree; `NotFound` when there is none.
+pub fn open_inside(tree: &Path, path: &Path) -> std::io::Result<std::fs::File> {
+    let real = path.canonicalize()?;
+    if !real.starts_with(tree) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::PermissionDenied,
+            "a symbolic link that leads out of the store: slabscope reads only the files inside it",
+        ));
+    }
+    crate::volume::io::open_regular(&real)
+}
+
+/// A read-only Zarr store over the folder `root`, whose files all lie in the store's tree.
 #[derive(Debug)]
 pub struct LocalStore {
     root: PathBuf,
+    /// The store's tree ([`tree`]): no file outside it is read.
+    tree: PathBuf,
     /// The most bytes one file of the store may hold.
     max_file: u64,
     /// What the chunks of the array read may decode to.
@@ -23,10 +46,12 @@ pub struct LocalStore {
 }
 
 impl LocalStore {
-    /// The store of the folder `root`, whose files may each hold at most `max_file` bytes.
-    pub fn new(root: &Path, max_file: u64) -> Self {
+    /// The store of the folder `root`, inside the store's tree `tree`, whose files may each hold
+    /// at most `max_file` bytes.
+    pub fn new(root: &Path, tree: &Path, max_file: u64) -> Self {
         Self {
             root: root.to_path_buf(),
+            tree: tree.to_path_buf(),
             max_file,
             guard: None,
         }
@@ -55,7 +80,7 @@ impl LocalStore {
     /// The file of `key` opened with its size; `None` when there is none.
     fn open(&self, key: &StoreKey) -> Result<Option<(std::fs::File, u64)>, StorageError> {
         let path = self.path(key)?;
-        let file = match crate::volume::io::open_regular(&path) {
+        let file = match open_inside(&self.tree, &path) {
             Ok(file) => file,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(StorageError::Other(format!("{key}: {e}"))),
@@ -121,8 +146,9 @@ fn read_range(
         ByteRange::Suffix(length) => (size.saturating_sub(length), size),
     };
     if start > end || end > size {
+        // The range may come from a shard's index: its numbers are the file's bytes, not quoted.
         return Err(StorageError::Other(format!(
-            "{key}: bytes {start}..{end} asked of a file of {size}"
+            "{key}: a range of bytes asked that the file of {size} bytes does not hold"
         )));
     }
     // Within the file, which is within the budget.
@@ -140,7 +166,8 @@ mod tests {
     fn keys_stay_in_the_folder_and_files_within_the_limit() {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("small"), b"0123456789").unwrap();
-        let store = LocalStore::new(dir.path(), 16);
+        let tree = tree(dir.path()).unwrap();
+        let store = LocalStore::new(dir.path(), &tree, 16);
         let key = |k: &str| StoreKey::new(k).unwrap();
         let got = store.get(&key("small")).unwrap().unwrap();
         assert_eq!(&got[..], b"0123456789");
@@ -160,5 +187,34 @@ mod tests {
         let err = store.get(&key("big")).unwrap_err().to_string();
         assert!(err.contains("more than the memory limit"), "{err}");
         assert!(store.path(&key("a/../../etc")).is_err());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn links_inside_the_tree_are_read_and_links_out_of_it_refused() {
+        use std::os::unix::fs::symlink;
+        let outside = tempfile::tempdir().unwrap();
+        std::fs::write(outside.path().join("secret"), b"ABCDEFGH").unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().join("store");
+        std::fs::create_dir_all(root.join("sub")).unwrap();
+        std::fs::write(root.join("sub/real"), b"0123").unwrap();
+        symlink(root.join("sub/real"), root.join("inside")).unwrap();
+        symlink(outside.path().join("secret"), root.join("out")).unwrap();
+        symlink(outside.path(), root.join("folder")).unwrap();
+        symlink(root.join("sub"), root.join("alias")).unwrap();
+        let store = LocalStore::new(&root, &tree(&root).unwrap(), 64);
+        let key = |k: &str| StoreKey::new(k).unwrap();
+        assert_eq!(&store.get(&key("inside")).unwrap().unwrap()[..], b"0123");
+        assert_eq!(
+            &store.get(&key("alias/real")).unwrap().unwrap()[..],
+            b"0123"
+        );
+        for k in ["out", "folder/secret"] {
+            let e = store.get(&key(k)).unwrap_err().to_string();
+            assert!(e.contains(k) && e.contains("leads out of the store"), "{e}");
+            assert!(!e.contains("ABCD"), "{e}");
+        }
+        assert!(store.get(&key("folder/absent")).unwrap().is_none());
     }
 }

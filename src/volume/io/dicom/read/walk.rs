@@ -50,6 +50,7 @@ impl Fault {
                 what: "its DICOM header".into(),
                 needed,
                 limit,
+                machine: false,
             },
         }
     }

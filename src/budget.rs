@@ -1,0 +1,147 @@
+//! The one budget planner: which pyramid level each piece of work runs on. Every front end (the
+//! CLI's commands, the TUI, triage, Python) asks it, naming what the level is for ([`Purpose`]);
+//! none chooses a level itself.
+//!
+//! - An **analysis** of the level asked for (`--resolution`) runs there when it fits the memory
+//!   budget, else on the finest coarser level that fits, or with its slabs counted strip by strip
+//!   on every voxel ([`Plan`]).
+//! - A **picture** (render, slice, the TUI) is drawn from the level its analysis runs on at full
+//!   resolution within the budget.
+//! - A **glance** (the TUI's first answer on a large volume, a store's first picture) runs on the
+//!   finest level of at most [`GLANCE_VOXELS`] voxels, at once, before the real answer.
+//! - A **pixel**'s level in the ray caster is the finest whose voxels are no larger than the
+//!   pixel's footprint (`render::pyramid_level`).
+
+use crate::analysis::{AnalysisParams, Plan};
+use crate::error::{Error, Result};
+use crate::volume::Volume;
+
+/// The most voxels a glance is computed on: the view search, the histories and the picture of
+/// the TUI's first answer on a large volume come from the finest pyramid level this small, and
+/// the full resolution follows in the background.
+pub const GLANCE_VOXELS: usize = 1 << 21;
+
+/// What a level is chosen for.
+#[derive(Clone, Copy, Debug)]
+pub enum Purpose<'a> {
+    /// The view search and the partition of pyramid level `wanted` by `params`.
+    Analysis {
+        /// The level asked for (0: every voxel, the paper's method).
+        wanted: usize,
+        /// The analysis's parameters (the method decides whether slabs can be streamed).
+        params: &'a AnalysisParams,
+    },
+    /// A picture drawn with the analysis it shows: the level a full-resolution analysis runs
+    /// on within the budget.
+    Picture,
+    /// A first answer at once: the finest level of at most [`GLANCE_VOXELS`] voxels.
+    Glance,
+}
+
+/// A memory budget, in bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Budget {
+    /// The most bytes the volume and its analysis may take; a file read in place is not
+    /// counted.
+    pub max_memory: u64,
+}
+
+impl Budget {
+    /// A budget of `max_memory` bytes.
+    #[must_use]
+    pub fn new(max_memory: u64) -> Self {
+        Self { max_memory }
+    }
+
+    /// Where `purpose`'s work on `volume` runs within this budget; the plan's note says what the
+    /// user should know when the budget moved it from the level asked for.
+    pub fn plan(&self, volume: &Volume, purpose: Purpose<'_>) -> Result<Plan> {
+        match purpose {
+            Purpose::Analysis { wanted, params } => {
+                if wanted > 0 {
+                    // A level the file holds and the user asked for is read or refused, never
+                    // computed in its place.
+                    volume.asked_level(wanted)?;
+                }
+                Plan::within(volume, wanted, self.max_memory, params)
+            }
+            Purpose::Picture => {
+                let (level, note) = crate::analysis::within_memory(volume, 0, self.max_memory)?;
+                Ok(Plan {
+                    note,
+                    ..Plan::at(level)
+                })
+            }
+            Purpose::Glance => {
+                // Never finer than the budget allows either.
+                let bins = crate::geometry::lattice::SamplingParams::default().bins;
+                let (fits, _) =
+                    crate::analysis::level_within_memory(volume, 0, self.max_memory, bins)?;
+                let level = glance_level(volume.dims()).max(fits);
+                Ok(Plan::at(volume.coarser(level)))
+            }
+        }
+    }
+}
+
+/// `e`, raised by the analysis `plan` planned, blamed on the budget when the budget moved the
+/// analysis to a coarser level and `e` is about a parameter (a slab count that the level asked
+/// for would hold): [`Error::TooCoarse`].
+#[must_use]
+pub fn blame(plan: &Plan, e: Error) -> Error {
+    match (&plan.note, e) {
+        (Some(note), e @ (Error::InvalidParameter { .. } | Error::DefaultUnfit { .. })) => {
+            Error::TooCoarse {
+                note: note.clone(),
+                cause: Box::new(e),
+            }
+        }
+        (_, e) => e,
+    }
+}
+
+/// The pyramid level of a glance at a volume of `dims`: 0 when it is small enough to compute at
+/// full resolution at once.
+#[must_use]
+pub fn glance_level(dims: [usize; 3]) -> usize {
+    crate::volume::pyramid::level_within(dims, GLANCE_VOXELS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_purpose_gets_its_level() {
+        let volume = crate::volume::phantom::body([96, 96, 96], 1).unwrap();
+        let params = AnalysisParams::default();
+        let roomy = Budget::new(u64::MAX);
+        let plan = roomy
+            .plan(
+                &volume,
+                Purpose::Analysis {
+                    wanted: 1,
+                    params: &params,
+                },
+            )
+            .unwrap();
+        assert_eq!(plan.partition.dims(), [48, 48, 48]);
+        assert!(plan.note.is_none());
+        let picture = roomy.plan(&volume, Purpose::Picture).unwrap();
+        assert_eq!(picture.partition.dims(), [96, 96, 96]);
+        // A budget with room for level 1's analysis only moves the picture there, and says so.
+        let level1 = crate::analysis::memory_needed(&volume, 1);
+        let tight = Budget::new(level1);
+        let picture = tight.plan(&volume, Purpose::Picture).unwrap();
+        assert_eq!(picture.partition.dims(), [48, 48, 48]);
+        assert!(picture.note.is_some_and(|n| n.contains("pyramid level 1")));
+        // 96³ is 884,736 voxels: a glance takes it whole; 160³ (4 M) is halved.
+        assert_eq!(glance_level([96; 3]), 0);
+        assert_eq!(glance_level([160; 3]), 1);
+        let glance = roomy.plan(&volume, Purpose::Glance).unwrap();
+        assert_eq!(glance.partition.dims(), [96, 96, 96]);
+        // Nor is a glance finer than the budget allows.
+        let glance = tight.plan(&volume, Purpose::Glance).unwrap();
+        assert_eq!(glance.partition.dims(), [48, 48, 48]);
+    }
+}

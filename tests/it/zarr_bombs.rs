@@ -1,0 +1,218 @@
+//! Issue #47, decompression past the budget: a chunk whose codec chain (gzip inside gzip, zstd
+//! inside gzip), frames (a second zstd frame after a small first one) or nested shards decode
+//! past its chunk's bytes is refused before `zarrs` decodes it, under a small budget, in one line
+//! that names the store and the chunk and quotes none of its bytes. Every store is written here.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use slabscope::{LoadOptions, load};
+
+/// The bytes a bomb decodes to: far past the 256 KiB chunk and the 64 MiB budget's quarter.
+const BOMB: usize = 32 << 20;
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+fn zstd(bytes: &[u8]) -> Vec<u8> {
+    zstd::bulk::compress(bytes, 3).unwrap()
+}
+
+fn codec(name: &str) -> String {
+    match name {
+        "bytes" => r#"{"name": "bytes", "configuration": {"endian": "little"}}"#.into(),
+        "gzip" => r#"{"name": "gzip", "configuration": {"level": 5}}"#.into(),
+        "zstd" => r#"{"name": "zstd", "configuration": {"level": 3, "checksum": false}}"#.into(),
+        other => other.into(),
+    }
+}
+
+/// A Zarr v3 array of 64³ u8 in one chunk of codecs `codecs` (names, or JSON objects), whose
+/// chunk `c/0/0/0` holds `chunk`.
+fn store(dir: &Path, codecs: &[&str], chunk: &[u8]) -> PathBuf {
+    let store = dir.join("bomb.zarr");
+    std::fs::create_dir_all(store.join("c/0/0")).unwrap();
+    let codecs: Vec<String> = codecs.iter().map(|c| codec(c)).collect();
+    let meta = format!(
+        r#"{{"zarr_format": 3, "node_type": "array", "shape": [64, 64, 64],
+            "data_type": "uint8", "fill_value": 0,
+            "chunk_grid": {{"name": "regular", "configuration": {{"chunk_shape": [64, 64, 64]}}}},
+            "chunk_key_encoding": {{"name": "default", "configuration": {{"separator": "/"}}}},
+            "codecs": [{}]}}"#,
+        codecs.join(", ")
+    );
+    std::fs::write(store.join("zarr.json"), meta).unwrap();
+    std::fs::write(store.join("c/0/0/0"), chunk).unwrap();
+    store
+}
+
+/// The error of loading `store` under a budget of 64 MiB: one line naming the store.
+fn refused(store: &Path) -> String {
+    let opts = LoadOptions {
+        max_memory: 64 << 20,
+        ..LoadOptions::default()
+    };
+    let e = load(store, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains(&store.display().to_string()),
+        "names the store: {e}"
+    );
+    assert!(!e.contains('\n'), "one line: {e}");
+    assert!(
+        !e.contains(&BOMB.to_string()),
+        "quotes no byte of the file: {e}"
+    );
+    e
+}
+
+fn assert_decodes_to_more(e: &str) {
+    assert!(
+        e.contains("chunk c/0/0/0") && e.contains("decodes to more, more than the 262144 bytes"),
+        "{e}"
+    );
+}
+
+#[test]
+fn gzip_inside_gzip_is_weighed_through_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let chunk = gzip(&gzip(&vec![0u8; BOMB]));
+    assert_decodes_to_more(&refused(&store(
+        dir.path(),
+        &["bytes", "gzip", "gzip"],
+        &chunk,
+    )));
+}
+
+#[test]
+fn zstd_inside_gzip_is_weighed_through_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let chunk = gzip(&zstd(&vec![0u8; BOMB]));
+    assert_decodes_to_more(&refused(&store(
+        dir.path(),
+        &["bytes", "zstd", "gzip"],
+        &chunk,
+    )));
+}
+
+#[test]
+fn a_second_zstd_frame_after_a_small_first_is_weighed() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut chunk = zstd(&[1u8; 16]);
+    chunk.extend(zstd(&vec![0u8; BOMB]));
+    assert_decodes_to_more(&refused(&store(dir.path(), &["bytes", "zstd"], &chunk)));
+}
+
+#[test]
+fn a_chain_that_fits_still_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let voxels: Vec<u8> = (0..64 * 64 * 64).map(|i| (i % 251) as u8).collect();
+    let mut chunk = zstd(&voxels[..1000]);
+    chunk.extend(zstd(&voxels[1000..]));
+    let chunk = gzip(&chunk);
+    let l = load(
+        &store(dir.path(), &["bytes", "zstd", "gzip"], &chunk),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(
+        l.volume.value([5, 3, 2]),
+        ((2 * 64 + 3) * 64 + 5) as f32 % 251.0
+    );
+}
+
+/// A shard of 2³ inner chunks of 32³ whose first inner chunk is itself a shard of 2³ chunks of
+/// 16³, the first of them a gzip bomb; the others empty.
+fn nested_shard() -> Vec<u8> {
+    let empty = [u8::MAX; 16];
+    let bomb = gzip(&vec![0u8; BOMB]);
+    let mut inner = bomb.clone();
+    inner.extend(0u64.to_le_bytes());
+    inner.extend((bomb.len() as u64).to_le_bytes());
+    for _ in 1..8 {
+        inner.extend(empty);
+    }
+    let mut shard = inner.clone();
+    shard.extend(0u64.to_le_bytes());
+    shard.extend((inner.len() as u64).to_le_bytes());
+    for _ in 1..8 {
+        shard.extend(empty);
+    }
+    shard
+}
+
+#[test]
+fn a_shard_inside_a_shard_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let index = r#""index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]"#;
+    let inner = format!(
+        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [16, 16, 16],
+            "codecs": [{}, {}], {index}}}}}"#,
+        codec("bytes"),
+        codec("gzip")
+    );
+    let outer = format!(
+        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [32, 32, 32],
+            "codecs": [{inner}], {index}}}}}"#
+    );
+    let e = refused(&store(dir.path(), &[&outer], &nested_shard()));
+    assert!(e.contains("a shard inside a shard is not read"), "{e}");
+}
+
+#[test]
+fn a_codec_on_whole_shards_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let sharding = format!(
+        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [32, 32, 32],
+            "codecs": [{}, {}],
+            "index_codecs": [{{"name": "bytes", "configuration": {{"endian": "little"}}}}]}}}}"#,
+        codec("bytes"),
+        codec("gzip")
+    );
+    let chunk = gzip(&vec![0u8; BOMB]);
+    let e = refused(&store(dir.path(), &[&sharding, "gzip"], &chunk));
+    assert!(
+        e.contains("a codec applied to whole shards is not read"),
+        "{e}"
+    );
+}
+
+/// A copy of the fixture store `name` in `dir`.
+fn copy_store(name: &str, dir: &Path) -> PathBuf {
+    let store = dir.join(name);
+    crate::common::copy_tree(&crate::common::data(&format!("zarr/{name}")), &store);
+    store
+}
+
+#[test]
+fn a_level_asked_for_whose_chunks_cannot_be_read_is_an_error() {
+    use crate::common::{run, s};
+    let dir = tempfile::tempdir().unwrap();
+    let store = copy_store("v04_blosc.ome.zarr", dir.path());
+    // Level 1's first chunk: a Blosc header that states a megabyte.
+    let mut header = vec![2u8, 1, 1, 2];
+    header.extend(1_000_000u32.to_le_bytes());
+    header.extend([0u8; 8]);
+    std::fs::write(store.join("s1/0/0/0"), header).unwrap();
+    let asked = run(&[
+        "analyze",
+        s(&store),
+        "--resolution",
+        "1",
+        "--max-memory",
+        "64M",
+    ]);
+    assert!(!asked.ok, "computed in its place: {}", asked.stdout);
+    let e = asked.stderr.trim();
+    assert!(e.contains(s(&store)) && e.contains("s1/0/0/0"), "{e}");
+    assert!(
+        e.contains("says it decodes to more") && !e.contains("1000000"),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1, "{e}");
+    // Level 0 asked for: read, the broken level never needed.
+    let full = run(&["analyze", s(&store), "--max-memory", "64M"]);
+    assert!(full.ok, "{}", full.stderr);
+}
