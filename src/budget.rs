@@ -84,6 +84,44 @@ impl Budget {
     }
 }
 
+impl Budget {
+    /// That the label volume of `plan`'s partition into `slabs` slabs, at `volume`'s own shape
+    /// ([`label_volume`](crate::partition::label_volume)), fits in this budget beside what stays
+    /// held once the analysis is done: `volume`'s voxels in memory and the coarser levels the
+    /// plan ran on. `path` is the file the volume came from, for the error.
+    pub fn labels(
+        &self,
+        path: &std::path::Path,
+        volume: &Volume,
+        plan: &Plan,
+        slabs: usize,
+    ) -> Result<()> {
+        let coarser = |level: &Volume| {
+            if level.dims() == volume.dims() {
+                0
+            } else {
+                level.memory_bytes()
+            }
+        };
+        let mut held = volume.memory_bytes() + coarser(&plan.partition);
+        if plan.views.dims() != plan.partition.dims() {
+            held += coarser(&plan.views);
+        }
+        let needed = held + crate::partition::label_memory(volume, slabs);
+        if needed <= self.max_memory {
+            return Ok(());
+        }
+        let [x, y, z] = volume.dims();
+        Err(Error::TooLarge {
+            path: path.to_path_buf(),
+            what: format!("the label volume of every voxel ({x}×{y}×{z}) beside the analysis"),
+            needed,
+            limit: self.max_memory,
+            machine: false,
+        })
+    }
+}
+
 /// `e`, raised by the analysis `plan` planned, blamed on the budget when the budget moved the
 /// analysis to a coarser level and `e` is about a parameter (a slab count that the level asked
 /// for would hold): [`Error::TooCoarse`].

@@ -302,11 +302,15 @@ impl Analysis {
         self.key(py, "notes")
     }
 
-    /// The slab index of every voxel of the level partitioned, `[x, y, z]` (uint8, or uint16
-    /// beyond 256 slabs), as `analyze --export-labels` writes it.
+    /// Every voxel's slab, `[x, y, z]` at the volume's shape whatever level the analysis ran
+    /// on: the slab's index + 1, and 0 for background and missing voxels (uint8, or uint16
+    /// beyond 255 slabs), as `analyze --export-labels` writes it.
     fn labels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let Computed { inner, level } = self.computed(py)?;
-        let labels = run::quick(py, || slabscope::label_volume(level, &inner.partition))?;
+        let full = Arc::clone(&self.volume.get().inner);
+        let labels = run::quick(py, || {
+            slabscope::label_volume(&full, level, &inner.partition, &slabscope::Monitor::none())
+        })?;
         let dims = labels.dims();
         let shaped = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
         Ok(match labels.data() {

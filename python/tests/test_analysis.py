@@ -63,13 +63,23 @@ def test_the_analysis_reads_as_its_report(phantoms):
     assert analysis.to_dict() is not analysis.to_dict(), "a new dict each call"
 
 
-def test_labels_number_every_voxel_by_its_slab(phantoms):
+def test_labels_number_every_voxel_by_its_slab_plus_one(phantoms):
     volume = slabscope.load(str(phantoms["body"]))
     analysis = slabscope.analyze(volume, axis="z")
     labels = analysis.labels()
     assert labels.shape == volume.shape and labels.dtype == np.uint8
     for i, (first, end) in enumerate(analysis.slabs):
-        assert (labels[:, :, first:end] == i).all()
+        # The slab's index + 1, and 0 for the air around the body (the background).
+        assert set(np.unique(labels[:, :, first:end])) == {0, i + 1}
+    assert (labels[0, 0, :] == 0).all(), "the corner is air"
+
+
+def test_labels_of_a_coarser_level_have_the_volumes_shape(phantoms):
+    volume = slabscope.load(str(phantoms["body"]))
+    analysis = slabscope.analyze(volume, axis="z", resolution=1, slabs=2)
+    labels = analysis.labels()
+    assert labels.shape == volume.shape
+    assert set(np.unique(labels)) == {0, 1, 2}
 
 
 def test_nibabel_arrays_give_slabscopes_own_analysis(phantoms):

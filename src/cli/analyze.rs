@@ -6,13 +6,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::Plan;
 use slabscope::budget::{Budget, Purpose};
 use slabscope::explain::StepsShown;
-use slabscope::partition::label_bytes;
 use slabscope::report::curves_csv;
 use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
-use slabscope::{AnalysisReport, SlabsReport, label_volume};
+use slabscope::{AnalysisReport, Monitor, SlabsReport, label_volume};
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::params::{self, Flags};
@@ -38,8 +36,9 @@ pub struct AnalyzeArgs {
     pub resolution: Flags<params::Resolution>,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
-    /// Write the slab index of every voxel as a label volume in the source's world geometry:
-    /// NRRD (.nrrd) or NIfTI (.nii, .nii.gz), by the extension.
+    /// Write every voxel's slab as a label volume at the source's shape and world geometry (the
+    /// slab's index + 1; 0 for background and missing voxels): NRRD (.nrrd) or NIfTI (.nii,
+    /// .nii.gz), by the extension.
     #[arg(long, value_name = "OUT.nrrd")]
     pub export_labels: Option<PathBuf>,
     /// Write the slab boundaries as slice indices, millimetres and fractions of the axis (JSON).
@@ -86,7 +85,8 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         .analysis
         .params(args.views.given.switch(&slabscope::params::table::VIEWS)?)?;
     params.explain = args.explain;
-    let plan = Budget::new(max_memory).plan(
+    let budget = Budget::new(max_memory);
+    let plan = budget.plan(
         full,
         Purpose::Analysis {
             wanted,
@@ -96,18 +96,21 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let volume = plan.partition.as_ref();
     if args.export_labels.is_some() {
         // A byte a voxel at least: refused before the analysis rather than after it.
-        check_labels_fit(&args.file, &plan, 1)?;
+        budget.labels(&args.file, full, &plan, 1)?;
     }
     let analysis = args.analysis.analyze_with(&name, &plan, &params)?;
     let part = &analysis.partition;
     if args.export_labels.is_some() {
-        check_labels_fit(&args.file, &plan, label_bytes(part.slabs.len()))?;
+        budget.labels(&args.file, full, &plan, part.slabs.len())?;
     }
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
     let mut staged = Vec::new();
     if let Some(path) = &args.export_labels {
-        staged.push(stage_volume(path, &label_volume(volume, part)?)?);
+        staged.push(stage_volume(
+            path,
+            &label_volume(full, volume, part, &Monitor::none())?,
+        )?);
     }
     if let Some(path) = &args.export_slabs {
         let text = slabscope::report::to_json(&SlabsReport::new(&name, volume, part))?;
@@ -152,24 +155,4 @@ fn parse_explain(s: &str) -> Result<StepsShown, String> {
             )),
         },
     }
-}
-
-/// That a label volume of `plan`'s partition level, `bytes` a voxel, fits in the room a streamed
-/// plan left (a plan in memory has already counted it).
-fn check_labels_fit(file: &Path, plan: &Plan, bytes: u64) -> Result<()> {
-    let Some(room) = plan.streamed else {
-        return Ok(());
-    };
-    let needed = plan.partition.len() as u64 * bytes;
-    if needed > room {
-        let human = slabscope::error::short_bytes;
-        anyhow::bail!(
-            "{}: --export-labels of every voxel needs {}, more than the {} left within the \
-             memory limit: export the labels at a coarser --resolution, or raise --max-memory",
-            file.display(),
-            human(needed),
-            human(room)
-        );
-    }
-    Ok(())
 }

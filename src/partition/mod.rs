@@ -3,6 +3,7 @@
 
 mod bottom_up;
 mod histories;
+mod labels;
 mod optimal;
 mod result;
 mod stack;
@@ -14,11 +15,9 @@ use serde::Serialize;
 pub use crate::geometry::coordinate_axis;
 pub use bottom_up::{Merge, MergeHistory, PAIRS_KEPT, slice_nmi};
 pub use histories::{Histories, Scope};
+pub use labels::{label_bytes, label_memory, label_volume};
 pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
-pub use result::{
-    Comparison, Partition, PartitionParams, Step, Stop, label_bytes, label_volume, partition,
-    partition_kept,
-};
+pub use result::{Comparison, Partition, PartitionParams, Step, Stop, partition, partition_kept};
 pub use stack::{
     BackgroundSummary, InPlane, MISSING, SliceStack, StackParams, sampled_gain, slice_geometry,
 };

@@ -1,7 +1,6 @@
 //! One partition as a front end shows it: a position in a method's history, with the slabs, the
 //! steps taken, what each slab holds, its boundaries and the curves.
 
-use rayon::prelude::*;
 use serde::Serialize;
 
 use super::histories::{Histories, Scope};
@@ -10,10 +9,10 @@ use super::{
     StackParams,
 };
 use crate::error::Result;
-use crate::geometry::{WorldAxis, dot};
+use crate::geometry::WorldAxis;
 use crate::progress::Monitor;
+use crate::volume::Volume;
 use crate::volume::background::BackgroundRule;
-use crate::volume::{Volume, VoxelType, Voxels};
 
 /// When to stop splitting or merging.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -266,63 +265,4 @@ pub fn partition_kept(
     let position = histories.position(params.method, params.stop)?;
     let partition = Partition::new(&histories, params.method, position, monitor)?;
     Ok((partition, histories))
-}
-
-/// A label volume: the index of the slab each voxel lies in (u8, or u16 above 256 slabs: a byte
-/// or two a voxel), with the volume's dimensions and spacing. A voxel belongs to the slice whose
-/// centre is nearest along the axis.
-pub fn label_volume(volume: &Volume, p: &Partition) -> Result<Volume> {
-    let mut slab_of = vec![0u16; p.slices];
-    for (i, &(a, b)) in p.slabs.iter().enumerate() {
-        slab_of[a..b].fill(i as u16);
-    }
-    let (ty, data) = if label_bytes(p.slabs.len()) == 1 {
-        let labels = labels(volume, p, &slab_of, |l| l as u8);
-        (VoxelType::U8, Voxels::owned(labels))
-    } else {
-        (
-            VoxelType::U16,
-            Voxels::owned(labels(volume, p, &slab_of, |l| l)),
-        )
-    };
-    Ok(
-        Volume::from_voxels(volume.dims(), volume.spacing(), ty, data)?
-            .with_transform(*volume.transform()),
-    )
-}
-
-/// Bytes a voxel of [`label_volume`] takes for a partition of `slabs` slabs.
-#[must_use]
-pub fn label_bytes(slabs: usize) -> u64 {
-    if slabs <= 256 { 1 } else { 2 }
-}
-
-/// The label of every voxel of `volume`: `slab_of` its nearest slice, as `T`.
-fn labels<T: Copy + Default + Send>(
-    volume: &Volume,
-    p: &Partition,
-    slab_of: &[u16],
-    label: impl Fn(u16) -> T + Sync,
-) -> Vec<T> {
-    let [nx, ny, _] = volume.dims();
-    let s = volume.spacing();
-    let last = p.slices as f64 - 1.0;
-    let mut labels = vec![T::default(); volume.len()];
-    labels
-        .par_chunks_mut(nx * ny)
-        .enumerate()
-        .for_each(|(z, plane)| {
-            for (i, l) in plane.iter_mut().enumerate() {
-                let pos = [
-                    (i % nx) as f64 * s[0],
-                    (i / nx) as f64 * s[1],
-                    z as f64 * s[2],
-                ];
-                let k = ((dot(pos, p.axis) - p.offset) / p.thickness)
-                    .round()
-                    .clamp(0.0, last);
-                *l = label(slab_of[k as usize]);
-            }
-        });
-    labels
 }

@@ -71,6 +71,9 @@ pub struct BackgroundSummary {
     pub value: Option<f32>,
     /// The share of the volume's voxels that are background.
     pub fraction: f64,
+    /// The rule (its threshold is `value`).
+    #[serde(skip)]
+    pub rule: BackgroundRule,
 }
 
 impl BackgroundSummary {
@@ -84,6 +87,7 @@ impl BackgroundSummary {
             },
             value: b.value,
             fraction: b.fraction,
+            rule: b.rule,
         }
     }
 

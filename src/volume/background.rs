@@ -56,34 +56,49 @@ impl Background {
 
     /// The background `rule` finds in `volume`; stops when `monitor` is cancelled.
     pub fn find(volume: &Volume, rule: BackgroundRule, monitor: &Monitor) -> Result<Self> {
-        Ok(match rule {
-            BackgroundRule::None => Self::none(),
-            BackgroundRule::Below(t) => {
+        let value = match rule {
+            BackgroundRule::None => None,
+            BackgroundRule::Below(t) => Some(t),
+            BackgroundRule::Auto => border_threshold(volume),
+        };
+        Self::at(volume, rule, value, monitor)
+    }
+
+    /// The background of `volume` by `rule` at the threshold `value` (none without one): what
+    /// [`find`](Self::find) gives when it finds `value`. The threshold found on one pyramid
+    /// level leaves out the same by the same rule on another (a label volume at full resolution
+    /// from an analysis of a coarser level).
+    pub fn at(
+        volume: &Volume,
+        rule: BackgroundRule,
+        value: Option<f32>,
+        monitor: &Monitor,
+    ) -> Result<Self> {
+        Ok(match (rule, value) {
+            (BackgroundRule::None, _) | (_, None) => Self {
+                rule,
+                ..Self::none()
+            },
+            (BackgroundRule::Below(_), Some(t)) => {
                 let n = crate::volume::with_voxels!(volume.data(), |v| {
                     v.par_iter().filter(|&&v| v.to_f32() <= t).count()
                 });
                 Self {
-                    rule,
+                    rule: BackgroundRule::Below(t),
                     value: Some(t),
                     fraction: n as f64 / volume.len() as f64,
                     mask: None,
                 }
             }
-            BackgroundRule::Auto => match border_threshold(volume) {
-                Some(t) => {
-                    let (mask, count) = connected_below(volume, t, monitor)?;
-                    Self {
-                        rule,
-                        value: Some(t),
-                        fraction: count as f64 / volume.len() as f64,
-                        mask: Some(mask),
-                    }
-                }
-                None => Self {
+            (BackgroundRule::Auto, Some(t)) => {
+                let (mask, count) = connected_below(volume, t, monitor)?;
+                Self {
                     rule,
-                    ..Self::none()
-                },
-            },
+                    value: Some(t),
+                    fraction: count as f64 / volume.len() as f64,
+                    mask: Some(mask),
+                }
+            }
         })
     }
 

@@ -166,7 +166,8 @@ fn exports_are_written_and_never_overwritten_unasked() {
     let info = json(&["info", labels.to_str().unwrap(), "--json"]);
     assert_eq!(info["dims"], serde_json::json!([24, 24, 24]));
     assert_eq!(info["type"], "u8");
-    assert_eq!(info["range"], serde_json::json!([0.0, 2.0]));
+    // Slab index + 1: no voxel of these layers is background, so no 0.
+    assert_eq!(info["range"], serde_json::json!([1.0, 3.0]));
     let s: Value = serde_json::from_str(&std::fs::read_to_string(&slabs).unwrap()).unwrap();
     assert_eq!(s["slabs"].as_array().unwrap().len(), 3);
     assert_eq!(s["slabs"][0]["fraction"][0], 0.0);
@@ -186,6 +187,33 @@ fn exports_are_written_and_never_overwritten_unasked() {
     forced.push("--force");
     let Ran { ok, stderr, .. } = run(&forced);
     assert!(ok, "{stderr}");
+}
+
+/// The labels of an analysis of a coarser level lie over every voxel of the volume, at its
+/// shape, and the body's air around it is 0.
+#[test]
+fn labels_of_a_coarser_level_are_at_the_volumes_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = dir.path().join("body.nrrd");
+    let labels = dir.path().join("labels.nii");
+    let (b, l) = (body.to_str().unwrap(), labels.to_str().unwrap());
+    let made = run(&["phantom", "body", "-o", b, "--dims", "24x24x40"]);
+    assert!(made.ok, "{}", made.stderr);
+    let args = [
+        "analyze",
+        b,
+        "--resolution",
+        "1",
+        "--slabs",
+        "3",
+        "--export-labels",
+        l,
+    ];
+    let Ran { ok, stderr, .. } = run(&args);
+    assert!(ok, "{stderr}");
+    let info = json(&["info", l, "--json"]);
+    assert_eq!(info["dims"], serde_json::json!([24, 24, 40]));
+    assert_eq!(info["range"], serde_json::json!([0.0, 3.0]));
 }
 
 #[test]

@@ -185,7 +185,7 @@ fn export(dir: &Path, name: &str, ext: &str) -> (Volume, PathBuf) {
         ..AnalysisParams::default()
     };
     let a = analyze(&v, &params, &Monitor::none()).unwrap();
-    let labels = label_volume(&v, &a.partition).unwrap();
+    let labels = label_volume(&v, &v, &a.partition, &Monitor::none()).unwrap();
     let stem = name.split('.').next().unwrap();
     let out = dir.join(format!("{stem}-labels.{ext}"));
     write_volume(&out, &labels, false).unwrap();

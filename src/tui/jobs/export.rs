@@ -55,7 +55,8 @@ pub(super) fn export(
     let text = slabscope::report::to_json(&report)?;
     write_new(&json, text.as_bytes())?;
     monitor.start("writing labels", 1);
-    let labelled = label_volume(volume, &analysis.partition)?;
+    // At the working volume's shape, whatever level the preview's partition is of.
+    let labelled = label_volume(full, volume, &analysis.partition, monitor)?;
     write_nrrd(&labels, &labelled, NrrdEncoding::Gzip, false)?;
     Ok(format!(
         "wrote {}, {} and {}",

@@ -1,0 +1,236 @@
+//! Label volumes of a partition, by the medical-imaging convention: a voxel's label is its slab's
+//! index + 1, and 0 marks the voxels the analysis left out (background, and missing values), so
+//! that viewers which draw label 0 clear (napari, ITK-SNAP, 3D Slicer) and tools which skip it
+//! (scikit-image's `regionprops`) see the slabs and nothing else. Slab indices stay as they are
+//! everywhere else (JSON `slabs[].index`, `--highlight`, the TUI).
+
+use rayon::prelude::*;
+
+use super::Partition;
+use crate::error::Result;
+use crate::geometry::dot;
+use crate::progress::Monitor;
+use crate::volume::background::Background;
+use crate::volume::{Volume, Voxel, VoxelType, Voxels};
+
+/// The label volume of `p` at `volume`'s shape, spacing and world geometry: each voxel's slab
+/// index + 1 (u8 up to 255 slabs, u16 beyond), 0 where the voxel is missing or background by
+/// the rule and threshold the partition left out. `partitioned` is the pyramid level of
+/// `volume` that `p` partitions (`volume` itself, or a coarser level): a voxel belongs to the
+/// slice whose centre is nearest along the axis, measured in that level's frame, so the labels
+/// of an analysis of a coarse level lie over every voxel of the volume.
+pub fn label_volume(
+    volume: &Volume,
+    partitioned: &Volume,
+    p: &Partition,
+    monitor: &Monitor,
+) -> Result<Volume> {
+    let background = Background::at(volume, p.background.rule, p.background.value, monitor)?;
+    let mut slab_of = vec![0u16; p.slices];
+    for (i, &(a, b)) in p.slabs.iter().enumerate() {
+        slab_of[a..b].fill(i as u16 + 1);
+    }
+    let frame = Frame::of(volume, partitioned, p);
+    let (ty, data) = if label_bytes(p.slabs.len()) == 1 {
+        let labels = labels(volume, &frame, &background, &slab_of, |l| l as u8);
+        (VoxelType::U8, Voxels::owned(labels))
+    } else {
+        let labels = labels(volume, &frame, &background, &slab_of, |l| l);
+        (VoxelType::U16, Voxels::owned(labels))
+    };
+    Ok(
+        Volume::from_voxels(volume.dims(), volume.spacing(), ty, data)?
+            .with_transform(*volume.transform()),
+    )
+}
+
+/// Bytes a voxel of [`label_volume`] takes for a partition of `slabs` slabs.
+#[must_use]
+pub fn label_bytes(slabs: usize) -> u64 {
+    if slabs < 256 { 1 } else { 2 }
+}
+
+/// The memory [`label_volume`] takes for `volume` and a partition of `slabs` slabs, in bytes:
+/// the labels, and a found background's mask (a bit a voxel).
+#[must_use]
+pub fn label_memory(volume: &Volume, slabs: usize) -> u64 {
+    let n = volume.len() as u64;
+    n * label_bytes(slabs) + n.div_ceil(64) * 8
+}
+
+/// Where a voxel of the labelled volume lies along the partition's axis.
+struct Frame {
+    axis: [f64; 3],
+    spacing: [f64; 3],
+    /// Voxel `i` lies at `(i - shift) · spacing` in the partitioned level's frame: its voxel 0
+    /// sits at the centre of the block of voxels it averages.
+    shift: [f64; 3],
+    offset: f64,
+    thickness: f64,
+    last: f64,
+}
+
+impl Frame {
+    fn of(volume: &Volume, partitioned: &Volume, p: &Partition) -> Self {
+        let (fine, coarse) = (volume.spacing(), partitioned.spacing());
+        Self {
+            axis: p.axis,
+            spacing: fine,
+            shift: std::array::from_fn(|m| (coarse[m] / fine[m] - 1.0) / 2.0),
+            offset: p.offset,
+            thickness: p.thickness,
+            last: p.slices as f64 - 1.0,
+        }
+    }
+
+    /// The slice nearest to voxel `(x, y, z)`.
+    #[inline]
+    fn slice(&self, x: usize, y: usize, z: usize) -> usize {
+        let c = [x as f64, y as f64, z as f64];
+        let pos = std::array::from_fn(|m| (c[m] - self.shift[m]) * self.spacing[m]);
+        let k = ((dot(pos, self.axis) - self.offset) / self.thickness).round();
+        k.clamp(0.0, self.last) as usize
+    }
+}
+
+/// The label of every voxel of `volume`: 0 where it is missing or `background`, else `slab_of`
+/// its nearest slice, as `T`.
+fn labels<T: Copy + Default + Send>(
+    volume: &Volume,
+    frame: &Frame,
+    background: &Background,
+    slab_of: &[u16],
+    label: impl Fn(u16) -> T + Sync,
+) -> Vec<T> {
+    crate::volume::with_voxels!(volume.data(), |v| {
+        labels_of(v, volume.dims(), frame, background, slab_of, &label)
+    })
+}
+
+/// [`labels`] of voxels `v` of dimensions `dims`.
+fn labels_of<V: Voxel, T: Copy + Default + Send>(
+    v: &[V],
+    [nx, ny, _]: [usize; 3],
+    frame: &Frame,
+    background: &Background,
+    slab_of: &[u16],
+    label: &(impl Fn(u16) -> T + Sync),
+) -> Vec<T> {
+    let mut labels = vec![T::default(); v.len()];
+    labels
+        .par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(z, plane)| {
+            let base = z * nx * ny;
+            for (i, l) in plane.iter_mut().enumerate() {
+                let value = v[base + i].to_f32();
+                let left_out = !value.is_finite() || background.contains(base + i, value);
+                *l = label(if left_out {
+                    0
+                } else {
+                    slab_of[frame.slice(i % nx, i / nx, z)]
+                });
+            }
+        });
+    labels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::partition::{PartitionParams, Stop, partition};
+    use crate::volume::background::BackgroundRule;
+
+    /// A volume of `dims` whose value rises with z in steps of 4 slices, dark (0) on the x = 0
+    /// face and missing at one voxel.
+    fn layered(dims: [usize; 3]) -> Volume {
+        let [nx, ny, nz] = dims;
+        let mut v = vec![0.0f32; nx * ny * nz];
+        for (i, x) in v.iter_mut().enumerate() {
+            let (xi, z) = (i % nx, i / (nx * ny));
+            *x = if xi == 0 {
+                0.0
+            } else {
+                10.0 + (z / 4) as f32 * 20.0
+            };
+        }
+        v[nx + 1] = f32::NAN;
+        Volume::new(dims, [1.0; 3], VoxelType::F32, v).unwrap()
+    }
+
+    fn params(slabs: usize) -> PartitionParams {
+        let mut p = PartitionParams {
+            stop: Stop::Slabs(slabs),
+            ..PartitionParams::default()
+        };
+        p.stack.background = BackgroundRule::Below(1.0);
+        p
+    }
+
+    #[test]
+    fn a_voxel_is_its_slab_plus_one_and_left_out_voxels_are_zero() {
+        let v = layered([6, 5, 16]);
+        let p = partition(&v, [0.0, 0.0, 1.0], &params(3), &Monitor::none()).unwrap();
+        let labels = label_volume(&v, &v, &p, &Monitor::none()).unwrap();
+        assert_eq!(labels.dims(), v.dims());
+        assert_eq!(labels.voxel_type(), VoxelType::U8);
+        let Voxels::U8(l) = labels.data() else {
+            panic!("u8 labels")
+        };
+        let mut seen = [false; 4];
+        for (i, &label) in l.as_slice().iter().enumerate() {
+            let (x, z) = (i % 6, i / 30);
+            let expect = if x == 0 || i == 7 {
+                0
+            } else {
+                1 + p
+                    .slabs
+                    .iter()
+                    .position(|&(a, b)| (a..b).contains(&z))
+                    .unwrap() as u8
+            };
+            assert_eq!(label, expect, "voxel {i}");
+            seen[usize::from(label)] = true;
+        }
+        assert_eq!(seen, [true; 4], "the background and every slab");
+    }
+
+    #[test]
+    fn labels_of_a_coarser_level_lie_over_every_voxel() {
+        let v = layered([8, 6, 16]);
+        let coarse = v.coarser(1);
+        assert_eq!(coarse.dims(), [4, 3, 8]);
+        let p = partition(&coarse, [0.0, 0.0, 1.0], &params(2), &Monitor::none()).unwrap();
+        let labels = label_volume(&v, &coarse, &p, &Monitor::none()).unwrap();
+        assert_eq!(labels.dims(), v.dims());
+        let Voxels::U8(l) = labels.data() else {
+            panic!("u8 labels")
+        };
+        // Coarse slice k averages full slices 2k and 2k + 1: the boundary between coarse
+        // slices a - 1 and a falls between full slices 2a - 1 and 2a.
+        let a = p.slabs[1].0;
+        for (i, &label) in l.as_slice().iter().enumerate() {
+            let (x, z) = (i % 8, i / 48);
+            let expect = if x == 0 || i == 9 {
+                0
+            } else if z < 2 * a {
+                1
+            } else {
+                2
+            };
+            assert_eq!(
+                label, expect,
+                "voxel {i} (z {z}, boundary at coarse slice {a})"
+            );
+        }
+    }
+
+    #[test]
+    fn a_label_takes_two_bytes_from_256_slabs() {
+        assert_eq!(label_bytes(255), 1);
+        assert_eq!(label_bytes(256), 2);
+        let v = Volume::new([4, 4, 4], [1.0; 3], VoxelType::F32, vec![1.0; 64]).unwrap();
+        assert_eq!(label_memory(&v, 3), 64 + 8);
+        assert_eq!(label_memory(&v, 300), 128 + 8);
+    }
+}
