@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let t = Instant::now();
         let mut failed = 0;
-        look_all(&volumes, &how, workers, &describe, |_, looked| {
+        look_all(&volumes, &how, workers, None, &describe, |_, looked| {
             failed += usize::from(looked.row.error.is_some());
             true
         });

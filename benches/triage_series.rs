@@ -88,7 +88,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let describe = |_: &Path, e: Error| e.to_string();
     let (mut rows, mut failed, mut noted) = (0, 0, 0);
-    look_all(&volumes, &how, 2, &describe, |_, looked| {
+    look_all(&volumes, &how, 2, None, &describe, |_, looked| {
         rows += 1;
         failed += usize::from(looked.row.error.is_some());
         noted += looked

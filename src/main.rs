@@ -76,11 +76,16 @@ fn open_tui(args: TuiArgs, tour: bool) -> anyhow::Result<u8> {
 fn main() -> ExitCode {
     slabscope::volume::mapped::install_fault_handler();
     let args = Cli::parse();
-    let result = match args.command {
+    let load = match &args.command {
+        Some(Command::Cli(command)) => command.load(),
+        Some(Command::Tour(t)) => Some(&t.load),
+        None => Some(&args.tui.load),
+    };
+    let result = cli::use_threads(load).and_then(|()| match args.command {
         Some(Command::Cli(command)) => cli::run(command),
         Some(Command::Tour(t)) => open_tui(t, true),
         None => open_tui(args.tui, false),
-    };
+    });
     let code = match result {
         Ok(code) => ExitCode::from(code),
         Err(e) => {

@@ -52,11 +52,19 @@ class Volume:
     @staticmethod
     def from_array(
         array: npt.ArrayLike,
-        spacing: Optional[Tuple[float, float, float]] = None,
+        spacing: Optional[Union[Tuple[float, float, float], npt.ArrayLike]] = None,
         affine: Optional[npt.ArrayLike] = None,
     ) -> Volume:
         """A volume of a NumPy array indexed [x, y, z]: read in place when Fortran-ordered
-        uint8, int8, uint16, int16 or float32 in native byte order, else copied once."""
+        uint8, int8, uint16, int16 or float32 in native byte order, else copied once. A
+        nibabel or SimpleITK image is taken as from_nibabel and from_sitk take it, and
+        nibabel's argument order, from_array(array, image.affine), is understood."""
+    @staticmethod
+    def from_nibabel(image: Any) -> Volume:
+        """A volume of a nibabel image: its voxels as nibabel gives them and its affine."""
+    @staticmethod
+    def from_sitk(image: Any) -> Volume:
+        """A volume of a SimpleITK image: its voxels, spacing, origin and direction (LPS to RAS+)."""
     @property
     def array(self) -> np.ndarray: ...
     @property
@@ -91,6 +99,7 @@ def load(
     endian: Optional[Literal["little", "big"]] = None,
     offset: Optional[int] = None,
     max_memory: Union[int, str, None] = None,
+    threads: Optional[int] = None,
     volume: int = 0,
     channel: int = 0,
     series: Union[int, str, None] = None,
@@ -136,7 +145,7 @@ class Analysis:
     def __deepcopy__(self, memo: Any, /) -> Analysis: ...
 
 def analyze(
-    volume: Volume,
+    volume: Union[Volume, npt.ArrayLike],
     progress: Optional[_Progress] = None,
     *,
     bins: int = 32,
@@ -158,6 +167,7 @@ def analyze(
     explain: Union[bool, Literal["all"], int, None] = None,
     resolution: Union[Literal["full", "auto"], int] = "full",
     max_memory: Union[int, str, None] = None,
+    threads: Optional[int] = None,
 ) -> Analysis:
     """The most structured view and the slabs along it, as `slabscope analyze` finds them."""
 
@@ -185,6 +195,7 @@ def render(
     progress: Optional[_Progress] = None,
     *,
     size: Tuple[int, int] = (640, 480),
+    threads: Optional[int] = None,
     mode: Literal["cut", "dvr", "mip"] = "cut",
     tf: Literal["auto", "ct-bone", "ct-soft", "mri"] = "auto",
     colormap: Literal["grey", "bone", "hot", "viridis"] = "grey",
@@ -213,6 +224,7 @@ def slice(
     progress: Optional[_Progress] = None,
     *,
     size: Tuple[int, int] = (512, 512),
+    threads: Optional[int] = None,
     no_letters: bool = False,
     tf: Literal["auto", "ct-bone", "ct-soft", "mri"] = "auto",
     colormap: Literal["grey", "bone", "hot", "viridis"] = "grey",

@@ -71,15 +71,17 @@ pub struct Computed {
 /// Finds the most structured view of `volume` and the slabs along it, with the CLI's analysis
 /// keywords and defaults (`bins=32, block=3, level=1, phases=8, method="topdown", slabs=4,
 /// background="auto"`, ...), `resolution="full"` (the paper's method), `views`, `max_memory`.
-/// `progress(phase, fraction)` is called as it goes; Ctrl-C stops it.
+/// `progress(phase, fraction)` is called as it goes; Ctrl-C stops it. `volume` may also be a
+/// NumPy array or a nibabel or `SimpleITK` image, taken as `Volume.from_array` takes it.
 #[pyfunction]
 #[pyo3(signature = (volume, progress=None, **params))]
 pub fn analyze(
     py: Python<'_>,
-    volume: &Bound<'_, Volume>,
+    volume: &Bound<'_, PyAny>,
     progress: Option<&Bound<'_, PyAny>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Analysis> {
+    let volume = &crate::foreign::volume_of(volume)?;
     let reporter = run::Reporter::new("analyze", progress)?;
     let (computed, json) = compute(py, volume.get(), reporter.callback(), params)?;
     drop(reporter);
@@ -109,6 +111,7 @@ fn compute(
     analysis_params.explain = explain(kw.get::<Bound<'_, PyAny>>("explain")?.as_ref())?;
     let resolution = resolution(&kw)?;
     let max_memory = crate::params::max_memory(&kw, volume.max_memory)?;
+    let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
     let full = Arc::clone(&volume.inner);
     let wanted = resolution
@@ -128,6 +131,7 @@ fn compute(
         slabscope::analyze_planned(&plan, &analysis_params, monitor)
             .map_err(|e| slabscope::budget::blame(&plan, given.blame(e)))
     })?;
+    crate::errors::intact(&full)?;
     let report = AnalysisReport::new(&volume.name, &full, &analysis_params.view, &analysis)
         .or_py()?
         .computed_on(&plan.partition)
@@ -311,6 +315,7 @@ impl Analysis {
         let labels = run::quick(py, || {
             slabscope::label_volume(&full, level, &inner.partition, &slabscope::Monitor::none())
         })?;
+        crate::errors::intact(&full)?;
         let dims = labels.dims();
         let shaped = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
         Ok(match labels.data() {

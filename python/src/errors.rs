@@ -105,6 +105,13 @@ pub fn to_py(e: Error) -> PyErr {
     }
 }
 
+/// Fails, naming the file, when `volume`'s voxels are read from a map whose file was cut short
+/// under it: what a call computed from them is wrong (the module recovers from the fault
+/// instead of ending the interpreter: `install_fault_recovery`).
+pub fn intact(volume: &slabscope::Volume) -> PyResult<()> {
+    volume.data().check_intact().map_err(to_py)
+}
+
 /// A `ValueError` for keyword `name` given `value`, which should be `expected`.
 pub fn invalid(name: &str, value: impl std::fmt::Display, expected: &str) -> PyErr {
     PyValueError::new_err(controls(&format!("{name}={value}: expected {expected}")).into_owned())

@@ -151,6 +151,7 @@ pub fn render(
         spread,
     } = render_params(&kw, size)?;
     let faces: bool = kw.or("faces", false)?;
+    let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
     let made;
     let analysis = if let Some(a) = analysis {
@@ -183,6 +184,7 @@ pub fn render(
     let image = run::long(py, reporter.callback(), |monitor| {
         Renderer::new(level)?.render(&layout, &params, monitor)
     })?;
+    crate::errors::intact(&volume.get().inner)?;
     Ok(Image {
         pixmap: image.pixmap,
     })
@@ -225,7 +227,7 @@ pub fn slice(
     py: Python<'_>,
     volume: &Volume,
     analysis: Option<&Analysis>,
-    index: Option<i64>,
+    index: Option<&Bound<'_, PyAny>>,
     progress: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Image> {
@@ -235,6 +237,7 @@ pub fn slice(
     let letters = !kw.or("no_letters", false)?;
     let look = look(&kw)?;
     let (params, _) = analysis_params(&kw)?;
+    let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
     let full = &volume.inner;
     let axis = match analysis {
@@ -252,14 +255,28 @@ pub fn slice(
         ..slices::SliceParams::default()
     };
     let stack = params.stack();
-    let index = match index {
-        Some(i) if i < 0 => Some(from_end(py, full, axis, &stack, i)?),
-        Some(i) => Some(usize::try_from(i).unwrap_or(usize::MAX)),
+    let index = match index.filter(|i| !i.is_none()) {
         None => None,
+        Some(given) => match given.extract::<i64>() {
+            Ok(i) if i < 0 => Some(from_end(py, full, axis, &stack, i)?),
+            Ok(i) => Some(usize::try_from(i).unwrap_or(usize::MAX)),
+            // An int beyond 64 bits names no slice.
+            Err(e) if e.is_instance_of::<pyo3::exceptions::PyOverflowError>(py) => {
+                let n = slices_along(py, full, axis, &stack)?;
+                return Err(no_such_slice(crate::errors::repr(given), n));
+            }
+            Err(_) => {
+                return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                    "index={}: expected an int",
+                    crate::errors::repr(given)
+                )));
+            }
+        },
     };
     let image = run::quick(py, || {
         slices::numbered(full, axis, &stack, index, look, &slice_params)
     })?;
+    crate::errors::intact(full)?;
     Ok(Image {
         pixmap: image.pixmap,
     })
@@ -274,20 +291,35 @@ fn from_end(
     stack: &slabscope::partition::StackParams,
     index: i64,
 ) -> PyResult<usize> {
+    let n = slices_along(py, volume, axis, stack)?;
+    if index < -n {
+        return Err(no_such_slice(index, n));
+    }
+    Ok(usize::try_from(n + index).unwrap_or(0))
+}
+
+/// How many slices `volume` has along `axis`.
+fn slices_along(
+    py: Python<'_>,
+    volume: &slabscope::Volume,
+    axis: [f64; 3],
+    stack: &slabscope::partition::StackParams,
+) -> PyResult<i64> {
     let (_, slices, _, _) = run::quick(py, || {
         slabscope::partition::slice_geometry(volume, axis, stack)
     })?;
-    let n = i64::try_from(slices).unwrap_or(i64::MAX);
-    if index < -n {
-        return Err(crate::errors::invalid(
-            "index",
-            index,
-            &format!(
-                "a slice from 0 to {}, or from -{n} to -1 counting from the end (there are {n} \
-                 slices along this axis)",
-                n - 1
-            ),
-        ));
-    }
-    Ok(usize::try_from(n + index).unwrap_or(0))
+    Ok(i64::try_from(slices).unwrap_or(i64::MAX))
+}
+
+/// `index=shown` names no slice of the `n` along the axis.
+fn no_such_slice(shown: impl std::fmt::Display, n: i64) -> PyErr {
+    crate::errors::invalid(
+        "index",
+        shown,
+        &format!(
+            "a slice from 0 to {}, or from -{n} to -1 counting from the end (there are {n} slices \
+             along this axis)",
+            n - 1
+        ),
+    )
 }

@@ -5,6 +5,7 @@
 
 mod analysis;
 mod errors;
+mod foreign;
 mod image;
 mod params;
 mod pickle;
@@ -17,6 +18,8 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    // A file cut short under its map raises VolumeError instead of ending the interpreter.
+    slabscope::volume::mapped::install_fault_recovery();
     m.add("VolumeError", py.get_type::<errors::VolumeError>())?;
     m.add("SCHEMA_VERSION", slabscope::SCHEMA_VERSION)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -168,10 +168,16 @@ fn axis_number(p: &Param, n: i64, value: &Bound<'_, PyAny>) -> PyResult<String> 
 }
 
 /// The load options: `dims`, `dtype`, `spacing`, `endian`, `offset` for raw files,
-/// `max_memory`, `volume`, `channel`, `series`, `include_localizers`, `resample`, `show_phi`,
-/// `label_image`.
-pub fn load_options(kw: &Kwargs<'_>) -> PyResult<LoadOptions> {
-    given(kw, table::LOAD)?.load().or_py()
+/// `max_memory`, `threads`, `volume`, `channel`, `series`, `include_localizers`, `resample`,
+/// `show_phi`, `label_image`; and the pool of `threads` threads.
+pub fn load_options(kw: &Kwargs<'_>) -> PyResult<(LoadOptions, Option<rayon::ThreadPool>)> {
+    let given = given(kw, table::LOAD)?;
+    Ok((given.load().or_py()?, given.thread_pool().or_py()?))
+}
+
+/// `threads`: a pool of that many threads for the call's work (`None`: all of them).
+pub fn threads(kw: &Kwargs<'_>) -> PyResult<Option<rayon::ThreadPool>> {
+    given(kw, &[&table::THREADS])?.thread_pool().or_py()
 }
 
 /// `max_memory`: bytes as a number or as text (`"8G"`), or `default`.
@@ -250,17 +256,24 @@ fn call_params(call: &str) -> Option<Vec<&'static Param>> {
         "load" | "list_volumes" => table::LOAD.to_vec(),
         "analyze" => [
             table::ANALYSIS,
-            &[&table::VIEWS, &table::RESOLUTION, &table::MAX_MEMORY],
+            &[
+                &table::VIEWS,
+                &table::RESOLUTION,
+                &table::MAX_MEMORY,
+                &table::THREADS,
+            ],
         ]
         .concat(),
         "render" => [
-            &[&table::RENDER_SIZE],
+            &[&table::RENDER_SIZE, &table::THREADS],
             table::SCENE_FIRST,
             table::LOOK,
             table::SCENE,
         ]
         .concat(),
-        "slice" => analysis_and(&[&[&table::SLICE_SIZE][..], table::LOOK].concat()),
+        "slice" => {
+            analysis_and(&[&[&table::SLICE_SIZE, &table::THREADS][..], table::LOOK].concat())
+        }
         "triage" => [table::ANALYSIS, table::LOAD].concat(),
         _ => return None,
     })

@@ -3,8 +3,9 @@
 //! turns Ctrl-C (or an exception from the callback) into cancellation, so a long search stops
 //! within a moment and other Python threads run meanwhile.
 
-use std::sync::Mutex;
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
@@ -69,6 +70,43 @@ impl Drop for Reporter<'_> {
     }
 }
 
+thread_local! {
+    /// The pool the calls made on this thread run their work in (`threads=`), while a
+    /// [`Threads`] guard set it.
+    static POOL: RefCell<Option<Arc<rayon::ThreadPool>>> = const { RefCell::new(None) };
+}
+
+/// `threads=` of a call: while this lives, [`long`] and [`quick`] run their work in `pool` (all
+/// threads when `None`).
+pub struct Threads(Option<Arc<rayon::ThreadPool>>);
+
+impl Threads {
+    /// Runs this thread's calls in `pool` until dropped.
+    #[must_use]
+    pub fn bound(pool: Option<rayon::ThreadPool>) -> Self {
+        Self(POOL.replace(pool.map(Arc::new)))
+    }
+}
+
+impl Drop for Threads {
+    fn drop(&mut self) {
+        POOL.set(self.0.take());
+    }
+}
+
+/// The pool this thread's calls run in, if `threads=` bound one.
+pub fn pool() -> Option<Arc<rayon::ThreadPool>> {
+    POOL.with_borrow(Clone::clone)
+}
+
+/// Runs `work` in `pool`, or where it is called without one.
+pub fn in_pool<T: Send>(pool: Option<&rayon::ThreadPool>, work: impl FnOnce() -> T + Send) -> T {
+    match pool {
+        Some(p) => p.install(work),
+        None => work(),
+    }
+}
+
 /// How often the watching thread looks at the work.
 const LOOK: Duration = Duration::from_millis(20);
 
@@ -86,8 +124,13 @@ pub fn long<T: Send>(
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(p);
     };
+    let pool = pool();
     let (result, raised) = std::thread::scope(|s| {
-        let worker = s.spawn(|| work(&Monitor::new(Some(&cancel), Some(&report))));
+        let worker = s.spawn(|| {
+            in_pool(pool.as_deref(), || {
+                work(&Monitor::new(Some(&cancel), Some(&report)))
+            })
+        });
         let mut raised: Option<PyErr> = None;
         let tell = |raised: &mut Option<PyErr>| {
             let last = latest
@@ -135,5 +178,6 @@ pub fn quick<T: Send>(
     py: Python<'_>,
     work: impl FnOnce() -> slabscope::Result<T> + Send,
 ) -> PyResult<T> {
-    py.detach(work).map_err(to_py)
+    let pool = pool();
+    py.detach(|| in_pool(pool.as_deref(), work)).map_err(to_py)
 }

@@ -121,7 +121,7 @@ pub fn triage(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Triage> {
     let kw = Kwargs::new(py, "triage", options)?;
-    let load = load_options(&kw)?;
+    let (load, pool) = load_options(&kw)?;
     let (params, _) = analysis_params(&kw)?;
     let timeout: f64 = kw.or("timeout", 60.0)?;
     if !(timeout.is_finite() && (0.1..=86400.0).contains(&timeout)) {
@@ -149,9 +149,16 @@ pub fn triage(
             m.strip_prefix(&format!("{}: ", shown(path)))
                 .map_or(m.clone(), str::to_string)
         };
-        look_all(&volumes, &how, WORKERS, &describe, |_, looked| {
-            slabscope::report::to_json_line(&looked.row).is_ok_and(|row| tx.send(row).is_ok())
-        });
+        look_all(
+            &volumes,
+            &how,
+            WORKERS,
+            pool.as_ref(),
+            &describe,
+            |_, looked| {
+                slabscope::report::to_json_line(&looked.row).is_ok_and(|row| tx.send(row).is_ok())
+            },
+        );
     });
     Ok(Triage {
         rows: Mutex::new(rx),
@@ -169,7 +176,7 @@ pub fn list_volumes(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Vec<String>> {
     let kw = Kwargs::new(py, "list_volumes", options)?;
-    let load = load_options(&kw)?;
+    let (load, _) = load_options(&kw)?;
     let volumes = entries(py, &kw, paths, &load)?;
     kw.finish()?;
     Ok(volumes.iter().map(Entry::line).collect())

@@ -14,6 +14,7 @@ use slabscope::geometry::world::WorldTransform;
 use slabscope::volume::{LentBytes, Voxel, VoxelType, Voxels};
 
 use crate::errors::repr;
+use crate::foreign::{self, Affine, Library, geometry};
 use crate::params::{Kwargs, load_options, numpy_name};
 use crate::run;
 
@@ -67,8 +68,9 @@ pub fn load_file(
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Volume> {
     let kw = Kwargs::new(py, "load", options)?;
-    let opts = load_options(&kw)?;
+    let (opts, pool) = load_options(&kw)?;
     kw.finish()?;
+    let _threads = run::Threads::bound(pool);
     let loaded = run::quick(py, || slabscope::load(&file, &opts))?;
     let kept = match options {
         Some(d) => d.copy()?,
@@ -178,46 +180,6 @@ fn given_spacing(value: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
     let invalid = || crate::errors::invalid(entry.keyword, repr(value), &entry.expected());
     let text = crate::params::as_text(entry, value).map_err(|_| invalid())?;
     slabscope::params::text::spacing(&text).ok_or_else(invalid)
-}
-
-/// The voxel-to-world transform of `affine` (rows, voxel index to RAS+ mm, as nibabel's) and
-/// `spacing`, which must agree with each other.
-fn geometry(
-    affine: Option<[[f64; 4]; 4]>,
-    spacing: Option<[f64; 3]>,
-) -> PyResult<([f64; 3], WorldTransform)> {
-    let Some(m) = affine else {
-        let spacing = spacing.unwrap_or([1.0; 3]);
-        return Ok((spacing, WorldTransform::unknown(spacing)));
-    };
-    if m.iter().flatten().any(|v| !v.is_finite()) || m[3] != [0.0, 0.0, 0.0, 1.0] {
-        return Err(PyValueError::new_err(
-            "affine: expected a finite 4x4 matrix whose last row is 0, 0, 0, 1",
-        ));
-    }
-    let linear = [
-        [m[0][0], m[0][1], m[0][2]],
-        [m[1][0], m[1][1], m[1][2]],
-        [m[2][0], m[2][1], m[2][2]],
-    ];
-    let t = WorldTransform::ras(linear, [m[0][3], m[1][3], m[2][3]]);
-    if !t.is_usable() {
-        return Err(PyValueError::new_err(
-            "affine: the matrix is singular (its 3x3 part has no inverse)",
-        ));
-    }
-    let zooms = t.zooms();
-    if let Some(s) = spacing
-        && s.iter()
-            .zip(zooms)
-            .any(|(a, b)| (a - b).abs() > 1e-6 * b.abs().max(1.0))
-    {
-        return Err(PyValueError::new_err(format!(
-            "spacing=({}, {}, {}) disagrees with the affine's voxel sizes ({:.6}, {:.6}, {:.6}): give one of them",
-            s[0], s[1], s[2], zooms[0], zooms[1], zooms[2]
-        )));
-    }
-    Ok((zooms, t))
 }
 
 /// One copy of `array` in Fortran order as `held` (infinities made missing, as every reader
@@ -421,58 +383,56 @@ impl Volume {
     /// order is read in place (`copied` is False: do not write to it while the volume is in
     /// use); any other real array is copied once. `affine` (4x4, voxel index to RAS+ mm) gives
     /// the orientation; `spacing` (mm) must then agree with it.
+    /// A nibabel or `SimpleITK` image is taken as `from_nibabel` and `from_sitk` take it, and
+    /// nibabel's own argument order, `from_array(array, image.affine)`, is understood.
     #[staticmethod]
     #[pyo3(signature = (array, spacing=None, affine=None))]
     fn from_array(
         py: Python<'_>,
         array: &Bound<'_, PyAny>,
         spacing: Option<&Bound<'_, PyAny>>,
-        affine: Option<[[f64; 4]; 4]>,
+        affine: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let spacing = spacing.map(given_spacing).transpose()?;
-        let numpy = py.import("numpy")?;
-        let original = if array.cast::<PyUntypedArray>().is_ok() {
-            array.clone()
-        } else {
-            numpy.call_method1("asarray", (array,))?
-        };
-        let untyped = original.cast::<PyUntypedArray>()?;
-        let stored = array_type(untyped.dtype().as_any())?;
-        let shape = untyped.shape().to_vec();
-        let [nx, ny, nz] = shape[..] else {
-            return Err(PyValueError::new_err(format!(
-                "an array of shape {shape:?}: a volume has 3 dimensions, [x, y, z] (take one volume of a 4D image with array[..., t])"
-            )));
-        };
-        let dims = [nx, ny, nz];
-        if dims.contains(&0) {
-            return Err(PyValueError::new_err(format!(
-                "an array of shape {shape:?}: a volume has at least one voxel"
-            )));
+        if let Some(library) = Library::of(array)? {
+            if spacing.is_some() || affine.is_some() {
+                return Err(PyValueError::new_err(
+                    "from_array of a nibabel or SimpleITK image: the image carries its own \
+                     spacing and affine (give neither)",
+                ));
+            }
+            return Self::of_image(array, library);
         }
-        let (spacing, transform) = geometry(affine, spacing)?;
-        let held = slabscope::volume::voxels::held_type(stored, false);
-        let (voxels, kept, copied) = if let Some(v) = lend_any(&original, held) {
-            (v, original.clone(), false)
-        } else {
-            let (v, copy) = copy_of(&original, held)?;
-            (v, copy, true)
+        let (spacing, affine) = match (spacing, affine) {
+            (Some(s), None) if foreign::is_affine(s) => (None, Some(s)),
+            other => other,
         };
-        let volume = run::quick(py, || {
-            slabscope::Volume::from_voxels(dims, spacing, stored, voxels)
-        })?
-        .with_transform(transform);
-        Ok(Self {
-            inner: Arc::new(volume),
-            name: "array".into(),
-            max_memory: slabscope::volume::io::default_max_memory(),
-            array: Some(kept.unbind()),
-            copied,
-            format: "array".into(),
-            notes: Vec::new(),
-            file: None,
-            carry: true,
-        })
+        let affine = affine
+            .map(|a| {
+                a.extract::<Affine>().map_err(|_| {
+                    PyValueError::new_err(format!(
+                        "affine={}: expected a 4x4 matrix (voxel index to RAS+ mm)",
+                        repr(a)
+                    ))
+                })
+            })
+            .transpose()?;
+        let spacing = spacing.map(given_spacing).transpose()?;
+        Self::of_array(py, array, spacing, affine)
+    }
+
+    /// A volume of a nibabel image (`nibabel.load(path)`): its voxels as nibabel gives them
+    /// (`image.dataobj`, scaled by the header; an unscaled integer image is read in place) and
+    /// its affine; named by its file.
+    #[staticmethod]
+    fn from_nibabel(image: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Self::of_image(image, Library::Nibabel)
+    }
+
+    /// A volume of a `SimpleITK` image: its voxels (indexed `[z, y, x]` by `SimpleITK`, `[x, y, z]`
+    /// here) and its spacing, origin and direction, turned from LPS to RAS+.
+    #[staticmethod]
+    fn from_sitk(image: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Self::of_image(image, Library::SimpleItk)
     }
 
     /// The voxels as a read-only NumPy array indexed `[x, y, z]`, sharing the volume's memory
@@ -487,6 +447,7 @@ impl Volume {
             view.getattr("flags")?.setattr("writeable", false)?;
             return Ok(view);
         }
+        crate::errors::intact(&this.inner)?;
         let dims = this.inner.dims();
         with_voxels!(this.inner.data(), |data| view(data, dims, slf.as_any()))
     }
@@ -555,5 +516,59 @@ impl Volume {
             self.orientation()
                 .map_or_else(String::new, |o| format!(" {o}"))
         )
+    }
+}
+
+impl Volume {
+    /// A volume of `array`'s voxels, `[x, y, z]`, with `spacing` or `affine` (see `from_array`).
+    pub(crate) fn of_array(
+        py: Python<'_>,
+        array: &Bound<'_, PyAny>,
+        spacing: Option<[f64; 3]>,
+        affine: Option<Affine>,
+    ) -> PyResult<Self> {
+        let numpy = py.import("numpy")?;
+        let original = if array.cast::<PyUntypedArray>().is_ok() {
+            array.clone()
+        } else {
+            numpy.call_method1("asarray", (array,))?
+        };
+        let untyped = original.cast::<PyUntypedArray>()?;
+        let stored = array_type(untyped.dtype().as_any())?;
+        let shape = untyped.shape().to_vec();
+        let [nx, ny, nz] = shape[..] else {
+            return Err(PyValueError::new_err(format!(
+                "an array of shape {shape:?}: a volume has 3 dimensions, [x, y, z] (take one volume of a 4D image with array[..., t])"
+            )));
+        };
+        let dims = [nx, ny, nz];
+        if dims.contains(&0) {
+            return Err(PyValueError::new_err(format!(
+                "an array of shape {shape:?}: a volume has at least one voxel"
+            )));
+        }
+        let (spacing, transform) = geometry(affine, spacing)?;
+        let held = slabscope::volume::voxels::held_type(stored, false);
+        let (voxels, kept, copied) = if let Some(v) = lend_any(&original, held) {
+            (v, original.clone(), false)
+        } else {
+            let (v, copy) = copy_of(&original, held)?;
+            (v, copy, true)
+        };
+        let volume = run::quick(py, || {
+            slabscope::Volume::from_voxels(dims, spacing, stored, voxels)
+        })?
+        .with_transform(transform);
+        Ok(Self {
+            inner: Arc::new(volume),
+            name: "array".into(),
+            max_memory: slabscope::volume::io::default_max_memory(),
+            array: Some(kept.unbind()),
+            copied,
+            format: "array".into(),
+            notes: Vec::new(),
+            file: None,
+            carry: true,
+        })
     }
 }

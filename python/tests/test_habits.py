@@ -127,3 +127,50 @@ def test_a_level_asked_for_that_cannot_be_read_is_an_error(tmp_path):
     with pytest.raises(slabscope.VolumeError, match=r"s1/0/0/0.*says it decodes to more"):
         slabscope.analyze(volume, resolution=1)
     assert slabscope.analyze(volume, slabs=2).slabs, "level 0 is read; the broken level is never needed"
+
+
+def test_an_index_beyond_64_bits_is_a_value_error_naming_index(volume):
+    analysis = slabscope.analyze(volume, axis="z", slabs=2, phases=0)
+    for huge in (2**70, -(2**70)):
+        with pytest.raises(ValueError, match=rf"^index={huge}: expected a slice from 0 to 7"):
+            slabscope.slice(volume, analysis, index=huge)
+    with pytest.raises(TypeError, match=r"^index='2': expected an int"):
+        slabscope.slice(volume, analysis, index="2")
+
+
+def test_threads_bound_the_work_and_change_no_answer(volume, tmp_path):
+    alone = slabscope.analyze(volume, slabs=2, threads=1)
+    assert alone.to_dict() == slabscope.analyze(volume, slabs=2).to_dict()
+    picture = slabscope.render(volume, alone, size=(64, 48), threads=1)
+    assert np.array_equal(np.asarray(picture), np.asarray(slabscope.render(volume, alone, size=(64, 48))))
+    assert np.array_equal(
+        np.asarray(slabscope.slice(volume, alone, threads=1)), np.asarray(slabscope.slice(volume, alone))
+    )
+    path = tmp_path / "v.nii"
+    path.write_bytes(b"")
+    with pytest.raises(ValueError, match=r"^threads=0: expected "):
+        slabscope.analyze(volume, threads=0)
+    with pytest.raises(ValueError, match=r"^threads=0: expected "):
+        slabscope.load(path, threads=0)
+    assert "threads" in str(inspect_signature(slabscope.analyze))
+
+
+def inspect_signature(call):
+    import inspect
+
+    return inspect.signature(call)
+
+
+def test_a_file_cut_short_under_its_map_raises_instead_of_ending_python(tmp_path):
+    # A raw i16 file read in place (mapped): cut short while the volume lives, the next call
+    # finds pages gone; the interpreter lives on and the call raises naming the file.
+    path = tmp_path / "scan_64x64x64_i16.raw"
+    rng = np.random.default_rng(1)
+    rng.integers(0, 1000, 64**3, dtype=np.int16).tofile(path)
+    volume = slabscope.load(path)
+    with open(path, "r+b") as f:
+        f.truncate(4096)
+    with pytest.raises(slabscope.VolumeError, match=r"scan_64x64x64_i16\.raw: the file was cut short"):
+        slabscope.analyze(volume, slabs=2)
+    with pytest.raises(slabscope.VolumeError, match="load it again"):
+        volume.array

@@ -31,6 +31,7 @@ def volumes() -> list[Volume]:
         endian="big",
         offset=0,
         max_memory="2G",
+        threads=2,
         volume=0,
         channel=0,
         series=None,
@@ -42,8 +43,12 @@ def volumes() -> list[Volume]:
     array: npt.NDArray[np.float32] = np.zeros((8, 8, 8), dtype=np.float32, order="F")
     made = Volume.from_array(array, spacing=(1.0, 1.0, 1.0))
     placed = Volume.from_array(array, affine=np.eye(4))
+    # nibabel's argument order, and other libraries' images (untyped: Any).
+    ordered = Volume.from_array(array, np.eye(4))
+    image: Any = None
+    foreign = [Volume.from_nibabel(image), Volume.from_sitk(image)] if image is not None else []
     carried = loaded.carrying_voxels()
-    return [loaded, raw, made, placed, carried]
+    return [loaded, raw, made, placed, ordered, carried, *foreign]
 
 
 def describe(volume: Volume) -> str:
@@ -94,6 +99,7 @@ def analyse(volume: Volume) -> Analysis:
     )
     named = slabscope.analyze(volume, axis=(0.0, 0.0, 1.0), background=0.5, resolution=1, explain=8)
     numbered = slabscope.analyze(volume, axis=2, progress=True)
+    bounded = slabscope.analyze(np.random.default_rng(0).random((8, 8, 8), dtype=np.float32), threads=1)
     views: list[dict[str, Any]] = analysis.views
     x, y, z = analysis.best_axis
     uncertain: bool = analysis.uncertain

@@ -18,6 +18,11 @@ impl LoadArgs {
     pub fn options(&self) -> slabscope::Result<LoadOptions> {
         self.given.load()
     }
+
+    /// `--threads`: the most threads the work runs on (`None`: one a core).
+    pub fn threads(&self) -> slabscope::Result<Option<usize>> {
+        self.given.threads()
+    }
 }
 
 impl AnalysisArgs {

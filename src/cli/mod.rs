@@ -58,6 +58,33 @@ pub enum Command {
     Phantom(phantom::PhantomArgs),
 }
 
+impl Command {
+    /// How the command reads its input, for a command that reads one.
+    pub fn load(&self) -> Option<&LoadArgs> {
+        match self {
+            Self::Info(a) => Some(&a.load),
+            Self::Analyze(a) => Some(&a.load),
+            Self::Render(a) => Some(&a.scene.load),
+            Self::Preview(a) => Some(&a.scene.load),
+            Self::Slice(a) => Some(&a.load),
+            Self::Triage(a) => Some(&a.load),
+            Self::Phantom(_) => None,
+        }
+    }
+}
+
+/// Bounds the work of the whole process to `--threads` threads when it is given: rayon's
+/// global pool, built before any work.
+pub fn use_threads(load: Option<&LoadArgs>) -> Result<()> {
+    if let Some(n) = load.map(LoadArgs::threads).transpose()?.flatten() {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| anyhow::anyhow!("--threads {n}: {e}"))?;
+    }
+    Ok(())
+}
+
 /// Runs a subcommand; the exit status it asks for (0 unless `triage` says otherwise).
 pub fn run(command: Command) -> Result<u8> {
     remove_staged_on_signals();

@@ -194,7 +194,7 @@ fn look_all(
         m.strip_prefix(&format!("{}: ", shown(path)))
             .map_or(m.clone(), str::to_string)
     };
-    slabscope::triage::look_all(volumes, &how, WORKERS, &describe, emit);
+    slabscope::triage::look_all(volumes, &how, WORKERS, None, &describe, emit);
     Ok(())
 }
 

@@ -5,8 +5,8 @@ use super::table::{
     AXIS, AXIS_BY, BACKGROUND, BINS, BLOCK, CHANNEL, COLORMAP, DIMS, ELEVATION, ENDIAN, GAIN, GAP,
     HIGHLIGHT, INCLUDE_LOCALIZERS, LABEL_IMAGE, LEVEL, MAX_MEMORY, METHOD, MODE, NO_LABELS,
     NO_OUTLINES, NO_SHADING, OFFSET, PERSPECTIVE, PHASE_SUBSET, PHASES, RAY_SPACING, REFINE,
-    RESAMPLE, SAMPLE_SPACING, SERIES, SHOW_PHI, SLABS, SOLO, SPACING, SPREAD, STEP, TF, THRESHOLD,
-    TYPE, VOLUME, WINDOW, ZOOM,
+    RESAMPLE, SAMPLE_SPACING, SERIES, SHOW_PHI, SLABS, SOLO, SPACING, SPREAD, STEP, TF, THREADS,
+    THRESHOLD, TYPE, VOLUME, WINDOW, ZOOM,
 };
 use super::{Given, text};
 use crate::analysis::AnalysisParams;
@@ -106,6 +106,24 @@ impl Given {
             show_phi: self.switch(&SHOW_PHI)?,
             label_image: self.parsed(&LABEL_IMAGE, text::any)?,
         })
+    }
+
+    /// The most threads the work may run on (`None`: one a core).
+    pub fn threads(&self) -> Result<Option<usize>> {
+        self.value(&THREADS)
+    }
+
+    /// A pool of at most [`threads`](Self::threads) threads for the work, when a number was
+    /// given (the caller runs the work in it with `install`).
+    pub fn thread_pool(&self) -> Result<Option<rayon::ThreadPool>> {
+        let Some(n) = self.threads()? else {
+            return Ok(None);
+        };
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map(Some)
+            .map_err(|e| Error::Degenerate(format!("a pool of {n} threads: {e}")))
     }
 
     /// How values become colours.

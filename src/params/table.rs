@@ -465,6 +465,13 @@ pub const MAX_MEMORY: Param = named(
         hyphens: false,
     },
 );
+pub const THREADS: Param = named(
+    "threads",
+    "threads",
+    "N",
+    "The most threads the work runs on (default: one a core)",
+    count(1, 4096, None),
+);
 pub const VOLUME: Param = named(
     "volume",
     "volume",
@@ -534,6 +541,7 @@ pub const LOAD: &[&Param] = &[
     &ENDIAN,
     &OFFSET,
     &MAX_MEMORY,
+    &THREADS,
     &VOLUME,
     &CHANNEL,
     &SERIES,

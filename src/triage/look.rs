@@ -156,11 +156,13 @@ fn load_entry(
 /// `emit` in order, as they complete, until `emit` returns false (the looks under way then
 /// finish, and no other starts). The volumes looked at together share the memory budget:
 /// each loads within its share, and one that needs more is looked at again alone, with the
-/// whole budget. `describe` words an error of a volume.
+/// whole budget. `describe` words an error of a volume. With a `pool`, each worker's work runs
+/// in it (a caller's thread count); else in rayon's global pool.
 pub fn look_all(
     volumes: &[Entry],
     how: &TriagePlan,
     workers: usize,
+    pool: Option<&rayon::ThreadPool>,
     describe: &(dyn Fn(&Path, Error) -> String + Sync),
     mut emit: impl FnMut(usize, TriageOutcome) -> bool,
 ) {
@@ -180,25 +182,31 @@ pub fn look_all(
         for _ in 0..workers {
             let (tx, next, gate, shared) = (tx.clone(), &next, &gate, &shared);
             scope.spawn(move || {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(entry) = volumes.get(i) else { break };
-                    let path = entry.path.as_path();
-                    let too_large = std::cell::Cell::new(false);
-                    let words = |e: Error| {
-                        too_large.set(too_large.get() || matches!(e, Error::TooLarge { .. }));
-                        describe(path, e)
-                    };
-                    let reading = gate.read().unwrap_or_else(PoisonError::into_inner);
-                    let mut looked = look(entry, shared, &|_| {}, &words);
-                    drop(reading);
-                    if too_large.get() && workers > 1 {
-                        let _alone = gate.write().unwrap_or_else(PoisonError::into_inner);
-                        looked = look(entry, how, &|_| {}, &|e| describe(path, e));
+                let work = || {
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(entry) = volumes.get(i) else { break };
+                        let path = entry.path.as_path();
+                        let too_large = std::cell::Cell::new(false);
+                        let words = |e: Error| {
+                            too_large.set(too_large.get() || matches!(e, Error::TooLarge { .. }));
+                            describe(path, e)
+                        };
+                        let reading = gate.read().unwrap_or_else(PoisonError::into_inner);
+                        let mut looked = look(entry, shared, &|_| {}, &words);
+                        drop(reading);
+                        if too_large.get() && workers > 1 {
+                            let _alone = gate.write().unwrap_or_else(PoisonError::into_inner);
+                            looked = look(entry, how, &|_| {}, &|e| describe(path, e));
+                        }
+                        if tx.send((i, looked)).is_err() {
+                            break;
+                        }
                     }
-                    if tx.send((i, looked)).is_err() {
-                        break;
-                    }
+                };
+                match pool {
+                    Some(p) => p.install(work),
+                    None => work(),
                 }
             });
         }

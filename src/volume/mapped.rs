@@ -8,31 +8,61 @@
 //! [`install_fault_handler`] (which the `slabscope` binary calls at start) turns SIGBUS on a
 //! registered map into that line on stderr and exit status 1. A library user who does not call it
 //! gets the default action of SIGBUS (the process ends) in that case.
+//!
+//! A host process that must live on (the Python module: the interpreter is the user's notebook)
+//! calls [`install_fault_recovery`] instead: a fault in a registered map puts a page of zeros in
+//! place of the page that is gone and marks the map cut short, the read goes on, and the caller
+//! asks [`MappedFile::check`] (through `Volume::check_intact`) after the work, which then fails
+//! naming the file.
 
 #![allow(unsafe_code)]
 
 use std::fs::File;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicPtr, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicPtr, AtomicUsize, Ordering};
+
+use crate::error::{Error, Result};
 
 /// A read-only memory map shared by the volumes (and pyramid levels) made from one file,
 /// registered so that its file being cut short is reported (see the module's documentation).
 pub struct MappedFile {
     map: memmap2::Mmap,
     slot: Option<usize>,
+    path: PathBuf,
 }
 
 impl MappedFile {
-    /// Wraps a map of a whole file, registered in `slot`.
-    fn new(map: memmap2::Mmap, slot: Option<usize>) -> Arc<Self> {
-        Arc::new(Self { map, slot })
+    /// Wraps a map of the whole file at `path`, registered in `slot`.
+    fn new(map: memmap2::Mmap, slot: Option<usize>, path: &Path) -> Arc<Self> {
+        Arc::new(Self {
+            map,
+            slot,
+            path: path.to_path_buf(),
+        })
     }
 
     /// The mapped bytes.
     #[must_use]
     pub fn bytes(&self) -> &[u8] {
         &self.map
+    }
+
+    /// Fails, naming the file, when it was cut short under the map and a read found a page gone
+    /// (replaced with zeros by [`install_fault_recovery`]'s handler): what was computed from it
+    /// is wrong.
+    pub fn check(&self) -> Result<()> {
+        let cut = self
+            .slot
+            .is_some_and(|i| SLOTS_IN_USE[i].cut.load(Ordering::Acquire));
+        if cut {
+            return Err(Error::format(
+                &self.path,
+                "the file was cut short while slabscope was reading it (it is mapped into \
+                 memory, and another program truncated it): load it again",
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -61,6 +91,8 @@ struct Slot {
     len: AtomicUsize,
     message: AtomicPtr<u8>,
     message_len: AtomicUsize,
+    /// A fault found a page of the map gone (with recovery on).
+    cut: AtomicBool,
 }
 
 #[allow(clippy::declare_interior_mutable_const)]
@@ -69,7 +101,13 @@ const FREE: Slot = Slot {
     len: AtomicUsize::new(0),
     message: AtomicPtr::new(std::ptr::null_mut()),
     message_len: AtomicUsize::new(0),
+    cut: AtomicBool::new(false),
 };
+
+/// Whether a fault in a registered map is recovered from ([`install_fault_recovery`]), and the
+/// page size the handler replaces pages by (read before, not in, the handler).
+static RECOVER: AtomicBool = AtomicBool::new(false);
+static PAGE: AtomicUsize = AtomicUsize::new(0);
 
 static SLOTS_IN_USE: [Slot; SLOTS] = [FREE; SLOTS];
 
@@ -82,7 +120,7 @@ pub(crate) fn map(file: &File, path: &Path) -> std::io::Result<Arc<MappedFile>> 
     // memory-safety matter for plain numbers.
     let map = unsafe { memmap2::Mmap::map(file) }?;
     let slot = register(&map, path);
-    Ok(MappedFile::new(map, slot))
+    Ok(MappedFile::new(map, slot, path))
 }
 
 /// Registers the range of `map`; the slot taken, if any.
@@ -106,6 +144,7 @@ fn register(map: &memmap2::Mmap, path: &Path) -> Option<usize> {
         {
             slot.message.store(message, Ordering::Release);
             slot.message_len.store(message_len, Ordering::Release);
+            slot.cut.store(false, Ordering::Release);
             slot.len.store(map.len(), Ordering::Release);
             slot.start.store(map.as_ptr() as usize, Ordering::Release);
             return Some(i);
@@ -131,19 +170,23 @@ fn unregister(i: usize) {
     slot.start.store(0, Ordering::Release);
 }
 
-/// The message of the registered map holding `address`, as a pointer and length.
-fn message_for(address: usize) -> Option<(*const u8, usize)> {
-    SLOTS_IN_USE.iter().find_map(|slot| {
+/// The slot of the registered map holding `address`.
+fn slot_for(address: usize) -> Option<&'static Slot> {
+    SLOTS_IN_USE.iter().find(|slot| {
         let start = slot.start.load(Ordering::Acquire);
         let len = slot.len.load(Ordering::Acquire);
-        let inside = start != 0 && start != usize::MAX && (start..start + len).contains(&address);
-        let message = slot.message.load(Ordering::Acquire);
-        (inside && !message.is_null()).then(|| {
-            (
-                message.cast_const(),
-                slot.message_len.load(Ordering::Acquire),
-            )
-        })
+        start != 0 && start != usize::MAX && (start..start + len).contains(&address)
+    })
+}
+
+/// The message of `slot`, as a pointer and length, while it is registered.
+fn message_of(slot: &Slot) -> Option<(*const u8, usize)> {
+    let message = slot.message.load(Ordering::Acquire);
+    (!message.is_null()).then(|| {
+        (
+            message.cast_const(),
+            slot.message_len.load(Ordering::Acquire),
+        )
     })
 }
 
@@ -163,15 +206,50 @@ pub fn install_fault_handler() {
     }
 }
 
+/// [`install_fault_handler`], except that a fault in a registered map is recovered from: the
+/// page that is gone is replaced with a page of zeros and the map marked cut short, for
+/// [`MappedFile::check`] to report (see the module's documentation). For a host process that
+/// must not end (the Python module).
+pub fn install_fault_recovery() {
+    // SAFETY: sysconf is safe to call; a failure gives -1, and then no page is replaced.
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
+    PAGE.store(usize::try_from(page).unwrap_or(0), Ordering::Release);
+    RECOVER.store(true, Ordering::Release);
+    install_fault_handler();
+}
+
 extern "C" fn on_fault(signal: libc::c_int, info: *mut libc::siginfo_t, _: *mut libc::c_void) {
     // SAFETY: the kernel passes a valid siginfo for a handler installed with SA_SIGINFO.
     let address = unsafe { (*info).si_addr() } as usize;
-    if let Some((message, len)) = message_for(address) {
-        // SAFETY: the message is a live allocation of `len` bytes (freed only after its slot is
-        // cleared); write and _exit are async-signal-safe.
-        unsafe {
-            libc::write(2, message.cast(), len);
-            libc::_exit(1);
+    if let Some(slot) = slot_for(address) {
+        let page = PAGE.load(Ordering::Acquire);
+        if RECOVER.load(Ordering::Acquire) && page.is_power_of_two() {
+            // SAFETY: the page lies inside a registered read-only map of ours, which stays
+            // mapped while registered; MAP_FIXED replaces just that page with zeros (mmap is a
+            // plain system call, safe in a handler on Linux), and the faulting read then
+            // repeats on it.
+            let zeros = unsafe {
+                libc::mmap(
+                    (address & !(page - 1)) as *mut libc::c_void,
+                    page,
+                    libc::PROT_READ,
+                    libc::MAP_PRIVATE | libc::MAP_ANONYMOUS | libc::MAP_FIXED,
+                    -1,
+                    0,
+                )
+            };
+            if zeros != libc::MAP_FAILED {
+                slot.cut.store(true, Ordering::Release);
+                return;
+            }
+        }
+        if let Some((message, len)) = message_of(slot) {
+            // SAFETY: the message is a live allocation of `len` bytes (freed only after its
+            // slot is cleared); write and _exit are async-signal-safe.
+            unsafe {
+                libc::write(2, message.cast(), len);
+                libc::_exit(1);
+            }
         }
     }
     // SAFETY: restoring the default action is async-signal-safe; returning re-runs the faulting
@@ -184,6 +262,10 @@ extern "C" fn on_fault(signal: libc::c_int, info: *mut libc::siginfo_t, _: *mut 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn message_for(address: usize) -> Option<(*const u8, usize)> {
+        slot_for(address).and_then(message_of)
+    }
 
     #[test]
     fn maps_are_registered_until_dropped() {
@@ -203,5 +285,26 @@ mod tests {
             message_for(start + 50).is_none(),
             "unregistered when dropped"
         );
+    }
+
+    /// With recovery on, a read past the end of a file cut short under its map finds zeros
+    /// instead of ending the process, and the map then says it was cut short, naming the file.
+    #[test]
+    fn a_file_cut_short_under_its_map_is_recovered_from_and_reported() {
+        install_fault_recovery();
+        let page = PAGE.load(Ordering::Acquire);
+        let mut file = tempfile::NamedTempFile::new().unwrap();
+        std::io::Write::write_all(&mut file, &vec![7u8; 3 * page]).unwrap();
+        let mapped = map(file.as_file(), file.path()).unwrap();
+        assert!(mapped.check().is_ok());
+        file.as_file().set_len(page as u64).unwrap();
+        let bytes = mapped.bytes();
+        assert_eq!(std::hint::black_box(bytes[10]), 7, "the page still there");
+        let gone = std::hint::black_box(&bytes[2 * page + 10]);
+        // SAFETY: a read of a mapped byte; the page past the end faults and is replaced.
+        assert_eq!(unsafe { std::ptr::read_volatile(gone) }, 0);
+        let e = mapped.check().unwrap_err().to_string();
+        assert!(e.contains(&file.path().display().to_string()), "{e}");
+        assert!(e.contains("cut short"), "{e}");
     }
 }

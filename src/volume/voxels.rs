@@ -170,6 +170,15 @@ impl<T: Voxel> Store<T> {
     pub fn is_mapped(&self) -> bool {
         matches!(self, Self::Mapped { .. })
     }
+
+    /// Fails, naming the file, when the voxels are read from a map whose file was cut short
+    /// under it ([`MappedFile::check`]).
+    pub fn check_intact(&self) -> crate::error::Result<()> {
+        match self {
+            Self::Mapped { file, .. } => file.check(),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// A volume's voxels, in the type they are held in.
@@ -320,6 +329,18 @@ impl Voxels {
             Self::U16(s) => s.is_mapped(),
             Self::I16(s) => s.is_mapped(),
             Self::F32(s) => s.is_mapped(),
+        }
+    }
+
+    /// Fails, naming the file, when the voxels are read from a map whose file was cut short
+    /// under it ([`MappedFile::check`]): what was computed from them is wrong.
+    pub fn check_intact(&self) -> crate::error::Result<()> {
+        match self {
+            Self::U8(s) => s.check_intact(),
+            Self::I8(s) => s.check_intact(),
+            Self::U16(s) => s.check_intact(),
+            Self::I16(s) => s.check_intact(),
+            Self::F32(s) => s.check_intact(),
         }
     }
 

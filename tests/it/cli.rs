@@ -216,6 +216,19 @@ fn labels_of_a_coarser_level_are_at_the_volumes_shape() {
     assert_eq!(info["range"], serde_json::json!([0.0, 3.0]));
 }
 
+/// `--threads` bounds the work without changing an answer; 0 threads is refused by name.
+#[test]
+fn threads_change_no_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = layers(dir.path(), 24);
+    let f = file.to_str().unwrap();
+    let all = json(&["analyze", f, "--slabs", "3", "--json"]);
+    let one = json(&["analyze", f, "--slabs", "3", "--json", "--threads", "1"]);
+    assert_eq!(all, one);
+    let Ran { ok, stderr, .. } = run(&["analyze", f, "--threads", "0"]);
+    assert!(!ok && stderr.contains("--threads"), "{stderr}");
+}
+
 #[test]
 fn phantoms_are_deterministic_and_protected() {
     let dir = tempfile::tempdir().unwrap();

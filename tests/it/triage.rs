@@ -664,7 +664,7 @@ fn a_run_stops_when_its_reader_stops_taking_rows() {
         tile: None,
     };
     let mut seen = Vec::new();
-    look_all(&all, &how, 2, &|_, e| e.to_string(), |i, _| {
+    look_all(&all, &how, 2, None, &|_, e| e.to_string(), |i, _| {
         seen.push(i);
         seen.len() < 2
     });
