@@ -15,7 +15,7 @@ use crate::volume::{Volume, Voxel, VoxelType, Voxels};
 
 /// The label volume of `p` at `volume`'s shape, spacing and world geometry: each voxel's slab
 /// index + 1 (u8 up to 255 slabs, u16 beyond), 0 where the voxel is missing or background by
-/// the rule and threshold the partition left out. `partitioned` is the pyramid level of
+/// the rule the partition left background out by. `partitioned` is the pyramid level of
 /// `volume` that `p` partitions (`volume` itself, or a coarser level): a voxel belongs to the
 /// slice whose centre is nearest along the axis, measured in that level's frame, so the labels
 /// of an analysis of a coarse level lie over every voxel of the volume.
@@ -25,7 +25,10 @@ pub fn label_volume(
     p: &Partition,
     monitor: &Monitor,
 ) -> Result<Volume> {
-    let background = Background::at(volume, p.background.rule, p.background.value, monitor)?;
+    // By the analysis's rule, found on the voxels labelled: on the level analysed, the
+    // threshold the analysis found; on a finer one, that level's own (its noise is wider than
+    // the averaged level's, and a threshold from there would leave specks of air labelled).
+    let background = Background::find(volume, p.background.rule, monitor)?;
     let mut slab_of = vec![0u16; p.slices];
     for (i, &(a, b)) in p.slabs.iter().enumerate() {
         slab_of[a..b].fill(i as u16 + 1);
@@ -222,6 +225,40 @@ mod tests {
                 label, expect,
                 "voxel {i} (z {z}, boundary at coarse slice {a})"
             );
+        }
+    }
+
+    /// Air with noise, analysed on a coarser level (whose averaging narrows the noise): at full
+    /// resolution no speck of air is labelled, and the body is.
+    #[test]
+    fn air_stays_zero_at_full_resolution_after_a_coarse_analysis() {
+        let dims = [24, 24, 32];
+        let mut lcg = crate::testing::Lcg::new(9);
+        let v: Vec<f32> = (0..dims.iter().product::<usize>())
+            .map(|i| {
+                let (x, y) = (i % 24, (i / 24) % 24);
+                let body = (6..18).contains(&x) && (6..18).contains(&y);
+                // Four uniform draws: near normal, 0 to 80.
+                let noise: f32 = (0..4).map(|_| (lcg.next_u64() % 21) as f32).sum();
+                if body { 200.0 + noise } else { noise }
+            })
+            .collect();
+        let v = Volume::new(dims, [1.0; 3], VoxelType::F32, v).unwrap();
+        let coarse = v.coarser(1);
+        let params = PartitionParams {
+            stop: Stop::Slabs(2),
+            ..PartitionParams::default()
+        };
+        let p = partition(&coarse, [0.0, 0.0, 1.0], &params, &Monitor::none()).unwrap();
+        assert_eq!(p.background.rule, BackgroundRule::Auto);
+        let labels = label_volume(&v, &coarse, &p, &Monitor::none()).unwrap();
+        let Voxels::U8(l) = labels.data() else {
+            panic!("u8 labels")
+        };
+        for (i, &label) in l.as_slice().iter().enumerate() {
+            let (x, y) = (i % 24, (i / 24) % 24);
+            let body = (6..18).contains(&x) && (6..18).contains(&y);
+            assert_eq!(label == 0, !body, "voxel {i}: label {label}");
         }
     }
 

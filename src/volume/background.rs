@@ -65,10 +65,8 @@ impl Background {
     }
 
     /// The background of `volume` by `rule` at the threshold `value` (none without one): what
-    /// [`find`](Self::find) gives when it finds `value`. The threshold found on one pyramid
-    /// level leaves out the same by the same rule on another (a label volume at full resolution
-    /// from an analysis of a coarser level).
-    pub fn at(
+    /// [`find`](Self::find) gives when it finds `value`.
+    fn at(
         volume: &Volume,
         rule: BackgroundRule,
         value: Option<f32>,
