@@ -9,9 +9,9 @@ use clap::Args;
 use slabscope::Plan;
 use slabscope::budget::{Budget, Purpose};
 use slabscope::explain::StepsShown;
+use slabscope::formats::{VolumeOutput, stage, stage_volume};
 use slabscope::partition::label_bytes;
 use slabscope::report::curves_csv;
-use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
 use slabscope::{AnalysisReport, SlabsReport, label_volume};
 
 use super::args::{AnalysisArgs, LoadArgs};

@@ -6,11 +6,11 @@ use anyhow::Result;
 use clap::Args;
 use slabscope::error::names::{controls, text};
 use slabscope::error::{human_bytes, shown};
+use slabscope::formats::zarr::ZarrInfo;
+use slabscope::formats::{DicomSeries, Loaded};
 use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, to_json};
 use slabscope::triage::{Entry, Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
-use slabscope::volume::io::zarr::ZarrInfo;
-use slabscope::volume::io::{DicomSeries, Loaded};
 
 use super::LoadArgs;
 

@@ -11,6 +11,7 @@ use super::table::{
 use super::{Given, text};
 use crate::analysis::AnalysisParams;
 use crate::error::{Error, Result};
+use crate::formats::{LoadOptions, RawOptions, default_max_memory};
 use crate::geometry::AxisChoice;
 use crate::geometry::lattice::SamplingParams;
 use crate::partition::Stop;
@@ -18,7 +19,6 @@ use crate::render::{CameraParams, Gap, RenderParams, TransferChoice};
 use crate::view::ViewParams;
 use crate::volume::Resolution;
 use crate::volume::background::BackgroundRule;
-use crate::volume::io::{LoadOptions, RawOptions, default_max_memory};
 
 impl Given {
     /// The first of two conflicting parameters both given, as an error.

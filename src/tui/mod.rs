@@ -101,7 +101,7 @@ pub fn run(options: Options) -> Result<()> {
     );
     // A file that cannot be opened is an error before the screen changes.
     if let Some(path) = &file {
-        slabscope::volume::io::check_input(path)?;
+        slabscope::formats::check_input(path)?;
     }
     let folder = folder_to_list(file.as_ref(), &load)?;
     let file = match &folder {

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use slabscope::LoadOptions;
-use slabscope::volume::io::dicom;
+use slabscope::formats::dicom;
 
 use crate::common::{dicom_data, rows, run, s};
 

@@ -13,8 +13,8 @@ mod ascii;
 use self::ascii::read_ascii;
 use super::limits::physical_memory;
 use crate::error::{Error, Result};
+use crate::volume::decode_to;
 use crate::volume::mapped;
-use crate::volume::voxel::decode_to;
 use crate::volume::voxels::{held_type, infinities_missing};
 use crate::volume::{Endian, Voxel, VoxelType, Voxels, dims_string};
 
