@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::parse_raw_name;
+use super::{Folder, parse_raw_name};
 use crate::error::{Error, Result};
 
 /// Whether the file name says a volume slabscope reads (content decides when it is loaded; a
@@ -24,24 +24,6 @@ pub fn volume_name(path: &Path) -> bool {
 pub(crate) fn is_tiff(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"))
-}
-
-/// What a folder is: one volume (a Zarr store, or a stack of two or more TIFF slices and no
-/// other volume file or folder), DICOM files (one series or several), a collection of volumes, or nothing
-/// slabscope reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Folder {
-    /// A stack of TIFF slices: one volume.
-    Slices,
-    /// DICOM files and no other volume file or folder: one series is a volume, several a
-    /// collection of series.
-    Dicom,
-    /// Volume files or folders (or a single TIFF file): looked at one by one.
-    Collection,
-    /// Neither a volume file nor a folder in it.
-    Empty,
-    /// A Zarr store (an OME-Zarr image or a plain array): one volume, never walked into.
-    Zarr,
 }
 
 /// Says what the folder `dir` is.

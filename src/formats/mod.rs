@@ -1,5 +1,7 @@
-//! Loading volumes from files: one entry point, [`load`], that picks the reader by content (magic
-//! bytes) first and by extension second, and writers for exporting.
+//! Reading volumes from files, above the [`Volume`] they produce: one entry point, [`load`],
+//! that asks the readers of one registry (`registry.rs`; each format's module holds its reader,
+//! `reader.rs` the trait they share) by content first and by name second, each reading a
+//! [`Source`]; and writers for exporting ([`write_volume`]).
 
 mod data;
 pub mod dicom;
@@ -12,23 +14,27 @@ mod ome;
 mod output;
 mod placement;
 mod raw;
+mod reader;
+mod registry;
+mod source;
 mod tiff;
 mod tiff_ifd;
 mod volumeshop;
+mod write;
 pub mod zarr;
 
-use std::fs::File;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-pub use folder::{Folder, folder_kind, volume_name};
+pub use folder::{folder_kind, volume_name};
 pub use limits::{default_max_memory, parse_bytes, physical_memory};
 pub use nifti::write_nifti;
 pub use nrrd::{NrrdEncoding, write_nrrd};
 pub use output::{Staged, check_output, remove_staged, same_file, stage, write_atomic};
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
+pub use source::{Source, check_input, open_regular};
+pub use write::{VolumeOutput, stage_volume, write_volume};
 
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -77,6 +83,24 @@ impl Format {
             Self::Synthetic => "synthetic",
         }
     }
+}
+
+/// What a folder is: one volume (a Zarr store, or a stack of two or more TIFF slices and no
+/// other volume file or folder), DICOM files (one series or several), a collection of volumes, or nothing
+/// slabscope reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Folder {
+    /// A stack of TIFF slices: one volume.
+    Slices,
+    /// DICOM files and no other volume file or folder: one series is a volume, several a
+    /// collection of series.
+    Dicom,
+    /// Volume files or folders (or a single TIFF file): looked at one by one.
+    Collection,
+    /// Neither a volume file nor a folder in it.
+    Empty,
+    /// A Zarr store (an OME-Zarr image or a plain array): one volume, never walked into.
+    Zarr,
 }
 
 /// Options for [`load`].
@@ -130,7 +154,7 @@ pub struct Loaded {
     /// Every file read: the one named, and a detached header's data file.
     pub sources: Vec<PathBuf>,
     /// The DICOM series read, for a DICOM file or folder.
-    pub dicom: Option<DicomSeries>,
+    pub dicom: Option<dicom::DicomSeries>,
     /// The store's image, levels, chunking and codecs, for an OME-Zarr store.
     pub zarr: Option<zarr::ZarrInfo>,
     /// The version of the format the file is written in, where the format has versions that
@@ -138,131 +162,12 @@ pub struct Loaded {
     pub format_version: Option<String>,
 }
 
-/// What a DICOM volume is, beyond its geometry: never a patient-identifying field unless they
-/// were asked for.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct DicomSeries {
-    /// The series' key: its `SeriesInstanceUID` (with `#2`, ... on the parts of a split series).
-    pub key: String,
-    /// `SeriesNumber`.
-    pub number: Option<i64>,
-    /// `SeriesDescription`.
-    pub description: String,
-    /// Modality.
-    pub modality: String,
-    /// The transfer syntax, named.
-    pub syntax: String,
-    /// Patient-identifying fields, read only when asked for (empty otherwise).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub patient: Vec<(String, String)>,
-}
-
 /// Loads the volume at `path` (a file, or a folder of TIFF slices).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     check_input(path)?;
-    load_checked(path, opts).map_err(|e| e.reached_from(path))
-}
-
-/// Fails unless `path` is a regular file or a folder: a FIFO would block forever and a device
-/// would never end.
-pub fn check_input(path: &Path) -> Result<()> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    match kind(&meta) {
-        None => Ok(()),
-        Some(kind) => Err(Error::unsupported(
-            path,
-            format!("{kind}: slabscope reads regular files and folders"),
-        )),
-    }
-}
-
-/// Opens `path` for reading, only if it is a regular file, without ever blocking: the open does
-/// not wait (`O_NONBLOCK`: a FIFO or a device, even one mounted over a file's name, opens at once
-/// instead of waiting for a writer) and the opened handle's own type is checked (not the name's,
-/// which a directory listing or an earlier `stat` may have seen differently). Every input file
-/// is opened through it.
-pub fn open_regular(path: &Path) -> std::io::Result<File> {
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        options.custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY);
-    }
-    let file = options.open(path)?;
-    let meta = file.metadata()?;
-    match kind(&meta) {
-        None if meta.is_file() => Ok(file),
-        None => Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "a folder, where a file was expected",
-        )),
-        Some(kind) => Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            format!("{kind}: slabscope reads regular files and folders"),
-        )),
-    }
-}
-
-/// What a path that is neither a regular file nor a folder is, in words.
-fn kind(meta: &std::fs::Metadata) -> Option<&'static str> {
-    if meta.is_file() || meta.is_dir() {
-        return None;
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        let t = meta.file_type();
-        if t.is_fifo() {
-            return Some("a FIFO (named pipe)");
-        }
-        if t.is_char_device() || t.is_block_device() {
-            return Some("a device");
-        }
-        if t.is_socket() {
-            return Some("a socket");
-        }
-    }
-    Some("not a regular file")
-}
-
-fn load_checked(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if opts.label_image.is_some() && !(meta.is_dir() && zarr::is_store(path)) {
-        return Err(Error::format(
-            path,
-            "--label-image names a label image of an OME-Zarr store, and this is none",
-        ));
-    }
-    let (format, loaded) = if meta.is_dir() {
-        load_folder(path, opts)?
-    } else {
-        let format = detect(path, opts)?;
-        let four_d = matches!(
-            format,
-            Format::Nifti | Format::Nrrd | Format::MetaImage | Format::Dicom | Format::Tiff
-        );
-        if opts.volume > 0 && !four_d {
-            return Err(data::one_volume(path, 1, opts.volume));
-        }
-        if opts.channel > 0 && format != Format::Tiff {
-            return Err(data::one_channel(path, 1, opts.channel));
-        }
-        let loaded = match format {
-            Format::Nifti => nifti::load(path, opts)?,
-            Format::Nrrd => nrrd::load(path, opts)?,
-            Format::MetaImage => metaimage::load(path, opts)?,
-            Format::VolumeShop => volumeshop::load(path, opts)?,
-            Format::Raw => raw::load(path, opts)?,
-            Format::Tiff => tiff::load_stack(path, opts)?,
-            Format::Dicom => dicom::load(path, opts)?,
-            Format::TiffFolder | Format::OmeZarr | Format::Synthetic => {
-                unreachable!("not detected from a file")
-            }
-        };
-        (format, loaded)
-    };
-    finish(path, format, loaded)
+    registry::read(path, opts)
+        .and_then(|(format, read)| finish(path, format, read))
+        .map_err(|e| e.reached_from(path))
 }
 
 /// The volume a reader read from `path`, its spacing checked (for every reader, here once:
@@ -294,40 +199,6 @@ fn finish(path: &Path, format: Format, mut loaded: Read0) -> Result<Loaded> {
     })
 }
 
-/// Reads the folder `path`: a Zarr store, a DICOM series, or a stack of TIFF slices.
-fn load_folder(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
-    let kind = folder_kind(path)?;
-    // Only an OME-TIFF file or an OME-Zarr store holds channels.
-    if opts.channel > 0 && kind != Folder::Zarr {
-        return Err(data::one_channel(path, 1, opts.channel));
-    }
-    Ok(match kind {
-        Folder::Zarr => (Format::OmeZarr, zarr::load(path, opts)?),
-        // A series may be named in a folder of DICOM files and other volumes.
-        Folder::Dicom => (Format::Dicom, dicom::load(path, opts)?),
-        Folder::Collection if opts.series.is_some() => (Format::Dicom, dicom::load(path, opts)?),
-        Folder::Collection => {
-            return Err(Error::format(
-                path,
-                "a folder of volumes, not one stack of TIFF slices: name a volume in it, or \
-                 triage the folder",
-            ));
-        }
-        Folder::Empty => {
-            return Err(Error::format(
-                path,
-                "folder holds no .tif or .tiff slices, no DICOM files and no volume files",
-            ));
-        }
-        Folder::Slices => {
-            if opts.volume > 0 {
-                return Err(data::one_volume(path, 1, opts.volume));
-            }
-            (Format::TiffFolder, tiff::load_folder(path, opts)?)
-        }
-    })
-}
-
 /// What a format reader returns before `load` adds its general notes.
 pub(crate) struct Read0 {
     pub volume: Volume,
@@ -335,7 +206,7 @@ pub(crate) struct Read0 {
     /// Files read besides the one named (a detached header's data file).
     pub sources: Vec<PathBuf>,
     /// The DICOM series read.
-    pub dicom: Option<DicomSeries>,
+    pub dicom: Option<dicom::DicomSeries>,
     /// The store read, for an OME-Zarr store.
     pub zarr: Option<zarr::ZarrInfo>,
     /// The format's version (see [`Loaded::format_version`]).
@@ -386,210 +257,5 @@ impl Read0 {
     pub(crate) fn with_transform(mut self, t: Option<WorldTransform>) -> Self {
         self.volume = placement::place(self.volume, t, &mut self.notes);
         self
-    }
-}
-
-fn detect(path: &Path, opts: &LoadOptions) -> Result<Format> {
-    if opts.raw.dims.is_some() {
-        return Ok(Format::Raw);
-    }
-    let mut head = Vec::with_capacity(4096);
-    open_regular(path)
-        .and_then(|f| f.take(4096).read_to_end(&mut head))
-        .map_err(|e| Error::io(path, e))?;
-    if let Some(format) = sniff(&head) {
-        return Ok(format);
-    }
-    if dicom::is_dicom(path) {
-        return Ok(Format::Dicom);
-    }
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let ext = |e: &str| name.ends_with(e);
-    if ext(".dat") {
-        return Ok(Format::VolumeShop);
-    }
-    if ext(".raw") || ext(".bin") || ext(".vol") || ext(".img") || parse_raw_name(&name).is_some() {
-        return Ok(Format::Raw);
-    }
-    let claimed = [
-        (".nii", "NIfTI"),
-        (".nii.gz", "NIfTI"),
-        (".nrrd", "NRRD"),
-        (".nhdr", "NRRD"),
-        (".mha", "MetaImage"),
-        (".mhd", "MetaImage"),
-    ]
-    .into_iter()
-    .find(|(e, _)| ext(e));
-    let what = match claimed {
-        _ if head.is_empty() => "the file is empty".to_string(),
-        Some((_, format)) => {
-            format!("the name says {format} but the content does not start like a {format} file")
-        }
-        None => "not a volume file".to_string(),
-    };
-    Err(Error::format(
-        path,
-        format!(
-            "{what} (slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, \
-             DICOM, OME-Zarr stores, and headerless raw data given its dimensions and voxel type)"
-        ),
-    ))
-}
-
-/// Recognises a format by its first bytes.
-fn sniff(head: &[u8]) -> Option<Format> {
-    // First: some DICOM files carry a TIFF header in their preamble.
-    if head.get(128..132) == Some(b"DICM") {
-        return Some(Format::Dicom);
-    }
-    if head.starts_with(&[0x1f, 0x8b]) {
-        return nifti::is_gzipped_nifti(head).then_some(Format::Nifti);
-    }
-    if nifti::looks_like(head) {
-        return Some(Format::Nifti);
-    }
-    if head.starts_with(b"NRRD000") {
-        return Some(Format::Nrrd);
-    }
-    if head.starts_with(b"II*\0")
-        || head.starts_with(b"MM\0*")
-        || head.starts_with(b"II+\0")
-        || head.starts_with(b"MM\0+")
-    {
-        return Some(Format::Tiff);
-    }
-    metaimage::looks_like(head).then_some(Format::MetaImage)
-}
-
-/// The formats slabscope writes volumes in, chosen by the output's extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum VolumeOutput {
-    /// `.nrrd`: attached, gzip-compressed, in LPS `space`.
-    Nrrd,
-    /// `.nii`.
-    Nifti,
-    /// `.nii.gz`.
-    NiftiGz,
-}
-
-impl VolumeOutput {
-    /// The format the name of `path` asks for; an unknown extension is an error, so that it is
-    /// found before any work is done.
-    pub fn for_path(path: &Path) -> Result<Self> {
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
-        // The name is lowercased: `.NII.GZ` counts.
-        let ends = |ext: &str| name.len() > ext.len() && name.ends_with(ext);
-        if ends(".nrrd") {
-            Ok(Self::Nrrd)
-        } else if ends(".nii.gz") {
-            Ok(Self::NiftiGz)
-        } else if ends(".nii") {
-            Ok(Self::Nifti)
-        } else {
-            Err(Error::unsupported(
-                path,
-                "volumes are written as .nrrd, .nii or .nii.gz, chosen by the extension",
-            ))
-        }
-    }
-}
-
-/// Writes `volume` in the format its extension names ([`VolumeOutput`]), atomically; an existing
-/// `path` is replaced only when `force` is set, and only when it is a regular file.
-pub fn write_volume(path: &Path, volume: &Volume, force: bool) -> Result<()> {
-    check_output(path, force)?;
-    stage_volume(path, volume)?.persist(force)
-}
-
-/// `volume` written in the format the extension of `path` names, to a temporary file beside it
-/// that [`Staged::persist`] puts in place.
-pub fn stage_volume(path: &Path, volume: &Volume) -> Result<Staged> {
-    match VolumeOutput::for_path(path)? {
-        VolumeOutput::Nrrd => nrrd::stage(path, volume, NrrdEncoding::Gzip),
-        VolumeOutput::Nifti => nifti::stage(path, volume, false),
-        VolumeOutput::NiftiGz => nifti::stage(path, volume, true),
-    }
-}
-
-/// The data file a header names, relative to the header's folder; it must exist.
-pub(crate) fn data_file(header: &Path, name: &str) -> Result<PathBuf> {
-    let p = Path::new(name);
-    let file = if p.is_absolute() {
-        p.to_path_buf()
-    } else {
-        header.parent().unwrap_or(Path::new(".")).join(p)
-    };
-    match std::fs::metadata(&file) {
-        Ok(meta) if meta.is_file() => Ok(file),
-        Ok(meta) => Err(Error::format(
-            header,
-            format!(
-                "its data file {} is {}",
-                crate::error::shown(&file),
-                kind(&meta).unwrap_or("a folder")
-            ),
-        )),
-        Err(e) => Err(Error::format(
-            header,
-            format!("its data file {}: {e}", crate::error::shown(&file)),
-        )),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A FIFO opens at once and is refused by its handle's own type, never waiting for a writer
-    /// (a plain `File::open` would wait forever); a folder is refused too.
-    #[test]
-    #[cfg(unix)]
-    fn only_regular_files_open_and_a_fifo_never_blocks() {
-        let dir = tempfile::tempdir().unwrap();
-        let fifo = dir.path().join("scan0001");
-        if !std::process::Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .is_ok_and(|s| s.success())
-        {
-            eprintln!("skipped: no mkfifo");
-            return;
-        }
-        let (tx, rx) = std::sync::mpsc::channel();
-        let path = fifo.clone();
-        std::thread::spawn(move || {
-            let _ = tx.send(open_regular(&path).map(drop).map_err(|e| e.to_string()));
-        });
-        let opened = rx
-            .recv_timeout(std::time::Duration::from_secs(10))
-            .expect("the open returned at once");
-        let e = opened.unwrap_err();
-        assert!(e.contains("a FIFO"), "{e}");
-        let e = open_regular(dir.path()).unwrap_err().to_string();
-        assert!(e.contains("a folder"), "{e}");
-        let file = dir.path().join("a.nii");
-        std::fs::write(&file, b"x").unwrap();
-        assert!(open_regular(&file).is_ok());
-    }
-
-    #[test]
-    fn sniffs_magic_bytes() {
-        assert_eq!(sniff(b"NRRD0004\ntype: uchar\n"), Some(Format::Nrrd));
-        assert_eq!(sniff(b"II*\0\x08\0\0\0"), Some(Format::Tiff));
-        assert_eq!(
-            sniff(b"ObjectType = Image\nNDims = 3\n"),
-            Some(Format::MetaImage)
-        );
-        assert_eq!(sniff(b"hello world"), None);
-        let mut nii = vec![0u8; 352];
-        nii[344..348].copy_from_slice(b"n+1\0");
-        assert_eq!(sniff(&nii), Some(Format::Nifti));
     }
 }

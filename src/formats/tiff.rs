@@ -11,11 +11,71 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
 
 use super::data::{self, check_budget, voxel_buffer};
-use super::{LoadOptions, Read0, ome, tiff_ifd};
+use super::reader::{Reader, Sniff};
+use super::{Folder, Format, LoadOptions, Read0, Source, ome, tiff_ifd};
 use crate::error::{Error, Result};
 use crate::volume::{VoxelType, Voxels};
 
 type Tiff = Decoder<BufReader<File>>;
+
+/// The reader of a multi-page TIFF stack (an OME-TIFF's pages over z, channel and time).
+pub(crate) struct TiffStack;
+
+impl Reader for TiffStack {
+    fn format(&self) -> Format {
+        Format::Tiff
+    }
+
+    fn title(&self) -> &'static str {
+        "TIFF"
+    }
+
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if [b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"]
+            .iter()
+            .any(|m| head.starts_with(*m))
+        {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    fn channels(&self) -> bool {
+        true
+    }
+
+    /// Reads through [`Source::path`]: the `tiff` decoder opens the file itself.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load_stack(source.path(), opts)
+    }
+}
+
+/// The reader of a folder of single-page TIFF slices.
+pub(crate) struct TiffSlices;
+
+impl Reader for TiffSlices {
+    fn format(&self) -> Format {
+        Format::TiffFolder
+    }
+
+    fn title(&self) -> &'static str {
+        "TIFF slices"
+    }
+
+    fn reads_folder(&self, kind: Folder, _opts: &LoadOptions) -> bool {
+        kind == Folder::Slices
+    }
+
+    /// Reads through [`Source::path`], the folder's.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load_folder(source.path(), opts)
+    }
+}
 
 /// Opens a TIFF whose directories [`tiff_ifd::check`] found sound; returns its decoder and
 /// its length in bytes.
@@ -203,7 +263,7 @@ fn spacing(dec: &mut Tiff) -> [f64; 3] {
     [ok(sx), ok(sy), ok(sz)]
 }
 
-pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (mut dec, len) = open(path)?;
     let description = dec
         .get_tag_ascii_string(Tag::ImageDescription)
@@ -363,7 +423,7 @@ pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-pub(crate) fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = slice_files(dir)?;
     let (mut dec, _) = open(&files[0])?;
     let spacing = spacing(&mut dec);

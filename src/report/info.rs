@@ -7,8 +7,9 @@ use serde::Serialize;
 
 use super::{GeometryReport, SCHEMA_VERSION};
 use crate::error::Result;
+use crate::formats::Loaded;
+use crate::formats::dicom::DicomSeries;
 use crate::formats::zarr::ZarrInfo;
-use crate::formats::{DicomSeries, Loaded};
 use crate::volume::VoxelType;
 
 /// The object `info --json` prints for one volume: what it is, where it lies, how its values

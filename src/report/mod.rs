@@ -374,7 +374,8 @@ mod tests {
     use std::path::Path;
 
     use super::*;
-    use crate::formats::{DicomSeries, Loaded};
+    use crate::formats::Loaded;
+    use crate::formats::dicom::DicomSeries;
 
     /// The key paths of a JSON value (`.dicom.patient`, `.volumes[].path`), as the contract
     /// snapshots list them.

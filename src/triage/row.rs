@@ -3,7 +3,8 @@
 use serde::Serialize;
 
 use crate::analysis::Analysis;
-use crate::formats::{DicomSeries, Loaded};
+use crate::formats::Loaded;
+use crate::formats::dicom::DicomSeries;
 use crate::report::SCHEMA_VERSION;
 
 /// One volume's row: what it is, what is wrong with it, and its most structured axis and slabs.

@@ -32,13 +32,54 @@ use self::header::Image;
 use self::read::Syntax;
 use self::scan::{Scan, paths_of, series_of};
 use super::data::check_budget;
-use super::{LoadOptions, Read0};
+use super::reader::{Reader, Sniff};
+use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::{Volume, VoxelType};
 
 /// The most files of one folder scanned.
 pub const MAX_FILES: usize = 1 << 18;
+
+/// The DICOM reader: a file, or a folder of files (one series, or the one named).
+pub(crate) struct Dicom;
+
+impl Reader for Dicom {
+    fn format(&self) -> Format {
+        Format::Dicom
+    }
+
+    fn title(&self) -> &'static str {
+        "DICOM"
+    }
+
+    /// `DICM` after the preamble (first of all: some DICOM files carry a TIFF header in theirs).
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if head.get(128..132) == Some(b"DICM") {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn probe(&self, source: &Source) -> bool {
+        is_dicom(source.path())
+    }
+
+    fn reads_folder(&self, kind: Folder, opts: &LoadOptions) -> bool {
+        // A series may be named in a folder of DICOM files and other volumes.
+        kind == Folder::Dicom || (kind == Folder::Collection && opts.series.is_some())
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    /// Reads through [`Source::path`]: a series is found among the files of a folder.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source.path(), opts)
+    }
+}
 
 /// Whether the file at `path` is DICOM, by its content (`DICM` after the preamble or at the
 /// start, or a file meta group), or by a `.dcm` name.
@@ -55,6 +96,25 @@ pub fn is_dicom(path: &Path) -> bool {
     super::open_regular(path)
         .and_then(|f| f.take(132).read_to_end(&mut head))
         .is_ok_and(|_| read::sniff(&head))
+}
+
+/// What a DICOM volume is, beyond its geometry: never a patient-identifying field unless they
+/// were asked for.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DicomSeries {
+    /// The series' key: its `SeriesInstanceUID` (with `#2`, ... on the parts of a split series).
+    pub key: String,
+    /// `SeriesNumber`.
+    pub number: Option<i64>,
+    /// `SeriesDescription`.
+    pub description: String,
+    /// Modality.
+    pub modality: String,
+    /// The transfer syntax, named.
+    pub syntax: String,
+    /// Patient-identifying fields, read only when asked for (empty otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub patient: Vec<(String, String)>,
 }
 
 /// One series of a DICOM folder, as a list shows it (no patient-identifying field).
@@ -307,7 +367,7 @@ fn no_series(path: &Path, scan: &Scan) -> Error {
 /// Loads the DICOM file or folder at `path` as a volume: of a folder, the files directly in
 /// it, or, for a series named by its UID, every DICOM file below it too (a series may lie in
 /// several folders).
-pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let deep = opts.series.as_deref().is_some_and(|s| !by_position(s));
     load_from(path, &paths_of(path, deep)?, opts)
 }
@@ -386,9 +446,9 @@ fn sources(scan: &Scan, series: &Series, order: &[usize]) -> Vec<PathBuf> {
 
 /// What the volume loaded from `series` is, beyond its geometry: the series' fields, its first
 /// file's transfer syntax and (when asked for) the patient's fields.
-fn described(scan: &Scan, series: &Series) -> super::DicomSeries {
+fn described(scan: &Scan, series: &Series) -> DicomSeries {
     let first = &series.images[0];
-    super::DicomSeries {
+    DicomSeries {
         key: series.key.clone(),
         number: series.number,
         description: series.description.clone(),

@@ -21,7 +21,8 @@ use serde::Serialize;
 
 use self::meta::{ArrayMeta, AxisKind, Image};
 use super::data::{one_channel, one_volume};
-use super::{Format, LoadOptions, Loaded, Read0};
+use super::reader::Reader;
+use super::{Folder, Format, LoadOptions, Loaded, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 
@@ -74,6 +75,47 @@ pub struct ZarrLevel {
     /// The pyramid level it is read as (0 for the first), null when it does not lie on the
     /// pyramid's grid (another downsampling), and is not used.
     pub pyramid_level: Option<usize>,
+}
+
+/// The reader of an OME-Zarr store or a plain Zarr array (a folder).
+pub(crate) struct Zarr;
+
+impl Reader for Zarr {
+    fn format(&self) -> Format {
+        Format::OmeZarr
+    }
+
+    fn title(&self) -> &'static str {
+        "OME-Zarr"
+    }
+
+    fn reads_folder(&self, kind: Folder, _opts: &LoadOptions) -> bool {
+        kind == Folder::Zarr
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    fn channels(&self) -> bool {
+        true
+    }
+
+    /// Reads through [`Source::path`], the store's folder.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source.path(), opts)
+    }
+}
+
+/// Fails when `opts` name a label image and `path` (a folder when `is_dir`) is no Zarr store.
+pub(crate) fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
+    if opts.label_image.is_some() && !(is_dir && is_store(path)) {
+        return Err(Error::format(
+            path,
+            "--label-image names a label image of an OME-Zarr store, and this is none",
+        ));
+    }
+    Ok(())
 }
 
 /// Whether the folder `dir` is a Zarr store (a group or an array, of Zarr v2 or v3).
@@ -372,7 +414,7 @@ impl Opened {
 }
 
 /// Loads the image of the store at `dir` (or the label image `opts` names).
-pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let opened = Opened::new(dir, opts)?;
     let mut read0 = opened.read(dir, 0, opts)?;
     if let Some(source) =
