@@ -36,7 +36,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     // would look at).
     let dir = &args.file;
     let opts = args.load.options()?;
-    let listed = if dir.is_dir() && opts.series.is_none() {
+    let listed = if dir.is_dir() && opts.dicom.series.is_none() {
         match folder_kind(dir)? {
             Folder::Collection => Some(discover(std::slice::from_ref(dir), &opts)?),
             Folder::Dicom => {

@@ -27,6 +27,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+pub use dicom::DicomOptions;
 pub use folder::{folder_kind, volume_name};
 pub use limits::{default_max_memory, parse_bytes, physical_memory};
 pub use nifti::write_nifti;
@@ -35,6 +36,7 @@ pub use output::{Staged, check_output, remove_staged, same_file, stage, write_at
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
 pub use source::{Source, check_input, open_regular};
 pub use write::{VolumeOutput, stage_volume, write_volume};
+pub use zarr::ZarrOptions;
 
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -103,41 +105,32 @@ pub enum Folder {
     Zarr,
 }
 
-/// Options for [`load`].
+/// Options for [`load`]: those every reader takes, and each format's own.
 #[derive(Clone, Debug)]
 pub struct LoadOptions {
     /// The most bytes the loaded f32 volume may occupy; checked before anything is allocated.
     pub max_memory: u64,
-    /// Description of a headerless raw file; when `dims` is set the file is read as raw.
-    pub raw: RawOptions,
     /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, a DICOM series) to read, from 0.
     pub volume: usize,
     /// Which channel of a multichannel file (an OME-TIFF's `C`), from 0.
     pub channel: usize,
-    /// Which series of a DICOM folder: its position in the list (from 1) or its UID.
-    pub series: Option<String>,
-    /// Keep DICOM localizer and derived images (left out by default).
-    pub include_localizers: bool,
-    /// Resample a DICOM series with uneven spacing or gantry tilt to an even, orthogonal grid.
-    pub resample: bool,
-    /// Read the patient-identifying DICOM fields (never read otherwise).
-    pub show_phi: bool,
-    /// Which label image of an OME-Zarr store to read (`labels/NAME`) instead of its image.
-    pub label_image: Option<String>,
+    /// Description of a headerless raw file; when `dims` is set the file is read as raw.
+    pub raw: RawOptions,
+    /// Which DICOM series to read, and how.
+    pub dicom: DicomOptions,
+    /// What of an OME-Zarr store to read.
+    pub zarr: ZarrOptions,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
         Self {
             max_memory: default_max_memory(),
-            raw: RawOptions::default(),
             volume: 0,
             channel: 0,
-            series: None,
-            include_localizers: false,
-            resample: false,
-            show_phi: false,
-            label_image: None,
+            raw: RawOptions::default(),
+            dicom: DicomOptions::default(),
+            zarr: ZarrOptions::default(),
         }
     }
 }

@@ -11,7 +11,7 @@ use super::table::{
 use super::{Given, text};
 use crate::analysis::AnalysisParams;
 use crate::error::{Error, Result};
-use crate::formats::{LoadOptions, RawOptions, default_max_memory};
+use crate::formats::{DicomOptions, LoadOptions, RawOptions, ZarrOptions, default_max_memory};
 use crate::geometry::AxisChoice;
 use crate::geometry::lattice::SamplingParams;
 use crate::partition::Stop;
@@ -100,11 +100,15 @@ impl Given {
             },
             volume: self.number(&VOLUME)?,
             channel: self.number(&CHANNEL)?,
-            series: self.parsed(&SERIES, text::any)?,
-            include_localizers: self.switch(&INCLUDE_LOCALIZERS)?,
-            resample: self.switch(&RESAMPLE)?,
-            show_phi: self.switch(&SHOW_PHI)?,
-            label_image: self.parsed(&LABEL_IMAGE, text::any)?,
+            dicom: DicomOptions {
+                series: self.parsed(&SERIES, text::any)?,
+                include_localizers: self.switch(&INCLUDE_LOCALIZERS)?,
+                resample: self.switch(&RESAMPLE)?,
+                show_phi: self.switch(&SHOW_PHI)?,
+            },
+            zarr: ZarrOptions {
+                label_image: self.parsed(&LABEL_IMAGE, text::any)?,
+            },
         })
     }
 

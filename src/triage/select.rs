@@ -46,7 +46,7 @@ pub fn select(
         Source::Paths(paths) => discover(paths, opts)?,
     };
     dedupe(&mut all);
-    let series = opts.series.as_deref();
+    let series = opts.dicom.series.as_deref();
     if let Some(wanted) = series {
         all = restrict_to_series(all, wanted, opts);
     }

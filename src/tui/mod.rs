@@ -67,7 +67,7 @@ fn folder_to_list(
     load: &LoadOptions,
 ) -> Result<Option<(PathBuf, Vec<slabscope::triage::Entry>)>> {
     let kind = match file {
-        Some(dir) if dir.is_dir() && load.series.is_none() => Some(folder_kind(dir)?),
+        Some(dir) if dir.is_dir() && load.dicom.series.is_none() => Some(folder_kind(dir)?),
         _ => None,
     };
     Ok(match (file, kind) {

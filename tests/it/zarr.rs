@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use slabscope::formats::ZarrOptions;
 use slabscope::volume::VoxelType;
 use slabscope::{Format, LoadOptions, Loaded, load};
 
@@ -115,7 +116,9 @@ fn the_store_s_coarser_datasets_are_the_pyramid_s_levels() {
     }
     // A label image whose levels keep z is off the grid: its levels are computed.
     let opts = LoadOptions {
-        label_image: Some("cells".into()),
+        zarr: ZarrOptions {
+            label_image: Some("cells".into()),
+        },
         ..LoadOptions::default()
     };
     let cells = open_with(&path("v05_sharded.ome.zarr"), &opts);
@@ -242,7 +245,9 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     assert_eq!(info.codecs, vec!["sharding(bytes, gzip)"]);
 
     let opts = LoadOptions {
-        label_image: Some("cells".into()),
+        zarr: ZarrOptions {
+            label_image: Some("cells".into()),
+        },
         ..LoadOptions::default()
     };
     let cells = open_with(&path(name), &opts);
@@ -260,7 +265,9 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     );
 
     let wrong = LoadOptions {
-        label_image: Some("nuclei".into()),
+        zarr: ZarrOptions {
+            label_image: Some("nuclei".into()),
+        },
         ..LoadOptions::default()
     };
     let e = load(&path(name), &wrong).unwrap_err().to_string();
@@ -482,7 +489,9 @@ fn metadata_and_label_images_out_of_the_store_are_refused() {
     refused_out(&store, &opts, "dataset \"s0\": .zarray");
     // A label image, and the whole labels group, that lead to another store.
     let cells = LoadOptions {
-        label_image: Some("cells".into()),
+        zarr: ZarrOptions {
+            label_image: Some("cells".into()),
+        },
         ..LoadOptions::default()
     };
     let (_keep4, other) = copy("v05_sharded.ome.zarr");

@@ -41,6 +41,19 @@ use crate::volume::{Volume, VoxelType};
 /// The most files of one folder scanned.
 pub const MAX_FILES: usize = 1 << 18;
 
+/// The options of a DICOM read.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct DicomOptions {
+    /// Which series of a folder: its position in the list (from 1) or its UID.
+    pub series: Option<String>,
+    /// Keep localizer and derived images (left out by default).
+    pub include_localizers: bool,
+    /// Resample a series with uneven spacing or gantry tilt to an even, orthogonal grid.
+    pub resample: bool,
+    /// Read the patient-identifying fields (never read otherwise).
+    pub show_phi: bool,
+}
+
 /// The DICOM reader: a file, or a folder of files (one series, or the one named).
 pub(crate) struct Dicom;
 
@@ -68,7 +81,7 @@ impl Reader for Dicom {
 
     fn reads_folder(&self, kind: Folder, opts: &LoadOptions) -> bool {
         // A series may be named in a folder of DICOM files and other volumes.
-        kind == Folder::Dicom || (kind == Folder::Collection && opts.series.is_some())
+        kind == Folder::Dicom || (kind == Folder::Collection && opts.dicom.series.is_some())
     }
 
     fn volumes(&self) -> bool {
@@ -279,10 +292,8 @@ pub fn load_series(
     super::check_input(path)?;
     // The files of one part of a split series group alone as that UID's only part.
     let uid = key.split('#').next().unwrap_or(key);
-    let opts = LoadOptions {
-        series: Some(uid.to_string()),
-        ..opts.clone()
-    };
+    let mut opts = opts.clone();
+    opts.dicom.series = Some(uid.to_string());
     let mut read = load_from(path, files, &opts).map_err(|e| e.reached_from(path))?;
     if let Some(d) = &mut read.dicom {
         d.key = key.to_string();
@@ -368,7 +379,11 @@ fn no_series(path: &Path, scan: &Scan) -> Error {
 /// it, or, for a series named by its UID, every DICOM file below it too (a series may lie in
 /// several folders).
 fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let deep = opts.series.as_deref().is_some_and(|s| !by_position(s));
+    let deep = opts
+        .dicom
+        .series
+        .as_deref()
+        .is_some_and(|s| !by_position(s));
     load_from(path, &paths_of(path, deep)?, opts)
 }
 
@@ -378,13 +393,13 @@ fn load_from(path: &Path, files: &[PathBuf], opts: &LoadOptions) -> Result<Read0
     if series.is_empty() {
         return Err(no_series(path, &scan));
     }
-    let series = pick(path, &series, opts.series.as_deref())?;
+    let series = pick(path, &series, opts.dicom.series.as_deref())?;
     let layout =
         assemble::layout(series, &|im| name(&scan, im)).map_err(|m| Error::format(path, m))?;
     super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
     check_pixels(path, &scan, series, &mut notes)?;
     notes.extend(layout.notes.iter().cloned());
-    let resample = opts.resample && layout.needs_resampling();
+    let resample = opts.dicom.resample && layout.needs_resampling();
     let [cols, rows] = layout.plane;
     let (slices, lps) = if resample {
         layout.resampled()

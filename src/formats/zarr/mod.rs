@@ -77,6 +77,13 @@ pub struct ZarrLevel {
     pub pyramid_level: Option<usize>,
 }
 
+/// The options of an OME-Zarr read.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ZarrOptions {
+    /// Which label image of the store to read (`labels/NAME`) instead of its image.
+    pub label_image: Option<String>,
+}
+
 /// The reader of an OME-Zarr store or a plain Zarr array (a folder).
 pub(crate) struct Zarr;
 
@@ -109,7 +116,7 @@ impl Reader for Zarr {
 
 /// Fails when `opts` name a label image and `path` (a folder when `is_dir`) is no Zarr store.
 pub(crate) fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
-    if opts.label_image.is_some() && !(is_dir && is_store(path)) {
+    if opts.zarr.label_image.is_some() && !(is_dir && is_store(path)) {
         return Err(Error::format(
             path,
             "--label-image names a label image of an OME-Zarr store, and this is none",
@@ -128,7 +135,7 @@ pub fn is_store(dir: &Path) -> bool {
 /// The image a load reads: the store, or one of its label images (which must lie in the store's
 /// tree `tree`, as every file read does).
 fn image_dir(dir: &Path, tree: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
-    let Some(name) = &opts.label_image else {
+    let Some(name) = &opts.zarr.label_image else {
         return Ok((dir.to_path_buf(), String::new()));
     };
     let names = meta::label_names(tree, dir).map_err(|m| Error::format(dir, m))?;

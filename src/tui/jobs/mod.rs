@@ -312,10 +312,8 @@ fn load_volume(
 ) -> JobMsg {
     let loaded = match source {
         Some(entry) => {
-            let load = LoadOptions {
-                series: entry.series.clone().or(load.series),
-                ..load
-            };
+            let mut load = load;
+            load.dicom.series = entry.series.clone().or(load.dicom.series);
             // A preview that cannot be read is no error: level 0's load says what is wrong.
             let preview = slabscope::formats::zarr::load_preview(&entry.path, &load, GLANCE_VOXELS);
             if let Ok(Some(p)) = preview {
