@@ -163,6 +163,19 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         .map_err(|e| e.reached_from(path))
 }
 
+/// A coarse pyramid level of the volume at `path`, read without reading level 0, where the file
+/// holds one on the pyramid's grid of at most `max_voxels` voxels (an OME-Zarr store's coarser
+/// dataset): the finest such, its [`Volume::level`](crate::Volume::level) saying which,
+/// quantized with its own range (level 0's is not known until level 0 is read). `None` for every
+/// other file, and when level 0 itself has at most `max_voxels` voxels. A first picture while
+/// [`load`] reads level 0.
+pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Loaded>> {
+    check_input(path)?;
+    let read = registry::preview(path, opts, max_voxels).map_err(|e| e.reached_from(path))?;
+    read.map(|(format, read)| finish(path, format, read))
+        .transpose()
+}
+
 /// The volume a reader read from `path`, its spacing checked (for every reader, here once:
 /// [`placement`]), with the notes every format shares.
 fn finish(path: &Path, format: Format, mut loaded: Read0) -> Result<Loaded> {

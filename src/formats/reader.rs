@@ -73,4 +73,16 @@ pub(crate) trait Reader: Sync {
 
     /// Reads the volume `opts` picks of `source`.
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0>;
+
+    /// A coarse pyramid level of that volume, of at most `max_voxels` voxels, read without
+    /// reading the volume (an OME-Zarr store's coarser dataset); `None` when `source` is not this
+    /// reader's or holds no such level, as every format but OME-Zarr.
+    fn preview(
+        &self,
+        _source: &Source,
+        _opts: &LoadOptions,
+        _max_voxels: usize,
+    ) -> Result<Option<Read0>> {
+        Ok(None)
+    }
 }

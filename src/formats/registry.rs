@@ -49,6 +49,22 @@ pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
     Ok((reader.format(), reader.read(&source, opts)?))
 }
 
+/// A coarse pyramid level of the volume at `path` that a reader reads without reading the
+/// volume (see [`Reader::preview`]), with the format it was read as; `None` when none does.
+pub(super) fn preview(
+    path: &Path,
+    opts: &LoadOptions,
+    max_voxels: usize,
+) -> Result<Option<(Format, Read0)>> {
+    let source = Source::new(path);
+    for reader in READERS {
+        if let Some(read) = reader.preview(&source, opts, max_voxels)? {
+            return Ok(Some((reader.format(), read)));
+        }
+    }
+    Ok(None)
+}
+
 /// Reads the folder `source`: a Zarr store, a DICOM series, or a stack of TIFF slices.
 fn read_folder(source: &Source, opts: &LoadOptions) -> Result<(Format, Read0)> {
     let path = source.path();

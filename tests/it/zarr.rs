@@ -132,7 +132,7 @@ fn a_coarse_dataset_is_read_alone_as_its_pyramid_level() {
     let store = path("v04_blosc.ome.zarr");
     let opts = LoadOptions::default();
     let full = open_with(&store, &opts).volume;
-    let preview = |max| slabscope::formats::zarr::load_preview(&store, &opts, max).unwrap();
+    let preview = |max| slabscope::formats::load_preview(&store, &opts, max).unwrap();
     let s1 = full.coarser(1);
     for (max, k) in [(s1.len(), 1), (s1.len() - 1, 2)] {
         let p = preview(max).unwrap_or_else(|| panic!("a preview within {max} voxels"));
@@ -156,7 +156,7 @@ fn a_coarse_dataset_is_read_alone_as_its_pyramid_level() {
     // Not a store: nothing to preview.
     let nifti = data("ramp_u8.nii");
     assert!(
-        slabscope::formats::zarr::load_preview(&nifti, &opts, 1)
+        slabscope::formats::load_preview(&nifti, &opts, 1)
             .unwrap()
             .is_none()
     );

@@ -22,7 +22,7 @@ use serde::Serialize;
 use self::meta::{ArrayMeta, AxisKind, Image};
 use super::data::{one_channel, one_volume};
 use super::reader::Reader;
-use super::{Folder, Format, LoadOptions, Loaded, Read0, Source};
+use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 
@@ -111,6 +111,21 @@ impl Reader for Zarr {
     /// Reads through [`Source::path`], the store's folder.
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source.path(), opts)
+    }
+
+    /// The finest of the store's coarser datasets on the pyramid's grid within `max_voxels`,
+    /// quantized with its own range (level 0's is not known until level 0 is read).
+    fn preview(
+        &self,
+        source: &Source,
+        opts: &LoadOptions,
+        max_voxels: usize,
+    ) -> Result<Option<Read0>> {
+        let path = source.path();
+        if !(path.is_dir() && is_store(path)) {
+            return Ok(None);
+        }
+        read_preview(path, opts, max_voxels)
     }
 }
 
@@ -430,22 +445,6 @@ fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
         read0.volume = read0.volume.with_level_source(Arc::new(source));
     }
     Ok(read0)
-}
-
-/// A coarse pyramid level of the volume at `path`, read without reading level 0, where the file
-/// holds one on the pyramid's grid of at most `max_voxels` voxels (an OME-Zarr store's coarser
-/// dataset): the finest such, its [`Volume::level`](crate::Volume::level) saying which,
-/// quantized with its own range (level 0's is not known until level 0 is read). `None` for every
-/// other file, and when level 0 itself has at most `max_voxels` voxels. A first picture while
-/// [`load`](super::load) reads level 0.
-pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Loaded>> {
-    super::check_input(path)?;
-    if !(path.is_dir() && is_store(path)) {
-        return Ok(None);
-    }
-    let read = read_preview(path, opts, max_voxels).map_err(|e| e.reached_from(path))?;
-    read.map(|r| super::finish(path, Format::OmeZarr, r))
-        .transpose()
 }
 
 /// The finest of the store's coarser datasets on the pyramid's grid with at most `max_voxels`

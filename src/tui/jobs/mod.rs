@@ -315,7 +315,7 @@ fn load_volume(
             let mut load = load;
             load.dicom.series = entry.series.clone().or(load.dicom.series);
             // A preview that cannot be read is no error: level 0's load says what is wrong.
-            let preview = slabscope::formats::zarr::load_preview(&entry.path, &load, GLANCE_VOXELS);
+            let preview = slabscope::formats::load_preview(&entry.path, &load, GLANCE_VOXELS);
             if let Ok(Some(p)) = preview {
                 send(JobMsg::Preview(Arc::new(p.volume), p.notes));
             }
