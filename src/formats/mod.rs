@@ -5,7 +5,6 @@
 
 mod data;
 pub mod dicom;
-mod folder;
 mod limits;
 mod metaimage;
 mod nifti;
@@ -28,12 +27,12 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 pub use dicom::DicomOptions;
-pub use folder::{folder_kind, volume_name};
 pub use limits::{default_max_memory, parse_bytes, physical_memory};
 pub use nifti::write_nifti;
 pub use nrrd::{NrrdEncoding, write_nrrd};
 pub use output::{Staged, check_output, remove_staged, same_file, stage, write_atomic};
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
+pub use registry::{folder_kind, volume_name};
 pub use source::{Source, check_input, open_regular};
 pub use write::{VolumeOutput, stage_volume, write_volume};
 pub use zarr::ZarrOptions;

@@ -31,6 +31,11 @@ impl Reader for Raw {
             || parse_raw_name(name).is_some()
     }
 
+    /// Only a name that carries its dimensions, with a raw data extension.
+    fn volume_name(&self, name: &str) -> bool {
+        [".raw", ".bin", ".vol"].iter().any(|e| name.ends_with(e)) && parse_raw_name(name).is_some()
+    }
+
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source, opts)
     }

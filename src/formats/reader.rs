@@ -55,6 +55,13 @@ pub(crate) trait Reader: Sync {
         &[]
     }
 
+    /// Whether a file so named (lowercased) is one of this format's volumes to a folder's walk
+    /// (its content decides when it is read): by default, one of its
+    /// [`extensions`](Self::extensions).
+    fn volume_name(&self, name: &str) -> bool {
+        self.extensions().iter().any(|e| name.ends_with(e))
+    }
+
     /// Whether a folder of this `kind` is this reader's (asked with the options: a DICOM series
     /// may be named in a folder of other volumes).
     fn reads_folder(&self, _kind: Folder, _opts: &LoadOptions) -> bool {

@@ -1,11 +1,11 @@
 //! The registry: every reader, once, in the order they are asked. A file's format is found by
 //! content first (each reader's sniff in this order, then each reader's deeper probe), by name
-//! second; a folder's by what it holds ([`folder_kind`]). What a format can hold (volumes,
-//! channels) is its reader's to say.
+//! second; a folder's by what it holds ([`folder_kind`]); which names say volume to a folder's
+//! walk, by the readers too ([`volume_name`]). What a format can hold (volumes, channels) is its
+//! reader's to say.
 
 use std::path::Path;
 
-use super::folder::folder_kind;
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source, data};
 use super::{dicom, metaimage, nifti, nrrd, raw, tiff, volumeshop, zarr};
@@ -47,6 +47,47 @@ pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
         return Err(data::one_channel(path, 1, opts.channel));
     }
     Ok((reader.format(), reader.read(&source, opts)?))
+}
+
+/// Whether the file name says a volume slabscope reads (content decides when it is loaded; a
+/// raw file counts only when its name carries its dimensions).
+pub fn volume_name(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    READERS.iter().any(|r| r.volume_name(&name))
+}
+
+/// Says what the folder `dir` is.
+pub fn folder_kind(dir: &Path) -> Result<Folder> {
+    if zarr::is_store(dir) {
+        return Ok(Folder::Zarr);
+    }
+    let (mut tiffs, mut others, mut dicoms) = (0usize, 0usize, 0usize);
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let path = entry.path();
+        let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+        // Anything named like a slice counts as one (a folder or a FIFO so named is then an
+        // error of the stack that names it).
+        if tiff::is_tiff(&path) {
+            tiffs += 1;
+        } else if is_dir || volume_name(&path) {
+            others += 1;
+        } else if entry.file_type().is_ok_and(|t| t.is_file()) && dicom::is_dicom(&path) {
+            dicoms += 1;
+        }
+    }
+    Ok(if tiffs >= 2 && others + dicoms == 0 {
+        Folder::Slices
+    } else if dicoms > 0 && tiffs + others == 0 {
+        Folder::Dicom
+    } else if tiffs + others + dicoms == 0 {
+        Folder::Empty
+    } else {
+        Folder::Collection
+    })
 }
 
 /// A coarse pyramid level of the volume at `path` that a reader reads without reading the
@@ -160,6 +201,19 @@ mod tests {
         assert_eq!(sniffed(&dcm), Some(Format::Dicom));
         // A gzip stream is NIfTI's or no reader's.
         assert_eq!(sniffed(&[0x1f, 0x8b, 8, 0]), None);
+    }
+
+    #[test]
+    fn names_that_say_volume() {
+        for name in [
+            "a.nii", "B.NII.GZ", "c.nrrd", "d.nhdr", "e.mha", "f.mhd", "g.tif", "h.dat",
+        ] {
+            assert!(volume_name(Path::new(name)), "{name}");
+        }
+        for name in ["notes.txt", "a.img", "scan.raw", "x.data", "y.zraw"] {
+            assert!(!volume_name(Path::new(name)), "{name}");
+        }
+        assert!(volume_name(Path::new("bonsai_256x256x256_uint8.raw")));
     }
 
     /// Each format is read by one reader, and each reader reads its own format.

@@ -30,6 +30,10 @@ impl Reader for TiffStack {
         "TIFF"
     }
 
+    fn volume_name(&self, name: &str) -> bool {
+        [".tif", ".tiff"].iter().any(|e| name.ends_with(e))
+    }
+
     fn sniff(&self, head: &[u8]) -> Sniff {
         if [b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"]
             .iter()
@@ -393,6 +397,13 @@ fn slice_number(path: &Path) -> Option<u64> {
     digits.chars().rev().collect::<String>().parse().ok()
 }
 
+/// Whether the file at `path` is named like a TIFF (`.tif`, `.tiff`, any case): in a folder, a
+/// slice.
+pub(crate) fn is_tiff(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"))
+}
+
 /// The TIFF files of a folder in slice order. Anything named like a slice that is not a
 /// readable regular file (a folder, a FIFO, a broken or looping link) is an error that names it,
 /// not a slice silently left out.
@@ -401,10 +412,7 @@ pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for entry in entries {
         let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        let named = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
-        if !named {
+        if !is_tiff(&path) {
             continue;
         }
         let meta = std::fs::metadata(&path).map_err(|e| Error::io(&path, e))?;

@@ -27,6 +27,10 @@ impl Reader for VolumeShop {
         name.ends_with(".dat")
     }
 
+    fn volume_name(&self, name: &str) -> bool {
+        self.claims_name(name)
+    }
+
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source, opts)
     }

@@ -57,6 +57,13 @@ impl Reader for Nifti {
         &[".nii", ".nii.gz"]
     }
 
+    /// Its extensions, and a two-file header's `.hdr`.
+    fn volume_name(&self, name: &str) -> bool {
+        [".nii", ".nii.gz", ".hdr"]
+            .iter()
+            .any(|e| name.ends_with(e))
+    }
+
     fn volumes(&self) -> bool {
         true
     }
