@@ -325,16 +325,16 @@ fn transform(h: &Header, unit: f64) -> Option<WorldTransform> {
     Some(WorldTransform::ras(linear, origin))
 }
 
-/// The `.img` (or `.img.gz`) beside a `.hdr` header.
+/// The `.img` (or `.img.gz`) beside a `.hdr` header: named by the header's own name, relative to
+/// its folder (the whole path would be taken relative to the folder a second time).
 fn image_file(source: &Source, gz: bool) -> Result<Source> {
-    let path = source.path();
-    let name = path.to_string_lossy();
+    let name = source.name();
     let stem = name
         .strip_suffix(".hdr.gz")
         .or_else(|| name.strip_suffix(".hdr"))
         .ok_or_else(|| {
             Error::format(
-                path,
+                source.path(),
                 "a two-file NIfTI header (ni1, ni2) should be named .hdr",
             )
         })?;
