@@ -261,7 +261,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     }
     let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
     let (file, start, skip) = match h.data_file.as_str() {
-        "LOCAL" => (path.to_path_buf(), h.len as u64, Skip::Bytes(0)),
+        "LOCAL" => (source.clone(), h.len as u64, Skip::Bytes(0)),
         name if name.starts_with("LIST")
             || name.contains('%')
             || name.split_whitespace().count() > 1 =>
@@ -271,7 +271,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
                 format!("multi-file data ({name:?})"),
             ));
         }
-        name => (source.sibling(name)?.path().to_path_buf(), 0, h.skip),
+        name => (source.sibling(name)?, 0, h.skip),
     };
     let spec = DataSpec {
         file,
@@ -298,7 +298,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     Ok(
         Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?
             .with_transform(transform)
-            .with_source(&spec.file),
+            .with_source(spec.file.path()),
     )
 }
 

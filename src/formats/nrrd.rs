@@ -445,7 +445,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     }
     let endian = h.endian.unwrap_or_default();
     let (file, start) = match &h.data_file {
-        None => (path.to_path_buf(), h.len as u64),
+        None => (source.clone(), h.len as u64),
         Some(name) => {
             if name.contains('%') || name.split_whitespace().count() > 1 || name.starts_with("LIST")
             {
@@ -454,7 +454,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
                     format!("multi-file data ({name:?})"),
                 ));
             }
-            (source.sibling(name)?.path().to_path_buf(), 0)
+            (source.sibling(name)?, 0)
         }
     };
     let spec = DataSpec {
@@ -474,7 +474,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     Ok(
         Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?
             .with_transform(transform)
-            .with_source(&spec.file),
+            .with_source(spec.file.path()),
     )
 }
 

@@ -96,7 +96,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         });
     };
     let spec = DataSpec {
-        file: path.to_path_buf(),
+        file: source.clone(),
         start: offset,
         skip_lines: 0,
         skip: Skip::Bytes(0),

@@ -13,8 +13,9 @@ use crate::volume::mapped::{self, MappedFile};
 /// by its path; a remote store can be one later. Readers take a source rather than a path, and
 /// reach its bytes through it ([`open`](Self::open), [`map`](Self::map), [`head`](Self::head),
 /// [`len`](Self::len)) and the files a header names beside it through
-/// [`sibling`](Self::sibling). Readers whose parsers still take a path (TIFF, DICOM, OME-Zarr,
-/// the shared voxel reader) use [`path`](Self::path) for now.
+/// [`sibling`](Self::sibling); the shared voxel reader (`data.rs`) reads the source its header
+/// names. Readers whose parsers still take a path (TIFF, DICOM, OME-Zarr, and the NIfTI, NRRD
+/// and MetaImage headers' messages) use [`path`](Self::path) for now.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Source {
     path: PathBuf,

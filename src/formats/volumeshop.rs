@@ -68,7 +68,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let n = file.read(&mut head).map_err(|e| Error::io(path, e))?;
     let dims = check_header(path, &head[..n], len)?;
     let spec = DataSpec {
-        file: path.to_path_buf(),
+        file: source.clone(),
         start: 6,
         skip_lines: 0,
         skip: Skip::Bytes(0),

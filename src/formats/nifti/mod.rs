@@ -190,7 +190,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         (img, gz)
     };
     let spec = DataSpec {
-        file: file.path().to_path_buf(),
+        file,
         start: 0,
         skip_lines: 0,
         skip: Skip::Bytes(offset as u64),
@@ -204,7 +204,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?
         .with_transform(transform(&h, unit))
-        .with_source(&spec.file);
+        .with_source(spec.file.path());
     read.format_version = Some(h.version.to_string());
     Ok(read)
 }
