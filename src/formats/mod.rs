@@ -154,7 +154,8 @@ pub struct Loaded {
     pub format_version: Option<String>,
 }
 
-/// Loads the volume at `path` (a file, or a folder of TIFF slices).
+/// Loads the volume at `path`: a file, or a folder (a stack of TIFF slices, a DICOM series or a
+/// Zarr store).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     check_input(path)?;
     registry::read(path, opts)
