@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use slabscope::volume::io::RawOptions;
+use slabscope::formats::RawOptions;
 use slabscope::volume::{Endian, VoxelType};
 use slabscope::{Error, LoadOptions};
 

@@ -8,8 +8,8 @@
 use std::time::{Duration, Instant};
 
 use slabscope::AnalysisParams;
+use slabscope::formats::{NrrdEncoding, write_nrrd};
 use slabscope::triage::{TriagePlan, discover, look_all};
-use slabscope::volume::io::{NrrdEncoding, write_nrrd};
 use slabscope::volume::phantom;
 use slabscope::{Error, LoadOptions};
 

@@ -14,7 +14,7 @@
 //! let dir = tempfile::tempdir()?;
 //! let path = dir.path().join("body.nrrd");
 //! let phantom = slabscope::volume::phantom::body([32, 32, 48], 1)?;
-//! slabscope::volume::io::write_volume(&path, &phantom, false)?;
+//! slabscope::formats::write_volume(&path, &phantom, false)?;
 //!
 //! let volume = slabscope::load(&path, &LoadOptions::default())?.volume;
 //! let analysis = slabscope::analyze(&volume, &AnalysisParams::default(), &Monitor::none())?;
@@ -38,8 +38,9 @@
 //! - [`error`]: the [`Error`] enum, grouped by concern, with the parameter's name and value as data.
 //! - [`progress`]: the [`Monitor`] every long computation takes: phase, progress and cancellation.
 //! - [`volume`]: the [`Volume`] (voxels in their own type, owned or mapped), its statistics and
-//!   quantization (docs/design.md §2), trilinear interpolation, the cell map, the pyramid,
-//!   synthetic phantoms, and `io/` with one reader per format.
+//!   quantization (docs/design.md §2), trilinear interpolation, the cell map, the pyramid and
+//!   synthetic phantoms.
+//! - [`formats`]: reading volumes from files, one reader per format, and writing them.
 //! - [`view`]: the most structured view (paper §3.1, §4): the icosphere, the entropy rate of an
 //!   axis and the search over the sphere.
 //! - [`partition`](mod@partition): slabs along an axis (paper §5): slice stacks, top-down (§5.1), bottom-up
@@ -56,6 +57,7 @@ pub mod analysis;
 pub mod budget;
 pub mod error;
 pub mod explain;
+pub mod formats;
 pub mod geometry;
 pub mod measure;
 pub mod params;
@@ -71,6 +73,7 @@ pub mod volume;
 
 pub use analysis::{Analysis, AnalysisParams, Plan, analyze, analyze_planned};
 pub use error::{Error, Result};
+pub use formats::{Format, LoadOptions, Loaded, load};
 pub use geometry::Axis;
 pub use geometry::lattice::SamplingParams;
 pub use partition::{
@@ -80,7 +83,6 @@ pub use progress::{Monitor, Progress};
 pub use render::{Layout, RenderParams, Renderer};
 pub use report::{AnalysisReport, SCHEMA_VERSION, SlabsReport};
 pub use view::{ViewParams, ViewSearch, search};
-pub use volume::io::{Format, LoadOptions, Loaded, load};
 pub use volume::{Quantizer, Stats, Volume, VoxelType};
 
 /// The name shown for the built-in dataset.

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use slabscope::volume::io::write_volume;
+use slabscope::formats::write_volume;
 use slabscope::volume::phantom;
 
 /// The command line the whole-process benchmarks share: `--runs N`, `--dir DIR` (where their

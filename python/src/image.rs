@@ -59,10 +59,10 @@ impl Image {
         // Only picture names are taken, so no volume is ever written over.
         let format = ImageOutput::for_path(&out)
             .map_err(|e| PyValueError::new_err(crate::errors::message(&e)))?;
-        slabscope::volume::io::check_output(&out, force).or_py()?;
+        slabscope::formats::check_output(&out, force).or_py()?;
         let bytes = encode(&self.pixmap, format).or_py()?;
         run::quick(py, || {
-            slabscope::volume::io::write_atomic(&out, force, |mut file| {
+            slabscope::formats::write_atomic(&out, force, |mut file| {
                 std::io::Write::write_all(&mut file, &bytes)
             })
         })

@@ -562,7 +562,7 @@ impl Volume {
         Ok(Self {
             inner: Arc::new(volume),
             name: "array".into(),
-            max_memory: slabscope::volume::io::default_max_memory(),
+            max_memory: slabscope::formats::default_max_memory(),
             array: Some(kept.unbind()),
             copied,
             format: "array".into(),

@@ -8,8 +8,8 @@ use anyhow::Result;
 use clap::Args;
 use slabscope::budget::{Budget, Purpose};
 use slabscope::explain::StepsShown;
+use slabscope::formats::{VolumeOutput, stage, stage_volume};
 use slabscope::report::curves_csv;
-use slabscope::volume::io::{VolumeOutput, stage, stage_volume};
 use slabscope::{AnalysisReport, Monitor, SlabsReport, label_volume};
 
 use super::args::{AnalysisArgs, LoadArgs};

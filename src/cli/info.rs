@@ -6,11 +6,12 @@ use anyhow::Result;
 use clap::Args;
 use slabscope::error::names::{controls, text};
 use slabscope::error::{human_bytes, shown};
+use slabscope::formats::Loaded;
+use slabscope::formats::dicom::DicomSeries;
+use slabscope::formats::zarr::ZarrInfo;
 use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, to_json};
 use slabscope::triage::{Entry, Folder, discover, folder_kind};
 use slabscope::volume::dims_string;
-use slabscope::volume::io::zarr::ZarrInfo;
-use slabscope::volume::io::{DicomSeries, Loaded};
 
 use super::LoadArgs;
 
@@ -35,7 +36,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     // would look at).
     let dir = &args.file;
     let opts = args.load.options()?;
-    let listed = if dir.is_dir() && opts.series.is_none() {
+    let listed = if dir.is_dir() && opts.dicom.series.is_none() {
         match folder_kind(dir)? {
             Folder::Collection => Some(discover(std::slice::from_ref(dir), &opts)?),
             Folder::Dicom => {

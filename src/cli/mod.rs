@@ -33,7 +33,7 @@ use anyhow::{Result, bail};
 use clap::Subcommand;
 use slabscope::error::names::controls;
 use slabscope::error::shown;
-use slabscope::volume::io::{check_output, same_file};
+use slabscope::formats::{check_output, same_file};
 use slabscope::{Error, Loaded};
 
 pub use args::{AnalysisArgs, LoadArgs};
@@ -112,7 +112,7 @@ fn remove_staged_on_signals() {
     };
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
-            slabscope::volume::io::remove_staged();
+            slabscope::formats::remove_staged();
             let _ = signal_hook::low_level::emulate_default_handler(signal);
             std::process::exit(128 + signal);
         }
@@ -194,7 +194,7 @@ fn same_path(a: &Path, b: &Path) -> bool {
 /// Writes `bytes` to `path` atomically; an existing file is replaced only when `force` is set.
 pub fn write_new(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
     use std::io::Write;
-    slabscope::volume::io::write_atomic(path, force, |mut file| file.write_all(bytes))?;
+    slabscope::formats::write_atomic(path, force, |mut file| file.write_all(bytes))?;
     Ok(())
 }
 

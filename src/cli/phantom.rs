@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
-use slabscope::volume::io::{NrrdEncoding, VolumeOutput, write_nrrd, write_volume};
+use slabscope::formats::{NrrdEncoding, VolumeOutput, write_nrrd, write_volume};
 use slabscope::volume::phantom;
 
 /// The phantoms.

@@ -11,6 +11,7 @@ use super::table::{
 use super::{Given, text};
 use crate::analysis::AnalysisParams;
 use crate::error::{Error, Result};
+use crate::formats::{DicomOptions, LoadOptions, RawOptions, ZarrOptions, default_max_memory};
 use crate::geometry::AxisChoice;
 use crate::geometry::lattice::SamplingParams;
 use crate::partition::Stop;
@@ -18,7 +19,6 @@ use crate::render::{CameraParams, Gap, RenderParams, TransferChoice};
 use crate::view::ViewParams;
 use crate::volume::Resolution;
 use crate::volume::background::BackgroundRule;
-use crate::volume::io::{LoadOptions, RawOptions, default_max_memory};
 
 impl Given {
     /// The first of two conflicting parameters both given, as an error.
@@ -100,11 +100,15 @@ impl Given {
             },
             volume: self.number(&VOLUME)?,
             channel: self.number(&CHANNEL)?,
-            series: self.parsed(&SERIES, text::any)?,
-            include_localizers: self.switch(&INCLUDE_LOCALIZERS)?,
-            resample: self.switch(&RESAMPLE)?,
-            show_phi: self.switch(&SHOW_PHI)?,
-            label_image: self.parsed(&LABEL_IMAGE, text::any)?,
+            dicom: DicomOptions {
+                series: self.parsed(&SERIES, text::any)?,
+                include_localizers: self.switch(&INCLUDE_LOCALIZERS)?,
+                resample: self.switch(&RESAMPLE)?,
+                show_phi: self.switch(&SHOW_PHI)?,
+            },
+            zarr: ZarrOptions {
+                label_image: self.parsed(&LABEL_IMAGE, text::any)?,
+            },
         })
     }
 

@@ -2,9 +2,9 @@
 //! window, raw dimensions and spacing, a voxel type, a byte order, a byte count, a resolution.
 //! Each returns `None` for text it does not take; what it takes is said by the parameter's entry.
 
+use crate::formats::{parse_bytes, parse_dims};
 use crate::geometry::AxisChoice;
 use crate::volume::background::BackgroundRule;
-use crate::volume::io::{parse_bytes, parse_dims};
 use crate::volume::{Endian, Resolution, VoxelType};
 
 /// Two values written `A` then a separator then `B` (spaces around each allowed).

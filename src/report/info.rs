@@ -7,9 +7,10 @@ use serde::Serialize;
 
 use super::{GeometryReport, SCHEMA_VERSION};
 use crate::error::Result;
+use crate::formats::Loaded;
+use crate::formats::dicom::DicomSeries;
+use crate::formats::zarr::ZarrInfo;
 use crate::volume::VoxelType;
-use crate::volume::io::zarr::ZarrInfo;
-use crate::volume::io::{DicomSeries, Loaded};
 
 /// The object `info --json` prints for one volume: what it is, where it lies, how its values
 /// spread, and for DICOM which series it is.

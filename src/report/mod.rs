@@ -374,7 +374,8 @@ mod tests {
     use std::path::Path;
 
     use super::*;
-    use crate::volume::io::{DicomSeries, Loaded};
+    use crate::formats::Loaded;
+    use crate::formats::dicom::DicomSeries;
 
     /// The key paths of a JSON value (`.dicom.patient`, `.volumes[].path`), as the contract
     /// snapshots list them.
@@ -409,7 +410,7 @@ mod tests {
     fn info_reports_every_key_of_the_contract() {
         let mut loaded = Loaded {
             volume: crate::volume::phantom::body([12, 10, 14], 1).unwrap(),
-            format: crate::volume::io::Format::Nrrd,
+            format: crate::formats::Format::Nrrd,
             notes: vec!["a note".into()],
             sources: Vec::new(),
             dicom: None,

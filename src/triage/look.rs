@@ -9,8 +9,8 @@ use super::{Entry, TriageRow};
 use crate::analysis::{AnalysisParams, analyze};
 use crate::budget::{Budget, Purpose};
 use crate::error::Error;
+use crate::formats::{LoadOptions, dicom, load};
 use crate::progress::{Monitor, Progress};
-use crate::volume::io::{LoadOptions, dicom, load};
 
 /// The coarse lattice of the fast path: rays and samples this many smallest voxel spacings
 /// apart, an eighth of the samples.
@@ -58,10 +58,11 @@ pub fn look(
 ) -> TriageOutcome {
     let failed = |row: TriageRow| TriageOutcome { row, cell: None };
     let timeout = how.timeout;
-    let opts = LoadOptions {
-        series: entry.series.clone().or_else(|| how.load.series.clone()),
-        ..how.load.clone()
-    };
+    let mut opts = how.load.clone();
+    opts.dicom.series = entry
+        .series
+        .clone()
+        .or_else(|| how.load.dicom.series.clone());
     let name = crate::error::shown(&entry.path);
     if let Some(problem) = &entry.problem {
         let e = Error::format(&entry.path, problem.clone());
@@ -136,10 +137,7 @@ pub fn look(
 /// Loads `entry`: a series whose files the walk (or a manifest's resolution) found is read
 /// from them alone, with what its folder left out said as the entry says it (once for the
 /// folder).
-fn load_entry(
-    entry: &Entry,
-    opts: &LoadOptions,
-) -> crate::error::Result<crate::volume::io::Loaded> {
+fn load_entry(entry: &Entry, opts: &LoadOptions) -> crate::error::Result<crate::formats::Loaded> {
     match &entry.series {
         Some(key) if !entry.files.is_empty() => {
             dicom::load_series(&entry.path, &entry.files, key, opts).map(|mut l| {

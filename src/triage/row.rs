@@ -3,8 +3,9 @@
 use serde::Serialize;
 
 use crate::analysis::Analysis;
+use crate::formats::Loaded;
+use crate::formats::dicom::DicomSeries;
 use crate::report::SCHEMA_VERSION;
-use crate::volume::io::{DicomSeries, Loaded};
 
 /// One volume's row: what it is, what is wrong with it, and its most structured axis and slabs.
 /// Rows carry no timings, so that the rows of shards concatenate to those of one run.

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Entry, dedupe, discover, parse_manifest, resolve, restrict_to_series, shard};
 use crate::error::{Error, Result, names, shown};
-use crate::volume::io::LoadOptions;
+use crate::formats::LoadOptions;
 
 /// The longest manifest read, bytes.
 pub const MAX_MANIFEST: u64 = 256 << 20;
@@ -46,7 +46,7 @@ pub fn select(
         Source::Paths(paths) => discover(paths, opts)?,
     };
     dedupe(&mut all);
-    let series = opts.series.as_deref();
+    let series = opts.dicom.series.as_deref();
     if let Some(wanted) = series {
         all = restrict_to_series(all, wanted, opts);
     }
@@ -87,8 +87,8 @@ pub fn select(
 /// Reads a manifest (as `manifest_lines` writes it, or one path a line, for a DICOM series a tab
 /// and its UID): see [`parse_manifest`]. At most [`MAX_MANIFEST`] bytes.
 pub fn read_manifest(path: &Path) -> Result<Vec<Entry>> {
-    crate::volume::io::check_input(path)?;
-    let file = crate::volume::io::open_regular(path).map_err(|e| Error::io(path, e))?;
+    crate::formats::check_input(path)?;
+    let file = crate::formats::open_regular(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if len > MAX_MANIFEST {
         return Err(Error::format(

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use super::Entry;
 use crate::error::Result;
-use crate::volume::io::{LoadOptions, dicom};
+use crate::formats::{LoadOptions, dicom};
 
 /// A series key's `SeriesInstanceUID` (the key without its `#N`).
 fn uid(key: &str) -> &str {

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Entry, MAX_DEPTH, MAX_VOLUMES};
 use crate::error::{Error, Result};
-use crate::volume::io::{Folder, LoadOptions, dicom, folder_kind, volume_name};
+use crate::formats::{Folder, LoadOptions, dicom, folder_kind, volume_name};
 
 /// The volumes under `paths`, sorted and without repeats: each file named, each folder of
 /// slices, each DICOM series, and, walked recursively, every volume in the other folders

@@ -67,7 +67,7 @@ fn folder_to_list(
     load: &LoadOptions,
 ) -> Result<Option<(PathBuf, Vec<slabscope::triage::Entry>)>> {
     let kind = match file {
-        Some(dir) if dir.is_dir() && load.series.is_none() => Some(folder_kind(dir)?),
+        Some(dir) if dir.is_dir() && load.dicom.series.is_none() => Some(folder_kind(dir)?),
         _ => None,
     };
     Ok(match (file, kind) {
@@ -101,7 +101,7 @@ pub fn run(options: Options) -> Result<()> {
     );
     // A file that cannot be opened is an error before the screen changes.
     if let Some(path) = &file {
-        slabscope::volume::io::check_input(path)?;
+        slabscope::formats::check_input(path)?;
     }
     let folder = folder_to_list(file.as_ref(), &load)?;
     let file = match &folder {

@@ -4,7 +4,6 @@
 pub mod background;
 pub mod cells;
 pub mod interpolate;
-pub mod io;
 pub mod labels;
 pub mod mapped;
 pub mod phantom;
@@ -21,6 +20,7 @@ use rayon::prelude::*;
 pub use pyramid::Resolution;
 pub use quantize::Quantizer;
 pub use voxel::{Endian, VoxelType};
+pub(crate) use voxel::{decode_to, write_le};
 pub(crate) use voxels::with_voxels;
 pub use voxels::{LentBytes, Voxel, VoxelQuantizer, Voxels};
 

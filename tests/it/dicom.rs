@@ -65,7 +65,7 @@ fn close(a: [[f64; 4]; 4], b: [[f64; 4]; 4]) {
 #[test]
 fn a_series_with_shuffled_names_is_sorted_along_the_normal() {
     // Instance numbers run backwards and file names are random: positions decide.
-    let l = load_with("ct", |o| o.series = Some("1".into())).unwrap();
+    let l = load_with("ct", |o| o.dicom.series = Some("1".into())).unwrap();
     let v = &l.volume;
     assert_eq!(v.dims(), [24, 20, 12]);
     assert_eq!(v.spacing(), [0.8, 0.7, 2.5]);
@@ -94,7 +94,7 @@ fn a_series_with_shuffled_names_is_sorted_along_the_normal() {
 fn series_are_picked_by_position_or_uid_and_localizers_only_when_asked() {
     let e = load_with("ct", |_| {}).unwrap_err().to_string();
     assert!(e.contains("2 series") && e.contains("Sagittal MPR"), "{e}");
-    let sag = load_with("ct", |o| o.series = Some("2".into())).unwrap();
+    let sag = load_with("ct", |o| o.dicom.series = Some("2".into())).unwrap();
     let v = &sag.volume;
     assert_eq!(v.dims(), [24, 20, 6]);
     // Columns along +y, rows along -z: the normal (their cross product) is -x, so the slices
@@ -106,13 +106,13 @@ fn series_are_picked_by_position_or_uid_and_localizers_only_when_asked() {
     close(v.transform().matrix, t);
     check_voxels(v, |i, j, k| stored(i, j, 5 - k) - 1024.0);
     let uid = sag.dicom.unwrap().key;
-    let by_uid = load_with("ct", |o| o.series = Some(uid.clone())).unwrap();
+    let by_uid = load_with("ct", |o| o.dicom.series = Some(uid.clone())).unwrap();
     assert_eq!(by_uid.dicom.unwrap().key, uid);
-    let e = load_with("ct", |o| o.series = Some("7".into()))
+    let e = load_with("ct", |o| o.dicom.series = Some("7".into()))
         .unwrap_err()
         .to_string();
     assert!(e.contains("no series \"7\""), "{e}");
-    let e = load_with("ct", |o| o.include_localizers = true)
+    let e = load_with("ct", |o| o.dicom.include_localizers = true)
         .unwrap_err()
         .to_string();
     assert!(e.contains("3 series") && e.contains("Topogram"), "{e}");
@@ -133,7 +133,7 @@ fn a_missing_slice_is_named_and_resampling_fills_it() {
     );
     // Resampled: eight slices 2 mm apart, the missing one interpolated (the values are linear in
     // k, so exactly).
-    let r = load_with("gap", |o| o.resample = true).unwrap();
+    let r = load_with("gap", |o| o.dicom.resample = true).unwrap();
     assert_eq!(r.volume.dims(), [24, 20, 8]);
     check_voxels(&r.volume, |i, j, k| stored(i, j, k) - 1024.0);
     assert!(!r.notes.iter().any(|n| n.contains("missing slices")));
@@ -158,7 +158,7 @@ fn gantry_tilt_is_a_sheared_transform_or_resampled_away() {
     check_voxels(&l.volume, |i, j, k| stored(i, j, k) - 1024.0);
     // Resampled onto the orthogonal grid: slice k's row j is the tilted slice's row j - shift·k,
     // missing where that falls outside it.
-    let r = load_with("tilt", |o| o.resample = true).unwrap();
+    let r = load_with("tilt", |o| o.dicom.resample = true).unwrap();
     let t = ras(
         [[0.8, 0.0, 0.0], [0.0, 0.7, 0.0], [0.0, 0.0, 3.0]],
         [0.0, 0.0, 0.0],

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use slabscope::LoadOptions;
-use slabscope::volume::io::dicom;
+use slabscope::formats::{DicomOptions, dicom};
 
 use crate::common::{dicom_data, rows, run, s};
 
@@ -97,7 +97,10 @@ fn a_series_split_across_two_folders_is_one_volume_with_its_slices_in_order() {
     assert_eq!(noting_localizer(&all), 1, "{}", out.stdout);
     // The row's path and series reopen the same volume: every slice, in order along the normal.
     let opts = LoadOptions {
-        series: Some(uid.clone()),
+        dicom: DicomOptions {
+            series: Some(uid.clone()),
+            ..DicomOptions::default()
+        },
         ..LoadOptions::default()
     };
     let l = slabscope::load(&study, &opts).unwrap();

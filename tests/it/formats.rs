@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use slabscope::volume::io::{NrrdEncoding, RawOptions, write_nrrd};
+use slabscope::formats::{NrrdEncoding, RawOptions, write_nrrd};
 use slabscope::volume::{Endian, VoxelType};
 use slabscope::{Format, LoadOptions, Loaded, Volume, load};
 

@@ -5,11 +5,11 @@
 
 use slabscope::Volume;
 use slabscope::analysis::{AnalysisParams, analyze};
+use slabscope::formats::{LoadOptions, load, write_volume};
 use slabscope::partition::Method;
 use slabscope::progress::Monitor;
 use slabscope::render::{Layout, RenderParams, Renderer};
 use slabscope::report::{AnalysisReport, to_json};
-use slabscope::volume::io::{LoadOptions, load, write_volume};
 use slabscope::volume::{Voxel, VoxelType, Voxels, phantom};
 
 /// `volume`'s voxels, held as `T` (every value must be one of `T`'s).
@@ -132,7 +132,7 @@ fn a_mapped_file_cut_short_is_one_clear_line() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("body.nii");
     let body = slabscope::volume::phantom::body([32, 32, 40], 1).unwrap();
-    slabscope::volume::io::write_volume(&path, &body, false).unwrap();
+    slabscope::formats::write_volume(&path, &body, false).unwrap();
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_slabscope"))
         .args(["analyze", path.to_str().unwrap()])
         .env("SLABSCOPE_TEST_DELAY_MS", "1500")

@@ -101,6 +101,20 @@ fn nifti2_files_read_as_nibabel_reads_them() {
     assert_affine(&l, "ramp_u16_pair.hdr", 1.0);
 }
 
+/// A header named by a relative path finds its image beside it (not under its folder twice).
+#[test]
+fn a_pair_named_by_a_relative_path_reads() {
+    let relative = path("ramp_u16_pair.hdr");
+    let here = std::env::current_dir().unwrap();
+    let relative = relative
+        .strip_prefix(&here)
+        .expect("the data lie under the test's folder");
+    assert!(relative.is_relative() && relative.parent().is_some_and(|p| !p.as_os_str().is_empty()));
+    let l = load(relative, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(l.volume.voxel_type(), VoxelType::U16);
+    assert_eq!(l.sources[1], relative.with_extension("img"));
+}
+
 #[test]
 fn nifti2_4d_volumes_and_units() {
     let first = open("ramp_4d_um.nii", 0);

@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
+use slabscope::formats::write_volume;
 use slabscope::geometry::{AxisChoice, WorldTransform};
 use slabscope::partition::{Method, PartitionParams, Stop, partition};
-use slabscope::volume::io::write_volume;
 use slabscope::{AnalysisParams, LoadOptions, Monitor, Volume, analyze, label_volume, load};
 
 use crate::common::data;

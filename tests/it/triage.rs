@@ -236,7 +236,7 @@ fn the_fast_path_finds_the_full_searchs_axis_on_a_body() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("body.nrrd");
     let v = slabscope::volume::phantom::body([64, 64, 96], 3).unwrap();
-    slabscope::volume::io::write_nrrd(&path, &v, slabscope::volume::io::NrrdEncoding::Raw, false)
+    slabscope::formats::write_nrrd(&path, &v, slabscope::formats::NrrdEncoding::Raw, false)
         .unwrap();
     let row = |fast: bool| {
         let how = TriagePlan {
@@ -316,7 +316,7 @@ fn volumes_looked_at_together_share_the_budget_and_a_large_one_is_looked_at_alon
         .collect();
     let volume = slabscope::Volume::new([40; 3], [1.0; 3], slabscope::VoxelType::U8, data).unwrap();
     for name in ["a.nii.gz", "b.nii.gz", "c.nii.gz"] {
-        slabscope::volume::io::write_nifti(&dir.path().join(name), &volume, true, false).unwrap();
+        slabscope::formats::write_nifti(&dir.path().join(name), &volume, true, false).unwrap();
     }
     let root = dir.path().to_str().unwrap();
     // Each 40³ volume takes 64,000 bytes, held as its u8: more than half of 100,000, less than

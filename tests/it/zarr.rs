@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use slabscope::formats::ZarrOptions;
 use slabscope::volume::VoxelType;
 use slabscope::{Format, LoadOptions, Loaded, load};
 
@@ -115,7 +116,9 @@ fn the_store_s_coarser_datasets_are_the_pyramid_s_levels() {
     }
     // A label image whose levels keep z is off the grid: its levels are computed.
     let opts = LoadOptions {
-        label_image: Some("cells".into()),
+        zarr: ZarrOptions {
+            label_image: Some("cells".into()),
+        },
         ..LoadOptions::default()
     };
     let cells = open_with(&path("v05_sharded.ome.zarr"), &opts);
@@ -129,7 +132,7 @@ fn a_coarse_dataset_is_read_alone_as_its_pyramid_level() {
     let store = path("v04_blosc.ome.zarr");
     let opts = LoadOptions::default();
     let full = open_with(&store, &opts).volume;
-    let preview = |max| slabscope::volume::io::zarr::load_preview(&store, &opts, max).unwrap();
+    let preview = |max| slabscope::formats::load_preview(&store, &opts, max).unwrap();
     let s1 = full.coarser(1);
     for (max, k) in [(s1.len(), 1), (s1.len() - 1, 2)] {
         let p = preview(max).unwrap_or_else(|| panic!("a preview within {max} voxels"));
@@ -153,7 +156,7 @@ fn a_coarse_dataset_is_read_alone_as_its_pyramid_level() {
     // Not a store: nothing to preview.
     let nifti = data("ramp_u8.nii");
     assert!(
-        slabscope::volume::io::zarr::load_preview(&nifti, &opts, 1)
+        slabscope::formats::load_preview(&nifti, &opts, 1)
             .unwrap()
             .is_none()
     );
@@ -242,7 +245,9 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     assert_eq!(info.codecs, vec!["sharding(bytes, gzip)"]);
 
     let opts = LoadOptions {
-        label_image: Some("cells".into()),
+        zarr: ZarrOptions {
+            label_image: Some("cells".into()),
+        },
         ..LoadOptions::default()
     };
     let cells = open_with(&path(name), &opts);
@@ -260,7 +265,9 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     );
 
     let wrong = LoadOptions {
-        label_image: Some("nuclei".into()),
+        zarr: ZarrOptions {
+            label_image: Some("nuclei".into()),
+        },
         ..LoadOptions::default()
     };
     let e = load(&path(name), &wrong).unwrap_err().to_string();
@@ -482,7 +489,9 @@ fn metadata_and_label_images_out_of_the_store_are_refused() {
     refused_out(&store, &opts, "dataset \"s0\": .zarray");
     // A label image, and the whole labels group, that lead to another store.
     let cells = LoadOptions {
-        label_image: Some("cells".into()),
+        zarr: ZarrOptions {
+            label_image: Some("cells".into()),
+        },
         ..LoadOptions::default()
     };
     let (_keep4, other) = copy("v05_sharded.ome.zarr");

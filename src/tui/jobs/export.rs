@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use slabscope::volume::io::{NrrdEncoding, write_atomic, write_nrrd};
+use slabscope::formats::{NrrdEncoding, write_atomic, write_nrrd};
 use slabscope::{
     Analysis, AnalysisReport, Layout, Monitor, Partition, RenderParams, Renderer, Volume,
     label_volume,

@@ -312,13 +312,10 @@ fn load_volume(
 ) -> JobMsg {
     let loaded = match source {
         Some(entry) => {
-            let load = LoadOptions {
-                series: entry.series.clone().or(load.series),
-                ..load
-            };
+            let mut load = load;
+            load.dicom.series = entry.series.clone().or(load.dicom.series);
             // A preview that cannot be read is no error: level 0's load says what is wrong.
-            let preview =
-                slabscope::volume::io::zarr::load_preview(&entry.path, &load, GLANCE_VOXELS);
+            let preview = slabscope::formats::load_preview(&entry.path, &load, GLANCE_VOXELS);
             if let Ok(Some(p)) = preview {
                 send(JobMsg::Preview(Arc::new(p.volume), p.notes));
             }
@@ -333,7 +330,7 @@ fn load_volume(
 /// The volume the TUI works on: `loaded`'s, or beyond the memory budget the finest pyramid level
 /// whose analysis fits, said in a note.
 fn within_memory(
-    loaded: slabscope::volume::io::Loaded,
+    loaded: slabscope::formats::Loaded,
     max_memory: u64,
 ) -> slabscope::Result<(Arc<Volume>, Vec<String>)> {
     let plan = Budget::new(max_memory).plan(&loaded.volume, Purpose::Picture)?;

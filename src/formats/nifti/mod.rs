@@ -10,35 +10,86 @@ pub(crate) use write::stage;
 pub use write::write_nifti;
 
 use std::io::{BufReader, Read};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use flate2::bufread::MultiGzDecoder;
 
 use header::Header;
 
 use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
-use super::{LoadOptions, Read0, data_file};
+use super::reader::{Reader, Sniff};
+use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::VoxelType;
 
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
+/// The NIfTI reader.
+pub(crate) struct Nifti;
+
+impl Reader for Nifti {
+    fn format(&self) -> Format {
+        Format::Nifti
+    }
+
+    fn title(&self) -> &'static str {
+        "NIfTI"
+    }
+
+    /// A NIfTI header, plain or gzipped; a gzip stream of anything else is no reader's.
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if head.starts_with(&GZIP_MAGIC) {
+            return if is_gzipped_nifti(head) {
+                Sniff::Mine
+            } else {
+                Sniff::Nobody
+            };
+        }
+        if looks_like(head) {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn extensions(&self) -> &'static [&'static str] {
+        &[".nii", ".nii.gz"]
+    }
+
+    /// Its extensions, and a two-file header's `.hdr`.
+    fn volume_name(&self, name: &str) -> bool {
+        [".nii", ".nii.gz", ".hdr"]
+            .iter()
+            .any(|e| name.ends_with(e))
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source, opts)
+    }
+}
+
 /// Whether bytes start with a NIfTI-1 or NIfTI-2 header.
-pub(crate) fn looks_like(head: &[u8]) -> bool {
+fn looks_like(head: &[u8]) -> bool {
     matches!(head.get(344..348), Some(b"n+1\0" | b"ni1\0")) || header::looks_like_2(head)
 }
 
 /// Whether gzip-compressed bytes start with a NIfTI-1 or NIfTI-2 header.
-pub(crate) fn is_gzipped_nifti(head: &[u8]) -> bool {
+fn is_gzipped_nifti(head: &[u8]) -> bool {
     let mut buf = Vec::with_capacity(540);
     // A truncated stream still shows its first bytes.
     let _ = MultiGzDecoder::new(head).take(540).read_to_end(&mut buf);
     looks_like(&buf)
 }
 
-fn open(path: &Path) -> Result<(Box<dyn Read>, bool)> {
-    let mut file = BufReader::new(super::open_regular(path).map_err(|e| Error::io(path, e))?);
+/// The file of `source` to read from, gunzipped where it is gzipped, and whether it is.
+fn open(source: &Source) -> Result<(Box<dyn Read>, bool)> {
+    let path = source.path();
+    let mut file = BufReader::new(source.open()?);
     let mut magic = [0u8; 2];
     let n = file.read(&mut magic).map_err(|e| Error::io(path, e))?;
     let file = std::io::Cursor::new(magic[..n].to_vec()).chain(file);
@@ -51,9 +102,9 @@ fn open(path: &Path) -> Result<(Box<dyn Read>, bool)> {
 }
 
 /// Reads and checks the header of a NIfTI file of either version, and whether it is gzipped.
-fn read_header(path: &Path) -> Result<(Header, bool)> {
-    let (reader, gz) = open(path)?;
-    Ok((Header::read(path, reader)?, gz))
+fn read_header(source: &Source) -> Result<(Header, bool)> {
+    let (reader, gz) = open(source)?;
+    Ok((Header::read(source.path(), reader)?, gz))
 }
 
 /// NIfTI `datatype` codes of the voxel types slabscope reads and writes.
@@ -100,8 +151,9 @@ fn unit_to_mm(xyzt_units: u8) -> f64 {
     }
 }
 
-pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let (h, gz) = read_header(path)?;
+fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    let path = source.path();
+    let (h, gz) = read_header(source)?;
     let mut notes = Vec::new();
     check_intent(path, &h)?;
     let (ndim, dims, extra) = dimensions(path, &h)?;
@@ -131,9 +183,9 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         ));
     }
     let (file, gz) = if single {
-        (path.to_path_buf(), gz)
+        (source.clone(), gz)
     } else {
-        let img = image_file(path, gz)?;
+        let img = image_file(source, gz)?;
         let gz = open(&img)?.1;
         (img, gz)
     };
@@ -152,7 +204,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?
         .with_transform(transform(&h, unit))
-        .with_source(&spec.file);
+        .with_source(spec.file.path());
     read.format_version = Some(h.version.to_string());
     Ok(read)
 }
@@ -273,20 +325,18 @@ fn transform(h: &Header, unit: f64) -> Option<WorldTransform> {
     Some(WorldTransform::ras(linear, origin))
 }
 
-/// The `.img` (or `.img.gz`) beside a `.hdr` header.
-fn image_file(path: &Path, gz: bool) -> Result<PathBuf> {
-    let name = path.to_string_lossy();
+/// The `.img` (or `.img.gz`) beside a `.hdr` header: named by the header's own name, relative to
+/// its folder (the whole path would be taken relative to the folder a second time).
+fn image_file(source: &Source, gz: bool) -> Result<Source> {
+    let name = source.name();
     let stem = name
         .strip_suffix(".hdr.gz")
         .or_else(|| name.strip_suffix(".hdr"))
         .ok_or_else(|| {
             Error::format(
-                path,
+                source.path(),
                 "a two-file NIfTI header (ni1, ni2) should be named .hdr",
             )
         })?;
-    data_file(
-        path,
-        &format!("{stem}{}", if gz { ".img.gz" } else { ".img" }),
-    )
+    source.sibling(&format!("{stem}{}", if gz { ".img.gz" } else { ".img" }))
 }

@@ -12,7 +12,7 @@ use super::guard::Guard;
 use super::meta::ArrayMeta;
 use super::store::LocalStore;
 use crate::error::{Error, Result};
-use crate::volume::io::data::typed_buffer;
+use crate::formats::data::typed_buffer;
 use crate::volume::voxels::{held_type, infinities_missing};
 use crate::volume::{Voxel, VoxelType, Voxels};
 

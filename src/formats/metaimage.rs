@@ -5,7 +5,8 @@ use std::io::Read;
 use std::path::Path;
 
 use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
-use super::{LoadOptions, Read0, data_file};
+use super::reader::{Reader, Sniff};
+use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::{Endian, VoxelType};
@@ -22,8 +23,41 @@ const OPENING_KEYS: [&str; 6] = [
     "DimSize",
 ];
 
+/// The MetaImage reader.
+pub(crate) struct MetaImage;
+
+impl Reader for MetaImage {
+    fn format(&self) -> Format {
+        Format::MetaImage
+    }
+
+    fn title(&self) -> &'static str {
+        "MetaImage"
+    }
+
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if looks_like(head) {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn extensions(&self) -> &'static [&'static str] {
+        &[".mha", ".mhd"]
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source, opts)
+    }
+}
+
 /// Whether `head` starts like a MetaImage header.
-pub(crate) fn looks_like(head: &[u8]) -> bool {
+fn looks_like(head: &[u8]) -> bool {
     let first = head.split(|&b| b == b'\n').next().unwrap_or_default();
     let first = String::from_utf8_lossy(first);
     first.split_once('=').is_some_and(|(k, _)| {
@@ -199,10 +233,13 @@ pub(crate) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
     Ok(h)
 }
 
-pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    let path = source.path();
     let mut bytes = Vec::new();
-    super::open_regular(path)
-        .and_then(|f| f.take(MAX_HEADER).read_to_end(&mut bytes))
+    source
+        .open()?
+        .take(MAX_HEADER)
+        .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, e))?;
     let h = parse_header(path, &bytes)?;
     let mut notes = Vec::new();
@@ -224,7 +261,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     }
     let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
     let (file, start, skip) = match h.data_file.as_str() {
-        "LOCAL" => (path.to_path_buf(), h.len as u64, Skip::Bytes(0)),
+        "LOCAL" => (source.clone(), h.len as u64, Skip::Bytes(0)),
         name if name.starts_with("LIST")
             || name.contains('%')
             || name.split_whitespace().count() > 1 =>
@@ -234,7 +271,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
                 format!("multi-file data ({name:?})"),
             ));
         }
-        name => (data_file(path, name)?, 0, h.skip),
+        name => (source.sibling(name)?, 0, h.skip),
     };
     let spec = DataSpec {
         file,
@@ -261,7 +298,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     Ok(
         Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?
             .with_transform(transform)
-            .with_source(&spec.file),
+            .with_source(spec.file.path()),
     )
 }
 

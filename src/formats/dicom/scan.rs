@@ -76,7 +76,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
                 }
                 header::images(&obj, mosaic.as_ref())
             };
-            let patient = if opts.show_phi {
+            let patient = if opts.dicom.show_phi {
                 header::patient(&obj)
             } else {
                 Vec::new()
@@ -157,7 +157,7 @@ pub(super) fn series_of(
 ) -> Result<(Scan, Vec<Series>, Vec<String>)> {
     let mut scan = scan(paths, opts)?;
     let images = std::mem::take(&mut scan.images);
-    let (series, left) = assemble::group(images, opts.include_localizers);
+    let (series, left) = assemble::group(images, opts.dicom.include_localizers);
     let mut notes = Vec::new();
     let counted = |n: usize, what: &str| match n {
         0 => None,

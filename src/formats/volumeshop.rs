@@ -5,9 +5,36 @@ use std::io::Read;
 use std::path::Path;
 
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
-use super::{LoadOptions, Read0};
+use super::reader::Reader;
+use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::volume::{Endian, VoxelType, dims_string};
+
+/// The VolumeShop reader.
+pub(crate) struct VolumeShop;
+
+impl Reader for VolumeShop {
+    fn format(&self) -> Format {
+        Format::VolumeShop
+    }
+
+    fn title(&self) -> &'static str {
+        "VolumeShop"
+    }
+
+    #[allow(clippy::case_sensitive_file_extension_comparisons)] // the name is lowercased
+    fn claims_name(&self, name: &str) -> bool {
+        name.ends_with(".dat")
+    }
+
+    fn volume_name(&self, name: &str) -> bool {
+        self.claims_name(name)
+    }
+
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source, opts)
+    }
+}
 
 /// The dimensions a `.dat` header of `head` claims, when the file size `len` agrees with them.
 pub(crate) fn check_header(path: &Path, head: &[u8], len: u64) -> Result<[usize; 3]> {
@@ -33,14 +60,15 @@ pub(crate) fn check_header(path: &Path, head: &[u8], len: u64) -> Result<[usize;
     Ok(dims)
 }
 
-pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let mut file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
+fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    let path = source.path();
+    let mut file = source.open()?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let mut head = [0u8; 6];
     let n = file.read(&mut head).map_err(|e| Error::io(path, e))?;
     let dims = check_header(path, &head[..n], len)?;
     let spec = DataSpec {
-        file: path.to_path_buf(),
+        file: source.clone(),
         start: 6,
         skip_lines: 0,
         skip: Skip::Bytes(0),

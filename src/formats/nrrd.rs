@@ -10,10 +10,44 @@ pub(crate) use self::write::stage;
 pub use self::write::{NrrdEncoding, write_nrrd};
 
 use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels};
-use super::{LoadOptions, Read0, data_file};
+use super::reader::{Reader, Sniff};
+use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::{Endian, VoxelType};
+
+/// The NRRD reader.
+pub(crate) struct Nrrd;
+
+impl Reader for Nrrd {
+    fn format(&self) -> Format {
+        Format::Nrrd
+    }
+
+    fn title(&self) -> &'static str {
+        "NRRD"
+    }
+
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if head.starts_with(b"NRRD000") {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn extensions(&self) -> &'static [&'static str] {
+        &[".nrrd", ".nhdr"]
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source, opts)
+    }
+}
 
 /// The most bytes a header may take before we stop looking for its end.
 const MAX_HEADER: usize = 1 << 20;
@@ -326,8 +360,9 @@ pub(crate) fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
 }
 
 /// Reads the header bytes: up to the first blank line, or the whole (detached) header file.
-fn read_header_bytes(path: &Path) -> Result<Vec<u8>> {
-    let file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
+fn read_header_bytes(source: &Source) -> Result<Vec<u8>> {
+    let path = source.path();
+    let file = source.open()?;
     let mut bytes = Vec::new();
     let mut reader = file.take(MAX_HEADER as u64);
     let mut chunk = [0u8; 8192];
@@ -375,8 +410,9 @@ fn volume_axes(path: &Path, h: &Header) -> Result<Vec<usize>> {
     Ok(axes)
 }
 
-pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let h = parse_header(path, &read_header_bytes(path)?)?;
+fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    let path = source.path();
+    let h = parse_header(path, &read_header_bytes(source)?)?;
     let mut notes = Vec::new();
     let axes = volume_axes(path, &h)?;
     let mut dims = [1usize; 3];
@@ -409,7 +445,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     }
     let endian = h.endian.unwrap_or_default();
     let (file, start) = match &h.data_file {
-        None => (path.to_path_buf(), h.len as u64),
+        None => (source.clone(), h.len as u64),
         Some(name) => {
             if name.contains('%') || name.split_whitespace().count() > 1 || name.starts_with("LIST")
             {
@@ -418,7 +454,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
                     format!("multi-file data ({name:?})"),
                 ));
             }
-            (data_file(path, name)?, 0)
+            (source.sibling(name)?, 0)
         }
     };
     let spec = DataSpec {
@@ -438,7 +474,7 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     Ok(
         Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?
             .with_transform(transform)
-            .with_source(&spec.file),
+            .with_source(spec.file.path()),
     )
 }
 

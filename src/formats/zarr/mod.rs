@@ -21,7 +21,8 @@ use serde::Serialize;
 
 use self::meta::{ArrayMeta, AxisKind, Image};
 use super::data::{one_channel, one_volume};
-use super::{Format, LoadOptions, Loaded, Read0};
+use super::reader::Reader;
+use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 
@@ -76,6 +77,69 @@ pub struct ZarrLevel {
     pub pyramid_level: Option<usize>,
 }
 
+/// The options of an OME-Zarr read.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ZarrOptions {
+    /// Which label image of the store to read (`labels/NAME`) instead of its image.
+    pub label_image: Option<String>,
+}
+
+/// The reader of an OME-Zarr store or a plain Zarr array (a folder).
+pub(crate) struct Zarr;
+
+impl Reader for Zarr {
+    fn format(&self) -> Format {
+        Format::OmeZarr
+    }
+
+    fn title(&self) -> &'static str {
+        "OME-Zarr"
+    }
+
+    fn reads_folder(&self, kind: Folder, _opts: &LoadOptions) -> bool {
+        kind == Folder::Zarr
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    fn channels(&self) -> bool {
+        true
+    }
+
+    /// Reads through [`Source::path`], the store's folder.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source.path(), opts)
+    }
+
+    /// The finest of the store's coarser datasets on the pyramid's grid within `max_voxels`,
+    /// quantized with its own range (level 0's is not known until level 0 is read).
+    fn preview(
+        &self,
+        source: &Source,
+        opts: &LoadOptions,
+        max_voxels: usize,
+    ) -> Result<Option<Read0>> {
+        let path = source.path();
+        if !(path.is_dir() && is_store(path)) {
+            return Ok(None);
+        }
+        read_preview(path, opts, max_voxels)
+    }
+}
+
+/// Fails when `opts` name a label image and `path` (a folder when `is_dir`) is no Zarr store.
+pub(crate) fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
+    if opts.zarr.label_image.is_some() && !(is_dir && is_store(path)) {
+        return Err(Error::format(
+            path,
+            "--label-image names a label image of an OME-Zarr store, and this is none",
+        ));
+    }
+    Ok(())
+}
+
 /// Whether the folder `dir` is a Zarr store (a group or an array, of Zarr v2 or v3).
 pub fn is_store(dir: &Path) -> bool {
     ["zarr.json", ".zattrs", ".zgroup", ".zarray"]
@@ -86,7 +150,7 @@ pub fn is_store(dir: &Path) -> bool {
 /// The image a load reads: the store, or one of its label images (which must lie in the store's
 /// tree `tree`, as every file read does).
 fn image_dir(dir: &Path, tree: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
-    let Some(name) = &opts.label_image else {
+    let Some(name) = &opts.zarr.label_image else {
         return Ok((dir.to_path_buf(), String::new()));
     };
     let names = meta::label_names(tree, dir).map_err(|m| Error::format(dir, m))?;
@@ -372,7 +436,7 @@ impl Opened {
 }
 
 /// Loads the image of the store at `dir` (or the label image `opts` names).
-pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let opened = Opened::new(dir, opts)?;
     let mut read0 = opened.read(dir, 0, opts)?;
     if let Some(source) =
@@ -381,22 +445,6 @@ pub(crate) fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
         read0.volume = read0.volume.with_level_source(Arc::new(source));
     }
     Ok(read0)
-}
-
-/// A coarse pyramid level of the volume at `path`, read without reading level 0, where the file
-/// holds one on the pyramid's grid of at most `max_voxels` voxels (an OME-Zarr store's coarser
-/// dataset): the finest such, its [`Volume::level`](crate::Volume::level) saying which,
-/// quantized with its own range (level 0's is not known until level 0 is read). `None` for every
-/// other file, and when level 0 itself has at most `max_voxels` voxels. A first picture while
-/// [`load`](super::load) reads level 0.
-pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Loaded>> {
-    super::check_input(path)?;
-    if !(path.is_dir() && is_store(path)) {
-        return Ok(None);
-    }
-    let read = read_preview(path, opts, max_voxels).map_err(|e| e.reached_from(path))?;
-    read.map(|r| super::finish(path, Format::OmeZarr, r))
-        .transpose()
 }
 
 /// The finest of the store's coarser datasets on the pyramid's grid with at most `max_voxels`

@@ -11,11 +11,75 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
 
 use super::data::{self, check_budget, voxel_buffer};
-use super::{LoadOptions, Read0, ome, tiff_ifd};
+use super::reader::{Reader, Sniff};
+use super::{Folder, Format, LoadOptions, Read0, Source, ome, tiff_ifd};
 use crate::error::{Error, Result};
 use crate::volume::{VoxelType, Voxels};
 
 type Tiff = Decoder<BufReader<File>>;
+
+/// The reader of a multi-page TIFF stack (an OME-TIFF's pages over z, channel and time).
+pub(crate) struct TiffStack;
+
+impl Reader for TiffStack {
+    fn format(&self) -> Format {
+        Format::Tiff
+    }
+
+    fn title(&self) -> &'static str {
+        "TIFF"
+    }
+
+    fn volume_name(&self, name: &str) -> bool {
+        [".tif", ".tiff"].iter().any(|e| name.ends_with(e))
+    }
+
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if [b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"]
+            .iter()
+            .any(|m| head.starts_with(*m))
+        {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    fn channels(&self) -> bool {
+        true
+    }
+
+    /// Reads through [`Source::path`]: the `tiff` decoder opens the file itself.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load_stack(source.path(), opts)
+    }
+}
+
+/// The reader of a folder of single-page TIFF slices.
+pub(crate) struct TiffSlices;
+
+impl Reader for TiffSlices {
+    fn format(&self) -> Format {
+        Format::TiffFolder
+    }
+
+    fn title(&self) -> &'static str {
+        "TIFF slices"
+    }
+
+    fn reads_folder(&self, kind: Folder, _opts: &LoadOptions) -> bool {
+        kind == Folder::Slices
+    }
+
+    /// Reads through [`Source::path`], the folder's.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load_folder(source.path(), opts)
+    }
+}
 
 /// Opens a TIFF whose directories [`tiff_ifd::check`] found sound; returns its decoder and
 /// its length in bytes.
@@ -203,7 +267,7 @@ fn spacing(dec: &mut Tiff) -> [f64; 3] {
     [ok(sx), ok(sy), ok(sz)]
 }
 
-pub(crate) fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
     let (mut dec, len) = open(path)?;
     let description = dec
         .get_tag_ascii_string(Tag::ImageDescription)
@@ -333,6 +397,13 @@ fn slice_number(path: &Path) -> Option<u64> {
     digits.chars().rev().collect::<String>().parse().ok()
 }
 
+/// Whether the file at `path` is named like a TIFF (`.tif`, `.tiff`, any case): in a folder, a
+/// slice.
+pub(crate) fn is_tiff(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"))
+}
+
 /// The TIFF files of a folder in slice order. Anything named like a slice that is not a
 /// readable regular file (a folder, a FIFO, a broken or looping link) is an error that names it,
 /// not a slice silently left out.
@@ -341,10 +412,7 @@ pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for entry in entries {
         let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        let named = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"));
-        if !named {
+        if !is_tiff(&path) {
             continue;
         }
         let meta = std::fs::metadata(&path).map_err(|e| Error::io(&path, e))?;
@@ -363,7 +431,7 @@ pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-pub(crate) fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
+fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = slice_files(dir)?;
     let (mut dec, _) = open(&files[0])?;
     let spacing = spacing(&mut dec);

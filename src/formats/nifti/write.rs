@@ -9,10 +9,10 @@ use flate2::write::GzEncoder;
 
 use super::DATATYPES;
 use crate::error::Result;
+use crate::formats::Staged;
 use crate::geometry::world::Quaternion;
 use crate::volume::Volume;
-use crate::volume::io::Staged;
-use crate::volume::voxel::write_le;
+use crate::volume::write_le;
 
 /// Writes `volume` as a single-file NIfTI (`.nii`, or gzip-compressed when `gzip`) in its voxel
 /// type (integer types rounded and clamped), with its voxel-to-world transform as both the sform
@@ -248,8 +248,8 @@ fn stored_quaternion(q: Quaternion) -> [f32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::formats::{LoadOptions, load};
     use crate::geometry::WorldTransform;
-    use crate::volume::io::{LoadOptions, load};
     use crate::volume::{VoxelType, Voxels};
 
     /// A volume `nx`×3×2 of u16 ramp values with a rotated, shifted transform.

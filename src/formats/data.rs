@@ -3,7 +3,7 @@
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, ErrorKind, Read, Seek, SeekFrom};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use flate2::bufread::{MultiGzDecoder, ZlibDecoder};
 use rayon::prelude::*;
@@ -11,10 +11,11 @@ use rayon::prelude::*;
 mod ascii;
 
 use self::ascii::read_ascii;
+use super::Source;
 use super::limits::physical_memory;
 use crate::error::{Error, Result};
+use crate::volume::decode_to;
 use crate::volume::mapped;
-use crate::volume::voxel::decode_to;
 use crate::volume::voxels::{held_type, infinities_missing};
 use crate::volume::{Endian, Voxel, VoxelType, Voxels, dims_string};
 
@@ -43,8 +44,8 @@ pub(crate) enum Skip {
 /// Everything needed to read a volume's voxels from a file.
 #[derive(Clone, Debug)]
 pub(crate) struct DataSpec {
-    /// The file holding the data.
-    pub file: PathBuf,
+    /// The source holding the data (the header's own, or the data file it names).
+    pub file: Source,
     /// Byte offset in the file where the data section starts (e.g. the end of an attached header).
     pub start: u64,
     /// Lines to skip from `start` before the data (NRRD `line skip`).
@@ -249,20 +250,20 @@ pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
 /// into memory, not where they are mapped: mapped file pages are the kernel's to drop, and what
 /// an analysis of them needs is weighed by the analysis (`analysis::level_within_memory`).
 fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
-    let expected = voxel_count(&spec.file, spec.dims)?
+    let expected = voxel_count(spec.file.path(), spec.dims)?
         .and_then(|n| (n as u64).checked_mul(spec.voxel_type.size() as u64))
         .ok_or_else(|| {
             Error::format(
-                &spec.file,
+                spec.file.path(),
                 format!(
                     "a {} volume has more voxels than this machine can address",
                     dims_string(spec.dims)
                 ),
             )
         })?;
-    let path = spec.file.as_path();
+    let path = spec.file.path();
     let buffer = || typed_buffer::<T>(path, spec.dims, max_memory);
-    let mut file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
+    let mut file = spec.file.open()?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if spec.start > len {
         return Err(Error::format(
@@ -359,7 +360,7 @@ fn read_raw<T: Decode>(
     expected: u64,
     buffer: impl FnOnce() -> Result<Vec<T>>,
 ) -> Result<Voxels> {
-    let path = spec.file.as_path();
+    let path = spec.file.path();
     // Without a skip, the data (every volume of it) is the end of the file.
     let start = if let Some(n) = spec.skip_bytes(expected) {
         pos.saturating_add(n)
@@ -426,7 +427,7 @@ fn read_stream<T: Decode>(
     mut out: Vec<T>,
 ) -> Result<Vec<T>> {
     let count = out.len();
-    let path = spec.file.as_path();
+    let path = spec.file.path();
     let corrupt = |e: std::io::Error, at: u64| {
         Error::format(
             path,

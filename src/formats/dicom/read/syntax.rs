@@ -7,7 +7,7 @@ use dicom_dictionary_std::StandardDataDictionary;
 
 /// How a file's data set is encoded: its transfer syntax.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub(in crate::volume::io::dicom) struct Syntax {
+pub(in crate::formats::dicom) struct Syntax {
     /// The transfer syntax UID.
     pub uid: String,
     /// The data set is explicit VR (else implicit): as it is encoded, which a few writers make
@@ -71,7 +71,7 @@ impl Syntax {
 }
 
 /// The name of the transfer syntax `uid`, or the UID itself when unknown.
-pub(in crate::volume::io::dicom) fn syntax_name(uid: &str) -> String {
+pub(in crate::formats::dicom) fn syntax_name(uid: &str) -> String {
     use dicom_encoding::TransferSyntaxIndex;
     dicom_transfer_syntax_registry::TransferSyntaxRegistry
         .get(uid)

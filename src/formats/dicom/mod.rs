@@ -32,13 +32,67 @@ use self::header::Image;
 use self::read::Syntax;
 use self::scan::{Scan, paths_of, series_of};
 use super::data::check_budget;
-use super::{LoadOptions, Read0};
+use super::reader::{Reader, Sniff};
+use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::{Volume, VoxelType};
 
 /// The most files of one folder scanned.
 pub const MAX_FILES: usize = 1 << 18;
+
+/// The options of a DICOM read.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct DicomOptions {
+    /// Which series of a folder: its position in the list (from 1) or its UID.
+    pub series: Option<String>,
+    /// Keep localizer and derived images (left out by default).
+    pub include_localizers: bool,
+    /// Resample a series with uneven spacing or gantry tilt to an even, orthogonal grid.
+    pub resample: bool,
+    /// Read the patient-identifying fields (never read otherwise).
+    pub show_phi: bool,
+}
+
+/// The DICOM reader: a file, or a folder of files (one series, or the one named).
+pub(crate) struct Dicom;
+
+impl Reader for Dicom {
+    fn format(&self) -> Format {
+        Format::Dicom
+    }
+
+    fn title(&self) -> &'static str {
+        "DICOM"
+    }
+
+    /// `DICM` after the preamble (first of all: some DICOM files carry a TIFF header in theirs).
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if head.get(128..132) == Some(b"DICM") {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn probe(&self, source: &Source) -> bool {
+        is_dicom(source.path())
+    }
+
+    fn reads_folder(&self, kind: Folder, opts: &LoadOptions) -> bool {
+        // A series may be named in a folder of DICOM files and other volumes.
+        kind == Folder::Dicom || (kind == Folder::Collection && opts.dicom.series.is_some())
+    }
+
+    fn volumes(&self) -> bool {
+        true
+    }
+
+    /// Reads through [`Source::path`]: a series is found among the files of a folder.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source.path(), opts)
+    }
+}
 
 /// Whether the file at `path` is DICOM, by its content (`DICM` after the preamble or at the
 /// start, or a file meta group), or by a `.dcm` name.
@@ -55,6 +109,25 @@ pub fn is_dicom(path: &Path) -> bool {
     super::open_regular(path)
         .and_then(|f| f.take(132).read_to_end(&mut head))
         .is_ok_and(|_| read::sniff(&head))
+}
+
+/// What a DICOM volume is, beyond its geometry: never a patient-identifying field unless they
+/// were asked for.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DicomSeries {
+    /// The series' key: its `SeriesInstanceUID` (with `#2`, ... on the parts of a split series).
+    pub key: String,
+    /// `SeriesNumber`.
+    pub number: Option<i64>,
+    /// `SeriesDescription`.
+    pub description: String,
+    /// Modality.
+    pub modality: String,
+    /// The transfer syntax, named.
+    pub syntax: String,
+    /// Patient-identifying fields, read only when asked for (empty otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub patient: Vec<(String, String)>,
 }
 
 /// One series of a DICOM folder, as a list shows it (no patient-identifying field).
@@ -219,10 +292,8 @@ pub fn load_series(
     super::check_input(path)?;
     // The files of one part of a split series group alone as that UID's only part.
     let uid = key.split('#').next().unwrap_or(key);
-    let opts = LoadOptions {
-        series: Some(uid.to_string()),
-        ..opts.clone()
-    };
+    let mut opts = opts.clone();
+    opts.dicom.series = Some(uid.to_string());
     let mut read = load_from(path, files, &opts).map_err(|e| e.reached_from(path))?;
     if let Some(d) = &mut read.dicom {
         d.key = key.to_string();
@@ -307,8 +378,12 @@ fn no_series(path: &Path, scan: &Scan) -> Error {
 /// Loads the DICOM file or folder at `path` as a volume: of a folder, the files directly in
 /// it, or, for a series named by its UID, every DICOM file below it too (a series may lie in
 /// several folders).
-pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let deep = opts.series.as_deref().is_some_and(|s| !by_position(s));
+fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
+    let deep = opts
+        .dicom
+        .series
+        .as_deref()
+        .is_some_and(|s| !by_position(s));
     load_from(path, &paths_of(path, deep)?, opts)
 }
 
@@ -318,13 +393,13 @@ fn load_from(path: &Path, files: &[PathBuf], opts: &LoadOptions) -> Result<Read0
     if series.is_empty() {
         return Err(no_series(path, &scan));
     }
-    let series = pick(path, &series, opts.series.as_deref())?;
+    let series = pick(path, &series, opts.dicom.series.as_deref())?;
     let layout =
         assemble::layout(series, &|im| name(&scan, im)).map_err(|m| Error::format(path, m))?;
     super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
     check_pixels(path, &scan, series, &mut notes)?;
     notes.extend(layout.notes.iter().cloned());
-    let resample = opts.resample && layout.needs_resampling();
+    let resample = opts.dicom.resample && layout.needs_resampling();
     let [cols, rows] = layout.plane;
     let (slices, lps) = if resample {
         layout.resampled()
@@ -386,9 +461,9 @@ fn sources(scan: &Scan, series: &Series, order: &[usize]) -> Vec<PathBuf> {
 
 /// What the volume loaded from `series` is, beyond its geometry: the series' fields, its first
 /// file's transfer syntax and (when asked for) the patient's fields.
-fn described(scan: &Scan, series: &Series) -> super::DicomSeries {
+fn described(scan: &Scan, series: &Series) -> DicomSeries {
     let first = &series.images[0];
-    super::DicomSeries {
+    DicomSeries {
         key: series.key.clone(),
         number: series.number,
         description: series.description.clone(),

@@ -30,7 +30,7 @@ pub fn open_inside(tree: &Path, path: &Path) -> std::io::Result<std::fs::File> {
             "a symbolic link that leads out of the store: slabscope reads only the files inside it",
         ));
     }
-    crate::volume::io::open_regular(&real)
+    crate::formats::open_regular(&real)
 }
 
 /// A read-only Zarr store over the folder `root`, whose files all lie in the store's tree.

@@ -57,7 +57,7 @@ pub(super) fn read_ascii(
 ) -> Result<Vec<f32>> {
     let count = out.len();
     out.clear();
-    let path = spec.file.as_path();
+    let path = spec.file.path();
     let io = |e: std::io::Error| Error::format(path, format!("ascii data: {e}"));
     let skip = match spec.skip {
         Skip::Bytes(n) => n,

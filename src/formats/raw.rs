@@ -1,12 +1,45 @@
 //! Headerless raw voxels, described by options or by the file name (`bonsai_256x256x256_uint8.raw`,
 //! `head.256x256x113.u16.raw`); read through a memory map.
 
-use std::path::Path;
-
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
-use super::{LoadOptions, Read0};
+use super::reader::Reader;
+use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::volume::{Endian, VoxelType, dims_string};
+
+/// The raw reader.
+pub(crate) struct Raw;
+
+impl Reader for Raw {
+    fn format(&self) -> Format {
+        Format::Raw
+    }
+
+    fn title(&self) -> &'static str {
+        "raw"
+    }
+
+    /// Dimensions given make any file raw data.
+    fn forced(&self, opts: &LoadOptions) -> bool {
+        opts.raw.dims.is_some()
+    }
+
+    fn claims_name(&self, name: &str) -> bool {
+        [".raw", ".bin", ".vol", ".img"]
+            .iter()
+            .any(|e| name.ends_with(e))
+            || parse_raw_name(name).is_some()
+    }
+
+    /// Only a name that carries its dimensions, with a raw data extension.
+    fn volume_name(&self, name: &str) -> bool {
+        [".raw", ".bin", ".vol"].iter().any(|e| name.ends_with(e)) && parse_raw_name(name).is_some()
+    }
+
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source, opts)
+    }
+}
 
 /// How to read a headerless raw file; unset fields come from the file name or defaults.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -42,12 +75,9 @@ pub fn parse_raw_name(name: &str) -> Option<([usize; 3], Option<VoxelType>)> {
     Some((dims, ty))
 }
 
-pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let from_name = parse_raw_name(&name);
+fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    let path = source.path();
+    let from_name = parse_raw_name(&source.name());
     let raw = &opts.raw;
     let dims = raw
         .dims
@@ -62,11 +92,11 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         return Err(Error::RawUndescribed {
             path: path.to_path_buf(),
             missing: &["type"],
-            detail: missing_type_detail(path, dims, offset),
+            detail: missing_type_detail(source, dims, offset),
         });
     };
     let spec = DataSpec {
-        file: path.to_path_buf(),
+        file: source.clone(),
         start: offset,
         skip_lines: 0,
         skip: Skip::Bytes(0),
@@ -87,9 +117,9 @@ pub(crate) fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
 }
 
 /// What is known of raw data without a voxel type, with the bytes per voxel its size suggests.
-fn missing_type_detail(path: &Path, dims: [usize; 3], offset: u64) -> String {
+fn missing_type_detail(source: &Source, dims: [usize; 3], offset: u64) -> String {
     let voxels = dims.iter().map(|&d| d as u64).product::<u64>();
-    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    let len = source.len().unwrap_or(0);
     let data = len.saturating_sub(offset);
     let hint = if voxels > 0 && data.is_multiple_of(voxels) && data > 0 {
         format!(" (its size suggests {} bytes per voxel)", data / voxels)

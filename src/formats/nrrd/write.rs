@@ -12,7 +12,7 @@ use super::super::Staged;
 use super::type_name;
 use crate::error::Result;
 use crate::volume::Volume;
-use crate::volume::voxel::write_le;
+use crate::volume::write_le;
 
 /// How [`write_nrrd`] stores the voxels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

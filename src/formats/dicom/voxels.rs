@@ -20,7 +20,7 @@ use super::read::{self, Pixels, Syntax};
 use super::scan::{Scan, Scanned};
 use super::{parse, quoted};
 use crate::error::{Error, Result};
-use crate::volume::io::data::{check_budget, voxel_buffer};
+use crate::formats::data::{check_budget, voxel_buffer};
 
 /// The voxels of slices `order` of `series` as they lie: a volume of `dims` columns, rows and
 /// slices, within `budget`.
@@ -113,7 +113,7 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
     match &file.pixels {
         Pixels::None => Err(Error::format(path, "no pixel data")),
         Pixels::Native { offset, len } => {
-            let mut f = crate::volume::io::open_regular(path).map_err(|e| Error::io(path, e))?;
+            let mut f = crate::formats::open_regular(path).map_err(|e| Error::io(path, e))?;
             let size = f.metadata().map_err(|e| Error::io(path, e))?.len();
             let (mut buf, mut mosaic) = (Vec::new(), MosaicFrame::new(path, budget));
             for (im, plane) in frames {

@@ -1,0 +1,267 @@
+//! Reading volumes from files, above the [`Volume`] they produce: one entry point, [`load`],
+//! that asks the readers of one registry (`registry.rs`; each format's module holds its reader,
+//! `reader.rs` the trait they share) by content first and by name second, each reading a
+//! [`Source`]; and writers for exporting ([`write_volume`]).
+
+mod data;
+pub mod dicom;
+mod limits;
+mod metaimage;
+mod nifti;
+mod nrrd;
+mod ome;
+mod output;
+mod placement;
+mod raw;
+mod reader;
+mod registry;
+mod source;
+mod tiff;
+mod tiff_ifd;
+mod volumeshop;
+mod write;
+pub mod zarr;
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+pub use dicom::DicomOptions;
+pub use limits::{default_max_memory, parse_bytes, physical_memory};
+pub use nifti::write_nifti;
+pub use nrrd::{NrrdEncoding, write_nrrd};
+pub use output::{Staged, check_output, remove_staged, same_file, stage, write_atomic};
+pub use raw::{RawOptions, parse_dims, parse_raw_name};
+pub use registry::{folder_kind, volume_name};
+pub use source::{Source, check_input, open_regular};
+pub use write::{VolumeOutput, stage_volume, write_volume};
+pub use zarr::ZarrOptions;
+
+use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
+use crate::volume::Volume;
+
+/// The file formats slabscope reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Format {
+    /// NIfTI-1, `.nii`, `.nii.gz` or a `.hdr`/`.img` pair.
+    Nifti,
+    /// NRRD, attached (`.nrrd`) or detached (`.nhdr`).
+    Nrrd,
+    /// MetaImage, `.mha` or `.mhd` with a data file.
+    MetaImage,
+    /// VolumeShop / TU Wien `.dat`: three u16 dimensions then u16 voxels.
+    VolumeShop,
+    /// Headerless raw voxels described by options or the file name.
+    Raw,
+    /// A multi-page TIFF stack.
+    Tiff,
+    /// A folder of single-page TIFF slices.
+    TiffFolder,
+    /// A DICOM file or series (a folder of files).
+    Dicom,
+    /// An OME-Zarr image or a plain Zarr array (a folder).
+    OmeZarr,
+    /// Made in memory (a phantom or the built-in dataset).
+    Synthetic,
+}
+
+impl Format {
+    /// The name shown to users and in JSON.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Nifti => "nifti",
+            Self::Nrrd => "nrrd",
+            Self::MetaImage => "metaimage",
+            Self::VolumeShop => "volumeshop",
+            Self::Raw => "raw",
+            Self::Tiff => "tiff",
+            Self::TiffFolder => "tiff-folder",
+            Self::Dicom => "dicom",
+            Self::OmeZarr => "ome-zarr",
+            Self::Synthetic => "synthetic",
+        }
+    }
+}
+
+/// What a folder is: one volume (a Zarr store, or a stack of two or more TIFF slices and no
+/// other volume file or folder), DICOM files (one series or several), a collection of volumes, or nothing
+/// slabscope reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Folder {
+    /// A stack of TIFF slices: one volume.
+    Slices,
+    /// DICOM files and no other volume file or folder: one series is a volume, several a
+    /// collection of series.
+    Dicom,
+    /// Volume files or folders (or a single TIFF file): looked at one by one.
+    Collection,
+    /// Neither a volume file nor a folder in it.
+    Empty,
+    /// A Zarr store (an OME-Zarr image or a plain array): one volume, never walked into.
+    Zarr,
+}
+
+/// Options for [`load`]: those every reader takes, and each format's own.
+#[derive(Clone, Debug)]
+pub struct LoadOptions {
+    /// The most bytes the loaded f32 volume may occupy; checked before anything is allocated.
+    pub max_memory: u64,
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, a DICOM series) to read, from 0.
+    pub volume: usize,
+    /// Which channel of a multichannel file (an OME-TIFF's `C`), from 0.
+    pub channel: usize,
+    /// Description of a headerless raw file; when `dims` is set the file is read as raw.
+    pub raw: RawOptions,
+    /// Which DICOM series to read, and how.
+    pub dicom: DicomOptions,
+    /// What of an OME-Zarr store to read.
+    pub zarr: ZarrOptions,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            max_memory: default_max_memory(),
+            volume: 0,
+            channel: 0,
+            raw: RawOptions::default(),
+            dicom: DicomOptions::default(),
+            zarr: ZarrOptions::default(),
+        }
+    }
+}
+
+/// A loaded volume with what the loader noticed on the way.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The volume.
+    pub volume: Volume,
+    /// The format it was read as.
+    pub format: Format,
+    /// Things a user should know, e.g. "4D file with 12 volumes: loaded volume 0 (the first)".
+    pub notes: Vec<String>,
+    /// Every file read: the one named, and a detached header's data file.
+    pub sources: Vec<PathBuf>,
+    /// The DICOM series read, for a DICOM file or folder.
+    pub dicom: Option<dicom::DicomSeries>,
+    /// The store's image, levels, chunking and codecs, for an OME-Zarr store.
+    pub zarr: Option<zarr::ZarrInfo>,
+    /// The version of the format the file is written in, where the format has versions that
+    /// readers tell apart (NIfTI `1` or `2`, OME-Zarr `0.4` or `0.5`).
+    pub format_version: Option<String>,
+}
+
+/// Loads the volume at `path`: a file, or a folder (a stack of TIFF slices, a DICOM series or a
+/// Zarr store).
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    check_input(path)?;
+    registry::read(path, opts)
+        .and_then(|(format, read)| finish(path, format, read))
+        .map_err(|e| e.reached_from(path))
+}
+
+/// A coarse pyramid level of the volume at `path`, read without reading level 0, where the file
+/// holds one on the pyramid's grid of at most `max_voxels` voxels (an OME-Zarr store's coarser
+/// dataset): the finest such, its [`Volume::level`](crate::Volume::level) saying which,
+/// quantized with its own range (level 0's is not known until level 0 is read). `None` for every
+/// other file, and when level 0 itself has at most `max_voxels` voxels. A first picture while
+/// [`load`] reads level 0.
+pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Loaded>> {
+    check_input(path)?;
+    let read = registry::preview(path, opts, max_voxels).map_err(|e| e.reached_from(path))?;
+    read.map(|(format, read)| finish(path, format, read))
+        .transpose()
+}
+
+/// The volume a reader read from `path`, its spacing checked (for every reader, here once:
+/// [`placement`]), with the notes every format shares.
+fn finish(path: &Path, format: Format, mut loaded: Read0) -> Result<Loaded> {
+    placement::check_spacing(path, &loaded.volume)?;
+    let missing = loaded.volume.stats().missing;
+    if missing > 0 {
+        loaded.notes.push(format!(
+            "{missing} NaN or infinite voxels are treated as missing (left out of every measure)"
+        ));
+    }
+    if loaded.volume.is_constant() {
+        loaded.notes.push(format!(
+            "every voxel is {}: the volume is constant and has no structure to analyse",
+            loaded.volume.stats().min
+        ));
+    }
+    let mut sources = vec![path.to_path_buf()];
+    sources.extend(loaded.sources.into_iter().filter(|s| s != path));
+    Ok(Loaded {
+        volume: loaded.volume,
+        format,
+        notes: loaded.notes,
+        sources,
+        dicom: loaded.dicom,
+        zarr: loaded.zarr,
+        format_version: loaded.format_version,
+    })
+}
+
+/// What a format reader returns before `load` adds its general notes.
+pub(crate) struct Read0 {
+    pub volume: Volume,
+    pub notes: Vec<String>,
+    /// Files read besides the one named (a detached header's data file).
+    pub sources: Vec<PathBuf>,
+    /// The DICOM series read.
+    pub dicom: Option<dicom::DicomSeries>,
+    /// The store read, for an OME-Zarr store.
+    pub zarr: Option<zarr::ZarrInfo>,
+    /// The format's version (see [`Loaded::format_version`]).
+    pub format_version: Option<String>,
+}
+
+impl Read0 {
+    /// The volume read from `path`, with the reader's notes.
+    pub(crate) fn new(
+        path: &Path,
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        ty: crate::volume::VoxelType,
+        voxels: crate::volume::Voxels,
+        notes: Vec<String>,
+    ) -> Result<Self> {
+        // The file's values, not a parameter the user gave: said as the file's.
+        let volume = Volume::from_voxels(dims, spacing, ty, voxels).map_err(|e| match e {
+            Error::InvalidParameter {
+                parameter,
+                value,
+                expected,
+            } => Error::format(
+                path,
+                format!("the file's voxel {parameter} {value}: expected {expected}"),
+            ),
+            other => Error::format(path, other.to_string()),
+        })?;
+        Ok(Self {
+            volume,
+            notes,
+            sources: Vec::new(),
+            dicom: None,
+            zarr: None,
+            format_version: None,
+        })
+    }
+
+    /// With `file` among the files read, when it is not the one named.
+    pub(crate) fn with_source(mut self, file: &Path) -> Self {
+        self.sources.push(file.to_path_buf());
+        self
+    }
+
+    /// With the voxel-to-world transform the file states, when it states one, held to bounds
+    /// ([`placement::place`]: an origin out of them replaced with 0, an unusable orientation
+    /// left out, each with a note).
+    pub(crate) fn with_transform(mut self, t: Option<WorldTransform>) -> Self {
+        self.volume = placement::place(self.volume, t, &mut self.notes);
+        self
+    }
+}

@@ -1,0 +1,95 @@
+//! The one trait every format's reader implements: how it is recognised (by content, by a
+//! deeper look, by name), what it can hold (volumes, channels), and how it is read. The
+//! registry ([`super::registry`]) asks the readers in its order; it knows no format itself.
+
+use super::{Folder, Format, LoadOptions, Read0, Source};
+use crate::error::Result;
+
+/// What a reader says of a file's first bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Sniff {
+    /// Not this reader's: ask the next.
+    No,
+    /// This reader's.
+    Mine,
+    /// A wrapper only this reader opens (a gzip stream, for NIfTI) around what is not its: no
+    /// reader's, and no later reader is asked.
+    Nobody,
+}
+
+/// A format's reader. Each format's module holds one (a unit value), listed once in
+/// [`super::registry`]; adding a format touches its module, that list and the docs.
+pub(crate) trait Reader: Sync {
+    /// The format it reads.
+    fn format(&self) -> Format;
+
+    /// The format's name in messages (`NIfTI`).
+    fn title(&self) -> &'static str;
+
+    /// Whether the options name this format whatever the file holds (raw data given its
+    /// dimensions).
+    fn forced(&self, _opts: &LoadOptions) -> bool {
+        false
+    }
+
+    /// What the file's first bytes (up to 4096) say.
+    fn sniff(&self, _head: &[u8]) -> Sniff {
+        Sniff::No
+    }
+
+    /// A look deeper than the first bytes, asked only when no reader's [`sniff`](Self::sniff)
+    /// knew them (DICOM without its preamble).
+    fn probe(&self, _source: &Source) -> bool {
+        false
+    }
+
+    /// Whether the name (lowercased) makes a file this format's when its content did not say
+    /// (VolumeShop's `.dat`, raw data's extensions and names with dimensions).
+    fn claims_name(&self, _name: &str) -> bool {
+        false
+    }
+
+    /// The endings of this format's names that do not make a file one by themselves: a file so
+    /// named whose content is not this format's is refused saying so.
+    fn extensions(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// Whether a file so named (lowercased) is one of this format's volumes to a folder's walk
+    /// (its content decides when it is read): by default, one of its
+    /// [`extensions`](Self::extensions).
+    fn volume_name(&self, name: &str) -> bool {
+        self.extensions().iter().any(|e| name.ends_with(e))
+    }
+
+    /// Whether a folder of this `kind` is this reader's (asked with the options: a DICOM series
+    /// may be named in a folder of other volumes).
+    fn reads_folder(&self, _kind: Folder, _opts: &LoadOptions) -> bool {
+        false
+    }
+
+    /// Whether one file of it can hold several volumes (`--volume N` picks one).
+    fn volumes(&self) -> bool {
+        false
+    }
+
+    /// Whether one file of it can hold several channels (`--channel N` picks one).
+    fn channels(&self) -> bool {
+        false
+    }
+
+    /// Reads the volume `opts` picks of `source`.
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0>;
+
+    /// A coarse pyramid level of that volume, of at most `max_voxels` voxels, read without
+    /// reading the volume (an OME-Zarr store's coarser dataset); `None` when `source` is not this
+    /// reader's or holds no such level, as every format but OME-Zarr.
+    fn preview(
+        &self,
+        _source: &Source,
+        _opts: &LoadOptions,
+        _max_voxels: usize,
+    ) -> Result<Option<Read0>> {
+        Ok(None)
+    }
+}

@@ -1,0 +1,228 @@
+//! The registry: every reader, once, in the order they are asked. A file's format is found by
+//! content first (each reader's sniff in this order, then each reader's deeper probe), by name
+//! second; a folder's by what it holds ([`folder_kind`]); which names say volume to a folder's
+//! walk, by the readers too ([`volume_name`]). What a format can hold (volumes, channels) is its
+//! reader's to say.
+
+use std::path::Path;
+
+use super::reader::{Reader, Sniff};
+use super::{Folder, Format, LoadOptions, Read0, Source, data};
+use super::{dicom, metaimage, nifti, nrrd, raw, tiff, volumeshop, zarr};
+use crate::error::{Error, Result};
+
+/// Every reader, in the order they are asked: the order of the content sniff (DICOM's preamble
+/// first, as some DICOM files carry a TIFF header in theirs), of the deeper probes and of the
+/// name rules.
+static READERS: &[&dyn Reader] = &[
+    &dicom::Dicom,
+    &nifti::Nifti,
+    &nrrd::Nrrd,
+    &tiff::TiffStack,
+    &metaimage::MetaImage,
+    &volumeshop::VolumeShop,
+    &raw::Raw,
+    &tiff::TiffSlices,
+    &zarr::Zarr,
+];
+
+/// What every message refusing a file says slabscope reads.
+const READS: &str = "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, \
+                     DICOM, OME-Zarr stores, and headerless raw data given its dimensions and \
+                     voxel type";
+
+/// Reads the file or folder at `path` (checked to be one), with the format it was read as.
+pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    zarr::check_label_image(path, meta.is_dir(), opts)?;
+    let source = Source::new(path);
+    if meta.is_dir() {
+        return read_folder(&source, opts);
+    }
+    let reader = detect(&source, opts)?;
+    if opts.volume > 0 && !reader.volumes() {
+        return Err(data::one_volume(path, 1, opts.volume));
+    }
+    if opts.channel > 0 && !reader.channels() {
+        return Err(data::one_channel(path, 1, opts.channel));
+    }
+    Ok((reader.format(), reader.read(&source, opts)?))
+}
+
+/// Whether the file name says a volume slabscope reads (content decides when it is loaded; a
+/// raw file counts only when its name carries its dimensions).
+pub fn volume_name(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    READERS.iter().any(|r| r.volume_name(&name))
+}
+
+/// Says what the folder `dir` is.
+pub fn folder_kind(dir: &Path) -> Result<Folder> {
+    if zarr::is_store(dir) {
+        return Ok(Folder::Zarr);
+    }
+    let (mut tiffs, mut others, mut dicoms) = (0usize, 0usize, 0usize);
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let path = entry.path();
+        let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+        // Anything named like a slice counts as one (a folder or a FIFO so named is then an
+        // error of the stack that names it).
+        if tiff::is_tiff(&path) {
+            tiffs += 1;
+        } else if is_dir || volume_name(&path) {
+            others += 1;
+        } else if entry.file_type().is_ok_and(|t| t.is_file()) && dicom::is_dicom(&path) {
+            dicoms += 1;
+        }
+    }
+    Ok(if tiffs >= 2 && others + dicoms == 0 {
+        Folder::Slices
+    } else if dicoms > 0 && tiffs + others == 0 {
+        Folder::Dicom
+    } else if tiffs + others + dicoms == 0 {
+        Folder::Empty
+    } else {
+        Folder::Collection
+    })
+}
+
+/// A coarse pyramid level of the volume at `path` that a reader reads without reading the
+/// volume (see [`Reader::preview`]), with the format it was read as; `None` when none does.
+pub(super) fn preview(
+    path: &Path,
+    opts: &LoadOptions,
+    max_voxels: usize,
+) -> Result<Option<(Format, Read0)>> {
+    let source = Source::new(path);
+    for reader in READERS {
+        if let Some(read) = reader.preview(&source, opts, max_voxels)? {
+            return Ok(Some((reader.format(), read)));
+        }
+    }
+    Ok(None)
+}
+
+/// Reads the folder `source`: a Zarr store, a DICOM series, or a stack of TIFF slices.
+fn read_folder(source: &Source, opts: &LoadOptions) -> Result<(Format, Read0)> {
+    let path = source.path();
+    let kind = folder_kind(path)?;
+    let reader = READERS.iter().find(|r| r.reads_folder(kind, opts));
+    if opts.channel > 0 && !reader.is_some_and(|r| r.channels()) {
+        return Err(data::one_channel(path, 1, opts.channel));
+    }
+    let Some(reader) = reader else {
+        return Err(Error::format(
+            path,
+            match kind {
+                Folder::Collection => {
+                    "a folder of volumes, not one stack of TIFF slices: name a volume in it, or \
+                     triage the folder"
+                }
+                _ => "folder holds no .tif or .tiff slices, no DICOM files and no volume files",
+            },
+        ));
+    };
+    if opts.volume > 0 && !reader.volumes() {
+        return Err(data::one_volume(path, 1, opts.volume));
+    }
+    Ok((reader.format(), reader.read(source, opts)?))
+}
+
+/// The reader of the file `source`: the one the options name, else by content, else by name.
+fn detect(source: &Source, opts: &LoadOptions) -> Result<&'static dyn Reader> {
+    if let Some(reader) = READERS.iter().find(|r| r.forced(opts)) {
+        return Ok(*reader);
+    }
+    let head = source.head(4096)?;
+    if let Some(reader) = sniff(&head) {
+        return Ok(reader);
+    }
+    if let Some(reader) = READERS.iter().find(|r| r.probe(source)) {
+        return Ok(*reader);
+    }
+    let name = source.name().to_ascii_lowercase();
+    if let Some(reader) = READERS.iter().find(|r| r.claims_name(&name)) {
+        return Ok(*reader);
+    }
+    let claimed = READERS
+        .iter()
+        .find(|r| r.extensions().iter().any(|e| name.ends_with(e)));
+    let what = match claimed {
+        _ if head.is_empty() => "the file is empty".to_string(),
+        Some(r) => format!(
+            "the name says {0} but the content does not start like a {0} file",
+            r.title()
+        ),
+        None => "not a volume file".to_string(),
+    };
+    Err(Error::format(source.path(), format!("{what} ({READS})")))
+}
+
+/// The reader whose format the first bytes `head` are, asking each in the registry's order.
+fn sniff(head: &[u8]) -> Option<&'static dyn Reader> {
+    for reader in READERS {
+        match reader.sniff(head) {
+            Sniff::Mine => return Some(*reader),
+            Sniff::Nobody => return None,
+            Sniff::No => {}
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sniffed(head: &[u8]) -> Option<Format> {
+        sniff(head).map(Reader::format)
+    }
+
+    #[test]
+    fn sniffs_magic_bytes() {
+        assert_eq!(sniffed(b"NRRD0004\ntype: uchar\n"), Some(Format::Nrrd));
+        assert_eq!(sniffed(b"II*\0\x08\0\0\0"), Some(Format::Tiff));
+        assert_eq!(
+            sniffed(b"ObjectType = Image\nNDims = 3\n"),
+            Some(Format::MetaImage)
+        );
+        assert_eq!(sniffed(b"hello world"), None);
+        let mut nii = vec![0u8; 352];
+        nii[344..348].copy_from_slice(b"n+1\0");
+        assert_eq!(sniffed(&nii), Some(Format::Nifti));
+        // A TIFF header in a DICOM preamble is DICOM's.
+        let mut dcm = b"II*\0".to_vec();
+        dcm.resize(128, 0);
+        dcm.extend_from_slice(b"DICM");
+        assert_eq!(sniffed(&dcm), Some(Format::Dicom));
+        // A gzip stream is NIfTI's or no reader's.
+        assert_eq!(sniffed(&[0x1f, 0x8b, 8, 0]), None);
+    }
+
+    #[test]
+    fn names_that_say_volume() {
+        for name in [
+            "a.nii", "B.NII.GZ", "c.nrrd", "d.nhdr", "e.mha", "f.mhd", "g.tif", "h.dat",
+        ] {
+            assert!(volume_name(Path::new(name)), "{name}");
+        }
+        for name in ["notes.txt", "a.img", "scan.raw", "x.data", "y.zraw"] {
+            assert!(!volume_name(Path::new(name)), "{name}");
+        }
+        assert!(volume_name(Path::new("bonsai_256x256x256_uint8.raw")));
+    }
+
+    /// Each format is read by one reader, and each reader reads its own format.
+    #[test]
+    fn one_reader_a_format() {
+        let mut formats: Vec<&str> = READERS.iter().map(|r| r.format().name()).collect();
+        formats.sort_unstable();
+        let count = formats.len();
+        formats.dedup();
+        assert_eq!(formats.len(), count, "{formats:?}");
+    }
+}
