@@ -109,7 +109,7 @@ def load(
     label_image: Optional[str] = None,
 ) -> Volume:
     """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), OME-Zarr,
-    VolumeShop, raw."""
+    MRC, VolumeShop, raw."""
 
 @final
 class Analysis:

@@ -48,7 +48,7 @@ pub struct Volume {
 
 /// Reads the volume at `path` (a file, a folder of TIFF slices or of DICOM files, an OME-Zarr
 /// store) with the CLI's loader options as keywords: `dims`, `dtype`, `spacing`, `endian`,
-/// `offset` (raw files), `max_memory`, `volume`, `channel`, `series`, `include_localizers`,
+/// `offset` (raw files), `max_memory`, `threads`, `volume`, `channel`, `series`, `include_localizers`,
 /// `resample`, `show_phi`, `label_image`.
 #[pyfunction]
 #[pyo3(signature = (path, **options))]

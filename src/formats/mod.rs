@@ -7,6 +7,7 @@ mod data;
 pub mod dicom;
 mod limits;
 mod metaimage;
+mod mrc;
 mod nifti;
 mod nrrd;
 mod ome;
@@ -63,6 +64,8 @@ pub enum Format {
     Dicom,
     /// An OME-Zarr image or a plain Zarr array (a folder).
     OmeZarr,
+    /// An MRC/CCP4 map or tomogram (electron microscopy).
+    Mrc,
     /// Made in memory (a phantom or the built-in dataset).
     Synthetic,
 }
@@ -81,6 +84,7 @@ impl Format {
             Self::TiffFolder => "tiff-folder",
             Self::Dicom => "dicom",
             Self::OmeZarr => "ome-zarr",
+            Self::Mrc => "mrc",
             Self::Synthetic => "synthetic",
         }
     }

@@ -11,13 +11,14 @@ use slabscope::{LoadOptions, load};
 use crate::common::data;
 
 /// File names that steer detection to each reader.
-const NAMES: [&str; 10] = [
+const NAMES: [&str; 11] = [
     "f.nii",
     "f.nii.gz",
     "f.nrrd",
     "f.nhdr",
     "f.mha",
     "f.mhd",
+    "f.mrc",
     "f.dat",
     "f.tif",
     "f_4x4x4_u8.raw",
@@ -25,7 +26,7 @@ const NAMES: [&str; 10] = [
 ];
 
 /// Valid files to mutate, one per format.
-const SEEDS: [&str; 9] = [
+const SEEDS: [&str; 11] = [
     "ramp_u8.nii",
     "ramp_i16_scaled.nii.gz",
     "ramp_u16_be.nrrd",
@@ -35,6 +36,8 @@ const SEEDS: [&str; 9] = [
     "ramp_f32_zlib.mha",
     "ramp_u16_stack.tif",
     "ramp_f32_stack.tif",
+    "mrc/ramp_zyx.mrc",
+    "mrc/ramp_f16.mrc",
 ];
 
 fn seed_bytes(name: &str) -> Vec<u8> {
@@ -43,7 +46,8 @@ fn seed_bytes(name: &str) -> Vec<u8> {
 
 /// Loads `bytes` saved as `name` under a 64 MiB limit and checks the outcome is well-formed.
 fn check(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
-    let path: PathBuf = dir.join(name);
+    // A seed in a folder of fixtures is written under its file name.
+    let path: PathBuf = dir.join(Path::new(name).file_name().unwrap());
     std::fs::write(&path, bytes).unwrap();
     let opts = LoadOptions {
         max_memory: 64 << 20,

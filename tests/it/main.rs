@@ -21,6 +21,7 @@ mod gain;
 mod geometry;
 mod metadata;
 mod mosaic;
+mod mrc;
 mod names;
 mod native;
 mod nifti2;

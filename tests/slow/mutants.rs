@@ -68,6 +68,15 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
     ),
     ("volumeshop", &[("", "m.dat")]),
     (
+        "mrc",
+        &[
+            ("mrc/ramp_i16.mrc", "m.mrc"),
+            ("mrc/ramp_f16.mrc", "m.mrc"),
+            ("mrc/ramp_zyx.mrc", "m.mrc"),
+            ("mrc/ramp_ext.mrc", "m.rec"),
+        ],
+    ),
+    (
         "dicom",
         &[
             ("dicom/enhanced.dcm", "m.dcm"),
