@@ -118,14 +118,15 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         dims_string(v.dims()),
         v.len()
     );
+    let (unit, per_mm) = length_unit(sx.max(sy).max(sz));
     outln!(
-        "spacing     {} x {} x {} mm  (extent {} x {} x {} mm)",
-        significant(sx),
-        significant(sy),
-        significant(sz),
-        extent(sx * nx as f64),
-        extent(sy * ny as f64),
-        extent(sz * nz as f64)
+        "spacing     {} x {} x {} {unit}  (extent {} x {} x {} {unit})",
+        significant(sx * per_mm),
+        significant(sy * per_mm),
+        significant(sz * per_mm),
+        extent(sx * per_mm * nx as f64),
+        extent(sy * per_mm * ny as f64),
+        extent(sz * per_mm * nz as f64)
     );
     print_geometry(geometry);
     outln!("type        {}", v.voxel_type());
@@ -309,6 +310,19 @@ pub fn sparkline(counts: &[u64]) -> String {
         .collect()
 }
 
+/// The unit a spacing whose largest step is `mm` reads best in, and its size per mm: mm down to
+/// a tenth of a millimetre, µm down to a tenth of a micrometre (light microscopy), ångström
+/// below (electron microscopy's maps).
+fn length_unit(mm: f64) -> (&'static str, f64) {
+    if mm >= 0.1 || mm <= 0.0 || !mm.is_finite() {
+        ("mm", 1.0)
+    } else if mm >= 1e-4 {
+        ("µm", 1e3)
+    } else {
+        ("Å", 1e7)
+    }
+}
+
 /// An extent in mm: to a tenth of a millimetre, or to three significant digits below that
 /// (a microscope's stack is micrometres across).
 fn extent(mm: f64) -> String {
@@ -323,6 +337,15 @@ fn extent(mm: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn small_spacings_read_in_their_own_unit() {
+        assert_eq!(length_unit(1.0), ("mm", 1.0));
+        assert_eq!(length_unit(0.1), ("mm", 1.0));
+        assert_eq!(length_unit(0.0005), ("µm", 1e3));
+        assert_eq!(length_unit(1.5e-7), ("Å", 1e7));
+        assert_eq!(significant(1.5e-7 * 1e7), "1.5");
+    }
 
     #[test]
     fn sparkline_scales_by_log() {
