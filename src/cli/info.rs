@@ -118,7 +118,7 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         dims_string(v.dims()),
         v.len()
     );
-    let (unit, per_mm) = length_unit(sx.max(sy).max(sz));
+    let (unit, per_mm) = slabscope::geometry::length_unit(sx.max(sy).max(sz));
     outln!(
         "spacing     {} x {} x {} {unit}  (extent {} x {} x {} {unit})",
         significant(sx * per_mm),
@@ -310,19 +310,6 @@ pub fn sparkline(counts: &[u64]) -> String {
         .collect()
 }
 
-/// The unit a spacing whose largest step is `mm` reads best in, and its size per mm: mm down to
-/// a tenth of a millimetre, µm down to a tenth of a micrometre (light microscopy), ångström
-/// below (electron microscopy's maps).
-fn length_unit(mm: f64) -> (&'static str, f64) {
-    if mm >= 0.1 || mm <= 0.0 || !mm.is_finite() {
-        ("mm", 1.0)
-    } else if mm >= 1e-4 {
-        ("µm", 1e3)
-    } else {
-        ("Å", 1e7)
-    }
-}
-
 /// An extent in mm: to a tenth of a millimetre, or to three significant digits below that
 /// (a microscope's stack is micrometres across).
 fn extent(mm: f64) -> String {
@@ -337,15 +324,6 @@ fn extent(mm: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn small_spacings_read_in_their_own_unit() {
-        assert_eq!(length_unit(1.0), ("mm", 1.0));
-        assert_eq!(length_unit(0.1), ("mm", 1.0));
-        assert_eq!(length_unit(0.0005), ("µm", 1e3));
-        assert_eq!(length_unit(1.5e-7), ("Å", 1e7));
-        assert_eq!(significant(1.5e-7 * 1e7), "1.5");
-    }
 
     #[test]
     fn sparkline_scales_by_log() {

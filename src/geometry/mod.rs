@@ -115,6 +115,20 @@ pub fn azimuth_elevation(d: [f64; 3]) -> (f64, f64) {
     )
 }
 
+/// The unit lengths of about `mm` read best in for people, with its size per millimetre: mm
+/// down to a tenth of a millimetre, µm down to a tenth of a micrometre (light microscopy),
+/// ångström below (electron microscopy's maps). Reports in JSON stay in mm.
+#[must_use]
+pub fn length_unit(mm: f64) -> (&'static str, f64) {
+    if mm >= 0.1 || mm <= 0.0 || !mm.is_finite() {
+        ("mm", 1.0)
+    } else if mm >= 1e-4 {
+        ("µm", 1e3)
+    } else {
+        ("Å", 1e7)
+    }
+}
+
 /// The smallest of three spacings.
 pub fn min_spacing(spacing: [f64; 3]) -> f64 {
     spacing.iter().copied().fold(f64::INFINITY, f64::min)
@@ -292,6 +306,15 @@ pub fn parse_triple(text: &str) -> Option<[f64; 3]> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn small_lengths_read_in_their_own_unit() {
+        use super::length_unit;
+        assert_eq!(length_unit(1.0), ("mm", 1.0));
+        assert_eq!(length_unit(0.1), ("mm", 1.0));
+        assert_eq!(length_unit(0.0005), ("µm", 1e3));
+        assert_eq!(length_unit(1.5e-7), ("Å", 1e7));
+    }
+
     use super::*;
 
     #[test]

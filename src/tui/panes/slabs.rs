@@ -28,6 +28,8 @@ pub struct SlabTable {
     pub background: BackgroundSummary,
     /// The axis in the world: its anatomical name, and whether millimetres are world ones.
     pub world: WorldAxis,
+    /// The unit lengths are shown in (mm, or µm and Å for small voxels), and its size per mm.
+    pub unit: (&'static str, f64),
 }
 
 impl SlabTable {
@@ -45,6 +47,7 @@ impl SlabTable {
             next,
             background: h.stack().background(),
             world: h.stack().world().clone(),
+            unit: slabscope::geometry::length_unit(h.stack().thickness()),
         }
     }
 }
@@ -84,25 +87,29 @@ struct Columns {
     wide: bool,
     /// Whether the range is in world millimetres.
     world: bool,
+    /// The unit of lengths, and its size per mm.
+    unit: (&'static str, f64),
 }
 
 impl Columns {
-    fn of(width: u16, world: bool) -> Self {
+    fn of(width: u16, world: bool, unit: (&'static str, f64)) -> Self {
         Self {
             medium: width >= 41,
             wide: width >= 56,
             world,
+            unit,
         }
     }
 
     fn header(&self, method: Method) -> Vec<&'static str> {
-        let mut h = vec!["#", "slices", "mm"];
+        let (length, world, range) = match self.unit.0 {
+            "µm" => ("µm", "world µm", "from–to µm"),
+            "Å" => ("Å", "world Å", "from–to Å"),
+            _ => ("mm", "world mm", "from–to mm"),
+        };
+        let mut h = vec!["#", "slices", length];
         if self.wide {
-            h.push(if self.world {
-                "world mm"
-            } else {
-                "from–to mm"
-            });
+            h.push(if self.world { world } else { range });
         }
         h.push("H");
         if self.medium {
@@ -121,10 +128,15 @@ impl Columns {
         let mut cells = vec![
             format!("{i}{mark}"),
             slab_text(s.slices),
-            format!("{:.1}", s.mm.1 - s.mm.0),
+            format!("{:.1}", (s.mm.1 - s.mm.0) * self.unit.1),
         ];
         if self.wide {
-            cells.push(format!("{:.1}–{:.1}", s.world_mm.0, s.world_mm.1));
+            let per = self.unit.1;
+            cells.push(format!(
+                "{:.1}–{:.1}",
+                s.world_mm.0 * per,
+                s.world_mm.1 * per
+            ));
         }
         cells.push(format!("{:.2}", s.entropy));
         if self.medium {
@@ -184,7 +196,7 @@ impl Widget for &SlabsPane {
             table.info.len(),
             table.slices
         );
-        let columns = Columns::of(area.width, table.world.oriented);
+        let columns = Columns::of(area.width, table.world.oriented, table.unit);
         let header = Row::new(columns.header(table.method))
             .style(self.theme.fg(Color::DarkGray).add_modifier(Modifier::BOLD));
         let visible = usize::from(area.height.saturating_sub(3));
