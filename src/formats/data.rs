@@ -65,12 +65,15 @@ pub(crate) struct DataSpec {
     /// Which volume of how many the file holds one after the other (a 4D file): `(0, 1)` for a
     /// 3D file.
     pub volumes: (usize, usize),
+    /// Whether bytes may follow the values (a writer's closing newline).
+    pub trailing: bool,
 }
 
 impl DataSpec {
-    /// Whether more data than the volume needs is expected (a later volume of a 4D file).
+    /// Whether more data than the volume needs is expected (a later volume of a 4D file, or
+    /// bytes the format allows after the values).
     fn allow_trailing(&self) -> bool {
-        self.volumes.0 + 1 < self.volumes.1
+        self.trailing || self.volumes.0 + 1 < self.volumes.1
     }
 
     /// The bytes (decoded) before the volume read: the skip, and the volumes before it (more

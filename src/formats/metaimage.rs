@@ -292,6 +292,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         },
         scale: None,
         volumes,
+        trailing: false,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let transform = transform(&h, spacing);

@@ -20,6 +20,7 @@ mod source;
 mod tiff;
 mod tiff_ifd;
 mod volumeshop;
+mod vtk;
 mod write;
 pub mod zarr;
 
@@ -66,6 +67,8 @@ pub enum Format {
     OmeZarr,
     /// An MRC/CCP4 map or tomogram (electron microscopy).
     Mrc,
+    /// Legacy VTK image data (`STRUCTURED_POINTS`).
+    Vtk,
     /// Made in memory (a phantom or the built-in dataset).
     Synthetic,
 }
@@ -85,6 +88,7 @@ impl Format {
             Self::Dicom => "dicom",
             Self::OmeZarr => "ome-zarr",
             Self::Mrc => "mrc",
+            Self::Vtk => "vtk",
             Self::Synthetic => "synthetic",
         }
     }

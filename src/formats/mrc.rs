@@ -240,6 +240,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         endian: h.endian,
         scale: None,
         volumes: (0, 1),
+        trailing: false,
     };
     let mut notes = Vec::new();
     let (ty, mut voxels) = if h.mode == 12 {

@@ -468,6 +468,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         endian,
         scale: None,
         volumes,
+        trailing: false,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let transform = transform(&h, &axes);

@@ -106,6 +106,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         endian: raw.endian.unwrap_or_default(),
         scale: None,
         volumes: (0, 1),
+        trailing: false,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let spacing = raw.spacing.unwrap_or([1.0; 3]);

@@ -78,6 +78,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         endian: Endian::Little,
         scale: None,
         volumes: (0, 1),
+        trailing: false,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let notes = vec!["VolumeShop .dat files carry no spacing: using 1 mm".into()];

@@ -11,7 +11,7 @@ use slabscope::{LoadOptions, load};
 use crate::common::data;
 
 /// File names that steer detection to each reader.
-const NAMES: [&str; 11] = [
+const NAMES: [&str; 12] = [
     "f.nii",
     "f.nii.gz",
     "f.nrrd",
@@ -19,6 +19,7 @@ const NAMES: [&str; 11] = [
     "f.mha",
     "f.mhd",
     "f.mrc",
+    "f.vtk",
     "f.dat",
     "f.tif",
     "f_4x4x4_u8.raw",
@@ -26,7 +27,7 @@ const NAMES: [&str; 11] = [
 ];
 
 /// Valid files to mutate, one per format.
-const SEEDS: [&str; 11] = [
+const SEEDS: [&str; 13] = [
     "ramp_u8.nii",
     "ramp_i16_scaled.nii.gz",
     "ramp_u16_be.nrrd",
@@ -38,6 +39,8 @@ const SEEDS: [&str; 11] = [
     "ramp_f32_stack.tif",
     "mrc/ramp_zyx.mrc",
     "mrc/ramp_f16.mrc",
+    "vtk/ramp_i16.vtk",
+    "vtk/ramp_u8_ascii.vtk",
 ];
 
 fn seed_bytes(name: &str) -> Vec<u8> {

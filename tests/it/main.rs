@@ -32,5 +32,6 @@ mod size;
 mod slice;
 mod triage;
 mod view;
+mod vtk;
 mod zarr;
 mod zarr_bombs;

@@ -68,15 +68,6 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
     ),
     ("volumeshop", &[("", "m.dat")]),
     (
-        "mrc",
-        &[
-            ("mrc/ramp_i16.mrc", "m.mrc"),
-            ("mrc/ramp_f16.mrc", "m.mrc"),
-            ("mrc/ramp_zyx.mrc", "m.mrc"),
-            ("mrc/ramp_ext.mrc", "m.rec"),
-        ],
-    ),
-    (
         "dicom",
         &[
             ("dicom/enhanced.dcm", "m.dcm"),
@@ -108,6 +99,25 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
             ("zarr/v05_sharded.ome.zarr//s0/c/1/1/1", "m.ome.zarr"),
             ("zarr/v05_tczyx.ome.zarr//s0/zarr.json", "m.ome.zarr"),
             ("zarr/v05_tczyx.ome.zarr//s0/c/1/2/1/1/1", "m.ome.zarr"),
+        ],
+    ),
+    // Readers added later come last: each mutant's random stream follows its place in the
+    // list, and the earlier readers' mutants stay the ones CI has always run.
+    (
+        "mrc",
+        &[
+            ("mrc/ramp_i16.mrc", "m.mrc"),
+            ("mrc/ramp_f16.mrc", "m.mrc"),
+            ("mrc/ramp_zyx.mrc", "m.mrc"),
+            ("mrc/ramp_ext.mrc", "m.rec"),
+        ],
+    ),
+    (
+        "vtk",
+        &[
+            ("vtk/ramp_i16.vtk", "m.vtk"),
+            ("vtk/ramp_u8_ascii.vtk", "m.vtk"),
+            ("vtk/ramp_f64_cells.vtk", "m.vtk"),
         ],
     ),
 ];

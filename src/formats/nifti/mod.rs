@@ -200,6 +200,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         endian: h.endian,
         scale,
         volumes,
+        trailing: false,
     };
     let voxels = read_voxels(&spec, opts.max_memory)?;
     let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?
