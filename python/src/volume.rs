@@ -508,9 +508,18 @@ impl Volume {
 
     fn __repr__(&self) -> String {
         let [x, y, z] = self.inner.dims();
-        let [sx, sy, sz] = self.inner.spacing();
+        let spacing = self.inner.spacing();
+        // In µm or Å where the voxels are that small, as `info` says them.
+        let (unit, per_mm) =
+            slabscope::geometry::length_unit(spacing.into_iter().fold(0.0, f64::max));
+        let [sx, sy, sz] = spacing.map(|s| {
+            format!("{:.6}", s * per_mm)
+                .trim_end_matches('0')
+                .trim_end_matches('.')
+                .to_string()
+        });
         format!(
-            "<slabscope.Volume {:?} {x}x{y}x{z} {} spacing ({sx}, {sy}, {sz}) mm{}>",
+            "<slabscope.Volume {:?} {x}x{y}x{z} {} spacing ({sx}, {sy}, {sz}) {unit}{}>",
             self.name,
             self.dtype(),
             self.orientation()

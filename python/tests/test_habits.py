@@ -174,3 +174,11 @@ def test_a_file_cut_short_under_its_map_raises_instead_of_ending_python(tmp_path
         slabscope.analyze(volume, slabs=2)
     with pytest.raises(slabscope.VolumeError, match="load it again"):
         volume.array
+
+
+def test_small_voxels_are_shown_in_their_own_unit():
+    # An electron microscopy map (MRC): its voxels are ångströms, as `info` says them.
+    volume = slabscope.load(DATA / "mrc" / "ramp_i16.mrc")
+    assert volume.format == "mrc"
+    assert "6x5x4 int16 spacing (1.5, 2, 2.5) Å>" in repr(volume)
+    assert volume.spacing == pytest.approx((1.5e-7, 2e-7, 2.5e-7))
