@@ -518,3 +518,30 @@ fn metadata_and_label_images_out_of_the_store_are_refused() {
     symlink("../cells_moved", store.join("labels/cells")).unwrap();
     assert!(open_with(&store, &cells).volume.labels().is_some());
 }
+
+/// A level 0 with an axis of no voxels is refused at once, naming the store: it once sent the
+/// matching of the coarser datasets to the pyramid's levels round forever (found by the
+/// mutation harness).
+#[test]
+fn an_axis_of_no_voxels_is_refused_at_once() {
+    let (_dir, store) = copy("v05_tczyx.ome.zarr");
+    let meta = store.join("s0/zarr.json");
+    let text = std::fs::read_to_string(&meta).unwrap();
+    let broken = text.replacen("    6,\n", "    0,\n", 1);
+    assert_ne!(broken, text, "the z extent was edited");
+    std::fs::write(&meta, broken).unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let path = store.clone();
+    std::thread::spawn(move || {
+        let _ = tx.send(load(&path, &LoadOptions::default()).map(|_| ()));
+    });
+    let e = rx
+        .recv_timeout(std::time::Duration::from_secs(20))
+        .expect("the load returned")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("v05_tczyx.ome.zarr") && e.contains("contain a zero"),
+        "{e}"
+    );
+}
