@@ -101,25 +101,28 @@ impl Columns {
         }
     }
 
-    fn header(&self, method: Method) -> Vec<&'static str> {
-        let (length, world, range) = match self.unit.0 {
-            "µm" => ("µm", "world µm", "from–to µm"),
-            "Å" => ("Å", "world Å", "from–to Å"),
-            _ => ("mm", "world mm", "from–to mm"),
-        };
-        let mut h = vec!["#", "slices", length];
+    fn header(&self, method: Method) -> Vec<String> {
+        let unit = self.unit.0;
+        let mut h: Vec<String> = vec!["#".into(), "slices".into(), unit.into()];
         if self.wide {
-            h.push(if self.world { world } else { range });
+            h.push(if self.world {
+                format!("world {unit}")
+            } else {
+                format!("from–to {unit}")
+            });
         }
-        h.push("H");
+        h.push("H".into());
         if self.medium {
-            h.push("mean");
+            h.push("mean".into());
         }
-        h.push(if method == Method::BottomUp {
-            "NMI→"
-        } else {
-            "ΔI→"
-        });
+        h.push(
+            if method == Method::BottomUp {
+                "NMI→"
+            } else {
+                "ΔI→"
+            }
+            .into(),
+        );
         h
     }
 
