@@ -76,21 +76,37 @@ thread_local! {
     static POOL: RefCell<Option<Arc<rayon::ThreadPool>>> = const { RefCell::new(None) };
 }
 
-/// `threads=` of a call: while this lives, [`long`] and [`quick`] run their work in `pool` (all
-/// threads when `None`).
-pub struct Threads(Option<Arc<rayon::ThreadPool>>);
+/// `threads=` of a call: while this lives, [`long`] and [`quick`] run their work in its pool.
+/// Without one, the pool of the call around it stays (`render` without an analysis analyses
+/// within render's `threads=`), else all threads.
+pub struct Threads {
+    /// Whether it bound a pool, and the pool it took the place of.
+    bound: bool,
+    previous: Option<Arc<rayon::ThreadPool>>,
+}
 
 impl Threads {
-    /// Runs this thread's calls in `pool` until dropped.
+    /// Runs this thread's calls in `pool`, when there is one, until dropped.
     #[must_use]
     pub fn bound(pool: Option<rayon::ThreadPool>) -> Self {
-        Self(POOL.replace(pool.map(Arc::new)))
+        match pool {
+            Some(p) => Self {
+                bound: true,
+                previous: POOL.replace(Some(Arc::new(p))),
+            },
+            None => Self {
+                bound: false,
+                previous: None,
+            },
+        }
     }
 }
 
 impl Drop for Threads {
     fn drop(&mut self) {
-        POOL.set(self.0.take());
+        if self.bound {
+            POOL.set(self.previous.take());
+        }
     }
 }
 
