@@ -28,6 +28,10 @@ pub enum Purpose<'a> {
     Analysis {
         /// The level asked for (0: every voxel, the paper's method).
         wanted: usize,
+        /// Whether every voxel was asked for by name (`--resolution full`): beyond the budget
+        /// the view search then counts every voxel too, slab by slab (slower), where by default
+        /// it runs on the finest level that fits.
+        every_voxel: bool,
         /// The analysis's parameters (the method decides whether slabs can be streamed).
         params: &'a AnalysisParams,
     },
@@ -57,13 +61,17 @@ impl Budget {
     /// user should know when the budget moved it from the level asked for.
     pub fn plan(&self, volume: &Volume, purpose: Purpose<'_>) -> Result<Plan> {
         match purpose {
-            Purpose::Analysis { wanted, params } => {
+            Purpose::Analysis {
+                wanted,
+                every_voxel,
+                params,
+            } => {
                 if wanted > 0 {
                     // A level the file holds and the user asked for is read or refused, never
                     // computed in its place.
                     volume.asked_level(wanted)?;
                 }
-                Plan::within(volume, wanted, self.max_memory, params)
+                Plan::within(volume, (wanted, every_voxel), self.max_memory, params)
             }
             Purpose::Picture => {
                 let (level, note) = crate::analysis::within_memory(volume, 0, self.max_memory)?;
@@ -159,6 +167,7 @@ mod tests {
                 &volume,
                 Purpose::Analysis {
                     wanted: 1,
+                    every_voxel: false,
                     params: &params,
                 },
             )

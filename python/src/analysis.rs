@@ -109,7 +109,7 @@ fn compute(
     let kw = Kwargs::new(py, "analyze", params)?;
     let (mut analysis_params, given) = analysis_params(&kw)?;
     analysis_params.explain = explain(kw.get::<Bound<'_, PyAny>>("explain")?.as_ref())?;
-    let resolution = resolution(&kw)?;
+    let (resolution, named) = resolution(&kw)?;
     let max_memory = crate::params::max_memory(&kw, volume.max_memory)?;
     let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
@@ -122,6 +122,7 @@ fn compute(
             &full,
             Purpose::Analysis {
                 wanted,
+                every_voxel: wanted == 0 && named,
                 params: &analysis_params,
             },
         )

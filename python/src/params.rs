@@ -212,9 +212,10 @@ pub fn analysis_params(kw: &Kwargs<'_>) -> PyResult<(AnalysisParams, Given)> {
     Ok((given.analysis().or_py()?, given))
 }
 
-/// `resolution`: `"full"` (the default, the paper's method), `"auto"` or a pyramid level.
-pub fn resolution(kw: &Kwargs<'_>) -> PyResult<Resolution> {
-    given(kw, &[&table::RESOLUTION])?.resolution().or_py()
+/// `resolution`: `"full"` (the default, the paper's method), `"auto"` or a pyramid level; and
+/// whether it was given.
+pub fn resolution(kw: &Kwargs<'_>) -> PyResult<(Resolution, bool)> {
+    given(kw, &[&table::RESOLUTION])?.resolution_named().or_py()
 }
 
 /// The look keywords: `tf` (auto, ct-bone, ct-soft, mri), `colormap`, `window`.

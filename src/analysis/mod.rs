@@ -205,6 +205,9 @@ pub struct Plan {
     pub partition: Arc<Volume>,
     /// When the slice stack is counted strip by strip: the working memory it may take, bytes.
     pub streamed: Option<u64>,
+    /// When the view search runs on every voxel slab by slab
+    /// ([`search_streamed`](crate::view::search_streamed)): the working memory it may take.
+    pub views_streamed: Option<u64>,
     /// What the user should know of the plan (nothing when everything runs on the level asked
     /// for, in memory).
     pub note: Option<String>,
@@ -218,6 +221,7 @@ impl Plan {
             views: Arc::clone(&level),
             partition: level,
             streamed: None,
+            views_streamed: None,
             note: None,
         }
     }
@@ -230,40 +234,64 @@ impl Plan {
     /// slabs are then those of every voxel, the best axis that of the coarser level.
     pub(crate) fn within(
         volume: &Volume,
-        wanted: usize,
+        (wanted, every_voxel): (usize, bool),
         max_memory: u64,
         params: &AnalysisParams,
     ) -> Result<Self> {
         let bins = params.view.sampling.bins;
         let (level, note) = level_within_memory(volume, wanted, max_memory, bins)?;
+        let human = crate::error::short_bytes;
+        let needs = human(memory_needed_with(volume, 0, bins));
+        let full = Arc::new(volume.clone());
+        let beyond = level != wanted && wanted == 0 && params.method != Method::BottomUp;
+        let full_room = max_memory.saturating_sub(volume.memory_bytes());
+        if beyond && every_voxel && streams_search(volume, params, full_room) {
+            return Ok(Self {
+                note: Some(format!(
+                    "level 0 needs {needs} for the analysis in memory, over the memory limit of {}: \
+                     the view search and the slabs are counted on every voxel, slab by slab",
+                    human(max_memory),
+                )),
+                views: Arc::clone(&full),
+                partition: full,
+                streamed: Some(full_room),
+                views_streamed: Some(full_room),
+            });
+        }
         let views = volume.coarser(level);
         let coarse = if level > 0 { views.memory_bytes() } else { 0 };
-        let room = max_memory.saturating_sub(volume.memory_bytes() + coarse);
-        let streams = level != wanted
-            && wanted == 0
-            && params.method != Method::BottomUp
-            && room >= crate::partition::streamed_memory_floor(volume, params.view.sampling.bins);
-        if !streams {
+        let room = full_room.saturating_sub(coarse);
+        if !(beyond && room >= crate::partition::streamed_memory_floor(volume, bins)) {
             return Ok(Self {
                 note,
                 ..Self::at(views)
             });
         }
-        let human = crate::error::short_bytes;
         Ok(Self {
             note: Some(format!(
-                "level 0 needs {} for the analysis in memory, over the memory limit of {}: the \
+                "level 0 needs {needs} for the analysis in memory, over the memory limit of {}: the \
                  view search runs on pyramid level {level}, the finest that fits ({}), and the \
                  slabs are counted on every voxel, strip by strip",
-                human(memory_needed_with(volume, 0, bins)),
                 human(max_memory),
                 human(memory_needed_with(volume, level, bins)),
             )),
             views,
-            partition: Arc::new(volume.clone()),
+            partition: full,
             streamed: Some(room),
+            views_streamed: None,
         })
     }
+}
+
+/// Whether the view search and the partition of every voxel of `volume` can both be counted
+/// in `room` bytes: not when the refinement, gain ranking or lesson needs the whole cell map.
+fn streams_search(volume: &Volume, params: &AnalysisParams, room: u64) -> bool {
+    params.runs_search()
+        && !params.view.refine
+        && !params.ranks_by_gain()
+        && params.explain.is_none()
+        && room >= crate::view::streamed_memory_floor(volume, &params.view)
+        && room >= crate::partition::streamed_memory_floor(volume, params.view.sampling.bins)
 }
 
 /// Runs the view search (unless an axis is given) on `plan`'s view level and partitions its
@@ -276,7 +304,10 @@ pub fn analyze_planned(
     let volume = plan.partition.as_ref();
     let chosen = params.axis.resolve(volume.transform(), volume.spacing())?;
     let mut views = if params.runs_search() {
-        Some(search(&plan.views, &params.view, monitor)?)
+        Some(match plan.views_streamed {
+            Some(room) => crate::view::search_streamed(&plan.views, &params.view, room, monitor)?,
+            None => search(&plan.views, &params.view, monitor)?,
+        })
     } else {
         None
     };

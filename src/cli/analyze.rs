@@ -57,10 +57,9 @@ pub struct AnalyzeArgs {
     pub load: LoadArgs,
 }
 
-pub fn run(args: &AnalyzeArgs) -> Result<()> {
-    if let Some(t) = args.timeout {
-        super::progress::stop_after(t);
-    }
+/// The files `args` writes, checked before anything is read: a labels file's format known, and
+/// none the input or an existing file unless `--force`.
+fn outputs(args: &AnalyzeArgs) -> Result<Vec<&Path>> {
     if let Some(path) = &args.export_labels {
         VolumeOutput::for_path(path)?;
     }
@@ -70,15 +69,23 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         .map(PathBuf::as_path)
         .collect();
     super::check_outputs(&outputs, std::slice::from_ref(&args.file), args.force)?;
+    Ok(outputs)
+}
+
+pub fn run(args: &AnalyzeArgs) -> Result<()> {
+    if let Some(t) = args.timeout {
+        super::progress::stop_after(t);
+    }
+    let outputs = outputs(args)?;
     let loaded = super::load(&args.file, &args.load)?;
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let full = &loaded.volume;
     let name = slabscope::error::shown(&args.file);
-    let wanted = args
+    let (wanted, named) = args
         .resolution
         .given
-        .resolution()
-        .and_then(|r| r.level(full.dims(), full.coarser_levels()))
+        .resolution_named()
+        .and_then(|(r, named)| Ok((r.level(full.dims(), full.coarser_levels())?, named)))
         .map_err(|e| anyhow::Error::from(e).context(name.clone()))?;
     let max_memory = args.load.options()?.max_memory;
     let mut params = args
@@ -90,6 +97,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         full,
         Purpose::Analysis {
             wanted,
+            every_voxel: wanted == 0 && named,
             params: &params,
         },
     )?;

@@ -227,7 +227,12 @@ impl Lattice {
     }
 
     fn corners(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
-        (0..8).map(|c| std::array::from_fn(|k| if c >> k & 1 == 1 { self.extent[k] } else { 0.0 }))
+        corners_of([0.0; 3], self.extent)
+    }
+
+    /// The voxel spacing, mm.
+    pub fn spacing(&self) -> [f64; 3] {
+        self.spacing
     }
 
     /// The integer range of `t` such that `(t + phase)·spacing` covers the projections of the box
@@ -269,9 +274,20 @@ impl Lattice {
     /// segments between two corners. Rows of a flat box (one voxel thick) meet it in a point or
     /// not at all, so walking only these spans keeps a lattice's cost to the rays that count.
     pub fn row_span(&self, j: i64) -> Option<(i64, i64)> {
+        self.span_in_box(j, [0.0; 3], self.extent)
+    }
+
+    /// [`row_span`](Self::row_span) for the part of the box whose coordinate `m` lies in
+    /// `lo..=hi` (mm): the rays of row `j` that can meet that slab of the box (and a few more).
+    pub fn row_span_within(&self, j: i64, (m, lo, hi): (usize, f64, f64)) -> Option<(i64, i64)> {
+        let (mut a, mut b) = ([0.0; 3], self.extent);
+        (a[m], b[m]) = (lo.max(0.0), hi.min(self.extent[m]));
+        self.span_in_box(j, a, b)
+    }
+
+    fn span_in_box(&self, j: i64, lo: [f64; 3], hi: [f64; 3]) -> Option<(i64, i64)> {
         let y = (j as f64 + self.phase[1]) * self.ray_spacing;
-        let points: Vec<(f64, f64)> = self
-            .corners()
+        let points: Vec<(f64, f64)> = corners_of(lo, hi)
             .map(|c| (dot(c, self.u), dot(c, self.v)))
             .collect();
         let size: f64 = self.extent.iter().sum();
@@ -430,6 +446,11 @@ impl Lattice {
 /// Whether `x` is a power of two in the normal range (no mantissa bits set).
 fn power_of_two(x: f64) -> bool {
     x.is_normal() && x.to_bits() & ((1 << 52) - 1) == 0
+}
+
+/// The corners of the box `lo..hi` (mm).
+fn corners_of(lo: [f64; 3], hi: [f64; 3]) -> impl Iterator<Item = [f64; 3]> {
+    (0..8).map(move |c| std::array::from_fn(|k| if c >> k & 1 == 1 { hi[k] } else { lo[k] }))
 }
 
 /// `x.floor() as i64` for `|x| < 2^52`, without the library call that `floor` is on

@@ -230,11 +230,20 @@ impl PartialCounts {
         if more.is_empty() {
             return;
         }
-        let mut all = std::mem::take(&mut self.fragments);
-        all.extend(more);
-        all.sort_unstable_by_key(|f| (f.key, f.start));
-        let mut out: Vec<Fragment> = Vec::with_capacity(all.len());
-        for f in all {
+        // The fragments held are in order (of key, then start): only the new ones are sorted,
+        // and the two runs merged.
+        let mut more = more;
+        let order = |f: &Fragment| (f.key, f.start);
+        more.sort_unstable_by_key(order);
+        let held = std::mem::take(&mut self.fragments);
+        let mut out: Vec<Fragment> = Vec::with_capacity(held.len() + more.len());
+        let (mut a, mut b) = (held.into_iter().peekable(), more.into_iter().peekable());
+        let merged = std::iter::from_fn(|| match (a.peek(), b.peek()) {
+            (Some(x), Some(y)) if order(y) < order(x) => b.next(),
+            (Some(_), _) => a.next(),
+            (None, _) => b.next(),
+        });
+        for f in merged {
             match out.last_mut() {
                 Some(prev) if prev.key == f.key && prev.end == f.start => {
                     match prev.stitch(&f, &mut self.counts) {

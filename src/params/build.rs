@@ -85,6 +85,13 @@ impl Given {
             .unwrap_or(Resolution::Full))
     }
 
+    /// The pyramid level asked for, and whether it was named (not left to the default): every
+    /// voxel asked for by name is computed on every voxel even beyond the memory budget
+    /// (`Purpose::Analysis`'s `every_voxel`).
+    pub fn resolution_named(&self) -> Result<(Resolution, bool)> {
+        Ok((self.resolution()?, self.has(&super::table::RESOLUTION)))
+    }
+
     /// How to read the input.
     pub fn load(&self) -> Result<LoadOptions> {
         Ok(LoadOptions {

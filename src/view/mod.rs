@@ -6,6 +6,7 @@
 pub mod icosphere;
 mod rate;
 mod refine;
+mod streamed;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -16,6 +17,7 @@ pub use rate::{
     work_units, work_units_of,
 };
 pub use refine::{REFINE_STOP_DEGREES, pattern_search, refine_evaluations, refine_steps};
+pub use streamed::{search_streamed, streamed_memory_floor};
 
 use crate::error::{Error, Result};
 use crate::geometry::lattice::{Lattice, SamplingParams};
@@ -224,6 +226,83 @@ fn phase(seed: u64, n: usize) -> [f64; 3] {
     })
 }
 
+/// Lattice `n` of `axis` (0 is the paper's) for `volume` under `params`.
+fn lattice_of(volume: &Volume, params: &ViewParams, axis: [f64; 3], n: usize) -> Result<Lattice> {
+    Ok(Lattice::new(
+        volume.dims(),
+        volume.spacing(),
+        axis,
+        params.sampling.ray_spacing.unwrap_or(1.0),
+        params.sampling.sample_spacing.unwrap_or(1.0),
+        phase(params.phase_seed, n),
+    )?)
+}
+
+/// `axis` made a canonical unit direction.
+fn canonical_axis(axis: [f64; 3]) -> Result<[f64; 3]> {
+    Ok(canonical(normalize(axis).ok_or_else(|| {
+        Error::invalid("axis", "[0, 0, 0]", "a direction with a length")
+    })?))
+}
+
+/// The shifted lattices of `axis` (phases 1 on), each with the rays it walks, for an axis
+/// whose paper lattice counted `samples`; `None` for each when the axis is too thin for a block
+/// in any phase (those phases would say nothing, and are not walked).
+fn shifted_lattices(
+    volume: &Volume,
+    params: &ViewParams,
+    axis: [f64; 3],
+    samples: u64,
+) -> Result<Vec<(Lattice, Option<RaySubset>)>> {
+    let thin = !lattice_of(volume, params, axis, 0)?.could_hold(params.block);
+    (1..params.phases)
+        .map(|n| {
+            let lattice = lattice_of(volume, params, axis, n)?;
+            Ok((lattice, (!thin).then(|| subset(params, samples, n))))
+        })
+        .collect()
+}
+
+/// The rays a shifted lattice walks, for an axis whose paper lattice counted `samples`:
+/// one block in `phase_subset`, spread over the volume, as long as each shifted lattice keeps
+/// [`SAMPLES_PER_CELL`] samples per cell of the L-block table; else all of them.
+///
+/// The plug-in entropy of L-blocks is biased low by about `cells / (2·N·ln 2)` bits for N
+/// samples, so a lattice with fewer samples scores lower; with this many samples a cell the
+/// bias stays below 0.023 bit and varies between axes by a tenth of that. Small volumes, where
+/// it would not, are cheap to walk whole.
+fn subset(params: &ViewParams, samples: u64, n: usize) -> RaySubset {
+    let cells = (params.sampling.bins as u64).saturating_pow(params.block as u32);
+    let affordable = samples / cells.saturating_mul(SAMPLES_PER_CELL).max(1);
+    RaySubset {
+        every: params.phase_subset.min(affordable).max(1),
+        offset: n as u64,
+    }
+}
+
+/// The paper lattice's result `paper` for `axis`, described in world terms, with the phase
+/// statistics of it and the `shifted` lattices' results when phases are asked for (lattices
+/// whose rays hold no block say nothing, and are left out of the mean).
+fn finish(
+    volume: &Volume,
+    params: &ViewParams,
+    axis: [f64; 3],
+    mut paper: AxisEntropy,
+    shifted: &[AxisEntropy],
+) -> AxisEntropy {
+    paper.axis = axis;
+    paper.world = volume.transform().describe(axis, volume.spacing());
+    if params.phases > 0 {
+        let values: Vec<f64> = std::iter::once(&paper)
+            .chain(shifted)
+            .filter(|r| r.measured())
+            .map(|r| r.entropy_rate)
+            .collect();
+        paper.phases = (!values.is_empty()).then(|| PhaseStats::of(&values));
+    }
+    paper
+}
+
 /// Everything one search needs to evaluate an axis.
 struct Evaluator<'a, T> {
     volume: &'a Volume,
@@ -232,80 +311,37 @@ struct Evaluator<'a, T> {
 }
 
 impl<T: Voxel> Evaluator<'_, T> {
-    fn lattice(&self, axis: [f64; 3], n: usize) -> Result<Lattice> {
-        Ok(Lattice::new(
-            self.volume.dims(),
-            self.volume.spacing(),
-            axis,
-            self.params.sampling.ray_spacing.unwrap_or(1.0),
-            self.params.sampling.sample_spacing.unwrap_or(1.0),
-            phase(self.params.phase_seed, n),
-        )?)
-    }
-
-    /// The rays a shifted lattice walks, for an axis whose paper lattice counted `samples`:
-    /// one block in `phase_subset`, spread over the volume, as long as each shifted lattice keeps
-    /// [`SAMPLES_PER_CELL`] samples per cell of the L-block table; else all of them.
-    ///
-    /// The plug-in entropy of L-blocks is biased low by about `cells / (2·N·ln 2)` bits for N
-    /// samples, so a lattice with fewer samples scores lower; with this many samples a cell the
-    /// bias stays below 0.023 bit and varies between axes by a tenth of that. Small volumes, where
-    /// it would not, are cheap to walk whole.
-    fn subset(&self, samples: u64, n: usize) -> RaySubset {
-        let cells = (self.params.sampling.bins as u64).saturating_pow(self.params.block as u32);
-        let affordable = samples / cells.saturating_mul(SAMPLES_PER_CELL).max(1);
-        RaySubset {
-            every: self.params.phase_subset.min(affordable).max(1),
-            offset: n as u64,
-        }
-    }
-
     fn units(&self, axis: [f64; 3]) -> Result<u64> {
         let phases = self.params.phases.max(1) as u64;
-        Ok(work_units(&self.lattice(axis, 0)?) * phases)
+        Ok(work_units(&lattice_of(self.volume, &self.params, axis, 0)?) * phases)
     }
 
     /// The entropy rate of `axis` on the paper's lattice, with the phase statistics when asked
     /// for.
     fn evaluate(&self, axis: [f64; 3], monitor: &Monitor) -> Result<AxisEntropy> {
-        let axis = canonical(
-            normalize(axis)
-                .ok_or_else(|| Error::invalid("axis", "[0, 0, 0]", "a direction with a length"))?,
-        );
-        let block = self.params.block;
-        let mut result = entropy_rate(&self.sampler, &self.lattice(axis, 0)?, block, monitor)?;
-        result.axis = axis;
-        result.world = self
-            .volume
-            .transform()
-            .describe(axis, self.volume.spacing());
-        if self.params.phases > 0 {
-            // Phases whose rays hold no block say nothing, and are left out of the mean.
-            let mut values: Vec<f64> = result
-                .measured()
-                .then_some(result.entropy_rate)
-                .into_iter()
-                .collect();
-            // An axis too thin for a block in any phase: the other phases would say nothing.
-            let thin = !self.lattice(axis, 0)?.could_hold(block);
-            for n in 1..self.params.phases {
-                let lattice = self.lattice(axis, n)?;
-                if thin {
-                    monitor.advance(work_units(&lattice))?;
-                    continue;
-                }
-                let subset = self.subset(result.samples, n);
-                let r = entropy_rate_of(&self.sampler, &lattice, block, subset, monitor)?;
-                // A subset walks fewer rows of tiles: the progress of the rest.
-                let rest = work_units(&lattice).saturating_sub(work_units_of(&lattice, subset));
-                monitor.advance(rest)?;
-                if r.measured() {
-                    values.push(r.entropy_rate);
-                }
-            }
-            result.phases = (!values.is_empty()).then(|| PhaseStats::of(&values));
+        let axis = canonical_axis(axis)?;
+        let (volume, params) = (self.volume, &self.params);
+        let block = params.block;
+        let lattice = lattice_of(volume, params, axis, 0)?;
+        let paper = entropy_rate(&self.sampler, &lattice, block, monitor)?;
+        let mut shifted = Vec::new();
+        for (lattice, subset) in shifted_lattices(volume, params, axis, paper.samples)? {
+            let Some(subset) = subset else {
+                monitor.advance(work_units(&lattice))?;
+                continue;
+            };
+            shifted.push(entropy_rate_of(
+                &self.sampler,
+                &lattice,
+                block,
+                subset,
+                monitor,
+            )?);
+            // A subset walks fewer rows of tiles: the progress of the rest.
+            let rest = work_units(&lattice).saturating_sub(work_units_of(&lattice, subset));
+            monitor.advance(rest)?;
         }
-        Ok(result)
+        Ok(finish(volume, params, axis, paper, &shifted))
     }
 }
 
@@ -334,25 +370,39 @@ fn search_in<T: Voxel>(
     let axes = icosphere::axes(eval.params.level);
     let total = axes.iter().map(|&a| eval.units(a)).sum::<Result<u64>>()?;
     monitor.start("view search", total);
-    let mut views = axes
+    let views = axes
         .par_iter()
         .map(|&axis| eval.evaluate(axis, monitor))
         .collect::<Result<Vec<_>>>()?;
-    views.sort_by(rank);
-    if !views[0].measured() {
-        return Err(Error::Degenerate(format!(
-            "no ray holds {} samples in a row along any axis: the volume is too thin to measure",
-            eval.params.block
-        )));
-    }
+    let views = ranked(views, eval.params.block)?;
     let refined = if eval.params.refine {
         Some(refine::refine(&eval, &views, monitor)?)
     } else {
         None
     };
+    Ok(concluded(views, eval.params, refined))
+}
+
+/// `views` in the ranking's order, refused when no axis could be measured.
+fn ranked(mut views: Vec<AxisEntropy>, block: usize) -> Result<Vec<AxisEntropy>> {
+    views.sort_by(rank);
+    if !views[0].measured() {
+        return Err(Error::Degenerate(format!(
+            "no ray holds {block} samples in a row along any axis: the volume is too thin to measure"
+        )));
+    }
+    Ok(views)
+}
+
+/// The search's result from its ranked views, with the contenders of the best.
+fn concluded(
+    views: Vec<AxisEntropy>,
+    params: ViewParams,
+    refined: Option<AxisEntropy>,
+) -> ViewSearch {
     let contenders = contenders(refined.as_ref().unwrap_or(&views[0]), &views);
-    Ok(ViewSearch {
-        ranked_by: if eval.params.phases > 0 {
+    ViewSearch {
+        ranked_by: if params.phases > 0 {
             RankedBy::PhaseMean
         } else {
             RankedBy::PaperLattice
@@ -360,9 +410,9 @@ fn search_in<T: Voxel>(
         uncertain: contenders.as_ref().map(|c| c.len() > 1),
         contenders,
         views,
-        params: eval.params,
+        params,
         refined,
-    })
+    }
 }
 
 /// The angle between two axes in degrees, ignoring their sign.

@@ -3,6 +3,8 @@
 //! sample is a convex combination of its cell's corners, so it lies in their common bin: where
 //! the map knows the bin, no interpolation is needed.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use super::{Quantizer, Volume, Voxel};
@@ -29,7 +31,7 @@ pub fn cell_map(volume: &Volume, q: &Quantizer) -> (Vec<u8>, Vec<u8>) {
 /// (one byte a voxel) is held whole: for voxels whose bins a table gives exactly, which need no
 /// per-voxel map.
 pub fn cells_only(volume: &Volume, q: &Quantizer) -> Vec<u8> {
-    crate::volume::with_voxels!(volume.data(), |voxels| banded_cells(voxels, volume, q))
+    cells_window(volume, q, 0..volume.len())
 }
 
 /// [`cell_map`] over `voxels`, the voxels of `volume` in their own type.
@@ -50,22 +52,49 @@ fn cell_map_of<T: Voxel>(voxels: &[T], volume: &Volume, q: &Quantizer) -> (Vec<u
     (cells, bins)
 }
 
-/// [`cells_only`] over `voxels`: each task makes the safe bins of its band of cells and of the
-/// corners beyond it (one plane more) in a buffer of its own.
-fn banded_cells<T: Voxel>(voxels: &[T], volume: &Volume, q: &Quantizer) -> Vec<u8> {
+/// The entries `range` (linear voxel indices) of [`cells_only`]'s map, made alone: the map of a
+/// window of planes, for a walk that holds no more (entries of the last plane are [`MIXED`], as
+/// there).
+pub fn cells_window(volume: &Volume, q: &Quantizer, range: Range<usize>) -> Vec<u8> {
+    crate::volume::with_voxels!(volume.data(), |voxels| {
+        banded_cells(voxels, volume, q, range)
+    })
+}
+
+/// The entries `range` of [`cell_map`]'s per-voxel map: the bin each voxel safely lies in, or
+/// [`MIXED`].
+pub fn voxel_map_window(volume: &Volume, q: &Quantizer, range: Range<usize>) -> Vec<u8> {
+    crate::volume::with_voxels!(volume.data(), |voxels| {
+        let safe_bin = safe_bin_of(volume, q);
+        let mut bins = vec![0u8; range.len()];
+        bins.par_chunks_mut(CHUNK)
+            .zip(voxels[range].par_chunks(CHUNK))
+            .for_each(|(b, v)| wide(|| b.iter_mut().zip(v).for_each(|(b, &v)| *b = safe_bin(v))));
+        bins
+    })
+}
+
+/// The entries `range` of [`cells_only`]'s map over `voxels`: each task makes the safe bins of
+/// its band of cells and of the corners beyond it (one plane more) in a buffer of its own.
+fn banded_cells<T: Voxel>(
+    voxels: &[T],
+    volume: &Volume,
+    q: &Quantizer,
+    range: Range<usize>,
+) -> Vec<u8> {
     let safe_bin = safe_bin_of::<T>(volume, q);
     let corners = Corners::of(volume.dims());
     let [nx, ny, _] = volume.dims();
     // Eight planes a band: the plane of corners beyond a band is made twice, an eighth more.
     let band = CHUNK.max(8 * nx * ny);
-    let with_corners = corners.cells(voxels.len());
-    let mut cells = vec![0; voxels.len()];
+    let with_corners = corners.cells(voxels.len()).clamp(range.start, range.end) - range.start;
+    let mut cells = vec![0; range.len()];
     cells[with_corners..].fill(MIXED);
     cells[..with_corners]
         .par_chunks_mut(band)
         .enumerate()
         .for_each(|(c, out)| {
-            let start = c * band;
+            let start = range.start + c * band;
             let end = (start + out.len() + corners.reach).min(voxels.len());
             let mut bins = vec![0u8; end - start];
             wide(|| {

@@ -372,14 +372,24 @@ pub struct BinTable {
 }
 
 impl BinTable {
+    /// Whether values of `T` are binned by a table (integers of at most 16 bits).
+    #[must_use]
+    pub fn exists<T: Voxel>() -> bool {
+        Self::size::<T>().is_some()
+    }
+
+    fn size<T: Voxel>() -> Option<u32> {
+        match T::TYPE {
+            VoxelType::U8 | VoxelType::I8 => Some(1 << 8),
+            VoxelType::U16 | VoxelType::I16 => Some(1 << 16),
+            _ => None,
+        }
+    }
+
     /// The table of `T` under `q`, or `None` for f32 (no table: quantize by the formula).
     #[must_use]
     pub fn new<T: Voxel>(q: &Quantizer) -> Option<Self> {
-        let size = match T::TYPE {
-            VoxelType::U8 | VoxelType::I8 => 1 << 8,
-            VoxelType::U16 | VoxelType::I16 => 1 << 16,
-            _ => return None,
-        };
+        let size = Self::size::<T>()?;
         let min = T::TYPE.range().0;
         let bins = (0..size)
             .map(|i| {

@@ -18,123 +18,16 @@
 //! walk's fixed cost per stretch makes it slower than the tile walk on the machines measured
 //! (docs/performance.md, "The bricked walk").
 
-use super::BinSampler;
+use rayon::prelude::*;
+
+use super::grid::Bricks;
 use super::tiles::{RayStart, RayStarts, Walker, advance, sample_bin, scalar_walk, tile_rows};
+use super::{BinSampler, RaySubset};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::{FIXED_BITS, Lattice};
 use crate::measure::{BlockCounts, Fragment, PartialCounts, ray_key};
 use crate::progress::Monitor;
 use crate::volume::Voxel;
-
-/// Cells along each side of a brick: 64³ one-byte cells, 256 KiB.
-pub const BRICK_CELLS: usize = 64;
-
-/// A grid of bricks over a volume's cells (the cell between voxels `x` and `x + 1` along each
-/// axis, one cell along an axis of one voxel), `size` cells along each axis, the last ones cut
-/// short.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Bricks {
-    cells: [i64; 3],
-    size: [i64; 3],
-    count: [i64; 3],
-}
-
-impl Bricks {
-    /// The bricks of `size` cells a side over a volume of `dims` voxels.
-    pub fn new(dims: [usize; 3], size: usize) -> Self {
-        Self::shaped(dims, [size; 3])
-    }
-
-    /// The bricks of `size[m]` cells along axis `m` over a volume of `dims` voxels.
-    pub fn shaped(dims: [usize; 3], size: [usize; 3]) -> Self {
-        let cells = dims.map(|n| n.saturating_sub(1).max(1) as i64);
-        let size = size.map(|s| s.max(1) as i64);
-        Self {
-            cells,
-            size,
-            count: std::array::from_fn(|m| (cells[m] + size[m] - 1) / size[m]),
-        }
-    }
-
-    /// Bricks of about `cells³` cells for rays along `step`: longest along the axes the rays
-    /// run most along, so that a ray's stretch in a brick is long (its mean is the brick's
-    /// volume over its area seen along the ray, which this shape makes least), each side at
-    /// least a quarter of `cells`.
-    pub fn along(dims: [usize; 3], cells: usize, step: [i64; 3]) -> Self {
-        let norm = step
-            .iter()
-            .map(|&s| (s as f64).powi(2))
-            .sum::<f64>()
-            .sqrt()
-            .max(1.0);
-        let w = step.map(|s| (s.unsigned_abs() as f64 / norm).max(0.25));
-        let k = (cells as f64).powi(3) / w.iter().product::<f64>();
-        let k = k.cbrt();
-        Self::shaped(dims, w.map(|w| ((k * w / 8.0).round() as usize).max(1) * 8))
-    }
-
-    /// Number of bricks.
-    pub fn len(&self) -> usize {
-        self.count.iter().product::<i64>() as usize
-    }
-
-    /// Always false: a volume has a cell.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    fn coords(&self, b: usize) -> [i64; 3] {
-        let b = b as i64;
-        let [nx, ny, _] = self.count;
-        [b % nx, (b / nx) % ny, b / (nx * ny)]
-    }
-
-    /// The cells of brick `b`: `lo..hi` along each axis.
-    pub fn cells_of(&self, b: usize) -> ([i64; 3], [i64; 3]) {
-        let c = self.coords(b);
-        let lo = std::array::from_fn(|m| c[m] * self.size[m]);
-        let hi = std::array::from_fn(|m| ((c[m] + 1) * self.size[m]).min(self.cells[m]));
-        (lo, hi)
-    }
-
-    /// The box of brick `b` in fixed-point index coordinates: `lo..hi` along each axis.
-    fn bounds(&self, b: usize) -> ([i64; 3], [i64; 3]) {
-        let (lo, hi) = self.cells_of(b);
-        (lo.map(|x| x << FIXED_BITS), hi.map(|x| x << FIXED_BITS))
-    }
-
-    /// The brick holding the sample at `p` (fixed point), clamped into the grid.
-    fn holding(&self, p: [i64; 3]) -> usize {
-        let c: [i64; 3] = std::array::from_fn(|m| {
-            (p[m].max(0) >> FIXED_BITS).min(self.cells[m] - 1) / self.size[m]
-        });
-        let [nx, ny, _] = self.count;
-        (c[0] + nx * (c[1] + ny * c[2])) as usize
-    }
-
-    /// Every brick, in an order in which each ray along `step` meets the bricks it crosses:
-    /// coordinates rising where the step rises and falling where it falls, z slowest.
-    pub fn sweep(&self, step: [i64; 3]) -> Vec<usize> {
-        let along = |m: usize| -> Vec<i64> {
-            let n = self.count[m];
-            if step[m] < 0 {
-                (0..n).rev().collect()
-            } else {
-                (0..n).collect()
-            }
-        };
-        let [nx, ny, _] = self.count;
-        let mut out = Vec::with_capacity(self.len());
-        for z in along(2) {
-            for y in along(1) {
-                for x in along(0) {
-                    out.push((x + nx * (y + ny * z)) as usize);
-                }
-            }
-        }
-        out
-    }
-}
 
 /// Where one ray of a band stands.
 struct Slot {
@@ -196,6 +89,11 @@ struct BrickWalk<'a, T: Voxel> {
     step: [i64; 3],
     /// Which bricks are walked (all when `None`).
     member: Option<Vec<bool>>,
+    /// Which rays are walked.
+    subset: RaySubset,
+    /// When the bricks walked are a slab of the grid: its cells along z, `lo..hi` in fixed
+    /// point. Rays are then set up only where they can meet it, and taken up where they enter it.
+    slab: Option<(i64, i64)>,
 }
 
 impl<'a, T: Voxel> BrickWalk<'a, T> {
@@ -213,7 +111,66 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             block,
             step: super::fixed_step(lattice),
             member,
+            subset: RaySubset::ALL,
+            slab: None,
         }
+    }
+
+    /// The walk of the bricks of `bricks` whose cells along z are `planes`, along the rays
+    /// `subset` keeps.
+    pub(super) fn of_slab(
+        sampler: &'a BinSampler<'a, T>,
+        lattice: &'a Lattice,
+        block: usize,
+        bricks: Bricks,
+        (planes, subset): (std::ops::Range<i64>, RaySubset),
+    ) -> Self {
+        let member = (0..bricks.len())
+            .map(|b| {
+                let (lo, hi) = bricks.cells_of(b);
+                lo[2] >= planes.start && hi[2] <= planes.end
+            })
+            .collect();
+        Self {
+            subset,
+            slab: Some((planes.start << FIXED_BITS, planes.end << FIXED_BITS)),
+            ..Self::new(sampler, lattice, block, bricks, Some(member))
+        }
+    }
+
+    /// The range of `i` of row `j` whose rays can meet the bricks walked.
+    fn row_span(&self, j: i64) -> Option<(i64, i64)> {
+        match self.slab {
+            None => self.lattice.row_span(j),
+            Some((lo, hi)) => {
+                let s = self.lattice.spacing()[2];
+                let z = |c: i64| (c >> FIXED_BITS) as f64 * s;
+                self.lattice.row_span_within(j, (2, z(lo), z(hi)))
+            }
+        }
+    }
+
+    /// The first sample of a ray from `p0` (fixed point) at or after `t` that can lie in the
+    /// slab walked (`t` when there is none): samples before it lie in bricks not walked.
+    fn slab_entry(&self, p0: [i64; 3], t: i64) -> i64 {
+        let (Some((lo, hi)), s) = (self.slab, self.step[2]) else {
+            return t;
+        };
+        let first = match s.signum() {
+            // The first with p + t·s >= lo, or below hi going down.
+            1 => floor_div(lo - p0[2] + s - 1, s),
+            -1 => floor_div(p0[2] - hi, -s) + 1,
+            _ => return t,
+        };
+        first.max(t)
+    }
+
+    /// Whether a ray at `p` has left the slab walked for good.
+    fn past_slab(&self, p: [i64; 3]) -> bool {
+        self.slab.is_some_and(|(lo, hi)| {
+            let s = self.step[2];
+            (s > 0 && p[2] >= hi) || (s < 0 && p[2] < lo)
+        })
     }
 
     fn walked(&self, b: usize) -> bool {
@@ -231,10 +188,13 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             waiting: vec![Vec::new(); self.bricks.len()],
         };
         for j in j0..=j1 {
-            let Some((a, b)) = self.lattice.row_span(j) else {
+            let Some((a, b)) = self.row_span(j) else {
                 continue;
             };
             for i in a.max(i0)..=b.min(i1) {
+                if !self.subset.keeps(i, j) {
+                    continue;
+                }
                 let Some(RayStart {
                     p: p0,
                     grid,
@@ -256,14 +216,18 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
                     }
                     continue;
                 }
+                let t = self.slab_entry(p0, t0);
+                if t >= t1 {
+                    continue;
+                }
                 let mut slot = Slot {
                     p0,
                     grid,
                     n,
                     t0,
                     t1,
-                    t: t0,
-                    p: at(p0, self.step, t0),
+                    t,
+                    p: at(p0, self.step, t),
                     key,
                     open: None,
                 };
@@ -302,6 +266,9 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             if let Some(f) = slot.open.take() {
                 let left = f.close(&mut out.counts, false);
                 out.push_fragment(left);
+            }
+            if self.past_slab(slot.p) {
+                return None;
             }
             let (lo, hi) = self.bricks.bounds(b);
             slot.t += steps_in(slot.p, self.step, lo, hi);
@@ -459,7 +426,6 @@ pub(super) fn bricked_counts<T: Voxel>(
     (size, shaped): (usize, bool),
     monitor: &Monitor,
 ) -> Result<(BlockCounts, u64)> {
-    use rayon::prelude::*;
     let bricks = if shaped {
         Bricks::along(sampler.dims(), size, super::fixed_step(lattice))
     } else {
@@ -520,4 +486,45 @@ pub fn counts_of_bricks<T: Voxel>(
     let mut band = walk.band(js, &mut out);
     walk.walk(&mut band, &order, &mut out);
     out
+}
+
+/// Rows of rays a slab's walk sets up at a time: what it holds per ray is bounded by a band.
+pub(crate) const SLAB_ROWS: u64 = 64;
+
+/// The block counts of the stretches of `lattice`'s rays (those `subset` keeps) in the slab of
+/// `bricks` whose cells along z are `planes` (a whole number of bricks thick): what they
+/// determine, and the fragments of the rays that enter or leave it. The slabs of a grid added in
+/// any order are [`block_counts`](super::block_counts)'s counts bit for bit; the sampler need
+/// hold the cell map of the slab's planes alone ([`BinSampler::window`]). Only the rays that can
+/// meet the slab are set up, bands of rows in parallel.
+pub fn counts_of_slab<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattice: &Lattice,
+    block: usize,
+    bricks: Bricks,
+    (planes, subset): (std::ops::Range<i64>, RaySubset),
+) -> PartialCounts {
+    let walk = BrickWalk::of_slab(sampler, lattice, block, bricks, (planes, subset));
+    let order: Vec<usize> = bricks
+        .sweep(walk.step)
+        .into_iter()
+        .filter(|&b| walk.walked(b))
+        .collect();
+    let (_, (j0, j1)) = lattice.ray_ranges();
+    let bands: Vec<(i64, i64)> = (j0..=j1)
+        .step_by(SLAB_ROWS as usize)
+        .map(|j| (j, (j + SLAB_ROWS as i64 - 1).min(j1)))
+        .collect();
+    let empty = || PartialCounts::new(sampler.bins(), block);
+    bands
+        .into_par_iter()
+        .fold(empty, |mut out, js| {
+            let mut band = walk.band(js, &mut out);
+            walk.walk(&mut band, &order, &mut out);
+            out
+        })
+        .reduce(empty, |mut a, b| {
+            a.add(b);
+            a
+        })
 }

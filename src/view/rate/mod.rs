@@ -3,6 +3,7 @@
 
 mod bricks;
 mod columns;
+mod grid;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod sampler;
@@ -11,7 +12,9 @@ mod tiles;
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use bricks::{BRICK_CELLS, Bricks, counts_of_bricks};
+pub(crate) use bricks::SLAB_ROWS;
+pub use bricks::{counts_of_bricks, counts_of_slab};
+pub use grid::{BRICK_CELLS, Bricks};
 pub use sampler::{BinSampler, InnerSpans, VoxelBins};
 
 use crate::error::Result;
@@ -138,7 +141,7 @@ pub struct AxisEntropy {
 }
 
 impl AxisEntropy {
-    fn new(axis: [f64; 3], counts: &BlockCounts, rays: u64) -> Self {
+    pub(crate) fn new(axis: [f64; 3], counts: &BlockCounts, rays: u64) -> Self {
         let (h1, h_short, h_long) = counts.entropies();
         let (azimuth, elevation) = crate::geometry::azimuth_elevation(axis);
         Self {

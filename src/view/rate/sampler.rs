@@ -3,7 +3,7 @@
 //! cells, where the walks need no clamping.
 
 use crate::geometry::lattice::{FIXED_BITS, FIXED_STEP, ceil_i64, to_fixed};
-use crate::volume::cells::{MIXED, cell_map, cells_only};
+use crate::volume::cells::{MIXED, cell_map, cells_only, cells_window, voxel_map_window};
 use crate::volume::interpolate::Interpolator;
 use crate::volume::voxels::BinTable;
 use crate::volume::{Quantizer, Volume, Voxel};
@@ -15,14 +15,18 @@ use crate::volume::{Quantizer, Volume, Voxel};
 pub struct BinSampler<'a, T = f32> {
     it: Interpolator<'a, T>,
     q: Quantizer,
+    /// The cell map of the cells from linear index `base` on: the whole map, or a window of it
+    /// (see [`BinSampler::window`]); a cell outside is answered by interpolation.
     cells: Vec<u8>,
+    base: usize,
     voxel_bins: VoxelBins,
     dims: [usize; 3],
 }
 
 /// How a sampler knows the bin of a voxel.
 pub enum VoxelBins {
-    /// Per voxel: the bin it safely lies in, or [`MIXED`] (see [`cell_map`]), for f32.
+    /// Per voxel from the sampler's `base` on: the bin it safely lies in, or [`MIXED`] (see
+    /// [`cell_map`]), for f32; a voxel outside is answered from its value.
     Map(Vec<u8>),
     /// The bins of every value of an integer type of at most 16 bits, exactly.
     Table(BinTable),
@@ -52,10 +56,54 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
         Self {
             it: Interpolator::over(data, volume.dims()),
             cells,
+            base: 0,
             voxel_bins,
             dims: volume.dims(),
             q,
         }
+    }
+
+    /// A sampler of all of `volume` (whose voxels `data` are) that holds the cell map of the
+    /// planes of cells `planes` alone (and the per-voxel map of their voxels, for f32): a byte a
+    /// voxel of those planes instead of the whole volume's. It answers every sample as
+    /// [`over`](Self::over)'s does; outside the planes, by interpolating the voxels (the map
+    /// only saves work).
+    pub fn window(
+        data: &'a [T],
+        volume: &Volume,
+        q: Quantizer,
+        planes: std::ops::Range<usize>,
+    ) -> Self {
+        let [nx, ny, _] = volume.dims();
+        let range = planes.start * nx * ny..(planes.end * nx * ny).min(data.len());
+        let voxel_bins = match BinTable::new::<T>(&q) {
+            Some(table) => VoxelBins::Table(table),
+            None => VoxelBins::Map(voxel_map_window(volume, &q, range.clone())),
+        };
+        Self {
+            it: Interpolator::over(data, volume.dims()),
+            cells: cells_window(volume, &q, range.clone()),
+            base: range.start,
+            voxel_bins,
+            dims: volume.dims(),
+            q,
+        }
+    }
+
+    /// The bytes [`window`](Self::window) holds for `planes` planes of cells of a volume of
+    /// `dims` voxels of type `T` (one a voxel, two for f32 with its per-voxel map).
+    pub fn window_bytes(dims: [usize; 3], planes: usize) -> u64 {
+        let per_voxel = if BinTable::exists::<T>() { 1 } else { 2 };
+        (dims[0] * dims[1] * planes * per_voxel) as u64
+    }
+
+    /// The cell map's entry for cell `index`: [`MIXED`] outside the planes held.
+    #[inline]
+    fn cell_entry(&self, index: usize) -> u8 {
+        self.cells
+            .get(index.wrapping_sub(self.base))
+            .copied()
+            .unwrap_or(MIXED)
     }
 
     /// Number of bins.
@@ -79,7 +127,7 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
             corner[m] = i;
             index += i as usize * self.it.stride[m];
         }
-        match self.cells[index] {
+        match self.cell_entry(index) {
             MIXED => {
                 let f = std::array::from_fn(|m| {
                     ((p[m].max(0) - (corner[m] << FIXED_BITS)) as f64 * FIXED_STEP) as f32
@@ -122,7 +170,11 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
     /// Any index may be given: a prefetch never faults.
     #[inline]
     pub fn prefetch_cell(&self, index: usize) {
-        prefetch(self.cells.as_ptr().wrapping_add(index));
+        prefetch(
+            self.cells
+                .as_ptr()
+                .wrapping_add(index.wrapping_sub(self.base)),
+        );
     }
 
     /// Asks the processor to bring the corner voxels of cell `index` into cache.
@@ -135,10 +187,16 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
         }
     }
 
-    /// The cell map: per cell (at the linear index of its lower corner voxel) its bin or
-    /// [`MIXED`].
+    /// The cell map held: per cell (at the linear index of its lower corner voxel less
+    /// [`cells_base`](Self::cells_base)) its bin or [`MIXED`].
     pub fn cells(&self) -> &[u8] {
         &self.cells
+    }
+
+    /// The linear index of the first cell [`cells`](Self::cells) holds: 0 unless a
+    /// [`window`](Self::window).
+    pub fn cells_base(&self) -> usize {
+        self.base
     }
 
     /// How the bin of a voxel is known: a per-voxel map whose [`MIXED`] entries
@@ -154,9 +212,9 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
     pub fn voxel_bin_at(&self, index: usize) -> Option<u8> {
         match &self.voxel_bins {
             VoxelBins::Table(table) => Some(table.bin(self.it.data[index])),
-            VoxelBins::Map(map) => match map[index] {
-                MIXED => self.q.bin(self.it.at(index)),
-                b => Some(b),
+            VoxelBins::Map(map) => match map.get(index.wrapping_sub(self.base)) {
+                Some(&b) if b != MIXED => Some(b),
+                _ => self.q.bin(self.it.at(index)),
             },
         }
     }
@@ -190,7 +248,7 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
     /// The bin of cell `index` when all its samples share one, else [`MIXED`].
     #[inline]
     pub fn cell_bin(&self, index: usize) -> u8 {
-        self.cells[index]
+        self.cell_entry(index)
     }
 
     /// The bin of the trilinear sample at `p` in cell `index`, where `p` lies in

@@ -2,6 +2,7 @@
 //! equal brute-force counts over voxel columns.
 
 use super::*;
+use crate::geometry::lattice::FIXED_BITS;
 use crate::geometry::min_spacing;
 use crate::measure::{PartialCounts, block_entropies};
 use crate::testing::Lcg;
@@ -235,4 +236,95 @@ fn bricks_counted_apart_in_random_groups_add_up_to_the_whole() {
         }
     }
     assert!(open > 10_000, "{open} pieces of rays stitched");
+}
+
+#[test]
+fn slabs_counted_apart_from_windows_of_the_map_add_up_to_the_whole() {
+    // Each slab walked with a sampler holding its planes' cells alone; the slabs added in a
+    // shuffled order: every table and the ray count of the tile walk, with and without subsets.
+    let mut lcg = Lcg::new(21);
+    let mut compared = 0;
+    for (dims, spacing) in [
+        ([23, 19, 31], [1.0, 1.0, 1.0]),
+        ([40, 9, 17], [0.7, 1.3, 2.1]),
+        ([12, 11, 1], [1.0, 1.0, 1.0]),
+        ([9, 8, 2], [1.0, 1.0, 0.5]),
+    ] {
+        let v = awkward_volume(dims, spacing, 5);
+        let q = v.quantizer(16).unwrap();
+        let whole = BinSampler::new(&v, q);
+        let cells = dims[2].saturating_sub(1).max(1);
+        for axis in [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.3, -0.5, 0.81],
+            [1.0, 1.0, -1.0],
+        ] {
+            let s = min_spacing(v.spacing());
+            let lattice = Lattice::new(dims, v.spacing(), axis, s, s, [0.31, 0.77, 0.5]).unwrap();
+            for subset in [
+                RaySubset::ALL,
+                RaySubset {
+                    every: 3,
+                    offset: 1,
+                },
+            ] {
+                let none = Monitor::none();
+                let (counts, rays) = counts_with(
+                    &whole,
+                    &lattice,
+                    3,
+                    &none,
+                    Walk::Tiles { vector: false },
+                    subset,
+                )
+                .unwrap();
+                let expect = AxisEntropy::new(lattice.d, &counts, rays);
+                for (slab, brick) in [(1, 1), (2, 1), (5, 5), (6, 3), (64, 64)] {
+                    let bricks = Bricks::shaped(dims, [4, 7, brick]);
+                    let mut slabs: Vec<std::ops::Range<usize>> = (0..cells)
+                        .step_by(slab)
+                        .map(|z| z..(z + slab).min(cells))
+                        .collect();
+                    for k in (1..slabs.len()).rev() {
+                        slabs.swap(k, (lcg.next_u64() % (k as u64 + 1)) as usize);
+                    }
+                    let mut total = PartialCounts::new(16, 3);
+                    for planes in slabs {
+                        let window = BinSampler::window(v.voxels(), &v, q, planes.clone());
+                        let z = planes.start as i64..planes.end as i64;
+                        total.add(counts_of_slab(&window, &lattice, 3, bricks, (z, subset)));
+                    }
+                    assert!(total.is_complete(), "{dims:?} {axis:?} slabs of {slab}");
+                    let got = AxisEntropy::new(lattice.d, &total.counts, total.rays);
+                    assert_eq!(got, expect, "{dims:?} {axis:?} {subset:?} slabs of {slab}");
+                    compared += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(compared, 4 * 4 * 2 * 5);
+}
+
+#[test]
+fn a_window_of_the_map_answers_every_sample_as_the_whole_map() {
+    let v = awkward_volume([14, 13, 12], [1.0; 3], 8);
+    for bins in [4, 32] {
+        let q = v.quantizer(bins).unwrap();
+        let whole = BinSampler::new(&v, q);
+        let window = BinSampler::window(v.voxels(), &v, q, 4..7);
+        assert_eq!(window.cells().len(), 14 * 13 * 3);
+        assert_eq!(window.cells_base(), 14 * 13 * 4);
+        let mut lcg = Lcg::new(bins as u64);
+        for _ in 0..20_000 {
+            // Anywhere inside the volume, its far faces included.
+            let p: [i64; 3] = std::array::from_fn(|m| {
+                let last = [13u64, 12, 11][m];
+                (lcg.next_u64() % ((last << FIXED_BITS) + 1)) as i64
+            });
+            assert_eq!(window.bin_fixed(p), whole.bin_fixed(p), "{p:?}");
+            let voxel = p.map(|c| c >> FIXED_BITS << FIXED_BITS);
+            assert_eq!(window.voxel_bin(voxel), whole.voxel_bin(voxel), "{voxel:?}");
+        }
+    }
 }

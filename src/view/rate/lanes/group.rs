@@ -138,7 +138,7 @@ impl Group {
         c: &Consts,
         sampler: &BinSampler<T>,
     ) {
-        let cells = sampler.cells();
+        let (cells, base) = (sampler.cells(), sampler.cells_base());
         chunk.missing = [0; CHUNK];
         // First the labels: no step waits for another's, so many are read at once...
         for t in 0..chunk.steps {
@@ -156,7 +156,11 @@ impl Group {
             let at = &mut chunk.cells[t];
             at.set(cell);
             for (label, &i) in chunk.labels[t].iter_mut().zip(&at.0) {
-                *label = cells[i as usize];
+                // Outside a window of the map (idle lanes, and only they): mixed.
+                *label = cells
+                    .get((i as usize).wrapping_sub(base))
+                    .copied()
+                    .unwrap_or(MIXED);
             }
             self.p = offset(&self.p, &c.step);
         }

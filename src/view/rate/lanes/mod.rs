@@ -53,7 +53,7 @@ const AHEAD: usize = 16;
 
 /// Whether this processor has AVX2, and `sampler`'s cells can be indexed by 32-bit lanes.
 pub(super) fn available<T: Voxel>(sampler: &BinSampler<T>) -> bool {
-    is_x86_feature_detected!("avx2") && i32::try_from(sampler.cells().len()).is_ok()
+    is_x86_feature_detected!("avx2") && i32::try_from(sampler.voxels().len()).is_ok()
 }
 
 /// Resolves the queue of `chunk` one entry at a time, through the scalar path: for rays on the

@@ -1,0 +1,321 @@
+//! The view search of a volume whose cell map does not fit in memory, at full resolution: the
+//! volume is counted a slab of planes at a time, each slab's cell map made, walked along every
+//! lattice and dropped, and each lattice's counts added slab after slab ([`PartialCounts`]), so
+//! that the result is [`search`](super::search)'s, bit for bit, in a fraction of its memory.
+//!
+//! The voxels are read where they are (a mapped file, or held); what is held is one slab's cell
+//! map (a byte a voxel of the slab, two for f32) and, per lattice counted in the same sweep, its
+//! tables and the pieces of its rays open at the slab's top. The lattices are counted in as few
+//! sweeps as that memory allows: the paper's lattices of every axis first, then the shifted ones,
+//! whose rays depend on what the paper's counted (see `subset`).
+
+use std::ops::Range;
+
+use rayon::prelude::*;
+
+use super::rate::{AxisEntropy, BinSampler, Bricks, RaySubset, counts_of_slab};
+use super::{ViewParams, ViewSearch, canonical_axis, concluded, finish, icosphere};
+use super::{lattice_of, ranked, resolve, shifted_lattices};
+use crate::error::{Error, Result};
+use crate::geometry::lattice::Lattice;
+use crate::measure::{Fragment, PartialCounts};
+use crate::progress::Monitor;
+use crate::view::rate::SLAB_ROWS;
+
+/// About what a ray being set up for a slab's walk holds, bytes.
+const SLOT_BYTES: u64 = 160;
+use crate::volume::{Quantizer, Volume, Voxel};
+
+/// The least memory [`search_streamed`] works in for `volume` (bytes): the cell map of a slab
+/// one plane thick, and the counts of one lattice.
+#[must_use]
+pub fn streamed_memory_floor(volume: &Volume, params: &ViewParams) -> u64 {
+    let dims = volume.dims();
+    // Two planes of two bytes a voxel, and a lattice along z (the most rays crossing a plane).
+    let s = crate::geometry::min_spacing(volume.spacing());
+    let ray = params.sampling.ray_spacing.unwrap_or(s);
+    let z = Lattice::new(dims, volume.spacing(), [0.0, 0.0, 1.0], ray, s, [0.0; 3]);
+    let job = z.map_or(u64::MAX, |l| job_bytes(dims, &l, params, 1));
+    4 * (dims[0] * dims[1]) as u64 + job
+}
+
+/// [`search`](super::search)'s result, counted a slab of planes at a time within about `room`
+/// bytes (at least [`streamed_memory_floor`]): the same numbers, bit for bit. The axis
+/// refinement is not streamed: it is refused here (the planner runs it on a level that fits).
+pub fn search_streamed(
+    volume: &Volume,
+    params: &ViewParams,
+    room: u64,
+    monitor: &Monitor,
+) -> Result<ViewSearch> {
+    if params.refine {
+        return Err(Error::invalid(
+            "refine",
+            true,
+            "off for a view search counted slab by slab",
+        ));
+    }
+    let params = resolve(volume, params)?;
+    let q = volume.quantizer(params.sampling.bins)?;
+    let axes = icosphere::axes(params.level)
+        .into_iter()
+        .map(canonical_axis)
+        .collect::<Result<Vec<_>>>()?;
+    crate::volume::with_voxels!(volume.data(), |data| {
+        let sweeps = Sweeps {
+            data,
+            volume,
+            q,
+            params: &params,
+            room,
+        };
+        sweeps.search(&axes, monitor)
+    })
+}
+
+/// One lattice counted slab by slab.
+struct Job {
+    lattice: Lattice,
+    subset: RaySubset,
+    counts: PartialCounts,
+}
+
+/// What every sweep over the volume shares.
+struct Sweeps<'a, T> {
+    data: &'a [T],
+    volume: &'a Volume,
+    q: Quantizer,
+    params: &'a ViewParams,
+    room: u64,
+}
+
+impl<T: Voxel> Sweeps<'_, T> {
+    fn search(&self, axes: &[[f64; 3]], monitor: &Monitor) -> Result<ViewSearch> {
+        let (volume, params) = (self.volume, self.params);
+        let slabs = self.slabs();
+        let sweep = planes(volume.dims(), slabs.1).count() as u64;
+        let lattices = axes.len() as u64 * params.phases.max(1) as u64;
+        monitor.start("view search", lattices * sweep);
+        let paper = axes
+            .iter()
+            .map(|&axis| Ok((lattice_of(volume, params, axis, 0)?, RaySubset::ALL)))
+            .collect::<Result<Vec<_>>>()?;
+        let paper = self.count(paper, slabs, monitor)?;
+        // The shifted lattices walk rays chosen by what the paper's counted: a second round.
+        let (mut owners, mut shifted) = (Vec::new(), Vec::new());
+        for (a, (&axis, paper)) in axes.iter().zip(&paper).enumerate() {
+            for (lattice, subset) in shifted_lattices(volume, params, axis, paper.samples)? {
+                match subset {
+                    Some(subset) => {
+                        owners.push(a);
+                        shifted.push((lattice, subset));
+                    }
+                    None => monitor.advance(sweep)?,
+                }
+            }
+        }
+        let shifted = self.count(shifted, slabs, monitor)?;
+        let mut of_axis = vec![Vec::new(); axes.len()];
+        for (a, r) in owners.into_iter().zip(shifted) {
+            of_axis[a].push(r);
+        }
+        let views = axes
+            .iter()
+            .zip(paper)
+            .zip(&of_axis)
+            .map(|((&axis, paper), shifted)| finish(volume, params, axis, paper, shifted))
+            .collect();
+        Ok(concluded(
+            ranked(views, params.block)?,
+            params.clone(),
+            None,
+        ))
+    }
+
+    /// The entropy rates of `lattices` (each with the rays it walks), in as few sweeps over the
+    /// volume's slabs as the room allows; one progress unit a lattice and slab.
+    fn count(
+        &self,
+        lattices: Vec<(Lattice, RaySubset)>,
+        (bricks, slab): (Bricks, usize),
+        monitor: &Monitor,
+    ) -> Result<Vec<AxisEntropy>> {
+        let dims = self.volume.dims();
+        let window = BinSampler::<T>::window_bytes(dims, slab + 1);
+        let room = self.room.saturating_sub(window);
+        let (bins, block) = (self.params.sampling.bins, self.params.block);
+        let mut out = Vec::with_capacity(lattices.len());
+        let mut jobs: Vec<Job> = Vec::new();
+        let mut held = 0;
+        let mut lattices = lattices.into_iter().peekable();
+        while let Some((lattice, subset)) = lattices.next() {
+            let bytes = job_bytes(dims, &lattice, self.params, subset.every);
+            held += bytes;
+            jobs.push(Job {
+                lattice,
+                subset,
+                counts: PartialCounts::new(bins, block),
+            });
+            let next = lattices
+                .peek()
+                .map_or(u64::MAX, |(l, s)| job_bytes(dims, l, self.params, s.every));
+            if held.saturating_add(next) > room {
+                out.extend(self.sweep(std::mem::take(&mut jobs), (bricks, slab), monitor)?);
+                held = 0;
+            }
+        }
+        Ok(out)
+    }
+
+    /// One sweep over the slabs counting `jobs`, and their entropy rates.
+    fn sweep(
+        &self,
+        mut jobs: Vec<Job>,
+        (bricks, slab): (Bricks, usize),
+        monitor: &Monitor,
+    ) -> Result<Vec<AxisEntropy>> {
+        let block = self.params.block;
+        for planes in planes(self.volume.dims(), slab) {
+            let sampler = BinSampler::window(self.data, self.volume, self.q, planes.clone());
+            let z = planes.start as i64..planes.end as i64;
+            jobs.par_iter_mut().try_for_each(|job| {
+                let part = counts_of_slab(
+                    &sampler,
+                    &job.lattice,
+                    block,
+                    bricks,
+                    (z.clone(), job.subset),
+                );
+                job.counts.add(part);
+                monitor.advance(1)
+            })?;
+        }
+        jobs.into_iter()
+            .map(|job| {
+                if !job.counts.is_complete() {
+                    return Err(Error::Degenerate(format!(
+                        "the slab walk left {} pieces of rays unjoined",
+                        job.counts.fragments().len()
+                    )));
+                }
+                Ok(AxisEntropy::new(
+                    job.lattice.d,
+                    &job.counts.counts,
+                    job.counts.rays,
+                ))
+            })
+            .collect()
+    }
+
+    /// The bricks of the sweeps, and the planes of cells a slab holds (a whole number of
+    /// bricks but the last), as many as a quarter of the room allows.
+    fn slabs(&self) -> (Bricks, usize) {
+        let dims = self.volume.dims();
+        let cells = dims[2].saturating_sub(1).max(1);
+        let per_plane = BinSampler::<T>::window_bytes(dims, 1).max(1);
+        let affordable = ((self.room / 4) / per_plane).saturating_sub(1).max(1) as usize;
+        let planes = affordable.min(cells);
+        // A slab is one brick: its rays' stretches run from face to face of the slab, long
+        // enough that the walk's cost per stretch fades (bricks of 64³ cells cost twice the tile
+        // walk for it), and its map stays in the last-level cache.
+        (Bricks::shaped(dims, [dims[0], dims[1], planes]), planes)
+    }
+}
+
+/// The planes of cells of each slab of `slab` planes, in order along z.
+fn planes(dims: [usize; 3], slab: usize) -> impl Iterator<Item = Range<usize>> {
+    let cells = dims[2].saturating_sub(1).max(1);
+    (0..cells)
+        .step_by(slab.max(1))
+        .map(move |z| z..(z + slab).min(cells))
+}
+
+/// The bytes one lattice counted in a sweep over a volume of `dims` may hold: its tables and
+/// a slab's (two of each), a band of rays being set up, and the open pieces of its rays, three
+/// for each ray crossing a plane of constant z while a slab's pieces (those entering it at its
+/// bottom and leaving it at its top) are stitched to the sweep's.
+fn job_bytes(dims: [usize; 3], lattice: &Lattice, params: &ViewParams, every: u64) -> u64 {
+    let bits = usize::BITS - (params.sampling.bins.max(2) - 1).leading_zeros();
+    let tables = 32u64 << (bits as usize * params.block).min(40);
+    let spacing = lattice.spacing();
+    let [ex, ey] = [0, 1].map(|m| dims[m].saturating_sub(1) as f64 * spacing[m]);
+    let rs = lattice.ray_spacing;
+    // The plane's rectangle seen along the axis, and the rays on its outline.
+    let crossing = ex * ey * lattice.d[2].abs() / (rs * rs) + 2.0 * (ex + ey) / rs + 4.0;
+    let kept = crossing / every.max(1) as f64 + 16.0 * (ex + ey) / rs;
+    let ((i0, i1), _) = lattice.ray_ranges();
+    let band = SLAB_ROWS * (i1 - i0 + 1).max(1) as u64 * SLOT_BYTES;
+    tables + band + (kept * 3.0) as u64 * std::mem::size_of::<Fragment>() as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::Lcg;
+    use crate::volume::VoxelType;
+
+    /// Blocks along a slanted direction, noise, and (for f32) missing voxels.
+    fn volume(dims: [usize; 3], spacing: [f64; 3], voxel_type: VoxelType) -> Volume {
+        let mut lcg = Lcg::new(4);
+        let data = (0..dims.iter().product::<usize>())
+            .map(|i| {
+                let r = (lcg.next_u64() >> 33) as u32;
+                let (x, y, z) = (
+                    i % dims[0],
+                    (i / dims[0]) % dims[1],
+                    i / (dims[0] * dims[1]),
+                );
+                if voxel_type == VoxelType::F32 && r.is_multiple_of(89) {
+                    f32::NAN
+                } else {
+                    ((x / 4 + y / 3 + 2 * z / 5) % 6) as f32 * 20.0 + (r % 7) as f32
+                }
+            })
+            .collect();
+        Volume::new(dims, spacing, voxel_type, data).unwrap()
+    }
+
+    #[test]
+    fn the_streamed_search_is_the_search_bit_for_bit() {
+        let none = Monitor::none();
+        let mut sweeps = 0;
+        for (dims, spacing, voxel_type) in [
+            ([30, 26, 41], [1.0, 1.0, 1.0], VoxelType::U8),
+            ([28, 20, 33], [0.8, 0.8, 1.7], VoxelType::F32),
+            ([24, 31, 19], [1.0, 1.2, 1.0], VoxelType::I16),
+        ] {
+            let v = volume(dims, spacing, voxel_type);
+            for params in [ViewParams::paper(), ViewParams::default()] {
+                let expect =
+                    serde_json::to_string(&super::super::search(&v, &params, &none).unwrap())
+                        .unwrap();
+                // From one slab and one sweep to slabs of a plane, a lattice a sweep.
+                for room in [u64::MAX, 400_000, 1] {
+                    let got = search_streamed(&v, &params, room, &none).unwrap();
+                    assert_eq!(
+                        serde_json::to_string(&got).unwrap(),
+                        expect,
+                        "{dims:?} {room}"
+                    );
+                    sweeps += 1;
+                }
+            }
+        }
+        assert_eq!(sweeps, 18);
+    }
+
+    #[test]
+    fn the_refinement_is_refused_and_a_cancel_stops_the_sweeps() {
+        let v = volume([20, 20, 20], [1.0; 3], VoxelType::U8);
+        let refine = ViewParams {
+            refine: true,
+            ..ViewParams::default()
+        };
+        let e = search_streamed(&v, &refine, u64::MAX, &Monitor::none()).unwrap_err();
+        assert!(e.to_string().contains("refine"), "{e}");
+        let cancel = std::sync::atomic::AtomicBool::new(true);
+        let monitor = Monitor::new(Some(&cancel), None);
+        let e = search_streamed(&v, &ViewParams::default(), 1, &monitor).unwrap_err();
+        assert!(matches!(e, Error::Cancelled), "{e}");
+    }
+}
