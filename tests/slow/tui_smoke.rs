@@ -138,7 +138,7 @@ fn the_tour_runs_from_its_first_page_to_its_last_and_quits_with_0() {
 }
 
 #[test]
-fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
+fn a_folder_opens_with_its_pane_and_steps_through_its_volumes() {
     let _alone = crate::one_at_a_time();
     if !crate::have_tmux("the folder smoke test") {
         return;
@@ -154,8 +154,8 @@ fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
         dir.path().display()
     );
     let tmux = Tmux::start("folder", &command, (120, 32));
-    // The list, filled by triage: three volumes and the broken file's error.
-    let screen = tmux.wait_for("(4 looked at)", 120);
+    // The folder's pane, filled by triage: three volumes and the broken file's error.
+    let screen = tmux.wait_for(", 4 looked at", 120);
     assert!(
         screen.contains("ramp_i16.mha") && screen.contains("ramp_u8.nii"),
         "{screen}"
@@ -188,7 +188,7 @@ fn a_folder_of_dicom_series_opens_as_a_list_of_series() {
     );
     let tmux = Tmux::start("dicom", &command, (120, 32));
     // Two series (the localizer left out), named by number and description.
-    let screen = tmux.wait_for("(2 looked at)", 120);
+    let screen = tmux.wait_for(", 2 looked at", 120);
     assert!(
         screen.contains("[series 3 \"Abdomen 2.5\"]")
             && screen.contains("[series 4 \"Sagittal MPR\"]"),
