@@ -109,6 +109,8 @@ pub enum JobMsg {
     Lesson(u64, Result<Box<crate::tui::lesson::Lesson>, String>),
     /// Background triage's row of volume `index` of the folder.
     Triaged(usize, Box<slabscope::triage::TriageRow>),
+    /// Background triage's thumbnail of volume `index`: its exploded view and mid slices.
+    Thumbnail(usize, Box<image::RgbaImage>),
     /// A manifest of the marked volumes, to this file: written, or why not.
     Manifest(std::path::PathBuf, Written),
     /// A message of a job started for the volume open in `epoch` (the jobs drop it once

@@ -316,6 +316,12 @@ impl App {
                 }
                 vec![]
             }
+            JobMsg::Thumbnail(i, image) => {
+                if let Some(slot) = self.files.as_mut().and_then(|f| f.thumbnails.get_mut(i)) {
+                    *slot = Some(*image);
+                }
+                vec![]
+            }
             JobMsg::Manifest(path, written) => self.on_manifest(&path, written),
             JobMsg::Exported(result) => {
                 self.export = Task::Idle;

@@ -22,6 +22,10 @@ use export::export;
 pub use gate::Gate;
 use worker::start_renderer;
 
+/// The tile of the thumbnails background triage draws, pixels: the exploded view this square,
+/// the three mid slices beside it (as in `triage --sheet`).
+pub const THUMBNAIL_TILE: u32 = 32;
+
 /// Runs effects in the background and reports through the event channel.
 pub struct Jobs {
     events: Sender<Event>,
@@ -205,7 +209,7 @@ impl Jobs {
                 params,
                 timeout: std::time::Duration::from_secs(60),
                 fast: true,
-                tile: None,
+                tile: Some(THUMBNAIL_TILE),
             };
             for (i, entry) in paths.iter().enumerate() {
                 // The open volume's work first: its view search, histories and picture.
@@ -216,12 +220,17 @@ impl Jobs {
                     let m = e.to_string();
                     m.strip_prefix(&prefix).map_or(m.clone(), str::to_string)
                 };
-                let row = slabscope::triage::look(entry, &how, &|_| {}, &describe).row;
-                if events
-                    .send(Event::Job(JobMsg::Triaged(i, Box::new(row))))
-                    .is_err()
-                {
+                let looked = slabscope::triage::look(entry, &how, &|_| {}, &describe);
+                let thumbnail = looked.cell.and_then(|cell| {
+                    let (w, h) = (cell.width(), cell.height());
+                    image::RgbaImage::from_raw(w, h, cell.data().to_vec())
+                });
+                let row = JobMsg::Triaged(i, Box::new(looked.row));
+                if events.send(Event::Job(row)).is_err() {
                     break;
+                }
+                if let Some(t) = thumbnail {
+                    let _ = events.send(Event::Job(JobMsg::Thumbnail(i, Box::new(t))));
                 }
             }
         });

@@ -8,6 +8,7 @@ use std::collections::BTreeSet;
 use std::fmt::Write;
 use std::path::PathBuf;
 
+use image::RgbaImage;
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier};
@@ -116,6 +117,8 @@ pub struct FilesPane {
     pub paths: Vec<Entry>,
     /// Each volume's row, once triage has it.
     pub rows: Vec<Option<TriageRow>>,
+    /// Each volume's thumbnail (its exploded view and mid slices), once triage has drawn it.
+    pub thumbnails: Vec<Option<RgbaImage>>,
     /// The cursor: the volume it is on (an index into `paths`).
     pub row: usize,
     /// The volume open in the other panes.
@@ -145,6 +148,7 @@ impl FilesPane {
         let order = (0..paths.len()).collect();
         Self {
             root,
+            thumbnails: vec![None; paths.len()],
             paths,
             rows,
             row: 0,
@@ -415,6 +419,29 @@ enum Value {
     S(String),
 }
 
+/// Draws `image` scaled to fill `area` in half-blocks (averaging the pixels each covers): a
+/// cell's upper half one pixel, its lower half the one below.
+pub fn half_blocks(image: &RgbaImage, area: Rect, buf: &mut Buffer) {
+    let (w, h) = (u32::from(area.width), 2 * u32::from(area.height));
+    if w == 0 || h == 0 || image.width() == 0 || image.height() == 0 {
+        return;
+    }
+    let scaled = image::imageops::resize(image, w, h, image::imageops::FilterType::Triangle);
+    let at = |x: u32, y: u32| {
+        let p = scaled.get_pixel(x, y);
+        Color::Rgb(p[0], p[1], p[2])
+    };
+    for (dx, x) in (area.x..area.right()).enumerate() {
+        for (dy, y) in (area.y..area.bottom()).enumerate() {
+            let (px, py) = (dx as u32, 2 * dy as u32);
+            buf[(x, y)]
+                .set_symbol("▀")
+                .set_fg(at(px, py))
+                .set_bg(at(px, py + 1));
+        }
+    }
+}
+
 /// The columns' widths, on a wide pane (110 cells) or not.
 fn widths(wide: bool) -> Vec<Constraint> {
     let widths: &[Constraint] = if wide {
@@ -466,6 +493,19 @@ impl Widget for &FilesPane {
         let lines = lines.min(inner.height.saturating_sub(2));
         let [table_area, detail_area] =
             Layout::vertical([Constraint::Min(0), Constraint::Length(lines)]).areas(inner);
+        // The cursor's thumbnail beside the table, where there is room and colour.
+        let thumbnail = self.thumbnails.get(self.row).and_then(Option::as_ref);
+        let side = match thumbnail {
+            Some(_) if self.theme.color && inner.width >= 140 && table_area.height >= 5 => {
+                4 * table_area.height
+            }
+            _ => 0,
+        };
+        let [table_area, thumb_area] =
+            Layout::horizontal([Constraint::Min(0), Constraint::Length(side)]).areas(table_area);
+        if let Some(t) = thumbnail.filter(|_| side > 0) {
+            half_blocks(t, thumb_area, buf);
+        }
         let widths = widths(wide);
         let slabs = if wide { "slabs" } else { "sl" };
         let header = Row::new([

@@ -353,3 +353,53 @@ fn marks_become_a_manifest_that_reads_back_to_the_same_volumes() {
         "{folder:?}"
     );
 }
+
+#[test]
+fn the_cursors_thumbnail_shows_beside_the_table_where_there_is_room_and_colour() {
+    let root = Path::new("/data");
+    let (mut app, _) = folder_app(root, &NAMES);
+    // Left half red, right half blue, as triage's cell would come.
+    let image = image::RgbaImage::from_fn(64, 32, |x, _| {
+        if x < 32 {
+            image::Rgba([200, 0, 0, 255])
+        } else {
+            image::Rgba([0, 0, 200, 255])
+        }
+    });
+    app.update(Action::Job(JobMsg::Thumbnail(0, Box::new(image))));
+    let files = app.files.as_mut().unwrap();
+    let draw = |files: &crate::tui::panes::files::FilesPane, w: u16| {
+        let mut buf = ratatui::buffer::Buffer::empty(ratatui::layout::Rect::new(0, 0, w, 10));
+        ratatui::widgets::Widget::render(files, buf.area, &mut buf);
+        buf
+    };
+    // No colour: no thumbnail.
+    assert!(!super::text(&draw(files, 160)).contains('▀'));
+    files.theme = crate::tui::theme::Theme {
+        color: true,
+        contrast: false,
+    };
+    // Inside the border, 8 lines of table: a thumbnail 32 cells wide at the right.
+    let buf = draw(files, 160);
+    let red = ratatui::style::Color::Rgb(200, 0, 0);
+    let blue = ratatui::style::Color::Rgb(0, 0, 200);
+    for y in 1..9 {
+        for x in 127..159 {
+            let cell = &buf[(x, y)];
+            assert_eq!(cell.symbol(), "▀", "({x}, {y})");
+            // Away from the edge, where the scaling averages the two colours.
+            let want = match x {
+                ..141 => red,
+                141..145 => continue,
+                _ => blue,
+            };
+            assert_eq!((cell.fg, cell.bg), (want, want), "({x}, {y})");
+        }
+        assert_ne!(buf[(126, y)].symbol(), "▀");
+    }
+    // Narrow: none.
+    assert!(!super::text(&draw(files, 100)).contains('▀'));
+    // Another volume under the cursor: none, it has no thumbnail yet.
+    files.step(1);
+    assert!(!super::text(&draw(files, 160)).contains('▀'));
+}
