@@ -118,6 +118,11 @@ fn the_pane_shows_below_the_picture_at_80x24_and_160x48() {
         );
         assert!(!app.preview.covered, "nothing covers the picture");
     }
+    // The smallest screen the panes take: the picture keeps rows beside the folder's pane.
+    let small = ratatui::layout::Rect::new(0, 0, 60, 18);
+    let a = crate::tui::ui::areas(small, false, Some(NAMES.len())).unwrap();
+    assert_eq!((a.files.height, a.preview.height), (5, 6), "{a:?}");
+    screens(&mut filled(60, 18), 60, 18, vec![]);
     // The failed row's error in full under the table, once the cursor is on it.
     let mut app = filled(160, 48);
     app.update(Action::Move(2));
