@@ -109,9 +109,24 @@ pub enum JobMsg {
     Lesson(u64, Result<Box<crate::tui::lesson::Lesson>, String>),
     /// Background triage's row of volume `index` of the folder.
     Triaged(usize, Box<slabscope::triage::TriageRow>),
+    /// Background triage's thumbnail of volume `index`: its exploded view and mid slices.
+    Thumbnail(usize, Box<image::RgbaImage>),
+    /// A manifest of the marked volumes, to this file: written, or why not.
+    Manifest(std::path::PathBuf, Written),
     /// A message of a job started for the volume open in `epoch` (the jobs drop it once
     /// another volume is open; the app never sees this wrapper).
     Epoch(u64, Box<JobMsg>),
+}
+
+/// What came of writing a file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Written {
+    /// Written, with this many lines of volumes.
+    Done(usize),
+    /// Not written: the file exists, and was not to be replaced.
+    Exists,
+    /// Not written, and why (one line naming the file).
+    Failed(String),
 }
 
 /// A picture for the preview pane, and the slice view's readout.
@@ -169,8 +184,10 @@ pub enum Action {
     ToggleMode,
     /// The slice view or the exploded view.
     ToggleSlices,
-    /// Show or hide a folder's file list.
+    /// Show or hide a folder's pane.
     ToggleFiles,
+    /// A key of the folder's pane: marks, order, filters.
+    Folder(FolderKey),
     /// Multiply the window's width by this factor.
     WindowWidth(f32),
     /// Move the window's level by this fraction of its width.
@@ -209,6 +226,29 @@ pub enum Ask {
     Axis,
     /// A threshold (empty clears it).
     Threshold,
+    /// Part of a volume's name, in the folder's pane.
+    Find,
+    /// The file to write the marked volumes to, as a manifest.
+    Manifest,
+    /// That file again, which exists: the same name replaces it.
+    Overwrite,
+}
+
+/// What a key of the folder's pane does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FolderKey {
+    /// Mark the cursor's volume, or take its mark away.
+    Mark,
+    /// Sort by the next column.
+    Sort,
+    /// Sort the other way.
+    Reverse,
+    /// Only the failed volumes, or all.
+    Errors,
+    /// Only the uncertain volumes, or all.
+    Uncertain,
+    /// Only the volumes of the next format, or all.
+    Format,
 }
 
 /// The look of the exploded view.
@@ -348,6 +388,11 @@ pub enum Effect {
         Vec<slabscope::triage::Entry>,
         Box<slabscope::AnalysisParams>,
     ),
+    /// Write these volumes as a manifest to this file, replacing it when asked (true).
+    WriteManifest(std::path::PathBuf, Vec<slabscope::triage::Entry>, bool),
+    /// Hold background triage at its next volume (true) while the open volume's work runs, or
+    /// let it go on (false).
+    PauseTriage(bool),
     /// Cancel running jobs.
     Cancel,
     /// Drop what the jobs started for the open volume still send, and the file's preview level:
@@ -369,6 +414,14 @@ impl std::fmt::Debug for Effect {
             Self::Export(r) => write!(f, "Export({:?} at {})", r.method, r.position),
             Self::Open(p) => write!(f, "Open({})", p.name()),
             Self::Triage(p, _) => write!(f, "Triage({} volumes)", p.len()),
+            Self::WriteManifest(p, e, force) => write!(
+                f,
+                "WriteManifest({}, {} volumes{})",
+                p.display(),
+                e.len(),
+                if *force { ", replacing" } else { "" }
+            ),
+            Self::PauseTriage(on) => write!(f, "PauseTriage({on})"),
             Self::Cancel => write!(f, "Cancel"),
             Self::Forget => write!(f, "Forget"),
             Self::Quit => write!(f, "Quit"),

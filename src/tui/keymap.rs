@@ -5,7 +5,7 @@
 
 use crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
-use super::event::{Action, Ask};
+use super::event::{Action, Ask, FolderKey};
 
 /// A key: its code, and whether Ctrl is held (a key bound without Ctrl answers with any
 /// modifier).
@@ -151,14 +151,12 @@ pub const BINDINGS: &[Binding] = &[
         ],
     ),
     row(
-        "g",
-        "gaps: similarity / uniform",
-        &[(ch('g'), || Action::ToggleGap)],
-    ),
-    row(
-        "r",
-        "render: cut faces / DVR / MIP",
-        &[(ch('r'), || Action::ToggleMode)],
+        "g r",
+        "gaps: similarity / uniform; cut / DVR / MIP",
+        &[
+            (ch('g'), || Action::ToggleGap),
+            (ch('r'), || Action::ToggleMode),
+        ],
     ),
     row(
         "v",
@@ -176,35 +174,51 @@ pub const BINDINGS: &[Binding] = &[
         ],
     ),
     row(
-        "f c",
-        "transfer function (those that fit), colours",
+        "f c  o P",
+        "transfer fn, colours; slab alone; perspective",
         &[
             (ch('f'), || Action::CycleTransfer),
             (ch('c'), || Action::CycleColormap),
-        ],
-    ),
-    row(
-        "o P",
-        "selected slab alone; perspective",
-        &[
             (ch('o'), || Action::ToggleSolo),
             (ch('P'), || Action::TogglePerspective),
         ],
     ),
     row(
-        "e  F",
-        "export; folder's files, PgUp PgDn: volumes",
+        "e  x",
+        "export; lesson: the numbers behind axis or step",
         &[
             (ch('e'), || Action::Export),
+            (ch('x'), || Action::ToggleLesson),
+        ],
+    ),
+    row(
+        "F PgUp PgDn",
+        "folder's pane; open the volume before / after",
+        &[
             (ch('F'), || Action::ToggleFiles),
             (code(KeyCode::PageUp), || Action::Page(-1)),
             (code(KeyCode::PageDown), || Action::Page(1)),
         ],
     ),
     row(
-        "x",
-        "lesson: the numbers behind the axis or the step",
-        &[(ch('x'), || Action::ToggleLesson)],
+        "Space M /",
+        "folder: mark, marked to a manifest, find",
+        &[
+            (ch(' '), || Action::Folder(FolderKey::Mark)),
+            (ch('M'), || Action::Ask(Ask::Manifest)),
+            (ch('/'), || Action::Ask(Ask::Find)),
+        ],
+    ),
+    row(
+        "O D  E U T",
+        "folder: sort, reverse; errors, ≈, format only",
+        &[
+            (ch('O'), || Action::Folder(FolderKey::Sort)),
+            (ch('D'), || Action::Folder(FolderKey::Reverse)),
+            (ch('E'), || Action::Folder(FolderKey::Errors)),
+            (ch('U'), || Action::Folder(FolderKey::Uncertain)),
+            (ch('T'), || Action::Folder(FolderKey::Format)),
+        ],
     ),
     row(
         "Esc",

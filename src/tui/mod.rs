@@ -59,7 +59,7 @@ pub struct Options {
     pub tour: bool,
 }
 
-/// The folder `file` names, with the volumes it holds, when it opens as a file list: a folder of
+/// The folder `file` names, with the volumes it holds, when it opens with a pane of them: a folder of
 /// volumes does, its first volume open; so does a folder of DICOM files with several series,
 /// unless `load` names one.
 fn folder_to_list(
@@ -234,6 +234,7 @@ where
     if let Some((w, h)) = ui::preview_cells(
         ratatui::layout::Rect::new(0, 0, size.width, size.height),
         app.tour.is_some(),
+        ui::folder(app),
     ) {
         dispatch(app, runner, Action::PreviewArea(w, h));
     }

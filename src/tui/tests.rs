@@ -3,7 +3,6 @@
 //!
 //! Snapshots live in `src/tui/snapshots/`; `INSTA_UPDATE=always cargo test` rewrites them.
 
-use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
@@ -104,6 +103,7 @@ fn key(c: char) -> Event {
     Event::Key(KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE))
 }
 
+mod folder;
 mod gain;
 mod keys;
 mod lesson;
@@ -404,7 +404,7 @@ fn screens(app: &mut App, w: u16, h: u16, events: Vec<Event>) -> Vec<String> {
 #[test]
 fn whole_app_snapshots() {
     let mut app = ready_app();
-    let cells = super::ui::preview_cells(Rect::new(0, 0, 100, 30), false).unwrap();
+    let cells = super::ui::preview_cells(Rect::new(0, 0, 100, 30), false, None).unwrap();
     let events = vec![
         Event::Job(JobMsg::Rendered(
             1,
@@ -529,50 +529,4 @@ fn transfer_functions_that_do_not_fit_are_skipped() {
     }
     let ct = stats.min <= -500.0;
     assert_eq!(seen.contains(&Preset::CtBone), ct, "{seen:?}");
-}
-
-#[test]
-fn a_folder_opens_as_a_list_whose_volumes_open_in_turn() {
-    let paths: Vec<slabscope::triage::Entry> = ["a.nii", "b.nrrd", "c.mha"]
-        .iter()
-        .map(|n| slabscope::triage::Entry::file(PathBuf::from("/data").join(n)))
-        .collect();
-    let (mut app, effects) = App::for_folder(
-        PathBuf::from("/data"),
-        paths.clone(),
-        AnalysisParams::default(),
-        Screen::default(),
-    );
-    assert!(matches!(effects[..], [Effect::Load, Effect::Triage(ref p, _)] if p == &paths));
-    let files = app.files.as_ref().unwrap();
-    assert!(files.shown && files.open == 0 && files.name(1) == "b.nrrd");
-    assert!(app.preview.covered, "the list covers the picture");
-    // Rows fill in as triage completes them.
-    let row = slabscope::triage::TriageRow::failed("/data/c.mha", "broken".into());
-    app.update(Action::Job(JobMsg::Triaged(2, Box::new(row))));
-    assert!(app.files.as_ref().unwrap().rows[2].is_some());
-    // The cursor moves in the list; Enter opens its volume, afresh.
-    app.update(Action::Move(1));
-    let effects = app.update(Action::Select);
-    assert!(
-        matches!(&effects[..], [Effect::Cancel, Effect::Open(p), Effect::Load] if p == &paths[1]),
-        "{effects:?}"
-    );
-    let files = app.files.as_ref().unwrap();
-    assert!(!files.shown && files.open == 1);
-    assert!(files.rows[2].is_some(), "the list keeps its rows");
-    assert_eq!(app.name, "/data/b.nrrd");
-    // Page down and up step through the volumes, and stop at the ends.
-    let effects = app.update(Action::Page(1));
-    assert!(
-        matches!(&effects[..], [Effect::Cancel, Effect::Open(p), Effect::Load] if p == &paths[2])
-    );
-    assert!(app.update(Action::Page(1)).is_empty(), "the last volume");
-    app.update(Action::Page(-1));
-    assert_eq!(app.files.as_ref().unwrap().open, 1);
-    // F shows the list again, Esc hides it.
-    app.update(Action::ToggleFiles);
-    assert!(app.files.as_ref().unwrap().shown && app.preview.covered);
-    app.update(Action::Escape);
-    assert!(!app.files.as_ref().unwrap().shown);
 }

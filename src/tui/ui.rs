@@ -25,11 +25,13 @@ pub struct Areas {
     pub status: Rect,
     /// The tour's page, above the status lines (no rows outside a tour).
     pub tour: Rect,
+    /// A folder's volumes, below the panes (no rows without a folder).
+    pub files: Rect,
 }
 
-/// The layout of a screen of size `area` (with room for the tour's page when `tour`), or
-/// `None` when it is too small.
-pub fn areas(area: Rect, tour: bool) -> Option<Areas> {
+/// The layout of a screen of size `area` (with room for the tour's page when `tour`, and for
+/// the pane of a folder of `folder` volumes below the others), or `None` when it is too small.
+pub fn areas(area: Rect, tour: bool, folder: Option<usize>) -> Option<Areas> {
     if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
         return None;
     }
@@ -38,8 +40,12 @@ pub fn areas(area: Rect, tour: bool) -> Option<Areas> {
         (true, ..36) => 6,
         (true, _) => 8,
     };
-    let [body, tour, status] = Layout::vertical([
+    let files = folder.map_or(0, |n| {
+        panes::files::height(n, area.height.saturating_sub(page + 2))
+    });
+    let [body, files, tour, status] = Layout::vertical([
         Constraint::Min(0),
+        Constraint::Length(files),
         Constraint::Length(page),
         Constraint::Length(2),
     ])
@@ -67,12 +73,22 @@ pub fn areas(area: Rect, tour: bool) -> Option<Areas> {
         preview,
         status,
         tour,
+        files,
     })
 }
 
-/// The cells the preview image fills, for a screen of size `area` (and the tour's page).
-pub fn preview_cells(area: Rect, tour: bool) -> Option<(u16, u16)> {
-    let a = areas(area, tour)?;
+/// The folder's volumes when `app`'s pane of them shows: how many.
+pub fn folder(app: &App) -> Option<usize> {
+    app.files
+        .as_ref()
+        .filter(|f| f.shown)
+        .map(|f| f.paths.len())
+}
+
+/// The cells the preview image fills, for a screen of size `area` (and the tour's page, and a
+/// folder's pane of `folder` volumes).
+pub fn preview_cells(area: Rect, tour: bool, folder: Option<usize>) -> Option<(u16, u16)> {
+    let a = areas(area, tour, folder)?;
     let inner = Block::default().borders(Borders::ALL).inner(a.preview);
     Some((inner.width, inner.height))
 }
@@ -81,7 +97,7 @@ pub fn preview_cells(area: Rect, tour: bool) -> Option<(u16, u16)> {
 pub fn draw(frame: &mut Frame, app: &App) {
     let area = frame.area();
     frame.render_widget(Block::default().style(app.theme.base()), area);
-    let Some(a) = areas(area, app.tour.is_some()) else {
+    let Some(a) = areas(area, app.tour.is_some(), folder(app)) else {
         let text = format!(
             "The terminal is {}x{}: slabscope needs at least {}x{}. Enlarge it, or press q to quit.",
             area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
@@ -101,7 +117,7 @@ pub fn draw(frame: &mut Frame, app: &App) {
     frame.render_widget(&app.status, a.status);
     if app.lesson.open {
         let body = Rect {
-            height: area.height - a.status.height - a.tour.height,
+            height: area.height - a.status.height - a.tour.height - a.files.height,
             ..area
         };
         frame.render_widget(&app.lesson, body);
@@ -116,7 +132,7 @@ pub fn draw(frame: &mut Frame, app: &App) {
         );
     }
     if let Some(files) = app.files.as_ref().filter(|f| f.shown) {
-        frame.render_widget(files, area);
+        frame.render_widget(files, a.files);
     }
     if app.help {
         frame.render_widget(&panes::help::Help { theme: app.theme }, area);

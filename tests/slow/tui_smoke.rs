@@ -138,24 +138,27 @@ fn the_tour_runs_from_its_first_page_to_its_last_and_quits_with_0() {
 }
 
 #[test]
-fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
+fn a_folder_opens_with_its_pane_and_steps_through_its_volumes() {
     let _alone = crate::one_at_a_time();
     if !crate::have_tmux("the folder smoke test") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
+    let volumes = dir.path().join("vols");
+    std::fs::create_dir(&volumes).unwrap();
     for name in ["ramp_u8.nii", "ramp_i16.mha", "ramp_u16_be.nrrd"] {
-        std::fs::copy(data(name), dir.path().join(name)).unwrap();
+        std::fs::copy(data(name), volumes.join(name)).unwrap();
     }
-    std::fs::write(dir.path().join("zz_broken.nii"), b"no volume").unwrap();
+    std::fs::write(volumes.join("zz_broken.nii"), b"no volume").unwrap();
     let command = format!(
-        "{} {} --protocol blocks --slabs 2; echo EXITED $?; sleep 60",
-        binary(),
-        dir.path().display()
+        "cd {} && {} vols --protocol blocks --slabs 2; echo EXITED $?; sleep 60",
+        dir.path().display(),
+        binary()
     );
     let tmux = Tmux::start("folder", &command, (120, 32));
-    // The list, filled by triage: three volumes and the broken file's error.
-    let screen = tmux.wait_for("(4 looked at)", 120);
+    // The folder's pane, filled by triage: three volumes and the broken file's error; the
+    // picture above it, not hidden.
+    let screen = tmux.wait_for(", 4 looked at", 120);
     assert!(
         screen.contains("ramp_i16.mha") && screen.contains("ramp_u8.nii"),
         "{screen}"
@@ -164,12 +167,31 @@ fn a_folder_opens_as_a_file_list_and_steps_through_its_volumes() {
         screen.contains("zz_broken.nii  error: the name says NIfTI"),
         "{screen}"
     );
+    assert!(screen.contains('▀'), "the picture shows:\n{screen}");
     // Enter on the second line opens it; PgDn the next.
     tmux.keys("Down");
     tmux.keys("Enter");
     tmux.wait_for("volume 2 of 4: ramp_u16_be.nrrd", 30);
     tmux.keys("NPage");
     tmux.wait_for("volume 3 of 4: ramp_u8.nii", 30);
+    // The open volume marked and written as a manifest, which triage reads.
+    tmux.keys("Space");
+    tmux.keys("M");
+    tmux.wait_for("manifest to> slabscope-marked.txt", 30);
+    tmux.keys("Enter");
+    tmux.wait_for("wrote 1 volume(s) to slabscope-marked.txt", 30);
+    let out = crate::common::slabscope()
+        .args(["triage", "--manifest"])
+        .arg(dir.path().join("slabscope-marked.txt"))
+        .output()
+        .unwrap();
+    let rows = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(rows.lines().count(), 2, "a header and one row:\n{rows}");
+    assert!(rows.contains("vols/ramp_u8.nii"), "{rows}");
+    // Only the failed volume.
+    tmux.keys("E");
+    tmux.wait_for("only errors (1 shown)", 30);
     tmux.keys("q");
     tmux.wait_for("EXITED 0", 30);
 }
@@ -188,7 +210,7 @@ fn a_folder_of_dicom_series_opens_as_a_list_of_series() {
     );
     let tmux = Tmux::start("dicom", &command, (120, 32));
     // Two series (the localizer left out), named by number and description.
-    let screen = tmux.wait_for("(2 looked at)", 120);
+    let screen = tmux.wait_for(", 2 looked at", 120);
     assert!(
         screen.contains("[series 3 \"Abdomen 2.5\"]")
             && screen.contains("[series 4 \"Sagittal MPR\"]"),

@@ -1,4 +1,4 @@
-//! The app's key handling: [`App::update`] takes an action, lets an open prompt or the file list
+//! The app's key handling: [`App::update`] takes an action, lets an open prompt or the folder's pane
 //! have it first, and turns it into a change of state (cursor, pointer, look, window, the
 //! partition's position) and the effects that follow.
 
@@ -16,6 +16,7 @@ impl App {
         let mut effects = self.apply(action);
         effects.extend(self.sync_tour());
         effects.extend(self.sync_lesson());
+        effects.extend(self.sync_triage());
         effects
     }
 
@@ -41,7 +42,8 @@ impl App {
             }
             Action::Escape => self.escape(),
             Action::Focus(by) => {
-                self.focus = self.focus.step(by);
+                let folder = self.files.as_ref().is_some_and(|f| f.shown);
+                self.focus = self.focus.step(by, folder);
                 self.sync_focus();
                 vec![]
             }
@@ -75,6 +77,7 @@ impl App {
                 self.part.cycle_method();
                 self.after_step()
             }
+            Action::Ask(ask @ (Ask::Find | Ask::Manifest)) => self.ask_folder(ask),
             Action::Ask(ask) => {
                 self.status.prompt = Some(Prompt {
                     ask,
@@ -107,7 +110,10 @@ impl App {
             return Err(action);
         };
         match action {
-            Action::Type(c) => prompt.text.push(c),
+            Action::Type(c) => {
+                prompt.text.push(c);
+                self.typed_find();
+            }
             Action::Erase => {
                 prompt.text.pop();
             }
@@ -117,52 +123,6 @@ impl App {
             _ => {}
         }
         Ok(vec![])
-    }
-
-    /// While the file list shows, the keys move in it, open, or close it.
-    fn on_files(&mut self, action: Action) -> Result<Vec<Effect>, Action> {
-        let Some(files) = self.files.as_mut() else {
-            return Err(action);
-        };
-        match action {
-            Action::Page(by) => {
-                let next = (files.open as isize + by).clamp(0, files.paths.len() as isize - 1);
-                return if next as usize == files.open {
-                    Ok(vec![])
-                } else {
-                    Ok(self.open(next as usize))
-                };
-            }
-            Action::ToggleFiles => {
-                files.shown = !files.shown;
-                files.row = files.open;
-                let shown = files.shown;
-                self.preview.covered = shown || self.help;
-                return Ok(self.render_if(!shown));
-            }
-            _ if !files.shown => return Err(action),
-            Action::Move(by) | Action::Sideways(by) => {
-                let last = files.paths.len() as isize - 1;
-                files.row = (files.row as isize + by).clamp(0, last) as usize;
-            }
-            Action::Select => {
-                let row = files.row;
-                return Ok(self.open(row));
-            }
-            Action::Escape => {
-                files.shown = false;
-                self.preview.covered = self.help;
-                return Ok(self.render_if(true));
-            }
-            Action::Job(_) | Action::PreviewArea(..) | Action::Quit => return Err(action),
-            _ => {}
-        }
-        Ok(vec![])
-    }
-
-    /// A render when `yes` (the picture was covered and shows again).
-    fn render_if(&mut self, yes: bool) -> Vec<Effect> {
-        if yes { self.render() } else { vec![] }
     }
 
     /// Changes the look of the preview, which re-renders.
@@ -219,6 +179,10 @@ impl App {
         if self.part.histories.running() {
             self.part.histories = Task::Failed("cancelled".into());
         }
+        // A picture cancelled sends nothing: it is not awaited.
+        if self.preview.image.running() {
+            self.preview.image = Task::Failed("cancelled".into());
+        }
         self.export = Task::Idle;
         self.status.message = Some(if upgrading {
             "cancelled: the preview stays (Enter on an axis computes it again)".into()
@@ -250,6 +214,7 @@ impl App {
                     vec![]
                 }
             }
+            Pane::Files => vec![],
             Pane::Preview if self.pointing() => self.move_pointer(0, by),
             Pane::Preview => self.restyle(&Action::Orbit(by as f64 * 15.0, 0.0)),
         }
@@ -322,6 +287,9 @@ impl App {
         let Some(prompt) = self.status.prompt.take() else {
             return vec![];
         };
+        if matches!(prompt.ask, Ask::Find | Ask::Manifest | Ask::Overwrite) {
+            return self.submit_folder(&prompt);
+        }
         let text = prompt.text.trim();
         match prompt.ask {
             Ask::Axis => {
@@ -338,6 +306,7 @@ impl App {
                 self.sync();
                 vec![]
             }
+            Ask::Find | Ask::Manifest | Ask::Overwrite => vec![],
             Ask::Threshold => match text.parse::<f64>() {
                 Ok(t) if t.is_finite() => {
                     self.part.set_threshold(Some(t));

@@ -3,13 +3,13 @@
 //! partition changes. Here: the state, what the jobs' messages do to it and how the panes are kept
 //! in step; the keys are handled in `keys`.
 
+mod folder;
 mod gain;
 mod keys;
 mod lesson;
 pub mod tour;
 mod upgrade;
 
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use slabscope::{AnalysisParams, Progress, Volume};
@@ -28,6 +28,8 @@ use super::theme::Theme;
 /// The panes that take the keyboard's focus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pane {
+    /// A folder's volumes.
+    Files,
     /// The viewpoint list.
     Views,
     /// The slab table.
@@ -39,11 +41,23 @@ pub enum Pane {
 }
 
 impl Pane {
-    const ORDER: [Pane; 4] = [Pane::Views, Pane::Slabs, Pane::Curves, Pane::Preview];
+    const ORDER: [Pane; 5] = [
+        Pane::Files,
+        Pane::Views,
+        Pane::Slabs,
+        Pane::Curves,
+        Pane::Preview,
+    ];
 
-    fn step(self, by: isize) -> Self {
-        let i = Self::ORDER.iter().position(|p| *p == self).unwrap_or(0) as isize;
-        Self::ORDER[(i + by).rem_euclid(Self::ORDER.len() as isize) as usize]
+    /// The pane `by` from this one, the folder's only when it shows (`folder`).
+    fn step(self, by: isize, folder: bool) -> Self {
+        let order = if folder {
+            &Self::ORDER[..]
+        } else {
+            &Self::ORDER[1..]
+        };
+        let i = order.iter().position(|p| *p == self).unwrap_or(0) as isize;
+        order[(i + by).rem_euclid(order.len() as isize) as usize]
     }
 }
 
@@ -104,6 +118,8 @@ pub struct App {
     pub tour: Option<tour::Tour>,
     /// The pyramid level of the gain ranking shown or under way.
     gain_level: usize,
+    /// Whether background triage is held while the open volume's work runs.
+    triage_held: bool,
 }
 
 impl App {
@@ -133,59 +149,12 @@ impl App {
             ray: (0, 0),
             tour: None,
             gain_level: 0,
+            triage_held: false,
         };
         app.preview.hide = screen.hide;
         app.preview.graphics = screen.graphics;
         app.status.notice = screen.note;
         (app, vec![Effect::Load])
-    }
-
-    /// A fresh app for the volumes of the folder `root` (`paths`, sorted, at least one): the
-    /// first opens, the list shows, and triage fills it in the background.
-    pub fn for_folder(
-        root: PathBuf,
-        paths: Vec<slabscope::triage::Entry>,
-        params: AnalysisParams,
-        screen: Screen,
-    ) -> (Self, Vec<Effect>) {
-        let name = paths[0].name();
-        let (mut app, mut effects) = Self::new(name, params, screen);
-        effects.push(Effect::Triage(paths.clone(), Box::new(app.params.clone())));
-        let files = FilesPane::new(root, paths, app.theme);
-        app.status.volume = Some(format!(
-            "volume 1 of {}: {}",
-            files.paths.len(),
-            files.name(0)
-        ));
-        app.files = Some(files);
-        app.sync_focus();
-        (app, effects)
-    }
-
-    /// Opens volume `i` of the folder: every pane starts afresh (the look and the list stay).
-    fn open(&mut self, i: usize) -> Vec<Effect> {
-        let Some(mut files) = self.files.take() else {
-            return vec![];
-        };
-        if i >= files.paths.len() {
-            self.files = Some(files);
-            return vec![];
-        }
-        let path = files.paths[i].clone();
-        (files.open, files.row, files.shown) = (i, i, false);
-        self.files = Some(files);
-        let effects = self.start_afresh(path.name());
-        if let Some(files) = &self.files {
-            self.status.volume = Some(format!(
-                "volume {} of {}: {}",
-                i + 1,
-                files.paths.len(),
-                files.name(i)
-            ));
-        }
-        let mut out = vec![Effect::Cancel, Effect::Open(path)];
-        out.extend(effects);
-        out
     }
 
     /// Every pane afresh for the volume called `name` (the look, the list and the volume's
@@ -197,6 +166,7 @@ impl App {
         self.preview.cells = old.preview.cells;
         self.status.volume = old.status.volume;
         self.files = old.files;
+        self.triage_held = old.triage_held;
         // A tour goes on at its page, set again for the new volume.
         self.tour = old.tour.map(|t| tour::Tour {
             applied: false,
@@ -341,11 +311,18 @@ impl App {
             // The jobs unwrap these before the app sees them.
             JobMsg::Epoch(..) => vec![],
             JobMsg::Triaged(i, row) => {
-                if let Some(slot) = self.files.as_mut().and_then(|f| f.rows.get_mut(i)) {
-                    *slot = Some(*row);
+                if let Some(files) = self.files.as_mut() {
+                    files.fill(i, *row);
                 }
                 vec![]
             }
+            JobMsg::Thumbnail(i, image) => {
+                if let Some(slot) = self.files.as_mut().and_then(|f| f.thumbnails.get_mut(i)) {
+                    *slot = Some(*image);
+                }
+                vec![]
+            }
+            JobMsg::Manifest(path, written) => self.on_manifest(&path, written),
             JobMsg::Exported(result) => {
                 self.export = Task::Idle;
                 self.status.message = Some(match result {
@@ -467,8 +444,10 @@ impl App {
         self.slabs.focused = self.focus == Pane::Slabs;
         self.curves.focused = self.focus == Pane::Curves;
         self.preview.focused = self.focus == Pane::Preview;
-        self.preview.covered =
-            self.help || self.lesson.open || self.files.as_ref().is_some_and(|f| f.shown);
+        if let Some(files) = self.files.as_mut() {
+            files.focused = self.focus == Pane::Files;
+        }
+        self.preview.covered = self.help || self.lesson.open;
     }
 }
 

@@ -4,6 +4,7 @@
 //! carries the data it needs; nothing here reads the app.
 
 mod export;
+mod gate;
 mod worker;
 
 use std::sync::Arc;
@@ -18,7 +19,12 @@ use super::event::{Effect, Event, Job, JobMsg, RenderRequest};
 use super::preview_level;
 use crate::term::Caps;
 use export::export;
+pub use gate::Gate;
 use worker::start_renderer;
+
+/// The tile of the thumbnails background triage draws, pixels: the exploded view this square,
+/// the three mid slices beside it (as in `triage --sheet`).
+pub const THUMBNAIL_TILE: u32 = 32;
 
 /// Runs effects in the background and reports through the event channel.
 pub struct Jobs {
@@ -34,6 +40,8 @@ pub struct Jobs {
     epoch: u64,
     /// The test hook's wait before a preview is upgraded to full resolution.
     full_delay: Duration,
+    /// Holds background triage while the open volume's work runs.
+    triage_gate: Gate,
 }
 
 impl Jobs {
@@ -58,6 +66,7 @@ impl Jobs {
                 .ok()
                 .and_then(|ms| ms.parse().ok())
                 .map_or(Duration::ZERO, Duration::from_millis),
+            triage_gate: Gate::default(),
         }
     }
 
@@ -136,6 +145,8 @@ impl Jobs {
             Effect::Open(path) => self.open_next(path),
             Effect::Forget => self.forget(),
             Effect::Triage(paths, params) => self.triage(paths, *params),
+            Effect::PauseTriage(on) => self.triage_gate.hold(on),
+            Effect::WriteManifest(path, entries, force) => self.write(path, &entries, force),
             Effect::Render(request) => {
                 if let Some(tx) = &self.renders {
                     self.render_cancel.store(true, Ordering::Relaxed);
@@ -158,6 +169,14 @@ impl Jobs {
             }
             Effect::Quit => {}
         }
+    }
+
+    /// Writes the manifest of `entries` (a small file: at once) and says how that went.
+    fn write(&self, path: std::path::PathBuf, entries: &[slabscope::triage::Entry], force: bool) {
+        let written = write_manifest(&path, entries, force);
+        let _ = self
+            .events
+            .send(Event::Job(JobMsg::Manifest(path, written)));
     }
 
     /// The next volume: its own load, views, histories and renders; what the jobs of the last
@@ -183,27 +202,35 @@ impl Jobs {
     /// they are done or the app has gone.
     fn triage(&self, paths: Vec<slabscope::triage::Entry>, params: AnalysisParams) {
         let (events, load) = (self.events.clone(), self.load.clone());
+        let gate = self.triage_gate.clone();
         std::thread::spawn(move || {
             let how = slabscope::triage::TriagePlan {
                 load,
                 params,
                 timeout: std::time::Duration::from_secs(60),
                 fast: true,
-                tile: None,
+                tile: Some(THUMBNAIL_TILE),
             };
             for (i, entry) in paths.iter().enumerate() {
+                // The open volume's work first: its view search, histories and picture.
+                gate.wait();
                 // The list names the file: its errors need not.
                 let prefix = format!("{}: ", slabscope::error::shown(&entry.path));
                 let describe = |e: slabscope::Error| {
                     let m = e.to_string();
                     m.strip_prefix(&prefix).map_or(m.clone(), str::to_string)
                 };
-                let row = slabscope::triage::look(entry, &how, &|_| {}, &describe).row;
-                if events
-                    .send(Event::Job(JobMsg::Triaged(i, Box::new(row))))
-                    .is_err()
-                {
+                let looked = slabscope::triage::look(entry, &how, &|_| {}, &describe);
+                let thumbnail = looked.cell.and_then(|cell| {
+                    let (w, h) = (cell.width(), cell.height());
+                    image::RgbaImage::from_raw(w, h, cell.data().to_vec())
+                });
+                let row = JobMsg::Triaged(i, Box::new(looked.row));
+                if events.send(Event::Job(row)).is_err() {
                     break;
+                }
+                if let Some(t) = thumbnail {
+                    let _ = events.send(Event::Job(JobMsg::Thumbnail(i, Box::new(t))));
                 }
             }
         });
@@ -247,6 +274,35 @@ impl Jobs {
         };
         self.observe(&msg);
         Some(msg)
+    }
+}
+
+/// Writes `entries` as a manifest (the escaped form, each path made absolute so that it reads
+/// from any folder) to `path`: never over a file that exists unless `force`, never over
+/// anything but a regular file.
+pub(super) fn write_manifest(
+    path: &std::path::Path,
+    entries: &[slabscope::triage::Entry],
+    force: bool,
+) -> super::event::Written {
+    use std::io::Write;
+
+    use super::event::Written;
+    let absolute: Vec<slabscope::triage::Entry> = entries
+        .iter()
+        .map(|e| slabscope::triage::Entry {
+            path: std::path::absolute(&e.path).unwrap_or_else(|_| e.path.clone()),
+            ..e.clone()
+        })
+        .collect();
+    let mut text = slabscope::triage::manifest_lines(&absolute)
+        .collect::<Vec<_>>()
+        .join("\n");
+    text.push('\n');
+    match slabscope::formats::write_atomic(path, force, |mut f| f.write_all(text.as_bytes())) {
+        Ok(()) => Written::Done(entries.len()),
+        Err(slabscope::Error::Exists { .. }) => Written::Exists,
+        Err(e) => Written::Failed(e.to_string()),
     }
 }
 
@@ -364,6 +420,28 @@ mod tests {
         // The folder's triage rows are for every volume: never dropped.
         let row = slabscope::triage::TriageRow::failed("a", "b".into());
         assert!(jobs.admit(JobMsg::Triaged(0, Box::new(row))).is_some());
+    }
+
+    #[test]
+    fn background_triage_waits_while_the_open_volume_works() {
+        let (tx, rx) = channel();
+        let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
+        jobs.run(Effect::PauseTriage(true));
+        let unreadable = slabscope::triage::Entry::failed("gone.nii", "cannot be read");
+        let params = Box::new(AnalysisParams::default());
+        jobs.run(Effect::Triage(vec![unreadable], params));
+        // Until the triage thread waits at the gate (no clock: it gets there or the test hangs).
+        while jobs.triage_gate.waiting() == 0 {
+            std::thread::yield_now();
+        }
+        assert!(rx.try_recv().is_err(), "held: no row");
+        jobs.run(Effect::PauseTriage(false));
+        match rx.recv().unwrap() {
+            Event::Job(JobMsg::Triaged(0, row)) => {
+                assert_eq!(row.error.as_deref(), Some("cannot be read"));
+            }
+            _ => panic!("not a row"),
+        }
     }
 
     #[test]

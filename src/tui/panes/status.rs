@@ -71,6 +71,9 @@ impl StatusBar {
             let what = match p.ask {
                 Ask::Axis => "axis (x, y, z or DX,DY,DZ)",
                 Ask::Threshold => "threshold (empty clears)",
+                Ask::Find => "find a volume by name",
+                Ask::Manifest => "write the marked volumes as a manifest to",
+                Ask::Overwrite => "that file exists: Enter replaces it, or another name",
             };
             Line::from(vec![
                 Span::styled(format!("{what}> "), self.theme.fg(Color::Cyan)),

@@ -50,10 +50,15 @@ fn char_key(c: char) -> Key {
 
 /// The keys `text` names, as the help and the docs write them: words separated by spaces,
 /// commas and parentheses (a comma or parenthesis alone is the key), `/` and `or` between
-/// them, and any other word a key a character (`hjkl`, `↑↓←→`).
+/// them (the slash key itself in backticks), and any other word a key a character (`hjkl`,
+/// `↑↓←→`).
 fn keys_named(text: &str) -> Vec<Key> {
     let mut keys = Vec::new();
     for word in text.split_whitespace() {
+        if word.trim_end_matches(',') == "`/`" {
+            keys.push(char_key('/'));
+            continue;
+        }
         let mut w = word.trim_matches('`');
         while w.chars().count() > 1 && (w.ends_with(',') || w.ends_with(')')) {
             w = &w[..w.len() - 1];
