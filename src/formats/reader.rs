@@ -78,6 +78,18 @@ pub(crate) trait Reader: Sync {
         false
     }
 
+    /// The key `info --json` gives this reader's [`Details`](super::Details) under, null for a
+    /// volume of another format; `None` for a reader that tells nothing besides the volume.
+    fn details_key(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// Whether `triage` rows carry the details too, under the same key
+    /// ([`Details::row_json`](super::Details::row_json)).
+    fn in_rows(&self) -> bool {
+        false
+    }
+
     /// Reads the volume `opts` picks of `source`.
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0>;
 

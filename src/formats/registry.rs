@@ -61,6 +61,14 @@ pub fn volume_name(path: &Path) -> bool {
     READERS.iter().any(|r| r.volume_name(&name))
 }
 
+/// Every reader's key for its details in `info --json` (see [`Reader::details_key`]), with its
+/// format and whether `triage` rows carry them too, in the registry's order.
+pub(super) fn details_keys() -> impl Iterator<Item = (Format, &'static str, bool)> {
+    READERS
+        .iter()
+        .filter_map(|r| r.details_key().map(|key| (r.format(), key, r.in_rows())))
+}
+
 /// Says what the folder `dir` is.
 pub fn folder_kind(dir: &Path) -> Result<Folder> {
     if zarr::is_store(dir) {

@@ -112,3 +112,58 @@ fn mrc_files_are_volumes_to_triage() {
     assert!(r.ok, "{}", r.stderr);
     assert!(r.stdout.contains("\"format\":\"mrc\""), "{}", r.stdout);
 }
+
+#[test]
+fn info_says_the_mode_in_text_and_json() {
+    for (name, line, mode, values) in [
+        (
+            "ramp_i8.mrc",
+            "mode        0 (8-bit signed integers)",
+            0,
+            "8-bit signed integers",
+        ),
+        (
+            "ramp_i16.mrc",
+            "mode        1 (16-bit signed integers)",
+            1,
+            "16-bit signed integers",
+        ),
+        (
+            "ramp_f32.mrc",
+            "mode        2 (32-bit reals)",
+            2,
+            "32-bit reals",
+        ),
+        (
+            "ramp_u16.mrc",
+            "mode        6 (16-bit unsigned integers)",
+            6,
+            "16-bit unsigned integers",
+        ),
+        (
+            "ramp_f16.mrc",
+            "mode        12 (16-bit reals)",
+            12,
+            "16-bit reals",
+        ),
+    ] {
+        let file = data(&format!("mrc/{name}"));
+        let text = run(&["info", file.to_str().unwrap()]);
+        assert!(text.ok, "{name}: {}", text.stderr);
+        let lines: Vec<&str> = text.stdout.lines().collect();
+        // Right after the format's line.
+        assert_eq!(lines[1], "format      mrc", "{name}");
+        assert_eq!(lines[2], line, "{name}");
+        let json = run(&["info", file.to_str().unwrap(), "--json"]);
+        let v: serde_json::Value = serde_json::from_str(&json.stdout).unwrap();
+        assert_eq!(v["mrc"]["mode"], mode, "{name}");
+        assert_eq!(v["mrc"]["values"], values, "{name}");
+        // Every other reader's key is there, null.
+        for other in ["dicom", "ome_zarr", "vtk"] {
+            assert!(
+                v[other].is_null() && v.get(other).is_some(),
+                "{name}: {other}"
+            );
+        }
+    }
+}

@@ -87,3 +87,67 @@ fn what_is_no_image_is_refused_in_one_line() {
     let bytes = std::fs::read(data("vtk/ramp_i16.vtk")).unwrap();
     refused("cut.vtk", &bytes[..bytes.len() - 20], "cut.vtk");
 }
+
+#[test]
+fn info_lists_the_array_read_in_text_and_json() {
+    for (name, line, kind, ty, at) in [
+        (
+            "ramp_i16.vtk",
+            "arrays      density (short scalars, point data)",
+            "scalars",
+            "short",
+            "point",
+        ),
+        (
+            "ramp_f32.vtk",
+            "arrays      density (float scalars, point data)",
+            "scalars",
+            "float",
+            "point",
+        ),
+        (
+            "ramp_u8_ascii.vtk",
+            "arrays      density (unsigned_char color scalars, point data)",
+            "color_scalars",
+            "unsigned_char",
+            "point",
+        ),
+        (
+            "ramp_f64_cells.vtk",
+            "arrays      density (double scalars, cell data)",
+            "scalars",
+            "double",
+            "cell",
+        ),
+    ] {
+        let file = data(&format!("vtk/{name}"));
+        let text = run(&["info", file.to_str().unwrap()]);
+        assert!(text.ok, "{name}: {}", text.stderr);
+        let lines: Vec<&str> = text.stdout.lines().collect();
+        assert_eq!(lines[1], "format      vtk", "{name}");
+        assert_eq!(lines[2], line, "{name}");
+        let json = run(&["info", file.to_str().unwrap(), "--json"]);
+        let v: serde_json::Value = serde_json::from_str(&json.stdout).unwrap();
+        let arrays = v["vtk"]["arrays"].as_array().unwrap();
+        assert_eq!(arrays.len(), 1, "{name}");
+        assert_eq!(arrays[0]["name"], "density", "{name}");
+        assert_eq!(arrays[0]["kind"], kind, "{name}");
+        assert_eq!(arrays[0]["type"], ty, "{name}");
+        assert_eq!(arrays[0]["data"], at, "{name}");
+        assert!(v["mrc"].is_null() && v["dicom"].is_null(), "{name}");
+    }
+}
+
+#[test]
+fn an_array_name_is_escaped_in_info() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("named.vtk");
+    let mut bytes = std::fs::read(data("vtk/ramp_i16.vtk")).unwrap();
+    let at = bytes.windows(7).position(|w| w == b"density").unwrap();
+    bytes.splice(at..at + 7, b"d\x1b[2Jx".iter().copied());
+    std::fs::write(&path, bytes).unwrap();
+    let text = run(&["info", path.to_str().unwrap()]);
+    assert!(text.ok, "{}", text.stderr);
+    assert!(!text.stdout.contains('\x1b'), "{}", text.stdout);
+    assert!(text.stdout.contains("arrays      d"), "{}", text.stdout);
+}

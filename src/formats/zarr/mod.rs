@@ -8,6 +8,7 @@
 //! spacing and origin in mm; `--volume N` picks the time point and `--channel N` the channel.
 
 mod chain;
+mod details;
 mod guard;
 mod levels;
 pub(crate) mod meta;
@@ -106,6 +107,10 @@ impl Reader for Zarr {
 
     fn channels(&self) -> bool {
         true
+    }
+
+    fn details_key(&self) -> Option<&'static str> {
+        Some("ome_zarr")
     }
 
     /// Reads through [`Source::path`], the store's folder.
@@ -430,7 +435,7 @@ impl Opened {
             read0.volume = read0.volume.declared_labels();
         }
         read0.format_version.clone_from(&self.info.version);
-        read0.zarr = Some(self.info.clone());
+        read0.details = Some(std::sync::Arc::new(self.info.clone()));
         Ok(read0)
     }
 }
