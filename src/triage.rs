@@ -20,7 +20,7 @@ pub use self::row::TriageRow;
 pub use self::select::{MAX_MANIFEST, Selection, Source, read_manifest, select};
 pub use self::series::resolve;
 pub use self::walk::{discover, restrict_to_series, series_positions};
-pub use crate::formats::{Folder, folder_kind};
+pub use crate::formats::{Folder, folder_kind, picks_in_folder};
 
 /// The most volumes a walk collects: a bound on the memory a folder tree can claim.
 pub const MAX_VOLUMES: usize = 1 << 20;

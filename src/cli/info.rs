@@ -7,7 +7,7 @@ use clap::Args;
 use slabscope::error::{human_bytes, shown};
 use slabscope::formats::{Details, Loaded};
 use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, to_json};
-use slabscope::triage::{Entry, Folder, discover, folder_kind};
+use slabscope::triage::{Entry, Folder, discover, folder_kind, picks_in_folder};
 use slabscope::volume::dims_string;
 
 use super::LoadArgs;
@@ -33,13 +33,13 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     // would look at).
     let dir = &args.file;
     let opts = args.load.options()?;
-    let listed = if dir.is_dir() && opts.dicom.series.is_none() {
+    let listed = if dir.is_dir() && !picks_in_folder(&opts) {
         match folder_kind(dir)? {
             Folder::Collection => Some(discover(std::slice::from_ref(dir), &opts)?),
-            Folder::Dicom => {
+            Folder::Series => {
                 Some(discover(std::slice::from_ref(dir), &opts)?).filter(|series| series.len() > 1)
             }
-            Folder::Slices | Folder::Zarr | Folder::Empty => None,
+            Folder::Slices | Folder::Store | Folder::Empty => None,
         }
     } else {
         None

@@ -38,7 +38,7 @@ pub use nifti::write_nifti;
 pub use nrrd::{NrrdEncoding, write_nrrd};
 pub use output::{Staged, check_output, remove_staged, same_file, stage, write_atomic};
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
-pub use registry::{folder_kind, volume_name};
+pub use registry::{folder_kind, picks_in_folder, volume_name};
 pub use source::{Source, check_input, open_regular};
 pub use write::{VolumeOutput, stage_volume, write_volume};
 pub use zarr::ZarrOptions;
@@ -98,22 +98,23 @@ impl Format {
     }
 }
 
-/// What a folder is: one volume (a Zarr store, or a stack of two or more TIFF slices and no
-/// other volume file or folder), DICOM files (one series or several), a collection of volumes, or nothing
-/// slabscope reads.
+/// What a folder is, as the readers say ([`folder_kind`]): one volume (a reader's store, or a
+/// stack of two or more slices and no other volume file or folder), files that make volumes
+/// together (one series or several), a collection of volumes, or nothing slabscope reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Folder {
-    /// A stack of TIFF slices: one volume.
+    /// A stack of slices (TIFF): one volume.
     Slices,
-    /// DICOM files and no other volume file or folder: one series is a volume, several a
-    /// collection of series.
-    Dicom,
+    /// Files that make volumes together (DICOM) and no other volume file or folder: one series
+    /// is a volume, several a collection of series.
+    Series,
     /// Volume files or folders (or a single TIFF file): looked at one by one.
     Collection,
     /// Neither a volume file nor a folder in it.
     Empty,
-    /// A Zarr store (an OME-Zarr image or a plain array): one volume, never walked into.
-    Zarr,
+    /// A reader's store (a Zarr store: an OME-Zarr image or a plain array): one volume, never
+    /// walked into.
+    Store,
 }
 
 /// Options for [`load`]: those every reader takes, and each format's own.

@@ -2,6 +2,8 @@
 //! deeper look, by name), what it can hold (volumes, channels), and how it is read. The
 //! registry ([`super::registry`]) asks the readers in its order; it knows no format itself.
 
+use std::path::Path;
+
 use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::Result;
 
@@ -60,6 +62,37 @@ pub(crate) trait Reader: Sync {
     /// [`extensions`](Self::extensions).
     fn volume_name(&self, name: &str) -> bool {
         self.extensions().iter().any(|e| name.ends_with(e))
+    }
+
+    /// Fails when the options ask of the file or folder at `path` what only this format holds
+    /// and it is not this format's (a label image of a Zarr store named for another file):
+    /// asked of every reader before any reads.
+    fn check_options(&self, _path: &Path, _is_dir: bool, _opts: &LoadOptions) -> Result<()> {
+        Ok(())
+    }
+
+    /// Whether the folder `dir` is one volume this reader reads whole, never walked into (a
+    /// Zarr store): a [`Folder::Store`].
+    fn store(&self, _dir: &Path) -> bool {
+        false
+    }
+
+    /// Whether a file so named is a slice of a folder of slices, one volume (a TIFF slice): by
+    /// name alone, asked first of a folder's entries.
+    fn slice_name(&self, _path: &Path) -> bool {
+        false
+    }
+
+    /// Whether the file at `path`, which no reader's name rules call a volume, is one of files
+    /// that make volumes together (DICOM): by content, asked last of a folder's entries.
+    fn series_file(&self, _path: &Path) -> bool {
+        false
+    }
+
+    /// Whether the options pick one volume among a folder's files (a DICOM series by
+    /// `--series`): the folder is then read, not listed.
+    fn picks_in_folder(&self, _opts: &LoadOptions) -> bool {
+        false
     }
 
     /// Whether a folder of this `kind` is this reader's (asked with the options: a DICOM series

@@ -81,9 +81,17 @@ impl Reader for Dicom {
         is_dicom(source.path())
     }
 
+    fn series_file(&self, path: &Path) -> bool {
+        is_dicom(path)
+    }
+
+    fn picks_in_folder(&self, opts: &LoadOptions) -> bool {
+        opts.dicom.series.is_some()
+    }
+
     fn reads_folder(&self, kind: Folder, opts: &LoadOptions) -> bool {
         // A series may be named in a folder of DICOM files and other volumes.
-        kind == Folder::Dicom || (kind == Folder::Collection && opts.dicom.series.is_some())
+        kind == Folder::Series || (kind == Folder::Collection && self.picks_in_folder(opts))
     }
 
     fn volumes(&self) -> bool {

@@ -97,8 +97,16 @@ impl Reader for Zarr {
         "OME-Zarr"
     }
 
+    fn check_options(&self, path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
+        check_label_image(path, is_dir, opts)
+    }
+
+    fn store(&self, dir: &Path) -> bool {
+        is_store(dir)
+    }
+
     fn reads_folder(&self, kind: Folder, _opts: &LoadOptions) -> bool {
-        kind == Folder::Zarr
+        kind == Folder::Store
     }
 
     fn volumes(&self) -> bool {
@@ -135,7 +143,7 @@ impl Reader for Zarr {
 }
 
 /// Fails when `opts` name a label image and `path` (a folder when `is_dir`) is no Zarr store.
-pub(crate) fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
+fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
     if opts.zarr.label_image.is_some() && !(is_dir && is_store(path)) {
         return Err(Error::format(
             path,
