@@ -6,7 +6,7 @@
 use slabscope::volume::VoxelType;
 use slabscope::{Format, LoadOptions, load};
 
-use crate::common::{data, run};
+use crate::common::{data, info_details, run};
 
 /// The 6x5x4 ramp `x + 10y + 100z` of `make_mrc.py`, `wrap` applied to each value.
 fn assert_ramp(name: &str, ty: VoxelType, wrap: impl Fn(i64) -> i64) {
@@ -147,15 +147,9 @@ fn info_says_the_mode_in_text_and_json() {
             "16-bit reals",
         ),
     ] {
-        let file = data(&format!("mrc/{name}"));
-        let text = run(&["info", file.to_str().unwrap()]);
-        assert!(text.ok, "{name}: {}", text.stderr);
-        let lines: Vec<&str> = text.stdout.lines().collect();
         // Right after the format's line.
-        assert_eq!(lines[1], "format      mrc", "{name}");
-        assert_eq!(lines[2], line, "{name}");
-        let json = run(&["info", file.to_str().unwrap(), "--json"]);
-        let v: serde_json::Value = serde_json::from_str(&json.stdout).unwrap();
+        let (details, v) = info_details(&data(&format!("mrc/{name}")), "mrc");
+        assert_eq!(details, line, "{name}");
         assert_eq!(v["mrc"]["mode"], mode, "{name}");
         assert_eq!(v["mrc"]["values"], values, "{name}");
         // Every other reader's key is there, null.

@@ -4,12 +4,16 @@
 //! one-component `COLOR_SCALARS` line and `LOOKUP_TABLE`), then the values, big-endian binary or
 //! ASCII, x fastest. Cell data is a volume of one voxel fewer along each axis, its voxels at the
 //! cells' centres. Other datasets (polygons, unstructured and curvilinear grids) are no image and
-//! are refused naming what they are.
+//! are refused naming what they are. `info` lists the file's arrays (`arrays`).
+
+mod arrays;
 
 use std::io::Read;
 use std::path::Path;
 
 use serde::Serialize;
+
+use self::arrays::later_arrays;
 
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::details::{Details, json_of};
@@ -55,7 +59,7 @@ impl Reader for Vtk {
     }
 }
 
-/// What `info` shows of a legacy VTK file: its arrays before the values, the one read.
+/// What `info` shows of a legacy VTK file: its arrays, the one read first.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub(crate) struct VtkDetails {
     /// The arrays, in the file's order.
@@ -67,7 +71,8 @@ pub(crate) struct VtkDetails {
 pub(crate) struct VtkArray {
     /// Its name as written.
     pub name: String,
-    /// What it is: `scalars` or `color_scalars`.
+    /// What it is: `scalars`, `color_scalars`, `vectors`, `normals`, `tensors`,
+    /// `texture_coordinates` or `field` (an array of a `FIELD`).
     pub kind: &'static str,
     /// Its type as written (`float`, `unsigned_char`; `unsigned_char` for colours).
     #[serde(rename = "type")]
@@ -335,7 +340,9 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         row[3] = o;
     }
     let mut read = Read0::new(path, dims, spacing, held, voxels, notes)?;
-    read.details = Some(std::sync::Arc::new(h.details()));
+    let mut details = h.details();
+    details.arrays.extend(later_arrays(source, &h));
+    read.details = Some(std::sync::Arc::new(details));
     Ok(read.with_transform(Some(transform)))
 }
 
