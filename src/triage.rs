@@ -73,6 +73,17 @@ impl Entry {
         }
     }
 
+    /// The options that read this entry: `load`'s, with the entry's series (where it is one)
+    /// in place of theirs.
+    #[must_use]
+    pub fn options(&self, load: &crate::formats::LoadOptions) -> crate::formats::LoadOptions {
+        let mut opts = load.clone();
+        if let Some(series) = &self.series {
+            opts.dicom.series = Some(series.clone());
+        }
+        opts
+    }
+
     /// The entry's name in messages and lists: the path, with the series after it.
     pub fn name(&self) -> String {
         self.name_under(Path::new(""))

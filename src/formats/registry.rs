@@ -237,6 +237,16 @@ mod tests {
         assert!(volume_name(Path::new("bonsai_256x256x256_uint8.raw")));
     }
 
+    /// The sentence of every refusal names every reader (its title's first word): a format
+    /// added is added to it.
+    #[test]
+    fn the_sentence_names_every_reader() {
+        for reader in READERS {
+            let word = reader.title().split(' ').next().unwrap_or_default();
+            assert!(READS.contains(word), "{word} is not in {READS:?}");
+        }
+    }
+
     /// Each format is read by one reader, and each reader reads its own format.
     #[test]
     fn one_reader_a_format() {
