@@ -26,13 +26,11 @@ pub trait Details: Any + Debug + Send + Sync {
     /// the file escaped by the one rule ([`crate::error::names`]).
     fn lines(&self) -> Vec<(String, String)>;
 
-    /// The value `info --json` gives under the reader's key
-    /// ([`Reader::details_key`](super::reader::Reader::details_key)).
+    /// The value `info --json` gives under the reader's key (its `Reader::details_key`).
     fn json(&self) -> Value;
 
-    /// The value a `triage` row gives under the reader's key, where its rows carry one
-    /// ([`Reader::in_rows`](super::reader::Reader::in_rows)): JSON text, its keys in the order
-    /// they are written.
+    /// The value a `triage` row gives under the reader's key, where its rows carry one (its
+    /// `Reader::in_rows`): JSON text, its keys in the order they are written.
     fn row_json(&self) -> Option<Box<RawValue>> {
         None
     }

@@ -1,6 +1,9 @@
 //! The one trait every format's reader implements: how it is recognised (by content, by a
-//! deeper look, by name), what it can hold (volumes, channels), and how it is read. The
-//! registry ([`super::registry`]) asks the readers in its order; it knows no format itself.
+//! deeper look, by name), what it says of a folder and of the options, what it can hold
+//! (volumes, channels), how it is read, and the key of what it tells besides the volume
+//! ([`Details`](super::Details)). Every method but `format`, `title` and `read` has a default
+//! that says "not this reader's". The registry ([`super::registry`]) asks the readers in its
+//! order; it knows no format itself.
 
 use std::path::Path;
 
