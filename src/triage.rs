@@ -20,7 +20,7 @@ pub use self::row::TriageRow;
 pub use self::select::{MAX_MANIFEST, Selection, Source, read_manifest, select};
 pub use self::series::resolve;
 pub use self::walk::{discover, restrict_to_series, series_positions};
-pub use crate::formats::{Folder, folder_kind};
+pub use crate::formats::{Folder, folder_kind, picks_in_folder};
 
 /// The most volumes a walk collects: a bound on the memory a folder tree can claim.
 pub const MAX_VOLUMES: usize = 1 << 20;
@@ -71,6 +71,17 @@ impl Entry {
             problem: Some(problem.into()),
             ..Self::file(path)
         }
+    }
+
+    /// The options that read this entry: `load`'s, with the entry's series (where it is one)
+    /// in place of theirs.
+    #[must_use]
+    pub fn options(&self, load: &crate::formats::LoadOptions) -> crate::formats::LoadOptions {
+        let mut opts = load.clone();
+        if let Some(series) = &self.series {
+            opts.dicom.series = Some(series.clone());
+        }
+        opts
     }
 
     /// The entry's name in messages and lists: the path, with the series after it.

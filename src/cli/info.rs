@@ -4,13 +4,10 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::error::names::{controls, text};
 use slabscope::error::{human_bytes, shown};
-use slabscope::formats::Loaded;
-use slabscope::formats::dicom::DicomSeries;
-use slabscope::formats::zarr::ZarrInfo;
+use slabscope::formats::{Details, Loaded};
 use slabscope::report::{FolderReport, GeometryReport, InfoReport, ListedVolume, to_json};
-use slabscope::triage::{Entry, Folder, discover, folder_kind};
+use slabscope::triage::{Entry, Folder, discover, folder_kind, picks_in_folder};
 use slabscope::volume::dims_string;
 
 use super::LoadArgs;
@@ -36,13 +33,13 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     // would look at).
     let dir = &args.file;
     let opts = args.load.options()?;
-    let listed = if dir.is_dir() && opts.dicom.series.is_none() {
+    let listed = if dir.is_dir() && !picks_in_folder(&opts) {
         match folder_kind(dir)? {
             Folder::Collection => Some(discover(std::slice::from_ref(dir), &opts)?),
-            Folder::Dicom => {
+            Folder::Series => {
                 Some(discover(std::slice::from_ref(dir), &opts)?).filter(|series| series.len() > 1)
             }
-            Folder::Slices | Folder::Zarr | Folder::Empty => None,
+            Folder::Slices | Folder::Store | Folder::Empty => None,
         }
     } else {
         None
@@ -93,25 +90,17 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     let [nx, ny, nz] = v.dims();
     let [sx, sy, sz] = v.spacing();
     outln!("file        {name}");
-    match (&loaded.format_version, &loaded.zarr) {
-        (Some(version), Some(z)) => outln!(
-            "format      {} (OME-Zarr {version} on Zarr v{})",
-            format.name(),
-            z.zarr_format
-        ),
-        (None, Some(z)) => outln!(
-            "format      {} (a plain Zarr v{} array)",
-            format.name(),
-            z.zarr_format
-        ),
-        (Some(version), None) => outln!("format      {} (version {version})", format.name()),
+    let details = loaded.details.as_deref();
+    match (
+        details.and_then(Details::format_words),
+        &loaded.format_version,
+    ) {
+        (Some(words), _) => outln!("format      {} ({words})", format.name()),
+        (None, Some(version)) => outln!("format      {} (version {version})", format.name()),
         (None, None) => outln!("format      {}", format.name()),
     }
-    if let Some(z) = &loaded.zarr {
-        print_zarr(z);
-    }
-    if let Some(d) = &loaded.dicom {
-        print_dicom(d);
+    for (label, text) in details.map(Details::lines).unwrap_or_default() {
+        outln!("{label:<11} {text}");
     }
     outln!(
         "dims        {}  ({} voxels)",
@@ -157,77 +146,6 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
         sparkline(hist)
     );
     Ok(())
-}
-
-/// The DICOM series read: its fields escaped as they were read (`controls` leaves them so and
-/// keeps anything else out).
-fn print_dicom(d: &DicomSeries) {
-    let number = d.number.map_or_else(String::new, |n| format!("{n} "));
-    outln!(
-        "series      {number}\"{}\" ({})",
-        controls(&d.description),
-        controls(&d.modality)
-    );
-    outln!("series uid  {}", controls(&d.key));
-    outln!("syntax      {}", controls(&d.syntax));
-    for (field, value) in &d.patient {
-        outln!("{field:<11} {}", controls(value));
-    }
-}
-
-/// What an OME-Zarr store holds: the image read, its axes, levels, chunking, codecs and labels,
-/// every name the store's metadata gives escaped by the one rule (`names::text`).
-fn print_zarr(z: &ZarrInfo) {
-    let shape = |s: &[u64]| s.iter().map(u64::to_string).collect::<Vec<_>>().join("x");
-    let list = |names: &[String]| names.iter().map(|n| text(n)).collect::<Vec<_>>().join(", ");
-    if !z.image.is_empty() {
-        outln!("image       {}", text(&z.image));
-    }
-    let axes: Vec<String> = z
-        .axes
-        .iter()
-        .map(|a| match &a.unit {
-            Some(unit) => format!("{} ({}, {})", text(&a.name), text(&a.kind), text(unit)),
-            None => format!("{} ({})", text(&a.name), text(&a.kind)),
-        })
-        .collect();
-    outln!("axes        {}", axes.join(", "));
-    let levels: Vec<String> = z
-        .levels
-        .iter()
-        .map(|l| {
-            let path = if l.path.is_empty() {
-                ".".into()
-            } else {
-                text(&l.path)
-            };
-            match l.pyramid_level {
-                Some(k) => format!("{path} {} (pyramid level {k})", shape(&l.shape)),
-                None => format!("{path} {} (not on the pyramid's grid)", shape(&l.shape)),
-            }
-        })
-        .collect();
-    outln!("levels      {}", levels.join(", "));
-    match &z.inner_chunks {
-        Some(inner) => outln!(
-            "chunks      {} in shards of {}",
-            shape(inner),
-            shape(&z.chunks)
-        ),
-        None => outln!("chunks      {}", shape(&z.chunks)),
-    }
-    let codecs = if z.codecs.is_empty() {
-        "none".to_string()
-    } else {
-        list(&z.codecs)
-    };
-    outln!("codecs      {codecs} ({})", text(&z.data_type));
-    if !z.labels.is_empty() {
-        outln!(
-            "labels      {}  (--label-image NAME reads one)",
-            list(&z.labels)
-        );
-    }
 }
 
 /// The orientation, the transform and the world box.

@@ -4,6 +4,7 @@
 //! [`Source`]; and writers for exporting ([`write_volume`]).
 
 mod data;
+mod details;
 pub mod dicom;
 mod limits;
 mod metaimage;
@@ -24,17 +25,20 @@ mod vtk;
 mod write;
 pub mod zarr;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::Serialize;
 
+pub use details::{Details, RowDetails};
 pub use dicom::DicomOptions;
 pub use limits::{default_max_memory, parse_bytes, physical_memory};
 pub use nifti::write_nifti;
 pub use nrrd::{NrrdEncoding, write_nrrd};
 pub use output::{Staged, check_output, remove_staged, same_file, stage, write_atomic};
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
-pub use registry::{folder_kind, volume_name};
+pub use registry::{folder_kind, picks_in_folder, volume_name};
 pub use source::{Source, check_input, open_regular};
 pub use write::{VolumeOutput, stage_volume, write_volume};
 pub use zarr::ZarrOptions;
@@ -94,22 +98,23 @@ impl Format {
     }
 }
 
-/// What a folder is: one volume (a Zarr store, or a stack of two or more TIFF slices and no
-/// other volume file or folder), DICOM files (one series or several), a collection of volumes, or nothing
-/// slabscope reads.
+/// What a folder is, as the readers say ([`folder_kind`]): one volume (a reader's store, or a
+/// stack of two or more slices and no other volume file or folder), files that make volumes
+/// together (one series or several), a collection of volumes, or nothing slabscope reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Folder {
-    /// A stack of TIFF slices: one volume.
+    /// A stack of slices (TIFF): one volume.
     Slices,
-    /// DICOM files and no other volume file or folder: one series is a volume, several a
-    /// collection of series.
-    Dicom,
+    /// Files that make volumes together (DICOM) and no other volume file or folder: one series
+    /// is a volume, several a collection of series.
+    Series,
     /// Volume files or folders (or a single TIFF file): looked at one by one.
     Collection,
     /// Neither a volume file nor a folder in it.
     Empty,
-    /// A Zarr store (an OME-Zarr image or a plain array): one volume, never walked into.
-    Zarr,
+    /// A reader's store (a Zarr store: an OME-Zarr image or a plain array): one volume, never
+    /// walked into.
+    Store,
 }
 
 /// Options for [`load`]: those every reader takes, and each format's own.
@@ -153,13 +158,36 @@ pub struct Loaded {
     pub notes: Vec<String>,
     /// Every file read: the one named, and a detached header's data file.
     pub sources: Vec<PathBuf>,
-    /// The DICOM series read, for a DICOM file or folder.
-    pub dicom: Option<dicom::DicomSeries>,
-    /// The store's image, levels, chunking and codecs, for an OME-Zarr store.
-    pub zarr: Option<zarr::ZarrInfo>,
+    /// What the reader tells besides the volume (a DICOM series, an OME-Zarr store's levels,
+    /// an MRC map's mode), for `info` and lists to show without knowing the format.
+    pub details: Option<Arc<dyn Details>>,
     /// The version of the format the file is written in, where the format has versions that
     /// readers tell apart (NIfTI `1` or `2`, OME-Zarr `0.4` or `0.5`).
     pub format_version: Option<String>,
+}
+
+impl Loaded {
+    /// The reader's details as the type it wrote them in, for code that knows the format
+    /// (`loaded.details_as::<DicomSeries>()`); `None` when they are another's or there are none.
+    #[must_use]
+    pub fn details_as<T: Details>(&self) -> Option<&T> {
+        let details: &dyn std::any::Any = self.details.as_deref()?;
+        details.downcast_ref()
+    }
+
+    /// What `info --json` gives of the details: every reader's key, null but for the reader
+    /// that read the volume (a format added adds its key).
+    #[must_use]
+    pub fn details_json(&self) -> BTreeMap<&'static str, serde_json::Value> {
+        details::info_json(self.format, self.details.as_deref())
+    }
+
+    /// What a `triage` row gives of the details: the keys of the readers whose rows carry
+    /// them, null but for the reader that read the volume.
+    #[must_use]
+    pub fn row_details(&self) -> RowDetails {
+        RowDetails::of(Some(self.format), self.details.as_deref())
+    }
 }
 
 /// Loads the volume at `path`: a file, or a folder (a stack of TIFF slices, a DICOM series or a
@@ -207,8 +235,7 @@ fn finish(path: &Path, format: Format, mut loaded: Read0) -> Result<Loaded> {
         format,
         notes: loaded.notes,
         sources,
-        dicom: loaded.dicom,
-        zarr: loaded.zarr,
+        details: loaded.details,
         format_version: loaded.format_version,
     })
 }
@@ -219,10 +246,8 @@ pub(crate) struct Read0 {
     pub notes: Vec<String>,
     /// Files read besides the one named (a detached header's data file).
     pub sources: Vec<PathBuf>,
-    /// The DICOM series read.
-    pub dicom: Option<dicom::DicomSeries>,
-    /// The store read, for an OME-Zarr store.
-    pub zarr: Option<zarr::ZarrInfo>,
+    /// What the reader tells besides the volume (see [`Loaded::details`]).
+    pub details: Option<Arc<dyn Details>>,
     /// The format's version (see [`Loaded::format_version`]).
     pub format_version: Option<String>,
 }
@@ -253,8 +278,7 @@ impl Read0 {
             volume,
             notes,
             sources: Vec::new(),
-            dicom: None,
-            zarr: None,
+            details: None,
             format_version: None,
         })
     }

@@ -14,7 +14,10 @@
 use std::io::Read;
 use std::path::Path;
 
+use serde::Serialize;
+
 use super::data::{DataSpec, Encoding, Skip, check_budget, read_voxels};
+use super::details::{Details, json_of};
 use super::reader::{Reader, Sniff};
 use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
@@ -57,8 +60,31 @@ impl Reader for Mrc {
         self.claims_name(name) || name.ends_with(".map") || name.ends_with(".ccp4")
     }
 
+    fn details_key(&self) -> Option<&'static str> {
+        Some("mrc")
+    }
+
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source, opts)
+    }
+}
+
+/// What `info` shows of an MRC map: its mode, and what the mode's values are.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub(crate) struct MrcDetails {
+    /// `MODE` as the header gives it.
+    pub mode: i32,
+    /// What its values are: `32-bit reals`, `8-bit unsigned integers (IMOD)`, ...
+    pub values: &'static str,
+}
+
+impl Details for MrcDetails {
+    fn lines(&self) -> Vec<(String, String)> {
+        vec![("mode".into(), format!("{} ({})", self.mode, self.values))]
+    }
+
+    fn json(&self) -> serde_json::Value {
+        json_of(self)
     }
 }
 
@@ -160,6 +186,18 @@ impl Header {
                 ));
             }
         })
+    }
+
+    /// What the values of a mode read are.
+    fn values(&self) -> &'static str {
+        match self.mode {
+            0 if self.unsigned_bytes => "8-bit unsigned integers (IMOD)",
+            0 => "8-bit signed integers",
+            1 => "16-bit signed integers",
+            2 => "32-bit reals",
+            6 => "16-bit unsigned integers",
+            _ => "16-bit reals",
+        }
     }
 
     /// Where each stored axis (columns, rows, sections) goes among x, y, z.
@@ -271,7 +309,12 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     if h.ispg == 0 && h.n[2] > 1 {
         notes.push("the header calls it a stack of images (ISPG 0): read as a volume".into());
     }
-    Read0::new(path, dims, spacing, ty, voxels, notes)
+    let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?;
+    read.details = Some(std::sync::Arc::new(MrcDetails {
+        mode: h.mode,
+        values: h.values(),
+    }));
+    Ok(read)
 }
 
 /// f16 voxels, held as their bits, as f32.

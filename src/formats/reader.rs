@@ -1,6 +1,11 @@
 //! The one trait every format's reader implements: how it is recognised (by content, by a
-//! deeper look, by name), what it can hold (volumes, channels), and how it is read. The
-//! registry ([`super::registry`]) asks the readers in its order; it knows no format itself.
+//! deeper look, by name), what it says of a folder and of the options, what it can hold
+//! (volumes, channels), how it is read, and the key of what it tells besides the volume
+//! ([`Details`](super::Details)). Every method but `format`, `title` and `read` has a default
+//! that says "not this reader's". The registry ([`super::registry`]) asks the readers in its
+//! order; it knows no format itself.
+
+use std::path::Path;
 
 use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::Result;
@@ -62,6 +67,37 @@ pub(crate) trait Reader: Sync {
         self.extensions().iter().any(|e| name.ends_with(e))
     }
 
+    /// Fails when the options ask of the file or folder at `path` what only this format holds
+    /// and it is not this format's (a label image of a Zarr store named for another file):
+    /// asked of every reader before any reads.
+    fn check_options(&self, _path: &Path, _is_dir: bool, _opts: &LoadOptions) -> Result<()> {
+        Ok(())
+    }
+
+    /// Whether the folder `dir` is one volume this reader reads whole, never walked into (a
+    /// Zarr store): a [`Folder::Store`].
+    fn store(&self, _dir: &Path) -> bool {
+        false
+    }
+
+    /// Whether a file so named is a slice of a folder of slices, one volume (a TIFF slice): by
+    /// name alone, asked first of a folder's entries.
+    fn slice_name(&self, _path: &Path) -> bool {
+        false
+    }
+
+    /// Whether the file at `path`, which no reader's name rules call a volume, is one of files
+    /// that make volumes together (DICOM): by content, asked last of a folder's entries.
+    fn series_file(&self, _path: &Path) -> bool {
+        false
+    }
+
+    /// Whether the options pick one volume among a folder's files (a DICOM series by
+    /// `--series`): the folder is then read, not listed.
+    fn picks_in_folder(&self, _opts: &LoadOptions) -> bool {
+        false
+    }
+
     /// Whether a folder of this `kind` is this reader's (asked with the options: a DICOM series
     /// may be named in a folder of other volumes).
     fn reads_folder(&self, _kind: Folder, _opts: &LoadOptions) -> bool {
@@ -75,6 +111,18 @@ pub(crate) trait Reader: Sync {
 
     /// Whether one file of it can hold several channels (`--channel N` picks one).
     fn channels(&self) -> bool {
+        false
+    }
+
+    /// The key `info --json` gives this reader's [`Details`](super::Details) under, null for a
+    /// volume of another format; `None` for a reader that tells nothing besides the volume.
+    fn details_key(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// Whether `triage` rows carry the details too, under the same key
+    /// ([`Details::row_json`](super::Details::row_json)).
+    fn in_rows(&self) -> bool {
         false
     }
 

@@ -36,7 +36,9 @@ const READS: &str = "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TI
 /// Reads the file or folder at `path` (checked to be one), with the format it was read as.
 pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    zarr::check_label_image(path, meta.is_dir(), opts)?;
+    for reader in READERS {
+        reader.check_options(path, meta.is_dir(), opts)?;
+    }
     let source = Source::new(path);
     if meta.is_dir() {
         return read_folder(&source, opts);
@@ -61,31 +63,48 @@ pub fn volume_name(path: &Path) -> bool {
     READERS.iter().any(|r| r.volume_name(&name))
 }
 
-/// Says what the folder `dir` is.
+/// Every reader's key for its details in `info --json` (see [`Reader::details_key`]), with its
+/// format and whether `triage` rows carry them too, in the registry's order.
+pub(super) fn details_keys() -> impl Iterator<Item = (Format, &'static str, bool)> {
+    READERS
+        .iter()
+        .filter_map(|r| r.details_key().map(|key| (r.format(), key, r.in_rows())))
+}
+
+/// Whether the options pick one volume among a folder's files (a DICOM series by `--series`),
+/// so that a front end reads the folder named rather than list it.
+pub fn picks_in_folder(opts: &LoadOptions) -> bool {
+    READERS.iter().any(|r| r.picks_in_folder(opts))
+}
+
+/// Says what the folder `dir` is, asking the readers: whether it is one's store, which of its
+/// entries are slices by name and which files make volumes together by content.
 pub fn folder_kind(dir: &Path) -> Result<Folder> {
-    if zarr::is_store(dir) {
-        return Ok(Folder::Zarr);
+    if READERS.iter().any(|r| r.store(dir)) {
+        return Ok(Folder::Store);
     }
-    let (mut tiffs, mut others, mut dicoms) = (0usize, 0usize, 0usize);
+    let (mut slices, mut others, mut series) = (0usize, 0usize, 0usize);
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let entry = entry.map_err(|e| Error::io(dir, e))?;
         let path = entry.path();
         let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
         // Anything named like a slice counts as one (a folder or a FIFO so named is then an
         // error of the stack that names it).
-        if tiff::is_tiff(&path) {
-            tiffs += 1;
+        if READERS.iter().any(|r| r.slice_name(&path)) {
+            slices += 1;
         } else if is_dir || volume_name(&path) {
             others += 1;
-        } else if entry.file_type().is_ok_and(|t| t.is_file()) && dicom::is_dicom(&path) {
-            dicoms += 1;
+        } else if entry.file_type().is_ok_and(|t| t.is_file())
+            && READERS.iter().any(|r| r.series_file(&path))
+        {
+            series += 1;
         }
     }
-    Ok(if tiffs >= 2 && others + dicoms == 0 {
+    Ok(if slices >= 2 && others + series == 0 {
         Folder::Slices
-    } else if dicoms > 0 && tiffs + others == 0 {
-        Folder::Dicom
-    } else if tiffs + others + dicoms == 0 {
+    } else if series > 0 && slices + others == 0 {
+        Folder::Series
+    } else if slices + others + series == 0 {
         Folder::Empty
     } else {
         Folder::Collection
@@ -216,6 +235,16 @@ mod tests {
             assert!(!volume_name(Path::new(name)), "{name}");
         }
         assert!(volume_name(Path::new("bonsai_256x256x256_uint8.raw")));
+    }
+
+    /// The sentence of every refusal names every reader (its title's first word): a format
+    /// added is added to it.
+    #[test]
+    fn the_sentence_names_every_reader() {
+        for reader in READERS {
+            let word = reader.title().split(' ').next().unwrap_or_default();
+            assert!(READS.contains(word), "{word} is not in {READS:?}");
+        }
     }
 
     /// Each format is read by one reader, and each reader reads its own format.

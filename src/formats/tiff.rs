@@ -71,6 +71,10 @@ impl Reader for TiffSlices {
         "TIFF slices"
     }
 
+    fn slice_name(&self, path: &Path) -> bool {
+        is_tiff(path)
+    }
+
     fn reads_folder(&self, kind: Folder, _opts: &LoadOptions) -> bool {
         kind == Folder::Slices
     }

@@ -1,4 +1,5 @@
-//! The reports of `info`: one volume, with its DICOM series, and the volumes of a folder.
+//! The reports of `info`: one volume, with what its reader tells of it, and the volumes of a
+//! folder.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -8,12 +9,10 @@ use serde::Serialize;
 use super::{GeometryReport, SCHEMA_VERSION};
 use crate::error::Result;
 use crate::formats::Loaded;
-use crate::formats::dicom::DicomSeries;
-use crate::formats::zarr::ZarrInfo;
 use crate::volume::VoxelType;
 
 /// The object `info --json` prints for one volume: what it is, where it lies, how its values
-/// spread, and for DICOM which series it is.
+/// spread, and what its reader tells besides (which DICOM series it is, ...).
 #[derive(Clone, Debug, Serialize)]
 pub struct InfoReport {
     /// [`SCHEMA_VERSION`].
@@ -56,27 +55,10 @@ pub struct InfoReport {
     pub histogram: Vec<u64>,
     /// What the loader noticed (a 4D file, a volume picked, ...).
     pub notes: Vec<String>,
-    /// The DICOM series read, null for other formats.
-    pub dicom: Option<DicomReport>,
-    /// The OME-Zarr store's image, axes, levels, chunking and codecs, null for other formats.
-    pub ome_zarr: Option<ZarrInfo>,
-}
-
-/// The DICOM series of an [`InfoReport`].
-#[derive(Clone, Debug, Serialize)]
-pub struct DicomReport {
-    /// The series' key: its `SeriesInstanceUID` (with `#2`, ... on the parts of a split series).
-    pub series: String,
-    /// `SeriesNumber`.
-    pub number: Option<i64>,
-    /// `SeriesDescription`.
-    pub description: String,
-    /// Modality.
-    pub modality: String,
-    /// The transfer syntax, named.
-    pub transfer_syntax: String,
-    /// Patient-identifying fields by name, only when they were asked for (empty otherwise).
-    pub patient: BTreeMap<String, String>,
+    /// What the reader tells besides the volume, under each reader's key (`dicom`, `ome_zarr`,
+    /// `mrc`, `vtk`): null but for the reader that read it.
+    #[serde(flatten)]
+    pub details: BTreeMap<&'static str, serde_json::Value>,
 }
 
 impl InfoReport {
@@ -104,23 +86,8 @@ impl InfoReport {
             geometry: GeometryReport::of(v),
             histogram: v.histogram(bins)?,
             notes: loaded.notes.clone(),
-            dicom: loaded.dicom.as_ref().map(DicomReport::of),
-            ome_zarr: loaded.zarr.clone(),
+            details: loaded.details_json(),
         })
-    }
-}
-
-impl DicomReport {
-    /// The report of the series `d`.
-    pub fn of(d: &DicomSeries) -> Self {
-        Self {
-            series: d.key.clone(),
-            number: d.number,
-            description: d.description.clone(),
-            modality: d.modality.clone(),
-            transfer_syntax: d.syntax.clone(),
-            patient: d.patient.iter().cloned().collect(),
-        }
     }
 }
 

@@ -18,7 +18,7 @@ use crate::volume::Volume;
 
 mod info;
 
-pub use info::{DicomReport, FolderReport, InfoReport, ListedVolume};
+pub use info::{FolderReport, InfoReport, ListedVolume};
 
 /// The version of the JSON contract.
 pub const SCHEMA_VERSION: u32 = 2;
@@ -413,8 +413,7 @@ mod tests {
             format: crate::formats::Format::Nrrd,
             notes: vec!["a note".into()],
             sources: Vec::new(),
-            dicom: None,
-            zarr: None,
+            details: None,
             format_version: None,
         };
         let plain = InfoReport::new("body.nrrd", &loaded, 32).unwrap();
@@ -435,6 +434,7 @@ mod tests {
                 ".mean",
                 ".memory_bytes",
                 ".missing",
+                ".mrc",
                 ".notes",
                 ".ome_zarr",
                 ".orientation",
@@ -445,17 +445,19 @@ mod tests {
                 ".stored_bytes",
                 ".type",
                 ".voxels",
+                ".vtk",
                 ".world_bounds",
             ]
         );
-        loaded.dicom = Some(DicomSeries {
+        loaded.format = crate::formats::Format::Dicom;
+        loaded.details = Some(std::sync::Arc::new(DicomSeries {
             key: "1.2.3".into(),
             number: Some(4),
             description: "Abdomen".into(),
             modality: "CT".into(),
             syntax: "explicit VR little endian".into(),
             patient: vec![("patient name".into(), "Doe^J".into())],
-        });
+        }));
         let dicom = InfoReport::new("ct", &loaded, 32).unwrap();
         let keys = keys_of(&dicom);
         for key in [
@@ -472,7 +474,7 @@ mod tests {
         let v: serde_json::Value = serde_json::from_str(&to_json(&dicom).unwrap()).unwrap();
         assert_eq!(v["schema_version"], SCHEMA_VERSION);
         assert_eq!(v["type"], "i16");
-        assert_eq!(v["format"], "nrrd");
+        assert_eq!(v["format"], "dicom");
     }
 
     #[test]

@@ -58,11 +58,7 @@ pub fn look(
 ) -> TriageOutcome {
     let failed = |row: TriageRow| TriageOutcome { row, cell: None };
     let timeout = how.timeout;
-    let mut opts = how.load.clone();
-    opts.dicom.series = entry
-        .series
-        .clone()
-        .or_else(|| how.load.dicom.series.clone());
+    let opts = entry.options(&how.load);
     let name = crate::error::shown(&entry.path);
     if let Some(problem) = &entry.problem {
         let e = Error::format(&entry.path, problem.clone());

@@ -4,7 +4,7 @@ use serde::Serialize;
 
 use crate::analysis::Analysis;
 use crate::formats::Loaded;
-use crate::formats::dicom::DicomSeries;
+use crate::formats::RowDetails;
 use crate::report::SCHEMA_VERSION;
 
 /// One volume's row: what it is, what is wrong with it, and its most structured axis and slabs.
@@ -17,9 +17,11 @@ pub struct TriageRow {
     pub path: String,
     /// The DICOM series' key (its `SeriesInstanceUID`) in a folder of DICOM files.
     pub series: Option<String>,
-    /// What the DICOM series is (number, description, modality, transfer syntax; patient
-    /// fields only when they were asked for).
-    pub dicom: Option<DicomSeries>,
+    /// What the reader tells of the volume, under the key of each reader whose rows carry it
+    /// (`dicom`: the series' number, description, modality, transfer syntax; patient fields
+    /// only when they were asked for), null but for the reader that read it.
+    #[serde(flatten)]
+    pub details: RowDetails,
     /// The format read (null when loading failed).
     pub format: Option<String>,
     /// `[nx, ny, nz]`.
@@ -70,7 +72,7 @@ impl TriageRow {
             schema_version: SCHEMA_VERSION,
             path: path.to_string(),
             series: None,
-            dicom: None,
+            details: RowDetails::none(),
             format: None,
             dims: None,
             spacing: None,
@@ -105,20 +107,17 @@ impl TriageRow {
             range: (s.finite > 0).then_some([s.min, s.max]),
             missing: Some(s.missing),
             problems: loaded.notes.clone(),
-            dicom: loaded.dicom.clone(),
+            details: loaded.row_details(),
             error: None,
             ..Self::failed(path, String::new())
         }
     }
 
-    /// The volume's name: its path, with the DICOM series after it.
+    /// The volume's name: its path, with the reader's label after it (the DICOM series), or
+    /// the series' key when it was not read.
     pub fn name(&self) -> String {
-        let series = match (&self.dicom, &self.series) {
-            (Some(d), _) => match (d.number, d.description.is_empty()) {
-                (Some(n), false) => format!(" [series {n} \"{}\"]", d.description),
-                (Some(n), true) => format!(" [series {n}]"),
-                (None, _) => format!(" [series {}]", d.key),
-            },
+        let series = match (self.details.label(), &self.series) {
+            (Some(label), _) => label.to_string(),
             (None, Some(key)) => format!(" [series {key}]"),
             (None, None) => String::new(),
         };

@@ -103,8 +103,8 @@ fn walk(dir: &Path, depth: usize, opts: &LoadOptions, found: &mut Vec<Entry>) ->
     // The folder is read twice, to classify it and to walk it, rather than held: a folder of
     // millions of entries stays out of memory.
     match folder_kind(dir) {
-        Ok(Folder::Slices | Folder::Zarr) => return push(found, Entry::file(dir)),
-        Ok(Folder::Dicom) => return push_series(dir, opts, found),
+        Ok(Folder::Slices | Folder::Store) => return push(found, Entry::file(dir)),
+        Ok(Folder::Series) => return push_series(dir, opts, found),
         Ok(Folder::Collection | Folder::Empty) => {}
         Err(e) => return push(found, Entry::failed(dir, problem(&e))),
     }

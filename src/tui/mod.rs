@@ -28,7 +28,7 @@ use crossterm::terminal::{
 };
 use ratatui::Terminal;
 use ratatui::backend::{Backend, CrosstermBackend};
-use slabscope::triage::{Folder, discover, folder_kind};
+use slabscope::triage::{Folder, discover, folder_kind, picks_in_folder};
 use slabscope::{AnalysisParams, LoadOptions};
 
 use crate::term::{self, Protocol};
@@ -67,11 +67,11 @@ fn folder_to_list(
     load: &LoadOptions,
 ) -> Result<Option<(PathBuf, Vec<slabscope::triage::Entry>)>> {
     let kind = match file {
-        Some(dir) if dir.is_dir() && load.dicom.series.is_none() => Some(folder_kind(dir)?),
+        Some(dir) if dir.is_dir() && !picks_in_folder(load) => Some(folder_kind(dir)?),
         _ => None,
     };
     Ok(match (file, kind) {
-        (Some(dir), Some(Folder::Collection | Folder::Dicom | Folder::Empty)) => {
+        (Some(dir), Some(Folder::Collection | Folder::Series | Folder::Empty)) => {
             let paths = discover(std::slice::from_ref(dir), load)?;
             if paths.is_empty() {
                 bail!(
@@ -79,7 +79,7 @@ fn folder_to_list(
                     slabscope::error::shown(dir)
                 );
             }
-            Some((dir.clone(), paths)).filter(|(_, p)| kind != Some(Folder::Dicom) || p.len() > 1)
+            Some((dir.clone(), paths)).filter(|(_, p)| kind != Some(Folder::Series) || p.len() > 1)
         }
         _ => None,
     })

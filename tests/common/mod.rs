@@ -131,3 +131,19 @@ pub fn copy_tree(from: &Path, to: &Path) {
         }
     }
 }
+
+/// `info` of `file` as text and as JSON: checks that its second line names `format`, and gives
+/// the line after it (the first of the reader's details) and the JSON.
+pub fn info_details(file: &Path, format: &str) -> (String, Value) {
+    let name = file.display();
+    let text = run(&["info", s(file)]);
+    assert!(text.ok, "{name}: {}", text.stderr);
+    let lines: Vec<&str> = text.stdout.lines().collect();
+    assert_eq!(lines[1], format!("format      {format}"), "{name}");
+    let json = run(&["info", s(file), "--json"]);
+    assert!(json.ok, "{name}: {}", json.stderr);
+    (
+        lines[2].to_string(),
+        serde_json::from_str(&json.stdout).unwrap(),
+    )
+}

@@ -3,6 +3,7 @@
 //! `stored(i, j, k) = (3i + 5j + 11k) % 1000` (column, row, slice along the normal), so each
 //! assembled volume is checked voxel by voxel, and its transform against the positions.
 
+use slabscope::formats::dicom::DicomSeries;
 use slabscope::volume::VoxelType;
 use slabscope::{LoadOptions, Loaded, Volume};
 
@@ -78,7 +79,7 @@ fn a_series_with_shuffled_names_is_sorted_along_the_normal() {
     );
     close(v.transform().matrix, t);
     assert_eq!(v.transform().axcodes().as_deref(), Some("LPS"));
-    let d = l.dicom.as_ref().unwrap();
+    let d = l.details_as::<DicomSeries>().unwrap();
     assert_eq!((d.number, d.description.as_str()), (Some(3), "Abdomen 2.5"));
     assert!(d.patient.is_empty(), "patient fields read unasked");
     assert!(
@@ -105,9 +106,9 @@ fn series_are_picked_by_position_or_uid_and_localizers_only_when_asked() {
     );
     close(v.transform().matrix, t);
     check_voxels(v, |i, j, k| stored(i, j, 5 - k) - 1024.0);
-    let uid = sag.dicom.unwrap().key;
+    let uid = sag.details_as::<DicomSeries>().unwrap().key.clone();
     let by_uid = load_with("ct", |o| o.dicom.series = Some(uid.clone())).unwrap();
-    assert_eq!(by_uid.dicom.unwrap().key, uid);
+    assert_eq!(by_uid.details_as::<DicomSeries>().unwrap().key, uid);
     let e = load_with("ct", |o| o.dicom.series = Some("7".into()))
         .unwrap_err()
         .to_string();
@@ -221,8 +222,7 @@ fn repeated_positions_are_a_4d_series() {
 fn jpeg_lossless_deflate_and_no_preamble_read_exactly() {
     let l = load("jpegll");
     assert!(
-        l.dicom
-            .as_ref()
+        l.details_as::<DicomSeries>()
             .unwrap()
             .syntax
             .contains("1.2.840.10008.1.2.4.70")

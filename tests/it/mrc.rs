@@ -6,7 +6,7 @@
 use slabscope::volume::VoxelType;
 use slabscope::{Format, LoadOptions, load};
 
-use crate::common::{data, run};
+use crate::common::{data, info_details, run};
 
 /// The 6x5x4 ramp `x + 10y + 100z` of `make_mrc.py`, `wrap` applied to each value.
 fn assert_ramp(name: &str, ty: VoxelType, wrap: impl Fn(i64) -> i64) {
@@ -111,4 +111,53 @@ fn mrc_files_are_volumes_to_triage() {
     let r = run(&["triage", dir.path().to_str().unwrap(), "--json"]);
     assert!(r.ok, "{}", r.stderr);
     assert!(r.stdout.contains("\"format\":\"mrc\""), "{}", r.stdout);
+}
+
+#[test]
+fn info_says_the_mode_in_text_and_json() {
+    for (name, line, mode, values) in [
+        (
+            "ramp_i8.mrc",
+            "mode        0 (8-bit signed integers)",
+            0,
+            "8-bit signed integers",
+        ),
+        (
+            "ramp_i16.mrc",
+            "mode        1 (16-bit signed integers)",
+            1,
+            "16-bit signed integers",
+        ),
+        (
+            "ramp_f32.mrc",
+            "mode        2 (32-bit reals)",
+            2,
+            "32-bit reals",
+        ),
+        (
+            "ramp_u16.mrc",
+            "mode        6 (16-bit unsigned integers)",
+            6,
+            "16-bit unsigned integers",
+        ),
+        (
+            "ramp_f16.mrc",
+            "mode        12 (16-bit reals)",
+            12,
+            "16-bit reals",
+        ),
+    ] {
+        // Right after the format's line.
+        let (details, v) = info_details(&data(&format!("mrc/{name}")), "mrc");
+        assert_eq!(details, line, "{name}");
+        assert_eq!(v["mrc"]["mode"], mode, "{name}");
+        assert_eq!(v["mrc"]["values"], values, "{name}");
+        // Every other reader's key is there, null.
+        for other in ["dicom", "ome_zarr", "vtk"] {
+            assert!(
+                v[other].is_null() && v.get(other).is_some(),
+                "{name}: {other}"
+            );
+        }
+    }
 }

@@ -5,7 +5,7 @@
 use slabscope::volume::VoxelType;
 use slabscope::{Format, LoadOptions, Loaded, load};
 
-use crate::common::{data, run};
+use crate::common::{data, info_details, run};
 
 fn open(name: &str) -> Loaded {
     load(&data(&format!("vtk/{name}")), &LoadOptions::default())
@@ -86,4 +86,146 @@ fn what_is_no_image_is_refused_in_one_line() {
     );
     let bytes = std::fs::read(data("vtk/ramp_i16.vtk")).unwrap();
     refused("cut.vtk", &bytes[..bytes.len() - 20], "cut.vtk");
+}
+
+#[test]
+fn info_lists_the_array_read_in_text_and_json() {
+    for (name, line, kind, ty, at) in [
+        (
+            "ramp_i16.vtk",
+            "arrays      density (short scalars, point data)",
+            "scalars",
+            "short",
+            "point",
+        ),
+        (
+            "ramp_f32.vtk",
+            "arrays      density (float scalars, point data)",
+            "scalars",
+            "float",
+            "point",
+        ),
+        (
+            "ramp_u8_ascii.vtk",
+            "arrays      density (unsigned_char color scalars, point data)",
+            "color_scalars",
+            "unsigned_char",
+            "point",
+        ),
+        (
+            "ramp_f64_cells.vtk",
+            "arrays      density (double scalars, cell data)",
+            "scalars",
+            "double",
+            "cell",
+        ),
+    ] {
+        let (details, v) = info_details(&data(&format!("vtk/{name}")), "vtk");
+        assert_eq!(details, line, "{name}");
+        let arrays = v["vtk"]["arrays"].as_array().unwrap();
+        assert_eq!(arrays.len(), 1, "{name}");
+        assert_eq!(arrays[0]["name"], "density", "{name}");
+        assert_eq!(arrays[0]["kind"], kind, "{name}");
+        assert_eq!(arrays[0]["type"], ty, "{name}");
+        assert_eq!(arrays[0]["data"], at, "{name}");
+        assert!(v["mrc"].is_null() && v["dicom"].is_null(), "{name}");
+    }
+}
+
+#[test]
+fn an_array_name_is_escaped_in_info() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("named.vtk");
+    let mut bytes = std::fs::read(data("vtk/ramp_i16.vtk")).unwrap();
+    let at = bytes.windows(7).position(|w| w == b"density").unwrap();
+    bytes.splice(at..at + 7, b"d\x1b[2Jx".iter().copied());
+    std::fs::write(&path, bytes).unwrap();
+    let text = run(&["info", path.to_str().unwrap()]);
+    assert!(text.ok, "{}", text.stderr);
+    assert!(!text.stdout.contains('\x1b'), "{}", text.stdout);
+    assert!(text.stdout.contains("arrays      d"), "{}", text.stdout);
+}
+
+/// A 3x2x2 file of five arrays as VTK's format describes them: point scalars (the one read),
+/// after a `METADATA` block more scalars and vectors, then cell data holding a `FIELD` of two
+/// arrays; binary (big-endian) or ASCII.
+fn five_arrays(binary: bool) -> Vec<u8> {
+    let values = |count: usize, size: usize| -> Vec<u8> {
+        if binary {
+            let mut v = vec![0u8; count * size];
+            v.push(b'\n');
+            v
+        } else {
+            let words: Vec<String> = (0..count).map(|i| i.to_string()).collect();
+            format!("{}\n", words.join(" ")).into_bytes()
+        }
+    };
+    let encoding = if binary { "BINARY" } else { "ASCII" };
+    let mut f = format!(
+        "# vtk DataFile Version 3.0\nfive arrays\n{encoding}\nDATASET STRUCTURED_POINTS\n\
+         DIMENSIONS 3 2 2\nSPACING 1 1 1\nORIGIN 0 0 0\nPOINT_DATA 12\n\
+         SCALARS density short 1\nLOOKUP_TABLE default\n"
+    )
+    .into_bytes();
+    f.extend(values(12, 2));
+    f.extend(b"METADATA\nINFORMATION 0\n\nSCALARS mask unsigned_char\nLOOKUP_TABLE default\n");
+    f.extend(values(12, 1));
+    f.extend(b"VECTORS flow float\n");
+    f.extend(values(36, 4));
+    f.extend(b"CELL_DATA 2\nFIELD FieldData 2\npressure 1 2 double\n");
+    f.extend(values(2, 8));
+    f.extend(b"labels 2 2 int\n");
+    f.extend(values(4, 4));
+    f
+}
+
+#[test]
+fn info_lists_every_array_of_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for binary in [true, false] {
+        let path = dir.path().join(format!("five_{binary}.vtk"));
+        std::fs::write(&path, five_arrays(binary)).unwrap();
+        let (details, v) = info_details(&path, "vtk");
+        assert_eq!(
+            details,
+            "arrays      density (short scalars, point data), mask (unsigned_char scalars, point \
+             data), flow (float vectors, point data), pressure (double field, cell data), labels \
+             (int field, cell data)",
+            "binary {binary}"
+        );
+        let arrays = v["vtk"]["arrays"].as_array().unwrap();
+        let listed: Vec<[&str; 4]> = arrays
+            .iter()
+            .map(|a| ["name", "kind", "type", "data"].map(|k| a[k].as_str().unwrap()))
+            .collect();
+        assert_eq!(
+            listed,
+            [
+                ["density", "scalars", "short", "point"],
+                ["mask", "scalars", "unsigned_char", "point"],
+                ["flow", "vectors", "float", "point"],
+                ["pressure", "field", "double", "cell"],
+                ["labels", "field", "int", "cell"],
+            ],
+            "binary {binary}"
+        );
+        // The volume is the first array's.
+        let loaded = load(&path, &LoadOptions::default()).unwrap();
+        assert_eq!(loaded.volume.dims(), [3, 2, 2]);
+    }
+}
+
+#[test]
+fn a_file_cut_short_after_its_first_array_lists_what_it_holds() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cut.vtk");
+    let whole = five_arrays(true);
+    let cut = whole.windows(4).position(|w| w == b"CELL").unwrap() - 20;
+    std::fs::write(&path, &whole[..cut]).unwrap();
+    let (details, _) = info_details(&path, "vtk");
+    assert_eq!(
+        details,
+        "arrays      density (short scalars, point data), mask (unsigned_char scalars, point \
+         data), flow (float vectors, point data)"
+    );
 }

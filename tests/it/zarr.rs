@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use slabscope::formats::ZarrOptions;
+use slabscope::formats::zarr::ZarrInfo;
 use slabscope::volume::VoxelType;
 use slabscope::{Format, LoadOptions, Loaded, load};
 
@@ -87,7 +88,7 @@ fn ngff_04_blosc_reads_every_voxel_in_micrometres() {
         assert!((m[k][3] - want).abs() < 1e-15, "{m:?}");
     }
     assert!(!v.transform().known, "no anatomical orientation");
-    let info = l.zarr.as_ref().unwrap();
+    let info = l.details_as::<ZarrInfo>().unwrap();
     assert_eq!(
         (info.version.as_deref(), info.zarr_format),
         (Some("0.4"), 2)
@@ -164,7 +165,7 @@ fn a_coarse_dataset_is_read_alone_as_its_pyramid_level() {
 
 /// The pyramid level each of the store's datasets is read as.
 fn pyramid_levels(l: &Loaded) -> Vec<Option<usize>> {
-    let info = l.zarr.as_ref().unwrap();
+    let info = l.details_as::<ZarrInfo>().unwrap();
     info.levels.iter().map(|l| l.pyramid_level).collect()
 }
 
@@ -238,7 +239,7 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     let e = expected(name, "s0");
     assert_eq!(sum, e["sum"].as_f64().unwrap());
     assert_eq!(weighted, e["weighted"].as_f64().unwrap());
-    let info = l.zarr.as_ref().unwrap();
+    let info = l.details_as::<ZarrInfo>().unwrap();
     assert_eq!(info.inner_chunks, Some(vec![4, 4, 4]));
     assert_eq!(info.chunks, vec![8, 8, 8]);
     assert_eq!(info.labels, vec!["cells"]);
@@ -252,7 +253,10 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     };
     let cells = open_with(&path(name), &opts);
     assert_eq!(cells.volume.voxel_type(), VoxelType::U8);
-    assert_eq!(cells.zarr.as_ref().unwrap().image, "labels/cells");
+    assert_eq!(
+        cells.details_as::<ZarrInfo>().unwrap().image,
+        "labels/cells"
+    );
     assert_eq!(
         cells.volume.value([10, 9, 8]),
         (formula(&[8, 9, 10]) / 40 % 5) as f32
@@ -397,7 +401,7 @@ fn a_plain_zarr_array_reads_with_unit_spacing() {
     let l = open_with(&store, &LoadOptions::default());
     assert_eq!(l.volume.dims(), [4, 3, 2]);
     assert_eq!(l.volume.value([3, 2, 1]), (23 * 3 - 7) as f32);
-    assert_eq!(l.zarr.as_ref().unwrap().version, None);
+    assert_eq!(l.details_as::<ZarrInfo>().unwrap().version, None);
     assert_eq!(l.format_version, None);
 }
 

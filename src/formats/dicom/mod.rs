@@ -10,6 +10,7 @@
 mod assemble;
 mod codestream;
 mod csa;
+mod details;
 mod elements;
 mod format;
 mod header;
@@ -27,6 +28,7 @@ use dicom_object::InMemDicomObject;
 use serde::Serialize;
 
 use self::assemble::{Layout, Series};
+pub use self::details::DicomReport;
 use self::format::PixelFormat;
 use self::header::Image;
 use self::read::Syntax;
@@ -79,12 +81,28 @@ impl Reader for Dicom {
         is_dicom(source.path())
     }
 
+    fn series_file(&self, path: &Path) -> bool {
+        is_dicom(path)
+    }
+
+    fn picks_in_folder(&self, opts: &LoadOptions) -> bool {
+        opts.dicom.series.is_some()
+    }
+
     fn reads_folder(&self, kind: Folder, opts: &LoadOptions) -> bool {
         // A series may be named in a folder of DICOM files and other volumes.
-        kind == Folder::Dicom || (kind == Folder::Collection && opts.dicom.series.is_some())
+        kind == Folder::Series || (kind == Folder::Collection && self.picks_in_folder(opts))
     }
 
     fn volumes(&self) -> bool {
+        true
+    }
+
+    fn details_key(&self) -> Option<&'static str> {
+        Some("dicom")
+    }
+
+    fn in_rows(&self) -> bool {
         true
     }
 
@@ -294,10 +312,7 @@ pub fn load_series(
     let uid = key.split('#').next().unwrap_or(key);
     let mut opts = opts.clone();
     opts.dicom.series = Some(uid.to_string());
-    let mut read = load_from(path, files, &opts).map_err(|e| e.reached_from(path))?;
-    if let Some(d) = &mut read.dicom {
-        d.key = key.to_string();
-    }
+    let read = load_from(path, files, &opts, Some(key)).map_err(|e| e.reached_from(path))?;
     super::finish(path, super::Format::Dicom, read)
 }
 
@@ -384,11 +399,17 @@ fn load(path: &Path, opts: &LoadOptions) -> Result<Read0> {
         .series
         .as_deref()
         .is_some_and(|s| !by_position(s));
-    load_from(path, &paths_of(path, deep)?, opts)
+    load_from(path, &paths_of(path, deep)?, opts, None)
 }
 
-/// Loads the series `opts` picks of the DICOM files `files`, named `path` in messages.
-fn load_from(path: &Path, files: &[PathBuf], opts: &LoadOptions) -> Result<Read0> {
+/// Loads the series `opts` picks of the DICOM files `files`, named `path` in messages, and
+/// called `key` (a part of a split series) where that is given.
+fn load_from(
+    path: &Path,
+    files: &[PathBuf],
+    opts: &LoadOptions,
+    key: Option<&str>,
+) -> Result<Read0> {
     let (scan, series, mut notes) = series_of(files, opts)?;
     if series.is_empty() {
         return Err(no_series(path, &scan));
@@ -432,8 +453,7 @@ fn load_from(path: &Path, files: &[PathBuf], opts: &LoadOptions) -> Result<Read0
         volume,
         notes,
         sources: sources(&scan, series, order),
-        dicom: Some(described(&scan, series)),
-        zarr: None,
+        details: Some(std::sync::Arc::new(described(&scan, series, key))),
         format_version: None,
     })
 }
@@ -459,12 +479,13 @@ fn sources(scan: &Scan, series: &Series, order: &[usize]) -> Vec<PathBuf> {
         .collect()
 }
 
-/// What the volume loaded from `series` is, beyond its geometry: the series' fields, its first
-/// file's transfer syntax and (when asked for) the patient's fields.
-fn described(scan: &Scan, series: &Series) -> DicomSeries {
+/// What the volume loaded from `series` is, beyond its geometry: the series' fields (its key
+/// `key` where that is given), its first file's transfer syntax and (when asked for) the
+/// patient's fields.
+fn described(scan: &Scan, series: &Series, key: Option<&str>) -> DicomSeries {
     let first = &series.images[0];
     DicomSeries {
-        key: series.key.clone(),
+        key: key.unwrap_or(&series.key).to_string(),
         number: series.number,
         description: series.description.clone(),
         modality: series.modality.clone(),

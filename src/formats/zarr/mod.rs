@@ -8,6 +8,7 @@
 //! spacing and origin in mm; `--volume N` picks the time point and `--channel N` the channel.
 
 mod chain;
+mod details;
 mod guard;
 mod levels;
 pub(crate) mod meta;
@@ -96,8 +97,16 @@ impl Reader for Zarr {
         "OME-Zarr"
     }
 
+    fn check_options(&self, path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
+        check_label_image(path, is_dir, opts)
+    }
+
+    fn store(&self, dir: &Path) -> bool {
+        is_store(dir)
+    }
+
     fn reads_folder(&self, kind: Folder, _opts: &LoadOptions) -> bool {
-        kind == Folder::Zarr
+        kind == Folder::Store
     }
 
     fn volumes(&self) -> bool {
@@ -106,6 +115,10 @@ impl Reader for Zarr {
 
     fn channels(&self) -> bool {
         true
+    }
+
+    fn details_key(&self) -> Option<&'static str> {
+        Some("ome_zarr")
     }
 
     /// Reads through [`Source::path`], the store's folder.
@@ -130,7 +143,7 @@ impl Reader for Zarr {
 }
 
 /// Fails when `opts` name a label image and `path` (a folder when `is_dir`) is no Zarr store.
-pub(crate) fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
+fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
     if opts.zarr.label_image.is_some() && !(is_dir && is_store(path)) {
         return Err(Error::format(
             path,
@@ -430,7 +443,7 @@ impl Opened {
             read0.volume = read0.volume.declared_labels();
         }
         read0.format_version.clone_from(&self.info.version);
-        read0.zarr = Some(self.info.clone());
+        read0.details = Some(std::sync::Arc::new(self.info.clone()));
         Ok(read0)
     }
 }

@@ -96,7 +96,7 @@ impl Jobs {
             Effect::Load => {
                 let (source, load) = (self.source.clone(), self.load.clone());
                 self.spawn(Job::Load, move |_, send| {
-                    load_volume(source.as_ref(), load, send)
+                    load_volume(source.as_ref(), &load, send)
                 });
             }
             Effect::SearchViews(params, level) => {
@@ -363,13 +363,12 @@ fn wait(delay: Duration, monitor: &Monitor) -> slabscope::Result<()> {
 /// place of the options'. A coarse pyramid level the file holds is sent first, as a preview.
 fn load_volume(
     source: Option<&slabscope::triage::Entry>,
-    load: LoadOptions,
+    load: &LoadOptions,
     send: &dyn Fn(JobMsg),
 ) -> JobMsg {
     let loaded = match source {
         Some(entry) => {
-            let mut load = load;
-            load.dicom.series = entry.series.clone().or(load.dicom.series);
+            let load = entry.options(load);
             // A preview that cannot be read is no error: level 0's load says what is wrong.
             let preview = slabscope::formats::load_preview(&entry.path, &load, GLANCE_VOXELS);
             if let Ok(Some(p)) = preview {

@@ -4,12 +4,19 @@
 //! one-component `COLOR_SCALARS` line and `LOOKUP_TABLE`), then the values, big-endian binary or
 //! ASCII, x fastest. Cell data is a volume of one voxel fewer along each axis, its voxels at the
 //! cells' centres. Other datasets (polygons, unstructured and curvilinear grids) are no image and
-//! are refused naming what they are.
+//! are refused naming what they are. `info` lists the file's arrays (`arrays`).
+
+mod arrays;
 
 use std::io::Read;
 use std::path::Path;
 
+use serde::Serialize;
+
+use self::arrays::later_arrays;
+
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
+use super::details::{Details, json_of};
 use super::reader::{Reader, Sniff};
 use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
@@ -43,8 +50,54 @@ impl Reader for Vtk {
         &[".vtk"]
     }
 
+    fn details_key(&self) -> Option<&'static str> {
+        Some("vtk")
+    }
+
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source, opts)
+    }
+}
+
+/// What `info` shows of a legacy VTK file: its arrays, the one read first.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub(crate) struct VtkDetails {
+    /// The arrays, in the file's order.
+    pub arrays: Vec<VtkArray>,
+}
+
+/// One array of a legacy VTK file.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub(crate) struct VtkArray {
+    /// Its name as written.
+    pub name: String,
+    /// What it is: `scalars`, `color_scalars`, `vectors`, `normals`, `tensors`,
+    /// `texture_coordinates` or `field` (an array of a `FIELD`).
+    pub kind: &'static str,
+    /// Its type as written (`float`, `unsigned_char`; `unsigned_char` for colours).
+    #[serde(rename = "type")]
+    pub ty: String,
+    /// `point` or `cell` data.
+    pub data: &'static str,
+}
+
+impl Details for VtkDetails {
+    fn lines(&self) -> Vec<(String, String)> {
+        let arrays: Vec<String> = self
+            .arrays
+            .iter()
+            .map(|a| {
+                let kind = a.kind.replace('_', " ");
+                let name = crate::error::names::text(&a.name);
+                let ty = crate::error::names::text(&a.ty);
+                format!("{name} ({ty} {kind}, {} data)", a.data)
+            })
+            .collect();
+        vec![("arrays".into(), arrays.join(", "))]
+    }
+
+    fn json(&self) -> serde_json::Value {
+        json_of(self)
     }
 }
 
@@ -58,6 +111,8 @@ struct Header {
     cells: bool,
     ty: Option<VoxelType>,
     color: bool,
+    /// The array's name and type as written.
+    array: (String, String),
     /// Where the values start.
     start: u64,
 }
@@ -154,6 +209,8 @@ impl Header {
                 }
                 self.ty = Some(VoxelType::U8);
                 self.color = true;
+                let name = words.get(1).copied().unwrap_or("");
+                self.array = (name.to_string(), "unsigned_char".to_string());
                 return Ok(true);
             }
             "LOOKUP_TABLE" => return Ok(self.ty.is_some()),
@@ -171,6 +228,10 @@ impl Header {
     /// A `SCALARS name type [components]` line.
     fn scalars(&mut self, path: &Path, line: &str, words: &[&str]) -> Result<()> {
         let name = words.get(2).copied().unwrap_or("");
+        self.array = (
+            words.get(1).copied().unwrap_or("").to_string(),
+            name.to_string(),
+        );
         self.ty =
             Some(scalar_type(name).ok_or_else(|| {
                 Error::unsupported(path, format!("VTK scalars of type {name:?}"))
@@ -278,5 +339,28 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     for (row, o) in transform.matrix.iter_mut().zip(origin) {
         row[3] = o;
     }
-    Ok(Read0::new(path, dims, spacing, held, voxels, notes)?.with_transform(Some(transform)))
+    let mut read = Read0::new(path, dims, spacing, held, voxels, notes)?;
+    let mut details = h.details();
+    details.arrays.extend(later_arrays(source, &h));
+    read.details = Some(std::sync::Arc::new(details));
+    Ok(read.with_transform(Some(transform)))
+}
+
+impl Header {
+    /// What `info` shows of the file.
+    fn details(&self) -> VtkDetails {
+        let (name, ty) = self.array.clone();
+        VtkDetails {
+            arrays: vec![VtkArray {
+                name,
+                kind: if self.color {
+                    "color_scalars"
+                } else {
+                    "scalars"
+                },
+                ty,
+                data: if self.cells { "cell" } else { "point" },
+            }],
+        }
+    }
 }
