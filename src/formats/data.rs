@@ -235,24 +235,43 @@ decode_as_stored!(u8, i8, u16, i16);
 /// Reads the voxels `spec` describes, after checking the memory budget: integers of at most 16
 /// bits that the file does not scale in their own type, everything else as f32.
 pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
+    read_voxels_in(spec, None, max_memory)
+}
+
+/// [`read_voxels`] from `stream`, the voxel bytes (or, for [`Encoding::Ascii`], the text) a
+/// reader has decoded itself (a VTK XML array's base64 or zlib blocks) rather than `spec`'s
+/// file at `spec.start`; `what` names the stream in messages.
+pub(crate) fn read_voxels_from(
+    spec: &DataSpec,
+    stream: &mut dyn BufRead,
+    what: &'static str,
+    max_memory: u64,
+) -> Result<Voxels> {
+    read_voxels_in(spec, Some((stream, what)), max_memory)
+}
+
+/// A stream of voxel bytes a reader decoded, and its name in messages.
+type Stream<'a> = Option<(&'a mut dyn BufRead, &'static str)>;
+
+fn read_voxels_in(spec: &DataSpec, stream: Stream, max_memory: u64) -> Result<Voxels> {
     let held = if spec.encoding == Encoding::Ascii {
         VoxelType::F32
     } else {
         held_type(spec.voxel_type, spec.scale.is_some())
     };
     match held {
-        VoxelType::U8 => read_typed::<u8>(spec, max_memory),
-        VoxelType::I8 => read_typed::<i8>(spec, max_memory),
-        VoxelType::U16 => read_typed::<u16>(spec, max_memory),
-        VoxelType::I16 => read_typed::<i16>(spec, max_memory),
-        _ => read_typed::<f32>(spec, max_memory),
+        VoxelType::U8 => read_typed::<u8>(spec, stream, max_memory),
+        VoxelType::I8 => read_typed::<i8>(spec, stream, max_memory),
+        VoxelType::U16 => read_typed::<u16>(spec, stream, max_memory),
+        VoxelType::I16 => read_typed::<i16>(spec, stream, max_memory),
+        _ => read_typed::<f32>(spec, stream, max_memory),
     }
 }
 
 /// [`read_voxels`] into voxels of type `T`. The budget is checked when the voxels are decoded
 /// into memory, not where they are mapped: mapped file pages are the kernel's to drop, and what
 /// an analysis of them needs is weighed by the analysis (`analysis::level_within_memory`).
-fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
+fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, max_memory: u64) -> Result<Voxels> {
     let expected = voxel_count(spec.file.path(), spec.dims)?
         .and_then(|n| (n as u64).checked_mul(spec.voxel_type.size() as u64))
         .ok_or_else(|| {
@@ -266,6 +285,14 @@ fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
         })?;
     let path = spec.file.path();
     let buffer = || typed_buffer::<T>(path, spec.dims, max_memory);
+    if let Some((stream, what)) = stream {
+        let owned = if spec.encoding == Encoding::Ascii {
+            ascii_as::<T>(spec, stream, max_memory)?
+        } else {
+            read_stream(spec, stream, what, expected, buffer()?)?
+        };
+        return Ok(Voxels::owned(owned));
+    }
     let mut file = spec.file.open()?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if spec.start > len {
@@ -307,14 +334,16 @@ fn read_typed<T: Decode>(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
             buffer()?,
         )?,
         Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, buffer()?)?,
-        Encoding::Ascii => {
-            let values = read_ascii(spec, reader, voxel_buffer(path, spec.dims, max_memory)?)?;
-            // `read_voxels` reads ascii data as f32 only.
-            T::from_ascii(values)
-                .ok_or_else(|| Error::format(path, "ascii data is read as f32 only"))?
-        }
+        Encoding::Ascii => ascii_as::<T>(spec, reader, max_memory)?,
     };
     Ok(Voxels::owned(owned))
+}
+
+/// The ascii values of `reader` as `T` (f32: `read_voxels` reads ascii data as f32 only).
+fn ascii_as<T: Decode>(spec: &DataSpec, reader: impl BufRead, max_memory: u64) -> Result<Vec<T>> {
+    let path = spec.file.path();
+    let values = read_ascii(spec, reader, voxel_buffer(path, spec.dims, max_memory)?)?;
+    T::from_ascii(values).ok_or_else(|| Error::format(path, "ascii data is read as f32 only"))
 }
 
 /// The buffered bytes of `reader`, filled again when empty (empty at the end), with reads that

@@ -21,6 +21,7 @@ mod source;
 mod tiff;
 mod tiff_ifd;
 mod volumeshop;
+mod vti;
 mod vtk;
 mod write;
 pub mod zarr;
@@ -73,6 +74,8 @@ pub enum Format {
     Mrc,
     /// Legacy VTK image data (`STRUCTURED_POINTS`).
     Vtk,
+    /// VTK XML image data (`.vti`).
+    Vti,
     /// Made in memory (a phantom or the built-in dataset).
     Synthetic,
 }
@@ -93,6 +96,7 @@ impl Format {
             Self::OmeZarr => "ome-zarr",
             Self::Mrc => "mrc",
             Self::Vtk => "vtk",
+            Self::Vti => "vti",
             Self::Synthetic => "synthetic",
         }
     }

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source, data};
-use super::{dicom, metaimage, mrc, nifti, nrrd, raw, tiff, volumeshop, vtk, zarr};
+use super::{dicom, metaimage, mrc, nifti, nrrd, raw, tiff, volumeshop, vti, vtk, zarr};
 use crate::error::{Error, Result};
 
 /// Every reader, in the order they are asked: the order of the content sniff (DICOM's preamble
@@ -22,6 +22,7 @@ static READERS: &[&dyn Reader] = &[
     &metaimage::MetaImage,
     &mrc::Mrc,
     &vtk::Vtk,
+    &vti::Vti,
     &volumeshop::VolumeShop,
     &raw::Raw,
     &tiff::TiffSlices,
@@ -30,8 +31,8 @@ static READERS: &[&dyn Reader] = &[
 
 /// What every message refusing a file says slabscope reads.
 const READS: &str = "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, \
-                     DICOM, OME-Zarr stores, MRC, legacy VTK image data, and headerless raw data \
-                     given its dimensions and voxel type";
+                     DICOM, OME-Zarr stores, MRC, legacy VTK image data, VTK XML image data (.vti), \
+                     and headerless raw data given its dimensions and voxel type";
 
 /// Reads the file or folder at `path` (checked to be one), with the format it was read as.
 pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {

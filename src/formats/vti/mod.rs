@@ -1,0 +1,560 @@
+//! VTK XML image data (`.vti`), as `ParaView`, `PyVista` and VTK's `vtkXMLImageDataWriter` save
+//! simulation grids: an XML header (`<VTKFile type="ImageData">`, `<ImageData WholeExtent
+//! Origin Spacing Direction>`, one `<Piece Extent>`, its `<PointData>` and `<CellData>`
+//! `<DataArray>`s), the values inline as ascii or base64 (`format="binary"`), or appended after
+//! the header in an `<AppendedData>` section, raw or base64, found by their `offset`. Binary values
+//! start with a header of their size (`UInt32` or `UInt64` words), or, zlib-compressed, of the
+//! blocks' sizes. x runs fastest.
+//!
+//! The array read is the one a data section's `Scalars` names (point data first), else the first
+//! one-component array; an array of several components (a vector field) named so is refused, as
+//! the legacy reader refuses one. Cell data is a volume of one voxel fewer along each axis, its
+//! voxels at the cells' centres. The file's units are taken as mm; `Direction` (VTK 9) turns the
+//! axes, placing the volume without naming anatomy (VTK's world has none). The XML is parsed up to
+//! `<AppendedData>`; appended raw values are read from the file by their offset, in place where
+//! they can be.
+
+mod payload;
+
+use std::io::{BufReader, Read};
+use std::path::Path;
+
+use roxmltree::{Document, Node, ParsingOptions};
+
+use self::payload::{Base64, Blocks, Words};
+use super::data::{DataSpec, Encoding, Skip, read_voxels, read_voxels_from};
+use super::reader::{Reader, Sniff};
+use super::{Format, LoadOptions, Read0, Source};
+use crate::error::{Error, Result};
+use crate::geometry::WorldTransform;
+use crate::volume::{Endian, VoxelType};
+
+/// The VTK XML image data reader.
+pub(crate) struct Vti;
+
+/// The most XML nodes a header may hold.
+const MAX_NODES: u32 = 1 << 16;
+
+impl Reader for Vti {
+    fn format(&self) -> Format {
+        Format::Vti
+    }
+
+    fn title(&self) -> &'static str {
+        "VTK XML image data"
+    }
+
+    fn sniff(&self, head: &[u8]) -> Sniff {
+        if starts_vtk_file(head) {
+            Sniff::Mine
+        } else {
+            Sniff::No
+        }
+    }
+
+    fn extensions(&self) -> &'static [&'static str] {
+        &[".vti"]
+    }
+
+    fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
+        load(source, opts)
+    }
+}
+
+/// Whether `head` starts like a VTK XML file: `<VTKFile` after an XML declaration, comments and
+/// whitespace.
+fn starts_vtk_file(head: &[u8]) -> bool {
+    let mut rest = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head);
+    loop {
+        rest = rest.trim_ascii_start();
+        let close: &[u8] = if rest.starts_with(b"<?") {
+            b"?>"
+        } else if rest.starts_with(b"<!--") {
+            b"-->"
+        } else {
+            return rest.starts_with(b"<VTKFile");
+        };
+        match rest.windows(close.len()).position(|w| w == close) {
+            Some(end) => rest = &rest[end + close.len()..],
+            None => return false,
+        }
+    }
+}
+
+/// Where the appended data is: its encoding and where its bytes start (after the `_`).
+#[derive(Clone, Copy, Debug)]
+struct Appended {
+    base64: bool,
+    start: usize,
+}
+
+/// What the file's header says of the file as a whole.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    words: Words,
+    zlib: bool,
+    appended: Option<Appended>,
+}
+
+/// The array read: its section, name, type, format and offset.
+struct Array<'a> {
+    cells: bool,
+    name: String,
+    ty: VoxelType,
+    format: &'a str,
+    offset: Option<u64>,
+    text: &'a str,
+}
+
+fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    let path = source.path();
+    let bad = |what: String| Error::format(path, what);
+    let map = source.map()?;
+    let bytes = map.bytes();
+    // The XML ends where the appended data starts: that part is no XML.
+    let tag = find(bytes, b"<AppendedData");
+    let xml_end = tag.unwrap_or(bytes.len());
+    let text = std::str::from_utf8(&bytes[..xml_end])
+        .map_err(|e| bad(format!("its XML header is not UTF-8 text: {e}")))?;
+    let owned;
+    let text = if tag.is_some() {
+        owned = format!("{text}</VTKFile>");
+        owned.as_str()
+    } else {
+        text
+    };
+    let options = ParsingOptions {
+        nodes_limit: MAX_NODES,
+        ..ParsingOptions::default()
+    };
+    let doc = Document::parse_with_options(text, options)
+        .map_err(|e| bad(format!("its XML header: {e}")))?;
+    let root = doc.root_element();
+    let appended = tag
+        .map(|at| appended_section(path, bytes, at))
+        .transpose()?;
+    let layout = layout(path, root, appended)?;
+    let image = child(path, root, "ImageData")?;
+    let pieces: Vec<Node> = image
+        .children()
+        .filter(|n| n.has_tag_name("Piece"))
+        .collect();
+    let [piece] = pieces[..] else {
+        return Err(bad(format!(
+            "holds {} pieces: slabscope reads image data of one piece",
+            pieces.len()
+        )));
+    };
+    let extent = integers::<6>(path, piece, "Extent")?;
+    let points: [usize; 3] = std::array::from_fn(|m| extent_points(extent, m));
+    if points.contains(&0) {
+        return Err(bad(format!(
+            "its piece's Extent {extent:?} is empty or too large"
+        )));
+    }
+    let array = pick_array(path, piece)?;
+    let dims = if array.cells {
+        points.map(|n| n.saturating_sub(1).max(1))
+    } else {
+        points
+    };
+    let spec = DataSpec {
+        file: source.clone(),
+        start: 0,
+        skip_lines: 0,
+        skip: Skip::Bytes(0),
+        encoding: Encoding::Raw,
+        dims,
+        voxel_type: array.ty,
+        endian: layout.words.endian,
+        scale: None,
+        volumes: (0, 1),
+        trailing: true,
+    };
+    let voxels = read_array(&spec, &array, layout, bytes, opts.max_memory)?;
+    // VTK gives no units: spacing and origin are taken as mm, as the legacy reader takes them.
+    let mut notes = Vec::new();
+    if array.cells {
+        notes.push("cell data: a voxel a cell, at its centre".into());
+    }
+    let (spacing, transform) = placement(path, image, extent, array.cells, &mut notes)?;
+    let read = Read0::new(path, dims, spacing, array.ty, voxels, notes)?;
+    Ok(read.with_transform(Some(transform)))
+}
+
+/// The first place of `needle` in `bytes`.
+fn find(bytes: &[u8], needle: &[u8]) -> Option<usize> {
+    bytes.windows(needle.len()).position(|w| w == needle)
+}
+
+/// The `<AppendedData encoding>` tag at `at`, and where its data starts, after its `_`.
+fn appended_section(path: &Path, bytes: &[u8], at: usize) -> Result<Appended> {
+    let bad = |what: &str| Error::format(path, format!("its AppendedData {what}"));
+    let end = bytes[at..]
+        .iter()
+        .take(4096)
+        .position(|&b| b == b'>')
+        .ok_or_else(|| bad("tag does not end"))?;
+    let tag = std::str::from_utf8(&bytes[at..=at + end]).map_err(|_| bad("tag is no text"))?;
+    let tag = format!("{}/>", tag.trim_end_matches('>').trim_end_matches('/'));
+    let doc = Document::parse(&tag).map_err(|e| bad(&format!("tag: {e}")))?;
+    let base64 = match doc.root_element().attribute("encoding").unwrap_or("raw") {
+        "raw" => false,
+        "base64" => true,
+        other => return Err(bad(&format!("encoding {other:?}: expected raw or base64"))),
+    };
+    let after = at + end + 1;
+    let skip = bytes[after..]
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .filter(|&i| bytes[after + i] == b'_')
+        .ok_or_else(|| bad("does not start with an underscore"))?;
+    Ok(Appended {
+        base64,
+        start: after + skip + 1,
+    })
+}
+
+/// The `<VTKFile>` element's byte order, header type and compressor.
+fn layout(path: &Path, root: Node, appended: Option<Appended>) -> Result<Layout> {
+    let bad = |what: String| Error::unsupported(path, what);
+    if !root.has_tag_name("VTKFile") {
+        return Err(Error::format(path, "its XML is not a VTKFile"));
+    }
+    match root.attribute("type") {
+        Some("ImageData") => {}
+        other => {
+            return Err(bad(format!(
+                "a VTK XML {} file: slabscope reads image data (ImageData)",
+                other.unwrap_or("untyped")
+            )));
+        }
+    }
+    let endian = match root.attribute("byte_order").unwrap_or("LittleEndian") {
+        "LittleEndian" => Endian::Little,
+        "BigEndian" => Endian::Big,
+        other => return Err(bad(format!("byte_order {other:?}"))),
+    };
+    let size = match root.attribute("header_type").unwrap_or("UInt32") {
+        "UInt32" => 4,
+        "UInt64" => 8,
+        other => {
+            return Err(bad(format!(
+                "header_type {other:?}: expected UInt32 or UInt64"
+            )));
+        }
+    };
+    let zlib = match root.attribute("compressor").unwrap_or("") {
+        "" => false,
+        "vtkZLibDataCompressor" => true,
+        other => {
+            return Err(bad(format!(
+                "compressor {other:?}: slabscope reads zlib-compressed and uncompressed data"
+            )));
+        }
+    };
+    Ok(Layout {
+        words: Words { size, endian },
+        zlib,
+        appended,
+    })
+}
+
+/// The child element of `node` named `name`.
+fn child<'a, 'i>(path: &Path, node: Node<'a, 'i>, name: &str) -> Result<Node<'a, 'i>> {
+    node.children()
+        .find(|n| n.has_tag_name(name))
+        .ok_or_else(|| {
+            Error::format(
+                path,
+                format!("no <{name}> in its <{}>", node.tag_name().name()),
+            )
+        })
+}
+
+/// `N` numbers of the attribute `name` of `node`, `None` when it has none.
+fn numbers<const N: usize>(path: &Path, node: Node, name: &str) -> Result<Option<[f64; N]>> {
+    let Some(text) = node.attribute(name) else {
+        return Ok(None);
+    };
+    let values: Vec<f64> = text
+        .split_ascii_whitespace()
+        .map(|w| w.parse().ok().filter(|v: &f64| v.is_finite()))
+        .collect::<Option<_>>()
+        .unwrap_or_default();
+    let values: [f64; N] = values.try_into().map_err(|_| {
+        Error::format(
+            path,
+            format!(
+                "{name}={:?}: expected {N} numbers",
+                crate::error::names::text(text)
+            ),
+        )
+    })?;
+    Ok(Some(values))
+}
+
+/// `N` whole numbers of the attribute `name` of `node`, which must have it.
+fn integers<const N: usize>(path: &Path, node: Node, name: &str) -> Result<[i64; N]> {
+    let values = numbers::<N>(path, node, name)?.ok_or_else(|| {
+        Error::format(
+            path,
+            format!("its <{}> has no {name}", node.tag_name().name()),
+        )
+    })?;
+    if values.iter().any(|v| v.fract() != 0.0 || v.abs() > 1e15) {
+        return Err(Error::format(
+            path,
+            format!("{name} {values:?}: expected whole numbers"),
+        ));
+    }
+    Ok(values.map(|v| v as i64))
+}
+
+/// The points of `extent` along axis `m`; 0 when it is empty or beyond a billion.
+fn extent_points(extent: [i64; 6], m: usize) -> usize {
+    let n = extent[2 * m + 1] - extent[2 * m] + 1;
+    usize::try_from(n)
+        .ok()
+        .filter(|&n| n <= 1 << 30)
+        .unwrap_or(0)
+}
+
+/// The array read: the one `Scalars` names (point data first), else the first one of one
+/// component.
+fn pick_array<'a>(path: &Path, piece: Node<'a, '_>) -> Result<Array<'a>> {
+    let sections = ["PointData", "CellData"].map(|s| piece.children().find(|n| n.has_tag_name(s)));
+    let arrays = |section: Option<Node<'a, '_>>| {
+        section
+            .into_iter()
+            .flat_map(|s| s.children().filter(|n| n.has_tag_name("DataArray")))
+    };
+    let named = sections.iter().enumerate().find_map(|(k, s)| {
+        let scalars = s.and_then(|s| s.attribute("Scalars"))?;
+        Some((k, arrays(*s).find(|a| a.attribute("Name") == Some(scalars))))
+    });
+    let (k, node) = match named {
+        Some((k, Some(node))) => (k, node),
+        Some((k, None)) => {
+            let scalars = sections[k]
+                .and_then(|s| s.attribute("Scalars"))
+                .unwrap_or("");
+            return Err(Error::format(
+                path,
+                format!(
+                    "its Scalars {:?} names no array",
+                    crate::error::names::text(scalars)
+                ),
+            ));
+        }
+        None => (0..2)
+            .find_map(|k| {
+                arrays(sections[k])
+                    .find(|a| a.attribute("NumberOfComponents").unwrap_or("1") == "1")
+                    .map(|a| (k, a))
+            })
+            .ok_or_else(|| Error::format(path, "holds no array of one component to read"))?,
+    };
+    array(path, node, k == 1)
+}
+
+/// What the `<DataArray>` `node` says.
+fn array<'a>(path: &Path, node: Node<'a, '_>, cells: bool) -> Result<Array<'a>> {
+    let name = node.attribute("Name").unwrap_or("").to_string();
+    let shown = crate::error::names::text(&name);
+    let components = node.attribute("NumberOfComponents").unwrap_or("1");
+    if components != "1" {
+        return Err(Error::unsupported(
+            path,
+            format!(
+                "its array {shown:?} has {} components a voxel (a vector field): slabscope reads scalars",
+                crate::error::names::text(components)
+            ),
+        ));
+    }
+    let ty_name = node.attribute("type").unwrap_or("");
+    let ty = scalar_type(ty_name).ok_or_else(|| {
+        Error::unsupported(
+            path,
+            format!(
+                "its array {shown:?} is of type {:?}: slabscope reads Int8 to UInt32, Float32 and Float64",
+                crate::error::names::text(ty_name)
+            ),
+        )
+    })?;
+    let offset = node
+        .attribute("offset")
+        .map(|o| {
+            o.trim()
+                .parse::<u64>()
+                .map_err(|_| Error::format(path, format!("its array {shown:?} has a bad offset")))
+        })
+        .transpose()?;
+    Ok(Array {
+        cells,
+        name,
+        ty,
+        format: node.attribute("format").unwrap_or("ascii"),
+        offset,
+        text: node.text().unwrap_or(""),
+    })
+}
+
+/// The voxel type of a VTK XML type's name (64-bit integers are not read, as in legacy files).
+fn scalar_type(name: &str) -> Option<VoxelType> {
+    Some(match name {
+        "Int8" | "Char" => VoxelType::I8,
+        "UInt8" => VoxelType::U8,
+        "Int16" => VoxelType::I16,
+        "UInt16" => VoxelType::U16,
+        "Int32" => VoxelType::I32,
+        "UInt32" => VoxelType::U32,
+        "Float32" => VoxelType::F32,
+        "Float64" => VoxelType::F64,
+        _ => return None,
+    })
+}
+
+/// Reads the voxels of `array`, whose volume `spec` describes, from the file's `bytes`.
+fn read_array(
+    spec: &DataSpec,
+    array: &Array,
+    layout: Layout,
+    bytes: &[u8],
+    max_memory: u64,
+) -> Result<crate::volume::Voxels> {
+    let path = spec.file.path();
+    let shown = crate::error::names::text(&array.name);
+    let bad = |what: String| Error::format(path, format!("its array {shown:?}: {what}"));
+    let expected = spec
+        .dims
+        .iter()
+        .try_fold(spec.voxel_type.size() as u64, |a, &d| {
+            a.checked_mul(d as u64)
+        })
+        .ok_or_else(|| bad("more voxels than this machine can address".into()))?;
+    let (input, base64): (&[u8], bool) = match array.format {
+        "ascii" => {
+            let spec = DataSpec {
+                encoding: Encoding::Ascii,
+                trailing: false,
+                ..spec.clone()
+            };
+            let mut text = array.text.as_bytes();
+            return read_voxels_from(&spec, &mut text, "ascii", max_memory);
+        }
+        "binary" => (array.text.as_bytes(), true),
+        "appended" => {
+            let appended = layout
+                .appended
+                .ok_or_else(|| bad("appended, but the file has no AppendedData".into()))?;
+            let offset = array
+                .offset
+                .ok_or_else(|| bad("appended, with no offset".into()))?;
+            let at = usize::try_from(offset)
+                .ok()
+                .and_then(|o| appended.start.checked_add(o))
+                .filter(|&at| at <= bytes.len())
+                .ok_or_else(|| bad(format!("its offset {offset} is beyond the file's end")))?;
+            if !appended.base64 && !layout.zlib {
+                return raw_in_place(spec, &bytes[at..], at, layout.words, expected, max_memory);
+            }
+            (&bytes[at..], appended.base64)
+        }
+        other => {
+            return Err(bad(format!(
+                "format {:?}: expected ascii, binary or appended",
+                crate::error::names::text(other)
+            )));
+        }
+    };
+    let mut decoded: Box<dyn Read + '_> = if base64 {
+        Box::new(Base64::new(input))
+    } else {
+        Box::new(input)
+    };
+    let room = input.len() as u64;
+    if layout.zlib {
+        let blocks = Blocks::new(decoded, layout.words, expected, room).map_err(bad)?;
+        let mut stream = BufReader::new(blocks);
+        return read_voxels_from(spec, &mut stream, "zlib", max_memory);
+    }
+    let size = layout
+        .words
+        .read(&mut decoded)
+        .map_err(|e| bad(e.to_string()))?;
+    if size != expected {
+        return Err(bad(format!(
+            "its header says {size} bytes, not the {expected} of its voxels"
+        )));
+    }
+    let mut stream = BufReader::new(decoded.take(size));
+    read_voxels_from(spec, &mut stream, "base64", max_memory)
+}
+
+/// Raw appended voxels at `at` in the file (`bytes` from there), after their size: read in place
+/// where they can be.
+fn raw_in_place(
+    spec: &DataSpec,
+    bytes: &[u8],
+    at: usize,
+    words: Words,
+    expected: u64,
+    max_memory: u64,
+) -> Result<crate::volume::Voxels> {
+    let path = spec.file.path();
+    let size = words
+        .read(&mut &bytes[..])
+        .map_err(|e| Error::format(path, e.to_string()))?;
+    if size != expected {
+        return Err(Error::format(
+            path,
+            format!(
+                "an appended array's header says {size} bytes, not the {expected} of its voxels"
+            ),
+        ));
+    }
+    let spec = DataSpec {
+        start: (at + words.size) as u64,
+        ..spec.clone()
+    };
+    read_voxels(&spec, max_memory)
+}
+
+/// The spacing and the voxel-to-world transform of the `<ImageData>` `image` whose piece spans
+/// `extent`: `Origin + Direction · (index · Spacing)`, a cell's voxel at the cell's centre.
+fn placement(
+    path: &Path,
+    image: Node,
+    extent: [i64; 6],
+    cells: bool,
+    notes: &mut Vec<String>,
+) -> Result<([f64; 3], WorldTransform)> {
+    let spacing = numbers::<3>(path, image, "Spacing")?.unwrap_or_else(|| {
+        notes.push("no Spacing: using 1 mm".into());
+        [1.0; 3]
+    });
+    if spacing.iter().any(|&s| s <= 0.0) {
+        return Err(Error::format(
+            path,
+            format!("Spacing {spacing:?}: expected three positive numbers"),
+        ));
+    }
+    let origin = numbers::<3>(path, image, "Origin")?.unwrap_or([0.0; 3]);
+    let direction = numbers::<9>(path, image, "Direction")?
+        .unwrap_or([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+    // The first voxel's index in the image's grid.
+    let first: [f64; 3] =
+        std::array::from_fn(|m| extent[2 * m] as f64 + if cells { 0.5 } else { 0.0 });
+    let mut transform = WorldTransform::unknown(spacing);
+    for r in 0..3 {
+        for c in 0..3 {
+            transform.matrix[r][c] = direction[3 * r + c] * spacing[c];
+        }
+        transform.matrix[r][3] = origin[r]
+            + (0..3)
+                .map(|c| transform.matrix[r][c] * first[c])
+                .sum::<f64>();
+    }
+    Ok((spacing, transform))
+}

@@ -1,0 +1,272 @@
+//! The bytes of a VTK XML array: base64 text decoded as it is read ([`Base64`]), a header of one
+//! byte count or, compressed, of the zlib blocks' sizes, and the blocks inflated one at a time
+//! ([`Blocks`]). Every size the header claims is checked against the array's own size and the
+//! bytes the file holds before anything is allocated.
+
+use std::io::{Error as IoError, ErrorKind, Read};
+
+use flate2::bufread::ZlibDecoder;
+
+use crate::volume::Endian;
+
+/// An I/O error of invalid data saying `what`.
+fn invalid(what: String) -> IoError {
+    IoError::new(ErrorKind::InvalidData, what)
+}
+
+/// Base64 text decoded as it is read, whitespace skipped; a group padded with `=` may be
+/// followed by another (VTK encodes a compressed array's header and its blocks apart).
+pub(super) struct Base64<'a> {
+    text: &'a [u8],
+    at: usize,
+    /// The last group's bytes, how many it holds, and how many were given.
+    held: [u8; 3],
+    held_len: usize,
+    at_held: usize,
+}
+
+impl<'a> Base64<'a> {
+    pub(super) fn new(text: &'a [u8]) -> Self {
+        Self {
+            text,
+            at: 0,
+            held: [0; 3],
+            held_len: 0,
+            at_held: 0,
+        }
+    }
+
+    /// The next group of four characters decoded into `held`; false at the end of the text.
+    fn group(&mut self) -> std::io::Result<bool> {
+        let mut sixes = [0u8; 4];
+        let mut n = 0;
+        let mut pad = 0;
+        while n < 4 {
+            let Some(&c) = self.text.get(self.at) else {
+                return match n {
+                    0 => Ok(false),
+                    _ => Err(invalid("base64 text ends inside a group".into())),
+                };
+            };
+            self.at += 1;
+            let six = match c {
+                b'A'..=b'Z' => c - b'A',
+                b'a'..=b'z' => c - b'a' + 26,
+                b'0'..=b'9' => c - b'0' + 52,
+                b'+' => 62,
+                b'/' => 63,
+                b'=' if n >= 2 => {
+                    pad += 1;
+                    0
+                }
+                c if c.is_ascii_whitespace() => continue,
+                _ => {
+                    return Err(invalid(format!(
+                        "{:?} at character {} is not base64",
+                        char::from(c),
+                        self.at - 1
+                    )));
+                }
+            };
+            if pad > 0 && c != b'=' {
+                return Err(invalid("base64 padding inside a group".into()));
+            }
+            sixes[n] = six;
+            n += 1;
+        }
+        let word = sixes.iter().fold(0u32, |w, &s| (w << 6) | u32::from(s));
+        self.held = [(word >> 16) as u8, (word >> 8) as u8, word as u8];
+        self.held_len = 3 - pad;
+        self.at_held = 0;
+        Ok(true)
+    }
+}
+
+impl Read for Base64<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let mut done = 0;
+        while done < buf.len() {
+            if self.at_held == self.held_len {
+                if !self.group()? {
+                    break;
+                }
+                continue;
+            }
+            let n = (self.held_len - self.at_held).min(buf.len() - done);
+            buf[done..done + n].copy_from_slice(&self.held[self.at_held..self.at_held + n]);
+            self.at_held += n;
+            done += n;
+        }
+        Ok(done)
+    }
+}
+
+/// How an array's header words are read: their size and byte order.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Words {
+    /// 4 (`UInt32`) or 8 (`UInt64`).
+    pub size: usize,
+    pub endian: Endian,
+}
+
+impl Words {
+    /// The next header word of `input`.
+    pub(super) fn read(self, input: &mut impl Read) -> std::io::Result<u64> {
+        let mut b = [0u8; 8];
+        let word = &mut b[..self.size];
+        input.read_exact(word).map_err(|_| {
+            IoError::new(ErrorKind::UnexpectedEof, "the array ends inside its header")
+        })?;
+        if self.endian == Endian::Big {
+            word.reverse();
+        }
+        Ok(u64::from_le_bytes(b))
+    }
+}
+
+/// The zlib blocks of a compressed array, inflated one at a time as they are read.
+pub(super) struct Blocks<R> {
+    input: R,
+    /// Each block's compressed size.
+    sizes: Vec<u64>,
+    block_size: u64,
+    last_size: u64,
+    next: usize,
+    compressed: Vec<u8>,
+    block: Vec<u8>,
+    at: usize,
+}
+
+impl<R: Read> Blocks<R> {
+    /// Reads the compression header of `input` (the number of blocks, the block size, the last
+    /// block's size, then each block's compressed size), checked against `expected`, the
+    /// array's size in bytes, and `room`, the most bytes `input` can hold.
+    pub(super) fn new(
+        mut input: R,
+        words: Words,
+        expected: u64,
+        room: u64,
+    ) -> Result<Self, String> {
+        let mut word = || words.read(&mut input).map_err(|e| e.to_string());
+        let (count, block_size, last) = (word()?, word()?, word()?);
+        let last_size = if last == 0 { block_size } else { last };
+        let total = match count {
+            0 => Some(0),
+            n => (n - 1)
+                .checked_mul(block_size)
+                .and_then(|t| t.checked_add(last_size)),
+        };
+        if total != Some(expected) || last_size > block_size {
+            return Err(format!(
+                "its zlib header says {count} blocks of {block_size} bytes, the last {last} \
+                 bytes: expected {expected} bytes in all"
+            ));
+        }
+        // Each block's size is a word of the file.
+        if count.saturating_mul(words.size as u64) > room {
+            return Err(format!(
+                "its zlib header says {count} blocks, more than the file holds"
+            ));
+        }
+        let sizes = (0..count)
+            .map(|_| word())
+            .collect::<Result<Vec<u64>, String>>()?;
+        Ok(Self {
+            input,
+            sizes,
+            block_size,
+            last_size,
+            next: 0,
+            compressed: Vec::new(),
+            block: Vec::new(),
+            at: 0,
+        })
+    }
+
+    /// Inflates the next block into `block`.
+    fn inflate(&mut self) -> std::io::Result<()> {
+        let i = self.next;
+        let size = if i + 1 == self.sizes.len() {
+            self.last_size
+        } else {
+            self.block_size
+        };
+        self.compressed.clear();
+        (&mut self.input)
+            .take(self.sizes[i])
+            .read_to_end(&mut self.compressed)?;
+        if (self.compressed.len() as u64) < self.sizes[i] {
+            return Err(IoError::new(
+                ErrorKind::UnexpectedEof,
+                format!("zlib block {i} is cut short"),
+            ));
+        }
+        self.block.clear();
+        ZlibDecoder::new(&self.compressed[..])
+            .take(size)
+            .read_to_end(&mut self.block)
+            .map_err(|e| invalid(format!("zlib block {i}: {e}")))?;
+        if self.block.len() as u64 != size {
+            return Err(invalid(format!(
+                "zlib block {i} inflates to {} bytes, not {size}",
+                self.block.len()
+            )));
+        }
+        self.next += 1;
+        self.at = 0;
+        Ok(())
+    }
+}
+
+impl<R: Read> Read for Blocks<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.at == self.block.len() {
+            if self.next == self.sizes.len() {
+                return Ok(0);
+            }
+            self.inflate()?;
+        }
+        let n = buf.len().min(self.block.len() - self.at);
+        buf[..n].copy_from_slice(&self.block[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn decoded(text: &str) -> std::io::Result<Vec<u8>> {
+        let mut out = Vec::new();
+        Base64::new(text.as_bytes()).read_to_end(&mut out)?;
+        Ok(out)
+    }
+
+    #[test]
+    fn base64_groups_padded_in_the_middle_and_whitespace() {
+        assert_eq!(decoded("aGVsbG8=").unwrap(), b"hello");
+        assert_eq!(decoded(" aGk=\n  aGVsbG8=").unwrap(), b"hihello");
+        assert_eq!(decoded("YQ==YWJj").unwrap(), b"aabc");
+        assert_eq!(decoded("").unwrap(), b"");
+        assert!(decoded("aGV").is_err());
+        assert!(decoded("a===").is_err());
+        assert!(decoded("aG=s").is_err());
+        assert!(decoded("aG<s").is_err());
+    }
+
+    #[test]
+    fn blocks_check_their_header_against_the_array() {
+        let words = Words {
+            size: 4,
+            endian: Endian::Little,
+        };
+        let header = |w: &[u32]| -> Vec<u8> { w.iter().flat_map(|v| v.to_le_bytes()).collect() };
+        // Two blocks of 4 bytes, the last of 2: 6 bytes, not 10.
+        let e = Blocks::new(&header(&[2, 4, 2, 9, 9])[..], words, 10, 100).err();
+        assert!(e.unwrap().contains("2 blocks of 4 bytes"));
+        // A billion blocks the file cannot hold.
+        let e = Blocks::new(&header(&[1 << 30, 1, 0])[..], words, 1 << 30, 100).err();
+        assert!(e.unwrap().contains("more than the file holds"));
+    }
+}
