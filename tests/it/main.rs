@@ -32,6 +32,7 @@ mod size;
 mod slice;
 mod triage;
 mod view;
+mod vti;
 mod vtk;
 mod zarr;
 mod zarr_bombs;

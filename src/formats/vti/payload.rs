@@ -114,8 +114,11 @@ impl Words {
     pub(super) fn read(self, input: &mut impl Read) -> std::io::Result<u64> {
         let mut b = [0u8; 8];
         let word = &mut b[..self.size];
-        input.read_exact(word).map_err(|_| {
-            IoError::new(ErrorKind::UnexpectedEof, "the array ends inside its header")
+        input.read_exact(word).map_err(|e| match e.kind() {
+            ErrorKind::UnexpectedEof => {
+                IoError::new(ErrorKind::UnexpectedEof, "the array ends inside its header")
+            }
+            _ => e,
         })?;
         if self.endian == Endian::Big {
             word.reverse();

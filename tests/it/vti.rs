@@ -1,0 +1,226 @@
+//! VTK XML image data written by VTK's own writer (`tests/data/vti/make_vti.py`): ascii, inline
+//! base64, appended raw and base64, zlib blocks, both byte orders and header types, point and
+//! cell data, a Direction; to the voxel, with spacing, origin and axes, and against the legacy
+//! `.vtk` of the same volume. Hostile headers are refused in one line naming the file.
+
+use slabscope::volume::VoxelType;
+use slabscope::{Format, LoadOptions, Loaded, load};
+
+use crate::common::{data, run};
+
+fn open(name: &str) -> Loaded {
+    load(&data(&format!("vti/{name}")), &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// The 6x5x4 ramp `x + 10y + 100z` of `make_vti.py` read from `name`, `wrap` applied to each
+/// value.
+fn assert_ramp(name: &str, ty: VoxelType, wrap: impl Fn(i64) -> i64) -> Loaded {
+    let loaded = open(name);
+    assert_eq!(loaded.format, Format::Vti, "{name}");
+    let v = &loaded.volume;
+    assert_eq!(v.dims(), [6, 5, 4], "{name}");
+    assert_eq!(v.voxel_type(), ty, "{name}");
+    assert_eq!(v.spacing(), [1.5, 2.0, 2.5], "{name}");
+    assert!(!v.transform().known, "{name}: VTK's world has no anatomy");
+    for z in 0..4 {
+        for y in 0..5 {
+            for x in 0..6 {
+                let want = wrap((x + 10 * y + 100 * z) as i64) as f32;
+                assert_eq!(v.value([x, y, z]), want, "{name}: voxel ({x},{y},{z})");
+            }
+        }
+    }
+    loaded
+}
+
+/// Each voxel axis's step in the world, and the first voxel's place.
+fn axes(loaded: &Loaded) -> ([f64; 3], [[f64; 3]; 3]) {
+    let t = loaded.volume.transform();
+    let first = t.apply([0.0; 3]);
+    let step = |m: usize| {
+        let mut ijk = [0.0; 3];
+        ijk[m] = 1.0;
+        let p = t.apply(ijk);
+        std::array::from_fn(|r| p[r] - first[r])
+    };
+    (first, [step(0), step(1), step(2)])
+}
+
+#[test]
+fn every_encoding_reads_to_the_voxel() {
+    let straight = [[1.5, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.5]];
+    for (name, ty, wraps) in [
+        ("ramp_i16_ascii.vti", VoxelType::I16, None),
+        ("ramp_f32_binary.vti", VoxelType::F32, None),
+        ("ramp_u8_raw.vti", VoxelType::U8, Some(256)),
+        ("ramp_f64_base64.vti", VoxelType::F64, None),
+        ("ramp_u16_zlib.vti", VoxelType::U16, None),
+        ("ramp_i32_zlib_binary.vti", VoxelType::I32, None),
+        ("ramp_i8_be.vti", VoxelType::I8, Some(-256)),
+        ("ramp_u32_be_zlib.vti", VoxelType::U32, None),
+    ] {
+        let wrap = |v: i64| match wraps {
+            Some(256) => v % 256,
+            Some(_) => (v as i8).into(),
+            None => v,
+        };
+        let loaded = assert_ramp(name, ty, wrap);
+        assert_eq!(axes(&loaded), ([-3.0, 4.0, 10.0], straight), "{name}");
+    }
+}
+
+#[test]
+fn a_direction_turns_the_axes_and_cells_sit_at_their_centres() {
+    // x along world y, y along world -x, z along z.
+    let turned = [[0.0, 1.5, 0.0], [-2.0, 0.0, 0.0], [0.0, 0.0, 2.5]];
+    let points = assert_ramp("rotated_i16_ascii.vti", VoxelType::I16, |v| v);
+    assert_eq!(axes(&points), ([-3.0, 4.0, 10.0], turned));
+    // The first cell's centre: half a step along each turned axis from the origin.
+    let cells = assert_ramp("rotated_f64_cells.vti", VoxelType::F64, |v| v);
+    assert_eq!(axes(&cells), ([-4.0, 4.75, 11.25], turned));
+    assert!(cells.notes.iter().any(|n| n.contains("cell data")));
+}
+
+#[test]
+fn the_same_volume_as_the_legacy_file() {
+    for (vti, vtk) in [
+        ("vti/ramp_i16_ascii.vti", "vtk/ramp_i16.vtk"),
+        ("vti/ramp_f32_binary.vti", "vtk/ramp_f32.vtk"),
+    ] {
+        let a = load(&data(vti), &LoadOptions::default()).unwrap();
+        let b = load(&data(vtk), &LoadOptions::default()).unwrap();
+        assert_eq!(a.volume.dims(), b.volume.dims(), "{vti}");
+        assert_eq!(a.volume.spacing(), b.volume.spacing(), "{vti}");
+        assert_eq!(a.volume.transform(), b.volume.transform(), "{vti}");
+        assert_eq!(a.volume.voxel_type(), b.volume.voxel_type(), "{vti}");
+        let n = a.volume.len();
+        let (ax, bx): (Vec<f32>, Vec<f32>) = (0..n)
+            .map(|i| {
+                let ijk = [i % 6, i / 6 % 5, i / 30];
+                (a.volume.value(ijk), b.volume.value(ijk))
+            })
+            .unzip();
+        assert_eq!(ax, bx, "{vti}");
+    }
+}
+
+#[test]
+fn scalars_name_the_array_read_among_others() {
+    // `flow` (three components) and `mask` come first; `Scalars` names `density`.
+    assert_ramp("ramp_u16_zlib.vti", VoxelType::U16, |v| v);
+    let text = std::fs::read_to_string(data("vti/ramp_i16_ascii.vti")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // Without Scalars, the first array of one component is read.
+    let path = dir.path().join("unnamed.vti");
+    std::fs::write(&path, text.replace(" Scalars=\"density\"", "")).unwrap();
+    let loaded = load(&path, &LoadOptions::default()).unwrap();
+    assert_eq!(loaded.volume.value([5, 4, 3]), 345.0);
+}
+
+/// Runs `info` on `text` saved as `name`: it fails in one line naming the file and saying `says`.
+fn refused(dir: &std::path::Path, name: &str, text: &[u8], says: &str) {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    let r = run(&["info", "--max-memory", "64M", path.to_str().unwrap()]);
+    assert!(!r.ok, "{name}");
+    let line = r.stderr.trim();
+    assert_eq!(line.lines().count(), 1, "{line}");
+    assert!(line.contains(name) && line.contains(says), "{name}: {line}");
+}
+
+#[test]
+fn what_is_not_read_is_refused_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let ascii = std::fs::read_to_string(data("vti/ramp_i16_ascii.vti")).unwrap();
+    let edit = |from: &str, to: &str| {
+        assert!(ascii.contains(from), "{from}");
+        ascii.replace(from, to).into_bytes()
+    };
+    let d = dir.path();
+    refused(
+        d,
+        "mesh.vti",
+        b"<VTKFile type=\"PolyData\"><PolyData/></VTKFile>",
+        "a VTK XML PolyData file",
+    );
+    let piece = "<Piece Extent=\"0 5 0 4 0 3\">";
+    let two = ascii.replacen("</Piece>", &format!("</Piece>{piece}</Piece>"), 1);
+    refused(d, "two.vti", two.as_bytes(), "holds 2 pieces");
+    refused(
+        d,
+        "long.vti",
+        &edit("type=\"Int16\"", "type=\"Int64\""),
+        "of type \"Int64\"",
+    );
+    refused(
+        d,
+        "flow.vti",
+        &edit(
+            "format=\"ascii\"",
+            "NumberOfComponents=\"3\" format=\"ascii\"",
+        ),
+        "3 components",
+    );
+    refused(
+        d,
+        "lz4.vti",
+        &edit(
+            "header_type=\"UInt32\"",
+            "header_type=\"UInt32\" compressor=\"vtkLZ4DataCompressor\"",
+        ),
+        "compressor \"vtkLZ4DataCompressor\"",
+    );
+    refused(d, "short.vti", &edit("345\n", "\n"), "truncated ascii data");
+    refused(d, "cut.vti", &ascii.as_bytes()[..600], "cut.vti");
+    // A hostile extent: beyond the budget, refused before anything is allocated.
+    refused(
+        d,
+        "huge.vti",
+        &edit(piece, "<Piece Extent=\"0 99999 0 99999 0 99999\">"),
+        "huge.vti",
+    );
+}
+
+/// Where the appended data of `file` starts: after the `_` that follows `<AppendedData`.
+fn appended(file: &[u8]) -> usize {
+    let tag = file
+        .windows(13)
+        .position(|w| w == b"<AppendedData")
+        .unwrap();
+    tag + file[tag..].iter().position(|&b| b == b'_').unwrap() + 1
+}
+
+#[test]
+fn hostile_binary_headers_are_refused_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let raw = std::fs::read(data("vti/ramp_u16_zlib.vti")).unwrap();
+    let data_at = appended(&raw);
+    // The block count of the array read (`density`, at offset 775) made a billion.
+    let mut many = raw.clone();
+    let density = data_at + 775;
+    many[density..density + 4].copy_from_slice(&(1u32 << 30).to_le_bytes());
+    refused(d, "many.vti", &many, "zlib header says 1073741824 blocks");
+    // An offset beyond the file.
+    let text = String::from_utf8_lossy(&raw).into_owned();
+    let far = text.replacen("offset=\"775\"", "offset=\"9999999\"", 1);
+    refused(d, "far.vti", far.as_bytes(), "beyond the file's end");
+    // The zlib header of the first block of `density` (after 3 + 4 words) corrupted.
+    let mut bad = raw.clone();
+    bad[density + 28] = 0xff;
+    refused(d, "corrupt.vti", &bad, "corrupt.vti");
+    // Inline base64 that is not.
+    let b64 = std::fs::read_to_string(data("vti/ramp_f32_binary.vti")).unwrap();
+    let at = b64.find("format=\"binary\"").unwrap();
+    let start = at + b64[at..].find('>').unwrap() + 12;
+    let mut broken = b64.clone();
+    broken.replace_range(start..=start, "!");
+    refused(d, "b64.vti", broken.as_bytes(), "not base64");
+    // A raw array whose size header disagrees with its extent.
+    let u8raw = std::fs::read(data("vti/ramp_u8_raw.vti")).unwrap();
+    let data_at = appended(&u8raw);
+    let mut lie = u8raw.clone();
+    lie[data_at..data_at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
+    refused(d, "lie.vti", &lie, "not the 120 of its voxels");
+}
