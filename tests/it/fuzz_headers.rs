@@ -11,7 +11,7 @@ use slabscope::{LoadOptions, load};
 use crate::common::data;
 
 /// File names that steer detection to each reader.
-const NAMES: [&str; 12] = [
+const NAMES: [&str; 13] = [
     "f.nii",
     "f.nii.gz",
     "f.nrrd",
@@ -24,10 +24,11 @@ const NAMES: [&str; 12] = [
     "f.tif",
     "f_4x4x4_u8.raw",
     "f.bin",
+    "f.vti",
 ];
 
 /// Valid files to mutate, one per format.
-const SEEDS: [&str; 13] = [
+const SEEDS: [&str; 17] = [
     "ramp_u8.nii",
     "ramp_i16_scaled.nii.gz",
     "ramp_u16_be.nrrd",
@@ -41,6 +42,10 @@ const SEEDS: [&str; 13] = [
     "mrc/ramp_f16.mrc",
     "vtk/ramp_i16.vtk",
     "vtk/ramp_u8_ascii.vtk",
+    "vti/ramp_u8_raw.vti",
+    "vti/ramp_u16_zlib.vti",
+    "vti/ramp_i32_zlib_binary.vti",
+    "vti/ramp_f64_base64.vti",
 ];
 
 fn seed_bytes(name: &str) -> Vec<u8> {
@@ -147,7 +152,7 @@ proptest! {
 
     #[test]
     fn magic_prefixed_garbage_never_panics(
-        magic in prop::sample::select(vec![&b"NRRD0004\n"[..], b"ObjectType = Image\n", b"II*\0", b"MM\0*", b"\x1f\x8b\x08\0"]),
+        magic in prop::sample::select(vec![&b"NRRD0004\n"[..], b"ObjectType = Image\n", b"II*\0", b"MM\0*", b"\x1f\x8b\x08\0", b"<VTKFile type=\"ImageData\">"]),
         rest in prop::collection::vec(any::<u8>(), 0..600),
     ) {
         let dir = tempfile::tempdir().unwrap();

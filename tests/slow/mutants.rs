@@ -120,6 +120,17 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
             ("vtk/ramp_f64_cells.vtk", "m.vtk"),
         ],
     ),
+    (
+        "vti",
+        &[
+            ("vti/ramp_i16_ascii.vti", "m.vti"),
+            ("vti/ramp_f32_binary.vti", "m.vti"),
+            ("vti/ramp_u8_raw.vti", "m.vti"),
+            ("vti/ramp_u16_zlib.vti", "m.vti"),
+            ("vti/ramp_i32_zlib_binary.vti", "m.vti"),
+            ("vti/ramp_f64_base64.vti", "m.vti"),
+        ],
+    ),
 ];
 
 /// xorshift64*: the mutants of a seed are the same on every run.
