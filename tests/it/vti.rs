@@ -224,3 +224,36 @@ fn hostile_binary_headers_are_refused_in_one_line() {
     lie[data_at..data_at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
     refused(d, "lie.vti", &lie, "not the 120 of its voxels");
 }
+
+#[test]
+fn info_lists_the_arrays_the_one_read_first() {
+    let (details, v) = crate::common::info_details(&data("vti/ramp_u16_zlib.vti"), "vti");
+    assert_eq!(
+        details,
+        "arrays      density (UInt16, point data), flow (Float32 x3, point data), mask (UInt8, \
+         point data)"
+    );
+    let arrays = v["vti"]["arrays"].as_array().unwrap();
+    let listed: Vec<(&str, &str, u64, &str)> = arrays
+        .iter()
+        .map(|a| {
+            (
+                a["name"].as_str().unwrap(),
+                a["type"].as_str().unwrap(),
+                a["components"].as_u64().unwrap(),
+                a["data"].as_str().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        listed,
+        [
+            ("density", "UInt16", 1, "point"),
+            ("flow", "Float32", 3, "point"),
+            ("mask", "UInt8", 1, "point"),
+        ]
+    );
+    assert!(v["vtk"].is_null() && v["mrc"].is_null());
+    let (details, _) = crate::common::info_details(&data("vti/rotated_f64_cells.vti"), "vti");
+    assert_eq!(details, "arrays      density (Float64, cell data)");
+}

@@ -12,14 +12,15 @@
 //! voxels at the cells' centres. The file's units are taken as mm; `Direction` (VTK 9) turns the
 //! axes, placing the volume without naming anatomy (VTK's world has none). The XML is parsed up to
 //! `<AppendedData>`; appended raw values are read from the file by their offset, in place where
-//! they can be.
+//! they can be. `info` lists the file's arrays (`vti`).
 
+mod arrays;
 mod payload;
 
 use std::io::{BufReader, Read};
 use std::path::Path;
 
-use roxmltree::{Document, Node, ParsingOptions};
+use roxmltree::{Document, Node, NodeId, ParsingOptions};
 
 use self::payload::{Base64, Blocks, Words};
 use super::data::{DataSpec, Encoding, Skip, read_voxels, read_voxels_from};
@@ -54,6 +55,10 @@ impl Reader for Vti {
 
     fn extensions(&self) -> &'static [&'static str] {
         &[".vti"]
+    }
+
+    fn details_key(&self) -> Option<&'static str> {
+        Some("vti")
     }
 
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
@@ -98,6 +103,7 @@ struct Layout {
 
 /// The array read: its section, name, type, format and offset.
 struct Array<'a> {
+    id: NodeId,
     cells: bool,
     name: String,
     ty: VoxelType,
@@ -178,7 +184,8 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         notes.push("cell data: a voxel a cell, at its centre".into());
     }
     let (spacing, transform) = placement(path, image, extent, array.cells, &mut notes)?;
-    let read = Read0::new(path, dims, spacing, array.ty, voxels, notes)?;
+    let mut read = Read0::new(path, dims, spacing, array.ty, voxels, notes)?;
+    read.details = Some(std::sync::Arc::new(arrays::arrays(piece, array.id)));
     Ok(read.with_transform(Some(transform)))
 }
 
@@ -391,6 +398,7 @@ fn array<'a>(path: &Path, node: Node<'a, '_>, cells: bool) -> Result<Array<'a>> 
         })
         .transpose()?;
     Ok(Array {
+        id: node.id(),
         cells,
         name,
         ty,
