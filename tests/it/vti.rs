@@ -6,7 +6,8 @@
 use slabscope::volume::VoxelType;
 use slabscope::{Format, LoadOptions, Loaded, load};
 
-use crate::common::{data, run};
+use crate::common::data;
+use crate::vtk::{assert_ramp_voxels, refused};
 
 fn open(name: &str) -> Loaded {
     load(&data(&format!("vti/{name}")), &LoadOptions::default())
@@ -23,14 +24,7 @@ fn assert_ramp(name: &str, ty: VoxelType, wrap: impl Fn(i64) -> i64) -> Loaded {
     assert_eq!(v.voxel_type(), ty, "{name}");
     assert_eq!(v.spacing(), [1.5, 2.0, 2.5], "{name}");
     assert!(!v.transform().known, "{name}: VTK's world has no anatomy");
-    for z in 0..4 {
-        for y in 0..5 {
-            for x in 0..6 {
-                let want = wrap((x + 10 * y + 100 * z) as i64) as f32;
-                assert_eq!(v.value([x, y, z]), want, "{name}: voxel ({x},{y},{z})");
-            }
-        }
-    }
+    assert_ramp_voxels(v, name, wrap);
     loaded
 }
 
@@ -116,17 +110,6 @@ fn scalars_name_the_array_read_among_others() {
     std::fs::write(&path, text.replace(" Scalars=\"density\"", "")).unwrap();
     let loaded = load(&path, &LoadOptions::default()).unwrap();
     assert_eq!(loaded.volume.value([5, 4, 3]), 345.0);
-}
-
-/// Runs `info` on `text` saved as `name`: it fails in one line naming the file and saying `says`.
-fn refused(dir: &std::path::Path, name: &str, text: &[u8], says: &str) {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    let r = run(&["info", "--max-memory", "64M", path.to_str().unwrap()]);
-    assert!(!r.ok, "{name}");
-    let line = r.stderr.trim();
-    assert_eq!(line.lines().count(), 1, "{line}");
-    assert!(line.contains(name) && line.contains(says), "{name}: {line}");
 }
 
 #[test]

@@ -2,7 +2,9 @@
 //! ASCII, point and cell data, to the voxel, with spacing and origin; other datasets and arrays
 //! refused in one line naming the file.
 
-use slabscope::volume::VoxelType;
+use std::path::Path;
+
+use slabscope::volume::{Volume, VoxelType};
 use slabscope::{Format, LoadOptions, Loaded, load};
 
 use crate::common::{data, info_details, run};
@@ -23,6 +25,12 @@ fn assert_ramp(name: &str, ty: VoxelType, wrap: impl Fn(i64) -> i64, first: [f64
     assert_eq!(v.spacing(), [1.5, 2.0, 2.5], "{name}");
     assert_eq!(v.transform().apply([0.0; 3]), first, "{name}");
     assert!(!v.transform().known, "{name}: VTK's world has no anatomy");
+    assert_ramp_voxels(v, name, wrap);
+}
+
+/// The voxels of `v` (read from `name`) are the 6x5x4 ramp `x + 10y + 100z` of the VTK
+/// fixtures, `wrap` applied to each value.
+pub(crate) fn assert_ramp_voxels(v: &Volume, name: &str, wrap: impl Fn(i64) -> i64) {
     for z in 0..4 {
         for y in 0..5 {
             for x in 0..6 {
@@ -31,6 +39,18 @@ fn assert_ramp(name: &str, ty: VoxelType, wrap: impl Fn(i64) -> i64, first: [f64
             }
         }
     }
+}
+
+/// `info` on `text` saved as `name` in `dir` (under a 64 MiB budget) fails in one line naming
+/// the file and saying `says`.
+pub(crate) fn refused(dir: &Path, name: &str, text: &[u8], says: &str) {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    let r = run(&["info", "--max-memory", "64M", path.to_str().unwrap()]);
+    assert!(!r.ok, "{name}");
+    let line = r.stderr.trim();
+    assert_eq!(line.lines().count(), 1, "{line}");
+    assert!(line.contains(name) && line.contains(says), "{name}: {line}");
 }
 
 #[test]
@@ -52,15 +72,7 @@ fn point_and_cell_data_read_to_the_voxel() {
 #[test]
 fn what_is_no_image_is_refused_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
-    let refused = |name: &str, text: &[u8], says: &str| {
-        let path = dir.path().join(name);
-        std::fs::write(&path, text).unwrap();
-        let r = run(&["info", path.to_str().unwrap()]);
-        assert!(!r.ok, "{name}");
-        let line = r.stderr.trim();
-        assert_eq!(line.lines().count(), 1, "{line}");
-        assert!(line.contains(name) && line.contains(says), "{line}");
-    };
+    let refused = |name: &str, text: &[u8], says: &str| refused(dir.path(), name, text, says);
     let head = "# vtk DataFile Version 3.0\nt\nASCII\n";
     refused(
         "mesh.vtk",
