@@ -221,6 +221,12 @@ mod tests {
         dcm.resize(128, 0);
         dcm.extend_from_slice(b"DICM");
         assert_eq!(sniffed(&dcm), Some(Format::Dicom));
+        // VTK XML image data, after its declaration and a comment.
+        assert_eq!(
+            sniffed(b"<?xml version=\"1.0\"?>\n<!-- a -->\n<VTKFile type=\"ImageData\">"),
+            Some(Format::Vti)
+        );
+        assert_eq!(sniffed(b"<?xml version=\"1.0\"?>\n<svg>"), None);
         // A gzip stream is NIfTI's or no reader's.
         assert_eq!(sniffed(&[0x1f, 0x8b, 8, 0]), None);
     }
@@ -228,7 +234,7 @@ mod tests {
     #[test]
     fn names_that_say_volume() {
         for name in [
-            "a.nii", "B.NII.GZ", "c.nrrd", "d.nhdr", "e.mha", "f.mhd", "g.tif", "h.dat",
+            "a.nii", "B.NII.GZ", "c.nrrd", "d.nhdr", "e.mha", "f.mhd", "g.tif", "h.dat", "i.vti",
         ] {
             assert!(volume_name(Path::new(name)), "{name}");
         }

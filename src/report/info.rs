@@ -56,7 +56,7 @@ pub struct InfoReport {
     /// What the loader noticed (a 4D file, a volume picked, ...).
     pub notes: Vec<String>,
     /// What the reader tells besides the volume, under each reader's key (`dicom`, `ome_zarr`,
-    /// `mrc`, `vtk`): null but for the reader that read it.
+    /// `mrc`, `vtk`, `vti`): null but for the reader that read it.
     #[serde(flatten)]
     pub details: BTreeMap<&'static str, serde_json::Value>,
 }

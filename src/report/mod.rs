@@ -445,6 +445,7 @@ mod tests {
                 ".stored_bytes",
                 ".type",
                 ".voxels",
+                ".vti",
                 ".vtk",
                 ".world_bounds",
             ]
