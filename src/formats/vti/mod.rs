@@ -434,6 +434,8 @@ fn read_array(
     let path = spec.file.path();
     let shown = crate::error::names::text(&array.name);
     let bad = |what: String| Error::format(path, format!("its array {shown:?}: {what}"));
+    // The budget is weighed by the shared voxel reader, as the volume is held, before any block
+    // is inflated or any base64 decoded; the block list alone is weighed here.
     let expected = spec
         .dims
         .iter()
@@ -481,9 +483,11 @@ fn read_array(
     } else {
         Box::new(input)
     };
-    let room = input.len() as u64;
     if layout.zlib {
-        let blocks = Blocks::new(decoded, layout.words, expected, room).map_err(bad)?;
+        // Each block's compressed size is a word of the file, listed in memory as a u64.
+        let max_blocks = (input.len() / layout.words.size) as u64;
+        let max_blocks = max_blocks.min(max_memory / 8);
+        let blocks = Blocks::new(decoded, layout.words, expected, max_blocks).map_err(bad)?;
         let mut stream = BufReader::new(blocks);
         return read_voxels_from(spec, &mut stream, "zlib", max_memory);
     }

@@ -143,12 +143,13 @@ pub(super) struct Blocks<R> {
 impl<R: Read> Blocks<R> {
     /// Reads the compression header of `input` (the number of blocks, the block size, the last
     /// block's size, then each block's compressed size), checked against `expected`, the
-    /// array's size in bytes, and `room`, the most bytes `input` can hold.
+    /// array's size in bytes, and `max_blocks`, the most blocks `input` can hold and memory can
+    /// list.
     pub(super) fn new(
         mut input: R,
         words: Words,
         expected: u64,
-        room: u64,
+        max_blocks: u64,
     ) -> Result<Self, String> {
         let mut word = || words.read(&mut input).map_err(|e| e.to_string());
         let (count, block_size, last) = (word()?, word()?, word()?);
@@ -165,10 +166,9 @@ impl<R: Read> Blocks<R> {
                  bytes: expected {expected} bytes in all"
             ));
         }
-        // Each block's size is a word of the file.
-        if count.saturating_mul(words.size as u64) > room {
+        if count > max_blocks {
             return Err(format!(
-                "its zlib header says {count} blocks, more than the file holds"
+                "its zlib header says {count} blocks, more than the file or the memory limit holds"
             ));
         }
         let sizes = (0..count)
@@ -270,6 +270,9 @@ mod tests {
         assert!(e.unwrap().contains("2 blocks of 4 bytes"));
         // A billion blocks the file cannot hold.
         let e = Blocks::new(&header(&[1 << 30, 1, 0])[..], words, 1 << 30, 100).err();
-        assert!(e.unwrap().contains("more than the file holds"));
+        assert!(
+            e.unwrap()
+                .contains("more than the file or the memory limit holds")
+        );
     }
 }
