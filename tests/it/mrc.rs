@@ -153,7 +153,7 @@ fn info_says_the_mode_in_text_and_json() {
         assert_eq!(v["mrc"]["mode"], mode, "{name}");
         assert_eq!(v["mrc"]["values"], values, "{name}");
         // Every other reader's key is there, null.
-        for other in ["dicom", "ome_zarr", "vtk"] {
+        for other in ["dicom", "ome_zarr", "vtk", "vti"] {
             assert!(
                 v[other].is_null() && v.get(other).is_some(),
                 "{name}: {other}"
