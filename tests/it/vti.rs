@@ -240,3 +240,16 @@ fn info_lists_the_arrays_the_one_read_first() {
     let (details, _) = crate::common::info_details(&data("vti/rotated_f64_cells.vti"), "vti");
     assert_eq!(details, "arrays      density (Float64, cell data)");
 }
+
+#[test]
+fn appended_raw_values_are_read_in_place() {
+    let r = crate::common::run(&[
+        "info",
+        "--json",
+        data("vti/ramp_u8_raw.vti").to_str().unwrap(),
+    ]);
+    assert!(r.ok, "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(v["mapped_bytes"], 120, "{v}");
+    assert_eq!(v["memory_bytes"], 0, "{v}");
+}
