@@ -21,10 +21,10 @@ use crate::geometry::lattice::Lattice;
 use crate::measure::{Fragment, PartialCounts};
 use crate::progress::Monitor;
 use crate::view::rate::SLAB_ROWS;
+use crate::volume::{Quantizer, Volume, Voxel};
 
 /// About what a ray being set up for a slab's walk holds, bytes.
 const SLOT_BYTES: u64 = 160;
-use crate::volume::{Quantizer, Volume, Voxel};
 
 /// The least memory [`search_streamed`] works in for `volume` (bytes): the cell map of a slab
 /// one plane thick, and the counts of one lattice.
@@ -35,8 +35,10 @@ pub fn streamed_memory_floor(volume: &Volume, params: &ViewParams) -> u64 {
     let s = crate::geometry::min_spacing(volume.spacing());
     let ray = params.sampling.ray_spacing.unwrap_or(s);
     let z = Lattice::new(dims, volume.spacing(), [0.0, 0.0, 1.0], ray, s, [0.0; 3]);
-    let job = z.map_or(u64::MAX, |l| job_bytes(dims, &l, params, 1));
-    4 * (dims[0] * dims[1]) as u64 + job
+    let job = z.map_or(u64::MAX, |l| {
+        job_bytes(dims, &l, params, 1) + merge_bytes(crossing(dims, &l, 1))
+    });
+    (4 * (dims[0] * dims[1]) as u64).saturating_add(job)
 }
 
 /// [`search`](super::search)'s result, counted a slab of planes at a time within about `room`
@@ -142,7 +144,17 @@ impl<T: Voxel> Sweeps<'_, T> {
     ) -> Result<Vec<AxisEntropy>> {
         let dims = self.volume.dims();
         let window = BinSampler::<T>::window_bytes(dims, slab + 1);
-        let room = self.room.saturating_sub(window);
+        // Each thread may be stitching one lattice's slab to its sweep's pieces at a time.
+        let widest = lattices
+            .iter()
+            .map(|(l, s)| crossing(dims, l, s.every))
+            .max()
+            .unwrap_or(0);
+        let threads = rayon::current_num_threads().min(lattices.len()) as u64;
+        let room = self
+            .room
+            .saturating_sub(window)
+            .saturating_sub(threads * merge_bytes(widest));
         let (bins, block) = (self.params.sampling.bins, self.params.block);
         let mut out = Vec::with_capacity(lattices.len());
         let mut jobs: Vec<Job> = Vec::new();
@@ -230,22 +242,35 @@ fn planes(dims: [usize; 3], slab: usize) -> impl Iterator<Item = Range<usize>> {
         .map(move |z| z..(z + slab).min(cells))
 }
 
-/// The bytes one lattice counted in a sweep over a volume of `dims` may hold: its tables and
-/// a slab's (two of each), a band of rays being set up, and the open pieces of its rays, three
-/// for each ray crossing a plane of constant z while a slab's pieces (those entering it at its
-/// bottom and leaving it at its top) are stitched to the sweep's.
+/// The bytes one lattice counted in a sweep over a volume of `dims` holds between slabs: its
+/// tables and a slab's, a band of rays being set up, and an open piece for each ray crossing a
+/// plane of constant z.
 fn job_bytes(dims: [usize; 3], lattice: &Lattice, params: &ViewParams, every: u64) -> u64 {
     let bits = usize::BITS - (params.sampling.bins.max(2) - 1).leading_zeros();
     let tables = 32u64 << (bits as usize * params.block).min(40);
+    let ((i0, i1), _) = lattice.ray_ranges();
+    let band = SLAB_ROWS * (i1 - i0 + 1).max(1) as u64 * SLOT_BYTES;
+    tables + band + crossing(dims, lattice, every) * FRAGMENT
+}
+
+/// What stitching a slab's pieces to a sweep's takes beyond them, for a lattice whose rays
+/// crossing a plane are `crossing`: the slab's pieces (those entering it and those leaving it)
+/// and the stitched list while both are held.
+fn merge_bytes(crossing: u64) -> u64 {
+    5 * crossing * FRAGMENT
+}
+
+const FRAGMENT: u64 = std::mem::size_of::<Fragment>() as u64;
+
+/// An upper bound on the rays of `lattice` (one in `every`, as a subset keeps them) that cross
+/// a plane of constant z of a volume of `dims`: the plane's rectangle seen along the axis, and
+/// the rays on its outline.
+fn crossing(dims: [usize; 3], lattice: &Lattice, every: u64) -> u64 {
     let spacing = lattice.spacing();
     let [ex, ey] = [0, 1].map(|m| dims[m].saturating_sub(1) as f64 * spacing[m]);
     let rs = lattice.ray_spacing;
-    // The plane's rectangle seen along the axis, and the rays on its outline.
     let crossing = ex * ey * lattice.d[2].abs() / (rs * rs) + 2.0 * (ex + ey) / rs + 4.0;
-    let kept = crossing / every.max(1) as f64 + 16.0 * (ex + ey) / rs;
-    let ((i0, i1), _) = lattice.ray_ranges();
-    let band = SLAB_ROWS * (i1 - i0 + 1).max(1) as u64 * SLOT_BYTES;
-    tables + band + (kept * 3.0) as u64 * std::mem::size_of::<Fragment>() as u64
+    (crossing / every.max(1) as f64 + 16.0 * (ex + ey) / rs) as u64
 }
 
 #[cfg(test)]
