@@ -49,6 +49,7 @@ impl LessonPane {
         let what = match &self.subject {
             Some(Subject::Axis { .. }) => "why this viewpoint (← → another ray)",
             Some(Subject::Step { .. }) => "why this step (n p step)",
+            Some(Subject::Modes { .. }) => "the paper beside this tool's defaults",
             None => "",
         };
         format!(" Lesson: {what}  x closes ")
@@ -98,6 +99,11 @@ impl Widget for &LessonPane {
                 }
                 Lesson::Split(s) => split(s, self.theme, inner, buf),
                 Lesson::Merge(m) => merge(m, self.theme, inner, buf),
+                Lesson::Modes(m) => paragraph(
+                    text::mode_lines(m).into_iter().map(Line::from).collect(),
+                    inner,
+                    buf,
+                ),
                 Lesson::Optimal(o) => paragraph(
                     text::optimal_lines(o).into_iter().map(Line::from).collect(),
                     inner,

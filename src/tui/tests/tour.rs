@@ -3,14 +3,19 @@
 
 use slabscope::partition::Method;
 
-use super::{ready_app, screens};
-use crate::tui::app::tour::{PAGES, Row, Tour};
-use crate::tui::event::{Action, Effect};
+use slabscope::Monitor;
+
+use super::{ready_app, ready_paper_app, screens};
+use slabscope::explain::text::grouped;
+
+use crate::tui::app::tour::{MODES, PAGES, Row, Tour};
+use crate::tui::event::{Action, Effect, JobMsg, Task};
+use crate::tui::lesson::Lesson;
 
 #[test]
 fn every_page_sets_the_panes_it_speaks_of() {
     let mut app = ready_app();
-    app.tour = Some(Tour::new());
+    app.tour = Some(Tour::new(false));
     app.update(Action::TurnPage(-1));
     let last_view = app.views.len() - 1;
     let mut seen_lessons = 0;
@@ -46,11 +51,89 @@ fn every_page_sets_the_panes_it_speaks_of() {
 #[test]
 fn the_page_shows_below_the_panes() {
     let mut app = ready_app();
-    app.tour = Some(Tour::new());
+    app.tour = Some(Tour::new(false));
     app.update(Action::TurnPage(0));
     let shots = screens(&mut app, 80, 24, vec![]);
     let screen = &shots[0];
-    assert!(screen.contains("Tour, page 1 of 12"), "{screen}");
+    assert!(screen.contains("Tour (defaults), page 1 of 13"), "{screen}");
     assert!(screen.contains("Slabs:"), "{screen}");
     insta::assert_snapshot!("tour_page_1_80x24", screen);
+}
+
+/// Runs the lesson request among `effects` as the jobs would and hands the app its answer.
+fn answer(app: &mut crate::tui::app::App, effects: Vec<Effect>) {
+    let request = effects
+        .into_iter()
+        .find_map(|e| match e {
+            Effect::Lesson(r) => Some(r),
+            _ => None,
+        })
+        .expect("a lesson request");
+    let result = request.compute(&Monitor::none()).map(Box::new);
+    app.update(Action::Job(JobMsg::Lesson(request.generation, result)));
+}
+
+#[test]
+fn in_paper_mode_the_lists_h_is_the_lessons_h() {
+    let mut app = ready_paper_app();
+    app.tour = Some(Tour::new(true));
+    let effects = app.update(Action::TurnPage(2));
+    answer(&mut app, effects);
+    let views = app.views.views.ready().unwrap();
+    let listed = slabscope::view::score(&views.views[0]);
+    let Task::Ready(lesson) = &app.lesson.lesson else {
+        panic!("no lesson")
+    };
+    let Lesson::Axis { selected, .. } = lesson.as_ref() else {
+        panic!("an axis lesson")
+    };
+    assert_eq!(listed, selected.entropy_rate);
+    let listed = listed.to_owned();
+    assert!(views.views[0].phases.is_none());
+    let screen = &screens(&mut app, 160, 48, vec![])[0];
+    assert!(
+        screen.contains("Tour (paper mode), page 3 of 13"),
+        "{screen}"
+    );
+    // The lesson and, once it is closed, the list show it alike.
+    let h = format!("{listed:.4}");
+    assert!(
+        screen.contains(&format!("= {h} bits per sample")),
+        "{screen}"
+    );
+    app.update(Action::ToggleLesson);
+    let screen = &screens(&mut app, 160, 48, vec![])[0];
+    assert!(screen.contains(&h), "{screen}");
+}
+
+#[test]
+fn the_modes_page_shows_both_numbers_side_by_side() {
+    for (paper, mut app) in [(false, ready_app()), (true, ready_paper_app())] {
+        app.tour = Some(Tour::new(paper));
+        let effects = app.update(Action::TurnPage(MODES as isize));
+        answer(&mut app, effects);
+        let Task::Ready(lesson) = &app.lesson.lesson else {
+            panic!("no lesson")
+        };
+        let Lesson::Modes(m) = lesson.as_ref() else {
+            panic!("the modes' lesson")
+        };
+        let m = m.clone();
+        let phases = m.phases.unwrap();
+        let (small, large) = (
+            screens(&mut app, 80, 24, vec![]).remove(0),
+            screens(&mut app, 160, 48, vec![]).remove(0),
+        );
+        for n in [
+            format!("{:.4}", m.paper_h),
+            format!("{:.4}", phases.mean),
+            grouped(m.voxels),
+            grouped(m.without_background()),
+        ] {
+            assert!(large.contains(&n), "{n} not in\n{large}");
+        }
+        let name = if paper { "paper" } else { "defaults" };
+        insta::assert_snapshot!(format!("tour_modes_{name}_80x24"), small);
+        insta::assert_snapshot!(format!("tour_modes_{name}_160x48"), large);
+    }
 }
