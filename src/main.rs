@@ -55,8 +55,8 @@ struct TuiLook {
 enum Command {
     #[command(flatten)]
     Cli(cli::Command),
-    /// A guided tour of the paper's method in 13 pages on the TUI's live panes (Space or → next,
-    /// ← back, q quits)
+    /// A guided tour of the paper's method in 13 pages on the TUI's live panes (Space, → or Page
+    /// Down next, ← or Page Up back, q quits)
     Tour(TourArgs),
 }
 

@@ -1,5 +1,6 @@
 //! The guided tour (`slabscope tour`): the paper in thirteen short pages, each with the live panes
-//! set to show what it says. Space or → the next page, ← the one before, q quits.
+//! set to show what it says. Space, → or `PgDn` the next page, ← or `PgUp` the one before (as a
+//! presenter's remote sends them), q quits.
 //!
 //! Once the views and the histories are in, each page focuses a pane, selects the best or the
 //! worst viewpoint, shows a method at a slab count and opens or closes the lesson; the user may

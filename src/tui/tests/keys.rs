@@ -111,7 +111,10 @@ fn the_help_shows_the_keys_its_rows_bind() {
         }
     }
     assert_eq!(keymap::help().len(), BINDINGS.len());
-    assert_eq!(keymap::tour_hints(), "Space or → next, ← back, q quits");
+    assert_eq!(
+        keymap::tour_hints(),
+        "Space → PgDn next, ← PgUp back, q quits"
+    );
 }
 
 #[test]
@@ -162,17 +165,17 @@ fn the_tour_names_keys_that_do_what_it_says() {
         );
     };
     says(
-        7,
+        8,
         "n and p step through the history; + and - change the slab count",
     );
     assert!(matches!(in_tour('n'), Action::Step(1)));
     assert!(matches!(in_tour('p'), Action::Step(-1)));
     assert!(matches!(in_tour('+'), Action::Slabs(1)));
     assert!(matches!(in_tour('-'), Action::Slabs(-1)));
-    says(9, "m switches the method");
+    says(10, "m switches the method");
     assert!(matches!(in_tour('m'), Action::CycleMethod));
     says(
-        11,
+        12,
         "Orbit with [ ] { }, change the look with r f c; q ends the tour",
     );
     for c in ['[', ']', '{', '}'] {
@@ -183,6 +186,27 @@ fn the_tour_names_keys_that_do_what_it_says() {
     assert!(matches!(in_tour('c'), Action::CycleColormap));
     assert!(matches!(in_tour('q'), Action::Quit));
     assert!(matches!(in_tour(' '), Action::TurnPage(1)));
+}
+
+#[test]
+fn a_presenters_remote_turns_pages_in_the_tour_and_volumes_outside_it() {
+    let page = |code, touring| keymap::action(KeyEvent::from(code), false, touring);
+    assert!(matches!(
+        page(KeyCode::PageDown, true),
+        Some(Action::TurnPage(1))
+    ));
+    assert!(matches!(
+        page(KeyCode::PageUp, true),
+        Some(Action::TurnPage(-1))
+    ));
+    assert!(matches!(
+        page(KeyCode::PageDown, false),
+        Some(Action::Page(1))
+    ));
+    assert!(matches!(
+        page(KeyCode::PageUp, false),
+        Some(Action::Page(-1))
+    ));
 }
 
 #[test]
