@@ -6,9 +6,10 @@ use super::{
 };
 use crate::partition::{Slab, slab_text};
 
-/// `slices 12–40`.
+/// `slices 12–40`, or `slice 7` for one.
 fn slices(s: Slab) -> String {
-    format!("slices {}", slab_text(s))
+    let word = if s.1 <= s.0 + 1 { "slice" } else { "slices" };
+    format!("{word} {}", slab_text(s))
 }
 
 /// `[3 3 4]`.

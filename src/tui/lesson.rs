@@ -70,8 +70,8 @@ pub enum Lesson {
     },
     /// A top-down split.
     Split(Box<SplitLesson>),
-    /// A bottom-up merge.
-    Merge(Box<MergeLesson>),
+    /// A bottom-up merge, and the merges of its history.
+    Merge(Box<MergeLesson>, usize),
     /// The optimum beside greedy top-down.
     Optimal(OptimalLesson),
     /// The paper's numbers beside the defaults'.
@@ -126,7 +126,8 @@ impl LessonRequest {
                         Lesson::Split(Box::new(split_lesson(h, position).map_err(text)?))
                     }
                     Method::BottomUp => {
-                        Lesson::Merge(Box::new(merge_lesson(h, position, monitor).map_err(text)?))
+                        let m = merge_lesson(h, position, monitor).map_err(text)?;
+                        Lesson::Merge(Box::new(m), h.last(Method::BottomUp))
                     }
                     Method::Optimal => match optimal_lesson(h, position + 1) {
                         Some(o) => Lesson::Optimal(o),

@@ -236,6 +236,8 @@ impl App {
         if let Some(t) = self.tour.as_mut() {
             t.turn(by);
         }
+        // A message belongs to the page it was said on.
+        self.status.message = None;
         vec![]
     }
 
@@ -275,6 +277,8 @@ impl App {
             (self.lesson.subject, self.lesson.lesson) = (None, Task::Idle);
         }
         self.ray = (0, 0);
+        // What the terminal's answers said is not the page's.
+        self.status.notice = None;
         if let Some(t) = self.tour.as_mut() {
             (t.applied, t.numbers) = (true, numbers);
         }

@@ -98,7 +98,7 @@ impl Widget for &LessonPane {
                     }
                 }
                 Lesson::Split(s) => split(s, self.theme, inner, buf),
-                Lesson::Merge(m) => merge(m, self.theme, inner, buf),
+                Lesson::Merge(m, of) => merge(m, *of, self.theme, inner, buf),
                 Lesson::Modes(m) => paragraph(
                     text::mode_lines(m).into_iter().map(Line::from).collect(),
                     inner,
@@ -185,6 +185,21 @@ fn axis(
     lines
 }
 
+/// The ray each of `rows` pixel rows shows, of `n` rays picked evenly (`rows` ≤ `n`): the
+/// lesson's ray `selected` on its nearest row and on no other (a row that would show it again
+/// shows its neighbour), so one ▶ marks it.
+fn picked_rays(n: usize, rows: usize, selected: Option<usize>) -> Vec<usize> {
+    let own = selected.map(|s| s * rows / n);
+    (0..rows)
+        .map(|y| match (y * n / rows, selected) {
+            (_, Some(s)) if own == Some(y) => s,
+            (r, Some(s)) if r == s && s + 1 < n => s + 1,
+            (r, Some(s)) if r == s => s.saturating_sub(1),
+            (r, _) => r,
+        })
+        .collect()
+}
+
 /// The plane of rays holding the lesson's ray: a pixel row a ray (half blocks), a column a
 /// sample, grey by bin, the lesson's ray in yellow and marked ▶; rays and samples picked
 /// evenly where there are more than fit.
@@ -205,14 +220,8 @@ fn plane_picture(plane: &RayPlane, bins: usize, area: Rect, buf: &mut Buffer) {
     );
     let (n, k) = (plane.rays.len(), plane.bins[0].len());
     let (shown_rows, shown_cols) = (n.min(rows), k.min(cols));
-    let pick = |y: usize| -> usize {
-        let r = y * n / shown_rows;
-        // The lesson's ray always shows: its nearest pixel row is it.
-        match plane.selected {
-            Some(s) if s * shown_rows / n == y => s,
-            _ => r,
-        }
-    };
+    let picked = picked_rays(n, shown_rows, plane.selected);
+    let pick = |y: usize| picked[y];
     let colour = |r: usize, x: usize| -> Color {
         match plane.bins[r][x * k / shown_cols] {
             None => Color::Rgb(0, 0, 0),
@@ -395,9 +404,10 @@ fn gains(s: &SplitLesson, theme: Theme, area: Rect, mark: Rect, buf: &mut Buffer
     Paragraph::new(line).render(mark, buf);
 }
 
-/// A merge: its sentences and, in the rows they leave, the joint histogram as a heat map.
-fn merge(m: &MergeLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
-    let words = text::merge_lines(m, m.step.max(1));
+/// A merge, one of `of` in its history: its sentences and, in the rows they leave, the joint
+/// histogram as a heat map.
+fn merge(m: &MergeLesson, of: usize, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let words = text::merge_lines(m, of.max(m.step));
     let used = wrapped_rows(&words, area.width).min(area.height);
     let [top, map] = Layout::vertical([Constraint::Length(used), Constraint::Min(0)]).areas(area);
     paragraph(words.into_iter().map(Line::from).collect(), top, buf);
@@ -453,6 +463,24 @@ fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, buf: &mut Bu
         };
         if line.y < area.y + area.height {
             Paragraph::new(Line::from(spans)).render(line, buf);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::picked_rays;
+
+    #[test]
+    fn the_lessons_ray_shows_on_one_row_only() {
+        for n in 1..40 {
+            for rows in 1..=n {
+                for s in 0..n {
+                    let picked = picked_rays(n, rows, Some(s));
+                    let marked = picked.iter().filter(|&&r| r == s).count();
+                    assert_eq!(marked, 1, "ray {s} of {n} on {rows} rows: {picked:?}");
+                }
+            }
         }
     }
 }

@@ -134,9 +134,12 @@ fn a_steps_lesson_follows_the_steps_and_the_method() {
             ..
         }
     ));
-    let Lesson::Merge(merge) = lesson(&app) else {
+    let Lesson::Merge(merge, of) = lesson(&app) else {
         panic!("a merge lesson")
     };
+    // One merge of the whole history, as the status line counts its steps.
+    let history = app.part.ready().unwrap().last(Method::BottomUp);
+    assert_eq!(*of, history);
     let numbers = [merge.h_x, merge.h_y, merge.h_xy, merge.mi, merge.nmi];
     let (small, large) = (shown(&app, 80, 22), shown(&app, 160, 48));
     assert_shows(&small, &numbers);

@@ -137,3 +137,20 @@ fn the_modes_page_shows_both_numbers_side_by_side() {
         insta::assert_snapshot!(format!("tour_modes_{name}_160x48"), large);
     }
 }
+
+#[test]
+fn the_status_line_holds_only_the_pages_words() {
+    let mut app = ready_app();
+    app.status.notice = Some("tmux keeps images from the terminal".into());
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(0));
+    assert_eq!(app.status.notice, None);
+    app.status.message = Some("full resolution moved the cuts".into());
+    app.update(Action::TurnPage(1));
+    assert_eq!(app.status.message, None);
+    let screen = &screens(&mut app, 80, 24, vec![])[0];
+    assert!(
+        !screen.contains("tmux") && !screen.contains("moved"),
+        "{screen}"
+    );
+}
