@@ -154,3 +154,38 @@ fn the_status_line_holds_only_the_pages_words() {
         "{screen}"
     );
 }
+
+#[test]
+fn the_contrast_theme_draws_every_pane_on_its_own_background() {
+    let contrast = crate::tui::theme::Theme {
+        color: true,
+        contrast: true,
+    };
+    let mut app = super::ready_app_with(contrast);
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(6));
+    for (w, h) in [(80, 24), (160, 48)] {
+        let mut terminal =
+            ratatui::Terminal::new(ratatui::backend::TestBackend::new(w, h)).unwrap();
+        terminal
+            .draw(|frame| crate::tui::ui::draw(frame, &app))
+            .unwrap();
+        let buffer = terminal.backend().buffer();
+        let black = ratatui::style::Color::Rgb(0, 0, 0);
+        // Every pane but the preview (whose picture has its own colours) is black.
+        let a = crate::tui::ui::areas(buffer.area, true, None).unwrap();
+        let mut unpainted = Vec::new();
+        for pane in [a.views, a.slabs, a.curves, a.tour, a.status] {
+            for position in pane.positions() {
+                if buffer[position].bg != black {
+                    unpainted.push((position.x, position.y));
+                }
+            }
+        }
+        assert!(unpainted.is_empty(), "{w}x{h}: not black at {unpainted:?}");
+        // The curves' axes: the slices under the lower chart, each curve named on its own.
+        let screen = super::text(buffer);
+        assert!(screen.contains("NMI") && screen.contains("ΔI"), "{screen}");
+        insta::assert_snapshot!(format!("tour_curves_contrast_{w}x{h}"), screen);
+    }
+}
