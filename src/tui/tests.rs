@@ -94,6 +94,12 @@ fn ready_paper_app() -> App {
         ..Screen::default()
     };
     let (mut app, _) = App::new("body.nrrd".into(), params, screen);
+    feed(&mut app, volume, views, analysis);
+    app
+}
+
+/// Hands `app` the volume, its view search and its histories, as the jobs would report them.
+fn feed(app: &mut App, volume: &Arc<Volume>, views: &ViewSearch, histories: &Arc<Histories>) {
     app.update(Action::Job(JobMsg::Loaded(Ok((
         Arc::clone(volume),
         vec![],
@@ -102,9 +108,8 @@ fn ready_paper_app() -> App {
     app.update(Action::Job(JobMsg::Analysis(
         1,
         0,
-        Ok(Arc::clone(analysis)),
+        Ok(Arc::clone(histories)),
     )));
-    app
 }
 
 /// An app with the default parameters.

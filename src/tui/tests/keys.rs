@@ -190,23 +190,19 @@ fn the_tour_names_keys_that_do_what_it_says() {
 
 #[test]
 fn a_presenters_remote_turns_pages_in_the_tour_and_volumes_outside_it() {
-    let page = |code, touring| keymap::action(KeyEvent::from(code), false, touring);
-    assert!(matches!(
-        page(KeyCode::PageDown, true),
-        Some(Action::TurnPage(1))
-    ));
-    assert!(matches!(
-        page(KeyCode::PageUp, true),
-        Some(Action::TurnPage(-1))
-    ));
-    assert!(matches!(
-        page(KeyCode::PageDown, false),
-        Some(Action::Page(1))
-    ));
-    assert!(matches!(
-        page(KeyCode::PageUp, false),
-        Some(Action::Page(-1))
-    ));
+    for (code, touring, by) in [
+        (KeyCode::PageDown, true, 1),
+        (KeyCode::PageUp, true, -1),
+        (KeyCode::PageDown, false, 1),
+        (KeyCode::PageUp, false, -1),
+    ] {
+        let turned = match keymap::action(KeyEvent::from(code), false, touring) {
+            Some(Action::TurnPage(n)) if touring => n,
+            Some(Action::Page(n)) if !touring => n,
+            _ => panic!("{code:?} (touring: {touring}) does not turn"),
+        };
+        assert_eq!(turned, by, "{code:?} (touring: {touring})");
+    }
 }
 
 #[test]

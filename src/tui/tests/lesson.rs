@@ -11,7 +11,7 @@ use crate::tui::lesson::{Lesson, Subject};
 
 /// Runs the lesson request among `effects` as the jobs would and hands the app its answer;
 /// returns the subject it was about.
-fn answer(app: &mut App, effects: Vec<Effect>) -> Subject {
+pub(super) fn answer(app: &mut App, effects: Vec<Effect>) -> Subject {
     let request = effects
         .into_iter()
         .find_map(|e| match e {

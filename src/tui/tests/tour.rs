@@ -3,13 +3,12 @@
 
 use slabscope::partition::Method;
 
-use slabscope::Monitor;
-
+use super::lesson::answer;
 use super::{ready_app, ready_paper_app, screens};
 use slabscope::explain::text::grouped;
 
 use crate::tui::app::tour::{MODES, PAGES, Row, Tour};
-use crate::tui::event::{Action, Effect, JobMsg, Task};
+use crate::tui::event::{Action, Effect, Task};
 use crate::tui::lesson::Lesson;
 
 #[test]
@@ -58,19 +57,6 @@ fn the_page_shows_below_the_panes() {
     assert!(screen.contains("Tour (defaults), page 1 of 13"), "{screen}");
     assert!(screen.contains("Slabs:"), "{screen}");
     insta::assert_snapshot!("tour_page_1_80x24", screen);
-}
-
-/// Runs the lesson request among `effects` as the jobs would and hands the app its answer.
-fn answer(app: &mut crate::tui::app::App, effects: Vec<Effect>) {
-    let request = effects
-        .into_iter()
-        .find_map(|e| match e {
-            Effect::Lesson(r) => Some(r),
-            _ => None,
-        })
-        .expect("a lesson request");
-    let result = request.compute(&Monitor::none()).map(Box::new);
-    app.update(Action::Job(JobMsg::Lesson(request.generation, result)));
 }
 
 #[test]
