@@ -144,6 +144,14 @@ fn a_steps_lesson_follows_the_steps_and_the_method() {
     let (small, large) = (shown(&app, 80, 22), shown(&app, 160, 48));
     assert_shows(&small, &numbers);
     assert_shows(&large, &numbers);
+    // The heat map's axes: X's bins down, Y's across, and its colour scale up to the most.
+    for text in [&small, &large] {
+        assert!(text.contains("X's bin down, Y's across"), "{text}");
+        assert!(
+            text.contains("   1  ") && text.contains(" counts"),
+            "{text}"
+        );
+    }
     insta::assert_snapshot!("lesson_merge_80x22", small);
     insta::assert_snapshot!("lesson_merge_160x48", large);
     // The optimum beside greedy.
