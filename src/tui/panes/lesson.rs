@@ -337,15 +337,17 @@ fn split(s: &SplitLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
         s.at
     );
     let used = wrapped_rows(&words, area.width);
-    let bar = (area.height.saturating_sub(used + 1) / 4).clamp(1, 6);
+    let bar = (area.height.saturating_sub(used + 3) / 4).clamp(1, 6);
     let [top, rest] =
-        Layout::vertical([Constraint::Min(3), Constraint::Length(4 * bar + 1)]).areas(area);
+        Layout::vertical([Constraint::Min(3), Constraint::Length(4 * bar + 3)]).areas(area);
     paragraph(words.into_iter().map(Line::from).collect(), top, buf);
     let rows = Layout::vertical([
         Constraint::Length(bar),
         Constraint::Length(bar),
         Constraint::Length(bar),
+        Constraint::Length(1),
         Constraint::Length(bar),
+        Constraint::Length(1),
         Constraint::Length(1),
     ])
     .split(rest);
@@ -356,14 +358,60 @@ fn split(s: &SplitLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
     ]) {
         bars(label, counts, theme, *row, buf);
     }
-    gains(s, theme, rows[3], rows[4], buf);
+    // The three histograms share their bins: ticked once, under them.
+    let each = bar_width(rows[0], s.first.len());
+    let last = s.first.len().saturating_sub(1);
+    ticks(
+        "bin",
+        &[(0, 0), (last / 2 * each, last / 2), (last * each, last)],
+        rows[3],
+        buf,
+    );
+    gains(s, theme, rows[4], rows[5], buf);
+    let (first, end) = (s.split.0 + 1, s.split.1 - 1);
+    let width = usize::from(rows[6].width.saturating_sub(LABEL));
+    let n = s.gains.len().max(1);
+    let column = |slice: usize| (slice - first) * width.min(n) / n;
+    ticks("slice", &[(0, first), (column(end), end)], rows[6], buf);
 }
 
-/// A labelled bar chart of `counts` on a log scale, as many columns a bin as fit.
+/// The columns of the label left of each chart of the split.
+const LABEL: u16 = 11;
+
+/// The columns a bin takes in a bar chart of `bins` bins in `area` (label included).
+fn bar_width(area: Rect, bins: usize) -> usize {
+    (usize::from(area.width.saturating_sub(LABEL)) / bins.max(1)).clamp(1, 3)
+}
+
+/// A row of ticks under a chart: `name` in the label's columns, each value at its column of
+/// the chart (one that would overlap the one before, or not fit, is left out).
+fn ticks(name: &str, at: &[(usize, usize)], area: Rect, buf: &mut Buffer) {
+    let mut line = format!("{name:>10} ");
+    for &(column, value) in at {
+        let text = value.to_string();
+        let start = usize::from(LABEL) + column;
+        let taken = line.chars().count();
+        let fits = start + text.len() <= usize::from(area.width);
+        if fits && (start > taken || taken == usize::from(LABEL)) {
+            line.push_str(&" ".repeat(start - taken));
+            line.push_str(&text);
+        }
+    }
+    Paragraph::new(line).render(area, buf);
+}
+
+/// A labelled bar chart of `counts` on a log scale, as many columns a bin as fit; the label
+/// says the largest count, the chart's top.
 fn bars(label: &str, counts: &[u64], theme: Theme, area: Rect, buf: &mut Buffer) {
-    let [l, chart] = Layout::horizontal([Constraint::Length(11), Constraint::Min(0)]).areas(area);
-    Paragraph::new(format!("{label} log")).render(l, buf);
-    let each = (usize::from(chart.width) / counts.len().max(1)).clamp(1, 3);
+    let [l, chart] =
+        Layout::horizontal([Constraint::Length(LABEL), Constraint::Min(0)]).areas(area);
+    let most = counts.iter().copied().max().unwrap_or(0);
+    Paragraph::new(vec![
+        Line::from(format!("{label} log")),
+        Line::from(format!("≤{}", text::grouped(most))),
+    ])
+    .render(l, buf);
+    let each = bar_width(area, counts.len());
     let data: Vec<u64> = counts
         .iter()
         .flat_map(|&c| std::iter::repeat_n(((c as f64).ln_1p() * 1000.0) as u64, each))
@@ -377,8 +425,14 @@ fn bars(label: &str, counts: &[u64], theme: Theme, area: Rect, buf: &mut Buffer)
 /// The gain at every cut of the slab, squeezed to the width (the largest of each column's cuts),
 /// and a mark under the cut taken.
 fn gains(s: &SplitLesson, theme: Theme, area: Rect, mark: Rect, buf: &mut Buffer) {
-    let [l, chart] = Layout::horizontal([Constraint::Length(11), Constraint::Min(0)]).areas(area);
-    Paragraph::new("ΔI cuts".to_string()).render(l, buf);
+    let [l, chart] =
+        Layout::horizontal([Constraint::Length(LABEL), Constraint::Min(0)]).areas(area);
+    let most = s.gains.iter().copied().fold(0.0f64, f64::max);
+    Paragraph::new(vec![
+        Line::from("ΔI cuts"),
+        Line::from(format!("≤{most:.4}")),
+    ])
+    .render(l, buf);
     let n = s.gains.len().max(1);
     let columns = usize::from(chart.width).clamp(1, n);
     let column = |i: usize| i * columns / n;

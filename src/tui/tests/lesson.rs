@@ -117,6 +117,11 @@ fn a_steps_lesson_follows_the_steps_and_the_method() {
     let (small, large) = (shown(&app, 80, 22), shown(&app, 160, 48));
     assert_shows(&small, &numbers);
     assert_shows(&large, &numbers);
+    // The histograms' shared bins and the cuts' slices are ticked, each chart's top said.
+    for text in [&small, &large] {
+        assert!(text.contains("bin 0") && text.contains("slice"), "{text}");
+        assert!(text.contains(&format!("≤{:.4}", split.gain)), "{text}");
+    }
     insta::assert_snapshot!("lesson_split_80x22", small);
     insta::assert_snapshot!("lesson_split_160x48", large);
     // Stepping back explains the split now last.
