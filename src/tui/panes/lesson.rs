@@ -383,20 +383,26 @@ fn bar_width(area: Rect, bins: usize) -> usize {
     (usize::from(area.width.saturating_sub(LABEL)) / bins.max(1)).clamp(1, 3)
 }
 
-/// A row of ticks under a chart: `name` in the label's columns, each value at its column of
-/// the chart (one that would overlap the one before, or not fit, is left out).
-fn ticks(name: &str, at: &[(usize, usize)], area: Rect, buf: &mut Buffer) {
-    let mut line = format!("{name:>10} ");
+/// A row of ticks under a chart: `name` right-aligned in the `label` columns left of the chart,
+/// then each value at its column of the chart (one that would touch the one before, or not fit
+/// in `width`, is left out).
+fn tick_line(name: &str, label: usize, at: &[(usize, usize)], width: usize) -> String {
+    let mut line = format!("{name:>w$} ", w = label.saturating_sub(1));
     for &(column, value) in at {
         let text = value.to_string();
-        let start = usize::from(LABEL) + column;
+        let start = label + column;
         let taken = line.chars().count();
-        let fits = start + text.len() <= usize::from(area.width);
-        if fits && (start > taken || taken == usize::from(LABEL)) {
+        if start + text.len() <= width && (start > taken || taken == label) {
             line.push_str(&" ".repeat(start - taken));
             line.push_str(&text);
         }
     }
+    line
+}
+
+/// [`tick_line`] drawn in `area`, under a chart of the split.
+fn ticks(name: &str, at: &[(usize, usize)], area: Rect, buf: &mut Buffer) {
+    let line = tick_line(name, usize::from(LABEL), at, usize::from(area.width));
     Paragraph::new(line).render(area, buf);
 }
 
@@ -515,13 +521,13 @@ fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, buf: &mut Bu
         lines.push(Line::from(spans));
     }
     // Y's bins under the map: its first, middle and last cell.
-    let mut ticks = " ".repeat(TICKS + n);
-    for c in [0, n / 2, n - 1] {
-        let label = (c * group).to_string();
-        let at = (TICKS + c).min(ticks.len() - label.len());
-        ticks.replace_range(at..at + label.len(), &label);
-    }
-    lines.push(Line::from(ticks));
+    let at = [0, n / 2, n - 1].map(|c| (c, c * group));
+    lines.push(Line::from(tick_line(
+        "",
+        TICKS,
+        &at,
+        usize::from(area.width),
+    )));
     let mut scale = vec![Span::raw("   1 ")];
     scale.extend((0..=8).map(|i| heat_cell(f64::from(i) / 8.0, f64::from(i) / 8.0, theme)));
     scale.push(Span::raw(format!(" {top} counts")));
@@ -552,7 +558,21 @@ fn heat_cell(upper: f64, lower: f64, theme: Theme) -> Span<'static> {
 
 #[cfg(test)]
 mod tests {
-    use super::picked_rays;
+    use super::{picked_rays, tick_line};
+
+    #[test]
+    fn ticks_stand_at_their_columns_and_never_touch() {
+        assert_eq!(
+            tick_line("bin", 6, &[(0, 0), (4, 16), (9, 31)], 40),
+            "  bin 0   16   31"
+        );
+        // 30 would touch 18: left out, as a tick past the width.
+        assert_eq!(
+            tick_line("", 5, &[(0, 0), (3, 18), (5, 30)], 40),
+            "     0  18"
+        );
+        assert_eq!(tick_line("", 5, &[(0, 0), (30, 99)], 20), "     0");
+    }
 
     #[test]
     fn the_lessons_ray_shows_on_one_row_only() {
