@@ -529,7 +529,12 @@ fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, buf: &mut Bu
         usize::from(area.width),
     )));
     let mut scale = vec![Span::raw("   1 ")];
-    scale.extend((0..=8).map(|i| heat_cell(f64::from(i) / 8.0, f64::from(i) / 8.0, theme)));
+    // From one count's shade (not the empty cells') to the most's.
+    let one = level(1);
+    scale.extend((0..=8).map(|i| {
+        let v = one + (1.0 - one) * f64::from(i) / 8.0;
+        heat_cell(v, v, theme)
+    }));
     scale.push(Span::raw(format!(" {top} counts")));
     lines.push(Line::from(scale));
     Paragraph::new(lines).render(
