@@ -55,20 +55,35 @@ struct TuiLook {
 enum Command {
     #[command(flatten)]
     Cli(cli::Command),
-    /// A guided tour of the paper's method in 12 pages on the TUI's live panes (Space or → next,
-    /// ← back, q quits)
-    Tour(TuiArgs),
+    /// A guided tour of the paper's method in 13 pages on the TUI's live panes (Space, → or Page
+    /// Down next, ← or Page Up back, q quits)
+    Tour(TourArgs),
+}
+
+/// The tour's arguments: the TUI's, and paper mode.
+#[derive(Debug, clap::Args)]
+struct TourArgs {
+    #[command(flatten)]
+    tui: TuiArgs,
+    #[command(flatten)]
+    tour: cli::TourArgs,
 }
 
 /// Opens the TUI as `args` say, with the tour when `tour`.
-fn open_tui(args: TuiArgs, tour: bool) -> anyhow::Result<u8> {
+fn open_tui(mut args: TuiArgs, tour: Option<cli::TourArgs>) -> anyhow::Result<u8> {
+    let paper = tour.as_ref().is_some_and(cli::TourArgs::paper);
+    if paper {
+        args.analysis
+            .given
+            .set(&slabscope::params::table::PAPER, "true");
+    }
     tui::run(tui::Options {
         load: args.load.options()?,
         analysis: args.analysis.params(true)?,
         file: args.file,
         protocol: args.look.protocol,
         theme: args.look.theme,
-        tour,
+        tour: tour.map(|_| tui::TourMode { paper }),
     })
     .map(|()| 0)
 }
@@ -78,13 +93,13 @@ fn main() -> ExitCode {
     let args = Cli::parse();
     let load = match &args.command {
         Some(Command::Cli(command)) => command.load(),
-        Some(Command::Tour(t)) => Some(&t.load),
+        Some(Command::Tour(t)) => Some(&t.tui.load),
         None => Some(&args.tui.load),
     };
     let result = cli::use_threads(load).and_then(|()| match args.command {
         Some(Command::Cli(command)) => cli::run(command),
-        Some(Command::Tour(t)) => open_tui(t, true),
-        None => open_tui(args.tui, false),
+        Some(Command::Tour(t)) => open_tui(t.tui, Some(t.tour)),
+        None => open_tui(args.tui, None),
     });
     let code = match result {
         Ok(code) => ExitCode::from(code),

@@ -13,6 +13,16 @@ pub type LoadArgs = Flags<params::Load>;
 /// How to find the most structured view and the slabs along it.
 pub type AnalysisArgs = Flags<params::Analysis>;
 
+/// The tour's own flags: paper mode.
+pub type TourArgs = Flags<params::Tour>;
+
+impl TourArgs {
+    /// Whether the tour runs in paper mode (`--paper`).
+    pub fn paper(&self) -> bool {
+        self.given.has(&slabscope::params::table::PAPER)
+    }
+}
+
 impl LoadArgs {
     /// The library's load options.
     pub fn options(&self) -> slabscope::Result<LoadOptions> {

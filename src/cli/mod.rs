@@ -36,7 +36,7 @@ use slabscope::error::shown;
 use slabscope::formats::{check_output, same_file};
 use slabscope::{Error, Loaded};
 
-pub use args::{AnalysisArgs, LoadArgs};
+pub use args::{AnalysisArgs, LoadArgs, TourArgs};
 
 /// The subcommands.
 #[derive(Debug, Subcommand)]

@@ -128,6 +128,10 @@ set!(
     Analysis => table::ANALYSIS.to_vec()
 );
 set!(
+    /// The tour's own: paper mode.
+    Tour => table::TOUR.to_vec()
+);
+set!(
     /// How to read the input.
     Load => table::LOAD.to_vec()
 );

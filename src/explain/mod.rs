@@ -5,6 +5,7 @@
 //! lesson pane and the tour all show these values, computed here once.
 
 mod axis;
+mod modes;
 mod steps;
 pub mod text;
 
@@ -14,6 +15,7 @@ pub use axis::{
     AxisLesson, BlockCount, RayPlane, RaySamples, axis_lesson, ray_plane, ray_samples,
     table_entropy,
 };
+pub use modes::{ModeLesson, mode_lesson};
 pub use steps::{
     MergeLesson, OptimalLesson, RunnerUp, SplitLesson, merge_lesson, merge_lessons, optimal_lesson,
     split_lesson,

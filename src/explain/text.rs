@@ -1,12 +1,15 @@
 //! The lessons as sentences with their numbers, as `analyze --explain` prints them and the TUI's
 //! lesson pane shows them: every number that decides a step, written out with the formula.
 
-use super::{AxisLesson, AxisRole, BlockCount, Explain, MergeLesson, OptimalLesson, SplitLesson};
+use super::{
+    AxisLesson, AxisRole, BlockCount, Explain, MergeLesson, ModeLesson, OptimalLesson, SplitLesson,
+};
 use crate::partition::{Slab, slab_text};
 
-/// `slices 12–40`.
+/// `slices 12–40`, or `slice 7` for one.
 fn slices(s: Slab) -> String {
-    format!("slices {}", slab_text(s))
+    let word = if s.1 <= s.0 + 1 { "slice" } else { "slices" };
+    format!("{word} {}", slab_text(s))
 }
 
 /// `[3 3 4]`.
@@ -36,6 +39,40 @@ pub fn top_blocks(table: &[BlockCount], n: usize) -> String {
         .map(|b| format!("{} ×{}", block_text(&b.symbols), grouped(b.count)))
         .collect();
     shown.join(" · ")
+}
+
+/// The lines of the paper's numbers beside the defaults' for one axis.
+pub fn mode_lines(m: &ModeLesson) -> Vec<String> {
+    let [x, y, z] = m.axis;
+    let share = 100.0 * m.background as f64 / m.voxels.max(1) as f64;
+    let mut lines = vec![
+        format!("h along ({x:.2}, {y:.2}, {z:.2}), bits per sample:"),
+        format!(
+            "  the paper's lattice  h = {:.4}  (paper mode ranks by it)",
+            m.paper_h
+        ),
+    ];
+    if let Some(p) = m.phases {
+        lines.push(format!(
+            "  mean of {} lattices   h = {:.4}  (defaults rank by it; {:.4}–{:.4})",
+            p.n, p.mean, p.min, p.max
+        ));
+    }
+    lines.extend([
+        "v_T, the samples the slabs count:".into(),
+        format!(
+            "  every voxel        v_T = {}  (the paper, paper mode)",
+            grouped(m.voxels)
+        ),
+        format!(
+            "  background out     v_T = {}  (defaults: {share:.1}% is background)",
+            grouped(m.without_background()),
+        ),
+        "Why: one lattice lines up with some axes better than others, which moves h by more \
+         than the axes differ; air around the object makes every slab's histogram alike."
+            .into(),
+    ]);
+    lines
 }
 
 /// The lines of one axis's lesson, headed by `title` (the axis as the caller writes it).

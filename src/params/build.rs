@@ -4,7 +4,7 @@
 use super::table::{
     AXIS, AXIS_BY, BACKGROUND, BINS, BLOCK, CHANNEL, COLORMAP, DIMS, ELEVATION, ENDIAN, GAIN, GAP,
     HIGHLIGHT, INCLUDE_LOCALIZERS, LABEL_IMAGE, LEVEL, MAX_MEMORY, METHOD, MODE, NO_LABELS,
-    NO_OUTLINES, NO_SHADING, OFFSET, PERSPECTIVE, PHASE_SUBSET, PHASES, RAY_SPACING, REFINE,
+    NO_OUTLINES, NO_SHADING, OFFSET, PAPER, PERSPECTIVE, PHASE_SUBSET, PHASES, RAY_SPACING, REFINE,
     RESAMPLE, SAMPLE_SPACING, SERIES, SHOW_PHI, SLABS, SOLO, SPACING, SPREAD, STEP, TF, THREADS,
     THRESHOLD, TYPE, VOLUME, WINDOW, ZOOM,
 };
@@ -51,6 +51,8 @@ impl Given {
             Some(t) => Stop::Threshold(t),
             None => Stop::Slabs(self.number(&SLABS)?),
         };
+        // The paper's way: its single lattice, every voxel counted.
+        let paper = self.switch(&PAPER)?;
         Ok(AnalysisParams {
             view: ViewParams {
                 sampling: SamplingParams {
@@ -60,7 +62,7 @@ impl Given {
                 },
                 block: self.number(&BLOCK)?,
                 level: self.number(&LEVEL)?,
-                phases: self.number(&PHASES)?,
+                phases: if paper { 0 } else { self.number(&PHASES)? },
                 phase_subset: self.number(&PHASE_SUBSET)?,
                 refine: self.switch(&REFINE)?,
                 ..ViewParams::default()
@@ -69,9 +71,12 @@ impl Given {
             search_views: self.switch(&super::table::VIEWS)?,
             method: self.word(&METHOD)?,
             stop,
-            background: self
-                .parsed(&BACKGROUND, text::background)?
-                .unwrap_or(BackgroundRule::Auto),
+            background: if paper {
+                BackgroundRule::None
+            } else {
+                self.parsed(&BACKGROUND, text::background)?
+                    .unwrap_or(BackgroundRule::Auto)
+            },
             axis_by: self.word(&AXIS_BY)?,
             gain: self.switch(&GAIN)?,
             explain: None,

@@ -554,9 +554,25 @@ pub const LOAD: &[&Param] = &[
 /// The pictures' and slices' own entries.
 pub const PICTURES: &[&Param] = &[&VIEWS, &RESOLUTION, &RENDER_SIZE, &SLICE_SIZE, &INDEX];
 
+// The tour's own.
+
+pub const PAPER: Param = Param {
+    conflicts: &["phases", "background"],
+    ..param(
+        "paper",
+        "paper",
+        "Follow the paper exactly: rank by its single lattice and count every voxel (the named \
+         form of --phases 0 --background none)",
+        Takes::Switch,
+    )
+};
+
+/// The tour's parameters.
+pub const TOUR: &[&Param] = &[&PAPER];
+
 /// Every entry, for looking one up by name.
 pub fn all() -> impl Iterator<Item = &'static Param> {
-    [ANALYSIS, LOOK, SCENE_FIRST, SCENE, PICTURES, LOAD]
+    [ANALYSIS, LOOK, SCENE_FIRST, SCENE, PICTURES, LOAD, TOUR]
         .into_iter()
         .flatten()
         .copied()

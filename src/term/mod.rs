@@ -207,7 +207,8 @@ pub fn choose(
         Protocol::Auto if replies.is_none() && env.term == "xterm-kitty" => Graphics::Kitty,
         Protocol::Auto | Protocol::Blocks => Graphics::Blocks,
     };
-    if passthrough == Some(Passthrough::Off) {
+    // Said only when the images were asked of the terminal: one who chose a protocol chose it.
+    if passthrough == Some(Passthrough::Off) && choice == Protocol::Auto {
         notes.push(format!(
             "tmux keeps images from the terminal: `{}` lets them through (then restart slabscope)",
             tmux::ENABLE

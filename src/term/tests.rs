@@ -126,6 +126,15 @@ fn tmux_passes_the_outer_terminal_or_says_how() {
     );
     assert_eq!(off.graphics, Graphics::Blocks);
     assert!(off.note.unwrap().contains(tmux::ENABLE));
+    // Half-blocks chosen by name: nothing to say about tmux's passthrough.
+    let blocks = choose(
+        Protocol::Blocks,
+        &tmux_env,
+        Some(Passthrough::Off),
+        Some(&parse(TMUX_ITSELF)),
+        None,
+    );
+    assert_eq!((blocks.graphics, blocks.note), (Graphics::Blocks, None));
     // The outer window's pixels say nothing about a tmux pane's cells.
     let r = Replies {
         window: Some((1000, 660)),

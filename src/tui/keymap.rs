@@ -238,20 +238,26 @@ pub const BINDINGS: &[Binding] = &[
     ),
 ];
 
-/// The tour's keys, before those of the panes; its page's title shows them as hints.
+/// The tour's keys, before those of the panes; its page's title shows them as hints. `PgUp` and
+/// `PgDn`, which a presenter's remote sends, turn pages here (outside the tour they open a
+/// folder's volumes).
 pub const TOUR: &[Binding] = &[
     row(
-        "Space or →",
+        "Space → PgDn",
         "next",
         &[
             (ch(' '), || Action::TurnPage(1)),
             (code(KeyCode::Right), || Action::TurnPage(1)),
+            (code(KeyCode::PageDown), || Action::TurnPage(1)),
         ],
     ),
     row(
-        "←",
+        "← PgUp",
         "back",
-        &[(code(KeyCode::Left), || Action::TurnPage(-1))],
+        &[
+            (code(KeyCode::Left), || Action::TurnPage(-1)),
+            (code(KeyCode::PageUp), || Action::TurnPage(-1)),
+        ],
     ),
     row("q", "quits", &[(ch('q'), || Action::Quit)]),
 ];
@@ -313,7 +319,7 @@ pub fn help() -> Vec<(&'static str, &'static str)> {
     BINDINGS.iter().map(|b| (b.keys, b.help)).collect()
 }
 
-/// The tour's hints: `Space or → next, ← back, q quits`.
+/// The tour's hints: `Space → PgDn next, ← PgUp back, q quits`.
 pub fn tour_hints() -> String {
     TOUR.iter()
         .map(|b| format!("{} {}", b.keys, b.help))

@@ -4,8 +4,8 @@
 use std::sync::Arc;
 
 use slabscope::explain::{
-    AxisLesson, MergeLesson, OptimalLesson, RayPlane, RaySamples, SplitLesson, axis_lesson,
-    merge_lesson, optimal_lesson, ray_plane, ray_samples, split_lesson,
+    AxisLesson, MergeLesson, ModeLesson, OptimalLesson, RayPlane, RaySamples, SplitLesson,
+    axis_lesson, merge_lesson, mode_lesson, optimal_lesson, ray_plane, ray_samples, split_lesson,
 };
 use slabscope::partition::Method;
 use slabscope::{Histories, Monitor, ViewParams, Volume};
@@ -21,6 +21,12 @@ pub enum Subject {
         best: [f64; 3],
         /// The ray's offset from the central ray, along the lattice's two in-plane directions.
         offset: (i64, i64),
+    },
+    /// The paper's numbers beside the defaults' for the selected axis (the tour's page on the
+    /// modes).
+    Modes {
+        /// The selected axis.
+        axis: [f64; 3],
     },
     /// The last step taken to reach `position` of `method`'s history (for the optimum: the
     /// partition into `position + 1` slabs).
@@ -64,10 +70,12 @@ pub enum Lesson {
     },
     /// A top-down split.
     Split(Box<SplitLesson>),
-    /// A bottom-up merge.
-    Merge(Box<MergeLesson>),
+    /// A bottom-up merge, and the merges of its history.
+    Merge(Box<MergeLesson>, usize),
     /// The optimum beside greedy top-down.
     Optimal(OptimalLesson),
+    /// The paper's numbers beside the defaults'.
+    Modes(Box<ModeLesson>),
     /// Nothing to explain yet, and why.
     Nothing(String),
 }
@@ -94,6 +102,14 @@ impl LessonRequest {
                     best: lesson(*best).map_err(text)?,
                 })
             }
+            Subject::Modes { axis } => {
+                let volume = self
+                    .volume
+                    .as_deref()
+                    .ok_or("the volume is not loaded yet")?;
+                let lesson = mode_lesson(volume, *axis, &self.view, monitor).map_err(text)?;
+                Ok(Lesson::Modes(Box::new(lesson)))
+            }
             Subject::Step {
                 method, position, ..
             } => {
@@ -110,7 +126,8 @@ impl LessonRequest {
                         Lesson::Split(Box::new(split_lesson(h, position).map_err(text)?))
                     }
                     Method::BottomUp => {
-                        Lesson::Merge(Box::new(merge_lesson(h, position, monitor).map_err(text)?))
+                        let m = merge_lesson(h, position, monitor).map_err(text)?;
+                        Lesson::Merge(Box::new(m), h.last(Method::BottomUp))
                     }
                     Method::Optimal => match optimal_lesson(h, position + 1) {
                         Some(o) => Lesson::Optimal(o),

@@ -55,8 +55,15 @@ pub struct Options {
     pub analysis: AnalysisParams,
     /// The colours.
     pub theme: theme::ThemeChoice,
-    /// Run the guided tour.
-    pub tour: bool,
+    /// Run the guided tour, and how.
+    pub tour: Option<TourMode>,
+}
+
+/// How the tour runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TourMode {
+    /// Paper mode: the paper's single lattice and every voxel (`tour --paper`).
+    pub paper: bool,
 }
 
 /// The folder `file` names, with the volumes it holds, when it opens with a pane of them: a folder of
@@ -154,8 +161,8 @@ pub fn run(options: Options) -> Result<()> {
             Some((root, paths)) => App::for_folder(root, paths, analysis, screen),
             None => App::new(name.clone(), analysis, screen),
         };
-        if tour {
-            app.tour = Some(app::tour::Tour::new());
+        if let Some(mode) = tour {
+            app.tour = Some(app::tour::Tour::new(mode.paper));
         }
         run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)?;
         // The user saw why; the exit status says so too.

@@ -60,6 +60,58 @@ fn fixture() -> &'static (Arc<Volume>, ViewSearch, Arc<Histories>) {
     })
 }
 
+/// The fixture's volume searched and partitioned the paper's way (`tour --paper`).
+fn paper_fixture() -> &'static (ViewSearch, Arc<Histories>) {
+    static FIXTURE: OnceLock<(ViewSearch, Arc<Histories>)> = OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let volume = &fixture().0;
+        let views = search(volume, &ViewParams::paper(), &Monitor::none()).unwrap();
+        let stack = StackParams {
+            background: slabscope::volume::background::BackgroundRule::None,
+            ..StackParams::default()
+        };
+        let histories = Histories::new(
+            volume,
+            views.best().axis,
+            &stack,
+            Scope::ALL,
+            &Monitor::none(),
+        );
+        (views, Arc::new(histories.unwrap()))
+    })
+}
+
+/// An app in paper mode taken through loading, the view search and the analysis.
+fn ready_paper_app() -> App {
+    let (volume, ..) = fixture();
+    let (views, analysis) = paper_fixture();
+    let params = slabscope::params::Given::new()
+        .with(&slabscope::params::table::PAPER, "true")
+        .analysis()
+        .unwrap();
+    let screen = Screen {
+        theme: PLAIN,
+        ..Screen::default()
+    };
+    let (mut app, _) = App::new("body.nrrd".into(), params, screen);
+    feed(&mut app, volume, views, analysis);
+    app
+}
+
+/// Hands `app` the volume, its view search and its histories, as the jobs would report them.
+fn feed(app: &mut App, volume: &Arc<Volume>, views: &ViewSearch, histories: &Arc<Histories>) {
+    app.update(Action::Job(JobMsg::Loaded(Ok((
+        Arc::clone(volume),
+        vec![],
+    )))));
+    app.update(Action::Job(JobMsg::Views(0, Ok(Box::new(views.clone())))));
+    app.update(Action::Job(JobMsg::Analysis(
+        1,
+        0,
+        Ok(Arc::clone(histories)),
+    )));
+}
+
 /// An app with the default parameters.
 fn new_app(name: &str, theme: Theme) -> (App, Vec<Effect>) {
     let screen = Screen {

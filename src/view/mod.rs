@@ -355,6 +355,27 @@ pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result
     })
 }
 
+/// The entropy rate of one `axis` as [`search`] measures it under `params` (with its phase
+/// statistics when `params` asks for phases).
+pub fn evaluate(
+    volume: &Volume,
+    params: &ViewParams,
+    axis: [f64; 3],
+    monitor: &Monitor,
+) -> Result<AxisEntropy> {
+    let params = resolve(volume, params)?;
+    let q = volume.quantizer(params.sampling.bins)?;
+    crate::volume::with_voxels!(volume.data(), |data| {
+        let eval = Evaluator {
+            volume,
+            sampler: BinSampler::over(data, volume, q),
+            params,
+        };
+        monitor.start("one axis", eval.units(axis)?);
+        eval.evaluate(axis, monitor)
+    })
+}
+
 /// [`search`] with the sampler of `volume`'s voxels, in their own type.
 fn search_in<T: Voxel>(
     sampler: BinSampler<'_, T>,

@@ -328,12 +328,12 @@ fn the_tour_runs_to_its_last_page_in_a_real_terminal() {
     };
     wait_until(
         120,
-        || screen().contains("page 1 of 12"),
+        || screen().contains("page 1 of 13"),
         "the tour's first page",
     );
-    for page in 2..=12 {
+    for page in 2..=13 {
         display.key("space");
-        let want = format!("page {page} of 12");
+        let want = format!("page {page} of 13");
         wait_until(60, || screen().contains(&want), &want);
     }
     // Inside the xterm (at the screen's corner, 150×45 cells): black, not xterm's white.

@@ -32,7 +32,16 @@ impl App {
 
     /// What the lesson should explain now, when it can.
     fn lesson_subject(&self) -> Option<Subject> {
-        if self.focus == Pane::Views {
+        if self
+            .tour
+            .as_ref()
+            .is_some_and(|t| t.page == super::tour::MODES)
+        {
+            self.views.views.ready()?;
+            Some(Subject::Modes {
+                axis: self.views.selected()?,
+            })
+        } else if self.focus == Pane::Views {
             let views = self.views.views.ready()?;
             Some(Subject::Axis {
                 selected: self.views.selected()?,

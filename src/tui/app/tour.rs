@@ -1,5 +1,6 @@
-//! The guided tour (`slabscope tour`): the paper in twelve short pages, each with the live panes
-//! set to show what it says. Space or → the next page, ← the one before, q quits.
+//! The guided tour (`slabscope tour`): the paper in thirteen short pages, each with the live panes
+//! set to show what it says. Space, → or `PgDn` the next page, ← or `PgUp` the one before (as a
+//! presenter's remote sends them), q quits.
 //!
 //! Once the views and the histories are in, each page focuses a pane, selects the best or the
 //! worst viewpoint, shows a method at a slab count and opens or closes the lesson; the user may
@@ -21,6 +22,8 @@ pub struct Tour {
     pub applied: bool,
     /// What the page adds from the volume's own numbers.
     pub numbers: Option<String>,
+    /// Paper mode (`tour --paper`): the paper's single lattice, every voxel counted.
+    pub paper: bool,
 }
 
 /// The numbers a page adds to its paragraph, from the histories shown.
@@ -30,7 +33,7 @@ pub fn page_numbers(page: usize, histories: &Histories, slabs: usize) -> Option<
         Some(histories.information(&histories.slabs(method, position)))
     };
     match page {
-        9 => Some(format!(
+        10 => Some(format!(
             "Here {slabs} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
             kept(Method::TopDown)?,
             kept(Method::BottomUp)?,
@@ -84,8 +87,11 @@ const fn setup(focus: Pane, lesson: bool, row: Row, method: Method, slabs: usize
     }
 }
 
+/// The page on paper mode and the defaults, whose lesson is the two modes' numbers.
+pub const MODES: usize = 5;
+
 /// The tour's pages, in order.
-pub const PAGES: [Page; 12] = [
+pub const PAGES: [Page; 13] = [
     Page {
         title: "The volume and the question",
         text: "Along which direction is this volume most structured, and how should it be cut \
@@ -121,6 +127,14 @@ pub const PAGES: [Page; 12] = [
                the L-1 before it are known. The most structured view has the lowest h: here \
                the worst axis is selected, beside the best.",
         setup: setup(Pane::Views, true, Row::Worst, Method::TopDown, 4),
+    },
+    Page {
+        title: "The paper and this tool's defaults",
+        text: "By default this tool ranks axes by the mean h over 8 shifted lattices (one \
+               lattice favours the axes it lines up with) and leaves the background connected \
+               to the border out of the slabs (air makes every slab alike). tour --paper \
+               follows the paper: one lattice, every voxel.",
+        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "Slicing along the best axis",
@@ -174,13 +188,19 @@ pub const PAGES: [Page; 12] = [
 ];
 
 impl Tour {
-    /// The first page.
-    pub fn new() -> Self {
+    /// The first page, in paper mode when `paper`.
+    pub fn new(paper: bool) -> Self {
         Self {
             page: 0,
             applied: false,
             numbers: None,
+            paper,
         }
+    }
+
+    /// The mode, as the title shows it.
+    pub fn mode(&self) -> &'static str {
+        if self.paper { "paper mode" } else { "defaults" }
     }
 
     /// Turns `by` pages, within the tour.
@@ -216,6 +236,8 @@ impl App {
         if let Some(t) = self.tour.as_mut() {
             t.turn(by);
         }
+        // A message belongs to the page it was said on.
+        self.status.message = None;
         vec![]
     }
 
@@ -255,6 +277,8 @@ impl App {
             (self.lesson.subject, self.lesson.lesson) = (None, Task::Idle);
         }
         self.ray = (0, 0);
+        // What the terminal's answers said is not the page's.
+        self.status.notice = None;
         if let Some(t) = self.tour.as_mut() {
             (t.applied, t.numbers) = (true, numbers);
         }

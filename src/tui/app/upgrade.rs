@@ -170,7 +170,7 @@ impl App {
                     effects.extend(self.start_gain_at(0));
                 }
                 if moved {
-                    self.status.message = Some(format!(
+                    self.aside(format!(
                         "{}: the best axis is {} (the preview's was {})",
                         self.final_words(),
                         axis_text(best),
@@ -204,6 +204,14 @@ impl App {
         effects
     }
 
+    /// Says `words` about work the user did not ask for, outside the tour: there the status line
+    /// belongs to the page.
+    fn aside(&mut self, words: String) {
+        if self.tour.is_none() {
+            self.status.message = Some(words);
+        }
+    }
+
     /// Histories finished: shown, or a preview's replaced by full resolution.
     pub(super) fn on_histories(
         &mut self,
@@ -221,7 +229,7 @@ impl App {
                     let full = Arc::clone(full);
                     let now = self.part.slabs().unwrap_or_default();
                     let words = compare((preview, shown), (&full, &now), shift, self.final_words());
-                    self.status.message = Some(words);
+                    self.aside(words);
                     self.carry_over(preview, &full, shift);
                 }
                 (_, _, Task::Failed(e)) => {

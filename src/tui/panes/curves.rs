@@ -55,14 +55,26 @@ impl CurvesPane {
 struct Curve<'a> {
     values: &'a [f64],
     name: &'static str,
+    short: &'static str,
     color: Color,
 }
 
-/// One chart: a curve over the cuts, vertical lines at the boundaries and the cursor.
+/// The x axis's labels: the slices at its ends and middle (the lower chart's, which the upper
+/// shares; the pane's title says they are slices), or none.
+fn slice_labels(n: usize, shown: bool) -> Vec<String> {
+    if shown {
+        vec!["0".into(), (n / 2).to_string(), n.to_string()]
+    } else {
+        vec![]
+    }
+}
+
+/// One chart: a curve over the cuts, vertical lines at the boundaries and the cursor; the
+/// slices written under it when `x_labels`. Drawn on the theme's own background.
 fn chart(
     curve: &Curve,
     boundaries: &[usize],
-    cursor: usize,
+    (cursor, x_labels): (usize, bool),
     theme: Theme,
     area: Rect,
     buf: &mut Buffer,
@@ -98,15 +110,22 @@ fn chart(
     sets.push(line(&cursor_line).style(theme.fg(Color::Yellow)));
     sets.push(line(&points).name(curve.name).style(theme.fg(curve.color)));
     Chart::new(sets)
+        .style(theme.base())
         .x_axis(
             Axis::default()
                 .bounds([0.0, n as f64])
+                .labels(slice_labels(n, x_labels))
                 .style(theme.fg(Color::DarkGray)),
         )
         .y_axis(
             Axis::default()
                 .bounds([0.0, top])
-                .labels([format!("{:.2}", 0.0), format!("{top:.3}")])
+                // The curve's name between its ends: the chart's legend on its axis.
+                .labels([
+                    format!("{:.2}", 0.0),
+                    curve.short.into(),
+                    format!("{top:.3}"),
+                ])
                 .style(theme.fg(Color::DarkGray)),
         )
         .render(area, buf);
@@ -145,14 +164,23 @@ impl Widget for &CurvesPane {
         let nmi = Curve {
             values: nmi,
             name: "NMI slice to slice",
+            short: "NMI",
             color: Color::Cyan,
         };
         let gain = Curve {
             values: gain,
             name: "ΔI of a first cut",
+            short: "ΔI",
             color: Color::Magenta,
         };
-        chart(&nmi, &curves.boundaries, c, self.theme, top, buf);
-        chart(&gain, &curves.boundaries, c, self.theme, bottom, buf);
+        chart(&nmi, &curves.boundaries, (c, false), self.theme, top, buf);
+        chart(
+            &gain,
+            &curves.boundaries,
+            (c, true),
+            self.theme,
+            bottom,
+            buf,
+        );
     }
 }

@@ -49,6 +49,7 @@ impl LessonPane {
         let what = match &self.subject {
             Some(Subject::Axis { .. }) => "why this viewpoint (← → another ray)",
             Some(Subject::Step { .. }) => "why this step (n p step)",
+            Some(Subject::Modes { .. }) => "the paper beside this tool's defaults",
             None => "",
         };
         format!(" Lesson: {what}  x closes ")
@@ -97,7 +98,12 @@ impl Widget for &LessonPane {
                     }
                 }
                 Lesson::Split(s) => split(s, self.theme, inner, buf),
-                Lesson::Merge(m) => merge(m, self.theme, inner, buf),
+                Lesson::Merge(m, of) => merge(m, *of, self.theme, inner, buf),
+                Lesson::Modes(m) => paragraph(
+                    text::mode_lines(m).into_iter().map(Line::from).collect(),
+                    inner,
+                    buf,
+                ),
                 Lesson::Optimal(o) => paragraph(
                     text::optimal_lines(o).into_iter().map(Line::from).collect(),
                     inner,
@@ -179,6 +185,21 @@ fn axis(
     lines
 }
 
+/// The ray each of `rows` pixel rows shows, of `n` rays picked evenly (`rows` ≤ `n`): the
+/// lesson's ray `selected` on its nearest row and on no other (a row that would show it again
+/// shows its neighbour), so one ▶ marks it.
+fn picked_rays(n: usize, rows: usize, selected: Option<usize>) -> Vec<usize> {
+    let own = selected.map(|s| s * rows / n);
+    (0..rows)
+        .map(|y| match (y * n / rows, selected) {
+            (_, Some(s)) if own == Some(y) => s,
+            (r, Some(s)) if r == s && s + 1 < n => s + 1,
+            (r, Some(s)) if r == s => s.saturating_sub(1),
+            (r, _) => r,
+        })
+        .collect()
+}
+
 /// The plane of rays holding the lesson's ray: a pixel row a ray (half blocks), a column a
 /// sample, grey by bin, the lesson's ray in yellow and marked ▶; rays and samples picked
 /// evenly where there are more than fit.
@@ -199,14 +220,8 @@ fn plane_picture(plane: &RayPlane, bins: usize, area: Rect, buf: &mut Buffer) {
     );
     let (n, k) = (plane.rays.len(), plane.bins[0].len());
     let (shown_rows, shown_cols) = (n.min(rows), k.min(cols));
-    let pick = |y: usize| -> usize {
-        let r = y * n / shown_rows;
-        // The lesson's ray always shows: its nearest pixel row is it.
-        match plane.selected {
-            Some(s) if s * shown_rows / n == y => s,
-            _ => r,
-        }
-    };
+    let picked = picked_rays(n, shown_rows, plane.selected);
+    let pick = |y: usize| picked[y];
     let colour = |r: usize, x: usize| -> Color {
         match plane.bins[r][x * k / shown_cols] {
             None => Color::Rgb(0, 0, 0),
@@ -322,15 +337,17 @@ fn split(s: &SplitLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
         s.at
     );
     let used = wrapped_rows(&words, area.width);
-    let bar = (area.height.saturating_sub(used + 1) / 4).clamp(1, 6);
+    let bar = (area.height.saturating_sub(used + 3) / 4).clamp(1, 6);
     let [top, rest] =
-        Layout::vertical([Constraint::Min(3), Constraint::Length(4 * bar + 1)]).areas(area);
+        Layout::vertical([Constraint::Min(3), Constraint::Length(4 * bar + 3)]).areas(area);
     paragraph(words.into_iter().map(Line::from).collect(), top, buf);
     let rows = Layout::vertical([
         Constraint::Length(bar),
         Constraint::Length(bar),
         Constraint::Length(bar),
+        Constraint::Length(1),
         Constraint::Length(bar),
+        Constraint::Length(1),
         Constraint::Length(1),
     ])
     .split(rest);
@@ -341,14 +358,66 @@ fn split(s: &SplitLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
     ]) {
         bars(label, counts, theme, *row, buf);
     }
-    gains(s, theme, rows[3], rows[4], buf);
+    // The three histograms share their bins: ticked once, under them.
+    let each = bar_width(rows[0], s.first.len());
+    let last = s.first.len().saturating_sub(1);
+    ticks(
+        "bin",
+        &[(0, 0), (last / 2 * each, last / 2), (last * each, last)],
+        rows[3],
+        buf,
+    );
+    gains(s, theme, rows[4], rows[5], buf);
+    let (first, end) = (s.split.0 + 1, s.split.1 - 1);
+    let width = usize::from(rows[6].width.saturating_sub(LABEL));
+    let n = s.gains.len().max(1);
+    let column = |slice: usize| (slice - first) * width.min(n) / n;
+    ticks("slice", &[(0, first), (column(end), end)], rows[6], buf);
 }
 
-/// A labelled bar chart of `counts` on a log scale, as many columns a bin as fit.
+/// The columns of the label left of each chart of the split.
+const LABEL: u16 = 11;
+
+/// The columns a bin takes in a bar chart of `bins` bins in `area` (label included).
+fn bar_width(area: Rect, bins: usize) -> usize {
+    (usize::from(area.width.saturating_sub(LABEL)) / bins.max(1)).clamp(1, 3)
+}
+
+/// A row of ticks under a chart: `name` right-aligned in the `label` columns left of the chart,
+/// then each value at its column of the chart (one that would touch the one before, or not fit
+/// in `width`, is left out).
+fn tick_line(name: &str, label: usize, at: &[(usize, usize)], width: usize) -> String {
+    let mut line = format!("{name:>w$} ", w = label.saturating_sub(1));
+    for &(column, value) in at {
+        let text = value.to_string();
+        let start = label + column;
+        let taken = line.chars().count();
+        if start + text.len() <= width && (start > taken || taken == label) {
+            line.push_str(&" ".repeat(start - taken));
+            line.push_str(&text);
+        }
+    }
+    line
+}
+
+/// [`tick_line`] drawn in `area`, under a chart of the split.
+fn ticks(name: &str, at: &[(usize, usize)], area: Rect, buf: &mut Buffer) {
+    let line = tick_line(name, usize::from(LABEL), at, usize::from(area.width));
+    Paragraph::new(line).render(area, buf);
+}
+
+/// A labelled bar chart of `counts` on a log scale, as many columns a bin as fit; the label
+/// says the largest count, the chart's top.
 fn bars(label: &str, counts: &[u64], theme: Theme, area: Rect, buf: &mut Buffer) {
-    let [l, chart] = Layout::horizontal([Constraint::Length(11), Constraint::Min(0)]).areas(area);
-    Paragraph::new(format!("{label} log")).render(l, buf);
-    let each = (usize::from(chart.width) / counts.len().max(1)).clamp(1, 3);
+    let [l, chart] =
+        Layout::horizontal([Constraint::Length(LABEL), Constraint::Min(0)]).areas(area);
+    let most = counts.iter().copied().max().unwrap_or(0);
+    Paragraph::new(vec![
+        Line::from(format!("{label} log")),
+        Line::from(format!("≤{}", text::grouped(most))),
+    ])
+    .render(l, buf);
+    let each = bar_width(area, counts.len());
     let data: Vec<u64> = counts
         .iter()
         .flat_map(|&c| std::iter::repeat_n(((c as f64).ln_1p() * 1000.0) as u64, each))
@@ -362,8 +431,14 @@ fn bars(label: &str, counts: &[u64], theme: Theme, area: Rect, buf: &mut Buffer)
 /// The gain at every cut of the slab, squeezed to the width (the largest of each column's cuts),
 /// and a mark under the cut taken.
 fn gains(s: &SplitLesson, theme: Theme, area: Rect, mark: Rect, buf: &mut Buffer) {
-    let [l, chart] = Layout::horizontal([Constraint::Length(11), Constraint::Min(0)]).areas(area);
-    Paragraph::new("ΔI cuts".to_string()).render(l, buf);
+    let [l, chart] =
+        Layout::horizontal([Constraint::Length(LABEL), Constraint::Min(0)]).areas(area);
+    let most = s.gains.iter().copied().fold(0.0f64, f64::max);
+    Paragraph::new(vec![
+        Line::from("ΔI cuts"),
+        Line::from(format!("≤{most:.4}")),
+    ])
+    .render(l, buf);
     let n = s.gains.len().max(1);
     let columns = usize::from(chart.width).clamp(1, n);
     let column = |i: usize| i * columns / n;
@@ -389,9 +464,10 @@ fn gains(s: &SplitLesson, theme: Theme, area: Rect, mark: Rect, buf: &mut Buffer
     Paragraph::new(line).render(mark, buf);
 }
 
-/// A merge: its sentences and, in the rows they leave, the joint histogram as a heat map.
-fn merge(m: &MergeLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
-    let words = text::merge_lines(m, m.step.max(1));
+/// A merge, one of `of` in its history: its sentences and, in the rows they leave, the joint
+/// histogram as a heat map.
+fn merge(m: &MergeLesson, of: usize, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let words = text::merge_lines(m, of.max(m.step));
     let used = wrapped_rows(&words, area.width).min(area.height);
     let [top, map] = Layout::vertical([Constraint::Length(used), Constraint::Min(0)]).areas(area);
     paragraph(words.into_iter().map(Line::from).collect(), top, buf);
@@ -399,54 +475,120 @@ fn merge(m: &MergeLesson, theme: Theme, area: Rect, buf: &mut Buffer) {
 }
 
 /// The joint histogram, x (the first slab's bin) down and y across, two rows of bins a line
-/// (half blocks), bins grouped where the area is smaller; shades without colours.
+/// (half blocks), bins grouped where the area is smaller; shades without colours. X's bins are
+/// ticked on the left, Y's under the map, and a colour scale from one count to the most ends it.
 fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, buf: &mut Buffer) {
-    if area.height < 2 || area.width < 12 {
+    if area.height < 4 || area.width < 16 {
         return;
     }
-    let label = "X↓ Y→ ";
-    let rows = usize::from(area.height - 1) * 2;
-    let cols = usize::from(area.width) - label.len();
+    let rows = usize::from(area.height - 3) * 2;
+    let cols = usize::from(area.width) - TICKS;
     let group = bins.div_ceil(rows).max(bins.div_ceil(cols)).max(1);
     let n = bins.div_ceil(group);
     let mut cells = vec![0u64; n * n];
     for &[x, y, c] in &m.joint {
         cells[x as usize / group * n + y as usize / group] += c;
     }
-    let top = cells.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let top = cells.iter().copied().max().unwrap_or(1).max(1);
     let level = |c: u64| {
         if c == 0 {
             0.0
         } else {
-            (1.0 + (c as f64).ln()) / (1.0 + top.ln())
+            (1.0 + (c as f64).ln()) / (1.0 + (top as f64).ln())
         }
     };
-    let shade = |v: f64| Color::Rgb((40.0 + 215.0 * v) as u8, (30.0 + 120.0 * v) as u8, 60);
-    Paragraph::new(format!("joint histogram, log counts, {group} bin a cell"))
-        .render(Rect { height: 1, ..area }, buf);
+    Paragraph::new(format!(
+        "joint histogram: X's bin down, Y's across, log counts, {group} bin a cell"
+    ))
+    .render(Rect { height: 1, ..area }, buf);
+    let mut lines = Vec::new();
     for r in 0..n.div_ceil(2) {
-        let mut spans = vec![Span::raw(if r == 0 { label } else { "      " })];
-        for y in 0..n {
-            let upper = level(cells[2 * r * n + y]);
-            let lower = if 2 * r + 1 < n {
-                level(cells[(2 * r + 1) * n + y])
-            } else {
-                0.0
-            };
-            spans.push(if theme.color {
-                Span::styled("▀", Style::default().fg(shade(upper)).bg(shade(lower)))
-            } else {
-                const SHADES: [&str; 5] = [" ", "░", "▒", "▓", "█"];
-                Span::raw(SHADES[((upper.max(lower)) * 4.0).round() as usize])
-            });
-        }
-        let line = Rect {
-            y: area.y + 1 + r as u16,
-            height: 1,
-            ..area
+        // Every other line says the X bin of its upper row.
+        let tick = if r % 2 == 0 {
+            format!("{:>4} ", 2 * r * group)
+        } else {
+            " ".repeat(TICKS)
         };
-        if line.y < area.y + area.height {
-            Paragraph::new(Line::from(spans)).render(line, buf);
+        let mut spans = vec![Span::raw(tick)];
+        for y in 0..n {
+            let lower = (2 * r + 1 < n).then(|| cells[(2 * r + 1) * n + y]);
+            spans.push(heat_cell(
+                level(cells[2 * r * n + y]),
+                lower.map_or(0.0, level),
+                theme,
+            ));
+        }
+        lines.push(Line::from(spans));
+    }
+    // Y's bins under the map: its first, middle and last cell.
+    let at = [0, n / 2, n - 1].map(|c| (c, c * group));
+    lines.push(Line::from(tick_line(
+        "",
+        TICKS,
+        &at,
+        usize::from(area.width),
+    )));
+    let mut scale = vec![Span::raw("   1 ")];
+    // From one count's shade (not the empty cells') to the most's.
+    let one = level(1);
+    scale.extend((0..=8).map(|i| {
+        let v = one + (1.0 - one) * f64::from(i) / 8.0;
+        heat_cell(v, v, theme)
+    }));
+    scale.push(Span::raw(format!(" {top} counts")));
+    lines.push(Line::from(scale));
+    Paragraph::new(lines).render(
+        Rect {
+            y: area.y + 1,
+            height: area.height - 1,
+            ..area
+        },
+        buf,
+    );
+}
+
+/// Columns the X ticks take left of the heat map.
+const TICKS: usize = 5;
+
+/// One cell of the heat map: its upper and lower bins' levels (0 to 1).
+fn heat_cell(upper: f64, lower: f64, theme: Theme) -> Span<'static> {
+    let shade = |v: f64| Color::Rgb((40.0 + 215.0 * v) as u8, (30.0 + 120.0 * v) as u8, 60);
+    if theme.color {
+        Span::styled("▀", Style::default().fg(shade(upper)).bg(shade(lower)))
+    } else {
+        const SHADES: [&str; 5] = [" ", "░", "▒", "▓", "█"];
+        Span::raw(SHADES[(upper.max(lower) * 4.0).round() as usize])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{picked_rays, tick_line};
+
+    #[test]
+    fn ticks_stand_at_their_columns_and_never_touch() {
+        assert_eq!(
+            tick_line("bin", 6, &[(0, 0), (4, 16), (9, 31)], 40),
+            "  bin 0   16   31"
+        );
+        // 30 would touch 18: left out, as a tick past the width.
+        assert_eq!(
+            tick_line("", 5, &[(0, 0), (3, 18), (5, 30)], 40),
+            "     0  18"
+        );
+        assert_eq!(tick_line("", 5, &[(0, 0), (30, 99)], 20), "     0");
+    }
+
+    #[test]
+    fn the_lessons_ray_shows_on_one_row_only() {
+        for n in 1..40 {
+            for rows in 1..=n {
+                for s in 0..n {
+                    let picked = picked_rays(n, rows, Some(s));
+                    let marked = picked.iter().filter(|&&r| r == s).count();
+                    assert_eq!(marked, 1, "ray {s} of {n} on {rows} rows: {picked:?}");
+                }
+            }
         }
     }
 }

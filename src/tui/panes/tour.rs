@@ -20,7 +20,8 @@ impl Widget for TourPage<'_> {
     fn render(self, area: Rect, buf: &mut Buffer) {
         let page = self.tour.current();
         let title = format!(
-            " Tour, {}: {}  ({}) ",
+            " Tour ({}), {}: {}  ({}) ",
+            self.tour.mode(),
             self.tour.counter(),
             page.title,
             keymap::tour_hints()

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use slabscope::AnalysisParams;
 use slabscope::triage::{Entry, TriageRow};
 
-use super::{PLAIN, fixture, rendered, screens};
+use super::{PLAIN, feed, fixture, rendered, screens};
 use crate::tui::app::{App, Pane, Screen};
 use crate::tui::event::{Action, Ask, Effect, FolderKey, JobMsg, Written};
 use crate::tui::panes::files::Column;
@@ -57,16 +57,7 @@ fn filled(w: u16, h: u16) -> App {
     let root = Path::new("/data");
     let (mut app, _) = folder_app(root, &NAMES);
     let (volume, views, histories) = fixture();
-    app.update(Action::Job(JobMsg::Loaded(Ok((
-        Arc::clone(volume),
-        vec![],
-    )))));
-    app.update(Action::Job(JobMsg::Views(0, Ok(Box::new(views.clone())))));
-    app.update(Action::Job(JobMsg::Analysis(
-        1,
-        0,
-        Ok(Arc::clone(histories)),
-    )));
+    feed(&mut app, volume, views, histories);
     let cells = crate::tui::ui::preview_cells(
         ratatui::layout::Rect::new(0, 0, w, h),
         false,

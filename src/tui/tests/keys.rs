@@ -111,7 +111,10 @@ fn the_help_shows_the_keys_its_rows_bind() {
         }
     }
     assert_eq!(keymap::help().len(), BINDINGS.len());
-    assert_eq!(keymap::tour_hints(), "Space or → next, ← back, q quits");
+    assert_eq!(
+        keymap::tour_hints(),
+        "Space → PgDn next, ← PgUp back, q quits"
+    );
 }
 
 #[test]
@@ -162,17 +165,17 @@ fn the_tour_names_keys_that_do_what_it_says() {
         );
     };
     says(
-        7,
+        8,
         "n and p step through the history; + and - change the slab count",
     );
     assert!(matches!(in_tour('n'), Action::Step(1)));
     assert!(matches!(in_tour('p'), Action::Step(-1)));
     assert!(matches!(in_tour('+'), Action::Slabs(1)));
     assert!(matches!(in_tour('-'), Action::Slabs(-1)));
-    says(9, "m switches the method");
+    says(10, "m switches the method");
     assert!(matches!(in_tour('m'), Action::CycleMethod));
     says(
-        11,
+        12,
         "Orbit with [ ] { }, change the look with r f c; q ends the tour",
     );
     for c in ['[', ']', '{', '}'] {
@@ -183,6 +186,23 @@ fn the_tour_names_keys_that_do_what_it_says() {
     assert!(matches!(in_tour('c'), Action::CycleColormap));
     assert!(matches!(in_tour('q'), Action::Quit));
     assert!(matches!(in_tour(' '), Action::TurnPage(1)));
+}
+
+#[test]
+fn a_presenters_remote_turns_pages_in_the_tour_and_volumes_outside_it() {
+    for (code, touring, by) in [
+        (KeyCode::PageDown, true, 1),
+        (KeyCode::PageUp, true, -1),
+        (KeyCode::PageDown, false, 1),
+        (KeyCode::PageUp, false, -1),
+    ] {
+        let turned = match keymap::action(KeyEvent::from(code), false, touring) {
+            Some(Action::TurnPage(n)) if touring => n,
+            Some(Action::Page(n)) if !touring => n,
+            _ => panic!("{code:?} (touring: {touring}) does not turn"),
+        };
+        assert_eq!(turned, by, "{code:?} (touring: {touring})");
+    }
 }
 
 #[test]

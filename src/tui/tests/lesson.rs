@@ -11,7 +11,7 @@ use crate::tui::lesson::{Lesson, Subject};
 
 /// Runs the lesson request among `effects` as the jobs would and hands the app its answer;
 /// returns the subject it was about.
-fn answer(app: &mut App, effects: Vec<Effect>) -> Subject {
+pub(super) fn answer(app: &mut App, effects: Vec<Effect>) -> Subject {
     let request = effects
         .into_iter()
         .find_map(|e| match e {
@@ -117,6 +117,11 @@ fn a_steps_lesson_follows_the_steps_and_the_method() {
     let (small, large) = (shown(&app, 80, 22), shown(&app, 160, 48));
     assert_shows(&small, &numbers);
     assert_shows(&large, &numbers);
+    // The histograms' shared bins and the cuts' slices are ticked, each chart's top said.
+    for text in [&small, &large] {
+        assert!(text.contains("bin 0") && text.contains("slice"), "{text}");
+        assert!(text.contains(&format!("≤{:.4}", split.gain)), "{text}");
+    }
     insta::assert_snapshot!("lesson_split_80x22", small);
     insta::assert_snapshot!("lesson_split_160x48", large);
     // Stepping back explains the split now last.
@@ -134,13 +139,24 @@ fn a_steps_lesson_follows_the_steps_and_the_method() {
             ..
         }
     ));
-    let Lesson::Merge(merge) = lesson(&app) else {
+    let Lesson::Merge(merge, of) = lesson(&app) else {
         panic!("a merge lesson")
     };
+    // One merge of the whole history, as the status line counts its steps.
+    let history = app.part.ready().unwrap().last(Method::BottomUp);
+    assert_eq!(*of, history);
     let numbers = [merge.h_x, merge.h_y, merge.h_xy, merge.mi, merge.nmi];
     let (small, large) = (shown(&app, 80, 22), shown(&app, 160, 48));
     assert_shows(&small, &numbers);
     assert_shows(&large, &numbers);
+    // The heat map's axes: X's bins down, Y's across, and its colour scale up to the most.
+    for text in [&small, &large] {
+        assert!(text.contains("X's bin down, Y's across"), "{text}");
+        assert!(
+            text.contains("   1  ") && text.contains(" counts"),
+            "{text}"
+        );
+    }
     insta::assert_snapshot!("lesson_merge_80x22", small);
     insta::assert_snapshot!("lesson_merge_160x48", large);
     // The optimum beside greedy.

@@ -3,14 +3,18 @@
 
 use slabscope::partition::Method;
 
-use super::{ready_app, screens};
-use crate::tui::app::tour::{PAGES, Row, Tour};
-use crate::tui::event::{Action, Effect};
+use super::lesson::answer;
+use super::{ready_app, ready_paper_app, screens};
+use slabscope::explain::text::grouped;
+
+use crate::tui::app::tour::{MODES, PAGES, Row, Tour};
+use crate::tui::event::{Action, Effect, Task};
+use crate::tui::lesson::Lesson;
 
 #[test]
 fn every_page_sets_the_panes_it_speaks_of() {
     let mut app = ready_app();
-    app.tour = Some(Tour::new());
+    app.tour = Some(Tour::new(false));
     app.update(Action::TurnPage(-1));
     let last_view = app.views.len() - 1;
     let mut seen_lessons = 0;
@@ -46,11 +50,128 @@ fn every_page_sets_the_panes_it_speaks_of() {
 #[test]
 fn the_page_shows_below_the_panes() {
     let mut app = ready_app();
-    app.tour = Some(Tour::new());
+    app.tour = Some(Tour::new(false));
     app.update(Action::TurnPage(0));
     let shots = screens(&mut app, 80, 24, vec![]);
     let screen = &shots[0];
-    assert!(screen.contains("Tour, page 1 of 12"), "{screen}");
+    assert!(screen.contains("Tour (defaults), page 1 of 13"), "{screen}");
     assert!(screen.contains("Slabs:"), "{screen}");
     insta::assert_snapshot!("tour_page_1_80x24", screen);
+}
+
+#[test]
+fn in_paper_mode_the_lists_h_is_the_lessons_h() {
+    let mut app = ready_paper_app();
+    app.tour = Some(Tour::new(true));
+    let effects = app.update(Action::TurnPage(2));
+    answer(&mut app, effects);
+    let views = app.views.views.ready().unwrap();
+    let listed = slabscope::view::score(&views.views[0]);
+    let Task::Ready(lesson) = &app.lesson.lesson else {
+        panic!("no lesson")
+    };
+    let Lesson::Axis { selected, .. } = lesson.as_ref() else {
+        panic!("an axis lesson")
+    };
+    assert_eq!(listed, selected.entropy_rate);
+    let listed = listed.to_owned();
+    assert!(views.views[0].phases.is_none());
+    let screen = &screens(&mut app, 160, 48, vec![])[0];
+    assert!(
+        screen.contains("Tour (paper mode), page 3 of 13"),
+        "{screen}"
+    );
+    // The lesson and, once it is closed, the list show it alike.
+    let h = format!("{listed:.4}");
+    assert!(
+        screen.contains(&format!("= {h} bits per sample")),
+        "{screen}"
+    );
+    app.update(Action::ToggleLesson);
+    let screen = &screens(&mut app, 160, 48, vec![])[0];
+    assert!(screen.contains(&h), "{screen}");
+}
+
+#[test]
+fn the_modes_page_shows_both_numbers_side_by_side() {
+    for (paper, mut app) in [(false, ready_app()), (true, ready_paper_app())] {
+        app.tour = Some(Tour::new(paper));
+        let effects = app.update(Action::TurnPage(MODES as isize));
+        answer(&mut app, effects);
+        let Task::Ready(lesson) = &app.lesson.lesson else {
+            panic!("no lesson")
+        };
+        let Lesson::Modes(m) = lesson.as_ref() else {
+            panic!("the modes' lesson")
+        };
+        let m = m.clone();
+        let phases = m.phases.unwrap();
+        let (small, large) = (
+            screens(&mut app, 80, 24, vec![]).remove(0),
+            screens(&mut app, 160, 48, vec![]).remove(0),
+        );
+        for n in [
+            format!("{:.4}", m.paper_h),
+            format!("{:.4}", phases.mean),
+            grouped(m.voxels),
+            grouped(m.without_background()),
+        ] {
+            assert!(large.contains(&n), "{n} not in\n{large}");
+        }
+        let name = if paper { "paper" } else { "defaults" };
+        insta::assert_snapshot!(format!("tour_modes_{name}_80x24"), small);
+        insta::assert_snapshot!(format!("tour_modes_{name}_160x48"), large);
+    }
+}
+
+#[test]
+fn the_status_line_holds_only_the_pages_words() {
+    let mut app = ready_app();
+    app.status.notice = Some("tmux keeps images from the terminal".into());
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(0));
+    assert_eq!(app.status.notice, None);
+    app.status.message = Some("full resolution moved the cuts".into());
+    app.update(Action::TurnPage(1));
+    assert_eq!(app.status.message, None);
+    let screen = &screens(&mut app, 80, 24, vec![])[0];
+    assert!(
+        !screen.contains("tmux") && !screen.contains("moved"),
+        "{screen}"
+    );
+}
+
+#[test]
+fn the_contrast_theme_draws_every_pane_on_its_own_background() {
+    let contrast = crate::tui::theme::Theme {
+        color: true,
+        contrast: true,
+    };
+    let mut app = super::ready_app_with(contrast);
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(6));
+    for (w, h) in [(80, 24), (160, 48)] {
+        let mut terminal =
+            ratatui::Terminal::new(ratatui::backend::TestBackend::new(w, h)).unwrap();
+        terminal
+            .draw(|frame| crate::tui::ui::draw(frame, &app))
+            .unwrap();
+        let buffer = terminal.backend().buffer();
+        let black = ratatui::style::Color::Rgb(0, 0, 0);
+        // Every pane but the preview (whose picture has its own colours) is black.
+        let a = crate::tui::ui::areas(buffer.area, true, None).unwrap();
+        let mut unpainted = Vec::new();
+        for pane in [a.views, a.slabs, a.curves, a.tour, a.status] {
+            for position in pane.positions() {
+                if buffer[position].bg != black {
+                    unpainted.push((position.x, position.y));
+                }
+            }
+        }
+        assert!(unpainted.is_empty(), "{w}x{h}: not black at {unpainted:?}");
+        // The curves' axes: the slices under the lower chart, each curve named on its own.
+        let screen = super::text(buffer);
+        assert!(screen.contains("NMI") && screen.contains("ΔI"), "{screen}");
+        insta::assert_snapshot!(format!("tour_curves_contrast_{w}x{h}"), screen);
+    }
 }
