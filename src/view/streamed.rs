@@ -276,29 +276,8 @@ fn crossing(dims: [usize; 3], lattice: &Lattice, every: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::Lcg;
+    use crate::testing::awkward_volume;
     use crate::volume::VoxelType;
-
-    /// Blocks along a slanted direction, noise, and (for f32) missing voxels.
-    fn volume(dims: [usize; 3], spacing: [f64; 3], voxel_type: VoxelType) -> Volume {
-        let mut lcg = Lcg::new(4);
-        let data = (0..dims.iter().product::<usize>())
-            .map(|i| {
-                let r = (lcg.next_u64() >> 33) as u32;
-                let (x, y, z) = (
-                    i % dims[0],
-                    (i / dims[0]) % dims[1],
-                    i / (dims[0] * dims[1]),
-                );
-                if voxel_type == VoxelType::F32 && r.is_multiple_of(89) {
-                    f32::NAN
-                } else {
-                    ((x / 4 + y / 3 + 2 * z / 5) % 6) as f32 * 20.0 + (r % 7) as f32
-                }
-            })
-            .collect();
-        Volume::new(dims, spacing, voxel_type, data).unwrap()
-    }
 
     #[test]
     fn the_streamed_search_is_the_search_bit_for_bit() {
@@ -309,7 +288,7 @@ mod tests {
             ([28, 20, 33], [0.8, 0.8, 1.7], VoxelType::F32),
             ([24, 31, 19], [1.0, 1.2, 1.0], VoxelType::I16),
         ] {
-            let v = volume(dims, spacing, voxel_type);
+            let v = awkward_volume(dims, spacing, voxel_type, 4);
             for params in [ViewParams::paper(), ViewParams::default()] {
                 let expect =
                     serde_json::to_string(&super::super::search(&v, &params, &none).unwrap())
@@ -331,7 +310,7 @@ mod tests {
 
     #[test]
     fn the_refinement_is_refused_and_a_cancel_stops_the_sweeps() {
-        let v = volume([20, 20, 20], [1.0; 3], VoxelType::U8);
+        let v = awkward_volume([20, 20, 20], [1.0; 3], VoxelType::U8, 4);
         let refine = ViewParams {
             refine: true,
             ..ViewParams::default()

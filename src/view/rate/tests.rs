@@ -60,23 +60,7 @@ fn axis_aligned_rate_equals_a_brute_force_count_over_columns() {
 
 /// A noisy volume with blocks, bins at their edges and missing voxels.
 fn awkward_volume(dims: [usize; 3], spacing: [f64; 3], seed: u64) -> Volume {
-    let mut lcg = Lcg::new(seed);
-    let data = (0..dims.iter().product::<usize>())
-        .map(|i| {
-            let r = (lcg.next_u64() >> 33) as u32;
-            let (x, y, z) = (
-                i % dims[0],
-                (i / dims[0]) % dims[1],
-                i / (dims[0] * dims[1]),
-            );
-            if r.is_multiple_of(97) {
-                f32::NAN
-            } else {
-                ((x / 3 + y / 4 + z / 5) % 7) as f32 * 10.0 + (r % 5) as f32 * 0.7
-            }
-        })
-        .collect();
-    Volume::new(dims, spacing, VoxelType::F32, data).unwrap()
+    crate::testing::awkward_volume(dims, spacing, VoxelType::F32, seed)
 }
 
 #[test]
