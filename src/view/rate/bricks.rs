@@ -177,6 +177,15 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
         self.member.as_ref().is_none_or(|m| m[b])
     }
 
+    /// The bricks walked, in sweep order.
+    fn order(&self) -> Vec<usize> {
+        self.bricks
+            .sweep(self.step)
+            .into_iter()
+            .filter(|&b| self.walked(b))
+            .collect()
+    }
+
     /// The rays of rows `j0..=j1`, each waiting in the brick of its first sample inside a cell
     /// that is walked; rays with no sample inside a cell are counted whole into `out` if the
     /// brick of their first sample is walked.
@@ -432,7 +441,7 @@ pub(super) fn bricked_counts<T: Voxel>(
         Bricks::new(sampler.dims(), size)
     };
     let walk = BrickWalk::new(sampler, lattice, block, bricks, None);
-    let order = walk.bricks.sweep(walk.step);
+    let order = walk.order();
     let rows: Vec<(i64, i64)> = tile_rows(lattice, 1).collect();
     let bands: Vec<&[(i64, i64)]> = rows.chunks(band_rows(lattice, size)).collect();
     let empty = || PartialCounts::new(sampler.bins(), block);
@@ -476,11 +485,7 @@ pub fn counts_of_bricks<T: Voxel>(
         }
     }
     let walk = BrickWalk::new(sampler, lattice, block, bricks, Some(member));
-    let order: Vec<usize> = bricks
-        .sweep(walk.step)
-        .into_iter()
-        .filter(|&b| walk.walked(b))
-        .collect();
+    let order = walk.order();
     let mut out = PartialCounts::new(sampler.bins(), block);
     let (_, js) = lattice.ray_ranges();
     let mut band = walk.band(js, &mut out);
@@ -505,11 +510,7 @@ pub fn counts_of_slab<T: Voxel>(
     (planes, subset): (std::ops::Range<i64>, RaySubset),
 ) -> PartialCounts {
     let walk = BrickWalk::of_slab(sampler, lattice, block, bricks, (planes, subset));
-    let order: Vec<usize> = bricks
-        .sweep(walk.step)
-        .into_iter()
-        .filter(|&b| walk.walked(b))
-        .collect();
+    let order = walk.order();
     let (_, (j0, j1)) = lattice.ray_ranges();
     let bands: Vec<(i64, i64)> = (j0..=j1)
         .step_by(SLAB_ROWS as usize)
