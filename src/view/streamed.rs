@@ -276,7 +276,7 @@ fn crossing(dims: [usize; 3], lattice: &Lattice, every: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::awkward_volume;
+    use crate::view::rate::tests::awkward_volume_of as awkward_volume;
     use crate::volume::VoxelType;
 
     #[test]

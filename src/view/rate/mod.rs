@@ -353,4 +353,4 @@ fn count_in_parallel<P: Send>(
 }
 
 #[cfg(test)]
-mod tests;
+pub(super) mod tests;

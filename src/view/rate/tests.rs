@@ -60,7 +60,37 @@ fn axis_aligned_rate_equals_a_brute_force_count_over_columns() {
 
 /// A noisy volume with blocks, bins at their edges and missing voxels.
 fn awkward_volume(dims: [usize; 3], spacing: [f64; 3], seed: u64) -> Volume {
-    crate::testing::awkward_volume(dims, spacing, VoxelType::F32, seed)
+    awkward_volume_of(dims, spacing, VoxelType::F32, seed)
+}
+
+/// A noisy volume of blocks for the walks' tests: `(x/3 + y/4 + z/5) mod 7` times ten, noise of
+/// up to 2.8 (f32, in steps of 0.7, so that values fall on bin edges) or 4 (integers), and a
+/// missing voxel in about 97 where `voxel_type` is f32.
+pub(in crate::view) fn awkward_volume_of(
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    voxel_type: VoxelType,
+    seed: u64,
+) -> Volume {
+    let float = voxel_type == VoxelType::F32;
+    let mut lcg = Lcg::new(seed);
+    let data = (0..dims.iter().product::<usize>())
+        .map(|i| {
+            let r = (lcg.next_u64() >> 33) as u32;
+            let (x, y, z) = (
+                i % dims[0],
+                (i / dims[0]) % dims[1],
+                i / (dims[0] * dims[1]),
+            );
+            let noise = (r % 5) as f32 * if float { 0.7 } else { 1.0 };
+            if float && r.is_multiple_of(97) {
+                f32::NAN
+            } else {
+                ((x / 3 + y / 4 + z / 5) % 7) as f32 * 10.0 + noise
+            }
+        })
+        .collect();
+    Volume::new(dims, spacing, voxel_type, data).unwrap()
 }
 
 #[test]
