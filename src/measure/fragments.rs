@@ -225,39 +225,56 @@ impl PartialCounts {
         self.fragments.is_empty()
     }
 
+    /// Stitches this part's fragments into `open` (fragments of the same sequences held apart,
+    /// in order of key and start, as this leaves them), counting here what crosses each seam:
+    /// afterwards `open` holds every fragment still open, and this part none. For a walk that
+    /// keeps the open rays of a sweep by bands of its own rather than in one list.
+    pub fn stitch_into(&mut self, open: &mut Vec<Fragment>) {
+        let more = std::mem::take(&mut self.fragments);
+        *open = stitched(std::mem::take(open), more, &mut self.counts);
+    }
+
     /// Takes `more` fragments in, stitching every pair that meets.
     fn join(&mut self, more: Vec<Fragment>) {
-        if more.is_empty() {
-            return;
-        }
-        // The fragments held are in order (of key, then start): only the new ones are sorted,
-        // and the two runs merged.
-        let mut more = more;
-        let order = |f: &Fragment| (f.key, f.start);
-        more.sort_unstable_by_key(order);
         let held = std::mem::take(&mut self.fragments);
-        let mut out: Vec<Fragment> = Vec::with_capacity(held.len() + more.len());
-        let (mut a, mut b) = (held.into_iter().peekable(), more.into_iter().peekable());
-        let merged = std::iter::from_fn(|| match (a.peek(), b.peek()) {
-            (Some(x), Some(y)) if order(y) < order(x) => b.next(),
-            (Some(_), _) => a.next(),
-            (None, _) => b.next(),
-        });
-        for f in merged {
-            match out.last_mut() {
-                Some(prev) if prev.key == f.key && prev.end == f.start => {
-                    match prev.stitch(&f, &mut self.counts) {
-                        Some(joined) => *prev = joined,
-                        None => {
-                            out.pop();
-                        }
+        self.fragments = stitched(held, more, &mut self.counts);
+    }
+}
+
+/// The fragments `held` (in order of key and start) and `more` (in any order) in order, every
+/// pair that meets stitched, counting into `counts` what crosses the seams.
+fn stitched(
+    held: Vec<Fragment>,
+    mut more: Vec<Fragment>,
+    counts: &mut BlockCounts,
+) -> Vec<Fragment> {
+    if more.is_empty() {
+        return held;
+    }
+    // Only the new ones are sorted, and the two runs merged.
+    let order = |f: &Fragment| (f.key, f.start);
+    more.sort_unstable_by_key(order);
+    let mut out: Vec<Fragment> = Vec::with_capacity(held.len() + more.len());
+    let (mut a, mut b) = (held.into_iter().peekable(), more.into_iter().peekable());
+    let merged = std::iter::from_fn(|| match (a.peek(), b.peek()) {
+        (Some(x), Some(y)) if order(y) < order(x) => b.next(),
+        (Some(_), _) => a.next(),
+        (None, _) => b.next(),
+    });
+    for f in merged {
+        match out.last_mut() {
+            Some(prev) if prev.key == f.key && prev.end == f.start => {
+                match prev.stitch(&f, counts) {
+                    Some(joined) => *prev = joined,
+                    None => {
+                        out.pop();
                     }
                 }
-                _ => out.push(f),
             }
+            _ => out.push(f),
         }
-        self.fragments = out;
     }
+    out
 }
 
 #[cfg(test)]

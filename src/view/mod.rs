@@ -12,9 +12,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 pub use rate::{
-    AxisEntropy, BRICK_CELLS, BinSampler, Bricks, InnerSpans, PhaseStats, RaySubset, Walk,
-    block_counts, block_counts_by, counts_of_bricks, entropy_rate, entropy_rate_of, ray_bins,
-    work_units, work_units_of,
+    AxisEntropy, BRICK_CELLS, BinSampler, Bricks, InnerSpans, OpenRays, PhaseStats, RaySubset,
+    Walk, block_counts, block_counts_by, count_slab_into, counts_of_bricks, entropy_rate,
+    entropy_rate_of, ray_bins, work_units, work_units_of,
 };
 pub use refine::{REFINE_STOP_DEGREES, pattern_search, refine_evaluations, refine_steps};
 pub use streamed::{search_streamed, streamed_memory_floor};

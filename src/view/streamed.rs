@@ -4,16 +4,17 @@
 //! that the result is [`search`](super::search)'s, bit for bit, in a fraction of its memory.
 //!
 //! The voxels are read where they are (a mapped file, or held); what is held is one slab's cell
-//! map (a byte a voxel of the slab, two for f32) and, per lattice counted in the same sweep, its
-//! tables and the pieces of its rays open at the slab's top. The lattices are counted in as few
-//! sweeps as that memory allows: the paper's lattices of every axis first, then the shifted ones,
-//! whose rays depend on what the paper's counted (see `subset`).
+//! map (a byte a voxel of the slab, two for f32), per lattice counted in the same sweep its
+//! tables and the pieces of its rays open at the slab's face ([`OpenRays`], stitched band by
+//! band as each slab is walked), and per thread the band of rays it is walking. The lattices
+//! are counted in as few sweeps as that memory allows: the paper's lattices of every axis first,
+//! then the shifted ones, whose rays depend on what the paper's counted (see `subset`).
 
 use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::rate::{AxisEntropy, BinSampler, Bricks, RaySubset, counts_of_slab};
+use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
 use super::{ViewParams, ViewSearch, canonical_axis, concluded, finish, icosphere};
 use super::{lattice_of, ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
@@ -35,8 +36,9 @@ pub fn streamed_memory_floor(volume: &Volume, params: &ViewParams) -> u64 {
     let s = crate::geometry::min_spacing(volume.spacing());
     let ray = params.sampling.ray_spacing.unwrap_or(s);
     let z = Lattice::new(dims, volume.spacing(), [0.0, 0.0, 1.0], ray, s, [0.0; 3]);
+    let threads = rayon::current_num_threads() as u64;
     let job = z.map_or(u64::MAX, |l| {
-        job_bytes(dims, &l, params, 1) + merge_bytes(crossing(dims, &l, 1))
+        job_bytes(dims, &l, params, 1).saturating_add(threads * band_bytes(&l, params))
     });
     (4 * (dims[0] * dims[1]) as u64).saturating_add(job)
 }
@@ -80,6 +82,7 @@ struct Job {
     lattice: Lattice,
     subset: RaySubset,
     counts: PartialCounts,
+    open: OpenRays,
 }
 
 /// What every sweep over the volume shares.
@@ -144,17 +147,17 @@ impl<T: Voxel> Sweeps<'_, T> {
     ) -> Result<Vec<AxisEntropy>> {
         let dims = self.volume.dims();
         let window = BinSampler::<T>::window_bytes(dims, slab + 1);
-        // Each thread may be stitching one lattice's slab to its sweep's pieces at a time.
+        // Each thread walks one band of one lattice's rays at a time.
         let widest = lattices
             .iter()
-            .map(|(l, s)| crossing(dims, l, s.every))
+            .map(|(l, _)| band_bytes(l, self.params))
             .max()
             .unwrap_or(0);
-        let threads = rayon::current_num_threads().min(lattices.len()) as u64;
+        let threads = rayon::current_num_threads() as u64;
         let room = self
             .room
             .saturating_sub(window)
-            .saturating_sub(threads * merge_bytes(widest));
+            .saturating_sub(threads * widest);
         let (bins, block) = (self.params.sampling.bins, self.params.block);
         let mut out = Vec::with_capacity(lattices.len());
         let mut jobs: Vec<Job> = Vec::new();
@@ -164,6 +167,7 @@ impl<T: Voxel> Sweeps<'_, T> {
             let bytes = job_bytes(dims, &lattice, self.params, subset.every);
             held += bytes;
             jobs.push(Job {
+                open: OpenRays::new(&lattice),
                 lattice,
                 subset,
                 counts: PartialCounts::new(bins, block),
@@ -191,12 +195,13 @@ impl<T: Voxel> Sweeps<'_, T> {
             let sampler = BinSampler::window(self.data, self.volume, self.q, planes.clone());
             let z = planes.start as i64..planes.end as i64;
             jobs.par_iter_mut().try_for_each(|job| {
-                let part = counts_of_slab(
+                let part = count_slab_into(
                     &sampler,
                     &job.lattice,
                     block,
                     bricks,
                     (z.clone(), job.subset),
+                    &mut job.open,
                 );
                 job.counts.add(part);
                 monitor.advance(1)
@@ -204,10 +209,10 @@ impl<T: Voxel> Sweeps<'_, T> {
         }
         jobs.into_iter()
             .map(|job| {
-                if !job.counts.is_complete() {
+                if !job.open.is_empty() {
                     return Err(Error::Degenerate(format!(
                         "the slab walk left {} pieces of rays unjoined",
-                        job.counts.fragments().len()
+                        job.open.len()
                     )));
                 }
                 Ok(AxisEntropy::new(
@@ -242,22 +247,26 @@ fn planes(dims: [usize; 3], slab: usize) -> impl Iterator<Item = Range<usize>> {
         .map(move |z| z..(z + slab).min(cells))
 }
 
-/// The bytes one lattice counted in a sweep over a volume of `dims` holds between slabs: its
-/// tables and a slab's, a band of rays being set up, and an open piece for each ray crossing a
-/// plane of constant z.
-fn job_bytes(dims: [usize; 3], lattice: &Lattice, params: &ViewParams, every: u64) -> u64 {
+/// The bytes of one lattice's block tables.
+fn table_bytes(params: &ViewParams) -> u64 {
     let bits = usize::BITS - (params.sampling.bins.max(2) - 1).leading_zeros();
-    let tables = 32u64 << (bits as usize * params.block).min(40);
-    let ((i0, i1), _) = lattice.ray_ranges();
-    let band = SLAB_ROWS * (i1 - i0 + 1).max(1) as u64 * SLOT_BYTES;
-    tables + band + crossing(dims, lattice, every) * FRAGMENT
+    32u64 << (bits as usize * params.block).min(40)
 }
 
-/// What stitching a slab's pieces to a sweep's takes beyond them, for a lattice whose rays
-/// crossing a plane are `crossing`: the slab's pieces (those entering it and those leaving it)
-/// and the stitched list while both are held.
-fn merge_bytes(crossing: u64) -> u64 {
-    5 * crossing * FRAGMENT
+/// The bytes one lattice counted in a sweep over a volume of `dims` holds between slabs: its
+/// tables, and an open piece for each ray crossing a plane of constant z.
+fn job_bytes(dims: [usize; 3], lattice: &Lattice, params: &ViewParams, every: u64) -> u64 {
+    table_bytes(params) + crossing(dims, lattice, every) * FRAGMENT
+}
+
+/// The bytes a thread holds while it walks one band of `lattice`'s rays through a slab: the
+/// rays being set up, the pieces they leave and their stitching to the band's open ones (at
+/// most three pieces a ray while both lists and the stitched one are held), and the tables it
+/// counts into.
+fn band_bytes(lattice: &Lattice, params: &ViewParams) -> u64 {
+    let ((i0, i1), _) = lattice.ray_ranges();
+    let rays = SLAB_ROWS * (i1 - i0 + 1).max(1) as u64;
+    rays * (SLOT_BYTES + 3 * FRAGMENT) + 2 * table_bytes(params)
 }
 
 const FRAGMENT: u64 = std::mem::size_of::<Fragment>() as u64;

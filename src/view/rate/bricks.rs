@@ -48,7 +48,7 @@ struct Slot {
 
 /// The rays of a band of rows walked together, and per brick the rays whose next sample lies in
 /// it (by index in `slots`), in the order they were set up.
-struct Band {
+pub(super) struct Band {
     slots: Vec<Slot>,
     waiting: Vec<Vec<u32>>,
 }
@@ -81,7 +81,7 @@ fn at(p0: [i64; 3], step: [i64; 3], t: i64) -> [i64; 3] {
 }
 
 /// The walk of one lattice brick by brick: what every band shares.
-struct BrickWalk<'a, T: Voxel> {
+pub(super) struct BrickWalk<'a, T: Voxel> {
     sampler: &'a BinSampler<'a, T>,
     lattice: &'a Lattice,
     bricks: Bricks,
@@ -178,7 +178,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
     }
 
     /// The bricks walked, in sweep order.
-    fn order(&self) -> Vec<usize> {
+    pub(super) fn order(&self) -> Vec<usize> {
         self.bricks
             .sweep(self.step)
             .into_iter()
@@ -189,7 +189,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
     /// The rays of rows `j0..=j1`, each waiting in the brick of its first sample inside a cell
     /// that is walked; rays with no sample inside a cell are counted whole into `out` if the
     /// brick of their first sample is walked.
-    fn band(&self, (j0, j1): (i64, i64), out: &mut PartialCounts) -> Band {
+    pub(super) fn band(&self, (j0, j1): (i64, i64), out: &mut PartialCounts) -> Band {
         let ((i0, i1), _) = self.lattice.ray_ranges();
         let starts = RayStarts::new(self.lattice, self.sampler, self.step);
         let mut band = Band {
@@ -288,7 +288,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
 
     /// Walks `band`'s rays through the bricks `order` (the walked ones, in sweep order),
     /// counting into `out`, and ends them.
-    fn walk(&self, band: &mut Band, order: &[usize], out: &mut PartialCounts) {
+    pub(super) fn walk(&self, band: &mut Band, order: &[usize], out: &mut PartialCounts) {
         let (mut walkers, mut sorted, mut tally) = (Vec::new(), Vec::new(), Vec::new());
         for &b in order {
             let ids = std::mem::take(&mut band.waiting[b]);
@@ -491,41 +491,4 @@ pub fn counts_of_bricks<T: Voxel>(
     let mut band = walk.band(js, &mut out);
     walk.walk(&mut band, &order, &mut out);
     out
-}
-
-/// Rows of rays a slab's walk sets up at a time: what it holds per ray is bounded by a band.
-pub(crate) const SLAB_ROWS: u64 = 64;
-
-/// The block counts of the stretches of `lattice`'s rays (those `subset` keeps) in the slab of
-/// `bricks` whose cells along z are `planes` (a whole number of bricks thick): what they
-/// determine, and the fragments of the rays that enter or leave it. The slabs of a grid added in
-/// any order are [`block_counts`](super::block_counts)'s counts bit for bit; the sampler need
-/// hold the cell map of the slab's planes alone ([`BinSampler::window`]). Only the rays that can
-/// meet the slab are set up, bands of rows in parallel.
-pub fn counts_of_slab<T: Voxel>(
-    sampler: &BinSampler<T>,
-    lattice: &Lattice,
-    block: usize,
-    bricks: Bricks,
-    (planes, subset): (std::ops::Range<i64>, RaySubset),
-) -> PartialCounts {
-    let walk = BrickWalk::of_slab(sampler, lattice, block, bricks, (planes, subset));
-    let order = walk.order();
-    let (_, (j0, j1)) = lattice.ray_ranges();
-    let bands: Vec<(i64, i64)> = (j0..=j1)
-        .step_by(SLAB_ROWS as usize)
-        .map(|j| (j, (j + SLAB_ROWS as i64 - 1).min(j1)))
-        .collect();
-    let empty = || PartialCounts::new(sampler.bins(), block);
-    bands
-        .into_par_iter()
-        .fold(empty, |mut out, js| {
-            let mut band = walk.band(js, &mut out);
-            walk.walk(&mut band, &order, &mut out);
-            out
-        })
-        .reduce(empty, |mut a, b| {
-            a.add(b);
-            a
-        })
 }

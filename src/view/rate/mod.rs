@@ -7,15 +7,17 @@ mod grid;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 mod sampler;
+mod slab;
 mod tiles;
 
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub(crate) use bricks::SLAB_ROWS;
-pub use bricks::{counts_of_bricks, counts_of_slab};
+pub use bricks::counts_of_bricks;
 pub use grid::{BRICK_CELLS, Bricks};
 pub use sampler::{BinSampler, InnerSpans, VoxelBins};
+pub(crate) use slab::SLAB_ROWS;
+pub use slab::{OpenRays, count_slab_into};
 
 use crate::error::Result;
 use crate::geometry::WorldAxis;

@@ -303,15 +303,31 @@ fn slabs_counted_apart_from_windows_of_the_map_add_up_to_the_whole() {
                     for k in (1..slabs.len()).rev() {
                         slabs.swap(k, (lcg.next_u64() % (k as u64 + 1)) as usize);
                     }
-                    let mut total = PartialCounts::new(16, 3);
+                    // One sweep holding the open rays, and every slab apart, added.
+                    let (mut sweep, mut apart) =
+                        (PartialCounts::new(16, 3), PartialCounts::new(16, 3));
+                    let mut open = OpenRays::new(&lattice);
                     for planes in slabs {
                         let window = BinSampler::window(v.voxels(), &v, q, planes.clone());
                         let z = planes.start as i64..planes.end as i64;
-                        total.add(counts_of_slab(&window, &lattice, 3, bricks, (z, subset)));
+                        let walk = |open: &mut OpenRays| {
+                            count_slab_into(&window, &lattice, 3, bricks, (z.clone(), subset), open)
+                        };
+                        sweep.add(walk(&mut open));
+                        let mut alone = OpenRays::new(&lattice);
+                        let part = walk(&mut alone);
+                        apart.add(PartialCounts::of(
+                            part.counts,
+                            part.rays,
+                            alone.into_fragments(),
+                        ));
                     }
-                    assert!(total.is_complete(), "{dims:?} {axis:?} slabs of {slab}");
-                    let got = AxisEntropy::new(lattice.d, &total.counts, total.rays);
-                    assert_eq!(got, expect, "{dims:?} {axis:?} {subset:?} slabs of {slab}");
+                    assert!(open.is_empty(), "{dims:?} {axis:?} slabs of {slab}");
+                    assert!(apart.is_complete(), "{dims:?} {axis:?} slabs of {slab}");
+                    for total in [sweep, apart] {
+                        let got = AxisEntropy::new(lattice.d, &total.counts, total.rays);
+                        assert_eq!(got, expect, "{dims:?} {axis:?} {subset:?} slabs of {slab}");
+                    }
                     compared += 1;
                 }
             }
