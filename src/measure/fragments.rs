@@ -232,6 +232,8 @@ impl PartialCounts {
     pub fn stitch_into(&mut self, open: &mut Vec<Fragment>) {
         let more = std::mem::take(&mut self.fragments);
         *open = stitched(std::mem::take(open), more, &mut self.counts);
+        // Held until the next slab: no room kept for the merge it came from.
+        open.shrink_to_fit();
     }
 
     /// Takes `more` fragments in, stitching every pair that meets.

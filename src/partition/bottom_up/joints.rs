@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use super::super::Slab;
 use super::super::stack::{MISSING, SliceStack};
+use super::checkpoints::{Checkpoints, Runs};
 use crate::error::Result;
 use crate::measure::normalized_mutual_information;
 use crate::progress::Monitor;
@@ -93,6 +94,8 @@ pub(crate) struct Columns {
     run_first: Vec<u32>,
     run_symbol: Vec<u8>,
     run_end: Vec<u32>,
+    /// The cumulative histograms of the columns of many runs, at every so many runs.
+    checkpoints: Checkpoints,
 }
 
 impl Columns {
@@ -104,6 +107,15 @@ impl Columns {
         // then fill the arrays, a block of columns a task.
         let run_start = run_starts(stack, &active);
         let (run_first, run_symbol, run_end) = runs_of(stack, &active, &run_start);
+        let runs = |i: usize| {
+            let r = run_start[i]..run_start[i + 1];
+            Runs {
+                firsts: &run_first[r.clone()],
+                symbols: &run_symbol[r],
+                end: run_end[i],
+            }
+        };
+        let checkpoints = Checkpoints::new(active.len(), runs, stack.bins(), MISSING);
         Self {
             active,
             constant,
@@ -111,6 +123,18 @@ impl Columns {
             run_first,
             run_symbol,
             run_end,
+            checkpoints,
+        }
+    }
+
+    /// Active column `i`'s runs.
+    #[inline]
+    fn runs(&self, i: usize) -> Runs<'_> {
+        let runs = self.run_start[i]..self.run_start[i + 1];
+        Runs {
+            firsts: &self.run_first[runs.clone()],
+            symbols: &self.run_symbol[runs],
+            end: self.run_end[i],
         }
     }
 
@@ -127,16 +151,39 @@ impl Columns {
     }
 
     /// Fills `hists[j]` with active column `i`'s histogram over `slabs[j]` (contiguous slabs),
-    /// from its runs: the work is the number of runs, not of slices.
+    /// from its runs: the work is the number of runs, not of slices, and for a slab of many
+    /// runs, the runs between two checkpoints.
     fn fill_from_runs(&self, i: usize, slabs: &[Slab], hists: &mut [PixelHistogram]) {
         for h in hists.iter_mut() {
             h.clear();
         }
+        let runs = self.runs(i);
+        let span = |s: &Slab| (s.0 as u32, s.1 as u32);
+        let whole = (span(&slabs[0]).0, span(&slabs[slabs.len() - 1]).1);
+        if !self.checkpoints.serve(i, &runs, whole) {
+            return Self::walk_runs(&runs, slabs, hists);
+        }
+        let mut scratch = [0u32; 512];
+        for (j, slab) in slabs.iter().enumerate() {
+            if self.checkpoints.serve(i, &runs, span(slab)) {
+                let h = &mut hists[j];
+                self.checkpoints
+                    .histogram(i, &runs, span(slab), &mut scratch, |s, n| h.add(s, n));
+            } else {
+                Self::walk_runs(&runs, std::slice::from_ref(slab), &mut hists[j..=j]);
+            }
+        }
+    }
+
+    /// Adds into `hists[j]` the histogram over `slabs[j]` (contiguous slabs) of a column's
+    /// `runs`, run by run.
+    fn walk_runs(runs: &Runs, slabs: &[Slab], hists: &mut [PixelHistogram]) {
         let (lo, hi) = (slabs[0].0 as u32, slabs[slabs.len() - 1].1 as u32);
-        let runs = self.run_start[i]..self.run_start[i + 1];
-        let firsts = &self.run_first[runs.clone()];
-        let symbols = &self.run_symbol[runs];
-        let end = self.run_end[i];
+        let Runs {
+            firsts,
+            symbols,
+            end,
+        } = *runs;
         let mut r = firsts.partition_point(|&f| f <= lo).saturating_sub(1);
         let mut j = 0;
         while r < firsts.len() && firsts[r] < hi {

@@ -4,6 +4,7 @@
 //! product of the two slabs' histograms there, `h(x, y) = Σ_p cA(p, x)·cB(p, y)`.
 //! Those histograms and their NMI are `joints`; this is the merging.
 
+mod checkpoints;
 mod joints;
 
 use std::cmp::Ordering;

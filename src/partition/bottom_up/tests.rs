@@ -129,3 +129,34 @@ fn nmi_matches_the_measure_on_single_slices() {
     let (mi, h) = mutual_information(&joint, 4, 4);
     assert!((nmi[0] - mi / h).abs() < 1e-12);
 }
+
+#[test]
+fn long_columns_of_noise_give_the_pairwise_joint_histograms_from_their_checkpoints() {
+    // Three pixels, 3000 slices of noise with missing samples: every column has thousands of
+    // runs, so slabs of many runs are taken from checkpoints, small ones run by run.
+    let mut state = 5u32;
+    let mut next = || {
+        state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+        (state >> 16) as u8
+    };
+    let slices: Vec<Vec<u8>> = (0..3000)
+        .map(|_| {
+            (0..3)
+                .map(|_| if next() % 11 == 0 { MISSING } else { next() % 5 })
+                .collect()
+        })
+        .collect();
+    let stack = stack_of(&slices, 5);
+    let columns = Columns::new(&stack);
+    for slabs in [
+        vec![(0, 1), (1, 1700), (1700, 1701), (1701, 3000)],
+        vec![(5, 400), (400, 1333), (1333, 1334), (1334, 2999)],
+        vec![(0, 1500), (1500, 3000)],
+    ] {
+        let joints = consecutive_joints(&stack, &columns, &slabs);
+        for (i, joint) in joints.iter().enumerate() {
+            let expect = literal_joint(&slices, slabs[i], slabs[i + 1], 5);
+            assert_eq!(joint, &expect, "{slabs:?}, pair {i}");
+        }
+    }
+}
