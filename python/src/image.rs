@@ -161,8 +161,8 @@ pub fn render(
         made = analyze(py, volume, progress, None)?;
         &made
     };
-    let Computed { inner, level } = analysis.computed(py)?;
-    let part = &inner.partition;
+    let computed: &Computed = analysis.computed(py)?;
+    let (level, part) = (computed.level(), &computed.analysis.partition);
     if faces {
         let look = TransferChoice {
             preset: params.preset,

@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use image::{DynamicImage, RgbaImage};
-use slabscope::budget::{Budget, Purpose};
 use slabscope::geometry::min_spacing;
 use slabscope::params::Scene;
 use slabscope::render::{Layout, Renderer, Stack, TransferChoice, encode, slice};
+use slabscope::request::Level;
 use tiny_skia::Pixmap;
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -100,16 +100,15 @@ fn render_file(
     }
     // An analysis beyond the memory budget runs on a pyramid level, and the picture is drawn
     // from that level.
-    let plan =
-        Budget::new(scene.load.options()?.max_memory).plan(&loaded.volume, Purpose::Picture)?;
-    if let Some(note) = &plan.note {
+    let max_memory = scene.load.options()?.max_memory;
+    let request = scene.analysis.request(false, Level::Picture, max_memory)?;
+    let planned = request.plan(&loaded.volume)?;
+    if let Some(note) = &planned.plan.note {
         super::note(file, note);
     }
-    let volume = plan.partition.as_ref();
-    let part = scene
-        .analysis
-        .analyze(&slabscope::error::shown(file), &plan, false)?
-        .partition;
+    let analysed = super::args::analyze(&slabscope::error::shown(file), planned)?;
+    let volume = analysed.level().as_ref();
+    let part = &analysed.analysis.partition;
     let options = scene.options.scene(width, height)?;
     if faces {
         let renderer = Renderer::new(volume)?;
@@ -130,7 +129,7 @@ fn render_file(
         return Ok(slice::faces(
             volume,
             &transfer,
-            &Stack::of(&part),
+            &Stack::of(part),
             &part.slabs,
             tile,
         )?);
@@ -143,7 +142,7 @@ fn render_file(
             part.slabs.len()
         );
     }
-    let layout = Layout::exploded(&part, options.gap, options.spread);
+    let layout = Layout::exploded(part, options.gap, options.spread);
     let renderer = Renderer::new(volume)?;
     let image = with_bar(|monitor| renderer.render(&layout, &options.params, monitor))?;
     Ok(image.pixmap)
