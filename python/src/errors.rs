@@ -47,7 +47,7 @@ pub fn message(e: &Error) -> String {
         } => {
             let value = match value {
                 slabscope::error::Value::Size(w, h) => format!("({w}, {h})"),
-                v => v.to_string(),
+                slabscope::error::Value::Whole(n) => n.to_string(),
             };
             format!("{}={value}: {problem}", keyword(parameter))
         }
