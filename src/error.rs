@@ -127,6 +127,17 @@ pub enum Error {
         /// What would fit.
         expected: String,
     },
+    /// A value valid in itself that does not fit what it applies to: a slab to highlight
+    /// beyond the slabs found, a picture too small for the faces of its slabs.
+    #[error("{parameter} {value}: {problem}")]
+    Unfit {
+        /// The parameter's name.
+        parameter: &'static str,
+        /// The value given, as data (each front end writes a size its own way).
+        value: Value,
+        /// What is wrong with it here.
+        problem: String,
+    },
     /// Two parameters given together that exclude each other.
     #[error("{} and {} cannot both be given", parameters[0], parameters[1])]
     Conflicting {
@@ -163,6 +174,25 @@ pub enum Error {
     /// The computation was cancelled through its cancellation flag.
     #[error("cancelled")]
     Cancelled,
+}
+
+/// A parameter's value in an error, as data: a front end writes it in its own syntax.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Value {
+    /// A whole number.
+    Whole(u64),
+    /// A picture's size, width and height in pixels.
+    Size(u32, u32),
+}
+
+impl std::fmt::Display for Value {
+    /// The command line's syntax: `5`, `640x480`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Whole(n) => write!(f, "{n}"),
+            Self::Size(w, h) => write!(f, "{w}x{h}"),
+        }
+    }
 }
 
 /// A path as messages show it: escaped by the one rule of [`names`] (on one line, nothing raw

@@ -51,7 +51,10 @@
 //!   caster and overlays.
 //! - [`report`]: the JSON contract (docs/design.md §3, field by field in docs/json.md) and the
 //!   other exports, built from the results.
+//! - [`budget`]: the one planner of the pyramid level each piece of work runs on.
 //! - [`triage`]: many volumes at once: what a set of paths holds, shards of it, one row each.
+//! - [`params`]: every parameter a user sets, defined once, and the values given, parsed.
+//! - [`request`]: analyse, render and slice as request values the front ends build and run.
 
 pub mod analysis;
 pub mod budget;
@@ -65,6 +68,7 @@ pub mod partition;
 pub mod progress;
 pub mod render;
 pub mod report;
+pub mod request;
 #[cfg(test)]
 mod testing;
 pub mod triage;

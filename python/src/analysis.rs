@@ -8,10 +8,10 @@ use numpy::ndarray::{ArrayView3, ShapeBuilder};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use slabscope::budget::{Budget, Purpose};
+use slabscope::Error;
 use slabscope::explain::StepsShown;
+use slabscope::request::{Analysed, AnalysisRequest, Level};
 use slabscope::volume::Voxels;
-use slabscope::{AnalysisReport, Error};
 
 use crate::errors::{OrPy, to_py};
 use crate::params::{Kwargs, analysis_params, resolution};
@@ -60,13 +60,9 @@ pub struct Analysis {
     report: Py<PyDict>,
 }
 
-/// The library's analysis and the pyramid level it partitioned.
-pub struct Computed {
-    /// The library's analysis.
-    pub inner: slabscope::Analysis,
-    /// The pyramid level partitioned (the volume itself at full resolution).
-    pub level: Arc<slabscope::Volume>,
-}
+/// The library's analysis, where it ran (its `level()` is the pyramid level partitioned) and
+/// how it was asked.
+pub type Computed = Analysed;
 
 /// Finds the most structured view of `volume` and the slabs along it, with the CLI's analysis
 /// keywords and defaults (`bins=32, block=3, level=1, phases=8, method="topdown", slabs=4,
@@ -114,35 +110,18 @@ fn compute(
     let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
     let full = Arc::clone(&volume.inner);
-    let wanted = resolution
-        .level(full.dims(), full.coarser_levels())
-        .or_py()?;
-    let plan = run::quick(py, || {
-        Budget::new(max_memory).plan(
-            &full,
-            Purpose::Analysis {
-                wanted,
-                every_voxel: wanted == 0 && named,
-                params: &analysis_params,
-            },
-        )
-    })?;
-    // A slab count the user did not give is not blamed on `slabs=`.
-    let analysis = run::long(py, progress, |monitor| {
-        slabscope::analyze_planned(&plan, &analysis_params, monitor)
-            .map_err(|e| slabscope::budget::blame(&plan, given.blame(e)))
-    })?;
-    crate::errors::intact(&full)?;
-    let report = AnalysisReport::new(&volume.name, &full, &analysis_params.view, &analysis)
-        .or_py()?
-        .computed_on(&plan.partition)
-        .views_on(&plan.views);
-    let json = slabscope::report::to_json(&report).or_py()?;
-    let computed = Computed {
-        inner: analysis,
-        level: Arc::clone(&plan.partition),
+    let request = AnalysisRequest {
+        level: Level::Asked(resolution, named),
+        given: Some(given),
+        ..AnalysisRequest::new(analysis_params, max_memory)
     };
-    Ok((computed, json))
+    let planned = run::quick(py, || request.plan(&full))?;
+    // A slab count the user did not give is not blamed on `slabs=`.
+    let analysed = run::long(py, progress, |monitor| planned.run(monitor))?;
+    crate::errors::intact(&full)?;
+    let report = analysed.report(&volume.name, &full).or_py()?;
+    let json = slabscope::report::to_json(&report).or_py()?;
+    Ok((analysed, json))
 }
 
 /// Whether two volumes hold the same voxels (NaN equal to NaN).
@@ -311,7 +290,8 @@ impl Analysis {
     /// on: the slab's index + 1, and 0 for background and missing voxels (uint8, or uint16
     /// beyond 255 slabs), as `analyze --export-labels` writes it.
     fn labels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let Computed { inner, level } = self.computed(py)?;
+        let computed = self.computed(py)?;
+        let (inner, level) = (&computed.analysis, computed.level());
         let full = Arc::clone(&self.volume.get().inner);
         let labels = run::quick(py, || {
             slabscope::label_volume(&full, level, &inner.partition, &slabscope::Monitor::none())

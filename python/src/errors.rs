@@ -40,6 +40,17 @@ pub fn message(e: &Error) -> String {
                 keyword(parameter)
             )
         }
+        Error::Unfit {
+            parameter,
+            value,
+            problem,
+        } => {
+            let value = match value {
+                slabscope::error::Value::Size(w, h) => format!("({w}, {h})"),
+                slabscope::error::Value::Whole(n) => n.to_string(),
+            };
+            format!("{}={value}: {problem}", keyword(parameter))
+        }
         Error::Conflicting { parameters: [a, b] } => {
             format!("{}= and {}= cannot both be given", keyword(a), keyword(b))
         }
@@ -96,6 +107,7 @@ pub fn to_py(e: Error) -> PyErr {
         Error::NotRegularFile { .. } => PyOSError::new_err(text),
         Error::InvalidParameter { .. }
         | Error::DefaultUnfit { .. }
+        | Error::Unfit { .. }
         | Error::Conflicting { .. }
         | Error::Needs { .. }
         | Error::TooCoarse { .. } => PyValueError::new_err(text),

@@ -6,10 +6,8 @@ use numpy::ndarray::{Array3, ArrayView3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use slabscope::geometry::min_spacing;
-use slabscope::render::{
-    ImageOutput, Layout, Renderer, Stack, TransferChoice, encode, slice as slices,
-};
+use slabscope::render::{ImageOutput, encode, slice as slices};
+use slabscope::request::{RenderRequest, SliceRequest};
 use tiny_skia::Pixmap;
 
 use crate::analysis::{Analysis, Computed, analyze};
@@ -161,59 +159,20 @@ pub fn render(
         made = analyze(py, volume, progress, None)?;
         &made
     };
-    let Computed { inner, level } = analysis.computed(py)?;
-    let part = &inner.partition;
-    if faces {
-        let look = TransferChoice {
-            preset: params.preset,
-            colormap: params.colormap,
-            window: params.window,
-        };
-        let pixmap = slab_faces(py, level, part, look, size)?;
-        return Ok(Image { pixmap });
-    }
-    if let Some(h) = params.highlight
-        && h >= part.slabs.len()
-    {
-        return Err(PyValueError::new_err(format!(
-            "highlight={h}: there are only {} slabs (numbered from 0)",
-            part.slabs.len()
-        )));
-    }
-    let layout = Layout::exploded(part, gap, spread);
-    let image = run::long(py, reporter.callback(), |monitor| {
-        Renderer::new(level)?.render(&layout, &params, monitor)
+    let computed: &Computed = analysis.computed(py)?;
+    let request = RenderRequest {
+        scene: slabscope::params::Scene {
+            params,
+            gap,
+            spread,
+        },
+        faces,
+    };
+    let pixmap = run::long(py, reporter.callback(), |monitor| {
+        request.render(computed, monitor)
     })?;
     crate::errors::intact(&volume.get().inner)?;
-    Ok(Image {
-        pixmap: image.pixmap,
-    })
-}
-
-/// The strip of `part`'s slab faces in `look`, fit into `(width, height)`, as `render --faces`
-/// draws it: a column a slab, its last slice above its first, each fit into a tile.
-fn slab_faces(
-    py: Python<'_>,
-    level: &slabscope::Volume,
-    part: &slabscope::Partition,
-    look: TransferChoice,
-    (width, height): (u32, u32),
-) -> PyResult<Pixmap> {
-    let k = part.slabs.len() as u32;
-    let tile = (
-        width.saturating_sub(4 * (k + 1)) / k.max(1),
-        height.saturating_sub(12) / 2,
-    );
-    if tile.0 < 8 || tile.1 < 8 {
-        return Err(PyValueError::new_err(format!(
-            "size=({width}, {height}): too small for the faces of {k} slabs"
-        )));
-    }
-    run::quick(py, || {
-        let renderer = Renderer::new(level)?;
-        let transfer = renderer.transfer(look, min_spacing(level.spacing()))?;
-        slices::faces(level, &transfer, &Stack::of(part), &part.slabs, tile)
-    })
+    Ok(Image { pixmap })
 }
 
 /// One slice across the slab axis, oriented as radiologists read it, as `slabscope slice`
@@ -240,29 +199,35 @@ pub fn slice(
     let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
     let full = &volume.inner;
+    let mut request = SliceRequest {
+        params,
+        axis: None,
+        index: None,
+        look,
+        picture: slices::SliceParams {
+            fit,
+            letters,
+            ..slices::SliceParams::default()
+        },
+    };
     let axis = match analysis {
         Some(a) => {
             a.check_volume(py, volume)?;
             a.axis(py)?
         }
         None => run::long(py, reporter.callback(), |monitor| {
-            slabscope::analysis::chosen_axis(full, &params, monitor)
+            request.axis(full, monitor)
         })?,
     };
-    let slice_params = slices::SliceParams {
-        fit,
-        letters,
-        ..slices::SliceParams::default()
-    };
-    let stack = params.stack();
-    let index = match index.filter(|i| !i.is_none()) {
+    request.axis = Some(axis);
+    request.index = match index.filter(|i| !i.is_none()) {
         None => None,
         Some(given) => match given.extract::<i64>() {
-            Ok(i) if i < 0 => Some(from_end(py, full, axis, &stack, i)?),
+            Ok(i) if i < 0 => Some(from_end(py, full, &request, i)?),
             Ok(i) => Some(usize::try_from(i).unwrap_or(usize::MAX)),
             // An int beyond 64 bits names no slice.
             Err(e) if e.is_instance_of::<pyo3::exceptions::PyOverflowError>(py) => {
-                let n = slices_along(py, full, axis, &stack)?;
+                let n = slices_along(py, full, &request)?;
                 return Err(no_such_slice(crate::errors::repr(given), n));
             }
             Err(_) => {
@@ -273,41 +238,34 @@ pub fn slice(
             }
         },
     };
-    let image = run::quick(py, || {
-        slices::numbered(full, axis, &stack, index, look, &slice_params)
-    })?;
+    let pixmap = run::quick(py, || request.run(full, &slabscope::Monitor::none()))?;
     crate::errors::intact(full)?;
-    Ok(Image {
-        pixmap: image.pixmap,
-    })
+    Ok(Image { pixmap })
 }
 
-/// The slice a negative `index` names, counting from the end as Python's sequences do
-/// (`-1` is the last slice along `axis`).
+/// The slice a negative `index` names along `request`'s axis, counting from the end as
+/// Python's sequences do (`-1` is the last slice).
 fn from_end(
     py: Python<'_>,
     volume: &slabscope::Volume,
-    axis: [f64; 3],
-    stack: &slabscope::partition::StackParams,
+    request: &SliceRequest,
     index: i64,
 ) -> PyResult<usize> {
-    let n = slices_along(py, volume, axis, stack)?;
+    let n = slices_along(py, volume, request)?;
     if index < -n {
         return Err(no_such_slice(index, n));
     }
     Ok(usize::try_from(n + index).unwrap_or(0))
 }
 
-/// How many slices `volume` has along `axis`.
+/// How many slices `volume` has along `request`'s axis.
 fn slices_along(
     py: Python<'_>,
     volume: &slabscope::Volume,
-    axis: [f64; 3],
-    stack: &slabscope::partition::StackParams,
+    request: &SliceRequest,
 ) -> PyResult<i64> {
-    let (_, slices, _, _) = run::quick(py, || {
-        slabscope::partition::slice_geometry(volume, axis, stack)
-    })?;
+    let axis = request.axis.unwrap_or_default();
+    let slices = run::quick(py, || request.slices(volume, axis))?;
     Ok(i64::try_from(slices).unwrap_or(i64::MAX))
 }
 

@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::budget::{Budget, Purpose};
 use slabscope::explain::StepsShown;
 use slabscope::formats::{VolumeOutput, stage, stage_volume};
 use slabscope::report::curves_csv;
-use slabscope::{AnalysisReport, Monitor, SlabsReport, label_volume};
+use slabscope::request::Level;
+use slabscope::{Monitor, SlabsReport, label_volume};
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::params::{self, Flags};
@@ -81,35 +81,28 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     super::check_outputs(&outputs, &loaded.sources, args.force)?;
     let full = &loaded.volume;
     let name = slabscope::error::shown(&args.file);
-    let (wanted, named) = args
-        .resolution
-        .given
-        .resolution_named()
-        .and_then(|(r, named)| Ok((r.level(full.dims(), full.coarser_levels())?, named)))
-        .map_err(|e| anyhow::Error::from(e).context(name.clone()))?;
-    let max_memory = args.load.options()?.max_memory;
-    let mut params = args
-        .analysis
-        .params(args.views.given.switch(&slabscope::params::table::VIEWS)?)?;
-    params.explain = args.explain;
-    let budget = Budget::new(max_memory);
-    let plan = budget.plan(
-        full,
-        Purpose::Analysis {
-            wanted,
-            every_voxel: wanted == 0 && named,
-            params: &params,
-        },
+    let context = |e: slabscope::Error| anyhow::Error::from(e).context(name.clone());
+    let (resolution, named) = args.resolution.given.resolution_named().map_err(context)?;
+    let level = Level::Asked(resolution, named);
+    level.wanted(full).map_err(context)?;
+    let mut request = args.analysis.request(
+        args.views.given.switch(&slabscope::params::table::VIEWS)?,
+        level,
+        args.load.options()?.max_memory,
     )?;
-    let volume = plan.partition.as_ref();
+    request.params.explain = args.explain;
+    let planned = request.plan(full)?;
     if args.export_labels.is_some() {
         // A byte a voxel at least: refused before the analysis rather than after it.
-        budget.labels(&args.file, full, &plan, 1)?;
+        request.budget.labels(&args.file, full, &planned.plan, 1)?;
     }
-    let analysis = args.analysis.analyze_with(&name, &plan, &params)?;
+    let analysed = super::args::analyze(&name, planned)?;
+    let (volume, analysis) = (analysed.level().as_ref(), &analysed.analysis);
     let part = &analysis.partition;
     if args.export_labels.is_some() {
-        budget.labels(&args.file, full, &plan, part.slabs.len())?;
+        request
+            .budget
+            .labels(&args.file, full, &analysed.plan, part.slabs.len())?;
     }
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
@@ -129,11 +122,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         staged.push(stage(path, |mut f| f.write_all(text.as_bytes()))?);
     }
     let report = if args.json {
-        Some(
-            AnalysisReport::new(&name, full, &params.view, &analysis)?
-                .computed_on(volume)
-                .views_on(&plan.views),
-        )
+        Some(analysed.report(&name, full)?)
     } else {
         None
     };
@@ -143,7 +132,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     if let Some(report) = report {
         outln!("{}", slabscope::report::to_json(&report)?);
     } else {
-        super::text::print_analysis(&name, volume, &analysis);
+        super::text::print_analysis(&name, volume, analysis);
         if let Some(explain) = &analysis.explain {
             super::explain::print(explain);
         }

@@ -3,6 +3,7 @@
 //! library's parameter entries (`slabscope::params`), made flags by [`super::params`].
 
 use slabscope::params::text;
+use slabscope::request::{Analysed, AnalysisRequest, Level, Planned};
 use slabscope::{AnalysisParams, LoadOptions};
 
 use super::params::{self, Flags};
@@ -36,35 +37,19 @@ impl LoadArgs {
 }
 
 impl AnalysisArgs {
-    /// Runs the analysis of `volume` (read from `name`) with a progress bar; an error names the
-    /// file, and a slab count the user did not give is not blamed on `--slabs`.
-    pub fn analyze(
+    /// The analysis request of these arguments at `level` within `max_memory` bytes;
+    /// `search_views` runs the view search even for a named axis.
+    pub fn request(
         &self,
-        name: &str,
-        plan: &slabscope::Plan,
         search_views: bool,
-    ) -> anyhow::Result<slabscope::Analysis> {
-        self.analyze_with(name, plan, &self.params(search_views)?)
-    }
-
-    /// [`analyze`](Self::analyze) with these arguments' `params`, amended by the caller.
-    pub fn analyze_with(
-        &self,
-        name: &str,
-        plan: &slabscope::Plan,
-        params: &AnalysisParams,
-    ) -> anyhow::Result<slabscope::Analysis> {
-        let views = plan.views.as_ref();
-        if let Some(heavy) = params.heavy_work(views.dims(), views.spacing()) {
-            eprintln!(
-                "slabscope: note: {name}: {heavy}: it may take long; --timeout SECONDS bounds it"
-            );
-        }
-        super::progress::with_bar(|monitor| slabscope::analyze_planned(plan, params, monitor))
-            .map_err(|e| {
-                let e = slabscope::budget::blame(plan, self.given.blame(e));
-                anyhow::Error::from(e).context(name.to_string())
-            })
+        level: Level,
+        max_memory: u64,
+    ) -> slabscope::Result<AnalysisRequest> {
+        Ok(AnalysisRequest {
+            level,
+            given: Some(self.given.clone()),
+            ..AnalysisRequest::new(self.params(search_views)?, max_memory)
+        })
     }
 
     /// The library's parameters; `search_views` runs the view search even for a named axis.
@@ -74,6 +59,18 @@ impl AnalysisArgs {
             ..self.given.analysis()?
         })
     }
+}
+
+/// Runs the analysis `planned` of the volume read from `name` with a progress bar, said first
+/// when it asks for much work; an error names the file.
+pub fn analyze(name: &str, planned: Planned<'_>) -> anyhow::Result<Analysed> {
+    if let Some(heavy) = planned.heavy_work() {
+        eprintln!(
+            "slabscope: note: {name}: {heavy}: it may take long; --timeout SECONDS bounds it"
+        );
+    }
+    super::progress::with_bar(|monitor| planned.run(monitor))
+        .map_err(|e| anyhow::Error::from(e).context(name.to_string()))
 }
 
 /// A parser of numbers in `lo..=hi`, for float options.

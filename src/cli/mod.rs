@@ -233,6 +233,11 @@ fn in_flag_terms(e: &Error) -> String {
                 .unwrap_or("VALUE");
             format!("{e} ({} {placeholder} asks for another)", flag(parameter))
         }
+        Error::Unfit {
+            parameter,
+            value,
+            problem,
+        } => format!("{} {value}: {problem}", flag(parameter)),
         Error::Conflicting { parameters: [a, b] } => {
             format!("{} and {} cannot both be given", flag(a), flag(b))
         }

@@ -7,10 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use image::{DynamicImage, RgbaImage};
-use slabscope::budget::{Budget, Purpose};
-use slabscope::geometry::min_spacing;
 use slabscope::params::Scene;
-use slabscope::render::{Layout, Renderer, Stack, TransferChoice, encode, slice};
+use slabscope::render::{TransferChoice, encode};
+use slabscope::request::{Level, RenderRequest};
 use tiny_skia::Pixmap;
 
 use super::args::{AnalysisArgs, LoadArgs};
@@ -100,53 +99,18 @@ fn render_file(
     }
     // An analysis beyond the memory budget runs on a pyramid level, and the picture is drawn
     // from that level.
-    let plan =
-        Budget::new(scene.load.options()?.max_memory).plan(&loaded.volume, Purpose::Picture)?;
-    if let Some(note) = &plan.note {
+    let max_memory = scene.load.options()?.max_memory;
+    let request = scene.analysis.request(false, Level::Picture, max_memory)?;
+    let planned = request.plan(&loaded.volume)?;
+    if let Some(note) = &planned.plan.note {
         super::note(file, note);
     }
-    let volume = plan.partition.as_ref();
-    let part = scene
-        .analysis
-        .analyze(&slabscope::error::shown(file), &plan, false)?
-        .partition;
-    let options = scene.options.scene(width, height)?;
-    if faces {
-        let renderer = Renderer::new(volume)?;
-        let look = TransferChoice {
-            preset: options.params.preset,
-            colormap: options.params.colormap,
-            window: options.params.window,
-        };
-        let transfer = renderer.transfer(look, min_spacing(volume.spacing()))?;
-        let k = part.slabs.len() as u32;
-        let tile = (
-            width.saturating_sub(4 * (k + 1)) / k.max(1),
-            height.saturating_sub(12) / 2,
-        );
-        if tile.0 < 8 || tile.1 < 8 {
-            bail!("--size {width}x{height}: too small for the faces of {k} slabs");
-        }
-        return Ok(slice::faces(
-            volume,
-            &transfer,
-            &Stack::of(&part),
-            &part.slabs,
-            tile,
-        )?);
-    }
-    if let Some(h) = options.params.highlight
-        && h >= part.slabs.len()
-    {
-        bail!(
-            "--highlight {h}: there are only {} slabs (numbered from 0)",
-            part.slabs.len()
-        );
-    }
-    let layout = Layout::exploded(&part, options.gap, options.spread);
-    let renderer = Renderer::new(volume)?;
-    let image = with_bar(|monitor| renderer.render(&layout, &options.params, monitor))?;
-    Ok(image.pixmap)
+    let analysed = super::args::analyze(&slabscope::error::shown(file), planned)?;
+    let request = RenderRequest {
+        scene: scene.options.scene(width, height)?,
+        faces,
+    };
+    Ok(with_bar(|monitor| request.render(&analysed, monitor))?)
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {

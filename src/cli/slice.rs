@@ -5,8 +5,10 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use slabscope::analysis::chosen_axis;
-use slabscope::render::{encode, slice};
+use slabscope::Monitor;
+use slabscope::render::encode;
+use slabscope::render::slice::SliceParams;
+use slabscope::request::SliceRequest;
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::progress::with_bar;
@@ -48,22 +50,21 @@ pub fn run(args: &SliceArgs) -> Result<()> {
     let volume = &loaded.volume;
     // The axis, and where its slices lie: no partition is needed (a 3-slice volume has a
     // middle slice, if not 4 slabs).
-    let params = args.analysis.params(false)?;
-    let name = slabscope::error::shown(&args.file);
-    let axis = with_bar(|monitor| chosen_axis(volume, &params, monitor))
-        .map_err(|e| anyhow::Error::from(e).context(name))?;
-    let slice_params = slice::SliceParams {
-        fit: args.size.given.size(&table::SLICE_SIZE)?,
-        letters: !args.no_letters,
-        ..slice::SliceParams::default()
+    let mut request = SliceRequest {
+        params: args.analysis.params(false)?,
+        axis: None,
+        index: args.index.given.value(&table::INDEX)?,
+        look: args.look.look()?,
+        picture: SliceParams {
+            fit: args.size.given.size(&table::SLICE_SIZE)?,
+            letters: !args.no_letters,
+            ..SliceParams::default()
+        },
     };
-    let image = slice::numbered(
-        volume,
-        axis,
-        &params.stack(),
-        args.index.given.value(&table::INDEX)?,
-        args.look.look()?,
-        &slice_params,
-    )?;
-    super::write_new(&args.output, &encode(&image.pixmap, format)?, args.force)
+    let name = slabscope::error::shown(&args.file);
+    let axis = with_bar(|monitor| request.axis(volume, monitor))
+        .map_err(|e| anyhow::Error::from(e).context(name))?;
+    request.axis = Some(axis);
+    let image = request.run(volume, &Monitor::none())?;
+    super::write_new(&args.output, &encode(&image, format)?, args.force)
 }

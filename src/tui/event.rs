@@ -298,10 +298,13 @@ impl Default for PictureSettings {
     }
 }
 
-/// What to render, at which size.
+/// What the preview pane's render worker draws, at which size: the exploded view of the slabs
+/// on screen (from their histories, as the user steps) or the slice view, encoded for the
+/// terminal. The TUI's own job, not the library's `request::RenderRequest`, which draws an
+/// analysis done.
 #[derive(Clone)]
-pub struct RenderRequest {
-    /// Request number; only the newest result is shown.
+pub struct PictureJob {
+    /// Job number; only the newest result is shown.
     pub generation: u64,
     /// The pyramid level of the volume the slabs and the slice view are on (0: full
     /// resolution).
@@ -321,12 +324,13 @@ pub struct RenderRequest {
     /// Preview size in cells.
     pub cells: (u16, u16),
     /// The slice view instead of the exploded view.
-    pub slice: Option<SliceRequest>,
+    pub slice: Option<SliceCursor>,
 }
 
-/// What the slice view shows.
+/// Where the slice view looks: the slice under the curves' cursor and the pointer on it (the
+/// library's `request::SliceRequest` is `slabscope slice`'s picture).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SliceRequest {
+pub struct SliceCursor {
     /// The slice under the curves' cursor.
     pub index: usize,
     /// The pointer: a physical point (voxel indices times spacing), read where it projects
@@ -377,7 +381,7 @@ pub enum Effect {
     /// Compute a lesson's numbers.
     Lesson(Box<crate::tui::lesson::LessonRequest>),
     /// Render.
-    Render(Box<RenderRequest>),
+    Render(Box<PictureJob>),
     /// Write exports.
     Export(Box<ExportRequest>),
     /// Load this volume instead (a folder's next volume).

@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use slabscope::{AnalysisParams, Progress, Volume};
 
-use super::event::{Effect, ExportRequest, Job, JobMsg, RenderRequest, SliceRequest, Task};
+use super::event::{Effect, ExportRequest, Job, JobMsg, PictureJob, SliceCursor, Task};
 use super::panes::curves::{Curves, CurvesPane};
 use super::panes::files::FilesPane;
 use super::panes::lesson::LessonPane;
@@ -248,7 +248,7 @@ impl App {
         if !matches!(self.preview.image, Task::Ready(_)) {
             self.preview.image = Task::started("rendering");
         }
-        vec![Effect::Render(Box::new(RenderRequest {
+        vec![Effect::Render(Box::new(PictureJob {
             generation: self.preview.generation,
             level,
             highlight: (!slabs.is_empty()).then_some(self.slabs.row),
@@ -258,7 +258,7 @@ impl App {
             axis,
             look: self.preview.look,
             cells: self.preview.cells,
-            slice: (self.preview.slices && histories.is_some()).then(|| SliceRequest {
+            slice: (self.preview.slices && histories.is_some()).then(|| SliceCursor {
                 index: self.curves.cursor,
                 pointer: self.preview.pointer.unwrap_or_else(|| centre(&volume)),
             }),

@@ -4,10 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use slabscope::formats::{NrrdEncoding, write_atomic, write_nrrd};
-use slabscope::{
-    Analysis, AnalysisReport, Layout, Monitor, Partition, RenderParams, Renderer, Volume,
-    label_volume,
-};
+use slabscope::params::Scene;
+use slabscope::render::{ImageOutput, encode};
+use slabscope::request::RenderRequest;
+use slabscope::{Analysis, AnalysisReport, Monitor, Partition, RenderParams, Volume, label_volume};
 
 use crate::tui::event::ExportRequest;
 
@@ -28,21 +28,27 @@ pub(super) fn export(
     let png = free_name(&format!("{stem}-slabscope"), "png");
     let json = free_name(&format!("{stem}-slabscope"), "json");
     let labels = free_name(&format!("{stem}-slabscope-labels"), "nrrd");
-    let layout = Layout::exploded(&part, r.look.gap, r.look.spread);
-    let render = RenderParams {
-        width: 1280,
-        height: 960,
-        mode: r.look.mode,
-        preset: r.look.preset,
-        colormap: r.look.colormap,
-        window: r.look.window,
-        camera: r.look.camera,
-        highlight: r.highlight.filter(|&h| h < part.slabs.len()),
-        solo: r.look.solo,
-        ..RenderParams::default()
+    let picture = RenderRequest {
+        scene: Scene {
+            params: RenderParams {
+                width: 1280,
+                height: 960,
+                mode: r.look.mode,
+                preset: r.look.preset,
+                colormap: r.look.colormap,
+                window: r.look.window,
+                camera: r.look.camera,
+                highlight: r.highlight.filter(|&h| h < part.slabs.len()),
+                solo: r.look.solo,
+                ..RenderParams::default()
+            },
+            gap: r.look.gap,
+            spread: r.look.spread,
+        },
+        faces: false,
     };
-    let image = Renderer::new(volume)?.render(&layout, &render, monitor)?;
-    write_new(&png, &image.png()?)?;
+    let image = picture.draw(volume, &part, monitor)?;
+    write_new(&png, &encode(&image, ImageOutput::Png)?)?;
     let analysis = Analysis {
         views: r.views.clone(),
         gain: r.gain.as_ref().map(|(g, _)| g.clone()),

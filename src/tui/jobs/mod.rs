@@ -15,7 +15,7 @@ use std::time::Duration;
 use slabscope::budget::{Budget, GLANCE_VOXELS, Purpose};
 use slabscope::{AnalysisParams, Histories, LoadOptions, Monitor, Progress, Scope, Volume, search};
 
-use super::event::{Effect, Event, Job, JobMsg, RenderRequest};
+use super::event::{Effect, Event, Job, JobMsg, PictureJob};
 use super::preview_level;
 use crate::term::Caps;
 use export::export;
@@ -30,7 +30,7 @@ pub const THUMBNAIL_TILE: u32 = 32;
 pub struct Jobs {
     events: Sender<Event>,
     cancel: Arc<AtomicBool>,
-    renders: Option<Sender<RenderRequest>>,
+    renders: Option<Sender<PictureJob>>,
     render_cancel: Arc<AtomicBool>,
     caps: Caps,
     source: Option<slabscope::triage::Entry>,
@@ -484,7 +484,7 @@ mod tests {
             cell: (8, 16),
             ..Caps::blocks()
         };
-        let whole = RenderRequest {
+        let whole = PictureJob {
             generation: 1,
             level: 0,
             slabs: Vec::new(),
@@ -523,7 +523,7 @@ mod tests {
                 graphics,
                 ..sixel.clone()
             };
-            let step = RenderRequest {
+            let step = PictureJob {
                 slabs: h.slabs(Method::TopDown, 4),
                 histories: Some(Arc::clone(&h)),
                 ..whole.clone()

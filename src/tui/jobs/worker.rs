@@ -18,7 +18,7 @@ use tiny_skia::Pixmap;
 use super::Open;
 use crate::term::image::encode;
 use crate::term::{Caps, Graphics};
-use crate::tui::event::{Event, JobMsg, PictureSettings, RenderRequest, Rendered, SliceRequest};
+use crate::tui::event::{Event, JobMsg, PictureJob, PictureSettings, Rendered, SliceCursor};
 
 /// The render worker: owns the volume and its renderer, renders the newest request, encodes it
 /// for the terminal and sends it back.
@@ -27,8 +27,8 @@ pub(super) fn start_renderer(
     caps: Caps,
     (events, epoch): (Sender<Event>, u64),
     cancel: Arc<AtomicBool>,
-) -> Sender<RenderRequest> {
-    let (tx, rx) = channel::<RenderRequest>();
+) -> Sender<PictureJob> {
+    let (tx, rx) = channel::<PictureJob>();
     std::thread::spawn(move || {
         let events = EpochSender { events, epoch };
         // The preview's pyramid level and its renderer, and level 0's, each made when first
@@ -97,7 +97,7 @@ impl EpochSender {
 }
 
 /// Waits for a request, then takes the newest one queued.
-fn newest(rx: &Receiver<RenderRequest>) -> Option<RenderRequest> {
+fn newest(rx: &Receiver<PictureJob>) -> Option<PictureJob> {
     let mut request = rx.recv().ok()?;
     while let Ok(newer) = rx.try_recv() {
         request = newer;
@@ -110,7 +110,7 @@ fn newest(rx: &Receiver<RenderRequest>) -> Option<RenderRequest> {
 pub(super) fn render(
     renderer: &Renderer,
     caps: &Caps,
-    r: &RenderRequest,
+    r: &PictureJob,
     monitor: &Monitor,
 ) -> anyhow::Result<Box<Rendered>> {
     let look = &r.look;
@@ -132,7 +132,7 @@ pub(super) fn render(
             let view = SliceView {
                 stack,
                 slab: (highlight, r.slabs[highlight]),
-                request: s,
+                cursor: s,
                 size: (width, height),
             };
             let (pixmap, caption, window) = view.draw(renderer, look)?;
@@ -189,7 +189,7 @@ pub(super) fn render(
 struct SliceView<'a> {
     stack: &'a Stack,
     slab: (usize, Slab),
-    request: SliceRequest,
+    cursor: SliceCursor,
     size: (u32, u32),
 }
 
@@ -208,7 +208,7 @@ impl SliceView<'_> {
         let mut canvas = Pixmap::new(w, h).ok_or_else(|| anyhow::anyhow!("no room for slices"))?;
         canvas.fill(tiny_skia::Color::from_rgba8(12, 12, 18, 255));
         let stack = self.stack;
-        let index = self.request.index.min(stack.slices.saturating_sub(1));
+        let index = self.cursor.index.min(stack.slices.saturating_sub(1));
         // The slice takes three fifths of a wide pane, the faces the rest.
         let side = if w > h { w * 2 / 5 } else { 0 };
         let params = |fit: (u32, u32)| SliceParams {
@@ -226,7 +226,7 @@ impl SliceView<'_> {
         let origin = paste_centred(&mut canvas, &main.pixmap, (0, 0, w - side, h));
         // The pointer, moved onto the plane.
         let n = stack.axis;
-        let p = self.request.pointer;
+        let p = self.cursor.pointer;
         let off = stack.position(index) - geometry::dot(p, n);
         let on_plane: [f64; 3] = std::array::from_fn(|m| p[m] + off * n[m]);
         let (px, py) = main.pixel_of(on_plane);

@@ -1,0 +1,163 @@
+//! The analysis request: the view search and the partition of a volume at the level asked for,
+//! within a memory budget, and the report `analyze --json` prints of it.
+
+use std::sync::Arc;
+
+use crate::analysis::{Analysis, AnalysisParams, Plan, analyze_planned};
+use crate::budget::{Budget, Purpose, blame};
+use crate::error::Result;
+use crate::params::Given;
+use crate::progress::Monitor;
+use crate::report::AnalysisReport;
+use crate::volume::{Resolution, Volume};
+
+/// Which pyramid level an analysis runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Level {
+    /// The level asked for (`--resolution`, `resolution=`), and whether it was named rather
+    /// than left to its default: every voxel asked for by name is counted on every voxel even
+    /// beyond the budget ([`Purpose::Analysis`]'s `every_voxel`).
+    Asked(Resolution, bool),
+    /// The level a picture is drawn from: the finest whose whole analysis fits the budget
+    /// ([`Purpose::Picture`]), as `render`, `preview` and the TUI analyse.
+    Picture,
+}
+
+impl Level {
+    /// The pyramid level of `volume` this asks for (0 for a picture's): a level number past
+    /// the volume's last is an error about `resolution`.
+    pub fn wanted(self, volume: &Volume) -> Result<usize> {
+        match self {
+            Self::Asked(resolution, _) => resolution.level(volume.dims(), volume.coarser_levels()),
+            Self::Picture => Ok(0),
+        }
+    }
+}
+
+/// An analysis to run: its parameters, its level, its memory budget and the values the user
+/// gave. Run it in two steps ([`plan`](Self::plan), then [`Planned::run`]) to look at the plan
+/// before the work starts, or in one ([`run`](Self::run)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnalysisRequest {
+    /// How to analyse.
+    pub params: AnalysisParams,
+    /// Which level to analyse.
+    pub level: Level,
+    /// The memory budget.
+    pub budget: Budget,
+    /// The values the user gave, when the parameters came from them: an error about a
+    /// parameter not given then blames its default ([`Given::blame`]).
+    pub given: Option<Given>,
+}
+
+impl AnalysisRequest {
+    /// An analysis by `params` of every voxel (the default, not named) within `max_memory`
+    /// bytes.
+    #[must_use]
+    pub fn new(params: AnalysisParams, max_memory: u64) -> Self {
+        Self {
+            params,
+            level: Level::Asked(Resolution::Full, false),
+            budget: Budget::new(max_memory),
+            given: None,
+        }
+    }
+
+    /// Where the analysis of `volume` runs within the budget.
+    pub fn plan(&self, volume: &Volume) -> Result<Planned<'_>> {
+        let wanted = self.level.wanted(volume)?;
+        let purpose = match self.level {
+            Level::Asked(_, named) => Purpose::Analysis {
+                wanted,
+                every_voxel: wanted == 0 && named,
+                params: &self.params,
+            },
+            Level::Picture => Purpose::Picture,
+        };
+        Ok(Planned {
+            request: self,
+            plan: self.budget.plan(volume, purpose)?,
+        })
+    }
+
+    /// The analysis of `volume`: planned, then run.
+    pub fn run(&self, volume: &Volume, monitor: &Monitor) -> Result<Analysed> {
+        self.plan(volume)?.run(monitor)
+    }
+}
+
+/// An analysis planned: the request and where its work runs.
+#[derive(Clone, Debug)]
+pub struct Planned<'a> {
+    request: &'a AnalysisRequest,
+    /// Where the view search and the partition run.
+    pub plan: Plan,
+}
+
+impl Planned<'_> {
+    /// The request planned.
+    #[must_use]
+    pub fn request(&self) -> &AnalysisRequest {
+        self.request
+    }
+
+    /// What the user should know before a view search that asks for many times the default's
+    /// work starts ([`AnalysisParams::heavy_work`] on the level it runs on).
+    #[must_use]
+    pub fn heavy_work(&self) -> Option<String> {
+        let views = self.plan.views.as_ref();
+        self.request
+            .params
+            .heavy_work(views.dims(), views.spacing())
+    }
+
+    /// Runs the view search and the partition. An error about a parameter not given blames its
+    /// default, and one the budget's coarser level caused blames the budget
+    /// ([`blame`](crate::budget::blame)).
+    pub fn run(self, monitor: &Monitor) -> Result<Analysed> {
+        let request = self.request;
+        let analysis = analyze_planned(&self.plan, &request.params, monitor).map_err(|e| {
+            let e = match &request.given {
+                Some(given) => given.blame(e),
+                None => e,
+            };
+            blame(&self.plan, e)
+        })?;
+        Ok(Analysed {
+            params: request.params.clone(),
+            plan: self.plan,
+            analysis,
+        })
+    }
+}
+
+/// An analysis done: what it found, where it ran, and how it was asked.
+#[derive(Clone, Debug)]
+pub struct Analysed {
+    /// The parameters it ran with.
+    pub params: AnalysisParams,
+    /// Where it ran.
+    pub plan: Plan,
+    /// What it found.
+    pub analysis: Analysis,
+}
+
+impl Analysed {
+    /// The pyramid level partitioned (the volume itself at full resolution): the slabs are its
+    /// slices, and a picture of them is drawn from it.
+    #[must_use]
+    pub fn level(&self) -> &Arc<Volume> {
+        &self.plan.partition
+    }
+
+    /// The report of this analysis of `full` (read from `name`), as `analyze --json` prints it:
+    /// the volume's own dimensions and geometry, the level partitioned and, when the view
+    /// search ran on another, that level.
+    pub fn report(&self, name: &str, full: &Volume) -> Result<AnalysisReport> {
+        Ok(
+            AnalysisReport::new(name, full, &self.params.view, &self.analysis)?
+                .computed_on(&self.plan.partition)
+                .views_on(&self.plan.views),
+        )
+    }
+}

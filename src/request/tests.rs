@@ -1,0 +1,245 @@
+//! The requests against the steps they stand for, written out as the front ends wrote them.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use super::*;
+use crate::analysis::{AnalysisParams, analyze_planned, memory_needed};
+use crate::budget::{Budget, Purpose};
+use crate::error::Error;
+use crate::params::{Given, table};
+use crate::progress::Monitor;
+use crate::render::slice::{SliceParams, numbered};
+use crate::render::{Layout, Renderer, TransferChoice};
+use crate::report::{AnalysisReport, to_json};
+use crate::volume::{Resolution, Volume, phantom};
+
+fn body() -> Volume {
+    phantom::body([24, 24, 40], 1).unwrap()
+}
+
+/// The analysis as `analyze` and Python wrote it before the request: the level, the budget's
+/// plan, the analysis on it, the report with where it ran.
+fn by_hand(volume: &Volume, params: &AnalysisParams, max_memory: u64) -> String {
+    let plan = Budget::new(max_memory)
+        .plan(
+            volume,
+            Purpose::Analysis {
+                wanted: 0,
+                every_voxel: false,
+                params,
+            },
+        )
+        .unwrap();
+    let analysis = analyze_planned(&plan, params, &Monitor::none()).unwrap();
+    let report = AnalysisReport::new("body", volume, &params.view, &analysis)
+        .unwrap()
+        .computed_on(&plan.partition)
+        .views_on(&plan.views);
+    to_json(&report).unwrap()
+}
+
+#[test]
+fn the_analysis_request_gives_the_sequence_it_stands_for() {
+    let volume = body();
+    let params = AnalysisParams::default();
+    // Room for everything, and room only for pyramid level 1's analysis (the partition then
+    // counted on every voxel, strip by strip): the same report either way as by hand.
+    for max_memory in [u64::MAX, memory_needed(&volume, 1)] {
+        let request = AnalysisRequest::new(params.clone(), max_memory);
+        let done = request.run(&volume, &Monitor::none()).unwrap();
+        let json = to_json(&done.report("body", &volume).unwrap()).unwrap();
+        assert_eq!(json, by_hand(&volume, &params, max_memory), "{max_memory}");
+        assert_eq!(done.analysis.partition.slabs.len(), 4);
+    }
+    let tight = AnalysisRequest::new(params, memory_needed(&volume, 1))
+        .run(&volume, &Monitor::none())
+        .unwrap();
+    assert!(
+        tight.plan.note.is_some(),
+        "the budget moved the view search"
+    );
+    assert_eq!(tight.plan.views.dims(), [12, 12, 20]);
+}
+
+#[test]
+fn the_level_asked_for_and_a_pictures_level() {
+    let volume = body();
+    let mut request = AnalysisRequest::new(AnalysisParams::default(), u64::MAX);
+    request.level = Level::Asked(Resolution::Level(1), true);
+    let done = request.run(&volume, &Monitor::none()).unwrap();
+    assert_eq!(done.level().dims(), [12, 12, 20]);
+    let report = done.report("body", &volume).unwrap();
+    assert_eq!(report.resolution.pyramid_level, 1);
+    // A level past the last names `resolution`.
+    request.level = Level::Asked(Resolution::Level(9), true);
+    assert!(matches!(
+        request.plan(&volume),
+        Err(Error::InvalidParameter {
+            parameter: "resolution",
+            ..
+        })
+    ));
+    // A picture's analysis runs on the level that fits, never streamed.
+    request.level = Level::Picture;
+    request.budget = Budget::new(memory_needed(&volume, 1));
+    let planned = request.plan(&volume).unwrap();
+    assert_eq!(planned.plan.partition.dims(), [12, 12, 20]);
+    assert!(planned.plan.streamed.is_none());
+}
+
+#[test]
+fn a_request_cancelled_through_its_monitor_stops() {
+    let volume = body();
+    let cancel = AtomicBool::new(true);
+    let monitor = Monitor::new(Some(&cancel), None);
+    let request = AnalysisRequest::new(AnalysisParams::default(), u64::MAX);
+    assert!(matches!(
+        request.run(&volume, &monitor),
+        Err(Error::Cancelled)
+    ));
+    let done = request.run(&volume, &Monitor::none()).unwrap();
+    let render = RenderRequest {
+        scene: Given::new().scene(64, 48).unwrap(),
+        faces: false,
+    };
+    assert!(matches!(
+        render.render(&done, &monitor),
+        Err(Error::Cancelled)
+    ));
+    let faces = RenderRequest {
+        faces: true,
+        ..render
+    };
+    assert!(matches!(
+        faces.render(&done, &monitor),
+        Err(Error::Cancelled)
+    ));
+    let slice = SliceRequest {
+        params: AnalysisParams::default(),
+        axis: None,
+        index: None,
+        look: TransferChoice::default(),
+        picture: SliceParams::default(),
+    };
+    assert!(matches!(
+        slice.run(&volume, &monitor),
+        Err(Error::Cancelled)
+    ));
+}
+
+#[test]
+fn a_default_that_does_not_fit_is_blamed_on_the_default() {
+    // Three slices along z: the default of 4 slabs does not fit; 4 given does not either.
+    let volume = phantom::body([16, 16, 3], 1).unwrap();
+    for (given, default) in [
+        (Given::new().with(&table::AXIS, "z"), true),
+        (
+            Given::new()
+                .with(&table::AXIS, "z")
+                .with(&table::SLABS, "4"),
+            false,
+        ),
+    ] {
+        let mut request = AnalysisRequest::new(given.analysis().unwrap(), u64::MAX);
+        request.given = Some(given);
+        match request.run(&volume, &Monitor::none()) {
+            Err(Error::DefaultUnfit { parameter, .. }) => {
+                assert!(default && parameter == "slabs");
+            }
+            Err(Error::InvalidParameter { parameter, .. }) => {
+                assert!(!default && parameter == "slabs");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}
+
+#[test]
+fn the_render_request_draws_what_the_renderer_draws() {
+    let volume = body();
+    let done = AnalysisRequest::new(AnalysisParams::default(), u64::MAX)
+        .run(&volume, &Monitor::none())
+        .unwrap();
+    let scene = Given::new().scene(64, 48).unwrap();
+    let part = &done.analysis.partition;
+    let layout = Layout::exploded(part, scene.gap, scene.spread);
+    let expected = Renderer::new(&volume)
+        .unwrap()
+        .render(&layout, &scene.params, &Monitor::none())
+        .unwrap()
+        .pixmap;
+    let request = RenderRequest {
+        scene: scene.clone(),
+        faces: false,
+    };
+    let drawn = request.render(&done, &Monitor::none()).unwrap();
+    assert_eq!(drawn.data(), expected.data());
+    // A slab past the four, and a strip too small for their faces, name their parameters.
+    let mut past = request.clone();
+    past.scene.params.highlight = Some(4);
+    let e = past.render(&done, &Monitor::none()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "highlight 4: there are only 4 slabs (numbered from 0)"
+    );
+    let faces = RenderRequest {
+        scene: Given::new().scene(30, 30).unwrap(),
+        faces: true,
+    };
+    let e = faces.render(&done, &Monitor::none()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "size 30x30: too small for the faces of 4 slabs"
+    );
+    // 640 less five gaps of 4, in four columns; 480 less three gaps, in two rows.
+    assert_eq!(faces_tile((640, 480), 4).unwrap(), (155, 234));
+    let strip = RenderRequest {
+        scene: Given::new().scene(200, 100).unwrap(),
+        faces: true,
+    }
+    .render(&done, &Monitor::none())
+    .unwrap();
+    assert_eq!((strip.width(), strip.height()), (4 * 49 + 4, 2 * 44 + 12));
+}
+
+#[test]
+fn the_slice_request_draws_the_slice_numbered_draws() {
+    let volume = Arc::new(body());
+    let params = Given::new().with(&table::AXIS, "y").analysis().unwrap();
+    let request = SliceRequest {
+        params: params.clone(),
+        axis: None,
+        index: Some(3),
+        look: TransferChoice::default(),
+        picture: SliceParams {
+            fit: (64, 64),
+            ..SliceParams::default()
+        },
+    };
+    let axis = request.axis(&volume, &Monitor::none()).unwrap();
+    assert_eq!(axis, [0.0, 1.0, 0.0]);
+    assert_eq!(request.slices(&volume, axis).unwrap(), 24);
+    let expected = numbered(
+        &volume,
+        axis,
+        &params.stack(),
+        Some(3),
+        TransferChoice::default(),
+        &request.picture,
+    )
+    .unwrap();
+    let drawn = request.run(&volume, &Monitor::none()).unwrap();
+    assert_eq!(drawn.data(), expected.pixmap.data());
+    let past = SliceRequest {
+        index: Some(24),
+        ..request
+    };
+    assert!(matches!(
+        past.run(&volume, &Monitor::none()),
+        Err(Error::InvalidParameter {
+            parameter: "index",
+            ..
+        })
+    ));
+}
