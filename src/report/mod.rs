@@ -17,6 +17,7 @@ use crate::view::{AxisEntropy, Contender, RankedBy, ViewParams};
 use crate::volume::Volume;
 
 mod info;
+mod json;
 
 pub use info::{FolderReport, InfoReport, ListedVolume};
 
@@ -329,19 +330,7 @@ impl SlabsReport {
 /// zero has no sign worth printing), nothing in it raw: its control and bidirectional characters
 /// written as `\uXXXX` escapes ([`names::json`](crate::error::names::json)).
 pub fn to_json(value: &impl Serialize) -> Result<String> {
-    fn unsign(v: &mut serde_json::Value) {
-        match v {
-            serde_json::Value::Number(n) if n.as_f64() == Some(0.0) && n.is_f64() => {
-                *v = serde_json::json!(0.0);
-            }
-            serde_json::Value::Array(a) => a.iter_mut().for_each(unsign),
-            serde_json::Value::Object(o) => o.values_mut().for_each(unsign),
-            _ => {}
-        }
-    }
-    let mut v = serde_json::to_value(value).map_err(|e| Error::Encode(e.to_string()))?;
-    unsign(&mut v);
-    let text = serde_json::to_string_pretty(&v).map_err(|e| Error::Encode(e.to_string()))?;
+    let text = json::pretty(value).map_err(|e| Error::Encode(e.to_string()))?;
     Ok(crate::error::names::json(&text).into_owned())
 }
 

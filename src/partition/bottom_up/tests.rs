@@ -142,7 +142,13 @@ fn long_columns_of_noise_give_the_pairwise_joint_histograms_from_their_checkpoin
     let slices: Vec<Vec<u8>> = (0..3000)
         .map(|_| {
             (0..3)
-                .map(|_| if next() % 11 == 0 { MISSING } else { next() % 5 })
+                .map(|_| {
+                    if next() % 11 == 0 {
+                        MISSING
+                    } else {
+                        next() % 5
+                    }
+                })
                 .collect()
         })
         .collect();
