@@ -214,6 +214,13 @@ fn each_failure_of_the_server_is_one_line_naming_the_url() {
     let url = format!("http://127.0.0.1:{}/a.ome.zarr", closed_port());
     let ran = run(&["info", &url]);
     says(&ran.stderr, &url, &["connection refused"]);
+    // TLS asked of a server that speaks plain HTTP.
+    let server = serve(&zarr(), Mode::Normal, "");
+    let url = server
+        .url("v04_blosc.ome.zarr")
+        .replace("http://", "https://");
+    let ran = run(&["info", &url]);
+    says(&ran.stderr, &url, &["TLS failure with 127.0.0.1"]);
 }
 
 #[test]

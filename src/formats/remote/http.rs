@@ -135,7 +135,7 @@ impl Client {
                 .reader()
                 .read_to_end(&mut body);
             if let Err(e) = read {
-                return Err(ureq::Error::Io(e));
+                return Ok(Answer::Broken(e));
             }
             if let Some(n) = stated
                 && (body.len() as u64) < n
@@ -215,6 +215,18 @@ impl Client {
                          Content-Length says"
                     ));
                 }
+                Ok(Answer::Broken(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                    return Err(format!(
+                        "{key}: the answer ended before the bytes its Content-Length says"
+                    ));
+                }
+                Ok(Answer::Broken(e)) => {
+                    let e = ureq::Error::Io(e);
+                    if !retry(&e) {
+                        return Err(format!("{key}: {}", self.words(&e)));
+                    }
+                    last = self.words(&e);
+                }
                 Err(e) if retry(&e) => last = self.words(&e),
                 Err(e) => return Err(format!("{key}: {}", self.words(&e))),
             }
@@ -245,8 +257,12 @@ impl Client {
                 std::io::ErrorKind::ConnectionReset | std::io::ErrorKind::ConnectionAborted => {
                     format!("the connection to {host} was reset")
                 }
+                std::io::ErrorKind::UnexpectedEof if self.url.scheme == "https" => format!(
+                    "TLS failure with {host}: the connection closed before an answer (does \
+                     the server speak HTTPS?)"
+                ),
                 std::io::ErrorKind::UnexpectedEof => {
-                    "the answer ended before its Content-Length said".into()
+                    format!("the connection to {host} closed before an answer")
                 }
                 std::io::ErrorKind::TimedOut | std::io::ErrorKind::WouldBlock => format!(
                     "the server did not answer within {s} s (a stalled server; \
@@ -275,6 +291,8 @@ enum Answer {
     TooLarge(u64),
     /// A body shorter than its Content-Length: got, stated.
     Short(u64, u64),
+    /// A body whose reading failed.
+    Broken(std::io::Error),
 }
 
 /// What a request fetched.
