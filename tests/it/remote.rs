@@ -290,3 +290,47 @@ fn urls_go_where_paths_go() {
     assert!(ran.ok, "{}", ran.text());
     assert!(png.is_file());
 }
+
+/// `s3://bucket/prefix` at an endpoint (`AWS_ENDPOINT_URL`), path-style and anonymous: the
+/// loopback server holds the bucket `zarr` (the fixtures' folder), and answers 403 for the
+/// metadata a store does not have, as public S3 does when listing is not allowed.
+#[test]
+fn s3_stores_are_read_at_an_endpoint() {
+    let server = serve(&data(""), Mode::Status(403), "zarr.json");
+    let info = |input: &str, endpoint: Option<&str>| {
+        let mut command = crate::common::slabscope();
+        command.args(["info", "--json", input]);
+        command.env_remove("AWS_ENDPOINT_URL_S3");
+        match endpoint {
+            Some(e) => command.env("AWS_ENDPOINT_URL", e),
+            None => command.env_remove("AWS_ENDPOINT_URL"),
+        };
+        let ran: crate::common::Ran = command.output().unwrap().into();
+        assert!(ran.ok, "{input}: {}", ran.stderr);
+        let mut json: serde_json::Value = serde_json::from_str(&ran.stdout).unwrap();
+        json["file"] = serde_json::Value::Null;
+        json
+    };
+    let s3 = "s3://zarr/v04_blosc.ome.zarr";
+    let local = zarr().join("v04_blosc.ome.zarr");
+    assert_eq!(info(s3, Some(&server.base)), info(s(&local), None));
+    let asked = server.requests();
+    assert!(
+        asked
+            .iter()
+            .all(|r| r.contains(" /zarr/v04_blosc.ome.zarr/")),
+        "{asked:?}"
+    );
+    // Over plain HTTP the same 403 is an error.
+    let (url, e) = failure(Mode::Status(403), "zarr.json");
+    says(&e, &url, &["zarr.json: HTTP 403 Forbidden"]);
+    // A chunk answered 403 is an error on S3 too, naming the s3:// URL.
+    let server = serve(&data(""), Mode::Status(403), "/s0/0");
+    let ran: crate::common::Ran = crate::common::slabscope()
+        .args(["info", s3])
+        .env("AWS_ENDPOINT_URL", &server.base)
+        .output()
+        .unwrap()
+        .into();
+    says(&ran.stderr, s3, &["chunk s0/0/0/0: HTTP 403 Forbidden"]);
+}

@@ -193,6 +193,11 @@ impl Client {
                         .ok_or_else(|| format!("{key}: the server gives no size"));
                 }
                 Ok(Answer::Status(404)) => return Ok(None),
+                // S3 answers 403 for a key it does not have when listing is not allowed: a
+                // metadata file probed for (zarr.json of a v2 store) is then absent.
+                Ok(Answer::Status(403)) if self.url.s3.is_some() && super::is_metadata(key) => {
+                    return Ok(None);
+                }
                 Ok(Answer::Status(status)) if status >= 500 => {
                     last = format!("HTTP {status} {}", reason(status));
                 }

@@ -11,19 +11,13 @@ use zarrs::storage::{Bytes, MaybeBytesIterator, ReadableStorageTraits, StorageEr
 
 use super::guard::Guard;
 use crate::formats::remote::http::{Client, Span};
-use crate::formats::remote::{Url, join};
+use crate::formats::remote::{Url, is_metadata, join};
 
 /// A remote store: its client, and its metadata files as fetched (absent ones too).
 #[derive(Debug)]
 pub struct Remote {
     client: Client,
     metadata: Mutex<HashMap<String, Option<Arc<[u8]>>>>,
-}
-
-/// Whether the key names a metadata file (fetched once, kept).
-fn is_metadata(key: &str) -> bool {
-    let name = key.rsplit('/').next().unwrap_or(key);
-    matches!(name, "zarr.json" | ".zarray" | ".zattrs" | ".zgroup")
 }
 
 impl Remote {

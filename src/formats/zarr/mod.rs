@@ -195,9 +195,9 @@ fn read_image(root: &Root, node: &str) -> Result<(Image, Vec<ArrayMeta>)> {
     let fail = |m: String| Error::format(&shown, m);
     let (zarr_format, attrs) = meta::attributes(root, node).map_err(fail)?.ok_or_else(|| {
         fail(if root.is_remote() {
-            "no Zarr store at this URL (no zarr.json, .zattrs, .zgroup or .zarray in it): \
-             slabscope reads Zarr and OME-Zarr stores over HTTP; download a file of another \
-             format and name the file"
+            "no Zarr store at this URL (no zarr.json, .zattrs, .zgroup or .zarray in it, or \
+             for S3 none it may read: public S3 answers 403 for both): slabscope reads Zarr and \
+             OME-Zarr stores over HTTP; download a file of another format and name the file"
                 .into()
         } else {
             "not a Zarr store (no zarr.json, .zattrs or .zgroup)".into()
