@@ -124,6 +124,7 @@ impl Root {
     }
 
     /// Whether the file `key` exists.
+    #[cfg_attr(not(feature = "remote"), allow(clippy::unnecessary_wraps))]
     pub fn has(&self, key: &str) -> std::result::Result<bool, String> {
         match self {
             Self::Local { dir, .. } => Ok(dir.join(key).exists()),
