@@ -123,15 +123,14 @@ impl Client {
             let partial = status == 206;
             let stated = response.body().content_length();
             // (A server that ignores the range sends the whole object: held to the limit too.)
-            let cap = limit;
-            if stated.is_some_and(|n| n > cap) {
+            if stated.is_some_and(|n| n > limit) {
                 return Ok(Answer::TooLarge(stated.unwrap_or(0)));
             }
             let mut body = Vec::new();
             let read = response
                 .body_mut()
                 .with_config()
-                .limit(cap)
+                .limit(limit)
                 .reader()
                 .read_to_end(&mut body);
             if let Err(e) = read {
