@@ -163,6 +163,31 @@ def test_an_ome_zarr_store_and_its_label_image():
     ]
 
 
+def test_an_ome_zarr_store_at_a_url_is_read_in_place():
+    import functools
+    import http.server
+
+    handler = functools.partial(
+        http.server.SimpleHTTPRequestHandler, directory=str(DATA / "zarr")
+    )
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        url = f"http://127.0.0.1:{server.server_address[1]}/v05_sharded.ome.zarr"
+        remote = slabscope.load(url)
+        local = slabscope.load(DATA / "zarr" / "v05_sharded.ome.zarr")
+        assert remote.shape == local.shape
+        assert remote.spacing == local.spacing
+        assert np.array_equal(remote.array, local.array)
+        cells = slabscope.load(url, label_image="cells")
+        assert cells.array.max() == 4
+        with pytest.raises(slabscope.VolumeError, match="no Zarr store at this URL"):
+            slabscope.load(url.replace("v05_sharded", "absent"))
+    finally:
+        server.shutdown()
+
+
 def test_an_ome_tiffs_channel_and_time_point_are_keywords():
     volume = slabscope.load(DATA / "ome" / "zct.ome.tif", channel=1, volume=1)
     assert volume.range == (4000.0, 4234.0)

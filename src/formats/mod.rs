@@ -17,6 +17,7 @@ mod placement;
 mod raw;
 mod reader;
 mod registry;
+pub mod remote;
 mod source;
 mod tiff;
 mod tiff_ifd;
@@ -200,7 +201,16 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     check_input(path)?;
     registry::read(path, opts)
         .and_then(|(format, read)| finish(path, format, read))
-        .map_err(|e| e.reached_from(path))
+        .map_err(|e| e.reached_from(&named(path)))
+}
+
+/// `path` as errors name it: a URL without what it must not show ([`remote::shown_text`]).
+fn named(path: &Path) -> std::borrow::Cow<'_, Path> {
+    if remote::is_url(path) {
+        std::borrow::Cow::Owned(remote::shown_text(&path.to_string_lossy()))
+    } else {
+        std::borrow::Cow::Borrowed(path)
+    }
 }
 
 /// A coarse pyramid level of the volume at `path`, read without reading level 0, where the file
@@ -211,7 +221,8 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
 /// [`load`] reads level 0.
 pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Loaded>> {
     check_input(path)?;
-    let read = registry::preview(path, opts, max_voxels).map_err(|e| e.reached_from(path))?;
+    let read =
+        registry::preview(path, opts, max_voxels).map_err(|e| e.reached_from(&named(path)))?;
     read.map(|(format, read)| finish(path, format, read))
         .transpose()
 }

@@ -36,6 +36,9 @@ const READS: &str = "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TI
 
 /// Reads the file or folder at `path` (checked to be one), with the format it was read as.
 pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
+    if super::remote::is_url(path) {
+        return read_url(path, opts);
+    }
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     for reader in READERS {
         reader.check_options(path, meta.is_dir(), opts)?;
@@ -52,6 +55,28 @@ pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
         return Err(data::one_channel(path, 1, opts.channel));
     }
     Ok((reader.format(), reader.read(&source, opts)?))
+}
+
+/// Reads the URL `path`: a Zarr store, read in place (files of every other format are refused
+/// by name, unread: they are read from a file).
+fn read_url(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
+    let shown = super::remote::shown_text(&path.to_string_lossy());
+    let lower = shown.to_string_lossy().to_ascii_lowercase();
+    let lower = lower.trim_end_matches('/');
+    let store = Path::new(lower)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("zarr"));
+    if !store && volume_name(Path::new(lower)) {
+        return Err(Error::unsupported(
+            &shown,
+            "slabscope reads Zarr and OME-Zarr stores at URLs, in place; files of other formats \
+             are read from disk: download it and name the file",
+        ));
+    }
+    for reader in READERS {
+        reader.check_options(path, true, opts)?;
+    }
+    Ok((Format::OmeZarr, zarr::Zarr.read(&Source::new(path), opts)?))
 }
 
 /// Whether the file name says a volume slabscope reads (content decides when it is loaded; a

@@ -110,9 +110,12 @@ impl Source {
     }
 }
 
-/// Fails unless `path` is a regular file or a folder: a FIFO would block forever and a device
-/// would never end.
+/// Fails unless `path` is a regular file or a folder (or a URL, [`super::remote::is_url`], read
+/// by its reader): a FIFO would block forever and a device would never end.
 pub fn check_input(path: &Path) -> Result<()> {
+    if super::remote::is_url(path) {
+        return Ok(());
+    }
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     match kind(&meta) {
         None => Ok(()),

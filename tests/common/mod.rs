@@ -147,3 +147,4 @@ pub fn info_details(file: &Path, format: &str) -> (String, Value) {
         serde_json::from_str(&json.stdout).unwrap(),
     )
 }
+pub mod http;

@@ -27,6 +27,8 @@ mod native;
 mod nifti2;
 mod orientation;
 mod partition;
+#[cfg(feature = "remote")]
+mod remote;
 mod render;
 mod size;
 mod slice;

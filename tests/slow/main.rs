@@ -19,6 +19,8 @@ mod cli_progress;
 mod hostile;
 mod mutants;
 mod real_terminal;
+#[cfg(feature = "remote")]
+mod remote;
 mod tui_smoke;
 
 /// Holds off every other test of this binary until the returned guard is dropped (at the end

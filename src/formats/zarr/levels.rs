@@ -9,13 +9,15 @@ use std::path::PathBuf;
 use super::Layout;
 use super::meta::{ArrayMeta, Image};
 use super::read::Dataset;
+use super::root::Root;
 use crate::volume::Voxels;
 use crate::volume::pyramid::{LevelSource, coarser_dims, step};
 
 /// The datasets of a store that are pyramid levels, by level.
 #[derive(Debug)]
 pub struct StoreLevels {
-    tree: PathBuf,
+    root: Root,
+    node: String,
     image: PathBuf,
     layout: Layout,
     at: [u64; 2],
@@ -35,7 +37,8 @@ impl StoreLevels {
             })
             .collect();
         (!levels.is_empty()).then(|| Self {
-            tree: first.tree.to_path_buf(),
+            root: first.root.clone(),
+            node: first.node.to_string(),
             image: first.image.to_path_buf(),
             layout: first.layout.clone(),
             at: first.at,
@@ -91,7 +94,8 @@ impl LevelSource for StoreLevels {
     fn level(&self, k: usize, dims: [usize; 3]) -> Option<crate::error::Result<Voxels>> {
         let (_, path, meta) = self.levels.iter().find(|(level, _, _)| *level == k)?;
         let dataset = Dataset {
-            tree: &self.tree,
+            root: &self.root,
+            node: &self.node,
             image: &self.image,
             path,
             meta,

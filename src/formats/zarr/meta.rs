@@ -3,15 +3,12 @@
 //! their scales and translations, the label images beside it, and each array's shape, type,
 //! chunking and codecs as `info` shows them.
 
-use std::io::Read;
-use std::path::Path;
-
 use serde_json::Value;
 
-use crate::volume::VoxelType;
+use super::root::Root;
+use crate::formats::remote::join;
 
-/// The most bytes of one metadata file read.
-const MAX_JSON: u64 = 16 << 20;
+use crate::volume::VoxelType;
 
 /// The most axes an image may have (NGFF allows five).
 const MAX_AXES: usize = 5;
@@ -111,45 +108,16 @@ impl ArrayMeta {
     }
 }
 
-/// The JSON of the metadata file `path` of the store whose tree is `tree` (a file outside it is
-/// not read); `None` when there is none.
-pub fn read_json(tree: &Path, path: &Path) -> Result<Option<Value>, String> {
-    let file = match super::store::open_inside(tree, path) {
-        Ok(file) => file,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(format!("{}: {e}", name(path))),
-    };
-    let mut text = Vec::new();
-    file.take(MAX_JSON + 1)
-        .read_to_end(&mut text)
-        .map_err(|e| format!("{}: {e}", name(path)))?;
-    if text.len() as u64 > MAX_JSON {
-        return Err(format!(
-            "{}: more than {} MiB of metadata",
-            name(path),
-            MAX_JSON >> 20
-        ));
-    }
-    serde_json::from_slice(&text)
-        .map(Some)
-        .map_err(|e| format!("{}: not JSON ({e})", name(path)))
-}
-
-/// The file name of `path` inside its store, for messages.
-fn name(path: &Path) -> String {
-    path.file_name()
-        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
-}
-
-/// The attributes of the group or array at `dir`, with its Zarr format: `zarr.json`'s
-/// `attributes` (v3) or `.zattrs` (v2); `None` when `dir` is no Zarr node.
-pub fn attributes(tree: &Path, dir: &Path) -> Result<Option<(u8, Value)>, String> {
-    if let Some(node) = read_json(tree, &dir.join("zarr.json"))? {
-        let attrs = node.get("attributes").cloned().unwrap_or(Value::Null);
+/// The attributes of the group or array `node` of the store `root`, with its Zarr format:
+/// `zarr.json`'s `attributes` (v3) or `.zattrs` (v2); `None` when `node` is no Zarr node.
+pub fn attributes(root: &Root, node: &str) -> Result<Option<(u8, Value)>, String> {
+    if let Some(meta) = root.json(&join(node, "zarr.json"))? {
+        let attrs = meta.get("attributes").cloned().unwrap_or(Value::Null);
         return Ok(Some((3, attrs)));
     }
-    let attrs = read_json(tree, &dir.join(".zattrs"))?;
-    let is_v2 = attrs.is_some() || dir.join(".zgroup").exists() || dir.join(".zarray").exists();
+    let attrs = root.json(&join(node, ".zattrs"))?;
+    let is_v2 =
+        attrs.is_some() || root.has(&join(node, ".zgroup"))? || root.has(&join(node, ".zarray"))?;
     Ok(is_v2.then(|| (2, attrs.unwrap_or(Value::Null))))
 }
 
@@ -160,8 +128,8 @@ fn ome_fields(attrs: &Value) -> &Value {
 
 /// The label images a group of labels lists (`labels/`'s `labels`); none when there is no such
 /// group, an error when it cannot be read.
-pub fn label_names(tree: &Path, image_dir: &Path) -> Result<Vec<String>, String> {
-    let attrs = match attributes(tree, &image_dir.join("labels")) {
+pub fn label_names(root: &Root, image: &str) -> Result<Vec<String>, String> {
+    let attrs = match attributes(root, &join(image, "labels")) {
         Ok(Some((_, attrs))) => attrs,
         Ok(None) => return Ok(Vec::new()),
         Err(e) => return Err(format!("labels/{e}")),
@@ -355,13 +323,18 @@ fn transforms(list: Option<&Value>, n: usize) -> Result<(Vec<f64>, Vec<f64>), St
     Ok((scale, translation))
 }
 
-/// The metadata of the array at `dir`, of Zarr format 2 (`.zarray`) or 3 (`zarr.json`).
-pub fn array(tree: &Path, dir: &Path) -> Result<ArrayMeta, String> {
-    if let Some(v3) = read_json(tree, &dir.join("zarr.json"))? {
+/// The metadata of the array `node` of the store `root`, of Zarr format 2 (`.zarray`) or 3
+/// (`zarr.json`), the store's (a remote store is asked only for its format's file).
+pub fn array(root: &Root, node: &str, zarr_format: u8) -> Result<ArrayMeta, String> {
+    if zarr_format == 3 {
+        let v3 = root
+            .json(&join(node, "zarr.json"))?
+            .ok_or("no array metadata (zarr.json)")?;
         return array_v3(&v3);
     }
-    let v2 =
-        read_json(tree, &dir.join(".zarray"))?.ok_or("no array metadata (zarr.json or .zarray)")?;
+    let v2 = root
+        .json(&join(node, ".zarray"))?
+        .ok_or("no array metadata (.zarray)")?;
     let list = |field: &str| numbers(v2.get(field)).ok_or(format!(".zarray has no {field}"));
     let mut codecs: Vec<String> = v2
         .get("filters")

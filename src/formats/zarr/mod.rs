@@ -10,9 +10,12 @@
 mod chain;
 mod details;
 mod guard;
+#[cfg(feature = "remote")]
+mod http_store;
 mod levels;
 pub(crate) mod meta;
 mod read;
+mod root;
 mod store;
 
 use std::path::{Path, PathBuf};
@@ -21,8 +24,10 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use self::meta::{ArrayMeta, AxisKind, Image};
+use self::root::Root;
 use super::data::{one_channel, one_volume};
 use super::reader::Reader;
+use super::remote::{is_url, join};
 use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -135,7 +140,7 @@ impl Reader for Zarr {
         max_voxels: usize,
     ) -> Result<Option<Read0>> {
         let path = source.path();
-        if !(path.is_dir() && is_store(path)) {
+        if !(is_url(path) || (path.is_dir() && is_store(path))) {
             return Ok(None);
         }
         read_preview(path, opts, max_voxels)
@@ -144,7 +149,7 @@ impl Reader for Zarr {
 
 /// Fails when `opts` name a label image and `path` (a folder when `is_dir`) is no Zarr store.
 fn check_label_image(path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
-    if opts.zarr.label_image.is_some() && !(is_dir && is_store(path)) {
+    if opts.zarr.label_image.is_some() && !(is_url(path) || (is_dir && is_store(path))) {
         return Err(Error::format(
             path,
             "--label-image names a label image of an OME-Zarr store, and this is none",
@@ -160,13 +165,13 @@ pub fn is_store(dir: &Path) -> bool {
         .any(|f| dir.join(f).is_file())
 }
 
-/// The image a load reads: the store, or one of its label images (which must lie in the store's
-/// tree `tree`, as every file read does).
-fn image_dir(dir: &Path, tree: &Path, opts: &LoadOptions) -> Result<(PathBuf, String)> {
+/// The image a load reads: the store's root node, or one of its label images, with its name.
+fn image_node(root: &Root, opts: &LoadOptions) -> Result<(String, String)> {
     let Some(name) = &opts.zarr.label_image else {
-        return Ok((dir.to_path_buf(), String::new()));
+        return Ok((String::new(), String::new()));
     };
-    let names = meta::label_names(tree, dir).map_err(|m| Error::format(dir, m))?;
+    let shown = root.shown("");
+    let names = meta::label_names(root, "").map_err(|m| Error::format(&shown, m))?;
     if !names.contains(name) {
         let listed = if names.is_empty() {
             "the store has no label images".to_string()
@@ -174,21 +179,31 @@ fn image_dir(dir: &Path, tree: &Path, opts: &LoadOptions) -> Result<(PathBuf, St
             format!("its label images: {}", names.join(", "))
         };
         return Err(Error::format(
-            dir,
+            &shown,
             format!("no label image {name:?} ({listed})"),
         ));
     }
-    Ok((dir.join("labels").join(name), format!("labels/{name}")))
+    let node = format!("labels/{name}");
+    Ok((node.clone(), node))
 }
 
-/// The image at `dir`: an OME-Zarr group's first image, or a plain array as an image of one
-/// level with unit scale (its axes t, c, z, y, x counted from the last).
-fn read_image(dir: &Path, tree: &Path) -> Result<(Image, Vec<ArrayMeta>)> {
-    let fail = |m: String| Error::format(dir, m);
-    let (zarr_format, attrs) = meta::attributes(tree, dir)
-        .map_err(fail)?
-        .ok_or_else(|| fail("not a Zarr store (no zarr.json, .zattrs or .zgroup)".into()))?;
-    let image = match meta::array(tree, dir) {
+/// The image at the node `node` of the store `root`: an OME-Zarr group's first image, or a
+/// plain array as an image of one level with unit scale (its axes t, c, z, y, x counted from the
+/// last).
+fn read_image(root: &Root, node: &str) -> Result<(Image, Vec<ArrayMeta>)> {
+    let shown = root.shown(node);
+    let fail = |m: String| Error::format(&shown, m);
+    let (zarr_format, attrs) = meta::attributes(root, node).map_err(fail)?.ok_or_else(|| {
+        fail(if root.is_remote() {
+            "no Zarr store at this URL (no zarr.json, .zattrs, .zgroup or .zarray in it, or \
+             for S3 none it may read: public S3 answers 403 for both): slabscope reads Zarr and \
+             OME-Zarr stores over HTTP; download a file of another format and name the file"
+                .into()
+        } else {
+            "not a Zarr store (no zarr.json, .zattrs or .zgroup)".into()
+        })
+    })?;
+    let image = match meta::array(root, node, zarr_format) {
         // A plain array: no OME metadata to read.
         Ok(array) => plain_image(&array, zarr_format).map_err(fail)?,
         Err(_) => meta::image(&attrs, zarr_format).map_err(fail)?,
@@ -197,7 +212,7 @@ fn read_image(dir: &Path, tree: &Path) -> Result<(Image, Vec<ArrayMeta>)> {
         .datasets
         .iter()
         .map(|d| {
-            let array = meta::array(tree, &dir.join(&d.path))
+            let array = meta::array(root, &join(node, &d.path), zarr_format)
                 .map_err(|m| fail(format!("dataset {:?}: {m}", d.path)))?;
             if array.shape.len() != image.axes.len() {
                 return Err(fail(format!(
@@ -248,14 +263,12 @@ fn plain_image(array: &ArrayMeta, zarr_format: u8) -> std::result::Result<Image,
     })
 }
 
-/// What `info` shows of the store at `dir` (of tree `tree`), whose image `image` has its axes as
-/// `layout` says.
+/// What `info` shows of the store `root`, whose image `image` has its axes as `layout` says.
 fn describe(
     image: &Image,
     arrays: &[ArrayMeta],
     layout: &Layout,
-    dir: &Path,
-    tree: &Path,
+    root: &Root,
     name: String,
 ) -> ZarrInfo {
     let first = &arrays[0];
@@ -297,7 +310,7 @@ fn describe(
         inner_chunks: first.inner.clone(),
         codecs: first.codecs.clone(),
         // Labels that cannot be listed are not: reading one names what is wrong.
-        labels: meta::label_names(tree, dir).unwrap_or_default(),
+        labels: meta::label_names(root, "").unwrap_or_default(),
     }
 }
 
@@ -352,8 +365,11 @@ impl Layout {
 /// A store's image opened: its metadata read and checked against the options, nothing of its
 /// voxels read yet.
 struct Opened {
-    /// The store's tree: every file read lies in it.
-    tree: PathBuf,
+    /// Where the store lives.
+    root: Root,
+    /// The image's node in the store (`""`, or `labels/NAME`).
+    node: String,
+    /// The image as messages name it.
     image_path: PathBuf,
     image: Image,
     arrays: Vec<ArrayMeta>,
@@ -365,12 +381,14 @@ struct Opened {
 impl Opened {
     /// Opens the image of the store at `dir` (or the label image `opts` names).
     fn new(dir: &Path, opts: &LoadOptions) -> Result<Self> {
-        let tree = store::tree(dir)?;
-        let (image_path, name) = image_dir(dir, &tree, opts)?;
-        let (image, arrays) = read_image(&image_path, &tree)?;
+        let root = Root::open(dir)?;
+        let (node, name) = image_node(&root, opts)?;
+        let image_path = root.shown(&node);
+        let (image, arrays) = read_image(&root, &node)?;
         let array = &arrays[0];
         let layout = Layout::of(&image, &array.shape).map_err(|m| Error::format(&image_path, m))?;
-        let info = describe(&image, &arrays, &layout, dir, &tree, name);
+        let info = describe(&image, &arrays, &layout, &root, name);
+        let dir = &root.shown("");
         let mut notes = Vec::new();
         let count = |axis: Option<usize>| axis.map_or(1, |a| array.shape[a] as usize);
         let (times, channels) = (count(layout.time), count(layout.channel));
@@ -397,7 +415,8 @@ impl Opened {
             ));
         }
         Ok(Self {
-            tree,
+            root,
+            node,
             image_path,
             image,
             arrays,
@@ -410,7 +429,8 @@ impl Opened {
     /// Dataset `i`, to read the time point and channel `opts` picks.
     fn dataset(&self, i: usize, opts: &LoadOptions) -> read::Dataset<'_> {
         read::Dataset {
-            tree: &self.tree,
+            root: &self.root,
+            node: &self.node,
             image: &self.image_path,
             path: &self.image.datasets[i].path,
             meta: &self.arrays[i],

@@ -2,15 +2,15 @@
 //! channel, chunk by chunk, into the volume's buffer.
 
 use std::path::Path;
-use std::sync::Arc;
 
 use rayon::prelude::*;
 use zarrs::array::{Array, ArraySubset, ElementOwned};
+use zarrs::storage::ReadableStorageTraits;
 
 use super::Layout;
 use super::guard::Guard;
 use super::meta::ArrayMeta;
-use super::store::LocalStore;
+use super::root::Root;
 use crate::error::{Error, Result};
 use crate::formats::data::typed_buffer;
 use crate::volume::voxels::{held_type, infinities_missing};
@@ -19,9 +19,11 @@ use crate::volume::{Voxel, VoxelType, Voxels};
 /// One dataset of an image, and which time point and channel of it to read.
 #[derive(Clone, Copy, Debug)]
 pub struct Dataset<'a> {
-    /// The store's tree: every file read lies in it.
-    pub tree: &'a Path,
-    /// The image's folder.
+    /// Where the store lives.
+    pub root: &'a Root,
+    /// The image's node in the store.
+    pub node: &'a str,
+    /// The image as messages name it.
     pub image: &'a Path,
     /// The dataset's path in the image.
     pub path: &'a str,
@@ -42,10 +44,13 @@ impl Dataset<'_> {
         let fail = |m: String| Error::format(self.image, m);
         let stored = self.meta.voxel_type().map_err(fail)?;
         check_chunks(self.image, self.meta, stored, self.max_memory)?;
+        let step = self.meta.inner.as_ref().unwrap_or(&self.meta.chunks);
+        if self.root.is_remote() {
+            check_requests(self.image, self.path, self.layout, step, dims)?;
+        }
         let guard = Guard::new(self.path, self.meta, stored.size() as u64)
             .map_err(|e| fail(format!("dataset {:?}: {e}", self.path)))?;
-        let store =
-            Arc::new(LocalStore::new(self.image, self.tree, self.max_memory).with_guard(guard));
+        let store = self.root.storage(self.node, self.max_memory, guard);
         let array = Array::open(store, &format!("/{}", self.path))
             .map_err(|e| fail(format!("dataset {:?}: {e}", self.path)))?;
         Reader {
@@ -53,7 +58,7 @@ impl Dataset<'_> {
             array: &array,
             layout: self.layout,
             at: self.at,
-            step: self.meta.inner.as_ref().unwrap_or(&self.meta.chunks),
+            step,
             chunks: &self.meta.chunks,
             dims,
             max_memory: self.max_memory,
@@ -91,10 +96,44 @@ fn check_chunks(path: &Path, array: &ArrayMeta, ty: VoxelType, max_memory: u64) 
     Ok(())
 }
 
+/// The most requests one read of a dataset over HTTP makes (a chunk, or an inner chunk of a
+/// shard, is one): a store of tiny chunks is refused, not fetched a million times over.
+pub const MAX_REQUESTS: u64 = 65_536;
+
+/// Fails when reading the dataset `path` of dimensions `dims` (x fastest), a request for each
+/// `step` of it (in the axes' order), would make more than [`MAX_REQUESTS`] requests.
+fn check_requests(
+    image: &Path,
+    path: &str,
+    layout: &Layout,
+    step: &[u64],
+    dims: [usize; 3],
+) -> Result<()> {
+    let [nx, ny, nz] = dims.map(|n| n as u64);
+    let per = |axis: Option<usize>, n: u64| axis.map_or(1, |a| n.div_ceil(step[a].max(1)));
+    let [z, y, x] = layout.spatial;
+    let requests = per(z, nz)
+        .saturating_mul(per(y, ny))
+        .saturating_mul(per(x, nx));
+    if requests > MAX_REQUESTS {
+        let shape: Vec<String> = step.iter().map(u64::to_string).collect();
+        return Err(Error::format(
+            image,
+            format!(
+                "dataset {path:?} is read in chunks of {} voxels: {requests} requests over HTTP, \
+                 more than the {MAX_REQUESTS} slabscope makes for one read (download the store, \
+                 or read a coarser level with --resolution)",
+                shape.join("x")
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// How the voxels of one time point and channel are read, chunk by chunk, into the volume.
 struct Reader<'a> {
     path: &'a Path,
-    array: &'a Array<LocalStore>,
+    array: &'a Array<dyn ReadableStorageTraits>,
     layout: &'a Layout,
     /// The time point and channel read.
     at: [u64; 2],
@@ -196,6 +235,8 @@ impl Reader<'_> {
                 if text.starts_with(&format!("chunk {key} ")) {
                     return Error::format(self.path, text); // the guard's, naming it already
                 }
+                // A remote store's, naming the key already.
+                let text = text.strip_prefix(&format!("{key}: ")).unwrap_or(&text);
                 Error::format(self.path, format!("chunk {key}: {text}"))
             })?;
         let width = x.len();

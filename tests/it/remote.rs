@@ -1,0 +1,336 @@
+//! Zarr and OME-Zarr stores read in place over HTTP, from a loopback server written in the test
+//! (`tests/common/http.rs`) serving the committed fixture stores: the voxels, levels, label
+//! images and reports equal the local store's; `info` makes few requests; every failure of the
+//! server is one line naming the URL, never a credential. The stalled server is in
+//! `tests/slow/remote.rs`.
+
+use std::path::{Path, PathBuf};
+
+use slabscope::formats::{ZarrOptions, load_preview};
+use slabscope::{LoadOptions, Loaded, load};
+
+use crate::common::http::{Mode, Server, closed_port, serve};
+use crate::common::{data, run, s};
+
+const STORES: [&str; 4] = [
+    "v04_blosc.ome.zarr",
+    "v04_yx.ome.zarr",
+    "v05_sharded.ome.zarr",
+    "v05_tczyx.ome.zarr",
+];
+
+fn zarr() -> PathBuf {
+    data("zarr")
+}
+
+fn loaded(path: &Path, opts: &LoadOptions) -> Loaded {
+    load(path, opts).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Every voxel and the geometry of `va` and `vb` are the same.
+fn same_volume(va: &slabscope::Volume, vb: &slabscope::Volume, what: &str) {
+    assert_eq!(va.dims(), vb.dims(), "{what}");
+    assert_eq!(va.spacing(), vb.spacing(), "{what}");
+    assert_eq!(va.voxel_type(), vb.voxel_type(), "{what}");
+    assert_eq!(va.transform(), vb.transform(), "{what}");
+    assert_eq!(va.level(), vb.level(), "{what}");
+    let [nx, ny, nz] = va.dims();
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let (p, q) = (va.value([x, y, z]), vb.value([x, y, z]));
+                assert!(
+                    p == q || (p.is_nan() && q.is_nan()),
+                    "{what} at {x},{y},{z}"
+                );
+            }
+        }
+    }
+}
+
+/// Every voxel, the geometry, the details and the notes of `a` and `b` are the same.
+fn same(a: &Loaded, b: &Loaded, what: &str) {
+    same_volume(&a.volume, &b.volume, what);
+    assert_eq!(a.format, b.format, "{what}");
+    assert_eq!(a.details_json(), b.details_json(), "{what}");
+    assert_eq!(a.notes, b.notes, "{what}");
+}
+
+#[test]
+fn remote_stores_read_as_the_local_ones_voxel_for_voxel() {
+    for mode in [Mode::Normal, Mode::NoRange] {
+        let server = serve(&zarr(), mode, "");
+        for name in STORES {
+            let url = PathBuf::from(server.url(name));
+            let local = zarr().join(name);
+            let opts = LoadOptions::default();
+            same(&loaded(&url, &opts), &loaded(&local, &opts), name);
+        }
+        // A time point and a channel, and a label image.
+        let tczyx = LoadOptions {
+            volume: 1,
+            channel: 1,
+            ..LoadOptions::default()
+        };
+        let name = "v05_tczyx.ome.zarr";
+        let (url, local) = (PathBuf::from(server.url(name)), zarr().join(name));
+        same(&loaded(&url, &tczyx), &loaded(&local, &tczyx), "t1 c1");
+        let cells = LoadOptions {
+            zarr: ZarrOptions {
+                label_image: Some("cells".into()),
+            },
+            ..LoadOptions::default()
+        };
+        let name = "v05_sharded.ome.zarr";
+        let (url, local) = (PathBuf::from(server.url(name)), zarr().join(name));
+        same(&loaded(&url, &cells), &loaded(&local, &cells), "labels");
+        // The store's coarser levels, read from the server as from the folder.
+        let name = "v04_blosc.ome.zarr";
+        let opts = LoadOptions::default();
+        let (url, local) = (PathBuf::from(server.url(name)), zarr().join(name));
+        let (remote, local) = (loaded(&url, &opts), loaded(&local, &opts));
+        for k in 1..3 {
+            let a = remote.volume.asked_level(k).unwrap();
+            let b = local.volume.asked_level(k).unwrap();
+            same_volume(&a, &b, &format!("level {k}"));
+        }
+    }
+}
+
+#[test]
+fn the_first_picture_comes_from_a_coarse_level_without_level_0() {
+    let server = serve(&zarr(), Mode::Normal, "");
+    let name = "v04_blosc.ome.zarr";
+    let url = PathBuf::from(server.url(name));
+    let opts = LoadOptions::default();
+    let remote = load_preview(&url, &opts, 300).unwrap().unwrap();
+    let local = load_preview(&zarr().join(name), &opts, 300)
+        .unwrap()
+        .unwrap();
+    same(&remote, &local, "preview");
+    let asked = server.requests();
+    assert!(
+        asked.iter().all(|r| !r.contains("/s0/0")),
+        "a chunk of level 0: {asked:?}"
+    );
+}
+
+/// `analyze --json` of the store over HTTP is the local store's report, its file aside.
+#[test]
+fn reports_equal_the_local_stores() {
+    let server = serve(&zarr(), Mode::Normal, "");
+    for name in ["v04_blosc.ome.zarr", "v05_sharded.ome.zarr"] {
+        let url = server.url(name);
+        let local = zarr().join(name);
+        let report = |input: &str| {
+            let ran = run(&["analyze", "--json", "--slabs", "3", input]);
+            assert!(ran.ok, "{input}: {}", ran.stderr);
+            let mut json: serde_json::Value = serde_json::from_str(&ran.stdout).unwrap();
+            assert_eq!(json["file"], input);
+            json["file"] = serde_json::Value::Null;
+            json
+        };
+        assert_eq!(report(&url), report(s(&local)), "{name}");
+        let info = |input: &str| {
+            let ran = run(&["info", "--json", input]);
+            assert!(ran.ok, "{input}: {}", ran.stderr);
+            let mut json: serde_json::Value = serde_json::from_str(&ran.stdout).unwrap();
+            json["file"] = serde_json::Value::Null;
+            json
+        };
+        assert_eq!(info(&url), info(s(&local)), "{name}");
+    }
+}
+
+/// `info` fetches the metadata once each and the chunks of level 0, nothing more.
+#[test]
+fn info_makes_few_requests() {
+    let server = serve(&zarr(), Mode::Normal, "");
+    let name = "v04_blosc.ome.zarr";
+    let ran = run(&["info", &server.url(name)]);
+    assert!(ran.ok, "{}", ran.stderr);
+    let asked = server.requests();
+    let is_metadata = |r: &String| {
+        let name = r.split(' ').nth(1).unwrap().rsplit('/').next().unwrap();
+        name.starts_with('.') || name == "zarr.json"
+    };
+    let chunks: Vec<&String> = asked.iter().filter(|r| !is_metadata(r)).collect();
+    assert!(chunks.iter().all(|r| r.contains("/s0/")), "{chunks:#?}");
+    let metadata = asked.len() - chunks.len();
+    // Each chunk file of level 0 once (there are 3x3x3), nothing of the other levels.
+    assert_eq!(chunks.len(), 27, "{asked:#?}");
+    // The store's zarr.json (absent), .zattrs and .zarray (absent: not a plain array), each
+    // level's .zarray, the labels' four names (absent), and what zarrs asks when it opens level
+    // 0 (its zarr.json, absent, and .zattrs): each once.
+    assert_eq!(metadata, 12, "{asked:#?}");
+    let mut unique = asked.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(
+        unique.len(),
+        asked.len(),
+        "a request made twice: {asked:#?}"
+    );
+}
+
+/// Runs `info URL` against a server misbehaving as `mode` on the paths holding `only`; its error.
+fn failure(mode: Mode, only: &str) -> (String, String) {
+    let server: Server = serve(&zarr(), mode, only);
+    let url = server.url("v04_blosc.ome.zarr");
+    let ran = run(&["info", &url]);
+    assert!(!ran.ok, "{mode:?}: {}", ran.stdout);
+    (url, ran.stderr)
+}
+
+/// One line, naming the URL, saying `words`.
+fn says(error: &str, url: &str, words: &[&str]) {
+    assert_eq!(error.lines().count(), 1, "{error}");
+    assert!(error.contains(url), "{error}");
+    for w in words {
+        assert!(error.contains(w), "{w:?} in {error}");
+    }
+}
+
+#[test]
+fn each_failure_of_the_server_is_one_line_naming_the_url() {
+    let (url, e) = failure(Mode::Status(404), "");
+    says(&e, &url, &["no Zarr store at this URL"]);
+    let (url, e) = failure(Mode::Status(403), "");
+    says(&e, &url, &["zarr.json: HTTP 403 Forbidden", "public"]);
+    let (url, e) = failure(Mode::Status(401), "");
+    says(&e, &url, &["HTTP 401 Unauthorized"]);
+    let (url, e) = failure(Mode::Status(403), "/s0/0");
+    says(&e, &url, &["chunk s0/0/0/0: HTTP 403 Forbidden"]);
+    let (url, e) = failure(Mode::Status(500), "/s0/0");
+    says(&e, &url, &["HTTP 500 Internal Server Error, after 3 tries"]);
+    let (url, e) = failure(Mode::Truncate, "/s0/0");
+    says(&e, &url, &["ended", "Content-Length"]);
+    let (url, e) = failure(Mode::Truncate, ".zattrs");
+    says(&e, &url, &[".zattrs", "Content-Length"]);
+    let (url, e) = failure(Mode::RedirectLoop, "");
+    says(&e, &url, &["a redirect loop"]);
+    let (url, e) = failure(Mode::Html, "");
+    says(&e, &url, &["an HTML page where JSON was expected"]);
+    let url = format!("http://127.0.0.1:{}/a.ome.zarr", closed_port());
+    let ran = run(&["info", &url]);
+    says(&ran.stderr, &url, &["connection refused"]);
+    // TLS asked of a server that speaks plain HTTP.
+    let server = serve(&zarr(), Mode::Normal, "");
+    let url = server
+        .url("v04_blosc.ome.zarr")
+        .replace("http://", "https://");
+    let ran = run(&["info", &url]);
+    says(&ran.stderr, &url, &["TLS failure with 127.0.0.1"]);
+}
+
+#[test]
+fn a_500_that_passes_is_retried() {
+    // The server answers 500 once for each path, then serves it: the read succeeds.
+    let server = serve(&zarr(), Mode::Flaky, "");
+    let ran = run(&["info", &server.url("v04_blosc.ome.zarr")]);
+    assert!(ran.ok, "{}", ran.stderr);
+    let asked = server.requests();
+    assert!(asked.iter().any(|r| r.contains("/s0/0")), "{asked:?}");
+}
+
+#[test]
+fn credentials_other_formats_and_tiny_chunks_are_refused() {
+    let server = serve(&zarr(), Mode::Normal, "");
+    let secret = server
+        .url("v04_blosc.ome.zarr")
+        .replace("http://", "http://user:hunter2@");
+    for url in [secret, server.url("v04_blosc.ome.zarr?token=hunter2")] {
+        let ran = run(&["info", &url]);
+        assert!(!ran.ok);
+        assert!(!ran.text().contains("hunter2"), "{}", ran.text());
+        says(&ran.stderr, &server.base, &["credentials"]);
+    }
+    let url = server.url("scan.nii.gz");
+    let ran = run(&["info", &url]);
+    says(&ran.stderr, &url, &["download it"]);
+    assert!(server.requests().is_empty(), "{:?}", server.requests());
+    // A store of one-voxel chunks: refused before a chunk is asked.
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("tiny.zarr");
+    std::fs::create_dir(&store).unwrap();
+    std::fs::write(
+        store.join(".zarray"),
+        r#"{"zarr_format": 2, "shape": [64, 64, 32], "chunks": [1, 1, 1], "dtype": "<u1",
+            "compressor": null, "fill_value": 0, "order": "C", "filters": null}"#,
+    )
+    .unwrap();
+    let tiny = serve(dir.path(), Mode::Normal, "");
+    let url = tiny.url("tiny.zarr");
+    let ran = run(&["info", &url]);
+    says(&ran.stderr, &url, &["131072 requests", "65536"]);
+    let asked = tiny.requests();
+    assert!(
+        asked
+            .iter()
+            .all(|r| r.contains("/.z") || r.contains("zarr.json")),
+        "{asked:?}"
+    );
+}
+
+/// The URL goes wherever a path goes: a triage manifest, `render`, `slice`.
+#[test]
+fn urls_go_where_paths_go() {
+    let server = serve(&zarr(), Mode::Normal, "");
+    let url = server.url("v04_blosc.ome.zarr");
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("list.txt");
+    std::fs::write(&manifest, format!("{url}\n")).unwrap();
+    let ran = run(&["triage", "--json", "--manifest", s(&manifest)]);
+    assert!(ran.ok, "{}", ran.text());
+    let row: serde_json::Value = serde_json::from_str(ran.stdout.trim()).unwrap();
+    assert_eq!(row["path"], url.as_str(), "{row}");
+    assert_eq!(row["format"], "ome-zarr", "{row}");
+    let png = dir.path().join("view.png");
+    let ran = run(&["render", &url, "-o", s(&png), "--size", "64x48"]);
+    assert!(ran.ok, "{}", ran.text());
+    assert!(png.is_file());
+}
+
+/// `s3://bucket/prefix` at an endpoint (`AWS_ENDPOINT_URL`), path-style and anonymous: the
+/// loopback server holds the bucket `zarr` (the fixtures' folder), and answers 403 for the
+/// metadata a store does not have, as public S3 does when listing is not allowed.
+#[test]
+fn s3_stores_are_read_at_an_endpoint() {
+    let server = serve(&data(""), Mode::Status(403), "zarr.json");
+    let info = |input: &str, endpoint: Option<&str>| {
+        let mut command = crate::common::slabscope();
+        command.args(["info", "--json", input]);
+        command.env_remove("AWS_ENDPOINT_URL_S3");
+        match endpoint {
+            Some(e) => command.env("AWS_ENDPOINT_URL", e),
+            None => command.env_remove("AWS_ENDPOINT_URL"),
+        };
+        let ran: crate::common::Ran = command.output().unwrap().into();
+        assert!(ran.ok, "{input}: {}", ran.stderr);
+        let mut json: serde_json::Value = serde_json::from_str(&ran.stdout).unwrap();
+        json["file"] = serde_json::Value::Null;
+        json
+    };
+    let s3 = "s3://zarr/v04_blosc.ome.zarr";
+    let local = zarr().join("v04_blosc.ome.zarr");
+    assert_eq!(info(s3, Some(&server.base)), info(s(&local), None));
+    let asked = server.requests();
+    assert!(
+        asked
+            .iter()
+            .all(|r| r.contains(" /zarr/v04_blosc.ome.zarr/")),
+        "{asked:?}"
+    );
+    // Over plain HTTP the same 403 is an error.
+    let (url, e) = failure(Mode::Status(403), "zarr.json");
+    says(&e, &url, &["zarr.json: HTTP 403 Forbidden"]);
+    // A chunk answered 403 is an error on S3 too, naming the s3:// URL.
+    let server = serve(&data(""), Mode::Status(403), "/s0/0");
+    let ran: crate::common::Ran = crate::common::slabscope()
+        .args(["info", s3])
+        .env("AWS_ENDPOINT_URL", &server.base)
+        .output()
+        .unwrap()
+        .into();
+    says(&ran.stderr, s3, &["chunk s0/0/0/0: HTTP 403 Forbidden"]);
+}
