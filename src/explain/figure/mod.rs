@@ -139,6 +139,24 @@ impl View {
         }
     }
 
+    /// Looking across `axis` and a little along it, so that rays along it run from the left of
+    /// the screen to the right (as the paper's Fig. 1b draws them); `None` for a zero axis.
+    pub fn across(axis: [f64; 3]) -> Option<Self> {
+        let (d, u, v) = crate::geometry::frame(axis).ok()?;
+        let toward = normalize(std::array::from_fn(|k| {
+            -0.55 * d[k] + 0.7 * u[k] + 0.45 * v[k]
+        }))?;
+        let up = normalize(std::array::from_fn(|k| v[k] - dot(v, toward) * toward[k]))?;
+        let right = cross(up, toward);
+        // The viewpoint's side (+axis) on the left.
+        let flip = if dot(right, d) > 0.0 { -1.0 } else { 1.0 };
+        Some(Self {
+            right: right.map(|c| c * flip),
+            up: up.map(|c| c * flip),
+            toward,
+        })
+    }
+
     /// Where `p` falls on the screen.
     pub fn project(&self, p: [f64; 3]) -> [f64; 2] {
         [dot(p, self.right), dot(p, self.up)]
@@ -173,5 +191,10 @@ mod tests {
         assert!(c[0].abs() < 1e-12 && c[1].abs() < 1e-12);
         assert!(v.project([0.0, 0.0, 1.0])[1] > 0.0);
         assert!(v.faces(v.toward) && !v.faces(v.toward.map(|c| -c)));
+        // Across an axis: still a right-handed screen, the axis pointing left.
+        let a = View::across([0.0, 0.0, 1.0]).unwrap();
+        assert!((dot(cross(a.right, a.up), a.toward) - 1.0).abs() < 1e-12);
+        let p = a.project([0.0, 0.0, 1.0]);
+        assert!(p[0] < 0.0 && p[0].abs() > p[1].abs(), "{p:?}");
     }
 }
