@@ -149,7 +149,7 @@ pub fn nmi_example(joint: &[u64; 4]) -> NmiExample {
 
 /// `0 1 1` as the tour writes a block.
 fn block_text(b: &[u8]) -> String {
-    b.iter().map(u8::to_string).collect::<Vec<_>>().join("")
+    b.iter().map(u8::to_string).collect()
 }
 
 impl RayExample {

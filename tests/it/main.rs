@@ -30,6 +30,7 @@ mod partition;
 mod render;
 mod size;
 mod slice;
+mod tour;
 mod triage;
 mod view;
 mod vti;
