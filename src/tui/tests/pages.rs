@@ -48,9 +48,34 @@ fn every_page_at_both_sizes_in_both_themes() {
                 let head: String = title.chars().take(usize::from(w) - 40).collect();
                 assert!(screen.contains(&head), "{head} not in\n{screen}");
                 insta::assert_snapshot!(format!("tour_{name}_page_{:02}_{w}x{h}", i + 1), screen);
+                if theme.contrast && page.board.is_some() {
+                    board_is_black(&app, w, h, i);
+                }
             }
             let effects = app.update(Action::TurnPage(1));
             answer_any(&mut app, effects);
         }
     }
+}
+
+/// The board of page `i` (in the exploded view's place) is drawn on the contrast theme's black.
+fn board_is_black(app: &App, w: u16, h: u16, i: usize) {
+    let backend = ratatui::backend::TestBackend::new(w, h);
+    let mut terminal = ratatui::Terminal::new(backend).unwrap();
+    terminal
+        .draw(|frame| crate::tui::ui::draw(frame, app))
+        .unwrap();
+    let buffer = terminal.backend().buffer();
+    let a = crate::tui::ui::areas(buffer.area, true, None).unwrap();
+    let black = ratatui::style::Color::Rgb(0, 0, 0);
+    let grey: Vec<_> = a
+        .preview
+        .positions()
+        .filter(|&p| buffer[p].bg != black)
+        .collect();
+    assert!(
+        grey.is_empty(),
+        "page {} at {w}x{h}: not black at {grey:?}",
+        i + 1
+    );
 }
