@@ -60,6 +60,7 @@ const FIG_1B: &str = "fig-1b-rays.png";
 /// Writes the tour's pages into `options.dir`.
 pub fn export(options: &ExportOptions) -> Result<()> {
     check_folder(&options.dir, options.force)?;
+    check_files(&options.dir, options.file.as_deref(), options.force)?;
     let numbers = compute(options)?;
     let pages: Vec<Exported> = (0..PAGES.len()).map(|i| page(i, &numbers)).collect();
     let mode = if options.paper {
@@ -79,16 +80,44 @@ pub fn export(options: &ExportOptions) -> Result<()> {
             "pictures": e.pictures,
         })).collect::<Vec<_>>(),
     });
-    let write = |name: &str, bytes: &[u8]| -> Result<()> {
-        let path = options.dir.join(name);
-        slabscope::formats::write_atomic(&path, options.force, |mut f| f.write_all(bytes))
-            .with_context(|| format!("{}: cannot write it", path.display()))
-    };
-    for (name, png) in pictures(&numbers)? {
-        write(name, &png)?;
+    let mut files = pictures(&numbers)?;
+    files.push((
+        "tour.json",
+        serde_json::to_string_pretty(&json)?.into_bytes(),
+    ));
+    files.push((
+        "tour.md",
+        markdown(&numbers.name, mode, &pages).into_bytes(),
+    ));
+    // Every file written in full beside its place first, then all put in place together.
+    let staged = files
+        .iter()
+        .map(|(name, bytes)| {
+            slabscope::formats::stage(&options.dir.join(name), |mut f| f.write_all(bytes))
+        })
+        .collect::<slabscope::Result<Vec<_>>>()?;
+    for s in staged {
+        s.persist(options.force)?;
     }
-    write("tour.json", serde_json::to_string_pretty(&json)?.as_bytes())?;
-    write("tour.md", markdown(&numbers.name, mode, &pages).as_bytes())?;
+    Ok(())
+}
+
+/// The files the export writes.
+const FILES: [&str; 5] = [EXPLODED, FIG_1A, FIG_1B, "tour.json", "tour.md"];
+
+/// Fails unless every file of the export may be written into `dir`: none is the volume read,
+/// and none exists unless `force` (checked before any work).
+fn check_files(dir: &Path, input: Option<&Path>, force: bool) -> Result<()> {
+    for name in FILES {
+        let path = dir.join(name);
+        if input.is_some_and(|i| slabscope::formats::same_file(&path, i)) {
+            bail!(
+                "{}: is the volume read: the tour is not written over it",
+                path.display()
+            );
+        }
+        slabscope::formats::check_output(&path, force)?;
+    }
     Ok(())
 }
 
@@ -158,6 +187,11 @@ fn compute(o: &ExportOptions) -> Result<Numbers> {
         bottom,
         modes,
     })
+}
+
+/// An axis as the tour names it: `z` or `[ 0.000, 0.526, 0.851]`.
+fn axis_name(axis: [f64; 3]) -> String {
+    slabscope::Axis::new(axis).map_or_else(|_| format!("{axis:?}"), |a| a.to_string())
 }
 
 /// The physical size of `volume`, mm.
@@ -230,7 +264,7 @@ fn sphere_page(n: &Numbers) -> Exported {
         lines: vec![format!(
             "{points} viewpoints, {} axes; the best axis {}",
             points / 2,
-            slabscope::Axis::new(n.top.axis()).map_or_else(|_| "?".into(), |a| a.to_string())
+            axis_name(n.top.axis())
         )],
         pictures: vec![FIG_1A],
     }
@@ -266,7 +300,16 @@ fn volume_page(i: usize, n: &Numbers) -> Exported {
     let title = PAGES[i].title;
     let (numbers, lines) = match title {
         "The volume and the question" | "The exploded view" => {
-            let line = format!("{SLABS} slabs along {:?}: {:?}", part.axis, part.slabs);
+            let slabs: Vec<String> = part
+                .slabs
+                .iter()
+                .map(|&(a, b)| format!("{a}–{}", b.saturating_sub(1)))
+                .collect();
+            let line = format!(
+                "{SLABS} slabs along {}, slices {}",
+                axis_name(part.axis),
+                slabs.join(", ")
+            );
             let numbers = json!({
                 "dims": n.volume.dims(),
                 "spacing": n.volume.spacing(),

@@ -105,6 +105,16 @@ fn a_folder_with_files_is_written_over_only_with_force() {
             .unwrap()
             .starts_with("# The paper")
     );
+    // The files are checked before any work: a folder holding a file where the tour writes
+    // one is refused even with --force.
+    std::fs::remove_file(out.join("tour.md")).unwrap();
+    std::fs::create_dir(out.join("tour.md")).unwrap();
+    let ran = run(&["tour", s(&body), "--export", s(&out), "--force"]);
+    assert!(
+        !ran.ok && ran.stderr.contains("not a regular file"),
+        "{}",
+        ran.stderr
+    );
     // A file is no folder; a folder whose parent is missing is not made.
     let ran = run(&["tour", s(&body), "--export", s(&body)]);
     assert!(ran.stderr.contains("not a folder"), "{}", ran.stderr);
