@@ -206,7 +206,7 @@ fn pictures(n: &Numbers) -> Result<Vec<(&'static str, Vec<u8>)>> {
     let level = n.top.views.as_ref().map_or(1, |v| v.params.level);
     let sphere = sphere_figure(level, axis, &View::default());
     let across = View::across(axis).unwrap_or_default();
-    let rays = rays_figure(size(&n.volume), axis, 4, 9, &across)?;
+    let rays = rays_figure(size(&n.volume), axis, 4, 5, &across)?;
     let layout = Layout::exploded(&n.top.partition, Gap::Similarity, DEFAULT_SPREAD);
     let params = RenderParams {
         width: 960,

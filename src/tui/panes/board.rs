@@ -89,10 +89,11 @@ impl BoardPane {
             Board::Rays => {
                 let axis = self.best.map_or([0.0, 0.0, 1.0], |b| b.0);
                 let across = View::across(axis).unwrap_or(view);
-                let f = rays_figure(self.size?, axis, 3, 7, &across).ok()?;
+                let across_n = if rows < WIREFRAME_ROWS { 2 } else { 3 };
+                let f = rays_figure(self.size?, axis, across_n, 5, &across).ok()?;
                 Some((
                     f.drawing,
-                    "blue: parallel rays; red: the sampled one; green: its samples",
+                    "blue: parallel rays; red: one ray, green: its samples x0 … x4",
                 ))
             }
             Board::Blocks | Board::Js | Board::Nmi => None,
