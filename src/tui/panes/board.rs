@@ -87,7 +87,7 @@ impl BoardPane {
                 Some((f.drawing, legend))
             }
             Board::Rays => {
-                let axis = self.best.map_or([0.0, 0.0, 1.0], |b| b.0);
+                let axis = self.best?.0;
                 let across = View::across(axis).unwrap_or(view);
                 let across_n = if rows < WIREFRAME_ROWS { 2 } else { 3 };
                 let f = rays_figure(self.size?, axis, across_n, 5, &across).ok()?;
