@@ -54,10 +54,11 @@ impl BoardPane {
         let axis = self
             .best
             .and_then(|(a, _)| Axis::new(a).ok())
-            .map(|a| format!(", the best axis {a} in red"))
+            .map(|a| a.name().map_or_else(|| a.to_string(), str::to_string))
+            .map(|a| format!(": best axis {a}"))
             .unwrap_or_default();
         match self.board {
-            Board::Sphere => format!(" Fig. 1a: the viewpoint sphere{axis} "),
+            Board::Sphere => format!(" Fig. 1a, the viewpoint sphere{axis} "),
             Board::Rays => " Fig. 1b: rays from the viewpoint's plane, one ray's samples ".into(),
             Board::Blocks => " Worked example: a ray of five samples (§4) ".into(),
             Board::Js => " Worked example: JS of two histograms (eq. 5, 6) ".into(),
