@@ -191,7 +191,7 @@ fn compute(o: &ExportOptions) -> Result<Numbers> {
 
 /// An axis as the tour names it: `z` or `[ 0.000, 0.526, 0.851]`.
 fn axis_name(axis: [f64; 3]) -> String {
-    slabscope::Axis::new(axis).map_or_else(|_| format!("{axis:?}"), |a| a.labelled())
+    slabscope::Axis::new(axis).map_or_else(|_| format!("{axis:?}"), slabscope::Axis::labelled)
 }
 
 /// The physical size of `volume`, mm.
