@@ -55,8 +55,8 @@ struct TuiLook {
 enum Command {
     #[command(flatten)]
     Cli(cli::Command),
-    /// A guided tour of the paper's method in 13 pages on the TUI's live panes (Space, → or Page
-    /// Down next, ← or Page Up back, q quits)
+    /// A guided tour of the paper's method in 16 pages on the TUI's live panes (Space, → or Page
+    /// Down next, ← or Page Up back, q quits), or written for slides with --export
     Tour(TourArgs),
 }
 
@@ -67,6 +67,33 @@ struct TourArgs {
     tui: TuiArgs,
     #[command(flatten)]
     tour: cli::TourArgs,
+    /// Write the pages into this folder instead (tour.md, tour.json and the pictures as PNG),
+    /// without a terminal; the folder is made, or must be empty
+    #[arg(long, value_name = "DIR")]
+    export: Option<PathBuf>,
+    /// With --export: write over the tour's files in a folder that is not empty
+    #[arg(long, requires = "export")]
+    force: bool,
+}
+
+/// Writes the tour's pages into `dir` (`tour --export`).
+fn export_tour(t: TourArgs, dir: PathBuf) -> anyhow::Result<u8> {
+    let mut args = t.tui;
+    let paper = t.tour.paper();
+    if paper {
+        args.analysis
+            .given
+            .set(&slabscope::params::table::PAPER, "true");
+    }
+    tui::export::export(&tui::export::ExportOptions {
+        dir,
+        force: t.force,
+        file: args.file,
+        load: args.load.options()?,
+        analysis: args.analysis.params(true)?,
+        paper,
+    })
+    .map(|()| 0)
 }
 
 /// Opens the TUI as `args` say, with the tour when `tour`.
@@ -98,7 +125,10 @@ fn main() -> ExitCode {
     };
     let result = cli::use_threads(load).and_then(|()| match args.command {
         Some(Command::Cli(command)) => cli::run(command),
-        Some(Command::Tour(t)) => open_tui(t.tui, Some(t.tour)),
+        Some(Command::Tour(mut t)) => match t.export.take() {
+            Some(dir) => export_tour(t, dir),
+            None => open_tui(t.tui, Some(t.tour)),
+        },
         None => open_tui(args.tui, None),
     });
     let code = match result {

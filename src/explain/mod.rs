@@ -5,9 +5,11 @@
 //! lesson pane and the tour all show these values, computed here once.
 
 mod axis;
+pub mod figure;
 mod modes;
 mod steps;
 pub mod text;
+mod worked;
 
 use serde::Serialize;
 
@@ -20,6 +22,8 @@ pub use steps::{
     MergeLesson, OptimalLesson, RunnerUp, SplitLesson, merge_lesson, merge_lessons, optimal_lesson,
     split_lesson,
 };
+
+pub use worked::{JsExample, NmiExample, RayExample, Worked, worked};
 
 use crate::error::Result;
 use crate::partition::{Histories, Method, Partition};

@@ -8,6 +8,7 @@
 //! number of threads.
 
 mod camera;
+mod figure;
 mod layout;
 mod output;
 mod overlay;
@@ -22,6 +23,7 @@ use std::sync::{Arc, OnceLock};
 use serde::Serialize;
 
 pub use camera::{Camera, CameraParams};
+pub use figure::draw_figure;
 pub use layout::{DEFAULT_SPREAD, Gap, Layout, MIN_GAP, Placement, Stack};
 pub use output::{Image, ImageOutput, encode, paste_centred};
 pub use pyramid::{VOXELS_PER_PIXEL, pyramid_level};

@@ -5,6 +5,7 @@
 
 pub mod app;
 pub mod event;
+pub mod export;
 pub mod jobs;
 pub mod keymap;
 pub mod lesson;

@@ -159,6 +159,7 @@ mod folder;
 mod gain;
 mod keys;
 mod lesson;
+mod pages;
 mod tour;
 mod upgrade;
 

@@ -93,6 +93,25 @@ pub fn preview_cells(area: Rect, tour: bool, folder: Option<usize>) -> Option<(u
     Some((inner.width, inner.height))
 }
 
+/// The board the tour's page shows in the exploded view's place, if any.
+pub fn board(app: &App) -> Option<panes::board::BoardPane> {
+    let board = app.tour.as_ref()?.current().board?;
+    let best = app.views.views.ready().and_then(|s| {
+        let best = s.views.first()?;
+        Some((best.axis, s.params.level))
+    });
+    let size = app.volume.ready().map(|v| {
+        let (d, s) = (v.dims(), v.spacing());
+        std::array::from_fn(|k| d[k] as f64 * s[k])
+    });
+    Some(panes::board::BoardPane {
+        board,
+        best,
+        size,
+        theme: app.theme,
+    })
+}
+
 /// Draws the whole screen.
 pub fn draw(frame: &mut Frame, app: &App) {
     let area = frame.area();
@@ -121,6 +140,15 @@ pub fn draw(frame: &mut Frame, app: &App) {
             ..area
         };
         frame.render_widget(&app.lesson, body);
+    }
+    if let Some(board) = board(app).filter(|_| !app.lesson.open) {
+        // A worked example's lines want the width of the row; a figure sits beside the list.
+        let place = if board.is_figure() {
+            a.preview
+        } else {
+            a.views.union(a.preview)
+        };
+        frame.render_widget(&board, place);
     }
     if let Some(tour) = &app.tour {
         frame.render_widget(

@@ -11,6 +11,12 @@ pub const MAX_LEVEL: usize = 4;
 /// The icosphere's vertices: the icosahedron (0, ±1, ±φ) and cyclic permutations, normalized,
 /// each triangle split into four `level` times with new vertices normalized.
 pub fn icosphere(level: usize) -> Vec<[f64; 3]> {
+    mesh(level).0
+}
+
+/// The icosphere's vertices (as [`icosphere`] gives them) and its triangles, by vertex index
+/// (20, 80, 320, … of them), to draw it as the paper's Fig. 1a does.
+pub fn mesh(level: usize) -> (Vec<[f64; 3]>, Vec<[usize; 3]>) {
     let phi = f64::midpoint(1.0, 5f64.sqrt());
     let mut points: Vec<[f64; 3]> = [
         [-1.0, phi, 0.0],
@@ -72,7 +78,7 @@ pub fn icosphere(level: usize) -> Vec<[f64; 3]> {
             })
             .collect();
     }
-    points
+    (points, faces)
 }
 
 /// One canonical direction per antipodal pair of the icosphere's vertices, in order of first
@@ -106,6 +112,24 @@ mod tests {
             for p in &pts {
                 assert!((dot(*p, *p) - 1.0).abs() < 1e-12);
             }
+        }
+    }
+
+    #[test]
+    fn the_mesh_is_closed() {
+        for (level, faces) in [(0, 20), (1, 80), (2, 320)] {
+            let (points, f) = mesh(level);
+            assert_eq!(f.len(), faces);
+            // Euler: V - E + F = 2, every edge shared by two triangles.
+            let mut edges = std::collections::HashMap::new();
+            for t in &f {
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+                }
+            }
+            assert!(edges.values().all(|&n| n == 2), "level {level}");
+            assert_eq!(points.len() + f.len(), edges.len() + 2, "level {level}");
         }
     }
 

@@ -32,6 +32,7 @@ mod remote;
 mod render;
 mod size;
 mod slice;
+mod tour;
 mod triage;
 mod view;
 mod vti;

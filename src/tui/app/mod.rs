@@ -447,7 +447,12 @@ impl App {
         if let Some(files) = self.files.as_mut() {
             files.focused = self.focus == Pane::Files;
         }
-        self.preview.covered = self.help || self.lesson.open;
+        // A tour page's figure or worked example stands in the picture's place.
+        let board = self
+            .tour
+            .as_ref()
+            .is_some_and(|t| t.current().board.is_some());
+        self.preview.covered = self.help || self.lesson.open || board;
     }
 }
 

@@ -1,4 +1,4 @@
-//! The guided tour (`slabscope tour`): the paper in thirteen short pages, each with the live panes
+//! The guided tour (`slabscope tour`): the paper in sixteen short pages, each with the live panes
 //! set to show what it says. Space, → or `PgDn` the next page, ← or `PgUp` the one before (as a
 //! presenter's remote sends them), q quits.
 //!
@@ -11,6 +11,22 @@ use slabscope::partition::Method;
 
 use super::{App, Pane};
 use crate::tui::event::{Effect, Task};
+
+/// What a page draws in the exploded view's place: one of the paper's figures, or a worked
+/// example on tiny data before the volume's own numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Board {
+    /// Fig. 1a: the viewpoint sphere, the best axis marked.
+    Sphere,
+    /// Fig. 1b: rays cast from a viewpoint's plane through the volume.
+    Rays,
+    /// The paper's ray of five samples, its blocks and `h`.
+    Blocks,
+    /// Two 4-bin histograms and their JS divergence.
+    Js,
+    /// A 2×2 joint histogram, its MI and NMI.
+    Nmi,
+}
 
 /// The tour's place: the page shown, and whether the panes were set for it (they are once the
 /// page's data is in).
@@ -33,7 +49,7 @@ pub fn page_numbers(page: usize, histories: &Histories, slabs: usize) -> Option<
         Some(histories.information(&histories.slabs(method, position)))
     };
     match page {
-        10 => Some(format!(
+        COMPARED => Some(format!(
             "Here {slabs} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
             kept(Method::TopDown)?,
             kept(Method::BottomUp)?,
@@ -75,6 +91,8 @@ pub struct Page {
     pub text: &'static str,
     /// The panes.
     pub setup: Setup,
+    /// What shows in the exploded view's place, if anything.
+    pub board: Option<Board>,
 }
 
 const fn setup(focus: Pane, lesson: bool, row: Row, method: Method, slabs: usize) -> Setup {
@@ -88,37 +106,56 @@ const fn setup(focus: Pane, lesson: bool, row: Row, method: Method, slabs: usize
 }
 
 /// The page on paper mode and the defaults, whose lesson is the two modes' numbers.
-pub const MODES: usize = 5;
+pub const MODES: usize = 6;
+
+/// The page setting top-down beside bottom-up, which adds what each keeps.
+pub const COMPARED: usize = 13;
 
 /// The tour's pages, in order.
-pub const PAGES: [Page; 13] = [
+pub const PAGES: [Page; 16] = [
     Page {
         title: "The volume and the question",
         text: "Along which direction is this volume most structured, and how should it be cut \
                into slabs across that direction so that each slab holds alike content? The \
                answer is drawn on the right: the slabs pulled apart, an exploded view \
                (Ruiz et al., Similarity-based exploded views, 2008).",
+        board: None,
         setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "The viewpoint sphere",
-        text: "The candidate directions are the vertices of a subdivided icosahedron (an axis \
-               and its opposite are one). The list ranks them by their entropy rate, lowest \
-               first; in a wide terminal the sphere map shows where they point.",
+        text: "The candidate directions are the vertices of a subdivided icosahedron, drawn on \
+               the right as the paper's Fig. 1a: 42 viewpoints, an axis and its opposite one \
+               (21 axes), the best axis marked. The list ranks them by their entropy rate, \
+               lowest first.",
+        board: Some(Board::Sphere),
         setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "One ray and its samples",
-        text: "Along an axis, parallel rays cross the volume one voxel apart (the paper's \
-               lattice); each samples it one voxel apart, and every sample is quantized to one \
-               of B bins. The strip is the ray through the centre, a cell a sample, grey by bin.",
-        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
+        text: "Along an axis, parallel rays are cast from a plane at the viewpoint through the \
+               volume, one voxel apart (the paper's lattice); each samples it one voxel apart, \
+               and every sample is quantized to one of B bins. The paper's Fig. 1b on the \
+               right: the plane, its rays, the volume's box and the samples of one ray.",
+        board: Some(Board::Rays),
+        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
+    },
+    Page {
+        title: "A worked example: blocks along one ray",
+        text: "The paper's example: five samples x0 … x4 on one ray form three blocks of 3 and \
+               four of 2. Their frequencies give H(X^3) and H(X^2), and h = H(X^3) - H(X^2) \
+               (eq. 2, 4): how much a sample still surprises once the two before it are known. \
+               The numbers on the right are the library's own.",
+        board: Some(Board::Blocks),
+        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
     },
     Page {
         title: "Blocks and H(X^L)",
         text: "A block is L samples in a row on one ray. Counted over every ray, blocks have a \
                distribution p; its entropy is H(X^L) = -Σ p(x1..xL) log2 p(x1..xL) bits \
-               (eq. 2). The lesson lists the most frequent blocks and H(X^1) … H(X^L).",
+               (eq. 2). On the volume: the strip is the ray through the centre, a cell a sample, \
+               grey by bin; the lesson lists the most frequent blocks and H(X^1) … H(X^L).",
+        board: None,
         setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
     },
     Page {
@@ -126,6 +163,7 @@ pub const PAGES: [Page; 13] = [
         text: "h = H(X^L) - H(X^(L-1)) (eq. 4) is what is left uncertain about a sample once \
                the L-1 before it are known. The most structured view has the lowest h: here \
                the worst axis is selected, beside the best.",
+        board: None,
         setup: setup(Pane::Views, true, Row::Worst, Method::TopDown, 4),
     },
     Page {
@@ -134,6 +172,7 @@ pub const PAGES: [Page; 13] = [
                lattice favours the axes it lines up with) and leaves the background connected \
                to the border out of the slabs (air makes every slab alike). tour --paper \
                follows the paper: one lattice, every voxel.",
+        board: None,
         setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
     },
     Page {
@@ -141,6 +180,16 @@ pub const PAGES: [Page; 13] = [
         text: "Across the best axis the volume is cut into slices; each slice's histogram of \
                bins is all the partition needs. The curves: the NMI of each slice with the \
                next, and the gain of one cut of the whole stack at each slice.",
+        board: None,
+        setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 1),
+    },
+    Page {
+        title: "A worked example: the divergence of two histograms",
+        text: "Before the volume's slabs, two of eight voxels each over four bins. JS = \
+               H(p1 + p2) - π1 H(p1) - π2 H(p2) (eq. 5) is 0 when the histograms are alike and \
+               grows as they differ; weighted by the parts' share of the volume it is the \
+               information a cut between them gains, ΔI (eq. 6).",
+        board: Some(Board::Js),
         setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 1),
     },
     Page {
@@ -148,6 +197,7 @@ pub const PAGES: [Page; 13] = [
         text: "Top-down splitting takes the cut that keeps the most information: ΔI = (v1 + v2) \
                / vT · JS, with JS = H(p1 + p2) - π1 H(p1) - π2 H(p2), the Jensen-Shannon \
                divergence of the two parts' histograms (eq. 5, 6).",
+        board: None,
         setup: setup(Pane::Slabs, true, Row::Best, Method::TopDown, 2),
     },
     Page {
@@ -155,13 +205,24 @@ pub const PAGES: [Page; 13] = [
         text: "Each step takes the best cut over all slabs, so I(slab; value), the information \
                the slabs keep about the values, grows with every split. n and p step through \
                the history; + and - change the slab count.",
+        board: None,
         setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 4),
+    },
+    Page {
+        title: "A worked example: how alike two slices are",
+        text: "Two slices' pixels counted by their bins in one slice and the other make a joint \
+               histogram. MI = H(X) + H(Y) - H(X,Y) (eq. 7) is what one slice tells of the \
+               other; NMI = MI / H(X,Y) (eq. 8) scales it to 0 … 1. Here the slices agree on \
+               six pixels of eight.",
+        board: Some(Board::Nmi),
+        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, 4),
     },
     Page {
         title: "A merge",
         text: "Bottom-up merging starts from single slices and joins the two neighbours most \
                alike: the largest NMI = MI / H(X,Y) of their joint histogram over corresponding \
                pixels, MI = H(X) + H(Y) - H(X,Y) (eq. 7, 8).",
+        board: None,
         setup: setup(Pane::Slabs, true, Row::Best, Method::BottomUp, 4),
     },
     Page {
@@ -169,6 +230,7 @@ pub const PAGES: [Page; 13] = [
         text: "The two greedy methods answer different questions: top-down keeps the most \
                information about the values, bottom-up keeps alike slices together. Their slab \
                tables and the information each keeps differ; m switches the method.",
+        board: None,
         setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, 4),
     },
     Page {
@@ -176,6 +238,7 @@ pub const PAGES: [Page; 13] = [
         text: "Dynamic programming over every placement of the boundaries finds the partition \
                that keeps the most information for a slab count. Greedy top-down is usually \
                within a few per cent of it; the lesson says by how much and where they differ.",
+        board: None,
         setup: setup(Pane::Slabs, true, Row::Best, Method::Optimal, 4),
     },
     Page {
@@ -183,6 +246,7 @@ pub const PAGES: [Page; 13] = [
         text: "Finally the slabs are drawn pulled apart along the axis, the gaps by how unlike \
                neighbouring slabs are. Orbit with [ ] { }, change the look with r f c; q ends \
                the tour.",
+        board: None,
         setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
     },
 ];
@@ -238,6 +302,7 @@ impl App {
         }
         // A message belongs to the page it was said on.
         self.status.message = None;
+        self.sync_focus();
         vec![]
     }
 

@@ -1,5 +1,6 @@
 //! The panes: each owns its state and renders it (`impl Widget for &Pane`).
 
+pub mod board;
 pub mod curves;
 pub mod files;
 pub mod help;

@@ -165,17 +165,17 @@ fn the_tour_names_keys_that_do_what_it_says() {
         );
     };
     says(
-        8,
+        10,
         "n and p step through the history; + and - change the slab count",
     );
     assert!(matches!(in_tour('n'), Action::Step(1)));
     assert!(matches!(in_tour('p'), Action::Step(-1)));
     assert!(matches!(in_tour('+'), Action::Slabs(1)));
     assert!(matches!(in_tour('-'), Action::Slabs(-1)));
-    says(10, "m switches the method");
+    says(13, "m switches the method");
     assert!(matches!(in_tour('m'), Action::CycleMethod));
     says(
-        12,
+        15,
         "Orbit with [ ] { }, change the look with r f c; q ends the tour",
     );
     for c in ['[', ']', '{', '}'] {

@@ -7,7 +7,12 @@ use super::lesson::answer;
 use super::{ready_app, ready_paper_app, screens};
 use slabscope::explain::text::grouped;
 
-use crate::tui::app::tour::{MODES, PAGES, Row, Tour};
+use crate::tui::app::tour::{Board, MODES, PAGES, Row, Tour};
+
+/// The page of blocks and H(X^L) on the volume, with the axis's lesson.
+const BLOCKS: usize = 4;
+/// The page of the slices' curves.
+const CURVES: usize = 7;
 use crate::tui::event::{Action, Effect, Task};
 use crate::tui::lesson::Lesson;
 
@@ -54,7 +59,7 @@ fn the_page_shows_below_the_panes() {
     app.update(Action::TurnPage(0));
     let shots = screens(&mut app, 80, 24, vec![]);
     let screen = &shots[0];
-    assert!(screen.contains("Tour (defaults), page 1 of 13"), "{screen}");
+    assert!(screen.contains("Tour (defaults), page 1 of 16"), "{screen}");
     assert!(screen.contains("Slabs:"), "{screen}");
     insta::assert_snapshot!("tour_page_1_80x24", screen);
 }
@@ -63,7 +68,7 @@ fn the_page_shows_below_the_panes() {
 fn in_paper_mode_the_lists_h_is_the_lessons_h() {
     let mut app = ready_paper_app();
     app.tour = Some(Tour::new(true));
-    let effects = app.update(Action::TurnPage(2));
+    let effects = app.update(Action::TurnPage(BLOCKS as isize));
     answer(&mut app, effects);
     let views = app.views.views.ready().unwrap();
     let listed = slabscope::view::score(&views.views[0]);
@@ -78,7 +83,7 @@ fn in_paper_mode_the_lists_h_is_the_lessons_h() {
     assert!(views.views[0].phases.is_none());
     let screen = &screens(&mut app, 160, 48, vec![])[0];
     assert!(
-        screen.contains("Tour (paper mode), page 3 of 13"),
+        screen.contains("Tour (paper mode), page 5 of 16"),
         "{screen}"
     );
     // The lesson and, once it is closed, the list show it alike.
@@ -149,7 +154,7 @@ fn the_contrast_theme_draws_every_pane_on_its_own_background() {
     };
     let mut app = super::ready_app_with(contrast);
     app.tour = Some(Tour::new(false));
-    app.update(Action::TurnPage(6));
+    app.update(Action::TurnPage(CURVES as isize));
     for (w, h) in [(80, 24), (160, 48)] {
         let mut terminal =
             ratatui::Terminal::new(ratatui::backend::TestBackend::new(w, h)).unwrap();
@@ -174,4 +179,52 @@ fn the_contrast_theme_draws_every_pane_on_its_own_background() {
         assert!(screen.contains("NMI") && screen.contains("ΔI"), "{screen}");
         insta::assert_snapshot!(format!("tour_curves_contrast_{w}x{h}"), screen);
     }
+}
+
+#[test]
+fn the_figures_and_worked_examples_stand_in_the_pictures_place() {
+    let mut app = ready_app();
+    app.tour = Some(Tour::new(false));
+    let boards: Vec<(usize, Board)> = PAGES
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| Some((i, p.board?)))
+        .collect();
+    assert_eq!(boards.len(), 5);
+    // Each worked example comes before the page of the volume's numbers it prepares.
+    assert_eq!(PAGES[BLOCKS].board, None);
+    assert_eq!(boards[2], (BLOCKS - 1, Board::Blocks));
+    let w = slabscope::explain::worked();
+    for (page, board) in boards {
+        app.tour.as_mut().unwrap().page = page;
+        app.tour.as_mut().unwrap().applied = false;
+        app.update(Action::TurnPage(0));
+        assert!(
+            app.preview.covered,
+            "page {}: the picture is not covered",
+            page + 1
+        );
+        for (w_, h) in [(80, 24), (160, 48)] {
+            let screen = screens(&mut app, w_, h, vec![]).remove(0);
+            let words: Vec<String> = match board {
+                Board::Sphere => vec!["Fig. 1a".into(), "●".into()],
+                Board::Rays => vec!["Fig. 1b".into(), "●".into(), "•".into()],
+                Board::Blocks => vec![format!("{:.4} bits per sample", w.ray.entropy_rate)],
+                Board::Js => vec![format!("= {:.4} bits", w.js.js)],
+                Board::Nmi => vec![format!("NMI = MI / H(X,Y) = {:.4}", w.nmi.nmi)],
+            };
+            for word in words {
+                assert!(
+                    screen.contains(&word),
+                    "{word} not on page {}:\n{screen}",
+                    page + 1
+                );
+            }
+            insta::assert_snapshot!(format!("tour_board_{}_{w_}x{h}", page + 1), screen);
+        }
+    }
+    // The next page without a board uncovers the picture.
+    app.tour.as_mut().unwrap().page = 0;
+    app.update(Action::TurnPage(0));
+    assert!(!app.preview.covered);
 }

@@ -1,0 +1,177 @@
+//! `slabscope tour --export DIR`: the pages written for slides, their numbers the lesson's (the
+//! same as `analyze --explain` gives), their pictures PNG, and a folder with files in it left
+//! alone unless `--force`.
+
+use serde_json::Value;
+
+use crate::common::{Ran, run, s};
+
+/// The JSON `analyze` prints for `args`.
+fn analyzed(args: &[&str]) -> Value {
+    let Ran {
+        ok, stdout, stderr, ..
+    } = run(args);
+    assert!(ok, "{stderr}");
+    serde_json::from_str(&stdout).unwrap()
+}
+
+#[test]
+fn the_exported_pages_hold_the_lessons_numbers_and_pictures() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = dir.path().join("body.nrrd");
+    let made = run(&["phantom", "body", "-o", s(&body), "--dims", "24x24x40"]);
+    assert!(made.ok, "{}", made.stderr);
+    for paper in [false, true] {
+        let out = dir.path().join(if paper { "paper" } else { "defaults" });
+        let mut args = vec!["tour", s(&body), "--export", s(&out)];
+        let mut explain = vec![
+            "analyze",
+            s(&body),
+            "--json",
+            "--slabs",
+            "4",
+            "--explain",
+            "all",
+        ];
+        if paper {
+            args.push("--paper");
+            explain.extend(["--phases", "0", "--background", "none"]);
+        }
+        let ran = run(&args);
+        assert!(ran.ok, "{}", ran.stderr);
+        for name in [
+            "tour.md",
+            "tour.json",
+            "exploded-view.png",
+            "fig-1a-viewpoint-sphere.png",
+            "fig-1b-rays.png",
+        ] {
+            let bytes = std::fs::read(out.join(name)).unwrap();
+            if std::path::Path::new(name).extension() == Some("png".as_ref()) {
+                assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{name}");
+            }
+        }
+        let tour: Value =
+            serde_json::from_slice(&std::fs::read(out.join("tour.json")).unwrap()).unwrap();
+        let pages = tour["pages"].as_array().unwrap();
+        assert_eq!(pages.len(), 16);
+        assert_eq!(tour["mode"], if paper { "paper mode" } else { "defaults" });
+        let page = |title: &str| {
+            pages
+                .iter()
+                .find(|p| p["title"] == title)
+                .unwrap_or_else(|| panic!("no page {title}"))["numbers"]
+                .clone()
+        };
+        check_lessons(&page, &explain, &body, paper);
+        // The worked examples by hand: h = log2 3 - 1.5 of the five-sample ray.
+        let ray = page("A worked example: blocks along one ray");
+        let h = ray["entropy_rate"].as_f64().unwrap();
+        assert!((h - (3f64.log2() - 1.5)).abs() < 1e-12, "{h}");
+        assert_eq!(page("The viewpoint sphere")["viewpoints"], 42);
+        let md = std::fs::read_to_string(out.join("tour.md")).unwrap();
+        assert!(
+            md.contains("![The viewpoint sphere](fig-1a-viewpoint-sphere.png)"),
+            "{md}"
+        );
+        assert!(md.contains("## 16. The exploded view"), "{md}");
+    }
+}
+
+#[test]
+fn a_folder_with_files_is_written_over_only_with_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = dir.path().join("body.nrrd");
+    let made = run(&["phantom", "body", "-o", s(&body), "--dims", "16x16x24"]);
+    assert!(made.ok, "{}", made.stderr);
+    let out = dir.path().join("slides");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("tour.md"), "mine").unwrap();
+    let ran = run(&["tour", s(&body), "--export", s(&out)]);
+    assert!(!ran.ok);
+    assert!(
+        ran.stderr.contains("the folder is not empty (use --force"),
+        "{}",
+        ran.stderr
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("tour.md")).unwrap(),
+        "mine"
+    );
+    let ran = run(&["tour", s(&body), "--export", s(&out), "--force"]);
+    assert!(ran.ok, "{}", ran.stderr);
+    assert!(
+        std::fs::read_to_string(out.join("tour.md"))
+            .unwrap()
+            .starts_with("# The paper")
+    );
+    // The files are checked before any work: a folder holding a file where the tour writes
+    // one is refused even with --force.
+    std::fs::remove_file(out.join("tour.md")).unwrap();
+    std::fs::create_dir(out.join("tour.md")).unwrap();
+    let ran = run(&["tour", s(&body), "--export", s(&out), "--force"]);
+    assert!(
+        !ran.ok && ran.stderr.contains("not a regular file"),
+        "{}",
+        ran.stderr
+    );
+    // A file is no folder; a folder whose parent is missing is not made.
+    let ran = run(&["tour", s(&body), "--export", s(&body)]);
+    assert!(ran.stderr.contains("not a folder"), "{}", ran.stderr);
+    let deep = dir.path().join("no/such");
+    let ran = run(&["tour", s(&body), "--export", s(&deep)]);
+    assert!(
+        !ran.ok && ran.stderr.contains("cannot make the folder"),
+        "{}",
+        ran.stderr
+    );
+    // --force alone asks for --export.
+    assert!(!run(&["tour", s(&body), "--force"]).ok);
+}
+
+/// The exported pages' numbers against `analyze --explain`'s (`explain` its arguments).
+fn check_lessons(
+    page: &dyn Fn(&str) -> Value,
+    explain: &[&str],
+    body: &std::path::Path,
+    paper: bool,
+) {
+    let lesson = analyzed(explain)["explain"].clone();
+    // The axis's block entropies and rate, the first split, the optimum: the lesson's.
+    let blocks = page("Blocks and H(X^L)");
+    let chosen = &lesson["axes"][0];
+    for key in ["block_entropies", "entropy_rate", "rays", "samples", "axis"] {
+        assert_eq!(blocks[key], chosen[key], "{key}");
+    }
+    let rates = page("The entropy rate of the best and the worst axis");
+    assert_eq!(
+        rates["worst"]["entropy_rate"],
+        lesson["axes"][1]["entropy_rate"]
+    );
+    let split = page("The first split");
+    for key in ["at", "js", "gain", "weights", "entropies", "information"] {
+        assert_eq!(split[key], lesson["splits"][0][key], "{key}");
+    }
+    assert_eq!(page("The optimum"), lesson["optimal"]);
+    // The merge leaving four slabs bottom-up, as `analyze --method bottomup` explains it.
+    let mut bottom_up = vec![
+        "analyze",
+        s(body),
+        "--json",
+        "--slabs",
+        "4",
+        "--method",
+        "bottomup",
+        "--explain",
+        "1",
+    ];
+    if paper {
+        bottom_up.extend(["--phases", "0", "--background", "none"]);
+    }
+    let merges = analyzed(&bottom_up);
+    let merge = page("A merge");
+    let last = &merges["explain"]["merges"][0];
+    for key in ["nmi", "mi", "h_xy", "merge"] {
+        assert_eq!(merge[key], last[key], "{key}");
+    }
+}
