@@ -237,4 +237,27 @@ fn a_long_thin_volume_is_analysed_within_its_old_memory_and_the_budget() {
         assert!(!out.status.success(), "{dims:?}: {stderr}");
         assert!(stderr.contains("max-memory 64.0 MiB"), "{dims:?}: {stderr}");
     }
+    // Bottom-up on the line of noise: its merges read long columns of a run a slice (quadratic
+    // in the slices without checkpoints: minutes), and its report of 199,999 merges was held as
+    // a tree of JSON values (315 MiB).
+    let path = line(dir.path(), [1, 1, 200_000]);
+    let args = [
+        "analyze",
+        s(&path),
+        "--axis",
+        "z",
+        "--json",
+        "--method",
+        "bottomup",
+        "--max-memory",
+        "200M",
+    ];
+    let (stdout, peak) = peak_of(&args);
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["partition"]["slices"], 200_000);
+    assert!(
+        peak <= 166 << 20,
+        "bottom-up: peak anonymous memory {} MiB over the old build's 166 MB",
+        peak >> 20
+    );
 }
