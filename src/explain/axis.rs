@@ -20,6 +20,18 @@ pub struct BlockCount {
     pub count: u64,
 }
 
+impl BlockCount {
+    /// The `k`-blocks `counts` holds, with how many times each occurs.
+    pub(crate) fn table_of(counts: &BlockCounts, k: usize) -> Vec<Self> {
+        counts
+            .table(k)
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(symbols, count)| Self { symbols, count })
+            .collect()
+    }
+}
+
 /// Why an axis has the entropy rate it has: every count behind `h = H(X^L) - H(X^(L-1))`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct AxisLesson {
@@ -197,14 +209,7 @@ pub fn axis_lesson(
         block_entropies.push(walk(k)?.0.entropies().2);
     }
     block_entropies.extend([h_short, h_long]);
-    let table = |k: usize| -> Vec<BlockCount> {
-        counts
-            .table(k)
-            .unwrap_or_default()
-            .into_iter()
-            .map(|(symbols, count)| BlockCount { symbols, count })
-            .collect()
-    };
+    let table = |k: usize| BlockCount::table_of(&counts, k);
     let d = lattice.d;
     Ok(AxisLesson {
         axis: d,

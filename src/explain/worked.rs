@@ -90,14 +90,7 @@ pub fn ray_example(samples: &[u8], bins: usize, block: usize) -> RayExample {
     }
     counts.end_sequence();
     let (_, h_short, h_long) = counts.entropies();
-    let table = |k: usize| -> Vec<BlockCount> {
-        counts
-            .table(k)
-            .unwrap_or_default()
-            .into_iter()
-            .map(|(symbols, count)| BlockCount { symbols, count })
-            .collect()
-    };
+    let table = |k: usize| BlockCount::table_of(&counts, k);
     let windows = |k: usize| samples.windows(k).map(<[u8]>::to_vec).collect();
     RayExample {
         samples: samples.to_vec(),

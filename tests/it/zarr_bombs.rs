@@ -216,3 +216,42 @@ fn a_level_asked_for_whose_chunks_cannot_be_read_is_an_error() {
     let full = run(&["analyze", s(&store), "--max-memory", "64M"]);
     assert!(full.ok, "{}", full.stderr);
 }
+
+/// A Zarr v3 array of `shape` u8 in chunks of `chunk`, with no chunk written.
+fn flood(dir: &Path, name: &str, shape: u64, chunk: u64) -> PathBuf {
+    let store = dir.join(name);
+    std::fs::create_dir_all(&store).unwrap();
+    let meta = format!(
+        r#"{{"zarr_format": 3, "node_type": "array", "shape": [{shape}, {shape}, {shape}],
+            "data_type": "uint8", "fill_value": 0,
+            "chunk_grid": {{"name": "regular", "configuration": {{"chunk_shape": [{chunk}, {chunk}, {chunk}]}}}},
+            "chunk_key_encoding": {{"name": "default", "configuration": {{"separator": "/"}}}},
+            "codecs": [{}]}}"#,
+        codec("bytes")
+    );
+    std::fs::write(store.join("zarr.json"), meta).unwrap();
+    store
+}
+
+#[test]
+fn a_flood_of_tiny_chunks_is_refused_before_any_is_read() {
+    // 512³ in one-voxel chunks: 134 million of them, hours of opening files that do not exist.
+    let dir = tempfile::tempdir().unwrap();
+    for (name, shape, chunk, reads) in [
+        ("ones.zarr", 512, 1, "134217728"),
+        ("eights.zarr", 512, 8, "262144"),
+    ] {
+        let e = refused(&flood(dir.path(), name, shape, chunk));
+        assert!(
+            e.contains(&format!("{reads} chunks of fewer than 4096 voxels")) && e.contains("65536"),
+            "{e}"
+        );
+    }
+    // Chunks of 16³ voxels (4096: not small) are read, all fill, none written.
+    let v = load(
+        &flood(dir.path(), "sixteens.zarr", 64, 16),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(v.volume.dims(), [64, 64, 64]);
+}

@@ -328,12 +328,12 @@ fn the_tour_runs_to_its_last_page_in_a_real_terminal() {
     };
     wait_until(
         120,
-        || screen().contains("page 1 of 13"),
+        || screen().contains("page 1 of 16"),
         "the tour's first page",
     );
-    for page in 2..=13 {
+    for page in 2..=16 {
         display.key("space");
-        let want = format!("page {page} of 13");
+        let want = format!("page {page} of 16");
         wait_until(60, || screen().contains(&want), &want);
     }
     // Inside the xterm (at the screen's corner, 150×45 cells): black, not xterm's white.

@@ -116,18 +116,18 @@ fn the_tour_runs_from_its_first_page_to_its_last_and_quits_with_0() {
         binary()
     );
     let tmux = Tmux::start("tour", &command, (80, 24));
-    tmux.wait_for("page 1 of 13", 120);
-    for page in 2..=13 {
+    tmux.wait_for("page 1 of 16", 120);
+    for page in 2..=16 {
         tmux.keys(if page % 2 == 0 { "Space" } else { "Right" });
-        tmux.wait_for(&format!("page {page} of 13"), 60);
+        tmux.wait_for(&format!("page {page} of 16"), 60);
     }
     let screen = tmux.wait_for("The exploded view", 10);
     assert!(screen.contains("Exploded view"), "{screen}");
     tmux.keys("Space");
     std::thread::sleep(Duration::from_millis(300));
-    tmux.wait_for("page 13 of 13", 10);
+    tmux.wait_for("page 16 of 16", 10);
     tmux.keys("Left");
-    tmux.wait_for("page 12 of 13", 10);
+    tmux.wait_for("page 15 of 16", 10);
     tmux.wait_for("Optimum into 4 slabs", 60);
     tmux.keys("q");
     let screen = tmux.wait_for("EXITED 0", 30);

@@ -45,9 +45,13 @@ impl Dataset<'_> {
         let stored = self.meta.voxel_type().map_err(fail)?;
         check_chunks(self.image, self.meta, stored, self.max_memory)?;
         let step = self.meta.inner.as_ref().unwrap_or(&self.meta.chunks);
-        if self.root.is_remote() {
-            check_requests(self.image, self.path, self.layout, step, dims)?;
-        }
+        check_reads(
+            self.image,
+            self.path,
+            self.layout,
+            step,
+            (dims, self.root.is_remote()),
+        )?;
         let guard = Guard::new(self.path, self.meta, stored.size() as u64)
             .map_err(|e| fail(format!("dataset {:?}: {e}", self.path)))?;
         let store = self.root.storage(self.node, self.max_memory, guard);
@@ -97,37 +101,52 @@ fn check_chunks(path: &Path, array: &ArrayMeta, ty: VoxelType, max_memory: u64) 
 }
 
 /// The most requests one read of a dataset over HTTP makes (a chunk, or an inner chunk of a
-/// shard, is one): a store of tiny chunks is refused, not fetched a million times over.
+/// shard, is one): a store of tiny chunks is refused, not fetched a million times over. Also the
+/// most chunks of fewer than [`SMALL_CHUNK`] voxels one read of a local store takes.
 pub const MAX_REQUESTS: u64 = 65_536;
 
-/// Fails when reading the dataset `path` of dimensions `dims` (x fastest), a request for each
-/// `step` of it (in the axes' order), would make more than [`MAX_REQUESTS`] requests.
-fn check_requests(
+/// Voxels a chunk holds below which its own cost (a file opened, or a shard's index entry read,
+/// a codec run) outweighs its voxels': a local store of more than [`MAX_REQUESTS`] chunks this
+/// small is refused before any is read (a 512³ store of one-voxel chunks is 134 million of them,
+/// hours of work even when no chunk file exists).
+pub const SMALL_CHUNK: u64 = 4096;
+
+/// Fails when reading the dataset `path` of dimensions `dims` (x fastest), a chunk for each
+/// `step` of it (in the axes' order), would read more than [`MAX_REQUESTS`] chunks: over HTTP
+/// (`remote`) whatever their size, locally when they are smaller than [`SMALL_CHUNK`] voxels.
+fn check_reads(
     image: &Path,
     path: &str,
     layout: &Layout,
     step: &[u64],
-    dims: [usize; 3],
+    (dims, remote): ([usize; 3], bool),
 ) -> Result<()> {
     let [nx, ny, nz] = dims.map(|n| n as u64);
-    let per = |axis: Option<usize>, n: u64| axis.map_or(1, |a| n.div_ceil(step[a].max(1)));
     let [z, y, x] = layout.spatial;
-    let requests = per(z, nz)
+    let per = |axis: Option<usize>, n: u64| axis.map_or(1, |a| n.div_ceil(step[a].max(1)));
+    let side = |axis: Option<usize>, n: u64| axis.map_or(1, |a| step[a].clamp(1, n.max(1)));
+    let reads = per(z, nz)
         .saturating_mul(per(y, ny))
         .saturating_mul(per(x, nx));
-    if requests > MAX_REQUESTS {
-        let shape: Vec<String> = step.iter().map(u64::to_string).collect();
-        return Err(Error::format(
-            image,
-            format!(
-                "dataset {path:?} is read in chunks of {} voxels: {requests} requests over HTTP, \
-                 more than the {MAX_REQUESTS} slabscope makes for one read (download the store, \
-                 or read a coarser level with --resolution)",
-                shape.join("x")
-            ),
-        ));
+    let voxels = side(z, nz) * side(y, ny) * side(x, nx);
+    if reads <= MAX_REQUESTS || (!remote && voxels >= SMALL_CHUNK) {
+        return Ok(());
     }
-    Ok(())
+    let shape: Vec<String> = step.iter().map(u64::to_string).collect();
+    let (what, advice) = if remote {
+        ("requests over HTTP", "download the store")
+    } else {
+        ("chunks of fewer than 4096 voxels", "rechunk the store")
+    };
+    Err(Error::format(
+        image,
+        format!(
+            "dataset {path:?} is read in chunks of {} voxels: {reads} {what}, more than the \
+             {MAX_REQUESTS} slabscope reads at once ({advice}, or read a coarser level with \
+             --resolution)",
+            shape.join("x")
+        ),
+    ))
 }
 
 /// How the voxels of one time point and channel are read, chunk by chunk, into the volume.
