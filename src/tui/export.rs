@@ -175,6 +175,8 @@ fn compute(o: &ExportOptions) -> Result<Numbers> {
             method: Method::BottomUp,
             axis: slabscope::geometry::AxisChoice::Along(along),
             explain: Some(StepsShown::Last(1)),
+            // The axis is the top-down analysis's: no second view search.
+            search_views: false,
             ..params.clone()
         },
         &monitor,
@@ -271,7 +273,12 @@ fn sphere_page(n: &Numbers) -> Exported {
 }
 
 fn rays_page(n: &Numbers) -> Exported {
-    let lesson = n.top.explain.as_ref().map(|e| &e.axes[0].lesson);
+    let lesson = n
+        .top
+        .explain
+        .as_ref()
+        .and_then(|e| e.axes.first())
+        .map(|a| &a.lesson);
     Exported {
         numbers: json!({
             "bins": lesson.map(|l| l.bins),

@@ -159,7 +159,12 @@ impl Client {
             if !(200..300).contains(&status) {
                 return Ok(Answer::Status(status));
             }
-            Ok(Answer::Size(response.body().content_length()))
+            // A HEAD answer has no body to ask: its size is the header's.
+            let length = response
+                .headers()
+                .get("content-length")
+                .and_then(|v| v.to_str().ok()?.trim().parse().ok());
+            Ok(Answer::Size(length))
         })?;
         Ok(match fetched {
             Some(Fetched::Size(n)) => Some(n),
@@ -225,7 +230,8 @@ impl Client {
                     ));
                 }
                 Ok(Answer::Broken(e)) => {
-                    let e = ureq::Error::Io(e);
+                    // ureq's own errors (a body past its limit) come back out of the wrapping.
+                    let e = ureq::Error::from(e);
                     if !retry(&e) {
                         return Err(format!("{key}: {}", self.words(&e)));
                     }

@@ -4,6 +4,8 @@
 //! slab. Without them, merging the slices of a 1×1×200,000 volume of noise costs a step per
 //! slice of each slab merged, quadratic in the slices.
 
+use super::super::stack::MISSING;
+
 /// Runs between two checkpoints: four times the bins, so that the checkpoints take at most a
 /// byte a run (the runs themselves take five).
 fn every(bins: usize) -> usize {
@@ -36,7 +38,6 @@ impl Runs<'_> {
 /// The checkpoints of the columns with at least `4 ·` [`every`] runs.
 pub(super) struct Checkpoints {
     bins: usize,
-    missing: u8,
     /// Per column: where its checkpoints start in `counts`, in histograms (`u32::MAX`: none).
     start: Vec<u32>,
     /// Checkpoint `c` of a column: the histogram of its runs `0 .. c · every`.
@@ -44,18 +45,12 @@ pub(super) struct Checkpoints {
 }
 
 impl Checkpoints {
-    /// The checkpoints of the columns `runs` gives (`bins` symbols; `missing` the symbol of a
-    /// missing sample, not counted).
-    pub fn new<'a>(
-        columns: usize,
-        runs: impl Fn(usize) -> Runs<'a>,
-        bins: usize,
-        missing: u8,
-    ) -> Self {
+    /// The checkpoints of the columns `runs` gives, of `bins` symbols (a missing sample is not
+    /// counted).
+    pub fn new<'a>(columns: usize, runs: impl Fn(usize) -> Runs<'a>, bins: usize) -> Self {
         let k = every(bins);
         let mut out = Self {
             bins,
-            missing,
             start: vec![u32::MAX; columns],
             counts: Vec::new(),
         };
@@ -71,7 +66,7 @@ impl Checkpoints {
                 if r % k == 0 {
                     out.counts.extend_from_slice(&running);
                 }
-                if s != missing {
+                if s != MISSING {
                     running[usize::from(s)] += column.end_of(r) - column.firsts[r];
                 }
             }
@@ -120,7 +115,7 @@ impl Checkpoints {
         out.copy_from_slice(&self.counts[at..at + self.bins]);
         for r in c * k..=last {
             let s = runs.symbols[r];
-            if s != self.missing {
+            if s != MISSING {
                 let end = if r == last {
                     runs.end_of(r).min(x)
                 } else {

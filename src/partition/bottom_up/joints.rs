@@ -115,7 +115,7 @@ impl Columns {
                 end: run_end[i],
             }
         };
-        let checkpoints = Checkpoints::new(active.len(), runs, stack.bins(), MISSING);
+        let checkpoints = Checkpoints::new(active.len(), runs, stack.bins());
         Self {
             active,
             constant,
