@@ -106,12 +106,23 @@ pub fn sphere_figure(level: usize, chosen: [f64; 3], view: &View) -> SphereFigur
 /// Each antipodal pair of `points` once, the canonical direction first, in order of the
 /// canonical one's first appearance (the order of `icosphere::axes`).
 fn pairs(points: &[[f64; 3]]) -> Vec<[usize; 2]> {
-    let mut out: Vec<[usize; 2]> = Vec::new();
+    // Points matched by their coordinates rounded as `icosphere::axes` rounds them: linear in
+    // the points (the drawing is made as the pane is drawn).
+    let key = |p: [f64; 3]| p.map(|c| (c * 1e9).round() as i64);
+    let at: std::collections::HashMap<[i64; 3], usize> = points
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| (key(p), i))
+        .collect();
+    let mut paired = vec![false; points.len()];
+    let mut out = Vec::with_capacity(points.len() / 2);
     for (i, &p) in points.iter().enumerate() {
-        if out.iter().flatten().any(|&k| k == i) {
+        if paired[i] {
             continue;
         }
-        if let Some(j) = points.iter().position(|&q| dot(p, q) < -1.0 + 1e-9) {
+        if let Some(&j) = at.get(&key(p.map(|c| -c))) {
+            paired[i] = true;
+            paired[j] = true;
             out.push(if canonical(p) == p { [i, j] } else { [j, i] });
         }
     }
