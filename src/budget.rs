@@ -126,6 +126,7 @@ impl Budget {
             needed,
             limit: self.max_memory,
             machine: false,
+            disk: false,
         })
     }
 }

@@ -59,6 +59,9 @@ pub enum Error {
         /// Whether the limit is the machine's own (its memory, or the system refused the
         /// allocation), which no memory budget lifts.
         machine: bool,
+        /// Whether the bytes are voxels to decode, which a scratch folder on disk could hold
+        /// instead (`LoadOptions::scratch`, not given).
+        disk: bool,
     },
     /// The format is recognised but this variant of it is not supported.
     #[error("{}: unsupported: {message}", shown(path))]

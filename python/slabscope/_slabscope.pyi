@@ -99,6 +99,7 @@ def load(
     endian: Optional[Literal["little", "big"]] = None,
     offset: Optional[int] = None,
     max_memory: Union[int, str, None] = None,
+    scratch: Optional[str] = None,
     threads: Optional[int] = None,
     volume: int = 0,
     channel: int = 0,

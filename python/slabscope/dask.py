@@ -27,6 +27,7 @@ LOAD_KEYWORDS = (
     "endian",
     "offset",
     "max_memory",
+    "scratch",
     "volume",
     "channel",
     "series",

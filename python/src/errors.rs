@@ -62,7 +62,17 @@ pub fn message(e: &Error) -> String {
             message(cause),
             keyword("max_memory")
         ),
+        Error::TooLarge {
+            machine: true,
+            disk: true,
+            ..
+        } => format!("{e} (decode it to disk with {}=)", keyword("scratch")),
         Error::TooLarge { machine: true, .. } => e.to_string(),
+        Error::TooLarge { disk: true, .. } => format!(
+            "{e} (raise it with {}=, or decode it to disk with {}=)",
+            keyword("max_memory"),
+            keyword("scratch")
+        ),
         Error::TooLarge { .. } => format!("{e} (raise it with {}=)", keyword("max_memory")),
         Error::RawUndescribed {
             path,

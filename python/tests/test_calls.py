@@ -88,8 +88,17 @@ def test_files_errors_are_the_exceptions_users_catch(tmp_path):
         slabscope.load(str(raw))
     volume = slabscope.load(raw, dims=(4, 4, 4), dtype=np.uint8)
     assert volume.shape == (4, 4, 4) and volume.format == "raw"
-    with pytest.raises(slabscope.VolumeError, match=r"raise it with max_memory="):
-        slabscope.load(str(DATA / "ramp_u8_two_members.nii.gz"), max_memory=10)
+    gz = str(DATA / "ramp_u8_two_members.nii.gz")
+    with pytest.raises(
+        slabscope.VolumeError,
+        match=r"raise it with max_memory=, or decode it to disk with scratch=\)$",
+    ):
+        slabscope.load(gz, max_memory=10)
+    # Decoded into an unnamed file of the scratch folder instead: the same voxels, mapped.
+    (tmp_path / "scratch").mkdir()
+    decoded = slabscope.load(gz, max_memory=10, scratch=str(tmp_path / "scratch"))
+    np.testing.assert_array_equal(decoded.array, slabscope.load(gz).array)
+    assert list((tmp_path / "scratch").iterdir()) == []
     with pytest.raises(TypeError, match="unexpected keyword argument 'dim'"):
         slabscope.load(raw, dim=(4, 4, 4))
 

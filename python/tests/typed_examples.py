@@ -31,6 +31,7 @@ def volumes() -> list[Volume]:
         endian="big",
         offset=0,
         max_memory="2G",
+        scratch=None,
         threads=2,
         volume=0,
         channel=0,

@@ -128,7 +128,13 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     if s.missing > 0 {
         outln!("missing     {} NaN/Inf voxels", s.missing);
     }
-    if v.mapped_bytes() > 0 {
+    if v.scratch_bytes() > 0 {
+        outln!(
+            "memory      none: {} of {} decoded into a scratch file on disk (mapped)",
+            human_bytes(v.scratch_bytes()),
+            v.data().held()
+        );
+    } else if v.mapped_bytes() > 0 {
         outln!(
             "memory      none: {} of {} read in place from the file (mapped)",
             human_bytes(v.mapped_bytes()),

@@ -247,7 +247,17 @@ fn in_flag_terms(e: &Error) -> String {
             in_flag_terms(cause),
             flag("max_memory")
         ),
+        Error::TooLarge {
+            machine: true,
+            disk: true,
+            ..
+        } => format!("{e} (decode it to disk with {} DIR)", flag("scratch")),
         Error::TooLarge { machine: true, .. } => e.to_string(),
+        Error::TooLarge { disk: true, .. } => format!(
+            "{e} (raise it with {}, or decode it to disk with {} DIR)",
+            flag("max_memory"),
+            flag("scratch")
+        ),
         Error::TooLarge { .. } => format!("{e} (raise it with {})", flag("max_memory")),
         Error::RawUndescribed {
             path,

@@ -13,6 +13,7 @@ mod ascii;
 use self::ascii::read_ascii;
 use super::Source;
 use super::limits::physical_memory;
+use super::scratch::{Room, VoxelOut};
 use crate::error::{Error, Result};
 use crate::volume::decode_to;
 use crate::volume::mapped;
@@ -144,6 +145,7 @@ fn check_budget_of(
             needed: bytes.unwrap_or(u64::MAX),
             limit,
             machine,
+            disk: false,
         }),
     }
 }
@@ -185,6 +187,7 @@ pub(crate) fn typed_buffer<T: Voxel>(
         needed: (n * T::TYPE.size()) as u64,
         limit: max_memory,
         machine: true,
+        disk: false,
     })?;
     drop(probe);
     Ok(bytemuck::zeroed_vec(n))
@@ -234,8 +237,8 @@ decode_as_stored!(u8, i8, u16, i16);
 
 /// Reads the voxels `spec` describes, after checking the memory budget: integers of at most 16
 /// bits that the file does not scale in their own type, everything else as f32.
-pub(crate) fn read_voxels(spec: &DataSpec, max_memory: u64) -> Result<Voxels> {
-    read_voxels_in(spec, None, max_memory)
+pub(crate) fn read_voxels(spec: &DataSpec, room: Room) -> Result<Voxels> {
+    read_voxels_in(spec, None, room)
 }
 
 /// [`read_voxels`] from `stream`, the voxel bytes (or, for [`Encoding::Ascii`], the text) a
@@ -245,33 +248,34 @@ pub(crate) fn read_voxels_from(
     spec: &DataSpec,
     stream: &mut dyn BufRead,
     what: &'static str,
-    max_memory: u64,
+    room: Room,
 ) -> Result<Voxels> {
-    read_voxels_in(spec, Some((stream, what)), max_memory)
+    read_voxels_in(spec, Some((stream, what)), room)
 }
 
 /// A stream of voxel bytes a reader decoded, and its name in messages.
 type Stream<'a> = Option<(&'a mut dyn BufRead, &'static str)>;
 
-fn read_voxels_in(spec: &DataSpec, stream: Stream, max_memory: u64) -> Result<Voxels> {
+fn read_voxels_in(spec: &DataSpec, stream: Stream, room: Room) -> Result<Voxels> {
     let held = if spec.encoding == Encoding::Ascii {
         VoxelType::F32
     } else {
         held_type(spec.voxel_type, spec.scale.is_some())
     };
     match held {
-        VoxelType::U8 => read_typed::<u8>(spec, stream, max_memory),
-        VoxelType::I8 => read_typed::<i8>(spec, stream, max_memory),
-        VoxelType::U16 => read_typed::<u16>(spec, stream, max_memory),
-        VoxelType::I16 => read_typed::<i16>(spec, stream, max_memory),
-        _ => read_typed::<f32>(spec, stream, max_memory),
+        VoxelType::U8 => read_typed::<u8>(spec, stream, room),
+        VoxelType::I8 => read_typed::<i8>(spec, stream, room),
+        VoxelType::U16 => read_typed::<u16>(spec, stream, room),
+        VoxelType::I16 => read_typed::<i16>(spec, stream, room),
+        _ => read_typed::<f32>(spec, stream, room),
     }
 }
 
 /// [`read_voxels`] into voxels of type `T`. The budget is checked when the voxels are decoded
 /// into memory, not where they are mapped: mapped file pages are the kernel's to drop, and what
 /// an analysis of them needs is weighed by the analysis (`analysis::level_within_memory`).
-fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, max_memory: u64) -> Result<Voxels> {
+fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, room: Room) -> Result<Voxels> {
+    let max_memory = room.max_memory;
     let expected = voxel_count(spec.file.path(), spec.dims)?
         .and_then(|n| (n as u64).checked_mul(spec.voxel_type.size() as u64))
         .ok_or_else(|| {
@@ -284,14 +288,18 @@ fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, max_memory: u64) -> Re
             )
         })?;
     let path = spec.file.path();
-    let buffer = || typed_buffer::<T>(path, spec.dims, max_memory);
+    // Decoded voxels beyond the budget go to a scratch file (`scratch.rs`).
+    let out = || {
+        VoxelOut::new(path, spec.dims, room.scratch, || {
+            typed_buffer::<T>(path, spec.dims, max_memory)
+        })
+    };
     if let Some((stream, what)) = stream {
-        let owned = if spec.encoding == Encoding::Ascii {
-            ascii_as::<T>(spec, stream, max_memory)?
+        return if spec.encoding == Encoding::Ascii {
+            Ok(Voxels::owned(ascii_as::<T>(spec, stream, max_memory)?))
         } else {
-            read_stream(spec, stream, what, expected, buffer()?)?
+            read_stream(spec, stream, what, expected, out()?)
         };
-        return Ok(Voxels::owned(owned));
     }
     let mut file = spec.file.open()?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
@@ -322,21 +330,12 @@ fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, max_memory: u64) -> Re
         }
         pos += n;
     }
-    let owned = match spec.encoding {
-        Encoding::Raw => {
-            return read_raw::<T>(spec, &reader.into_inner(), (pos, len), expected, buffer);
-        }
-        Encoding::Gzip => read_stream(
-            spec,
-            MultiGzDecoder::new(reader),
-            "gzip",
-            expected,
-            buffer()?,
-        )?,
-        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, buffer()?)?,
-        Encoding::Ascii => ascii_as::<T>(spec, reader, max_memory)?,
-    };
-    Ok(Voxels::owned(owned))
+    match spec.encoding {
+        Encoding::Raw => read_raw::<T>(spec, &reader.into_inner(), (pos, len), expected, out),
+        Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, out()?),
+        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, out()?),
+        Encoding::Ascii => Ok(Voxels::owned(ascii_as::<T>(spec, reader, max_memory)?)),
+    }
 }
 
 /// The ascii values of `reader` as `T` (f32: `read_voxels` reads ascii data as f32 only).
@@ -390,7 +389,7 @@ fn read_raw<T: Decode>(
     file: &File,
     (pos, len): (u64, u64),
     expected: u64,
-    buffer: impl FnOnce() -> Result<Vec<T>>,
+    out: impl FnOnce() -> Result<VoxelOut<T>>,
 ) -> Result<Voxels> {
     let path = spec.file.path();
     // Without a skip, the data (every volume of it) is the end of the file.
@@ -430,13 +429,14 @@ fn read_raw<T: Decode>(
     {
         return Ok(voxels);
     }
-    let mut out = buffer()?;
+    let mut out = out()?;
     let bytes = &map.bytes()[start..start + expected as usize];
     let size = spec.voxel_type.size();
-    out.par_chunks_mut(CHUNK)
+    out.all()
+        .par_chunks_mut(CHUNK)
         .zip(bytes.par_chunks(CHUNK * size))
         .for_each(|(o, b)| T::decode(b, spec, o));
-    Ok(Voxels::owned(out))
+    out.finish()
 }
 
 /// Whether f32 voxels hold an infinity, which a reader stores as NaN (so they cannot be read in
@@ -456,9 +456,8 @@ fn read_stream<T: Decode>(
     mut reader: impl Read,
     what: &str,
     expected: u64,
-    mut out: Vec<T>,
-) -> Result<Vec<T>> {
-    let count = out.len();
+    mut out: VoxelOut<T>,
+) -> Result<Voxels> {
     let path = spec.file.path();
     let corrupt = |e: std::io::Error, at: u64| {
         Error::format(
@@ -483,12 +482,13 @@ fn read_stream<T: Decode>(
     let size = spec.voxel_type.size();
     let mut buf = vec![0u8; (1 << 20) / size * size];
     let mut done = 0usize;
-    while done < count {
-        let want = (count - done).min(buf.len() / size);
+    while out.left() > 0 {
+        let want = out.left().min(buf.len() / size);
         let got = fill(&mut reader, &mut buf[..want * size])
             .map_err(|e| corrupt(e, (done * size) as u64))?;
         let whole = got / size;
-        T::decode(&buf[..whole * size], spec, &mut out[done..done + whole]);
+        T::decode(&buf[..whole * size], spec, out.room(whole));
+        out.commit(whole);
         if got < want * size {
             return Err(Error::Truncated {
                 path: path.to_path_buf(),
@@ -512,7 +512,7 @@ fn read_stream<T: Decode>(
             ));
         }
     }
-    Ok(out)
+    out.finish()
 }
 
 /// Reads until `buf` is full or the stream ends; returns the bytes read. A stream that ends inside

@@ -294,7 +294,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes,
         trailing: false,
     };
-    let voxels = read_voxels(&spec, opts.max_memory)?;
+    let voxels = read_voxels(&spec, opts.room())?;
     let transform = transform(&h, spacing);
     Ok(
         Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?

@@ -18,6 +18,7 @@ mod raw;
 mod reader;
 mod registry;
 pub mod remote;
+mod scratch;
 mod source;
 mod tiff;
 mod tiff_ifd;
@@ -137,6 +138,20 @@ pub struct LoadOptions {
     pub dicom: DicomOptions,
     /// What of an OME-Zarr store to read.
     pub zarr: ZarrOptions,
+    /// A folder on disk to decode voxels into when they do not fit in `max_memory` (compressed
+    /// or converted voxels; those stored as held are read in place anyway): they are then read
+    /// from there as a mapped file. `None`: such voxels beyond the budget are refused.
+    pub scratch: Option<PathBuf>,
+}
+
+impl LoadOptions {
+    /// Where decoded voxels may go.
+    pub(crate) fn room(&self) -> scratch::Room<'_> {
+        scratch::Room {
+            max_memory: self.max_memory,
+            scratch: self.scratch.as_deref(),
+        }
+    }
 }
 
 impl Default for LoadOptions {
@@ -148,6 +163,7 @@ impl Default for LoadOptions {
             raw: RawOptions::default(),
             dicom: DicomOptions::default(),
             zarr: ZarrOptions::default(),
+            scratch: None,
         }
     }
 }
@@ -241,6 +257,14 @@ fn finish(path: &Path, format: Format, mut loaded: Read0) -> Result<Loaded> {
         loaded.notes.push(format!(
             "every voxel is {}: the volume is constant and has no structure to analyse",
             loaded.volume.stats().min
+        ));
+    }
+    let scratch = loaded.volume.scratch_bytes();
+    if scratch > 0 {
+        loaded.notes.push(format!(
+            "decoded beyond the memory limit into an unnamed scratch file of {} on disk, read \
+             from there as a mapped file",
+            crate::error::human_bytes(scratch),
         ));
     }
     let mut sources = vec![path.to_path_buf()];

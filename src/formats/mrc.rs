@@ -284,12 +284,9 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let (ty, mut voxels) = if h.mode == 12 {
         // Widened to f32, within the budget as an f32 volume.
         check_budget(path, h.n, opts.max_memory)?;
-        (
-            VoxelType::F32,
-            widen_f16(read_voxels(&spec, opts.max_memory)?),
-        )
+        (VoxelType::F32, widen_f16(read_voxels(&spec, opts.room())?))
     } else {
-        (stored, read_voxels(&spec, opts.max_memory)?)
+        (stored, read_voxels(&spec, opts.room())?)
     };
     let mut dims = h.n;
     if order != [0, 1, 2] {

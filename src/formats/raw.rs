@@ -108,7 +108,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes: (0, 1),
         trailing: false,
     };
-    let voxels = read_voxels(&spec, opts.max_memory)?;
+    let voxels = read_voxels(&spec, opts.room())?;
     let spacing = raw.spacing.unwrap_or([1.0; 3]);
     let mut notes = Vec::new();
     if raw.spacing.is_none() {

@@ -5,8 +5,8 @@ use super::table::{
     AXIS, AXIS_BY, BACKGROUND, BINS, BLOCK, CHANNEL, COLORMAP, DIMS, ELEVATION, ENDIAN, GAIN, GAP,
     HIGHLIGHT, INCLUDE_LOCALIZERS, LABEL_IMAGE, LEVEL, MAX_MEMORY, METHOD, MODE, NO_LABELS,
     NO_OUTLINES, NO_SHADING, OFFSET, PAPER, PERSPECTIVE, PHASE_SUBSET, PHASES, RAY_SPACING, REFINE,
-    RESAMPLE, SAMPLE_SPACING, SERIES, SHOW_PHI, SLABS, SOLO, SPACING, SPREAD, STEP, TF, THREADS,
-    THRESHOLD, TYPE, VOLUME, WINDOW, ZOOM,
+    RESAMPLE, SAMPLE_SPACING, SCRATCH, SERIES, SHOW_PHI, SLABS, SOLO, SPACING, SPREAD, STEP, TF,
+    THREADS, THRESHOLD, TYPE, VOLUME, WINDOW, ZOOM,
 };
 use super::{Given, text};
 use crate::analysis::AnalysisParams;
@@ -121,6 +121,9 @@ impl Given {
             zarr: ZarrOptions {
                 label_image: self.parsed(&LABEL_IMAGE, text::any)?,
             },
+            scratch: self
+                .parsed(&SCRATCH, text::any)?
+                .map(std::path::PathBuf::from),
         })
     }
 

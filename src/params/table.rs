@@ -465,6 +465,20 @@ pub const MAX_MEMORY: Param = named(
         hyphens: false,
     },
 );
+pub const SCRATCH: Param = named(
+    "scratch",
+    "scratch",
+    "DIR",
+    "A folder on disk to decode compressed or converted voxels into when they do not fit in \
+     --max-memory (an unnamed file, gone when slabscope ends), read from there as a mapped file; \
+     without it such a volume is refused",
+    Takes::Text {
+        valid: |s| !s.is_empty(),
+        expected: "a folder",
+        default: None,
+        hyphens: false,
+    },
+);
 pub const THREADS: Param = named(
     "threads",
     "threads",
@@ -541,6 +555,7 @@ pub const LOAD: &[&Param] = &[
     &ENDIAN,
     &OFFSET,
     &MAX_MEMORY,
+    &SCRATCH,
     &THREADS,
     &VOLUME,
     &CHANNEL,

@@ -30,16 +30,25 @@ pub struct MappedFile {
     map: memmap2::Mmap,
     slot: Option<usize>,
     path: PathBuf,
+    scratch: bool,
 }
 
 impl MappedFile {
     /// Wraps a map of the whole file at `path`, registered in `slot`.
-    fn new(map: memmap2::Mmap, slot: Option<usize>, path: &Path) -> Arc<Self> {
+    fn new(map: memmap2::Mmap, slot: Option<usize>, path: &Path, scratch: bool) -> Arc<Self> {
         Arc::new(Self {
             map,
             slot,
             path: path.to_path_buf(),
+            scratch,
         })
+    }
+
+    /// Whether this is a scratch file the voxels of `path` were decoded into (beyond the memory
+    /// budget), rather than `path` itself.
+    #[must_use]
+    pub fn is_scratch(&self) -> bool {
+        self.scratch
     }
 
     /// The mapped bytes.
@@ -120,7 +129,13 @@ pub(crate) fn map(file: &File, path: &Path) -> std::io::Result<Arc<MappedFile>> 
     // memory-safety matter for plain numbers.
     let map = unsafe { memmap2::Mmap::map(file) }?;
     let slot = register(&map, path);
-    Ok(MappedFile::new(map, slot, path))
+    Ok(MappedFile::new(map, slot, path, false))
+}
+
+/// The read-only map of an unnamed scratch file the voxels of `path` were decoded into. Not
+/// registered: no other process can reach a file without a name to cut it short.
+pub(crate) fn scratch(map: memmap2::Mmap, path: &Path) -> Arc<MappedFile> {
+    MappedFile::new(map, None, path, true)
 }
 
 /// Registers the range of `map`; the slot taken, if any.

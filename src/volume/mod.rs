@@ -278,6 +278,17 @@ impl Volume {
         }
     }
 
+    /// Bytes of a scratch file on disk the voxels were decoded into, as they did not fit in the
+    /// memory budget (docs/design.md §5): 0 when they are in memory or read in place.
+    #[must_use]
+    pub fn scratch_bytes(&self) -> u64 {
+        if self.data.is_scratch() {
+            self.data.bytes()
+        } else {
+            0
+        }
+    }
+
     /// Bytes the voxels take as the file stores them (in the file's voxel type).
     #[must_use]
     pub fn stored_bytes(&self) -> u64 {

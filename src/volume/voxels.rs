@@ -171,6 +171,12 @@ impl<T: Voxel> Store<T> {
         matches!(self, Self::Mapped { .. })
     }
 
+    /// Whether the voxels are read from a scratch file ([`MappedFile::is_scratch`]).
+    #[must_use]
+    pub fn is_scratch(&self) -> bool {
+        matches!(self, Self::Mapped { file, .. } if file.is_scratch())
+    }
+
     /// Fails, naming the file, when the voxels are read from a map whose file was cut short
     /// under it ([`MappedFile::check`]).
     pub fn check_intact(&self) -> crate::error::Result<()> {
@@ -329,6 +335,18 @@ impl Voxels {
             Self::U16(s) => s.is_mapped(),
             Self::I16(s) => s.is_mapped(),
             Self::F32(s) => s.is_mapped(),
+        }
+    }
+
+    /// Whether the voxels are read from a scratch file decoded beyond the memory budget.
+    #[must_use]
+    pub fn is_scratch(&self) -> bool {
+        match self {
+            Self::U8(s) => s.is_scratch(),
+            Self::I8(s) => s.is_scratch(),
+            Self::U16(s) => s.is_scratch(),
+            Self::I16(s) => s.is_scratch(),
+            Self::F32(s) => s.is_scratch(),
         }
     }
 

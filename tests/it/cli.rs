@@ -508,7 +508,7 @@ fn a_mapped_volume_beyond_the_budget_is_analysed_on_the_finest_level_that_fits()
         0
     );
     // Loading the mapped file is within any budget; a compressed copy is decoded into memory,
-    // and that is refused.
+    // and that is refused, unless a scratch folder is given to decode it into.
     assert_eq!(
         json(&["info", s(&nii), "--json", "--max-memory", "1K"])["dims"][2],
         96
@@ -518,9 +518,57 @@ fn a_mapped_volume_beyond_the_budget_is_analysed_on_the_finest_level_that_fits()
     assert!(ok);
     let Ran { ok, stderr, .. } = run(&["info", s(&gz), "--max-memory", "100K"]);
     assert!(
-        !ok && stderr.contains("raise it with --max-memory"),
+        !ok && stderr
+            .contains("(raise it with --max-memory, or decode it to disk with --scratch DIR)"),
         "{stderr}"
     );
+    let scratch = dir.path().join("scratch");
+    std::fs::create_dir(&scratch).unwrap();
+    let Ran {
+        ok, stdout, stderr, ..
+    } = run(&[
+        "info",
+        s(&gz),
+        "--max-memory",
+        "100K",
+        "--scratch",
+        s(&scratch),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains(
+            "memory      none: 768.0 KiB (786432 bytes) of i16 decoded into a scratch file on disk"
+        ),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains("an unnamed scratch file of 768.0 KiB (786432 bytes) on disk"),
+        "{stderr}"
+    );
+    // The scratch file has no name: nothing is left in the folder.
+    assert_eq!(std::fs::read_dir(&scratch).unwrap().count(), 0);
+    // Decoded to disk, the volume is a mapped one: the same answers as the uncompressed file's,
+    // on the level that fits and on every voxel.
+    let of = |file: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "analyze",
+            s(file),
+            "--json",
+            "--axis",
+            "z",
+            "--max-memory",
+            "300K",
+        ];
+        args.extend_from_slice(extra);
+        let mut report = json(&args);
+        report["file"] = serde_json::Value::Null;
+        report
+    };
+    for extra in [&[][..], &["--resolution", "full"][..]] {
+        let mapped = of(&nii, extra);
+        let decoded = of(&gz, &[&["--scratch", s(&scratch)][..], extra].concat());
+        assert_eq!(mapped, decoded);
+    }
 }
 
 /// `--timeout` stops `analyze` and `render` with an error that says so, and a view search far

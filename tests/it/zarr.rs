@@ -549,3 +549,41 @@ fn an_axis_of_no_voxels_is_refused_at_once() {
         "{e}"
     );
 }
+
+/// Beyond the budget, a store's chunks are decoded into a file of the scratch folder given and
+/// read from there: the same voxels as in memory.
+#[test]
+fn a_store_beyond_the_budget_is_decoded_into_the_scratch_folder() {
+    let scratch = tempfile::tempdir().unwrap();
+    // 14x12x10 u16 (3360 bytes) in chunks of 240 bytes, which a quarter of the budget holds.
+    let (name, budget) = ("v04_blosc.ome.zarr", 1200);
+    let in_memory = open(name);
+    let tight = LoadOptions {
+        max_memory: budget,
+        ..LoadOptions::default()
+    };
+    let refused = load(&path(name), &tight).unwrap_err();
+    assert!(
+        matches!(refused, slabscope::Error::TooLarge { disk: true, .. }),
+        "{refused}"
+    );
+    let decoded = open_with(
+        &path(name),
+        &LoadOptions {
+            scratch: Some(scratch.path().to_path_buf()),
+            ..tight
+        },
+    );
+    assert!(decoded.volume.scratch_bytes() > 0, "{name}");
+    assert_eq!(
+        decoded.volume.scratch_bytes(),
+        in_memory.volume.memory_bytes()
+    );
+    assert_eq!(
+        decoded.volume.data().to_f32_vec(),
+        in_memory.volume.data().to_f32_vec(),
+        "{name}"
+    );
+    assert!(decoded.notes.iter().any(|n| n.contains("scratch file")));
+    assert_eq!(std::fs::read_dir(scratch.path()).unwrap().count(), 0);
+}

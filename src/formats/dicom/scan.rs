@@ -72,6 +72,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
                         needed: total.saturating_add(cost),
                         limit: budget,
                         machine: false,
+                        disk: false,
                     });
                 }
                 header::images(&obj, mosaic.as_ref())

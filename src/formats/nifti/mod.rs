@@ -202,7 +202,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes,
         trailing: false,
     };
-    let voxels = read_voxels(&spec, opts.max_memory)?;
+    let voxels = read_voxels(&spec, opts.room())?;
     let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?
         .with_transform(transform(&h, unit))
         .with_source(spec.file.path());

@@ -25,6 +25,7 @@ use roxmltree::{Document, Node, NodeId, ParsingOptions};
 use self::payload::{Base64, Blocks, Words};
 use super::data::{DataSpec, Encoding, Skip, read_voxels, read_voxels_from};
 use super::reader::{Reader, Sniff};
+use super::scratch::Room;
 use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -177,7 +178,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes: (0, 1),
         trailing: true,
     };
-    let voxels = read_array(&spec, &array, layout, bytes, opts.max_memory)?;
+    let voxels = read_array(&spec, &array, layout, bytes, opts.room())?;
     // VTK gives no units: spacing and origin are taken as mm, as the legacy reader takes them.
     let mut notes = Vec::new();
     if array.cells {
@@ -429,7 +430,7 @@ fn read_array(
     array: &Array,
     layout: Layout,
     bytes: &[u8],
-    max_memory: u64,
+    room: Room,
 ) -> Result<crate::volume::Voxels> {
     let path = spec.file.path();
     let shown = crate::error::names::text(&array.name);
@@ -451,7 +452,7 @@ fn read_array(
                 ..spec.clone()
             };
             let mut text = array.text.as_bytes();
-            return read_voxels_from(&spec, &mut text, "ascii", max_memory);
+            return read_voxels_from(&spec, &mut text, "ascii", room);
         }
         "binary" => (array.text.as_bytes(), true),
         "appended" => {
@@ -467,7 +468,7 @@ fn read_array(
                 .filter(|&at| at <= bytes.len())
                 .ok_or_else(|| bad(format!("its offset {offset} is beyond the file's end")))?;
             if !appended.base64 && !layout.zlib {
-                return raw_in_place(spec, &bytes[at..], at, layout.words, expected, max_memory);
+                return raw_in_place(spec, &bytes[at..], at, layout.words, expected, room);
             }
             (&bytes[at..], appended.base64)
         }
@@ -486,10 +487,10 @@ fn read_array(
     if layout.zlib {
         // Each block's compressed size is a word of the file, listed in memory as a u64.
         let max_blocks = (input.len() / layout.words.size) as u64;
-        let max_blocks = max_blocks.min(max_memory / 8);
+        let max_blocks = max_blocks.min(room.max_memory / 8);
         let blocks = Blocks::new(decoded, layout.words, expected, max_blocks).map_err(bad)?;
         let mut stream = BufReader::new(blocks);
-        return read_voxels_from(spec, &mut stream, "zlib", max_memory);
+        return read_voxels_from(spec, &mut stream, "zlib", room);
     }
     let size = layout
         .words
@@ -501,7 +502,7 @@ fn read_array(
         )));
     }
     let mut stream = BufReader::new(decoded.take(size));
-    read_voxels_from(spec, &mut stream, "base64", max_memory)
+    read_voxels_from(spec, &mut stream, "base64", room)
 }
 
 /// Raw appended voxels at `at` in the file (`bytes` from there), after their size: read in place
@@ -512,7 +513,7 @@ fn raw_in_place(
     at: usize,
     words: Words,
     expected: u64,
-    max_memory: u64,
+    room: Room,
 ) -> Result<crate::volume::Voxels> {
     let path = spec.file.path();
     let size = words
@@ -530,7 +531,7 @@ fn raw_in_place(
         start: (at + words.size) as u64,
         ..spec.clone()
     };
-    read_voxels(&spec, max_memory)
+    read_voxels(&spec, room)
 }
 
 /// The spacing and the voxel-to-world transform of the `<ImageData>` `image` whose piece spans

@@ -304,7 +304,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         // VTK's writer ends binary values with a newline.
         trailing: true,
     };
-    let mut voxels = read_voxels(&spec, opts.max_memory)?;
+    let mut voxels = read_voxels(&spec, opts.room())?;
     let mut held = ty;
     if h.color && !h.binary {
         // ASCII colours are written as fractions of 255: the bytes again.

@@ -102,6 +102,7 @@ impl LevelSource for StoreLevels {
             layout: &self.layout,
             at: self.at,
             max_memory: self.max_memory,
+            scratch: None, // coarser than level 0, which was read
         };
         // A level that cannot be read is computed instead unless asked for (`asked_level`).
         Some(dataset.voxels(dims))

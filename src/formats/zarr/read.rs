@@ -13,6 +13,7 @@ use super::meta::ArrayMeta;
 use super::root::Root;
 use crate::error::{Error, Result};
 use crate::formats::data::typed_buffer;
+use crate::formats::scratch::VoxelOut;
 use crate::volume::voxels::{held_type, infinities_missing};
 use crate::volume::{Voxel, VoxelType, Voxels};
 
@@ -35,6 +36,8 @@ pub struct Dataset<'a> {
     pub at: [u64; 2],
     /// The memory budget.
     pub max_memory: u64,
+    /// The folder for voxels beyond the budget (`LoadOptions::scratch`).
+    pub scratch: Option<&'a Path>,
 }
 
 impl Dataset<'_> {
@@ -66,6 +69,7 @@ impl Dataset<'_> {
             chunks: &self.meta.chunks,
             dims,
             max_memory: self.max_memory,
+            scratch: self.scratch,
         }
         .voxels(stored)
     }
@@ -93,6 +97,7 @@ fn check_chunks(path: &Path, array: &ArrayMeta, ty: VoxelType, max_memory: u64) 
                     needed: bytes.unwrap_or(u64::MAX),
                     limit,
                     machine: false,
+                    disk: false,
                 });
             }
         }
@@ -162,16 +167,17 @@ struct Reader<'a> {
     chunks: &'a [u64],
     dims: [usize; 3],
     max_memory: u64,
+    scratch: Option<&'a Path>,
 }
 
 impl Reader<'_> {
     /// The voxels, held as integers of at most 16 bits are, everything else as f32.
     fn voxels(&self, stored: VoxelType) -> Result<Voxels> {
-        Ok(match held_type(stored, false) {
-            VoxelType::U8 => Voxels::owned(self.read::<u8, u8>(|v| v)?),
-            VoxelType::I8 => Voxels::owned(self.read::<i8, i8>(|v| v)?),
-            VoxelType::U16 => Voxels::owned(self.read::<u16, u16>(|v| v)?),
-            VoxelType::I16 => Voxels::owned(self.read::<i16, i16>(|v| v)?),
+        match held_type(stored, false) {
+            VoxelType::U8 => self.read::<u8, u8>(|v| v)?.finish(),
+            VoxelType::I8 => self.read::<i8, i8>(|v| v)?.finish(),
+            VoxelType::U16 => self.read::<u16, u16>(|v| v)?.finish(),
+            VoxelType::I16 => self.read::<i16, i16>(|v| v)?.finish(),
             _ => {
                 let mut values = match stored {
                     VoxelType::U32 => self.read::<u32, f32>(|v| v as f32)?,
@@ -179,10 +185,13 @@ impl Reader<'_> {
                     VoxelType::F64 => self.read::<f64, f32>(|v| v as f32)?,
                     _ => self.read::<f32, f32>(|v| v)?,
                 };
-                infinities_missing(&mut values);
-                Voxels::from_f32(values)
+                values
+                    .all()
+                    .par_chunks_mut(1 << 16)
+                    .for_each(infinities_missing);
+                values.finish()
             }
-        })
+        }
     }
 
     /// Reads elements of type `E` into a volume of `T`, converting each with `to`: slabs of one
@@ -190,8 +199,12 @@ impl Reader<'_> {
     fn read<E: ElementOwned + Copy + Send + Sync, T: Voxel>(
         &self,
         to: fn(E) -> T,
-    ) -> Result<Vec<T>> {
-        let mut out = typed_buffer::<T>(self.path, self.dims, self.max_memory)?;
+    ) -> Result<VoxelOut<T>> {
+        let (path, dims) = (self.path, self.dims);
+        let mut all = VoxelOut::new(path, dims, self.scratch, || {
+            typed_buffer::<T>(path, dims, self.max_memory)
+        })?;
+        let out = all.all();
         let [nx, ny, nz] = self.dims;
         let step = |axis: Option<usize>| axis.map_or(1, |a| self.step[a].max(1) as usize);
         let [sz, sy, sx] = self.layout.spatial.map(step);
@@ -209,7 +222,7 @@ impl Reader<'_> {
                 }
                 Ok::<(), Error>(())
             })?;
-        Ok(out)
+        Ok(all)
     }
 
     /// Reads the box `[z, y, x]` of the volume into `out`, the slab that starts at slice `z0`.

@@ -51,6 +51,7 @@ impl Fault {
                 needed,
                 limit,
                 machine: false,
+                disk: false,
             },
         }
     }

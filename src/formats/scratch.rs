@@ -1,0 +1,386 @@
+//! Where decoded voxels go: memory within the budget, else a scratch file on disk, mapped.
+//!
+//! Voxels stored as they are held are read in place from a map of their file, so the budget
+//! never weighs them (their pages are the kernel's to drop). Compressed or converted voxels
+//! (`.nii.gz`, a zlib MetaImage, scaled or big-endian data, a Zarr chunk) must be decoded
+//! somewhere. Within the budget that is memory. Beyond it, when the user gives a scratch folder
+//! (`--scratch DIR`), rather than refuse, they are decoded once into an unnamed file there and
+//! then mapped read-only: from there on the volume is a mapped one like any other, so its pyramid
+//! levels, the view search slab by slab and the partition strip by strip read it as they read a
+//! mapped file, with no second decode (docs/design.md, "Volumes of any size"). The file has no
+//! name (it is gone when the process ends, however it ends) and its blocks are reserved on disk
+//! before it is mapped, so a full disk is an error and never a fault. A scratch folder in memory
+//! (tmpfs) would hold the voxels in memory after all, so it is refused, and so is one without
+//! room for the voxels with a margin to spare.
+
+#![allow(unsafe_code)]
+
+use std::fs::File;
+use std::os::fd::AsRawFd;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::volume::mapped;
+use crate::volume::{Voxel, Voxels};
+
+/// Free space a scratch file must leave on its file system: this fraction of it (capped at
+/// [`MARGIN_MAX`]), so that decoding never fills a disk others use.
+const MARGIN_FRACTION: u64 = 20;
+const MARGIN_MAX: u64 = 1 << 30;
+
+/// Decoded voxels of type `T` on their way to a volume: a vector in memory, or the map of a
+/// scratch file, filled in any order ([`all`](Self::all)) or in memory order a stretch at a time
+/// ([`room`](Self::room) then [`commit`](Self::commit)).
+pub(crate) struct VoxelOut<T> {
+    count: usize,
+    done: usize,
+    to: To<T>,
+}
+
+enum To<T> {
+    Memory(Vec<T>),
+    /// The scratch file's map, its room reserved on disk (so that writing through the map can
+    /// never find the disk full), and the file the voxels are of.
+    Scratch {
+        map: memmap2::MmapMut,
+        path: PathBuf,
+        _voxels: std::marker::PhantomData<T>,
+    },
+}
+
+/// Where decoded voxels may go: memory within `max_memory`, beyond it a file in the `scratch`
+/// folder when one is given.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Room<'a> {
+    /// The memory budget.
+    pub max_memory: u64,
+    /// The folder for voxels beyond it (`LoadOptions::scratch`).
+    pub scratch: Option<&'a Path>,
+}
+
+impl<T: Voxel> VoxelOut<T> {
+    /// Room for the `dims` voxels of `path`: memory when `memory` (the budget's check, an
+    /// error when they do not fit) allows it, else a file in the `scratch` folder when it can
+    /// hold them, else `memory`'s error (with the reason the scratch could not).
+    pub(crate) fn new(
+        path: &Path,
+        dims: [usize; 3],
+        scratch: Option<&Path>,
+        memory: impl FnOnce() -> Result<Vec<T>>,
+    ) -> Result<Self> {
+        let refused = match memory() {
+            Ok(v) => {
+                return Ok(Self {
+                    count: v.len(),
+                    done: 0,
+                    to: To::Memory(v),
+                });
+            }
+            Err(e @ Error::TooLarge { .. }) => e,
+            Err(e) => return Err(e),
+        };
+        let Some(dir) = scratch else {
+            return Err(match refused {
+                Error::TooLarge {
+                    path,
+                    what,
+                    needed,
+                    limit,
+                    machine,
+                    ..
+                } => Error::TooLarge {
+                    path,
+                    what,
+                    needed,
+                    limit,
+                    machine,
+                    disk: true,
+                },
+                other => other,
+            });
+        };
+        let Some(count) = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d)) else {
+            return Err(refused);
+        };
+        let bytes = (count as u64).saturating_mul(T::TYPE.size() as u64);
+        match scratch_map(dir, bytes) {
+            Ok(map) => Ok(Self {
+                count,
+                done: 0,
+                to: To::Scratch {
+                    map,
+                    path: path.to_path_buf(),
+                    _voxels: std::marker::PhantomData,
+                },
+            }),
+            Err(why) => Err(with_reason(refused, &why)),
+        }
+    }
+
+    /// The voxels still to come in memory order.
+    pub(crate) fn left(&self) -> usize {
+        self.count - self.done
+    }
+
+    /// Every voxel, to fill in any order (then [`finish`](Self::finish)).
+    pub(crate) fn all(&mut self) -> &mut [T] {
+        self.done = self.count;
+        self.voxels()
+    }
+
+    /// The next `n` voxels in memory order, to fill and then [`commit`](Self::commit).
+    pub(crate) fn room(&mut self, n: usize) -> &mut [T] {
+        let (from, to) = (self.done, self.done + n.min(self.left()));
+        &mut self.voxels()[from..to]
+    }
+
+    fn voxels(&mut self) -> &mut [T] {
+        match &mut self.to {
+            To::Memory(v) => v,
+            To::Scratch { map, .. } => bytemuck::cast_slice_mut(&mut map[..]),
+        }
+    }
+
+    /// Takes the next `n` voxels as filled.
+    pub(crate) fn commit(&mut self, n: usize) {
+        self.done += n.min(self.left());
+    }
+
+    /// The volume's voxels, once every one is filled: in memory, or the scratch file mapped
+    /// read-only.
+    pub(crate) fn finish(self) -> Result<Voxels> {
+        debug_assert_eq!(self.done, self.count);
+        match self.to {
+            To::Memory(v) => Ok(Voxels::owned(v)),
+            To::Scratch { map, path, .. } => {
+                let map = map
+                    .make_read_only()
+                    .map_err(|e| Error::format(&path, format!("the scratch file: {e}")))?;
+                Voxels::mapped(mapped::scratch(map, &path), T::TYPE, 0, self.count)
+                    .ok_or_else(|| Error::format(&path, "the scratch file is shorter than written"))
+            }
+        }
+    }
+}
+
+/// The writable map of an unnamed file in the scratch folder with `bytes` reserved on disk,
+/// or why there is none.
+fn scratch_map(dir: &Path, bytes: u64) -> std::result::Result<memmap2::MmapMut, String> {
+    let shown = crate::error::shown(dir);
+    let file = tempfile::tempfile_in(dir)
+        .map_err(|e| format!("no scratch file could be made in {shown} ({e})"))?;
+    let room = room_of(&file).map_err(|e| format!("the scratch folder {shown}: {e}"))?;
+    if room.in_memory {
+        return Err(format!(
+            "the scratch folder {shown} is in memory (tmpfs), not on disk"
+        ));
+    }
+    let margin = (room.total / MARGIN_FRACTION).min(MARGIN_MAX);
+    if bytes.saturating_add(margin) > room.free {
+        return Err(format!(
+            "the scratch folder {shown} has {} free, not {} with a margin",
+            mib(room.free),
+            mib(bytes.saturating_add(margin))
+        ));
+    }
+    reserve(&file, bytes).map_err(|e| format!("the scratch folder {shown}: {e}"))?;
+    // SAFETY: the file has no name, so no other process can open, write or truncate it; its
+    // blocks are reserved, so writing through the map cannot meet a full disk.
+    unsafe { memmap2::MmapMut::map_mut(&file) }
+        .map_err(|e| format!("the scratch file in {shown} could not be mapped ({e})"))
+}
+
+/// Sets `file`'s length to `bytes` with every block allocated on disk.
+fn reserve(file: &File, bytes: u64) -> std::io::Result<()> {
+    let len = libc::off_t::try_from(bytes).map_err(std::io::Error::other)?;
+    // SAFETY: a plain system call on a descriptor `file` keeps open.
+    match unsafe { libc::posix_fallocate(file.as_raw_fd(), 0, len) } {
+        0 => Ok(()),
+        e => Err(std::io::Error::from_raw_os_error(e)),
+    }
+}
+
+fn mib(bytes: u64) -> String {
+    format!("{:.1} MiB", bytes as f64 / f64::from(1u32 << 20))
+}
+
+/// The file system a file is on: its size and free bytes, and whether it lives in memory.
+struct FileSystem {
+    total: u64,
+    free: u64,
+    in_memory: bool,
+}
+
+#[allow(clippy::useless_conversion)] // the fields are wider or narrower elsewhere
+fn room_of(file: &File) -> std::io::Result<FileSystem> {
+    let fd = file.as_raw_fd();
+    // SAFETY: `fstatvfs` writes one `statvfs` into the zeroed struct it is given, for an open
+    // descriptor that `file` keeps alive.
+    let mut vfs: libc::statvfs = unsafe { std::mem::zeroed() };
+    if unsafe { libc::fstatvfs(fd, &raw mut vfs) } != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    let block = u64::from(vfs.f_frsize);
+    Ok(FileSystem {
+        total: u64::from(vfs.f_blocks).saturating_mul(block),
+        free: u64::from(vfs.f_bavail).saturating_mul(block),
+        in_memory: in_memory(fd)?,
+    })
+}
+
+#[cfg(target_os = "linux")]
+fn in_memory(fd: std::os::fd::RawFd) -> std::io::Result<bool> {
+    const TMPFS_MAGIC: i64 = 0x0102_1994;
+    const RAMFS_MAGIC: i64 = 0x8584_58f6;
+    // SAFETY: as for `fstatvfs` above: one `statfs` written into the zeroed struct.
+    let mut fs: libc::statfs = unsafe { std::mem::zeroed() };
+    if unsafe { libc::fstatfs(fd, &raw mut fs) } != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    #[allow(clippy::useless_conversion)]
+    let kind = i64::from(fs.f_type);
+    Ok(kind == TMPFS_MAGIC || kind == RAMFS_MAGIC)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn in_memory(_fd: std::os::fd::RawFd) -> std::io::Result<bool> {
+    Ok(false)
+}
+
+/// The budget's refusal, saying also why the voxels could not go to a scratch file.
+fn with_reason(refused: Error, why: &str) -> Error {
+    match refused {
+        Error::TooLarge {
+            path,
+            what,
+            needed,
+            limit,
+            machine,
+            ..
+        } => Error::TooLarge {
+            path,
+            what: format!("{what} (not decoded to disk instead: {why})"),
+            needed,
+            limit,
+            machine,
+            disk: false,
+        },
+        other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn refuse<T>() -> Result<Vec<T>> {
+        Err(Error::TooLarge {
+            path: PathBuf::from("big.nii.gz"),
+            what: "a volume".into(),
+            needed: 1 << 40,
+            limit: 1,
+            machine: false,
+            disk: false,
+        })
+    }
+
+    #[test]
+    fn beyond_the_budget_voxels_go_to_a_mapped_scratch_file_in_order() {
+        let dims = [300, 200, 150];
+        let dir = tempfile::tempdir().unwrap();
+        let mut out =
+            VoxelOut::<i16>::new(Path::new("big.nii.gz"), dims, Some(dir.path()), refuse).unwrap();
+        let mut next = 0i32;
+        while out.left() > 0 {
+            let n = 1 << 20;
+            for v in out.room(n) {
+                *v = (next % 30_000) as i16;
+                next += 1;
+            }
+            out.commit(n);
+        }
+        let voxels = out.finish().unwrap();
+        let Voxels::I16(store) = &voxels else {
+            panic!("held as i16");
+        };
+        assert!(store.is_mapped());
+        let got = store.as_slice();
+        assert_eq!(got.len(), 300 * 200 * 150);
+        assert!(
+            got.iter()
+                .enumerate()
+                .all(|(i, &v)| v == (i % 30_000) as i16)
+        );
+    }
+
+    #[test]
+    fn within_the_budget_voxels_stay_in_memory() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut out = VoxelOut::<u8>::new(
+            Path::new("small.nii.gz"),
+            [4, 3, 2],
+            Some(dir.path()),
+            || Ok(vec![0; 24]),
+        )
+        .unwrap();
+        out.room(24).copy_from_slice(&[7; 24]);
+        out.commit(24);
+        let Voxels::U8(store) = out.finish().unwrap() else {
+            panic!("held as u8");
+        };
+        assert!(!store.is_mapped());
+        assert_eq!(store.as_slice(), &[7; 24]);
+    }
+
+    #[test]
+    fn a_scratch_too_small_keeps_the_budget_error_with_its_reason() {
+        // 2⁶³ bytes fit on no disk.
+        let dir = tempfile::tempdir().unwrap();
+        let e = VoxelOut::<u8>::new(
+            Path::new("big.nii.gz"),
+            [1 << 21, 1 << 21, 1 << 21],
+            Some(dir.path()),
+            refuse,
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.starts_with("big.nii.gz: a volume (not decoded to disk instead: the scratch"));
+        assert!(e.contains("free, not"), "{e}");
+        assert!(!e.contains('\n'));
+    }
+
+    #[test]
+    fn without_a_scratch_folder_the_budget_error_says_a_disk_would_do() {
+        let e = VoxelOut::<u8>::new(Path::new("big.nii.gz"), [8, 8, 8], None, refuse)
+            .err()
+            .unwrap();
+        assert!(matches!(e, Error::TooLarge { disk: true, .. }), "{e:?}");
+    }
+
+    #[test]
+    fn a_scratch_folder_in_memory_is_refused() {
+        let shm = Path::new("/dev/shm");
+        let Ok(file) = tempfile::tempfile_in(shm) else {
+            return; // no /dev/shm here: nothing to test
+        };
+        if !room_of(&file).is_ok_and(|r| r.in_memory) {
+            return;
+        }
+        let e = VoxelOut::<u8>::new(Path::new("big.nii.gz"), [8, 8, 8], Some(shm), refuse)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("is in memory (tmpfs), not on disk"), "{e}");
+    }
+
+    #[test]
+    fn other_errors_pass_through() {
+        let e = VoxelOut::<u8>::new(Path::new("x"), [1, 1, 1], None, || {
+            Err(Error::format(Path::new("x"), "dimensions contain a zero"))
+        })
+        .err()
+        .unwrap();
+        assert_eq!(e.to_string(), "x: dimensions contain a zero");
+    }
+}
