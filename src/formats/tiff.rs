@@ -30,6 +30,10 @@ impl Reader for TiffStack {
         "TIFF"
     }
 
+    fn reads(&self) -> Option<&'static str> {
+        Some("TIFF stacks")
+    }
+
     fn volume_name(&self, name: &str) -> bool {
         [".tif", ".tiff"].iter().any(|e| name.ends_with(e))
     }
@@ -69,6 +73,11 @@ impl Reader for TiffSlices {
 
     fn title(&self) -> &'static str {
         "TIFF slices"
+    }
+
+    /// Named with the stacks ("TIFF stacks"): a folder of slices is one.
+    fn reads(&self) -> Option<&'static str> {
+        None
     }
 
     fn slice_name(&self, path: &Path) -> bool {

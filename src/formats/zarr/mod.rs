@@ -102,6 +102,10 @@ impl Reader for Zarr {
         "OME-Zarr"
     }
 
+    fn reads(&self) -> Option<&'static str> {
+        Some("OME-Zarr stores")
+    }
+
     fn check_options(&self, path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
         check_label_image(path, is_dir, opts)
     }
