@@ -130,7 +130,9 @@ impl Reader for Zarr {
         Some("ome_zarr")
     }
 
-    /// Reads through [`Source::path`], the store's folder.
+    /// Reads through [`Source::path`], the store's folder or URL: a store is no one stream of
+    /// bytes but a tree of keys (its metadata, one file or answer a chunk), which `zarrs` reads
+    /// by key from a store made of the path (a folder's files) or the URL (ranged requests).
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source.path(), opts)
     }
