@@ -36,8 +36,10 @@ impl SliceRequest {
         }
     }
 
-    /// How many slices `volume` has along `axis`, cut as this request cuts them.
-    pub fn slices(&self, volume: &Volume, axis: [f64; 3]) -> Result<usize> {
+    /// How many slices `volume` has across [`axis`](Self::axis), cut as this request cuts
+    /// them: what `index` counts.
+    pub fn slices(&self, volume: &Volume, monitor: &Monitor) -> Result<usize> {
+        let axis = self.axis(volume, monitor)?;
         let (_, slices, _, _) =
             crate::partition::slice_geometry(volume, axis, &self.params.stack())?;
         Ok(slices)

@@ -219,7 +219,7 @@ fn the_slice_request_draws_the_slice_numbered_draws() {
     };
     let axis = request.axis(&volume, &Monitor::none()).unwrap();
     assert_eq!(axis, [0.0, 1.0, 0.0]);
-    assert_eq!(request.slices(&volume, axis).unwrap(), 24);
+    assert_eq!(request.slices(&volume, &Monitor::none()).unwrap(), 24);
     let expected = numbered(
         &volume,
         axis,
