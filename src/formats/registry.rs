@@ -219,7 +219,10 @@ fn detect(source: &Source, opts: &LoadOptions) -> Result<&'static dyn Reader> {
         ),
         None => "not a volume file".to_string(),
     };
-    Err(Error::format(source.path(), format!("{what} ({})", reads())))
+    Err(Error::format(
+        source.path(),
+        format!("{what} ({})", reads()),
+    ))
 }
 
 /// The reader whose format the first bytes `head` are, asking each in the registry's order.
