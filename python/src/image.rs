@@ -210,16 +210,17 @@ pub fn slice(
             ..slices::SliceParams::default()
         },
     };
-    let axis = match analysis {
+    match analysis {
         Some(a) => {
             a.check_volume(py, volume)?;
-            a.axis(py)?
+            request.axis = Some(a.axis(py)?);
         }
-        None => run::long(py, reporter.callback(), |monitor| {
-            request.axis(full, monitor)
-        })?,
-    };
-    request.axis = Some(axis);
+        None => {
+            run::long(py, reporter.callback(), |monitor| {
+                request.find_axis(full, monitor)
+            })?;
+        }
+    }
     request.index = match index.filter(|i| !i.is_none()) {
         None => None,
         Some(given) => match given.extract::<i64>() {
