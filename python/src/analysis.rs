@@ -52,17 +52,14 @@ pub struct Analysis {
     volume: Py<Volume>,
     /// The keywords it was analysed with.
     params: Py<PyDict>,
-    /// The library's analysis and the level partitioned; empty when unpickled, until needed.
-    computed: OnceLock<Computed>,
+    /// The library's analysis, where it ran (its `level()` is the pyramid level partitioned)
+    /// and how it was asked; empty when unpickled, until needed.
+    computed: OnceLock<Analysed>,
     /// The report as JSON text.
     json: String,
     /// The report, parsed once for the properties.
     report: Py<PyDict>,
 }
-
-/// The library's analysis, where it ran (its `level()` is the pyramid level partitioned) and
-/// how it was asked.
-pub type Computed = Analysed;
 
 /// Finds the most structured view of `volume` and the slabs along it, with the CLI's analysis
 /// keywords and defaults (`bins=32, block=3, level=1, phases=8, method="topdown", slabs=4,
@@ -101,7 +98,7 @@ fn compute(
     volume: &Volume,
     progress: Option<&Bound<'_, PyAny>>,
     params: Option<&Bound<'_, PyDict>>,
-) -> PyResult<(Computed, String)> {
+) -> PyResult<(Analysed, String)> {
     let kw = Kwargs::new(py, "analyze", params)?;
     let (mut analysis_params, given) = analysis_params(&kw)?;
     analysis_params.explain = explain(kw.get::<Bound<'_, PyAny>>("explain")?.as_ref())?;
@@ -177,7 +174,7 @@ impl Analysis {
 
     /// The library's analysis and the level it partitioned: analysed again, once, for an
     /// unpickled analysis, which must then give the same report.
-    pub fn computed(&self, py: Python<'_>) -> PyResult<&Computed> {
+    pub fn computed(&self, py: Python<'_>) -> PyResult<&Analysed> {
         if let Some(done) = self.computed.get() {
             return Ok(done);
         }

@@ -10,7 +10,7 @@ use slabscope::render::{ImageOutput, encode, slice as slices};
 use slabscope::request::{RenderRequest, SliceRequest};
 use tiny_skia::Pixmap;
 
-use crate::analysis::{Analysis, Computed, analyze};
+use crate::analysis::{Analysis, analyze};
 use crate::errors::OrPy;
 use crate::params::{Kwargs, analysis_params, look, render_params, size};
 use crate::run;
@@ -159,7 +159,7 @@ pub fn render(
         made = analyze(py, volume, progress, None)?;
         &made
     };
-    let computed: &Computed = analysis.computed(py)?;
+    let analysed = analysis.computed(py)?;
     let request = RenderRequest {
         scene: slabscope::params::Scene {
             params,
@@ -169,7 +169,7 @@ pub fn render(
         faces,
     };
     let pixmap = run::long(py, reporter.callback(), |monitor| {
-        request.render(computed, monitor)
+        request.render(analysed, monitor)
     })?;
     crate::errors::intact(&volume.get().inner)?;
     Ok(Image { pixmap })
@@ -210,16 +210,17 @@ pub fn slice(
             ..slices::SliceParams::default()
         },
     };
-    let axis = match analysis {
+    match analysis {
         Some(a) => {
             a.check_volume(py, volume)?;
-            a.axis(py)?
+            request.axis = Some(a.axis(py)?);
         }
-        None => run::long(py, reporter.callback(), |monitor| {
-            request.axis(full, monitor)
-        })?,
-    };
-    request.axis = Some(axis);
+        None => {
+            run::long(py, reporter.callback(), |monitor| {
+                request.find_axis(full, monitor)
+            })?;
+        }
+    }
     request.index = match index.filter(|i| !i.is_none()) {
         None => None,
         Some(given) => match given.extract::<i64>() {
@@ -258,14 +259,13 @@ fn from_end(
     Ok(usize::try_from(n + index).unwrap_or(0))
 }
 
-/// How many slices `volume` has along `request`'s axis.
+/// How many slices `volume` has along `request`'s axis (found before: no search runs).
 fn slices_along(
     py: Python<'_>,
     volume: &slabscope::Volume,
     request: &SliceRequest,
 ) -> PyResult<i64> {
-    let axis = request.axis.unwrap_or_default();
-    let slices = run::quick(py, || request.slices(volume, axis))?;
+    let slices = run::quick(py, || request.slices(volume, &slabscope::Monitor::none()))?;
     Ok(i64::try_from(slices).unwrap_or(i64::MAX))
 }
 

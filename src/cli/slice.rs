@@ -62,9 +62,8 @@ pub fn run(args: &SliceArgs) -> Result<()> {
         },
     };
     let name = slabscope::error::shown(&args.file);
-    let axis = with_bar(|monitor| request.axis(volume, monitor))
+    with_bar(|monitor| request.find_axis(volume, monitor))
         .map_err(|e| anyhow::Error::from(e).context(name))?;
-    request.axis = Some(axis);
     let image = request.run(volume, &Monitor::none())?;
     super::write_new(&args.output, &encode(&image, format)?, args.force)
 }

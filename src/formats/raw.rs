@@ -19,6 +19,14 @@ impl Reader for Raw {
         "raw"
     }
 
+    fn reads(&self) -> Option<&'static str> {
+        Some("headerless raw data given its dimensions and voxel type")
+    }
+
+    fn fallback(&self) -> bool {
+        true
+    }
+
     /// Dimensions given make any file raw data.
     fn forced(&self, opts: &LoadOptions) -> bool {
         opts.raw.dims.is_some()

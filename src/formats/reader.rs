@@ -31,6 +31,19 @@ pub(crate) trait Reader: Sync {
     /// The format's name in messages (`NIfTI`).
     fn title(&self) -> &'static str;
 
+    /// How the sentence of what slabscope reads (which every refusal of a file no reader reads
+    /// ends with) names this format: by default its [`title`](Self::title); `None` for a reader
+    /// that another reader of its kind names (TIFF slices, under TIFF stacks).
+    fn reads(&self) -> Option<&'static str> {
+        Some(self.title())
+    }
+
+    /// Whether it reads any file it is told how to read (raw data given its dimensions), what is
+    /// read when no other format is: the sentence of what slabscope reads names it last.
+    fn fallback(&self) -> bool {
+        false
+    }
+
     /// Whether the options name this format whatever the file holds (raw data given its
     /// dimensions).
     fn forced(&self, _opts: &LoadOptions) -> bool {

@@ -29,10 +29,23 @@ static READERS: &[&dyn Reader] = &[
     &zarr::Zarr,
 ];
 
-/// What every message refusing a file says slabscope reads.
-const READS: &str = "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, \
-                     DICOM, OME-Zarr stores, MRC, legacy VTK image data, VTK XML image data (.vti), \
-                     and headerless raw data given its dimensions and voxel type";
+/// What every message refusing a file says slabscope reads: the readers' names for their formats
+/// ([`Reader::reads`]) in the order of [`Format`]'s variants (the order the formats came in),
+/// the one that reads what no other format does ([`Reader::fallback`]: raw data) last.
+pub(crate) fn reads() -> String {
+    let mut named: Vec<((bool, u8), &str)> = READERS
+        .iter()
+        .filter_map(|r| Some(((r.fallback(), r.format() as u8), r.reads()?)))
+        .collect();
+    named.sort_unstable_by_key(|&(order, _)| order);
+    let names: Vec<&str> = named.into_iter().map(|(_, name)| name).collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => {
+            format!("slabscope reads {}, and {last}", rest.join(", "))
+        }
+        _ => format!("slabscope reads {}", names.concat()),
+    }
+}
 
 /// Reads the file or folder at `path` (checked to be one), with the format it was read as.
 pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
@@ -206,7 +219,10 @@ fn detect(source: &Source, opts: &LoadOptions) -> Result<&'static dyn Reader> {
         ),
         None => "not a volume file".to_string(),
     };
-    Err(Error::format(source.path(), format!("{what} ({READS})")))
+    Err(Error::format(
+        source.path(),
+        format!("{what} ({})", reads()),
+    ))
 }
 
 /// The reader whose format the first bytes `head` are, asking each in the registry's order.
@@ -269,13 +285,21 @@ mod tests {
         assert!(volume_name(Path::new("bonsai_256x256x256_uint8.raw")));
     }
 
-    /// The sentence of every refusal names every reader (its title's first word): a format
-    /// added is added to it.
+    /// The sentence of every refusal, made from the readers, is the one that was kept by hand
+    /// before byte for byte, and names every reader (its title's first word): a format added
+    /// is added to it.
     #[test]
     fn the_sentence_names_every_reader() {
+        let reads = reads();
+        assert_eq!(
+            reads,
+            "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, DICOM, \
+             OME-Zarr stores, MRC, legacy VTK image data, VTK XML image data (.vti), and \
+             headerless raw data given its dimensions and voxel type"
+        );
         for reader in READERS {
             let word = reader.title().split(' ').next().unwrap_or_default();
-            assert!(READS.contains(word), "{word} is not in {READS:?}");
+            assert!(reads.contains(word), "{word} is not in {reads:?}");
         }
     }
 

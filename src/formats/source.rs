@@ -14,8 +14,10 @@ use crate::volume::mapped::{self, MappedFile};
 /// reach its bytes through it ([`open`](Self::open), [`map`](Self::map), [`head`](Self::head),
 /// [`len`](Self::len)) and the files a header names beside it through
 /// [`sibling`](Self::sibling); the shared voxel reader (`data.rs`) reads the source its header
-/// names. Readers whose parsers still take a path (TIFF, DICOM, OME-Zarr, and the NIfTI, NRRD
-/// and MetaImage headers' messages) use [`path`](Self::path) for now.
+/// names; TIFF decodes the source's map, and DICOM reads each of a series' files through a
+/// source of its own. What still takes [`path`](Self::path): the folder formats, whose volume is
+/// many files (a folder of TIFF slices or of DICOM files walked by its path, a Zarr store read
+/// by key from its folder or URL), and messages, which name the path.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Source {
     path: PathBuf,

@@ -3,9 +3,9 @@
 //! OME-XML (which also orders its pages over z, channel and time), else from ImageJ's description
 //! (`spacing=`) and the resolution tags when present.
 
-use std::fs::File;
-use std::io::BufReader;
+use std::io::Cursor;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
@@ -14,9 +14,19 @@ use super::data::{self, check_budget, voxel_buffer};
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source, ome, tiff_ifd};
 use crate::error::{Error, Result};
+use crate::volume::mapped::MappedFile;
 use crate::volume::{VoxelType, Voxels};
 
-type Tiff = Decoder<BufReader<File>>;
+/// A TIFF's bytes as the decoder reads them: the source's map.
+struct Bytes(Arc<MappedFile>);
+
+impl AsRef<[u8]> for Bytes {
+    fn as_ref(&self) -> &[u8] {
+        self.0.bytes()
+    }
+}
+
+type Tiff = Decoder<Cursor<Bytes>>;
 
 /// The reader of a multi-page TIFF stack (an OME-TIFF's pages over z, channel and time).
 pub(crate) struct TiffStack;
@@ -28,6 +38,10 @@ impl Reader for TiffStack {
 
     fn title(&self) -> &'static str {
         "TIFF"
+    }
+
+    fn reads(&self) -> Option<&'static str> {
+        Some("TIFF stacks")
     }
 
     fn volume_name(&self, name: &str) -> bool {
@@ -53,9 +67,9 @@ impl Reader for TiffStack {
         true
     }
 
-    /// Reads through [`Source::path`]: the `tiff` decoder opens the file itself.
+    /// Reads the source's map (the `tiff` decoder takes any `Read + Seek`).
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
-        load_stack(source.path(), opts)
+        load_stack(source, opts)
     }
 }
 
@@ -71,6 +85,11 @@ impl Reader for TiffSlices {
         "TIFF slices"
     }
 
+    /// Named with the stacks ("TIFF stacks"): a folder of slices is one.
+    fn reads(&self) -> Option<&'static str> {
+        None
+    }
+
     fn slice_name(&self, path: &Path) -> bool {
         is_tiff(path)
     }
@@ -79,21 +98,30 @@ impl Reader for TiffSlices {
         kind == Folder::Slices
     }
 
-    /// Reads through [`Source::path`], the folder's.
+    /// Reads the folder's slices, each from its own [`Source`]'s map (the folder is walked by
+    /// its path: a folder of files has no bytes of its own).
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load_folder(source.path(), opts)
     }
 }
 
-/// Opens a TIFF whose directories [`tiff_ifd::check`] found sound; returns its decoder and
-/// its length in bytes.
-fn open(path: &Path) -> Result<(Tiff, u64)> {
-    tiff_ifd::check(path)?;
-    let file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
-    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    let dec = Decoder::new(BufReader::new(file))
+/// Opens the TIFF `source`, mapped, once [`tiff_ifd::check`] found its directories sound;
+/// returns its decoder and its length in bytes. What is decoded from it is checked against the
+/// file being cut short under the map ([`intact`]).
+fn open(source: &Source) -> Result<(Tiff, u64)> {
+    let path = source.path();
+    let map = source.map()?;
+    tiff_ifd::check(path, map.bytes())?;
+    let len = map.bytes().len() as u64;
+    let dec = Decoder::new(Cursor::new(Bytes(map)))
         .map_err(|e| Error::format(path, format!("not a readable TIFF: {e}")))?;
     Ok((dec, len))
+}
+
+/// Fails, naming the file, when it was cut short under the decoder's map while it was read (a
+/// host that recovers from the fault, as Python does, read zeros in place of the pages gone).
+fn intact(dec: &mut Tiff) -> Result<()> {
+    dec.inner().get_ref().0.check()
 }
 
 /// A page as its directory describes it, read without decoding anything.
@@ -271,8 +299,9 @@ fn spacing(dec: &mut Tiff) -> [f64; 3] {
     [ok(sx), ok(sy), ok(sz)]
 }
 
-fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
-    let (mut dec, len) = open(path)?;
+fn load_stack(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    let path = source.path();
+    let (mut dec, len) = open(source)?;
     let description = dec
         .get_tag_ascii_string(Tag::ImageDescription)
         .unwrap_or_default();
@@ -310,6 +339,7 @@ fn load_stack(path: &Path, opts: &LoadOptions) -> Result<Read0> {
             .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
         dec = decode(path, (dec, len), index, first, &mut buffer, out)?.0;
     }
+    intact(&mut dec)?;
     Read0::new(
         path,
         dims,
@@ -437,22 +467,23 @@ pub(crate) fn slice_files(dir: &Path) -> Result<Vec<PathBuf>> {
 
 fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let files = slice_files(dir)?;
-    let (mut dec, _) = open(&files[0])?;
+    let (mut dec, _) = open(&Source::new(&files[0]))?;
     let spacing = spacing(&mut dec);
     let first = describe(&files[0], &mut dec, 0)?;
     let dims = [first.width as usize, first.height as usize, files.len()];
     check_budget(dir, dims, opts.max_memory)?;
     // Every slice is described and checked before any is decoded.
     for (i, file) in files.iter().enumerate().skip(1) {
-        pages_agree(file, i, first, describe(file, &mut open(file)?.0, 0)?)?;
+        let mut dec = open(&Source::new(file))?.0;
+        pages_agree(file, i, first, describe(file, &mut dec, 0)?)?;
     }
     let mut voxels = voxel_buffer(dir, dims, opts.max_memory)?;
     let mut buffer = DecodingResult::U8(Vec::new());
     for (file, out) in files.iter().zip(voxels.chunks_mut(first.voxels())) {
-        let (mut dec, len) = open(file)?;
+        let (mut dec, len) = open(&Source::new(file))?;
         // The file may have changed since it was described.
         pages_agree(file, 0, first, describe(file, &mut dec, 0)?)?;
-        decode(file, (dec, len), 0, first, &mut buffer, out)?;
+        intact(&mut decode(file, (dec, len), 0, first, &mut buffer, out)?.0)?;
     }
     let name = |p: &PathBuf| crate::error::shown(Path::new(p.file_name().unwrap_or_default()));
     let notes = vec![format!(

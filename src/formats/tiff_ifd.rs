@@ -3,7 +3,7 @@
 //! buffer from a count no file could hold (its 0.11 reader allocates an ASCII value of any count
 //! up to its decoding limit, and prints a debugging line above it).
 
-use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::io::{Cursor, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -32,11 +32,11 @@ fn uint(r: &mut impl Read, n: usize, big: bool) -> std::io::Result<u64> {
     })
 }
 
-/// Checks the directories of the TIFF at `path`; returns how many pages it has.
-pub(crate) fn check(path: &Path) -> Result<usize> {
-    let file = super::open_regular(path).map_err(|e| Error::io(path, e))?;
-    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    let mut r = BufReader::new(file);
+/// Checks the directories of the TIFF whose bytes are `bytes` (named `path` in messages); returns
+/// how many pages it has.
+pub(crate) fn check(path: &Path, bytes: &[u8]) -> Result<usize> {
+    let len = bytes.len() as u64;
+    let mut r = Cursor::new(bytes);
     let bad = |m: String| Error::format(path, format!("not a readable TIFF: {m}"));
     let io = |e: std::io::Error| Error::format(path, format!("not a readable TIFF: {e}"));
     let mut magic = [0u8; 4];

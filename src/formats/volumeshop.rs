@@ -22,6 +22,10 @@ impl Reader for VolumeShop {
         "VolumeShop"
     }
 
+    fn reads(&self) -> Option<&'static str> {
+        Some("VolumeShop .dat")
+    }
+
     #[allow(clippy::case_sensitive_file_extension_comparisons)] // the name is lowercased
     fn claims_name(&self, name: &str) -> bool {
         name.ends_with(".dat")

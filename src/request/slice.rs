@@ -36,8 +36,18 @@ impl SliceRequest {
         }
     }
 
-    /// How many slices `volume` has along `axis`, cut as this request cuts them.
-    pub fn slices(&self, volume: &Volume, axis: [f64; 3]) -> Result<usize> {
+    /// Finds the axis ([`axis`](Self::axis)) and keeps it in the request, so that what follows
+    /// ([`slices`](Self::slices), [`run`](Self::run)) runs no view search again.
+    pub fn find_axis(&mut self, volume: &Volume, monitor: &Monitor) -> Result<[f64; 3]> {
+        let axis = self.axis(volume, monitor)?;
+        self.axis = Some(axis);
+        Ok(axis)
+    }
+
+    /// How many slices `volume` has across [`axis`](Self::axis), cut as this request cuts
+    /// them: what `index` counts.
+    pub fn slices(&self, volume: &Volume, monitor: &Monitor) -> Result<usize> {
+        let axis = self.axis(volume, monitor)?;
         let (_, slices, _, _) =
             crate::partition::slice_geometry(volume, axis, &self.params.stack())?;
         Ok(slices)

@@ -219,7 +219,15 @@ fn the_slice_request_draws_the_slice_numbered_draws() {
     };
     let axis = request.axis(&volume, &Monitor::none()).unwrap();
     assert_eq!(axis, [0.0, 1.0, 0.0]);
-    assert_eq!(request.slices(&volume, axis).unwrap(), 24);
+    assert_eq!(request.slices(&volume, &Monitor::none()).unwrap(), 24);
+    // The axis the view search found is kept: the request then searches no more (a cancelled
+    // monitor stops no search), and draws what numbered draws across it.
+    let mut kept = SliceRequest {
+        params: AnalysisParams::default(),
+        ..request.clone()
+    };
+    let found = kept.find_axis(&volume, &Monitor::none()).unwrap();
+    assert_eq!(kept.axis, Some(found));
     let expected = numbered(
         &volume,
         axis,
@@ -231,6 +239,20 @@ fn the_slice_request_draws_the_slice_numbered_draws() {
     .unwrap();
     let drawn = request.run(&volume, &Monitor::none()).unwrap();
     assert_eq!(drawn.data(), expected.pixmap.data());
+    let cancelled = AtomicBool::new(true);
+    let drawn = kept
+        .run(&volume, &Monitor::new(Some(&cancelled), None))
+        .unwrap();
+    let across = numbered(
+        &volume,
+        found,
+        &kept.params.stack(),
+        Some(3),
+        TransferChoice::default(),
+        &kept.picture,
+    )
+    .unwrap();
+    assert_eq!(drawn.data(), across.pixmap.data());
     let past = SliceRequest {
         index: Some(24),
         ..request

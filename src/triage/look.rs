@@ -6,11 +6,13 @@ use std::sync::{Arc, PoisonError, RwLock};
 use std::time::Duration;
 
 use super::{Entry, TriageRow};
-use crate::analysis::{AnalysisParams, analyze};
-use crate::budget::{Budget, Purpose};
+use crate::analysis::AnalysisParams;
+use crate::budget::Budget;
 use crate::error::Error;
 use crate::formats::{LoadOptions, dicom, load};
 use crate::progress::{Monitor, Progress};
+use crate::request::{Analysed, AnalysisRequest, Level};
+use crate::volume::Volume;
 
 /// The coarse lattice of the fast path: rays and samples this many smallest voxel spacings
 /// apart, an eighth of the samples.
@@ -87,33 +89,17 @@ pub fn look(
     };
     let report = |p: Progress| progress(p.fraction);
     let monitor = Monitor::new(Some(&cancel), Some(&report));
-    // Beyond its share of the budget, a volume is analysed on a pyramid level.
-    let plan = match Budget::new(opts.max_memory).plan(&loaded.volume, Purpose::Picture) {
-        Ok(plan) => plan,
-        Err(e) => return failed(row.with_error(describe(e))),
-    };
-    let (level, budget_note) = (plan.partition, plan.note);
-    let v = level.as_ref();
-    let mut params = how.params.clone();
-    let sampling = &mut params.view.sampling;
-    let unset = sampling.ray_spacing.is_none() && sampling.sample_spacing.is_none();
-    if how.fast && unset && v.dims().iter().all(|&n| n >= COARSE_MIN_DIM) {
-        let coarse = COARSE * crate::geometry::min_spacing(v.spacing());
-        (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
-        params.view.phases = params.view.phases.min(COARSE_PHASES);
-    }
-    let result = analyze(v, &params, &monitor).and_then(|mut analysis| {
-        analysis.notes.splice(0..0, budget_note);
+    let result = analysed(&loaded.volume, how, opts.max_memory, &monitor).and_then(|analysed| {
         let cell = match how.tile {
             Some(tile) => Some(crate::render::sheet::cell(
-                v,
-                &analysis.partition,
+                analysed.level(),
+                &analysed.analysis.partition,
                 tile,
                 &monitor,
             )?),
             None => None,
         };
-        Ok((analysis, cell))
+        Ok((analysed.analysis, cell))
     });
     let _ = done.send(());
     let _ = watchdog.join();
@@ -127,6 +113,42 @@ pub fn look(
             timeout.as_secs_f64()
         ))),
         Err(e) => failed(row.with_error(describe(e))),
+    }
+}
+
+/// The analysis of `volume` as `how` says, by the library's request: beyond its share of the
+/// budget (`max_memory`) on the pyramid level a picture is drawn from ([`Level::Picture`]), with
+/// the fast path's coarse lattice where it applies to that level.
+fn analysed(
+    volume: &Volume,
+    how: &TriagePlan,
+    max_memory: u64,
+    monitor: &Monitor,
+) -> crate::error::Result<Analysed> {
+    let mut request = AnalysisRequest {
+        params: how.params.clone(),
+        level: Level::Picture,
+        budget: Budget::new(max_memory),
+        given: None,
+    };
+    if how.fast {
+        // The level is made once, when first planned: the plan again is a lookup.
+        let level = Arc::clone(&request.plan(volume)?.plan.partition);
+        fast_path(&mut request.params, &level);
+    }
+    request.plan(volume)?.run(monitor)
+}
+
+/// The fast path's parameters for `level`: where they name no spacing and it has
+/// [`COARSE_MIN_DIM`] voxels a side, the view search on a lattice [`COARSE`] times coarser than
+/// its voxels, ranked over at most [`COARSE_PHASES`] phases.
+fn fast_path(params: &mut AnalysisParams, level: &Volume) {
+    let sampling = &mut params.view.sampling;
+    let unset = sampling.ray_spacing.is_none() && sampling.sample_spacing.is_none();
+    if unset && level.dims().iter().all(|&n| n >= COARSE_MIN_DIM) {
+        let coarse = COARSE * crate::geometry::min_spacing(level.spacing());
+        (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
+        params.view.phases = params.view.phases.min(COARSE_PHASES);
     }
 }
 

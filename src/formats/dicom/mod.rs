@@ -20,7 +20,6 @@ mod read;
 mod scan;
 mod voxels;
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use dicom_encoding::TransferSyntaxIndex;
@@ -78,7 +77,7 @@ impl Reader for Dicom {
     }
 
     fn probe(&self, source: &Source) -> bool {
-        is_dicom(source.path())
+        is_dicom_source(source)
     }
 
     fn series_file(&self, path: &Path) -> bool {
@@ -106,7 +105,9 @@ impl Reader for Dicom {
         true
     }
 
-    /// Reads through [`Source::path`]: a series is found among the files of a folder.
+    /// Reads the file, or the series found among the files of a folder (or below it), each file
+    /// read through its own [`Source`]: the folder is walked by its path, a series being many
+    /// files, never one source's bytes.
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source.path(), opts)
     }
@@ -115,18 +116,18 @@ impl Reader for Dicom {
 /// Whether the file at `path` is DICOM, by its content (`DICM` after the preamble or at the
 /// start, or a file meta group), or by a `.dcm` name.
 pub fn is_dicom(path: &Path) -> bool {
-    let named = path.extension().is_some_and(|e| {
+    is_dicom_source(&Source::new(path))
+}
+
+/// Whether the file `source` is DICOM (see [`is_dicom`]).
+fn is_dicom_source(source: &Source) -> bool {
+    let name = source.name();
+    let named = Path::new(&name).extension().is_some_and(|e| {
         ["dcm", "dicom", "ima"]
             .iter()
             .any(|x| e.eq_ignore_ascii_case(x))
     });
-    if named {
-        return true;
-    }
-    let mut head = Vec::with_capacity(132);
-    super::open_regular(path)
-        .and_then(|f| f.take(132).read_to_end(&mut head))
-        .is_ok_and(|_| read::sniff(&head))
+    named || source.head(132).is_ok_and(|head| read::sniff(&head))
 }
 
 /// What a DICOM volume is, beyond its geometry: never a patient-identifying field unless they

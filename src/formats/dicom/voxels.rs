@@ -113,7 +113,7 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
     match &file.pixels {
         Pixels::None => Err(Error::format(path, "no pixel data")),
         Pixels::Native { offset, len } => {
-            let mut f = crate::formats::open_regular(path).map_err(|e| Error::io(path, e))?;
+            let mut f = crate::formats::Source::new(path).open()?;
             let size = f.metadata().map_err(|e| Error::io(path, e))?.len();
             let (mut buf, mut mosaic) = (Vec::new(), MosaicFrame::new(path, budget));
             for (im, plane) in frames {

@@ -46,6 +46,10 @@ impl Reader for Vti {
         "VTK XML image data"
     }
 
+    fn reads(&self) -> Option<&'static str> {
+        Some("VTK XML image data (.vti)")
+    }
+
     fn sniff(&self, head: &[u8]) -> Sniff {
         if starts_vtk_file(head) {
             Sniff::Mine

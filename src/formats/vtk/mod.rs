@@ -38,6 +38,10 @@ impl Reader for Vtk {
         "VTK"
     }
 
+    fn reads(&self) -> Option<&'static str> {
+        Some("legacy VTK image data")
+    }
+
     fn sniff(&self, head: &[u8]) -> Sniff {
         if head.starts_with(b"# vtk DataFile Version") {
             Sniff::Mine

@@ -102,6 +102,10 @@ impl Reader for Zarr {
         "OME-Zarr"
     }
 
+    fn reads(&self) -> Option<&'static str> {
+        Some("OME-Zarr stores")
+    }
+
     fn check_options(&self, path: &Path, is_dir: bool, opts: &LoadOptions) -> Result<()> {
         check_label_image(path, is_dir, opts)
     }
@@ -126,7 +130,9 @@ impl Reader for Zarr {
         Some("ome_zarr")
     }
 
-    /// Reads through [`Source::path`], the store's folder.
+    /// Reads through [`Source::path`], the store's folder or URL: a store is no one stream of
+    /// bytes but a tree of keys (its metadata, one file or answer a chunk), which `zarrs` reads
+    /// by key from a store made of the path (a folder's files) or the URL (ranged requests).
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source.path(), opts)
     }

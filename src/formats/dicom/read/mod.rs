@@ -89,7 +89,7 @@ fn bare(head: &[u8]) -> bool {
 /// Walks the file at `path`, keeping its data set up to the pixel data; with `pixels`, reads
 /// the encapsulated fragments or inflated pixels too. Everything kept is charged to `budget`.
 pub(super) fn read(path: &Path, budget: u64, pixels: bool) -> Result<Part> {
-    let file = crate::formats::open_regular(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::formats::Source::new(path).open()?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     let mut walk = Walk::new(BufReader::new(file), len, budget);
     let fail = |e: Fault| e.into_error(path);
