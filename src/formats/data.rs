@@ -332,10 +332,38 @@ fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, room: Room) -> Result<
     }
     match spec.encoding {
         Encoding::Raw => read_raw::<T>(spec, &reader.into_inner(), (pos, len), expected, out),
-        Encoding::Gzip => read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, out()?),
-        Encoding::Zlib => read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, out()?),
+        Encoding::Gzip => {
+            could_hold(spec, len - pos, expected, room)?;
+            read_stream(spec, MultiGzDecoder::new(reader), "gzip", expected, out()?)
+        }
+        Encoding::Zlib => {
+            could_hold(spec, len - pos, expected, room)?;
+            read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, out()?)
+        }
         Encoding::Ascii => Ok(Voxels::owned(ascii_as::<T>(spec, reader, max_memory)?)),
     }
+}
+
+/// The most bytes deflate (gzip, zlib) decodes one compressed byte into: 258 bytes a match of
+/// at least two bits, and a little more for the stream's own overhead.
+const DEFLATE_MOST: u64 = 1032;
+
+/// Fails when `compressed` bytes of deflate cannot hold the `expected` bytes of voxels: checked
+/// before room on disk is reserved for them (`room.scratch`), so that a header claiming a huge
+/// volume over a small stream reserves nothing. In memory the budget bounds that already.
+fn could_hold(spec: &DataSpec, compressed: u64, expected: u64, room: Room) -> Result<()> {
+    if room.scratch.is_none() || expected <= compressed.saturating_mul(DEFLATE_MOST) {
+        return Ok(());
+    }
+    Err(Error::format(
+        spec.file.path(),
+        format!(
+            "{compressed} bytes of compressed data cannot hold the {expected} bytes of a {} {} \
+             volume",
+            dims_string(spec.dims),
+            spec.voxel_type
+        ),
+    ))
 }
 
 /// The ascii values of `reader` as `T` (f32: `read_voxels` reads ascii data as f32 only).

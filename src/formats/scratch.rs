@@ -8,8 +8,8 @@
 //! then mapped read-only: from there on the volume is a mapped one like any other, so its pyramid
 //! levels, the view search slab by slab and the partition strip by strip read it as they read a
 //! mapped file, with no second decode (docs/design.md, "Volumes of any size"). The file has no
-//! name (it is gone when the process ends, however it ends) and its blocks are reserved on disk
-//! before it is mapped, so a full disk is an error and never a fault. A scratch folder in memory
+//! name where the file system allows (`O_TMPFILE`: gone however the process ends) and its blocks
+//! are reserved on disk before it is mapped, so a full disk is an error before decoding. A scratch folder in memory
 //! (tmpfs) would hold the voxels in memory after all, so it is refused, and so is one without
 //! room for the voxels with a margin to spare.
 
@@ -44,6 +44,7 @@ enum To<T> {
     Scratch {
         map: memmap2::MmapMut,
         path: PathBuf,
+        dir: PathBuf,
         _voxels: std::marker::PhantomData<T>,
     },
 }
@@ -110,6 +111,7 @@ impl<T: Voxel> VoxelOut<T> {
                 to: To::Scratch {
                     map,
                     path: path.to_path_buf(),
+                    dir: dir.to_path_buf(),
                     _voxels: std::marker::PhantomData,
                 },
             }),
@@ -152,11 +154,20 @@ impl<T: Voxel> VoxelOut<T> {
         debug_assert_eq!(self.done, self.count);
         match self.to {
             To::Memory(v) => Ok(Voxels::owned(v)),
-            To::Scratch { map, path, .. } => {
-                let map = map
-                    .make_read_only()
-                    .map_err(|e| Error::format(&path, format!("the scratch file: {e}")))?;
-                Voxels::mapped(mapped::scratch(map, &path), T::TYPE, 0, self.count)
+            To::Scratch { map, path, dir, .. } => {
+                // Written out before it is read back, so that a disk that fails is an error here.
+                let failed = |e: std::io::Error| {
+                    Error::format(
+                        &path,
+                        format!(
+                            "its scratch file in {} could not be written: {e}",
+                            crate::error::shown(&dir)
+                        ),
+                    )
+                };
+                map.flush().map_err(failed)?;
+                let map = map.make_read_only().map_err(failed)?;
+                Voxels::mapped(mapped::scratch(map, &path, &dir), T::TYPE, 0, self.count)
                     .ok_or_else(|| Error::format(&path, "the scratch file is shorter than written"))
             }
         }
@@ -190,14 +201,30 @@ fn scratch_map(dir: &Path, bytes: u64) -> std::result::Result<memmap2::MmapMut, 
         .map_err(|e| format!("the scratch file in {shown} could not be mapped ({e})"))
 }
 
-/// Sets `file`'s length to `bytes` with every block allocated on disk.
+/// Sets `file`'s length to `bytes` with every block allocated on disk: `fallocate(2)` itself,
+/// not glibc's `posix_fallocate`, which on a file system without it writes every block in turn;
+/// such a file system is refused instead.
+#[cfg(target_os = "linux")]
 fn reserve(file: &File, bytes: u64) -> std::io::Result<()> {
     let len = libc::off_t::try_from(bytes).map_err(std::io::Error::other)?;
     // SAFETY: a plain system call on a descriptor `file` keeps open.
-    match unsafe { libc::posix_fallocate(file.as_raw_fd(), 0, len) } {
-        0 => Ok(()),
-        e => Err(std::io::Error::from_raw_os_error(e)),
+    if unsafe { libc::fallocate(file.as_raw_fd(), 0, 0, len) } == 0 {
+        return Ok(());
     }
+    let e = std::io::Error::last_os_error();
+    if e.raw_os_error() == Some(libc::EOPNOTSUPP) {
+        return Err(std::io::Error::other(
+            "its file system cannot reserve room for a file (no fallocate)",
+        ));
+    }
+    Err(e)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn reserve(_file: &File, _bytes: u64) -> std::io::Result<()> {
+    Err(std::io::Error::other(
+        "decoding to disk is built for Linux only",
+    ))
 }
 
 fn mib(bytes: u64) -> String {

@@ -132,22 +132,35 @@ pub(crate) fn map(file: &File, path: &Path) -> std::io::Result<Arc<MappedFile>> 
     Ok(MappedFile::new(map, slot, path, false))
 }
 
-/// The read-only map of an unnamed scratch file the voxels of `path` were decoded into. Not
-/// registered: no other process can reach a file without a name to cut it short.
-pub(crate) fn scratch(map: memmap2::Mmap, path: &Path) -> Arc<MappedFile> {
-    MappedFile::new(map, None, path, true)
+/// The read-only map of an unnamed scratch file in `dir` the voxels of `path` were decoded
+/// into, registered so that a page the disk fails to give back is reported as the other maps'
+/// faults are.
+pub(crate) fn scratch(map: memmap2::Mmap, path: &Path, dir: &Path) -> Arc<MappedFile> {
+    let text = format!(
+        "slabscope: error: {}: its voxels decoded into a scratch file in {} could not be read \
+         back (the disk failed, or the file was cut short)\n",
+        crate::error::shown(path),
+        crate::error::shown(dir)
+    );
+    let slot = register_text(&map, text);
+    MappedFile::new(map, slot, path, true)
 }
 
 /// Registers the range of `map`; the slot taken, if any.
 fn register(map: &memmap2::Mmap, path: &Path) -> Option<usize> {
-    if map.is_empty() {
-        return None;
-    }
     let text = format!(
         "slabscope: error: {}: the file was cut short while slabscope was reading it (it is \
          mapped into memory, and another program truncated it)\n",
         crate::error::shown(path)
     );
+    register_text(map, text)
+}
+
+/// Registers the range of `map` with the line `text` a fault in it prints.
+fn register_text(map: &memmap2::Mmap, text: String) -> Option<usize> {
+    if map.is_empty() {
+        return None;
+    }
     let message: Box<[u8]> = text.into_bytes().into_boxed_slice();
     let message_len = message.len();
     let message = Box::into_raw(message).cast::<u8>();

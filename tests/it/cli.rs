@@ -571,6 +571,47 @@ fn a_mapped_volume_beyond_the_budget_is_analysed_on_the_finest_level_that_fits()
     }
 }
 
+/// A compressed stream too short to hold the volume its header claims is refused before any room
+/// is reserved for it in the scratch folder; a folder that is not one is refused as a flag.
+#[test]
+fn a_scratch_folder_is_not_filled_by_a_header_that_lies() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let nii = dir.path().join("small.nii");
+    let Ran { ok, .. } = run(&["phantom", "body", "--dims", "16x16x16", "-o", s(&nii)]);
+    assert!(ok);
+    let mut bytes = std::fs::read(&nii).unwrap();
+    // dim[1..3] (i16 at bytes 42, 44, 46): 20000³ i16, 16 TB.
+    for at in [42, 44, 46] {
+        bytes[at..at + 2].copy_from_slice(&20000i16.to_le_bytes());
+    }
+    let gz = dir.path().join("liar.nii.gz");
+    let mut encoder = flate2::write::GzEncoder::new(
+        std::fs::File::create(&gz).unwrap(),
+        flate2::Compression::fast(),
+    );
+    encoder.write_all(&bytes).unwrap();
+    encoder.finish().unwrap();
+    let scratch = dir.path().join("scratch");
+    std::fs::create_dir(&scratch).unwrap();
+    let Ran { ok, stderr, .. } = run(&[
+        "info",
+        s(&gz),
+        "--max-memory",
+        "1M",
+        "--scratch",
+        s(&scratch),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("bytes of compressed data cannot hold the 16000000000000 bytes of a 20000x20000x20000 i16 volume"),
+        "{stderr}"
+    );
+    let Ran { ok, stderr, .. } = run(&["info", s(&nii), "--scratch", s(&nii)]);
+    assert!(!ok);
+    assert!(stderr.contains("is not an existing folder"), "{stderr}");
+}
+
 /// `--timeout` stops `analyze` and `render` with an error that says so, and a view search far
 /// heavier than the default's is announced on stderr before it starts (the default is not).
 #[test]

@@ -4,7 +4,7 @@
 //! level's (scale 2^k, a shift of (2^k − 1)/2 voxels) is read as level k, in place of computing
 //! it. Others (another grid, another downsampling factor) are listed by `info` and not used.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::Layout;
 use super::meta::{ArrayMeta, Image};
@@ -22,6 +22,7 @@ pub struct StoreLevels {
     layout: Layout,
     at: [u64; 2],
     max_memory: u64,
+    scratch: Option<PathBuf>,
     /// Pyramid level, dataset path and array metadata, of each dataset on the grid.
     levels: Vec<(usize, String, ArrayMeta)>,
 }
@@ -43,6 +44,7 @@ impl StoreLevels {
             layout: first.layout.clone(),
             at: first.at,
             max_memory: first.max_memory,
+            scratch: first.scratch.map(Path::to_path_buf),
             levels,
         })
     }
@@ -102,7 +104,7 @@ impl LevelSource for StoreLevels {
             layout: &self.layout,
             at: self.at,
             max_memory: self.max_memory,
-            scratch: None, // coarser than level 0, which was read
+            scratch: self.scratch.as_deref(),
         };
         // A level that cannot be read is computed instead unless asked for (`asked_level`).
         Some(dataset.voxels(dims))

@@ -14,7 +14,7 @@ use super::root::Root;
 use crate::error::{Error, Result};
 use crate::formats::data::typed_buffer;
 use crate::formats::scratch::VoxelOut;
-use crate::volume::voxels::{held_type, infinities_missing};
+use crate::volume::voxels::held_type;
 use crate::volume::{Voxel, VoxelType, Voxels};
 
 /// One dataset of an image, and which time point and channel of it to read.
@@ -154,6 +154,11 @@ fn check_reads(
     ))
 }
 
+/// `v`, or NaN (missing) for an infinity.
+fn finite_or_nan(v: f32) -> f32 {
+    if v.is_infinite() { f32::NAN } else { v }
+}
+
 /// How the voxels of one time point and channel are read, chunk by chunk, into the volume.
 struct Reader<'a> {
     path: &'a Path,
@@ -178,19 +183,13 @@ impl Reader<'_> {
             VoxelType::I8 => self.read::<i8, i8>(|v| v)?.finish(),
             VoxelType::U16 => self.read::<u16, u16>(|v| v)?.finish(),
             VoxelType::I16 => self.read::<i16, i16>(|v| v)?.finish(),
-            _ => {
-                let mut values = match stored {
-                    VoxelType::U32 => self.read::<u32, f32>(|v| v as f32)?,
-                    VoxelType::I32 => self.read::<i32, f32>(|v| v as f32)?,
-                    VoxelType::F64 => self.read::<f64, f32>(|v| v as f32)?,
-                    _ => self.read::<f32, f32>(|v| v)?,
-                };
-                values
-                    .all()
-                    .par_chunks_mut(1 << 16)
-                    .for_each(infinities_missing);
-                values.finish()
-            }
+            // Infinities made missing as each value is stored, as every reader stores them.
+            _ => match stored {
+                VoxelType::U32 => self.read::<u32, f32>(|v| v as f32)?.finish(),
+                VoxelType::I32 => self.read::<i32, f32>(|v| v as f32)?.finish(),
+                VoxelType::F64 => self.read::<f64, f32>(|v| finite_or_nan(v as f32))?.finish(),
+                _ => self.read::<f32, f32>(finite_or_nan)?.finish(),
+            },
         }
     }
 
