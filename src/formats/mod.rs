@@ -137,6 +137,9 @@ pub struct LoadOptions {
     pub dicom: DicomOptions,
     /// What of an OME-Zarr store to read.
     pub zarr: ZarrOptions,
+    /// Raised, the load stops between chunks, files or pages with
+    /// [`Error::Cancelled`](crate::Error::Cancelled) (a timeout, Ctrl-C, the user moving on).
+    pub cancel: crate::progress::Cancel,
 }
 
 impl Default for LoadOptions {
@@ -148,6 +151,7 @@ impl Default for LoadOptions {
             raw: RawOptions::default(),
             dicom: DicomOptions::default(),
             zarr: ZarrOptions::default(),
+            cancel: crate::progress::Cancel::never(),
         }
     }
 }
@@ -198,6 +202,7 @@ impl Loaded {
 /// Loads the volume at `path`: a file, or a folder (a stack of TIFF slices, a DICOM series or a
 /// Zarr store).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    opts.cancel.check()?;
     check_input(path)?;
     registry::read(path, opts)
         .and_then(|(format, read)| finish(path, format, read))

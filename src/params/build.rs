@@ -121,6 +121,7 @@ impl Given {
             zarr: ZarrOptions {
                 label_image: self.parsed(&LABEL_IMAGE, text::any)?,
             },
+            cancel: crate::progress::Cancel::never(),
         })
     }
 

@@ -10,6 +10,7 @@ use super::Layout;
 use super::meta::{ArrayMeta, Image};
 use super::read::Dataset;
 use super::root::Root;
+use crate::progress::Cancel;
 use crate::volume::Voxels;
 use crate::volume::pyramid::{LevelSource, coarser_dims, step};
 
@@ -22,6 +23,8 @@ pub struct StoreLevels {
     layout: Layout,
     at: [u64; 2],
     max_memory: u64,
+    /// The load's cancellation, looked at as a level is read.
+    cancel: Cancel,
     /// Pyramid level, dataset path and array metadata, of each dataset on the grid.
     levels: Vec<(usize, String, ArrayMeta)>,
 }
@@ -43,6 +46,7 @@ impl StoreLevels {
             layout: first.layout.clone(),
             at: first.at,
             max_memory: first.max_memory,
+            cancel: first.cancel.clone(),
             levels,
         })
     }
@@ -102,6 +106,7 @@ impl LevelSource for StoreLevels {
             layout: &self.layout,
             at: self.at,
             max_memory: self.max_memory,
+            cancel: &self.cancel,
         };
         // A level that cannot be read is computed instead unless asked for (`asked_level`).
         Some(dataset.voxels(dims))

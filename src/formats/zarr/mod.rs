@@ -427,7 +427,7 @@ impl Opened {
     }
 
     /// Dataset `i`, to read the time point and channel `opts` picks.
-    fn dataset(&self, i: usize, opts: &LoadOptions) -> read::Dataset<'_> {
+    fn dataset<'a>(&'a self, i: usize, opts: &'a LoadOptions) -> read::Dataset<'a> {
         read::Dataset {
             root: &self.root,
             node: &self.node,
@@ -437,6 +437,7 @@ impl Opened {
             layout: &self.layout,
             at: [opts.volume as u64, opts.channel as u64],
             max_memory: opts.max_memory,
+            cancel: &opts.cancel,
         }
     }
 

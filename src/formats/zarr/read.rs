@@ -13,6 +13,7 @@ use super::meta::ArrayMeta;
 use super::root::Root;
 use crate::error::{Error, Result};
 use crate::formats::data::typed_buffer;
+use crate::progress::Cancel;
 use crate::volume::voxels::{held_type, infinities_missing};
 use crate::volume::{Voxel, VoxelType, Voxels};
 
@@ -35,6 +36,8 @@ pub struct Dataset<'a> {
     pub at: [u64; 2],
     /// The memory budget.
     pub max_memory: u64,
+    /// Looked at before each chunk: raised, the read stops.
+    pub cancel: &'a Cancel,
 }
 
 impl Dataset<'_> {
@@ -66,6 +69,7 @@ impl Dataset<'_> {
             chunks: &self.meta.chunks,
             dims,
             max_memory: self.max_memory,
+            cancel: self.cancel,
         }
         .voxels(stored)
     }
@@ -162,6 +166,7 @@ struct Reader<'a> {
     chunks: &'a [u64],
     dims: [usize; 3],
     max_memory: u64,
+    cancel: &'a Cancel,
 }
 
 impl Reader<'_> {
@@ -186,7 +191,8 @@ impl Reader<'_> {
     }
 
     /// Reads elements of type `E` into a volume of `T`, converting each with `to`: slabs of one
-    /// chunk's depth along z in parallel, each chunk of a slab in turn.
+    /// chunk's depth along z in parallel, each chunk of a slab in turn, stopped between chunks
+    /// when the load is cancelled.
     fn read<E: ElementOwned + Copy + Send + Sync, T: Voxel>(
         &self,
         to: fn(E) -> T,
@@ -203,6 +209,7 @@ impl Reader<'_> {
                 let z1 = (z0 + sz).min(nz);
                 for y0 in (0..ny).step_by(sy) {
                     for x0 in (0..nx).step_by(sx) {
+                        self.cancel.check()?;
                         let box3 = [z0..z1, y0..(y0 + sy).min(ny), x0..(x0 + sx).min(nx)];
                         self.chunk(&box3, z0, out, to)?;
                     }
