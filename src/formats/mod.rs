@@ -137,8 +137,8 @@ pub struct LoadOptions {
     pub dicom: DicomOptions,
     /// What of an OME-Zarr store to read.
     pub zarr: ZarrOptions,
-    /// Raised, the load stops between chunks, files or pages with
-    /// [`Error::Cancelled`](crate::Error::Cancelled) (a timeout, Ctrl-C, the user moving on).
+    /// Raised, the load stops between chunks, files or pages with [`Error::Cancelled`] (a
+    /// timeout, Ctrl-C, the user moving on).
     pub cancel: crate::progress::Cancel,
 }
 
