@@ -83,7 +83,7 @@ pub use geometry::lattice::SamplingParams;
 pub use partition::{
     Histories, Method, Partition, PartitionParams, Scope, Stop, label_volume, partition,
 };
-pub use progress::{Monitor, Progress};
+pub use progress::{Cancel, Monitor, Progress};
 pub use render::{Layout, RenderParams, Renderer};
 pub use report::{AnalysisReport, SCHEMA_VERSION, SlabsReport};
 pub use view::{ViewParams, ViewSearch, search};

@@ -1,6 +1,7 @@
 //! Progress reporting and cancellation for long computations, shared by the view search,
 //! partition histories and renders, so the TUI can show a gauge and the user can cancel.
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
@@ -104,6 +105,48 @@ impl<'a> Monitor<'a> {
     }
 }
 
+/// The cancellation flag a load looks at between its units of work (a Zarr chunk, a DICOM
+/// series' file, a TIFF page), carried by [`LoadOptions`](crate::LoadOptions): raised, the load
+/// stops with [`Error::Cancelled`]. A front end raises it at its timeout, on Ctrl-C, or when the
+/// user moves on; by default no flag, and a load runs to its end.
+#[derive(Clone, Debug, Default)]
+pub struct Cancel(Option<Arc<AtomicBool>>);
+
+impl Cancel {
+    /// A load stopped when `flag` is raised.
+    #[must_use]
+    pub fn new(flag: Arc<AtomicBool>) -> Self {
+        Self(Some(flag))
+    }
+
+    /// A load that runs to its end.
+    #[must_use]
+    pub fn never() -> Self {
+        Self(None)
+    }
+
+    /// The flag, for a [`Monitor`] of the same work.
+    #[must_use]
+    pub fn flag(&self) -> Option<&AtomicBool> {
+        self.0.as_deref()
+    }
+
+    /// Whether cancellation was asked for.
+    #[must_use]
+    pub fn is_cancelled(&self) -> bool {
+        self.0.as_ref().is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+
+    /// Fails with [`Error::Cancelled`] when cancellation was asked for.
+    pub fn check(&self) -> Result<()> {
+        if self.is_cancelled() {
+            Err(Error::Cancelled)
+        } else {
+            Ok(())
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use std::sync::Mutex;
@@ -154,5 +197,18 @@ mod tests {
         assert!(m.advance(1).is_ok());
         flag.store(true, Ordering::Relaxed);
         assert!(matches!(m.advance(1), Err(Error::Cancelled)));
+    }
+
+    #[test]
+    fn a_load_is_cancelled_through_its_shared_flag() {
+        assert!(Cancel::never().check().is_ok());
+        assert!(Cancel::default().flag().is_none());
+        let flag = Arc::new(AtomicBool::new(false));
+        let cancel = Cancel::new(Arc::clone(&flag));
+        let copy = cancel.clone();
+        assert!(copy.check().is_ok());
+        flag.store(true, Ordering::Relaxed);
+        assert!(matches!(copy.check(), Err(Error::Cancelled)));
+        assert!(cancel.flag().is_some_and(|f| f.load(Ordering::Relaxed)));
     }
 }

@@ -11,7 +11,7 @@ use std::time::Duration;
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::PyBool;
-use slabscope::{Monitor, Progress};
+use slabscope::{Cancel, Monitor, Progress};
 
 use crate::errors::{repr, to_py};
 
@@ -133,7 +133,26 @@ pub fn long<T: Send>(
     progress: Option<&Bound<'_, PyAny>>,
     work: impl FnOnce(&Monitor) -> slabscope::Result<T> + Send,
 ) -> PyResult<T> {
-    let cancel = AtomicBool::new(false);
+    watched(py, progress, |monitor, _| work(monitor))
+}
+
+/// Runs a load, the GIL released, with the cancellation it takes
+/// ([`LoadOptions::cancel`](slabscope::LoadOptions)): Ctrl-C raises it, and `KeyboardInterrupt`
+/// once the load has stopped between chunks, files or pages.
+pub fn loading<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(Cancel) -> slabscope::Result<T> + Send,
+) -> PyResult<T> {
+    watched(py, None, |_, cancel| work(cancel))
+}
+
+/// [`long`]'s work, handed the monitor and the same flag as a load's cancellation.
+fn watched<T: Send>(
+    py: Python<'_>,
+    progress: Option<&Bound<'_, PyAny>>,
+    work: impl FnOnce(&Monitor, Cancel) -> slabscope::Result<T> + Send,
+) -> PyResult<T> {
+    let cancel = Arc::new(AtomicBool::new(false));
     let latest: Mutex<Option<Progress>> = Mutex::new(None);
     let report = |p: Progress| {
         *latest
@@ -144,7 +163,8 @@ pub fn long<T: Send>(
     let (result, raised) = std::thread::scope(|s| {
         let worker = s.spawn(|| {
             in_pool(pool.as_deref(), || {
-                work(&Monitor::new(Some(&cancel), Some(&report)))
+                let monitor = Monitor::new(Some(cancel.as_ref()), Some(&report));
+                work(&monitor, Cancel::new(Arc::clone(&cancel)))
             })
         });
         let mut raised: Option<PyErr> = None;

@@ -71,7 +71,9 @@ pub fn load_file(
     let (opts, pool) = load_options(&kw)?;
     kw.finish()?;
     let _threads = run::Threads::bound(pool);
-    let loaded = run::quick(py, || slabscope::load(&file, &opts))?;
+    let loaded = run::loading(py, |cancel| {
+        slabscope::load(&file, &slabscope::LoadOptions { cancel, ..opts })
+    })?;
     let kept = match options {
         Some(d) => d.copy()?,
         None => PyDict::new(py),

@@ -69,6 +69,47 @@ def test_ctrl_c_stops_a_long_search_within_a_second(phantoms):
     assert time.perf_counter() - started < 1.5
 
 
+def _crc32c(data: bytes) -> int:
+    table = []
+    for i in range(256):
+        c = i
+        for _ in range(8):
+            c = (c >> 1) ^ 0x82F63B78 if c & 1 else c >> 1
+        table.append(c)
+    c = 0xFFFFFFFF
+    for byte in data:
+        c = table[(c ^ byte) & 0xFF] ^ (c >> 8)
+    return c ^ 0xFFFFFFFF
+
+
+def _one_shard_of_tiny_chunks(path, n=40):
+    """A Zarr v3 array of n³ u8 in one shard of one-voxel inner chunks, none written: n³ reads
+    of the shard's index, a minute's load, under the chunk-flood limit (64,000 for n=40)."""
+    (path / "c" / "0" / "0").mkdir(parents=True)
+    bytes_codec = '{"name": "bytes", "configuration": {"endian": "little"}}'
+    (path / "zarr.json").write_text(
+        '{"zarr_format": 3, "node_type": "array", "shape": [%d, %d, %d], "data_type": "uint8",'
+        ' "fill_value": 0, "chunk_grid": {"name": "regular", "configuration": {"chunk_shape":'
+        ' [%d, %d, %d]}}, "chunk_key_encoding": {"name": "default", "configuration":'
+        ' {"separator": "/"}}, "codecs": [{"name": "sharding_indexed", "configuration":'
+        ' {"chunk_shape": [1, 1, 1], "codecs": [%s], "index_codecs": [%s, {"name": "crc32c"}],'
+        ' "index_location": "end"}}]}' % (n, n, n, n, n, n, bytes_codec, bytes_codec)
+    )
+    index = b"\xff" * (16 * n**3)
+    (path / "c" / "0" / "0" / "0").write_bytes(index + _crc32c(index).to_bytes(4, "little"))
+    return path
+
+
+def test_ctrl_c_stops_a_long_load_within_a_second(tmp_path):
+    store = _one_shard_of_tiny_chunks(tmp_path / "slow.zarr")
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    started = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        slabscope.load(str(store))
+    assert time.perf_counter() - started < 1.5
+
+
 @pytest.mark.parametrize("name", sorted(p.name for p in BAD.iterdir() if p.name != "make_corpus.py"))
 def test_every_hostile_fixture_is_an_exception(name):
     with pytest.raises((slabscope.VolumeError, OSError, ValueError)) as raised:

@@ -27,7 +27,10 @@ impl TourArgs {
 impl LoadArgs {
     /// The library's load options.
     pub fn options(&self) -> slabscope::Result<LoadOptions> {
-        self.given.load()
+        Ok(LoadOptions {
+            cancel: super::progress::load_cancel(),
+            ..self.given.load()?
+        })
     }
 
     /// `--threads`: the most threads the work runs on (`None`: one a core).

@@ -9,11 +9,11 @@
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, LazyLock, Mutex, OnceLock};
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
-use slabscope::{Monitor, Progress};
+use slabscope::{Cancel, Monitor, Progress};
 
 /// What a bar counts: the percent of a phase, or volumes.
 #[derive(Clone, Copy)]
@@ -177,8 +177,8 @@ fn duration(d: Duration, tenths: bool) -> String {
     }
 }
 
-/// Raised at the `--timeout`: every long computation of the command stops.
-static STOP: AtomicBool = AtomicBool::new(false);
+/// Raised at the `--timeout`: every long computation of the command stops, its load included.
+static STOP: LazyLock<Arc<AtomicBool>> = LazyLock::new(|| Arc::new(AtomicBool::new(false)));
 
 /// The `--timeout` in force, seconds.
 static TIMEOUT: OnceLock<f64> = OnceLock::new();
@@ -194,6 +194,11 @@ pub fn stop_after(seconds: f64) {
     }
 }
 
+/// The cancellation a load takes: raised at the `--timeout`, as [`with_bar`]'s monitor is.
+pub fn load_cancel() -> Cancel {
+    Cancel::new(Arc::clone(&STOP))
+}
+
 /// The words for a computation the `--timeout` stopped, when it did.
 pub fn timed_out() -> Option<String> {
     let t = TIMEOUT.get()?;
@@ -206,7 +211,7 @@ pub fn timed_out() -> Option<String> {
 pub fn with_bar<T>(work: impl FnOnce(&Monitor) -> T) -> T {
     let bar = Bar::phases();
     let report = |p: Progress| bar.set(p);
-    work(&Monitor::new(Some(&STOP), Some(&report)))
+    work(&Monitor::new(Some(STOP.as_ref()), Some(&report)))
 }
 
 #[cfg(test)]

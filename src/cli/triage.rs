@@ -57,7 +57,7 @@ pub struct TriageArgs {
     /// Overwrite the sheet if it exists.
     #[arg(long)]
     pub force: bool,
-    /// Stop the analysis of a volume after this many seconds (its row says so).
+    /// Stop the loading and analysis of a volume after this many seconds (its row says so).
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = super::args::within(0.1, 86400.0))]
     pub timeout: f64,
     #[command(flatten)]

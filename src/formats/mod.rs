@@ -142,6 +142,9 @@ pub struct LoadOptions {
     /// or converted voxels; those stored as held are read in place anyway): they are then read
     /// from there as a mapped file. `None`: such voxels beyond the budget are refused.
     pub scratch: Option<PathBuf>,
+    /// Raised, the load stops between chunks, files or pages with [`Error::Cancelled`] (a
+    /// timeout, Ctrl-C, the user moving on).
+    pub cancel: crate::progress::Cancel,
 }
 
 impl LoadOptions {
@@ -164,6 +167,7 @@ impl Default for LoadOptions {
             dicom: DicomOptions::default(),
             zarr: ZarrOptions::default(),
             scratch: None,
+            cancel: crate::progress::Cancel::never(),
         }
     }
 }
@@ -214,6 +218,7 @@ impl Loaded {
 /// Loads the volume at `path`: a file, or a folder (a stack of TIFF slices, a DICOM series or a
 /// Zarr store).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
+    opts.cancel.check()?;
     check_input(path)?;
     registry::read(path, opts)
         .and_then(|(format, read)| finish(path, format, read))

@@ -303,6 +303,35 @@ mod tests {
         }
     }
 
+    /// A load whose cancellation is raised stops in the reader's loop (past [`crate::load`]'s
+    /// own look at it): between a Zarr store's chunks, a DICOM series' files, a TIFF stack's
+    /// pages and a folder's TIFF slices, with [`Error::Cancelled`], not an error of a file.
+    #[test]
+    fn a_cancelled_load_stops_in_every_readers_loop() {
+        let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+        let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+        for (name, format, series) in [
+            ("zarr/v05_tczyx.ome.zarr", Format::OmeZarr, None),
+            ("dicom/ct", Format::Dicom, Some("1")),
+            ("ramp_u16_stack.tif", Format::Tiff, None),
+            ("ramp_slices", Format::TiffFolder, None),
+        ] {
+            let mut uncancelled = LoadOptions::default();
+            uncancelled.dicom.series = series.map(String::from);
+            let opts = LoadOptions {
+                cancel: crate::progress::Cancel::new(std::sync::Arc::clone(&flag)),
+                ..uncancelled.clone()
+            };
+            let path = data.join(name);
+            let read_whole = read(&path, &uncancelled).map(|r| r.0);
+            assert_eq!(read_whole.ok(), Some(format), "{name}");
+            assert!(
+                matches!(read(&path, &opts), Err(Error::Cancelled)),
+                "{name}"
+            );
+        }
+    }
+
     /// Each format is read by one reader, and each reader reads its own format.
     #[test]
     fn one_reader_a_format() {

@@ -319,6 +319,7 @@ fn load_stack(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let plane = |pages: usize| [first.width as usize, first.height as usize, pages];
     check_budget(path, plane(wanted(pages)), opts.max_memory)?;
     while dec.more_images() {
+        opts.cancel.check()?;
         dec.next_image()
             .map_err(|e| Error::format(path, format!("page {pages}: {e}")))?;
         pages_agree(path, pages, first, describe(path, &mut dec, pages)?)?;
@@ -335,6 +336,7 @@ fn load_stack(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let mut voxels = voxel_buffer(path, dims, opts.max_memory)?;
     let mut buffer = DecodingResult::U8(Vec::new());
     for (&index, out) in indices.iter().zip(voxels.chunks_mut(first.voxels())) {
+        opts.cancel.check()?;
         dec.seek_to_image(index)
             .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
         dec = decode(path, (dec, len), index, first, &mut buffer, out)?.0;
@@ -474,12 +476,14 @@ fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     check_budget(dir, dims, opts.max_memory)?;
     // Every slice is described and checked before any is decoded.
     for (i, file) in files.iter().enumerate().skip(1) {
+        opts.cancel.check()?;
         let mut dec = open(&Source::new(file))?.0;
         pages_agree(file, i, first, describe(file, &mut dec, 0)?)?;
     }
     let mut voxels = voxel_buffer(dir, dims, opts.max_memory)?;
     let mut buffer = DecodingResult::U8(Vec::new());
     for (file, out) in files.iter().zip(voxels.chunks_mut(first.voxels())) {
+        opts.cancel.check()?;
         let (mut dec, len) = open(&Source::new(file))?;
         // The file may have changed since it was described.
         pages_agree(file, 0, first, describe(file, &mut dec, 0)?)?;

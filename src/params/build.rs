@@ -124,6 +124,7 @@ impl Given {
             scratch: self
                 .parsed(&SCRATCH, text::any)?
                 .map(std::path::PathBuf::from),
+            cancel: crate::progress::Cancel::never(),
         })
     }
 

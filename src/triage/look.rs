@@ -10,7 +10,7 @@ use crate::analysis::AnalysisParams;
 use crate::budget::Budget;
 use crate::error::Error;
 use crate::formats::{LoadOptions, dicom, load};
-use crate::progress::{Monitor, Progress};
+use crate::progress::{Cancel, Monitor, Progress};
 use crate::request::{Analysed, AnalysisRequest, Level};
 use crate::volume::Volume;
 
@@ -60,35 +60,37 @@ pub fn look(
 ) -> TriageOutcome {
     let failed = |row: TriageRow| TriageOutcome { row, cell: None };
     let timeout = how.timeout;
-    let opts = entry.options(&how.load);
     let name = crate::error::shown(&entry.path);
     if let Some(problem) = &entry.problem {
         let e = Error::format(&entry.path, problem.clone());
         return failed(TriageRow::failed(&name, describe(e)));
     }
+    // The load and the analysis share the time.
+    let watchdog = Watchdog::start(timeout);
+    let cancel = &watchdog.flag;
+    let opts = LoadOptions {
+        cancel: Cancel::new(Arc::clone(cancel)),
+        ..entry.options(&how.load)
+    };
     let loaded = match load_entry(entry, &opts) {
         Ok(l) => l,
         Err(e) => {
-            let mut row = TriageRow::failed(&name, describe(e));
+            let words = match e {
+                Error::Cancelled => format!(
+                    "loading took longer than the {} s timeout",
+                    timeout.as_secs_f64()
+                ),
+                e => describe(e),
+            };
+            let mut row = TriageRow::failed(&name, words);
             row.series.clone_from(&entry.series);
             return failed(row);
         }
     };
     let mut row = TriageRow::loaded(&name, &loaded);
     row.series.clone_from(&entry.series);
-    // A watchdog raises the cancel flag at the timeout, unless told first that the work is done.
-    let cancel = Arc::new(AtomicBool::new(false));
-    let (done, finished) = std::sync::mpsc::channel::<()>();
-    let watchdog = {
-        let cancel = Arc::clone(&cancel);
-        std::thread::spawn(move || {
-            if finished.recv_timeout(timeout).is_err() {
-                cancel.store(true, Ordering::Relaxed);
-            }
-        })
-    };
     let report = |p: Progress| progress(p.fraction);
-    let monitor = Monitor::new(Some(&cancel), Some(&report));
+    let monitor = Monitor::new(Some(cancel.as_ref()), Some(&report));
     let result = analysed(&loaded.volume, how, opts.max_memory, &monitor).and_then(|analysed| {
         let cell = match how.tile {
             Some(tile) => Some(crate::render::sheet::cell(
@@ -101,8 +103,7 @@ pub fn look(
         };
         Ok((analysed.analysis, cell))
     });
-    let _ = done.send(());
-    let _ = watchdog.join();
+    watchdog.stop();
     match result {
         Ok((analysis, cell)) => TriageOutcome {
             row: row.analysed(&analysis),
@@ -149,6 +150,32 @@ fn fast_path(params: &mut AnalysisParams, level: &Volume) {
         let coarse = COARSE * crate::geometry::min_spacing(level.spacing());
         (sampling.ray_spacing, sampling.sample_spacing) = (Some(coarse), Some(coarse));
         params.view.phases = params.view.phases.min(COARSE_PHASES);
+    }
+}
+
+/// Raises its flag at a timeout, unless stopped first (when the work is done).
+struct Watchdog {
+    flag: Arc<AtomicBool>,
+    done: std::sync::mpsc::Sender<()>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Watchdog {
+    fn start(timeout: Duration) -> Self {
+        let flag = Arc::new(AtomicBool::new(false));
+        let (done, finished) = std::sync::mpsc::channel::<()>();
+        let raised = Arc::clone(&flag);
+        let thread = std::thread::spawn(move || {
+            if finished.recv_timeout(timeout).is_err() {
+                raised.store(true, Ordering::Relaxed);
+            }
+        });
+        Self { flag, done, thread }
+    }
+
+    fn stop(self) {
+        let _ = self.done.send(());
+        let _ = self.thread.join();
     }
 }
 

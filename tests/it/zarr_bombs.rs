@@ -255,3 +255,61 @@ fn a_flood_of_tiny_chunks_is_refused_before_any_is_read() {
     .unwrap();
     assert_eq!(v.volume.dims(), [64, 64, 64]);
 }
+
+/// A store of 64,000 chunks of 8³ voxels (under the flood limit, none written): seconds of
+/// opening absent files, long enough for a timeout or a cancellation to fall inside the load.
+fn slow_store(dir: &Path) -> PathBuf {
+    flood(dir, "slow.zarr", 320, 8)
+}
+
+#[test]
+fn a_timeout_stops_a_long_load_naming_the_file() {
+    use crate::common::{run, s};
+    let dir = tempfile::tempdir().unwrap();
+    let store = slow_store(dir.path());
+    let stopped = run(&["analyze", s(&store), "--timeout", "0.2"]);
+    assert!(!stopped.ok);
+    // Stopped in the load (the analysis' stop names no loading), on one line naming the store.
+    let line = format!(
+        "slabscope: error: {}: loading: stopped at the --timeout of 0.2 s\n",
+        store.display()
+    );
+    assert_eq!(stopped.stderr, line);
+    assert!(stopped.stdout.is_empty());
+}
+
+#[test]
+fn a_load_stops_when_its_cancellation_is_raised() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = slow_store(dir.path());
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let opts = LoadOptions {
+        cancel: slabscope::Cancel::new(std::sync::Arc::clone(&flag)),
+        ..LoadOptions::default()
+    };
+    let raise = std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        flag.store(true, std::sync::atomic::Ordering::Relaxed);
+    });
+    let loaded = load(&store, &opts);
+    raise.join().unwrap();
+    assert!(
+        matches!(loaded, Err(slabscope::Error::Cancelled)),
+        "{loaded:?}"
+    );
+}
+
+#[test]
+fn triage_stops_a_long_load_at_its_timeout_in_the_row() {
+    use crate::common::{rows, run, s};
+    let dir = tempfile::tempdir().unwrap();
+    let store = slow_store(dir.path());
+    let ran = run(&["triage", s(&store), "--json", "--timeout", "0.2"]);
+    assert_eq!(ran.code, 1, "{}", ran.stderr);
+    let rows = rows(&ran.stdout);
+    assert_eq!(
+        rows[0]["error"],
+        "loading took longer than the 0.2 s timeout"
+    );
+    assert!(rows[0]["dims"].is_null(), "not loaded");
+}

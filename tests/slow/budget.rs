@@ -43,6 +43,15 @@ fn layered_where_memory_is_read() -> Option<(tempfile::TempDir, std::path::PathB
 /// the peak in bytes. The output goes to a file, not a pipe, which a report larger than the
 /// pipe (a curve of 200,000 slices) would fill while nothing reads it.
 fn peak_of(args: &[&str]) -> (String, u64) {
+    let (out, stdout, peak) = peak_run(args);
+    assert!(out.status.success(), "{out:?}");
+    (stdout, peak)
+}
+
+/// Runs `slabscope args` as [`peak_of`] does, whether it succeeds or fails: its output (its
+/// standard error; its standard output read from the file), its standard output and the peak
+/// of its anonymous memory in bytes.
+pub fn peak_run(args: &[&str]) -> (std::process::Output, String, u64) {
     use std::io::{Read, Seek};
     let mut stdout = tempfile::tempfile().unwrap();
     let mut child = slabscope()
@@ -65,11 +74,10 @@ fn peak_of(args: &[&str]) -> (String, u64) {
         std::thread::sleep(Duration::from_millis(2));
     }
     let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "{out:?}");
     let mut text = String::new();
     stdout.rewind().unwrap();
     stdout.read_to_string(&mut text).unwrap();
-    (text, peak)
+    (out, text, peak)
 }
 
 #[test]

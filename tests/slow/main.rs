@@ -14,6 +14,7 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 #[path = "../common/mod.rs"]
 mod common;
 
+mod bombs;
 mod budget;
 mod cli_progress;
 mod hostile;

@@ -131,6 +131,18 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
             ("vti/ramp_f64_base64.vti", "m.vti"),
         ],
     ),
+    // Issue #47's hostile stores: a codec chain (gzip inside gzip), a shard inside a shard, and
+    // 4096 chunks of 4³ (a header number made extreme makes a flood of them).
+    (
+        "zarr-hostile",
+        &[
+            ("zarr/hostile/gzip_gzip.zarr//zarr.json", "m.zarr"),
+            ("zarr/hostile/gzip_gzip.zarr//c/0/0/0", "m.zarr"),
+            ("zarr/hostile/nested_shard.zarr//zarr.json", "m.zarr"),
+            ("zarr/hostile/nested_shard.zarr//c/0/0/0", "m.zarr"),
+            ("zarr/hostile/small_chunks.zarr//zarr.json", "m.zarr"),
+        ],
+    ),
 ];
 
 /// xorshift64*: the mutants of a seed are the same on every run.

@@ -39,6 +39,8 @@ pub(super) struct Scan {
     pub images_found: usize,
     /// The first file's patient fields, when asked for.
     pub patient: Vec<(String, String)>,
+    /// The load's cancellation, looked at before each file is read (scanned, then decoded).
+    pub cancel: crate::progress::Cancel,
 }
 
 /// A file scanned: what reads its pixels, its images, and its patient fields (when asked for).
@@ -52,6 +54,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
     let results: Vec<Result<Described>> = paths
         .par_iter()
         .map(|path| {
+            opts.cancel.check()?;
             let part = read::read(path, budget, false)?;
             let obj = parse(path, &part.dataset, &part.syntax)?;
             // A file without pixels (a DICOMDIR, a report, a presentation state) has no image.
@@ -96,6 +99,7 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
         skipped: Vec::new(),
         images_found: 0,
         patient: Vec::new(),
+        cancel: opts.cancel.clone(),
     };
     for (r, path) in results.into_iter().zip(paths) {
         match r {
@@ -112,9 +116,13 @@ fn scan(paths: &[PathBuf], opts: &LoadOptions) -> Result<Scan> {
                 }));
                 out.files.push(scanned);
             }
-            // One file alone failing is the error, and so is the budget running out; in a
-            // folder a file that cannot be read is left out and said.
-            Err(e) if paths.len() == 1 || matches!(e, Error::TooLarge { .. }) => return Err(e),
+            // One file alone failing is the error, and so is the budget running out or the load
+            // cancelled; in a folder a file that cannot be read is left out and said.
+            Err(e)
+                if paths.len() == 1 || matches!(e, Error::TooLarge { .. } | Error::Cancelled) =>
+            {
+                return Err(e);
+            }
             Err(e) => out.skipped.push((path.clone(), e)),
         }
     }

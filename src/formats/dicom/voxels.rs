@@ -85,7 +85,8 @@ fn read_slices(
     Ok(planes)
 }
 
-/// Decodes slice `k` of `order` into `planes[k]`, file by file in parallel.
+/// Decodes slice `k` of `order` into `planes[k]`, file by file in parallel, stopped between
+/// files when the load is cancelled.
 fn fill(
     scan: &Scan,
     series: &Series,
@@ -103,7 +104,10 @@ fn fill(
         .into_iter()
         .collect::<Vec<_>>()
         .into_par_iter()
-        .try_for_each(|(file, frames)| read_frames(&scan.files[file], frames, budget))
+        .try_for_each(|(file, frames)| {
+            scan.cancel.check()?;
+            read_frames(&scan.files[file], frames, budget)
+        })
 }
 
 /// Decodes `frames` of one file.

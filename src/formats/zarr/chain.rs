@@ -149,9 +149,22 @@ pub fn weigh(stages: &[Stage], bytes: &[u8], limit: u64, slack: u64) -> Result<(
         return Err(Over::Decodes);
     }
     match failed {
-        Some(e) if e.to_string().contains("too much memory") => Err(Over::Window),
+        Some(e) if is_window_too_large(&e) => Err(Over::Window),
         _ => Ok(()),
     }
+}
+
+/// Whether `e` is zstd's refusal of a frame whose window is past the decoder's limit
+/// (`ZSTD_error_frameParameter_windowTooLarge`): the zstd crate gives a decoder's error code as
+/// an `io::Error` of kind `Other` carrying exactly that code's name, which zstd itself gives
+/// here, so no wording is written into this check.
+fn is_window_too_large(e: &std::io::Error) -> bool {
+    use zstd::zstd_safe::{get_error_name, zstd_sys::ZSTD_ErrorCode};
+    // zstd's error codes are the negated enum values, as size_t.
+    let code = (ZSTD_ErrorCode::ZSTD_error_frameParameter_windowTooLarge as usize).wrapping_neg();
+    e.kind() == std::io::ErrorKind::Other
+        && e.get_ref()
+            .is_some_and(|inner| inner.to_string() == get_error_name(code))
 }
 
 /// `inner`, counted against `bound`, marking `over` past it.
@@ -213,6 +226,31 @@ mod tests {
         header.extend([0u8; 8]);
         let stages = [Stage::Blosc, Stage::Gzip];
         assert_eq!(weigh(&stages, &gzip(&header), 64, 4096), Err(Over::Says));
+    }
+
+    #[test]
+    fn the_window_is_told_by_zstd_s_error_code_not_by_words() {
+        use zstd::zstd_safe::{get_error_name, zstd_sys::ZSTD_ErrorCode};
+        let name = |c: ZSTD_ErrorCode| get_error_name((c as usize).wrapping_neg());
+        let window = name(ZSTD_ErrorCode::ZSTD_error_frameParameter_windowTooLarge);
+        let corrupt = name(ZSTD_ErrorCode::ZSTD_error_corruption_detected);
+        assert!(is_window_too_large(&std::io::Error::other(window)));
+        assert!(!is_window_too_large(&std::io::Error::other(corrupt)));
+        // The same words from elsewhere (a file's error of another kind) are not zstd's.
+        let elsewhere = std::io::Error::new(std::io::ErrorKind::InvalidData, window);
+        assert!(!is_window_too_large(&elsewhere));
+        // A window frame inside gzip is refused as one.
+        let mut e = zstd::stream::write::Encoder::new(Vec::new(), 3).unwrap();
+        e.include_contentsize(false).unwrap();
+        e.window_log(27).unwrap();
+        e.long_distance_matching(true).unwrap();
+        e.write_all(&[5u8; 100]).unwrap();
+        let framed = gzip(&e.finish().unwrap());
+        let stages = [Stage::Same, Stage::Zstd, Stage::Gzip];
+        assert_eq!(
+            weigh(&stages, &framed, 64 << 10, 80 << 10),
+            Err(Over::Window)
+        );
     }
 
     #[test]

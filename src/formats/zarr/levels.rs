@@ -10,6 +10,7 @@ use super::Layout;
 use super::meta::{ArrayMeta, Image};
 use super::read::Dataset;
 use super::root::Root;
+use crate::progress::Cancel;
 use crate::volume::Voxels;
 use crate::volume::pyramid::{LevelSource, coarser_dims, step};
 
@@ -23,6 +24,8 @@ pub struct StoreLevels {
     at: [u64; 2],
     max_memory: u64,
     scratch: Option<PathBuf>,
+    /// The load's cancellation, looked at as a level is read.
+    cancel: Cancel,
     /// Pyramid level, dataset path and array metadata, of each dataset on the grid.
     levels: Vec<(usize, String, ArrayMeta)>,
 }
@@ -45,6 +48,7 @@ impl StoreLevels {
             at: first.at,
             max_memory: first.max_memory,
             scratch: first.scratch.map(Path::to_path_buf),
+            cancel: first.cancel.clone(),
             levels,
         })
     }
@@ -105,6 +109,7 @@ impl LevelSource for StoreLevels {
             at: self.at,
             max_memory: self.max_memory,
             scratch: self.scratch.as_deref(),
+            cancel: &self.cancel,
         };
         // A level that cannot be read is computed instead unless asked for (`asked_level`).
         Some(dataset.voxels(dims))

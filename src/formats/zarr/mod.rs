@@ -444,6 +444,7 @@ impl Opened {
             at: [opts.volume as u64, opts.channel as u64],
             max_memory: opts.max_memory,
             scratch: opts.scratch.as_deref(),
+            cancel: &opts.cancel,
         }
     }
 

@@ -14,6 +14,7 @@ use super::root::Root;
 use crate::error::{Error, Result};
 use crate::formats::data::typed_buffer;
 use crate::formats::scratch::VoxelOut;
+use crate::progress::Cancel;
 use crate::volume::voxels::held_type;
 use crate::volume::{Voxel, VoxelType, Voxels};
 
@@ -38,6 +39,8 @@ pub struct Dataset<'a> {
     pub max_memory: u64,
     /// The folder for voxels beyond the budget (`LoadOptions::scratch`).
     pub scratch: Option<&'a Path>,
+    /// Looked at before each chunk: raised, the read stops.
+    pub cancel: &'a Cancel,
 }
 
 impl Dataset<'_> {
@@ -70,6 +73,7 @@ impl Dataset<'_> {
             dims,
             max_memory: self.max_memory,
             scratch: self.scratch,
+            cancel: self.cancel,
         }
         .voxels(stored)
     }
@@ -173,6 +177,7 @@ struct Reader<'a> {
     dims: [usize; 3],
     max_memory: u64,
     scratch: Option<&'a Path>,
+    cancel: &'a Cancel,
 }
 
 impl Reader<'_> {
@@ -194,7 +199,8 @@ impl Reader<'_> {
     }
 
     /// Reads elements of type `E` into a volume of `T`, converting each with `to`: slabs of one
-    /// chunk's depth along z in parallel, each chunk of a slab in turn.
+    /// chunk's depth along z in parallel, each chunk of a slab in turn, stopped between chunks
+    /// when the load is cancelled.
     fn read<E: ElementOwned + Copy + Send + Sync, T: Voxel>(
         &self,
         to: fn(E) -> T,
@@ -215,6 +221,7 @@ impl Reader<'_> {
                 let z1 = (z0 + sz).min(nz);
                 for y0 in (0..ny).step_by(sy) {
                     for x0 in (0..nx).step_by(sx) {
+                        self.cancel.check()?;
                         let box3 = [z0..z1, y0..(y0 + sy).min(ny), x0..(x0 + sx).min(nx)];
                         self.chunk(&box3, z0, out, to)?;
                     }

@@ -22,15 +22,48 @@ pub fn tree(dir: &Path) -> crate::error::Result<PathBuf> {
 /// The file `path` of the store whose tree is `tree` ([`tree`]), opened as every input is: an
 /// error (of kind `PermissionDenied`, naming nothing of the file) when it, or a folder on its
 /// way, is a symbolic link that leads out of the tree; `NotFound` when there is none.
+///
+/// Nothing outside the tree is opened, and the open handle is checked after: its name's real
+/// place must still lie in the tree and be the very file opened (the same device and inode),
+/// so a link swapped in between the check and the open cannot lead the read out of the tree.
 pub fn open_inside(tree: &Path, path: &Path) -> std::io::Result<std::fs::File> {
-    let real = path.canonicalize()?;
-    if !real.starts_with(tree) {
+    let inside = |p: &Path| {
+        let real = p.canonicalize()?;
+        if real.starts_with(tree) {
+            Ok(real)
+        } else {
+            Err(std::io::Error::new(
+                std::io::ErrorKind::PermissionDenied,
+                "a symbolic link that leads out of the store: slabscope reads only the files \
+                 inside it",
+            ))
+        }
+    };
+    let real = inside(path)?;
+    let file = crate::formats::open_regular(&real)?;
+    let again = inside(&real)?;
+    if !same_file(&file.metadata()?, &std::fs::metadata(&again)?) {
         return Err(std::io::Error::new(
             std::io::ErrorKind::PermissionDenied,
-            "a symbolic link that leads out of the store: slabscope reads only the files inside it",
+            "a file of the store replaced while it was opened: slabscope reads only the files \
+             inside it",
         ));
     }
-    crate::formats::open_regular(&real)
+    Ok(file)
+}
+
+/// Whether two files' metadata are of one file (the same device and inode).
+#[cfg(unix)]
+fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    (a.dev(), a.ino()) == (b.dev(), b.ino())
+}
+
+/// Whether two files' metadata are of one file: where there are no inodes to compare, their
+/// sizes and times.
+#[cfg(not(unix))]
+fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
+    a.len() == b.len() && a.modified().ok() == b.modified().ok()
 }
 
 /// A read-only Zarr store over the folder `root`, whose files all lie in the store's tree.
@@ -161,6 +194,30 @@ fn read_range(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The handle is compared with the name's file by device and inode: a hard link is the file,
+    /// another file of the same bytes is not; a link out of the tree is refused before opening.
+    #[cfg(unix)]
+    #[test]
+    fn the_open_handle_is_the_file_named_inside_the_tree() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = dir.path().join("s.zarr");
+        std::fs::create_dir(&store).unwrap();
+        let (a, b) = (store.join("a"), store.join("b"));
+        std::fs::write(&a, b"same").unwrap();
+        std::fs::write(&b, b"same").unwrap();
+        std::fs::hard_link(&a, store.join("a2")).unwrap();
+        let meta = |p: &Path| std::fs::metadata(p).unwrap();
+        assert!(same_file(&meta(&a), &meta(&store.join("a2"))));
+        assert!(!same_file(&meta(&a), &meta(&b)));
+        let tree = tree(&store).unwrap();
+        let opened = open_inside(&tree, &a).unwrap();
+        assert!(same_file(&opened.metadata().unwrap(), &meta(&a)));
+        std::fs::write(dir.path().join("secret"), b"x").unwrap();
+        std::os::unix::fs::symlink(dir.path().join("secret"), store.join("out")).unwrap();
+        let e = open_inside(&tree, &store.join("out")).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::PermissionDenied);
+    }
 
     #[test]
     fn keys_stay_in_the_folder_and_files_within_the_limit() {

@@ -30,6 +30,9 @@ pub const THUMBNAIL_TILE: u32 = 32;
 pub struct Jobs {
     events: Sender<Event>,
     cancel: Arc<AtomicBool>,
+    /// The load's own cancellation: raised when another volume is opened and at quitting, not
+    /// by Escape (which stops the work on a volume, not its reading).
+    load_cancel: Arc<AtomicBool>,
     renders: Option<Sender<PictureJob>>,
     render_cancel: Arc<AtomicBool>,
     caps: Caps,
@@ -55,6 +58,7 @@ impl Jobs {
         Self {
             events,
             cancel: Arc::new(AtomicBool::new(false)),
+            load_cancel: Arc::new(AtomicBool::new(false)),
             renders: None,
             render_cancel: Arc::new(AtomicBool::new(false)),
             caps,
@@ -94,7 +98,8 @@ impl Jobs {
     pub fn run(&mut self, effect: Effect) {
         match effect {
             Effect::Load => {
-                let (source, load) = (self.source.clone(), self.load.clone());
+                let (source, mut load) = (self.source.clone(), self.load.clone());
+                load.cancel = slabscope::Cancel::new(Arc::clone(&self.load_cancel));
                 self.spawn(Job::Load, move |_, send| {
                     load_volume(source.as_ref(), &load, send)
                 });
@@ -167,7 +172,7 @@ impl Jobs {
                     });
                 }
             }
-            Effect::Quit => {}
+            Effect::Quit => self.load_cancel.store(true, Ordering::Relaxed),
         }
     }
 
@@ -179,9 +184,11 @@ impl Jobs {
             .send(Event::Job(JobMsg::Manifest(path, written)));
     }
 
-    /// The next volume: its own load, views, histories and renders; what the jobs of the last
-    /// one still send is dropped.
+    /// The next volume: its own load, views, histories and renders; the last one's load stops,
+    /// and what the jobs of the last one still send is dropped.
     fn open_next(&mut self, path: slabscope::triage::Entry) {
+        self.load_cancel.store(true, Ordering::Relaxed);
+        self.load_cancel = Arc::new(AtomicBool::new(false));
         self.epoch += 1;
         self.source = Some(path);
         self.open = Open::default();
@@ -419,6 +426,33 @@ mod tests {
         // The folder's triage rows are for every volume: never dropped.
         let row = slabscope::triage::TriageRow::failed("a", "b".into());
         assert!(jobs.admit(JobMsg::Triaged(0, Box::new(row))).is_some());
+    }
+
+    /// Opening another volume stops the load under way (a Zarr store of 64,000 absent chunks:
+    /// seconds of reading), which ends cancelled rather than reading on.
+    #[test]
+    fn opening_another_volume_stops_the_load_under_way() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = dir.path().join("slow.zarr");
+        std::fs::create_dir(&store).unwrap();
+        let meta = r#"{"zarr_format": 3, "node_type": "array", "shape": [320, 320, 320],
+            "data_type": "uint8", "fill_value": 0,
+            "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [8, 8, 8]}},
+            "chunk_key_encoding": {"name": "default", "configuration": {"separator": "/"}},
+            "codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]}"#;
+        std::fs::write(store.join("zarr.json"), meta).unwrap();
+        let (tx, rx) = channel();
+        let entry = slabscope::triage::Entry::file(&store);
+        let mut jobs = Jobs::new(tx, Caps::blocks(), Some(entry), LoadOptions::default());
+        jobs.run(Effect::Load);
+        jobs.run(Effect::Open(slabscope::triage::Entry::file("next.nii")));
+        match rx.recv().unwrap() {
+            Event::Job(JobMsg::Epoch(0, msg)) => match *msg {
+                JobMsg::Loaded(Err(e)) => assert_eq!(e, slabscope::Error::Cancelled.to_string()),
+                _ => panic!("not the load's end"),
+            },
+            _ => panic!("not the first volume's message"),
+        }
     }
 
     #[test]

@@ -1,0 +1,196 @@
+//! Issue #47, the budget on hostile stores, measured: Zarr chunks that decode to a gibibyte
+//! (gzip inside gzip, zstd inside gzip, a second zstd frame after a small first one), a shard
+//! inside a shard, a pyramid level whose chunks are bombs asked for with `--resolution 1`, and
+//! `triage` reading two bombs at once, each refused under `--max-memory 256M` with the peak
+//! anonymous memory of the process at most the budget and 64 MiB.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::budget::peak_run;
+use crate::common::s;
+
+/// What each bomb decodes to: four times the budget.
+const BOMB: usize = 1 << 30;
+
+/// The budget the commands run under, and what they may take beyond it.
+const BUDGET: u64 = 256 << 20;
+const SLACK: u64 = 64 << 20;
+
+/// `BOMB` zeros written into `w` a mebibyte at a time (never held whole).
+fn zeros(mut w: impl Write) {
+    let block = vec![0u8; 1 << 20];
+    for _ in 0..BOMB >> 20 {
+        w.write_all(&block).unwrap();
+    }
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+fn gzip_of_zeros() -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    zeros(&mut e);
+    e.finish().unwrap()
+}
+
+fn zstd_of_zeros() -> Vec<u8> {
+    let mut e = zstd::stream::Encoder::new(Vec::new(), 1).unwrap();
+    zeros(&mut e);
+    e.finish().unwrap()
+}
+
+fn codec(name: &str) -> String {
+    match name {
+        "bytes" => r#"{"name": "bytes", "configuration": {"endian": "little"}}"#.into(),
+        "gzip" => r#"{"name": "gzip", "configuration": {"level": 5}}"#.into(),
+        "zstd" => r#"{"name": "zstd", "configuration": {"level": 3, "checksum": false}}"#.into(),
+        other => other.into(),
+    }
+}
+
+/// A Zarr v3 array `name` in `dir` of 64³ u8 in one chunk of codecs `codecs`, whose chunk
+/// holds `chunk`.
+fn store(dir: &Path, name: &str, codecs: &[&str], chunk: &[u8]) -> PathBuf {
+    let store = dir.join(name);
+    std::fs::create_dir_all(store.join("c/0/0")).unwrap();
+    let codecs: Vec<String> = codecs.iter().map(|c| codec(c)).collect();
+    let meta = format!(
+        r#"{{"zarr_format": 3, "node_type": "array", "shape": [64, 64, 64],
+            "data_type": "uint8", "fill_value": 0,
+            "chunk_grid": {{"name": "regular", "configuration": {{"chunk_shape": [64, 64, 64]}}}},
+            "chunk_key_encoding": {{"name": "default", "configuration": {{"separator": "/"}}}},
+            "codecs": [{}]}}"#,
+        codecs.join(", ")
+    );
+    std::fs::write(store.join("zarr.json"), meta).unwrap();
+    std::fs::write(store.join("c/0/0/0"), chunk).unwrap();
+    store
+}
+
+/// A shard of 2³ inner chunks of 32³ whose first inner chunk is itself a shard of 2³ chunks of
+/// 16³, the first of them a gzip bomb.
+fn nested_shard(dir: &Path, bomb: &[u8]) -> PathBuf {
+    let empty = [u8::MAX; 16];
+    let mut inner = bomb.to_vec();
+    inner.extend(0u64.to_le_bytes());
+    inner.extend((bomb.len() as u64).to_le_bytes());
+    for _ in 1..8 {
+        inner.extend(empty);
+    }
+    let mut shard = inner.clone();
+    shard.extend(0u64.to_le_bytes());
+    shard.extend((inner.len() as u64).to_le_bytes());
+    for _ in 1..8 {
+        shard.extend(empty);
+    }
+    let index = r#""index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]"#;
+    let inner = format!(
+        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [16, 16, 16],
+            "codecs": [{}, {}], {index}}}}}"#,
+        codec("bytes"),
+        codec("gzip")
+    );
+    let outer = format!(
+        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [32, 32, 32],
+            "codecs": [{inner}], {index}}}}}"#
+    );
+    store(dir, "nested.zarr", &[&outer], &shard)
+}
+
+/// Runs `slabscope args`: it fails, naming `named` (on stderr, or in triage's rows), within the
+/// budget; its standard output.
+fn refused_within_budget(args: &[&str], named: &Path) -> String {
+    let (out, stdout, peak) = peak_run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{args:?}: {stdout}");
+    assert!(
+        stderr.contains(s(named)) || stdout.contains(s(named)),
+        "{args:?}: {stderr}{stdout}"
+    );
+    assert!(
+        peak <= BUDGET + SLACK,
+        "{args:?}: peak anonymous memory {} MiB over the budget of 256 MiB and 64 MiB",
+        peak >> 20
+    );
+    stdout
+}
+
+#[test]
+fn bombs_are_refused_within_the_budget() {
+    let _alone = crate::one_at_a_time();
+    if !Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read the anonymous memory from");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let gz = gzip_of_zeros();
+    let zs = zstd_of_zeros();
+    let mut frames = zstd::bulk::compress(&[1u8; 16], 3).unwrap();
+    frames.extend(&zs);
+    let stores = [
+        store(
+            dir.path(),
+            "gzgz.zarr",
+            &["bytes", "gzip", "gzip"],
+            &gzip(&gz),
+        ),
+        store(
+            dir.path(),
+            "zsgz.zarr",
+            &["bytes", "zstd", "gzip"],
+            &gzip(&zs),
+        ),
+        store(dir.path(), "frames.zarr", &["bytes", "zstd"], &frames),
+        nested_shard(dir.path(), &gz),
+    ];
+    for store in &stores {
+        refused_within_budget(&["analyze", s(store), "--max-memory", "256M"], store);
+    }
+    // Two bombs at once: each row refused, the two loads within one budget.
+    let rows = refused_within_budget(
+        &[
+            "triage",
+            s(&stores[0]),
+            s(&stores[1]),
+            "--json",
+            "--max-memory",
+            "256M",
+        ],
+        &stores[0],
+    );
+    let rows = crate::common::rows(&rows);
+    assert_eq!(rows.len(), 2);
+    assert!(rows.iter().all(|r| r["error"].is_string()), "{rows:?}");
+}
+
+#[test]
+fn a_pyramid_level_of_bombs_asked_for_is_refused_within_the_budget() {
+    let _alone = crate::one_at_a_time();
+    if !Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read the anonymous memory from");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("v04_blosc.ome.zarr");
+    crate::common::copy_tree(&crate::common::data("zarr/v04_blosc.ome.zarr"), &store);
+    // Level 1's first chunk: a Blosc header that states a gibibyte.
+    let mut header = vec![2u8, 1, 1, 2];
+    header.extend((BOMB as u32).to_le_bytes());
+    header.extend([0u8; 8]);
+    std::fs::write(store.join("s1/0/0/0"), header).unwrap();
+    refused_within_budget(
+        &[
+            "analyze",
+            s(&store),
+            "--resolution",
+            "1",
+            "--max-memory",
+            "256M",
+        ],
+        &store,
+    );
+}
