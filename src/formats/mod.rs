@@ -6,6 +6,7 @@
 mod data;
 mod details;
 pub mod dicom;
+mod hdf5;
 mod limits;
 mod metaimage;
 mod mrc;
@@ -77,6 +78,8 @@ pub enum Format {
     Vtk,
     /// VTK XML image data (`.vti`).
     Vti,
+    /// An HDF5 file's dataset (`.h5`, `.hdf5`, `.nxs`, `.ims`).
+    Hdf5,
     /// Made in memory (a phantom or the built-in dataset).
     Synthetic,
 }
@@ -98,6 +101,7 @@ impl Format {
             Self::Mrc => "mrc",
             Self::Vtk => "vtk",
             Self::Vti => "vti",
+            Self::Hdf5 => "hdf5",
             Self::Synthetic => "synthetic",
         }
     }
@@ -137,6 +141,10 @@ pub struct LoadOptions {
     pub dicom: DicomOptions,
     /// What of an OME-Zarr store to read.
     pub zarr: ZarrOptions,
+    /// Which array of a file holding several to read: a `.vti` file's array by its name, an
+    /// HDF5 file's dataset by its path (`None`: the active scalars, the only 3-D dataset, or
+    /// DXchange's `/exchange/data`).
+    pub array: Option<String>,
 }
 
 impl Default for LoadOptions {
@@ -148,6 +156,7 @@ impl Default for LoadOptions {
             raw: RawOptions::default(),
             dicom: DicomOptions::default(),
             zarr: ZarrOptions::default(),
+            array: None,
         }
     }
 }

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source, data};
-use super::{dicom, metaimage, mrc, nifti, nrrd, raw, tiff, volumeshop, vti, vtk, zarr};
+use super::{dicom, hdf5, metaimage, mrc, nifti, nrrd, raw, tiff, volumeshop, vti, vtk, zarr};
 use crate::error::{Error, Result};
 
 /// Every reader, in the order they are asked: the order of the content sniff (DICOM's preamble
@@ -23,6 +23,7 @@ static READERS: &[&dyn Reader] = &[
     &mrc::Mrc,
     &vtk::Vtk,
     &vti::Vti,
+    &hdf5::Hdf5,
     &volumeshop::VolumeShop,
     &raw::Raw,
     &tiff::TiffSlices,
@@ -32,6 +33,7 @@ static READERS: &[&dyn Reader] = &[
 /// What every message refusing a file says slabscope reads.
 const READS: &str = "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, \
                      DICOM, OME-Zarr stores, MRC, legacy VTK image data, VTK XML image data (.vti), \
+                     HDF5 datasets, \
                      and headerless raw data given its dimensions and voxel type";
 
 /// Reads the file or folder at `path` (checked to be one), with the format it was read as.

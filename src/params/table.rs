@@ -487,6 +487,20 @@ pub const CHANNEL: Param = named(
     "Which channel of a multichannel file (OME-TIFF, OME-Zarr), from 0",
     count(0, u32::MAX as u64, Some(0)),
 );
+pub const ARRAY: Param = named(
+    "array",
+    "array",
+    "NAME",
+    "Which array of a file holding several: a VTK XML image data array by its name, an HDF5 \
+     dataset by its path (default: the active scalars; DXchange's /exchange/data, else the only \
+     dataset of three or four dimensions)",
+    Takes::Text {
+        valid: |_| true,
+        expected: "an array's name or a dataset's path",
+        default: None,
+        hyphens: false,
+    },
+);
 pub const SERIES: Param = named(
     "series",
     "series",
@@ -544,6 +558,7 @@ pub const LOAD: &[&Param] = &[
     &THREADS,
     &VOLUME,
     &CHANNEL,
+    &ARRAY,
     &SERIES,
     &INCLUDE_LOCALIZERS,
     &RESAMPLE,
