@@ -209,8 +209,28 @@ impl Loaded {
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     check_input(path)?;
     registry::read(path, opts)
-        .and_then(|(format, read)| finish(path, format, read))
+        .and_then(|(format, read)| {
+            check_array(path, format, opts)?;
+            finish(path, format, read)
+        })
         .map_err(|e| e.reached_from(&named(path)))
+}
+
+/// `--array` names an array of a file holding several (VTK XML image data, HDF5): of a file of
+/// another format it is an error saying so, as `--channel` of a file of one channel is.
+fn check_array(path: &Path, format: Format, opts: &LoadOptions) -> Result<()> {
+    match &opts.array {
+        Some(name) if !matches!(format, Format::Vti | Format::Hdf5) => Err(Error::unsupported(
+            path,
+            format!(
+                "--array {:?} names an array of a VTK XML image data or HDF5 file; this {} file \
+                 holds one volume",
+                crate::error::names::text(name),
+                format.name()
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// `path` as errors name it: a URL without what it must not show ([`remote::shown_text`]).

@@ -476,8 +476,8 @@ pub const VOLUME: Param = named(
     "volume",
     "volume",
     "N",
-    "Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM; an OME-TIFF's or OME-Zarr's time \
-     point) to read, from 0",
+    "Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM, HDF5; an OME-TIFF's or OME-Zarr's \
+     time point) to read, from 0",
     count(0, u32::MAX as u64, Some(0)),
 );
 pub const CHANNEL: Param = named(
