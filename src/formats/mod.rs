@@ -143,7 +143,7 @@ pub struct LoadOptions {
     pub zarr: ZarrOptions,
     /// Which array of a file holding several to read: a `.vti` file's array by its name, an
     /// HDF5 file's dataset by its path (`None`: the active scalars, the only 3-D dataset, or
-    /// DXchange's `/exchange/data`).
+    /// `DXchange`'s `/exchange/data`).
     pub array: Option<String>,
 }
 

@@ -1,7 +1,7 @@
 //! HDF5 files written by h5py (`tests/data/hdf5/make_hdf5.py`): contiguous and chunked datasets,
 //! gzip and shuffle, the newest file format, big-endian reals, every voxel read as h5py reads it
 //! (`reference.json` freezes h5py's sums, first and last values); the dataset chosen by
-//! `--array`, by DXchange's path or as the only one; projections, ambiguity and hostile files
+//! `--array`, by `DXchange`'s path or as the only one; projections, ambiguity and hostile files
 //! refused in one line naming the file.
 
 use std::path::Path;

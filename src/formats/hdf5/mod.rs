@@ -1,7 +1,7 @@
-//! HDF5 (`.h5`, `.hdf5`, `.hdf`, `.nxs`, `.ims`): the files of synchrotron micro-CT (DXchange's
-//! `/exchange/data`, NeXus), ilastik, Fiji and Imaris. One dataset of three dimensions (or four,
+//! HDF5 (`.h5`, `.hdf5`, `.hdf`, `.nxs`, `.ims`): the files of synchrotron micro-CT (`DXchange`'s
+//! `/exchange/data`, `NeXus`), ilastik, Fiji and Imaris. One dataset of three dimensions (or four,
 //! a series of volumes, chosen with `--volume`) is read: the one `--array` names by its path, else
-//! DXchange's `/exchange/data`, else the file's only one. It is stored in C order as h5py writes
+//! `DXchange`'s `/exchange/data`, else the file's only one. It is stored in C order as h5py writes
 //! it, the last index fastest, so its indices are z, y, x (t, z, y, x), as OME-Zarr's are.
 //!
 //! The file's structure, its chunk indexes and its filters (deflate, shuffle, Fletcher-32 and

@@ -12,7 +12,7 @@ use crate::formats::details::{Details, json_of};
 /// The most datasets looked at (and listed) in one file.
 const MAX_DATASETS: usize = 4096;
 
-/// What DXchange names a reconstruction (and a beamline's projections).
+/// What `DXchange` names a reconstruction (and a beamline's projections).
 const DXCHANGE: &str = "exchange/data";
 
 /// What lies beside a beamline's projections, and says they are not a reconstruction.
@@ -106,7 +106,7 @@ pub(super) fn list(path: &Path, file: &H5File) -> Result<Vec<Found>> {
     Ok(found)
 }
 
-/// The dataset read: the one `named` (a path, with or without its leading `/`), else DXchange's
+/// The dataset read: the one `named` (a path, with or without its leading `/`), else `DXchange`'s
 /// `/exchange/data`, else the only one of three or four dimensions. A beamline's projections
 /// are refused unless named; a dataset of another rank always.
 pub(super) fn choose<'a>(
