@@ -476,15 +476,15 @@ pub const VOLUME: Param = named(
     "volume",
     "volume",
     "N",
-    "Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM, HDF5; an OME-TIFF's or OME-Zarr's \
-     time point) to read, from 0",
+    "Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM, HDF5; an OME-TIFF's, OME-Zarr's or \
+     Imaris file's time point) to read, from 0",
     count(0, u32::MAX as u64, Some(0)),
 );
 pub const CHANNEL: Param = named(
     "channel",
     "channel",
     "N",
-    "Which channel of a multichannel file (OME-TIFF, OME-Zarr), from 0",
+    "Which channel of a multichannel file (OME-TIFF, OME-Zarr, Imaris), from 0",
     count(0, u32::MAX as u64, Some(0)),
 );
 pub const ARRAY: Param = named(

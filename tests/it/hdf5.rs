@@ -144,7 +144,8 @@ fn h5pys_reading_agrees() {
             checked += 1;
         }
     }
-    assert_eq!(checked, 7);
+    // 7 in the .h5 files, the 8 padded Data of the Imaris file.
+    assert_eq!(checked, 15);
 }
 
 #[test]
@@ -267,4 +268,52 @@ fn a_budget_too_small_is_refused_before_reading() {
     refused(&path, &["--max-memory", "400"], "ramp_u16_contiguous.h5");
     let r = run(&["info", path.to_str().unwrap(), "--max-memory", "480"]);
     assert!(r.ok, "{}", r.stderr);
+}
+
+#[test]
+fn an_imaris_file_is_read_at_its_finest_level_cut_to_its_size() {
+    let path = data("hdf5/imaris.ims");
+    for (t, c) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let opts = LoadOptions {
+            channel: c,
+            ..options(None, t)
+        };
+        // 8x8x8 stored, 6x5x4 the image: ramp + 1000t + 2000c.
+        let add = 1000 * t as i64 + 2000 * c as i64;
+        assert_ramp("imaris.ims", &opts, VoxelType::U16, |v| v + add);
+    }
+    let loaded = load(&path, &options(None, 0)).unwrap();
+    // Extents 9, 10, 10 µm over 6, 5, 4 voxels.
+    for (got, want) in loaded
+        .volume
+        .spacing()
+        .into_iter()
+        .zip([1.5e-3, 2.0e-3, 2.5e-3])
+    {
+        assert!((got - want).abs() < 1e-12, "{:?}", loaded.volume.spacing());
+    }
+    assert!(
+        loaded
+            .notes
+            .iter()
+            .any(|n| n.contains("2 channels: loaded channel 0")),
+        "{:?}",
+        loaded.notes
+    );
+    refused(
+        &path,
+        &["--channel", "2"],
+        "holds 2 channels (numbered from 0), so there is no channel 2",
+    );
+    refused(&path, &["--volume", "2"], "imaris.ims");
+    // A coarser level, named, is read as stored (padding and all).
+    let level1 = "/DataSet/ResolutionLevel 1/TimePoint 0/Channel 0/Data";
+    let loaded = load(&path, &options(Some(level1), 0)).unwrap();
+    assert_eq!(loaded.volume.dims(), [4, 4, 4]);
+    // Another HDF5 file holds one channel.
+    refused(
+        &data("hdf5/ramp_f64_be.h5"),
+        &["--channel", "1"],
+        "holds 1 channel",
+    );
 }

@@ -10,16 +10,17 @@
 //! and its chunks' weighed against the budget before anything is read, datasets whose data is
 //! in other files refused, one line for every error. The voxel size is the `element_size_um`
 //! attribute's (z, y, x in µm, as ilastik and Fiji write it) where there is one; otherwise a
-//! note says 1 mm was used. A beamline's raw file (projections, with `theta`, `data_white` or
+//! note says 1 mm was used. An Imaris file is read as `imaris.rs` says. A beamline's raw file (projections, with `theta`, `data_white` or
 //! `data_dark` beside them) is refused unless `--array` names the dataset.
 
+mod imaris;
 mod pick;
 
 use std::path::Path;
 
 use rust_hdf5::{ByteOrder, DatatypeMessage, FileLocking, H5Dataset, H5File, StorageLayout};
 
-use super::data::{DataSpec, Encoding, Skip, pick_volume, read_voxels_from};
+use super::data::{DataSpec, Encoding, Skip, one_channel, pick_volume, read_voxels_from};
 use super::reader::{Reader, Sniff};
 use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
@@ -56,6 +57,11 @@ impl Reader for Hdf5 {
     }
 
     fn volumes(&self) -> bool {
+        true
+    }
+
+    /// An Imaris file's channels.
+    fn channels(&self) -> bool {
         true
     }
 
@@ -129,7 +135,18 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         .map_err(|e| Error::format(path, format!("not a readable HDF5 file: {}", message(&e))))?;
     let listing = pick::list(path, &file)?;
     let mut notes = Vec::new();
-    let chosen = pick::choose(path, &listing, opts.array.as_deref(), &mut notes)?;
+    let imaris = match opts.array {
+        None => imaris::pick(path, &file, &listing, opts, &mut notes)?,
+        Some(_) => None,
+    };
+    let chosen = match &imaris {
+        Some(i) => listing
+            .iter()
+            .find(|f| f.path == i.path)
+            .ok_or_else(|| Error::format(path, format!("holds no dataset /{}", i.path)))?,
+        None if opts.channel > 0 => return Err(one_channel(path, 1, opts.channel)),
+        None => pick::choose(path, &listing, opts.array.as_deref(), &mut notes)?,
+    };
     let name = chosen.shown();
     let ds = file
         .dataset(&chosen.path)
@@ -142,12 +159,66 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     check_storage(path, &name, &ds, ty.size() as u64, opts.max_memory)?;
     let shape = &chosen.shape;
     let rank = shape.len();
-    let dims = [shape[rank - 1], shape[rank - 2], shape[rank - 3]];
+    let mut dims = [shape[rank - 1], shape[rank - 2], shape[rank - 3]];
     let count = if rank == 4 { shape[0] } else { 1 };
-    let (volume, _) = pick_volume(path, count, opts.volume, &mut notes)?;
+    let volume = match imaris {
+        Some(_) if rank == 4 => return Err(pick::rank_error(path, chosen)),
+        Some(_) => 0,
+        None => pick_volume(path, count, opts.volume, &mut notes)?.0,
+    };
     check_budget(path, &name, shape, ty, opts.max_memory)?;
-    let mut bytes = ds.read_raw_bytes().map_err(|e| bad(path, &name, &e))?;
-    let size = ty.size();
+    let mut bytes = read_volume(path, &name, &ds, dims, ty.size(), (volume, count))?;
+    if let Some(size) = imaris.as_ref().and_then(|i| i.size) {
+        if (0..3).any(|m| size[m] > dims[m]) {
+            return Err(Error::format(
+                path,
+                format!("Imaris says the image is {size:?} voxels, more than dataset {name} holds"),
+            ));
+        }
+        imaris::crop(&mut bytes, dims, size, ty.size());
+        dims = size;
+    }
+    let spec = DataSpec {
+        file: source.clone(),
+        start: 0,
+        skip_lines: 0,
+        skip: Skip::Bytes(0),
+        encoding: Encoding::Raw,
+        dims,
+        voxel_type: ty,
+        endian,
+        scale: None,
+        volumes: (0, 1),
+        trailing: false,
+    };
+    let mut stream = bytes.as_slice();
+    let voxels = read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.max_memory)?;
+    drop(bytes);
+    let given = imaris
+        .and_then(|i| i.spacing)
+        .or_else(|| pick::spacing(&ds));
+    let spacing = given.unwrap_or_else(|| {
+        notes.push(format!(
+            "dataset {name} gives no voxel size (no element_size_um attribute): using 1 mm"
+        ));
+        [1.0; 3]
+    });
+    let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?;
+    read.details = Some(std::sync::Arc::new(pick::details(&listing, &chosen.path)));
+    Ok(read)
+}
+
+/// The stored bytes of volume `volume.0` of the `volume.1` the dataset `ds` holds, each of
+/// `dims` voxels of `size` bytes; the dataset is read whole.
+fn read_volume(
+    path: &Path,
+    name: &str,
+    ds: &H5Dataset,
+    dims: [usize; 3],
+    size: usize,
+    (volume, count): (usize, usize),
+) -> Result<Vec<u8>> {
+    let mut bytes = ds.read_raw_bytes().map_err(|e| bad(path, name, &e))?;
     let one = dims.iter().product::<usize>() * size;
     if bytes.len() != one * count {
         return Err(Error::format(
@@ -163,35 +234,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         bytes.drain(..one * volume);
     }
     bytes.truncate(one);
-    let spec = DataSpec {
-        file: source.clone(),
-        start: 0,
-        skip_lines: 0,
-        skip: Skip::Bytes(0),
-        encoding: Encoding::Raw,
-        dims,
-        voxel_type: ty,
-        endian,
-        scale: None,
-        volumes: (0, 1),
-        trailing: false,
-    };
-    let voxels = read_voxels_from(
-        &spec,
-        &mut bytes.as_slice(),
-        "HDF5 dataset",
-        opts.max_memory,
-    )?;
-    drop(bytes);
-    let spacing = pick::spacing(&ds).unwrap_or_else(|| {
-        notes.push(format!(
-            "dataset {name} gives no voxel size (no element_size_um attribute): using 1 mm"
-        ));
-        [1.0; 3]
-    });
-    let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?;
-    read.details = Some(std::sync::Arc::new(pick::details(&listing, &chosen.path)));
-    Ok(read)
+    Ok(bytes)
 }
 
 /// The error of `rust-hdf5` reading the dataset `name`, in one line.

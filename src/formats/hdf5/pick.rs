@@ -163,16 +163,7 @@ pub(super) fn choose<'a>(
         }
     };
     if !matches!(chosen.shape.len(), 3 | 4) {
-        return Err(Error::format(
-            path,
-            format!(
-                "dataset {} has {} dimensions ({}): slabscope reads datasets of three (z, y, x) \
-                 or four (t, z, y, x)",
-                chosen.shown(),
-                chosen.shape.len(),
-                chosen.ty
-            ),
-        ));
+        return Err(rank_error(path, chosen));
     }
     if found.len() > 1 {
         notes.push(format!(
@@ -182,6 +173,20 @@ pub(super) fn choose<'a>(
         ));
     }
     Ok(chosen)
+}
+
+/// The error for a dataset of another rank than three or four (or four where three are asked).
+pub(super) fn rank_error(path: &Path, chosen: &Found) -> Error {
+    Error::format(
+        path,
+        format!(
+            "dataset {} has {} dimensions ({}): slabscope reads datasets of three (z, y, x) or \
+             four (t, z, y, x)",
+            chosen.shown(),
+            chosen.shape.len(),
+            chosen.ty
+        ),
+    )
 }
 
 /// Refuses `dx` when a beamline's raw data lies beside it: it is projections.

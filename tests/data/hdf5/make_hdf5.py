@@ -64,8 +64,39 @@ with new("projections.h5") as f:
     f.create_dataset("exchange/data_dark", data=np.zeros((2, NY, NX), np.uint16))
     f.create_dataset("exchange/theta", data=np.linspace(0, 180, NZ))
 
+
+
+def imaris_text(value):
+    """Imaris's attributes: text as an array of one-byte strings."""
+    return np.array(list(str(value)), dtype="S1")
+
+
+# Imaris 5.5 (.ims): two resolution levels, two time points, two channels; each Data padded to
+# whole chunks (here 8x8x8 for level 0, 4x4x4 for level 1) beyond ImageSizeX/Y/Z; channel c at
+# time t holds the ramp + 1000*t + 2000*c (u16); the extents 0..9, 0..10, 0..10 µm make voxels
+# of 1.5, 2.0 and 2.5 µm.
+with new("imaris.ims") as f:
+    info = f.create_group("DataSetInfo/Image")
+    for key, value in [("X", NX), ("Y", NY), ("Z", NZ), ("Unit", "um"), ("ExtMin0", 0),
+                       ("ExtMin1", 0), ("ExtMin2", 0), ("ExtMax0", 1.5 * NX),
+                       ("ExtMax1", 2.0 * NY), ("ExtMax2", 2.5 * NZ)]:
+        info.attrs[key] = imaris_text(value)
+    for t in range(2):
+        for c in range(2):
+            for level, (pad, size) in enumerate([((8, 8, 8), (NZ, NY, NX)), ((4, 4, 4), (2, 3, 3))]):
+                g = f.create_group(f"DataSet/ResolutionLevel {level}/TimePoint {t}/Channel {c}")
+                data = np.zeros(pad, np.uint16)
+                if level == 0:
+                    data[:NZ, :NY, :NX] = ramp(np.uint16) + 1000 * t + 2000 * c
+                else:
+                    data[:2, :3, :3] = 7
+                g.create_dataset("Data", data=data, chunks=pad, compression="gzip")
+                g.create_dataset("Histogram", data=np.zeros(256, np.uint64))
+                for axis, n in zip("ZYX", size):
+                    g.attrs[f"ImageSize{axis}"] = imaris_text(n)
+
 reference = {}
-for path in sorted(HERE.glob("*.h5")):
+for path in sorted([*HERE.glob("*.h5"), *HERE.glob("*.ims")]):
     entries = {}
 
     def visit(name, obj, entries=entries):
