@@ -317,3 +317,36 @@ fn an_imaris_file_is_read_at_its_finest_level_cut_to_its_size() {
         "holds 1 channel",
     );
 }
+
+#[test]
+fn an_imaris_files_coarser_level_is_the_first_picture() {
+    use slabscope::formats::load_preview;
+    let path = data("hdf5/imaris.ims");
+    // 6x5x4 = 120 voxels at level 0; level 1, 3x3x2, is the pyramid's level 1.
+    let preview = load_preview(&path, &options(None, 0), 20).unwrap().unwrap();
+    assert_eq!(preview.format, Format::Hdf5);
+    assert_eq!(preview.volume.dims(), [3, 3, 2]);
+    assert_eq!(preview.volume.level().index, 1);
+    assert!(preview.volume.data().to_f32_vec().iter().all(|&v| v == 7.0));
+    // Its voxels are twice level 0's along x and z; y's 5 voxels halve to 3.
+    for (got, want) in preview
+        .volume
+        .spacing()
+        .into_iter()
+        .zip([3.0e-3, 10.0e-3 / 3.0, 5.0e-3])
+    {
+        assert!((got - want).abs() < 1e-12, "{:?}", preview.volume.spacing());
+    }
+    // Level 0 small enough: no preview; nor of a file that is not Imaris's.
+    assert!(
+        load_preview(&path, &options(None, 0), 120)
+            .unwrap()
+            .is_none()
+    );
+    let plain = data("hdf5/ramp_f32_gzip_shuffle.h5");
+    assert!(
+        load_preview(&plain, &options(None, 0), 20)
+            .unwrap()
+            .is_none()
+    );
+}

@@ -72,6 +72,34 @@ impl Reader for Hdf5 {
     fn read(&self, source: &Source, opts: &LoadOptions) -> Result<Read0> {
         load(source, opts)
     }
+
+    /// An Imaris file's coarser resolution level on the pyramid's grid.
+    fn preview(
+        &self,
+        source: &Source,
+        opts: &LoadOptions,
+        max_voxels: usize,
+    ) -> Result<Option<Read0>> {
+        let path = source.path();
+        let named = source.name().to_ascii_lowercase();
+        #[allow(clippy::case_sensitive_file_extension_comparisons)] // lowercased
+        let ims = named.ends_with(".ims");
+        if !ims || opts.array.is_some() || !path.is_file() {
+            return Ok(None);
+        }
+        if self.sniff(&source.head(4096)?) != Sniff::Mine {
+            return Ok(None);
+        }
+        let (file, listing) = open(path)?;
+        let Some((level, k, dims0)) =
+            imaris::preview_level(path, &file, &listing, opts, max_voxels)?
+        else {
+            return Ok(None);
+        };
+        let mut read = load_level(source, opts, level)?;
+        read.volume = read.volume.into_pyramid_level(k, dims0);
+        Ok(Some(read))
+    }
 }
 
 /// The first line of an error of `rust-hdf5`, at most 200 characters.
@@ -127,16 +155,28 @@ fn voxel_type(path: &Path, name: &str, dt: &DatatypeMessage) -> Result<(VoxelTyp
     })
 }
 
-fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
-    let path = source.path();
+/// Opens the HDF5 file `path` for reading, and lists its datasets.
+fn open(path: &Path) -> Result<(H5File, Vec<pick::Found>)> {
     let file = H5File::options()
         .locking(FileLocking::Disabled)
         .open(path)
         .map_err(|e| Error::format(path, format!("not a readable HDF5 file: {}", message(&e))))?;
     let listing = pick::list(path, &file)?;
+    Ok((file, listing))
+}
+
+fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
+    load_level(source, opts, 0)
+}
+
+/// Reads the volume `opts` pick of `source`, at resolution level `level` of an Imaris file
+/// (level 0 of any other).
+fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0> {
+    let path = source.path();
+    let (file, listing) = open(path)?;
     let mut notes = Vec::new();
     let imaris = match opts.array {
-        None => imaris::pick(path, &file, &listing, opts, &mut notes)?,
+        None => imaris::pick(path, &file, &listing, opts, level, &mut notes)?,
         Some(_) => None,
     };
     let chosen = match &imaris {
@@ -169,13 +209,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     check_budget(path, &name, shape, ty, opts.max_memory)?;
     let mut bytes = read_volume(path, &name, &ds, dims, ty.size(), (volume, count))?;
     if let Some(size) = imaris.as_ref().and_then(|i| i.size) {
-        if (0..3).any(|m| size[m] > dims[m]) {
-            return Err(Error::format(
-                path,
-                format!("Imaris says the image is {size:?} voxels, more than dataset {name} holds"),
-            ));
-        }
-        imaris::crop(&mut bytes, dims, size, ty.size());
+        imaris::crop(path, &name, &mut bytes, dims, size, ty.size())?;
         dims = size;
     }
     let spec = DataSpec {
