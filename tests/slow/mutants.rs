@@ -138,6 +138,7 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
             ("hdf5/ramp_f32_gzip_shuffle.h5", "m.h5"),
             ("hdf5/ramp_i16_gzip_latest.h5", "m.h5"),
             ("hdf5/ramp_4d_i8.h5", "m.h5"),
+            ("hdf5/imaris.ims", "m.ims"),
         ],
     ),
 ];
