@@ -9,8 +9,13 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::formats::details::{Details, json_of};
 
-/// The most datasets looked at (and listed) in one file.
-const MAX_DATASETS: usize = 4096;
+/// The most datasets looked at in one file (an Imaris file holds two a channel, time point and
+/// resolution level).
+const MAX_DATASETS: usize = 65_536;
+
+/// The most datasets `info --json` lists, and its text line.
+const MAX_LISTED: usize = 256;
+const MAX_LINE: usize = 16;
 
 /// What `DXchange` names a reconstruction (and a beamline's projections).
 const DXCHANGE: &str = "exchange/data";
@@ -33,15 +38,18 @@ pub(crate) struct Hdf5Dataset {
 /// What `info` shows of an HDF5 file: its datasets, the one read first.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub(crate) struct Hdf5Details {
-    /// The datasets: the one read, then the others by path.
+    /// The datasets: the one read, then the others by path (at most 256).
     pub datasets: Vec<Hdf5Dataset>,
+    /// How many datasets the file holds.
+    pub count: usize,
 }
 
 impl Details for Hdf5Details {
     fn lines(&self) -> Vec<(String, String)> {
-        let listed: Vec<String> = self
+        let mut listed: Vec<String> = self
             .datasets
             .iter()
+            .take(MAX_LINE)
             .map(|d| {
                 let shape: Vec<String> = d.shape.iter().map(usize::to_string).collect();
                 format!(
@@ -52,6 +60,9 @@ impl Details for Hdf5Details {
                 )
             })
             .collect();
+        if self.count > MAX_LINE {
+            listed.push(format!("and {} more", self.count - MAX_LINE));
+        }
         vec![("datasets".into(), listed.join(", "))]
     }
 
@@ -246,7 +257,8 @@ pub(super) fn details(found: &[Found], read: &str) -> Hdf5Details {
     let first = found.iter().filter(|f| f.path == read).map(entry);
     let rest = found.iter().filter(|f| f.path != read).map(entry);
     Hdf5Details {
-        datasets: first.chain(rest).collect(),
+        datasets: first.chain(rest).take(MAX_LISTED).collect(),
+        count: found.len(),
     }
 }
 
