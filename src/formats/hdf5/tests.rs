@@ -51,3 +51,24 @@ fn the_budget_counts_the_stored_bytes_and_the_volume() {
     let huge = [usize::MAX, usize::MAX, 2];
     assert!(check_budget(path, "/a", &huge, VoxelType::U8, u64::MAX).is_err());
 }
+
+#[test]
+fn info_names_the_read_dataset_first_and_counts_the_rest() {
+    let found: Vec<pick::Found> = (0..20)
+        .map(|i| pick::Found {
+            path: format!("d{i:02}"),
+            shape: vec![2, 3, 4],
+            ty: "u8".into(),
+        })
+        .collect();
+    let details = pick::details(&found, "d07");
+    assert_eq!(details.count, 20);
+    assert_eq!(details.datasets[0].path, "/d07");
+    assert_eq!(details.datasets[1].path, "/d00");
+    let line = &crate::formats::Details::lines(&details)[0].1;
+    assert!(
+        line.starts_with("/d07 (2x3x4 u8), /d00 (2x3x4 u8)"),
+        "{line}"
+    );
+    assert!(line.ends_with(", and 4 more"), "{line}");
+}
