@@ -103,6 +103,7 @@ def load(
     threads: Optional[int] = None,
     volume: int = 0,
     channel: int = 0,
+    array: Optional[str] = None,
     series: Union[int, str, None] = None,
     include_localizers: bool = False,
     resample: bool = False,
@@ -110,7 +111,7 @@ def load(
     label_image: Optional[str] = None,
 ) -> Volume:
     """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), OME-Zarr,
-    MRC, VolumeShop, raw."""
+    MRC, VTK, HDF5, VolumeShop, raw."""
 
 @final
 class Analysis:

@@ -35,6 +35,7 @@ def volumes() -> list[Volume]:
         threads=2,
         volume=0,
         channel=0,
+        array=None,
         series=None,
         include_localizers=False,
         resample=False,

@@ -6,6 +6,7 @@
 mod data;
 mod details;
 pub mod dicom;
+mod hdf5;
 mod limits;
 mod metaimage;
 mod mrc;
@@ -78,6 +79,8 @@ pub enum Format {
     Vtk,
     /// VTK XML image data (`.vti`).
     Vti,
+    /// An HDF5 file's dataset (`.h5`, `.hdf5`, `.nxs`, `.ims`).
+    Hdf5,
     /// Made in memory (a phantom or the built-in dataset).
     Synthetic,
 }
@@ -99,6 +102,7 @@ impl Format {
             Self::Mrc => "mrc",
             Self::Vtk => "vtk",
             Self::Vti => "vti",
+            Self::Hdf5 => "hdf5",
             Self::Synthetic => "synthetic",
         }
     }
@@ -145,6 +149,10 @@ pub struct LoadOptions {
     /// Raised, the load stops between chunks, files or pages with [`Error::Cancelled`] (a
     /// timeout, Ctrl-C, the user moving on).
     pub cancel: crate::progress::Cancel,
+    /// Which array of a file holding several to read: a `.vti` file's array by its name, an
+    /// HDF5 file's dataset by its path (`None`: the active scalars, the only 3-D dataset, or
+    /// `DXchange`'s `/exchange/data`).
+    pub array: Option<String>,
 }
 
 impl LoadOptions {
@@ -168,6 +176,7 @@ impl Default for LoadOptions {
             zarr: ZarrOptions::default(),
             scratch: None,
             cancel: crate::progress::Cancel::never(),
+            array: None,
         }
     }
 }
@@ -221,8 +230,28 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     opts.cancel.check()?;
     check_input(path)?;
     registry::read(path, opts)
-        .and_then(|(format, read)| finish(path, format, read))
+        .and_then(|(format, read)| {
+            check_array(path, format, opts)?;
+            finish(path, format, read)
+        })
         .map_err(|e| e.reached_from(&named(path)))
+}
+
+/// `--array` names an array of a file holding several (VTK XML image data, HDF5): of a file of
+/// another format it is an error saying so, as `--channel` of a file of one channel is.
+fn check_array(path: &Path, format: Format, opts: &LoadOptions) -> Result<()> {
+    match &opts.array {
+        Some(name) if !matches!(format, Format::Vti | Format::Hdf5) => Err(Error::unsupported(
+            path,
+            format!(
+                "--array {:?} names an array of a VTK XML image data or HDF5 file; this {} file \
+                 holds one volume",
+                crate::error::names::text(name),
+                format.name()
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// `path` as errors name it: a URL without what it must not show ([`remote::shown_text`]).

@@ -144,7 +144,7 @@ pub(crate) trait Reader: Sync {
 
     /// A coarse pyramid level of that volume, of at most `max_voxels` voxels, read without
     /// reading the volume (an OME-Zarr store's coarser dataset); `None` when `source` is not this
-    /// reader's or holds no such level, as every format but OME-Zarr.
+    /// reader's or holds no such level, as every format but OME-Zarr and Imaris's HDF5.
     fn preview(
         &self,
         _source: &Source,

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source, data};
-use super::{dicom, metaimage, mrc, nifti, nrrd, raw, tiff, volumeshop, vti, vtk, zarr};
+use super::{dicom, hdf5, metaimage, mrc, nifti, nrrd, raw, tiff, volumeshop, vti, vtk, zarr};
 use crate::error::{Error, Result};
 
 /// Every reader, in the order they are asked: the order of the content sniff (DICOM's preamble
@@ -23,6 +23,7 @@ static READERS: &[&dyn Reader] = &[
     &mrc::Mrc,
     &vtk::Vtk,
     &vti::Vti,
+    &hdf5::Hdf5,
     &volumeshop::VolumeShop,
     &raw::Raw,
     &tiff::TiffSlices,
@@ -286,7 +287,7 @@ mod tests {
     }
 
     /// The sentence of every refusal, made from the readers, is the one that was kept by hand
-    /// before byte for byte, and names every reader (its title's first word): a format added
+    /// before byte for byte (HDF5's since added), and names every reader (its title's first word): a format added
     /// is added to it.
     #[test]
     fn the_sentence_names_every_reader() {
@@ -294,8 +295,8 @@ mod tests {
         assert_eq!(
             reads,
             "slabscope reads NIfTI, NRRD, MetaImage, VolumeShop .dat, TIFF stacks, DICOM, \
-             OME-Zarr stores, MRC, legacy VTK image data, VTK XML image data (.vti), and \
-             headerless raw data given its dimensions and voxel type"
+             OME-Zarr stores, MRC, legacy VTK image data, VTK XML image data (.vti), HDF5 \
+             datasets, and headerless raw data given its dimensions and voxel type"
         );
         for reader in READERS {
             let word = reader.title().split(' ').next().unwrap_or_default();

@@ -490,16 +490,30 @@ pub const VOLUME: Param = named(
     "volume",
     "volume",
     "N",
-    "Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM; an OME-TIFF's or OME-Zarr's time \
-     point) to read, from 0",
+    "Which volume of a 4D file (NIfTI, NRRD, MetaImage, DICOM, HDF5; an OME-TIFF's, OME-Zarr's or \
+     Imaris file's time point) to read, from 0",
     count(0, u32::MAX as u64, Some(0)),
 );
 pub const CHANNEL: Param = named(
     "channel",
     "channel",
     "N",
-    "Which channel of a multichannel file (OME-TIFF, OME-Zarr), from 0",
+    "Which channel of a multichannel file (OME-TIFF, OME-Zarr, Imaris), from 0",
     count(0, u32::MAX as u64, Some(0)),
+);
+pub const ARRAY: Param = named(
+    "array",
+    "array",
+    "NAME",
+    "Which array of a file holding several: a VTK XML image data array by its name, an HDF5 \
+     dataset by its path (default: the active scalars; DXchange's /exchange/data, else the only \
+     dataset of three or four dimensions)",
+    Takes::Text {
+        valid: |_| true,
+        expected: "an array's name or a dataset's path",
+        default: None,
+        hyphens: false,
+    },
 );
 pub const SERIES: Param = named(
     "series",
@@ -559,6 +573,7 @@ pub const LOAD: &[&Param] = &[
     &THREADS,
     &VOLUME,
     &CHANNEL,
+    &ARRAY,
     &SERIES,
     &INCLUDE_LOCALIZERS,
     &RESAMPLE,

@@ -417,6 +417,7 @@ mod tests {
                 ".file",
                 ".format",
                 ".format_version",
+                ".hdf5",
                 ".held_type",
                 ".histogram",
                 ".mapped_bytes",

@@ -19,6 +19,7 @@ mod formats;
 mod fuzz_headers;
 mod gain;
 mod geometry;
+mod hdf5;
 mod metadata;
 mod mosaic;
 mod mrc;

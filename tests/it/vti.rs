@@ -253,3 +253,36 @@ fn appended_raw_values_are_read_in_place() {
     assert_eq!(v["mapped_bytes"], 120, "{v}");
     assert_eq!(v["memory_bytes"], 0, "{v}");
 }
+
+#[test]
+fn array_names_the_array_read() {
+    let path = data("vti/ramp_u16_zlib.vti");
+    let named = |name: &str| slabscope::LoadOptions {
+        array: Some(name.to_string()),
+        ..slabscope::LoadOptions::default()
+    };
+    // `mask`, all zeros, instead of the `density` that `Scalars` names.
+    let loaded = slabscope::load(&path, &named("mask")).unwrap();
+    assert_eq!(loaded.volume.voxel_type(), slabscope::volume::VoxelType::U8);
+    assert_eq!(loaded.volume.dims(), [6, 5, 4]);
+    assert!(loaded.volume.data().to_f32_vec().iter().all(|&v| v == 0.0));
+    let density = slabscope::load(&path, &named("density")).unwrap();
+    assert_eq!(density.volume.value([5, 4, 3]), 345.0);
+    let e = slabscope::load(&path, &named("nope"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("holds no array \"nope\": its arrays are \"flow\", \"mask\", \"density\""),
+        "{e}"
+    );
+    // A vector field named is refused as when `Scalars` names it.
+    let e = slabscope::load(&path, &named("flow"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("3 components"), "{e}");
+    // Of a file of another format, --array is an error.
+    let e = slabscope::load(&data("mrc/ramp_i16.mrc"), &named("x"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("this mrc file holds one volume"), "{e}");
+}

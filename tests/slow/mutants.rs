@@ -143,6 +143,16 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
             ("zarr/hostile/small_chunks.zarr//zarr.json", "m.zarr"),
         ],
     ),
+    (
+        "hdf5",
+        &[
+            ("hdf5/ramp_u16_contiguous.h5", "m.h5"),
+            ("hdf5/ramp_f32_gzip_shuffle.h5", "m.h5"),
+            ("hdf5/ramp_i16_gzip_latest.h5", "m.h5"),
+            ("hdf5/ramp_4d_i8.h5", "m.h5"),
+            ("hdf5/imaris.ims", "m.ims"),
+        ],
+    ),
 ];
 
 /// xorshift64*: the mutants of a seed are the same on every run.
@@ -186,6 +196,10 @@ const EXTREMES: [&str; 16] = [
 fn header_len(bytes: &[u8]) -> usize {
     // JSON metadata (Zarr's) is all header.
     if bytes.first() == Some(&b'{') {
+        return bytes.len();
+    }
+    // HDF5's metadata is spread through the file (these fixtures are a few kilobytes).
+    if bytes.starts_with(b"\x89HDF") {
         return bytes.len();
     }
     if bytes.get(128..132) == Some(b"DICM") {

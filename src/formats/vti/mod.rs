@@ -163,7 +163,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
             "its piece's Extent {extent:?} is empty or too large"
         )));
     }
-    let array = pick_array(path, piece)?;
+    let array = pick_array(path, piece, opts.array.as_deref())?;
     let dims = if array.cells {
         points.map(|n| n.saturating_sub(1).max(1))
     } else {
@@ -332,15 +332,37 @@ fn extent_points(extent: [i64; 6], m: usize) -> usize {
         .unwrap_or(0)
 }
 
-/// The array read: the one `Scalars` names (point data first), else the first one of one
-/// component.
-fn pick_array<'a>(path: &Path, piece: Node<'a, '_>) -> Result<Array<'a>> {
+/// The array read: the one `chosen` names (`--array`), else the one `Scalars` names (point data
+/// first), else the first one of one component.
+fn pick_array<'a>(path: &Path, piece: Node<'a, '_>, chosen: Option<&str>) -> Result<Array<'a>> {
     let sections = ["PointData", "CellData"].map(|s| piece.children().find(|n| n.has_tag_name(s)));
     let arrays = |section: Option<Node<'a, '_>>| {
         section
             .into_iter()
             .flat_map(|s| s.children().filter(|n| n.has_tag_name("DataArray")))
     };
+    if let Some(chosen) = chosen {
+        let all = || (0..2).flat_map(|k| arrays(sections[k]).map(move |a| (k, a)));
+        let Some((k, node)) = all().find(|(_, a)| a.attribute("Name") == Some(chosen)) else {
+            let names: Vec<String> = all()
+                .map(|(_, a)| {
+                    format!(
+                        "{:?}",
+                        crate::error::names::text(a.attribute("Name").unwrap_or(""))
+                    )
+                })
+                .collect();
+            return Err(Error::format(
+                path,
+                format!(
+                    "holds no array {:?}: its arrays are {}",
+                    crate::error::names::text(chosen),
+                    names.join(", ")
+                ),
+            ));
+        };
+        return array(path, node, k == 1);
+    }
     let named = sections.iter().enumerate().find_map(|(k, s)| {
         let scalars = s.and_then(|s| s.attribute("Scalars"))?;
         Some((k, arrays(*s).find(|a| a.attribute("Name") == Some(scalars))))
