@@ -351,7 +351,8 @@ pub const RESOLUTION: Param = named(
     "auto|full|K",
     "The pyramid level to compute on: full (every voxel, the paper's method), auto (the coarsest \
      level with at least 128 voxels along every axis), or a level number K (each level halves \
-     every axis, averaging 2x2x2 blocks)",
+     every axis, averaging 2x2x2 blocks; for an OME-Zarr store, K names the store's K-th dataset \
+     when its datasets make the pyramid, halving y and x only if they do)",
     Takes::Text {
         valid: |s| text::resolution(s).is_some(),
         expected: "auto, full or a pyramid level number",

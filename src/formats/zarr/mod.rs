@@ -31,6 +31,7 @@ use super::remote::{is_url, join};
 use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
+use crate::volume::pyramid;
 
 /// What `info` shows of a store: the image read, its axes, levels, chunking and codecs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -290,21 +291,20 @@ fn describe(
                 unit: a.unit.clone(),
             })
             .collect(),
-        levels: image
-            .datasets
-            .iter()
-            .zip(arrays)
-            .enumerate()
-            .map(|(i, (d, a))| ZarrLevel {
-                path: d.path.clone(),
-                shape: a.shape.clone(),
-                scale: d.scale.clone(),
-                pyramid_level: match i {
-                    0 => Some(0),
-                    _ => levels::pyramid_level(image, arrays, layout, i),
-                },
-            })
-            .collect(),
+        levels: {
+            let pyramid = levels::StorePyramid::of(image, arrays, layout);
+            (image.datasets.iter().zip(arrays).enumerate())
+                .map(|(i, (d, a))| ZarrLevel {
+                    path: d.path.clone(),
+                    shape: a.shape.clone(),
+                    scale: d.scale.clone(),
+                    pyramid_level: match i {
+                        0 => Some(0),
+                        _ => pyramid.level_of(i),
+                    },
+                })
+                .collect()
+        },
         data_type: first.dtype.clone(),
         chunks: first.chunks.clone(),
         inner_chunks: first.inner.clone(),
@@ -472,10 +472,10 @@ impl Opened {
 fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let opened = Opened::new(dir, opts)?;
     let mut read0 = opened.read(dir, 0, opts)?;
-    if let Some(source) =
+    if let Some((source, steps)) =
         levels::StoreLevels::new(&opened.image, &opened.arrays, &opened.dataset(0, opts))
     {
-        read0.volume = read0.volume.with_level_source(Arc::new(source));
+        read0.volume = read0.volume.with_level_source(Arc::new(source), &steps);
     }
     Ok(read0)
 }
@@ -487,18 +487,17 @@ fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
 fn read_preview(dir: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Read0>> {
     let opened = Opened::new(dir, opts)?;
     let dims0 = opened.layout.dims(&opened.arrays[0].shape);
-    let wanted = crate::volume::pyramid::level_within(dims0, max_voxels);
-    let best = (1..opened.arrays.len())
-        .filter_map(|i| {
-            let k = levels::pyramid_level(&opened.image, &opened.arrays, &opened.layout, i)?;
-            (k >= wanted).then_some((k, i))
-        })
+    let pyramid = levels::StorePyramid::of(&opened.image, &opened.arrays, &opened.layout);
+    let chain = pyramid::chain_dims(dims0, &pyramid::steps_after(dims0, &pyramid.steps));
+    let wanted = pyramid::level_within(&chain, max_voxels);
+    let best = (pyramid.levels.iter().copied())
+        .filter(|&(k, _)| k >= wanted)
         .min();
     let (Some((k, i)), 1..) = (best, wanted) else {
         return Ok(None);
     };
     let mut read0 = opened.read(dir, i, opts)?;
-    read0.volume = read0.volume.into_pyramid_level(k, dims0);
+    read0.volume = read0.volume.into_pyramid_level(k, dims0, &pyramid.steps);
     Ok(Some(read0))
 }
 
