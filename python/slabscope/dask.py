@@ -34,6 +34,8 @@ LOAD_KEYWORDS = (
     "resample",
     "show_phi",
     "label_image",
+    "endpoint",
+    "missing_as_fill",
 )
 
 

@@ -24,6 +24,11 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// For a store at a URL, take the statistics (range, mean, missing, histogram) from every
+    /// voxel of level 0 rather than from the store's coarsest dataset, which is all `info` reads
+    /// of a remote store otherwise
+    #[arg(long)]
+    pub exact: bool,
     #[command(flatten)]
     pub load: LoadArgs,
 }
@@ -65,7 +70,21 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let loaded = super::load(&args.file, &args.load)?;
+    // A remote store's statistics from its coarsest dataset: a few requests, not level 0.
+    let coarsest = if slabscope::formats::remote::is_url(&args.file) && !args.exact {
+        slabscope::formats::load_preview(&args.file, &opts, 0)?
+    } else {
+        None
+    };
+    let loaded = match coarsest {
+        Some(loaded) => {
+            for n in &loaded.notes {
+                super::note(&args.file, n);
+            }
+            loaded
+        }
+        None => super::load(&args.file, &args.load)?,
+    };
     print(&shown(&args.file), &loaded, args.json)
 }
 
@@ -87,8 +106,8 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     let (format, v) = (loaded.format, &loaded.volume);
     let s = v.stats();
     let (hist, geometry) = (&report.histogram, &report.geometry);
-    let [nx, ny, nz] = v.dims();
-    let [sx, sy, sz] = v.spacing();
+    let [nx, ny, nz] = report.dims;
+    let [sx, sy, sz] = report.spacing;
     outln!("file        {name}");
     let details = loaded.details.as_deref();
     match (
@@ -104,8 +123,8 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     }
     outln!(
         "dims        {}  ({} voxels)",
-        dims_string(v.dims()),
-        v.len()
+        dims_string(report.dims),
+        report.voxels
     );
     let (unit, per_mm) = slabscope::geometry::length_unit(sx.max(sy).max(sz));
     outln!(
@@ -119,6 +138,15 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     );
     print_geometry(geometry);
     outln!("type        {}", v.voxel_type());
+    if let Some(from) = &report.statistics_from {
+        outln!(
+            "statistics  from pyramid level {} ({}, a voxel for {} of level 0's), the store's \
+             coarsest: --exact reads every voxel",
+            from.pyramid_level,
+            dims_string(from.dims),
+            dims_string(from.factor)
+        );
+    }
     if s.finite == 0 {
         outln!("range       none: every voxel is NaN or infinite");
     } else {

@@ -534,6 +534,28 @@ pub const LABEL_IMAGE: Param = named(
     },
 );
 
+pub const ENDPOINT: Param = named(
+    "endpoint",
+    "endpoint",
+    "URL",
+    "The S3 endpoint an s3:// store is read at, path-style (MinIO, Ceph, a local S3 server), \
+     before AWS_ENDPOINT_URL_S3 and AWS_ENDPOINT_URL",
+    Takes::Text {
+        valid: |s| s.starts_with("http://") || s.starts_with("https://"),
+        expected: "an http:// or https:// URL",
+        default: None,
+        hyphens: false,
+    },
+);
+
+pub const MISSING_AS_FILL: Param = param(
+    "missing_as_fill",
+    "missing-as-fill",
+    "Read a chunk of a store at a URL that the server refuses (HTTP 403, as public S3 answers for \
+     a chunk never written) as the fill value, as a chunk not written, rather than an error",
+    Takes::Switch,
+);
+
 /// How to read the input.
 pub const LOAD: &[&Param] = &[
     &DIMS,
@@ -550,6 +572,8 @@ pub const LOAD: &[&Param] = &[
     &RESAMPLE,
     &SHOW_PHI,
     &LABEL_IMAGE,
+    &ENDPOINT,
+    &MISSING_AS_FILL,
 ];
 
 /// The pictures' and slices' own entries.

@@ -89,6 +89,12 @@ pub struct ZarrLevel {
 pub struct ZarrOptions {
     /// Which label image of the store to read (`labels/NAME`) instead of its image.
     pub label_image: Option<String>,
+    /// The endpoint an `s3://` store is read at (`--endpoint`), before the one the environment
+    /// names (`AWS_ENDPOINT_URL_S3`, `AWS_ENDPOINT_URL`).
+    pub endpoint: Option<String>,
+    /// Whether a chunk of a store at a URL that the server refuses (HTTP 403) is read as the
+    /// fill value, as a chunk not written (`--missing-as-fill`), rather than an error.
+    pub missing_as_fill: bool,
 }
 
 /// The reader of an OME-Zarr store or a plain Zarr array (a folder).
@@ -207,7 +213,18 @@ fn read_image(root: &Root, node: &str) -> Result<(Image, Vec<ArrayMeta>)> {
     let image = match meta::array(root, node, zarr_format) {
         // A plain array: no OME metadata to read.
         Ok(array) => plain_image(&array, zarr_format).map_err(fail)?,
-        Err(_) => meta::image(&attrs, zarr_format).map_err(fail)?,
+        Err(_) => meta::image(&attrs, zarr_format).map_err(|m| {
+            // A server lists nothing: name the container's first image for the user.
+            fail(if root.is_remote() && meta::is_bioformats2raw(&attrs) {
+                format!(
+                    "a bioformats2raw container of images, which cannot be listed over HTTP: \
+                     name one of its images, {}/0 for the first (then /1, /2, ...)",
+                    shown.display()
+                )
+            } else {
+                m
+            })
+        })?,
     };
     let arrays = image
         .datasets
@@ -381,7 +398,7 @@ struct Opened {
 impl Opened {
     /// Opens the image of the store at `dir` (or the label image `opts` names).
     fn new(dir: &Path, opts: &LoadOptions) -> Result<Self> {
-        let root = Root::open(dir)?;
+        let root = Root::open(dir, &opts.zarr)?;
         let (node, name) = image_node(&root, opts)?;
         let image_path = root.shown(&node);
         let (image, arrays) = read_image(&root, &node)?;
@@ -440,23 +457,33 @@ impl Opened {
         }
     }
 
+    /// The dimensions, spacing and transform of dataset `i`, with notes on units not known.
+    fn grid(&self, i: usize, notes: &mut Vec<String>) -> pyramid::Finest {
+        let dataset = &self.image.datasets[i];
+        let (spacing, origin) = geometry(&self.image, dataset, &self.layout, notes);
+        let mut transform = WorldTransform::unknown(spacing);
+        for k in 0..3 {
+            transform.matrix[k][3] = origin[k];
+        }
+        let dims = self.layout.dims(&self.arrays[i].shape);
+        pyramid::Finest {
+            dims,
+            spacing,
+            transform,
+        }
+    }
+
     /// The volume of dataset `i`, with its spacing and origin, and the notes.
     fn read(&self, dir: &Path, i: usize, opts: &LoadOptions) -> Result<Read0> {
         let fail = |m: String| Error::format(&self.image_path, m);
         let mut notes = self.notes.clone();
-        let (spacing, origin) = geometry(
-            &self.image,
-            &self.image.datasets[i],
-            &self.layout,
-            &mut notes,
-        );
-        let dims = self.layout.dims(&self.arrays[i].shape);
+        let pyramid::Finest {
+            dims,
+            spacing,
+            transform: t,
+        } = self.grid(i, &mut notes);
         let stored = self.arrays[i].voxel_type().map_err(fail)?;
         let voxels = self.dataset(i, opts).voxels(dims)?;
-        let mut t = WorldTransform::unknown(spacing);
-        for k in 0..3 {
-            t.matrix[k][3] = origin[k];
-        }
         let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
         read0 = read0.with_transform(Some(t));
         if self.image.label {
@@ -481,23 +508,30 @@ fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
 }
 
 /// The finest of the store's coarser datasets on the pyramid's grid with at most `max_voxels`
-/// voxels, read as that pyramid level of the image without reading level 0 (so quantized with
-/// its own range); `None` when level 0 itself has at most `max_voxels` voxels or no such dataset
-/// exists.
+/// voxels (with `max_voxels` 0, the coarsest), read as that pyramid level of the image without
+/// reading level 0 (so quantized with its own range); `None` when level 0 itself has at most
+/// `max_voxels` voxels or no such dataset exists.
 fn read_preview(dir: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Read0>> {
     let opened = Opened::new(dir, opts)?;
-    let dims0 = opened.layout.dims(&opened.arrays[0].shape);
+    let finest = opened.grid(0, &mut Vec::new());
+    let dims0 = finest.dims;
     let pyramid = levels::StorePyramid::of(&opened.image, &opened.arrays, &opened.layout);
     let chain = pyramid::chain_dims(dims0, &pyramid::steps_after(dims0, &pyramid.steps));
-    let wanted = pyramid::level_within(&chain, max_voxels);
-    let best = (pyramid.levels.iter().copied())
-        .filter(|&(k, _)| k >= wanted)
-        .min();
+    let wanted = match max_voxels {
+        0 => 1,
+        _ => pyramid::level_within(&chain, max_voxels),
+    };
+    let within = pyramid.levels.iter().copied().filter(|&(k, _)| k >= wanted);
+    let best = if max_voxels == 0 {
+        within.max()
+    } else {
+        within.min()
+    };
     let (Some((k, i)), 1..) = (best, wanted) else {
         return Ok(None);
     };
     let mut read0 = opened.read(dir, i, opts)?;
-    read0.volume = read0.volume.into_pyramid_level(k, dims0, &pyramid.steps);
+    read0.volume = read0.volume.into_pyramid_level(k, finest, &pyramid.steps);
     Ok(Some(read0))
 }
 

@@ -25,6 +25,20 @@ pub struct Pyramid {
     steps: Box<[[usize; 3]]>,
     /// The levels the file holds, read in place of computing them.
     source: Option<Arc<dyn LevelSource>>,
+    /// Level 0's grid, when a coarser level was read without it.
+    finest: Option<Finest>,
+}
+
+/// The grid of a pyramid's level 0, known from the file's metadata when a coarser level was read
+/// without reading level 0 ([`Volume::unread_finest`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Finest {
+    /// Level 0's dimensions, x first.
+    pub dims: [usize; 3],
+    /// Level 0's spacing, mm.
+    pub spacing: [f64; 3],
+    /// Level 0's voxel-to-world transform.
+    pub transform: crate::geometry::WorldTransform,
 }
 
 impl std::ops::Deref for Pyramid {
@@ -47,6 +61,7 @@ impl Pyramid {
             slots: steps.iter().map(|_| OnceLock::new()).collect(),
             steps: steps.into(),
             source,
+            finest: None,
         }
     }
 }
@@ -86,24 +101,34 @@ impl Volume {
             .collect()
     }
 
+    /// Level 0's grid when this level was read from a file without reading level 0 (an
+    /// OME-Zarr store's coarser dataset: a preview, or `info`'s statistics of a remote store);
+    /// `None` for every level of a volume whose level 0 was read.
+    #[must_use]
+    pub fn unread_finest(&self) -> Option<&Finest> {
+        self.pyramid.finest.as_ref()
+    }
+
     /// The dimensions of this level and of each coarser level, finest first.
     #[must_use]
     pub fn level_dims(&self) -> Vec<[usize; 3]> {
         chain_dims(self.dims, &self.pyramid.steps[self.level.index..])
     }
 
-    /// This volume, read from a file that holds it as pyramid level `k` of a level 0 of `dims0`
-    /// not read (an OME-Zarr store's coarser dataset, on the pyramid's grid, whose own first
-    /// levels' steps are `steps`): it takes that place in the pyramid, and is quantized with its
-    /// own range, level 0's being unknown. Its coarser levels are computed from it.
+    /// This volume, read from a file that holds it as pyramid level `k` of a level 0 of grid
+    /// `finest` not read (an OME-Zarr store's coarser dataset, on the pyramid's grid, whose own
+    /// first levels' steps are `steps`): it takes that place in the pyramid, and is quantized
+    /// with its own range, level 0's being unknown. Its coarser levels are computed from it.
     #[must_use]
     pub(crate) fn into_pyramid_level(
         mut self,
         k: usize,
-        dims0: [usize; 3],
+        finest: Finest,
         steps: &[[usize; 3]],
     ) -> Self {
-        let pyramid = Pyramid::new(steps_after(dims0, steps), None);
+        let dims0 = finest.dims;
+        let mut pyramid = Pyramid::new(steps_after(dims0, steps), None);
+        pyramid.finest = Some(finest);
         let (factor, _) = scale_of(dims0, &pyramid.steps[..k]);
         let labels = self.labels().is_some();
         self.level = Level {

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 mod levels;
 
-pub use levels::LevelSource;
+pub use levels::{Finest, LevelSource};
 pub(super) use levels::{Pyramid, empty};
 
 use super::voxels::Voxel;
