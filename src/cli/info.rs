@@ -72,7 +72,9 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     }
     // A remote store's statistics from its coarsest dataset: a few requests, not level 0.
     let coarsest = if slabscope::formats::remote::is_url(&args.file) && !args.exact {
-        slabscope::formats::load_preview(&args.file, &opts, 0)?
+        super::progress::while_reading(&args.file, || {
+            slabscope::formats::load_preview(&args.file, &opts, 0)
+        })?
     } else {
         None
     };

@@ -121,7 +121,8 @@ fn remove_staged_on_signals() {
 
 /// Loads `path`, printing the loader's notes to stderr.
 pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
-    let loaded = slabscope::load(path, &args.options()?)?;
+    let opts = args.options()?;
+    let loaded = progress::while_reading(path, || slabscope::load(path, &opts))?;
     for n in &loaded.notes {
         note(path, n);
     }

@@ -429,7 +429,7 @@ impl<'a> Renderer<'a> {
 /// and the labels' room; and the coarsest pyramid level its pixels allow ([`pyramid_level_in`],
 /// at the scene's nearest depth for a perspective camera). Slabs moved absurdly far are an error.
 fn framed(
-    (grids, display): (&[([usize; 3], [f64; 3])], Option<DisplayFrame>),
+    (grids, display): (&[pyramid::LevelGrid], Option<DisplayFrame>),
     layout: &Layout,
     params: &RenderParams,
     content: &Aabb,

@@ -7,6 +7,9 @@ use crate::geometry::dot;
 use crate::volume::Volume;
 use crate::volume::pyramid::{chain_dims, steps_after};
 
+/// A pyramid level's dimensions and spacing (mm).
+pub type LevelGrid = ([usize; 3], [f64; 3]);
+
 /// Voxels per pixel, along both screen axes, that a pyramid level must give for the next one to
 /// be read instead.
 pub const VOXELS_PER_PIXEL: f64 = 2.0;

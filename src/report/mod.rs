@@ -436,6 +436,7 @@ mod tests {
                 ".range",
                 ".schema_version",
                 ".spacing",
+                ".statistics_from",
                 ".stored_bytes",
                 ".type",
                 ".voxels",

@@ -214,7 +214,7 @@ fn info_reads_the_coarsest_level_and_exact_level_0() {
 }
 
 /// Whether the logged request `r` asks for a metadata file.
-fn is_metadata(r: &String) -> bool {
+fn is_metadata(r: &str) -> bool {
     let name = r.split(' ').nth(1).unwrap().rsplit('/').next().unwrap();
     name.starts_with('.') || name == "zarr.json"
 }

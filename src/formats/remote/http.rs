@@ -155,6 +155,7 @@ impl Client {
                 return Ok(Answer::Short(body.len() as u64, n));
             }
             self.fetched.fetch_add(body.len() as u64, Ordering::Relaxed);
+            super::count_fetched(body.len() as u64);
             Ok(Answer::Body(if partial { body } else { cut(body, span) }))
         })?;
         match fetched {

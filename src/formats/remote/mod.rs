@@ -10,6 +10,22 @@
 #[cfg(feature = "remote")]
 pub mod http;
 
+/// The bytes of every answer's body fetched by this process, over every store.
+static FETCHED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// The bytes of the answers' bodies this process has fetched from remote stores so far (for a
+/// progress line; 0 when none was read).
+#[must_use]
+pub fn bytes_fetched() -> u64 {
+    FETCHED.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Counts `n` bytes fetched ([`bytes_fetched`]).
+#[cfg(feature = "remote")]
+fn count_fetched(n: u64) {
+    FETCHED.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+}
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
