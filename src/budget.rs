@@ -85,7 +85,7 @@ impl Budget {
                 let bins = crate::geometry::lattice::SamplingParams::default().bins;
                 let (fits, _) =
                     crate::analysis::level_within_memory(volume, 0, self.max_memory, bins)?;
-                let level = glance_level(volume.dims()).max(fits);
+                let level = glance_level(volume).max(fits);
                 Ok(Plan::at(volume.coarser(level)))
             }
         }
@@ -147,16 +147,17 @@ pub fn blame(plan: &Plan, e: Error) -> Error {
     }
 }
 
-/// The pyramid level of a glance at a volume of `dims`: 0 when it is small enough to compute at
-/// full resolution at once.
+/// The pyramid level of a glance at `volume`: 0 when it is small enough to compute at full
+/// resolution at once.
 #[must_use]
-pub fn glance_level(dims: [usize; 3]) -> usize {
-    crate::volume::pyramid::level_within(dims, GLANCE_VOXELS)
+pub fn glance_level(volume: &Volume) -> usize {
+    crate::volume::pyramid::level_within(&volume.level_dims(), GLANCE_VOXELS)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::volume::pyramid;
 
     #[test]
     fn each_purpose_gets_its_level() {
@@ -184,8 +185,13 @@ mod tests {
         assert_eq!(picture.partition.dims(), [48, 48, 48]);
         assert!(picture.note.is_some_and(|n| n.contains("pyramid level 1")));
         // 96³ is 884,736 voxels: a glance takes it whole; 160³ (4 M) is halved.
-        assert_eq!(glance_level([96; 3]), 0);
-        assert_eq!(glance_level([160; 3]), 1);
+        let glance_of = |dims: [usize; 3]| {
+            let chain = pyramid::chain_dims(dims, &pyramid::steps_after(dims, &[]));
+            pyramid::level_within(&chain, GLANCE_VOXELS)
+        };
+        assert_eq!(glance_level(&volume), 0);
+        assert_eq!(glance_of([96; 3]), 0);
+        assert_eq!(glance_of([160; 3]), 1);
         let glance = roomy.plan(&volume, Purpose::Glance).unwrap();
         assert_eq!(glance.partition.dims(), [96, 96, 96]);
         // Nor is a glance finer than the budget allows.

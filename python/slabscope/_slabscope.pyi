@@ -109,6 +109,8 @@ def load(
     resample: bool = False,
     show_phi: bool = False,
     label_image: Optional[str] = None,
+    endpoint: Optional[str] = None,
+    missing_as_fill: bool = False,
 ) -> Volume:
     """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), OME-Zarr,
     MRC, VTK, HDF5, VolumeShop, raw."""

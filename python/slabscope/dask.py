@@ -35,6 +35,8 @@ LOAD_KEYWORDS = (
     "resample",
     "show_phi",
     "label_image",
+    "endpoint",
+    "missing_as_fill",
 )
 
 

@@ -48,8 +48,9 @@ pub struct Volume {
 
 /// Reads the volume at `path` (a file, a folder of TIFF slices or of DICOM files, an OME-Zarr
 /// store) with the CLI's loader options as keywords: `dims`, `dtype`, `spacing`, `endian`,
-/// `offset` (raw files), `max_memory`, `threads`, `volume`, `channel`, `array`, `series`,
-/// `include_localizers`, `resample`, `show_phi`, `label_image`.
+/// `offset` (raw files), `max_memory`, `scratch`, `threads`, `volume`, `channel`, `array`,
+/// `series`, `include_localizers`, `resample`, `show_phi`, `label_image`, `endpoint`,
+/// `missing_as_fill`.
 #[pyfunction]
 #[pyo3(signature = (path, **options))]
 pub fn load(

@@ -459,7 +459,7 @@ pub(crate) fn level_within_memory(
     let human = crate::error::short_bytes;
     match fits {
         Some(l) if l == wanted => Ok((l, None)),
-        Some(l) if level_dims(volume.dims(), l).iter().all(|&d| d >= 2) => Ok((
+        Some(l) if volume.level_dims()[l].iter().all(|&d| d >= 2) => Ok((
             l,
             Some(format!(
                 "level {wanted} needs {} for the analysis, over the memory limit of {}: computed \
@@ -481,21 +481,10 @@ pub(crate) fn level_within_memory(
     }
 }
 
-/// The dimensions of the level `level` levels coarser than `dims`.
-fn level_dims(dims: [usize; 3], level: usize) -> [usize; 3] {
-    (0..level).fold(dims, |d, _| crate::volume::pyramid::coarser_dims(d))
-}
-
 /// The dimensions and spacing of pyramid level `level` of `volume` (an axis of one voxel is
-/// not halved, nor its spacing doubled).
+/// not halved, nor its spacing doubled; nor an axis a store's own levels keep).
 fn level_grid(volume: &Volume, level: usize) -> ([usize; 3], [f64; 3]) {
-    (0..level).fold((volume.dims(), volume.spacing()), |(d, s), _| {
-        let step = crate::volume::pyramid::step(d);
-        (
-            crate::volume::pyramid::coarser_dims(d),
-            [0, 1, 2].map(|i| s[i] * step[i] as f64),
-        )
-    })
+    volume.level_grids()[level]
 }
 
 /// What an analysis on a pyramid level says of it; nothing at full resolution.

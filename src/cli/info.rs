@@ -24,6 +24,11 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// For a store at a URL, take the statistics (range, mean, missing, histogram) from every
+    /// voxel of level 0 rather than from the store's coarsest dataset, which is all `info` reads
+    /// of a remote store otherwise
+    #[arg(long)]
+    pub exact: bool,
     #[command(flatten)]
     pub load: LoadArgs,
 }
@@ -65,7 +70,23 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let loaded = super::load(&args.file, &args.load)?;
+    // A remote store's statistics from its coarsest dataset: a few requests, not level 0.
+    let coarsest = if slabscope::formats::remote::is_url(&args.file) && !args.exact {
+        super::progress::while_reading(&args.file, || {
+            slabscope::formats::load_preview(&args.file, &opts, 0)
+        })?
+    } else {
+        None
+    };
+    let loaded = match coarsest {
+        Some(loaded) => {
+            for n in &loaded.notes {
+                super::note(&args.file, n);
+            }
+            loaded
+        }
+        None => super::load(&args.file, &args.load)?,
+    };
     print(&shown(&args.file), &loaded, args.json)
 }
 
@@ -87,8 +108,8 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     let (format, v) = (loaded.format, &loaded.volume);
     let s = v.stats();
     let (hist, geometry) = (&report.histogram, &report.geometry);
-    let [nx, ny, nz] = v.dims();
-    let [sx, sy, sz] = v.spacing();
+    let [nx, ny, nz] = report.dims;
+    let [sx, sy, sz] = report.spacing;
     outln!("file        {name}");
     let details = loaded.details.as_deref();
     match (
@@ -104,8 +125,8 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     }
     outln!(
         "dims        {}  ({} voxels)",
-        dims_string(v.dims()),
-        v.len()
+        dims_string(report.dims),
+        report.voxels
     );
     let (unit, per_mm) = slabscope::geometry::length_unit(sx.max(sy).max(sz));
     outln!(
@@ -119,6 +140,15 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     );
     print_geometry(geometry);
     outln!("type        {}", v.voxel_type());
+    if let Some(from) = &report.statistics_from {
+        outln!(
+            "statistics  from pyramid level {} ({}, a voxel for {} of level 0's), the store's \
+             coarsest: --exact reads every voxel",
+            from.pyramid_level,
+            dims_string(from.dims),
+            dims_string(from.factor)
+        );
+    }
     if s.finite == 0 {
         outln!("range       none: every voxel is NaN or infinite");
     } else {
@@ -128,30 +158,26 @@ fn print(name: &str, loaded: &Loaded, json: bool) -> Result<()> {
     if s.missing > 0 {
         outln!("missing     {} NaN/Inf voxels", s.missing);
     }
-    if v.scratch_bytes() > 0 {
-        outln!(
-            "memory      none: {} of {} decoded into a scratch file on disk (mapped)",
-            human_bytes(v.scratch_bytes()),
-            v.data().held()
-        );
-    } else if v.mapped_bytes() > 0 {
-        outln!(
-            "memory      none: {} of {} read in place from the file (mapped)",
-            human_bytes(v.mapped_bytes()),
-            v.data().held()
-        );
-    } else {
-        outln!(
-            "memory      {} as {}",
-            human_bytes(v.memory_bytes()),
-            v.data().held()
-        );
-    }
+    print_memory(v);
     outln!(
         "histogram   {}  ({HISTOGRAM_BINS} bins, log scale)",
         sparkline(hist)
     );
     Ok(())
+}
+
+/// Where the voxels are held: memory, the file mapped, or a scratch file mapped.
+fn print_memory(v: &slabscope::Volume) {
+    let held = v.data().held();
+    if v.scratch_bytes() > 0 {
+        let bytes = human_bytes(v.scratch_bytes());
+        outln!("memory      none: {bytes} of {held} decoded into a scratch file on disk (mapped)");
+    } else if v.mapped_bytes() > 0 {
+        let bytes = human_bytes(v.mapped_bytes());
+        outln!("memory      none: {bytes} of {held} read in place from the file (mapped)");
+    } else {
+        outln!("memory      {} as {held}", human_bytes(v.memory_bytes()));
+    }
 }
 
 /// The orientation, the transform and the world box.

@@ -121,10 +121,13 @@ fn remove_staged_on_signals() {
 
 /// Loads `path`, printing the loader's notes to stderr.
 pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
-    let loaded = slabscope::load(path, &args.options()?).map_err(|e| match e {
-        // Stopped at the `--timeout`: said of the file, and of its loading.
-        Error::Cancelled => anyhow::Error::from(e).context(format!("{}: loading", shown(path))),
-        e => e.into(),
+    let opts = args.options()?;
+    let loaded = progress::while_reading(path, || slabscope::load(path, &opts)).map_err(|e| {
+        match e {
+            // Stopped at the `--timeout`: said of the file, and of its loading.
+            Error::Cancelled => anyhow::Error::from(e).context(format!("{}: loading", shown(path))),
+            e => e.into(),
+        }
     })?;
     for n in &loaded.notes {
         note(path, n);

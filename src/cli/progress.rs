@@ -4,7 +4,8 @@
 //! The library only reports where it is ([`Progress`]: the phase and the fraction of it done);
 //! the timing is the CLI's: elapsed from the phase's start (or the command's, for volumes), the
 //! rate smoothed exponentially by indicatif (weights fading over 15 s, stalls included), and the
-//! time left from that rate, shown only from 2 s and 1% of the work on.
+//! time left from that rate, shown only from 2 s and 1% of the work on. Once a store at a URL
+//! has been read from, the line also says the bytes fetched (over every store, so far).
 
 use std::fmt::Write as _;
 use std::io::IsTerminal;
@@ -20,6 +21,8 @@ use slabscope::{Cancel, Monitor, Progress};
 enum Counting {
     Phases,
     Volumes,
+    /// A store at a URL read: no fraction known, the time and the bytes fetched.
+    Fetching,
 }
 
 /// Draws `[########............]  43% view search  12.3 s elapsed, ~16 s left` (or
@@ -51,11 +54,23 @@ impl Bar {
         bar
     }
 
+    /// A line for reading `what` (a store at a URL), drawn at once: the time elapsed and the
+    /// bytes fetched.
+    pub fn fetching(what: String) -> Self {
+        let bar = Self::new(Counting::Fetching, 1);
+        if let Some(b) = &bar.bar {
+            b.set_message(what);
+            b.enable_steady_tick(TICK);
+        }
+        bar
+    }
+
     fn new(counting: Counting, len: u64) -> Self {
         let bar = std::io::stderr().is_terminal().then(|| {
             let template = match counting {
                 Counting::Phases => "[{bar:20}] {percent:>3}% {msg}  {timing}",
                 Counting::Volumes => "[{bar:20}] {pos}/{len} volumes  {timing}",
+                Counting::Fetching => "{msg}  {timing}",
             };
             let style = ProgressStyle::with_template(template)
                 .expect("the template is valid")
@@ -63,13 +78,19 @@ impl Bar {
                 .with_key(
                     "timing",
                     move |s: &ProgressState, w: &mut dyn std::fmt::Write| {
-                        let _ = w.write_str(&timing(
-                            s.elapsed(),
-                            s.pos(),
-                            s.len().unwrap_or(1),
-                            s.per_sec(),
-                            matches!(counting, Counting::Volumes),
-                        ));
+                        let _ = w.write_str(&match counting {
+                            Counting::Fetching => {
+                                format!("{} elapsed", duration(s.elapsed(), true))
+                            }
+                            _ => timing(
+                                s.elapsed(),
+                                s.pos(),
+                                s.len().unwrap_or(1),
+                                s.per_sec(),
+                                matches!(counting, Counting::Volumes),
+                            ),
+                        });
+                        let _ = w.write_str(&fetched(slabscope::formats::remote::bytes_fetched()));
                     },
                 );
             ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr()).with_style(style)
@@ -206,6 +227,26 @@ pub fn timed_out() -> Option<String> {
         .then(|| format!("stopped at the --timeout of {t} s"))
 }
 
+/// What the progress line adds for `bytes` fetched from remote stores: nothing when none.
+fn fetched(bytes: u64) -> String {
+    if bytes == 0 {
+        return String::new();
+    }
+    format!(", {} fetched", slabscope::error::short_bytes(bytes))
+}
+
+/// Runs `work`, reading the input `path`, with a line on stderr saying so, the time and the
+/// bytes fetched when `path` is a URL (a store read where it lives).
+pub fn while_reading<T>(path: &std::path::Path, work: impl FnOnce() -> T) -> T {
+    if !slabscope::formats::remote::is_url(path) {
+        return work();
+    }
+    // Named as errors name it: no user name, password or query, nothing raw.
+    let shown = slabscope::formats::remote::shown_text(&path.to_string_lossy());
+    let _line = Bar::fetching(format!("reading {}", slabscope::error::shown(&shown)));
+    work()
+}
+
 /// Runs `work` with a monitor that draws its progress in a bar on stderr and stops at the
 /// `--timeout`.
 pub fn with_bar<T>(work: impl FnOnce(&Monitor) -> T) -> T {
@@ -220,6 +261,13 @@ mod tests {
 
     fn secs(s: f64) -> Duration {
         Duration::from_secs_f64(s)
+    }
+
+    #[test]
+    fn bytes_fetched_are_said_once_there_are_any() {
+        assert_eq!(fetched(0), "");
+        assert!(fetched(3 << 20).starts_with(", 3"), "{}", fetched(3 << 20));
+        assert!(fetched(3 << 20).ends_with(" fetched"));
     }
 
     #[test]

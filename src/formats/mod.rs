@@ -268,7 +268,9 @@ fn named(path: &Path) -> std::borrow::Cow<'_, Path> {
 /// dataset): the finest such, its [`Volume::level`](crate::Volume::level) saying which,
 /// quantized with its own range (level 0's is not known until level 0 is read). `None` for every
 /// other file, and when level 0 itself has at most `max_voxels` voxels. A first picture while
-/// [`load`] reads level 0.
+/// [`load`] reads level 0. With `max_voxels` 0, the coarsest level the file holds (for `info`'s
+/// statistics of a remote store); its [`Volume::unread_finest`](crate::Volume::unread_finest)
+/// gives level 0's grid.
 pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Loaded>> {
     check_input(path)?;
     let read =

@@ -74,6 +74,13 @@ pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
 /// Reads the URL `path`: a Zarr store, read in place (files of every other format are refused
 /// by name, unread: they are read from a file).
 fn read_url(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
+    check_url(path, opts)?;
+    Ok((Format::OmeZarr, zarr::Zarr.read(&Source::new(path), opts)?))
+}
+
+/// Fails for the URL `path` when its name says a file of another format than Zarr's (read from
+/// disk), or when `opts` do not fit a store.
+fn check_url(path: &Path, opts: &LoadOptions) -> Result<()> {
     let shown = super::remote::shown_text(&path.to_string_lossy());
     let lower = shown.to_string_lossy().to_ascii_lowercase();
     let lower = lower.trim_end_matches('/');
@@ -90,7 +97,7 @@ fn read_url(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
     for reader in READERS {
         reader.check_options(path, true, opts)?;
     }
-    Ok((Format::OmeZarr, zarr::Zarr.read(&Source::new(path), opts)?))
+    Ok(())
 }
 
 /// Whether the file name says a volume slabscope reads (content decides when it is loaded; a
@@ -158,6 +165,9 @@ pub(super) fn preview(
     opts: &LoadOptions,
     max_voxels: usize,
 ) -> Result<Option<(Format, Read0)>> {
+    if super::remote::is_url(path) {
+        check_url(path, opts)?;
+    }
     let source = Source::new(path);
     for reader in READERS {
         if let Some(read) = reader.preview(&source, opts, max_voxels)? {

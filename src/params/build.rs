@@ -3,10 +3,10 @@
 
 use super::table::{
     ARRAY, AXIS, AXIS_BY, BACKGROUND, BINS, BLOCK, CHANNEL, COLORMAP, DIMS, ELEVATION, ENDIAN,
-    GAIN, GAP, HIGHLIGHT, INCLUDE_LOCALIZERS, LABEL_IMAGE, LEVEL, MAX_MEMORY, METHOD, MODE,
-    NO_LABELS, NO_OUTLINES, NO_SHADING, OFFSET, PAPER, PERSPECTIVE, PHASE_SUBSET, PHASES,
-    RAY_SPACING, REFINE, RESAMPLE, SAMPLE_SPACING, SCRATCH, SERIES, SHOW_PHI, SLABS, SOLO, SPACING,
-    SPREAD, STEP, TF, THREADS, THRESHOLD, TYPE, VOLUME, WINDOW, ZOOM,
+    ENDPOINT, GAIN, GAP, HIGHLIGHT, INCLUDE_LOCALIZERS, LABEL_IMAGE, LEVEL, MAX_MEMORY, METHOD,
+    MISSING_AS_FILL, MODE, NO_LABELS, NO_OUTLINES, NO_SHADING, OFFSET, PAPER, PERSPECTIVE,
+    PHASE_SUBSET, PHASES, RAY_SPACING, REFINE, RESAMPLE, SAMPLE_SPACING, SCRATCH, SERIES, SHOW_PHI,
+    SLABS, SOLO, SPACING, SPREAD, STEP, TF, THREADS, THRESHOLD, TYPE, VOLUME, WINDOW, ZOOM,
 };
 use super::{Given, text};
 use crate::analysis::AnalysisParams;
@@ -120,6 +120,8 @@ impl Given {
             },
             zarr: ZarrOptions {
                 label_image: self.parsed(&LABEL_IMAGE, text::any)?,
+                endpoint: self.parsed(&ENDPOINT, text::any)?,
+                missing_as_fill: self.switch(&MISSING_AS_FILL)?,
             },
             scratch: self
                 .parsed(&SCRATCH, text::any)?

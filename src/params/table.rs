@@ -351,7 +351,8 @@ pub const RESOLUTION: Param = named(
     "auto|full|K",
     "The pyramid level to compute on: full (every voxel, the paper's method), auto (the coarsest \
      level with at least 128 voxels along every axis), or a level number K (each level halves \
-     every axis, averaging 2x2x2 blocks)",
+     every axis, averaging 2x2x2 blocks; for an OME-Zarr store, K names the store's K-th dataset \
+     when its datasets make the pyramid, halving y and x only if they do)",
     Takes::Text {
         valid: |s| text::resolution(s).is_some(),
         expected: "auto, full or a pyramid level number",
@@ -561,6 +562,28 @@ pub const LABEL_IMAGE: Param = named(
     },
 );
 
+pub const ENDPOINT: Param = named(
+    "endpoint",
+    "endpoint",
+    "URL",
+    "The S3 endpoint an s3:// store is read at, path-style (MinIO, Ceph, a local S3 server), \
+     before AWS_ENDPOINT_URL_S3 and AWS_ENDPOINT_URL",
+    Takes::Text {
+        valid: |s| s.starts_with("http://") || s.starts_with("https://"),
+        expected: "an http:// or https:// URL",
+        default: None,
+        hyphens: false,
+    },
+);
+
+pub const MISSING_AS_FILL: Param = param(
+    "missing_as_fill",
+    "missing-as-fill",
+    "Read a chunk of a store at a URL that the server refuses (HTTP 403, as public S3 answers for \
+     a chunk never written) as the fill value, as a chunk not written, rather than an error",
+    Takes::Switch,
+);
+
 /// How to read the input.
 pub const LOAD: &[&Param] = &[
     &DIMS,
@@ -579,6 +602,8 @@ pub const LOAD: &[&Param] = &[
     &RESAMPLE,
     &SHOW_PHI,
     &LABEL_IMAGE,
+    &ENDPOINT,
+    &MISSING_AS_FILL,
 ];
 
 /// The pictures' and slices' own entries.

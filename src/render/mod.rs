@@ -26,7 +26,7 @@ pub use camera::{Camera, CameraParams};
 pub use figure::draw_figure;
 pub use layout::{DEFAULT_SPREAD, Gap, Layout, MIN_GAP, Placement, Stack};
 pub use output::{Image, ImageOutput, encode, paste_centred};
-pub use pyramid::{VOXELS_PER_PIXEL, pyramid_level};
+pub use pyramid::{VOXELS_PER_PIXEL, halving_grids, pyramid_level, pyramid_level_in};
 pub use transfer::{
     Colormap, HISTOGRAM_BINS, MAX_LABELS, Preset, Transfer, TransferChoice, label_values,
 };
@@ -397,9 +397,9 @@ impl<'a> Renderer<'a> {
         params: &RenderParams,
         content: &Aabb,
     ) -> Result<(Camera, usize)> {
-        let (dims, spacing) = (self.volume.dims(), self.volume.spacing());
-        let display = self.volume.transform().display_frame(layout.axis, spacing);
-        framed((dims, spacing, display), layout, params, content)
+        let grids = self.volume.level_grids();
+        let display = (self.volume.transform()).display_frame(layout.axis, self.volume.spacing());
+        framed((&grids, display), layout, params, content)
     }
 
     /// Draws what `params` asks over `image`: outlines and slab numbers, and the orientation
@@ -423,17 +423,18 @@ impl<'a> Renderer<'a> {
     }
 }
 
-/// The camera of `params` around a volume of `dims` voxels `spacing` apart (shown in the frame
-/// `display` when its orientation is known) with `layout`'s slabs moved, fitted to what is
-/// drawn: `content` (the box of what is not clear, mm) and the labels' room; and the coarsest
-/// pyramid level its pixels allow ([`pyramid_level`], at the scene's nearest depth for a
-/// perspective camera). Slabs moved absurdly far are an error.
+/// The camera of `params` around a volume whose pyramid levels have the dimensions and spacing
+/// `grids` (level 0's first; shown in the frame `display` when its orientation is known) with
+/// `layout`'s slabs moved, fitted to what is drawn: `content` (the box of what is not clear, mm)
+/// and the labels' room; and the coarsest pyramid level its pixels allow ([`pyramid_level_in`],
+/// at the scene's nearest depth for a perspective camera). Slabs moved absurdly far are an error.
 fn framed(
-    (dims, spacing, display): ([usize; 3], [f64; 3], Option<DisplayFrame>),
+    (grids, display): (&[pyramid::LevelGrid], Option<DisplayFrame>),
     layout: &Layout,
     params: &RenderParams,
     content: &Aabb,
 ) -> Result<(Camera, usize)> {
+    let (dims, spacing) = grids[0];
     let extent: [f64; 3] = std::array::from_fn(|m| (dims[m] - 1) as f64 * spacing[m]);
     let reference = min_spacing(spacing);
     let center = extent.map(|e| e / 2.0);
@@ -452,7 +453,7 @@ fn framed(
     let points = overlay::scene_points(layout, content, params);
     camera.fit(&points, MARGIN, room);
     let pixel = camera.pixel_size(&points);
-    let level = pyramid_level(pixel, camera.axes(), dims, spacing);
+    let level = pyramid_level_in(pixel, camera.axes(), grids);
     Ok((camera, level))
 }
 

@@ -5,46 +5,76 @@
 
 use crate::geometry::dot;
 use crate::volume::Volume;
-use crate::volume::pyramid::{coarser_dims, step};
+use crate::volume::pyramid::{chain_dims, steps_after};
+
+/// A pyramid level's dimensions and spacing (mm).
+pub type LevelGrid = ([usize; 3], [f64; 3]);
 
 /// Voxels per pixel, along both screen axes, that a pyramid level must give for the next one to
 /// be read instead.
 pub const VOXELS_PER_PIXEL: f64 = 2.0;
 
-/// The pyramid level a picture reads from a volume of `dims` voxels `spacing` mm apart, when
-/// its pixels are `pixel` mm across and its screen axes are the unit physical directions
-/// `right` and `up`: the coarsest level k such that level k − 1 gives at least
-/// [`VOXELS_PER_PIXEL`] along both, 0 when level 0 gives fewer.
-///
-/// A level with spacing `s` gives `pixel · ‖(r_x/s_x, r_y/s_y, r_z/s_z)‖` voxels per pixel along
-/// a screen axis `r`; an axis of one voxel holds no voxels to count and is left out (it is never
-/// halved, see [`step`]).
+/// The pyramid level a picture reads from a volume of `dims` voxels `spacing` mm apart whose
+/// pyramid halves every axis, when its pixels are `pixel` mm across and its screen axes are the
+/// unit physical directions `right` and `up`: [`pyramid_level_in`] of that pyramid's levels.
 #[must_use]
 pub fn pyramid_level(
     pixel: f64,
-    (right, up): ([f64; 3], [f64; 3]),
+    axes: ([f64; 3], [f64; 3]),
     dims: [usize; 3],
     spacing: [f64; 3],
+) -> usize {
+    pyramid_level_in(pixel, axes, &halving_grids(dims, spacing))
+}
+
+/// The dimensions and spacing of every level of the pyramid that halves every axis of a level 0
+/// of `dims` voxels `spacing` mm apart (as [`Volume::level_grids`] gives a volume's own).
+#[must_use]
+pub fn halving_grids(dims: [usize; 3], spacing: [f64; 3]) -> Vec<([usize; 3], [f64; 3])> {
+    let steps = steps_after(dims, &[]);
+    let mut factor = [1usize; 3];
+    let mut grids = vec![(dims, spacing)];
+    for (s, d) in steps
+        .iter()
+        .zip(chain_dims(dims, &steps).into_iter().skip(1))
+    {
+        factor = std::array::from_fn(|m| factor[m] * s[m]);
+        grids.push((d, std::array::from_fn(|m| spacing[m] * factor[m] as f64)));
+    }
+    grids
+}
+
+/// The pyramid level a picture reads from a pyramid whose levels have the dimensions and
+/// spacing `grids` (level 0's first), when its pixels are `pixel` mm across and its screen axes
+/// are the unit physical directions `right` and `up`: the coarsest level k such that level k − 1
+/// gives at least [`VOXELS_PER_PIXEL`] along both, 0 when level 0 gives fewer.
+///
+/// A level with spacing `s` gives `pixel · ‖(r_x/s_x, r_y/s_y, r_z/s_z)‖` voxels per pixel along
+/// a screen axis `r`; an axis of one voxel holds no voxels to count and is left out (it is never
+/// halved).
+#[must_use]
+pub fn pyramid_level_in(
+    pixel: f64,
+    (right, up): ([f64; 3], [f64; 3]),
+    grids: &[([usize; 3], [f64; 3])],
 ) -> usize {
     if !(pixel.is_finite() && pixel > 0.0) {
         return 0;
     }
-    let (mut level, mut dims, mut spacing) = (0, dims, spacing);
     let per_pixel = |r: [f64; 3], dims: [usize; 3], spacing: [f64; 3]| {
         let across: [f64; 3] =
             std::array::from_fn(|m| if dims[m] > 1 { r[m] / spacing[m] } else { 0.0 });
         pixel * dot(across, across).sqrt()
     };
-    while dims.iter().any(|&n| n > 1)
-        && per_pixel(right, dims, spacing) >= VOXELS_PER_PIXEL
-        && per_pixel(up, dims, spacing) >= VOXELS_PER_PIXEL
-    {
-        let s = step(dims);
-        spacing = std::array::from_fn(|m| spacing[m] * s[m] as f64);
-        dims = coarser_dims(dims);
-        level += 1;
-    }
-    level
+    grids
+        .iter()
+        .take(grids.len().saturating_sub(1))
+        .take_while(|&&(dims, spacing)| {
+            dims.iter().any(|&n| n > 1)
+                && per_pixel(right, dims, spacing) >= VOXELS_PER_PIXEL
+                && per_pixel(up, dims, spacing) >= VOXELS_PER_PIXEL
+        })
+        .count()
 }
 
 /// A pyramid level's voxel grid seen from level 0's millimetres (voxel indices times level 0's

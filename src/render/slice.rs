@@ -14,7 +14,7 @@ use tiny_skia::{Paint, Pixmap, Rect, Transform};
 
 use super::overlay::{Aabb, draw_digits, section};
 use super::pyramid::Grid;
-use super::{MAX_PIXELS, Transfer, paste_centred, pyramid_level, sample};
+use super::{MAX_PIXELS, Transfer, paste_centred, pyramid_level_in, sample};
 use crate::error::{Error, Result};
 use crate::geometry::{cross, dot, min_spacing, normalize};
 use crate::render::Stack;
@@ -223,7 +223,7 @@ pub fn slice(
         .ok_or_else(|| Error::invalid("size", format!("{w}x{h}"), "an image that fits"))?;
     // The picture reads the pyramid level its pixels allow (the voxel readouts of a slice
     // view read level 0 themselves).
-    let pyramid_level = pyramid_level(pixel, (frame.right, frame.up), dims, spacing);
+    let pyramid_level = pyramid_level_in(pixel, (frame.right, frame.up), &volume.level_grids());
     let coarse = (pyramid_level > 0).then(|| volume.coarser(pyramid_level));
     let level = coarse.as_deref().unwrap_or(volume);
     let plane = Plane {

@@ -96,7 +96,7 @@ fn a_small_picture_of_a_large_volume_reads_a_coarse_level() {
     let params = RenderParams::default();
     let extent = [2047.0; 3];
     let (camera, level) = framed(
-        ([2048; 3], [1.0; 3], None),
+        (&halving_grids([2048; 3], [1.0; 3]), None),
         &Layout::whole(Z),
         &params,
         &Aabb::of(extent),
@@ -114,7 +114,7 @@ fn a_small_picture_of_a_large_volume_reads_a_coarse_level() {
     };
     let layout = Layout::from_slabs(&stack, &[(0, 1024), (1024, 2048)], None, Gap::Uniform, 0.5);
     let (camera, level) = framed(
-        ([2048; 3], [1.0; 3], None),
+        (&halving_grids([2048; 3], [1.0; 3]), None),
         &layout,
         &params,
         &Aabb::of(extent),
@@ -125,7 +125,7 @@ fn a_small_picture_of_a_large_volume_reads_a_coarse_level() {
     assert_eq!(level, 3);
     // The same at 0.5 mm along z (a twice as thin box): only one level less along up.
     let (_, level) = framed(
-        ([2048; 3], [1.0, 1.0, 0.5], None),
+        (&halving_grids([2048; 3], [1.0, 1.0, 0.5]), None),
         &Layout::whole(Z),
         &params,
         &Aabb::of([2047.0, 2047.0, 1023.5]),

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::{GeometryReport, SCHEMA_VERSION};
+use super::{GeometryReport, ResolutionReport, SCHEMA_VERSION};
 use crate::error::Result;
 use crate::formats::Loaded;
 use crate::volume::VoxelType;
@@ -53,6 +53,10 @@ pub struct InfoReport {
     pub geometry: GeometryReport,
     /// Voxel counts over equal bins between the smallest and largest finite voxel.
     pub histogram: Vec<u64>,
+    /// The pyramid level `range`, `mean`, `missing` and `histogram` were taken from when not
+    /// from every voxel (a remote store's coarsest dataset, unless `--exact`); null when from
+    /// every voxel.
+    pub statistics_from: Option<ResolutionReport>,
     /// What the loader noticed (a 4D file, a volume picked, ...).
     pub notes: Vec<String>,
     /// What the reader tells besides the volume, under each reader's key (`dicom`, `ome_zarr`,
@@ -64,6 +68,26 @@ pub struct InfoReport {
 impl InfoReport {
     /// The report of `loaded`, read from the file `file`, with a histogram of `bins` bins.
     pub fn new(file: &str, loaded: &Loaded, bins: usize) -> Result<Self> {
+        let report = Self::of_volume(file, loaded, bins)?;
+        let v = &loaded.volume;
+        // A level read without level 0: the statistics are its, the grid level 0's.
+        let Some(finest) = v.unread_finest() else {
+            return Ok(report);
+        };
+        let voxels = finest.dims.iter().product::<usize>();
+        Ok(Self {
+            dims: finest.dims,
+            spacing: finest.spacing,
+            voxels,
+            stored_bytes: (voxels * v.voxel_type().size()) as u64,
+            geometry: GeometryReport::of_grid(&finest.transform, finest.dims),
+            statistics_from: Some(ResolutionReport::of(v)),
+            ..report
+        })
+    }
+
+    /// The report of `loaded`'s volume as it is.
+    fn of_volume(file: &str, loaded: &Loaded, bins: usize) -> Result<Self> {
         let v = &loaded.volume;
         let s = v.stats();
         let finite = s.finite > 0;
@@ -85,6 +109,7 @@ impl InfoReport {
             stored_bytes: v.stored_bytes(),
             geometry: GeometryReport::of(v),
             histogram: v.histogram(bins)?,
+            statistics_from: None,
             notes: loaded.notes.clone(),
             details: loaded.details_json(),
         })

@@ -213,12 +213,17 @@ pub struct GeometryReport {
 impl GeometryReport {
     /// The geometry of `volume`.
     pub fn of(volume: &Volume) -> Self {
-        let t = volume.transform();
+        Self::of_grid(volume.transform(), volume.dims())
+    }
+
+    /// The geometry of a volume of `dims` voxels placed by `t`.
+    #[must_use]
+    pub fn of_grid(t: &crate::geometry::WorldTransform, dims: [usize; 3]) -> Self {
         Self {
             affine: t.matrix,
             orientation: t.axcodes(),
             orthogonal: t.is_orthogonal(),
-            world_bounds: t.world_bounds(volume.dims()),
+            world_bounds: t.world_bounds(dims),
         }
     }
 }
@@ -432,6 +437,7 @@ mod tests {
                 ".range",
                 ".schema_version",
                 ".spacing",
+                ".statistics_from",
                 ".stored_bytes",
                 ".type",
                 ".voxels",

@@ -28,7 +28,7 @@ impl Level {
     /// the volume's last is an error about `resolution`.
     pub fn wanted(self, volume: &Volume) -> Result<usize> {
         match self {
-            Self::Asked(resolution, _) => resolution.level(volume.dims(), volume.coarser_levels()),
+            Self::Asked(resolution, _) => resolution.level(&volume.level_dims()),
             Self::Picture => Ok(0),
         }
     }

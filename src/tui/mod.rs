@@ -41,7 +41,7 @@ use theme::Theme;
 /// The pyramid level of `volume`'s preview (the budget planner's glance): 0 when it is small
 /// enough to compute at full resolution at once.
 pub fn preview_level(volume: &slabscope::Volume) -> usize {
-    slabscope::budget::glance_level(volume.dims())
+    slabscope::budget::glance_level(volume)
 }
 
 /// What the TUI opens and how.

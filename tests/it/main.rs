@@ -40,3 +40,4 @@ mod vti;
 mod vtk;
 mod zarr;
 mod zarr_bombs;
+mod zarr_levels;

@@ -78,6 +78,7 @@ fn remote_stores_read_as_the_local_ones_voxel_for_voxel() {
         let cells = LoadOptions {
             zarr: ZarrOptions {
                 label_image: Some("cells".into()),
+                ..ZarrOptions::default()
             },
             ..LoadOptions::default()
         };
@@ -131,29 +132,101 @@ fn reports_equal_the_local_stores() {
             json
         };
         assert_eq!(report(&url), report(s(&local)), "{name}");
-        let info = |input: &str| {
-            let ran = run(&["info", "--json", input]);
+        let info = |input: &str, exact: bool| {
+            let mut args = vec!["info", "--json", input];
+            if exact {
+                args.push("--exact");
+            }
+            let ran = run(&args);
             assert!(ran.ok, "{input}: {}", ran.stderr);
             let mut json: serde_json::Value = serde_json::from_str(&ran.stdout).unwrap();
             json["file"] = serde_json::Value::Null;
             json
         };
-        assert_eq!(info(&url), info(s(&local)), "{name}");
+        let local_info = info(s(&local), false);
+        assert_eq!(info(&url, true), local_info, "{name}");
+        assert!(local_info["statistics_from"].is_null());
+        // Without --exact, the statistics of the store's coarsest dataset, the rest level 0's.
+        let mut coarse = info(&url, false);
+        let coarsest = loaded(&local.clone(), &LoadOptions::default()).volume;
+        let top = if name == "v04_blosc.ome.zarr" { 2 } else { 0 };
+        if top == 0 {
+            assert_eq!(
+                coarse, local_info,
+                "{name}: no coarser dataset, level 0 read"
+            );
+            continue;
+        }
+        let level = coarsest.coarser(top);
+        let from = &coarse["statistics_from"];
+        assert_eq!(from["pyramid_level"], top, "{name}");
+        assert_eq!(from["dims"], serde_json::json!(level.dims()), "{name}");
+        let stats = level.stats();
+        assert_eq!(
+            coarse["range"],
+            serde_json::json!([stats.min, stats.max]),
+            "{name}"
+        );
+        assert_eq!(coarse["mean"], serde_json::json!(stats.mean), "{name}");
+        for key in [
+            "statistics_from",
+            "range",
+            "mean",
+            "histogram",
+            "memory_bytes",
+        ] {
+            coarse[key] = local_info[key].clone();
+        }
+        assert_eq!(
+            coarse, local_info,
+            "{name}: level 0's grid, type and details"
+        );
     }
 }
 
-/// `info` fetches the metadata once each and the chunks of level 0, nothing more.
+/// `info` of a remote store fetches the metadata once each and the chunks of the store's
+/// coarsest dataset, no chunk of level 0; `--exact` the chunks of level 0 instead.
 #[test]
-fn info_makes_few_requests() {
+fn info_reads_the_coarsest_level_and_exact_level_0() {
     let server = serve(&zarr(), Mode::Normal, "");
     let name = "v04_blosc.ome.zarr";
     let ran = run(&["info", &server.url(name)]);
     assert!(ran.ok, "{}", ran.stderr);
+    assert!(
+        ran.stdout
+            .contains("statistics  from pyramid level 2 (4x3x3, a voxel for 4x4x4 of level 0's)"),
+        "{}",
+        ran.stdout
+    );
+    assert!(
+        ran.stdout.contains("dims        14x12x10"),
+        "{}",
+        ran.stdout
+    );
     let asked = server.requests();
-    let is_metadata = |r: &String| {
-        let name = r.split(' ').nth(1).unwrap().rsplit('/').next().unwrap();
-        name.starts_with('.') || name == "zarr.json"
-    };
+    let chunks: Vec<&String> = asked.iter().filter(|r| !is_metadata(r)).collect();
+    // Level 2 (4×3×3 in chunks of 4×5×6: one chunk), nothing of level 0 or 1.
+    assert!(chunks.iter().all(|r| r.contains("/s2/")), "{chunks:#?}");
+    assert_eq!(chunks.len(), 1, "{asked:#?}");
+    // The metadata as for level 0 (below), each once.
+    assert_eq!(asked.len() - chunks.len(), 12, "{asked:#?}");
+    assert!(asked.len() <= 13, "{asked:#?}");
+}
+
+/// Whether the logged request `r` asks for a metadata file.
+fn is_metadata(r: &str) -> bool {
+    let name = r.split(' ').nth(1).unwrap().rsplit('/').next().unwrap();
+    name.starts_with('.') || name == "zarr.json"
+}
+
+/// `info --exact` fetches the metadata once each and the chunks of level 0, nothing more.
+#[test]
+fn info_makes_few_requests() {
+    let server = serve(&zarr(), Mode::Normal, "");
+    let name = "v04_blosc.ome.zarr";
+    let ran = run(&["info", "--exact", &server.url(name)]);
+    assert!(ran.ok, "{}", ran.stderr);
+    let asked = server.requests();
     let chunks: Vec<&String> = asked.iter().filter(|r| !is_metadata(r)).collect();
     assert!(chunks.iter().all(|r| r.contains("/s0/")), "{chunks:#?}");
     let metadata = asked.len() - chunks.len();
@@ -199,11 +272,12 @@ fn each_failure_of_the_server_is_one_line_naming_the_url() {
     says(&e, &url, &["zarr.json: HTTP 403 Forbidden", "public"]);
     let (url, e) = failure(Mode::Status(401), "");
     says(&e, &url, &["HTTP 401 Unauthorized"]);
-    let (url, e) = failure(Mode::Status(403), "/s0/0");
-    says(&e, &url, &["chunk s0/0/0/0: HTTP 403 Forbidden"]);
-    let (url, e) = failure(Mode::Status(500), "/s0/0");
+    // `info` reads the coarsest dataset's chunk, s2/0/0/0.
+    let (url, e) = failure(Mode::Status(403), "/s2/0");
+    says(&e, &url, &["chunk s2/0/0/0: HTTP 403 Forbidden"]);
+    let (url, e) = failure(Mode::Status(500), "/s2/0");
     says(&e, &url, &["HTTP 500 Internal Server Error, after 3 tries"]);
-    let (url, e) = failure(Mode::Truncate, "/s0/0");
+    let (url, e) = failure(Mode::Truncate, "/s2/0");
     says(&e, &url, &["ended", "Content-Length"]);
     let (url, e) = failure(Mode::Truncate, ".zattrs");
     says(&e, &url, &[".zattrs", "Content-Length"]);
@@ -224,13 +298,54 @@ fn each_failure_of_the_server_is_one_line_naming_the_url() {
 }
 
 #[test]
+fn a_chunk_refused_is_the_fill_value_with_missing_as_fill() {
+    let server = serve(&zarr(), Mode::Status(403), "/s2/0");
+    let url = server.url("v04_blosc.ome.zarr");
+    let refused = run(&["info", &url]);
+    says(
+        &refused.stderr,
+        &url,
+        &["chunk s2/0/0/0: HTTP 403 Forbidden", "--missing-as-fill"],
+    );
+    let filled = run(&["info", "--json", &url, "--missing-as-fill"]);
+    assert!(filled.ok, "{}", filled.stderr);
+    let json: serde_json::Value = serde_json::from_str(&filled.stdout).unwrap();
+    // Level 2's one chunk, the fill value (0) throughout.
+    assert_eq!(json["range"], serde_json::json!([0.0, 0.0]), "{json}");
+    assert_eq!(json["statistics_from"]["pyramid_level"], 2);
+}
+
+#[test]
+fn a_bioformats2raw_container_at_a_url_names_its_first_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let container = dir.path().join("plate.zarr");
+    crate::common::copy_tree(&zarr().join("v04_blosc.ome.zarr"), &container.join("0"));
+    std::fs::write(container.join(".zgroup"), r#"{"zarr_format": 2}"#).unwrap();
+    std::fs::write(container.join(".zattrs"), r#"{"bioformats2raw.layout": 3}"#).unwrap();
+    let server = serve(dir.path(), Mode::Normal, "");
+    let url = server.url("plate.zarr");
+    let ran = run(&["info", &url]);
+    says(
+        &ran.stderr,
+        &url,
+        &[
+            "bioformats2raw container",
+            "cannot be listed",
+            &format!("{url}/0 for the first"),
+        ],
+    );
+    let image = run(&["info", "--exact", &format!("{url}/0")]);
+    assert!(image.ok, "{}", image.stderr);
+}
+
+#[test]
 fn a_500_that_passes_is_retried() {
     // The server answers 500 once for each path, then serves it: the read succeeds.
     let server = serve(&zarr(), Mode::Flaky, "");
     let ran = run(&["info", &server.url("v04_blosc.ome.zarr")]);
     assert!(ran.ok, "{}", ran.stderr);
     let asked = server.requests();
-    assert!(asked.iter().any(|r| r.contains("/s0/0")), "{asked:?}");
+    assert!(asked.iter().any(|r| r.contains("/s2/0")), "{asked:?}");
 }
 
 #[test]
@@ -299,7 +414,7 @@ fn s3_stores_are_read_at_an_endpoint() {
     let server = serve(&data(""), Mode::Status(403), "zarr.json");
     let info = |input: &str, endpoint: Option<&str>| {
         let mut command = crate::common::slabscope();
-        command.args(["info", "--json", input]);
+        command.args(["info", "--json", "--exact", input]);
         command.env_remove("AWS_ENDPOINT_URL_S3");
         match endpoint {
             Some(e) => command.env("AWS_ENDPOINT_URL", e),
@@ -314,6 +429,21 @@ fn s3_stores_are_read_at_an_endpoint() {
     let s3 = "s3://zarr/v04_blosc.ome.zarr";
     let local = zarr().join("v04_blosc.ome.zarr");
     assert_eq!(info(s3, Some(&server.base)), info(s(&local), None));
+    // --endpoint names it, before the environment's (here an endpoint with nothing there).
+    let flagged: crate::common::Ran = crate::common::slabscope()
+        .args(["info", "--json", "--exact", s3, "--endpoint", &server.base])
+        .env(
+            "AWS_ENDPOINT_URL",
+            format!("http://127.0.0.1:{}", closed_port()),
+        )
+        .env_remove("AWS_ENDPOINT_URL_S3")
+        .output()
+        .unwrap()
+        .into();
+    assert!(flagged.ok, "{}", flagged.stderr);
+    let mut json: serde_json::Value = serde_json::from_str(&flagged.stdout).unwrap();
+    json["file"] = serde_json::Value::Null;
+    assert_eq!(json, info(s(&local), None));
     let asked = server.requests();
     assert!(
         asked
@@ -325,12 +455,12 @@ fn s3_stores_are_read_at_an_endpoint() {
     let (url, e) = failure(Mode::Status(403), "zarr.json");
     says(&e, &url, &["zarr.json: HTTP 403 Forbidden"]);
     // A chunk answered 403 is an error on S3 too, naming the s3:// URL.
-    let server = serve(&data(""), Mode::Status(403), "/s0/0");
+    let server = serve(&data(""), Mode::Status(403), "/s2/0");
     let ran: crate::common::Ran = crate::common::slabscope()
         .args(["info", s3])
         .env("AWS_ENDPOINT_URL", &server.base)
         .output()
         .unwrap()
         .into();
-    says(&ran.stderr, s3, &["chunk s0/0/0/0: HTTP 403 Forbidden"]);
+    says(&ran.stderr, s3, &["chunk s2/0/0/0: HTTP 403 Forbidden"]);
 }

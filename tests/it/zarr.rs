@@ -119,6 +119,7 @@ fn the_store_s_coarser_datasets_are_the_pyramid_s_levels() {
     let opts = LoadOptions {
         zarr: ZarrOptions {
             label_image: Some("cells".into()),
+            ..ZarrOptions::default()
         },
         ..LoadOptions::default()
     };
@@ -248,6 +249,7 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     let opts = LoadOptions {
         zarr: ZarrOptions {
             label_image: Some("cells".into()),
+            ..ZarrOptions::default()
         },
         ..LoadOptions::default()
     };
@@ -271,6 +273,7 @@ fn sharded_gzip_with_an_unwritten_chunk_and_a_label_image() {
     let wrong = LoadOptions {
         zarr: ZarrOptions {
             label_image: Some("nuclei".into()),
+            ..ZarrOptions::default()
         },
         ..LoadOptions::default()
     };
@@ -495,6 +498,7 @@ fn metadata_and_label_images_out_of_the_store_are_refused() {
     let cells = LoadOptions {
         zarr: ZarrOptions {
             label_image: Some("cells".into()),
+            ..ZarrOptions::default()
         },
         ..LoadOptions::default()
     };

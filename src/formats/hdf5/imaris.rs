@@ -5,6 +5,7 @@
 //! in its `Unit`, µm when none) over its size. Imaris writes every attribute as text. A coarser
 //! resolution level on the pyramid's grid is the first picture (`load_preview`).
 
+use crate::volume::pyramid;
 use std::path::Path;
 
 use rust_hdf5::H5File;
@@ -142,7 +143,8 @@ pub(super) fn preview_level(
     let Some(dims0) = size_at(0)? else {
         return Ok(None);
     };
-    let wanted = crate::volume::pyramid::level_within(dims0, max_voxels);
+    let chain = pyramid::chain_dims(dims0, &pyramid::steps_after(dims0, &[]));
+    let wanted = pyramid::level_within(&chain, max_voxels);
     if wanted == 0 {
         return Ok(None);
     }
@@ -198,6 +200,30 @@ fn cut(bytes: &mut Vec<u8>, dims: [usize; 3], size: [usize; 3], elem: usize) {
         }
     }
     bytes.truncate(to);
+}
+
+/// The grid of level 0 (of `dims0`) of the file `coarse` was read from as a coarser level: the
+/// same extent (an Imaris image's `ExtMin` to `ExtMax`) cut into `dims0` voxels, so each axis's
+/// spacing scaled by its voxel counts' ratio and the first voxel's centre moved to half a fine
+/// voxel from the extent's corner.
+pub(super) fn finest(coarse: &crate::volume::Volume, dims0: [usize; 3]) -> pyramid::Finest {
+    let (dims, spacing) = (coarse.dims(), coarse.spacing());
+    let mut transform = *coarse.transform();
+    let mut spacing0 = spacing;
+    for a in 0..3 {
+        let ratio = dims[a] as f64 / dims0[a] as f64;
+        spacing0[a] = spacing[a] * ratio;
+        for row in 0..3 {
+            let column = transform.matrix[row][a];
+            transform.matrix[row][3] += 0.5 * column * (ratio - 1.0);
+            transform.matrix[row][a] = column * ratio;
+        }
+    }
+    pyramid::Finest {
+        dims: dims0,
+        spacing: spacing0,
+        transform,
+    }
 }
 
 #[cfg(test)]

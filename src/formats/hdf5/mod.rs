@@ -101,7 +101,8 @@ impl Reader for Hdf5 {
             return Ok(None);
         };
         let mut read = load_level(source, opts, level)?;
-        read.volume = read.volume.into_pyramid_level(k, dims0);
+        let finest = imaris::finest(&read.volume, dims0);
+        read.volume = read.volume.into_pyramid_level(k, finest, &[]);
         Ok(Some(read))
     }
 }

@@ -45,6 +45,8 @@ pub struct Client {
     slots: Slots,
     requests: AtomicU64,
     fetched: AtomicU64,
+    /// Whether a chunk answered 403 is missing (the fill value) rather than an error.
+    forbidden_missing: bool,
 }
 
 impl Client {
@@ -80,7 +82,18 @@ impl Client {
             slots: Slots::new(MAX_IN_FLIGHT),
             requests: AtomicU64::new(0),
             fetched: AtomicU64::new(0),
+            forbidden_missing: false,
         })
+    }
+
+    /// This client, taking a chunk the server refuses (403) as missing when `missing`
+    /// (`--missing-as-fill`), as a chunk it does not have (404).
+    #[must_use]
+    pub fn forbidden_as_missing(self, missing: bool) -> Self {
+        Self {
+            forbidden_missing: missing,
+            ..self
+        }
     }
 
     /// The store's URL.
@@ -142,6 +155,7 @@ impl Client {
                 return Ok(Answer::Short(body.len() as u64, n));
             }
             self.fetched.fetch_add(body.len() as u64, Ordering::Relaxed);
+            super::count_fetched(body.len() as u64);
             Ok(Answer::Body(if partial { body } else { cut(body, span) }))
         })?;
         match fetched {
@@ -201,6 +215,16 @@ impl Client {
                 // metadata file probed for (zarr.json of a v2 store) is then absent.
                 Ok(Answer::Status(403)) if self.url.s3.is_some() && super::is_metadata(key) => {
                     return Ok(None);
+                }
+                // A chunk refused, taken as missing when asked (`--missing-as-fill`).
+                Ok(Answer::Status(403)) if self.forbidden_missing && !super::is_metadata(key) => {
+                    return Ok(None);
+                }
+                Ok(Answer::Status(403)) if !super::is_metadata(key) => {
+                    return Err(format!(
+                        "{key}: HTTP 403 Forbidden (--missing-as-fill reads a chunk refused as \
+                         the fill value, as public S3 refuses a chunk never written)"
+                    ));
                 }
                 Ok(Answer::Status(status)) if status >= 500 => {
                     last = format!("HTTP {status} {}", reason(status));

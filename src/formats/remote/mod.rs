@@ -10,6 +10,22 @@
 #[cfg(feature = "remote")]
 pub mod http;
 
+/// The bytes of every answer's body fetched by this process, over every store.
+static FETCHED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// The bytes of the answers' bodies this process has fetched from remote stores so far (for a
+/// progress line; 0 when none was read).
+#[must_use]
+pub fn bytes_fetched() -> u64 {
+    FETCHED.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Counts `n` bytes fetched ([`bytes_fetched`]).
+#[cfg(feature = "remote")]
+fn count_fetched(n: u64) {
+    FETCHED.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+}
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -53,10 +69,16 @@ impl Url {
     /// The URL `text`, checked; the error says what is wrong, naming the URL without what it
     /// must not show ([`shown_text`]).
     pub fn parse(text: &str) -> Result<Self, String> {
+        Self::parse_at(text, None)
+    }
+
+    /// [`parse`](Self::parse), an `s3://` URL at `endpoint` when one is given (`--endpoint`),
+    /// before the endpoint the environment names.
+    pub fn parse_at(text: &str, endpoint: Option<&str>) -> Result<Self, String> {
         let scheme =
             scheme(text).ok_or_else(|| "not an http://, https:// or s3:// URL".to_string())?;
         if scheme == "s3" {
-            return Self::s3(text, |name| std::env::var(name).ok());
+            return Self::s3(text, endpoint, |name| std::env::var(name).ok());
         }
         let rest = &text[scheme.len() + 3..];
         let (authority, path) = rest.split_at(rest.find('/').unwrap_or(rest.len()));
@@ -81,12 +103,20 @@ impl Url {
         })
     }
 
-    /// The URL of `s3://bucket/prefix` (`text`), with `env` the environment: path-style at the
-    /// endpoint `AWS_ENDPOINT_URL_S3` or `AWS_ENDPOINT_URL` names, else AWS's own (the region
-    /// `AWS_REGION`, `AWS_DEFAULT_REGION` or us-east-1), virtual-hosted unless the bucket's name
-    /// holds a dot.
-    fn s3(text: &str, env: impl Fn(&str) -> Option<String>) -> Result<Self, String> {
+    /// The URL of `s3://bucket/prefix` (`text`), with `env` the environment: path-style at
+    /// `endpoint` (`--endpoint`) or the endpoint `AWS_ENDPOINT_URL_S3` or `AWS_ENDPOINT_URL`
+    /// names, else AWS's own (the region `AWS_REGION`, `AWS_DEFAULT_REGION` or us-east-1),
+    /// virtual-hosted unless the bucket's name holds a dot. Errors name the setting they are
+    /// about.
+    fn s3(
+        text: &str,
+        endpoint: Option<&str>,
+        env: impl Fn(&str) -> Option<String>,
+    ) -> Result<Self, String> {
         let rest = &text[5..];
+        if text.chars().any(|c| c.is_control() || c == ' ') {
+            return Err("an s3:// URL with spaces or control characters".into());
+        }
         if rest.contains(['@', '?', '#']) {
             return Err(
                 "an s3:// URL with a user name, query or fragment: slabscope reads \
@@ -104,29 +134,34 @@ impl Url {
             ));
         }
         let shown = format!("s3://{bucket}{prefix}");
-        let set = |name: &str| env(name).filter(|v| !v.trim().is_empty());
-        if let Some(endpoint) = set("AWS_ENDPOINT_URL_S3").or_else(|| set("AWS_ENDPOINT_URL")) {
+        let set = |name: &'static str| {
+            env(name)
+                .filter(|v| !v.trim().is_empty())
+                .map(|v| (name, v))
+        };
+        let endpoint = (endpoint.map(|e| ("--endpoint", e.to_string())))
+            .or_else(|| set("AWS_ENDPOINT_URL_S3"))
+            .or_else(|| set("AWS_ENDPOINT_URL"));
+        if let Some((name, endpoint)) = endpoint {
             if !matches!(scheme(endpoint.trim()), Some("http" | "https")) {
-                return Err("the endpoint AWS_ENDPOINT_URL names is not http(s)://".into());
+                return Err(format!("the endpoint {name} names is not http(s)://"));
             }
             let base = Self::parse(endpoint.trim())
-                .map_err(|e| format!("the endpoint AWS_ENDPOINT_URL names: {e}"))?;
+                .map_err(|e| format!("the endpoint {name} names: {e}"))?;
             return Ok(Self {
                 path: format!("{}/{bucket}{prefix}", base.path),
                 s3: Some(shown),
                 ..base
             });
         }
-        let region = set("AWS_REGION")
+        let (name, region) = set("AWS_REGION")
             .or_else(|| set("AWS_DEFAULT_REGION"))
-            .unwrap_or_else(|| "us-east-1".into());
+            .unwrap_or(("the default", "us-east-1".into()));
         if !region
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '-')
         {
-            return Err(format!(
-                "region {region:?} (AWS_REGION): not a region's name"
-            ));
+            return Err(format!("region {region:?} ({name}): not a region's name"));
         }
         let (host, path) = if bucket.contains('.') {
             (
@@ -288,7 +323,7 @@ mod tests {
     #[test]
     fn s3_urls_are_virtual_hosted_or_path_style_at_an_endpoint() {
         let none = |_: &str| None;
-        let url = Url::s3("s3://idr-public/zarr/1.ome.zarr/", none).unwrap();
+        let url = Url::s3("s3://idr-public/zarr/1.ome.zarr/", None, none).unwrap();
         assert_eq!(
             url.base(),
             "https://idr-public.s3.us-east-1.amazonaws.com/zarr/1.ome.zarr"
@@ -299,18 +334,36 @@ mod tests {
             "https://idr-public.s3.us-east-1.amazonaws.com/zarr/1.ome.zarr/0/.zarray"
         );
         let region = |n: &str| (n == "AWS_DEFAULT_REGION").then(|| "eu-west-2".to_string());
-        let dotted = Url::s3("s3://my.bucket/a", region).unwrap();
+        let dotted = Url::s3("s3://my.bucket/a", None, region).unwrap();
         assert_eq!(
             dotted.base(),
             "https://s3.eu-west-2.amazonaws.com/my.bucket/a"
         );
         let local = |n: &str| (n == "AWS_ENDPOINT_URL").then(|| "http://127.0.0.1:9000/".into());
-        let url = Url::s3("s3://bucket", local).unwrap();
+        let url = Url::s3("s3://bucket", None, local).unwrap();
         assert_eq!(url.base(), "http://127.0.0.1:9000/bucket");
-        assert!(Url::s3("s3://Bad_Bucket/a", none).is_err());
-        assert!(Url::s3("s3://b/a?x=1", none).is_err());
+        // --endpoint before the environment's.
+        let flag = Url::s3("s3://bucket/p", Some("https://minio.example:9000"), local).unwrap();
+        assert_eq!(flag.base(), "https://minio.example:9000/bucket/p");
+        assert!(Url::s3("s3://Bad_Bucket/a", None, none).is_err());
+        assert!(Url::s3("s3://b/a?x=1", None, none).is_err());
+        let e = Url::s3("s3://b/a\u{7}b", None, none).unwrap_err();
+        assert!(e.contains("control characters"), "{e}");
+        // Each error names the setting it is about.
         let bad = |n: &str| (n == "AWS_ENDPOINT_URL").then(|| "ftp://x".to_string());
-        assert!(Url::s3("s3://b/a", bad).is_err());
+        let e = Url::s3("s3://b/a", None, bad).unwrap_err();
+        assert_eq!(e, "the endpoint AWS_ENDPOINT_URL names is not http(s)://");
+        let bad = |n: &str| (n == "AWS_ENDPOINT_URL_S3").then(|| "ftp://x".to_string());
+        let e = Url::s3("s3://b/a", None, bad).unwrap_err();
+        assert_eq!(
+            e,
+            "the endpoint AWS_ENDPOINT_URL_S3 names is not http(s)://"
+        );
+        let e = Url::s3("s3://b/a", Some("ftp://x"), none).unwrap_err();
+        assert_eq!(e, "the endpoint --endpoint names is not http(s)://");
+        let bad = |n: &str| (n == "AWS_DEFAULT_REGION").then(|| "eu west".to_string());
+        let e = Url::s3("s3://b/a", None, bad).unwrap_err();
+        assert!(e.contains("(AWS_DEFAULT_REGION)"), "{e}");
         assert_eq!(join("labels/a", "0"), "labels/a/0");
     }
 }

@@ -21,10 +21,11 @@ pub struct Remote {
 }
 
 impl Remote {
-    /// The store at `url`.
-    pub fn new(url: Url) -> Result<Self, String> {
+    /// The store at `url`; a chunk answered 403 is missing (the fill value) when
+    /// `forbidden_missing` (`--missing-as-fill`), else an error.
+    pub fn new(url: Url, forbidden_missing: bool) -> Result<Self, String> {
         Ok(Self {
-            client: Client::new(url)?,
+            client: Client::new(url)?.forbidden_as_missing(forbidden_missing),
             metadata: Mutex::new(HashMap::new()),
         })
     }

@@ -151,7 +151,7 @@ pub fn label_names(root: &Root, image: &str) -> Result<Vec<String>, String> {
 /// user can name the image in it.
 pub fn container(attrs: &Value) -> Option<String> {
     let ome = ome_fields(attrs);
-    if attrs.get("bioformats2raw.layout").is_some() || ome.get("bioformats2raw.layout").is_some() {
+    if is_bioformats2raw(attrs) {
         return Some(
             "a bioformats2raw container of images: name one in it (its folder 0, 1, ...)".into(),
         );
@@ -163,6 +163,12 @@ pub fn container(attrs: &Value) -> Option<String> {
         return Some("an HCS well: name one image in it (its folder 0, 1, ...)".into());
     }
     None
+}
+
+/// Whether `attrs` are those of a bioformats2raw container (its images in groups `0`, `1`, ...).
+pub fn is_bioformats2raw(attrs: &Value) -> bool {
+    let key = "bioformats2raw.layout";
+    attrs.get(key).is_some() || ome_fields(attrs).get(key).is_some()
 }
 
 /// The first image of the `multiscales` in `attrs` (of a group in Zarr format `zarr_format`).

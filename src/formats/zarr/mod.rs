@@ -31,6 +31,7 @@ use super::remote::{is_url, join};
 use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
+use crate::volume::pyramid;
 
 /// What `info` shows of a store: the image read, its axes, levels, chunking and codecs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -88,6 +89,12 @@ pub struct ZarrLevel {
 pub struct ZarrOptions {
     /// Which label image of the store to read (`labels/NAME`) instead of its image.
     pub label_image: Option<String>,
+    /// The endpoint an `s3://` store is read at (`--endpoint`), before the one the environment
+    /// names (`AWS_ENDPOINT_URL_S3`, `AWS_ENDPOINT_URL`).
+    pub endpoint: Option<String>,
+    /// Whether a chunk of a store at a URL that the server refuses (HTTP 403) is read as the
+    /// fill value, as a chunk not written (`--missing-as-fill`), rather than an error.
+    pub missing_as_fill: bool,
 }
 
 /// The reader of an OME-Zarr store or a plain Zarr array (a folder).
@@ -212,7 +219,18 @@ fn read_image(root: &Root, node: &str) -> Result<(Image, Vec<ArrayMeta>)> {
     let image = match meta::array(root, node, zarr_format) {
         // A plain array: no OME metadata to read.
         Ok(array) => plain_image(&array, zarr_format).map_err(fail)?,
-        Err(_) => meta::image(&attrs, zarr_format).map_err(fail)?,
+        Err(_) => meta::image(&attrs, zarr_format).map_err(|m| {
+            // A server lists nothing: name the container's first image for the user.
+            fail(if root.is_remote() && meta::is_bioformats2raw(&attrs) {
+                format!(
+                    "a bioformats2raw container of images, which cannot be listed over HTTP: \
+                     name one of its images, {}/0 for the first (then /1, /2, ...)",
+                    shown.display()
+                )
+            } else {
+                m
+            })
+        })?,
     };
     let arrays = image
         .datasets
@@ -296,21 +314,20 @@ fn describe(
                 unit: a.unit.clone(),
             })
             .collect(),
-        levels: image
-            .datasets
-            .iter()
-            .zip(arrays)
-            .enumerate()
-            .map(|(i, (d, a))| ZarrLevel {
-                path: d.path.clone(),
-                shape: a.shape.clone(),
-                scale: d.scale.clone(),
-                pyramid_level: match i {
-                    0 => Some(0),
-                    _ => levels::pyramid_level(image, arrays, layout, i),
-                },
-            })
-            .collect(),
+        levels: {
+            let pyramid = levels::StorePyramid::of(image, arrays, layout);
+            (image.datasets.iter().zip(arrays).enumerate())
+                .map(|(i, (d, a))| ZarrLevel {
+                    path: d.path.clone(),
+                    shape: a.shape.clone(),
+                    scale: d.scale.clone(),
+                    pyramid_level: match i {
+                        0 => Some(0),
+                        _ => pyramid.level_of(i),
+                    },
+                })
+                .collect()
+        },
         data_type: first.dtype.clone(),
         chunks: first.chunks.clone(),
         inner_chunks: first.inner.clone(),
@@ -387,7 +404,7 @@ struct Opened {
 impl Opened {
     /// Opens the image of the store at `dir` (or the label image `opts` names).
     fn new(dir: &Path, opts: &LoadOptions) -> Result<Self> {
-        let root = Root::open(dir)?;
+        let root = Root::open(dir, &opts.zarr)?;
         let (node, name) = image_node(&root, opts)?;
         let image_path = root.shown(&node);
         let (image, arrays) = read_image(&root, &node)?;
@@ -448,23 +465,33 @@ impl Opened {
         }
     }
 
+    /// The dimensions, spacing and transform of dataset `i`, with notes on units not known.
+    fn grid(&self, i: usize, notes: &mut Vec<String>) -> pyramid::Finest {
+        let dataset = &self.image.datasets[i];
+        let (spacing, origin) = geometry(&self.image, dataset, &self.layout, notes);
+        let mut transform = WorldTransform::unknown(spacing);
+        for k in 0..3 {
+            transform.matrix[k][3] = origin[k];
+        }
+        let dims = self.layout.dims(&self.arrays[i].shape);
+        pyramid::Finest {
+            dims,
+            spacing,
+            transform,
+        }
+    }
+
     /// The volume of dataset `i`, with its spacing and origin, and the notes.
     fn read(&self, dir: &Path, i: usize, opts: &LoadOptions) -> Result<Read0> {
         let fail = |m: String| Error::format(&self.image_path, m);
         let mut notes = self.notes.clone();
-        let (spacing, origin) = geometry(
-            &self.image,
-            &self.image.datasets[i],
-            &self.layout,
-            &mut notes,
-        );
-        let dims = self.layout.dims(&self.arrays[i].shape);
+        let pyramid::Finest {
+            dims,
+            spacing,
+            transform: t,
+        } = self.grid(i, &mut notes);
         let stored = self.arrays[i].voxel_type().map_err(fail)?;
         let voxels = self.dataset(i, opts).voxels(dims)?;
-        let mut t = WorldTransform::unknown(spacing);
-        for k in 0..3 {
-            t.matrix[k][3] = origin[k];
-        }
         let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
         read0 = read0.with_transform(Some(t));
         if self.image.label {
@@ -480,33 +507,39 @@ impl Opened {
 fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let opened = Opened::new(dir, opts)?;
     let mut read0 = opened.read(dir, 0, opts)?;
-    if let Some(source) =
+    if let Some((source, steps)) =
         levels::StoreLevels::new(&opened.image, &opened.arrays, &opened.dataset(0, opts))
     {
-        read0.volume = read0.volume.with_level_source(Arc::new(source));
+        read0.volume = read0.volume.with_level_source(Arc::new(source), &steps);
     }
     Ok(read0)
 }
 
 /// The finest of the store's coarser datasets on the pyramid's grid with at most `max_voxels`
-/// voxels, read as that pyramid level of the image without reading level 0 (so quantized with
-/// its own range); `None` when level 0 itself has at most `max_voxels` voxels or no such dataset
-/// exists.
+/// voxels (with `max_voxels` 0, the coarsest), read as that pyramid level of the image without
+/// reading level 0 (so quantized with its own range); `None` when level 0 itself has at most
+/// `max_voxels` voxels or no such dataset exists.
 fn read_preview(dir: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Read0>> {
     let opened = Opened::new(dir, opts)?;
-    let dims0 = opened.layout.dims(&opened.arrays[0].shape);
-    let wanted = crate::volume::pyramid::level_within(dims0, max_voxels);
-    let best = (1..opened.arrays.len())
-        .filter_map(|i| {
-            let k = levels::pyramid_level(&opened.image, &opened.arrays, &opened.layout, i)?;
-            (k >= wanted).then_some((k, i))
-        })
-        .min();
+    let finest = opened.grid(0, &mut Vec::new());
+    let dims0 = finest.dims;
+    let pyramid = levels::StorePyramid::of(&opened.image, &opened.arrays, &opened.layout);
+    let chain = pyramid::chain_dims(dims0, &pyramid::steps_after(dims0, &pyramid.steps));
+    let wanted = match max_voxels {
+        0 => 1,
+        _ => pyramid::level_within(&chain, max_voxels),
+    };
+    let within = pyramid.levels.iter().copied().filter(|&(k, _)| k >= wanted);
+    let best = if max_voxels == 0 {
+        within.max()
+    } else {
+        within.min()
+    };
     let (Some((k, i)), 1..) = (best, wanted) else {
         return Ok(None);
     };
     let mut read0 = opened.read(dir, i, opts)?;
-    read0.volume = read0.volume.into_pyramid_level(k, dims0);
+    read0.volume = read0.volume.into_pyramid_level(k, finest, &pyramid.steps);
     Ok(Some(read0))
 }
 

@@ -34,21 +34,22 @@ pub enum Root {
 }
 
 impl Root {
-    /// The root of the store `dir`: a folder, or a URL ([`remote::is_url`]).
-    pub fn open(dir: &Path) -> Result<Self> {
+    /// The root of the store `dir`: a folder, or a URL ([`remote::is_url`]; an `s3://` one at
+    /// the endpoint `opts` name, a chunk answered 403 missing when they say so).
+    pub fn open(dir: &Path, opts: &super::ZarrOptions) -> Result<Self> {
         let Some(text) = dir.to_str().filter(|_| remote::is_url(dir)) else {
             return Ok(Self::Local {
                 dir: dir.to_path_buf(),
                 tree: store::tree(dir)?,
             });
         };
-        let url =
-            remote::Url::parse(text).map_err(|m| Error::format(&remote::shown_text(text), m))?;
+        let url = remote::Url::parse_at(text, opts.endpoint.as_deref())
+            .map_err(|m| Error::format(&remote::shown_text(text), m))?;
         #[cfg(feature = "remote")]
         {
             let shown = url.shown();
-            let remote =
-                super::http_store::Remote::new(url).map_err(|m| Error::format(&shown, m))?;
+            let remote = super::http_store::Remote::new(url, opts.missing_as_fill)
+                .map_err(|m| Error::format(&shown, m))?;
             Ok(Self::Remote(Arc::new(remote)))
         }
         #[cfg(not(feature = "remote"))]

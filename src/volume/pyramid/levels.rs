@@ -4,7 +4,7 @@
 
 use std::sync::{Arc, OnceLock};
 
-use super::{coarser_dims, downsample_times, level_transform, step};
+use super::{chain_dims, downsample_times, level_transform, steps_after};
 use crate::volume::{Level, Volume, Voxels, compute_stats};
 
 /// Pyramid levels a file holds itself, on the pyramid's grid (docs/design.md §5).
@@ -16,12 +16,29 @@ pub trait LevelSource: Send + Sync + std::fmt::Debug {
 }
 
 /// The coarser levels of a volume's pyramid, shared by all its levels: slot `i` holds pyramid
-/// level `i + 1`.
+/// level `i + 1`, which step `i` makes of level `i`.
 #[derive(Debug)]
 pub struct Pyramid {
     slots: Box<[OnceLock<Arc<Volume>>]>,
+    /// Per level, the step (per axis 1 or 2) from the level above it: every axis longer than
+    /// one voxel halved, but for a store's own levels the axes they halve.
+    steps: Box<[[usize; 3]]>,
     /// The levels the file holds, read in place of computing them.
     source: Option<Arc<dyn LevelSource>>,
+    /// Level 0's grid, when a coarser level was read without it.
+    finest: Option<Finest>,
+}
+
+/// The grid of a pyramid's level 0, known from the file's metadata when a coarser level was read
+/// without reading level 0 ([`Volume::unread_finest`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Finest {
+    /// Level 0's dimensions, x first.
+    pub dims: [usize; 3],
+    /// Level 0's spacing, mm.
+    pub spacing: [f64; 3],
+    /// Level 0's voxel-to-world transform.
+    pub transform: crate::geometry::WorldTransform,
 }
 
 impl std::ops::Deref for Pyramid {
@@ -35,12 +52,18 @@ impl std::ops::Deref for Pyramid {
 /// No coarser level built yet, for a level 0 of `dims`: a slot for each level until every axis
 /// is one voxel.
 pub fn empty(dims: [usize; 3]) -> Arc<Pyramid> {
-    let longest = *dims.iter().max().unwrap_or(&1);
-    let levels = (usize::BITS - longest.saturating_sub(1).leading_zeros()) as usize;
-    Arc::new(Pyramid {
-        slots: (0..levels).map(|_| OnceLock::new()).collect(),
-        source: None,
-    })
+    Arc::new(Pyramid::new(steps_after(dims, &[]), None))
+}
+
+impl Pyramid {
+    fn new(steps: Vec<[usize; 3]>, source: Option<Arc<dyn LevelSource>>) -> Self {
+        Self {
+            slots: steps.iter().map(|_| OnceLock::new()).collect(),
+            steps: steps.into(),
+            source,
+            finest: None,
+        }
+    }
 }
 
 impl Volume {
@@ -51,24 +74,62 @@ impl Volume {
     }
 
     /// This volume (level 0, just read) with the coarser levels its file holds, read in place of
-    /// computing them when first asked for.
+    /// computing them when first asked for; `steps` are the file's own first levels' steps (per
+    /// axis 1 or 2), after which every axis is halved.
     #[must_use]
-    pub(crate) fn with_level_source(mut self, source: Arc<dyn LevelSource>) -> Self {
-        let slots = empty(self.dims).slots.len();
-        self.pyramid = Arc::new(Pyramid {
-            slots: (0..slots).map(|_| OnceLock::new()).collect(),
-            source: Some(source),
-        });
+    pub(crate) fn with_level_source(
+        mut self,
+        source: Arc<dyn LevelSource>,
+        steps: &[[usize; 3]],
+    ) -> Self {
+        self.pyramid = Arc::new(Pyramid::new(steps_after(self.dims, steps), Some(source)));
         self
     }
 
-    /// This volume, read from a file that holds it as pyramid level `k` of a level 0 of `dims0`
-    /// not read (an OME-Zarr store's coarser dataset, on the pyramid's grid): it takes that
-    /// place in the pyramid, and is quantized with its own range, level 0's being unknown. Its
-    /// coarser levels are computed from it.
+    /// The dimensions and spacing of this level and of each coarser level, finest first
+    /// (nothing is built).
     #[must_use]
-    pub(crate) fn into_pyramid_level(mut self, k: usize, dims0: [usize; 3]) -> Self {
-        let (factor, _) = scale_of(dims0, k);
+    pub fn level_grids(&self) -> Vec<([usize; 3], [f64; 3])> {
+        (0..=self.coarser_levels())
+            .map(|k| {
+                let (scale, dims) = self.scale_to(k);
+                (
+                    dims,
+                    std::array::from_fn(|m| self.spacing[m] * scale[m] as f64),
+                )
+            })
+            .collect()
+    }
+
+    /// Level 0's grid when this level was read from a file without reading level 0 (an
+    /// OME-Zarr store's coarser dataset: a preview, or `info`'s statistics of a remote store);
+    /// `None` for every level of a volume whose level 0 was read.
+    #[must_use]
+    pub fn unread_finest(&self) -> Option<&Finest> {
+        self.pyramid.finest.as_ref()
+    }
+
+    /// The dimensions of this level and of each coarser level, finest first.
+    #[must_use]
+    pub fn level_dims(&self) -> Vec<[usize; 3]> {
+        chain_dims(self.dims, &self.pyramid.steps[self.level.index..])
+    }
+
+    /// This volume, read from a file that holds it as pyramid level `k` of a level 0 of grid
+    /// `finest` not read (an OME-Zarr store's coarser dataset, on the pyramid's grid, whose own
+    /// first levels' steps are `steps`): it takes that place in the pyramid, and is quantized
+    /// with its own range, level 0's being unknown. Its coarser levels are computed from it.
+    #[must_use]
+    pub(crate) fn into_pyramid_level(
+        mut self,
+        k: usize,
+        finest: Finest,
+        steps: &[[usize; 3]],
+    ) -> Self {
+        let dims0 = finest.dims;
+        let mut pyramid = Pyramid::new(steps_after(dims0, steps), None);
+        pyramid.finest = Some(finest);
+        let (factor, _) = scale_of(dims0, &pyramid.steps[..k]);
         let labels = self.labels().is_some();
         self.level = Level {
             index: k,
@@ -76,7 +137,7 @@ impl Volume {
             range: [self.stats.min, self.stats.max],
             labels,
         };
-        self.pyramid = empty(dims0);
+        self.pyramid = Arc::new(pyramid);
         self
     }
 
@@ -150,7 +211,8 @@ impl Volume {
     /// Per axis, how many voxels of this level one voxel `times` levels coarser spans, and that
     /// level's dimensions.
     fn scale_to(&self, times: usize) -> ([usize; 3], [usize; 3]) {
-        scale_of(self.dims, times)
+        let here = self.level.index;
+        scale_of(self.dims, &self.pyramid.steps[here..here + times])
     }
 
     /// Whether this level's coarser levels take the most frequent label.
@@ -161,8 +223,10 @@ impl Volume {
     /// The level `times` levels coarser than this one, computed.
     fn halved(&self, times: usize) -> Volume {
         let labels = self.labelled();
+        let here = self.level.index;
+        let steps = &self.pyramid.steps[here..here + times];
         let (values, _) = crate::volume::with_voxels!(&self.data, |v| {
-            downsample_times(v, self.dims, labels, times)
+            downsample_times(v, self.dims, labels, steps)
         });
         self.level_of(times, Voxels::owned(values))
     }
@@ -200,17 +264,13 @@ impl Volume {
     }
 }
 
-/// Per axis, how many voxels of a level of `dims` one voxel `times` levels coarser spans, and
-/// that level's dimensions.
-fn scale_of(dims: [usize; 3], times: usize) -> ([usize; 3], [usize; 3]) {
-    let mut scale = [1usize; 3];
-    let mut d = dims;
-    for _ in 0..times {
-        let s = step(d);
-        scale = std::array::from_fn(|m| scale[m] * s[m]);
-        d = coarser_dims(d);
-    }
-    (scale, d)
+/// Per axis, how many voxels of a level of `dims` one voxel of the level the steps `steps` make
+/// of it spans, and that level's dimensions.
+fn scale_of(dims: [usize; 3], steps: &[[usize; 3]]) -> ([usize; 3], [usize; 3]) {
+    let scale = steps
+        .iter()
+        .fold([1usize; 3], |f, s| std::array::from_fn(|m| f[m] * s[m]));
+    (scale, chain_dims(dims, steps)[steps.len()])
 }
 
 #[cfg(test)]
@@ -239,7 +299,7 @@ mod tests {
     fn levels_the_file_holds_are_read_the_others_computed() {
         let data: Vec<f32> = (0..8 * 6 * 4).map(|i| (i % 5) as f32).collect();
         let plain = Volume::new([8, 6, 4], [1.0, 2.0, 3.0], VoxelType::U8, data).unwrap();
-        let v = plain.clone().with_level_source(Arc::new(Sevens));
+        let v = plain.clone().with_level_source(Arc::new(Sevens), &[]);
         let (read, computed) = (v.coarser(2), plain.coarser(2));
         assert_eq!(read.dims(), computed.dims());
         assert_eq!(read.transform(), computed.transform(), "the pyramid's grid");
@@ -253,7 +313,7 @@ mod tests {
         assert!((0..v.coarser(3).len()).all(|i| v.coarser(3).data().get(i) == 7.0));
         // Level 3 the file holds but cannot give: computed when the budget picks it (above,
         // from level 2), an error when asked for.
-        let fresh = plain.clone().with_level_source(Arc::new(Sevens));
+        let fresh = plain.clone().with_level_source(Arc::new(Sevens), &[]);
         let asked = fresh.asked_level(3).err().map(|e| e.to_string());
         assert!(asked.is_some_and(|e| e.contains("unreadable")));
         let two = fresh.asked_level(2).ok().map(|l| l.data().get(0));

@@ -1,12 +1,13 @@
 //! The multiresolution pyramid (docs/design.md §5): pyramid level k + 1 halves every axis of level
-//! k longer than one voxel, each coarse voxel the mean of the (up to) 2×2×2 finite voxels under
-//! it, or for label volumes their most frequent label (ties: the lowest).
+//! k longer than one voxel (or, where a store's own pyramid keeps an axis, the axes it halves),
+//! each coarse voxel the mean of the (up to) 2×2×2 finite voxels under it, or for label volumes
+//! their most frequent label (ties: the lowest).
 
 use rayon::prelude::*;
 
 mod levels;
 
-pub use levels::LevelSource;
+pub use levels::{Finest, LevelSource};
 pub(super) use levels::{Pyramid, empty};
 
 use super::voxels::Voxel;
@@ -26,7 +27,7 @@ pub enum Resolution {
     /// The coarsest level with at least [`AUTO_MIN_VOXELS`] voxels along every axis (level 0
     /// when an axis has fewer at full resolution).
     Auto,
-    /// Pyramid level K.
+    /// Pyramid level K (a store's K-th dataset when the pyramid is the store's).
     Level(usize),
 }
 
@@ -45,40 +46,68 @@ impl std::str::FromStr for Resolution {
 }
 
 impl Resolution {
-    /// The pyramid level this resolution picks for a volume of `dims` with `levels` levels below
-    /// it; a level number past the last is an error.
-    pub fn level(self, dims: [usize; 3], levels: usize) -> Result<usize> {
+    /// The pyramid level this resolution picks for a volume whose levels have the dimensions
+    /// `chain` (its own first, then each coarser level's); a level number past the last is an
+    /// error.
+    pub fn level(self, chain: &[[usize; 3]]) -> Result<usize> {
+        let levels = chain.len().saturating_sub(1);
         match self {
             Self::Full => Ok(0),
-            Self::Auto => {
-                let mut level = 0;
-                let mut d = dims;
-                while level < levels && coarser_dims(d).iter().all(|&n| n >= AUTO_MIN_VOXELS) {
-                    d = coarser_dims(d);
-                    level += 1;
-                }
-                Ok(level)
-            }
+            Self::Auto => Ok(chain
+                .iter()
+                .skip(1)
+                .take_while(|d| d.iter().all(|&n| n >= AUTO_MIN_VOXELS))
+                .count()),
             Self::Level(k) if k <= levels => Ok(k),
             Self::Level(k) => Err(Error::invalid(
                 "resolution",
                 k,
-                format!("a pyramid level from 0 to {levels} (each level halves every axis)"),
+                format!(
+                    "a pyramid level from 0 to {levels} (each level halves every axis, or the \
+                     axes a store's own levels halve)"
+                ),
             )),
         }
     }
 }
 
-/// The finest pyramid level of a volume of `dims` with at most `voxels` voxels (the top level,
-/// one voxel, when no other has so few).
+/// The finest of the pyramid levels whose dimensions are `chain` (level 0's first) with at most
+/// `voxels` voxels (the last, when no other has so few).
 #[must_use]
-pub fn level_within(dims: [usize; 3], voxels: usize) -> usize {
-    let (mut level, mut d) = (0, dims);
-    while d.iter().product::<usize>() > voxels && d.iter().any(|&n| n > 1) {
+pub fn level_within(chain: &[[usize; 3]], voxels: usize) -> usize {
+    chain
+        .iter()
+        .position(|d| d.iter().product::<usize>() <= voxels)
+        .unwrap_or(chain.len().saturating_sub(1))
+}
+
+/// The steps of the pyramid of a level 0 of `dims` that halves every axis longer than one voxel
+/// level after level, after the steps `first` (a store's own), until every axis is one voxel.
+#[must_use]
+pub fn steps_after(dims: [usize; 3], first: &[[usize; 3]]) -> Vec<[usize; 3]> {
+    let mut steps = first.to_vec();
+    let mut d = first.iter().fold(dims, |d, &s| coarser_dims_by(d, s));
+    while d.iter().any(|&n| n > 1) {
+        steps.push(step(d));
         d = coarser_dims(d);
-        level += 1;
     }
-    level
+    steps
+}
+
+/// The dimensions of a level of `dims` and of each level the steps `steps` make from it.
+#[must_use]
+pub fn chain_dims(dims: [usize; 3], steps: &[[usize; 3]]) -> Vec<[usize; 3]> {
+    let mut chain = vec![dims];
+    for &s in steps {
+        chain.push(coarser_dims_by(chain[chain.len() - 1], s));
+    }
+    chain
+}
+
+/// The dimensions of the level `step` (per axis 1 or 2) makes of a level of `dims`.
+#[must_use]
+pub fn coarser_dims_by(dims: [usize; 3], step: [usize; 3]) -> [usize; 3] {
+    std::array::from_fn(|m| dims[m].div_ceil(step[m]))
 }
 
 /// The dimensions of the next pyramid level: every axis longer than one voxel halved, rounding up.
@@ -116,14 +145,28 @@ pub fn level_transform(t: &WorldTransform, factor: [f64; 3]) -> WorldTransform {
     }
 }
 
-/// The next pyramid level of the voxels `fine` (x fastest, dimensions `dims`): block means of
-/// the finite voxels, or with `labels` their most frequent value (ties: the lowest); NaN where a
-/// block has no finite voxel. Returns the voxels and their dimensions.
+/// The next pyramid level of the voxels `fine` (x fastest, dimensions `dims`), every axis
+/// longer than one voxel halved: [`downsample_by`] with [`step`].
 #[must_use]
 pub fn downsample<T: Voxel>(fine: &[T], dims: [usize; 3], labels: bool) -> (Vec<f32>, [usize; 3]) {
+    downsample_by(fine, dims, step(dims), labels)
+}
+
+/// The level `step` (per axis 1, kept, or 2, halved) makes of the voxels `fine` (x fastest,
+/// dimensions `dims`): block means of the finite voxels, or with `labels` their most frequent
+/// value (ties: the lowest); NaN where a block has no finite voxel. Returns the voxels and their
+/// dimensions.
+#[must_use]
+pub fn downsample_by<T: Voxel>(
+    fine: &[T],
+    dims: [usize; 3],
+    step: [usize; 3],
+    labels: bool,
+) -> (Vec<f32>, [usize; 3]) {
     debug_assert_eq!(fine.len(), dims.iter().product::<usize>());
-    let coarse = coarser_dims(dims);
-    let [sx, sy, sz] = step(dims);
+    debug_assert!(step.iter().all(|s| (1..=2).contains(s)));
+    let coarse = coarser_dims_by(dims, step);
+    let [sx, sy, sz] = step;
     let [nx, ny, nz] = dims;
     let plane = coarse[0] * coarse[1];
     // Integers are never missing, and their sums in f64 are exact in any order.
@@ -171,41 +214,39 @@ pub fn downsample<T: Voxel>(fine: &[T], dims: [usize; 3], labels: bool) -> (Vec<
     (out, coarse)
 }
 
-/// Pyramid level `times` below the voxels `fine` (x fastest, dimensions `dims`), exactly as
-/// `times` calls of [`downsample`] would give it, but in one streaming pass: each coarse slice is
-/// made from the fine slices under it alone, so no intermediate level is ever held whole.
+/// The level the steps `steps` make of the voxels `fine` (x fastest, dimensions `dims`),
+/// exactly as one call of [`downsample_by`] a step would give it, but in one streaming pass:
+/// each coarse slice is made from the fine slices under it alone, so no intermediate level is
+/// ever held whole.
 #[must_use]
 pub fn downsample_times<T: Voxel>(
     fine: &[T],
     dims: [usize; 3],
     labels: bool,
-    times: usize,
+    steps: &[[usize; 3]],
 ) -> (Vec<f32>, [usize; 3]) {
-    if times <= 1 {
-        return match times {
-            0 => (fine.iter().map(|v| v.to_f32()).collect(), dims),
-            _ => downsample(fine, dims, labels),
-        };
+    match steps {
+        [] => return (fine.iter().map(|v| v.to_f32()).collect(), dims),
+        [s] => return downsample_by(fine, dims, *s, labels),
+        _ => {}
     }
-    let mut chain = vec![dims];
-    for _ in 0..times {
-        chain.push(coarser_dims(chain[chain.len() - 1]));
-    }
-    let coarse = chain[times];
+    let chain = chain_dims(dims, steps);
+    let coarse = chain[steps.len()];
     let plane = coarse[0] * coarse[1];
     let fine_plane = dims[0] * dims[1];
     let mut out = vec![0.0f32; plane * coarse[2]];
     out.par_chunks_mut(plane)
         .enumerate()
         .for_each(|(j, slice)| {
-            let (a, b) = fine_slices(&chain, j);
-            let (mut values, mut d) = downsample(
+            let (a, b) = fine_slices(steps, &chain, j);
+            let (mut values, mut d) = downsample_by(
                 &fine[a * fine_plane..b * fine_plane],
                 [dims[0], dims[1], b - a],
+                steps[0],
                 labels,
             );
-            for _ in 1..times {
-                (values, d) = downsample(&values, d, labels);
+            for &s in &steps[1..] {
+                (values, d) = downsample_by(&values, d, s, labels);
             }
             debug_assert_eq!(d, [coarse[0], coarse[1], 1]);
             slice.copy_from_slice(&values);
@@ -214,12 +255,11 @@ pub fn downsample_times<T: Voxel>(
 }
 
 /// The level-0 slices `[a, b)` under slice `j` of the last level of `chain` (the dimensions of
-/// level 0 and of each level after it).
-fn fine_slices(chain: &[[usize; 3]], j: usize) -> (usize, usize) {
+/// level 0 and of each level the steps `steps` make after it).
+fn fine_slices(steps: &[[usize; 3]], chain: &[[usize; 3]], j: usize) -> (usize, usize) {
     let (mut a, mut b) = (j, j + 1);
-    for d in chain[..chain.len() - 1].iter().rev() {
-        let s = step(*d)[2];
-        (a, b) = (a * s, (b * s).min(d[2]));
+    for (s, d) in steps.iter().zip(chain).rev() {
+        (a, b) = (a * s[2], (b * s[2]).min(d[2]));
     }
     (a, b)
 }
@@ -258,16 +298,21 @@ mod tests {
 
     use crate::volume::{Volume, VoxelType};
 
+    /// The dimensions of every level of the pyramid that halves every axis, from `dims`.
+    fn halving(dims: [usize; 3]) -> Vec<[usize; 3]> {
+        chain_dims(dims, &steps_after(dims, &[]))
+    }
+
     #[test]
     fn resolutions_pick_levels() {
         let parse = |t: &str| t.parse::<Resolution>().unwrap();
-        assert_eq!(parse("full").level([512; 3], 9).unwrap(), 0);
-        assert_eq!(parse("auto").level([512; 3], 9).unwrap(), 2, "128³");
-        assert_eq!(parse("auto").level([256, 256, 415], 9).unwrap(), 1);
-        assert_eq!(parse("auto").level([181, 217, 181], 8).unwrap(), 0);
-        assert_eq!(parse("auto").level([512, 512, 45], 9).unwrap(), 0);
-        assert_eq!(parse("3").level([512; 3], 9).unwrap(), 3);
-        assert!(parse("10").level([512; 3], 9).is_err());
+        assert_eq!(parse("full").level(&halving([512; 3])).unwrap(), 0);
+        assert_eq!(parse("auto").level(&halving([512; 3])).unwrap(), 2, "128³");
+        assert_eq!(parse("auto").level(&halving([256, 256, 415])).unwrap(), 1);
+        assert_eq!(parse("auto").level(&halving([181, 217, 181])).unwrap(), 0);
+        assert_eq!(parse("auto").level(&halving([512, 512, 45])).unwrap(), 0);
+        assert_eq!(parse("3").level(&halving([512; 3])).unwrap(), 3);
+        assert!(parse("10").level(&halving([512; 3])).is_err());
         assert!("coarse".parse::<Resolution>().is_err());
     }
 
@@ -283,31 +328,57 @@ mod tests {
                     (true, _) => (i * 7 % 5) as f32,
                 })
                 .collect();
-            let (mut chained, mut d) = (fine.clone(), dims);
-            for times in 1..=5 {
-                (chained, d) = downsample(&chained, d, labels);
-                let (streamed, sd) = downsample_times(&fine, dims, labels, times);
-                assert_eq!(sd, d, "{dims:?} level {times}");
-                let same = streamed
-                    .iter()
-                    .zip(&chained)
-                    .all(|(a, b)| a.to_bits() == b.to_bits());
-                assert!(same, "{dims:?} level {times}");
+            // Every axis halved, and a store's steps that keep z, then x, before halving all.
+            let halved = steps_after(dims, &[]);
+            let kept = steps_after(dims, &[[2, 2, 1], [1, 2, 2], [2, 2, 1]]);
+            for steps in [halved, kept] {
+                let (mut chained, mut d) = (fine.clone(), dims);
+                for times in 1..=5.min(steps.len()) {
+                    (chained, d) = downsample_by(&chained, d, steps[times - 1], labels);
+                    let (streamed, sd) = downsample_times(&fine, dims, labels, &steps[..times]);
+                    assert_eq!(sd, d, "{dims:?} level {times}");
+                    let same = streamed
+                        .iter()
+                        .zip(&chained)
+                        .all(|(a, b)| a.to_bits() == b.to_bits());
+                    assert!(same, "{dims:?} level {times} {steps:?}");
+                }
             }
         }
     }
 
     #[test]
-    fn the_finest_level_within_a_voxel_count() {
-        assert_eq!(level_within([512; 3], 1 << 21), 2, "128³ is 2²¹");
-        assert_eq!(level_within([1024; 3], 1 << 21), 3);
+    fn a_kept_axis_is_not_averaged() {
+        // 2×2×2 halved in y and x only: two slices, each the mean of its four voxels.
+        let fine: Vec<f32> = (0..8).map(|i| i as f32).collect();
+        let (c, dims) = downsample_by(&fine, [2, 2, 2], [2, 2, 1], false);
+        assert_eq!((c, dims), (vec![1.5, 5.5], [1, 1, 2]));
         assert_eq!(
-            level_within([256, 256, 415], 1 << 21),
+            steps_after([8, 8, 3], &[[2, 2, 1]]),
+            vec![[2, 2, 1], [2, 2, 2], [2, 2, 2]],
+            "then every axis halved: 4×4×3, 2×2×2, 1×1×1"
+        );
+        let chain = chain_dims([8, 8, 3], &steps_after([8, 8, 3], &[[2, 2, 1]]));
+        assert_eq!(chain, vec![[8, 8, 3], [4, 4, 3], [2, 2, 2], [1, 1, 1]]);
+        assert_eq!(Resolution::Auto.level(&chain).unwrap(), 0);
+        assert_eq!(level_within(&chain, 48), 1, "4×4×3 is 48 voxels");
+    }
+
+    #[test]
+    fn the_finest_level_within_a_voxel_count() {
+        assert_eq!(level_within(&halving([512; 3]), 1 << 21), 2, "128³ is 2²¹");
+        assert_eq!(level_within(&halving([1024; 3]), 1 << 21), 3);
+        assert_eq!(
+            level_within(&halving([256, 256, 415]), 1 << 21),
             2,
             "128×128×208 is more"
         );
-        assert_eq!(level_within([128; 3], 1 << 21), 0);
-        assert_eq!(level_within([5, 1, 1], 0), 3, "the top: one voxel");
+        assert_eq!(level_within(&halving([128; 3]), 1 << 21), 0);
+        assert_eq!(
+            level_within(&halving([5, 1, 1]), 0),
+            3,
+            "the top: one voxel"
+        );
     }
 
     #[test]
