@@ -30,6 +30,7 @@ LOAD_KEYWORDS = (
     "scratch",
     "volume",
     "channel",
+    "array",
     "series",
     "include_localizers",
     "resample",
