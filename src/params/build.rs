@@ -123,12 +123,26 @@ impl Given {
                 endpoint: self.parsed(&ENDPOINT, text::any)?,
                 missing_as_fill: self.switch(&MISSING_AS_FILL)?,
             },
-            scratch: self
-                .parsed(&SCRATCH, text::any)?
-                .map(std::path::PathBuf::from),
+            scratch: self.scratch()?,
             cancel: crate::progress::Cancel::never(),
             array: self.parsed(&ARRAY, text::any)?,
         })
+    }
+
+    /// The scratch folder given, which must be one that exists (checked when the options are
+    /// made, not when a volume first needs it).
+    fn scratch(&self) -> Result<Option<std::path::PathBuf>> {
+        let Some(dir) = self.parsed(&SCRATCH, text::any)? else {
+            return Ok(None);
+        };
+        if !std::path::Path::new(&dir).is_dir() {
+            return Err(Error::InvalidParameter {
+                parameter: "scratch",
+                expected: "an existing folder".into(),
+                value: dir,
+            });
+        }
+        Ok(Some(dir.into()))
     }
 
     /// The most threads the work may run on (`None`: one a core).

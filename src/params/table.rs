@@ -474,8 +474,8 @@ pub const SCRATCH: Param = named(
      --max-memory (an unnamed file, gone when slabscope ends), read from there as a mapped file; \
      without it such a volume is refused",
     Takes::Text {
-        valid: |s| std::path::Path::new(s).is_dir(),
-        expected: "an existing folder",
+        valid: |s| !s.is_empty(),
+        expected: "a folder",
         default: None,
         hyphens: false,
     },

@@ -46,6 +46,9 @@ pub struct InfoReport {
     pub memory_bytes: u64,
     /// Bytes of the file read in place for the voxels, mapped, not copied (0 when in memory).
     pub mapped_bytes: u64,
+    /// Of those, bytes of a scratch file the voxels were decoded into beyond the memory budget
+    /// (`--scratch`), not of the file itself (0 otherwise).
+    pub scratch_bytes: u64,
     /// Bytes the voxels take as the file stores them.
     pub stored_bytes: u64,
     /// The voxel-to-world transform: `affine`, `orientation`, `orthogonal`, `world_bounds`.
@@ -106,6 +109,7 @@ impl InfoReport {
             held_type: v.data().held(),
             memory_bytes: v.memory_bytes(),
             mapped_bytes: v.mapped_bytes(),
+            scratch_bytes: v.scratch_bytes(),
             stored_bytes: v.stored_bytes(),
             geometry: GeometryReport::of(v),
             histogram: v.histogram(bins)?,

@@ -436,6 +436,7 @@ mod tests {
                 ".orthogonal",
                 ".range",
                 ".schema_version",
+                ".scratch_bytes",
                 ".spacing",
                 ".statistics_from",
                 ".stored_bytes",

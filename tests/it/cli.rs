@@ -522,6 +522,18 @@ fn a_mapped_volume_beyond_the_budget_is_analysed_on_the_finest_level_that_fits()
             .contains("(raise it with --max-memory, or decode it to disk with --scratch DIR)"),
         "{stderr}"
     );
+}
+
+/// A compressed volume beyond the budget, given a scratch folder, is decoded into it and then
+/// read as the uncompressed file is: the same answers, and nothing left in the folder.
+#[test]
+fn a_compressed_volume_beyond_the_budget_is_decoded_into_the_scratch_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let (nii, gz) = (dir.path().join("body.nii"), dir.path().join("body.nii.gz"));
+    for out in [&nii, &gz] {
+        let Ran { ok, .. } = run(&["phantom", "body", "--dims", "64x64x96", "-o", s(out)]);
+        assert!(ok);
+    }
     let scratch = dir.path().join("scratch");
     std::fs::create_dir(&scratch).unwrap();
     let Ran {
@@ -544,6 +556,27 @@ fn a_mapped_volume_beyond_the_budget_is_analysed_on_the_finest_level_that_fits()
     assert!(
         stderr.contains("an unnamed scratch file of 768.0 KiB (786432 bytes) on disk"),
         "{stderr}"
+    );
+    let info = json(&[
+        "info",
+        s(&gz),
+        "--json",
+        "--max-memory",
+        "100K",
+        "--scratch",
+        s(&scratch),
+    ]);
+    assert_eq!(
+        (
+            &info["scratch_bytes"],
+            &info["mapped_bytes"],
+            &info["memory_bytes"]
+        ),
+        (
+            &Value::from(786_432),
+            &Value::from(786_432),
+            &Value::from(0)
+        )
     );
     // The scratch file has no name: nothing is left in the folder.
     assert_eq!(std::fs::read_dir(&scratch).unwrap().count(), 0);
@@ -609,7 +642,13 @@ fn a_scratch_folder_is_not_filled_by_a_header_that_lies() {
     );
     let Ran { ok, stderr, .. } = run(&["info", s(&nii), "--scratch", s(&nii)]);
     assert!(!ok);
-    assert!(stderr.contains("is not an existing folder"), "{stderr}");
+    assert!(
+        stderr.ends_with(&format!(
+            "--scratch {}: expected an existing folder\n",
+            s(&nii)
+        )),
+        "{stderr}"
+    );
 }
 
 /// `--timeout` stops `analyze` and `render` with an error that says so, and a view search far
