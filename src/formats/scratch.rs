@@ -81,24 +81,7 @@ impl<T: Voxel> VoxelOut<T> {
             Err(e) => return Err(e),
         };
         let Some(dir) = scratch else {
-            return Err(match refused {
-                Error::TooLarge {
-                    path,
-                    what,
-                    needed,
-                    limit,
-                    machine,
-                    ..
-                } => Error::TooLarge {
-                    path,
-                    what,
-                    needed,
-                    limit,
-                    machine,
-                    disk: true,
-                },
-                other => other,
-            });
+            return Err(refusal(refused, None));
         };
         let Some(count) = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d)) else {
             return Err(refused);
@@ -115,7 +98,7 @@ impl<T: Voxel> VoxelOut<T> {
                     _voxels: std::marker::PhantomData,
                 },
             }),
-            Err(why) => Err(with_reason(refused, &why)),
+            Err(why) => Err(refusal(refused, Some(&why))),
         }
     }
 
@@ -274,8 +257,9 @@ fn in_memory(_fd: std::os::fd::RawFd) -> std::io::Result<bool> {
     Ok(false)
 }
 
-/// The budget's refusal, saying also why the voxels could not go to a scratch file.
-fn with_reason(refused: Error, why: &str) -> Error {
+/// The budget's refusal: without a scratch folder (`why` `None`), saying that one would do;
+/// else saying why the voxels could not go to a scratch file there.
+fn refusal(refused: Error, why: Option<&str>) -> Error {
     match refused {
         Error::TooLarge {
             path,
@@ -286,11 +270,14 @@ fn with_reason(refused: Error, why: &str) -> Error {
             ..
         } => Error::TooLarge {
             path,
-            what: format!("{what} (not decoded to disk instead: {why})"),
+            what: match why {
+                Some(why) => format!("{what} (not decoded to disk instead: {why})"),
+                None => what,
+            },
             needed,
             limit,
             machine,
-            disk: false,
+            disk: why.is_none(),
         },
         other => other,
     }

@@ -148,3 +148,4 @@ pub fn info_details(file: &Path, format: &str) -> (String, Value) {
     )
 }
 pub mod http;
+pub mod zarr;

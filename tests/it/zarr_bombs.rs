@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 use slabscope::{LoadOptions, load};
 
+use crate::common::zarr::{codec, store};
+
 /// The bytes a bomb decodes to: far past the 256 KiB chunk and the 64 MiB budget's quarter.
 const BOMB: usize = 32 << 20;
 
@@ -19,34 +21,6 @@ fn gzip(bytes: &[u8]) -> Vec<u8> {
 
 fn zstd(bytes: &[u8]) -> Vec<u8> {
     zstd::bulk::compress(bytes, 3).unwrap()
-}
-
-fn codec(name: &str) -> String {
-    match name {
-        "bytes" => r#"{"name": "bytes", "configuration": {"endian": "little"}}"#.into(),
-        "gzip" => r#"{"name": "gzip", "configuration": {"level": 5}}"#.into(),
-        "zstd" => r#"{"name": "zstd", "configuration": {"level": 3, "checksum": false}}"#.into(),
-        other => other.into(),
-    }
-}
-
-/// A Zarr v3 array of 64³ u8 in one chunk of codecs `codecs` (names, or JSON objects), whose
-/// chunk `c/0/0/0` holds `chunk`.
-fn store(dir: &Path, codecs: &[&str], chunk: &[u8]) -> PathBuf {
-    let store = dir.join("bomb.zarr");
-    std::fs::create_dir_all(store.join("c/0/0")).unwrap();
-    let codecs: Vec<String> = codecs.iter().map(|c| codec(c)).collect();
-    let meta = format!(
-        r#"{{"zarr_format": 3, "node_type": "array", "shape": [64, 64, 64],
-            "data_type": "uint8", "fill_value": 0,
-            "chunk_grid": {{"name": "regular", "configuration": {{"chunk_shape": [64, 64, 64]}}}},
-            "chunk_key_encoding": {{"name": "default", "configuration": {{"separator": "/"}}}},
-            "codecs": [{}]}}"#,
-        codecs.join(", ")
-    );
-    std::fs::write(store.join("zarr.json"), meta).unwrap();
-    std::fs::write(store.join("c/0/0/0"), chunk).unwrap();
-    store
 }
 
 /// The error of loading `store` under a budget of 64 MiB: one line naming the store.
@@ -81,6 +55,7 @@ fn gzip_inside_gzip_is_weighed_through_both() {
     let chunk = gzip(&gzip(&vec![0u8; BOMB]));
     assert_decodes_to_more(&refused(&store(
         dir.path(),
+        "bomb.zarr",
         &["bytes", "gzip", "gzip"],
         &chunk,
     )));
@@ -92,6 +67,7 @@ fn zstd_inside_gzip_is_weighed_through_both() {
     let chunk = gzip(&zstd(&vec![0u8; BOMB]));
     assert_decodes_to_more(&refused(&store(
         dir.path(),
+        "bomb.zarr",
         &["bytes", "zstd", "gzip"],
         &chunk,
     )));
@@ -102,7 +78,12 @@ fn a_second_zstd_frame_after_a_small_first_is_weighed() {
     let dir = tempfile::tempdir().unwrap();
     let mut chunk = zstd(&[1u8; 16]);
     chunk.extend(zstd(&vec![0u8; BOMB]));
-    assert_decodes_to_more(&refused(&store(dir.path(), &["bytes", "zstd"], &chunk)));
+    assert_decodes_to_more(&refused(&store(
+        dir.path(),
+        "bomb.zarr",
+        &["bytes", "zstd"],
+        &chunk,
+    )));
 }
 
 #[test]
@@ -113,7 +94,7 @@ fn a_chain_that_fits_still_reads() {
     chunk.extend(zstd(&voxels[1000..]));
     let chunk = gzip(&chunk);
     let l = load(
-        &store(dir.path(), &["bytes", "zstd", "gzip"], &chunk),
+        &store(dir.path(), "bomb.zarr", &["bytes", "zstd", "gzip"], &chunk),
         &LoadOptions::default(),
     )
     .unwrap();
@@ -157,7 +138,7 @@ fn a_shard_inside_a_shard_is_refused() {
         r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [32, 32, 32],
             "codecs": [{inner}], {index}}}}}"#
     );
-    let e = refused(&store(dir.path(), &[&outer], &nested_shard()));
+    let e = refused(&store(dir.path(), "bomb.zarr", &[&outer], &nested_shard()));
     assert!(e.contains("a shard inside a shard is not read"), "{e}");
 }
 
@@ -172,7 +153,12 @@ fn a_codec_on_whole_shards_is_refused() {
         codec("gzip")
     );
     let chunk = gzip(&vec![0u8; BOMB]);
-    let e = refused(&store(dir.path(), &[&sharding, "gzip"], &chunk));
+    let e = refused(&store(
+        dir.path(),
+        "bomb.zarr",
+        &[&sharding, "gzip"],
+        &chunk,
+    ));
     assert!(
         e.contains("a codec applied to whole shards is not read"),
         "{e}"
