@@ -30,3 +30,33 @@ pub fn store(dir: &Path, name: &str, codecs: &[&str], chunk: &[u8]) -> PathBuf {
     std::fs::write(store.join("c/0/0/0"), chunk).unwrap();
     store
 }
+
+/// A shard of 2³ inner chunks of 32³ whose first inner chunk is itself a shard of 2³ chunks of
+/// 16³, the first of them `bomb` (gzip data), the others empty: a store `name` in `dir`.
+pub fn nested_shard(dir: &Path, name: &str, bomb: &[u8]) -> PathBuf {
+    let empty = [u8::MAX; 16];
+    let mut inner = bomb.to_vec();
+    inner.extend(0u64.to_le_bytes());
+    inner.extend((bomb.len() as u64).to_le_bytes());
+    for _ in 1..8 {
+        inner.extend(empty);
+    }
+    let mut shard = inner.clone();
+    shard.extend(0u64.to_le_bytes());
+    shard.extend((inner.len() as u64).to_le_bytes());
+    for _ in 1..8 {
+        shard.extend(empty);
+    }
+    let index = r#""index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]"#;
+    let inner = format!(
+        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [16, 16, 16],
+            "codecs": [{}, {}], {index}}}}}"#,
+        codec("bytes"),
+        codec("gzip")
+    );
+    let outer = format!(
+        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [32, 32, 32],
+            "codecs": [{inner}], {index}}}}}"#
+    );
+    store(dir, name, &[&outer], &shard)
+}

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use slabscope::{LoadOptions, load};
 
-use crate::common::zarr::{codec, store};
+use crate::common::zarr::{codec, nested_shard, store};
 
 /// The bytes a bomb decodes to: far past the 256 KiB chunk and the 64 MiB budget's quarter.
 const BOMB: usize = 32 << 20;
@@ -104,41 +104,11 @@ fn a_chain_that_fits_still_reads() {
     );
 }
 
-/// A shard of 2³ inner chunks of 32³ whose first inner chunk is itself a shard of 2³ chunks of
-/// 16³, the first of them a gzip bomb; the others empty.
-fn nested_shard() -> Vec<u8> {
-    let empty = [u8::MAX; 16];
-    let bomb = gzip(&vec![0u8; BOMB]);
-    let mut inner = bomb.clone();
-    inner.extend(0u64.to_le_bytes());
-    inner.extend((bomb.len() as u64).to_le_bytes());
-    for _ in 1..8 {
-        inner.extend(empty);
-    }
-    let mut shard = inner.clone();
-    shard.extend(0u64.to_le_bytes());
-    shard.extend((inner.len() as u64).to_le_bytes());
-    for _ in 1..8 {
-        shard.extend(empty);
-    }
-    shard
-}
-
 #[test]
 fn a_shard_inside_a_shard_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let index = r#""index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]"#;
-    let inner = format!(
-        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [16, 16, 16],
-            "codecs": [{}, {}], {index}}}}}"#,
-        codec("bytes"),
-        codec("gzip")
-    );
-    let outer = format!(
-        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [32, 32, 32],
-            "codecs": [{inner}], {index}}}}}"#
-    );
-    let e = refused(&store(dir.path(), "bomb.zarr", &[&outer], &nested_shard()));
+    let bomb = gzip(&vec![0u8; BOMB]);
+    let e = refused(&nested_shard(dir.path(), "bomb.zarr", &bomb));
     assert!(e.contains("a shard inside a shard is not read"), "{e}");
 }
 

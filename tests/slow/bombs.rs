@@ -5,11 +5,11 @@
 //! anonymous memory of the process at most the budget and 64 MiB.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::budget::peak_run;
 use crate::common::s;
-use crate::common::zarr::{codec, store};
+use crate::common::zarr::{nested_shard, store};
 
 /// What each bomb decodes to: four times the budget.
 const BOMB: usize = 1 << 30;
@@ -42,36 +42,6 @@ fn zstd_of_zeros() -> Vec<u8> {
     let mut e = zstd::stream::Encoder::new(Vec::new(), 1).unwrap();
     zeros(&mut e);
     e.finish().unwrap()
-}
-
-/// A shard of 2³ inner chunks of 32³ whose first inner chunk is itself a shard of 2³ chunks of
-/// 16³, the first of them a gzip bomb.
-fn nested_shard(dir: &Path, bomb: &[u8]) -> PathBuf {
-    let empty = [u8::MAX; 16];
-    let mut inner = bomb.to_vec();
-    inner.extend(0u64.to_le_bytes());
-    inner.extend((bomb.len() as u64).to_le_bytes());
-    for _ in 1..8 {
-        inner.extend(empty);
-    }
-    let mut shard = inner.clone();
-    shard.extend(0u64.to_le_bytes());
-    shard.extend((inner.len() as u64).to_le_bytes());
-    for _ in 1..8 {
-        shard.extend(empty);
-    }
-    let index = r#""index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]"#;
-    let inner = format!(
-        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [16, 16, 16],
-            "codecs": [{}, {}], {index}}}}}"#,
-        codec("bytes"),
-        codec("gzip")
-    );
-    let outer = format!(
-        r#"{{"name": "sharding_indexed", "configuration": {{"chunk_shape": [32, 32, 32],
-            "codecs": [{inner}], {index}}}}}"#
-    );
-    store(dir, "nested.zarr", &[&outer], &shard)
 }
 
 /// Runs `slabscope args`: it fails, naming `named` (on stderr, or in triage's rows), within the
@@ -118,7 +88,7 @@ fn bombs_are_refused_within_the_budget() {
             &gzip(&zs),
         ),
         store(dir.path(), "frames.zarr", &["bytes", "zstd"], &frames),
-        nested_shard(dir.path(), &gz),
+        nested_shard(dir.path(), "nested.zarr", &gz),
     ];
     for store in &stores {
         refused_within_budget(&["analyze", s(store), "--max-memory", "256M"], store);
