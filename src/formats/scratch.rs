@@ -59,6 +59,26 @@ pub(crate) struct Room<'a> {
     pub scratch: Option<&'a Path>,
 }
 
+impl Room<'_> {
+    /// Checks `dims` voxels held as f32 against the budget before anything is decoded: an
+    /// error when they do not fit and there is no scratch folder to take them (whether the
+    /// folder can is [`VoxelOut::new`]'s to find out, when the room is made).
+    pub(crate) fn check(&self, path: &Path, dims: [usize; 3]) -> Result<()> {
+        match super::data::check_budget(path, dims, self.max_memory) {
+            Err(Error::TooLarge { .. }) if self.scratch.is_some() => Ok(()),
+            Err(e @ Error::TooLarge { .. }) => Err(refusal(e, None)),
+            checked => checked.map(drop),
+        }
+    }
+
+    /// Room for `dims` voxels held as f32: memory within the budget, else the scratch folder.
+    pub(crate) fn f32_voxels(&self, path: &Path, dims: [usize; 3]) -> Result<VoxelOut<f32>> {
+        VoxelOut::new(path, dims, self.scratch, || {
+            super::data::voxel_buffer(path, dims, self.max_memory)
+        })
+    }
+}
+
 impl<T: Voxel> VoxelOut<T> {
     /// Room for the `dims` voxels of `path`: memory when `memory` (the budget's check, an
     /// error when they do not fit) allows it, else a file in the `scratch` folder when it can

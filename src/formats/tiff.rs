@@ -10,12 +10,12 @@ use std::sync::Arc;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
 
-use super::data::{self, check_budget, voxel_buffer};
+use super::data;
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source, ome, tiff_ifd};
 use crate::error::{Error, Result};
+use crate::volume::VoxelType;
 use crate::volume::mapped::MappedFile;
-use crate::volume::{VoxelType, Voxels};
 
 /// A TIFF's bytes as the decoder reads them: the source's map.
 struct Bytes(Arc<MappedFile>);
@@ -317,14 +317,14 @@ fn load_stack(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let wanted = |pages: usize| ome.as_ref().map_or(pages, |o| o.size_zct[0]);
     let mut pages = 1usize;
     let plane = |pages: usize| [first.width as usize, first.height as usize, pages];
-    check_budget(path, plane(wanted(pages)), opts.max_memory)?;
+    opts.room().check(path, plane(wanted(pages)))?;
     while dec.more_images() {
         opts.cancel.check()?;
         dec.next_image()
             .map_err(|e| Error::format(path, format!("page {pages}: {e}")))?;
         pages_agree(path, pages, first, describe(path, &mut dec, pages)?)?;
         pages += 1;
-        check_budget(path, plane(wanted(pages)), opts.max_memory)?;
+        opts.room().check(path, plane(wanted(pages)))?;
     }
     let indices: Vec<usize> = match &ome {
         Some(o) => ome_pages(path, o, first, pages, opts, &mut notes)?,
@@ -333,23 +333,16 @@ fn load_stack(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         None => (0..pages).collect(),
     };
     let dims = plane(indices.len());
-    let mut voxels = voxel_buffer(path, dims, opts.max_memory)?;
+    let mut voxels = opts.room().f32_voxels(path, dims)?;
     let mut buffer = DecodingResult::U8(Vec::new());
-    for (&index, out) in indices.iter().zip(voxels.chunks_mut(first.voxels())) {
+    for (&index, out) in indices.iter().zip(voxels.all().chunks_mut(first.voxels())) {
         opts.cancel.check()?;
         dec.seek_to_image(index)
             .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
         dec = decode(path, (dec, len), index, first, &mut buffer, out)?.0;
     }
     intact(&mut dec)?;
-    Read0::new(
-        path,
-        dims,
-        spacing,
-        first.ty,
-        Voxels::from_f32(voxels),
-        notes,
-    )
+    Read0::new(path, dims, spacing, first.ty, voxels.finish()?, notes)
 }
 
 /// An OME-TIFF's voxel sizes in mm; an axis without one is 1, and a note says so.
@@ -473,16 +466,16 @@ fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     let spacing = spacing(&mut dec);
     let first = describe(&files[0], &mut dec, 0)?;
     let dims = [first.width as usize, first.height as usize, files.len()];
-    check_budget(dir, dims, opts.max_memory)?;
+    opts.room().check(dir, dims)?;
     // Every slice is described and checked before any is decoded.
     for (i, file) in files.iter().enumerate().skip(1) {
         opts.cancel.check()?;
         let mut dec = open(&Source::new(file))?.0;
         pages_agree(file, i, first, describe(file, &mut dec, 0)?)?;
     }
-    let mut voxels = voxel_buffer(dir, dims, opts.max_memory)?;
+    let mut voxels = opts.room().f32_voxels(dir, dims)?;
     let mut buffer = DecodingResult::U8(Vec::new());
-    for (file, out) in files.iter().zip(voxels.chunks_mut(first.voxels())) {
+    for (file, out) in files.iter().zip(voxels.all().chunks_mut(first.voxels())) {
         opts.cancel.check()?;
         let (mut dec, len) = open(&Source::new(file))?;
         // The file may have changed since it was described.
@@ -496,14 +489,7 @@ fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
         name(&files[0]),
         name(&files[files.len() - 1])
     )];
-    Read0::new(
-        dir,
-        dims,
-        spacing,
-        first.ty,
-        Voxels::from_f32(voxels),
-        notes,
-    )
+    Read0::new(dir, dims, spacing, first.ty, voxels.finish()?, notes)
 }
 
 #[cfg(test)]

@@ -443,3 +443,63 @@ fn a_channel_of_a_file_of_one_channel_is_an_error() {
         );
     }
 }
+
+/// DICOM series and TIFF stacks and folders beyond the budget, given a scratch folder, are
+/// decoded into it and read back mapped: every voxel, the geometry and the type as in memory;
+/// without the folder they are refused, the error saying the folder would do.
+#[test]
+fn dicom_series_and_tiff_stacks_beyond_the_budget_are_decoded_into_the_scratch_folder() {
+    let scratch = tempfile::tempdir().unwrap();
+    let in_memory = |series: Option<&str>| {
+        let mut opts = LoadOptions::default();
+        opts.dicom.series = series.map(str::to_owned);
+        opts
+    };
+    let cases = [
+        ("dicom/ct", Some("1")),
+        ("dicom/gap", None),
+        ("ramp_u16_stack.tif", None),
+        ("ramp_slices", None),
+    ];
+    for (name, series) in cases {
+        let path = data(name);
+        let held = load(&path, &in_memory(series)).unwrap().volume;
+        let tight = LoadOptions {
+            max_memory: held.len() as u64 * 4 - 1,
+            ..in_memory(series)
+        };
+        let refused = load(&path, &tight).unwrap_err().to_string();
+        assert!(
+            refused.contains("over the memory limit"),
+            "{name}: {refused}"
+        );
+        let spilled = LoadOptions {
+            scratch: Some(scratch.path().to_path_buf()),
+            ..tight
+        };
+        let v = load(&path, &spilled)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .volume;
+        assert_eq!(v.scratch_bytes(), held.len() as u64 * 4, "{name}");
+        assert_eq!(
+            (v.dims(), v.spacing(), v.voxel_type()),
+            (held.dims(), held.spacing(), held.voxel_type()),
+            "{name}"
+        );
+        assert_eq!(v.transform(), held.transform(), "{name}");
+        let [nx, ny, nz] = v.dims();
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let (a, b) = (v.value([x, y, z]), held.value([x, y, z]));
+                    assert!(
+                        a.to_bits() == b.to_bits(),
+                        "{name} ({x},{y},{z}): {a} != {b}"
+                    );
+                }
+            }
+        }
+    }
+    // The scratch files have no names: nothing is left in the folder.
+    assert_eq!(std::fs::read_dir(scratch.path()).unwrap().count(), 0);
+}

@@ -32,7 +32,6 @@ use self::format::PixelFormat;
 use self::header::Image;
 use self::read::Syntax;
 use self::scan::{Scan, paths_of, series_of};
-use super::data::check_budget;
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
@@ -429,17 +428,16 @@ fn load_from(
         (layout.slices, layout.lps)
     };
     let dims = [cols, rows, slices];
-    check_budget(path, dims, opts.max_memory)?;
+    opts.room().check(path, dims)?;
     let order = &layout.order[opts.volume];
     let voxels = if resample {
-        let voxels =
-            voxels::resampled(path, &scan, series, &layout, order, slices, opts.max_memory)?;
+        let voxels = voxels::resampled(path, &scan, series, &layout, order, slices, opts.room())?;
         notes.push(resampled_note(&layout, slices));
         voxels
     } else {
-        voxels::as_they_lie(path, &scan, series, order, dims, opts.max_memory)?
+        voxels::as_they_lie(path, &scan, series, order, dims, opts.room())?
     };
-    let mut volume = Volume::new(dims, layout.spacing, VoxelType::F32, voxels)
+    let mut volume = Volume::from_voxels(dims, layout.spacing, VoxelType::F32, voxels)
         .map_err(|e| e.reached_from(path))?;
     let ty = voxel_type(series, &volume.stats());
     volume = volume.with_voxel_type(ty);

@@ -21,25 +21,28 @@ use super::scan::{Scan, Scanned};
 use super::{parse, quoted};
 use crate::error::{Error, Result};
 use crate::formats::data::{check_budget, voxel_buffer};
+use crate::formats::scratch::{Room, VoxelOut};
+use crate::volume::Voxels;
 
 /// The voxels of slices `order` of `series` as they lie: a volume of `dims` columns, rows and
-/// slices, within `budget`.
+/// slices, within the budget of `room` or in its scratch folder.
 pub(super) fn as_they_lie(
     path: &Path,
     scan: &Scan,
     series: &Series,
     order: &[usize],
     dims: [usize; 3],
-    budget: u64,
-) -> Result<Vec<f32>> {
-    let mut out = voxel_buffer(path, dims, budget)?;
-    let planes: Vec<&mut [f32]> = out.chunks_mut(dims[0] * dims[1]).collect();
-    fill(scan, series, order, planes, budget)?;
-    Ok(out)
+    room: Room,
+) -> Result<Voxels> {
+    let mut out = room.f32_voxels(path, dims)?;
+    let planes: Vec<&mut [f32]> = out.all().chunks_mut(dims[0] * dims[1]).collect();
+    fill(scan, series, order, planes, room.max_memory)?;
+    out.finish()
 }
 
 /// The voxels of slices `order` of `series` resampled to `slices` evenly spaced along the
-/// normal of `layout` (the tilt undone), within `budget`.
+/// normal of `layout` (the tilt undone): the source slices within the budget of `room`, the
+/// volume made from them beside them or in its scratch folder.
 pub(super) fn resampled(
     path: &Path,
     scan: &Scan,
@@ -47,15 +50,21 @@ pub(super) fn resampled(
     layout: &Layout,
     order: &[usize],
     slices: usize,
-    budget: u64,
-) -> Result<Vec<f32>> {
+    room: Room,
+) -> Result<Voxels> {
     let [cols, rows] = layout.plane;
-    // The source slices and the resampled volume are held at once.
-    check_budget(path, [cols, rows, layout.slices + slices], budget)?;
+    let budget = room.max_memory;
+    check_budget(path, [cols, rows, layout.slices], budget)?;
+    // The source slices and the resampled volume held at once, or the volume on disk.
+    let dims = [cols, rows, slices];
+    let mut out = VoxelOut::new(path, dims, room.scratch, || {
+        check_budget(path, [cols, rows, layout.slices + slices], budget)?;
+        voxel_buffer(path, dims, budget)
+    })?;
     let planes = read_slices(scan, series, order, layout.plane, budget)?;
-    let mut out = voxel_buffer(path, [cols, rows, slices], budget)?;
     let step = layout.spacing[2];
-    out.par_chunks_mut(cols * rows)
+    out.all()
+        .par_chunks_mut(cols * rows)
         .enumerate()
         .for_each(|(k, plane)| {
             let depth = k as f64 * step;
@@ -68,7 +77,7 @@ pub(super) fn resampled(
                 plane,
             );
         });
-    Ok(out)
+    out.finish()
 }
 
 /// Reads the slices `order` names into planes of their own (for resampling).
