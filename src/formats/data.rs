@@ -198,11 +198,6 @@ pub(crate) fn typed_buffer<T: Voxel>(
 trait Decode: Voxel {
     /// Decodes the voxels of `bytes` (exactly `out.len()` of them) into `out`.
     fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [Self]);
-
-    /// Values read from ascii data (always read as f32), in this type: `None` but for f32.
-    fn from_ascii(_values: Vec<f32>) -> Option<Vec<Self>> {
-        None
-    }
 }
 
 impl Decode for f32 {
@@ -210,11 +205,6 @@ impl Decode for f32 {
         decode_to(bytes, spec.voxel_type, spec.endian, spec.scale, out);
         // Infinities (in the file, or from scaling) are missing voxels.
         infinities_missing(out);
-    }
-
-    fn from_ascii(mut values: Vec<f32>) -> Option<Vec<f32>> {
-        infinities_missing(&mut values);
-        Some(values)
     }
 }
 
@@ -296,7 +286,12 @@ fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, room: Room) -> Result<
     };
     if let Some((stream, what)) = stream {
         return if spec.encoding == Encoding::Ascii {
-            Ok(Voxels::owned(ascii_as::<T>(spec, stream, max_memory)?))
+            // Within the budget: how many values a compressed text holds is not known before.
+            let memory = Room {
+                scratch: None,
+                ..room
+            };
+            ascii_as::<T>(spec, stream, memory)
         } else {
             read_stream(spec, stream, what, expected, out()?)
         };
@@ -340,7 +335,10 @@ fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, room: Room) -> Result<
             could_hold(spec, len - pos, expected, room)?;
             read_stream(spec, ZlibDecoder::new(reader), "zlib", expected, out()?)
         }
-        Encoding::Ascii => Ok(Voxels::owned(ascii_as::<T>(spec, reader, max_memory)?)),
+        Encoding::Ascii => {
+            text_could_hold(spec, len - pos, room)?;
+            ascii_as::<T>(spec, reader, room)
+        }
     }
 }
 
@@ -366,11 +364,35 @@ fn could_hold(spec: &DataSpec, compressed: u64, expected: u64, room: Room) -> Re
     ))
 }
 
-/// The ascii values of `reader` as `T` (f32: `read_voxels` reads ascii data as f32 only).
-fn ascii_as<T: Decode>(spec: &DataSpec, reader: impl BufRead, max_memory: u64) -> Result<Vec<T>> {
+/// Fails when `text` bytes of ascii data cannot hold the voxels of `spec` (a value and a
+/// separator take two bytes at least): checked before room on disk is reserved for them, as
+/// [`could_hold`] is.
+fn text_could_hold(spec: &DataSpec, text: u64, room: Room) -> Result<()> {
+    let values = spec.dims.iter().map(|&d| d as u64).product::<u64>();
+    if room.scratch.is_none() || values <= text / 2 + 1 {
+        return Ok(());
+    }
+    Err(Error::format(
+        spec.file.path(),
+        format!(
+            "{text} bytes of ascii data cannot hold the {values} values of a {} volume",
+            dims_string(spec.dims)
+        ),
+    ))
+}
+
+/// The ascii values of `reader` (read as f32 only: `read_voxels` holds ascii data as f32), in
+/// `room`.
+fn ascii_as<T: Decode>(spec: &DataSpec, reader: impl BufRead, room: Room) -> Result<Voxels> {
     let path = spec.file.path();
-    let values = read_ascii(spec, reader, voxel_buffer(path, spec.dims, max_memory)?)?;
-    T::from_ascii(values).ok_or_else(|| Error::format(path, "ascii data is read as f32 only"))
+    if T::TYPE != VoxelType::F32 {
+        return Err(Error::format(path, "ascii data is read as f32 only"));
+    }
+    let mut out = room.f32_voxels(path, spec.dims)?;
+    read_ascii(spec, reader, out.all())?;
+    // Infinities (in the file, or from scaling) are missing voxels.
+    infinities_missing(out.all());
+    out.finish()
 }
 
 /// The buffered bytes of `reader`, filled again when empty (empty at the end), with reads that

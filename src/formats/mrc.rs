@@ -16,9 +16,10 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::data::{DataSpec, Encoding, Skip, check_budget, read_voxels};
+use super::data::{DataSpec, Encoding, Skip, read_voxels, typed_buffer};
 use super::details::{Details, json_of};
 use super::reader::{Reader, Sniff};
+use super::scratch::{Room, VoxelOut};
 use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::volume::{Endian, VoxelType, Voxels};
@@ -282,18 +283,18 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     };
     let mut notes = Vec::new();
     let (ty, mut voxels) = if h.mode == 12 {
-        // Widened to f32, within the budget as an f32 volume.
-        check_budget(path, h.n, opts.max_memory)?;
-        (VoxelType::F32, widen_f16(read_voxels(&spec, opts.room())?))
+        // Widened to f32, within the budget as an f32 volume or in the scratch folder.
+        opts.room().check(path, h.n)?;
+        let bits = read_voxels(&spec, opts.room())?;
+        (VoxelType::F32, widen_f16(path, &bits, h.n, opts.room())?)
     } else {
         (stored, read_voxels(&spec, opts.room())?)
     };
     let mut dims = h.n;
     if order != [0, 1, 2] {
-        // A copy in the new order, within the budget as an f32 volume (no type is larger).
-        check_budget(path, h.n, opts.max_memory)?;
+        // A copy in the new order, within the budget or in the scratch folder.
         dims = reorder_dims(h.n, order);
-        voxels = reorder(&voxels, h.n, order);
+        voxels = reorder(path, &voxels, h.n, order, opts.room())?;
         notes.push(format!(
             "its columns, rows and sections run along the map's {}: reordered to x, y, z",
             order.map(|m| ["X", "Y", "Z"][m]).join(", ")
@@ -314,17 +315,16 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     Ok(read)
 }
 
-/// f16 voxels, held as their bits, as f32.
-fn widen_f16(bits: Voxels) -> Voxels {
+/// The `dims` f16 voxels of `path`, held as their bits, as f32 in `room`.
+fn widen_f16(path: &Path, bits: &Voxels, dims: [usize; 3], room: Room) -> Result<Voxels> {
     let Voxels::U16(s) = bits else {
         unreachable!("f16 is read as u16")
     };
-    Voxels::from_f32(
-        s.as_slice()
-            .iter()
-            .map(|&b| half::f16::from_bits(b).to_f32())
-            .collect(),
-    )
+    let mut out = room.f32_voxels(path, dims)?;
+    for (v, &b) in out.all().iter_mut().zip(s.as_slice()) {
+        *v = half::f16::from_bits(b).to_f32();
+    }
+    out.finish()
 }
 
 /// The dimensions along x, y, z of a map stored `n` (columns, rows, sections) along `order`.
@@ -336,13 +336,22 @@ fn reorder_dims(n: [usize; 3], order: [usize; 3]) -> [usize; 3] {
     dims
 }
 
-/// `voxels` stored columns, rows, sections (`n`), along the map axes `order`, put in x, y, z
-/// order.
-fn reorder(voxels: &Voxels, n: [usize; 3], order: [usize; 3]) -> Voxels {
+/// The voxels of `path` stored columns, rows, sections (`n`), along the map axes `order`, put
+/// in x, y, z order in `room`.
+fn reorder(
+    path: &Path,
+    voxels: &Voxels,
+    n: [usize; 3],
+    order: [usize; 3],
+    room: Room,
+) -> Result<Voxels> {
     let dims = reorder_dims(n, order);
     let stride = [1, dims[0], dims[0] * dims[1]];
     crate::volume::with_voxels!(voxels, |v| {
-        let mut out = v.to_vec();
+        let mut room = VoxelOut::new(path, dims, room.scratch, || {
+            typed_buffer(path, dims, room.max_memory)
+        })?;
+        let out = room.all();
         let mut i = 0;
         for s in 0..n[2] {
             for r in 0..n[1] {
@@ -354,6 +363,6 @@ fn reorder(voxels: &Voxels, n: [usize; 3], order: [usize; 3]) -> Voxels {
                 }
             }
         }
-        Voxels::owned(out)
+        room.finish()
     })
 }

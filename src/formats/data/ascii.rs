@@ -50,13 +50,9 @@ fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std::io::Result
     }
 }
 
-pub(super) fn read_ascii(
-    spec: &DataSpec,
-    mut reader: impl BufRead,
-    mut out: Vec<f32>,
-) -> Result<Vec<f32>> {
+pub(super) fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, out: &mut [f32]) -> Result<()> {
     let count = out.len();
-    out.clear();
+    let mut n = 0;
     let path = spec.file.path();
     let io = |e: std::io::Error| Error::format(path, format!("ascii data: {e}"));
     let skip = match spec.skip {
@@ -82,7 +78,7 @@ pub(super) fn read_ascii(
         }
     }
     while next_token(&mut reader, &mut token).map_err(io)? {
-        if out.len() == count {
+        if n == count {
             if spec.allow_trailing() {
                 break;
             }
@@ -94,7 +90,7 @@ pub(super) fn read_ascii(
         let bad = |why: &str| {
             Error::format(
                 path,
-                format!("ascii data, value {}: {} {why}", out.len(), quote(&token)),
+                format!("ascii data, value {n}: {} {why}", quote(&token)),
             )
         };
         let v: f64 = std::str::from_utf8(&token)
@@ -105,19 +101,17 @@ pub(super) fn read_ascii(
         if integer && !(v.fract() == 0.0 && (lo..=hi).contains(&v)) {
             return Err(bad(&format!("is not a {ty} value ({lo} to {hi})")));
         }
-        out.push(match spec.scale {
+        out[n] = match spec.scale {
             Some((m, b)) => (v * m + b) as f32,
             None => v as f32,
-        });
+        };
+        n += 1;
     }
-    if out.len() < count {
+    if n < count {
         return Err(Error::format(
             path,
-            format!(
-                "truncated ascii data: expected {count} values, found {}",
-                out.len()
-            ),
+            format!("truncated ascii data: expected {count} values, found {n}"),
         ));
     }
-    Ok(out)
+    Ok(())
 }
