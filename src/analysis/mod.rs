@@ -395,7 +395,8 @@ fn partitioned_kept(
 
 /// The anonymous memory an analysis of pyramid level `level` of `volume` takes at its peak, in
 /// bytes: the level's voxels where they are held in memory (none for a level 0 read in place
-/// from a mapped file; a coarser level holds f32), and the larger of the view search's cell map
+/// from a mapped file; a coarser level holds f32, beside the volume's own voxels held in memory,
+/// which stay held while it is analysed), and the larger of the view search's cell map
 /// (a byte a voxel for integers of at most 16 bits, whose bins a table gives, two for f32) and
 /// the partition's slice stack with the background mask and their columns (a byte, a bit and
 /// an eighth more: measured, 1281 MiB at the peak of a 1024³ analysis, 1280 by this count) with
@@ -421,7 +422,7 @@ pub fn memory_needed_with(volume: &Volume, level: usize, bins: usize) -> u64 {
         let integer = volume.data().held() != crate::volume::VoxelType::F32;
         (volume.memory_bytes(), if integer { n } else { 2 * n })
     } else {
-        (4 * n, 2 * n)
+        (volume.memory_bytes() + 4 * n, 2 * n)
     };
     let slices = crate::partition::most_slices(dims, spacing);
     let stack = n + n / 4 + slices * crate::partition::slice_bytes(bins);
@@ -525,14 +526,18 @@ mod tests {
     fn the_budget_picks_the_finest_level_that_fits() {
         // 16³ held in memory: its voxels, then the larger of 8192 bytes of cell map and the
         // slice stack (5120 bytes) with the per-slice sums of the longest stack (the diagonal,
-        // 28 slices of 576 bytes at 32 bins); level 1 is 8³ of f32 (2048 bytes), its stack (640)
-        // and 14 slices of sums.
+        // 28 slices of 576 bytes at 32 bins); level 1 is 8³ of f32 (2048 bytes) beside them, its
+        // stack (640) and 14 slices of sums.
         let data: Vec<f32> = (0..4096).map(|i| (i % 251) as f32).collect();
         let v = Volume::new([16; 3], [1.0; 3], VoxelType::U8, data).unwrap();
         let full = v.memory_bytes() + 5120 + 28 * 576;
         assert!(v.memory_bytes() >= 4096);
         assert_eq!(memory_needed(&v, 0), full);
-        assert_eq!(memory_needed(&v, 1), 2048 + 640 + 14 * 576);
+        // The volume's own voxels stay held beside a coarser level's.
+        assert_eq!(
+            memory_needed(&v, 1),
+            v.memory_bytes() + 2048 + 640 + 14 * 576
+        );
         assert_eq!(level_within_memory(&v, 0, full, 32).unwrap(), (0, None));
         let (level, note) = level_within_memory(&v, 0, full - 1, 32).unwrap();
         assert_eq!(level, 1);

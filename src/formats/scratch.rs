@@ -64,7 +64,7 @@ impl Room<'_> {
     /// error when they do not fit and there is no scratch folder to take them (whether the
     /// folder can is [`VoxelOut::new`]'s to find out, when the room is made).
     pub(crate) fn check(&self, path: &Path, dims: [usize; 3]) -> Result<()> {
-        match super::data::check_budget(path, dims, self.max_memory) {
+        match super::data::budget::check_budget(path, dims, self.max_memory) {
             Err(Error::TooLarge { .. }) if self.scratch.is_some() => Ok(()),
             Err(e @ Error::TooLarge { .. }) => Err(refusal(e, None)),
             checked => checked.map(drop),
@@ -74,7 +74,7 @@ impl Room<'_> {
     /// Room for `dims` voxels held as f32: memory within the budget, else the scratch folder.
     pub(crate) fn f32_voxels(&self, path: &Path, dims: [usize; 3]) -> Result<VoxelOut<f32>> {
         VoxelOut::new(path, dims, self.scratch, || {
-            super::data::voxel_buffer(path, dims, self.max_memory)
+            super::data::budget::voxel_buffer(path, dims, self.max_memory)
         })
     }
 }
