@@ -12,8 +12,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
 use std::time::Duration;
 
-use slabscope::budget::{Budget, GLANCE_VOXELS, Purpose};
-use slabscope::{AnalysisParams, Histories, LoadOptions, Monitor, Progress, Scope, Volume, search};
+use slabscope::budget::GLANCE_VOXELS;
+use slabscope::partition::StackParams;
+use slabscope::request::{AnalysisRequest, Level};
+use slabscope::view::ViewParams;
+use slabscope::{AnalysisParams, LoadOptions, Monitor, Progress, Volume};
 
 use super::event::{Effect, Event, Job, JobMsg, PictureJob};
 use super::preview_level;
@@ -100,46 +103,13 @@ impl Jobs {
             Effect::Load => {
                 let (source, mut load) = (self.source.clone(), self.load.clone());
                 load.cancel = slabscope::Cancel::new(Arc::clone(&self.load_cancel));
+                let request = self.request(AnalysisParams::default());
                 self.spawn(Job::Load, move |_, send| {
-                    load_volume(source.as_ref(), &load, send)
+                    load_volume(source.as_ref(), &load, &request, send)
                 });
             }
-            Effect::SearchViews(params, level) => {
-                let Some(source) = self.open.level(level) else {
-                    return;
-                };
-                let delay = self.full_delay(level);
-                self.spawn(Job::Views(level), move |monitor, send| {
-                    let on = source.get();
-                    if level > 0 {
-                        send(JobMsg::Coarse(Arc::clone(&on)));
-                    }
-                    let result = wait(delay, monitor).and_then(|()| search(&on, &params, monitor));
-                    JobMsg::Views(level, result.map(Box::new).map_err(|e| e.to_string()))
-                });
-            }
-            Effect::Analyze(generation, axis, params, level) => {
-                let Some(source) = self.open.level(level) else {
-                    return;
-                };
-                let delay = self.full_delay(level);
-                self.spawn(Job::Analysis(level), move |monitor, _| {
-                    let on = source.get();
-                    let result = wait(delay, monitor)
-                        .and_then(|()| Histories::new(&on, axis, &params, Scope::ALL, monitor));
-                    let result = result.map(Arc::new).map_err(|e| e.to_string());
-                    JobMsg::Analysis(generation, level, result)
-                });
-            }
-            Effect::RankGain(params, level) => {
-                let Some(source) = self.open.level(level) else {
-                    return;
-                };
-                self.spawn(Job::Gain, move |monitor, _| {
-                    let on = source.get();
-                    let result = slabscope::analysis::rank_by_gain(&on, &params, monitor);
-                    JobMsg::Gain(level, result.map(Box::new).map_err(|e| e.to_string()))
-                });
+            effect @ (Effect::SearchViews(..) | Effect::Analyze(..) | Effect::RankGain(..)) => {
+                self.analyse(effect);
             }
             Effect::Lesson(request) => {
                 self.spawn(Job::Lesson, move |monitor, _| {
@@ -173,6 +143,67 @@ impl Jobs {
                 }
             }
             Effect::Quit => self.load_cancel.store(true, Ordering::Relaxed),
+        }
+    }
+
+    /// Carries out an effect of the analysis (the view search, the histories, the gain
+    /// ranking) as a step of the library's request on the pyramid level it names.
+    fn analyse(&self, effect: Effect) {
+        match effect {
+            Effect::SearchViews(view, level) => {
+                let Some(source) = self.open.level(level) else {
+                    return;
+                };
+                let delay = self.full_delay(level);
+                let request = self.request(AnalysisParams {
+                    view,
+                    ..AnalysisParams::default()
+                });
+                self.spawn(Job::Views(level), move |monitor, send| {
+                    let on = source.get();
+                    if level > 0 {
+                        send(JobMsg::Coarse(Arc::clone(&on)));
+                    }
+                    let result = wait(delay, monitor).and_then(|()| request.on(on).views(monitor));
+                    JobMsg::Views(level, result.map(Box::new).map_err(|e| e.to_string()))
+                });
+            }
+            Effect::Analyze(generation, axis, stack, level) => {
+                let Some(source) = self.open.level(level) else {
+                    return;
+                };
+                let delay = self.full_delay(level);
+                let request = self.request(cutting(&stack));
+                self.spawn(Job::Analysis(level), move |monitor, _| {
+                    let on = source.get();
+                    let result =
+                        wait(delay, monitor).and_then(|()| request.on(on).histories(axis, monitor));
+                    let result = result.map(Arc::new).map_err(|e| e.to_string());
+                    JobMsg::Analysis(generation, level, result)
+                });
+            }
+            Effect::RankGain(params, level) => {
+                let Some(source) = self.open.level(level) else {
+                    return;
+                };
+                let request = self.request(*params);
+                self.spawn(Job::Gain, move |monitor, _| {
+                    let result = request.on(source.get()).gain(monitor);
+                    JobMsg::Gain(level, result.map(Box::new).map_err(|e| e.to_string()))
+                });
+            }
+            _ => {}
+        }
+    }
+
+    /// The library's request for an analysis by `params` within the memory budget, at the level
+    /// a picture is drawn from: the volume worked on is the one its plan gives when it loads
+    /// ([`load_volume`]), and the jobs' work runs on that volume or its glance as it is
+    /// ([`AnalysisRequest::on`]).
+    fn request(&self, params: AnalysisParams) -> AnalysisRequest {
+        AnalysisRequest {
+            level: Level::Picture,
+            ..AnalysisRequest::new(params, self.load.max_memory)
         }
     }
 
@@ -366,11 +397,25 @@ fn wait(delay: Duration, monitor: &Monitor) -> slabscope::Result<()> {
     monitor.check()
 }
 
+/// An analysis that cuts its slices as `stack` says: the histories' request.
+fn cutting(stack: &StackParams) -> AnalysisParams {
+    AnalysisParams {
+        view: ViewParams {
+            sampling: stack.sampling,
+            ..ViewParams::default()
+        },
+        background: stack.background,
+        ..AnalysisParams::default()
+    }
+}
+
 /// Loads `source` (None: the built-in dataset) with `load`, a series in `source` taking the
-/// place of the options'. A coarse pyramid level the file holds is sent first, as a preview.
+/// place of the options', and plans `request` on it: the volume worked on is the level its plan
+/// gives. A coarse pyramid level the file holds is sent first, as a preview.
 fn load_volume(
     source: Option<&slabscope::triage::Entry>,
     load: &LoadOptions,
+    request: &AnalysisRequest,
     send: &dyn Fn(JobMsg),
 ) -> JobMsg {
     let loaded = match source {
@@ -381,21 +426,20 @@ fn load_volume(
             if let Ok(Some(p)) = preview {
                 send(JobMsg::Preview(Arc::new(p.volume), p.notes));
             }
-            let max_memory = load.max_memory;
-            slabscope::load(&entry.path, &load).and_then(|l| within_memory(l, max_memory))
+            slabscope::load(&entry.path, &load).and_then(|l| worked_on(l, request))
         }
         None => slabscope::builtin_dataset().map(|v| (Arc::new(v), Vec::new())),
     };
     JobMsg::Loaded(loaded.map_err(|e| e.to_string()))
 }
 
-/// The volume the TUI works on: `loaded`'s, or beyond the memory budget the finest pyramid level
-/// whose analysis fits, said in a note.
-fn within_memory(
+/// The volume the TUI works on: the level `request`'s plan partitions on `loaded`'s (itself, or
+/// beyond the memory budget the finest pyramid level whose analysis fits, said in a note).
+fn worked_on(
     loaded: slabscope::formats::Loaded,
-    max_memory: u64,
+    request: &AnalysisRequest,
 ) -> slabscope::Result<(Arc<Volume>, Vec<String>)> {
-    let plan = Budget::new(max_memory).plan(&loaded.volume, Purpose::Picture)?;
+    let plan = request.plan(&loaded.volume)?.plan;
     let mut notes = loaded.notes;
     notes.extend(plan.note);
     Ok((plan.partition, notes))
@@ -407,7 +451,7 @@ mod tests {
     use std::time::Instant;
 
     use slabscope::partition::Method;
-    use slabscope::{AnalysisParams, Renderer, Scope};
+    use slabscope::{AnalysisParams, Histories, Renderer, Scope};
 
     use super::worker::render;
     use super::*;
