@@ -11,6 +11,22 @@ use super::*;
 use crate::term::{Caps, Graphics};
 use crate::tui::event::PictureSettings;
 
+/// The histories' request cuts the slices as the partitioning asked: its sampling and
+/// background, nothing of the defaults.
+#[test]
+fn the_histories_request_cuts_as_asked() {
+    let stack = StackParams {
+        sampling: slabscope::geometry::lattice::SamplingParams {
+            bins: 16,
+            ray_spacing: Some(1.5),
+            sample_spacing: Some(0.75),
+        },
+        background: slabscope::volume::background::BackgroundRule::Below(3.0),
+    };
+    assert_eq!(cutting(&stack).stack(), stack);
+    assert_ne!(stack, StackParams::default());
+}
+
 #[test]
 fn messages_of_a_volume_no_longer_open_are_dropped() {
     let (tx, _rx) = channel();
