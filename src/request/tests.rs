@@ -330,3 +330,31 @@ fn a_request_on_a_level_chosen_before_runs_there() {
     let by_hand = crate::analysis::rank_by_gain(&glance, &params, &Monitor::none()).unwrap();
     assert_eq!(gain.refined.axis, by_hand.refined.axis);
 }
+
+/// A plan that counts its slabs strip by strip gives the histories the request's own method
+/// reads, counted so: the same slabs as in memory, with no bottom-up history.
+#[test]
+fn histories_of_a_plan_counted_in_strips_are_the_methods_own() {
+    use crate::partition::{Histories, Method, Scope};
+    let volume = body();
+    let params = AnalysisParams::default();
+    let request = AnalysisRequest::new(params.clone(), u64::MAX);
+    let mut planned = request.on(Arc::new(volume.clone()));
+    let room = crate::partition::streamed_memory_floor(&volume, params.view.sampling.bins);
+    planned.plan.streamed = Some(room);
+    let axis = [0.0, 0.0, 1.0];
+    let h = planned.histories(axis, &Monitor::none()).unwrap();
+    assert!(!h.has(Method::BottomUp));
+    let whole =
+        Histories::new(&volume, axis, &params.stack(), Scope::ALL, &Monitor::none()).unwrap();
+    assert_eq!(h.slices(), whole.slices());
+    let (at, whole_at) = (
+        h.position(params.method, params.stop).unwrap(),
+        whole.position(params.method, params.stop).unwrap(),
+    );
+    assert_eq!(
+        h.slabs(params.method, at),
+        whole.slabs(params.method, whole_at)
+    );
+    assert_eq!(h.slabs(params.method, at).len(), 4);
+}
