@@ -91,7 +91,7 @@ impl DataSpec {
     }
 }
 
-/// The volume a reader reads of the `count` a file holds: `opts.volume`, checked, and the note
+/// The volume a reader reads of the `count` a file holds: `opts.part.volume`, checked, and the note
 /// that says which was read.
 pub(crate) fn pick_volume(
     path: &Path,

@@ -259,7 +259,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     if extra == 0 {
         return Err(Error::format(path, "the fourth DimSize is zero"));
     }
-    let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
+    let volumes = pick_volume(path, extra, opts.part.volume, &mut notes)?;
     let (file, start, skip) = match h.data_file.as_str() {
         "LOCAL" => (source.clone(), h.len as u64, Skip::Bytes(0)),
         name if name.starts_with("LIST")

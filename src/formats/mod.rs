@@ -127,15 +127,14 @@ pub enum Folder {
     Store,
 }
 
-/// Options for [`load`]: those every reader takes, and each format's own.
+/// Options for [`load`]: those every reader takes, which part of a file holding several to
+/// read, and each format's own.
 #[derive(Clone, Debug)]
 pub struct LoadOptions {
     /// The most bytes the loaded f32 volume may occupy; checked before anything is allocated.
     pub max_memory: u64,
-    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, a DICOM series) to read, from 0.
-    pub volume: usize,
-    /// Which channel of a multichannel file (an OME-TIFF's `C`), from 0.
-    pub channel: usize,
+    /// Which volume, channel or array of a file holding several to read.
+    pub part: PartOptions,
     /// Description of a headerless raw file; when `dims` is set the file is read as raw.
     pub raw: RawOptions,
     /// Which DICOM series to read, and how.
@@ -149,6 +148,18 @@ pub struct LoadOptions {
     /// Raised, the load stops between chunks, files or pages with [`Error::Cancelled`] (a
     /// timeout, Ctrl-C, the user moving on).
     pub cancel: crate::progress::Cancel,
+}
+
+/// Which part of a file holding several to read (`--volume`, `--channel`, `--array`): a reader
+/// whose files hold one refuses a part past the first, with the error naming the parameter.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PartOptions {
+    /// Which volume of a 4D file (NIfTI, NRRD, MetaImage, a DICOM series, an OME-Zarr store's
+    /// or an Imaris file's time points) to read, from 0.
+    pub volume: usize,
+    /// Which channel of a multichannel file (an OME-TIFF's or an OME-Zarr store's `C`, an
+    /// Imaris file's channels), from 0.
+    pub channel: usize,
     /// Which array of a file holding several to read: a `.vti` file's array by its name, an
     /// HDF5 file's dataset by its path (`None`: the active scalars, the only 3-D dataset, or
     /// `DXchange`'s `/exchange/data`).
@@ -169,14 +180,12 @@ impl Default for LoadOptions {
     fn default() -> Self {
         Self {
             max_memory: default_max_memory(),
-            volume: 0,
-            channel: 0,
+            part: PartOptions::default(),
             raw: RawOptions::default(),
             dicom: DicomOptions::default(),
             zarr: ZarrOptions::default(),
             scratch: None,
             cancel: crate::progress::Cancel::never(),
-            array: None,
         }
     }
 }
@@ -240,7 +249,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
 /// `--array` names an array of a file holding several (VTK XML image data, HDF5): of a file of
 /// another format it is an error saying so, as `--channel` of a file of one channel is.
 fn check_array(path: &Path, format: Format, opts: &LoadOptions) -> Result<()> {
-    match &opts.array {
+    match &opts.part.array {
         Some(name) if !matches!(format, Format::Vti | Format::Hdf5) => Err(Error::unsupported(
             path,
             format!(

@@ -439,7 +439,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     if extra == 0 {
         return Err(Error::format(path, "the fourth size is zero"));
     }
-    let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
+    let volumes = pick_volume(path, extra, opts.part.volume, &mut notes)?;
     if h.endian.is_none() && h.voxel_type.size() > 1 && h.encoding != Encoding::Ascii {
         notes.push("no endian field: assuming little-endian".into());
     }

@@ -62,11 +62,11 @@ pub(super) fn read(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
         return read_folder(&source, opts);
     }
     let reader = detect(&source, opts)?;
-    if opts.volume > 0 && !reader.volumes() {
-        return Err(data::one_volume(path, 1, opts.volume));
+    if opts.part.volume > 0 && !reader.volumes() {
+        return Err(data::one_volume(path, 1, opts.part.volume));
     }
-    if opts.channel > 0 && !reader.channels() {
-        return Err(data::one_channel(path, 1, opts.channel));
+    if opts.part.channel > 0 && !reader.channels() {
+        return Err(data::one_channel(path, 1, opts.part.channel));
     }
     Ok((reader.format(), reader.read(&source, opts)?))
 }
@@ -182,8 +182,8 @@ fn read_folder(source: &Source, opts: &LoadOptions) -> Result<(Format, Read0)> {
     let path = source.path();
     let kind = folder_kind(path)?;
     let reader = READERS.iter().find(|r| r.reads_folder(kind, opts));
-    if opts.channel > 0 && !reader.is_some_and(|r| r.channels()) {
-        return Err(data::one_channel(path, 1, opts.channel));
+    if opts.part.channel > 0 && !reader.is_some_and(|r| r.channels()) {
+        return Err(data::one_channel(path, 1, opts.part.channel));
     }
     let Some(reader) = reader else {
         return Err(Error::format(
@@ -197,8 +197,8 @@ fn read_folder(source: &Source, opts: &LoadOptions) -> Result<(Format, Read0)> {
             },
         ));
     };
-    if opts.volume > 0 && !reader.volumes() {
-        return Err(data::one_volume(path, 1, opts.volume));
+    if opts.part.volume > 0 && !reader.volumes() {
+        return Err(data::one_volume(path, 1, opts.part.volume));
     }
     Ok((reader.format(), reader.read(source, opts)?))
 }

@@ -328,8 +328,8 @@ fn load_stack(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     }
     let indices: Vec<usize> = match &ome {
         Some(o) => ome_pages(path, o, first, pages, opts, &mut notes)?,
-        None if opts.volume > 0 => return Err(data::one_volume(path, 1, opts.volume)),
-        None if opts.channel > 0 => return Err(data::one_channel(path, 1, opts.channel)),
+        None if opts.part.volume > 0 => return Err(data::one_volume(path, 1, opts.part.volume)),
+        None if opts.part.channel > 0 => return Err(data::one_channel(path, 1, opts.part.channel)),
         None => (0..pages).collect(),
     };
     let dims = plane(indices.len());
@@ -361,7 +361,7 @@ fn ome_spacing(o: &ome::OmePixels, notes: &mut Vec<String>) -> [f64; 3] {
     o.spacing.map(|s| s.unwrap_or(1.0))
 }
 
-/// The pages of an OME-TIFF that hold channel `opts.channel` at time point `opts.volume`, in z
+/// The pages of an OME-TIFF that hold channel `opts.part.channel` at time point `opts.part.volume`, in z
 /// order, after checking the OME-XML against the pages the file holds; notes say which were read.
 fn ome_pages(
     path: &Path,
@@ -391,26 +391,26 @@ fn ome_pages(
             ),
         ));
     }
-    if opts.channel >= c {
-        return Err(data::one_channel(path, c, opts.channel));
+    if opts.part.channel >= c {
+        return Err(data::one_channel(path, c, opts.part.channel));
     }
-    if opts.volume >= t {
-        return Err(data::one_volume(path, t, opts.volume));
+    if opts.part.volume >= t {
+        return Err(data::one_volume(path, t, opts.part.volume));
     }
     if c > 1 || t > 1 {
         notes.push(format!(
             "OME-TIFF of {c} channel{} and {t} time point{}: read channel {} at time point {}",
             if c == 1 { "" } else { "s" },
             if t == 1 { "" } else { "s" },
-            opts.channel,
-            opts.volume
+            opts.part.channel,
+            opts.part.volume
         ));
     }
     if o.images > 1 {
         notes.push(format!("OME-TIFF of {} images: read the first", o.images));
     }
     Ok((0..z)
-        .map(|k| o.page([k, opts.channel, opts.volume]))
+        .map(|k| o.page([k, opts.part.channel, opts.part.volume]))
         .collect())
 }
 

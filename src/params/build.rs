@@ -11,7 +11,9 @@ use super::table::{
 use super::{Given, text};
 use crate::analysis::AnalysisParams;
 use crate::error::{Error, Result};
-use crate::formats::{DicomOptions, LoadOptions, RawOptions, ZarrOptions, default_max_memory};
+use crate::formats::{
+    DicomOptions, LoadOptions, PartOptions, RawOptions, ZarrOptions, default_max_memory,
+};
 use crate::geometry::AxisChoice;
 use crate::geometry::lattice::SamplingParams;
 use crate::partition::Stop;
@@ -110,8 +112,11 @@ impl Given {
                 endian: self.parsed(&ENDIAN, text::endian)?,
                 offset: self.value(&OFFSET)?,
             },
-            volume: self.number(&VOLUME)?,
-            channel: self.number(&CHANNEL)?,
+            part: PartOptions {
+                volume: self.number(&VOLUME)?,
+                channel: self.number(&CHANNEL)?,
+                array: self.parsed(&ARRAY, text::any)?,
+            },
             dicom: DicomOptions {
                 series: self.parsed(&SERIES, text::any)?,
                 include_localizers: self.switch(&INCLUDE_LOCALIZERS)?,
@@ -125,7 +130,6 @@ impl Given {
             },
             scratch: self.scratch()?,
             cancel: crate::progress::Cancel::never(),
-            array: self.parsed(&ARRAY, text::any)?,
         })
     }
 
@@ -234,7 +238,7 @@ mod tests {
         assert_eq!(scene.spread, crate::render::DEFAULT_SPREAD);
         let load = given.load().unwrap();
         assert_eq!(load.raw, RawOptions::default());
-        assert_eq!((load.volume, load.channel), (0, 0));
+        assert_eq!((load.part.volume, load.part.channel), (0, 0));
     }
 
     #[test]

@@ -3,12 +3,14 @@
 
 use std::sync::Arc;
 
-use crate::analysis::{Analysis, AnalysisParams, Plan, analyze_planned};
+use crate::analysis::{Analysis, AnalysisParams, GainRanking, Plan, analyze_planned, rank_by_gain};
 use crate::budget::{Budget, Purpose, blame};
 use crate::error::Result;
 use crate::params::Given;
+use crate::partition::{Histories, Scope, partition_streamed_kept};
 use crate::progress::Monitor;
 use crate::report::AnalysisReport;
+use crate::view::ViewSearch;
 use crate::volume::{Resolution, Volume};
 
 /// Which pyramid level an analysis runs on.
@@ -80,6 +82,18 @@ impl AnalysisRequest {
         })
     }
 
+    /// This request's work on `level` as it is, in memory: a level the planner chose before,
+    /// which the budget is not asked about again. The TUI works so on the volume its load's
+    /// [`Level::Picture`] plan gave and on that volume's glance ([`Purpose::Glance`]), which it
+    /// shows first.
+    #[must_use]
+    pub fn on(&self, level: Arc<Volume>) -> Planned<'_> {
+        Planned {
+            request: self,
+            plan: Plan::at(level),
+        }
+    }
+
     /// The analysis of `volume`: planned, then run.
     pub fn run(&self, volume: &Volume, monitor: &Monitor) -> Result<Analysed> {
         self.plan(volume)?.run(monitor)
@@ -109,6 +123,32 @@ impl Planned<'_> {
         self.request
             .params
             .heavy_work(views.dims(), views.spacing())
+    }
+
+    /// The view search by the request's view parameters on the level planned for it, alone:
+    /// the first step of [`run`](Self::run), for a front end that shows the views before the
+    /// slabs (the TUI's sphere and list of views).
+    pub fn views(&self, monitor: &Monitor) -> Result<ViewSearch> {
+        self.plan.search(&self.request.params.view, monitor)
+    }
+
+    /// The axes ranked by partition gain on the view search's level, alone.
+    pub fn gain(&self, monitor: &Monitor) -> Result<GainRanking> {
+        rank_by_gain(&self.plan.views, &self.request.params, monitor)
+    }
+
+    /// The histories along `axis` (a unit physical direction) on the level partitioned, every
+    /// method's ([`Scope::ALL`]): what an interactive front end steps through, switching method,
+    /// slab count or threshold with nothing counted again (the TUI). A plan that counts its
+    /// slabs strip by strip keeps what the request's own method reads, with no bottom-up
+    /// history, as [`run`](Self::run) does.
+    pub fn histories(&self, axis: [f64; 3], monitor: &Monitor) -> Result<Histories> {
+        let (params, level) = (&self.request.params, self.plan.partition.as_ref());
+        match self.plan.streamed {
+            Some(room) => partition_streamed_kept(level, axis, &params.partition(), room, monitor)
+                .map(|(_, histories)| histories),
+            None => Histories::new(level, axis, &params.stack(), Scope::ALL, monitor),
+        }
     }
 
     /// Runs the view search and the partition. An error about a parameter not given blames its

@@ -265,3 +265,96 @@ fn the_slice_request_draws_the_slice_numbered_draws() {
         })
     ));
 }
+
+/// The steps of a planned request one at a time (the TUI's jobs: the views, then every
+/// method's histories along an axis) give what the whole run gives, within the budget and
+/// beyond it (the view search and the partition then on pyramid level 1).
+#[test]
+fn a_planned_request_step_by_step_gives_what_the_run_gives() {
+    use crate::partition::Method;
+    let volume = body();
+    let params = AnalysisParams::default();
+    for max_memory in [u64::MAX, memory_needed(&volume, 1)] {
+        let request = AnalysisRequest::new(params.clone(), max_memory);
+        let done = request.run(&volume, &Monitor::none()).unwrap();
+        let planned = request.plan(&volume).unwrap();
+        assert!(
+            planned.plan.streamed.is_none(),
+            "too small to count in strips"
+        );
+        let views = planned.views(&Monitor::none()).unwrap();
+        let found = done.analysis.views.as_ref().unwrap();
+        assert_eq!(views.views, found.views, "{max_memory}");
+        let axis = views.best().axis;
+        assert_eq!(axis, done.analysis.axis());
+        let h = planned.histories(axis, &Monitor::none()).unwrap();
+        let position = h.position(params.method, params.stop).unwrap();
+        assert_eq!(
+            h.slabs(params.method, position),
+            done.analysis.partition.slabs
+        );
+        // In memory, every method's history is there.
+        assert!(h.has(Method::BottomUp) && h.has(Method::Optimal));
+    }
+}
+
+/// A request on a level the planner chose before runs there as it is, whatever its budget:
+/// the histories are those of that level, every method's.
+#[test]
+fn a_request_on_a_level_chosen_before_runs_there() {
+    use crate::partition::{Histories, Method, Scope};
+    let volume = body();
+    let glance = volume.coarser(1);
+    let params = AnalysisParams::default();
+    let request = AnalysisRequest::new(params.clone(), 1);
+    let on = request.on(Arc::clone(&glance));
+    let views = on.views(&Monitor::none()).unwrap();
+    let by_hand = crate::view::search(&glance, &params.view, &Monitor::none()).unwrap();
+    assert_eq!(views.views, by_hand.views);
+    let axis = views.best().axis;
+    let h = on.histories(axis, &Monitor::none()).unwrap();
+    let by_hand =
+        Histories::new(&glance, axis, &params.stack(), Scope::ALL, &Monitor::none()).unwrap();
+    assert_eq!(h.slices(), by_hand.slices());
+    assert_eq!(h.nmi_curve(), by_hand.nmi_curve());
+    for method in [Method::TopDown, Method::BottomUp, Method::Optimal] {
+        assert!(h.has(method), "{method:?}");
+        let last = by_hand.last(method);
+        assert_eq!(
+            h.slabs(method, last),
+            by_hand.slabs(method, last),
+            "{method:?}"
+        );
+    }
+    let gain = on.gain(&Monitor::none()).unwrap();
+    let by_hand = crate::analysis::rank_by_gain(&glance, &params, &Monitor::none()).unwrap();
+    assert_eq!(gain.refined.axis, by_hand.refined.axis);
+}
+
+/// A plan that counts its slabs strip by strip gives the histories the request's own method
+/// reads, counted so: the same slabs as in memory, with no bottom-up history.
+#[test]
+fn histories_of_a_plan_counted_in_strips_are_the_methods_own() {
+    use crate::partition::{Histories, Method, Scope};
+    let volume = body();
+    let params = AnalysisParams::default();
+    let request = AnalysisRequest::new(params.clone(), u64::MAX);
+    let mut planned = request.on(Arc::new(volume.clone()));
+    let room = crate::partition::streamed_memory_floor(&volume, params.view.sampling.bins);
+    planned.plan.streamed = Some(room);
+    let axis = [0.0, 0.0, 1.0];
+    let h = planned.histories(axis, &Monitor::none()).unwrap();
+    assert!(!h.has(Method::BottomUp));
+    let whole =
+        Histories::new(&volume, axis, &params.stack(), Scope::ALL, &Monitor::none()).unwrap();
+    assert_eq!(h.slices(), whole.slices());
+    let (at, whole_at) = (
+        h.position(params.method, params.stop).unwrap(),
+        whole.position(params.method, params.stop).unwrap(),
+    );
+    assert_eq!(
+        h.slabs(params.method, at),
+        whole.slabs(params.method, whole_at)
+    );
+    assert_eq!(h.slabs(params.method, at).len(), 4);
+}

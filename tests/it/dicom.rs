@@ -210,9 +210,9 @@ fn repeated_positions_are_a_4d_series() {
     let first = load("fourd");
     assert_eq!(first.volume.dims(), [24, 20, 4]);
     check_voxels(&first.volume, |i, j, k| stored(i, j, k) - 1024.0);
-    let second = load_with("fourd", |o| o.volume = 1).unwrap();
+    let second = load_with("fourd", |o| o.part.volume = 1).unwrap();
     check_voxels(&second.volume, |i, j, k| stored(i, j, k) + 500.0 - 1024.0);
-    let e = load_with("fourd", |o| o.volume = 2)
+    let e = load_with("fourd", |o| o.part.volume = 2)
         .unwrap_err()
         .to_string();
     assert!(e.contains('2'), "{e}");

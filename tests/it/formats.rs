@@ -289,7 +289,10 @@ fn volume_of(path: &Path, n: usize) -> slabscope::Result<Loaded> {
     load(
         path,
         &LoadOptions {
-            volume: n,
+            part: slabscope::formats::PartOptions {
+                volume: n,
+                ..slabscope::formats::PartOptions::default()
+            },
             ..LoadOptions::default()
         },
     )
@@ -373,8 +376,11 @@ fn any_volume_of_a_4d_file_can_be_read() {
 /// and time point `volume`.
 fn ome(name: &str, channel: usize, volume: usize) -> slabscope::Result<Loaded> {
     let opts = LoadOptions {
-        channel,
-        volume,
+        part: slabscope::formats::PartOptions {
+            channel,
+            volume,
+            ..slabscope::formats::PartOptions::default()
+        },
         ..LoadOptions::default()
     };
     load(&data(&format!("ome/{name}")), &opts)
@@ -430,7 +436,10 @@ fn an_ome_tiff_channel_or_time_point_it_lacks_is_an_error_naming_what_it_has() {
 #[test]
 fn a_channel_of_a_file_of_one_channel_is_an_error() {
     let opts = LoadOptions {
-        channel: 1,
+        part: slabscope::formats::PartOptions {
+            channel: 1,
+            ..slabscope::formats::PartOptions::default()
+        },
         ..LoadOptions::default()
     };
     for name in ["ramp_u8.nii", "ramp_u16_stack.tif", "ramp_slices"] {

@@ -13,8 +13,11 @@ use crate::common::{data, info_details, run};
 
 fn options(array: Option<&str>, volume: usize) -> LoadOptions {
     LoadOptions {
-        array: array.map(str::to_string),
-        volume,
+        part: slabscope::formats::PartOptions {
+            array: array.map(str::to_string),
+            volume,
+            ..slabscope::formats::PartOptions::default()
+        },
         ..LoadOptions::default()
     }
 }
@@ -275,7 +278,10 @@ fn an_imaris_file_is_read_at_its_finest_level_cut_to_its_size() {
     let path = data("hdf5/imaris.ims");
     for (t, c) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
         let opts = LoadOptions {
-            channel: c,
+            part: slabscope::formats::PartOptions {
+                channel: c,
+                ..options(None, t).part
+            },
             ..options(None, t)
         };
         // 8x8x8 stored, 6x5x4 the image: ramp + 1000t + 2000c.

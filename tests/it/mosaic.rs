@@ -13,7 +13,10 @@ fn stored(i: usize, j: usize, k: usize, t: usize) -> f32 {
 
 fn load(name: &str, volume: usize) -> slabscope::Result<Loaded> {
     let opts = LoadOptions {
-        volume,
+        part: slabscope::formats::PartOptions {
+            volume,
+            ..slabscope::formats::PartOptions::default()
+        },
         ..LoadOptions::default()
     };
     slabscope::load(&dicom_data(&format!("mosaic/{name}")), &opts)

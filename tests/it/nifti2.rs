@@ -14,7 +14,10 @@ fn path(name: &str) -> PathBuf {
 
 fn open(name: &str, volume: usize) -> Loaded {
     let opts = LoadOptions {
-        volume,
+        part: slabscope::formats::PartOptions {
+            volume,
+            ..slabscope::formats::PartOptions::default()
+        },
         ..LoadOptions::default()
     };
     load(&path(name), &opts).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -130,7 +133,10 @@ fn nifti2_4d_volumes_and_units() {
     let e = load(
         &path("ramp_4d_um.nii"),
         &LoadOptions {
-            volume: 2,
+            part: slabscope::formats::PartOptions {
+                volume: 2,
+                ..slabscope::formats::PartOptions::default()
+            },
             ..LoadOptions::default()
         },
     )

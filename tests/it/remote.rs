@@ -68,8 +68,11 @@ fn remote_stores_read_as_the_local_ones_voxel_for_voxel() {
         }
         // A time point and a channel, and a label image.
         let tczyx = LoadOptions {
-            volume: 1,
-            channel: 1,
+            part: slabscope::formats::PartOptions {
+                volume: 1,
+                channel: 1,
+                ..slabscope::formats::PartOptions::default()
+            },
             ..LoadOptions::default()
         };
         let name = "v05_tczyx.ome.zarr";

@@ -258,7 +258,10 @@ fn appended_raw_values_are_read_in_place() {
 fn array_names_the_array_read() {
     let path = data("vti/ramp_u16_zlib.vti");
     let named = |name: &str| slabscope::LoadOptions {
-        array: Some(name.to_string()),
+        part: slabscope::formats::PartOptions {
+            array: Some(name.to_string()),
+            ..slabscope::formats::PartOptions::default()
+        },
         ..slabscope::LoadOptions::default()
     };
     // `mask`, all zeros, instead of the `density` that `Scalars` names.

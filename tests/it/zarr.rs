@@ -196,8 +196,11 @@ fn ngff_05_time_points_and_channels_in_nanometres() {
     for t in 0..2 {
         for c in 0..3 {
             let opts = LoadOptions {
-                volume: t,
-                channel: c,
+                part: slabscope::formats::PartOptions {
+                    volume: t,
+                    channel: c,
+                    ..slabscope::formats::PartOptions::default()
+                },
                 ..LoadOptions::default()
             };
             let l = open_with(&path(name), &opts);
@@ -215,8 +218,11 @@ fn ngff_05_time_points_and_channels_in_nanometres() {
     assert_eq!(weighted, e["weighted"].as_f64().unwrap());
     let err = |volume, channel| {
         let opts = LoadOptions {
-            volume,
-            channel,
+            part: slabscope::formats::PartOptions {
+                volume,
+                channel,
+                ..slabscope::formats::PartOptions::default()
+            },
             ..LoadOptions::default()
         };
         load(&path(name), &opts).unwrap_err().to_string()

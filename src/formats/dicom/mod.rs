@@ -417,7 +417,7 @@ fn load_from(
     let series = pick(path, &series, opts.dicom.series.as_deref())?;
     let layout =
         assemble::layout(series, &|im| name(&scan, im)).map_err(|m| Error::format(path, m))?;
-    super::data::pick_volume(path, layout.volumes, opts.volume, &mut notes)?;
+    super::data::pick_volume(path, layout.volumes, opts.part.volume, &mut notes)?;
     check_pixels(path, &scan, series, &mut notes)?;
     notes.extend(layout.notes.iter().cloned());
     let resample = opts.dicom.resample && layout.needs_resampling();
@@ -429,7 +429,7 @@ fn load_from(
     };
     let dims = [cols, rows, slices];
     opts.room().check(path, dims)?;
-    let order = &layout.order[opts.volume];
+    let order = &layout.order[opts.part.volume];
     let voxels = if resample {
         let voxels = voxels::resampled(path, &scan, series, &layout, order, slices, opts.room())?;
         notes.push(resampled_note(&layout, slices));

@@ -63,17 +63,17 @@ pub(super) fn pick(
     }
     let times = (0..MAX_COUNT).take_while(|&t| has(&data(t, 0))).count();
     let channels = (0..MAX_COUNT).take_while(|&c| has(&data(0, c))).count();
-    let (t, _) = pick_volume(path, times, opts.volume, notes)?;
-    if opts.channel >= channels {
-        return Err(one_channel(path, channels, opts.channel));
+    let (t, _) = pick_volume(path, times, opts.part.volume, notes)?;
+    if opts.part.channel >= channels {
+        return Err(one_channel(path, channels, opts.part.channel));
     }
     if channels > 1 {
         notes.push(format!(
             "Imaris file with {channels} channels: loaded channel {}",
-            opts.channel
+            opts.part.channel
         ));
     }
-    let c = opts.channel;
+    let c = opts.part.channel;
     let root = file.root_group();
     let number = |group: &str, key: &str| -> Option<f64> {
         let text = root.group(group).ok()?.attr_string(key).ok()?;
@@ -148,7 +148,7 @@ pub(super) fn preview_level(
     if wanted == 0 {
         return Ok(None);
     }
-    let (t, c) = (opts.volume, opts.channel);
+    let (t, c) = (opts.part.volume, opts.part.channel);
     let has = |p: &str| found.iter().any(|f| f.path == p);
     let mut best: Option<(usize, usize)> = None;
     for level in (1..MAX_LEVELS).take_while(|&l| has(&format!("{}/Data", group(l, t, c)))) {

@@ -88,7 +88,7 @@ impl Reader for Hdf5 {
         let named = source.name().to_ascii_lowercase();
         #[allow(clippy::case_sensitive_file_extension_comparisons)] // lowercased
         let ims = named.ends_with(".ims");
-        if !ims || opts.array.is_some() || !path.is_file() {
+        if !ims || opts.part.array.is_some() || !path.is_file() {
             return Ok(None);
         }
         if self.sniff(&source.head(4096)?) != Sniff::Mine {
@@ -180,7 +180,7 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
     let path = source.path();
     let (file, listing) = open(path)?;
     let mut notes = Vec::new();
-    let imaris = match opts.array {
+    let imaris = match opts.part.array {
         None => imaris::pick(path, &file, &listing, opts, level, &mut notes)?,
         Some(_) => None,
     };
@@ -189,8 +189,8 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
             .iter()
             .find(|f| f.path == i.path)
             .ok_or_else(|| Error::format(path, format!("holds no dataset /{}", i.path)))?,
-        None if opts.channel > 0 => return Err(one_channel(path, 1, opts.channel)),
-        None => pick::choose(path, &listing, opts.array.as_deref(), &mut notes)?,
+        None if opts.part.channel > 0 => return Err(one_channel(path, 1, opts.part.channel)),
+        None => pick::choose(path, &listing, opts.part.array.as_deref(), &mut notes)?,
     };
     let name = chosen.shown();
     let ds = file
@@ -209,7 +209,7 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
     let volume = match imaris {
         Some(_) if rank == 4 => return Err(pick::rank_error(path, chosen)),
         Some(_) => 0,
-        None => pick_volume(path, count, opts.volume, &mut notes)?.0,
+        None => pick_volume(path, count, opts.part.volume, &mut notes)?.0,
     };
     check_budget(path, &name, shape, ty, opts.max_memory)?;
     let mut bytes = read_volume(path, &name, &ds, dims, ty.size(), (volume, count))?;

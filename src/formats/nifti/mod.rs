@@ -157,7 +157,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let mut notes = Vec::new();
     check_intent(path, &h)?;
     let (ndim, dims, extra) = dimensions(path, &h)?;
-    let volumes = pick_volume(path, extra, opts.volume, &mut notes)?;
+    let volumes = pick_volume(path, extra, opts.part.volume, &mut notes)?;
     let ty = voxel_type(path, h.datatype)?;
     let unit = unit_to_mm(h.xyzt_units);
     let spacing = spacing(&h, ndim, unit, &mut notes);

@@ -163,7 +163,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
             "its piece's Extent {extent:?} is empty or too large"
         )));
     }
-    let array = pick_array(path, piece, opts.array.as_deref())?;
+    let array = pick_array(path, piece, opts.part.array.as_deref())?;
     let dims = if array.cells {
         points.map(|n| n.saturating_sub(1).max(1))
     } else {

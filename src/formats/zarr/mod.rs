@@ -415,11 +415,11 @@ impl Opened {
         let mut notes = Vec::new();
         let count = |axis: Option<usize>| axis.map_or(1, |a| array.shape[a] as usize);
         let (times, channels) = (count(layout.time), count(layout.channel));
-        if opts.volume >= times {
-            return Err(one_volume(dir, times, opts.volume));
+        if opts.part.volume >= times {
+            return Err(one_volume(dir, times, opts.part.volume));
         }
-        if opts.channel >= channels {
-            return Err(one_channel(dir, channels, opts.channel));
+        if opts.part.channel >= channels {
+            return Err(one_channel(dir, channels, opts.part.channel));
         }
         if times > 1 || channels > 1 {
             notes.push(format!(
@@ -427,8 +427,8 @@ impl Opened {
                  at time point {}",
                 plural(channels),
                 plural(times),
-                opts.channel,
-                opts.volume
+                opts.part.channel,
+                opts.part.volume
             ));
         }
         if image.multiscales > 1 {
@@ -458,7 +458,7 @@ impl Opened {
             path: &self.image.datasets[i].path,
             meta: &self.arrays[i],
             layout: &self.layout,
-            at: [opts.volume as u64, opts.channel as u64],
+            at: [opts.part.volume as u64, opts.part.channel as u64],
             max_memory: opts.max_memory,
             scratch: opts.scratch.as_deref(),
             cancel: &opts.cancel,

@@ -12,8 +12,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
 use std::time::Duration;
 
-use slabscope::budget::{Budget, GLANCE_VOXELS, Purpose};
-use slabscope::{AnalysisParams, Histories, LoadOptions, Monitor, Progress, Scope, Volume, search};
+use slabscope::budget::GLANCE_VOXELS;
+use slabscope::partition::StackParams;
+use slabscope::request::{AnalysisRequest, Level};
+use slabscope::view::ViewParams;
+use slabscope::{AnalysisParams, LoadOptions, Monitor, Progress, Volume};
 
 use super::event::{Effect, Event, Job, JobMsg, PictureJob};
 use super::preview_level;
@@ -100,46 +103,13 @@ impl Jobs {
             Effect::Load => {
                 let (source, mut load) = (self.source.clone(), self.load.clone());
                 load.cancel = slabscope::Cancel::new(Arc::clone(&self.load_cancel));
+                let request = self.request(AnalysisParams::default());
                 self.spawn(Job::Load, move |_, send| {
-                    load_volume(source.as_ref(), &load, send)
+                    load_volume(source.as_ref(), &load, &request, send)
                 });
             }
-            Effect::SearchViews(params, level) => {
-                let Some(source) = self.open.level(level) else {
-                    return;
-                };
-                let delay = self.full_delay(level);
-                self.spawn(Job::Views(level), move |monitor, send| {
-                    let on = source.get();
-                    if level > 0 {
-                        send(JobMsg::Coarse(Arc::clone(&on)));
-                    }
-                    let result = wait(delay, monitor).and_then(|()| search(&on, &params, monitor));
-                    JobMsg::Views(level, result.map(Box::new).map_err(|e| e.to_string()))
-                });
-            }
-            Effect::Analyze(generation, axis, params, level) => {
-                let Some(source) = self.open.level(level) else {
-                    return;
-                };
-                let delay = self.full_delay(level);
-                self.spawn(Job::Analysis(level), move |monitor, _| {
-                    let on = source.get();
-                    let result = wait(delay, monitor)
-                        .and_then(|()| Histories::new(&on, axis, &params, Scope::ALL, monitor));
-                    let result = result.map(Arc::new).map_err(|e| e.to_string());
-                    JobMsg::Analysis(generation, level, result)
-                });
-            }
-            Effect::RankGain(params, level) => {
-                let Some(source) = self.open.level(level) else {
-                    return;
-                };
-                self.spawn(Job::Gain, move |monitor, _| {
-                    let on = source.get();
-                    let result = slabscope::analysis::rank_by_gain(&on, &params, monitor);
-                    JobMsg::Gain(level, result.map(Box::new).map_err(|e| e.to_string()))
-                });
+            effect @ (Effect::SearchViews(..) | Effect::Analyze(..) | Effect::RankGain(..)) => {
+                self.analyse(effect);
             }
             Effect::Lesson(request) => {
                 self.spawn(Job::Lesson, move |monitor, _| {
@@ -173,6 +143,67 @@ impl Jobs {
                 }
             }
             Effect::Quit => self.load_cancel.store(true, Ordering::Relaxed),
+        }
+    }
+
+    /// Carries out an effect of the analysis (the view search, the histories, the gain
+    /// ranking) as a step of the library's request on the pyramid level it names.
+    fn analyse(&self, effect: Effect) {
+        match effect {
+            Effect::SearchViews(view, level) => {
+                let Some(source) = self.open.level(level) else {
+                    return;
+                };
+                let delay = self.full_delay(level);
+                let request = self.request(AnalysisParams {
+                    view,
+                    ..AnalysisParams::default()
+                });
+                self.spawn(Job::Views(level), move |monitor, send| {
+                    let on = source.get();
+                    if level > 0 {
+                        send(JobMsg::Coarse(Arc::clone(&on)));
+                    }
+                    let result = wait(delay, monitor).and_then(|()| request.on(on).views(monitor));
+                    JobMsg::Views(level, result.map(Box::new).map_err(|e| e.to_string()))
+                });
+            }
+            Effect::Analyze(generation, axis, stack, level) => {
+                let Some(source) = self.open.level(level) else {
+                    return;
+                };
+                let delay = self.full_delay(level);
+                let request = self.request(cutting(&stack));
+                self.spawn(Job::Analysis(level), move |monitor, _| {
+                    let on = source.get();
+                    let result =
+                        wait(delay, monitor).and_then(|()| request.on(on).histories(axis, monitor));
+                    let result = result.map(Arc::new).map_err(|e| e.to_string());
+                    JobMsg::Analysis(generation, level, result)
+                });
+            }
+            Effect::RankGain(params, level) => {
+                let Some(source) = self.open.level(level) else {
+                    return;
+                };
+                let request = self.request(*params);
+                self.spawn(Job::Gain, move |monitor, _| {
+                    let result = request.on(source.get()).gain(monitor);
+                    JobMsg::Gain(level, result.map(Box::new).map_err(|e| e.to_string()))
+                });
+            }
+            _ => {}
+        }
+    }
+
+    /// The library's request for an analysis by `params` within the memory budget, at the level
+    /// a picture is drawn from: the volume worked on is the one its plan gives when it loads
+    /// ([`load_volume`]), and the jobs' work runs on that volume or its glance as it is
+    /// ([`AnalysisRequest::on`]).
+    fn request(&self, params: AnalysisParams) -> AnalysisRequest {
+        AnalysisRequest {
+            level: Level::Picture,
+            ..AnalysisRequest::new(params, self.load.max_memory)
         }
     }
 
@@ -366,11 +397,25 @@ fn wait(delay: Duration, monitor: &Monitor) -> slabscope::Result<()> {
     monitor.check()
 }
 
+/// An analysis that cuts its slices as `stack` says: the histories' request.
+fn cutting(stack: &StackParams) -> AnalysisParams {
+    AnalysisParams {
+        view: ViewParams {
+            sampling: stack.sampling,
+            ..ViewParams::default()
+        },
+        background: stack.background,
+        ..AnalysisParams::default()
+    }
+}
+
 /// Loads `source` (None: the built-in dataset) with `load`, a series in `source` taking the
-/// place of the options'. A coarse pyramid level the file holds is sent first, as a preview.
+/// place of the options', and plans `request` on it: the volume worked on is the level its plan
+/// gives. A coarse pyramid level the file holds is sent first, as a preview.
 fn load_volume(
     source: Option<&slabscope::triage::Entry>,
     load: &LoadOptions,
+    request: &AnalysisRequest,
     send: &dyn Fn(JobMsg),
 ) -> JobMsg {
     let loaded = match source {
@@ -381,203 +426,24 @@ fn load_volume(
             if let Ok(Some(p)) = preview {
                 send(JobMsg::Preview(Arc::new(p.volume), p.notes));
             }
-            let max_memory = load.max_memory;
-            slabscope::load(&entry.path, &load).and_then(|l| within_memory(l, max_memory))
+            slabscope::load(&entry.path, &load).and_then(|l| worked_on(l, request))
         }
         None => slabscope::builtin_dataset().map(|v| (Arc::new(v), Vec::new())),
     };
     JobMsg::Loaded(loaded.map_err(|e| e.to_string()))
 }
 
-/// The volume the TUI works on: `loaded`'s, or beyond the memory budget the finest pyramid level
-/// whose analysis fits, said in a note.
-fn within_memory(
+/// The volume the TUI works on: the level `request`'s plan partitions on `loaded`'s (itself, or
+/// beyond the memory budget the finest pyramid level whose analysis fits, said in a note).
+fn worked_on(
     loaded: slabscope::formats::Loaded,
-    max_memory: u64,
+    request: &AnalysisRequest,
 ) -> slabscope::Result<(Arc<Volume>, Vec<String>)> {
-    let plan = Budget::new(max_memory).plan(&loaded.volume, Purpose::Picture)?;
+    let plan = request.plan(&loaded.volume)?.plan;
     let mut notes = loaded.notes;
     notes.extend(plan.note);
     Ok((plan.partition, notes))
 }
 
 #[cfg(test)]
-mod tests {
-    use std::sync::mpsc::channel;
-    use std::time::Instant;
-
-    use slabscope::partition::Method;
-    use slabscope::{AnalysisParams, Renderer, Scope};
-
-    use super::worker::render;
-    use super::*;
-    use crate::term::{Caps, Graphics};
-    use crate::tui::event::PictureSettings;
-
-    #[test]
-    fn messages_of_a_volume_no_longer_open_are_dropped() {
-        let (tx, _rx) = channel();
-        let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
-        let done = |epoch| JobMsg::Epoch(epoch, Box::new(JobMsg::Exported(Ok("x".into()))));
-        assert!(matches!(jobs.admit(done(0)), Some(JobMsg::Exported(_))));
-        jobs.run(Effect::Open(slabscope::triage::Entry::file("next.nii")));
-        assert!(jobs.admit(done(0)).is_none(), "the last volume's");
-        assert!(matches!(jobs.admit(done(1)), Some(JobMsg::Exported(_))));
-        // The folder's triage rows are for every volume: never dropped.
-        let row = slabscope::triage::TriageRow::failed("a", "b".into());
-        assert!(jobs.admit(JobMsg::Triaged(0, Box::new(row))).is_some());
-    }
-
-    /// Opening another volume stops the load under way (a Zarr store of 64,000 absent chunks:
-    /// seconds of reading), which ends cancelled rather than reading on.
-    #[test]
-    fn opening_another_volume_stops_the_load_under_way() {
-        let dir = tempfile::tempdir().unwrap();
-        let store = dir.path().join("slow.zarr");
-        std::fs::create_dir(&store).unwrap();
-        let meta = r#"{"zarr_format": 3, "node_type": "array", "shape": [320, 320, 320],
-            "data_type": "uint8", "fill_value": 0,
-            "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [8, 8, 8]}},
-            "chunk_key_encoding": {"name": "default", "configuration": {"separator": "/"}},
-            "codecs": [{"name": "bytes", "configuration": {"endian": "little"}}]}"#;
-        std::fs::write(store.join("zarr.json"), meta).unwrap();
-        let (tx, rx) = channel();
-        let entry = slabscope::triage::Entry::file(&store);
-        let mut jobs = Jobs::new(tx, Caps::blocks(), Some(entry), LoadOptions::default());
-        jobs.run(Effect::Load);
-        jobs.run(Effect::Open(slabscope::triage::Entry::file("next.nii")));
-        match rx.recv().unwrap() {
-            Event::Job(JobMsg::Epoch(0, msg)) => match *msg {
-                JobMsg::Loaded(Err(e)) => assert_eq!(e, slabscope::Error::Cancelled.to_string()),
-                _ => panic!("not the load's end"),
-            },
-            _ => panic!("not the first volume's message"),
-        }
-    }
-
-    #[test]
-    fn background_triage_waits_while_the_open_volume_works() {
-        let (tx, rx) = channel();
-        let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
-        jobs.run(Effect::PauseTriage(true));
-        let unreadable = slabscope::triage::Entry::failed("gone.nii", "cannot be read");
-        let params = Box::new(AnalysisParams::default());
-        jobs.run(Effect::Triage(vec![unreadable], params));
-        // Until the triage thread waits at the gate (no clock: it gets there or the test hangs).
-        while jobs.triage_gate.waiting() == 0 {
-            std::thread::yield_now();
-        }
-        assert!(rx.try_recv().is_err(), "held: no row");
-        jobs.run(Effect::PauseTriage(false));
-        match rx.recv().unwrap() {
-            Event::Job(JobMsg::Triaged(0, row)) => {
-                assert_eq!(row.error.as_deref(), Some("cannot be read"));
-            }
-            _ => panic!("not a row"),
-        }
-    }
-
-    #[test]
-    fn a_file_preview_serves_its_level_until_forgotten() {
-        let (tx, _rx) = channel();
-        let mut jobs = Jobs::new(tx, Caps::blocks(), None, LoadOptions::default());
-        assert!(jobs.open.level(1).is_none(), "nothing read yet");
-        let full = Arc::new(slabscope::volume::phantom::body([8, 8, 8], 1).unwrap());
-        let coarse = full.coarser(1);
-        jobs.observe(&JobMsg::Preview(Arc::clone(&coarse), vec![]));
-        assert!(matches!(jobs.open.level(1), Some(Source::Held(v)) if Arc::ptr_eq(&v, &coarse)));
-        assert!(jobs.open.level(0).is_none() && jobs.open.level(2).is_none());
-        jobs.observe(&JobMsg::Loaded(Ok((Arc::clone(&full), vec![]))));
-        assert!(
-            matches!(jobs.open.level(1), Some(Source::Held(_))),
-            "kept for level 1"
-        );
-        assert!(matches!(jobs.open.level(2), Some(Source::Coarser(_, 2))));
-        // Forgotten: level 1 comes from level 0, and what the jobs sent before is dropped.
-        let done = |epoch| JobMsg::Epoch(epoch, Box::new(JobMsg::Exported(Ok("x".into()))));
-        jobs.run(Effect::Forget);
-        assert!(matches!(jobs.open.level(1), Some(Source::Coarser(_, 1))));
-        assert!(jobs.admit(done(0)).is_none());
-        assert!(jobs.admit(done(1)).is_some());
-        assert_eq!(jobs.open.level(1).unwrap().get().dims(), coarse.dims());
-    }
-
-    /// Not a test but a measurement: `cargo test --release --bin slabscope preview_timing --
-    /// --ignored --nocapture` prints, for the built-in dataset, the time to the first image
-    /// after start, and the time and bytes of an image after a step at 1000×600 pixels, per
-    /// protocol.
-    #[test]
-    #[ignore = "a benchmark: prints timings, asserts nothing about them"]
-    fn preview_timing() {
-        let start = Instant::now();
-        let volume = slabscope::builtin_dataset().unwrap();
-        let renderer = Renderer::new(&volume).unwrap();
-        let cells = (125, 37);
-        let sixel = Caps {
-            graphics: Graphics::Sixel,
-            cell: (8, 16),
-            ..Caps::blocks()
-        };
-        let whole = PictureJob {
-            generation: 1,
-            level: 0,
-            slabs: Vec::new(),
-            axis: [0.0, 0.0, 1.0],
-            nmi: None,
-            histories: None,
-            look: PictureSettings::default(),
-            highlight: None,
-            cells,
-            slice: None,
-        };
-        let first = render(&renderer, &sixel, &whole, &Monitor::none()).unwrap();
-        println!(
-            "first image (load, render, sixel) {:.0} ms after start, {} KB",
-            start.elapsed().as_secs_f64() * 1e3,
-            first.image.bytes / 1024
-        );
-        let params = AnalysisParams::default();
-        let h = Arc::new(
-            Histories::new(
-                &volume,
-                [0.0, 0.0, 1.0],
-                &params.stack(),
-                Scope::ALL,
-                &Monitor::none(),
-            )
-            .unwrap(),
-        );
-        for (name, graphics) in [
-            ("sixel", Graphics::Sixel),
-            ("kitty", Graphics::Kitty),
-            ("iTerm2", Graphics::Iterm),
-            ("half-blocks", Graphics::Blocks),
-        ] {
-            let caps = Caps {
-                graphics,
-                ..sixel.clone()
-            };
-            let step = PictureJob {
-                slabs: h.slabs(Method::TopDown, 4),
-                histories: Some(Arc::clone(&h)),
-                ..whole.clone()
-            };
-            let mut times = Vec::new();
-            let mut bytes = 0;
-            for _ in 0..5 {
-                let t = Instant::now();
-                bytes = render(&renderer, &caps, &step, &Monitor::none())
-                    .unwrap()
-                    .image
-                    .bytes;
-                times.push(t.elapsed().as_secs_f64() * 1e3);
-            }
-            times.sort_by(f64::total_cmp);
-            println!(
-                "{name:>11}: an image after a step at 1000x592 px in {:.0} ms (median of 5), {} KB",
-                times[2],
-                bytes / 1024
-            );
-        }
-    }
-}
+mod tests;
