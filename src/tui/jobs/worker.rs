@@ -31,41 +31,65 @@ pub(super) fn start_renderer(
     let (tx, rx) = channel::<PictureJob>();
     std::thread::spawn(move || {
         let events = EpochSender { events, epoch };
-        // The preview's pyramid level and its renderer, and level 0's, each made when first
-        // asked for.
-        let coarse: OnceCell<Arc<Volume>> = OnceCell::new();
-        let (mut full, mut preview) = (None, None);
-        while let Some(request) = newest(&rx) {
-            cancel.store(false, Ordering::Relaxed);
-            let monitor = Monitor::new(Some(&cancel), None);
-            let generation = request.generation;
-            let renderer = match (request.level, open.full(), open.level(request.level)) {
-                (0, Some(volume), _) => made_for(&mut full, volume),
-                (k, _, Some(source)) if k > 0 => {
-                    made_for(&mut preview, coarse.get_or_init(|| source.get()))
-                }
-                _ => Err(anyhow::anyhow!(
-                    "pyramid level {} is not loaded yet",
-                    request.level
-                )),
-            };
-            let result = renderer.and_then(|r| render(r, &caps, &request, &monitor));
-            match result {
-                Err(e)
-                    if matches!(
-                        e.downcast_ref::<slabscope::Error>(),
-                        Some(slabscope::Error::Cancelled)
-                    ) => {}
-                result => {
-                    let _ = events.send(Event::Job(JobMsg::Rendered(
-                        generation,
-                        result.map_err(|e| format!("{e:#}")),
-                    )));
-                }
-            }
+        let serve = move || serve(&rx, &open, &caps, &events, &cancel);
+        // Threads of its own: on the global pool a picture would wait behind the view search's
+        // and the histories' work, which keep every thread of it busy for as long as they run
+        // (the first picture of a 96³ volume came after the view search, a minute on a busy
+        // machine). The pool's threads end with the worker.
+        let threads = std::thread::available_parallelism().map_or(2, usize::from);
+        match rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("slabscope-render-{i}"))
+            .build()
+        {
+            Ok(pool) => pool.install(serve),
+            Err(_) => serve(),
         }
     });
     tx
+}
+
+/// Renders the newest of the requests `rx` takes until it closes, and sends the pictures.
+fn serve(
+    rx: &Receiver<PictureJob>,
+    open: &Open,
+    caps: &Caps,
+    events: &EpochSender,
+    cancel: &AtomicBool,
+) {
+    // The preview's pyramid level and its renderer, and level 0's, each made when first
+    // asked for.
+    let coarse: OnceCell<Arc<Volume>> = OnceCell::new();
+    let (mut full, mut preview) = (None, None);
+    while let Some(request) = newest(rx) {
+        cancel.store(false, Ordering::Relaxed);
+        let monitor = Monitor::new(Some(cancel), None);
+        let generation = request.generation;
+        let renderer = match (request.level, open.full(), open.level(request.level)) {
+            (0, Some(volume), _) => made_for(&mut full, volume),
+            (k, _, Some(source)) if k > 0 => {
+                made_for(&mut preview, coarse.get_or_init(|| source.get()))
+            }
+            _ => Err(anyhow::anyhow!(
+                "pyramid level {} is not loaded yet",
+                request.level
+            )),
+        };
+        let result = renderer.and_then(|r| render(r, caps, &request, &monitor));
+        match result {
+            Err(e)
+                if matches!(
+                    e.downcast_ref::<slabscope::Error>(),
+                    Some(slabscope::Error::Cancelled)
+                ) => {}
+            result => {
+                let _ = events.send(Event::Job(JobMsg::Rendered(
+                    generation,
+                    result.map_err(|e| format!("{e:#}")),
+                )));
+            }
+        }
+    }
 }
 
 /// The renderer in `slot`, made for `volume` the first time.
