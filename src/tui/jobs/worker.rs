@@ -342,3 +342,67 @@ fn cross_hair(canvas: &mut Pixmap, (x, y): (f32, f32)) {
         );
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicUsize;
+    use std::time::Duration;
+
+    use super::*;
+
+    /// A picture is drawn while every thread of rayon's global pool is busy, as the view search
+    /// keeps them: the worker has threads of its own. (On the global pool it would wait until
+    /// they are let go, which here is only after the picture.)
+    #[test]
+    fn a_picture_does_not_wait_for_rayons_global_pool() {
+        let volume = Arc::new(slabscope::volume::phantom::body([24, 24, 32], 1).unwrap());
+        let open = Open {
+            full: Some(volume),
+            preview: None,
+        };
+        let threads = rayon::current_num_threads();
+        let (busy, release) = (
+            Arc::new(AtomicUsize::new(0)),
+            Arc::new(AtomicBool::new(false)),
+        );
+        for _ in 0..threads {
+            let (busy, release) = (Arc::clone(&busy), Arc::clone(&release));
+            rayon::spawn(move || {
+                busy.fetch_add(1, Ordering::SeqCst);
+                while !release.load(Ordering::SeqCst) {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+            });
+        }
+        while busy.load(Ordering::SeqCst) < threads {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let (tx, rx) = channel();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let renders = start_renderer(open, Caps::blocks(), (tx, 3), cancel);
+        renders
+            .send(PictureJob {
+                generation: 1,
+                level: 0,
+                slabs: Vec::new(),
+                axis: [0.0, 0.0, 1.0],
+                nmi: None,
+                histories: None,
+                look: PictureSettings::default(),
+                highlight: None,
+                cells: (40, 12),
+                slice: None,
+            })
+            .unwrap();
+        // A bound only for failing: the picture takes milliseconds.
+        let got = rx.recv_timeout(Duration::from_secs(120));
+        release.store(true, Ordering::SeqCst);
+        let Ok(Event::Job(JobMsg::Epoch(3, msg))) = got else {
+            panic!("no picture while the global pool was busy");
+        };
+        let JobMsg::Rendered(1, Ok(r)) = *msg else {
+            panic!("not the picture");
+        };
+        assert_eq!(r.image.cells, (40, 12));
+    }
+}
