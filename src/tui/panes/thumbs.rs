@@ -39,7 +39,9 @@ pub struct Thumbs {
     caps: Caps,
     /// What takes the picture away (kitty draws it as a layer of its own); empty elsewhere.
     pub hide: String,
-    drawn: RefCell<Option<(Shown, TermImage)>>,
+    /// What the last picture showed, and the picture (none where it could not be encoded, which
+    /// is not tried again for the same).
+    drawn: RefCell<Option<(Shown, Option<TermImage>)>>,
 }
 
 /// A line of the column: the volume it is, and its thumbnail if triage has drawn one.
@@ -116,11 +118,10 @@ impl Thumbs {
                 lines,
                 large.and_then(|(_, t)| t).map(|t| (t, large_cols)),
             );
-            *drawn = encode_as(&picture, cells, &self.caps, KITTY_THUMBS_ID)
-                .ok()
-                .map(|image| (shown, image));
+            let image = encode_as(&picture, cells, &self.caps, KITTY_THUMBS_ID).ok();
+            *drawn = Some((shown, image));
         }
-        if let Some((_, image)) = drawn.as_ref() {
+        if let Some((_, Some(image))) = drawn.as_ref() {
             image.render(area, buf);
         }
     }
