@@ -1,10 +1,13 @@
 """Triage from Python: the rows of `triage --json`, in its order, from a walk, a manifest or
-entries; early stops; pandas."""
+entries; early stops; pandas; the manifest the TUI writes from marks."""
 
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import subprocess
+import time
 
 import pytest
 
@@ -83,3 +86,60 @@ def test_a_frame_of_rows():
     frame = slabscope.triage_frame([str(DATA / "ramp_u8.nii"), str(DATA / "ramp_i16.nii")], slabs=2)
     assert isinstance(frame, pandas.DataFrame)
     assert list(frame["format"]) == ["nifti", "nifti"]
+
+
+class Tmux:
+    """A tmux server of the test's own (never the user's sessions), running one command."""
+
+    def __init__(self, command: str, cwd) -> None:
+        self.socket = f"slabscope-py-{os.getpid()}"
+        self.run("new-session", "-d", "-s", "t", "-x", "120", "-y", "32", "-c", str(cwd), command)
+
+    def run(self, *args: str) -> str:
+        done = subprocess.run(["tmux", "-L", self.socket, *args], capture_output=True, text=True, check=False)
+        return done.stdout
+
+    def wait_for(self, text: str, secs: float = 60) -> str:
+        end = time.monotonic() + secs
+        while True:
+            screen = self.run("capture-pane", "-p", "-t", "t")
+            if text in screen:
+                return screen
+            assert time.monotonic() < end, f"waited {secs} s for {text!r}; the screen shows:\n{screen}"
+            time.sleep(0.1)
+
+    def keys(self, *keys: str) -> None:
+        for key in keys:
+            self.run("send-keys", "-t", "t", key)
+
+    def close(self) -> None:
+        self.run("kill-server")
+
+
+def test_marks_the_tui_writes_as_a_manifest_read_back_to_the_same_rows(archive, cli, tmp_path_factory):
+    """`slabscope FOLDER` in tmux: two volumes marked (Space) and written (M) as a manifest, which
+    Python's triage(manifest=...) reads to the rows `triage --manifest` gives, of those two."""
+    if shutil.which("tmux") is None:
+        pytest.skip("tmux is not installed (apt-get install tmux)")
+    where = tmp_path_factory.mktemp("tui")
+    tmux = Tmux(f"{cli.binary} {archive} --protocol blocks --slabs 2; echo EXITED $?; sleep 60", where)
+    try:
+        tmux.wait_for("6 volumes in")
+        # The first row is marked and the cursor steps to the second; the third is marked.
+        tmux.keys("Space", "Down", "Space")
+        tmux.wait_for("2 marked")
+        tmux.keys("M")
+        tmux.wait_for("manifest to> slabscope-marked.txt")
+        tmux.keys("Enter")
+        tmux.wait_for("wrote 2 volume(s) to slabscope-marked.txt")
+        tmux.keys("q")
+        tmux.wait_for("EXITED 0")
+    finally:
+        tmux.close()
+    manifest = where / "slabscope-marked.txt"
+    rows = list(slabscope.triage(manifest=str(manifest), slabs=2))
+    assert rows == lines(cli("triage", "--manifest", str(manifest), "--json", "--slabs", "2"))
+    # The pane lists the folder sorted: deeper/body.nii, deeper/truncated.nrrd, the brain, ...
+    marked = [archive / "deeper" / "body.nii", archive / "nilearn_image_10426.nii.gz"]
+    assert rows == lines(cli("triage", *map(str, marked), "--json", "--slabs", "2"))
+    assert [r["error"] is None for r in rows] == [True, True]

@@ -48,11 +48,22 @@ enum Payload {
 /// `cells.0 × 2·cells.1` pixels; for the others it is drawn at its own size from the area's
 /// top-left corner.
 pub fn encode(image: &RgbaImage, cells: (u16, u16), caps: &Caps) -> Result<TermImage, String> {
+    encode_as(image, cells, caps, KITTY_ID)
+}
+
+/// [`encode`], a kitty picture with the image id `kitty_id` (a picture of its own, which neither
+/// replaces nor is replaced by one of another id).
+pub fn encode_as(
+    image: &RgbaImage,
+    cells: (u16, u16),
+    caps: &Caps,
+    kitty_id: u32,
+) -> Result<TermImage, String> {
     let seq = match caps.graphics {
         Graphics::Blocks => return Ok(blocks(image, cells)),
         Graphics::Sixel => sixel(image, caps.colors)?,
         Graphics::Iterm => iterm(image)?,
-        Graphics::Kitty => kitty(image, caps.tmux),
+        Graphics::Kitty => kitty(image, caps.tmux, kitty_id),
     };
     let seq = match caps.graphics {
         // kitty's chunks are wrapped one by one.
@@ -153,7 +164,7 @@ fn iterm(image: &RgbaImage) -> Result<String, String> {
 
 /// kitty: the previous picture deleted, the new one sent in chunks of zlib-compressed RGBA and
 /// placed at the cursor without moving it. Each chunk is its own passthrough inside tmux.
-fn kitty(image: &RgbaImage, in_tmux: bool) -> String {
+fn kitty(image: &RgbaImage, in_tmux: bool, id: u32) -> String {
     let data = BASE64.encode(zlib(image.as_raw()));
     let chunks: Vec<&str> = data
         .as_bytes()
@@ -161,14 +172,14 @@ fn kitty(image: &RgbaImage, in_tmux: bool) -> String {
         .map(|c| std::str::from_utf8(c).unwrap_or_default())
         .collect();
     let wrap = |s: String| if in_tmux { tmux::wrap(&s) } else { s };
-    let mut out = wrap(format!("\x1b_Ga=d,d=I,i={KITTY_ID},q=2\x1b\\"));
+    let mut out = wrap(format!("\x1b_Ga=d,d=I,i={id},q=2\x1b\\"));
     for (i, chunk) in chunks.iter().enumerate() {
         let more = u8::from(i + 1 < chunks.len());
         let mut seq = String::from("\x1b_G");
         if i == 0 {
             let _ = write!(
                 seq,
-                "a=T,f=32,o=z,i={KITTY_ID},s={},v={},C=1,q=2,",
+                "a=T,f=32,o=z,i={id},s={},v={},C=1,q=2,",
                 image.width(),
                 image.height()
             );
@@ -274,13 +285,13 @@ mod tests {
                 255,
             ])
         });
-        let plain = kitty(&big, false);
+        let plain = kitty(&big, false, KITTY_ID);
         let chunks = plain.matches("\x1b_G").count();
         assert!(chunks > 2, "{chunks}");
         assert!(plain.starts_with(&format!("\x1b_Ga=d,d=I,i={KITTY_ID}")));
         assert!(plain.contains("a=T,f=32,o=z,") && plain.contains(",C=1,"));
         assert_eq!(plain.matches("m=0;").count(), 1, "one last chunk");
-        let wrapped = kitty(&big, true);
+        let wrapped = kitty(&big, true, KITTY_ID);
         assert_eq!(wrapped.matches("\x1bPtmux;").count(), chunks);
         // The base64 inside reassembles into the zlib stream of the pixels.
         let data: String = plain

@@ -137,7 +137,10 @@ pub fn run(options: Options) -> Result<()> {
             return Err(e.into());
         }
     };
+    let thumbs = panes::thumbs::Thumbs::new(&caps);
+    // On quitting, the preview's picture and the thumbnails' are taken away.
     let hide = term::image::hide_sequence(&caps);
+    let quit_hide = format!("{hide}{}", thumbs.as_ref().map_or("", |t| &t.hide));
     let result = (|| {
         execute!(stdout(), EnterAlternateScreen)?;
         let mut terminal = Terminal::new(CrosstermBackend::new(stdout()))?;
@@ -162,6 +165,9 @@ pub fn run(options: Options) -> Result<()> {
             Some((root, paths)) => App::for_folder(root, paths, analysis, screen),
             None => App::new(name.clone(), analysis, screen),
         };
+        if let Some(files) = app.files.as_mut() {
+            files.thumbs = thumbs;
+        }
         if let Some(mode) = tour {
             app.tour = Some(app::tour::Tour::new(mode.paper));
         }
@@ -173,7 +179,7 @@ pub fn run(options: Options) -> Result<()> {
             _ => Ok(()),
         }
     })();
-    restore(&hide);
+    restore(&quit_hide);
     let _ = std::panic::take_hook();
     result
 }

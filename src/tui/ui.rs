@@ -159,8 +159,15 @@ pub fn draw(frame: &mut Frame, app: &App) {
             a.tour,
         );
     }
-    if let Some(files) = app.files.as_ref().filter(|f| f.shown) {
-        frame.render_widget(files, a.files);
+    match app.files.as_ref() {
+        Some(files) if files.shown => frame.render_widget(files, a.files),
+        // kitty's thumbnails are a layer of their own: taken away with the pane.
+        Some(files) => {
+            if let Some(t) = files.thumbs.as_ref().filter(|t| !t.hide.is_empty()) {
+                crate::term::image::hide(&t.hide, a.status, frame.buffer_mut());
+            }
+        }
+        None => {}
     }
     if app.help {
         frame.render_widget(&panes::help::Help { theme: app.theme }, area);

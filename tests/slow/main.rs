@@ -22,6 +22,7 @@ mod mutants;
 mod real_terminal;
 #[cfg(feature = "remote")]
 mod remote;
+mod tui_glance;
 mod tui_smoke;
 
 /// Holds off every other test of this binary until the returned guard is dropped (at the end

@@ -446,6 +446,7 @@ impl App {
         self.preview.focused = self.focus == Pane::Preview;
         if let Some(files) = self.files.as_mut() {
             files.focused = self.focus == Pane::Files;
+            files.covered = self.help;
         }
         // A tour page's figure or worked example stands in the picture's place.
         let board = self

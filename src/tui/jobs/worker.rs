@@ -31,41 +31,65 @@ pub(super) fn start_renderer(
     let (tx, rx) = channel::<PictureJob>();
     std::thread::spawn(move || {
         let events = EpochSender { events, epoch };
-        // The preview's pyramid level and its renderer, and level 0's, each made when first
-        // asked for.
-        let coarse: OnceCell<Arc<Volume>> = OnceCell::new();
-        let (mut full, mut preview) = (None, None);
-        while let Some(request) = newest(&rx) {
-            cancel.store(false, Ordering::Relaxed);
-            let monitor = Monitor::new(Some(&cancel), None);
-            let generation = request.generation;
-            let renderer = match (request.level, open.full(), open.level(request.level)) {
-                (0, Some(volume), _) => made_for(&mut full, volume),
-                (k, _, Some(source)) if k > 0 => {
-                    made_for(&mut preview, coarse.get_or_init(|| source.get()))
-                }
-                _ => Err(anyhow::anyhow!(
-                    "pyramid level {} is not loaded yet",
-                    request.level
-                )),
-            };
-            let result = renderer.and_then(|r| render(r, &caps, &request, &monitor));
-            match result {
-                Err(e)
-                    if matches!(
-                        e.downcast_ref::<slabscope::Error>(),
-                        Some(slabscope::Error::Cancelled)
-                    ) => {}
-                result => {
-                    let _ = events.send(Event::Job(JobMsg::Rendered(
-                        generation,
-                        result.map_err(|e| format!("{e:#}")),
-                    )));
-                }
-            }
+        let serve = move || serve(&rx, &open, &caps, &events, &cancel);
+        // Threads of its own: on the global pool a picture would wait behind the view search's
+        // and the histories' work, which keep every thread of it busy for as long as they run
+        // (the first picture of a 96³ volume came after the view search, a minute on a busy
+        // machine). The pool's threads end with the worker.
+        let threads = std::thread::available_parallelism().map_or(2, usize::from);
+        match rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("slabscope-render-{i}"))
+            .build()
+        {
+            Ok(pool) => pool.install(serve),
+            Err(_) => serve(),
         }
     });
     tx
+}
+
+/// Renders the newest of the requests `rx` takes until it closes, and sends the pictures.
+fn serve(
+    rx: &Receiver<PictureJob>,
+    open: &Open,
+    caps: &Caps,
+    events: &EpochSender,
+    cancel: &AtomicBool,
+) {
+    // The preview's pyramid level and its renderer, and level 0's, each made when first
+    // asked for.
+    let coarse: OnceCell<Arc<Volume>> = OnceCell::new();
+    let (mut full, mut preview) = (None, None);
+    while let Some(request) = newest(rx) {
+        cancel.store(false, Ordering::Relaxed);
+        let monitor = Monitor::new(Some(cancel), None);
+        let generation = request.generation;
+        let renderer = match (request.level, open.full(), open.level(request.level)) {
+            (0, Some(volume), _) => made_for(&mut full, volume),
+            (k, _, Some(source)) if k > 0 => {
+                made_for(&mut preview, coarse.get_or_init(|| source.get()))
+            }
+            _ => Err(anyhow::anyhow!(
+                "pyramid level {} is not loaded yet",
+                request.level
+            )),
+        };
+        let result = renderer.and_then(|r| render(r, caps, &request, &monitor));
+        match result {
+            Err(e)
+                if matches!(
+                    e.downcast_ref::<slabscope::Error>(),
+                    Some(slabscope::Error::Cancelled)
+                ) => {}
+            result => {
+                let _ = events.send(Event::Job(JobMsg::Rendered(
+                    generation,
+                    result.map_err(|e| format!("{e:#}")),
+                )));
+            }
+        }
+    }
 }
 
 /// The renderer in `slot`, made for `volume` the first time.
@@ -316,5 +340,69 @@ fn cross_hair(canvas: &mut Pixmap, (x, y): (f32, f32)) {
             tiny_skia::Transform::identity(),
             None,
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicUsize;
+    use std::time::Duration;
+
+    use super::*;
+
+    /// A picture is drawn while every thread of rayon's global pool is busy, as the view search
+    /// keeps them: the worker has threads of its own. (On the global pool it would wait until
+    /// they are let go, which here is only after the picture.)
+    #[test]
+    fn a_picture_does_not_wait_for_rayons_global_pool() {
+        let volume = Arc::new(slabscope::volume::phantom::body([24, 24, 32], 1).unwrap());
+        let open = Open {
+            full: Some(volume),
+            preview: None,
+        };
+        let threads = rayon::current_num_threads();
+        let (busy, release) = (
+            Arc::new(AtomicUsize::new(0)),
+            Arc::new(AtomicBool::new(false)),
+        );
+        for _ in 0..threads {
+            let (busy, release) = (Arc::clone(&busy), Arc::clone(&release));
+            rayon::spawn(move || {
+                busy.fetch_add(1, Ordering::SeqCst);
+                while !release.load(Ordering::SeqCst) {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+            });
+        }
+        while busy.load(Ordering::SeqCst) < threads {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let (tx, rx) = channel();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let renders = start_renderer(open, Caps::blocks(), (tx, 3), cancel);
+        renders
+            .send(PictureJob {
+                generation: 1,
+                level: 0,
+                slabs: Vec::new(),
+                axis: [0.0, 0.0, 1.0],
+                nmi: None,
+                histories: None,
+                look: PictureSettings::default(),
+                highlight: None,
+                cells: (40, 12),
+                slice: None,
+            })
+            .unwrap();
+        // A bound only for failing: the picture takes milliseconds.
+        let got = rx.recv_timeout(Duration::from_secs(120));
+        release.store(true, Ordering::SeqCst);
+        let Ok(Event::Job(JobMsg::Epoch(3, msg))) = got else {
+            panic!("no picture while the global pool was busy");
+        };
+        let JobMsg::Rendered(1, Ok(r)) = *msg else {
+            panic!("not the picture");
+        };
+        assert_eq!(r.image.cells, (40, 12));
     }
 }

@@ -16,6 +16,7 @@ use ratatui::text::Line;
 use ratatui::widgets::{Paragraph, Row, StatefulWidget, Table, TableState, Widget, Wrap};
 use slabscope::triage::{Entry, TriageRow};
 
+use super::thumbs::Thumbs;
 use crate::tui::theme::Theme;
 
 /// A column of the pane, which it can be sorted by.
@@ -135,6 +136,10 @@ pub struct FilesPane {
     pub filter: Filter,
     /// The manifest's file the user was told exists: the same name again replaces it.
     pub exists: Option<String>,
+    /// The thumbnails drawn with the terminal's image protocol (none with half-blocks).
+    pub thumbs: Option<Thumbs>,
+    /// Something (the help) covers the pane: its pictures are taken away until it closes.
+    pub covered: bool,
     /// The volumes shown, in the order shown.
     order: Vec<usize>,
     /// Colours.
@@ -159,6 +164,8 @@ impl FilesPane {
             sort: (Column::Name, false),
             filter: Filter::default(),
             exists: None,
+            thumbs: None,
+            covered: false,
             order,
             theme,
         }
@@ -389,6 +396,48 @@ impl FilesPane {
             .render(area, buf);
     }
 
+    /// The columns beside the table for thumbnails in a pane `width` wide with `rows` for the
+    /// table, and those of the cursor's large thumbnail among them: with an image protocol the
+    /// rows' column from 60 columns on, the large too from 140 where the cursor's volume has one;
+    /// with half-blocks and colours only the large, from 140.
+    fn beside(&self, width: u16, rows: u16) -> (u16, u16) {
+        let has = self.thumbnails.get(self.row).is_some_and(Option::is_some);
+        let large = has && width >= 140 && rows >= 5;
+        match &self.thumbs {
+            Some(t) if width >= 60 && rows >= 2 => {
+                let large = if large { t.large_columns(rows) } else { 0 };
+                (t.row_columns() + u16::from(large > 0) + large, large)
+            }
+            None if large && self.theme.color => (4 * rows, 4 * rows),
+            _ => (0, 0),
+        }
+    }
+
+    /// Draws the thumbnails into `area` beside the table, whose first row shown is `offset`:
+    /// with the image protocol each row's and the cursor's large (`large` columns wide), with
+    /// half-blocks the cursor's alone.
+    fn draw_thumbnails(&self, area: Rect, offset: usize, large: u16, buf: &mut Buffer) {
+        if area.width == 0 {
+            return;
+        }
+        let thumbnail = self.thumbnails.get(self.row).and_then(Option::as_ref);
+        let Some(thumbs) = &self.thumbs else {
+            if let Some(t) = thumbnail {
+                half_blocks(t, area, buf);
+            }
+            return;
+        };
+        let lines: Vec<super::thumbs::Line> = self
+            .order
+            .iter()
+            .skip(offset)
+            .take(usize::from(area.height.saturating_sub(1)))
+            .map(|&i| (i, self.thumbnails[i].as_ref()))
+            .collect();
+        let large_one = (large > 0).then_some((self.row, thumbnail));
+        thumbs.draw(area, &lines, large_one, large, self.covered, buf);
+    }
+
     fn title(&self) -> String {
         let mut title = format!(
             " {} volumes in {}, {} looked at",
@@ -493,19 +542,9 @@ impl Widget for &FilesPane {
         let lines = lines.min(inner.height.saturating_sub(2));
         let [table_area, detail_area] =
             Layout::vertical([Constraint::Min(0), Constraint::Length(lines)]).areas(inner);
-        // The cursor's thumbnail beside the table, where there is room and colour.
-        let thumbnail = self.thumbnails.get(self.row).and_then(Option::as_ref);
-        let side = match thumbnail {
-            Some(_) if self.theme.color && inner.width >= 140 && table_area.height >= 5 => {
-                4 * table_area.height
-            }
-            _ => 0,
-        };
+        let (side, large) = self.beside(inner.width, table_area.height);
         let [table_area, thumb_area] =
             Layout::horizontal([Constraint::Min(0), Constraint::Length(side)]).areas(table_area);
-        if let Some(t) = thumbnail.filter(|_| side > 0) {
-            half_blocks(t, thumb_area, buf);
-        }
         let widths = widths(wide);
         let slabs = if wide { "slabs" } else { "sl" };
         let header = Row::new([
@@ -525,6 +564,7 @@ impl Widget for &FilesPane {
             .row_highlight_style(self.theme.selected());
         let mut state = TableState::default().with_selected(self.cursor());
         StatefulWidget::render(table, table_area, buf, &mut state);
+        self.draw_thumbnails(thumb_area, state.offset(), large, buf);
         if self.order.is_empty() {
             let empty = if self.paths.is_empty() {
                 "no volumes"

@@ -9,6 +9,7 @@ pub mod preview;
 pub mod slabs;
 pub mod sphere;
 pub mod status;
+pub mod thumbs;
 pub mod tour;
 pub mod views;
 

@@ -399,3 +399,58 @@ fn the_cursors_thumbnail_shows_beside_the_table_where_there_is_room_and_colour()
     files.step(1);
     assert!(!super::text(&draw(files, 160)).contains('▀'));
 }
+
+/// With an image protocol (sixel, 8×16 cells), the rows' thumbnails and the cursor's are one
+/// picture beside the table: from 60 columns on the rows' column, 4 cells wide (a 2:1 picture
+/// one line high); from 140 the cursor's beside it, 32 cells wide for 8 lines; none while the
+/// help covers the pane.
+#[test]
+fn with_an_image_protocol_each_rows_thumbnail_shows_in_one_picture_beside_the_table() {
+    use ratatui::buffer::{Buffer, CellDiffOption};
+    use ratatui::layout::Rect;
+
+    use crate::term::{Caps, Graphics};
+    use crate::tui::panes::thumbs::Thumbs;
+
+    let (mut app, _) = folder_app(Path::new("/data"), &NAMES);
+    let image = image::RgbaImage::from_pixel(64, 32, image::Rgba([200, 0, 0, 255]));
+    app.update(Action::Job(JobMsg::Thumbnail(0, Box::new(image.clone()))));
+    app.update(Action::Job(JobMsg::Thumbnail(2, Box::new(image))));
+    let files = app.files.as_mut().unwrap();
+    let sixel = Caps {
+        graphics: Graphics::Sixel,
+        cell: (8, 16),
+        ..Caps::blocks()
+    };
+    files.thumbs = Thumbs::new(&sixel);
+    let draw = |files: &crate::tui::panes::files::FilesPane, w: u16| {
+        let mut buf = Buffer::empty(Rect::new(0, 0, w, 10));
+        ratatui::widgets::Widget::render(files, buf.area, &mut buf);
+        buf
+    };
+    // The picture's first cell, the rest skipped; the table's text stops before it.
+    let picture_at = |buf: &Buffer, x: u16, width: u16| {
+        assert!(
+            buf[(x, 1)].symbol().starts_with("\x1bP"),
+            "a sixel at ({x}, 1)"
+        );
+        assert!(!buf[(x - 1, 1)].symbol().starts_with('\x1b'));
+        for y in 1..9 {
+            for dx in 0..width {
+                if (dx, y) != (0, 1) {
+                    assert_eq!(buf[(x + dx, y)].diff_option, CellDiffOption::Skip);
+                }
+            }
+        }
+    };
+    picture_at(&draw(files, 100), 95, 4);
+    // Wide, the cursor's volume having one: the rows' 4, a column between, the cursor's 32.
+    picture_at(&draw(files, 160), 122, 37);
+    // Too narrow for any.
+    let buf = draw(files, 58);
+    assert!((0..58).all(|x| !buf[(x, 1)].symbol().starts_with('\x1b')));
+    // Covered by the help: nothing sent.
+    files.covered = true;
+    let buf = draw(files, 100);
+    assert!(!buf[(95, 1)].symbol().starts_with('\x1b'));
+}
