@@ -11,14 +11,12 @@ use anyhow::{Context, Result, bail};
 use serde_json::{Value, json};
 use slabscope::explain::figure::{View, rays_figure, sphere_figure};
 use slabscope::explain::{self, StepsShown, text, worked};
+use slabscope::geometry::AxisChoice;
 use slabscope::partition::Method;
 use slabscope::render::{DEFAULT_SPREAD, Gap, Layout, RenderParams, Renderer, draw_figure};
 use slabscope::{Analysis, AnalysisParams, LoadOptions, Monitor, Stop, Volume};
 
 use super::app::tour::{Board, PAGES};
-
-/// The slab count the tour's pages show.
-const SLABS: usize = 4;
 
 /// What to export and how.
 pub struct ExportOptions {
@@ -40,9 +38,25 @@ pub struct ExportOptions {
 struct Numbers {
     name: String,
     volume: Volume,
+    /// Top-down along the chosen axis at the given analysis's slab count, every split explained.
     top: Analysis,
+    /// Bottom-up along the same axis at the same slab count, its last merge explained.
     bottom: Analysis,
+    /// The given analysis's partition when its method is not top-down (else `top`'s).
+    chosen: Option<slabscope::Partition>,
     modes: explain::ModeLesson,
+}
+
+impl Numbers {
+    /// The slab count of the given analysis, which every page shows.
+    fn slabs(&self) -> usize {
+        self.top.partition.slabs.len()
+    }
+
+    /// The partition the given analysis found, drawn as the exploded view.
+    fn shown(&self) -> &slabscope::Partition {
+        self.chosen.as_ref().unwrap_or(&self.top.partition)
+    }
 }
 
 /// One page as exported.
@@ -145,8 +159,10 @@ fn check_folder(dir: &Path, force: bool) -> Result<()> {
     }
 }
 
-/// The analyses behind the pages: top-down with every split explained, bottom-up along the same
-/// axis with the merge that leaves the tour's slab count, and the modes' numbers.
+/// The analyses behind the pages: the given one (its method, its stop: `--slabs` or
+/// `--threshold`, as `analyze` runs it), top-down along its axis with every split explained,
+/// bottom-up along the same axis with the merge that leaves the same slab count, and the modes'
+/// numbers.
 fn compute(o: &ExportOptions) -> Result<Numbers> {
     let (name, volume) = match &o.file {
         Some(path) => (
@@ -159,34 +175,52 @@ fn compute(o: &ExportOptions) -> Result<Numbers> {
         ),
     };
     let monitor = Monitor::none();
-    let params = AnalysisParams {
-        method: Method::TopDown,
-        stop: Stop::Slabs(SLABS),
-        explain: Some(StepsShown::All),
+    let run = |params: &AnalysisParams| {
+        slabscope::analyze(&volume, params, &monitor)
+            .with_context(|| format!("{name}: the analysis failed"))
+    };
+    let top_down = o.analysis.method == Method::TopDown;
+    let given = run(&AnalysisParams {
+        explain: Some(if top_down {
+            StepsShown::All
+        } else {
+            StepsShown::Last(1)
+        }),
         search_views: true,
         ..o.analysis.clone()
+    })?;
+    let slabs = given.partition.slabs.len();
+    let along = AxisChoice::Along(slabscope::Axis::new(given.axis())?);
+    let (top, chosen) = if top_down {
+        (given, None)
+    } else {
+        // The view search again, for the lesson's worst axis; the axis stays the given one's.
+        let top = run(&AnalysisParams {
+            method: Method::TopDown,
+            stop: Stop::Slabs(slabs),
+            axis: along,
+            explain: Some(StepsShown::All),
+            search_views: true,
+            ..o.analysis.clone()
+        })?;
+        (top, Some(given.partition))
     };
-    let top = slabscope::analyze(&volume, &params, &monitor)
-        .with_context(|| format!("{name}: the analysis failed"))?;
-    let along = slabscope::Axis::new(top.axis())?;
-    let bottom = slabscope::analyze(
-        &volume,
-        &AnalysisParams {
-            method: Method::BottomUp,
-            axis: slabscope::geometry::AxisChoice::Along(along),
-            explain: Some(StepsShown::Last(1)),
-            // The axis is the top-down analysis's: no second view search.
-            search_views: false,
-            ..params.clone()
-        },
-        &monitor,
-    )?;
-    let modes = explain::mode_lesson(&volume, top.axis(), &params.view, &monitor)?;
+    let bottom = run(&AnalysisParams {
+        method: Method::BottomUp,
+        stop: Stop::Slabs(slabs),
+        axis: along,
+        explain: Some(StepsShown::Last(1)),
+        // The axis is the given analysis's: no second view search.
+        search_views: false,
+        ..o.analysis.clone()
+    })?;
+    let modes = explain::mode_lesson(&volume, top.axis(), &o.analysis.view, &monitor)?;
     Ok(Numbers {
         name,
         volume,
         top,
         bottom,
+        chosen,
         modes,
     })
 }
@@ -209,7 +243,7 @@ fn pictures(n: &Numbers) -> Result<Vec<(&'static str, Vec<u8>)>> {
     let sphere = sphere_figure(level, axis, &View::default());
     let across = View::across(axis).unwrap_or_default();
     let rays = rays_figure(size(&n.volume), axis, 4, 5, &across)?;
-    let layout = Layout::exploded(&n.top.partition, Gap::Similarity, DEFAULT_SPREAD);
+    let layout = Layout::exploded(n.shown(), Gap::Similarity, DEFAULT_SPREAD);
     let params = RenderParams {
         width: 960,
         height: 720,
@@ -307,21 +341,25 @@ fn volume_page(i: usize, n: &Numbers) -> Exported {
     let title = PAGES[i].title;
     let (numbers, lines) = match title {
         "The volume and the question" | "The exploded view" => {
-            let slabs: Vec<String> = part
+            let shown = n.shown();
+            let slabs: Vec<String> = shown
                 .slabs
                 .iter()
                 .map(|&(a, b)| format!("{a}–{}", b.saturating_sub(1)))
                 .collect();
             let line = format!(
-                "{SLABS} slabs along {}, slices {}",
-                axis_name(part.axis),
+                "{} slabs {} along {}, slices {}",
+                shown.slabs.len(),
+                shown.method.name(),
+                axis_name(shown.axis),
                 slabs.join(", ")
             );
             let numbers = json!({
                 "dims": n.volume.dims(),
                 "spacing": n.volume.spacing(),
-                "axis": part.axis,
-                "slabs": part.slabs,
+                "axis": shown.axis,
+                "method": shown.method.name(),
+                "slabs": shown.slabs,
             });
             return Exported {
                 numbers,
@@ -385,7 +423,7 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
     match title {
         "The first split" => splits
             .first()
-            .map_or_else(none, |s| (json!(s), text::split_lines(s, SLABS - 1))),
+            .map_or_else(none, |s| (json!(s), text::split_lines(s, n.slabs() - 1))),
         "Further splits and the gain curve" => (
             json!({
                 "information": splits.iter().map(|s| s.information).collect::<Vec<_>>(),
@@ -413,8 +451,11 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
                 "bottom_up_slabs": bottom.slabs,
             }),
             vec![format!(
-                "Here {SLABS} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
-                part.information, bottom.information, part.entropy
+                "Here {} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
+                n.slabs(),
+                part.information,
+                bottom.information,
+                part.entropy
             )],
         ),
         "The optimum" => match e.and_then(|e| e.optimal.as_ref()) {

@@ -175,3 +175,43 @@ fn check_lessons(
         assert_eq!(merge[key], last[key], "{key}");
     }
 }
+
+#[test]
+fn the_export_follows_the_given_analysis() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = dir.path().join("body.nrrd");
+    let made = run(&["phantom", "body", "-o", s(&body), "--dims", "24x24x40"]);
+    assert!(made.ok, "{}", made.stderr);
+    let given: [&[&str]; 2] = [
+        &["--slabs", "6", "--method", "bottomup"],
+        &["--threshold", "0.05"],
+    ];
+    for (i, flags) in given.iter().enumerate() {
+        let out = dir.path().join(format!("slides-{i}"));
+        let mut args = vec!["tour", s(&body), "--export", s(&out)];
+        args.extend_from_slice(flags);
+        let ran = run(&args);
+        assert!(ran.ok, "{}", ran.stderr);
+        let mut analyze = vec!["analyze", s(&body), "--json"];
+        analyze.extend_from_slice(flags);
+        let partition = analyzed(&analyze)["partition"].clone();
+        let tour: Value =
+            serde_json::from_slice(&std::fs::read(out.join("tour.json")).unwrap()).unwrap();
+        let pages = tour["pages"].as_array().unwrap();
+        let slabs = partition["slabs"].as_array().unwrap().len();
+        // The first and the last page show the given analysis's slabs, by its method.
+        for page in [&pages[0], &pages[15]] {
+            assert_eq!(page["numbers"]["slabs"], partition["slabs"]);
+            assert_eq!(page["numbers"]["method"], partition["method"]);
+        }
+        // Top-down and bottom-up are compared at its slab count.
+        let compared = &pages[13]["numbers"];
+        assert_eq!(compared["top_down_slabs"].as_array().unwrap().len(), slabs);
+        assert_eq!(compared["bottom_up_slabs"].as_array().unwrap().len(), slabs);
+        let lines = pages[13]["lines"][0].as_str().unwrap();
+        assert!(
+            lines.starts_with(&format!("Here {slabs} slabs keep")),
+            "{lines}"
+        );
+    }
+}
