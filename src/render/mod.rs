@@ -8,6 +8,7 @@
 //! number of threads.
 
 mod camera;
+pub mod chart;
 mod figure;
 mod layout;
 mod output;

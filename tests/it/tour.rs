@@ -45,6 +45,11 @@ fn the_exported_pages_hold_the_lessons_numbers_and_pictures() {
             "exploded-view.png",
             "fig-1a-viewpoint-sphere.png",
             "fig-1b-rays.png",
+            "curves.png",
+            "first-split.png",
+            "merge-joint-histogram.png",
+            "worked-js-histograms.png",
+            "worked-nmi-joint-table.png",
         ] {
             let bytes = std::fs::read(out.join(name)).unwrap();
             if std::path::Path::new(name).extension() == Some("png".as_ref()) {
@@ -75,6 +80,7 @@ fn the_exported_pages_hold_the_lessons_numbers_and_pictures() {
             "{md}"
         );
         assert!(md.contains("## 16. The exploded view"), "{md}");
+        check_pictures(&out, pages);
     }
 }
 
@@ -214,4 +220,29 @@ fn the_export_follows_the_given_analysis() {
             "{lines}"
         );
     }
+}
+
+/// Every picture a page names is written, the charts stand on their pages, at their sizes.
+fn check_pictures(out: &std::path::Path, pages: &[Value]) {
+    // Every picture a page names is written, and the charts stand on their pages.
+    for p in pages {
+        for picture in p["pictures"].as_array().unwrap() {
+            assert!(out.join(picture.as_str().unwrap()).is_file(), "{picture}");
+        }
+    }
+    let pictures = |title: &str| {
+        let p = pages.iter().find(|p| p["title"] == title).unwrap();
+        p["pictures"].clone()
+    };
+    assert_eq!(pictures("The first split")[0], "first-split.png");
+    assert_eq!(pictures("A merge")[0], "merge-joint-histogram.png");
+    assert_eq!(pictures("Slicing along the best axis")[0], "curves.png");
+    // The charts are drawn at their sizes (width and height from the PNG's header).
+    let size = |name: &str| {
+        let b = std::fs::read(out.join(name)).unwrap();
+        let be = |k: usize| u32::from_be_bytes(b[k..k + 4].try_into().unwrap());
+        (be(16), be(20))
+    };
+    assert_eq!(size("curves.png"), (1000, 700));
+    assert_eq!(size("merge-joint-histogram.png"), (800, 640));
 }

@@ -18,6 +18,10 @@ use slabscope::{Analysis, AnalysisParams, LoadOptions, Monitor, Stop, Volume};
 
 use super::app::tour::{Board, PAGES};
 
+mod charts;
+
+use charts::{CURVES, MERGE, SPLIT, WORKED_JS, WORKED_NMI};
+
 /// What to export and how.
 pub struct ExportOptions {
     /// The folder written (made when it does not exist).
@@ -116,8 +120,19 @@ pub fn export(options: &ExportOptions) -> Result<()> {
     Ok(())
 }
 
-/// The files the export writes.
-const FILES: [&str; 5] = [EXPLODED, FIG_1A, FIG_1B, "tour.json", "tour.md"];
+/// The files the export writes (a chart only where its page has one).
+const FILES: [&str; 10] = [
+    EXPLODED,
+    FIG_1A,
+    FIG_1B,
+    CURVES,
+    SPLIT,
+    MERGE,
+    WORKED_JS,
+    WORKED_NMI,
+    "tour.json",
+    "tour.md",
+];
 
 /// Fails unless every file of the export may be written into `dir`: none is the volume read,
 /// and none exists unless `force` (checked before any work).
@@ -250,11 +265,42 @@ fn pictures(n: &Numbers) -> Result<Vec<(&'static str, Vec<u8>)>> {
         ..RenderParams::default()
     };
     let exploded = Renderer::new(&n.volume)?.render(&layout, &params, &Monitor::none())?;
-    Ok(vec![
+    let w = worked();
+    let mut out = vec![
         (EXPLODED, exploded.png()?),
         (FIG_1A, png(&draw_figure(&sphere.drawing, 800, 800)?)?),
         (FIG_1B, png(&draw_figure(&rays.drawing, 1000, 640)?)?),
-    ])
+        (CURVES, png(&charts::curves(&n.top.partition, 1000, 700)?)?),
+        (WORKED_JS, png(&charts::worked_js(&w.js, 800, 450)?)?),
+        (WORKED_NMI, png(&charts::worked_nmi(&w.nmi, 640, 520)?)?),
+    ];
+    if let Some(s) = first_split(n) {
+        out.push((SPLIT, png(&charts::split(s, 1000, 760)?)?));
+    }
+    if let Some(m) = last_merge(n) {
+        out.push((MERGE, png(&charts::merge(m, 800, 640)?)?));
+    }
+    Ok(out)
+}
+
+/// Top-down's first split, explained.
+fn first_split(n: &Numbers) -> Option<&explain::SplitLesson> {
+    n.top.explain.as_ref().and_then(|e| e.splits.first())
+}
+
+/// Bottom-up's merge that leaves the tour's slab count, explained.
+fn last_merge(n: &Numbers) -> Option<&explain::MergeLesson> {
+    n.bottom.explain.as_ref().and_then(|e| e.merges.last())
+}
+
+/// The charts a page of the volume's own numbers shows, by its title.
+fn charts_of(title: &str, n: &Numbers) -> Vec<&'static str> {
+    match title {
+        "Slicing along the best axis" | "Further splits and the gain curve" => vec![CURVES],
+        "The first split" if first_split(n).is_some() => vec![SPLIT],
+        "A merge" if last_merge(n).is_some() => vec![MERGE],
+        _ => Vec::new(),
+    }
 }
 
 fn png(p: &tiny_skia::Pixmap) -> Result<Vec<u8>> {
@@ -267,15 +313,15 @@ fn png(p: &tiny_skia::Pixmap) -> Result<Vec<u8>> {
 /// Page `i`'s numbers, the lines that say them, and its pictures.
 fn page(i: usize, n: &Numbers) -> Exported {
     let w = worked();
-    let one = |numbers: Value, lines: Vec<String>| Exported {
+    let one = |numbers: Value, lines: Vec<String>, pictures: Vec<&'static str>| Exported {
         numbers,
         lines,
-        pictures: Vec::new(),
+        pictures,
     };
     match PAGES[i].board {
-        Some(Board::Blocks) => return one(json!(w.ray), w.ray.lines()),
-        Some(Board::Js) => return one(json!(w.js), w.js.lines()),
-        Some(Board::Nmi) => return one(json!(w.nmi), w.nmi.lines()),
+        Some(Board::Blocks) => return one(json!(w.ray), w.ray.lines(), Vec::new()),
+        Some(Board::Js) => return one(json!(w.js), w.js.lines(), vec![WORKED_JS]),
+        Some(Board::Nmi) => return one(json!(w.nmi), w.nmi.lines(), vec![WORKED_NMI]),
         Some(Board::Sphere) => return sphere_page(n),
         Some(Board::Rays) => return rays_page(n),
         None => {}
@@ -383,7 +429,7 @@ fn volume_page(i: usize, n: &Numbers) -> Exported {
     Exported {
         numbers,
         lines,
-        pictures: Vec::new(),
+        pictures: charts_of(title, n),
     }
 }
 
@@ -418,7 +464,7 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
     let (part, bottom) = (&n.top.partition, &n.bottom.partition);
     let e = n.top.explain.as_ref();
     let splits = e.map(|e| e.splits.as_slice()).unwrap_or_default();
-    let merge = n.bottom.explain.as_ref().and_then(|e| e.merges.last());
+    let merge = last_merge(n);
     let none = || (Value::Null, Vec::new());
     match title {
         "The first split" => splits
