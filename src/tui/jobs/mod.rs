@@ -529,6 +529,7 @@ mod tests {
             highlight: None,
             cells,
             slice: None,
+            figure: None,
         };
         let first = render(&renderer, &sixel, &whole, &Monitor::none()).unwrap();
         println!(
