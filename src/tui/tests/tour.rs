@@ -274,3 +274,31 @@ fn the_figures_are_the_preview_s_picture_where_the_terminal_draws_images() {
         assert!(app.preview.covered);
     }
 }
+
+#[test]
+fn the_pages_show_the_slab_count_given() {
+    let mut app = ready_app();
+    app.params.stop = slabscope::Stop::Slabs(6);
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(0));
+    assert_eq!(app.part.slab_count(), Some(6));
+    let turn_to = |app: &mut crate::tui::app::App, page: usize| {
+        let at = app.tour.as_ref().unwrap().page;
+        app.update(Action::TurnPage(page as isize - at as isize));
+        assert_eq!(app.tour.as_ref().unwrap().page, page);
+    };
+    // The curves keep their one slab, the first split its two.
+    turn_to(&mut app, CURVES);
+    assert_eq!(app.part.slab_count(), Some(1));
+    let split = PAGES
+        .iter()
+        .position(|p| p.title == "The first split")
+        .unwrap();
+    turn_to(&mut app, split);
+    assert_eq!(app.part.slab_count(), Some(2));
+    // Top-down and bottom-up are compared at the count given.
+    turn_to(&mut app, crate::tui::app::tour::COMPARED);
+    assert_eq!(app.part.slab_count(), Some(6));
+    let numbers = app.tour.as_ref().unwrap().numbers.clone().unwrap();
+    assert!(numbers.starts_with("Here 6 slabs keep"), "{numbers}");
+}
