@@ -48,6 +48,7 @@ fn the_exported_pages_hold_the_lessons_numbers_and_pictures() {
             "curves.png",
             "first-split.png",
             "merge-joint-histogram.png",
+            "merge-highest-nmi.png",
             "worked-js-histograms.png",
             "worked-nmi-joint-table.png",
         ] {
@@ -180,6 +181,17 @@ fn check_lessons(
     for key in ["nmi", "mi", "h_xy", "merge"] {
         assert_eq!(merge[key], last[key], "{key}");
     }
+    // Beside it, the merge of the highest NMI bottom-up took (the first on ties).
+    let steps = merges["partition"]["steps"].as_array().unwrap();
+    let highest = steps.iter().fold(&steps[0], |best, s| {
+        if s["nmi"].as_f64() > best["nmi"].as_f64() {
+            s
+        } else {
+            best
+        }
+    });
+    assert_eq!(merge["highest_nmi"]["nmi"], highest["nmi"]);
+    assert_eq!(merge["highest_nmi"]["merge"], highest["merge"]);
 }
 
 #[test]
@@ -235,7 +247,10 @@ fn check_pictures(out: &std::path::Path, pages: &[Value]) {
         p["pictures"].clone()
     };
     assert_eq!(pictures("The first split")[0], "first-split.png");
-    assert_eq!(pictures("A merge")[0], "merge-joint-histogram.png");
+    assert_eq!(
+        pictures("A merge"),
+        serde_json::json!(["merge-highest-nmi.png", "merge-joint-histogram.png"])
+    );
     assert_eq!(pictures("Slicing along the best axis")[0], "curves.png");
     // The charts are drawn at their sizes (width and height from the PNG's header).
     let size = |name: &str| {

@@ -15,6 +15,7 @@ use tiny_skia::Pixmap;
 pub const CURVES: &str = "curves.png";
 pub const SPLIT: &str = "first-split.png";
 pub const MERGE: &str = "merge-joint-histogram.png";
+pub const MERGE_BEST: &str = "merge-highest-nmi.png";
 pub const WORKED_JS: &str = "worked-js-histograms.png";
 pub const WORKED_NMI: &str = "worked-nmi-joint-table.png";
 

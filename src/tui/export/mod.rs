@@ -19,8 +19,9 @@ use slabscope::{Analysis, AnalysisParams, LoadOptions, Monitor, Stop, Volume};
 use super::app::tour::{Board, PAGES};
 
 mod charts;
+mod examples;
 
-use charts::{CURVES, MERGE, SPLIT, WORKED_JS, WORKED_NMI};
+use charts::{CURVES, MERGE, MERGE_BEST, SPLIT, WORKED_JS, WORKED_NMI};
 
 /// What to export and how.
 pub struct ExportOptions {
@@ -48,6 +49,8 @@ struct Numbers {
     bottom: Analysis,
     /// The given analysis's partition when its method is not top-down (else `top`'s).
     chosen: Option<slabscope::Partition>,
+    /// The merge of the highest NMI bottom-up took: the page's example of slices alike.
+    best_merge: Option<explain::MergeLesson>,
     modes: explain::ModeLesson,
 }
 
@@ -121,13 +124,14 @@ pub fn export(options: &ExportOptions) -> Result<()> {
 }
 
 /// The files the export writes (a chart only where its page has one).
-const FILES: [&str; 10] = [
+const FILES: [&str; 11] = [
     EXPLODED,
     FIG_1A,
     FIG_1B,
     CURVES,
     SPLIT,
     MERGE,
+    MERGE_BEST,
     WORKED_JS,
     WORKED_NMI,
     "tour.json",
@@ -230,12 +234,14 @@ fn compute(o: &ExportOptions) -> Result<Numbers> {
         ..o.analysis.clone()
     })?;
     let modes = explain::mode_lesson(&volume, top.axis(), &o.analysis.view, &monitor)?;
+    let best_merge = examples::best_merge(&volume, &bottom, &o.analysis, &monitor)?;
     Ok(Numbers {
         name,
         volume,
         top,
         bottom,
         chosen,
+        best_merge,
         modes,
     })
 }
@@ -280,6 +286,9 @@ fn pictures(n: &Numbers) -> Result<Vec<(&'static str, Vec<u8>)>> {
     if let Some(m) = last_merge(n) {
         out.push((MERGE, png(&charts::merge(m, 800, 640)?)?));
     }
+    if let Some(m) = &n.best_merge {
+        out.push((MERGE_BEST, png(&charts::merge(m, 800, 640)?)?));
+    }
     Ok(out)
 }
 
@@ -298,7 +307,13 @@ fn charts_of(title: &str, n: &Numbers) -> Vec<&'static str> {
     match title {
         "Slicing along the best axis" | "Further splits and the gain curve" => vec![CURVES],
         "The first split" if first_split(n).is_some() => vec![SPLIT],
-        "A merge" if last_merge(n).is_some() => vec![MERGE],
+        "A merge" => [
+            (MERGE_BEST, n.best_merge.is_some()),
+            (MERGE, last_merge(n).is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(file, drawn)| drawn.then_some(file))
+        .collect(),
         _ => Vec::new(),
     }
 }
@@ -486,7 +501,21 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
                 .collect(),
         ),
         "A merge" => merge.map_or_else(none, |m| {
-            (json!(m), text::merge_lines(m, bottom.steps.len()))
+            let mut numbers = json!(m);
+            let mut lines = text::merge_lines(m, bottom.steps.len());
+            if let Some(best) = &n.best_merge {
+                numbers["highest_nmi"] = json!(best);
+                lines.push(format!(
+                    "The merge of the highest NMI: step {}, slices {}–{} and {}–{}, NMI = {:.4}",
+                    best.step,
+                    best.merge.0.0,
+                    best.merge.0.1.saturating_sub(1),
+                    best.merge.1.0,
+                    best.merge.1.1.saturating_sub(1),
+                    best.nmi
+                ));
+            }
+            (numbers, lines)
         }),
         "Top-down against bottom-up" => (
             json!({
