@@ -25,9 +25,13 @@ const GAIN: [u8; 3] = [30, 130, 70];
 const NMI: [u8; 3] = [120, 60, 160];
 const MARK: [u8; 3] = [200, 40, 40];
 
-/// Slices `[a, b)` as read: `a–(b-1)`.
-fn slices((a, b): (usize, usize)) -> String {
-    format!("{a}–{}", b.saturating_sub(1))
+/// Slices `[a, b)` as read: `slices a–(b-1)`, or `slice a` alone.
+pub fn slices((a, b): (usize, usize)) -> String {
+    if b <= a + 1 {
+        format!("slice {a}")
+    } else {
+        format!("slices {a}–{}", b - 1)
+    }
 }
 
 fn scale(label: &str, lo: f64, hi: f64, whole: bool) -> Scale {
@@ -136,10 +140,7 @@ pub fn split(s: &SplitLesson, width: u32, height: u32) -> Result<Pixmap> {
             "Split {}: the two parts' histograms, JS = {:.4} bits",
             s.step, s.js
         ),
-        [
-            format!("slices {}", slices(a)),
-            format!("slices {}", slices(b)),
-        ],
+        [slices(a), slices(b)],
         [&s.first, &s.second],
     );
     let points: Vec<[f64; 2]> = s
@@ -150,7 +151,7 @@ pub fn split(s: &SplitLesson, width: u32, height: u32) -> Result<Pixmap> {
         .collect();
     let gains = Chart {
         title: format!(
-            "ΔI of each cut of slices {}, the best {:.4} bits",
+            "ΔI of each cut of {}, the best {:.4} bits",
             slices(s.split),
             s.gain
         ),
@@ -175,14 +176,14 @@ pub fn split(s: &SplitLesson, width: u32, height: u32) -> Result<Pixmap> {
 pub fn merge(m: &MergeLesson, width: u32, height: u32) -> Result<Pixmap> {
     let map = HeatMap {
         title: format!(
-            "Merge {}: slices {} and {}, NMI = {:.4}",
+            "Merge {}: {} and {}, NMI = {:.4}",
             m.step,
             slices(m.merge.0),
             slices(m.merge.1),
             m.nmi
         ),
-        x_label: format!("bin in slices {}", slices(m.merge.0)),
-        y_label: format!("bin in slices {}", slices(m.merge.1)),
+        x_label: format!("bin in {}", slices(m.merge.0)),
+        y_label: format!("bin in {}", slices(m.merge.1)),
         bins: m.bins,
         cells: m.joint.clone(),
     };
@@ -218,4 +219,20 @@ pub fn worked_nmi(nmi: &NmiExample, width: u32, height: u32) -> Result<Pixmap> {
         cells,
     };
     Ok(draw_heat_map(&map, width, height)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_slice_reads_as_one_and_shares_sum_to_one() {
+        assert_eq!(slices((7, 8)), "slice 7");
+        assert_eq!(slices((0, 94)), "slices 0–93");
+        let s = shares(&[1, 3, 0, 4]);
+        assert_eq!(s, [[0.0, 0.125], [1.0, 0.375], [2.0, 0.0], [3.0, 0.5]]);
+        assert_eq!(shares(&[0, 0]), [[0.0, 0.0], [1.0, 0.0]]);
+        assert!((headroom([0.5, 0.2].into_iter()) - 0.55).abs() < 1e-12);
+        assert!((headroom(std::iter::empty()) - 1.0).abs() < 1e-12);
+    }
 }

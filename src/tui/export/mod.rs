@@ -506,12 +506,10 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
             if let Some(best) = &n.best_merge {
                 numbers["highest_nmi"] = json!(best);
                 lines.push(format!(
-                    "The merge of the highest NMI: step {}, slices {}–{} and {}–{}, NMI = {:.4}",
+                    "The merge of the highest NMI: step {}, {} and {}, NMI = {:.4}",
                     best.step,
-                    best.merge.0.0,
-                    best.merge.0.1.saturating_sub(1),
-                    best.merge.1.0,
-                    best.merge.1.1.saturating_sub(1),
+                    charts::slices(best.merge.0),
+                    charts::slices(best.merge.1),
                     best.nmi
                 ));
             }
