@@ -12,8 +12,8 @@ mod ascii;
 pub(crate) mod budget;
 
 use self::ascii::read_ascii;
-pub(crate) use self::budget::{check_budget, typed_buffer, voxel_buffer};
 use self::budget::voxel_count;
+pub(crate) use self::budget::{check_budget, typed_buffer, voxel_buffer};
 use super::Source;
 use super::scratch::{Room, VoxelOut};
 use crate::error::{Error, Result};

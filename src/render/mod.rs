@@ -2,12 +2,14 @@
 //! axis, with cut faces that show the cross-section at every cut, direct volume rendering or
 //! maximum intensity projection, empty-space skipping, early ray termination, optional shading,
 //! a camera that frames what is drawn, and outlines (where they are seen) and labels drawn with
-//! tiny-skia. [`mod@slice`] draws the cross-sections themselves.
+//! tiny-skia. [`mod@slice`] draws the cross-sections themselves; [`chart`] draws charts with axes
+//! and heat maps with colour scales for slides.
 //!
 //! Every pixel is computed on its own from the same inputs, so images are identical whatever the
 //! number of threads.
 
 mod camera;
+pub mod chart;
 mod figure;
 mod layout;
 mod output;

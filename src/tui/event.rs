@@ -135,8 +135,9 @@ pub struct Rendered {
     pub image: TermImage,
     /// What the slice view reads at its pointer.
     pub caption: Option<String>,
-    /// The colour window the picture used, for the window and level keys to start from.
-    pub window: (f32, f32),
+    /// The colour window the picture used, for the window and level keys to start from (none
+    /// for a figure of the paper's).
+    pub window: Option<(f32, f32)>,
 }
 
 /// Everything the user can do, and what jobs report.
@@ -325,6 +326,9 @@ pub struct PictureJob {
     pub cells: (u16, u16),
     /// The slice view instead of the exploded view.
     pub slice: Option<SliceCursor>,
+    /// One of the paper's figures instead (a tour page's, drawn through the image protocol; the
+    /// board draws it in braille on half-blocks).
+    pub figure: Option<Box<slabscope::explain::figure::Drawing>>,
 }
 
 /// Where the slice view looks: the slice under the curves' cursor and the pointer on it (the

@@ -401,7 +401,7 @@ fn rendered(w: u16, h: u16) -> Rendered {
     Rendered {
         image: tiny_protocol(w, h),
         caption: None,
-        window: (0.0, 1.0),
+        window: Some((0.0, 1.0)),
     }
 }
 
@@ -557,7 +557,7 @@ fn window_keys_narrow_widen_and_move_the_window() {
     app.update(Action::CycleTransfer);
     assert_eq!(app.preview.look.window, None);
     let picture = Rendered {
-        window: (10.0, 30.0),
+        window: Some((10.0, 30.0)),
         ..rendered(40, 12)
     };
     let generation = app.preview.generation;

@@ -141,7 +141,9 @@ pub fn draw(frame: &mut Frame, app: &App) {
         };
         frame.render_widget(&app.lesson, body);
     }
-    if let Some(board) = board(app).filter(|_| !app.lesson.open) {
+    // A figure the terminal draws as an image is the preview's picture.
+    let image = app.figure_as_image();
+    if let Some(board) = board(app).filter(|b| !(app.lesson.open || image && b.is_figure())) {
         // A worked example's lines want the width of the row; a figure sits beside the list.
         let place = if board.is_figure() {
             a.preview

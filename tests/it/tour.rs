@@ -45,6 +45,12 @@ fn the_exported_pages_hold_the_lessons_numbers_and_pictures() {
             "exploded-view.png",
             "fig-1a-viewpoint-sphere.png",
             "fig-1b-rays.png",
+            "curves.png",
+            "first-split.png",
+            "merge-joint-histogram.png",
+            "merge-highest-nmi.png",
+            "worked-js-histograms.png",
+            "worked-nmi-joint-table.png",
         ] {
             let bytes = std::fs::read(out.join(name)).unwrap();
             if std::path::Path::new(name).extension() == Some("png".as_ref()) {
@@ -75,6 +81,7 @@ fn the_exported_pages_hold_the_lessons_numbers_and_pictures() {
             "{md}"
         );
         assert!(md.contains("## 16. The exploded view"), "{md}");
+        check_pictures(&out, pages);
     }
 }
 
@@ -174,4 +181,83 @@ fn check_lessons(
     for key in ["nmi", "mi", "h_xy", "merge"] {
         assert_eq!(merge[key], last[key], "{key}");
     }
+    // Beside it, the merge of the highest NMI bottom-up took (the first on ties).
+    let steps = merges["partition"]["steps"].as_array().unwrap();
+    let highest = steps.iter().fold(&steps[0], |best, s| {
+        if s["nmi"].as_f64() > best["nmi"].as_f64() {
+            s
+        } else {
+            best
+        }
+    });
+    assert_eq!(merge["highest_nmi"]["nmi"], highest["nmi"]);
+    assert_eq!(merge["highest_nmi"]["merge"], highest["merge"]);
+}
+
+#[test]
+fn the_export_follows_the_given_analysis() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = dir.path().join("body.nrrd");
+    let made = run(&["phantom", "body", "-o", s(&body), "--dims", "24x24x40"]);
+    assert!(made.ok, "{}", made.stderr);
+    let given: [&[&str]; 2] = [
+        &["--slabs", "6", "--method", "bottomup"],
+        &["--threshold", "0.05"],
+    ];
+    for (i, flags) in given.iter().enumerate() {
+        let out = dir.path().join(format!("slides-{i}"));
+        let mut args = vec!["tour", s(&body), "--export", s(&out)];
+        args.extend_from_slice(flags);
+        let ran = run(&args);
+        assert!(ran.ok, "{}", ran.stderr);
+        let mut analyze = vec!["analyze", s(&body), "--json"];
+        analyze.extend_from_slice(flags);
+        let partition = analyzed(&analyze)["partition"].clone();
+        let tour: Value =
+            serde_json::from_slice(&std::fs::read(out.join("tour.json")).unwrap()).unwrap();
+        let pages = tour["pages"].as_array().unwrap();
+        let slabs = partition["slabs"].as_array().unwrap().len();
+        // The first and the last page show the given analysis's slabs, by its method.
+        for page in [&pages[0], &pages[15]] {
+            assert_eq!(page["numbers"]["slabs"], partition["slabs"]);
+            assert_eq!(page["numbers"]["method"], partition["method"]);
+        }
+        // Top-down and bottom-up are compared at its slab count.
+        let compared = &pages[13]["numbers"];
+        assert_eq!(compared["top_down_slabs"].as_array().unwrap().len(), slabs);
+        assert_eq!(compared["bottom_up_slabs"].as_array().unwrap().len(), slabs);
+        let lines = pages[13]["lines"][0].as_str().unwrap();
+        assert!(
+            lines.starts_with(&format!("Here {slabs} slabs keep")),
+            "{lines}"
+        );
+    }
+}
+
+/// Every picture a page names is written, the charts stand on their pages, at their sizes.
+fn check_pictures(out: &std::path::Path, pages: &[Value]) {
+    // Every picture a page names is written, and the charts stand on their pages.
+    for p in pages {
+        for picture in p["pictures"].as_array().unwrap() {
+            assert!(out.join(picture.as_str().unwrap()).is_file(), "{picture}");
+        }
+    }
+    let pictures = |title: &str| {
+        let p = pages.iter().find(|p| p["title"] == title).unwrap();
+        p["pictures"].clone()
+    };
+    assert_eq!(pictures("The first split")[0], "first-split.png");
+    assert_eq!(
+        pictures("A merge"),
+        serde_json::json!(["merge-highest-nmi.png", "merge-joint-histogram.png"])
+    );
+    assert_eq!(pictures("Slicing along the best axis")[0], "curves.png");
+    // The charts are drawn at their sizes (width and height from the PNG's header).
+    let size = |name: &str| {
+        let b = std::fs::read(out.join(name)).unwrap();
+        let be = |k: usize| u32::from_be_bytes(b[k..k + 4].try_into().unwrap());
+        (be(16), be(20))
+    };
+    assert_eq!(size("curves.png"), (1000, 700));
+    assert_eq!(size("merge-joint-histogram.png"), (800, 640));
 }

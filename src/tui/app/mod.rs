@@ -248,7 +248,10 @@ impl App {
         if !matches!(self.preview.image, Task::Ready(_)) {
             self.preview.image = Task::started("rendering");
         }
+        let figure = self.figure();
+        self.preview.figure = figure.as_ref().map(|(_, title)| title.clone());
         vec![Effect::Render(Box::new(PictureJob {
+            figure: figure.map(|(drawing, _)| Box::new(drawing)),
             generation: self.preview.generation,
             level,
             highlight: (!slabs.is_empty()).then_some(self.slabs.row),
@@ -300,7 +303,7 @@ impl App {
                     self.preview.image = match result {
                         Ok(r) => {
                             self.preview.caption = r.caption;
-                            self.preview.window = Some(r.window);
+                            self.preview.window = r.window.or(self.preview.window);
                             Task::Ready(Box::new(r.image))
                         }
                         Err(e) => Task::Failed(e),
@@ -448,12 +451,32 @@ impl App {
             files.focused = self.focus == Pane::Files;
             files.covered = self.help;
         }
-        // A tour page's figure or worked example stands in the picture's place.
+        // A tour page's figure or worked example stands in the picture's place; a figure drawn
+        // through the image protocol is the picture.
         let board = self
             .tour
             .as_ref()
             .is_some_and(|t| t.current().board.is_some());
-        self.preview.covered = self.help || self.lesson.open || board;
+        let drawn = board && self.figure_as_image();
+        self.preview.covered = self.help || self.lesson.open || (board && !drawn);
+    }
+
+    /// Whether the tour's page shows one of the paper's figures as the preview's picture: the
+    /// terminal draws images (not half-blocks), and the figure's data is in.
+    pub fn figure_as_image(&self) -> bool {
+        self.preview.draws_images() && self.figure().is_some()
+    }
+
+    /// The tour page's figure for the image protocol, and its title, when the terminal draws
+    /// images and the figure's data is in.
+    fn figure(&self) -> Option<(slabscope::explain::figure::Drawing, String)> {
+        if !self.preview.draws_images() {
+            return None;
+        }
+        let board =
+            crate::tui::ui::board(self).filter(crate::tui::panes::board::BoardPane::is_figure)?;
+        let (drawing, legend) = board.drawing(u16::MAX)?;
+        Some((drawing, format!("{}— {legend} ", board.title())))
     }
 }
 

@@ -105,6 +105,22 @@ const fn setup(focus: Pane, lesson: bool, row: Row, method: Method, slabs: usize
     }
 }
 
+/// The slab count of the pages that show the analysis's partition: the library's default, or
+/// what `--slabs K` (or `--threshold T`) gives, as in an export of the same analysis. Pages that
+/// show one slab or the first split keep theirs.
+pub const SHOWN: usize = 4;
+
+impl Setup {
+    /// The slab count the page shows when the analysis gives `given` slabs.
+    pub fn slabs_with(&self, given: usize) -> usize {
+        if self.slabs == SHOWN {
+            given
+        } else {
+            self.slabs
+        }
+    }
+}
+
 /// The page on paper mode and the defaults, whose lesson is the two modes' numbers.
 pub const MODES: usize = 6;
 
@@ -120,7 +136,7 @@ pub const PAGES: [Page; 16] = [
                answer is drawn on the right: the slabs pulled apart, an exploded view \
                (Ruiz et al., Similarity-based exploded views, 2008).",
         board: None,
-        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, SHOWN),
     },
     Page {
         title: "The viewpoint sphere",
@@ -129,7 +145,7 @@ pub const PAGES: [Page; 16] = [
                (21 axes), the best axis marked. The list ranks them by their entropy rate, \
                lowest first.",
         board: Some(Board::Sphere),
-        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, SHOWN),
     },
     Page {
         title: "One ray and its samples",
@@ -138,7 +154,7 @@ pub const PAGES: [Page; 16] = [
                and every sample is quantized to one of B bins. The paper's Fig. 1b on the \
                right: the plane, its rays, the volume's box and the samples of one ray.",
         board: Some(Board::Rays),
-        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, SHOWN),
     },
     Page {
         title: "A worked example: blocks along one ray",
@@ -147,7 +163,7 @@ pub const PAGES: [Page; 16] = [
                (eq. 2, 4): how much a sample still surprises once the two before it are known. \
                The numbers on the right are the library's own.",
         board: Some(Board::Blocks),
-        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, false, Row::Best, Method::TopDown, SHOWN),
     },
     Page {
         title: "Blocks and H(X^L)",
@@ -156,7 +172,7 @@ pub const PAGES: [Page; 16] = [
                (eq. 2). On the volume: the strip is the ray through the centre, a cell a sample, \
                grey by bin; the lesson lists the most frequent blocks and H(X^1) … H(X^L).",
         board: None,
-        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, SHOWN),
     },
     Page {
         title: "The entropy rate of the best and the worst axis",
@@ -164,7 +180,7 @@ pub const PAGES: [Page; 16] = [
                the L-1 before it are known. The most structured view has the lowest h: here \
                the worst axis is selected, beside the best.",
         board: None,
-        setup: setup(Pane::Views, true, Row::Worst, Method::TopDown, 4),
+        setup: setup(Pane::Views, true, Row::Worst, Method::TopDown, SHOWN),
     },
     Page {
         title: "The paper and this tool's defaults",
@@ -173,7 +189,7 @@ pub const PAGES: [Page; 16] = [
                to the border out of the slabs (air makes every slab alike). tour --paper \
                follows the paper: one lattice, every voxel.",
         board: None,
-        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Views, true, Row::Best, Method::TopDown, SHOWN),
     },
     Page {
         title: "Slicing along the best axis",
@@ -206,7 +222,7 @@ pub const PAGES: [Page; 16] = [
                the slabs keep about the values, grows with every split. n and p step through \
                the history; + and - change the slab count.",
         board: None,
-        setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Curves, false, Row::Best, Method::TopDown, SHOWN),
     },
     Page {
         title: "A worked example: how alike two slices are",
@@ -215,7 +231,7 @@ pub const PAGES: [Page; 16] = [
                other; NMI = MI / H(X,Y) (eq. 8) scales it to 0 … 1. Here the slices agree on \
                six pixels of eight.",
         board: Some(Board::Nmi),
-        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, 4),
+        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, SHOWN),
     },
     Page {
         title: "A merge",
@@ -223,7 +239,7 @@ pub const PAGES: [Page; 16] = [
                alike: the largest NMI = MI / H(X,Y) of their joint histogram over corresponding \
                pixels, MI = H(X) + H(Y) - H(X,Y) (eq. 7, 8).",
         board: None,
-        setup: setup(Pane::Slabs, true, Row::Best, Method::BottomUp, 4),
+        setup: setup(Pane::Slabs, true, Row::Best, Method::BottomUp, SHOWN),
     },
     Page {
         title: "Top-down against bottom-up",
@@ -231,7 +247,7 @@ pub const PAGES: [Page; 16] = [
                information about the values, bottom-up keeps alike slices together. Their slab \
                tables and the information each keeps differ; m switches the method.",
         board: None,
-        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, 4),
+        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, SHOWN),
     },
     Page {
         title: "The optimum",
@@ -239,7 +255,7 @@ pub const PAGES: [Page; 16] = [
                that keeps the most information for a slab count. Greedy top-down is usually \
                within a few per cent of it; the lesson says by how much and where they differ.",
         board: None,
-        setup: setup(Pane::Slabs, true, Row::Best, Method::Optimal, 4),
+        setup: setup(Pane::Slabs, true, Row::Best, Method::Optimal, SHOWN),
     },
     Page {
         title: "The exploded view",
@@ -247,7 +263,7 @@ pub const PAGES: [Page; 16] = [
                neighbouring slabs are. Orbit with [ ] { }, change the look with r f c; q ends \
                the tour.",
         board: None,
-        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, 4),
+        setup: setup(Pane::Preview, false, Row::Best, Method::TopDown, SHOWN),
     },
 ];
 
@@ -316,6 +332,17 @@ impl App {
         };
         let h = h.as_ref();
         let s = t.current().setup;
+        let given = match self.params.stop {
+            slabscope::Stop::Slabs(k) => k,
+            slabscope::Stop::Threshold(v) => h.slab_count(
+                Method::TopDown,
+                h.position_for_threshold(Method::TopDown, v),
+            ),
+        };
+        let s = Setup {
+            slabs: s.slabs_with(given),
+            ..s
+        };
         let numbers = page_numbers(t.page, h, s.slabs);
         let worst = views
             .views

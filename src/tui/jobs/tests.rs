@@ -142,6 +142,7 @@ fn preview_timing() {
         highlight: None,
         cells,
         slice: None,
+        figure: None,
     };
     let first = render(&renderer, &sixel, &whole, &Monitor::none()).unwrap();
     println!(

@@ -11,7 +11,7 @@ use image::RgbaImage;
 use slabscope::geometry::{self, min_spacing};
 use slabscope::partition::Slab;
 use slabscope::render::slice::{self, SliceParams};
-use slabscope::render::{Gap, Stack, paste_centred};
+use slabscope::render::{Gap, Stack, draw_figure, paste_centred};
 use slabscope::{Layout, Monitor, RenderParams, Renderer, Volume};
 use tiny_skia::Pixmap;
 
@@ -150,8 +150,9 @@ pub(super) fn render(
     // One image pixel per screen pixel, as large as the terminal takes.
     let (width, height) = caps.image_size(r.cells);
     let (width, height) = (width.max(1), height.max(1));
-    let (pixmap, caption, window) = match (r.slice, &geometry) {
-        (Some(s), Some(stack)) if !r.slabs.is_empty() => {
+    let (pixmap, caption, window) = match (r.figure.as_deref(), r.slice, &geometry) {
+        (Some(drawing), ..) => (draw_figure(drawing, width, height)?, None, None),
+        (None, Some(s), Some(stack)) if !r.slabs.is_empty() => {
             let highlight = r.highlight.unwrap_or(0).min(r.slabs.len() - 1);
             let view = SliceView {
                 stack,
@@ -160,7 +161,7 @@ pub(super) fn render(
                 size: (width, height),
             };
             let (pixmap, caption, window) = view.draw(renderer, look)?;
-            (pixmap, Some(caption), window)
+            (pixmap, Some(caption), Some(window))
         }
         _ => {
             let layout = match (&r.histories, &geometry) {
@@ -189,7 +190,7 @@ pub(super) fn render(
                 ..RenderParams::default()
             };
             let image = renderer.render(&layout, &params, monitor)?;
-            (image.pixmap, None, image.window)
+            (image.pixmap, None, Some(image.window))
         }
     };
     let rgba = RgbaImage::from_raw(width, height, pixmap.data().to_vec())
@@ -392,6 +393,7 @@ mod tests {
                 highlight: None,
                 cells: (40, 12),
                 slice: None,
+                figure: None,
             })
             .unwrap();
         // A bound only for failing: the picture takes milliseconds.

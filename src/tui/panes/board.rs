@@ -50,7 +50,7 @@ impl BoardPane {
     }
 
     /// The pane's title.
-    fn title(&self) -> String {
+    pub fn title(&self) -> String {
         let axis = self
             .best
             .and_then(|(a, _)| Axis::new(a).ok())
@@ -69,7 +69,7 @@ impl BoardPane {
     /// The drawing shown in `rows` rows, `None` for a worked example or before its data is in.
     /// Below [`WIREFRAME_ROWS`] the sphere's wireframe and far side would run together: it is
     /// drawn as its outline, its near viewpoints and the best axis.
-    fn drawing(&self, rows: u16) -> Option<(Drawing, &'static str)> {
+    pub fn drawing(&self, rows: u16) -> Option<(Drawing, &'static str)> {
         let view = View::default();
         match self.board {
             Board::Sphere => {

@@ -36,11 +36,18 @@ pub struct PreviewPane {
     pub caption: Option<String>,
     /// The colour window the last picture used.
     pub window: Option<(f32, f32)>,
+    /// The title of the tour's figure the picture shows instead of the exploded view.
+    pub figure: Option<String>,
     /// Colours.
     pub theme: Theme,
 }
 
 impl PreviewPane {
+    /// Whether the terminal draws images (sixel, kitty, iTerm2), not half-blocks.
+    pub fn draws_images(&self) -> bool {
+        !matches!(self.graphics, "" | "half-blocks")
+    }
+
     /// An empty pane.
     pub fn new(theme: Theme) -> Self {
         Self {
@@ -56,12 +63,16 @@ impl PreviewPane {
             pointer: None,
             caption: None,
             window: None,
+            figure: None,
             theme,
         }
     }
 
     /// The title: what the picture shows and how.
     fn title(&self) -> String {
+        if let Some(figure) = &self.figure {
+            return figure.clone();
+        }
         let l = &self.look;
         let bytes = match &self.image {
             Task::Ready(i) if !self.graphics.is_empty() => {

@@ -228,3 +228,77 @@ fn the_figures_and_worked_examples_stand_in_the_pictures_place() {
     app.update(Action::TurnPage(0));
     assert!(!app.preview.covered);
 }
+
+/// The render a page asks for, if any.
+fn render_of(effects: &[Effect]) -> Option<&crate::tui::event::PictureJob> {
+    effects.iter().find_map(|e| match e {
+        Effect::Render(job) => Some(job.as_ref()),
+        _ => None,
+    })
+}
+
+#[test]
+fn the_figures_are_the_preview_s_picture_where_the_terminal_draws_images() {
+    for graphics in ["sixel", "half-blocks"] {
+        let mut app = ready_app();
+        app.preview.graphics = graphics;
+        app.preview.cells = (60, 20);
+        app.tour = Some(Tour::new(false));
+        app.update(Action::TurnPage(0));
+        let images = graphics == "sixel";
+        for (page, board) in [(1, Board::Sphere), (2, Board::Rays)] {
+            assert_eq!(PAGES[page].board, Some(board));
+            let effects = app.update(Action::TurnPage(1));
+            let job = render_of(&effects).expect("the page renders");
+            // Through the image protocol the figure is the picture, not covered by the board;
+            // on half-blocks the board draws it in braille over the covered picture.
+            assert_eq!(job.figure.is_some(), images, "{graphics} page {}", page + 1);
+            assert_eq!(app.preview.covered, !images, "{graphics} page {}", page + 1);
+            assert_eq!(app.figure_as_image(), images);
+            let title = app.preview.figure.clone().unwrap_or_default();
+            assert_eq!(title.contains("Fig. 1"), images, "{title}");
+            if let Some(figure) = &job.figure {
+                use slabscope::explain::figure::Ink;
+                // The best viewpoint marked on the sphere; the rays' five samples.
+                let dots = |ink| figure.dots.iter().filter(|d| d.ink == ink).count();
+                match board {
+                    Board::Sphere => assert_eq!(dots(Ink::Best), 1),
+                    _ => assert_eq!(dots(Ink::Sample), 5),
+                }
+            }
+        }
+        // The next page's worked example covers the picture, which is the exploded view again.
+        let effects = app.update(Action::TurnPage(1));
+        let job = render_of(&effects).expect("the page renders");
+        assert!(job.figure.is_none() && app.preview.figure.is_none());
+        assert!(app.preview.covered);
+    }
+}
+
+#[test]
+fn the_pages_show_the_slab_count_given() {
+    let mut app = ready_app();
+    app.params.stop = slabscope::Stop::Slabs(6);
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(0));
+    assert_eq!(app.part.slab_count(), Some(6));
+    let turn_to = |app: &mut crate::tui::app::App, page: usize| {
+        let at = app.tour.as_ref().unwrap().page;
+        app.update(Action::TurnPage(page as isize - at as isize));
+        assert_eq!(app.tour.as_ref().unwrap().page, page);
+    };
+    // The curves keep their one slab, the first split its two.
+    turn_to(&mut app, CURVES);
+    assert_eq!(app.part.slab_count(), Some(1));
+    let split = PAGES
+        .iter()
+        .position(|p| p.title == "The first split")
+        .unwrap();
+    turn_to(&mut app, split);
+    assert_eq!(app.part.slab_count(), Some(2));
+    // Top-down and bottom-up are compared at the count given.
+    turn_to(&mut app, crate::tui::app::tour::COMPARED);
+    assert_eq!(app.part.slab_count(), Some(6));
+    let numbers = app.tour.as_ref().unwrap().numbers.clone().unwrap();
+    assert!(numbers.starts_with("Here 6 slabs keep"), "{numbers}");
+}

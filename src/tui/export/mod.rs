@@ -11,14 +11,17 @@ use anyhow::{Context, Result, bail};
 use serde_json::{Value, json};
 use slabscope::explain::figure::{View, rays_figure, sphere_figure};
 use slabscope::explain::{self, StepsShown, text, worked};
+use slabscope::geometry::AxisChoice;
 use slabscope::partition::Method;
 use slabscope::render::{DEFAULT_SPREAD, Gap, Layout, RenderParams, Renderer, draw_figure};
 use slabscope::{Analysis, AnalysisParams, LoadOptions, Monitor, Stop, Volume};
 
 use super::app::tour::{Board, PAGES};
 
-/// The slab count the tour's pages show.
-const SLABS: usize = 4;
+mod charts;
+mod examples;
+
+use charts::{CURVES, MERGE, MERGE_BEST, SPLIT, WORKED_JS, WORKED_NMI};
 
 /// What to export and how.
 pub struct ExportOptions {
@@ -40,9 +43,27 @@ pub struct ExportOptions {
 struct Numbers {
     name: String,
     volume: Volume,
+    /// Top-down along the chosen axis at the given analysis's slab count, every split explained.
     top: Analysis,
+    /// Bottom-up along the same axis at the same slab count, its last merge explained.
     bottom: Analysis,
+    /// The given analysis's partition when its method is not top-down (else `top`'s).
+    chosen: Option<slabscope::Partition>,
+    /// The merge of the highest NMI bottom-up took: the page's example of slices alike.
+    best_merge: Option<explain::MergeLesson>,
     modes: explain::ModeLesson,
+}
+
+impl Numbers {
+    /// The slab count of the given analysis, which every page shows.
+    fn slabs(&self) -> usize {
+        self.top.partition.slabs.len()
+    }
+
+    /// The partition the given analysis found, drawn as the exploded view.
+    fn shown(&self) -> &slabscope::Partition {
+        self.chosen.as_ref().unwrap_or(&self.top.partition)
+    }
 }
 
 /// One page as exported.
@@ -102,8 +123,20 @@ pub fn export(options: &ExportOptions) -> Result<()> {
     Ok(())
 }
 
-/// The files the export writes.
-const FILES: [&str; 5] = [EXPLODED, FIG_1A, FIG_1B, "tour.json", "tour.md"];
+/// The files the export writes (a chart only where its page has one).
+const FILES: [&str; 11] = [
+    EXPLODED,
+    FIG_1A,
+    FIG_1B,
+    CURVES,
+    SPLIT,
+    MERGE,
+    MERGE_BEST,
+    WORKED_JS,
+    WORKED_NMI,
+    "tour.json",
+    "tour.md",
+];
 
 /// Fails unless every file of the export may be written into `dir`: none is the volume read,
 /// and none exists unless `force` (checked before any work).
@@ -145,8 +178,10 @@ fn check_folder(dir: &Path, force: bool) -> Result<()> {
     }
 }
 
-/// The analyses behind the pages: top-down with every split explained, bottom-up along the same
-/// axis with the merge that leaves the tour's slab count, and the modes' numbers.
+/// The analyses behind the pages: the given one (its method, its stop: `--slabs` or
+/// `--threshold`, as `analyze` runs it), top-down along its axis with every split explained,
+/// bottom-up along the same axis with the merge that leaves the same slab count, and the modes'
+/// numbers.
 fn compute(o: &ExportOptions) -> Result<Numbers> {
     let (name, volume) = match &o.file {
         Some(path) => (
@@ -159,34 +194,54 @@ fn compute(o: &ExportOptions) -> Result<Numbers> {
         ),
     };
     let monitor = Monitor::none();
-    let params = AnalysisParams {
-        method: Method::TopDown,
-        stop: Stop::Slabs(SLABS),
-        explain: Some(StepsShown::All),
+    let run = |params: &AnalysisParams| {
+        slabscope::analyze(&volume, params, &monitor)
+            .with_context(|| format!("{name}: the analysis failed"))
+    };
+    let top_down = o.analysis.method == Method::TopDown;
+    let given = run(&AnalysisParams {
+        explain: Some(if top_down {
+            StepsShown::All
+        } else {
+            StepsShown::Last(1)
+        }),
         search_views: true,
         ..o.analysis.clone()
+    })?;
+    let slabs = given.partition.slabs.len();
+    let along = AxisChoice::Along(slabscope::Axis::new(given.axis())?);
+    let (top, chosen) = if top_down {
+        (given, None)
+    } else {
+        // The view search again, for the lesson's worst axis; the axis stays the given one's.
+        let top = run(&AnalysisParams {
+            method: Method::TopDown,
+            stop: Stop::Slabs(slabs),
+            axis: along,
+            explain: Some(StepsShown::All),
+            search_views: true,
+            ..o.analysis.clone()
+        })?;
+        (top, Some(given.partition))
     };
-    let top = slabscope::analyze(&volume, &params, &monitor)
-        .with_context(|| format!("{name}: the analysis failed"))?;
-    let along = slabscope::Axis::new(top.axis())?;
-    let bottom = slabscope::analyze(
-        &volume,
-        &AnalysisParams {
-            method: Method::BottomUp,
-            axis: slabscope::geometry::AxisChoice::Along(along),
-            explain: Some(StepsShown::Last(1)),
-            // The axis is the top-down analysis's: no second view search.
-            search_views: false,
-            ..params.clone()
-        },
-        &monitor,
-    )?;
-    let modes = explain::mode_lesson(&volume, top.axis(), &params.view, &monitor)?;
+    let bottom = run(&AnalysisParams {
+        method: Method::BottomUp,
+        stop: Stop::Slabs(slabs),
+        axis: along,
+        explain: Some(StepsShown::Last(1)),
+        // The axis is the given analysis's: no second view search.
+        search_views: false,
+        ..o.analysis.clone()
+    })?;
+    let modes = explain::mode_lesson(&volume, top.axis(), &o.analysis.view, &monitor)?;
+    let best_merge = examples::best_merge(&volume, &bottom, &o.analysis, &monitor)?;
     Ok(Numbers {
         name,
         volume,
         top,
         bottom,
+        chosen,
+        best_merge,
         modes,
     })
 }
@@ -209,18 +264,58 @@ fn pictures(n: &Numbers) -> Result<Vec<(&'static str, Vec<u8>)>> {
     let sphere = sphere_figure(level, axis, &View::default());
     let across = View::across(axis).unwrap_or_default();
     let rays = rays_figure(size(&n.volume), axis, 4, 5, &across)?;
-    let layout = Layout::exploded(&n.top.partition, Gap::Similarity, DEFAULT_SPREAD);
+    let layout = Layout::exploded(n.shown(), Gap::Similarity, DEFAULT_SPREAD);
     let params = RenderParams {
         width: 960,
         height: 720,
         ..RenderParams::default()
     };
     let exploded = Renderer::new(&n.volume)?.render(&layout, &params, &Monitor::none())?;
-    Ok(vec![
+    let w = worked();
+    let mut out = vec![
         (EXPLODED, exploded.png()?),
         (FIG_1A, png(&draw_figure(&sphere.drawing, 800, 800)?)?),
         (FIG_1B, png(&draw_figure(&rays.drawing, 1000, 640)?)?),
-    ])
+        (CURVES, png(&charts::curves(&n.top.partition, 1000, 700)?)?),
+        (WORKED_JS, png(&charts::worked_js(&w.js, 800, 450)?)?),
+        (WORKED_NMI, png(&charts::worked_nmi(&w.nmi, 640, 520)?)?),
+    ];
+    if let Some(s) = first_split(n) {
+        out.push((SPLIT, png(&charts::split(s, 1000, 760)?)?));
+    }
+    if let Some(m) = last_merge(n) {
+        out.push((MERGE, png(&charts::merge(m, 800, 640)?)?));
+    }
+    if let Some(m) = &n.best_merge {
+        out.push((MERGE_BEST, png(&charts::merge(m, 800, 640)?)?));
+    }
+    Ok(out)
+}
+
+/// Top-down's first split, explained.
+fn first_split(n: &Numbers) -> Option<&explain::SplitLesson> {
+    n.top.explain.as_ref().and_then(|e| e.splits.first())
+}
+
+/// Bottom-up's merge that leaves the tour's slab count, explained.
+fn last_merge(n: &Numbers) -> Option<&explain::MergeLesson> {
+    n.bottom.explain.as_ref().and_then(|e| e.merges.last())
+}
+
+/// The charts a page of the volume's own numbers shows, by its title.
+fn charts_of(title: &str, n: &Numbers) -> Vec<&'static str> {
+    match title {
+        "Slicing along the best axis" | "Further splits and the gain curve" => vec![CURVES],
+        "The first split" if first_split(n).is_some() => vec![SPLIT],
+        "A merge" => [
+            (MERGE_BEST, n.best_merge.is_some()),
+            (MERGE, last_merge(n).is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(file, drawn)| drawn.then_some(file))
+        .collect(),
+        _ => Vec::new(),
+    }
 }
 
 fn png(p: &tiny_skia::Pixmap) -> Result<Vec<u8>> {
@@ -233,15 +328,15 @@ fn png(p: &tiny_skia::Pixmap) -> Result<Vec<u8>> {
 /// Page `i`'s numbers, the lines that say them, and its pictures.
 fn page(i: usize, n: &Numbers) -> Exported {
     let w = worked();
-    let one = |numbers: Value, lines: Vec<String>| Exported {
+    let one = |numbers: Value, lines: Vec<String>, pictures: Vec<&'static str>| Exported {
         numbers,
         lines,
-        pictures: Vec::new(),
+        pictures,
     };
     match PAGES[i].board {
-        Some(Board::Blocks) => return one(json!(w.ray), w.ray.lines()),
-        Some(Board::Js) => return one(json!(w.js), w.js.lines()),
-        Some(Board::Nmi) => return one(json!(w.nmi), w.nmi.lines()),
+        Some(Board::Blocks) => return one(json!(w.ray), w.ray.lines(), Vec::new()),
+        Some(Board::Js) => return one(json!(w.js), w.js.lines(), vec![WORKED_JS]),
+        Some(Board::Nmi) => return one(json!(w.nmi), w.nmi.lines(), vec![WORKED_NMI]),
         Some(Board::Sphere) => return sphere_page(n),
         Some(Board::Rays) => return rays_page(n),
         None => {}
@@ -307,21 +402,25 @@ fn volume_page(i: usize, n: &Numbers) -> Exported {
     let title = PAGES[i].title;
     let (numbers, lines) = match title {
         "The volume and the question" | "The exploded view" => {
-            let slabs: Vec<String> = part
+            let shown = n.shown();
+            let slabs: Vec<String> = shown
                 .slabs
                 .iter()
                 .map(|&(a, b)| format!("{a}–{}", b.saturating_sub(1)))
                 .collect();
             let line = format!(
-                "{SLABS} slabs along {}, slices {}",
-                axis_name(part.axis),
+                "{} slabs {} along {}, slices {}",
+                shown.slabs.len(),
+                shown.method.name(),
+                axis_name(shown.axis),
                 slabs.join(", ")
             );
             let numbers = json!({
                 "dims": n.volume.dims(),
                 "spacing": n.volume.spacing(),
-                "axis": part.axis,
-                "slabs": part.slabs,
+                "axis": shown.axis,
+                "method": shown.method.name(),
+                "slabs": shown.slabs,
             });
             return Exported {
                 numbers,
@@ -345,7 +444,7 @@ fn volume_page(i: usize, n: &Numbers) -> Exported {
     Exported {
         numbers,
         lines,
-        pictures: Vec::new(),
+        pictures: charts_of(title, n),
     }
 }
 
@@ -380,12 +479,12 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
     let (part, bottom) = (&n.top.partition, &n.bottom.partition);
     let e = n.top.explain.as_ref();
     let splits = e.map(|e| e.splits.as_slice()).unwrap_or_default();
-    let merge = n.bottom.explain.as_ref().and_then(|e| e.merges.last());
+    let merge = last_merge(n);
     let none = || (Value::Null, Vec::new());
     match title {
         "The first split" => splits
             .first()
-            .map_or_else(none, |s| (json!(s), text::split_lines(s, SLABS - 1))),
+            .map_or_else(none, |s| (json!(s), text::split_lines(s, n.slabs() - 1))),
         "Further splits and the gain curve" => (
             json!({
                 "information": splits.iter().map(|s| s.information).collect::<Vec<_>>(),
@@ -402,7 +501,19 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
                 .collect(),
         ),
         "A merge" => merge.map_or_else(none, |m| {
-            (json!(m), text::merge_lines(m, bottom.steps.len()))
+            let mut numbers = json!(m);
+            let mut lines = text::merge_lines(m, bottom.steps.len());
+            if let Some(best) = &n.best_merge {
+                numbers["highest_nmi"] = json!(best);
+                lines.push(format!(
+                    "The merge of the highest NMI: step {}, {} and {}, NMI = {:.4}",
+                    best.step,
+                    charts::slices(best.merge.0),
+                    charts::slices(best.merge.1),
+                    best.nmi
+                ));
+            }
+            (numbers, lines)
         }),
         "Top-down against bottom-up" => (
             json!({
@@ -413,8 +524,11 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
                 "bottom_up_slabs": bottom.slabs,
             }),
             vec![format!(
-                "Here {SLABS} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
-                part.information, bottom.information, part.entropy
+                "Here {} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
+                n.slabs(),
+                part.information,
+                bottom.information,
+                part.entropy
             )],
         ),
         "The optimum" => match e.and_then(|e| e.optimal.as_ref()) {
