@@ -93,25 +93,6 @@ pub fn preview_cells(area: Rect, tour: bool, folder: Option<usize>) -> Option<(u
     Some((inner.width, inner.height))
 }
 
-/// The board the tour's page shows in the exploded view's place, if any.
-pub fn board(app: &App) -> Option<panes::board::BoardPane> {
-    let board = app.tour.as_ref()?.current().board?;
-    let best = app.views.views.ready().and_then(|s| {
-        let best = s.views.first()?;
-        Some((best.axis, s.params.level))
-    });
-    let size = app.volume.ready().map(|v| {
-        let (d, s) = (v.dims(), v.spacing());
-        std::array::from_fn(|k| d[k] as f64 * s[k])
-    });
-    Some(panes::board::BoardPane {
-        board,
-        best,
-        size,
-        theme: app.theme,
-    })
-}
-
 /// Draws the whole screen.
 pub fn draw(frame: &mut Frame, app: &App) {
     let area = frame.area();
@@ -143,7 +124,10 @@ pub fn draw(frame: &mut Frame, app: &App) {
     }
     // A figure the terminal draws as an image is the preview's picture.
     let image = app.figure_as_image();
-    if let Some(board) = board(app).filter(|b| !(app.lesson.open || image && b.is_figure())) {
+    if let Some(board) = app
+        .board()
+        .filter(|b| !(app.lesson.open || image && b.is_figure()))
+    {
         // A worked example's lines want the width of the row; a figure sits beside the list.
         let place = if board.is_figure() {
             a.preview

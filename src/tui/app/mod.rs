@@ -467,14 +467,34 @@ impl App {
         self.preview.draws_images() && self.figure().is_some()
     }
 
+    /// The board the tour's page shows in the exploded view's place, if any.
+    pub fn board(&self) -> Option<crate::tui::panes::board::BoardPane> {
+        let board = self.tour.as_ref()?.current().board?;
+        let best = self.views.views.ready().and_then(|s| {
+            let best = s.views.first()?;
+            Some((best.axis, s.params.level))
+        });
+        let size = self.volume.ready().map(|v| {
+            let (d, s) = (v.dims(), v.spacing());
+            std::array::from_fn(|k| d[k] as f64 * s[k])
+        });
+        Some(crate::tui::panes::board::BoardPane {
+            board,
+            best,
+            size,
+            theme: self.theme,
+        })
+    }
+
     /// The tour page's figure for the image protocol, and its title, when the terminal draws
     /// images and the figure's data is in.
     fn figure(&self) -> Option<(slabscope::explain::figure::Drawing, String)> {
         if !self.preview.draws_images() {
             return None;
         }
-        let board =
-            crate::tui::ui::board(self).filter(crate::tui::panes::board::BoardPane::is_figure)?;
+        let board = self
+            .board()
+            .filter(crate::tui::panes::board::BoardPane::is_figure)?;
         let (drawing, legend) = board.drawing(u16::MAX)?;
         Some((drawing, format!("{}— {legend} ", board.title())))
     }
