@@ -338,7 +338,16 @@ mod tests {
         }
         let mut sum = rounds.zero(v, round).unwrap();
         for part in parts {
-            sum.iter_mut().zip(part).for_each(|(s, p)| s.add(p));
+            // Each part travels as bytes, as between a cluster's processes.
+            for (s, p) in sum.iter_mut().zip(part) {
+                let bytes = p.to_bytes();
+                let back = PartialCounts::from_bytes(&bytes).unwrap();
+                assert_eq!(back.to_bytes(), bytes);
+                for cut in [0, 7, 8, bytes.len() - 8] {
+                    assert!(PartialCounts::from_bytes(&bytes[..cut]).is_err());
+                }
+                s.add(back);
+            }
         }
         sum
     }
