@@ -10,6 +10,7 @@
 use std::collections::HashMap;
 
 mod codec;
+pub use codec::ReadResult;
 pub(crate) use codec::{Words, corrupt};
 
 use super::{entropy, sum_c_log_c};

@@ -271,7 +271,7 @@ impl Fragment {
     }
 
     /// A fragment [`write`](Self::write) wrote.
-    fn read(words: &mut super::blocks::Words) -> crate::error::Result<Self> {
+    fn read(words: &mut super::blocks::Words) -> super::blocks::ReadResult<Self> {
         let [key, start, end, flags, code, len] = [(); 6].map(|()| words.next());
         let (key, start, end, flags) = (key?, start?, end?, flags?);
         let head_len = (flags >> 8 & 0xff) as u8;
@@ -311,7 +311,7 @@ impl PartialCounts {
     }
 
     /// Counts [`to_bytes`](Self::to_bytes) wrote; an error for any other bytes.
-    pub fn from_bytes(bytes: &[u8]) -> crate::error::Result<Self> {
+    pub fn from_bytes(bytes: &[u8]) -> super::blocks::ReadResult<Self> {
         let corrupt = super::blocks::corrupt;
         if !bytes.len().is_multiple_of(8) {
             return Err(corrupt("not a whole number of words"));
@@ -331,7 +331,7 @@ impl PartialCounts {
         }
         let fragments = (0..n)
             .map(|_| Fragment::read(&mut words))
-            .collect::<crate::error::Result<Vec<_>>>()?;
+            .collect::<super::blocks::ReadResult<Vec<_>>>()?;
         if words.left() > 0 {
             return Err(corrupt("words after the last piece"));
         }

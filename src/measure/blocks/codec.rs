@@ -3,7 +3,9 @@
 //! symbols' ends. Read back, they are the same counts; anything else is refused.
 
 use super::{BlockCounts, Table};
-use crate::error::{Error, Result};
+
+/// What reading counts back gives: the counts, or what is wrong with the words.
+pub type ReadResult<T> = std::result::Result<T, String>;
 
 /// Reads words one at a time, refusing to read past the end.
 pub(crate) struct Words<'a> {
@@ -16,7 +18,7 @@ impl<'a> Words<'a> {
         Self { words, at: 0 }
     }
 
-    pub(crate) fn next(&mut self) -> Result<u64> {
+    pub(crate) fn next(&mut self) -> ReadResult<u64> {
         let w = self.words.get(self.at).copied().ok_or_else(short)?;
         self.at += 1;
         Ok(w)
@@ -28,13 +30,13 @@ impl<'a> Words<'a> {
     }
 }
 
-fn short() -> Error {
-    Error::Degenerate("counts cut short: the part was not written whole".into())
+fn short() -> String {
+    "counts cut short: the part was not written whole".into()
 }
 
 /// An error for counts that no writer made.
-pub(crate) fn corrupt(what: &str) -> Error {
-    Error::Degenerate(format!("counts that do not read back: {what}"))
+pub(crate) fn corrupt(what: &str) -> String {
+    format!("counts that do not read back: {what}")
 }
 
 fn put_table(table: &Table, out: &mut Vec<u64>) {
@@ -47,7 +49,7 @@ fn put_table(table: &Table, out: &mut Vec<u64>) {
     }
 }
 
-fn get_table(table: &mut Table, mask: u64, words: &mut Words) -> Result<()> {
+fn get_table(table: &mut Table, mask: u64, words: &mut Words) -> ReadResult<()> {
     let n = words.next()?;
     if n > words.left() as u64 / 2 {
         return Err(short());
@@ -72,7 +74,7 @@ impl BlockCounts {
     }
 
     /// Counts [`write`](Self::write) wrote, from `words`.
-    pub(crate) fn read(words: &mut Words) -> Result<Self> {
+    pub(crate) fn read(words: &mut Words) -> ReadResult<Self> {
         let (bins, block) = (words.next()?, words.next()?);
         if !(2..=256).contains(&bins) || !(2..=4).contains(&block) {
             return Err(corrupt("bins or block length out of range"));
