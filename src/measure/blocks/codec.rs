@@ -65,7 +65,7 @@ fn get_table(table: &mut Table, mask: u64, words: &mut Words) -> ReadResult<()> 
 }
 
 impl BlockCounts {
-    /// The counts as words, appended to `out` ([`read`](Self::read) reads them back).
+    /// The counts as words, appended to `out` (`PartialCounts::from_bytes` reads them back).
     pub fn write(&self, out: &mut Vec<u64>) {
         out.extend([self.bins as u64, self.packing.block]);
         put_table(&self.long, out);
