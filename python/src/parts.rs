@@ -135,7 +135,13 @@ pub fn _count_view_slab(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<ViewPart> {
     let grid = grid(dims, spacing, dtype, range);
-    let (data, _copy) = crate::volume::copy_of(voxels, grid.voxel_type)?;
+    // Read in place where the array is of the held type in Fortran order (a C-ordered
+    // [z, y, x] block's transpose is); else copied once. Either way `of_slab` copies the
+    // planes into their place in the grid.
+    let (data, _copy) = match crate::volume::lend_any(voxels, grid.voxel_type) {
+        Some(lent) => (lent, voxels.clone()),
+        None => crate::volume::copy_of(voxels, grid.voxel_type)?,
+    };
     let shape = voxels.cast::<numpy::PyUntypedArray>()?.shape().to_vec();
     if shape.len() != 3 || shape[0] != dims[0] || shape[1] != dims[1] {
         return Err(PyValueError::new_err(format!(
