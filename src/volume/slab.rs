@@ -104,3 +104,36 @@ impl Volume {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_slab_sits_at_its_own_indices_with_the_whole_grids_statistics() {
+        let data: Vec<f32> = (0..4 * 3 * 5).map(|i| i as f32).collect();
+        let whole = Volume::new([4, 3, 5], [1.0, 1.5, 2.0], VoxelType::F32, data).unwrap();
+        let grid = SlabGrid::of(&whole);
+        let slab = Volume::of_slab(&grid, 2, &whole.voxels()[24..48]).unwrap();
+        assert_eq!(slab.dims(), [4, 3, 5]);
+        assert_eq!(slab.stats(), whole.stats());
+        assert_eq!(slab.value([1, 2, 2]), whole.value([1, 2, 2]));
+        assert_eq!(slab.value([3, 0, 3]), 39.0);
+        // Outside the planes held nothing was written.
+        assert_eq!(slab.value([3, 2, 4]), 0.0);
+        assert_eq!(slab.quantizer(32).unwrap(), whole.quantizer(32).unwrap());
+        // An infinity is made missing, as a reader makes it.
+        let inf = [f32::INFINITY; 12];
+        assert!(
+            Volume::of_slab(&grid, 0, &inf)
+                .unwrap()
+                .value([0, 0, 0])
+                .is_nan()
+        );
+        // Part of a plane, or planes past the grid, are refused.
+        for (first, len) in [(0, 13), (4, 24), (6, 0)] {
+            let e = Volume::of_slab(&grid, first, &whole.voxels()[..len]).unwrap_err();
+            assert!(e.to_string().contains("whole planes of 4×3"), "{e}");
+        }
+    }
+}
