@@ -29,6 +29,12 @@ __all__ = [
     "_analysis_of",
     "_image_of",
     "_triage_of",
+    "ViewPart",
+    "_view_part_of",
+    "_count_view_slab",
+    "_slab_planes",
+    "_paper_samples",
+    "_analyze_with_parts",
 ]
 
 __version__: str
@@ -281,3 +287,48 @@ def _volume_from_voxels(array: np.ndarray, state: dict[str, Any]) -> Volume: ...
 def _analysis_of(volume: Volume, params: dict[str, Any], json: str) -> Analysis: ...
 def _image_of(width: int, height: int, pixels: bytes) -> Image: ...
 def _triage_of(rows: Sequence[str], count: int) -> Triage: ...
+
+@final
+class ViewPart:
+    """The view search's counts of one round over some slabs of a volume (issue #44): adds
+    with ``+`` (any grouping and order) and pickles as bytes."""
+
+    @property
+    def round(self) -> int: ...
+    @property
+    def complete(self) -> bool: ...
+    def __add__(self, other: ViewPart, /) -> ViewPart: ...
+    def __radd__(self, other: ViewPart, /) -> ViewPart: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
+
+def _view_part_of(round: int, counts: Sequence[bytes]) -> ViewPart: ...
+def _count_view_slab(
+    voxels: np.ndarray,
+    first: int,
+    planes: Tuple[int, int],
+    dims: Sequence[int],
+    spacing: Sequence[float],
+    dtype: str,
+    range: Tuple[float, float, int],
+    samples: Optional[Sequence[int]] = None,
+    **params: Any,
+) -> ViewPart: ...
+def _slab_planes(
+    planes: Tuple[int, int],
+    dims: Sequence[int],
+    spacing: Sequence[float],
+    dtype: str,
+    range: Tuple[float, float, int],
+    **params: Any,
+) -> Tuple[int, int, bool]: ...
+def _paper_samples(
+    paper: ViewPart,
+    dims: Sequence[int],
+    spacing: Sequence[float],
+    dtype: str,
+    range: Tuple[float, float, int],
+    **params: Any,
+) -> list[int]: ...
+def _analyze_with_parts(
+    volume: Volume, paper: ViewPart, shifted: Optional[ViewPart] = None, **params: Any
+) -> Analysis: ...

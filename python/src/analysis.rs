@@ -76,8 +76,31 @@ pub fn analyze(
 ) -> PyResult<Analysis> {
     let volume = &crate::foreign::volume_of(volume)?;
     let reporter = run::Reporter::new("analyze", progress)?;
-    let (computed, json) = compute(py, volume.get(), reporter.callback(), params)?;
+    let (computed, json) = compute(py, volume.get(), reporter.callback(), params, None)?;
     drop(reporter);
+    of_computed(py, volume, params, computed, json)
+}
+
+/// The analysis of `volume` with the keywords `params` whose view search's result `views`
+/// was counted in parts (`slabscope.dask.analyze_array`): `analyze`'s, report and all.
+pub fn analyze_with(
+    py: Python<'_>,
+    volume: &Bound<'_, Volume>,
+    views: Option<slabscope::view::ViewSearch>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Analysis> {
+    let (computed, json) = compute(py, volume.get(), None, params, views)?;
+    of_computed(py, volume, params, computed, json)
+}
+
+/// The `Analysis` of `volume` with `params` that gave `computed` and its report `json`.
+fn of_computed(
+    py: Python<'_>,
+    volume: &Bound<'_, Volume>,
+    params: Option<&Bound<'_, PyDict>>,
+    computed: Analysed,
+    json: String,
+) -> PyResult<Analysis> {
     let report = parse(py, &json)?.cast_into::<PyDict>()?.unbind();
     let params = match params {
         Some(d) => d.copy()?,
@@ -98,6 +121,7 @@ fn compute(
     volume: &Volume,
     progress: Option<&Bound<'_, PyAny>>,
     params: Option<&Bound<'_, PyDict>>,
+    views: Option<slabscope::view::ViewSearch>,
 ) -> PyResult<(Analysed, String)> {
     let kw = Kwargs::new(py, "analyze", params)?;
     let (mut analysis_params, given) = analysis_params(&kw)?;
@@ -114,7 +138,7 @@ fn compute(
     };
     let planned = run::quick(py, || request.plan(&full))?;
     // A slab count the user did not give is not blamed on `slabs=`.
-    let analysed = run::long(py, progress, |monitor| planned.run(monitor))?;
+    let analysed = run::long(py, progress, |monitor| planned.run_with(views, monitor))?;
     crate::errors::intact(&full)?;
     let report = analysed.report(&volume.name, &full).or_py()?;
     let json = slabscope::report::to_json(&report).or_py()?;
@@ -179,7 +203,7 @@ impl Analysis {
             return Ok(done);
         }
         let params = self.params.bind(py);
-        let (computed, json) = compute(py, self.volume.get(), None, Some(params))?;
+        let (computed, json) = compute(py, self.volume.get(), None, Some(params), None)?;
         if json != self.json {
             return Err(PyValueError::new_err(format!(
                 "analysis of {:?}: analysing its volume again gives another report (its file changed since it was pickled?): analyze it again",

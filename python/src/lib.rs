@@ -8,6 +8,7 @@ mod errors;
 mod foreign;
 mod image;
 mod params;
+mod parts;
 mod pickle;
 mod run;
 mod triage;
@@ -27,6 +28,7 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<analysis::Analysis>()?;
     m.add_class::<image::Image>()?;
     m.add_class::<triage::Triage>()?;
+    m.add_class::<parts::ViewPart>()?;
     m.add_function(wrap_pyfunction!(volume::load, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
     m.add_function(wrap_pyfunction!(image::render, m)?)?;
@@ -39,5 +41,10 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pickle::_analysis_of, m)?)?;
     m.add_function(wrap_pyfunction!(image::_image_of, m)?)?;
     m.add_function(wrap_pyfunction!(triage::_triage_of, m)?)?;
+    m.add_function(wrap_pyfunction!(parts::_view_part_of, m)?)?;
+    m.add_function(wrap_pyfunction!(parts::_count_view_slab, m)?)?;
+    m.add_function(wrap_pyfunction!(parts::_slab_planes, m)?)?;
+    m.add_function(wrap_pyfunction!(parts::_paper_samples, m)?)?;
+    m.add_function(wrap_pyfunction!(parts::_analyze_with_parts, m)?)?;
     Ok(())
 }

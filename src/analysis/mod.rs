@@ -2,9 +2,12 @@
 //! structured view (paper §3.1, §4), then the slabs along it (paper §5).
 
 mod gain;
+mod parts;
 mod plan;
 
 use std::sync::Arc;
+
+pub use parts::analyze_with_views;
 
 pub use gain::{
     AGREE_DEGREES, AxisBy, AxisGain, GainRanking, GainSampling, MAX_EVERY, MIN_PIXELS,
@@ -204,13 +207,23 @@ pub fn analyze_planned(
     params: &AnalysisParams,
     monitor: &Monitor,
 ) -> Result<Analysis> {
-    let volume = plan.partition.as_ref();
-    let chosen = params.axis.resolve(volume.transform(), volume.spacing())?;
-    let mut views = if params.runs_search() {
+    let views = if params.runs_search() {
         Some(plan.search(&params.view, monitor)?)
     } else {
         None
     };
+    analyzed_with(plan, params, views, monitor)
+}
+
+/// [`analyze_planned`] with the view search's result `views` (when it runs) found already.
+fn analyzed_with(
+    plan: &Plan,
+    params: &AnalysisParams,
+    mut views: Option<ViewSearch>,
+    monitor: &Monitor,
+) -> Result<Analysis> {
+    let volume = plan.partition.as_ref();
+    let chosen = params.axis.resolve(volume.transform(), volume.spacing())?;
     let mut gain = if params.ranks_by_gain() {
         Some(rank_by_gain(&plan.views, params, monitor)?)
     } else {
@@ -316,7 +329,7 @@ pub fn memory_needed(volume: &Volume, level: usize) -> u64 {
 #[must_use]
 pub fn memory_needed_with(volume: &Volume, level: usize, bins: usize) -> u64 {
     let level = level.min(volume.coarser_levels());
-    let (dims, spacing) = level_grid(volume, level);
+    let (dims, spacing) = volume.level_grids()[level];
     let n = dims.iter().map(|&d| d as u64).product::<u64>();
     let (held, map) = if level == 0 {
         let integer = volume.data().held() != crate::volume::VoxelType::F32;
@@ -380,12 +393,6 @@ pub(crate) fn level_within_memory(
             ),
         )),
     }
-}
-
-/// The dimensions and spacing of pyramid level `level` of `volume` (an axis of one voxel is
-/// not halved, nor its spacing doubled; nor an axis a store's own levels keep).
-fn level_grid(volume: &Volume, level: usize) -> ([usize; 3], [f64; 3]) {
-    volume.level_grids()[level]
 }
 
 /// What an analysis on a pyramid level says of it; nothing at full resolution.

@@ -9,6 +9,10 @@
 
 use std::collections::HashMap;
 
+mod codec;
+pub use codec::ReadResult;
+pub(crate) use codec::{Words, corrupt};
+
 use super::{entropy, sum_c_log_c};
 
 /// Codes up to this many bits are counted in a dense array; longer ones in a hash map.

@@ -243,6 +243,102 @@ impl PartialCounts {
     }
 }
 
+/// The first words of [`PartialCounts::to_bytes`]: `SLABPC` and a version.
+const MAGIC: u64 = u64::from_le_bytes(*b"SLABPC\x00\x01");
+
+impl Fragment {
+    /// The fragment as six words.
+    fn write(&self, out: &mut Vec<u64>) {
+        let flags = u64::from(self.first)
+            | u64::from(self.last) << 1
+            | u64::from(self.broken) << 2
+            | u64::from(self.head_len) << 8;
+        let head = self
+            .head
+            .iter()
+            .enumerate()
+            .map(|(k, s)| s.map_or(0, |v| u64::from(v) + 1) << (16 * k))
+            .fold(0, |a, b| a | b);
+        let (code, len) = self.run.parts();
+        out.extend([
+            self.key,
+            self.start,
+            self.end,
+            flags | head << 16,
+            code,
+            len,
+        ]);
+    }
+
+    /// A fragment [`write`](Self::write) wrote.
+    fn read(words: &mut super::blocks::Words) -> super::blocks::ReadResult<Self> {
+        let [key, start, end, flags, code, len] = [(); 6].map(|()| words.next());
+        let (key, start, end, flags) = (key?, start?, end?, flags?);
+        let head_len = (flags >> 8 & 0xff) as u8;
+        if end < start || usize::from(head_len) > MAX_HEAD {
+            return Err(super::blocks::corrupt("a piece of a ray"));
+        }
+        let head = std::array::from_fn(|k| match flags >> (16 + 16 * k) & 0xffff {
+            0 => None,
+            v => Some((v - 1) as u8),
+        });
+        Ok(Self {
+            key,
+            start,
+            end,
+            first: flags & 1 != 0,
+            last: flags & 2 != 0,
+            broken: flags & 4 != 0,
+            head,
+            head_len,
+            run: Run::from_parts(code?, len?),
+        })
+    }
+}
+
+impl PartialCounts {
+    /// The counts, rays and open pieces as bytes (little-endian words), to send to another
+    /// process: [`from_bytes`](Self::from_bytes) reads them back to the same counts.
+    #[must_use]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut words = vec![MAGIC];
+        self.counts.write(&mut words);
+        words.extend([self.rays, self.fragments.len() as u64]);
+        for f in &self.fragments {
+            f.write(&mut words);
+        }
+        words.iter().flat_map(|w| w.to_le_bytes()).collect()
+    }
+
+    /// Counts [`to_bytes`](Self::to_bytes) wrote; an error for any other bytes.
+    pub fn from_bytes(bytes: &[u8]) -> super::blocks::ReadResult<Self> {
+        let corrupt = super::blocks::corrupt;
+        if !bytes.len().is_multiple_of(8) {
+            return Err(corrupt("not a whole number of words"));
+        }
+        let words: Vec<u64> = bytes
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
+            .collect();
+        let mut words = super::blocks::Words::new(&words);
+        if words.next()? != MAGIC {
+            return Err(corrupt("not slabscope's partial counts"));
+        }
+        let counts = BlockCounts::read(&mut words)?;
+        let (rays, n) = (words.next()?, words.next()?);
+        if n > words.left() as u64 / 6 {
+            return Err(corrupt("more pieces of rays than words"));
+        }
+        let fragments = (0..n)
+            .map(|_| Fragment::read(&mut words))
+            .collect::<super::blocks::ReadResult<Vec<_>>>()?;
+        if words.left() > 0 {
+            return Err(corrupt("words after the last piece"));
+        }
+        Ok(Self::of(counts, rays, fragments))
+    }
+}
+
 /// The fragments `held` (in order of key and start) and `more` (in any order) in order, every
 /// pair that meets stitched, counting into `counts` what crosses the seams.
 fn stitched(

@@ -4,6 +4,7 @@
 //! optionally refined around the best.
 
 pub mod icosphere;
+mod parts;
 mod rate;
 mod refine;
 mod streamed;
@@ -11,6 +12,7 @@ mod streamed;
 use rayon::prelude::*;
 use serde::Serialize;
 
+pub use parts::{ViewRound, ViewRounds};
 pub use rate::{
     AxisEntropy, BRICK_CELLS, BinSampler, Bricks, InnerSpans, OpenRays, PhaseStats, RaySubset,
     Walk, block_counts, block_counts_by, count_slab_into, counts_of_bricks, entropy_rate,

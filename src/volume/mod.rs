@@ -9,6 +9,7 @@ pub mod mapped;
 pub mod phantom;
 pub mod pyramid;
 mod quantize;
+mod slab;
 mod voxel;
 pub mod voxels;
 
@@ -19,6 +20,7 @@ use rayon::prelude::*;
 
 pub use pyramid::Resolution;
 pub use quantize::Quantizer;
+pub use slab::SlabGrid;
 pub use voxel::{Endian, VoxelType};
 pub(crate) use voxel::{decode_to, write_le};
 pub(crate) use voxels::with_voxels;

@@ -215,6 +215,11 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
                     continue;
                 };
                 let key = ray_key(i, j);
+                if t0 >= t1 && self.slab.is_some() {
+                    // No sample inside a cell, in a slab: its samples in the slab's bricks.
+                    self.outer_pieces(key, (p0, grid, n), out);
+                    continue;
+                }
                 if t0 >= t1 {
                     // No sample inside a cell: the whole ray with the brick of its first.
                     if self.walked(self.bricks.holding(p0)) {
@@ -247,6 +252,37 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             }
         }
         band
+    }
+
+    /// The pieces of a ray of `n` samples from `p` with no sample inside a cell (it lies on
+    /// the volume's far faces) whose samples lie in bricks walked, each a fragment, so that a
+    /// slab reads the planes of its own samples alone.
+    fn outer_pieces(
+        &self,
+        key: u64,
+        (mut p, grid, n): ([i64; 3], bool, i64),
+        out: &mut PartialCounts,
+    ) {
+        let mut piece: Option<Fragment> = None;
+        for t in 0..n {
+            if self.walked(self.bricks.holding(p)) {
+                if piece.is_none() {
+                    out.rays += u64::from(t == 0);
+                    piece = Some(Fragment::new(key, t as u64));
+                }
+                if let Some(f) = piece.as_mut() {
+                    f.push(&mut out.counts, sample_bin(self.sampler, p, grid));
+                }
+            } else if let Some(f) = piece.take() {
+                let left = f.close(&mut out.counts, false);
+                out.push_fragment(left);
+            }
+            advance(&mut p, self.step);
+        }
+        if let Some(f) = piece {
+            let left = f.close(&mut out.counts, true);
+            out.push_fragment(left);
+        }
     }
 
     /// Appends the `count` samples of a ray from `p` on to `f`, one by one.

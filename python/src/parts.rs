@@ -1,0 +1,232 @@
+//! The view search counted in parts (issue #44), for `slabscope.dask.analyze_array`:
+//! `ViewPart` (the counts of one or more slabs of one round: it adds with `+` and pickles as
+//! bytes), and the functions a task and the client call: the voxel planes a slab's task holds,
+//! a slab's part counted from those planes alone, the paper lattices' sample counts, and the
+//! analysis finished from the parts' sums.
+
+use numpy::PyUntypedArrayMethods;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use slabscope::measure::PartialCounts;
+use slabscope::view::{ViewRound, ViewRounds};
+use slabscope::volume::{SlabGrid, Stats, VoxelType, Voxels};
+
+use crate::errors::OrPy;
+use crate::params::{Kwargs, analysis_params};
+use crate::volume::Volume;
+
+/// The counts of one round of the view search over some slabs: one entry a lattice.
+#[pyclass(module = "slabscope", frozen)]
+pub struct ViewPart {
+    /// 0 for the paper's lattices, 1 for the shifted ones.
+    round: u8,
+    counts: Vec<PartialCounts>,
+}
+
+#[pymethods]
+impl ViewPart {
+    /// The round: 0 for the paper's lattices, 1 for the shifted ones.
+    #[getter]
+    fn round(&self) -> u8 {
+        self.round
+    }
+
+    /// Whether every ray's pieces are joined: the whole volume's slabs are in it.
+    #[getter]
+    fn complete(&self) -> bool {
+        self.counts.iter().all(PartialCounts::is_complete)
+    }
+
+    fn __add__(&self, other: &Self) -> PyResult<Self> {
+        if self.round != other.round || self.counts.len() != other.counts.len() {
+            return Err(PyValueError::new_err(
+                "ViewPart + ViewPart: parts of two different rounds or searches",
+            ));
+        }
+        let mut counts = self.counts.clone();
+        for (a, b) in counts.iter_mut().zip(&other.counts) {
+            a.add(b.clone());
+        }
+        Ok(Self {
+            round: self.round,
+            counts,
+        })
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let bytes: Vec<Bound<'py, PyBytes>> = self
+            .counts
+            .iter()
+            .map(|c| PyBytes::new(py, &c.to_bytes()))
+            .collect();
+        crate::pickle::reduced(py, "_view_part_of", (self.round, bytes))
+    }
+}
+
+/// Unpickles a `ViewPart`.
+#[pyfunction]
+pub fn _view_part_of(round: u8, counts: Vec<Vec<u8>>) -> PyResult<ViewPart> {
+    let counts = counts
+        .iter()
+        .map(|b| PartialCounts::from_bytes(b))
+        .collect::<Result<Vec<_>, String>>()
+        .map_err(PyValueError::new_err)?;
+    Ok(ViewPart { round, counts })
+}
+
+/// The grid every task is told: dims `[x, y, z]`, spacing, the held type's name and the range.
+fn grid(dims: [usize; 3], spacing: [f64; 3], dtype: &str, range: (f32, f32, u64)) -> SlabGrid {
+    let voxel_type = match dtype {
+        "uint8" => VoxelType::U8,
+        "int8" => VoxelType::I8,
+        "uint16" => VoxelType::U16,
+        "int16" => VoxelType::I16,
+        _ => VoxelType::F32,
+    };
+    let n = dims.iter().product::<usize>();
+    SlabGrid {
+        dims,
+        spacing,
+        transform: slabscope::geometry::WorldTransform::unknown(spacing),
+        voxel_type,
+        // The counts read the range and whether any voxel is finite: the mean is not counted.
+        stats: Stats {
+            min: range.0,
+            max: range.1,
+            mean: f64::from(range.0),
+            finite: range.2 as usize,
+            missing: n.saturating_sub(range.2 as usize),
+        },
+    }
+}
+
+/// The rounds of the analysis keywords `params` on a grid (any volume of it).
+fn rounds(
+    py: Python<'_>,
+    volume: &slabscope::Volume,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<ViewRounds> {
+    let kw = Kwargs::new(py, "analyze_array", params)?;
+    let (analysis, _) = analysis_params(&kw)?;
+    ViewRounds::new(volume, &analysis.view).or_py()
+}
+
+fn round_of(samples: Option<Vec<u64>>) -> ViewRound {
+    samples.map_or(ViewRound::Paper, ViewRound::Shifted)
+}
+
+/// The cell planes `planes` of a slab of the grid counted in `round` (`samples`: `None` for
+/// the paper's lattices, the paper's sample counts for the shifted ones) from `voxels`, its
+/// voxel planes from `first` on (indexed `[x, y, z]`, x fastest), as `_slab_planes` gives them.
+#[pyfunction]
+#[pyo3(signature = (voxels, first, planes, dims, spacing, dtype, range, samples=None, **params))]
+#[allow(clippy::too_many_arguments)]
+pub fn _count_view_slab(
+    py: Python<'_>,
+    voxels: &Bound<'_, PyAny>,
+    first: usize,
+    planes: (usize, usize),
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+    samples: Option<Vec<u64>>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<ViewPart> {
+    let grid = grid(dims, spacing, dtype, range);
+    // Read in place where the array is of the held type in Fortran order (a C-ordered
+    // [z, y, x] block's transpose is); else copied once. Either way `of_slab` copies the
+    // planes into their place in the grid.
+    let (data, _copy) = match crate::volume::lend_any(voxels, grid.voxel_type) {
+        Some(lent) => (lent, voxels.clone()),
+        None => crate::volume::copy_of(voxels, grid.voxel_type)?,
+    };
+    let shape = voxels.cast::<numpy::PyUntypedArray>()?.shape().to_vec();
+    if shape.len() != 3 || shape[0] != dims[0] || shape[1] != dims[1] {
+        return Err(PyValueError::new_err(format!(
+            "a slab of shape {shape:?}: whole planes of {}×{} voxels, indexed [x, y, z]",
+            dims[0], dims[1]
+        )));
+    }
+    let slab = match &data {
+        Voxels::U8(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
+        Voxels::I8(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
+        Voxels::U16(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
+        Voxels::I16(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
+        Voxels::F32(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
+    }
+    .or_py()?;
+    let rounds = rounds(py, &slab, params)?;
+    let round = round_of(samples);
+    let is_paper = round == ViewRound::Paper;
+    let counts = py
+        .detach(|| rounds.count_slab(&slab, &round, planes.0..planes.1))
+        .or_py()?;
+    Ok(ViewPart {
+        round: u8::from(!is_paper),
+        counts,
+    })
+}
+
+/// A volume of the grid holding no voxel: what the rounds are made from on the client.
+fn empty(grid: &SlabGrid) -> PyResult<slabscope::Volume> {
+    slabscope::Volume::of_slab::<u8>(grid, 0, &[]).or_py()
+}
+
+/// The voxel planes `(first, end)` the task counting cell planes `planes` holds, whether a
+/// second round follows, and the number of lattices of the first.
+#[pyfunction]
+#[pyo3(signature = (planes, dims, spacing, dtype, range, **params))]
+pub fn _slab_planes(
+    py: Python<'_>,
+    planes: (usize, usize),
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<(usize, usize, bool)> {
+    let grid = grid(dims, spacing, dtype, range);
+    let rounds = rounds(py, &empty(&grid)?, params)?;
+    let held = rounds.voxel_planes(&(planes.0..planes.1), dims[2]);
+    Ok((held.start, held.end, rounds.has_shifted()))
+}
+
+/// The samples each axis's paper lattice counted, from the first round's sum.
+#[pyfunction]
+#[pyo3(signature = (paper, dims, spacing, dtype, range, **params))]
+pub fn _paper_samples(
+    py: Python<'_>,
+    paper: &ViewPart,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Vec<u64>> {
+    let grid = grid(dims, spacing, dtype, range);
+    let volume = empty(&grid)?;
+    let rounds = rounds(py, &volume, params)?;
+    rounds.paper_samples(&volume, &paper.counts).or_py()
+}
+
+/// The analysis of `volume` (the whole one) by the analysis keywords `params`, its view search
+/// finished from the rounds' sums `paper` and `shifted`: `analyze`'s, to the byte.
+#[pyfunction]
+#[pyo3(signature = (volume, paper, shifted=None, **params))]
+pub fn _analyze_with_parts(
+    py: Python<'_>,
+    volume: &Bound<'_, Volume>,
+    paper: &ViewPart,
+    shifted: Option<&ViewPart>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<crate::analysis::Analysis> {
+    let inner = &volume.get().inner;
+    let rounds = rounds(py, inner, params)?;
+    let shifted = shifted.map_or(&[][..], |s| &s.counts[..]);
+    let views = py
+        .detach(|| rounds.finish(inner, &paper.counts, shifted))
+        .or_py()?;
+    crate::analysis::analyze_with(py, volume, Some(views), params)
+}

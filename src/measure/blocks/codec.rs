@@ -1,0 +1,91 @@
+//! Block counts as words, to send between processes (issue #44: a cluster's parts): the bins
+//! and block length, each table's counted codes with their counts (in code order), the single
+//! symbols' ends. Read back, they are the same counts; anything else is refused.
+
+use super::{BlockCounts, Table};
+
+/// What reading counts back gives: the counts, or what is wrong with the words.
+pub type ReadResult<T> = std::result::Result<T, String>;
+
+/// Reads words one at a time, refusing to read past the end.
+pub(crate) struct Words<'a> {
+    words: &'a [u64],
+    at: usize,
+}
+
+impl<'a> Words<'a> {
+    pub(crate) fn new(words: &'a [u64]) -> Self {
+        Self { words, at: 0 }
+    }
+
+    pub(crate) fn next(&mut self) -> ReadResult<u64> {
+        let w = self.words.get(self.at).copied().ok_or_else(short)?;
+        self.at += 1;
+        Ok(w)
+    }
+
+    /// The number of words left.
+    pub(crate) fn left(&self) -> usize {
+        self.words.len() - self.at
+    }
+}
+
+fn short() -> String {
+    "counts cut short: the part was not written whole".into()
+}
+
+/// An error for counts that no writer made.
+pub(crate) fn corrupt(what: &str) -> String {
+    format!("counts that do not read back: {what}")
+}
+
+fn put_table(table: &Table, out: &mut Vec<u64>) {
+    let mut pairs = Vec::new();
+    table.for_each(|code, count| pairs.push((code, count)));
+    pairs.sort_unstable();
+    out.push(pairs.len() as u64);
+    for (code, count) in pairs {
+        out.extend([code, count]);
+    }
+}
+
+fn get_table(table: &mut Table, mask: u64, words: &mut Words) -> ReadResult<()> {
+    let n = words.next()?;
+    if n > words.left() as u64 / 2 {
+        return Err(short());
+    }
+    for _ in 0..n {
+        let (code, count) = (words.next()?, words.next()?);
+        if code & !mask != 0 {
+            return Err(corrupt("a block code beyond its table"));
+        }
+        table.add(code, count);
+    }
+    Ok(())
+}
+
+impl BlockCounts {
+    /// The counts as words, appended to `out` (`PartialCounts::from_bytes` reads them back).
+    pub fn write(&self, out: &mut Vec<u64>) {
+        out.extend([self.bins as u64, self.packing.block]);
+        put_table(&self.long, out);
+        put_table(&self.ends.short, out);
+        out.extend(self.ends.single.iter());
+    }
+
+    /// Counts [`write`](Self::write) wrote, from `words`.
+    pub(crate) fn read(words: &mut Words) -> ReadResult<Self> {
+        let (bins, block) = (words.next()?, words.next()?);
+        if !(2..=256).contains(&bins) || !(2..=4).contains(&block) {
+            return Err(corrupt("bins or block length out of range"));
+        }
+        let mut counts = Self::new(bins as usize, block as usize);
+        let (long, short) = (counts.packing.long_mask, counts.packing.short_mask);
+        get_table(&mut counts.long, long, words)?;
+        get_table(&mut counts.ends.short, short, words)?;
+        for s in counts.ends.single.iter_mut() {
+            *s = words.next()?;
+        }
+        Ok(counts)
+    }
+}
