@@ -240,6 +240,15 @@ fn lattice_of(volume: &Volume, params: &ViewParams, axis: [f64; 3], n: usize) ->
     )?)
 }
 
+/// The candidate axes of icosphere `level` as canonical unit directions, the order every
+/// search counts them in.
+fn candidate_axes(level: usize) -> Result<Vec<[f64; 3]>> {
+    icosphere::axes(level)
+        .into_iter()
+        .map(canonical_axis)
+        .collect()
+}
+
 /// `axis` made a canonical unit direction.
 fn canonical_axis(axis: [f64; 3]) -> Result<[f64; 3]> {
     Ok(canonical(normalize(axis).ok_or_else(|| {

@@ -15,7 +15,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
-use super::{ViewParams, ViewSearch, canonical_axis, concluded, finish, icosphere};
+use super::{ViewParams, ViewSearch, candidate_axes, concluded, finish};
 use super::{lattice_of, ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
@@ -54,10 +54,7 @@ impl ViewRounds {
             ));
         }
         let params = resolve(volume, params)?;
-        let axes = icosphere::axes(params.level)
-            .into_iter()
-            .map(canonical_axis)
-            .collect::<Result<Vec<_>>>()?;
+        let axes = candidate_axes(params.level)?;
         Ok(Self {
             params,
             axes,

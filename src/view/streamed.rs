@@ -15,7 +15,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
-use super::{ViewParams, ViewSearch, canonical_axis, concluded, finish, icosphere};
+use super::{ViewParams, ViewSearch, candidate_axes, concluded, finish};
 use super::{lattice_of, ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
@@ -61,10 +61,7 @@ pub fn search_streamed(
     }
     let params = resolve(volume, params)?;
     let q = volume.quantizer(params.sampling.bins)?;
-    let axes = icosphere::axes(params.level)
-        .into_iter()
-        .map(canonical_axis)
-        .collect::<Result<Vec<_>>>()?;
+    let axes = candidate_axes(params.level)?;
     crate::volume::with_voxels!(volume.data(), |data| {
         let sweeps = Sweeps {
             data,

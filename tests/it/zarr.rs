@@ -360,7 +360,7 @@ fn chunks_that_would_decode_past_their_size_are_refused_before_decoding() {
     std::fs::write(store.join("s0/1/1"), e.finish().unwrap()).unwrap();
     let err = error_of(&store);
     assert!(
-        err.contains("chunk s0/1/1 decodes to more, more than the 20 bytes of its chunk"),
+        err.contains("chunk s0/1/1 decodes to more than the 20 bytes of its chunk"),
         "{err}"
     );
     // zstd: a frame that says 1 GiB, in a chunk of 60 i16.
@@ -369,7 +369,7 @@ fn chunks_that_would_decode_past_their_size_are_refused_before_decoding() {
     std::fs::write(store.join("s0/c/0/0/0/0/0"), frame).unwrap();
     let err = error_of(&store);
     assert!(
-        err.contains("says it decodes to more, more than the 120 bytes"),
+        err.contains("says it decodes to more than the 120 bytes"),
         "{err}"
     );
     assert!(

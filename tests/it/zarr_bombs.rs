@@ -44,7 +44,7 @@ fn refused(store: &Path) -> String {
 
 fn assert_decodes_to_more(e: &str) {
     assert!(
-        e.contains("chunk c/0/0/0") && e.contains("decodes to more, more than the 262144 bytes"),
+        e.contains("chunk c/0/0/0") && e.contains("decodes to more than the 262144 bytes"),
         "{e}"
     );
 }

@@ -159,7 +159,7 @@ impl Guard {
         let limit = self.limit;
         let over = |decoded: &str| {
             Err(format!(
-                "chunk {key} {decoded}, more than the {limit} bytes of its chunk"
+                "chunk {key} {decoded} than the {limit} bytes of its chunk"
             ))
         };
         // A zstd frame read first that states more is refused unread; its number is not
@@ -221,7 +221,7 @@ mod tests {
         assert!(guard.check("s0/c/0/0", (0, 0), 0, &fits).is_ok());
         let bomb = gzip(&vec![0u8; 1 << 20]);
         let e = guard.check("s0/c/0/0", (0, 0), 0, &bomb).unwrap_err();
-        assert!(e.contains("decodes to more, more than the 16 bytes"), "{e}");
+        assert!(e.contains("decodes to more than the 16 bytes"), "{e}");
         assert!(
             guard.check("s0/zarr.json", (0, 0), 0, &bomb).is_ok(),
             "metadata"
