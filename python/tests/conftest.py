@@ -68,6 +68,17 @@ def phantoms(cli, tmp_path_factory):
     return {"body": body, "layers": layers, "big": big, "folder": folder}
 
 
+@pytest.fixture(scope="session")
+def client():
+    """A distributed.LocalCluster of two worker processes and its client, for the Dask tests
+    (which skip themselves without Dask, except under `CI=true`)."""
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, memory_limit="2GiB", dashboard_address=None) as cluster:
+        with Client(cluster) as client:
+            yield client
+
+
 def pytest_sessionfinish(session, exitstatus):
     """Under `CI=true` a skipped test fails the run: CI installs everything the suite uses."""
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")

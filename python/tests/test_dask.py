@@ -21,15 +21,6 @@ import slabscope
 import slabscope.dask
 
 
-@pytest.fixture(scope="module")
-def client():
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, memory_limit="2GiB", dashboard_address=None) as cluster:
-        with Client(cluster) as client:
-            yield client
-
-
 def test_a_cluster_gives_the_cli_rows(client, cli, tmp_path):
     for name in ["ramp_u8.nii", "ramp_i16.mha", "ramp_u16_be.nrrd", "nilearn_image_10426.nii.gz"]:
         shutil.copy(DATA / name, tmp_path / name)

@@ -21,15 +21,6 @@ import slabscope
 import slabscope.dask
 
 
-@pytest.fixture(scope="module")
-def client():
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, memory_limit="2GiB", dashboard_address=None) as cluster:
-        with Client(cluster) as client:
-            yield client
-
-
 def voxels() -> np.ndarray:
     """A 30×26×37 volume indexed [z, y, x] of layers along a tilted axis, with noise and a
     border of air, so that the automatic background finds something."""
