@@ -331,6 +331,26 @@ pub struct PictureJob {
     pub figure: Option<Box<slabscope::explain::figure::Drawing>>,
 }
 
+#[cfg(test)]
+impl PictureJob {
+    /// The whole volume along z on level 0, unpartitioned, in `cells`: the tests' first picture.
+    pub fn whole(cells: (u16, u16)) -> Self {
+        Self {
+            generation: 1,
+            level: 0,
+            slabs: Vec::new(),
+            axis: [0.0, 0.0, 1.0],
+            nmi: None,
+            histories: None,
+            look: PictureSettings::default(),
+            highlight: None,
+            cells,
+            slice: None,
+            figure: None,
+        }
+    }
+}
+
 /// Where the slice view looks: the slice under the curves' cursor and the pointer on it (the
 /// library's `request::SliceRequest` is `slabscope slice`'s picture).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,7 +9,6 @@ use slabscope::{AnalysisParams, Histories, Renderer, Scope};
 use super::worker::render;
 use super::*;
 use crate::term::{Caps, Graphics};
-use crate::tui::event::PictureSettings;
 
 /// The histories' request cuts the slices as the partitioning asked: its sampling and
 /// background, nothing of the defaults.
@@ -131,19 +130,7 @@ fn preview_timing() {
         cell: (8, 16),
         ..Caps::blocks()
     };
-    let whole = PictureJob {
-        generation: 1,
-        level: 0,
-        slabs: Vec::new(),
-        axis: [0.0, 0.0, 1.0],
-        nmi: None,
-        histories: None,
-        look: PictureSettings::default(),
-        highlight: None,
-        cells,
-        slice: None,
-        figure: None,
-    };
+    let whole = PictureJob::whole(cells);
     let first = render(&renderer, &sixel, &whole, &Monitor::none()).unwrap();
     println!(
         "first image (load, render, sixel) {:.0} ms after start, {} KB",

@@ -381,21 +381,7 @@ mod tests {
         let (tx, rx) = channel();
         let cancel = Arc::new(AtomicBool::new(false));
         let renders = start_renderer(open, Caps::blocks(), (tx, 3), cancel);
-        renders
-            .send(PictureJob {
-                generation: 1,
-                level: 0,
-                slabs: Vec::new(),
-                axis: [0.0, 0.0, 1.0],
-                nmi: None,
-                histories: None,
-                look: PictureSettings::default(),
-                highlight: None,
-                cells: (40, 12),
-                slice: None,
-                figure: None,
-            })
-            .unwrap();
+        renders.send(PictureJob::whole((40, 12))).unwrap();
         // A bound only for failing: the picture takes milliseconds.
         let got = rx.recv_timeout(Duration::from_secs(120));
         release.store(true, Ordering::SeqCst);
