@@ -348,10 +348,10 @@ fn reorder(
     let dims = reorder_dims(n, order);
     let stride = [1, dims[0], dims[0] * dims[1]];
     crate::volume::with_voxels!(voxels, |v| {
-        let mut room = VoxelOut::new(path, dims, room.scratch, || {
+        let mut held = VoxelOut::new(path, dims, room.scratch, || {
             typed_buffer(path, dims, room.max_memory)
         })?;
-        let out = room.all();
+        let out = held.all();
         let mut i = 0;
         for s in 0..n[2] {
             for r in 0..n[1] {
@@ -363,6 +363,6 @@ fn reorder(
                 }
             }
         }
-        room.finish()
+        held.finish()
     })
 }
