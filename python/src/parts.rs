@@ -39,7 +39,10 @@ impl ViewPart {
     }
 
     fn __add__(&self, other: &Self) -> PyResult<Self> {
-        if self.round != other.round || self.counts.len() != other.counts.len() {
+        if self.round != other.round
+            || self.counts.len() != other.counts.len()
+            || !(self.counts.iter().zip(&other.counts)).all(|(a, b)| a.counts.agrees(&b.counts))
+        {
             return Err(PyValueError::new_err(
                 "ViewPart + ViewPart: parts of two different rounds or searches",
             ));
@@ -67,6 +70,11 @@ impl ViewPart {
 /// Unpickles a `ViewPart`.
 #[pyfunction]
 pub fn _view_part_of(round: u8, counts: Vec<Vec<u8>>) -> PyResult<ViewPart> {
+    if round > 1 {
+        return Err(PyValueError::new_err(format!(
+            "a ViewPart of round {round}: expected 0 (the paper's lattices) or 1 (the shifted ones)"
+        )));
+    }
     let counts = counts
         .iter()
         .map(|b| PartialCounts::from_bytes(b))
@@ -135,13 +143,6 @@ pub fn _count_view_slab(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<ViewPart> {
     let grid = grid(dims, spacing, dtype, range);
-    // Read in place where the array is of the held type in Fortran order (a C-ordered
-    // [z, y, x] block's transpose is); else copied once. Either way `of_slab` copies the
-    // planes into their place in the grid.
-    let (data, _copy) = match crate::volume::lend_any(voxels, grid.voxel_type) {
-        Some(lent) => (lent, voxels.clone()),
-        None => crate::volume::copy_of(voxels, grid.voxel_type)?,
-    };
     let shape = voxels.cast::<numpy::PyUntypedArray>()?.shape().to_vec();
     if shape.len() != 3 || shape[0] != dims[0] || shape[1] != dims[1] {
         return Err(PyValueError::new_err(format!(
@@ -149,6 +150,13 @@ pub fn _count_view_slab(
             dims[0], dims[1]
         )));
     }
+    // Read in place where the array is of the held type in Fortran order (a C-ordered
+    // [z, y, x] block's transpose is); else copied once. Either way `of_slab` copies the
+    // planes into their place in the grid.
+    let (data, _copy) = match crate::volume::lend_any(voxels, grid.voxel_type) {
+        Some(lent) => (lent, voxels.clone()),
+        None => crate::volume::copy_of(voxels, grid.voxel_type)?,
+    };
     let slab = match &data {
         Voxels::U8(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
         Voxels::I8(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
@@ -158,6 +166,15 @@ pub fn _count_view_slab(
     }
     .or_py()?;
     let rounds = rounds(py, &slab, params)?;
+    // The planes the slab's samples read, every one of them: a plane missing would read as
+    // zeros, the counts wrong with no error.
+    let needed = rounds.voxel_planes(&(planes.0..planes.1), dims[2]);
+    if first != needed.start || shape[2] != needed.len() {
+        return Err(PyValueError::new_err(format!(
+            "cell planes {}..{} read voxel planes {}..{}, not the {} from plane {first} given",
+            planes.0, planes.1, needed.start, needed.end, shape[2]
+        )));
+    }
     let round = round_of(samples);
     let is_paper = round == ViewRound::Paper;
     let counts = py

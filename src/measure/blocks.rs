@@ -322,7 +322,14 @@ impl BlockCounts {
         }
     }
 
-    /// Adds `other`'s counts to these (both with no sequence under way).
+    /// Whether `other` counts blocks of the same length over the same symbols, so that the two
+    /// can be [merged](Self::merge).
+    #[must_use]
+    pub fn agrees(&self, other: &Self) -> bool {
+        self.bins == other.bins && self.packing.block == other.packing.block
+    }
+
+    /// Adds `other`'s counts to these (both with no sequence under way, and [agreeing](Self::agrees)).
     pub fn merge(&mut self, other: &Self) {
         self.long.merge(&other.long);
         self.ends.short.merge(&other.ends.short);

@@ -19,7 +19,7 @@ use super::{ViewParams, ViewSearch, candidate_axes, concluded, finish};
 use super::{lattice_of, ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
-use crate::measure::PartialCounts;
+use crate::measure::{BlockCounts, PartialCounts};
 use crate::volume::Volume;
 
 /// A round of a view search counted in parts.
@@ -195,12 +195,11 @@ impl ViewRounds {
     /// The samples each axis's paper lattice counted, from the first round's counts added up:
     /// what [`ViewRound::Shifted`] needs.
     pub fn paper_samples(&self, volume: &Volume, paper: &[PartialCounts]) -> Result<Vec<u64>> {
-        Ok(
-            Self::entropies(&self.paper_directions(volume, paper.len())?, paper)?
-                .iter()
-                .map(|r| r.samples)
-                .collect(),
-        )
+        Ok(self
+            .entropies(&self.paper_directions(volume, paper.len())?, paper)?
+            .iter()
+            .map(|r| r.samples)
+            .collect())
     }
 
     /// The directions of the paper lattices, for a paper round of `n` counts.
@@ -220,10 +219,17 @@ impl ViewRounds {
     }
 
     /// The entropy rates of complete counts, one a lattice of direction `axes`.
-    fn entropies(axes: &[[f64; 3]], counts: &[PartialCounts]) -> Result<Vec<AxisEntropy>> {
+    fn entropies(&self, axes: &[[f64; 3]], counts: &[PartialCounts]) -> Result<Vec<AxisEntropy>> {
+        let expected = BlockCounts::new(self.params.sampling.bins, self.params.block);
         axes.iter()
             .zip(counts)
             .map(|(&d, c)| {
+                if !c.counts.agrees(&expected) {
+                    return Err(Error::Degenerate(
+                        "parts counted with other bins or another block length than the search's"
+                            .into(),
+                    ));
+                }
                 if !c.is_complete() {
                     return Err(Error::Degenerate(format!(
                         "the parts left {} pieces of rays unjoined: a slab is missing",
@@ -244,7 +250,7 @@ impl ViewRounds {
         paper: &[PartialCounts],
         shifted: &[PartialCounts],
     ) -> Result<ViewSearch> {
-        let paper = Self::entropies(&self.paper_directions(volume, paper.len())?, paper)?;
+        let paper = self.entropies(&self.paper_directions(volume, paper.len())?, paper)?;
         let axes = &self.axes;
         let mut of_axis = vec![Vec::new(); axes.len()];
         if self.has_shifted() {
@@ -258,7 +264,7 @@ impl ViewRounds {
                 ));
             }
             let directions: Vec<[f64; 3]> = lattices.iter().map(|(_, l, _)| l.d).collect();
-            for ((a, _, _), r) in lattices.iter().zip(Self::entropies(&directions, shifted)?) {
+            for ((a, _, _), r) in lattices.iter().zip(self.entropies(&directions, shifted)?) {
                 of_axis[*a].push(r);
             }
         }
@@ -399,5 +405,41 @@ mod tests {
                 .unwrap_err();
             assert!(e.to_string().contains("0..19"), "{e}");
         }
+    }
+
+    /// Bytes that no writer made are refused, never read into counts that would overflow or
+    /// tables whose codes repeat; parts of another binning are refused when they are added up.
+    #[test]
+    fn hostile_or_foreign_parts_are_refused() {
+        let mut counts = BlockCounts::new(4, 3);
+        let mut run = crate::measure::Run::default();
+        for s in [0, 1, 2, 3, 0, 1] {
+            crate::measure::Counter::push_to(&mut counts, &mut run, s);
+        }
+        let bytes = PartialCounts::of(counts, 1, Vec::new()).to_bytes();
+        let words: Vec<u64> = bytes
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        // MAGIC, bins, block, then the long table: its length and (code, count) pairs.
+        assert!(words[3] >= 2, "{words:?}");
+        let with = |edit: &dyn Fn(&mut Vec<u64>)| {
+            let mut w = words.clone();
+            edit(&mut w);
+            let b: Vec<u8> = w.iter().flat_map(|x| x.to_le_bytes()).collect();
+            PartialCounts::from_bytes(&b).err().unwrap_or_default()
+        };
+        assert!(with(&|w| w[6] = w[4]).contains("out of order or repeated"));
+        assert!(with(&|w| w[5] = u64::MAX).contains("more blocks than any volume holds"));
+        let v = awkward_volume([12, 10, 9], [1.0; 3], VoxelType::U8, 4);
+        let params = ViewParams {
+            phases: 0,
+            ..ViewParams::default()
+        };
+        let rounds = ViewRounds::new(&v, &params).unwrap();
+        let paper = rounds.zero(&v, &ViewRound::Paper).unwrap();
+        let foreign = vec![PartialCounts::new(8, 3); paper.len()];
+        let e = rounds.finish(&v, &foreign, &[]);
+        assert!(e.is_err_and(|e| e.to_string().contains("other bins")));
     }
 }

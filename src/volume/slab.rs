@@ -59,9 +59,18 @@ impl Volume {
     /// them.
     pub fn of_slab<T: Voxel>(grid: &SlabGrid, first: usize, voxels: &[T]) -> Result<Self> {
         let [nx, ny, nz] = grid.dims;
-        let plane = nx * ny;
-        check_shape(grid.dims, grid.spacing, nx * ny * nz)?;
-        if plane == 0 || !voxels.len().is_multiple_of(plane) || first + voxels.len() / plane > nz {
+        let too_many = || Error::invalid("slab", "a grid", "one of a size this machine can map");
+        let plane = nx.checked_mul(ny).ok_or_else(too_many)?;
+        let count = plane.checked_mul(nz).ok_or_else(too_many)?;
+        count
+            .checked_mul(std::mem::size_of::<T>())
+            .ok_or_else(too_many)?;
+        check_shape(grid.dims, grid.spacing, count)?;
+        if plane == 0
+            || !voxels.len().is_multiple_of(plane)
+            || first > nz
+            || voxels.len() / plane > nz - first
+        {
             return Err(Error::invalid(
                 "slab",
                 format!("{} voxels from plane {first}", voxels.len()),
@@ -131,7 +140,7 @@ mod tests {
                 .is_nan()
         );
         // Part of a plane, or planes past the grid, are refused.
-        for (first, len) in [(0, 13), (4, 24), (6, 0)] {
+        for (first, len) in [(0, 13), (4, 24), (6, 0), (usize::MAX, 12)] {
             let e = Volume::of_slab(&grid, first, &whole.voxels()[..len]).unwrap_err();
             assert!(e.to_string().contains("whole planes of 4×3"), "{e}");
         }

@@ -49,16 +49,29 @@ fn put_table(table: &Table, out: &mut Vec<u64>) {
     }
 }
 
+/// The most a table or a symbol may count in a part read back: far beyond any volume's samples
+/// (2^56), so that adding parts cannot overflow.
+const MOST: u64 = 1 << 56;
+
 fn get_table(table: &mut Table, mask: u64, words: &mut Words) -> ReadResult<()> {
     let n = words.next()?;
     if n > words.left() as u64 / 2 {
         return Err(short());
     }
+    let (mut last, mut total) = (None, 0u64);
     for _ in 0..n {
         let (code, count) = (words.next()?, words.next()?);
         if code & !mask != 0 {
             return Err(corrupt("a block code beyond its table"));
         }
+        if last.is_some_and(|l| code <= l) {
+            return Err(corrupt("block codes out of order or repeated"));
+        }
+        total = total.saturating_add(count);
+        if total > MOST {
+            return Err(corrupt("more blocks than any volume holds"));
+        }
+        last = Some(code);
         table.add(code, count);
     }
     Ok(())
@@ -85,6 +98,9 @@ impl BlockCounts {
         get_table(&mut counts.ends.short, short, words)?;
         for s in counts.ends.single.iter_mut() {
             *s = words.next()?;
+            if *s > MOST {
+                return Err(corrupt("more symbols than any volume holds"));
+            }
         }
         Ok(counts)
     }
