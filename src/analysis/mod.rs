@@ -7,6 +7,7 @@ mod plan;
 
 use std::sync::Arc;
 
+pub(crate) use parts::analyze_planned_with;
 pub use parts::analyze_with_views;
 
 pub use gain::{

@@ -20,6 +20,17 @@ pub fn analyze_with_views(
     views: Option<ViewSearch>,
     monitor: &Monitor,
 ) -> Result<Analysis> {
+    analyze_planned_with(&Plan::at(Arc::new(volume.clone())), params, views, monitor)
+}
+
+/// [`analyze_with_views`] on `plan`: its partition (in memory or strip by strip) along the axis
+/// of `views`, a view search of level 0 found already.
+pub(crate) fn analyze_planned_with(
+    plan: &Plan,
+    params: &AnalysisParams,
+    views: Option<ViewSearch>,
+    monitor: &Monitor,
+) -> Result<Analysis> {
     match (&views, params.runs_search()) {
         (None, true) => {
             return Err(Error::invalid(
@@ -37,7 +48,7 @@ pub fn analyze_with_views(
         }
         _ => {}
     }
-    analyzed_with(&Plan::at(Arc::new(volume.clone())), params, views, monitor)
+    analyzed_with(plan, params, views, monitor)
 }
 
 #[cfg(test)]

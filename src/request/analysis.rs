@@ -4,7 +4,8 @@
 use std::sync::Arc;
 
 use crate::analysis::{
-    Analysis, AnalysisParams, GainRanking, Plan, analyze_planned, analyze_with_views, rank_by_gain,
+    Analysis, AnalysisParams, GainRanking, Plan, analyze_planned, analyze_planned_with,
+    rank_by_gain,
 };
 use crate::budget::{Budget, Purpose, blame};
 use crate::error::Result;
@@ -157,24 +158,26 @@ impl Planned<'_> {
     /// default, and one the budget's coarser level caused blames the budget
     /// ([`blame`](crate::budget::blame)).
     pub fn run(self, monitor: &Monitor) -> Result<Analysed> {
-        let views = None;
-        self.run_with(views, monitor)
+        self.run_with(None, monitor)
     }
 
     /// [`run`](Self::run) with the view search's result found already (counted in parts,
     /// [`analyze_with_views`](crate::analysis::analyze_with_views)): the rest of the analysis,
-    /// on a plan that keeps level 0 in memory; `None` runs the search here.
+    /// on the plan (its views of every voxel: level 0); `None` runs the search here.
     pub fn run_with(self, views: Option<ViewSearch>, monitor: &Monitor) -> Result<Analysed> {
         let request = self.request;
         let analysed = match views {
             None => analyze_planned(&self.plan, &request.params, monitor),
-            Some(views) if self.plan.note.is_none() && self.plan.views.level().index == 0 => {
-                analyze_with_views(&self.plan.partition, &request.params, Some(views), monitor)
+            Some(views) if self.plan.views.level().index == 0 => {
+                analyze_planned_with(&self.plan, &request.params, Some(views), monitor)
             }
             Some(_) => Err(crate::error::Error::invalid(
                 "views",
-                "counted in parts",
-                "a volume analysed whole in memory (this one is over the memory limit)",
+                "counted in parts on every voxel",
+                format!(
+                    "a plan whose views are of every voxel (this one's are of pyramid level {})",
+                    self.plan.views.level().index
+                ),
             )),
         };
         let analysis = analysed.map_err(|e| {
