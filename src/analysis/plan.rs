@@ -109,10 +109,9 @@ impl Plan {
 }
 
 /// Whether the view search and the partition of every voxel of `volume` can both be counted
-/// in `room` bytes: not when the refinement, gain ranking or lesson needs the whole cell map.
+/// in `room` bytes: not when the gain ranking or the lesson needs the whole volume.
 fn streams_search(volume: &Volume, params: &AnalysisParams, room: u64) -> bool {
     params.runs_search()
-        && !params.view.refine
         && !params.ranks_by_gain()
         && params.explain.is_none()
         && room >= crate::view::streamed_memory_floor(volume, &params.view)

@@ -358,3 +358,32 @@ fn histories_of_a_plan_counted_in_strips_are_the_methods_own() {
     );
     assert_eq!(h.slabs(params.method, at).len(), 4);
 }
+
+/// Every voxel asked for by name beyond the budget: the view search with the refinement is
+/// counted slab by slab (`view::streamed`'s tests hold it bit for bit to the search in memory);
+/// with the gain ranking, which scores axes on the whole volume, it runs on a coarser level.
+#[test]
+fn a_refined_search_of_every_voxel_beyond_the_budget_is_streamed() {
+    let volume = phantom::body([256, 256, 256], 1).unwrap();
+    let refine = |gain: bool| AnalysisParams {
+        view: crate::view::ViewParams {
+            refine: true,
+            ..crate::view::ViewParams::default()
+        },
+        gain,
+        ..AnalysisParams::default()
+    };
+    for gain in [false, true] {
+        let request = AnalysisRequest {
+            level: Level::Asked(Resolution::Full, true),
+            ..AnalysisRequest::new(refine(gain), memory_needed(&volume, 0) - 1)
+        };
+        let planned = request.plan(&volume).unwrap();
+        assert_eq!(
+            planned.plan.views_streamed.is_some(),
+            !gain,
+            "gain ranking {gain}: {:?}",
+            planned.plan.note
+        );
+    }
+}

@@ -15,8 +15,9 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
-use super::{ViewParams, ViewSearch, candidate_axes, concluded, finish};
-use super::{lattice_of, ranked, resolve, shifted_lattices};
+use super::refine::refine_in_lockstep;
+use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
+use super::{lattice_of, ranked, refine_evaluations, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{Fragment, PartialCounts};
@@ -44,21 +45,14 @@ pub fn streamed_memory_floor(volume: &Volume, params: &ViewParams) -> u64 {
 }
 
 /// [`search`](super::search)'s result, counted a slab of planes at a time within about `room`
-/// bytes (at least [`streamed_memory_floor`]): the same numbers, bit for bit. The axis
-/// refinement is not streamed: it is refused here (the planner runs it on a level that fits).
+/// bytes (at least [`streamed_memory_floor`]): the same numbers, bit for bit, the axis
+/// refinement's among them (its seeds' pattern searches in lockstep, a round of sweeps a step).
 pub fn search_streamed(
     volume: &Volume,
     params: &ViewParams,
     room: u64,
     monitor: &Monitor,
 ) -> Result<ViewSearch> {
-    if params.refine {
-        return Err(Error::invalid(
-            "refine",
-            true,
-            "off for a view search counted slab by slab",
-        ));
-    }
     let params = resolve(volume, params)?;
     let q = volume.quantizer(params.sampling.bins)?;
     let axes = candidate_axes(params.level)?;
@@ -96,14 +90,41 @@ impl<T: Voxel> Sweeps<'_, T> {
         let (volume, params) = (self.volume, self.params);
         let slabs = self.slabs();
         let sweep = planes(volume.dims(), slabs.1).count() as u64;
-        let lattices = axes.len() as u64 * params.phases.max(1) as u64;
-        monitor.start("view search", lattices * sweep);
+        let phases = params.phases.max(1) as u64;
+        monitor.start("view search", axes.len() as u64 * phases * sweep);
+        let views = ranked(self.evaluate(axes, slabs, monitor)?, params.block)?;
+        let refined = if params.refine {
+            let evaluations = refine_evaluations(params.level);
+            monitor.start("refining", evaluations * phases * sweep);
+            Some(refine_in_lockstep(params.level, &views, |axes| {
+                let axes = axes
+                    .iter()
+                    .map(|&a| canonical_axis(a))
+                    .collect::<Result<Vec<_>>>()?;
+                self.evaluate(&axes, slabs, monitor)
+            })?)
+        } else {
+            None
+        };
+        Ok(concluded(views, params.clone(), refined))
+    }
+
+    /// The entropy rates of `axes` (canonical), as `Evaluator::evaluate` gives each: its
+    /// paper's lattice counted in one round of sweeps, then its shifted lattices, whose rays
+    /// depend on what the paper's counted.
+    fn evaluate(
+        &self,
+        axes: &[[f64; 3]],
+        slabs: (Bricks, usize),
+        monitor: &Monitor,
+    ) -> Result<Vec<AxisEntropy>> {
+        let (volume, params) = (self.volume, self.params);
+        let sweep = planes(volume.dims(), slabs.1).count() as u64;
         let paper = axes
             .iter()
             .map(|&axis| Ok((lattice_of(volume, params, axis, 0)?, RaySubset::ALL)))
             .collect::<Result<Vec<_>>>()?;
         let paper = self.count(paper, slabs, monitor)?;
-        // The shifted lattices walk rays chosen by what the paper's counted: a second round.
         let (mut owners, mut shifted) = (Vec::new(), Vec::new());
         for (a, (&axis, paper)) in axes.iter().zip(&paper).enumerate() {
             for (lattice, subset) in shifted_lattices(volume, params, axis, paper.samples)? {
@@ -121,17 +142,12 @@ impl<T: Voxel> Sweeps<'_, T> {
         for (a, r) in owners.into_iter().zip(shifted) {
             of_axis[a].push(r);
         }
-        let views = axes
+        Ok(axes
             .iter()
             .zip(paper)
             .zip(&of_axis)
             .map(|((&axis, paper), shifted)| finish(volume, params, axis, paper, shifted))
-            .collect();
-        Ok(concluded(
-            ranked(views, params.block)?,
-            params.clone(),
-            None,
-        ))
+            .collect())
     }
 
     /// The entropy rates of `lattices` (each with the rays it walks), in as few sweeps over the
@@ -315,14 +331,36 @@ mod tests {
     }
 
     #[test]
-    fn the_refinement_is_refused_and_a_cancel_stops_the_sweeps() {
+    fn the_refinement_counted_slab_by_slab_is_the_refinement_in_memory() {
+        let none = Monitor::none();
+        let mut moved = 0;
+        for (dims, spacing, voxel_type) in [
+            ([22, 19, 27], [1.0, 1.0, 1.0], VoxelType::U8),
+            ([18, 21, 16], [0.9, 0.9, 1.6], VoxelType::F32),
+        ] {
+            let v = awkward_volume(dims, spacing, voxel_type, 4);
+            for phases in [0, 2] {
+                let params = ViewParams {
+                    refine: true,
+                    phases,
+                    ..ViewParams::default()
+                };
+                let expect = super::super::search(&v, &params, &none).unwrap();
+                moved += usize::from(expect.refined.as_ref().unwrap().axis != expect.views[0].axis);
+                let expect = serde_json::to_string(&expect).unwrap();
+                for room in [u64::MAX, 1] {
+                    let got = search_streamed(&v, &params, room, &none).unwrap();
+                    assert_eq!(serde_json::to_string(&got).unwrap(), expect, "{dims:?}");
+                }
+            }
+        }
+        // The refinement went somewhere off the sphere's vertices, so its steps were compared.
+        assert!(moved > 0);
+    }
+
+    #[test]
+    fn a_cancel_stops_the_sweeps() {
         let v = awkward_volume([20, 20, 20], [1.0; 3], VoxelType::U8, 4);
-        let refine = ViewParams {
-            refine: true,
-            ..ViewParams::default()
-        };
-        let e = search_streamed(&v, &refine, u64::MAX, &Monitor::none()).unwrap_err();
-        assert!(e.to_string().contains("refine"), "{e}");
         let cancel = std::sync::atomic::AtomicBool::new(true);
         let monitor = Monitor::new(Some(&cancel), None);
         let e = search_streamed(&v, &ViewParams::default(), 1, &monitor).unwrap_err();
