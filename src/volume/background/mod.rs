@@ -10,6 +10,8 @@ use crate::error::Result;
 use crate::progress::Monitor;
 use crate::volume::{Volume, Voxel};
 
+mod fill;
+
 /// How the background is chosen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 #[serde(rename_all = "lowercase", tag = "mode", content = "value")]
@@ -170,83 +172,11 @@ fn median_of(values: &mut [f32]) -> f32 {
 }
 
 /// The voxels at or below `t` connected (6-neighbours) to a border voxel at or below `t`, as a
-/// bit mask, with their count. A scanline fill: runs along x, a stack of seeds, no recursion.
+/// bit mask, with their count ([`fill`]).
 fn connected_below(volume: &Volume, t: f32, monitor: &Monitor) -> Result<(Vec<u64>, usize)> {
     crate::volume::with_voxels!(volume.data(), |v| {
-        connected_below_of(v, volume.dims(), t, monitor)
+        fill::connected_below_of(v, volume.dims(), t, monitor)
     })
-}
-
-/// [`connected_below`] in voxels `v` of dimensions `dims`.
-fn connected_below_of<T: Voxel>(
-    v: &[T],
-    [nx, ny, nz]: [usize; 3],
-    t: f32,
-    monitor: &Monitor,
-) -> Result<(Vec<u64>, usize)> {
-    let below = |i: usize| v[i].to_f32() <= t;
-    let mut mask = vec![0u64; v.len().div_ceil(64)];
-    let set = |mask: &mut Vec<u64>, i: usize| mask[i / 64] |= 1 << (i % 64);
-    let get = |mask: &Vec<u64>, i: usize| mask[i / 64] >> (i % 64) & 1 == 1;
-    let candidate = |mask: &Vec<u64>, i: usize| below(i) && !get(mask, i);
-    let mut stack: Vec<usize> = Vec::new();
-    let mut count = 0;
-    // Seeds: every border voxel at or below t.
-    for z in 0..nz {
-        for y in 0..ny {
-            let row = (z * ny + y) * nx;
-            let edge = z == 0 || z + 1 == nz || y == 0 || y + 1 == ny;
-            if edge {
-                stack.extend((row..row + nx).filter(|&i| below(i)));
-            } else {
-                stack.extend([row, row + nx - 1].into_iter().filter(|&i| below(i)));
-            }
-        }
-    }
-    let mut runs = 0u32;
-    while let Some(seed) = stack.pop() {
-        if !candidate(&mask, seed) {
-            continue;
-        }
-        // A glance at the cancel flag every few thousand runs: the fill of a large volume takes
-        // seconds, and a user who cancels waits for no more than a few milliseconds of it.
-        runs = runs.wrapping_add(1);
-        if runs.is_multiple_of(4096) {
-            monitor.check()?;
-        }
-        let row = seed - seed % nx;
-        let (mut a, mut b) = (seed, seed);
-        while a > row && candidate(&mask, a - 1) {
-            a -= 1;
-        }
-        while b + 1 < row + nx && candidate(&mask, b + 1) {
-            b += 1;
-        }
-        for i in a..=b {
-            set(&mut mask, i);
-        }
-        count += b - a + 1;
-        let (y, z) = ((row / nx) % ny, row / (nx * ny));
-        let neighbours = [
-            (y > 0).then(|| row - nx),
-            (y + 1 < ny).then(|| row + nx),
-            (z > 0).then(|| row - nx * ny),
-            (z + 1 < nz).then(|| row + nx * ny),
-        ];
-        for other in neighbours.into_iter().flatten() {
-            // One seed at the start of every run of candidates beside [a, b].
-            let mut in_run = false;
-            for x in a - row..=b - row {
-                let i = other + x;
-                let c = candidate(&mask, i);
-                if c && !in_run {
-                    stack.push(i);
-                }
-                in_run = c;
-            }
-        }
-    }
-    Ok((mask, count))
 }
 
 #[cfg(test)]

@@ -1,0 +1,273 @@
+//! The found background's fill: the voxels at or below a threshold connected (6-neighbours) to
+//! a border voxel at or below it, as a bit mask. A scanline fill (runs along x, a stack of
+//! seeds, no recursion) whose stack is bounded: seeds beyond [`STACK_SEEDS`] are not pushed,
+//! their rows marked instead (a bit a row of the volume), and the marked rows are swept for runs
+//! that touch the filled voxels of a neighbouring row once the stack is empty, until none is
+//! marked. A noisy background (a run or two of air a row between bright voxels) once pushed a
+//! seed a run, eight bytes each: gigabytes for a 1024³ volume, beyond any budget. The mask is
+//! the connected region whatever the order, so it is the same as the unbounded fill's.
+
+use crate::error::Result;
+use crate::progress::Monitor;
+use crate::volume::Voxel;
+
+/// The seeds the stack holds before rows are marked instead: 8 MiB.
+const STACK_SEEDS: usize = 1 << 20;
+
+/// [`connected_below_capped`] with the stack bounded by [`STACK_SEEDS`].
+pub(super) fn connected_below_of<T: Voxel>(
+    v: &[T],
+    dims: [usize; 3],
+    t: f32,
+    monitor: &Monitor,
+) -> Result<(Vec<u64>, usize)> {
+    let (mask, count, _) = connected_below_capped(v, dims, t, monitor, STACK_SEEDS)?;
+    Ok((mask, count))
+}
+
+/// The voxels of `v` (dimensions `dims`) at or below `t` connected to a border voxel at or
+/// below `t`, as a bit mask, with their count and the marked rows swept; the stack holding
+/// about `cap` seeds at most (and a row's more).
+fn connected_below_capped<T: Voxel>(
+    v: &[T],
+    dims: [usize; 3],
+    t: f32,
+    monitor: &Monitor,
+    cap: usize,
+) -> Result<(Vec<u64>, usize, usize)> {
+    let [nx, ny, nz] = dims;
+    let mut fill = Fill {
+        v,
+        dims,
+        t,
+        mask: vec![0; v.len().div_ceil(64)],
+        marked: vec![0; (ny * nz).div_ceil(64)],
+        stack: Vec::new(),
+        cap,
+        count: 0,
+        runs: 0,
+        swept: 0,
+    };
+    // Seeds: every border voxel at or below t, a seed a run of them, a row at a time.
+    for z in 0..nz {
+        for y in 0..ny {
+            let row = (z * ny + y) * nx;
+            if z == 0 || z + 1 == nz || y == 0 || y + 1 == ny {
+                fill.push_runs(row, 0, nx - 1, |_, _| true);
+            } else {
+                for i in [row, row + nx - 1] {
+                    if fill.candidate(i) {
+                        fill.stack.push(i);
+                    }
+                }
+            }
+            if fill.stack.len() >= cap {
+                fill.drain(monitor)?;
+            }
+        }
+    }
+    fill.drain(monitor)?;
+    while fill.sweep(monitor)? {}
+    Ok((fill.mask, fill.count, fill.swept))
+}
+
+/// A fill under way.
+struct Fill<'a, T> {
+    v: &'a [T],
+    dims: [usize; 3],
+    t: f32,
+    mask: Vec<u64>,
+    /// A bit a row (`z * ny + y`): rows beside filled voxels whose seeds were not pushed.
+    marked: Vec<u64>,
+    stack: Vec<usize>,
+    cap: usize,
+    count: usize,
+    runs: u32,
+    /// Marked rows swept.
+    swept: usize,
+}
+
+impl<T: Voxel> Fill<'_, T> {
+    fn filled(&self, i: usize) -> bool {
+        self.mask[i / 64] >> (i % 64) & 1 == 1
+    }
+
+    /// At or below the threshold, and not filled yet.
+    fn candidate(&self, i: usize) -> bool {
+        self.v[i].to_f32() <= self.t && !self.filled(i)
+    }
+
+    /// Pushes a seed at the start of every run of candidates in `row + a ..= row + b` holding
+    /// a voxel for which `touches` (given the fill and the voxel's x) holds.
+    fn push_runs(
+        &mut self,
+        row: usize,
+        a: usize,
+        b: usize,
+        touches: impl Fn(&Self, usize) -> bool,
+    ) {
+        let mut stack = std::mem::take(&mut self.stack);
+        let mut run: Option<(usize, bool)> = None;
+        for x in a..=b {
+            if self.candidate(row + x) {
+                let (start, touching) = run.unwrap_or((row + x, false));
+                run = Some((start, touching || touches(self, x)));
+            } else if let Some((start, touching)) = run.take()
+                && touching
+            {
+                stack.push(start);
+            }
+        }
+        if let Some((start, true)) = run {
+            stack.push(start);
+        }
+        self.stack = stack;
+    }
+
+    /// The rows beside row `row` (its first voxel's index): along y and along z.
+    fn neighbours(&self, row: usize) -> [Option<usize>; 4] {
+        let [nx, ny, nz] = self.dims;
+        let (y, z) = ((row / nx) % ny, row / (nx * ny));
+        [
+            (y > 0).then(|| row - nx),
+            (y + 1 < ny).then(|| row + nx),
+            (z > 0).then(|| row - nx * ny),
+            (z + 1 < nz).then(|| row + nx * ny),
+        ]
+    }
+
+    /// Fills from every seed on the stack until it is empty, marking the rows whose seeds do
+    /// not fit on it.
+    fn drain(&mut self, monitor: &Monitor) -> Result<()> {
+        let nx = self.dims[0];
+        while let Some(seed) = self.stack.pop() {
+            if !self.candidate(seed) {
+                continue;
+            }
+            // A glance at the cancel flag every few thousand runs: the fill of a large volume
+            // takes seconds, and a user who cancels waits no more than milliseconds of it.
+            self.runs = self.runs.wrapping_add(1);
+            if self.runs.is_multiple_of(4096) {
+                monitor.check()?;
+            }
+            let row = seed - seed % nx;
+            let (mut a, mut b) = (seed, seed);
+            while a > row && self.candidate(a - 1) {
+                a -= 1;
+            }
+            while b + 1 < row + nx && self.candidate(b + 1) {
+                b += 1;
+            }
+            for i in a..=b {
+                self.mask[i / 64] |= 1 << (i % 64);
+            }
+            self.count += b - a + 1;
+            for other in self.neighbours(row).into_iter().flatten() {
+                if self.stack.len() >= self.cap {
+                    let r = other / nx;
+                    self.marked[r / 64] |= 1 << (r % 64);
+                } else {
+                    self.push_runs(other, a - row, b - row, |_, _| true);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Seeds every marked row's runs that touch a filled voxel of a row beside it, filling
+    /// whenever the stack is full and at the end; whether any row was marked.
+    fn sweep(&mut self, monitor: &Monitor) -> Result<bool> {
+        let nx = self.dims[0];
+        let mut any = false;
+        for w in 0..self.marked.len() {
+            while self.marked[w] != 0 {
+                let bit = self.marked[w].trailing_zeros() as usize;
+                self.marked[w] &= !(1 << bit);
+                any = true;
+                self.swept += 1;
+                let row = (w * 64 + bit) * nx;
+                let beside = self.neighbours(row);
+                self.push_runs(row, 0, nx - 1, |fill, x| {
+                    beside.iter().flatten().any(|&other| fill.filled(other + x))
+                });
+                if self.stack.len() >= self.cap {
+                    self.drain(monitor)?;
+                }
+            }
+        }
+        self.drain(monitor)?;
+        Ok(any)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The region by a breadth-first search over voxels, a queue as long as it likes.
+    fn by_search(v: &[f32], [nx, ny, nz]: [usize; 3], t: f32) -> (Vec<bool>, usize) {
+        let mut seen = vec![false; v.len()];
+        let mut queue = std::collections::VecDeque::new();
+        for (i, &value) in v.iter().enumerate() {
+            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+            let border = x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz;
+            if border && value <= t {
+                seen[i] = true;
+                queue.push_back(i);
+            }
+        }
+        while let Some(i) = queue.pop_front() {
+            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+            let steps = [
+                (x > 0).then(|| i - 1),
+                (x + 1 < nx).then(|| i + 1),
+                (y > 0).then(|| i - nx),
+                (y + 1 < ny).then(|| i + nx),
+                (z > 0).then(|| i - nx * ny),
+                (z + 1 < nz).then(|| i + nx * ny),
+            ];
+            for j in steps.into_iter().flatten() {
+                if !seen[j] && v[j] <= t {
+                    seen[j] = true;
+                    queue.push_back(j);
+                }
+            }
+        }
+        let n = seen.iter().filter(|&&s| s).count();
+        (seen, n)
+    }
+
+    #[test]
+    fn the_bounded_fill_finds_the_region_a_search_finds() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut swept = 0;
+        for dims in [[1, 1, 1], [9, 1, 7], [1, 11, 6], [12, 9, 10], [23, 17, 19]] {
+            for share in [30, 55, 70, 95] {
+                let v: Vec<f32> = (0..dims.iter().product::<usize>())
+                    .map(|_| if random() % 100 < share { 0.0 } else { 9.0 })
+                    .collect();
+                let (seen, n) = by_search(&v, dims, 1.0);
+                for cap in [1, 2, 5, usize::MAX] {
+                    let (mask, count, rows) =
+                        connected_below_capped(&v, dims, 1.0, &Monitor::none(), cap).unwrap();
+                    assert_eq!(count, n, "{dims:?} {share}% {cap}");
+                    for (i, &s) in seen.iter().enumerate() {
+                        assert_eq!(mask[i / 64] >> (i % 64) & 1 == 1, s, "{dims:?} {i} {cap}");
+                    }
+                    if cap == usize::MAX {
+                        assert_eq!(rows, 0);
+                    }
+                    swept += rows;
+                }
+            }
+        }
+        // The small stacks did mark rows, and their sweeps found what the search finds.
+        assert!(swept > 100, "{swept}");
+    }
+}
