@@ -330,6 +330,7 @@ def analyze_array(
 
 
 def _finish(array: Any, geometry: dict, paper: Any, shifted: Any, params: dict) -> Any:
-    """The last task: the analysis of the whole array from the view search's parts."""
+    """The last task: the analysis of the whole array from the view search's parts, within
+    half its worker's Dask memory limit unless ``max_memory`` is given (beyond the voxels)."""
     volume = slabscope.Volume.from_array(np.asarray(array).T, **geometry)
-    return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, **params)
+    return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, **_with_budget(params))

@@ -154,3 +154,16 @@ def test_an_affine_as_nibabel_gives_it(client):
     assert got.to_dict() == one
     with pytest.raises(ValueError, match="spacing"):
         slabscope.dask.analyze_array(client, da.from_array(zyx), axes="zyx", affine=affine, spacing=(2, 2, 2), **params)
+
+
+def test_the_last_task_keeps_to_the_memory_budget(client):
+    zyx = voxels()
+    params = {"phases": 0, "background": "none"}
+    array = da.from_array(zyx, chunks=(8, 26, 30))
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), max_memory="100K", **params)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="100K", **params)
+    assert got.to_dict() == one.to_dict()
+    # 50 KiB fits level 2 alone, where one process would analyse: the views counted on every
+    # voxel are refused, not finished on another level.
+    with pytest.raises(ValueError, match="raise it with max_memory="):
+        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="50K", **params)
