@@ -295,7 +295,9 @@ def analyze_array(
 
     Rounds: the range (min/max reductions), the paper's lattices, the shifted lattices (with
     phases), then the partition and the background in one task over the whole array (not
-    split yet: docs/design.md). ``progress(phase, fraction)`` hears the tasks done of all.
+    split yet: docs/design.md), within half its worker's Dask memory limit unless
+    ``max_memory`` is given (a budget that would move one process to a coarser pyramid level
+    is a ``ValueError``). ``progress(phase, fraction)`` hears the tasks done of all.
     The refinement (``refine=True``) is refused: it is not split yet."""
 
     array, held_type, stored = _as_xyz(source, axes)
