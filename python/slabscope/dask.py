@@ -161,7 +161,7 @@ def _ome_zarr(path: str) -> tuple:
     try:
         group = zarr.open_group(path, mode="r")
     except Exception as e:  # zarr raises its own errors for a store that is not a group
-        raise ValueError(f"{path}: a Zarr array without OME-Zarr metadata: give its axis order with axes= (\"zyx\" for most; never assumed) ({e})") from None
+        raise ValueError(f"{path}: not an OME-Zarr group ({e}): a plain Zarr array needs its axis order given with axes= (\"zyx\" for most; never assumed)") from None
     attrs = dict(group.attrs)
     meta = attrs.get("ome", attrs)  # OME-Zarr 0.5 keeps its metadata under "ome"
     multiscales = meta.get("multiscales") if isinstance(meta, dict) else None

@@ -60,8 +60,10 @@ def test_axes_in_another_order_and_a_zarr_store(client, tmp_path):
     stored = zarr.open_array(store, mode="w", shape=zyx.shape, chunks=(10, 26, 30), dtype=zyx.dtype)
     stored[:] = zyx
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), phases=0, background="none").to_dict()
-    with pytest.raises(ValueError, match="axes="):
+    with pytest.raises(ValueError, match="v.zarr: not an OME-Zarr group .* needs its axis order given with axes="):
         slabscope.dask.analyze_array(client, store, phases=0, background="none")
+    with pytest.raises(ValueError, match="nowhere.zarr"):
+        slabscope.dask.analyze_array(client, tmp_path / "nowhere.zarr")
     from_store = slabscope.dask.analyze_array(client, store, axes="zyx", phases=0, background="none")
     assert from_store.to_dict() == one
     xyz = da.from_array(np.ascontiguousarray(zyx.T), chunks=(30, 26, 9))
