@@ -314,13 +314,13 @@ def _count_view_slab(
     **params: Any,
 ) -> ViewPart: ...
 def _slab_planes(
-    planes: Tuple[int, int],
+    planes: Sequence[Tuple[int, int]],
     dims: Sequence[int],
     spacing: Sequence[float],
     dtype: str,
     range: Tuple[float, float, int],
     **params: Any,
-) -> Tuple[int, int, bool]: ...
+) -> Tuple[list[Tuple[int, int]], bool]: ...
 def _paper_samples(
     paper: ViewPart,
     dims: Sequence[int],

@@ -106,15 +106,109 @@ def analyze(client: Any, paths: Sequence[Any], **options: Any) -> list:
 #: The NumPy types a volume holds as they are; any other is held as float32.
 _HELD = ("uint8", "int8", "uint16", "int16", "float32")
 
+#: Millimetres in a length unit of OME-Zarr's (UDUNITS-2 names): the table the Rust reader
+#: of OME-Zarr stores uses (src/formats/zarr/meta.rs), so that the spacing is `load`'s.
+_MM = {
+    "angstrom": 1e-7,
+    "attometer": 1e-15,
+    "centimeter": 10.0,
+    "decimeter": 100.0,
+    "exameter": 1e21,
+    "femtometer": 1e-12,
+    "foot": 304.8,
+    "gigameter": 1e12,
+    "hectometer": 1e5,
+    "inch": 25.4,
+    "kilometer": 1e6,
+    "megameter": 1e9,
+    "meter": 1e3,
+    "micrometer": 1e-3,
+    "mile": 1_609_344.0,
+    "millimeter": 1.0,
+    "nanometer": 1e-6,
+    "parsec": 3.085_677_581_491_367e19,
+    "petameter": 1e18,
+    "picometer": 1e-9,
+    "terameter": 1e15,
+    "yard": 914.4,
+    "yoctometer": 1e-21,
+    "yottameter": 1e27,
+    "zeptometer": 1e-18,
+    "zettameter": 1e24,
+}
 
-def _as_xyz(source: Any, axes: Optional[str]) -> Any:
+
+def _scales(transforms: Any, n: int) -> list:
+    """The product of the ``scale`` transformations of an OME-Zarr ``coordinateTransformations``
+    list, one factor an axis (its translations move no voxel nearer another: not read)."""
+    scale = [1.0] * n
+    for t in transforms or []:
+        if t.get("type") == "scale":
+            given = [float(f) for f in t["scale"]]
+            if len(given) != n:
+                raise ValueError(f"a scale of {len(given)} factors for {n} axes")
+            scale = [a * b for a, b in zip(scale, given)]
+    return scale
+
+
+def _ome_zarr(path: str) -> tuple:
+    """An OME-Zarr group's full-resolution array (its first dataset), its axes' names and their
+    spacing, mm (scales in the axes' units; without a unit, taken as mm). Axes other than
+    x, y and z (time, channel) must be one long: they are dropped."""
+    import dask.array as da
+    import zarr
+
+    try:
+        group = zarr.open_group(path, mode="r")
+    except Exception as e:  # zarr raises its own errors for a store that is not a group
+        raise ValueError(f"{path}: not an OME-Zarr group ({e}): a plain Zarr array needs its axis order given with axes= (\"zyx\" for most; never assumed)") from None
+    attrs = dict(group.attrs)
+    meta = attrs.get("ome", attrs)  # OME-Zarr 0.5 keeps its metadata under "ome"
+    multiscales = meta.get("multiscales") if isinstance(meta, dict) else None
+    if not multiscales:
+        raise ValueError(f"{path}: a Zarr group without OME-Zarr multiscales metadata: name the array inside it")
+    ms = multiscales[0]
+    try:
+        axes = [a["name"] if isinstance(a, dict) else str(a) for a in ms["axes"]]
+        units = [a.get("unit") if isinstance(a, dict) else None for a in ms["axes"]]
+        dataset = ms["datasets"][0]
+        scale = _scales(dataset.get("coordinateTransformations"), len(axes))
+        scale = [a * b for a, b in zip(scale, _scales(ms.get("coordinateTransformations"), len(axes)))]
+    except (AttributeError, KeyError, IndexError, TypeError, ValueError) as e:
+        raise ValueError(f"{path}: OME-Zarr multiscales metadata without axes, datasets or a valid scale ({e})") from None
+    array = da.from_zarr(path, component=dataset["path"])
+    if array.ndim != len(axes):
+        raise ValueError(f"{path}: {len(axes)} axes named for an array of {array.ndim} dimensions")
+    keep = []
+    for i, (name, n) in enumerate(zip(axes, array.shape)):
+        if name in ("x", "y", "z"):
+            keep.append(i)
+        elif n != 1:
+            raise ValueError(f"{path}: its {name!r} axis holds {n}: one volume at a time (take one with dask.array indexing and axes=)")
+    spacing = {}
+    for i in keep:
+        unit = units[i]
+        if unit is not None and unit not in _MM:
+            raise ValueError(f"{path}: the unit {unit!r} of axis {axes[i]!r} is not a length unit OME-Zarr names (UDUNITS-2: micrometer, millimeter, ...)")
+        spacing[axes[i]] = scale[i] * (_MM[unit] if unit else 1.0)
+    array = array[tuple(slice(None) if i in keep else 0 for i in range(array.ndim))]
+    names = "".join(axes[i] for i in keep)
+    return array, names, tuple(spacing.get(a, 1.0) for a in "xyz")
+
+
+def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
     """``source`` (a Zarr path or URL, or a dask array whose axis order ``axes`` names) as a
-    dask array indexed ``[z, y, x]`` in the type the volume holds."""
+    dask array indexed ``[z, y, x]`` in the type the volume holds, that type, and the spacing
+    an OME-Zarr store gives (else None)."""
     import dask.array as da
 
+    spacing = None
     if isinstance(source, (str, os.PathLike)):
-        array = da.from_zarr(str(source))
-        axes = axes or "zyx"
+        path = str(source)
+        if axes is None:
+            array, axes, spacing = _ome_zarr(path)
+        else:
+            array = da.from_zarr(path)
     else:
         array = source
     if axes is None:
@@ -123,7 +217,25 @@ def _as_xyz(source: Any, axes: Optional[str]) -> Any:
         raise ValueError(f"analyze_array: axes={axes!r} for an array of {array.ndim} dimensions: a permutation of \"xyz\" for 3")
     array = array.transpose([axes.index(a) for a in "zyx"])
     held = array.dtype.name if array.dtype.name in _HELD else "float32"
-    return array.astype(held), held
+    return array.astype(held), held, spacing
+
+
+def _geometry(spacing: Any, affine: Any, stored: Optional[tuple]) -> tuple:
+    """The spacing the tasks count with and the keywords of the whole volume's
+    ``Volume.from_array``: from ``affine`` (4×4, voxel index ``(x, y, z)`` to RAS+ mm, as nibabel
+    gives it) and ``spacing`` as ``from_array`` takes them (so that they must agree, and the
+    spacing is the one ``from_array`` finds), else the store's."""
+    if affine is None and spacing is None:
+        spacing = stored
+    given = {}
+    if affine is not None:
+        given["affine"] = np.asarray(affine, dtype=float)
+    if spacing is not None:
+        given["spacing"] = tuple(float(s) for s in spacing)
+    if not given:
+        return (1.0, 1.0, 1.0), given
+    probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **given)
+    return tuple(probe.spacing), given
 
 
 def _range(array: Any) -> tuple:
@@ -141,14 +253,14 @@ def _count(block: Any, first: int, planes: tuple, grid: tuple, samples: Any, par
     return slabscope._slabscope._count_view_slab(block.T, first, planes, *grid, samples=samples, **params)
 
 
-def _round(client: Any, array: Any, slabs: list, grid: tuple, samples: Any, params: dict, report: Any) -> Any:
-    """A round of tasks, one a slab, added up on the client as they come."""
+def _round(client: Any, array: Any, slabs: list, held: list, grid: tuple, samples: Any, params: dict, report: Any) -> Any:
+    """A round of tasks, one a slab (``held`` its voxel planes), added up on the client as
+    they come."""
     import dask
     from distributed import as_completed
 
     tasks = []
-    for planes in slabs:
-        first, end, _ = slabscope._slabscope._slab_planes(planes, *grid, **params)
+    for planes, (first, end) in zip(slabs, held):
         block = array[first:end]
         tasks.append(dask.delayed(_count)(block, first, planes, grid, samples, params))
     total = None
@@ -165,30 +277,40 @@ def analyze_array(
     *,
     axes: Optional[str] = None,
     spacing: Any = None,
+    affine: Any = None,
     progress: Any = None,
     **params: Any,
 ) -> Any:
     """``slabscope.analyze`` of one volume held as a Zarr store (a path or URL) or a dask
-    array (``axes`` naming its axis order, ``"zyx"`` for what ``dask.array.from_zarr`` gives;
-    never assumed), its view search counted by tasks on ``client``'s workers, a task a slab of
-    the array's chunks along z (with the planes around it that its samples read), the parts
+    array, its view search counted by tasks on ``client``'s workers, a task a slab of the
+    array's chunks along z (with the planes around it that its samples read), the parts
     added on the client: the same ``Analysis`` as one process gives, ``to_dict()`` equal.
+
+    ``axes`` names the array's axis order (``"zyx"`` for what ``dask.array.from_zarr``
+    gives; never assumed). An OME-Zarr group's path needs none: its ``multiscales``
+    metadata names the axes and gives the spacing (the scales of its first dataset, in its
+    units, as mm); a Zarr array without that metadata needs ``axes``. ``spacing`` (mm, x y z)
+    or ``affine`` (4×4, voxel index ``(x, y, z)`` to RAS+ mm, as nibabel gives it) are taken as
+    ``Volume.from_array`` takes them, and override the store's.
 
     Rounds: the range (min/max reductions), the paper's lattices, the shifted lattices (with
     phases), then the partition and the background in one task over the whole array (not
-    split yet: docs/design.md). ``progress(phase, fraction)`` hears the tasks done of all.
+    split yet: docs/design.md), within half its worker's Dask memory limit unless
+    ``max_memory`` is given (a budget that would move one process to a coarser pyramid level
+    is a ``ValueError``). ``progress(phase, fraction)`` hears the tasks done of all.
     The refinement (``refine=True``) is refused: it is not split yet."""
 
-    array, held = _as_xyz(source, axes)
+    array, held_type, stored = _as_xyz(source, axes)
+    spacing, geometry = _geometry(spacing, affine, stored)
     nz, ny, nx = array.shape
-    spacing = (1.0, 1.0, 1.0) if spacing is None else tuple(float(s) for s in spacing)
     low, high, finite = client.compute(list(_range(array)), sync=True)
-    grid = ([nx, ny, nz], list(spacing), held, (float(low), float(high), int(finite)))
+    grid = ([nx, ny, nz], list(spacing), held_type, (float(low), float(high), int(finite)))
     cells = max(nz - 1, 1)
     cuts = [int(c) for c in np.cumsum((0,) + array.chunks[0])]
     cuts = sorted({min(c, cells) for c in cuts} | {0, cells})
     slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
-    _, _, shifted = slabscope._slabscope._slab_planes(slabs[0], *grid, **params)
+    # The voxel planes each slab's task holds, the same in both rounds: found once.
+    held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, **params)
     total = len(slabs) * (2 if shifted else 1) + 1
     done = [0]
 
@@ -197,19 +319,20 @@ def analyze_array(
         if progress is not None:
             progress("view search in parts", done[0] / total)
 
-    paper = _round(client, array, slabs, grid, None, params, report)
+    paper = _round(client, array, slabs, held, grid, None, params, report)
     more = None
     if shifted:
         samples = slabscope._slabscope._paper_samples(paper, *grid, **params)
-        more = _round(client, array, slabs, grid, samples, params, report)
+        more = _round(client, array, slabs, held, grid, samples, params, report)
     import dask
 
-    whole = client.compute(dask.delayed(_finish)(array, spacing, paper, more, params)).result()
+    whole = client.compute(dask.delayed(_finish)(array, geometry, paper, more, params)).result()
     report()
     return whole
 
 
-def _finish(array: Any, spacing: tuple, paper: Any, shifted: Any, params: dict) -> Any:
-    """The last task: the analysis of the whole array from the view search's parts."""
-    volume = slabscope.Volume.from_array(np.asarray(array).T, spacing=spacing)
-    return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, **params)
+def _finish(array: Any, geometry: dict, paper: Any, shifted: Any, params: dict) -> Any:
+    """The last task: the analysis of the whole array from the view search's parts, within
+    half its worker's Dask memory limit unless ``max_memory`` is given (beyond the voxels)."""
+    volume = slabscope.Volume.from_array(np.asarray(array).T, **geometry)
+    return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, **_with_budget(params))

@@ -191,23 +191,29 @@ fn empty(grid: &SlabGrid) -> PyResult<slabscope::Volume> {
     slabscope::Volume::of_slab::<u8>(grid, 0, &[]).or_py()
 }
 
-/// The voxel planes `(first, end)` the task counting cell planes `planes` holds, whether a
-/// second round follows, and the number of lattices of the first.
+/// The voxel planes `(first, end)` the task counting each slab of cell planes of `planes`
+/// holds (found once for every round), and whether a second round follows.
 #[pyfunction]
 #[pyo3(signature = (planes, dims, spacing, dtype, range, **params))]
 pub fn _slab_planes(
     py: Python<'_>,
-    planes: (usize, usize),
+    planes: Vec<(usize, usize)>,
     dims: [usize; 3],
     spacing: [f64; 3],
     dtype: &str,
     range: (f32, f32, u64),
     params: Option<&Bound<'_, PyDict>>,
-) -> PyResult<(usize, usize, bool)> {
+) -> PyResult<(Vec<(usize, usize)>, bool)> {
     let grid = grid(dims, spacing, dtype, range);
     let rounds = rounds(py, &empty(&grid)?, params)?;
-    let held = rounds.voxel_planes(&(planes.0..planes.1), dims[2]);
-    Ok((held.start, held.end, rounds.has_shifted()))
+    let held = planes
+        .iter()
+        .map(|&(a, b)| {
+            let held = rounds.voxel_planes(&(a..b), dims[2]);
+            (held.start, held.end)
+        })
+        .collect();
+    Ok((held, rounds.has_shifted()))
 }
 
 /// The samples each axis's paper lattice counted, from the first round's sum.

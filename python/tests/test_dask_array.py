@@ -60,7 +60,11 @@ def test_axes_in_another_order_and_a_zarr_store(client, tmp_path):
     stored = zarr.open_array(store, mode="w", shape=zyx.shape, chunks=(10, 26, 30), dtype=zyx.dtype)
     stored[:] = zyx
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), phases=0, background="none").to_dict()
-    from_store = slabscope.dask.analyze_array(client, store, phases=0, background="none")
+    with pytest.raises(ValueError, match="v.zarr: not an OME-Zarr group .* needs its axis order given with axes="):
+        slabscope.dask.analyze_array(client, store, phases=0, background="none")
+    with pytest.raises(ValueError, match="nowhere.zarr"):
+        slabscope.dask.analyze_array(client, tmp_path / "nowhere.zarr")
+    from_store = slabscope.dask.analyze_array(client, store, axes="zyx", phases=0, background="none")
     assert from_store.to_dict() == one
     xyz = da.from_array(np.ascontiguousarray(zyx.T), chunks=(30, 26, 9))
     assert slabscope.dask.analyze_array(client, xyz.transpose(2, 1, 0), axes="zyx", phases=0, background="none").to_dict() == one
@@ -80,8 +84,10 @@ def test_view_parts_add_and_pickle():
     nz, ny, nx = zyx.shape
     grid = ([nx, ny, nz], [1.0, 1.0, 1.0], "uint8", (float(zyx.min()), float(zyx.max()), zyx.size))
     parts = []
-    for planes in [(0, 20), (20, 36)]:
-        first, end, _ = slabscope._slabscope._slab_planes(planes, *grid, phases=0)
+    slabs = [(0, 20), (20, 36)]
+    held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, phases=0)
+    assert held == [(0, 22), (19, 37)] and not shifted
+    for planes, (first, end) in zip(slabs, held):
         parts.append(slabscope._slabscope._count_view_slab(zyx[first:end].T, first, planes, *grid, phases=0))
     assert not parts[0].complete and not parts[1].complete
     back = pickle.loads(pickle.dumps(parts[1]))
@@ -90,3 +96,76 @@ def test_view_parts_add_and_pickle():
     volume = slabscope.Volume.from_array(zyx.T)
     got = slabscope._slabscope._analyze_with_parts(volume, total, None, phases=0, background="none")
     assert got.to_dict() == slabscope.analyze(volume, phases=0, background="none").to_dict()
+
+
+def ome_zarr(path, zyx: np.ndarray, axes: list, scale: list, version: str) -> None:
+    """An OME-Zarr group at ``path`` (0.4 in Zarr format 2, or 0.5 in format 3) of one
+    dataset: ``zyx``, given leading axes of length 1 where ``axes`` names more than it has."""
+    zarr = pytest.importorskip("zarr")
+    data = zyx.reshape((1,) * (len(axes) - zyx.ndim) + zyx.shape)
+    group = zarr.open_group(str(path), mode="w", zarr_format=2 if version == "0.4" else 3)
+    stored = group.create_array("0", shape=data.shape, chunks=(1,) * (data.ndim - 3) + (9, 26, 30), dtype=data.dtype)
+    stored[:] = data
+    multiscales = [{"version": version, "axes": axes, "datasets": [{"path": "0", "coordinateTransformations": [{"type": "scale", "scale": scale}]}]}]
+    if version == "0.4":
+        group.attrs["multiscales"] = multiscales
+    else:
+        group.attrs["ome"] = {"version": version, "multiscales": multiscales}
+
+
+def test_an_ome_zarr_group_gives_its_axes_and_spacing(client, tmp_path):
+    zyx = voxels()
+    params = {"phases": 0, "background": "none"}
+    space = lambda name, unit: {"name": name, "type": "space", "unit": unit}  # noqa: E731
+    # Spacing (x, y, z) = (1.0, 0.9, 1.3) mm, in micrometres with a channel axis, and in mm.
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=(1.0, 0.9, 1.3)), **params).to_dict()
+    channel = [{"name": "c", "type": "channel"}] + [space(a, "micrometer") for a in "zyx"]
+    ome_zarr(tmp_path / "a.zarr", zyx, channel, [1.0, 1300.0, 900.0, 1000.0], "0.4")
+    # The spacing and the analysis are those of slabscope.load of the same store.
+    loaded = slabscope.load(str(tmp_path / "a.zarr"))
+    assert loaded.spacing == (1000.0 * 1e-3, 900.0 * 1e-3, 1300.0 * 1e-3)
+    got = slabscope.dask.analyze_array(client, str(tmp_path / "a.zarr"), **params).to_dict()
+    assert got == slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=loaded.spacing), **params).to_dict()
+    # Named "array", as every volume made from an array is; all else is load's.
+    assert got == {**slabscope.analyze(loaded, **params).to_dict(), "file": "array"}
+    ome_zarr(tmp_path / "b.zarr", zyx, [space(a, "millimeter") for a in "zyx"], [1.3, 0.9, 1.0], "0.5")
+    assert slabscope.dask.analyze_array(client, tmp_path / "b.zarr", **params).to_dict() == one
+    # Axes stored in another order: the metadata's order is read, not assumed.
+    yzx = np.ascontiguousarray(zyx.transpose(1, 0, 2))
+    ome_zarr(tmp_path / "c.zarr", yzx, [space(a, None) for a in "yzx"], [0.9, 1.3, 1.0], "0.4")
+    assert slabscope.dask.analyze_array(client, str(tmp_path / "c.zarr"), **params).to_dict() == one
+    # spacing= overrides the store's.
+    ones = slabscope.analyze(slabscope.Volume.from_array(zyx.T), **params).to_dict()
+    assert slabscope.dask.analyze_array(client, str(tmp_path / "a.zarr"), spacing=(1, 1, 1), **params).to_dict() == ones
+    # A time axis of more than one volume, and a unit that is no length, are refused.
+    ome_zarr(tmp_path / "t.zarr", np.stack([zyx, zyx]), [{"name": "t", "type": "time"}] + [space(a, None) for a in "zyx"], [1.0] * 4, "0.4")
+    with pytest.raises(ValueError, match="'t' axis holds 2"):
+        slabscope.dask.analyze_array(client, str(tmp_path / "t.zarr"), **params)
+    ome_zarr(tmp_path / "u.zarr", zyx, [space(a, "furlong") for a in "zyx"], [1.0] * 3, "0.4")
+    with pytest.raises(ValueError, match="furlong"):
+        slabscope.dask.analyze_array(client, str(tmp_path / "u.zarr"), **params)
+
+
+def test_an_affine_as_nibabel_gives_it(client):
+    zyx = voxels()
+    params = {"phases": 0, "background": "none"}
+    c, s = np.cos(0.3), np.sin(0.3)
+    affine = np.array([[c, -s, 0, 4.0], [s, c, 0, -2.0], [0, 0, 1, 7.0], [0, 0, 0, 1]]) @ np.diag([1.0, 0.9, 1.3, 1.0])
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, affine=affine), **params).to_dict()
+    got = slabscope.dask.analyze_array(client, da.from_array(zyx, chunks=(9, 26, 30)), axes="zyx", affine=affine, **params)
+    assert got.to_dict() == one
+    with pytest.raises(ValueError, match="spacing"):
+        slabscope.dask.analyze_array(client, da.from_array(zyx), axes="zyx", affine=affine, spacing=(2, 2, 2), **params)
+
+
+def test_the_last_task_keeps_to_the_memory_budget(client):
+    zyx = voxels()
+    params = {"phases": 0, "background": "none"}
+    array = da.from_array(zyx, chunks=(8, 26, 30))
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), max_memory="100K", **params)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="100K", **params)
+    assert got.to_dict() == one.to_dict()
+    # 50 KiB fits level 2 alone, where one process would analyse: the views counted on every
+    # voxel are refused, not finished on another level.
+    with pytest.raises(ValueError, match=r"counted in parts on every voxel, cannot finish an analysis of pyramid level 2, because .*\(raise it with max_memory=\)"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="50K", **params)

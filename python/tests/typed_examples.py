@@ -187,6 +187,10 @@ def on_a_cluster(client: Any) -> None:
     triaged: list[Any] = slabscope.dask.triage(client, ".", slabs=2)
     analysed: list[Any] = slabscope.dask.analyze(client, ["a.nii"], slabs=2)
     print(triaged, analysed, slabscope.dask.LOAD_KEYWORDS)
+    one = slabscope.dask.analyze_array(client, "a.ome.zarr", slabs=2)
+    affine = [[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 2.0, 0], [0, 0, 0, 1.0]]
+    other = slabscope.dask.analyze_array(client, "b.zarr", axes="zyx", affine=affine, progress=print)
+    print(one, other)
 
 
 def copies(volume: Volume, analysis: Analysis, image: Image) -> None:

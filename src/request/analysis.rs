@@ -171,14 +171,7 @@ impl Planned<'_> {
             Some(views) if self.plan.views.level().index == 0 => {
                 analyze_planned_with(&self.plan, &request.params, Some(views), monitor)
             }
-            Some(_) => Err(crate::error::Error::invalid(
-                "views",
-                "counted in parts on every voxel",
-                format!(
-                    "a plan whose views are of every voxel (this one's are of pyramid level {})",
-                    self.plan.views.level().index
-                ),
-            )),
+            Some(_) => Err(self.coarser_than_the_views()),
         };
         let analysis = analysed.map_err(|e| {
             let e = match &request.given {
@@ -192,6 +185,24 @@ impl Planned<'_> {
             plan: self.plan,
             analysis,
         })
+    }
+
+    /// The refusal of views counted on every voxel for a plan of a coarser level: blamed on
+    /// the budget when the budget chose that level ([`Error::TooCoarse`], whose front ends say
+    /// how to raise it).
+    fn coarser_than_the_views(&self) -> crate::error::Error {
+        let cause = crate::error::Error::Degenerate(format!(
+            "the views, counted in parts on every voxel, cannot finish an analysis of pyramid \
+             level {}",
+            self.plan.views.level().index
+        ));
+        match &self.plan.note {
+            Some(note) => crate::error::Error::TooCoarse {
+                note: note.clone(),
+                cause: Box::new(cause),
+            },
+            None => cause,
+        }
     }
 }
 

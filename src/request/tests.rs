@@ -298,6 +298,22 @@ fn a_planned_request_step_by_step_gives_what_the_run_gives() {
     }
 }
 
+/// Views counted in parts on every voxel are refused by a plan the budget moved to a coarser
+/// level, the budget named as the cause.
+#[test]
+fn views_of_every_voxel_are_refused_on_a_coarser_level() {
+    let volume = body();
+    let params = AnalysisParams::default();
+    let views = crate::view::search(&volume, &params.view, &Monitor::none()).unwrap();
+    let request = AnalysisRequest::new(params, memory_needed(&volume, 1));
+    let planned = request.plan(&volume).unwrap();
+    assert_eq!(planned.plan.views.level().index, 1);
+    let e = planned.run_with(Some(views), &Monitor::none()).unwrap_err();
+    assert!(matches!(e, Error::TooCoarse { .. }), "{e:?}");
+    let text = e.to_string();
+    assert!(text.starts_with("the views, counted in parts on every voxel, cannot finish an analysis of pyramid level 1, because "), "{text}");
+}
+
 /// A request on a level the planner chose before runs there as it is, whatever its budget:
 /// the histories are those of that level, every method's.
 #[test]

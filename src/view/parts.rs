@@ -143,14 +143,9 @@ impl ViewRounds {
                 format!("a non-empty range within 0..{cells}"),
             ));
         }
-        // Bricks as thick as the largest count that divides the slab's start and (unless it
-        // is the last) its end, so that the slab is a whole number of them.
-        let end = if planes.end == cells { 0 } else { planes.end };
-        let thick = match gcd(planes.start, end) {
-            0 => planes.len(),
-            t => t,
-        };
-        let bricks = Bricks::shaped(dims, [dims[0], dims[1], thick]);
+        // The slab one layer of bricks of whole planes, its boundaries on the slab's faces
+        // wherever they fall (chunks of 37 and 38 planes give a brick each, not one a plane).
+        let bricks = Bricks::shaped_from(dims, [dims[0], dims[1], planes.len()], planes.start);
         let (bins, block) = (self.params.sampling.bins, self.params.block);
         let lattices = self.lattices(volume, round)?;
         let q = volume.quantizer(bins)?;
@@ -280,11 +275,6 @@ impl ViewRounds {
             None,
         ))
     }
-}
-
-/// The greatest common divisor (`gcd(0, n)` is `n`).
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 #[cfg(test)]

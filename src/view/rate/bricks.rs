@@ -187,8 +187,10 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
     }
 
     /// The rays of rows `j0..=j1`, each waiting in the brick of its first sample inside a cell
-    /// that is walked; rays with no sample inside a cell are counted whole into `out` if the
-    /// brick of their first sample is walked.
+    /// that is walked (in a slab, the first from where the ray can enter it). A ray with no
+    /// sample inside a cell is counted into `out` here: whole if the brick of its first sample
+    /// is walked, or, in a slab, as the pieces of its samples in the slab's bricks
+    /// ([`outer_pieces`](Self::outer_pieces)).
     pub(super) fn band(&self, (j0, j1): (i64, i64), out: &mut PartialCounts) -> Band {
         let ((i0, i1), _) = self.lattice.ray_ranges();
         let starts = RayStarts::new(self.lattice, self.sampler, self.step);
@@ -215,14 +217,13 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
                     continue;
                 };
                 let key = ray_key(i, j);
-                if t0 >= t1 && self.slab.is_some() {
-                    // No sample inside a cell, in a slab: its samples in the slab's bricks.
-                    self.outer_pieces(key, (p0, grid, n), out);
-                    continue;
-                }
                 if t0 >= t1 {
-                    // No sample inside a cell: the whole ray with the brick of its first.
-                    if self.walked(self.bricks.holding(p0)) {
+                    // No sample inside a cell (the ray lies on the volume's far faces).
+                    if self.slab.is_some() {
+                        // In a slab: its samples in the slab's bricks, as pieces.
+                        self.outer_pieces(key, (p0, grid, n), out);
+                    } else if self.walked(self.bricks.holding(p0)) {
+                        // Else the whole ray, with the brick of its first sample.
                         let mut f = Fragment::new(key, 0);
                         self.feed(&mut f, &mut out.counts, p0, grid, n);
                         out.rays += 1;

@@ -8,12 +8,16 @@ pub const BRICK_CELLS: usize = 64;
 
 /// A grid of bricks over a volume's cells (the cell between voxels `x` and `x + 1` along each
 /// axis, one cell along an axis of one voxel), `size` cells along each axis, the last ones cut
-/// short.
+/// short; along z the boundaries may be shifted to fall on a chosen plane, the first bricks
+/// then cut short too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Bricks {
     cells: [i64; 3],
     size: [i64; 3],
     count: [i64; 3],
+    /// Cells a brick boundary lies before cell 0 along each axis (`0..size`): brick `c` holds
+    /// cells `c·size − shift .. (c + 1)·size − shift`, clipped to the volume's.
+    shift: [i64; 3],
 }
 
 impl Bricks {
@@ -24,12 +28,22 @@ impl Bricks {
 
     /// The bricks of `size[m]` cells along axis `m` over a volume of `dims` voxels.
     pub fn shaped(dims: [usize; 3], size: [usize; 3]) -> Self {
+        Self::shaped_from(dims, size, 0)
+    }
+
+    /// The bricks of `size[m]` cells along axis `m` over a volume of `dims` voxels whose
+    /// boundaries along z fall on cell plane `origin` (and every `size[2]` planes before and
+    /// after it): a slab of cell planes `origin..origin + size[2]` is one layer of bricks,
+    /// wherever it starts.
+    pub fn shaped_from(dims: [usize; 3], size: [usize; 3], origin: usize) -> Self {
         let cells = dims.map(|n| n.saturating_sub(1).max(1) as i64);
         let size = size.map(|s| s.max(1) as i64);
+        let shift = [0, 0, (size[2] - origin as i64 % size[2]) % size[2]];
         Self {
             cells,
             size,
-            count: std::array::from_fn(|m| (cells[m] + size[m] - 1) / size[m]),
+            count: std::array::from_fn(|m| (cells[m] + shift[m] + size[m] - 1) / size[m]),
+            shift,
         }
     }
 
@@ -69,8 +83,9 @@ impl Bricks {
     /// The cells of brick `b`: `lo..hi` along each axis.
     pub fn cells_of(&self, b: usize) -> ([i64; 3], [i64; 3]) {
         let c = self.coords(b);
-        let lo = std::array::from_fn(|m| c[m] * self.size[m]);
-        let hi = std::array::from_fn(|m| ((c[m] + 1) * self.size[m]).min(self.cells[m]));
+        let lo = std::array::from_fn(|m| (c[m] * self.size[m] - self.shift[m]).max(0));
+        let hi =
+            std::array::from_fn(|m| ((c[m] + 1) * self.size[m] - self.shift[m]).min(self.cells[m]));
         (lo, hi)
     }
 
@@ -83,7 +98,7 @@ impl Bricks {
     /// The brick holding the sample at `p` (fixed point), clamped into the grid.
     pub(super) fn holding(&self, p: [i64; 3]) -> usize {
         let c: [i64; 3] = std::array::from_fn(|m| {
-            (p[m].max(0) >> FIXED_BITS).min(self.cells[m] - 1) / self.size[m]
+            ((p[m].max(0) >> FIXED_BITS).min(self.cells[m] - 1) + self.shift[m]) / self.size[m]
         });
         let [nx, ny, _] = self.count;
         (c[0] + nx * (c[1] + ny * c[2])) as usize
@@ -110,5 +125,39 @@ impl Bricks {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Bricks shifted to start on any plane tile the cells once, the plane a boundary.
+    #[test]
+    fn bricks_from_a_plane_tile_the_cells_with_a_boundary_there() {
+        let dims = [5, 4, 101];
+        for (size, origin) in [(38, 37), (7, 0), (7, 3), (100, 99), (1, 50), (150, 37)] {
+            let bricks = Bricks::shaped_from(dims, [5, 4, size], origin);
+            let mut held = vec![0; 100];
+            for b in 0..bricks.len() {
+                let (lo, hi) = bricks.cells_of(b);
+                assert!(lo[2] < hi[2], "{size} {origin}: brick {b} is empty");
+                assert!(origin as i64 <= lo[2] || hi[2] <= origin as i64);
+                for z in lo[2]..hi[2] {
+                    held[z as usize] += 1;
+                    let p = [0, 0, z << FIXED_BITS];
+                    assert_eq!(bricks.holding(p), b, "{size} {origin}: cell {z}");
+                }
+            }
+            assert_eq!(held, vec![1; 100], "{size} {origin}");
+        }
+        // Cuts at 37 and 75 of 100 cell planes: the middle slab is one brick, not 37 of one.
+        let bricks = Bricks::shaped_from(dims, [5, 4, 38], 37);
+        assert_eq!(bricks.len(), 3);
+        assert_eq!(bricks.cells_of(1), ([0, 0, 37], [4, 3, 75]));
+        assert_eq!(
+            Bricks::shaped(dims, [5, 4, 7]),
+            Bricks::shaped_from(dims, [5, 4, 7], 14)
+        );
     }
 }
