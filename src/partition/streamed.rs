@@ -137,11 +137,13 @@ pub fn partition_streamed_kept(
     partition.notes.insert(
         0,
         format!(
-            "the slice stack ({}) is over the memory limit: it was counted in {} strips of at \
-             most {} rows, in two passes over the volume",
+            "the slice stack ({}) is over the memory limit: it was counted in {}, in two passes \
+             over the volume",
             short_bytes(stack_bytes(&cutter, cutter.rows())),
-            strips.len(),
-            strips[0].len(),
+            match strips.len() {
+                1 => format!("one strip of {} rows", strips[0].len()),
+                n => format!("{n} strips of at most {} rows", strips[0].len()),
+            },
         ),
     );
     Ok((partition, histories))

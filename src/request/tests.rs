@@ -375,31 +375,61 @@ fn histories_of_a_plan_counted_in_strips_are_the_methods_own() {
     assert_eq!(h.slabs(params.method, at).len(), 4);
 }
 
-/// Every voxel asked for by name beyond the budget: the view search with the refinement is
-/// counted slab by slab (`view::streamed`'s tests hold it bit for bit to the search in memory);
-/// with the gain ranking, which scores axes on the whole volume, it runs on a coarser level.
+/// Every voxel asked for by name beyond the budget: the view search with the refinement and
+/// the gain ranking is counted slab by slab (`view::streamed`'s tests hold the search bit for
+/// bit to the search in memory, and the next test the gain ranking beside it); with the
+/// lesson, which shows the whole cell map, it runs on a coarser level.
 #[test]
 fn a_refined_search_of_every_voxel_beyond_the_budget_is_streamed() {
     let volume = phantom::body([256, 256, 256], 1).unwrap();
-    let refine = |gain: bool| AnalysisParams {
+    let refine = |explain: bool| AnalysisParams {
         view: crate::view::ViewParams {
             refine: true,
             ..crate::view::ViewParams::default()
         },
-        gain,
+        gain: true,
+        explain: explain.then(crate::explain::StepsShown::default),
         ..AnalysisParams::default()
     };
-    for gain in [false, true] {
+    for explain in [false, true] {
         let request = AnalysisRequest {
             level: Level::Asked(Resolution::Full, true),
-            ..AnalysisRequest::new(refine(gain), memory_needed(&volume, 0) - 1)
+            ..AnalysisRequest::new(refine(explain), memory_needed(&volume, 0) - 1)
         };
         let planned = request.plan(&volume).unwrap();
+        let note = &planned.plan.note;
         assert_eq!(
             planned.plan.views_streamed.is_some(),
-            !gain,
-            "gain ranking {gain}: {:?}",
-            planned.plan.note
+            !explain,
+            "{explain}: {note:?}"
         );
     }
+}
+
+/// The gain ranking (picking the axis) beside a view search and a partition counted slab by
+/// slab and strip by strip: the report of the analysis in memory.
+#[test]
+fn the_gain_ranking_beside_views_counted_slab_by_slab_is_the_one_in_memory() {
+    let volume = body();
+    let params = AnalysisParams {
+        gain: true,
+        axis_by: crate::analysis::AxisBy::Gain,
+        ..AnalysisParams::default()
+    };
+    let request = AnalysisRequest::new(params.clone(), u64::MAX);
+    let in_memory = request.run(&volume, &Monitor::none()).unwrap();
+    let mut planned = request.on(Arc::new(volume.clone()));
+    let bins = params.view.sampling.bins;
+    planned.plan.views_streamed = Some(crate::view::streamed_memory_floor(&volume, &params.view));
+    planned.plan.streamed = Some(crate::partition::streamed_memory_floor(&volume, bins));
+    let done = planned.run(&Monitor::none()).unwrap();
+    assert!(done.analysis.gain.is_some());
+    // The same report but for the notes on how the slice stack was counted.
+    let json = |a: &Analysed| {
+        let mut report = serde_json::to_value(a.report("body", &volume).unwrap()).unwrap();
+        report["notes"].take();
+        report["partition"]["notes"].take();
+        report
+    };
+    assert_eq!(json(&done), json(&in_memory));
 }

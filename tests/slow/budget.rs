@@ -151,15 +151,15 @@ fn a_full_resolution_partition_beyond_the_budget_is_counted_in_strips_exactly() 
     let Some((_dir, header)) = layered_where_memory_is_read() else {
         return;
     };
-    // By default (and with `--gain`, which ranks axes on the whole volume, whatever the
+    // By default (and with `--explain`, whose lesson shows the level's cell map, whatever the
     // resolution) the view search runs on level 1 (96 MiB fits beside the mapped file), and the
     // partition of every voxel is counted strip by strip.
     let args = ["analyze", s(&header), "--json", "--max-memory", "128M"];
     let (stdout, _) = peak_of(&args);
-    let ranked = [&args[..], &["--resolution", "full", "--gain"]].concat();
-    let (ranked, _) = peak_of(&ranked);
-    let ranked: serde_json::Value = serde_json::from_str(&ranked).unwrap();
-    assert_eq!(ranked["views_resolution"]["pyramid_level"], 1, "{ranked}");
+    let explained = [&args[..], &["--resolution", "full", "--explain"]].concat();
+    let (explained, _) = peak_of(&explained);
+    let explained: serde_json::Value = serde_json::from_str(&explained).unwrap();
+    assert_eq!(explained["views_resolution"]["pyramid_level"], 1, "{explained}");
     let streamed: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(streamed["resolution"]["pyramid_level"], 0, "{streamed}");
     assert_eq!(
