@@ -6,6 +6,7 @@
 mod data;
 mod details;
 pub mod dicom;
+pub mod group;
 mod hdf5;
 mod limits;
 mod metaimage;

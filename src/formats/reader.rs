@@ -117,6 +117,12 @@ pub(crate) trait Reader: Sync {
         false
     }
 
+    /// Its volumes of several files, which one folder may hold several of (DICOM's series):
+    /// `None` for a reader whose volume is one file or one whole folder.
+    fn groups(&self) -> Option<&'static dyn super::group::Groups> {
+        None
+    }
+
     /// Whether one file of it can hold several volumes (`--volume N` picks one).
     fn volumes(&self) -> bool {
         false

@@ -124,6 +124,12 @@ pub fn picks_in_folder(opts: &LoadOptions) -> bool {
     READERS.iter().any(|r| r.picks_in_folder(opts))
 }
 
+/// The volumes of several files of the reader that makes them (at most one does: a test holds
+/// that), for [`super::group`].
+pub(super) fn groups() -> Option<&'static dyn super::group::Groups> {
+    READERS.iter().find_map(|r| r.groups())
+}
+
 /// Says what the folder `dir` is, asking the readers: whether it is one's store, which of its
 /// entries are slices by name and which files make volumes together by content.
 pub fn folder_kind(dir: &Path) -> Result<Folder> {
@@ -341,6 +347,19 @@ mod tests {
                 "{name}"
             );
         }
+    }
+
+    /// At most one reader makes volumes of several files (the entries of a walk carry no
+    /// reader), and it is DICOM, whose files a folder's kind calls a series.
+    #[test]
+    fn one_reader_makes_volumes_of_several_files() {
+        let grouping: Vec<Format> = READERS
+            .iter()
+            .filter(|r| r.groups().is_some())
+            .map(|r| r.format())
+            .collect();
+        assert_eq!(grouping, [Format::Dicom]);
+        assert_eq!(super::super::group::noun(), "DICOM series");
     }
 
     /// Each format is read by one reader, and each reader reads its own format.
