@@ -128,6 +128,11 @@ pub(crate) trait Reader: Sync {
         false
     }
 
+    /// Whether one file of it can hold several arrays (`--array NAME` picks one).
+    fn arrays(&self) -> bool {
+        false
+    }
+
     /// Whether one file of it can hold several channels (`--channel N` picks one).
     fn channels(&self) -> bool {
         false

@@ -124,6 +124,22 @@ pub fn picks_in_folder(opts: &LoadOptions) -> bool {
     READERS.iter().any(|r| r.picks_in_folder(opts))
 }
 
+/// Whether the reader of `format` reads files that hold several arrays (`--array` picks one).
+pub(super) fn arrays(format: Format) -> bool {
+    READERS.iter().any(|r| r.format() == format && r.arrays())
+}
+
+/// The formats whose files hold several arrays, as the refusal of `--array` names them (`VTK
+/// XML image data or HDF5`), in the registry's order.
+pub(super) fn array_formats() -> String {
+    let titles: Vec<&str> = READERS
+        .iter()
+        .filter(|r| r.arrays())
+        .map(|r| r.title())
+        .collect();
+    titles.join(" or ")
+}
+
 /// The volumes of several files of the reader that makes them (at most one does: a test holds
 /// that), for [`super::group`].
 pub(super) fn groups() -> Option<&'static dyn super::group::Groups> {
@@ -360,6 +376,24 @@ mod tests {
             .collect();
         assert_eq!(grouping, [Format::Dicom]);
         assert_eq!(super::super::group::noun(), "DICOM series");
+    }
+
+    /// The refusal of `--array` names the readers whose files hold arrays, as it did by hand.
+    #[test]
+    fn the_formats_of_arrays() {
+        assert_eq!(array_formats(), "VTK XML image data or HDF5");
+        assert!(arrays(Format::Vti) && arrays(Format::Hdf5) && !arrays(Format::Vtk));
+        let mut opts = LoadOptions::default();
+        opts.part.array = Some("density".into());
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ramp_i16.nii");
+        let e = crate::formats::load(&path, &opts).unwrap_err().to_string();
+        assert!(
+            e.ends_with(
+                "ramp_i16.nii: unsupported: --array \"density\" names an array of a VTK XML \
+                 image data or HDF5 file; this nifti file holds one volume"
+            ),
+            "{e}"
+        );
     }
 
     /// Each format is read by one reader, and each reader reads its own format.
