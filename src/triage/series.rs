@@ -9,9 +9,9 @@ use super::Entry;
 use crate::error::Result;
 use crate::formats::{LoadOptions, group};
 
-/// A series key's `SeriesInstanceUID` (the key without its `#N`).
+/// The key of the whole series a part's key belongs to (its `SeriesInstanceUID`).
 fn uid(key: &str) -> &str {
-    key.split('#').next().unwrap_or(key)
+    group::whole(key)
 }
 
 /// Joins the DICOM series of `found[start..]` (one tree's walk) whose `SeriesInstanceUID`

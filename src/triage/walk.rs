@@ -180,7 +180,7 @@ pub fn restrict_to_series(entries: Vec<Entry>, wanted: &str, opts: &LoadOptions)
     };
     let (kept, left): (Vec<_>, Vec<_>) = entries.into_iter().zip(positions).partition(|(e, at)| {
         e.series.as_deref().is_some_and(|key| {
-            let uid = key.split('#').next().unwrap_or(key);
+            let uid = group::whole(key);
             key == wanted || uid == wanted || (position.is_some() && *at == position)
         })
     });

@@ -45,6 +45,17 @@ impl Groups for Series {
         super::load_series(folder, files, key, opts)
     }
 
+    fn whole<'a>(&self, key: &'a str) -> &'a str {
+        key.split('#').next().unwrap_or(key)
+    }
+
+    fn is_key(&self, text: &str) -> bool {
+        !text.is_empty()
+            && text
+                .chars()
+                .all(|c| c.is_ascii_digit() || c == '.' || c == '#')
+    }
+
     fn pick(&self, opts: &mut LoadOptions, key: &str) {
         opts.dicom.series = Some(key.to_string());
     }
