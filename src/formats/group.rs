@@ -1,12 +1,10 @@
 //! Volumes that several files make together, which one folder may hold several of (a DICOM
 //! series; a folder of TIFF slices is one volume, read whole, not such a group): found, listed
-//! and read through the reader whose files they are ([`Reader::groups`]), so that a walk over
+//! and read through the reader whose files they are (its `Reader::groups`), so that a walk over
 //! folders (triage's) and a manifest's entries know no format. One reader makes such volumes
 //! today, DICOM; the registry holds that at most one does (a second would tag the entries its
 //! listings give with itself). The keys are the reader's: [`whole`] gives the whole a part's key
 //! belongs to.
-//!
-//! [`Reader::groups`]: super::reader::Reader::groups
 
 use std::path::{Path, PathBuf};
 
