@@ -141,8 +141,8 @@ pub(super) fn array_formats() -> String {
 }
 
 /// The volumes of several files of the reader that makes them (at most one does: a test holds
-/// that), for [`super::group`].
-pub(super) fn groups() -> Option<&'static dyn super::group::Groups> {
+/// that), for `formats::group`.
+pub(super) fn groups() -> Option<&'static dyn super::reader::Groups> {
     READERS.iter().find_map(|r| r.groups())
 }
 
@@ -375,7 +375,10 @@ mod tests {
             .map(|r| r.format())
             .collect();
         assert_eq!(grouping, [Format::Dicom]);
-        assert_eq!(super::super::group::noun(), "DICOM series");
+        assert_eq!(
+            groups().map(super::super::reader::Groups::noun),
+            Some("DICOM series")
+        );
     }
 
     /// The refusal of `--array` names the readers whose files hold arrays, as it did by hand.

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::super::group::{Groups, Listing, Member};
+use super::super::reader::{Groups, Listing, Member};
 use super::{LoadOptions, Result};
 use crate::formats::Loaded;
 

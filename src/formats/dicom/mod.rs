@@ -97,7 +97,7 @@ impl Reader for Dicom {
         true
     }
 
-    fn groups(&self) -> Option<&'static dyn super::group::Groups> {
+    fn groups(&self) -> Option<&'static dyn super::reader::Groups> {
         Some(&group::Series)
     }
 
