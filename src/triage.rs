@@ -79,7 +79,7 @@ impl Entry {
     pub fn options(&self, load: &crate::formats::LoadOptions) -> crate::formats::LoadOptions {
         let mut opts = load.clone();
         if let Some(series) = &self.series {
-            opts.dicom.series = Some(series.clone());
+            crate::formats::group::pick(&mut opts, series);
         }
         opts
     }

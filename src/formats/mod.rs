@@ -6,6 +6,7 @@
 mod data;
 mod details;
 pub mod dicom;
+pub mod group;
 mod hdf5;
 mod limits;
 mod metaimage;
@@ -246,16 +247,17 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         .map_err(|e| e.reached_from(&named(path)))
 }
 
-/// `--array` names an array of a file holding several (VTK XML image data, HDF5): of a file of
-/// another format it is an error saying so, as `--channel` of a file of one channel is.
+/// `--array` names an array of a file holding several (VTK XML image data, HDF5: the readers
+/// say which): of a file of another format it is an error saying so, as `--channel` of a file
+/// of one channel is.
 fn check_array(path: &Path, format: Format, opts: &LoadOptions) -> Result<()> {
     match &opts.part.array {
-        Some(name) if !matches!(format, Format::Vti | Format::Hdf5) => Err(Error::unsupported(
+        Some(name) if !registry::arrays(format) => Err(Error::unsupported(
             path,
             format!(
-                "--array {:?} names an array of a VTK XML image data or HDF5 file; this {} file \
-                 holds one volume",
+                "--array {:?} names an array of a {} file; this {} file holds one volume",
                 crate::error::names::text(name),
+                registry::array_formats(),
                 format.name()
             ),
         )),

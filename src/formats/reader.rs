@@ -1,14 +1,16 @@
 //! The one trait every format's reader implements: how it is recognised (by content, by a
 //! deeper look, by name), what it says of a folder and of the options, what it can hold
-//! (volumes, channels), how it is read, and the key of what it tells besides the volume
+//! (volumes, channels, arrays), how it is read, and the key of what it tells besides the volume
 //! ([`Details`](super::Details)). Every method but `format`, `title` and `read` has a default
-//! that says "not this reader's". The registry ([`super::registry`]) asks the readers in its
-//! order; it knows no format itself.
+//! that says "not this reader's". A reader whose volumes are made of several files, which one
+//! folder holds several of (DICOM's series), gives its [`Groups`] too, and the [`Listing`] of
+//! [`Member`]s they list, which `formats::group` asks for through the registry. The registry
+//! ([`super::registry`]) asks the readers in its order; it knows no format itself.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use super::{Folder, Format, LoadOptions, Read0, Source};
-use crate::error::Result;
+use super::{Folder, Format, LoadOptions, Loaded, Read0, Source};
+use crate::error::{Error, Result};
 
 /// What a reader says of a file's first bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,8 +119,19 @@ pub(crate) trait Reader: Sync {
         false
     }
 
+    /// Its volumes of several files, which one folder may hold several of (DICOM's series):
+    /// `None` for a reader whose volume is one file or one whole folder.
+    fn groups(&self) -> Option<&'static dyn Groups> {
+        None
+    }
+
     /// Whether one file of it can hold several volumes (`--volume N` picks one).
     fn volumes(&self) -> bool {
+        false
+    }
+
+    /// Whether one file of it can hold several arrays (`--array NAME` picks one).
+    fn arrays(&self) -> bool {
         false
     }
 
@@ -153,4 +166,79 @@ pub(crate) trait Reader: Sync {
     ) -> Result<Option<Read0>> {
         Ok(None)
     }
+}
+
+/// One volume of a listing, as a list shows it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Member {
+    /// The key that picks it among the folder's volumes (a DICOM series' `SeriesInstanceUID`,
+    /// with `#2`, ... on the parts of a split series).
+    pub key: String,
+    /// The key of the whole it is a part of (the UID without its `#N`): the parts of one whole
+    /// found in several folders are listed again together.
+    pub whole: String,
+    /// How a list names it: `series 3 "Abdomen"`.
+    pub label: String,
+    /// The files it is read from, sorted.
+    pub files: Vec<PathBuf>,
+}
+
+/// What a scan of files found: their volumes (in the order a position counts them, from 1),
+/// the files that could not be read (each with its error) and what the scan left out, said once
+/// for all the files.
+#[derive(Debug, Default)]
+pub struct Listing {
+    /// The volumes.
+    pub volumes: Vec<Member>,
+    /// The files that could not be read.
+    pub failed: Vec<(PathBuf, Error)>,
+    /// What was left out.
+    pub notes: Vec<String>,
+}
+
+/// A reader's volumes of several files.
+pub(crate) trait Groups: Sync {
+    /// What one such volume is called in messages (`DICOM series`).
+    fn noun(&self) -> &'static str;
+
+    /// Whether the file at `path` is one of the files that make such volumes (by content).
+    fn member(&self, path: &Path) -> bool;
+
+    /// Those files directly in folder `dir`, sorted.
+    fn files_in(&self, dir: &Path) -> Result<Vec<PathBuf>>;
+
+    /// Those files in folder `dir` and below it, sorted.
+    fn files_under(&self, dir: &Path) -> Result<Vec<PathBuf>>;
+
+    /// The volumes the files `files` make, each file's header read once.
+    fn list(&self, files: &[PathBuf], opts: &LoadOptions) -> Result<Listing>;
+
+    /// The volumes the files directly in folder `dir` make: an error naming the folder when it
+    /// holds none of those files.
+    fn list_in(&self, dir: &Path, opts: &LoadOptions) -> Result<Listing>;
+
+    /// The volume `key` read from `files` alone (as a listing gave them), named `folder` in
+    /// messages, its notes saying nothing of the other files a listing left out (the listing
+    /// says that, once).
+    fn read(
+        &self,
+        folder: &Path,
+        files: &[PathBuf],
+        key: &str,
+        opts: &LoadOptions,
+    ) -> Result<Loaded>;
+
+    /// The key of the whole the volume `key` is a part of (a split DICOM series' UID, the key
+    /// without its `#N`): `key` itself when it is a whole.
+    fn whole<'a>(&self, key: &'a str) -> &'a str;
+
+    /// Whether `text` is spelt as one of its keys (a UID, digits and dots, maybe with `#N`).
+    fn is_key(&self, text: &str) -> bool;
+
+    /// The options that read the volume `key` of a folder: `opts` with it picked.
+    fn pick(&self, opts: &mut LoadOptions, key: &str);
+
+    /// The volume the options pick among a folder's (`--series`), as given: a key, or a
+    /// position in the folder's list from 1.
+    fn picked<'a>(&self, opts: &'a LoadOptions) -> Option<&'a str>;
 }

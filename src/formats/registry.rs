@@ -124,6 +124,28 @@ pub fn picks_in_folder(opts: &LoadOptions) -> bool {
     READERS.iter().any(|r| r.picks_in_folder(opts))
 }
 
+/// Whether the reader of `format` reads files that hold several arrays (`--array` picks one).
+pub(super) fn arrays(format: Format) -> bool {
+    READERS.iter().any(|r| r.format() == format && r.arrays())
+}
+
+/// The formats whose files hold several arrays, as the refusal of `--array` names them (`VTK
+/// XML image data or HDF5`), in the registry's order.
+pub(super) fn array_formats() -> String {
+    let titles: Vec<&str> = READERS
+        .iter()
+        .filter(|r| r.arrays())
+        .map(|r| r.title())
+        .collect();
+    titles.join(" or ")
+}
+
+/// The volumes of several files of the reader that makes them (at most one does: a test holds
+/// that), for `formats::group`.
+pub(super) fn groups() -> Option<&'static dyn super::reader::Groups> {
+    READERS.iter().find_map(|r| r.groups())
+}
+
 /// Says what the folder `dir` is, asking the readers: whether it is one's store, which of its
 /// entries are slices by name and which files make volumes together by content.
 pub fn folder_kind(dir: &Path) -> Result<Folder> {
@@ -341,6 +363,40 @@ mod tests {
                 "{name}"
             );
         }
+    }
+
+    /// At most one reader makes volumes of several files (the entries of a walk carry no
+    /// reader), and it is DICOM, whose files a folder's kind calls a series.
+    #[test]
+    fn one_reader_makes_volumes_of_several_files() {
+        let grouping: Vec<Format> = READERS
+            .iter()
+            .filter(|r| r.groups().is_some())
+            .map(|r| r.format())
+            .collect();
+        assert_eq!(grouping, [Format::Dicom]);
+        assert_eq!(
+            groups().map(super::super::reader::Groups::noun),
+            Some("DICOM series")
+        );
+    }
+
+    /// The refusal of `--array` names the readers whose files hold arrays, as it did by hand.
+    #[test]
+    fn the_formats_of_arrays() {
+        assert_eq!(array_formats(), "VTK XML image data or HDF5");
+        assert!(arrays(Format::Vti) && arrays(Format::Hdf5) && !arrays(Format::Vtk));
+        let mut opts = LoadOptions::default();
+        opts.part.array = Some("density".into());
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ramp_i16.nii");
+        let e = crate::formats::load(&path, &opts).unwrap_err().to_string();
+        assert!(
+            e.ends_with(
+                "ramp_i16.nii: unsupported: --array \"density\" names an array of a VTK XML \
+                 image data or HDF5 file; this nifti file holds one volume"
+            ),
+            "{e}"
+        );
     }
 
     /// Each format is read by one reader, and each reader reads its own format.

@@ -222,6 +222,19 @@ pub struct Scene {
     pub spread: f64,
 }
 
+impl Default for Scene {
+    /// The scene of a front end that sets what it shows itself (the TUI): the renderer's
+    /// defaults, similarity gaps and the default spread, as the parameter table's defaults give
+    /// them (a test holds the two the same).
+    fn default() -> Self {
+        Self {
+            params: RenderParams::default(),
+            gap: Gap::Similarity,
+            spread: crate::render::DEFAULT_SPREAD,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -236,6 +249,7 @@ mod tests {
         assert_eq!(scene.params, RenderParams::default());
         assert_eq!(scene.gap, Gap::Similarity);
         assert_eq!(scene.spread, crate::render::DEFAULT_SPREAD);
+        assert_eq!(scene, Scene::default());
         let load = given.load().unwrap();
         assert_eq!(load.raw, RawOptions::default());
         assert_eq!((load.part.volume, load.part.channel), (0, 0));

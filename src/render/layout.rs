@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::partition::Partition;
+use crate::partition::{Partition, SliceStack};
 
 /// With similarity gaps, this share of the total gap is spread evenly (the rest by
 /// dissimilarity), so that no gap is narrower than this fraction of the mean and every cut shows.
@@ -50,6 +50,17 @@ impl Stack {
             slices: p.slices,
             thickness: p.thickness,
             offset: p.offset,
+        }
+    }
+
+    /// The geometry of a slice stack (a history's, whose slabs an interactive front end steps
+    /// through).
+    pub fn of_slices(s: &SliceStack) -> Self {
+        Self {
+            axis: s.axis(),
+            slices: s.slices(),
+            thickness: s.thickness(),
+            offset: s.offset(),
         }
     }
 }

@@ -17,7 +17,7 @@ mod render;
 mod slice;
 
 pub use analysis::{Analysed, AnalysisRequest, Level, Planned};
-pub use render::{RenderRequest, faces_tile};
+pub use render::{RenderRequest, Shown, faces_tile};
 pub use slice::SliceRequest;
 
 #[cfg(test)]

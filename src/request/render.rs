@@ -6,9 +6,9 @@ use tiny_skia::Pixmap;
 use crate::error::{Error, Result, Value};
 use crate::geometry::min_spacing;
 use crate::params::Scene;
-use crate::partition::Partition;
+use crate::partition::{Histories, Partition, Slab};
 use crate::progress::Monitor;
-use crate::render::{Layout, Renderer, Stack, TransferChoice, slice};
+use crate::render::{Gap, Image, Layout, Renderer, Stack, TransferChoice, slice};
 
 use super::Analysed;
 
@@ -21,6 +21,60 @@ pub struct RenderRequest {
     /// Instead of the exploded view, the faces of every slab: its last slice above its first, a
     /// column a slab, fit into the size (`render --faces`).
     pub faces: bool,
+}
+
+/// What an exploded view shows: the whole volume, a partition's slabs, or the slabs of a
+/// history an interactive front end steps through (the TUI's).
+#[derive(Clone, Copy)]
+pub enum Shown<'a> {
+    /// The whole volume as one slab, seen around this axis (a unit physical direction): the
+    /// picture before anything is partitioned.
+    Whole([f64; 3]),
+    /// A partition's slabs, the similarity gaps sized by the NMI at its boundaries.
+    Partition(&'a Partition),
+    /// Slabs of `histories`' stack, the similarity gaps sized by `nmi` (one per boundary) when
+    /// known (a bottom-up step's), else by the NMI the histories count at their boundaries.
+    Stepped {
+        /// The histories the slabs are of.
+        histories: &'a Histories,
+        /// The slabs, in slice order.
+        slabs: &'a [Slab],
+        /// The NMI at each boundary, where known.
+        nmi: Option<&'a [f64]>,
+    },
+}
+
+impl Shown<'_> {
+    /// How many slabs it shows (the whole volume: one).
+    #[must_use]
+    pub fn count(&self) -> usize {
+        match self {
+            Self::Whole(_) => 1,
+            Self::Partition(p) => p.slabs.len(),
+            Self::Stepped { slabs, .. } => slabs.len(),
+        }
+    }
+
+    /// Its slabs pulled apart by `gap` and `spread`; the NMI at the stepped slabs' boundaries
+    /// is counted only when similarity gaps need it and it is not known.
+    fn layout(&self, gap: Gap, spread: f64, monitor: &Monitor) -> Result<Layout> {
+        Ok(match *self {
+            Self::Whole(axis) => Layout::whole(axis),
+            Self::Partition(p) => Layout::exploded(p, gap, spread),
+            Self::Stepped {
+                histories,
+                slabs,
+                nmi,
+            } => {
+                let counted = match (nmi, gap) {
+                    (None, Gap::Similarity) => Some(histories.boundary_nmi(slabs, monitor)?),
+                    _ => None,
+                };
+                let stack = Stack::of_slices(histories.stack());
+                Layout::from_slabs(&stack, slabs, nmi.or(counted.as_deref()), gap, spread)
+            }
+        })
+    }
 }
 
 /// The room around the tiles of the strip of faces, pixels: a gap before every column and after
@@ -72,20 +126,28 @@ impl RenderRequest {
             let transfer = renderer.transfer(look, min_spacing(level.spacing()))?;
             return slice::faces(level, &transfer, &Stack::of(part), &part.slabs, tile);
         }
-        if let Some(h) = params.highlight
-            && h >= part.slabs.len()
+        let renderer = Renderer::new(level)?;
+        Ok(self
+            .exploded(&renderer, &Shown::Partition(part), monitor)?
+            .pixmap)
+    }
+
+    /// The exploded view of `shown` drawn by `renderer` (made once for its level by a front end
+    /// that draws many pictures of it, as the TUI does), with the colour window it used. A slab
+    /// to highlight past the slabs is an error about `highlight`; [`faces`](Self::faces) is not
+    /// read.
+    pub fn exploded(&self, renderer: &Renderer, shown: &Shown, monitor: &Monitor) -> Result<Image> {
+        let slabs = shown.count();
+        if let Some(h) = self.scene.params.highlight
+            && h >= slabs
         {
             return Err(Error::Unfit {
                 parameter: "highlight",
                 value: Value::Whole(h as u64),
-                problem: format!(
-                    "there are only {} slabs (numbered from 0)",
-                    part.slabs.len()
-                ),
+                problem: format!("there are only {slabs} slabs (numbered from 0)"),
             });
         }
-        let layout = Layout::exploded(part, self.scene.gap, self.scene.spread);
-        let image = Renderer::new(level)?.render(&layout, params, monitor)?;
-        Ok(image.pixmap)
+        let layout = shown.layout(self.scene.gap, self.scene.spread, monitor)?;
+        renderer.render(&layout, &self.scene.params, monitor)
     }
 }

@@ -9,7 +9,7 @@ use super::{Entry, TriageRow};
 use crate::analysis::AnalysisParams;
 use crate::budget::Budget;
 use crate::error::Error;
-use crate::formats::{LoadOptions, dicom, load};
+use crate::formats::{LoadOptions, group, load};
 use crate::progress::{Cancel, Monitor, Progress};
 use crate::request::{Analysed, AnalysisRequest, Level};
 use crate::volume::Volume;
@@ -179,18 +179,16 @@ impl Watchdog {
     }
 }
 
-/// Loads `entry`: a series whose files the walk (or a manifest's resolution) found is read
-/// from them alone, with what its folder left out said as the entry says it (once for the
-/// folder).
+/// Loads `entry`: a volume of several files (a DICOM series) whose files the walk (or a
+/// manifest's resolution) found is read from them alone, with what its folder left out said as
+/// the entry says it (once for the folder).
 fn load_entry(entry: &Entry, opts: &LoadOptions) -> crate::error::Result<crate::formats::Loaded> {
     match &entry.series {
-        Some(key) if !entry.files.is_empty() => {
-            dicom::load_series(&entry.path, &entry.files, key, opts).map(|mut l| {
-                l.notes.retain(|n| !folder_note(n));
+        Some(key) if !entry.files.is_empty() => group::read(&entry.path, &entry.files, key, opts)
+            .map(|mut l| {
                 l.notes.splice(0..0, entry.notes.iter().cloned());
                 l
-            })
-        }
+            }),
         _ => load(&entry.path, opts),
     }
 }
@@ -267,14 +265,4 @@ pub fn look_all(
             }
         }
     });
-}
-
-/// Whether a loader's note is about the DICOM files around the series loaded rather than the
-/// series (images left out: localizers, derived images, files that could not be read), said
-/// once for the folder, on its first series' row ([`Entry::notes`]).
-fn folder_note(note: &str) -> bool {
-    note.starts_with("left out ")
-        && (note.contains(" localizer image")
-            || note.contains(" derived image")
-            || note.contains("could not be read"))
 }

@@ -114,12 +114,10 @@ fn raw_path(bytes: &[u8]) -> PathBuf {
     }
 }
 
-/// Whether `text` is a series key: a UID (digits and dots), maybe with `#N` after it.
+/// Whether `text` is a series key (a UID, digits and dots, maybe with `#N` after it: the
+/// reader's to say).
 fn is_series_key(text: &str) -> bool {
-    !text.is_empty()
-        && text
-            .chars()
-            .all(|c| c.is_ascii_digit() || c == '.' || c == '#')
+    crate::formats::group::is_key(text)
 }
 
 #[cfg(test)]

@@ -46,14 +46,14 @@ pub fn select(
         Source::Paths(paths) => discover(paths, opts)?,
     };
     dedupe(&mut all);
-    let series = opts.dicom.series.as_deref();
+    let series = crate::formats::group::picked(opts);
     if let Some(wanted) = series {
         all = restrict_to_series(all, wanted, opts);
     }
     if all.is_empty() {
         let what = series.map_or_else(
             || "volumes".to_string(),
-            |w| format!("DICOM series {}", names::text(w)),
+            |w| format!("{} {}", crate::formats::group::noun(), names::text(w)),
         );
         return Err(match source {
             Source::Manifest(m) => Error::format(m, format!("no {what} found in the manifest")),

@@ -7,11 +7,11 @@ use std::sync::Arc;
 
 use super::Entry;
 use crate::error::Result;
-use crate::formats::{LoadOptions, dicom};
+use crate::formats::{LoadOptions, group};
 
-/// A series key's `SeriesInstanceUID` (the key without its `#N`).
+/// The key of the whole series a part's key belongs to (its `SeriesInstanceUID`).
 fn uid(key: &str) -> &str {
-    key.split('#').next().unwrap_or(key)
+    group::whole(key)
 }
 
 /// Joins the DICOM series of `found[start..]` (one tree's walk) whose `SeriesInstanceUID`
@@ -67,11 +67,11 @@ fn listed(
     only: Option<&str>,
     opts: &LoadOptions,
 ) -> Vec<Entry> {
-    match dicom::list_files(files, opts) {
+    match group::list(files, opts) {
         Ok(listing) => listing
-            .series
+            .volumes
             .into_iter()
-            .filter(|s| only.is_none_or(|u| s.uid == u))
+            .filter(|s| only.is_none_or(|u| s.whole == u))
             .map(|s| Entry {
                 label: Some(s.label),
                 series: Some(s.key),
@@ -151,7 +151,7 @@ impl Folder {
         opts: &LoadOptions,
     ) -> &'a Folder {
         folders.entry(path.to_path_buf()).or_insert_with(|| {
-            let (direct, below) = (dicom::files_in(path), dicom::files_under(path));
+            let (direct, below) = (group::files_in(path), group::files_under(path));
             let same = matches!((&direct, &below), (Ok(a), Ok(b)) if a == b);
             let direct = Listed::of(direct, opts);
             let below = if same {
@@ -175,13 +175,13 @@ struct Listed {
 impl Listed {
     /// The listing of `files` (nothing when they or it cannot be read: loading says why).
     fn of(files: Result<Vec<PathBuf>>, opts: &LoadOptions) -> Self {
-        let Ok(listing) = files.and_then(|files| dicom::list_files(&files, opts)) else {
+        let Ok(listing) = files.and_then(|files| group::list(&files, opts)) else {
             return Self::default();
         };
         Self {
-            first: listing.series.first().map(|s| s.key.clone()),
+            first: listing.volumes.first().map(|s| s.key.clone()),
             files: listing
-                .series
+                .volumes
                 .into_iter()
                 .map(|s| (s.key, s.files.into()))
                 .collect(),

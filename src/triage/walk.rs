@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Entry, MAX_DEPTH, MAX_VOLUMES};
 use crate::error::{Error, Result};
-use crate::formats::{Folder, LoadOptions, dicom, folder_kind, volume_name};
+use crate::formats::{Folder, LoadOptions, folder_kind, group, volume_name};
 
 /// The volumes under `paths`, sorted and without repeats: each file named, each folder of
 /// slices, each DICOM series, and, walked recursively, every volume in the other folders
@@ -41,17 +41,17 @@ fn push(found: &mut Vec<Entry>, entry: Entry) -> Result<()> {
     Ok(())
 }
 
-/// The series of the DICOM files in `dir`, one entry each, and each file that cannot be read
-/// (its row will say why); the folder alone when it holds no file at all that reads as DICOM,
-/// or with its problem when it cannot be scanned.
+/// The volumes the files in `dir` make together (DICOM series), one entry each, and each file
+/// that cannot be read (its row will say why); the folder alone when it holds no file at all
+/// that reads as one of those, or with its problem when it cannot be scanned.
 fn push_series(dir: &Path, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result<()> {
-    match dicom::list_series(dir, opts) {
-        Ok(listing) if !(listing.series.is_empty() && listing.failed.is_empty()) => {
+    match group::list_in(dir, opts) {
+        Ok(listing) if !(listing.volumes.is_empty() && listing.failed.is_empty()) => {
             for (file, _) in listing.failed {
                 push(found, Entry::file(file))?;
             }
             let mut notes = listing.notes;
-            for (i, s) in listing.series.into_iter().enumerate() {
+            for (i, s) in listing.volumes.into_iter().enumerate() {
                 push(
                     found,
                     Entry {
@@ -68,14 +68,14 @@ fn push_series(dir: &Path, opts: &LoadOptions, found: &mut Vec<Entry>) -> Result
         }
         Ok(_) => push(found, Entry::file(dir)),
         Err(e) => {
-            // No series at all: each file that looks like DICOM is a row of its own, which says
+            // No volume at all: each file that looks like one of its files is a row of its own, which says
             // what is wrong with it; the folder is the row when it cannot even be listed.
             let files: Vec<PathBuf> = match std::fs::read_dir(dir) {
                 Ok(entries) => entries
                     .filter_map(Result::ok)
                     .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
                     .map(|e| e.path())
-                    .filter(|p| !volume_name(p) && dicom::is_dicom(p))
+                    .filter(|p| !volume_name(p) && group::member(p))
                     .collect(),
                 Err(_) => Vec::new(),
             };
@@ -121,7 +121,7 @@ fn walk(dir: &Path, depth: usize, opts: &LoadOptions, found: &mut Vec<Entry>) ->
         Ok(entries) => entries,
         Err(e) => return push(found, Entry::failed(dir, problem(&Error::io(dir, e)))),
     };
-    let mut dicom_files = false;
+    let mut grouped = false;
     for entry in entries {
         let entry = match entry {
             Ok(entry) => entry,
@@ -136,11 +136,11 @@ fn walk(dir: &Path, depth: usize, opts: &LoadOptions, found: &mut Vec<Entry>) ->
             walk(&path, depth + 1, opts, found)?;
         } else if volume_name(&path) {
             push(found, Entry::file(path))?;
-        } else if !dicom_files && t.is_file() && dicom::is_dicom(&path) {
-            dicom_files = true;
+        } else if !grouped && t.is_file() && group::member(&path) {
+            grouped = true;
         }
     }
-    if dicom_files {
+    if grouped {
         push_series(dir, opts, found)?;
     }
     Ok(())
@@ -159,8 +159,8 @@ pub fn series_positions(entries: &[Entry], opts: &LoadOptions) -> Vec<Option<usi
                 return e.position;
             }
             let keys = listed.entry(&e.path).or_insert_with(|| {
-                dicom::list_series(&e.path, opts)
-                    .map(|l| l.series.into_iter().map(|s| s.key).collect())
+                group::list_in(&e.path, opts)
+                    .map(|l| l.volumes.into_iter().map(|s| s.key).collect())
                     .unwrap_or_default()
             });
             keys.iter().position(|k| k == key).map(|i| i + 1)
@@ -180,7 +180,7 @@ pub fn restrict_to_series(entries: Vec<Entry>, wanted: &str, opts: &LoadOptions)
     };
     let (kept, left): (Vec<_>, Vec<_>) = entries.into_iter().zip(positions).partition(|(e, at)| {
         e.series.as_deref().is_some_and(|key| {
-            let uid = key.split('#').next().unwrap_or(key);
+            let uid = group::whole(key);
             key == wanted || uid == wanted || (position.is_some() && *at == position)
         })
     });

@@ -6,8 +6,9 @@
 use std::sync::Arc;
 
 use crossterm::event::KeyEvent;
+use slabscope::params::Scene;
 use slabscope::partition::{Method, Slab, StackParams};
-use slabscope::render::{CameraParams, Colormap, Gap, Mode, Preset};
+use slabscope::render::{CameraParams, Colormap, Gap, Mode, Preset, RenderParams};
 use slabscope::{Histories, Progress, ViewParams, ViewSearch, Volume};
 
 use crate::term::image::TermImage;
@@ -282,27 +283,58 @@ impl PictureSettings {
             window: self.window,
         }
     }
+
+    /// The library's scene of these settings for a `width × height` picture highlighting slab
+    /// `highlight`: the library's defaults for the rest (shading, step, outlines, background),
+    /// the slabs' numbers written only in a picture 120 pixels high or more, where they fit, and
+    /// the other slabs not faded, as the user steps through them.
+    pub fn scene(&self, (width, height): (u32, u32), highlight: Option<usize>) -> Scene {
+        let defaults = Scene::default().params;
+        Scene {
+            params: RenderParams {
+                width,
+                height,
+                mode: self.mode,
+                preset: self.preset,
+                colormap: self.colormap,
+                window: self.window,
+                camera: self.camera,
+                highlight,
+                solo: self.solo,
+                labels: height >= 120,
+                ..defaults
+            },
+            gap: self.gap,
+            spread: self.spread,
+        }
+    }
 }
 
 impl Default for PictureSettings {
+    /// The library's scene's defaults ([`Scene::default`]), the window of the preset's.
     fn default() -> Self {
+        let Scene {
+            params,
+            gap,
+            spread,
+        } = Scene::default();
         Self {
-            camera: CameraParams::default(),
-            spread: slabscope::render::DEFAULT_SPREAD,
-            gap: Gap::Similarity,
-            mode: Mode::Cut,
-            preset: Preset::Auto,
-            colormap: Colormap::Grey,
-            window: None,
-            solo: false,
+            camera: params.camera,
+            spread,
+            gap,
+            mode: params.mode,
+            preset: params.preset,
+            colormap: params.colormap,
+            window: params.window,
+            solo: params.solo,
         }
     }
 }
 
 /// What the preview pane's render worker draws, at which size: the exploded view of the slabs
 /// on screen (from their histories, as the user steps) or the slice view, encoded for the
-/// terminal. The TUI's own job, not the library's `request::RenderRequest`, which draws an
-/// analysis done.
+/// terminal. The exploded view is the library's `request::RenderRequest` of the
+/// [`scene`](PictureSettings::scene) of `look`, drawn from `level` by the worker's renderer.
 #[derive(Clone)]
 pub struct PictureJob {
     /// Job number; only the newest result is shown.

@@ -13,6 +13,7 @@ mod csa;
 mod details;
 mod elements;
 mod format;
+mod group;
 mod header;
 mod mosaic;
 mod pixels;
@@ -94,6 +95,10 @@ impl Reader for Dicom {
 
     fn volumes(&self) -> bool {
         true
+    }
+
+    fn groups(&self) -> Option<&'static dyn super::reader::Groups> {
+        Some(&group::Series)
     }
 
     fn details_key(&self) -> Option<&'static str> {
@@ -299,8 +304,9 @@ pub fn list_files(files: &[PathBuf], opts: &LoadOptions) -> Result<Listing> {
 
 /// Loads the series `key` from the DICOM files `files` alone (as a listing gave them), named
 /// `path` (its folder) in messages: the same volume as [`crate::load`] of `path` with that
-/// series, without reading the other files of the folder. Notes say nothing of images of
-/// other files left out (a listing of the folder says that).
+/// series, without reading the other files of the folder. Notes say nothing of the images the
+/// scan left out (localizers, derived images, files that could not be read: a listing of the
+/// folder says that, once).
 pub fn load_series(
     path: &Path,
     files: &[PathBuf],
@@ -410,7 +416,13 @@ fn load_from(
     opts: &LoadOptions,
     key: Option<&str>,
 ) -> Result<Read0> {
-    let (scan, series, mut notes) = series_of(files, opts)?;
+    let (scan, series, scan_notes) = series_of(files, opts)?;
+    // What the scan left out is the listing's to say when one series is read from its files.
+    let mut notes = if key.is_some() {
+        Vec::new()
+    } else {
+        scan_notes
+    };
     if series.is_empty() {
         return Err(no_series(path, &scan));
     }

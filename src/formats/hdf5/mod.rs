@@ -69,6 +69,11 @@ impl Reader for Hdf5 {
         true
     }
 
+    /// Its datasets.
+    fn arrays(&self) -> bool {
+        true
+    }
+
     fn details_key(&self) -> Option<&'static str> {
         Some("hdf5")
     }

@@ -46,6 +46,11 @@ impl Reader for Vti {
         "VTK XML image data"
     }
 
+    /// Its point data arrays.
+    fn arrays(&self) -> bool {
+        true
+    }
+
     fn reads(&self) -> Option<&'static str> {
         Some("VTK XML image data (.vti)")
     }

@@ -4,10 +4,9 @@
 use std::path::{Path, PathBuf};
 
 use slabscope::formats::{NrrdEncoding, write_atomic, write_nrrd};
-use slabscope::params::Scene;
 use slabscope::render::{ImageOutput, encode};
 use slabscope::request::RenderRequest;
-use slabscope::{Analysis, AnalysisReport, Monitor, Partition, RenderParams, Volume, label_volume};
+use slabscope::{Analysis, AnalysisReport, Monitor, Partition, Volume, label_volume};
 
 use crate::tui::event::ExportRequest;
 
@@ -29,22 +28,9 @@ pub(super) fn export(
     let json = free_name(&format!("{stem}-slabscope"), "json");
     let labels = free_name(&format!("{stem}-slabscope-labels"), "nrrd");
     let picture = RenderRequest {
-        scene: Scene {
-            params: RenderParams {
-                width: 1280,
-                height: 960,
-                mode: r.look.mode,
-                preset: r.look.preset,
-                colormap: r.look.colormap,
-                window: r.look.window,
-                camera: r.look.camera,
-                highlight: r.highlight.filter(|&h| h < part.slabs.len()),
-                solo: r.look.solo,
-                ..RenderParams::default()
-            },
-            gap: r.look.gap,
-            spread: r.look.spread,
-        },
+        scene: r
+            .look
+            .scene((1280, 960), r.highlight.filter(|&h| h < part.slabs.len())),
         faces: false,
     };
     let image = picture.draw(volume, &part, monitor)?;

@@ -3,12 +3,122 @@
 use std::sync::mpsc::channel;
 use std::time::Instant;
 
+use slabscope::params::{Given, Scene, table};
 use slabscope::partition::Method;
-use slabscope::{AnalysisParams, Histories, Renderer, Scope};
+use slabscope::request::RenderRequest;
+use slabscope::{AnalysisParams, Histories, Partition, Renderer, Scope};
 
-use super::worker::render;
+use super::worker::{picture, render};
 use super::*;
 use crate::term::{Caps, Graphics};
+use crate::tui::event::PictureSettings;
+
+/// The TUI's settings of the library's `scene`.
+fn settings_of(scene: &Scene) -> PictureSettings {
+    let p = &scene.params;
+    PictureSettings {
+        camera: p.camera,
+        spread: scene.spread,
+        gap: scene.gap,
+        mode: p.mode,
+        preset: p.preset,
+        colormap: p.colormap,
+        window: p.window,
+        solo: p.solo,
+    }
+}
+
+/// The library's scene of the values `given`, 96 × 128 pixels.
+fn scene_of(given: &[(&'static slabscope::params::Param, &str)]) -> Scene {
+    let given = given.iter().fold(Given::new(), |g, &(p, v)| g.with(p, v));
+    given.scene(96, 128).unwrap()
+}
+
+/// The preview's exploded view of a partition's slabs, as the user steps to them, is pixel for
+/// pixel the library's render request's picture of that partition with the same settings: the
+/// similarity gaps of slabs whose NMI the histories count (top-down) or know (a bottom-up
+/// step's), uniform gaps, and the whole volume before any partition.
+#[test]
+fn the_previews_picture_is_the_render_requests() {
+    let volume = slabscope::volume::phantom::body([24, 24, 32], 1).unwrap();
+    let renderer = Renderer::new(&volume).unwrap();
+    let axis = [0.0, 0.0, 1.0];
+    let h = Arc::new(
+        Histories::new(
+            &volume,
+            axis,
+            &AnalysisParams::default().stack(),
+            Scope::ALL,
+            &Monitor::none(),
+        )
+        .unwrap(),
+    );
+    let cases = [
+        (
+            Method::TopDown,
+            3,
+            scene_of(&[(&table::AZIMUTH, "-40"), (&table::ELEVATION, "35")]),
+        ),
+        (
+            Method::BottomUp,
+            28,
+            scene_of(&[
+                (&table::MODE, "dvr"),
+                (&table::SPREAD, "1.5"),
+                (&table::COLORMAP, "viridis"),
+            ]),
+        ),
+        (
+            Method::TopDown,
+            5,
+            scene_of(&[
+                (&table::GAP, "uniform"),
+                (&table::PERSPECTIVE, "true"),
+                (&table::ZOOM, "1.4"),
+            ]),
+        ),
+    ];
+    for (method, position, scene) in cases {
+        let part = Partition::new(&h, method, position, &Monitor::none()).unwrap();
+        let nmi = h.known_nmi(method, position);
+        assert_eq!(
+            nmi.is_some(),
+            method == Method::BottomUp,
+            "known only bottom-up"
+        );
+        let request = RenderRequest {
+            scene: scene.clone(),
+            faces: false,
+        };
+        let expected = request.draw(&volume, &part, &Monitor::none()).unwrap();
+        let job = PictureJob {
+            slabs: part.slabs.clone(),
+            histories: Some(Arc::clone(&h)),
+            nmi,
+            look: settings_of(&scene),
+            ..PictureJob::whole((12, 8))
+        };
+        let (drawn, caption, window) =
+            picture(&renderer, &job, (96, 128), &Monitor::none()).unwrap();
+        assert!(part.slabs.len() > 2 && caption.is_none() && window.is_some());
+        assert!(drawn.data() == expected.data(), "{method:?} at {position}");
+    }
+    // Nothing partitioned: the whole volume, as one slab.
+    let scene = scene_of(&[]);
+    let whole = PictureJob {
+        look: settings_of(&scene),
+        ..PictureJob::whole((12, 8))
+    };
+    let (drawn, ..) = picture(&renderer, &whole, (96, 128), &Monitor::none()).unwrap();
+    let expected = renderer
+        .render(
+            &slabscope::Layout::whole(axis),
+            &scene.params,
+            &Monitor::none(),
+        )
+        .unwrap();
+    assert!(drawn.data() == expected.pixmap.data());
+}
 
 /// The histories' request cuts the slices as the partitioning asked: its sampling and
 /// background, nothing of the defaults.

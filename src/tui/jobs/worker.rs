@@ -11,8 +11,9 @@ use image::RgbaImage;
 use slabscope::geometry::{self, min_spacing};
 use slabscope::partition::Slab;
 use slabscope::render::slice::{self, SliceParams};
-use slabscope::render::{Gap, Stack, draw_figure, paste_centred};
-use slabscope::{Layout, Monitor, RenderParams, Renderer, Volume};
+use slabscope::render::{Stack, draw_figure, paste_centred};
+use slabscope::request::{RenderRequest, Shown};
+use slabscope::{Monitor, Renderer, Volume};
 use tiny_skia::Pixmap;
 
 use super::Open;
@@ -137,62 +138,10 @@ pub(super) fn render(
     r: &PictureJob,
     monitor: &Monitor,
 ) -> anyhow::Result<Box<Rendered>> {
-    let look = &r.look;
-    let geometry = r.histories.as_ref().map(|h| {
-        let stack = h.stack();
-        Stack {
-            axis: stack.axis(),
-            slices: stack.slices(),
-            thickness: stack.thickness(),
-            offset: stack.offset(),
-        }
-    });
     // One image pixel per screen pixel, as large as the terminal takes.
     let (width, height) = caps.image_size(r.cells);
     let (width, height) = (width.max(1), height.max(1));
-    let (pixmap, caption, window) = match (r.figure.as_deref(), r.slice, &geometry) {
-        (Some(drawing), ..) => (draw_figure(drawing, width, height)?, None, None),
-        (None, Some(s), Some(stack)) if !r.slabs.is_empty() => {
-            let highlight = r.highlight.unwrap_or(0).min(r.slabs.len() - 1);
-            let view = SliceView {
-                stack,
-                slab: (highlight, r.slabs[highlight]),
-                cursor: s,
-                size: (width, height),
-            };
-            let (pixmap, caption, window) = view.draw(renderer, look)?;
-            (pixmap, Some(caption), Some(window))
-        }
-        _ => {
-            let layout = match (&r.histories, &geometry) {
-                (Some(h), Some(stack)) if !r.slabs.is_empty() => {
-                    let nmi = match (&r.nmi, look.gap) {
-                        (Some(nmi), _) => Some(nmi.clone()),
-                        (None, Gap::Similarity) => Some(h.boundary_nmi(&r.slabs, monitor)?),
-                        (None, Gap::Uniform) => None,
-                    };
-                    Layout::from_slabs(stack, &r.slabs, nmi.as_deref(), look.gap, look.spread)
-                }
-                _ => Layout::whole(r.axis),
-            };
-            let params = RenderParams {
-                width,
-                height,
-                mode: look.mode,
-                preset: look.preset,
-                colormap: look.colormap,
-                window: look.window,
-                camera: look.camera,
-                highlight: r.highlight,
-                solo: look.solo,
-                outlines: true,
-                labels: height >= 120,
-                ..RenderParams::default()
-            };
-            let image = renderer.render(&layout, &params, monitor)?;
-            (image.pixmap, None, Some(image.window))
-        }
-    };
+    let (pixmap, caption, window) = picture(renderer, r, (width, height), monitor)?;
     let rgba = RgbaImage::from_raw(width, height, pixmap.data().to_vec())
         .ok_or_else(|| anyhow::anyhow!("render buffer has the wrong size"))?;
     let cells = match caps.graphics {
@@ -207,6 +156,54 @@ pub(super) fn render(
         caption,
         window,
     }))
+}
+
+/// A picture drawn, the slice view's readout and the colour window used.
+pub(super) type Drawn = (Pixmap, Option<String>, Option<(f32, f32)>);
+
+/// The picture of `r`, `width × height` pixels, drawn with `renderer`: a figure of the paper's,
+/// the slice view with its readout, or the exploded view as the library's render request draws
+/// it; and the colour window it used (none for a figure).
+pub(super) fn picture(
+    renderer: &Renderer,
+    r: &PictureJob,
+    (width, height): (u32, u32),
+    monitor: &Monitor,
+) -> anyhow::Result<Drawn> {
+    let look = &r.look;
+    let histories = r.histories.as_deref().filter(|_| !r.slabs.is_empty());
+    Ok(match (r.figure.as_deref(), r.slice, histories) {
+        (Some(drawing), ..) => (draw_figure(drawing, width, height)?, None, None),
+        (None, Some(s), Some(h)) => {
+            let highlight = r.highlight.unwrap_or(0).min(r.slabs.len() - 1);
+            let view = SliceView {
+                stack: &Stack::of_slices(h.stack()),
+                slab: (highlight, r.slabs[highlight]),
+                cursor: s,
+                size: (width, height),
+            };
+            let (pixmap, caption, window) = view.draw(renderer, look)?;
+            (pixmap, Some(caption), Some(window))
+        }
+        _ => {
+            let shown = match histories {
+                Some(histories) => Shown::Stepped {
+                    histories,
+                    slabs: &r.slabs,
+                    nmi: r.nmi.as_deref(),
+                },
+                None => Shown::Whole(r.axis),
+            };
+            // A slab past the ones shown (the list a step behind) is highlighted nowhere.
+            let highlight = r.highlight.filter(|&h| h < shown.count());
+            let request = RenderRequest {
+                scene: look.scene((width, height), highlight),
+                faces: false,
+            };
+            let image = request.exploded(renderer, &shown, monitor)?;
+            (image.pixmap, None, Some(image.window))
+        }
+    })
 }
 
 /// The slice view: the slice under the cursor, large, with the pointer's cross; beside it the
