@@ -122,6 +122,73 @@ fn a_direction_turns_the_axes_and_cells_sit_at_their_centres() {
 }
 
 #[test]
+fn pieces_are_assembled_into_the_whole_extent() {
+    // VTK's writer streaming 3 pieces (x 0..1, then 1..5 split in y) and 2 (x 0..2, 2..5):
+    // pieces of point data share their boundary points.
+    for (name, ty, n) in [
+        ("ramp_u16_pieces.vti", VoxelType::U16, 3),
+        ("ramp_i16_pieces_ascii.vti", VoxelType::I16, 2),
+    ] {
+        let loaded = assert_ramp(name, ty, |v| v);
+        let straight = [[1.5, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.5]];
+        assert_eq!(axes(&loaded), ([-3.0, 4.0, 10.0], straight), "{name}");
+        let note = format!("{n} pieces assembled into its WholeExtent");
+        assert!(loaded.notes.contains(&note), "{name}: {:?}", loaded.notes);
+    }
+}
+
+#[test]
+fn pieces_that_do_not_tile_the_whole_extent_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ascii = std::fs::read_to_string(data("vti/ramp_i16_pieces_ascii.vti")).unwrap();
+    let edit = |from: &str, to: &str| {
+        assert!(ascii.contains(from), "{from}");
+        ascii.replacen(from, to, 1).into_bytes()
+    };
+    let whole = "WholeExtent=\"0 5 0 4 0 3\"";
+    refused(
+        d,
+        "gap.vti",
+        &edit(whole, "WholeExtent=\"0 6 0 4 0 3\""),
+        "its pieces leave voxel (6, 0, 0) of its WholeExtent uncovered",
+    );
+    refused(
+        d,
+        "out.vti",
+        &edit("Extent=\"2 5 0 4 0 3\"", "Extent=\"2 6 0 4 0 3\""),
+        "its piece 1's Extent [2, 6, 0, 4, 0, 3] is not within its WholeExtent",
+    );
+    // The second piece's first value, at the shared point (2, 0, 0), made 7.
+    refused(
+        d,
+        "disagree.vti",
+        &edit("        2 3 4 5 12 13", "        7 3 4 5 12 13"),
+        "its piece 1 gives voxel (2, 0, 0) another value than an earlier piece",
+    );
+    refused(
+        d,
+        "other.vti",
+        &ascii
+            .rsplitn(2, "type=\"Int16\"")
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect::<Vec<_>>()
+            .join("type=\"Int32\"")
+            .into_bytes(),
+        "its piece 1's array \"density\" is not of the first piece's type",
+    );
+    // Beyond the budget, refused before anything is read.
+    refused(
+        d,
+        "huge.vti",
+        &edit(whole, "WholeExtent=\"0 99999 0 99999 0 99999\""),
+        "huge.vti",
+    );
+}
+
+#[test]
 fn the_same_volume_as_the_legacy_file() {
     for (vti, vtk) in [
         ("vti/ramp_i16_ascii.vti", "vtk/ramp_i16.vtk"),
@@ -174,7 +241,7 @@ fn what_is_not_read_is_refused_in_one_line() {
     );
     let piece = "<Piece Extent=\"0 5 0 4 0 3\">";
     let two = ascii.replacen("</Piece>", &format!("</Piece>{piece}</Piece>"), 1);
-    refused(d, "two.vti", two.as_bytes(), "holds 2 pieces");
+    refused(d, "two.vti", two.as_bytes(), "holds no array \"density\"");
     refused(
         d,
         "wider.vti",

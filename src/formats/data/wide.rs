@@ -59,6 +59,14 @@ impl Rounded {
         f
     }
 
+    /// Both counts: `other`'s added to these.
+    pub(crate) fn add(&mut self, other: Self) {
+        self.count += other.count;
+        if other.largest.abs() > self.largest.abs() {
+            self.largest = other.largest;
+        }
+    }
+
     /// The note saying that `count` values of type `wide` were rounded, when any was.
     pub(crate) fn note(&self, wide: Wide) -> Option<String> {
         (self.count > 0).then(|| {

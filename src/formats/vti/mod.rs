@@ -1,6 +1,6 @@
 //! VTK XML image data (`.vti`), as `ParaView`, `PyVista` and VTK's `vtkXMLImageDataWriter` save
 //! simulation grids: an XML header (`<VTKFile type="ImageData">`, `<ImageData WholeExtent
-//! Origin Spacing Direction>`, one `<Piece Extent>`, its `<PointData>` and `<CellData>`
+//! Origin Spacing Direction>`, one `<Piece Extent>` (or several, assembled: `pieces.rs`), its `<PointData>` and `<CellData>`
 //! `<DataArray>`s), the values inline as ascii or base64 (`format="binary"`), or appended after
 //! the header in an `<AppendedData>` section, raw or base64, found by their `offset`. Binary values
 //! start with a header of their size (`UInt32` or `UInt64` words), or, compressed (zlib or LZ4),
@@ -17,6 +17,7 @@
 
 mod arrays;
 mod payload;
+mod pieces;
 mod read;
 
 use std::path::Path;
@@ -150,50 +151,49 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         .transpose()?;
     let layout = layout(path, root, appended)?;
     let image = child(path, root, "ImageData")?;
+    // VTK gives no units: spacing and origin are taken as mm, as the legacy reader takes them.
+    let mut notes = Vec::new();
     let pieces: Vec<Node> = image
         .children()
         .filter(|n| n.has_tag_name("Piece"))
         .collect();
-    let [piece] = pieces[..] else {
-        return Err(bad(format!(
-            "holds {} pieces: slabscope reads image data of one piece",
-            pieces.len()
-        )));
+    let (piece, extent) = match pieces[..] {
+        [] => return Err(bad("holds no <Piece>".into())),
+        [piece] => (piece, integers::<6>(path, piece, "Extent")?),
+        [first, ..] => (first, integers::<6>(path, image, "WholeExtent")?),
     };
-    let extent = integers::<6>(path, piece, "Extent")?;
     let points: [usize; 3] = std::array::from_fn(|m| extent_points(extent, m));
     if points.contains(&0) {
-        return Err(bad(format!(
-            "its piece's Extent {extent:?} is empty or too large"
-        )));
+        return Err(bad(format!("its Extent {extent:?} is empty or too large")));
     }
     let array = pick_array(path, piece, opts.part.array.as_deref())?;
-    let dims = if array.cells {
-        points.map(|n| n.saturating_sub(1).max(1))
-    } else {
-        points
-    };
     let spec = DataSpec {
         file: source.clone(),
         start: 0,
         skip_lines: 0,
         skip: Skip::Bytes(0),
         encoding: Encoding::Raw,
-        dims,
+        dims: voxel_dims(points, array.cells),
         voxel_type: array.ty,
         endian: layout.words.endian,
         scale: None,
         volumes: (0, 1),
         trailing: true,
     };
-    let (voxels, rounded) = read::read_array(&spec, &array, layout, bytes, opts.room())?;
-    // VTK gives no units: spacing and origin are taken as mm, as the legacy reader takes them.
-    let mut notes: Vec<String> = rounded.into_iter().collect();
+    let (voxels, rounded) = match pieces.len() {
+        1 => read::read_array(&spec, &array, layout, bytes, opts.room())?,
+        n => {
+            let read = pieces::assemble(&spec, &pieces, extent, &array, (layout, bytes), opts)?;
+            notes.push(format!("{n} pieces assembled into its WholeExtent"));
+            read
+        }
+    };
+    notes.extend(array.wide.and_then(|w| rounded.note(w)));
     if array.cells {
         notes.push("cell data: a voxel a cell, at its centre".into());
     }
     let (spacing, transform) = placement(path, image, extent, array.cells, &mut notes)?;
-    let mut read = Read0::new(path, dims, spacing, array.ty, voxels, notes)?;
+    let mut read = Read0::new(path, spec.dims, spacing, array.ty, voxels, notes)?;
     read.details = Some(std::sync::Arc::new(arrays::arrays(piece, array.id)));
     Ok(read.with_transform(Some(transform)))
 }
@@ -327,6 +327,16 @@ fn integers<const N: usize>(path: &Path, node: Node, name: &str) -> Result<[i64;
         ));
     }
     Ok(values.map(|v| v as i64))
+}
+
+/// The voxels along each axis of the `points` of an extent: a cell fewer for cell data (one
+/// where the extent is flat).
+fn voxel_dims(points: [usize; 3], cells: bool) -> [usize; 3] {
+    if cells {
+        points.map(|n| n.saturating_sub(1).max(1))
+    } else {
+        points
+    }
 }
 
 /// The points of `extent` along axis `m`; 0 when it is empty or beyond a billion.

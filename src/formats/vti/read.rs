@@ -7,20 +7,20 @@ use std::io::{BufReader, Read};
 use super::payload::{Base64, Blocks, Words};
 use super::{Array, Layout};
 use crate::error::{Error, Result};
-use crate::formats::data::wide::{Wide, read_wide, read_wide_ascii};
+use crate::formats::data::wide::{Rounded, Wide, read_wide, read_wide_ascii};
 use crate::formats::data::{DataSpec, Encoding, read_voxels, read_voxels_from};
 use crate::formats::scratch::Room;
 use crate::volume::Voxels;
 
-/// Reads the voxels of `array`, whose volume `spec` describes, from the file's `bytes`; with the
-/// note of the 64-bit values rounded to f32, when any was.
+/// Reads the voxels of `array`, whose volume `spec` describes, from the file's `bytes`; with
+/// the 64-bit values rounded to f32 (none for other types).
 pub(super) fn read_array(
     spec: &DataSpec,
     array: &Array,
     layout: Layout,
     bytes: &[u8],
     room: Room,
-) -> Result<(Voxels, Option<String>)> {
+) -> Result<(Voxels, Rounded)> {
     let path = spec.file.path();
     let shown = crate::error::names::text(&array.name);
     let bad = |what: String| Error::format(path, format!("its array {shown:?}: {what}"));
@@ -40,10 +40,10 @@ pub(super) fn read_array(
             };
             let mut text = array.text.as_bytes();
             if let Some(wide) = array.wide {
-                let (voxels, rounded) = read_wide_ascii(&spec, wide, text, room)?;
-                return Ok((voxels, rounded.note(wide)));
+                return read_wide_ascii(&spec, wide, text, room);
             }
-            return Ok((read_voxels_from(&spec, &mut text, "ascii", room)?, None));
+            let voxels = read_voxels_from(&spec, &mut text, "ascii", room)?;
+            return Ok((voxels, Rounded::default()));
         }
         "binary" => (array.text.as_bytes(), true),
         "appended" => {
@@ -60,7 +60,7 @@ pub(super) fn read_array(
                 .ok_or_else(|| bad(format!("its offset {offset} is beyond the file's end")))?;
             if !appended.base64 && layout.compressor.is_none() && array.wide.is_none() {
                 let voxels = raw_in_place(spec, &bytes[at..], at, layout.words, expected, room)?;
-                return Ok((voxels, None));
+                return Ok((voxels, Rounded::default()));
             }
             (&bytes[at..], appended.base64)
         }
@@ -98,20 +98,20 @@ pub(super) fn read_array(
 }
 
 /// The voxels of the bytes of `stream` (64-bit integers of the type `wide`, if any), with the
-/// note of the values rounded to f32; `what` names the stream in messages.
+/// values rounded to f32; `what` names the stream in messages.
 fn voxels_of(
     spec: &DataSpec,
     wide: Option<Wide>,
     stream: impl Read,
     what: &'static str,
     room: Room,
-) -> Result<(Voxels, Option<String>)> {
+) -> Result<(Voxels, Rounded)> {
     if let Some(wide) = wide {
-        let (voxels, rounded) = read_wide(spec, wide, stream, what, room)?;
-        return Ok((voxels, rounded.note(wide)));
+        return read_wide(spec, wide, stream, what, room);
     }
     let mut stream = BufReader::new(stream);
-    Ok((read_voxels_from(spec, &mut stream, what, room)?, None))
+    let voxels = read_voxels_from(spec, &mut stream, what, room)?;
+    Ok((voxels, Rounded::default()))
 }
 
 /// Raw appended voxels at `at` in the file (`bytes` from there), after their size: read in place
