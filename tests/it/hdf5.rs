@@ -128,6 +128,31 @@ fn element_size_um_is_the_spacing_and_its_absence_a_note() {
     );
 }
 
+#[test]
+fn dxchanges_pixel_size_is_the_voxel_size() {
+    let objective = "/measurement/instrument/detection_system/objective";
+    for (name, from) in [
+        (
+            "dxchange_resolution.h5",
+            format!("{objective}/resolution (0.65 microns)"),
+        ),
+        (
+            "dxchange_pixel_size.h5",
+            format!(
+                "/measurement/instrument/detector/pixel_size_x (6.5 um) over \
+                 {objective}/magnification (10)"
+            ),
+        ),
+    ] {
+        let loaded = load(&data(&format!("hdf5/{name}")), &options(None, 0)).unwrap();
+        for got in loaded.volume.spacing() {
+            assert!((got - 0.65e-3).abs() < 1e-15, "{name}: {got}");
+        }
+        let note = format!("voxel size from DXchange's {from}");
+        assert!(loaded.notes.contains(&note), "{name}: {:?}", loaded.notes);
+    }
+}
+
 /// What h5py read, frozen in `reference.json`, agrees with every 3-D dataset read here.
 #[test]
 fn h5pys_reading_agrees() {
@@ -165,8 +190,8 @@ fn h5pys_reading_agrees() {
             checked += 1;
         }
     }
-    // 9 in the .h5 files, the 8 padded Data of the Imaris file.
-    assert_eq!(checked, 17);
+    // 11 in the .h5 files, the 8 padded Data of the Imaris file.
+    assert_eq!(checked, 19);
 }
 
 #[test]

@@ -13,6 +13,7 @@
 //! note says 1 mm was used. An Imaris file is read as `imaris.rs` says. A beamline's raw file (projections, with `theta`, `data_white` or
 //! `data_dark` beside them) is refused unless `--array` names the dataset.
 
+mod dxchange;
 mod imaris;
 mod pick;
 
@@ -249,18 +250,40 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
         None => read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.room())?,
     };
     drop(bytes);
-    let given = imaris
-        .and_then(|i| i.spacing)
-        .or_else(|| pick::spacing(&ds));
-    let spacing = given.unwrap_or_else(|| {
-        notes.push(format!(
-            "dataset {name} gives no voxel size (no element_size_um attribute): using 1 mm"
-        ));
-        [1.0; 3]
-    });
+    let imaris_spacing = imaris.and_then(|i| i.spacing);
+    let spacing = voxel_size(
+        &file,
+        &ds,
+        (&chosen.path, &name),
+        imaris_spacing,
+        &mut notes,
+    );
     let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?;
     read.details = Some(std::sync::Arc::new(pick::details(&listing, &chosen.path)));
     Ok(read)
+}
+
+/// The voxel size of the dataset `ds` (at `path`, shown as `name`) in mm: its `element_size_um`,
+/// an Imaris file's (`imaris`), or `DXchange`'s, else 1 mm with a note.
+fn voxel_size(
+    file: &H5File,
+    ds: &H5Dataset,
+    (path, name): (&str, &str),
+    imaris: Option<[f64; 3]>,
+    notes: &mut Vec<String>,
+) -> [f64; 3] {
+    let given = imaris.or_else(|| pick::spacing(ds)).or_else(|| {
+        let (spacing, note) = dxchange::spacing(file, path)?;
+        notes.push(note);
+        Some(spacing)
+    });
+    given.unwrap_or_else(|| {
+        notes.push(format!(
+            "dataset {name} gives no voxel size (no element_size_um attribute, no DXchange \
+             pixel size): using 1 mm"
+        ));
+        [1.0; 3]
+    })
 }
 
 /// The stored bytes of volume `volume.0` of the `volume.1` the dataset `ds` holds, each of

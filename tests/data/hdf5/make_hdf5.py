@@ -51,6 +51,17 @@ with new("ramp_f64_be.h5") as f:
 with new("dxchange_recon.h5") as f:
     f.create_dataset("exchange/data", data=ramp(np.uint8), chunks=(1, 5, 6))
     f.create_dataset("exchange/mask2d", data=np.ones((5, 6), np.uint8))
+# DXchange's voxel size: the objective's effective pixel size (`resolution`, in microns), or the
+# detector's pixel size (`pixel_size_x`, in µm) over the objective's magnification.
+with new("dxchange_resolution.h5") as f:
+    f.create_dataset("exchange/data", data=ramp(np.uint16))
+    r = f.create_dataset("measurement/instrument/detection_system/objective/resolution", data=[0.65])
+    r.attrs["units"] = "microns"
+with new("dxchange_pixel_size.h5") as f:
+    f.create_dataset("exchange/data", data=ramp(np.uint16))
+    p = f.create_dataset("measurement/instrument/detector/pixel_size_x", data=[6.5])
+    p.attrs["units"] = "um"
+    f.create_dataset("measurement/instrument/detection_system/objective/magnification", data=[10.0])
 # Two 3-D datasets: one must be named.
 with new("two_volumes.h5") as f:
     f.create_dataset("a", data=ramp(np.int32))
