@@ -276,6 +276,9 @@ fn what_is_not_read_is_refused_in_one_line() {
         "compressor \"vtkLZMADataCompressor\"",
     );
     refused(d, "short.vti", &edit("345\n", "\n"), "truncated ascii data");
+    // The XML parser's message quotes the newline it found: escaped, the error is one line.
+    let broken = ascii.replacen("<ImageData", "<ImageData\n\n<", 1);
+    refused(d, "newline.vti", broken.as_bytes(), "its XML header");
     refused(d, "cut.vti", &ascii.as_bytes()[..600], "cut.vti");
     // A hostile extent: beyond the budget, refused before anything is allocated.
     refused(

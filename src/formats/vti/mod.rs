@@ -143,8 +143,12 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         nodes_limit: MAX_NODES,
         ..ParsingOptions::default()
     };
-    let doc = Document::parse_with_options(text, options)
-        .map_err(|e| bad(format!("its XML header: {e}")))?;
+    let doc = Document::parse_with_options(text, options).map_err(|e| {
+        bad(format!(
+            "its XML header: {}",
+            crate::error::names::controls(&e.to_string())
+        ))
+    })?;
     let root = doc.root_element();
     let appended = tag
         .map(|at| appended_section(path, bytes, at))
@@ -213,7 +217,12 @@ fn appended_section(path: &Path, bytes: &[u8], at: usize) -> Result<Appended> {
         .ok_or_else(|| bad("tag does not end"))?;
     let tag = std::str::from_utf8(&bytes[at..=at + end]).map_err(|_| bad("tag is no text"))?;
     let tag = format!("{}/>", tag.trim_end_matches('>').trim_end_matches('/'));
-    let doc = Document::parse(&tag).map_err(|e| bad(&format!("tag: {e}")))?;
+    let doc = Document::parse(&tag).map_err(|e| {
+        bad(&format!(
+            "tag: {}",
+            crate::error::names::controls(&e.to_string())
+        ))
+    })?;
     let base64 = match doc.root_element().attribute("encoding").unwrap_or("raw") {
         "raw" => false,
         "base64" => true,
