@@ -127,6 +127,9 @@ impl Words {
     }
 }
 
+/// The most bytes one byte of an LZ4 block decodes to, with room for the block's last literals.
+const LZ4_MOST: u64 = 256;
+
 /// How an array's blocks are compressed (the file's `compressor`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Compressor {
@@ -235,7 +238,16 @@ impl<R: Read> Blocks<R> {
                 .read_to_end(&mut self.block)
                 .map_err(|e| invalid(format!("zlib block {i}: {e}")))?,
             Compressor::Lz4 => {
-                // `size` is at most the array's size, which the budget allowed.
+                // An LZ4 byte decodes to at most 255 bytes (a match's length grows by 255 a
+                // byte): a block claiming more than its bytes can hold is refused before room is
+                // made for it.
+                let most = (self.compressed.len() as u64).saturating_mul(LZ4_MOST);
+                if size > most {
+                    return Err(invalid(format!(
+                        "lz4 block {i} of {} bytes cannot decompress to {size}",
+                        self.compressed.len()
+                    )));
+                }
                 self.block
                     .resize(usize::try_from(size).unwrap_or(usize::MAX), 0);
                 let made = lz4_flex::block::decompress_into(&self.compressed, &mut self.block)
@@ -325,5 +337,33 @@ mod tests {
             e.unwrap()
                 .contains("more than the file or the memory limit holds")
         );
+    }
+
+    #[test]
+    fn an_lz4_block_claiming_more_than_its_bytes_hold_is_refused_before_room_is_made() {
+        let words = Words {
+            size: 4,
+            endian: Endian::Little,
+        };
+        // One block of 1 MiB, compressed to 2 bytes.
+        let mut input: Vec<u8> = [1u32, 1 << 20, 0, 2]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        input.extend_from_slice(&[0x10, 0x00]);
+        let mut blocks = Blocks::new(&input[..], Compressor::Lz4, words, 1 << 20, 100).unwrap();
+        let e = blocks.read(&mut [0u8; 16]).unwrap_err().to_string();
+        assert_eq!(e, "lz4 block 0 of 2 bytes cannot decompress to 1048576");
+        assert!(blocks.block.capacity() < 1 << 20);
+        // The same bytes decoded exactly: a block of one literal, `A`.
+        let mut input: Vec<u8> = [1u32, 1, 0, 2]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        input.extend_from_slice(&[0x10, b'A']);
+        let mut blocks = Blocks::new(&input[..], Compressor::Lz4, words, 1, 100).unwrap();
+        let mut out = Vec::new();
+        blocks.read_to_end(&mut out).unwrap();
+        assert_eq!(out, b"A");
     }
 }
