@@ -10,6 +10,7 @@ use rayon::prelude::*;
 
 mod ascii;
 pub(crate) mod budget;
+pub(crate) mod wide;
 
 use self::ascii::read_ascii;
 use self::budget::voxel_count;

@@ -28,7 +28,7 @@ const NAMES: [&str; 13] = [
 ];
 
 /// Valid files to mutate, one per format.
-const SEEDS: [&str; 17] = [
+const SEEDS: [&str; 21] = [
     "ramp_u8.nii",
     "ramp_i16_scaled.nii.gz",
     "ramp_u16_be.nrrd",
@@ -46,6 +46,10 @@ const SEEDS: [&str; 17] = [
     "vti/ramp_u16_zlib.vti",
     "vti/ramp_i32_zlib_binary.vti",
     "vti/ramp_f64_base64.vti",
+    "vti/ramp_f32_lz4.vti",
+    "vti/ramp_i64_lz4_binary.vti",
+    "vti/ramp_u16_pieces.vti",
+    "vtk/ramp_i64.vtk",
 ];
 
 fn seed_bytes(name: &str) -> Vec<u8> {
@@ -108,6 +112,8 @@ fn edit() -> impl Strategy<Value = Edit> {
                 "ElementDataFile = LIST\n",
                 "type: double\n",
                 "65535",
+                "Extent=\"0 1 0 1 0 1\"",
+                "<Piece Extent=\"0 5 0 4 0 3\"></Piece>",
             ])
             .prop_map(str::to_string)
         )

@@ -53,6 +53,11 @@ fn every_encoding_reads_to_the_voxel() {
         ("ramp_i32_zlib_binary.vti", VoxelType::I32, None),
         ("ramp_i8_be.vti", VoxelType::I8, Some(-256)),
         ("ramp_u32_be_zlib.vti", VoxelType::U32, None),
+        // 64-bit integers, held as f32 (these all exactly), and LZ4 blocks.
+        ("ramp_i64_raw.vti", VoxelType::F32, None),
+        ("ramp_u64_ascii.vti", VoxelType::F32, None),
+        ("ramp_f32_lz4.vti", VoxelType::F32, None),
+        ("ramp_i64_lz4_binary.vti", VoxelType::F32, None),
     ] {
         let wrap = |v: i64| match wraps {
             Some(256) => v % 256,
@@ -61,7 +66,47 @@ fn every_encoding_reads_to_the_voxel() {
         };
         let loaded = assert_ramp(name, ty, wrap);
         assert_eq!(axes(&loaded), ([-3.0, 4.0, 10.0], straight), "{name}");
+        assert!(
+            loaded.notes.iter().all(|n| !n.contains("rounded")),
+            "{name}: {:?}",
+            loaded.notes
+        );
     }
+}
+
+#[test]
+fn int64_values_beyond_f32_are_rounded_to_the_nearest_and_said() {
+    // VTK's own reading of the values, and numpy's nearest f32 of each (make_vti.py).
+    let text = std::fs::read_to_string(data("vti/beyond_f32_i64.json")).unwrap();
+    let reference: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let f32s: Vec<f32> = reference["f32"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect();
+    let values: Vec<i64> = reference["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_i64().unwrap())
+        .collect();
+    assert_eq!(values[0], -(1 << 62) - 1);
+    let loaded = open("beyond_f32_i64.vti");
+    let v = &loaded.volume;
+    assert_eq!(v.voxel_type(), VoxelType::F32);
+    assert_eq!(v.data().to_f32_vec(), f32s);
+    let rounded = reference["rounded"].as_u64().unwrap();
+    assert_eq!(rounded, 120);
+    assert!(
+        loaded.notes.contains(&format!(
+            "120 i64 values beyond what an f32 holds exactly rounded to the nearest f32 (the \
+             largest {})",
+            values[0]
+        )),
+        "{:?}",
+        loaded.notes
+    );
 }
 
 #[test]
@@ -74,6 +119,73 @@ fn a_direction_turns_the_axes_and_cells_sit_at_their_centres() {
     let cells = assert_ramp("rotated_f64_cells.vti", VoxelType::F64, |v| v);
     assert_eq!(axes(&cells), ([-4.0, 4.75, 11.25], turned));
     assert!(cells.notes.iter().any(|n| n.contains("cell data")));
+}
+
+#[test]
+fn pieces_are_assembled_into_the_whole_extent() {
+    // VTK's writer streaming 3 pieces (x 0..1, then 1..5 split in y) and 2 (x 0..2, 2..5):
+    // pieces of point data share their boundary points.
+    for (name, ty, n) in [
+        ("ramp_u16_pieces.vti", VoxelType::U16, 3),
+        ("ramp_i16_pieces_ascii.vti", VoxelType::I16, 2),
+    ] {
+        let loaded = assert_ramp(name, ty, |v| v);
+        let straight = [[1.5, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.5]];
+        assert_eq!(axes(&loaded), ([-3.0, 4.0, 10.0], straight), "{name}");
+        let note = format!("{n} pieces assembled into its WholeExtent");
+        assert!(loaded.notes.contains(&note), "{name}: {:?}", loaded.notes);
+    }
+}
+
+#[test]
+fn pieces_that_do_not_tile_the_whole_extent_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ascii = std::fs::read_to_string(data("vti/ramp_i16_pieces_ascii.vti")).unwrap();
+    let edit = |from: &str, to: &str| {
+        assert!(ascii.contains(from), "{from}");
+        ascii.replacen(from, to, 1).into_bytes()
+    };
+    let whole = "WholeExtent=\"0 5 0 4 0 3\"";
+    refused(
+        d,
+        "gap.vti",
+        &edit(whole, "WholeExtent=\"0 6 0 4 0 3\""),
+        "its pieces leave voxel (6, 0, 0) of its WholeExtent uncovered",
+    );
+    refused(
+        d,
+        "out.vti",
+        &edit("Extent=\"2 5 0 4 0 3\"", "Extent=\"2 6 0 4 0 3\""),
+        "its piece 1's Extent [2, 6, 0, 4, 0, 3] is not within its WholeExtent",
+    );
+    // The second piece's first value, at the shared point (2, 0, 0), made 7.
+    refused(
+        d,
+        "disagree.vti",
+        &edit("        2 3 4 5 12 13", "        7 3 4 5 12 13"),
+        "its piece 1 gives voxel (2, 0, 0) another value than an earlier piece",
+    );
+    refused(
+        d,
+        "other.vti",
+        &ascii
+            .rsplitn(2, "type=\"Int16\"")
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect::<Vec<_>>()
+            .join("type=\"Int32\"")
+            .into_bytes(),
+        "its piece 1's array \"density\" is not of the first piece's type",
+    );
+    // Beyond the budget, refused before anything is read.
+    refused(
+        d,
+        "huge.vti",
+        &edit(whole, "WholeExtent=\"0 99999 0 99999 0 99999\""),
+        "huge.vti",
+    );
 }
 
 #[test]
@@ -129,12 +241,21 @@ fn what_is_not_read_is_refused_in_one_line() {
     );
     let piece = "<Piece Extent=\"0 5 0 4 0 3\">";
     let two = ascii.replacen("</Piece>", &format!("</Piece>{piece}</Piece>"), 1);
-    refused(d, "two.vti", two.as_bytes(), "holds 2 pieces");
+    refused(d, "two.vti", two.as_bytes(), "holds no array \"density\"");
+    refused(
+        d,
+        "wider.vti",
+        &edit("type=\"Int16\"", "type=\"Int128\""),
+        "of type \"Int128\"",
+    );
     refused(
         d,
         "long.vti",
-        &edit("type=\"Int16\"", "type=\"Int64\""),
-        "of type \"Int64\"",
+        &ascii
+            .replace("type=\"Int16\"", "type=\"Int64\"")
+            .replace("345\n", "1e3\n")
+            .into_bytes(),
+        "ascii data, value 119: \"1e3\" is not an integer of type i64",
     );
     refused(
         d,
@@ -147,14 +268,17 @@ fn what_is_not_read_is_refused_in_one_line() {
     );
     refused(
         d,
-        "lz4.vti",
+        "lzma.vti",
         &edit(
             "header_type=\"UInt32\"",
-            "header_type=\"UInt32\" compressor=\"vtkLZ4DataCompressor\"",
+            "header_type=\"UInt32\" compressor=\"vtkLZMADataCompressor\"",
         ),
-        "compressor \"vtkLZ4DataCompressor\"",
+        "compressor \"vtkLZMADataCompressor\"",
     );
     refused(d, "short.vti", &edit("345\n", "\n"), "truncated ascii data");
+    // The XML parser's message quotes the newline it found: escaped, the error is one line.
+    let broken = ascii.replacen("<ImageData", "<ImageData\n\n<", 1);
+    refused(d, "newline.vti", broken.as_bytes(), "its XML header");
     refused(d, "cut.vti", &ascii.as_bytes()[..600], "cut.vti");
     // A hostile extent: beyond the budget, refused before anything is allocated.
     refused(
@@ -206,6 +330,27 @@ fn hostile_binary_headers_are_refused_in_one_line() {
     let mut lie = u8raw.clone();
     lie[data_at..data_at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
     refused(d, "lie.vti", &lie, "not the 120 of its voxels");
+    // LZ4 blocks (UInt32 words: the count, the block size, the last block's size, then each
+    // block's compressed size): the first block's bytes made garbage, then its size a lie.
+    let lz4 = std::fs::read(data("vti/ramp_f32_lz4.vti")).unwrap();
+    let at = appended(&lz4);
+    let word = |i: usize| u32::from_le_bytes(lz4[at + 4 * i..at + 4 * i + 4].try_into().unwrap());
+    assert_eq!((word(0), word(1), word(2)), (8, 64, 32));
+    let first = at + 4 * (3 + 8);
+    let mut garbage = lz4.clone();
+    garbage[first..first + word(3) as usize].fill(0xff);
+    refused(d, "lz4garbage.vti", &garbage, "lz4 block 0");
+    let mut short = lz4.clone();
+    short[at + 12..at + 16].copy_from_slice(&(word(3) - 1).to_le_bytes());
+    refused(d, "lz4short.vti", &short, "lz4short.vti");
+    let mut many = lz4.clone();
+    many[at..at + 4].copy_from_slice(&(1u32 << 30).to_le_bytes());
+    refused(
+        d,
+        "lz4many.vti",
+        &many,
+        "its lz4 header says 1073741824 blocks",
+    );
 }
 
 #[test]

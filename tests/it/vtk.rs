@@ -67,6 +67,41 @@ fn point_and_cell_data_read_to_the_voxel() {
         |v| v,
         [-2.25, 5.0, 11.25],
     );
+    // 64-bit integers (`long`, `unsigned_long`), held as f32: these all exactly.
+    assert_ramp("ramp_i64.vtk", VoxelType::F32, |v| v, origin);
+    assert_ramp("ramp_u64_ascii.vtk", VoxelType::F32, |v| v, origin);
+}
+
+#[test]
+fn long_values_beyond_f32_are_rounded_and_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = "# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\n\
+                DIMENSIONS 2 1 1\nPOINT_DATA 2\nSCALARS s long\nLOOKUP_TABLE default\n";
+    let path = dir.path().join("ids.vtk");
+    std::fs::write(&path, format!("{head}-9223372036854775808 16777217\n")).unwrap();
+    let loaded = load(&path, &LoadOptions::default()).unwrap();
+    assert_eq!(
+        loaded.volume.data().to_f32_vec(),
+        [-9_223_372_036_854_775_808.0, 16_777_216.0]
+    );
+    assert!(
+        loaded.notes.contains(
+            &"1 i64 value beyond what an f32 holds exactly rounded to the nearest f32 (the \
+              largest 16777217)"
+                .to_string()
+        ),
+        "{:?}",
+        loaded.notes
+    );
+    // Beyond i64, or not whole: refused naming the value.
+    for (name, value) in [("over.vtk", "9223372036854775808"), ("half.vtk", "1.5")] {
+        refused(
+            dir.path(),
+            name,
+            format!("{head}0 {value}\n").as_bytes(),
+            &format!("value 1: \"{value}\" is not an integer of type i64"),
+        );
+    }
 }
 
 #[test]
@@ -98,6 +133,8 @@ fn what_is_no_image_is_refused_in_one_line() {
     );
     let bytes = std::fs::read(data("vtk/ramp_i16.vtk")).unwrap();
     refused("cut.vtk", &bytes[..bytes.len() - 20], "cut.vtk");
+    let bytes = std::fs::read(data("vtk/ramp_i64.vtk")).unwrap();
+    refused("cut64.vtk", &bytes[..bytes.len() - 20], "cut64.vtk");
 }
 
 #[test]

@@ -14,7 +14,7 @@ const MAX_TOKEN: usize = 64;
 const QUOTED: usize = 40;
 
 /// `token` quoted for a one-line message: at most [`QUOTED`] characters, escaped.
-fn quote(token: &[u8]) -> String {
+pub(super) fn quote(token: &[u8]) -> String {
     let text = crate::error::names::bytes(&token[..token.len().min(QUOTED)]);
     let more = if token.len() > QUOTED { "…" } else { "" };
     format!("\"{text}\"{more}")
@@ -22,7 +22,7 @@ fn quote(token: &[u8]) -> String {
 
 /// The next whitespace- or comma-separated token of `reader` in `token`: `false` at the end. A
 /// token longer than [`MAX_TOKEN`] stops the reading, so that no garbage is held in memory.
-fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std::io::Result<bool> {
+pub(super) fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std::io::Result<bool> {
     token.clear();
     loop {
         let buf = buffered(reader)?;

@@ -13,6 +13,7 @@
 //! note says 1 mm was used. An Imaris file is read as `imaris.rs` says. A beamline's raw file (projections, with `theta`, `data_white` or
 //! `data_dark` beside them) is refused unless `--array` names the dataset.
 
+mod dxchange;
 mod imaris;
 mod pick;
 
@@ -20,6 +21,7 @@ use std::path::Path;
 
 use rust_hdf5::{ByteOrder, DatatypeMessage, FileLocking, H5Dataset, H5File, StorageLayout};
 
+use super::data::wide::{Wide, read_wide};
 use super::data::{DataSpec, Encoding, Skip, one_channel, pick_volume, read_voxels_from};
 use super::reader::{Reader, Sniff};
 use super::{Format, LoadOptions, Read0, Source};
@@ -119,9 +121,13 @@ fn message(e: &rust_hdf5::Hdf5Error) -> String {
     crate::error::names::text(&line.chars().take(200).collect::<String>())
 }
 
-/// The voxel type and byte order of a dataset's elements; an error naming the dataset for a type
-/// slabscope does not read.
-fn voxel_type(path: &Path, name: &str, dt: &DatatypeMessage) -> Result<(VoxelType, Endian)> {
+/// The voxel type and byte order of a dataset's elements, and their 64-bit integer type (held as
+/// f32); an error naming the dataset for a type slabscope does not read.
+fn voxel_type(
+    path: &Path,
+    name: &str,
+    dt: &DatatypeMessage,
+) -> Result<(VoxelType, Endian, Option<Wide>)> {
     let endian = |order: &ByteOrder| match order {
         ByteOrder::LittleEndian => Endian::Little,
         ByteOrder::BigEndian => Endian::Big,
@@ -134,21 +140,23 @@ fn voxel_type(path: &Path, name: &str, dt: &DatatypeMessage) -> Result<(VoxelTyp
             ..
         } => {
             let ty = match (size, signed) {
-                (1, false) => Some(VoxelType::U8),
-                (1, true) => Some(VoxelType::I8),
-                (2, false) => Some(VoxelType::U16),
-                (2, true) => Some(VoxelType::I16),
-                (4, false) => Some(VoxelType::U32),
-                (4, true) => Some(VoxelType::I32),
+                (1, false) => Some((VoxelType::U8, None)),
+                (1, true) => Some((VoxelType::I8, None)),
+                (2, false) => Some((VoxelType::U16, None)),
+                (2, true) => Some((VoxelType::I16, None)),
+                (4, false) => Some((VoxelType::U32, None)),
+                (4, true) => Some((VoxelType::I32, None)),
+                (8, false) => Some((VoxelType::F32, Some(Wide::U64))),
+                (8, true) => Some((VoxelType::F32, Some(Wide::I64))),
                 _ => None,
             };
-            ty.map(|t| (t, endian(byte_order)))
+            ty.map(|(t, wide)| (t, endian(byte_order), wide))
         }
         DatatypeMessage::FloatingPoint {
             size, byte_order, ..
         } => match size {
-            4 => Some((VoxelType::F32, endian(byte_order))),
-            8 => Some((VoxelType::F64, endian(byte_order))),
+            4 => Some((VoxelType::F32, endian(byte_order), None)),
+            8 => Some((VoxelType::F64, endian(byte_order), None)),
             _ => None,
         },
         _ => None,
@@ -157,7 +165,7 @@ fn voxel_type(path: &Path, name: &str, dt: &DatatypeMessage) -> Result<(VoxelTyp
         Error::unsupported(
             path,
             format!(
-                "dataset {name} holds {}: slabscope reads 8- to 32-bit integers and 32- and \
+                "dataset {name} holds {}: slabscope reads 8- to 64-bit integers and 32- and \
                  64-bit reals",
                 pick::type_name(dt)
             ),
@@ -201,12 +209,14 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
     let ds = file
         .dataset(&chosen.path)
         .map_err(|e| Error::format(path, format!("dataset {name}: {}", message(&e))))?;
-    let (ty, endian) = voxel_type(
+    let (ty, endian, wide) = voxel_type(
         path,
         &name,
         &ds.datatype().map_err(|e| bad(path, &name, &e))?,
     )?;
-    check_storage(path, &name, &ds, ty.size() as u64, opts.max_memory)?;
+    // The bytes of one stored value.
+    let size = wide.map_or(ty.size(), |_| Wide::SIZE);
+    check_storage(path, &name, &ds, size as u64, opts.max_memory)?;
     let shape = &chosen.shape;
     let rank = shape.len();
     let mut dims = [shape[rank - 1], shape[rank - 2], shape[rank - 3]];
@@ -216,11 +226,11 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
         Some(_) => 0,
         None => pick_volume(path, count, opts.part.volume, &mut notes)?.0,
     };
-    check_budget(path, &name, shape, ty, opts.max_memory)?;
-    let mut bytes = read_volume(path, &name, &ds, dims, ty.size(), (volume, count))?;
-    if let Some(size) = imaris.as_ref().and_then(|i| i.size) {
-        imaris::crop(path, &name, &mut bytes, dims, size, ty.size())?;
-        dims = size;
+    check_budget(path, &name, shape, (ty, size), opts.max_memory)?;
+    let mut bytes = read_volume(path, &name, &ds, dims, size, (volume, count))?;
+    if let Some(cut) = imaris.as_ref().and_then(|i| i.size) {
+        imaris::crop(path, &name, &mut bytes, dims, cut, size)?;
+        dims = cut;
     }
     let spec = DataSpec {
         file: source.clone(),
@@ -236,20 +246,49 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
         trailing: false,
     };
     let mut stream = bytes.as_slice();
-    let voxels = read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.room())?;
+    let voxels = match wide {
+        Some(wide) => {
+            let (voxels, rounded) = read_wide(&spec, wide, stream, "HDF5 dataset", opts.room())?;
+            notes.extend(rounded.note(wide));
+            voxels
+        }
+        None => read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.room())?,
+    };
     drop(bytes);
-    let given = imaris
-        .and_then(|i| i.spacing)
-        .or_else(|| pick::spacing(&ds));
-    let spacing = given.unwrap_or_else(|| {
-        notes.push(format!(
-            "dataset {name} gives no voxel size (no element_size_um attribute): using 1 mm"
-        ));
-        [1.0; 3]
-    });
+    let imaris_spacing = imaris.and_then(|i| i.spacing);
+    let spacing = voxel_size(
+        &file,
+        &ds,
+        (&chosen.path, &name),
+        imaris_spacing,
+        &mut notes,
+    );
     let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?;
     read.details = Some(std::sync::Arc::new(pick::details(&listing, &chosen.path)));
     Ok(read)
+}
+
+/// The voxel size of the dataset `ds` (at `path`, shown as `name`) in mm: its `element_size_um`,
+/// an Imaris file's (`imaris`), or `DXchange`'s, else 1 mm with a note.
+fn voxel_size(
+    file: &H5File,
+    ds: &H5Dataset,
+    (path, name): (&str, &str),
+    imaris: Option<[f64; 3]>,
+    notes: &mut Vec<String>,
+) -> [f64; 3] {
+    let given = imaris.or_else(|| pick::spacing(ds)).or_else(|| {
+        let (spacing, note) = dxchange::spacing(file, path)?;
+        notes.push(note);
+        Some(spacing)
+    });
+    given.unwrap_or_else(|| {
+        notes.push(format!(
+            "dataset {name} gives no voxel size (no element_size_um attribute, no DXchange \
+             pixel size): using 1 mm"
+        ));
+        [1.0; 3]
+    })
 }
 
 /// The stored bytes of volume `volume.0` of the `volume.1` the dataset `ds` holds, each of
@@ -335,13 +374,14 @@ fn check_storage(
     Ok(())
 }
 
-/// Checks that the dataset's stored bytes (every volume of it, read at once) and the volume
-/// they are decoded into fit in `max_memory` together, and that each chunk of it does.
+/// Checks that the dataset's stored bytes (every volume of it, read at once, each value of
+/// `size` bytes) and the volume they are decoded into (as `ty` is held) fit in `max_memory`
+/// together, and that each chunk of it does.
 fn check_budget(
     path: &Path,
     name: &str,
     shape: &[usize],
-    ty: VoxelType,
+    (ty, size): (VoxelType, usize),
     max_memory: u64,
 ) -> Result<()> {
     let rank = shape.len();
@@ -350,7 +390,7 @@ fn check_budget(
         .try_fold(1u64, |a, &d| a.checked_mul(d as u64));
     let stored = shape
         .iter()
-        .try_fold(ty.size() as u64, |a, &d| a.checked_mul(d as u64));
+        .try_fold(size as u64, |a, &d| a.checked_mul(d as u64));
     let held = voxels.and_then(|n| n.checked_mul(held_type(ty, false).size() as u64));
     let needed = stored.zip(held).and_then(|(s, h)| s.checked_add(h));
     match needed {
@@ -358,12 +398,17 @@ fn check_budget(
         _ => Err(Error::TooLarge {
             path: path.to_path_buf(),
             what: format!(
-                "dataset {name}, {} {ty} voxels, read whole and then decoded",
+                "dataset {name}, {} {} voxels, read whole and then decoded",
                 shape
                     .iter()
                     .map(usize::to_string)
                     .collect::<Vec<_>>()
-                    .join("x")
+                    .join("x"),
+                if size == ty.size() {
+                    ty.to_string()
+                } else {
+                    "64-bit integer".into()
+                }
             ),
             needed: needed.unwrap_or(u64::MAX),
             limit: max_memory,

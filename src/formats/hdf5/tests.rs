@@ -25,16 +25,25 @@ fn element_types_map_to_voxel_types() {
     let le = ByteOrder::LittleEndian;
     assert_eq!(
         voxel_type(path, "/a", &int(2, true, ByteOrder::BigEndian)).unwrap(),
-        (VoxelType::I16, Endian::Big)
+        (VoxelType::I16, Endian::Big, None)
     );
     assert_eq!(
         voxel_type(path, "/a", &int(4, false, le)).unwrap(),
-        (VoxelType::U32, Endian::Little)
+        (VoxelType::U32, Endian::Little, None)
     );
-    let e = voxel_type(path, "/a", &int(8, true, le))
+    // 64-bit integers are held as f32.
+    assert_eq!(
+        voxel_type(path, "/a", &int(8, true, le)).unwrap(),
+        (VoxelType::F32, Endian::Little, Some(Wide::I64))
+    );
+    assert_eq!(
+        voxel_type(path, "/a", &int(8, false, ByteOrder::BigEndian)).unwrap(),
+        (VoxelType::F32, Endian::Big, Some(Wide::U64))
+    );
+    let e = voxel_type(path, "/a", &int(16, true, le))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("dataset /a holds i64"), "{e}");
+    assert!(e.contains("dataset /a holds"), "{e}");
     assert!(!e.contains('\n'), "{e}");
 }
 
@@ -42,14 +51,17 @@ fn element_types_map_to_voxel_types() {
 fn the_budget_counts_the_stored_bytes_and_the_volume() {
     let path = Path::new("x.h5");
     // 4x5x6 u16: 240 bytes stored, 240 held.
-    assert!(check_budget(path, "/a", &[4, 5, 6], VoxelType::U16, 480).is_ok());
-    assert!(check_budget(path, "/a", &[4, 5, 6], VoxelType::U16, 479).is_err());
+    assert!(check_budget(path, "/a", &[4, 5, 6], (VoxelType::U16, 2), 480).is_ok());
+    assert!(check_budget(path, "/a", &[4, 5, 6], (VoxelType::U16, 2), 479).is_err());
     // Two volumes of f64: 1920 stored, one volume of f32 held (480).
-    assert!(check_budget(path, "/a", &[2, 4, 5, 6], VoxelType::F64, 2400).is_ok());
-    assert!(check_budget(path, "/a", &[2, 4, 5, 6], VoxelType::F64, 2399).is_err());
+    assert!(check_budget(path, "/a", &[2, 4, 5, 6], (VoxelType::F64, 8), 2400).is_ok());
+    assert!(check_budget(path, "/a", &[2, 4, 5, 6], (VoxelType::F64, 8), 2399).is_err());
     // Claimed sizes past u64 are too large, not an overflow.
+    // Two volumes of i64: 1920 stored, one volume of f32 held (480).
+    assert!(check_budget(path, "/a", &[2, 4, 5, 6], (VoxelType::F32, 8), 2400).is_ok());
+    assert!(check_budget(path, "/a", &[2, 4, 5, 6], (VoxelType::F32, 8), 2399).is_err());
     let huge = [usize::MAX, usize::MAX, 2];
-    assert!(check_budget(path, "/a", &huge, VoxelType::U8, u64::MAX).is_err());
+    assert!(check_budget(path, "/a", &huge, (VoxelType::U8, 1), u64::MAX).is_err());
 }
 
 #[test]

@@ -1,10 +1,11 @@
 //! VTK XML image data (`.vti`), as `ParaView`, `PyVista` and VTK's `vtkXMLImageDataWriter` save
 //! simulation grids: an XML header (`<VTKFile type="ImageData">`, `<ImageData WholeExtent
-//! Origin Spacing Direction>`, one `<Piece Extent>`, its `<PointData>` and `<CellData>`
+//! Origin Spacing Direction>`, one `<Piece Extent>` (or several, assembled: `pieces.rs`), its `<PointData>` and `<CellData>`
 //! `<DataArray>`s), the values inline as ascii or base64 (`format="binary"`), or appended after
 //! the header in an `<AppendedData>` section, raw or base64, found by their `offset`. Binary values
-//! start with a header of their size (`UInt32` or `UInt64` words), or, zlib-compressed, of the
-//! blocks' sizes. x runs fastest.
+//! start with a header of their size (`UInt32` or `UInt64` words), or, compressed (zlib or LZ4),
+//! of the blocks' sizes. x runs fastest. 64-bit integers are held as f32, a note counting the
+//! values rounded (`data::wide`).
 //!
 //! The array read is the one a data section's `Scalars` names (point data first), else the first
 //! one-component array; an array of several components (a vector field) named so is refused, as
@@ -16,16 +17,17 @@
 
 mod arrays;
 mod payload;
+mod pieces;
+mod read;
 
-use std::io::{BufReader, Read};
 use std::path::Path;
 
 use roxmltree::{Document, Node, NodeId, ParsingOptions};
 
-use self::payload::{Base64, Blocks, Words};
-use super::data::{DataSpec, Encoding, Skip, read_voxels, read_voxels_from};
+use self::payload::{Compressor, Words};
+use super::data::wide::Wide;
+use super::data::{DataSpec, Encoding, Skip};
 use super::reader::{Reader, Sniff};
-use super::scratch::Room;
 use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
@@ -107,7 +109,7 @@ struct Appended {
 #[derive(Clone, Copy, Debug)]
 struct Layout {
     words: Words,
-    zlib: bool,
+    compressor: Option<Compressor>,
     appended: Option<Appended>,
 }
 
@@ -116,7 +118,10 @@ struct Array<'a> {
     id: NodeId,
     cells: bool,
     name: String,
+    /// The type its voxels are held in (f32 for 64-bit integers).
     ty: VoxelType,
+    /// Its type when it holds 64-bit integers.
+    wide: Option<Wide>,
     format: &'a str,
     offset: Option<u64>,
     text: &'a str,
@@ -143,58 +148,61 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         nodes_limit: MAX_NODES,
         ..ParsingOptions::default()
     };
-    let doc = Document::parse_with_options(text, options)
-        .map_err(|e| bad(format!("its XML header: {e}")))?;
+    let doc = Document::parse_with_options(text, options).map_err(|e| {
+        bad(format!(
+            "its XML header: {}",
+            crate::error::names::controls(&e.to_string())
+        ))
+    })?;
     let root = doc.root_element();
     let appended = tag
         .map(|at| appended_section(path, bytes, at))
         .transpose()?;
     let layout = layout(path, root, appended)?;
     let image = child(path, root, "ImageData")?;
+    // VTK gives no units: spacing and origin are taken as mm, as the legacy reader takes them.
+    let mut notes = Vec::new();
     let pieces: Vec<Node> = image
         .children()
         .filter(|n| n.has_tag_name("Piece"))
         .collect();
-    let [piece] = pieces[..] else {
-        return Err(bad(format!(
-            "holds {} pieces: slabscope reads image data of one piece",
-            pieces.len()
-        )));
+    let (piece, extent) = match pieces[..] {
+        [] => return Err(bad("holds no <Piece>".into())),
+        [piece] => (piece, integers::<6>(path, piece, "Extent")?),
+        [first, ..] => (first, integers::<6>(path, image, "WholeExtent")?),
     };
-    let extent = integers::<6>(path, piece, "Extent")?;
     let points: [usize; 3] = std::array::from_fn(|m| extent_points(extent, m));
     if points.contains(&0) {
-        return Err(bad(format!(
-            "its piece's Extent {extent:?} is empty or too large"
-        )));
+        return Err(bad(format!("its Extent {extent:?} is empty or too large")));
     }
     let array = pick_array(path, piece, opts.part.array.as_deref())?;
-    let dims = if array.cells {
-        points.map(|n| n.saturating_sub(1).max(1))
-    } else {
-        points
-    };
     let spec = DataSpec {
         file: source.clone(),
         start: 0,
         skip_lines: 0,
         skip: Skip::Bytes(0),
         encoding: Encoding::Raw,
-        dims,
+        dims: voxel_dims(points, array.cells),
         voxel_type: array.ty,
         endian: layout.words.endian,
         scale: None,
         volumes: (0, 1),
         trailing: true,
     };
-    let voxels = read_array(&spec, &array, layout, bytes, opts.room())?;
-    // VTK gives no units: spacing and origin are taken as mm, as the legacy reader takes them.
-    let mut notes = Vec::new();
+    let (voxels, rounded) = match pieces.len() {
+        1 => read::read_array(&spec, &array, layout, bytes, opts.room())?,
+        n => {
+            let read = pieces::assemble(&spec, &pieces, extent, &array, (layout, bytes), opts)?;
+            notes.push(format!("{n} pieces assembled into its WholeExtent"));
+            read
+        }
+    };
+    notes.extend(array.wide.and_then(|w| rounded.note(w)));
     if array.cells {
         notes.push("cell data: a voxel a cell, at its centre".into());
     }
     let (spacing, transform) = placement(path, image, extent, array.cells, &mut notes)?;
-    let mut read = Read0::new(path, dims, spacing, array.ty, voxels, notes)?;
+    let mut read = Read0::new(path, spec.dims, spacing, array.ty, voxels, notes)?;
     read.details = Some(std::sync::Arc::new(arrays::arrays(piece, array.id)));
     Ok(read.with_transform(Some(transform)))
 }
@@ -214,7 +222,12 @@ fn appended_section(path: &Path, bytes: &[u8], at: usize) -> Result<Appended> {
         .ok_or_else(|| bad("tag does not end"))?;
     let tag = std::str::from_utf8(&bytes[at..=at + end]).map_err(|_| bad("tag is no text"))?;
     let tag = format!("{}/>", tag.trim_end_matches('>').trim_end_matches('/'));
-    let doc = Document::parse(&tag).map_err(|e| bad(&format!("tag: {e}")))?;
+    let doc = Document::parse(&tag).map_err(|e| {
+        bad(&format!(
+            "tag: {}",
+            crate::error::names::controls(&e.to_string())
+        ))
+    })?;
     let base64 = match doc.root_element().attribute("encoding").unwrap_or("raw") {
         "raw" => false,
         "base64" => true,
@@ -261,18 +274,20 @@ fn layout(path: &Path, root: Node, appended: Option<Appended>) -> Result<Layout>
             )));
         }
     };
-    let zlib = match root.attribute("compressor").unwrap_or("") {
-        "" => false,
-        "vtkZLibDataCompressor" => true,
+    let compressor = match root.attribute("compressor").unwrap_or("") {
+        "" => None,
+        "vtkZLibDataCompressor" => Some(Compressor::Zlib),
+        "vtkLZ4DataCompressor" => Some(Compressor::Lz4),
         other => {
             return Err(bad(format!(
-                "compressor {other:?}: slabscope reads zlib-compressed and uncompressed data"
+                "compressor {other:?}: slabscope reads zlib- and LZ4-compressed and uncompressed \
+                 data"
             )));
         }
     };
     Ok(Layout {
         words: Words { size, endian },
-        zlib,
+        compressor,
         appended,
     })
 }
@@ -326,6 +341,16 @@ fn integers<const N: usize>(path: &Path, node: Node, name: &str) -> Result<[i64;
         ));
     }
     Ok(values.map(|v| v as i64))
+}
+
+/// The voxels along each axis of the `points` of an extent: a cell fewer for cell data (one
+/// where the extent is flat).
+fn voxel_dims(points: [usize; 3], cells: bool) -> [usize; 3] {
+    if cells {
+        points.map(|n| n.saturating_sub(1).max(1))
+    } else {
+        points
+    }
 }
 
 /// The points of `extent` along axis `m`; 0 when it is empty or beyond a billion.
@@ -412,11 +437,12 @@ fn array<'a>(path: &Path, node: Node<'a, '_>, cells: bool) -> Result<Array<'a>> 
         ));
     }
     let ty_name = node.attribute("type").unwrap_or("");
-    let ty = scalar_type(ty_name).ok_or_else(|| {
+    let (ty, wide) = scalar_type(ty_name).ok_or_else(|| {
         Error::unsupported(
             path,
             format!(
-                "its array {shown:?} is of type {:?}: slabscope reads Int8 to UInt32, Float32 and Float64",
+                "its array {shown:?} is of type {:?}: slabscope reads Int8 to UInt64, Float32 \
+                 and Float64",
                 crate::error::names::text(ty_name)
             ),
         )
@@ -434,15 +460,23 @@ fn array<'a>(path: &Path, node: Node<'a, '_>, cells: bool) -> Result<Array<'a>> 
         cells,
         name,
         ty,
+        wide,
         format: node.attribute("format").unwrap_or("ascii"),
         offset,
         text: node.text().unwrap_or(""),
     })
 }
 
-/// The voxel type of a VTK XML type's name (64-bit integers are not read, as in legacy files).
-fn scalar_type(name: &str) -> Option<VoxelType> {
-    Some(match name {
+impl Array<'_> {
+    /// The bytes of one of its values in the file.
+    fn size(&self) -> usize {
+        self.wide.map_or(self.ty.size(), |_| Wide::SIZE)
+    }
+}
+
+/// The voxel type of a VTK XML type's name, and its 64-bit integer type (held as f32).
+fn scalar_type(name: &str) -> Option<(VoxelType, Option<Wide>)> {
+    let ty = match name {
         "Int8" | "Char" => VoxelType::I8,
         "UInt8" => VoxelType::U8,
         "Int16" => VoxelType::I16,
@@ -451,118 +485,11 @@ fn scalar_type(name: &str) -> Option<VoxelType> {
         "UInt32" => VoxelType::U32,
         "Float32" => VoxelType::F32,
         "Float64" => VoxelType::F64,
+        "Int64" => return Some((VoxelType::F32, Some(Wide::I64))),
+        "UInt64" => return Some((VoxelType::F32, Some(Wide::U64))),
         _ => return None,
-    })
-}
-
-/// Reads the voxels of `array`, whose volume `spec` describes, from the file's `bytes`.
-fn read_array(
-    spec: &DataSpec,
-    array: &Array,
-    layout: Layout,
-    bytes: &[u8],
-    room: Room,
-) -> Result<crate::volume::Voxels> {
-    let path = spec.file.path();
-    let shown = crate::error::names::text(&array.name);
-    let bad = |what: String| Error::format(path, format!("its array {shown:?}: {what}"));
-    // The budget is weighed by the shared voxel reader, as the volume is held, before any block
-    // is inflated or any base64 decoded; the block list alone is weighed here.
-    let expected = spec
-        .dims
-        .iter()
-        .try_fold(spec.voxel_type.size() as u64, |a, &d| {
-            a.checked_mul(d as u64)
-        })
-        .ok_or_else(|| bad("more voxels than this machine can address".into()))?;
-    let (input, base64): (&[u8], bool) = match array.format {
-        "ascii" => {
-            let spec = DataSpec {
-                encoding: Encoding::Ascii,
-                trailing: false,
-                ..spec.clone()
-            };
-            let mut text = array.text.as_bytes();
-            return read_voxels_from(&spec, &mut text, "ascii", room);
-        }
-        "binary" => (array.text.as_bytes(), true),
-        "appended" => {
-            let appended = layout
-                .appended
-                .ok_or_else(|| bad("appended, but the file has no AppendedData".into()))?;
-            let offset = array
-                .offset
-                .ok_or_else(|| bad("appended, with no offset".into()))?;
-            let at = usize::try_from(offset)
-                .ok()
-                .and_then(|o| appended.start.checked_add(o))
-                .filter(|&at| at <= bytes.len())
-                .ok_or_else(|| bad(format!("its offset {offset} is beyond the file's end")))?;
-            if !appended.base64 && !layout.zlib {
-                return raw_in_place(spec, &bytes[at..], at, layout.words, expected, room);
-            }
-            (&bytes[at..], appended.base64)
-        }
-        other => {
-            return Err(bad(format!(
-                "format {:?}: expected ascii, binary or appended",
-                crate::error::names::text(other)
-            )));
-        }
     };
-    let mut decoded: Box<dyn Read + '_> = if base64 {
-        Box::new(Base64::new(input))
-    } else {
-        Box::new(input)
-    };
-    if layout.zlib {
-        // Each block's compressed size is a word of the file, listed in memory as a u64.
-        let max_blocks = (input.len() / layout.words.size) as u64;
-        let max_blocks = max_blocks.min(room.max_memory / 8);
-        let blocks = Blocks::new(decoded, layout.words, expected, max_blocks).map_err(bad)?;
-        let mut stream = BufReader::new(blocks);
-        return read_voxels_from(spec, &mut stream, "zlib", room);
-    }
-    let size = layout
-        .words
-        .read(&mut decoded)
-        .map_err(|e| bad(e.to_string()))?;
-    if size != expected {
-        return Err(bad(format!(
-            "its header says {size} bytes, not the {expected} of its voxels"
-        )));
-    }
-    let mut stream = BufReader::new(decoded.take(size));
-    read_voxels_from(spec, &mut stream, "base64", room)
-}
-
-/// Raw appended voxels at `at` in the file (`bytes` from there), after their size: read in place
-/// where they can be.
-fn raw_in_place(
-    spec: &DataSpec,
-    bytes: &[u8],
-    at: usize,
-    words: Words,
-    expected: u64,
-    room: Room,
-) -> Result<crate::volume::Voxels> {
-    let path = spec.file.path();
-    let size = words
-        .read(&mut &bytes[..])
-        .map_err(|e| Error::format(path, e.to_string()))?;
-    if size != expected {
-        return Err(Error::format(
-            path,
-            format!(
-                "an appended array's header says {size} bytes, not the {expected} of its voxels"
-            ),
-        ));
-    }
-    let spec = DataSpec {
-        start: (at + words.size) as u64,
-        ..spec.clone()
-    };
-    read_voxels(&spec, room)
+    Some((ty, None))
 }
 
 /// The spacing and the voxel-to-world transform of the `<ImageData>` `image` whose piece spans

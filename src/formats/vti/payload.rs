@@ -1,6 +1,6 @@
 //! The bytes of a VTK XML array: base64 text decoded as it is read ([`Base64`]), a header of one
-//! byte count or, compressed, of the zlib blocks' sizes, and the blocks inflated one at a time
-//! ([`Blocks`]). Every size the header claims is checked against the array's own size and the
+//! byte count or, compressed, of the zlib or LZ4 blocks' sizes, and the blocks decompressed one
+//! at a time ([`Blocks`]). Every size the header claims is checked against the array's own size and the
 //! bytes the file holds before anything is allocated.
 
 use std::io::{Error as IoError, ErrorKind, Read};
@@ -127,9 +127,32 @@ impl Words {
     }
 }
 
-/// The zlib blocks of a compressed array, inflated one at a time as they are read.
+/// The most bytes one byte of an LZ4 block decodes to, with room for the block's last literals.
+const LZ4_MOST: u64 = 256;
+
+/// How an array's blocks are compressed (the file's `compressor`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Compressor {
+    /// `vtkZLibDataCompressor`: each block a zlib stream.
+    Zlib,
+    /// `vtkLZ4DataCompressor`: each block an LZ4 block (no frame).
+    Lz4,
+}
+
+impl Compressor {
+    /// Its name in messages.
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            Self::Zlib => "zlib",
+            Self::Lz4 => "lz4",
+        }
+    }
+}
+
+/// The compressed blocks of an array, decompressed one at a time as they are read.
 pub(super) struct Blocks<R> {
     input: R,
+    compressor: Compressor,
     /// Each block's compressed size.
     sizes: Vec<u64>,
     block_size: u64,
@@ -147,6 +170,7 @@ impl<R: Read> Blocks<R> {
     /// list.
     pub(super) fn new(
         mut input: R,
+        compressor: Compressor,
         words: Words,
         expected: u64,
         max_blocks: u64,
@@ -160,15 +184,16 @@ impl<R: Read> Blocks<R> {
                 .checked_mul(block_size)
                 .and_then(|t| t.checked_add(last_size)),
         };
+        let name = compressor.name();
         if total != Some(expected) || last_size > block_size {
             return Err(format!(
-                "its zlib header says {count} blocks of {block_size} bytes, the last {last} \
+                "its {name} header says {count} blocks of {block_size} bytes, the last {last} \
                  bytes: expected {expected} bytes in all"
             ));
         }
         if count > max_blocks {
             return Err(format!(
-                "its zlib header says {count} blocks, more than the file or the memory limit holds"
+                "its {name} header says {count} blocks, more than the file or the memory limit holds"
             ));
         }
         let sizes = (0..count)
@@ -176,6 +201,7 @@ impl<R: Read> Blocks<R> {
             .collect::<Result<Vec<u64>, String>>()?;
         Ok(Self {
             input,
+            compressor,
             sizes,
             block_size,
             last_size,
@@ -186,7 +212,7 @@ impl<R: Read> Blocks<R> {
         })
     }
 
-    /// Inflates the next block into `block`.
+    /// Decompresses the next block into `block`.
     fn inflate(&mut self) -> std::io::Result<()> {
         let i = self.next;
         let size = if i + 1 == self.sizes.len() {
@@ -201,18 +227,38 @@ impl<R: Read> Blocks<R> {
         if (self.compressed.len() as u64) < self.sizes[i] {
             return Err(IoError::new(
                 ErrorKind::UnexpectedEof,
-                format!("zlib block {i} is cut short"),
+                format!("{} block {i} is cut short", self.compressor.name()),
             ));
         }
+        let name = self.compressor.name();
         self.block.clear();
-        ZlibDecoder::new(&self.compressed[..])
-            .take(size)
-            .read_to_end(&mut self.block)
-            .map_err(|e| invalid(format!("zlib block {i}: {e}")))?;
-        if self.block.len() as u64 != size {
+        let made = match self.compressor {
+            Compressor::Zlib => ZlibDecoder::new(&self.compressed[..])
+                .take(size)
+                .read_to_end(&mut self.block)
+                .map_err(|e| invalid(format!("zlib block {i}: {e}")))?,
+            Compressor::Lz4 => {
+                // An LZ4 byte decodes to at most 255 bytes (a match's length grows by 255 a
+                // byte): a block claiming more than its bytes can hold is refused before room is
+                // made for it.
+                let most = (self.compressed.len() as u64).saturating_mul(LZ4_MOST);
+                if size > most {
+                    return Err(invalid(format!(
+                        "lz4 block {i} of {} bytes cannot decompress to {size}",
+                        self.compressed.len()
+                    )));
+                }
+                self.block
+                    .resize(usize::try_from(size).unwrap_or(usize::MAX), 0);
+                let made = lz4_flex::block::decompress_into(&self.compressed, &mut self.block)
+                    .map_err(|e| invalid(format!("lz4 block {i}: {e}")))?;
+                self.block.truncate(made);
+                made
+            }
+        };
+        if made as u64 != size {
             return Err(invalid(format!(
-                "zlib block {i} inflates to {} bytes, not {size}",
-                self.block.len()
+                "{name} block {i} decompresses to {made} bytes, not {size}"
             )));
         }
         self.next += 1;
@@ -266,13 +312,58 @@ mod tests {
         };
         let header = |w: &[u32]| -> Vec<u8> { w.iter().flat_map(|v| v.to_le_bytes()).collect() };
         // Two blocks of 4 bytes, the last of 2: 6 bytes, not 10.
-        let e = Blocks::new(&header(&[2, 4, 2, 9, 9])[..], words, 10, 100).err();
-        assert!(e.unwrap().contains("2 blocks of 4 bytes"));
+        let e = Blocks::new(
+            &header(&[2, 4, 2, 9, 9])[..],
+            Compressor::Zlib,
+            words,
+            10,
+            100,
+        )
+        .err();
+        assert!(
+            e.unwrap()
+                .contains("its zlib header says 2 blocks of 4 bytes")
+        );
         // A billion blocks the file cannot hold.
-        let e = Blocks::new(&header(&[1 << 30, 1, 0])[..], words, 1 << 30, 100).err();
+        let e = Blocks::new(
+            &header(&[1 << 30, 1, 0])[..],
+            Compressor::Lz4,
+            words,
+            1 << 30,
+            100,
+        )
+        .err();
         assert!(
             e.unwrap()
                 .contains("more than the file or the memory limit holds")
         );
+    }
+
+    #[test]
+    fn an_lz4_block_claiming_more_than_its_bytes_hold_is_refused_before_room_is_made() {
+        let words = Words {
+            size: 4,
+            endian: Endian::Little,
+        };
+        // One block of 1 MiB, compressed to 2 bytes.
+        let mut input: Vec<u8> = [1u32, 1 << 20, 0, 2]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        input.extend_from_slice(&[0x10, 0x00]);
+        let mut blocks = Blocks::new(&input[..], Compressor::Lz4, words, 1 << 20, 100).unwrap();
+        let e = blocks.read(&mut [0u8; 16]).unwrap_err().to_string();
+        assert_eq!(e, "lz4 block 0 of 2 bytes cannot decompress to 1048576");
+        assert!(blocks.block.capacity() < 1 << 20);
+        // The same bytes decoded exactly: a block of one literal, `A`.
+        let mut input: Vec<u8> = [1u32, 1, 0, 2]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        input.extend_from_slice(&[0x10, b'A']);
+        let mut blocks = Blocks::new(&input[..], Compressor::Lz4, words, 1, 100).unwrap();
+        let mut out = Vec::new();
+        blocks.read_to_end(&mut out).unwrap();
+        assert_eq!(out, b"A");
     }
 }

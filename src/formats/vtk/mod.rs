@@ -8,13 +8,14 @@
 
 mod arrays;
 
-use std::io::Read;
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
 use serde::Serialize;
 
 use self::arrays::later_arrays;
 
+use super::data::wide::{Rounded, Wide, read_wide, read_wide_ascii};
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::details::{Details, json_of};
 use super::reader::{Reader, Sniff};
@@ -114,6 +115,8 @@ struct Header {
     origin: [f64; 3],
     cells: bool,
     ty: Option<VoxelType>,
+    /// Its type when it holds 64-bit integers (held as f32).
+    wide: Option<Wide>,
     color: bool,
     /// The array's name and type as written.
     array: (String, String),
@@ -236,10 +239,12 @@ impl Header {
             words.get(1).copied().unwrap_or("").to_string(),
             name.to_string(),
         );
-        self.ty =
-            Some(scalar_type(name).ok_or_else(|| {
-                Error::unsupported(path, format!("VTK scalars of type {name:?}"))
-            })?);
+        self.wide = wide_type(name);
+        self.ty = Some(
+            scalar_type(name)
+                .or(self.wide.map(|_| VoxelType::F32))
+                .ok_or_else(|| Error::unsupported(path, format!("VTK scalars of type {name:?}")))?,
+        );
         if words.get(3).map_or(Ok(1), |c| c.parse::<usize>()) != Ok(1) {
             return Err(Error::unsupported(
                 path,
@@ -263,6 +268,16 @@ fn scalar_type(name: &str) -> Option<VoxelType> {
         "double" | "vtktypefloat64" => VoxelType::F64,
         _ => return None,
     })
+}
+
+/// The 64-bit integer type of a VTK scalar type's name (`long` as VTK writes it on Linux and
+/// macOS: 8 bytes).
+fn wide_type(name: &str) -> Option<Wide> {
+    match name.to_ascii_lowercase().as_str() {
+        "long" | "vtkidtype" | "vtktypeint64" => Some(Wide::I64),
+        "unsigned_long" | "vtktypeuint64" => Some(Wide::U64),
+        _ => None,
+    }
 }
 
 fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
@@ -308,7 +323,15 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         // VTK's writer ends binary values with a newline.
         trailing: true,
     };
-    let mut voxels = read_voxels(&spec, opts.room())?;
+    let mut notes = Vec::new();
+    let mut voxels = match h.wide {
+        Some(wide) => {
+            let (voxels, rounded) = read_wide_values(&spec, wide, opts)?;
+            notes.extend(rounded.note(wide));
+            voxels
+        }
+        None => read_voxels(&spec, opts.room())?,
+    };
     let mut held = ty;
     if h.color && !h.binary {
         // ASCII colours are written as fractions of 255: the bytes again.
@@ -321,7 +344,21 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         };
         held = VoxelType::U8;
     }
-    let mut notes = Vec::new();
+    let (spacing, transform) = placement(path, &h, &mut notes)?;
+    let mut read = Read0::new(path, dims, spacing, held, voxels, notes)?;
+    let mut details = h.details();
+    details.arrays.extend(later_arrays(source, &h));
+    read.details = Some(std::sync::Arc::new(details));
+    Ok(read.with_transform(Some(transform)))
+}
+
+/// The spacing of the file `h` heads, and its voxels' place: at its origin (the first cell's
+/// centre half a step past it), its orientation unknown.
+fn placement(
+    path: &Path,
+    h: &Header,
+    notes: &mut Vec<String>,
+) -> Result<([f64; 3], WorldTransform)> {
     let spacing = h.spacing.unwrap_or_else(|| {
         notes.push("no SPACING: using 1 mm".into());
         [1.0; 3]
@@ -343,11 +380,35 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     for (row, o) in transform.matrix.iter_mut().zip(origin) {
         row[3] = o;
     }
-    let mut read = Read0::new(path, dims, spacing, held, voxels, notes)?;
-    let mut details = h.details();
-    details.arrays.extend(later_arrays(source, &h));
-    read.details = Some(std::sync::Arc::new(details));
-    Ok(read.with_transform(Some(transform)))
+    Ok((spacing, transform))
+}
+
+/// The 64-bit integers of the values `spec` describes, binary (big-endian) or ascii, as f32
+/// voxels, and what rounding them did.
+fn read_wide_values(spec: &DataSpec, wide: Wide, opts: &LoadOptions) -> Result<(Voxels, Rounded)> {
+    let path = spec.file.path();
+    let mut file = spec.file.open()?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    file.seek(SeekFrom::Start(spec.start))
+        .map_err(|e| Error::io(path, e))?;
+    let file = BufReader::new(file);
+    if spec.encoding == Encoding::Ascii {
+        return read_wide_ascii(spec, wide, file, opts.room());
+    }
+    let expected = spec
+        .dims
+        .iter()
+        .try_fold(Wide::SIZE as u64, |a, &d| a.checked_mul(d as u64))
+        .unwrap_or(u64::MAX);
+    let found = len.saturating_sub(spec.start);
+    if found < expected {
+        return Err(Error::Truncated {
+            path: path.to_path_buf(),
+            expected,
+            found,
+        });
+    }
+    read_wide(spec, wide, file.take(expected), "binary", opts.room())
 }
 
 impl Header {

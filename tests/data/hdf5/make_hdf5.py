@@ -4,7 +4,8 @@ function of its index, so the tests check values without a second copy: value(x,
 x + 10*y + 100*z (+ 1000*t for a 4-D dataset), stored in C order as h5py writes it, the array
 indexed [z, y, x] (the last index fastest). h5py is BSD-licensed; the files are this project's.
 `reference.json` beside them freezes h5py's own reading: each dataset's shape, dtype, chunks,
-filters, and the sum and first and last values of its voxels."""
+filters, and the sum and first and last values of its voxels (and, for 64-bit integers, of
+numpy's nearest f32 of each, with how many an f32 does not hold exactly)."""
 
 import json
 from pathlib import Path
@@ -50,6 +51,17 @@ with new("ramp_f64_be.h5") as f:
 with new("dxchange_recon.h5") as f:
     f.create_dataset("exchange/data", data=ramp(np.uint8), chunks=(1, 5, 6))
     f.create_dataset("exchange/mask2d", data=np.ones((5, 6), np.uint8))
+# DXchange's voxel size: the objective's effective pixel size (`resolution`, in microns), or the
+# detector's pixel size (`pixel_size_x`, in µm) over the objective's magnification.
+with new("dxchange_resolution.h5") as f:
+    f.create_dataset("exchange/data", data=ramp(np.uint16))
+    r = f.create_dataset("measurement/instrument/detection_system/objective/resolution", data=[0.65])
+    r.attrs["units"] = "microns"
+with new("dxchange_pixel_size.h5") as f:
+    f.create_dataset("exchange/data", data=ramp(np.uint16))
+    p = f.create_dataset("measurement/instrument/detector/pixel_size_x", data=[6.5])
+    p.attrs["units"] = "um"
+    f.create_dataset("measurement/instrument/detection_system/objective/magnification", data=[10.0])
 # Two 3-D datasets: one must be named.
 with new("two_volumes.h5") as f:
     f.create_dataset("a", data=ramp(np.int32))
@@ -64,6 +76,13 @@ with new("projections.h5") as f:
     f.create_dataset("exchange/data_dark", data=np.zeros((2, NY, NX), np.uint16))
     f.create_dataset("exchange/theta", data=np.linspace(0, 180, NZ))
 
+# 64-bit integers, held as f32: a big-endian i64 ramp, chunked with gzip, and u64 values an f32
+# does not hold exactly (the ramp plus 2^40, the last voxel 2^64 - 1).
+with new("wide_ints.h5") as f:
+    f.create_dataset("ramp", data=ramp(">i8"), chunks=(2, 5, 6), compression="gzip")
+    beyond = ramp(np.uint64) + np.uint64(1 << 40)
+    beyond[-1, -1, -1] = np.iinfo(np.uint64).max
+    f.create_dataset("beyond", data=beyond)
 
 
 def imaris_text(value):
@@ -111,6 +130,15 @@ for path in sorted([*HERE.glob("*.h5"), *HERE.glob("*.ims")]):
                 "first": float(a.flat[0]) if a.size else None,
                 "last": float(a.flat[-1]) if a.size else None,
             }
+            if a.dtype.kind in "iu" and a.dtype.itemsize == 8 and a.ndim == 3:
+                # Held as f32: numpy's nearest f32 of each value, and how many are not exact.
+                f32 = a.astype(np.float32)
+                entries["/" + name]["f32"] = {
+                    "sum": float(np.sum(f32, dtype=np.float64)),
+                    "first": float(f32.flat[0]),
+                    "last": float(f32.flat[-1]),
+                    "rounded": int(sum(int(v) != int(w) for v, w in zip(a.flat, f32.flat))),
+                }
 
     with h5py.File(path, "r") as f:
         f.visititems(visit)

@@ -42,3 +42,7 @@ write("ramp_i16.vtk", image(np.int16), binary=True)
 write("ramp_f32.vtk", image(np.float32), binary=True)
 write("ramp_u8_ascii.vtk", image(np.uint8), binary=False)  # values up to 345 wrap to u8
 write("ramp_f64_cells.vtk", image(np.float64, cells=True), binary=True)
+# 64-bit integers (held as f32): VTK names an int64 array `vtktypeint64`, a uint64 one
+# `vtktypeuint64`.
+write("ramp_i64.vtk", image(np.int64), binary=True)
+write("ramp_u64_ascii.vtk", image(np.uint64), binary=False)
