@@ -159,7 +159,10 @@ fn a_full_resolution_partition_beyond_the_budget_is_counted_in_strips_exactly() 
     let explained = [&args[..], &["--resolution", "full", "--explain"]].concat();
     let (explained, _) = peak_of(&explained);
     let explained: serde_json::Value = serde_json::from_str(&explained).unwrap();
-    assert_eq!(explained["views_resolution"]["pyramid_level"], 1, "{explained}");
+    assert_eq!(
+        explained["views_resolution"]["pyramid_level"], 1,
+        "{explained}"
+    );
     let streamed: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(streamed["resolution"]["pyramid_level"], 0, "{streamed}");
     assert_eq!(
