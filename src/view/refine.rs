@@ -95,9 +95,9 @@ impl<T> Pattern<T> {
     }
 }
 
-/// A pattern search (`refine::Pattern`) from `seed`, whose axis `axis_of` gives, from a step of `start` degrees:
-/// `evaluate` scores an axis (the neighbours of a step in parallel); `stepped` runs after each
-/// step, for progress and cancellation.
+/// A pattern search (`refine::Pattern`) from `seed`, whose axis `axis_of` gives, from a step of
+/// `start` degrees: `evaluate` scores an axis (the neighbours of a step in parallel); `stepped`
+/// runs after each step, for progress and cancellation.
 pub fn pattern_search<T: Clone + Send>(
     seed: &T,
     start: f64,
