@@ -4,6 +4,8 @@
 
 use std::sync::Arc;
 
+use slabscope::partition::Method;
+
 use super::{App, Pane};
 use crate::tui::event::{Effect, Task};
 use crate::tui::lesson::{Lesson, LessonRequest, Subject};
@@ -48,6 +50,9 @@ impl App {
                 best: views.best().axis,
                 offset: self.ray,
             })
+        } else if let Some((generation, upto)) = self.shown_best_merge() {
+            self.part.ready()?;
+            Some(Subject::BestMerge { upto, generation })
         } else {
             self.part.ready()?;
             Some(Subject::Step {
@@ -58,8 +63,23 @@ impl App {
         }
     }
 
+    /// The tour's merge page's pin, while the step shown is the one it set.
+    fn shown_best_merge(&self) -> Option<(u64, usize)> {
+        let pin = self.tour.as_ref()?.best_merge?;
+        let shown = (self.part.generation(), self.part.position);
+        (self.focus != Pane::Views && self.part.method == Method::BottomUp && pin == shown)
+            .then_some(pin)
+    }
+
     /// Asks for the lesson of what is selected when that changed.
     pub(super) fn sync_lesson(&mut self) -> Vec<Effect> {
+        // Once the user steps away from the step the merge page set, the lesson follows the
+        // steps, even back at that step.
+        if self.shown_best_merge().is_none()
+            && let Some(t) = self.tour.as_mut()
+        {
+            t.best_merge = None;
+        }
         if !self.lesson.open {
             return vec![];
         }

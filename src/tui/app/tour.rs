@@ -40,6 +40,10 @@ pub struct Tour {
     pub numbers: Option<String>,
     /// Paper mode (`tour --paper`): the paper's single lattice, every voxel counted.
     pub paper: bool,
+    /// On the page of a merge, the histories' generation and the step it set: while the step
+    /// shown is that one, the lesson shows the merge of the highest NMI taken to it (the last
+    /// one may join slabs barely alike); n p step on from it, and the lesson follows the step.
+    pub best_merge: Option<(u64, usize)>,
 }
 
 /// The numbers a page adds to its paragraph, from the histories shown.
@@ -123,6 +127,9 @@ impl Setup {
 
 /// The page on paper mode and the defaults, whose lesson is the two modes' numbers.
 pub const MODES: usize = 6;
+
+/// The page of a merge, whose lesson is the merge of the highest NMI taken to the step shown.
+pub const MERGE: usize = 12;
 
 /// The page setting top-down beside bottom-up, which adds what each keeps.
 pub const COMPARED: usize = 13;
@@ -275,6 +282,7 @@ impl Tour {
             applied: false,
             numbers: None,
             paper,
+            best_merge: None,
         }
     }
 
@@ -288,7 +296,7 @@ impl Tour {
         let page = self.page.saturating_add_signed(by).min(PAGES.len() - 1);
         if page != self.page {
             self.page = page;
-            (self.applied, self.numbers) = (false, None);
+            (self.applied, self.numbers, self.best_merge) = (false, None, None);
         }
     }
 
@@ -371,8 +379,10 @@ impl App {
         self.ray = (0, 0);
         // What the terminal's answers said is not the page's.
         self.status.notice = None;
+        let best_merge = (t.page == MERGE && method == Method::BottomUp)
+            .then(|| (self.part.generation(), position));
         if let Some(t) = self.tour.as_mut() {
-            (t.applied, t.numbers) = (true, numbers);
+            (t.applied, t.numbers, t.best_merge) = (true, numbers, best_merge);
         }
         self.sync_focus();
         self.after_step()
