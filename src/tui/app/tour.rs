@@ -1,5 +1,5 @@
 //! The guided tour (`slabscope tour`): the paper in sixteen short pages, each with the live panes
-//! set to show what it says. Space, → or `PgDn` the next page, ← or `PgUp` the one before (as a
+//! set to show what it says. Space, →, `PgDn` or `.` the next page, ←, `PgUp` or `b` the one before (as a
 //! presenter's remote sends them), q quits.
 //!
 //! Once the views and the histories are in, each page focuses a pane, selects the best or the
