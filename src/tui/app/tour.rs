@@ -319,6 +319,16 @@ pub fn position(histories: &Histories, method: Method, slabs: usize) -> Option<u
 }
 
 impl App {
+    /// Whether the exploded view shows large, over the four panes: on the tour's last page,
+    /// unless the lesson or the help covers it.
+    pub fn preview_large(&self) -> bool {
+        self.tour
+            .as_ref()
+            .is_some_and(|t| t.page + 1 == PAGES.len())
+            && !self.lesson.open
+            && !self.help
+    }
+
     /// Turns the tour's page.
     pub(super) fn turn_page(&mut self, by: isize) -> Vec<Effect> {
         if let Some(t) = self.tour.as_mut() {

@@ -62,6 +62,7 @@ fn filled(w: u16, h: u16) -> App {
         ratatui::layout::Rect::new(0, 0, w, h),
         false,
         Some(NAMES.len()),
+        false,
     )
     .unwrap();
     app.update(Action::PreviewArea(cells.0, cells.1));

@@ -364,3 +364,37 @@ fn the_merge_page_shows_the_merge_of_the_highest_nmi_and_the_steps_stay_reachabl
         Subject::BestMerge { .. }
     ));
 }
+
+#[test]
+fn the_last_page_shows_the_exploded_view_large() {
+    let mut app = ready_app();
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(PAGES.len() as isize - 1));
+    assert!(app.preview_large());
+    for (w, h) in [(80, 24), (160, 48)] {
+        let screen = &screens(&mut app, w, h, vec![])[0];
+        // The preview over the four panes: as wide as the screen, down to the tour's page.
+        let area = ratatui::layout::Rect::new(0, 0, w, h);
+        let cells = crate::tui::ui::preview_cells(area, true, None, true).unwrap();
+        let page = if h < 36 { 6 } else { 8 };
+        assert_eq!(cells, (w - 2, h - page - 2 - 2));
+        assert_eq!(app.preview.cells, cells, "the picture asked at that size");
+        let first = screen.lines().next().unwrap();
+        assert!(first.starts_with("┌ Exploded view"), "{screen}");
+        assert!(
+            !screen.contains("Slabs") && !screen.contains("Curves"),
+            "{screen}"
+        );
+    }
+    // The page before, the lesson or the help: the panes as ever.
+    app.update(Action::ToggleLesson);
+    assert!(!app.preview_large());
+    app.update(Action::ToggleLesson);
+    app.update(Action::TurnPage(-1));
+    assert!(!app.preview_large());
+    screens(&mut app, 160, 48, vec![]);
+    let area = ratatui::layout::Rect::new(0, 0, 160, 48);
+    let small = crate::tui::ui::preview_cells(area, true, None, false).unwrap();
+    assert!(small.0 < 120, "{small:?}");
+    assert_eq!(app.preview.cells, small);
+}
