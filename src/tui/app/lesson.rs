@@ -63,23 +63,16 @@ impl App {
         }
     }
 
-    /// The tour's merge page's pin, while the step shown is the one it set.
+    /// The histories' generation and the step shown, while the tour's merge page shows the
+    /// merge of the highest NMI taken to it.
     fn shown_best_merge(&self) -> Option<(u64, usize)> {
-        let pin = self.tour.as_ref()?.best_merge?;
-        let shown = (self.part.generation(), self.part.position);
-        (self.focus != Pane::Views && self.part.method == Method::BottomUp && pin == shown)
-            .then_some(pin)
+        let pinned = self.tour.as_ref()?.best_merge;
+        (pinned && self.focus != Pane::Views && self.part.method == Method::BottomUp)
+            .then(|| (self.part.generation(), self.part.position))
     }
 
     /// Asks for the lesson of what is selected when that changed.
     pub(super) fn sync_lesson(&mut self) -> Vec<Effect> {
-        // Once the user steps away from the step the merge page set, the lesson follows the
-        // steps, even back at that step.
-        if self.shown_best_merge().is_none()
-            && let Some(t) = self.tour.as_mut()
-        {
-            t.best_merge = None;
-        }
         if !self.lesson.open {
             return vec![];
         }

@@ -40,10 +40,10 @@ pub struct Tour {
     pub numbers: Option<String>,
     /// Paper mode (`tour --paper`): the paper's single lattice, every voxel counted.
     pub paper: bool,
-    /// On the page of a merge, the histories' generation and the step it set: while the step
-    /// shown is that one, the lesson shows the merge of the highest NMI taken to it (the last
-    /// one may join slabs barely alike); n p step on from it, and the lesson follows the step.
-    pub best_merge: Option<(u64, usize)>,
+    /// On the page of a merge, until the user steps (n p, + -, m, Home End): the lesson shows
+    /// the merge of the highest NMI taken to the step shown (the last one may join slabs barely
+    /// alike), new histories (full resolution) included; once stepped, it follows the steps.
+    pub best_merge: bool,
 }
 
 /// The numbers a page adds to its paragraph, from the histories shown.
@@ -282,7 +282,7 @@ impl Tour {
             applied: false,
             numbers: None,
             paper,
-            best_merge: None,
+            best_merge: false,
         }
     }
 
@@ -296,7 +296,7 @@ impl Tour {
         let page = self.page.saturating_add_signed(by).min(PAGES.len() - 1);
         if page != self.page {
             self.page = page;
-            (self.applied, self.numbers, self.best_merge) = (false, None, None);
+            (self.applied, self.numbers, self.best_merge) = (false, None, false);
         }
     }
 
@@ -327,6 +327,13 @@ impl App {
             .is_some_and(|t| t.page + 1 == PAGES.len())
             && !self.lesson.open
             && !self.help
+    }
+
+    /// The user steps: the merge page's lesson follows the steps from now on.
+    pub(super) fn leave_best_merge(&mut self) {
+        if let Some(t) = self.tour.as_mut() {
+            t.best_merge = false;
+        }
     }
 
     /// Turns the tour's page.
@@ -389,8 +396,7 @@ impl App {
         self.ray = (0, 0);
         // What the terminal's answers said is not the page's.
         self.status.notice = None;
-        let best_merge = (t.page == MERGE && method == Method::BottomUp)
-            .then(|| (self.part.generation(), position));
+        let best_merge = t.page == MERGE && method == Method::BottomUp;
         if let Some(t) = self.tour.as_mut() {
             (t.applied, t.numbers, t.best_merge) = (true, numbers, best_merge);
         }
