@@ -30,6 +30,7 @@ impl App {
             Ok(effects) => return effects,
             Err(action) => action,
         };
+        self.leave_best_merge(&action);
         match action {
             Action::Quit => {
                 self.quit = true;
@@ -58,12 +59,6 @@ impl App {
             }
             Action::WindowWidth(_) | Action::WindowLevel(_) => self.window(&action),
             Action::Select => self.select(),
-            Action::Step(_) | Action::StepTo(_) | Action::Slabs(_) | Action::CycleMethod
-                if self.tour.as_ref().is_some_and(|t| t.best_merge) =>
-            {
-                self.leave_best_merge();
-                self.update(action)
-            }
             Action::Step(by) => match self.part.step(by) {
                 Ok(()) => self.after_step(),
                 Err(message) => {

@@ -329,9 +329,15 @@ impl App {
             && !self.help
     }
 
-    /// The user steps: the merge page's lesson follows the steps from now on.
-    pub(super) fn leave_best_merge(&mut self) {
-        if let Some(t) = self.tour.as_mut() {
+    /// When `action` steps (n p, + -, m, Home End), the merge page's lesson follows the steps
+    /// from now on.
+    pub(super) fn leave_best_merge(&mut self, action: &crate::tui::event::Action) {
+        use crate::tui::event::Action;
+        let steps = matches!(
+            action,
+            Action::Step(_) | Action::StepTo(_) | Action::Slabs(_) | Action::CycleMethod
+        );
+        if let Some(t) = self.tour.as_mut().filter(|_| steps) {
             t.best_merge = false;
         }
     }
