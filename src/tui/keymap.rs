@@ -240,23 +240,26 @@ pub const BINDINGS: &[Binding] = &[
 
 /// The tour's keys, before those of the panes; its page's title shows them as hints. `PgUp` and
 /// `PgDn`, which a presenter's remote sends, turn pages here (outside the tour they open a
-/// folder's volumes).
+/// folder's volumes), and so do `b` and `.`, which some remotes send (outside the tour the
+/// background's toggle and a step).
 pub const TOUR: &[Binding] = &[
     row(
-        "Space → PgDn",
+        "Space → PgDn .",
         "next",
         &[
             (ch(' '), || Action::TurnPage(1)),
             (code(KeyCode::Right), || Action::TurnPage(1)),
             (code(KeyCode::PageDown), || Action::TurnPage(1)),
+            (ch('.'), || Action::TurnPage(1)),
         ],
     ),
     row(
-        "← PgUp",
+        "← PgUp b",
         "back",
         &[
             (code(KeyCode::Left), || Action::TurnPage(-1)),
             (code(KeyCode::PageUp), || Action::TurnPage(-1)),
+            (ch('b'), || Action::TurnPage(-1)),
         ],
     ),
     row("q", "quits", &[(ch('q'), || Action::Quit)]),
@@ -319,7 +322,7 @@ pub fn help() -> Vec<(&'static str, &'static str)> {
     BINDINGS.iter().map(|b| (b.keys, b.help)).collect()
 }
 
-/// The tour's hints: `Space → PgDn next, ← PgUp back, q quits`.
+/// The tour's hints: `Space → PgDn . next, ← PgUp b back, q quits`.
 pub fn tour_hints() -> String {
     TOUR.iter()
         .map(|b| format!("{} {}", b.keys, b.help))

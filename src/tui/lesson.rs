@@ -38,6 +38,14 @@ pub enum Subject {
         /// The histories' request generation, so that new histories are a new subject.
         generation: u64,
     },
+    /// The merge of the highest NMI among the first `upto` bottom-up took (the tour's page on a
+    /// merge: the last one may join slabs barely alike), beside the step shown, `upto`.
+    BestMerge {
+        /// The step shown: the merges taken to the slab count shown.
+        upto: usize,
+        /// The histories' request generation.
+        generation: u64,
+    },
 }
 
 /// A lesson to compute.
@@ -72,6 +80,16 @@ pub enum Lesson {
     Split(Box<SplitLesson>),
     /// A bottom-up merge, and the merges of its history.
     Merge(Box<MergeLesson>, usize),
+    /// The merge of the highest NMI among the first `upto` (the step shown), and the merges of
+    /// its history.
+    BestMerge {
+        /// The merge.
+        merge: Box<MergeLesson>,
+        /// The step shown.
+        upto: usize,
+        /// The merges of the history.
+        of: usize,
+    },
     /// The optimum beside greedy top-down.
     Optimal(OptimalLesson),
     /// The paper's numbers beside the defaults'.
@@ -135,6 +153,33 @@ impl LessonRequest {
                     },
                 })
             }
+            Subject::BestMerge { upto, .. } => {
+                let h = self
+                    .histories
+                    .as_deref()
+                    .ok_or("the partition is not ready yet")?;
+                let step = highest_nmi(h, *upto).ok_or("no merge taken yet")?;
+                Ok(Lesson::BestMerge {
+                    merge: Box::new(merge_lesson(h, step, monitor).map_err(text)?),
+                    upto: *upto,
+                    of: h.last(Method::BottomUp),
+                })
+            }
         }
     }
+}
+
+/// The merge of the highest NMI among the first `upto` bottom-up took (its step, from 1; the
+/// first on ties), as `tour --export` picks it from the analysis's steps; `None` before any.
+pub fn highest_nmi(histories: &Histories, upto: usize) -> Option<usize> {
+    let steps = &histories.bottom()?.steps;
+    steps
+        .iter()
+        .take(upto)
+        .enumerate()
+        .fold(None, |best: Option<(usize, f64)>, (i, s)| match best {
+            Some((_, top)) if top >= s.nmi => best,
+            _ => Some((i + 1, s.nmi)),
+        })
+        .map(|(step, _)| step)
 }

@@ -249,6 +249,7 @@ where
         ratatui::layout::Rect::new(0, 0, size.width, size.height),
         app.tour.is_some(),
         ui::folder(app),
+        app.preview_large(),
     ) {
         dispatch(app, runner, Action::PreviewArea(w, h));
     }

@@ -457,7 +457,7 @@ fn screens(app: &mut App, w: u16, h: u16, events: Vec<Event>) -> Vec<String> {
 #[test]
 fn whole_app_snapshots() {
     let mut app = ready_app();
-    let cells = super::ui::preview_cells(Rect::new(0, 0, 100, 30), false, None).unwrap();
+    let cells = super::ui::preview_cells(Rect::new(0, 0, 100, 30), false, None, false).unwrap();
     let events = vec![
         Event::Job(JobMsg::Rendered(
             1,

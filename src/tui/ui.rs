@@ -77,6 +77,19 @@ pub fn areas(area: Rect, tour: bool, folder: Option<usize>) -> Option<Areas> {
     })
 }
 
+/// `a` with the preview over the four panes (the tour's last page, the exploded view large):
+/// the others get no cells.
+pub fn enlarged(a: Areas) -> Areas {
+    let none = |r: Rect| Rect::new(r.x, r.y, 0, 0);
+    Areas {
+        preview: a.views.union(a.preview).union(a.slabs).union(a.curves),
+        views: none(a.views),
+        slabs: none(a.slabs),
+        curves: none(a.curves),
+        ..a
+    }
+}
+
 /// The folder's volumes when `app`'s pane of them shows: how many.
 pub fn folder(app: &App) -> Option<usize> {
     app.files
@@ -86,9 +99,15 @@ pub fn folder(app: &App) -> Option<usize> {
 }
 
 /// The cells the preview image fills, for a screen of size `area` (and the tour's page, and a
-/// folder's pane of `folder` volumes).
-pub fn preview_cells(area: Rect, tour: bool, folder: Option<usize>) -> Option<(u16, u16)> {
+/// folder's pane of `folder` volumes), over the four panes when `large`.
+pub fn preview_cells(
+    area: Rect,
+    tour: bool,
+    folder: Option<usize>,
+    large: bool,
+) -> Option<(u16, u16)> {
     let a = areas(area, tour, folder)?;
+    let a = if large { enlarged(a) } else { a };
     let inner = Block::default().borders(Borders::ALL).inner(a.preview);
     Some((inner.width, inner.height))
 }
@@ -97,7 +116,7 @@ pub fn preview_cells(area: Rect, tour: bool, folder: Option<usize>) -> Option<(u
 pub fn draw(frame: &mut Frame, app: &App) {
     let area = frame.area();
     frame.render_widget(Block::default().style(app.theme.base()), area);
-    let Some(a) = areas(area, app.tour.is_some(), folder(app)) else {
+    let Some(mut a) = areas(area, app.tour.is_some(), folder(app)) else {
         let text = format!(
             "The terminal is {}x{}: slabscope needs at least {}x{}. Enlarge it, or press q to quit.",
             area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
@@ -110,9 +129,14 @@ pub fn draw(frame: &mut Frame, app: &App) {
         );
         return;
     };
-    frame.render_widget(&app.views, a.views);
-    frame.render_widget(&app.slabs, a.slabs);
-    frame.render_widget(&app.curves, a.curves);
+    let large = app.preview_large();
+    if large {
+        a = enlarged(a);
+    } else {
+        frame.render_widget(&app.views, a.views);
+        frame.render_widget(&app.slabs, a.slabs);
+        frame.render_widget(&app.curves, a.curves);
+    }
     frame.render_widget(&app.preview, a.preview);
     frame.render_widget(&app.status, a.status);
     if app.lesson.open {

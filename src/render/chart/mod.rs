@@ -332,7 +332,9 @@ fn draw_bars(pixmap: &mut Pixmap, series: &Series, plot: &Plot, (k, of): (usize,
     }
 }
 
-/// The names of the series and marks, top right inside the plot, each beside its colour.
+/// The names of the series and marks inside the plot, each beside its colour, in the corner
+/// where their box covers the fewest pixels already drawn (curves, bars, marks; the grid counts
+/// as empty), top right on ties.
 fn legend(pixmap: &mut Pixmap, chart: &Chart, plot: &Plot, s: f32) {
     let mut entries: Vec<(&str, [u8; 3])> = Vec::new();
     let named = chart
@@ -345,21 +347,48 @@ fn legend(pixmap: &mut Pixmap, chart: &Chart, plot: &Plot, s: f32) {
             entries.push((name, colour));
         }
     }
+    if entries.is_empty() {
+        return;
+    }
     let widest = entries
         .iter()
         .map(|e| text_width(e.0, s))
         .fold(0.0, f32::max);
-    let x = plot.right - widest - 14.0 * s;
+    let (w, h) = (widest + 15.0 * s, entries.len() as f32 * 10.0 * s);
+    let (left, right) = (plot.left + 4.0 * s, plot.right - w - 2.0 * s);
+    let (top, bottom) = (plot.top + s, plot.bottom - h - 2.0 * s);
+    let corners = [(right, top), (left, top), (right, bottom), (left, bottom)];
+    let (x0, y0) = corners
+        .into_iter()
+        .map(|c| (covered(pixmap, (c.0, c.1, w, h)), c))
+        .fold(
+            None,
+            |best: Option<(usize, (f32, f32))>, (n, c)| match best {
+                Some((b, _)) if b <= n => best,
+                _ => Some((n, c)),
+            },
+        )
+        .map_or(corners[0], |(_, c)| c);
+    fill(pixmap, (x0, y0, w, h), [255, 255, 255]);
     for (i, (name, colour)) in entries.iter().enumerate() {
-        let y = plot.top + 2.0 * s + i as f32 * 10.0 * s;
-        fill(
-            pixmap,
-            (x - 2.0 * s, y - s, widest + 15.0 * s, 10.0 * s),
-            [255, 255, 255],
-        );
+        let (x, y) = (x0 + 2.0 * s, y0 + s + i as f32 * 10.0 * s);
         fill(pixmap, (x, y, 8.0 * s, 7.0 * s), *colour);
         draw_text(pixmap, name, (x + 11.0 * s, y), s, INK);
     }
+}
+
+/// The pixels in `area` (x, y, width, height) of `pixmap` neither white nor the grid's (its
+/// anti-aliased lines are greys between the two).
+fn covered(pixmap: &Pixmap, (x, y, w, h): (f32, f32, f32, f32)) -> usize {
+    let xs = x.max(0.0) as u32..(x + w).max(0.0) as u32;
+    let ys = y.max(0.0) as u32..(y + h).max(0.0) as u32;
+    ys.flat_map(|py| xs.clone().map(move |px| (px, py)))
+        .filter_map(|(px, py)| pixmap.pixel(px, py))
+        .filter(|c| {
+            let grey = c.red() == c.green() && c.green() == c.blue();
+            !(grey && c.red() >= GRID[0])
+        })
+        .count()
 }
 
 #[cfg(test)]

@@ -67,7 +67,8 @@ fn bars_of_two_series_stand_side_by_side_and_marks_cross_the_plot() {
     // Bars 0.8 of the slot (2) wide, shared by two: the red one left of x, the blue right.
     let (left, right) = (plot.px(4.0 - 0.4), plot.px(4.0 + 0.4));
     assert_eq!(rgb(&p, left, plot.py(0.2)), RED);
-    assert_eq!(rgb(&p, right, plot.py(0.6)), BLUE);
+    // (Low in the bar: the legend, large at this size, covers the least at the top left.)
+    assert_eq!(rgb(&p, right, plot.py(0.3)), BLUE);
     // Above the red bar's top, below the blue's: the grid's white.
     assert_ne!(rgb(&p, left, plot.py(0.6)), RED);
     let x = plot.px(7.0);
@@ -98,4 +99,43 @@ fn heat_cells_are_coloured_by_their_counts_on_a_log_scale() {
     // An empty cell off the diagonal stays white.
     assert_eq!(at(2.0, 0.0), [255, 255, 255]);
     assert!(draw_heat_map(&map, 0, 10).is_err());
+}
+
+#[test]
+fn the_legend_stands_where_it_covers_least() {
+    let flat = |y: f64| Series {
+        name: "the curve".into(),
+        style: Style::Line,
+        colour: RED,
+        points: vec![[0.0, y], [10.0, y]],
+    };
+    let mark = |x| Mark {
+        x,
+        colour: BLUE,
+        name: "boundary".into(),
+    };
+    // A curve low in the plot: the legend top right, over none of it.
+    let low = chart(vec![flat(0.05)], vec![]);
+    let p = draw_charts(std::slice::from_ref(&low), 800, 500).unwrap();
+    let plot = plot_of(&low, (0.0, 0.0, 800.0, 500.0), font_scale(500));
+    assert_eq!(rgb(&p, plot.px(9.8), plot.py(0.05)), RED);
+    // The legend's swatch is the one red pixel far above the curve.
+    let swatch = (plot.top as u32..plot.py(0.5) as u32)
+        .flat_map(|y| (plot.px(5.0) as u32..plot.right as u32).map(move |x| (x, y)))
+        .any(|(x, y)| rgb(&p, x as f32, y as f32) == RED);
+    assert!(swatch, "no legend top right");
+    // A curve along the top with a mark at the right: the legend bottom left, the curve whole.
+    let high = chart(vec![flat(0.97)], vec![mark(9.5)]);
+    let p = draw_charts(std::slice::from_ref(&high), 800, 500).unwrap();
+    let plot = plot_of(&high, (0.0, 0.0, 800.0, 500.0), font_scale(500));
+    for x in [0.2, 1.0, 5.0, 9.0, 9.8] {
+        assert_eq!(rgb(&p, plot.px(x), plot.py(0.97)), RED, "at {x}");
+    }
+    let crossed = (0..20).any(|i| rgb(&p, plot.px(9.5), plot.py(0.1) - i as f32) == BLUE);
+    assert!(crossed, "the mark is covered");
+    // The red swatch below the middle and left of it.
+    let below = (plot.py(0.5) as u32..plot.bottom as u32)
+        .flat_map(|y| (plot.left as u32..plot.px(5.0) as u32).map(move |x| (x, y)))
+        .any(|(x, y)| rgb(&p, x as f32, y as f32) == RED);
+    assert!(below, "no legend bottom left");
 }

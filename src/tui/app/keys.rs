@@ -30,6 +30,7 @@ impl App {
             Ok(effects) => return effects,
             Err(action) => action,
         };
+        self.leave_best_merge(&action);
         match action {
             Action::Quit => {
                 self.quit = true;

@@ -4,6 +4,8 @@
 
 use std::sync::Arc;
 
+use slabscope::partition::Method;
+
 use super::{App, Pane};
 use crate::tui::event::{Effect, Task};
 use crate::tui::lesson::{Lesson, LessonRequest, Subject};
@@ -48,6 +50,9 @@ impl App {
                 best: views.best().axis,
                 offset: self.ray,
             })
+        } else if let Some((generation, upto)) = self.shown_best_merge() {
+            self.part.ready()?;
+            Some(Subject::BestMerge { upto, generation })
         } else {
             self.part.ready()?;
             Some(Subject::Step {
@@ -56,6 +61,14 @@ impl App {
                 generation: self.part.generation(),
             })
         }
+    }
+
+    /// The histories' generation and the step shown, while the tour's merge page shows the
+    /// merge of the highest NMI taken to it.
+    fn shown_best_merge(&self) -> Option<(u64, usize)> {
+        let pinned = self.tour.as_ref()?.best_merge;
+        (pinned && self.focus != Pane::Views && self.part.method == Method::BottomUp)
+            .then(|| (self.part.generation(), self.part.position))
     }
 
     /// Asks for the lesson of what is selected when that changed.

@@ -171,6 +171,7 @@ impl App {
         self.tour = old.tour.map(|t| tour::Tour {
             applied: false,
             numbers: None,
+            best_merge: false,
             ..t
         });
         self.sync_focus();

@@ -1,5 +1,5 @@
 //! The guided tour (`slabscope tour`): the paper in sixteen short pages, each with the live panes
-//! set to show what it says. Space, → or `PgDn` the next page, ← or `PgUp` the one before (as a
+//! set to show what it says. Space, →, `PgDn` or `.` the next page, ←, `PgUp` or `b` the one before (as a
 //! presenter's remote sends them), q quits.
 //!
 //! Once the views and the histories are in, each page focuses a pane, selects the best or the
@@ -40,6 +40,10 @@ pub struct Tour {
     pub numbers: Option<String>,
     /// Paper mode (`tour --paper`): the paper's single lattice, every voxel counted.
     pub paper: bool,
+    /// On the page of a merge, until the user steps (n p, + -, m, Home End): the lesson shows
+    /// the merge of the highest NMI taken to the step shown (the last one may join slabs barely
+    /// alike), new histories (full resolution) included; once stepped, it follows the steps.
+    pub best_merge: bool,
 }
 
 /// The numbers a page adds to its paragraph, from the histories shown.
@@ -123,6 +127,9 @@ impl Setup {
 
 /// The page on paper mode and the defaults, whose lesson is the two modes' numbers.
 pub const MODES: usize = 6;
+
+/// The page of a merge, whose lesson is the merge of the highest NMI taken to the step shown.
+pub const MERGE: usize = 12;
 
 /// The page setting top-down beside bottom-up, which adds what each keeps.
 pub const COMPARED: usize = 13;
@@ -275,6 +282,7 @@ impl Tour {
             applied: false,
             numbers: None,
             paper,
+            best_merge: false,
         }
     }
 
@@ -288,7 +296,7 @@ impl Tour {
         let page = self.page.saturating_add_signed(by).min(PAGES.len() - 1);
         if page != self.page {
             self.page = page;
-            (self.applied, self.numbers) = (false, None);
+            (self.applied, self.numbers, self.best_merge) = (false, None, false);
         }
     }
 
@@ -311,6 +319,29 @@ pub fn position(histories: &Histories, method: Method, slabs: usize) -> Option<u
 }
 
 impl App {
+    /// Whether the exploded view shows large, over the four panes: on the tour's last page,
+    /// unless the lesson or the help covers it.
+    pub fn preview_large(&self) -> bool {
+        self.tour
+            .as_ref()
+            .is_some_and(|t| t.page + 1 == PAGES.len())
+            && !self.lesson.open
+            && !self.help
+    }
+
+    /// When `action` steps (n p, + -, m, Home End), the merge page's lesson follows the steps
+    /// from now on.
+    pub(super) fn leave_best_merge(&mut self, action: &crate::tui::event::Action) {
+        use crate::tui::event::Action;
+        let steps = matches!(
+            action,
+            Action::Step(_) | Action::StepTo(_) | Action::Slabs(_) | Action::CycleMethod
+        );
+        if let Some(t) = self.tour.as_mut().filter(|_| steps) {
+            t.best_merge = false;
+        }
+    }
+
     /// Turns the tour's page.
     pub(super) fn turn_page(&mut self, by: isize) -> Vec<Effect> {
         if let Some(t) = self.tour.as_mut() {
@@ -371,8 +402,9 @@ impl App {
         self.ray = (0, 0);
         // What the terminal's answers said is not the page's.
         self.status.notice = None;
+        let best_merge = t.page == MERGE && method == Method::BottomUp;
         if let Some(t) = self.tour.as_mut() {
-            (t.applied, t.numbers) = (true, numbers);
+            (t.applied, t.numbers, t.best_merge) = (true, numbers, best_merge);
         }
         self.sync_focus();
         self.after_step()

@@ -49,6 +49,9 @@ impl LessonPane {
         let what = match &self.subject {
             Some(Subject::Axis { .. }) => "why this viewpoint (← → another ray)",
             Some(Subject::Step { .. }) => "why this step (n p step)",
+            Some(Subject::BestMerge { .. }) => {
+                "a merge of slices alike (n p step from the step shown)"
+            }
             Some(Subject::Modes { .. }) => "the paper beside this tool's defaults",
             None => "",
         };
@@ -98,7 +101,10 @@ impl Widget for &LessonPane {
                     }
                 }
                 Lesson::Split(s) => split(s, self.theme, inner, buf),
-                Lesson::Merge(m, of) => merge(m, *of, self.theme, inner, buf),
+                Lesson::Merge(m, of) => merge(m, *of, None, self.theme, inner, buf),
+                Lesson::BestMerge { merge: m, upto, of } => {
+                    merge(m, *of, Some(*upto), self.theme, inner, buf);
+                }
                 Lesson::Modes(m) => paragraph(
                     text::mode_lines(m).into_iter().map(Line::from).collect(),
                     inner,
@@ -386,7 +392,7 @@ fn bar_width(area: Rect, bins: usize) -> usize {
 /// A row of ticks under a chart: `name` right-aligned in the `label` columns left of the chart,
 /// then each value at its column of the chart (one that would touch the one before, or not fit
 /// in `width`, is left out).
-fn tick_line(name: &str, label: usize, at: &[(usize, usize)], width: usize) -> String {
+pub(super) fn tick_line(name: &str, label: usize, at: &[(usize, usize)], width: usize) -> String {
     let mut line = format!("{name:>w$} ", w = label.saturating_sub(1));
     for &(column, value) in at {
         let text = value.to_string();
@@ -465,100 +471,30 @@ fn gains(s: &SplitLesson, theme: Theme, area: Rect, mark: Rect, buf: &mut Buffer
 }
 
 /// A merge, one of `of` in its history: its sentences and, in the rows they leave, the joint
-/// histogram as a heat map.
-fn merge(m: &MergeLesson, of: usize, theme: Theme, area: Rect, buf: &mut Buffer) {
-    let words = text::merge_lines(m, of.max(m.step));
+/// histogram as a heat map. `upto`: the step shown, when the merge is the highest NMI's of
+/// those taken to it, which a first line says.
+fn merge(
+    m: &MergeLesson,
+    of: usize,
+    upto: Option<usize>,
+    theme: Theme,
+    area: Rect,
+    buf: &mut Buffer,
+) {
+    let mut words = text::merge_lines(m, of.max(m.step));
+    if let Some(upto) = upto {
+        words.insert(
+            0,
+            format!(
+                "The example: of the {upto} merges taken to the slabs shown, the one of the \
+                 highest NMI (n p step on from merge {upto}, the last):"
+            ),
+        );
+    }
     let used = wrapped_rows(&words, area.width).min(area.height);
     let [top, map] = Layout::vertical([Constraint::Length(used), Constraint::Min(0)]).areas(area);
     paragraph(words.into_iter().map(Line::from).collect(), top, buf);
-    heat_map(m, m.bins, theme, map, buf);
-}
-
-/// The joint histogram, x (the first slab's bin) down and y across, two rows of bins a line
-/// (half blocks), bins grouped where the area is smaller; shades without colours. X's bins are
-/// ticked on the left, Y's under the map, and a colour scale from one count to the most ends it.
-fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, buf: &mut Buffer) {
-    if area.height < 4 || area.width < 16 {
-        return;
-    }
-    let rows = usize::from(area.height - 3) * 2;
-    let cols = usize::from(area.width) - TICKS;
-    let group = bins.div_ceil(rows).max(bins.div_ceil(cols)).max(1);
-    let n = bins.div_ceil(group);
-    let mut cells = vec![0u64; n * n];
-    for &[x, y, c] in &m.joint {
-        cells[x as usize / group * n + y as usize / group] += c;
-    }
-    let top = cells.iter().copied().max().unwrap_or(1).max(1);
-    let level = |c: u64| {
-        if c == 0 {
-            0.0
-        } else {
-            (1.0 + (c as f64).ln()) / (1.0 + (top as f64).ln())
-        }
-    };
-    Paragraph::new(format!(
-        "joint histogram: X's bin down, Y's across, log counts, {group} bin a cell"
-    ))
-    .render(Rect { height: 1, ..area }, buf);
-    let mut lines = Vec::new();
-    for r in 0..n.div_ceil(2) {
-        // Every other line says the X bin of its upper row.
-        let tick = if r % 2 == 0 {
-            format!("{:>4} ", 2 * r * group)
-        } else {
-            " ".repeat(TICKS)
-        };
-        let mut spans = vec![Span::raw(tick)];
-        for y in 0..n {
-            let lower = (2 * r + 1 < n).then(|| cells[(2 * r + 1) * n + y]);
-            spans.push(heat_cell(
-                level(cells[2 * r * n + y]),
-                lower.map_or(0.0, level),
-                theme,
-            ));
-        }
-        lines.push(Line::from(spans));
-    }
-    // Y's bins under the map: its first, middle and last cell.
-    let at = [0, n / 2, n - 1].map(|c| (c, c * group));
-    lines.push(Line::from(tick_line(
-        "",
-        TICKS,
-        &at,
-        usize::from(area.width),
-    )));
-    let mut scale = vec![Span::raw("   1 ")];
-    // From one count's shade (not the empty cells') to the most's.
-    let one = level(1);
-    scale.extend((0..=8).map(|i| {
-        let v = one + (1.0 - one) * f64::from(i) / 8.0;
-        heat_cell(v, v, theme)
-    }));
-    scale.push(Span::raw(format!(" {top} counts")));
-    lines.push(Line::from(scale));
-    Paragraph::new(lines).render(
-        Rect {
-            y: area.y + 1,
-            height: area.height - 1,
-            ..area
-        },
-        buf,
-    );
-}
-
-/// Columns the X ticks take left of the heat map.
-const TICKS: usize = 5;
-
-/// One cell of the heat map: its upper and lower bins' levels (0 to 1).
-fn heat_cell(upper: f64, lower: f64, theme: Theme) -> Span<'static> {
-    let shade = |v: f64| Color::Rgb((40.0 + 215.0 * v) as u8, (30.0 + 120.0 * v) as u8, 60);
-    if theme.color {
-        Span::styled("▀", Style::default().fg(shade(upper)).bg(shade(lower)))
-    } else {
-        const SHADES: [&str; 5] = [" ", "░", "▒", "▓", "█"];
-        Span::raw(SHADES[(upper.max(lower) * 4.0).round() as usize])
-    }
+    super::heat::heat_map(m, m.bins, theme, map, buf);
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 pub mod board;
 pub mod curves;
 pub mod files;
+pub mod heat;
 pub mod help;
 pub mod lesson;
 pub mod preview;

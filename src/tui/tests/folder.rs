@@ -62,6 +62,7 @@ fn filled(w: u16, h: u16) -> App {
         ratatui::layout::Rect::new(0, 0, w, h),
         false,
         Some(NAMES.len()),
+        false,
     )
     .unwrap();
     app.update(Action::PreviewArea(cells.0, cells.1));
@@ -453,4 +454,43 @@ fn with_an_image_protocol_each_rows_thumbnail_shows_in_one_picture_beside_the_ta
     files.covered = true;
     let buf = draw(files, 100);
     assert!(!buf[(95, 1)].symbol().starts_with('\x1b'));
+}
+
+#[test]
+fn in_the_tour_a_remotes_keys_turn_pages_and_open_no_other_volume() {
+    use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+    let root = PathBuf::from("/data");
+    let (mut app, _) = folder_app(&root, &["a.nii", "b.nrrd"]);
+    app.tour = Some(crate::tui::app::tour::Tour::new(false));
+    let page = |app: &App| app.tour.as_ref().unwrap().page;
+    let name = app.name.clone();
+    for (code, to) in [
+        (KeyCode::PageDown, 1),
+        (KeyCode::Char('.'), 2),
+        (KeyCode::Char('b'), 1),
+        (KeyCode::PageUp, 0),
+    ] {
+        let key = KeyEvent::new(code, KeyModifiers::NONE);
+        let action = crate::tui::keymap::action(key, false, app.tour.is_some()).unwrap();
+        let effects = app.update(action);
+        assert!(
+            !effects
+                .iter()
+                .any(|e| matches!(e, Effect::Open(_) | Effect::Cancel | Effect::Load)),
+            "{code:?}: {effects:?}"
+        );
+        assert_eq!(page(&app), to, "{code:?}");
+        assert_eq!(app.files.as_ref().unwrap().open, 0, "{code:?}");
+        assert_eq!(app.name, name);
+    }
+    // Outside the tour PgDn opens the next volume.
+    app.tour = None;
+    let key = KeyEvent::new(KeyCode::PageDown, KeyModifiers::NONE);
+    let effects = app.update(crate::tui::keymap::action(key, false, false).unwrap());
+    assert!(
+        effects
+            .iter()
+            .any(|e| matches!(e, Effect::Open(p) if p == &Entry::file(root.join("b.nrrd")))),
+        "{effects:?}"
+    );
 }

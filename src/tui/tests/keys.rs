@@ -113,7 +113,7 @@ fn the_help_shows_the_keys_its_rows_bind() {
     assert_eq!(keymap::help().len(), BINDINGS.len());
     assert_eq!(
         keymap::tour_hints(),
-        "Space → PgDn next, ← PgUp back, q quits"
+        "Space → PgDn . next, ← PgUp b back, q quits"
     );
 }
 

@@ -7,14 +7,14 @@ use super::lesson::answer;
 use super::{ready_app, ready_paper_app, screens};
 use slabscope::explain::text::grouped;
 
-use crate::tui::app::tour::{Board, MODES, PAGES, Row, Tour};
+use crate::tui::app::tour::{Board, MERGE, MODES, PAGES, Row, Tour};
 
 /// The page of blocks and H(X^L) on the volume, with the axis's lesson.
 const BLOCKS: usize = 4;
 /// The page of the slices' curves.
 const CURVES: usize = 7;
 use crate::tui::event::{Action, Effect, Task};
-use crate::tui::lesson::Lesson;
+use crate::tui::lesson::{Lesson, Subject};
 
 #[test]
 fn every_page_sets_the_panes_it_speaks_of() {
@@ -301,4 +301,100 @@ fn the_pages_show_the_slab_count_given() {
     assert_eq!(app.part.slab_count(), Some(6));
     let numbers = app.tour.as_ref().unwrap().numbers.clone().unwrap();
     assert!(numbers.starts_with("Here 6 slabs keep"), "{numbers}");
+}
+
+#[test]
+fn the_merge_page_shows_the_merge_of_the_highest_nmi_and_the_steps_stay_reachable() {
+    let mut app = ready_app();
+    app.tour = Some(Tour::new(false));
+    let effects = app.update(Action::TurnPage(MERGE as isize));
+    let upto = app.part.position;
+    let subject = answer(&mut app, effects);
+    assert!(
+        matches!(subject, Subject::BestMerge { upto: u, .. } if u == upto),
+        "{subject:?}"
+    );
+    let h = std::sync::Arc::clone(app.part.ready().unwrap());
+    let steps = &h.bottom().unwrap().steps[..upto];
+    let Task::Ready(lesson) = &app.lesson.lesson else {
+        panic!("no lesson")
+    };
+    let Lesson::BestMerge { merge, upto: u, of } = lesson.as_ref() else {
+        panic!("the best merge's lesson")
+    };
+    assert_eq!((*u, *of), (upto, h.last(Method::BottomUp)));
+    // The first of the highest NMI among the merges taken to the slabs shown.
+    let taken = &steps[merge.step - 1];
+    assert_eq!(taken.merge, merge.merge);
+    assert!(steps[..merge.step - 1].iter().all(|s| s.nmi < taken.nmi));
+    assert!(steps.iter().all(|s| s.nmi <= taken.nmi));
+    assert!((merge.nmi - taken.nmi).abs() < 1e-12, "{}", merge.nmi);
+    // Not the last on this volume: the page's example differs from the step shown.
+    assert!(merge.step < upto, "{} of {upto}", merge.step);
+    let (step, of) = (merge.step, *of);
+    for (w, hgt) in [(80, 24), (160, 48)] {
+        let screen = &screens(&mut app, w, hgt, vec![])[0];
+        assert!(screen.contains("The example: of the"), "{screen}");
+        assert!(
+            screen.contains(&format!("Merge {step} of {of}")),
+            "{screen}"
+        );
+    }
+    // p steps back from the step shown, and the lesson follows the steps from then on, even
+    // back at the page's step.
+    let effects = app.update(Action::Step(-1));
+    assert!(matches!(
+        answer(&mut app, effects),
+        Subject::Step { position, .. } if position == upto - 1
+    ));
+    let effects = app.update(Action::Step(1));
+    assert!(matches!(
+        answer(&mut app, effects),
+        Subject::Step { position, .. } if position == upto
+    ));
+    let Task::Ready(lesson) = &app.lesson.lesson else {
+        panic!("no lesson")
+    };
+    assert!(matches!(lesson.as_ref(), Lesson::Merge(m, _) if m.step == upto));
+    // Turning back to the page shows its example again.
+    app.update(Action::TurnPage(1));
+    let effects = app.update(Action::TurnPage(-1));
+    assert!(matches!(
+        answer(&mut app, effects),
+        Subject::BestMerge { .. }
+    ));
+}
+
+#[test]
+fn the_last_page_shows_the_exploded_view_large() {
+    let mut app = ready_app();
+    app.tour = Some(Tour::new(false));
+    app.update(Action::TurnPage(PAGES.len() as isize - 1));
+    assert!(app.preview_large());
+    for (w, h) in [(80, 24), (160, 48)] {
+        let screen = &screens(&mut app, w, h, vec![])[0];
+        // The preview over the four panes: as wide as the screen, down to the tour's page.
+        let area = ratatui::layout::Rect::new(0, 0, w, h);
+        let cells = crate::tui::ui::preview_cells(area, true, None, true).unwrap();
+        let page = if h < 36 { 6 } else { 8 };
+        assert_eq!(cells, (w - 2, h - page - 2 - 2));
+        assert_eq!(app.preview.cells, cells, "the picture asked at that size");
+        let first = screen.lines().next().unwrap();
+        assert!(first.starts_with("┌ Exploded view"), "{screen}");
+        assert!(
+            !screen.contains("Slabs") && !screen.contains("Curves"),
+            "{screen}"
+        );
+    }
+    // The page before, the lesson or the help: the panes as ever.
+    app.update(Action::ToggleLesson);
+    assert!(!app.preview_large());
+    app.update(Action::ToggleLesson);
+    app.update(Action::TurnPage(-1));
+    assert!(!app.preview_large());
+    screens(&mut app, 160, 48, vec![]);
+    let area = ratatui::layout::Rect::new(0, 0, 160, 48);
+    let small = crate::tui::ui::preview_cells(area, true, None, false).unwrap();
+    assert!(small.0 < 120, "{small:?}");
+    assert_eq!(app.preview.cells, small);
 }
