@@ -1,4 +1,5 @@
-//! The merge lesson's joint histogram as a heat map, its bins ticked and a colour scale.
+//! The merge lesson's joint histogram as a heat map, its bins ticked and a colour scale; and the
+//! rows of ticks under the lesson's charts ([`tick_line`]).
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
@@ -7,7 +8,6 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
 use slabscope::explain::MergeLesson;
 
-use super::lesson::tick_line;
 use crate::tui::theme::Theme;
 
 /// The joint histogram, x (the first slab's bin) down and y across, two rows of bins a line
@@ -94,5 +94,41 @@ fn heat_cell(upper: f64, lower: f64, theme: Theme) -> Span<'static> {
     } else {
         const SHADES: [&str; 5] = [" ", "░", "▒", "▓", "█"];
         Span::raw(SHADES[(upper.max(lower) * 4.0).round() as usize])
+    }
+}
+
+/// A row of ticks under a chart: `name` right-aligned in the `label` columns left of the chart,
+/// then each value at its column of the chart (one that would touch the one before, or not fit
+/// in `width`, is left out).
+pub(super) fn tick_line(name: &str, label: usize, at: &[(usize, usize)], width: usize) -> String {
+    let mut line = format!("{name:>w$} ", w = label.saturating_sub(1));
+    for &(column, value) in at {
+        let text = value.to_string();
+        let start = label + column;
+        let taken = line.chars().count();
+        if start + text.len() <= width && (start > taken || taken == label) {
+            line.push_str(&" ".repeat(start - taken));
+            line.push_str(&text);
+        }
+    }
+    line
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick_line;
+
+    #[test]
+    fn ticks_stand_at_their_columns_and_never_touch() {
+        assert_eq!(
+            tick_line("bin", 6, &[(0, 0), (4, 16), (9, 31)], 40),
+            "  bin 0   16   31"
+        );
+        // 30 would touch 18: left out, as a tick past the width.
+        assert_eq!(
+            tick_line("", 5, &[(0, 0), (3, 18), (5, 30)], 40),
+            "     0  18"
+        );
+        assert_eq!(tick_line("", 5, &[(0, 0), (30, 99)], 20), "     0");
     }
 }

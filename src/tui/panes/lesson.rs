@@ -11,6 +11,7 @@ use ratatui::widgets::{Clear, Paragraph, Sparkline, Widget, Wrap};
 use slabscope::explain::text;
 use slabscope::explain::{AxisLesson, MergeLesson, RayPlane, RaySamples, SplitLesson};
 
+use super::heat::{self, tick_line};
 use super::placeholder;
 use crate::tui::event::Task;
 use crate::tui::lesson::{Lesson, Subject};
@@ -389,23 +390,6 @@ fn bar_width(area: Rect, bins: usize) -> usize {
     (usize::from(area.width.saturating_sub(LABEL)) / bins.max(1)).clamp(1, 3)
 }
 
-/// A row of ticks under a chart: `name` right-aligned in the `label` columns left of the chart,
-/// then each value at its column of the chart (one that would touch the one before, or not fit
-/// in `width`, is left out).
-pub(super) fn tick_line(name: &str, label: usize, at: &[(usize, usize)], width: usize) -> String {
-    let mut line = format!("{name:>w$} ", w = label.saturating_sub(1));
-    for &(column, value) in at {
-        let text = value.to_string();
-        let start = label + column;
-        let taken = line.chars().count();
-        if start + text.len() <= width && (start > taken || taken == label) {
-            line.push_str(&" ".repeat(start - taken));
-            line.push_str(&text);
-        }
-    }
-    line
-}
-
 /// [`tick_line`] drawn in `area`, under a chart of the split.
 fn ticks(name: &str, at: &[(usize, usize)], area: Rect, buf: &mut Buffer) {
     let line = tick_line(name, usize::from(LABEL), at, usize::from(area.width));
@@ -494,26 +478,12 @@ fn merge(
     let used = wrapped_rows(&words, area.width).min(area.height);
     let [top, map] = Layout::vertical([Constraint::Length(used), Constraint::Min(0)]).areas(area);
     paragraph(words.into_iter().map(Line::from).collect(), top, buf);
-    super::heat::heat_map(m, m.bins, theme, map, buf);
+    heat::heat_map(m, m.bins, theme, map, buf);
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{picked_rays, tick_line};
-
-    #[test]
-    fn ticks_stand_at_their_columns_and_never_touch() {
-        assert_eq!(
-            tick_line("bin", 6, &[(0, 0), (4, 16), (9, 31)], 40),
-            "  bin 0   16   31"
-        );
-        // 30 would touch 18: left out, as a tick past the width.
-        assert_eq!(
-            tick_line("", 5, &[(0, 0), (3, 18), (5, 30)], 40),
-            "     0  18"
-        );
-        assert_eq!(tick_line("", 5, &[(0, 0), (30, 99)], 20), "     0");
-    }
+    use super::picked_rays;
 
     #[test]
     fn the_lessons_ray_shows_on_one_row_only() {
