@@ -191,6 +191,22 @@ pub fn merge_lessons(
         .collect())
 }
 
+/// The step (numbered from 1) of the merge of the highest NMI among `steps` in order, each a
+/// merge's NMI or `None` for a step that is no merge; the first on ties: the example the lesson
+/// and the tour's export show, two slabs nearly alike, where the last merge may join slabs
+/// barely alike. `None` when no step is a merge.
+pub fn highest_nmi_merge(steps: impl IntoIterator<Item = Option<f64>>) -> Option<usize> {
+    steps
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, nmi)| Some((i + 1, nmi?)))
+        .fold(None, |best: Option<(usize, f64)>, (step, nmi)| match best {
+            Some((_, top)) if top >= nmi => best,
+            _ => Some((step, nmi)),
+        })
+        .map(|(step, _)| step)
+}
+
 /// The lesson of bottom-up's merge number `step` (from 1): one pass over the stack for the
 /// joint histogram.
 pub fn merge_lesson(histories: &Histories, step: usize, monitor: &Monitor) -> Result<MergeLesson> {
@@ -231,4 +247,24 @@ pub fn optimal_lesson(histories: &Histories, slabs: usize) -> Option<OptimalLess
         optimal_boundaries: inner(&optimum.slabs),
         greedy_boundaries: inner(&greedy),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::highest_nmi_merge;
+
+    #[test]
+    fn the_highest_nmi_merge_is_the_first_of_equals_among_merges() {
+        assert_eq!(
+            highest_nmi_merge([Some(0.2), Some(0.7), Some(0.7), Some(0.1)]),
+            Some(2)
+        );
+        // Steps that are no merge count in the numbering, never as the example.
+        assert_eq!(
+            highest_nmi_merge([None, Some(0.3), None, Some(0.5)]),
+            Some(4)
+        );
+        assert_eq!(highest_nmi_merge([None, None]), None);
+        assert_eq!(highest_nmi_merge(std::iter::empty()), None);
+    }
 }

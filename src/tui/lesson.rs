@@ -173,13 +173,5 @@ impl LessonRequest {
 /// first on ties), as `tour --export` picks it from the analysis's steps; `None` before any.
 pub fn highest_nmi(histories: &Histories, upto: usize) -> Option<usize> {
     let steps = &histories.bottom()?.steps;
-    steps
-        .iter()
-        .take(upto)
-        .enumerate()
-        .fold(None, |best: Option<(usize, f64)>, (i, s)| match best {
-            Some((_, top)) if top >= s.nmi => best,
-            _ => Some((i + 1, s.nmi)),
-        })
-        .map(|(step, _)| step)
+    slabscope::explain::highest_nmi_merge(steps.iter().take(upto).map(|s| Some(s.nmi)))
 }

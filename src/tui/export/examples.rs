@@ -3,7 +3,7 @@
 //! where the last merge, the one that leaves the slab count, may join slabs barely alike.
 
 use anyhow::Result;
-use slabscope::explain::{MergeLesson, merge_lesson};
+use slabscope::explain::{MergeLesson, highest_nmi_merge, merge_lesson};
 use slabscope::partition::{Histories, Method, Scope, Step};
 use slabscope::{Analysis, AnalysisParams, Monitor, Volume};
 
@@ -15,20 +15,11 @@ pub fn best_merge(
     params: &AnalysisParams,
     monitor: &Monitor,
 ) -> Result<Option<MergeLesson>> {
-    let best = bottom
-        .partition
-        .steps
-        .iter()
-        .enumerate()
-        .filter_map(|(i, s)| match s {
-            Step::Merge { nmi, .. } => Some((i + 1, *nmi)),
-            Step::Split { .. } => None,
-        })
-        .fold(None, |best: Option<(usize, f64)>, (step, nmi)| match best {
-            Some((_, top)) if top >= nmi => best,
-            _ => Some((step, nmi)),
-        });
-    let Some((step, _)) = best else {
+    let nmis = bottom.partition.steps.iter().map(|s| match s {
+        Step::Merge { nmi, .. } => Some(*nmi),
+        Step::Split { .. } => None,
+    });
+    let Some(step) = highest_nmi_merge(nmis) else {
         return Ok(None);
     };
     let stack = AnalysisParams {
