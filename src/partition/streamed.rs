@@ -101,8 +101,9 @@ pub fn partition_streamed_kept(
     let mut histograms = vec![0u64; n * bins];
     let mut positions = vec![0u64; n];
     let mut joints = vec![0u64; (n - 1) * bins * bins];
+    let mut sums = cutter.sums();
     for rows in &strips {
-        let strip = cutter.cut(rows.clone(), monitor)?;
+        let strip = cutter.cut(rows.clone(), sums.as_mut(), monitor)?;
         add(&mut histograms, &strip.slice_histograms());
         add(&mut positions, strip.positions());
         add_consecutive_joints(
@@ -115,7 +116,7 @@ pub fn partition_streamed_kept(
     }
     let nmi_curve = nmi_of_joints(&joints, bins);
     drop(joints);
-    let summary = cutter.summary(positions, monitor)?;
+    let summary = cutter.summary(positions, sums, monitor)?;
     let scope = params.scope(Some(n));
     let histories = Histories::of_summary(summary, histograms, nmi_curve, scope)?;
     let position = histories.position(params.method, params.stop)?;
@@ -125,7 +126,7 @@ pub fn partition_streamed_kept(
         monitor.start("slicing in strips (pass 2 of 2)", work);
         let mut joints = vec![0u64; (slabs.len() - 1) * bins * bins];
         for rows in &strips {
-            let strip = cutter.cut(rows.clone(), monitor)?;
+            let strip = cutter.cut(rows.clone(), None, monitor)?;
             add_consecutive_joints(&strip, &Columns::new(&strip), &slabs, &mut joints, monitor)?;
         }
         nmi_of_joints(&joints, bins)

@@ -12,9 +12,9 @@ use crate::error::{Error, Result};
 use crate::geometry::{WorldAxis, canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
 use crate::volume::background::Background;
-use crate::volume::interpolate::Interpolator;
 use crate::volume::{Quantizer, Volume, Voxel};
 
+mod oblique;
 mod sparse;
 
 pub use self::sparse::{InPlane, sampled_gain};
@@ -66,16 +66,17 @@ impl SliceStack {
         let cutter = Cutter::new(volume, axis, params, monitor)?;
         let rows = 0..cutter.rows();
         monitor.start("slicing", cutter.work(&rows));
+        let mut sums = cutter.sums();
         let Self {
             columns,
             symbols,
             positions,
             ..
-        } = cutter.cut(rows, monitor)?;
+        } = cutter.cut(rows, sums.as_mut(), monitor)?;
         Ok(Self {
             columns,
             symbols,
-            ..cutter.summary(positions, monitor)?
+            ..cutter.summary(positions, sums, monitor)?
         })
     }
 }
@@ -90,9 +91,9 @@ pub(crate) struct Cutter<'a> {
     axis: [f64; 3],
     bins: usize,
     quantizer: Quantizer,
-    background: Cow<'a, Background>,
+    pub(super) background: Cow<'a, Background>,
     /// The lattice of an oblique axis; `None` along a coordinate axis.
-    lattice: Option<Lattice>,
+    pub(super) lattice: Option<Lattice>,
 }
 
 impl<'a> Cutter<'a> {
@@ -197,7 +198,7 @@ impl<'a> Cutter<'a> {
     /// The symbol of a sample of value `v` whose voxel (the nearest, for an interpolated one)
     /// is at linear `index`: its bin, or [`MISSING`] for background and values that do not count.
     #[inline]
-    fn symbol(&self, index: usize, v: f32) -> u8 {
+    pub(super) fn symbol(&self, index: usize, v: f32) -> u8 {
         if self.background.contains(index, v) {
             MISSING
         } else {
@@ -205,12 +206,23 @@ impl<'a> Cutter<'a> {
         }
     }
 
-    /// The stack of the pixels of `rows`, without the per-slice sums (a strip's positions are
-    /// its own).
-    pub(crate) fn cut(&self, rows: Range<usize>, monitor: &Monitor) -> Result<SliceStack> {
+    /// The sums to give [`cut`](Self::cut): an oblique cut counts them as it cuts; along a
+    /// coordinate axis [`summary`](Self::summary) counts them plane by plane.
+    pub(crate) fn sums(&self) -> Option<SliceSums> {
+        self.lattice.as_ref().map(|_| SliceSums::new(self.slices()))
+    }
+
+    /// The stack of the pixels of `rows` (a strip's positions are its own). Along an oblique
+    /// axis, its slices' sums and counts of counted values are added onto `sums` when given.
+    pub(crate) fn cut(
+        &self,
+        rows: Range<usize>,
+        sums: Option<&mut SliceSums>,
+        monitor: &Monitor,
+    ) -> Result<SliceStack> {
         let keep = |index: usize, v: f32| self.symbol(index, v);
         match (&self.lattice, coordinate_axis(self.axis)) {
-            (Some(lattice), _) => self.along_lattice(lattice, rows, &keep, monitor),
+            (Some(lattice), _) => self.along_lattice(lattice, rows, sums, monitor),
             (None, Some(m)) => self.along_coordinate(m, rows, &keep, monitor),
             (None, None) => unreachable!("a coordinate axis has no lattice"),
         }
@@ -218,16 +230,21 @@ impl<'a> Cutter<'a> {
 
     /// The stack's per-slice geometry, background and sums without its columns: what a
     /// partition reports of the stack once its histograms are counted. `positions` are the
-    /// strips' positions summed.
-    pub(crate) fn summary(&self, positions: Vec<u64>, monitor: &Monitor) -> Result<SliceStack> {
+    /// strips' positions summed, `sums` the sums the cuts counted ([`sums`](Self::sums)),
+    /// `None` along a coordinate axis, whose sums are counted here.
+    pub(crate) fn summary(
+        &self,
+        positions: Vec<u64>,
+        sums: Option<SliceSums>,
+        monitor: &Monitor,
+    ) -> Result<SliceStack> {
         monitor.check()?;
         let (volume, d) = (self.volume, self.axis);
         let counted = |index: usize, v: f32| v.is_finite() && !self.background.contains(index, v);
-        let slices = self.slices();
-        let (sums, counts) = match (&self.lattice, coordinate_axis(d)) {
-            (Some(lattice), _) => lattice_sums(volume, lattice, slices, &counted),
+        let SliceSums { sums, counts } = match (sums, coordinate_axis(d)) {
+            (Some(sums), _) => sums,
             (None, Some(m)) => plane_sums(volume, m, &counted),
-            (None, None) => unreachable!("a coordinate axis has no lattice"),
+            (None, None) => unreachable!("an oblique cut counts its sums"),
         };
         let (thickness, offset) = match (&self.lattice, coordinate_axis(d)) {
             (Some(l), _) => (
@@ -240,7 +257,7 @@ impl<'a> Cutter<'a> {
         Ok(SliceStack {
             axis: d,
             bins: self.bins,
-            slices,
+            slices: self.slices(),
             thickness,
             offset,
             columns: Vec::new(),
@@ -313,61 +330,6 @@ impl<'a> Cutter<'a> {
             .collect();
         Ok(self.bare(columns, symbols, vec![pixels as u64; n]))
     }
-
-    fn along_lattice(
-        &self,
-        lattice: &Lattice,
-        rows: Range<usize>,
-        keep: &(dyn Fn(usize, f32) -> u8 + Sync),
-        monitor: &Monitor,
-    ) -> Result<SliceStack> {
-        let volume = self.volume;
-        let (_, (j0, _)) = lattice.ray_ranges();
-        let (k_first, _) = lattice.sample_range();
-        let slices = self.slices();
-        let rows: Vec<i64> = rows.map(|r| j0 + r as i64).collect();
-        let per_row = crate::volume::with_voxels!(volume.data(), |data| {
-            let it = Interpolator::over(data, volume.dims());
-            rows.par_iter()
-                .map(|&j| {
-                    let mut columns = Vec::new();
-                    let mut symbols = Vec::new();
-                    for ray in lattice.row(j) {
-                        columns.push(Column {
-                            offset: symbols.len(),
-                            first: (ray.k0 - k_first) as u32,
-                            len: ray.len() as u32,
-                        });
-                        symbols.extend((ray.k0..=ray.k1).map(|k| {
-                            let p = ray.at(k);
-                            keep(it.nearest(p), it.sample(p))
-                        }));
-                    }
-                    monitor.advance(1)?;
-                    Ok((columns, symbols))
-                })
-                .collect::<Result<Vec<_>>>()
-        })?;
-        let total = per_row.iter().map(|(_, s)| s.len()).sum();
-        let mut columns = Vec::with_capacity(per_row.iter().map(|(c, _)| c.len()).sum());
-        let mut symbols = Vec::with_capacity(total);
-        let mut positions = vec![0u64; slices];
-        for (cols, syms) in per_row {
-            for c in &cols {
-                let first = c.first as usize;
-                for p in &mut positions[first..first + c.len as usize] {
-                    *p += 1;
-                }
-            }
-            let base = symbols.len();
-            columns.extend(cols.into_iter().map(|c| Column {
-                offset: c.offset + base,
-                ..c
-            }));
-            symbols.extend(syms);
-        }
-        Ok(self.bare(columns, symbols, positions))
-    }
 }
 
 impl SliceStack {
@@ -438,16 +400,45 @@ impl SliceStack {
     }
 }
 
+/// Per slice: the sum and count of the values that count (for slab means).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct SliceSums {
+    pub(crate) sums: Vec<f64>,
+    pub(crate) counts: Vec<u64>,
+}
+
+impl SliceSums {
+    /// None yet, for `slices` slices.
+    pub(crate) fn new(slices: usize) -> Self {
+        Self {
+            sums: vec![0.0; slices],
+            counts: vec![0; slices],
+        }
+    }
+
+    /// Adds `other`'s, slice by slice.
+    pub(crate) fn add_onto(&mut self, other: &Self) {
+        self.sums
+            .iter_mut()
+            .zip(&other.sums)
+            .for_each(|(a, b)| *a += b);
+        self.counts
+            .iter_mut()
+            .zip(&other.counts)
+            .for_each(|(a, b)| *a += b);
+    }
+}
+
 /// Per voxel plane along coordinate axis `m`: the sum and count of the counted values.
 fn plane_sums(
     volume: &Volume,
     m: usize,
     counted: &(dyn Fn(usize, f32) -> bool + Sync),
-) -> (Vec<f64>, Vec<u64>) {
+) -> SliceSums {
     let dims = volume.dims();
     let stride = [1, dims[0], dims[0] * dims[1]];
     let (a, b) = other_axes(m);
-    crate::volume::with_voxels!(volume.data(), |voxels| {
+    let (sums, counts) = crate::volume::with_voxels!(volume.data(), |voxels| {
         (0..dims[m])
             .into_par_iter()
             .map(|s| {
@@ -466,43 +457,8 @@ fn plane_sums(
                 (sum, count)
             })
             .unzip()
-    })
-}
-
-/// Per lattice slice: the sum and count of the counted interpolated values.
-fn lattice_sums(
-    volume: &Volume,
-    lattice: &Lattice,
-    slices: usize,
-    counted: &(dyn Fn(usize, f32) -> bool + Sync),
-) -> (Vec<f64>, Vec<u64>) {
-    let (_, (j0, j1)) = lattice.ray_ranges();
-    let (k_first, _) = lattice.sample_range();
-    let zero = || (vec![0.0f64; slices], vec![0u64; slices]);
-    crate::volume::with_voxels!(volume.data(), |data| {
-        let it = Interpolator::over(data, volume.dims());
-        (j0..=j1)
-            .into_par_iter()
-            .fold(zero, |(mut sums, mut counts), j| {
-                for ray in lattice.row(j) {
-                    for k in ray.k0..=ray.k1 {
-                        let p = ray.at(k);
-                        let v = it.sample(p);
-                        if counted(it.nearest(p), v) {
-                            let s = (k - k_first) as usize;
-                            sums[s] += f64::from(v);
-                            counts[s] += 1;
-                        }
-                    }
-                }
-                (sums, counts)
-            })
-            .reduce(zero, |(mut a, mut b), (c, e)| {
-                a.iter_mut().zip(c).for_each(|(x, y)| *x += y);
-                b.iter_mut().zip(e).for_each(|(x, y)| *x += y);
-                (a, b)
-            })
-    })
+    });
+    SliceSums { sums, counts }
 }
 
 /// The lattice of an oblique stack.
