@@ -246,14 +246,14 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
         trailing: false,
     };
     let mut stream = bytes.as_slice();
-    let voxels = match wide {
-        Some(wide) => {
-            let (voxels, rounded) = read_wide(&spec, wide, stream, "HDF5 dataset", opts.room())?;
-            notes.extend(rounded.note(wide));
-            voxels
-        }
-        None => read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.room())?,
+    let (voxels, rounded, stored) = if let Some(wide) = wide {
+        let (voxels, rounded) = read_wide(&spec, wide, stream, "HDF5 dataset", opts.room())?;
+        (voxels, rounded, wide.name())
+    } else {
+        let (voxels, rounded) = read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.room())?;
+        (voxels, rounded, ty.name())
     };
+    notes.extend(rounded.note(stored));
     drop(bytes);
     let imaris_spacing = imaris.and_then(|i| i.spacing);
     let spacing = voxel_size(

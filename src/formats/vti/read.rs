@@ -13,7 +13,7 @@ use crate::formats::scratch::Room;
 use crate::volume::Voxels;
 
 /// Reads the voxels of `array`, whose volume `spec` describes, from the file's `bytes`; with
-/// the 64-bit values rounded to f32 (none for other types).
+/// the 32- and 64-bit integers rounded to f32 counted (none for other types).
 pub(super) fn read_array(
     spec: &DataSpec,
     array: &Array,
@@ -42,8 +42,7 @@ pub(super) fn read_array(
             if let Some(wide) = array.wide {
                 return read_wide_ascii(&spec, wide, text, room);
             }
-            let voxels = read_voxels_from(&spec, &mut text, "ascii", room)?;
-            return Ok((voxels, Rounded::default()));
+            return read_voxels_from(&spec, &mut text, "ascii", room);
         }
         "binary" => (array.text.as_bytes(), true),
         "appended" => {
@@ -59,8 +58,7 @@ pub(super) fn read_array(
                 .filter(|&at| at <= bytes.len())
                 .ok_or_else(|| bad(format!("its offset {offset} is beyond the file's end")))?;
             if !appended.base64 && layout.compressor.is_none() && array.wide.is_none() {
-                let voxels = raw_in_place(spec, &bytes[at..], at, layout.words, expected, room)?;
-                return Ok((voxels, Rounded::default()));
+                return raw_in_place(spec, &bytes[at..], at, layout.words, expected, room);
             }
             (&bytes[at..], appended.base64)
         }
@@ -110,8 +108,7 @@ fn voxels_of(
         return read_wide(spec, wide, stream, what, room);
     }
     let mut stream = BufReader::new(stream);
-    let voxels = read_voxels_from(spec, &mut stream, what, room)?;
-    Ok((voxels, Rounded::default()))
+    read_voxels_from(spec, &mut stream, what, room)
 }
 
 /// Raw appended voxels at `at` in the file (`bytes` from there), after their size: read in place
@@ -123,7 +120,7 @@ fn raw_in_place(
     words: Words,
     expected: u64,
     room: Room,
-) -> Result<Voxels> {
+) -> Result<(Voxels, Rounded)> {
     let path = spec.file.path();
     let size = words
         .read(&mut &bytes[..])
