@@ -15,6 +15,7 @@
 
 mod dxchange;
 mod imaris;
+mod nexus;
 mod pick;
 
 use std::path::Path;
@@ -278,14 +279,20 @@ fn voxel_size(
     notes: &mut Vec<String>,
 ) -> [f64; 3] {
     let given = imaris.or_else(|| pick::spacing(ds)).or_else(|| {
-        let (spacing, note) = dxchange::spacing(file, path)?;
+        let shape = ds.shape();
+        let zyx = match shape.as_slice() {
+            [.., z, y, x] => [*z, *y, *x],
+            _ => return None,
+        };
+        let (spacing, note) =
+            dxchange::spacing(file, path).or_else(|| nexus::spacing(file, path, zyx))?;
         notes.push(note);
         Some(spacing)
     });
     given.unwrap_or_else(|| {
         notes.push(format!(
             "dataset {name} gives no voxel size (no element_size_um attribute, no DXchange \
-             pixel size): using 1 mm"
+             pixel size, no NeXus axes): using 1 mm"
         ));
         [1.0; 3]
     })
