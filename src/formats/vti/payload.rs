@@ -245,6 +245,16 @@ impl<R: Read> Blocks<R> {
         self.compressed.capacity() + self.block.capacity() + zlib
     }
 
+    /// The bytes an LZ4 block is held in, whole, beside its compressed bytes (LZ4's blocks have
+    /// no stream): the largest block and the largest compressed block; `None` for zlib, whose
+    /// blocks are streams.
+    pub(super) fn held_whole(&self) -> Option<u64> {
+        (self.compressor == Compressor::Lz4).then(|| {
+            let compressed = self.sizes.iter().copied().max().unwrap_or(0);
+            self.block_size.saturating_add(compressed)
+        })
+    }
+
     /// The decoded size of block `i`.
     fn size(&self, i: usize) -> u64 {
         if i + 1 == self.sizes.len() {

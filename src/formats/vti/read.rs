@@ -11,6 +11,7 @@ use crate::formats::data::wide::{Rounded, Wide, read_wide, read_wide_ascii};
 use crate::formats::data::{DataSpec, Encoding, read_voxels, read_voxels_from};
 use crate::formats::scratch::Room;
 use crate::volume::Voxels;
+use crate::volume::voxels::held_type;
 
 /// Reads the voxels of `array`, whose volume `spec` describes, from the file's `bytes`; with
 /// the 32- and 64-bit integers rounded to f32 counted (none for other types).
@@ -80,6 +81,7 @@ pub(super) fn read_array(
         let max_blocks = max_blocks.min(room.max_memory / 8);
         let blocks =
             Blocks::new(decoded, compressor, layout.words, expected, max_blocks).map_err(bad)?;
+        blocks_fit(spec, array, blocks.held_whole(), room)?;
         return voxels_of(spec, array.wide, blocks, compressor.name(), room);
     }
     let size = layout
@@ -93,6 +95,36 @@ pub(super) fn read_array(
     }
     let what = if base64 { "base64" } else { "raw" };
     voxels_of(spec, array.wide, decoded.take(size), what, room)
+}
+
+/// Fails when an LZ4 block held whole (`held` bytes with its compressed bytes) does not fit in
+/// `room`'s budget beside the volume `spec` describes, when that is read into memory.
+fn blocks_fit(spec: &DataSpec, array: &Array, held: Option<u64>, room: Room) -> Result<()> {
+    let Some(held) = held else {
+        return Ok(());
+    };
+    let voxels = spec.dims.iter().map(|&d| d as u64).product::<u64>();
+    let volume = if room.scratch.is_some() {
+        0
+    } else {
+        voxels.saturating_mul(held_type(array.ty, false).size() as u64)
+    };
+    let needed = volume.saturating_add(held);
+    if needed <= room.max_memory {
+        return Ok(());
+    }
+    Err(Error::TooLarge {
+        path: spec.file.path().to_path_buf(),
+        what: format!(
+            "its array {:?}'s lz4 blocks, each held whole ({held} bytes with its compressed \
+             bytes) beside the volume",
+            crate::error::names::text(&array.name)
+        ),
+        needed,
+        limit: room.max_memory,
+        machine: false,
+        disk: false,
+    })
 }
 
 /// The voxels of the bytes of `stream` (64-bit integers of the type `wide`, if any), with the
