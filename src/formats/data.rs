@@ -15,6 +15,7 @@ pub(crate) mod wide;
 use self::ascii::read_ascii;
 use self::budget::voxel_count;
 pub(crate) use self::budget::{check_budget, typed_buffer, voxel_buffer};
+use self::wide::Rounded;
 use super::Source;
 use super::scratch::{Room, VoxelOut};
 use crate::error::{Error, Result};
@@ -115,28 +116,35 @@ pub(crate) fn pick_volume(
 /// Voxel types that file bytes decode into: f32 from any type (scaled as the file says), and
 /// each integer type of at most 16 bits from itself, unscaled.
 trait Decode: Voxel {
-    /// Decodes the voxels of `bytes` (exactly `out.len()` of them) into `out`.
-    fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [Self]);
+    /// Decodes the voxels of `bytes` (exactly `out.len()` of them) into `out`: the integers an
+    /// f32 does not hold exactly, counted.
+    fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [Self]) -> Rounded;
 }
 
 impl Decode for f32 {
-    fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [f32]) {
+    fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [f32]) -> Rounded {
         decode_to(bytes, spec.voxel_type, spec.endian, spec.scale, out);
         // Infinities (in the file, or from scaling) are missing voxels.
         infinities_missing(out);
+        // Scaled values are the scale's to round, not the integers'.
+        if spec.scale.is_some() {
+            return Rounded::default();
+        }
+        Rounded::of_bytes(bytes, spec.voxel_type, spec.endian)
     }
 }
 
 macro_rules! decode_as_stored {
     ($($t:ty),*) => {$(
         impl Decode for $t {
-            fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [$t]) {
+            fn decode(bytes: &[u8], spec: &DataSpec, out: &mut [$t]) -> Rounded {
                 debug_assert!(spec.voxel_type == <$t>::TYPE && spec.scale.is_none());
                 let to: &mut [u8] = bytemuck::cast_slice_mut(out);
                 to.copy_from_slice(bytes);
                 if spec.endian != Endian::NATIVE {
                     to.chunks_exact_mut(std::mem::size_of::<$t>()).for_each(<[u8]>::reverse);
                 }
+                Rounded::default()
             }
         }
     )*};
@@ -145,8 +153,9 @@ macro_rules! decode_as_stored {
 decode_as_stored!(u8, i8, u16, i16);
 
 /// Reads the voxels `spec` describes, after checking the memory budget: integers of at most 16
-/// bits that the file does not scale in their own type, everything else as f32.
-pub(crate) fn read_voxels(spec: &DataSpec, room: Room) -> Result<Voxels> {
+/// bits that the file does not scale in their own type, everything else as f32, with the
+/// 32-bit integers an f32 does not hold exactly counted (the reader notes them).
+pub(crate) fn read_voxels(spec: &DataSpec, room: Room) -> Result<(Voxels, Rounded)> {
     read_voxels_in(spec, None, room)
 }
 
@@ -158,14 +167,14 @@ pub(crate) fn read_voxels_from(
     stream: &mut dyn BufRead,
     what: &'static str,
     room: Room,
-) -> Result<Voxels> {
+) -> Result<(Voxels, Rounded)> {
     read_voxels_in(spec, Some((stream, what)), room)
 }
 
 /// A stream of voxel bytes a reader decoded, and its name in messages.
 type Stream<'a> = Option<(&'a mut dyn BufRead, &'static str)>;
 
-fn read_voxels_in(spec: &DataSpec, stream: Stream, room: Room) -> Result<Voxels> {
+fn read_voxels_in(spec: &DataSpec, stream: Stream, room: Room) -> Result<(Voxels, Rounded)> {
     let held = if spec.encoding == Encoding::Ascii {
         VoxelType::F32
     } else {
@@ -183,7 +192,7 @@ fn read_voxels_in(spec: &DataSpec, stream: Stream, room: Room) -> Result<Voxels>
 /// [`read_voxels`] into voxels of type `T`. The budget is checked when the voxels are decoded
 /// into memory, not where they are mapped: mapped file pages are the kernel's to drop, and what
 /// an analysis of them needs is weighed by the analysis (`analysis::level_within_memory`).
-fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, room: Room) -> Result<Voxels> {
+fn read_typed<T: Decode>(spec: &DataSpec, stream: Stream, room: Room) -> Result<(Voxels, Rounded)> {
     let max_memory = room.max_memory;
     let expected = voxel_count(spec.file.path(), spec.dims)?
         .and_then(|n| (n as u64).checked_mul(spec.voxel_type.size() as u64))
@@ -302,16 +311,20 @@ fn text_could_hold(spec: &DataSpec, text: u64, room: Room) -> Result<()> {
 
 /// The ascii values of `reader` (read as f32 only: `read_voxels` holds ascii data as f32), in
 /// `room`.
-fn ascii_as<T: Decode>(spec: &DataSpec, reader: impl BufRead, room: Room) -> Result<Voxels> {
+fn ascii_as<T: Decode>(
+    spec: &DataSpec,
+    reader: impl BufRead,
+    room: Room,
+) -> Result<(Voxels, Rounded)> {
     let path = spec.file.path();
     if T::TYPE != VoxelType::F32 {
         return Err(Error::format(path, "ascii data is read as f32 only"));
     }
     let mut out = room.f32_voxels(path, spec.dims)?;
-    read_ascii(spec, reader, out.all())?;
+    let rounded = read_ascii(spec, reader, out.all())?;
     // Infinities (in the file, or from scaling) are missing voxels.
     infinities_missing(out.all());
-    out.finish()
+    Ok((out.finish()?, rounded))
 }
 
 /// The buffered bytes of `reader`, filled again when empty (empty at the end), with reads that
@@ -359,7 +372,7 @@ fn read_raw<T: Decode>(
     (pos, len): (u64, u64),
     expected: u64,
     out: impl FnOnce() -> Result<VoxelOut<T>>,
-) -> Result<Voxels> {
+) -> Result<(Voxels, Rounded)> {
     let path = spec.file.path();
     // Without a skip, the data (every volume of it) is the end of the file.
     let start = if let Some(n) = spec.skip_bytes(expected) {
@@ -396,16 +409,19 @@ fn read_raw<T: Decode>(
         && let Some(voxels) = Voxels::mapped(map.clone(), T::TYPE, start, count)
         && !has_infinity(&voxels)
     {
-        return Ok(voxels);
+        // Held as stored: integers of at most 16 bits, or f32.
+        return Ok((voxels, Rounded::default()));
     }
     let mut out = out()?;
     let bytes = &map.bytes()[start..start + expected as usize];
     let size = spec.voxel_type.size();
-    out.all()
+    let rounded = out
+        .all()
         .par_chunks_mut(CHUNK)
         .zip(bytes.par_chunks(CHUNK * size))
-        .for_each(|(o, b)| T::decode(b, spec, o));
-    out.finish()
+        .map(|(o, b)| T::decode(b, spec, o))
+        .reduce(Rounded::default, Rounded::plus);
+    Ok((out.finish()?, rounded))
 }
 
 /// Whether f32 voxels hold an infinity, which a reader stores as NaN (so they cannot be read in
@@ -426,7 +442,7 @@ fn read_stream<T: Decode>(
     what: &str,
     expected: u64,
     mut out: VoxelOut<T>,
-) -> Result<Voxels> {
+) -> Result<(Voxels, Rounded)> {
     let path = spec.file.path();
     let corrupt = |e: std::io::Error, at: u64| {
         Error::format(
@@ -451,12 +467,13 @@ fn read_stream<T: Decode>(
     let size = spec.voxel_type.size();
     let mut buf = vec![0u8; (1 << 20) / size * size];
     let mut done = 0usize;
+    let mut rounded = Rounded::default();
     while out.left() > 0 {
         let want = out.left().min(buf.len() / size);
         let got = fill(&mut reader, &mut buf[..want * size])
             .map_err(|e| corrupt(e, (done * size) as u64))?;
         let whole = got / size;
-        T::decode(&buf[..whole * size], spec, out.room(whole));
+        rounded.add(T::decode(&buf[..whole * size], spec, out.room(whole)));
         out.commit(whole);
         if got < want * size {
             return Err(Error::Truncated {
@@ -481,7 +498,7 @@ fn read_stream<T: Decode>(
             ));
         }
     }
-    out.finish()
+    Ok((out.finish()?, rounded))
 }
 
 /// Reads until `buf` is full or the stream ends; returns the bytes read. A stream that ends inside

@@ -285,10 +285,11 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let (ty, mut voxels) = if h.mode == 12 {
         // Widened to f32, within the budget as an f32 volume or in the scratch folder.
         opts.room().check(path, h.n)?;
-        let bits = read_voxels(&spec, opts.room())?;
+        // f16 and MRC's other integers are f32s exactly.
+        let (bits, _) = read_voxels(&spec, opts.room())?;
         (VoxelType::F32, widen_f16(path, &bits, h.n, opts.room())?)
     } else {
-        (stored, read_voxels(&spec, opts.room())?)
+        (stored, read_voxels(&spec, opts.room())?.0)
     };
     let mut dims = h.n;
     if order != [0, 1, 2] {

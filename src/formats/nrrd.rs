@@ -470,7 +470,8 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes,
         trailing: false,
     };
-    let voxels = read_voxels(&spec, opts.room())?;
+    let (voxels, rounded) = read_voxels(&spec, opts.room())?;
+    notes.extend(rounded.note(h.voxel_type.name()));
     let transform = transform(&h, &axes);
     Ok(
         Read0::new(path, dims, spacing, h.voxel_type, voxels, notes)?

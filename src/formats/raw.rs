@@ -116,9 +116,9 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes: (0, 1),
         trailing: false,
     };
-    let voxels = read_voxels(&spec, opts.room())?;
+    let (voxels, rounded) = read_voxels(&spec, opts.room())?;
     let spacing = raw.spacing.unwrap_or([1.0; 3]);
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = rounded.note(voxel_type.name()).into_iter().collect();
     if raw.spacing.is_none() {
         notes.push("raw data carries no spacing: using 1 mm per voxel".into());
     }

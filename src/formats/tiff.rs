@@ -11,6 +11,7 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::{ResolutionUnit, Tag};
 
 use super::data;
+use super::data::wide::{Exact, Rounded};
 use super::reader::{Reader, Sniff};
 use super::{Folder, Format, LoadOptions, Read0, Source, ome, tiff_ifd};
 use crate::error::{Error, Result};
@@ -202,7 +203,8 @@ fn pages_agree(path: &Path, page: usize, first: Page, this: Page) -> Result<()> 
 }
 
 /// Decodes the current page, described by `page`, into `out` (its voxels), with the decoder
-/// allowed no more memory than the page needs.
+/// allowed no more memory than the page needs; the 32-bit integers an f32 does not hold
+/// exactly, counted.
 fn decode(
     path: &Path,
     (dec, len): (Tiff, u64),
@@ -210,7 +212,7 @@ fn decode(
     page: Page,
     buffer: &mut DecodingResult,
     out: &mut [f32],
-) -> Result<(Tiff, u64)> {
+) -> Result<(Tiff, Rounded)> {
     let mut limits = Limits::default();
     // The page, and any tag value (the crate charges those to the same limit; the directory
     // walk found each within the file).
@@ -221,23 +223,24 @@ fn decode(
     let mut dec = dec.with_limits(limits);
     dec.read_image_to_buffer(buffer)
         .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
-    let n = fill(buffer, out);
+    let (n, rounded) = fill(buffer, out);
     if n != page.voxels() {
         return Err(Error::format(
             path,
             format!("page {index} decoded to {n} samples, not {}", page.voxels()),
         ));
     }
-    Ok((dec, len))
+    Ok((dec, rounded))
 }
 
-/// Widens the decoded samples into `out`; the number of samples decoded.
-fn fill(buffer: &DecodingResult, out: &mut [f32]) -> usize {
-    fn widen<T: Copy + Into<f64>>(values: &[T], out: &mut [f32]) -> usize {
+/// Widens the decoded samples into `out`: the number of samples decoded, and the integers an
+/// f32 does not hold exactly, counted.
+fn fill(buffer: &DecodingResult, out: &mut [f32]) -> (usize, Rounded) {
+    fn widen<T: Copy + Into<f64> + Exact>(values: &[T], out: &mut [f32]) -> (usize, Rounded) {
         for (o, &v) in out.iter_mut().zip(values) {
             *o = v.into() as f32;
         }
-        values.len()
+        (values.len(), T::rounded(values))
     }
     match buffer {
         DecodingResult::U8(v) => widen(v, out),
@@ -248,7 +251,7 @@ fn fill(buffer: &DecodingResult, out: &mut [f32]) -> usize {
         DecodingResult::I32(v) => widen(v, out),
         DecodingResult::F32(v) => widen(v, out),
         DecodingResult::F64(v) => widen(v, out),
-        _ => 0,
+        _ => (0, Rounded::default()),
     }
 }
 
@@ -335,13 +338,17 @@ fn load_stack(source: &Source, opts: &LoadOptions) -> Result<Read0> {
     let dims = plane(indices.len());
     let mut voxels = opts.room().f32_voxels(path, dims)?;
     let mut buffer = DecodingResult::U8(Vec::new());
+    let mut rounded = Rounded::default();
     for (&index, out) in indices.iter().zip(voxels.all().chunks_mut(first.voxels())) {
         opts.cancel.check()?;
         dec.seek_to_image(index)
             .map_err(|e| Error::format(path, format!("page {index}: {e}")))?;
-        dec = decode(path, (dec, len), index, first, &mut buffer, out)?.0;
+        let r;
+        (dec, r) = decode(path, (dec, len), index, first, &mut buffer, out)?;
+        rounded.add(r);
     }
     intact(&mut dec)?;
+    notes.extend(rounded.note(first.ty.name()));
     Read0::new(path, dims, spacing, first.ty, voxels.finish()?, notes)
 }
 
@@ -475,20 +482,24 @@ fn load_folder(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
     }
     let mut voxels = opts.room().f32_voxels(dir, dims)?;
     let mut buffer = DecodingResult::U8(Vec::new());
+    let mut rounded = Rounded::default();
     for (file, out) in files.iter().zip(voxels.all().chunks_mut(first.voxels())) {
         opts.cancel.check()?;
         let (mut dec, len) = open(&Source::new(file))?;
         // The file may have changed since it was described.
         pages_agree(file, 0, first, describe(file, &mut dec, 0)?)?;
-        intact(&mut decode(file, (dec, len), 0, first, &mut buffer, out)?.0)?;
+        let (mut dec, r) = decode(file, (dec, len), 0, first, &mut buffer, out)?;
+        intact(&mut dec)?;
+        rounded.add(r);
     }
     let name = |p: &PathBuf| crate::error::shown(Path::new(p.file_name().unwrap_or_default()));
-    let notes = vec![format!(
+    let mut notes = vec![format!(
         "{} slices from {} to {}",
         files.len(),
         name(&files[0]),
         name(&files[files.len() - 1])
     )];
+    notes.extend(rounded.note(first.ty.name()));
     Read0::new(dir, dims, spacing, first.ty, voxels.finish()?, notes)
 }
 

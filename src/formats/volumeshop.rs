@@ -84,7 +84,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes: (0, 1),
         trailing: false,
     };
-    let voxels = read_voxels(&spec, opts.room())?;
+    let (voxels, _) = read_voxels(&spec, opts.room())?; // u16: f32s exactly
     let notes = vec!["VolumeShop .dat files carry no spacing: using 1 mm".into()];
     Read0::new(path, dims, [1.0; 3], VoxelType::U16, voxels, notes)
 }

@@ -153,6 +153,51 @@ fn dxchanges_pixel_size_is_the_voxel_size() {
     }
 }
 
+/// A `NeXus` `NXdata` group's axis datasets give the voxel size: their step (h5py's reading of
+/// their first and last values, frozen in `reference.json`) in their `units`, matched to the
+/// dimensions by the group's `axes` (read as far as `rust-hdf5` reads it), their lengths and
+/// names.
+#[test]
+fn nexus_axes_give_the_voxel_size() {
+    let text = std::fs::read_to_string(data("hdf5/reference.json")).unwrap();
+    let reference: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let step = |file: &str, axis: &str| {
+        let want = &reference[file][format!("/entry/data/{axis}")];
+        let n = want["shape"][0].as_f64().unwrap();
+        (want["last"].as_f64().unwrap() - want["first"].as_f64().unwrap()) / (n - 1.0)
+    };
+    for (file, to_mm, note) in [
+        (
+            "nexus.h5",
+            [1e-6, 1e-3, 1e-3],
+            "voxel size from the NeXus NXdata axes of /entry/data (z 2.5 um, y 2 um, x 1500 nm)",
+        ),
+        (
+            "nexus_cube.h5",
+            [1.0; 3],
+            "voxel size from the NeXus NXdata axes of /entry/data (z 3 mm, y 2 mm, x 1 mm)",
+        ),
+    ] {
+        let loaded = load(&data(&format!("hdf5/{file}")), &options(None, 0)).unwrap();
+        let want = [
+            step(file, "x") * to_mm[0],
+            step(file, "y") * to_mm[1],
+            step(file, "z") * to_mm[2],
+        ];
+        assert_eq!(loaded.volume.spacing(), want, "{file}");
+        assert!(
+            loaded.notes.iter().any(|n| n == note),
+            "{file}: {:?}",
+            loaded.notes
+        );
+    }
+    // 1.5 µm, 2 µm, 2.5 µm; 1, 2, 3 mm.
+    let loaded = load(&data("hdf5/nexus.h5"), &options(None, 0)).unwrap();
+    for (got, want) in loaded.volume.spacing().iter().zip([1.5e-3, 2e-3, 2.5e-3]) {
+        assert!((got - want).abs() < 1e-15, "{got}");
+    }
+}
+
 /// What h5py read, frozen in `reference.json`, agrees with every 3-D dataset read here.
 #[test]
 fn h5pys_reading_agrees() {
@@ -166,11 +211,11 @@ fn h5pys_reading_agrees() {
             }
             let loaded = load(&data(&format!("hdf5/{file}")), &options(Some(path), 0))
                 .unwrap_or_else(|e| panic!("{file} {path}: {e}"));
-            // 64-bit integers are held as f32: numpy's nearest f32 of each.
+            // 32- and 64-bit integers are held as f32: numpy's nearest f32 of each.
             let want = if want["f32"].is_object() {
                 let rounded = want["f32"]["rounded"].as_u64().unwrap();
                 let said = loaded.notes.iter().any(|n| {
-                    n.starts_with(&format!("{rounded} u64 values beyond what an f32 holds"))
+                    n.starts_with(&format!("{rounded} ")) && n.contains(" beyond what an f32 holds")
                 });
                 assert_eq!(said, rounded > 0, "{file} {path}: {:?}", loaded.notes);
                 &want["f32"]
@@ -190,8 +235,8 @@ fn h5pys_reading_agrees() {
             checked += 1;
         }
     }
-    // 11 in the .h5 files, the 8 padded Data of the Imaris file.
-    assert_eq!(checked, 19);
+    // 14 in the .h5 files, the 8 padded Data of the Imaris file.
+    assert_eq!(checked, 22);
 }
 
 #[test]

@@ -14,6 +14,7 @@ mod cli;
 mod contract;
 mod dicom;
 mod dicom_tree;
+mod exact;
 mod explain;
 mod formats;
 mod fuzz_headers;

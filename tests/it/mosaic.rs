@@ -254,3 +254,61 @@ fn a_bad_csa_header_is_an_error_and_a_missing_one_falls_back() {
         .to_string();
     assert!(e.contains("ImageType says MOSAIC, but neither"), "{e}");
 }
+
+/// The CSA2 header `csa2` ("SV10") rewritten in the CSA1 layout, as older syngo versions wrote
+/// it (and SPM and dcm2niix read it): no signature, and each item's first word its length plus
+/// the first tag's item count.
+fn as_csa1(csa2: &[u8]) -> Vec<u8> {
+    let word = |at: usize| i32::from_le_bytes(csa2[at..at + 4].try_into().unwrap());
+    let count = word(8);
+    let mut out = csa2[8..16].to_vec();
+    let mut at = 16;
+    let mut base = None;
+    for _ in 0..count {
+        let items = word(at + 76);
+        let base = *base.get_or_insert(items);
+        out.extend_from_slice(&csa2[at..at + 84]);
+        at += 84;
+        for _ in 0..items {
+            let len = word(at + 4);
+            for w in [len + base, len, 77, len] {
+                out.extend(w.to_le_bytes());
+            }
+            let padded = (len as usize).div_ceil(4) * 4;
+            out.extend_from_slice(&csa2[at + 16..at + 16 + padded]);
+            at += 16 + padded;
+        }
+    }
+    assert_eq!(at, csa2.len(), "the whole CSA2 header walked");
+    out
+}
+
+/// A CSA1 fixture: `desc`'s file with its CSA image header (0029,1110) rewritten in the CSA1
+/// layout. Its slice normal, against the orientation's cross product, is in the CSA header only:
+/// read from CSA1, the tiles are reversed as dcm2niix reversed them (`desc.json`).
+#[test]
+fn a_csa1_header_gives_the_slice_normal_as_csa2_does() {
+    let bytes = std::fs::read(dicom_data("mosaic/desc/t0.dcm")).unwrap();
+    // Explicit VR little endian: (0029,1110) OB, two reserved bytes, a 4-byte length.
+    let head = [0x29, 0x00, 0x10, 0x11, b'O', b'B', 0, 0];
+    let at = bytes.windows(8).position(|w| w == head).unwrap();
+    let len = u32::from_le_bytes(bytes[at + 8..at + 12].try_into().unwrap()) as usize;
+    let csa2 = &bytes[at + 12..at + 12 + len];
+    assert!(csa2.starts_with(b"SV10"));
+    let csa1 = as_csa1(csa2);
+    assert!(!csa1.starts_with(b"SV10") && csa1.len().is_multiple_of(2));
+    let mut rewritten = bytes[..at + 8].to_vec();
+    rewritten.extend(u32::try_from(csa1.len()).unwrap().to_le_bytes());
+    rewritten.extend(&csa1);
+    rewritten.extend(&bytes[at + 12 + len..]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t0.dcm");
+    std::fs::write(&file, rewritten).unwrap();
+    let l = slabscope::load(&file, &LoadOptions::default()).unwrap();
+    let v = &l.volume;
+    assert_eq!(v.dims(), [6, 5, 7]);
+    assert_eq!(v.value([0, 0, 0]), stored(0, 0, 6, 0));
+    assert_eq!(v.value([0, 0, 6]), stored(0, 0, 0, 0));
+    same_as_dcm2niix(v, &frozen("desc"), 0, true);
+    assert_eq!(l.notes, load("desc", 0).unwrap().notes);
+}

@@ -434,3 +434,50 @@ fn array_names_the_array_read() {
         .to_string();
     assert!(e.contains("this mrc file holds one volume"), "{e}");
 }
+
+/// A 64³ u8 `.vti` whose one LZ4 block is the whole array (256 KiB of 7s), appended raw.
+fn one_lz4_block(dir: &std::path::Path) -> std::path::PathBuf {
+    let block = vec![7u8; 1 << 18];
+    let compressed = lz4_flex::block::compress(&block);
+    let mut bytes = br#"<?xml version="1.0"?>
+<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt32" compressor="vtkLZ4DataCompressor">
+  <ImageData WholeExtent="0 63 0 63 0 63" Origin="0 0 0" Spacing="1 1 1">
+    <Piece Extent="0 63 0 63 0 63">
+      <PointData Scalars="s">
+        <DataArray type="UInt8" Name="s" format="appended" offset="0"/>
+      </PointData>
+    </Piece>
+  </ImageData>
+  <AppendedData encoding="raw">
+   _"#
+    .to_vec();
+    for w in [1, 1 << 18, 0, u32::try_from(compressed.len()).unwrap()] {
+        bytes.extend(u32::to_le_bytes(w));
+    }
+    bytes.extend(&compressed);
+    bytes.extend(b"\n  </AppendedData>\n</VTKFile>\n");
+    let path = dir.join("one_block.vti");
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// An LZ4 block is held whole (LZ4's blocks have no stream): with its compressed bytes, beside
+/// the volume, within the budget, or refused before it is decoded, naming the budget.
+#[test]
+fn an_lz4_block_held_whole_is_weighed_beside_the_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = one_lz4_block(dir.path());
+    let with = |max_memory: u64| LoadOptions {
+        max_memory,
+        ..LoadOptions::default()
+    };
+    // The volume alone (256 KiB) fits in 400,000 bytes; with the block beside it, it does not.
+    let e = load(&path, &with(400_000)).unwrap_err().to_string();
+    assert!(
+        e.contains("lz4 blocks, each held whole") && e.contains("one_block.vti"),
+        "{e}"
+    );
+    assert!(!e.contains('\n'), "{e}");
+    let loaded = load(&path, &with(600_000)).unwrap();
+    assert!(loaded.volume.data().to_f32_vec().iter().all(|&v| v == 7.0));
+}

@@ -3,6 +3,7 @@
 
 use std::io::{BufRead, Read};
 
+use super::wide::Rounded;
 use super::{DataSpec, Skip, buffered};
 use crate::error::{Error, Result};
 use crate::volume::VoxelType;
@@ -50,7 +51,11 @@ pub(super) fn next_token(reader: &mut impl BufRead, token: &mut Vec<u8>) -> std:
     }
 }
 
-pub(super) fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, out: &mut [f32]) -> Result<()> {
+pub(super) fn read_ascii(
+    spec: &DataSpec,
+    mut reader: impl BufRead,
+    out: &mut [f32],
+) -> Result<Rounded> {
     let count = out.len();
     let mut n = 0;
     let path = spec.file.path();
@@ -64,6 +69,7 @@ pub(super) fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, out: &mut [f
     let integer = !matches!(ty, VoxelType::F32 | VoxelType::F64);
     let (lo, hi) = ty.range();
     let mut token = Vec::with_capacity(MAX_TOKEN + 1);
+    let mut rounded = Rounded::default();
     // The volumes before the one read.
     let before = spec.volumes.0 * count;
     for read in 0..before {
@@ -101,9 +107,15 @@ pub(super) fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, out: &mut [f
         if integer && !(v.fract() == 0.0 && (lo..=hi).contains(&v)) {
             return Err(bad(&format!("is not a {ty} value ({lo} to {hi})")));
         }
-        out[n] = match spec.scale {
-            Some((m, b)) => (v * m + b) as f32,
-            None => v as f32,
+        out[n] = if let Some((m, b)) = spec.scale {
+            (v * m + b) as f32
+        } else {
+            if integer {
+                // A whole number within a 32-bit type's range, so exact as an i64.
+                #[allow(clippy::cast_possible_truncation)]
+                rounded.add(Rounded::of([v as i64]));
+            }
+            v as f32
         };
         n += 1;
     }
@@ -113,5 +125,5 @@ pub(super) fn read_ascii(spec: &DataSpec, mut reader: impl BufRead, out: &mut [f
             format!("truncated ascii data: expected {count} values, found {n}"),
         ));
     }
-    Ok(())
+    Ok(rounded)
 }

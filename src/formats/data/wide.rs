@@ -1,8 +1,9 @@
-//! 64-bit integers (VTK's `Int64`/`UInt64` and `long`, h5py's int64/uint64): held as f32, as
-//! every value wider than 16 bits is, each one rounded to the nearest f32. An f32 holds every
-//! integer up to 2^24 in magnitude exactly, and larger ones only when their low bits are zero;
-//! the values that were rounded are counted, and said in a note ([`Rounded::note`]), never
-//! rounded silently.
+//! Integers wider than an f32 holds exactly: 64-bit ones (VTK's `Int64`/`UInt64` and `long`,
+//! h5py's int64/uint64) and 32-bit ones (every format's u32/i32), held as f32, as every value
+//! wider than 16 bits is, each one rounded to the nearest f32. An f32 holds every integer up to
+//! 2^24 in magnitude exactly, and larger ones only when their low bits are zero; the values that
+//! were rounded are counted by one test ([`Rounded::of`], [`Rounded::of_bytes`], [`Exact`]), and
+//! said in a note ([`Rounded::note`]), never rounded silently.
 
 use std::io::{BufRead, ErrorKind, Read};
 
@@ -44,7 +45,49 @@ pub(crate) struct Rounded {
     pub largest: i128,
 }
 
+/// Integers of at most this magnitude are f32s exactly: 2^24.
+const EXACT: u64 = 1 << 24;
+
 impl Rounded {
+    /// The integers of `values` an f32 does not hold exactly, counted: the test every reader
+    /// that widens 32-bit integers to f32 applies (64-bit ones pass through [`WideReader`]).
+    pub(crate) fn of(values: impl IntoIterator<Item = i64>) -> Self {
+        let mut rounded = Self::default();
+        for v in values {
+            if v.unsigned_abs() > EXACT {
+                rounded.take(i128::from(v));
+            }
+        }
+        rounded
+    }
+
+    /// [`Rounded::of`] the voxels of `bytes` stored as `ty` in `endian` order: nothing for types
+    /// other than u32 and i32 (smaller integers and floats are f32s exactly, and 64-bit
+    /// integers are counted as they are read).
+    pub(crate) fn of_bytes(bytes: &[u8], ty: VoxelType, endian: Endian) -> Self {
+        let word = |c: &[u8]| {
+            let mut w = [0u8; 4];
+            w.copy_from_slice(c);
+            if endian == Endian::Big {
+                w.reverse();
+            }
+            w
+        };
+        let words = bytes.chunks_exact(4).map(word);
+        match ty {
+            VoxelType::U32 => Self::of(words.map(|w| i64::from(u32::from_le_bytes(w)))),
+            VoxelType::I32 => Self::of(words.map(|w| i64::from(i32::from_le_bytes(w)))),
+            _ => Self::default(),
+        }
+    }
+
+    /// These counts and `other`'s.
+    #[must_use]
+    pub(crate) fn plus(mut self, other: Self) -> Self {
+        self.add(other);
+        self
+    }
+
     /// `v` as the nearest f32, counted when that is not `v`.
     fn take(&mut self, v: i128) -> f32 {
         #[allow(clippy::cast_precision_loss)] // counted below
@@ -67,18 +110,47 @@ impl Rounded {
         }
     }
 
-    /// The note saying that `count` values of type `wide` were rounded, when any was.
-    pub(crate) fn note(&self, wide: Wide) -> Option<String> {
+    /// The note saying that `count` values of type `ty` (its name: `i64`, `u32`...) were
+    /// rounded, when any was.
+    pub(crate) fn note(&self, ty: &str) -> Option<String> {
         (self.count > 0).then(|| {
             format!(
                 "{} {} value{} beyond what an f32 holds exactly rounded to the nearest f32 \
                  (the largest {})",
                 self.count,
-                wide.name(),
+                ty,
                 if self.count == 1 { "" } else { "s" },
                 self.largest
             )
         })
+    }
+}
+
+/// Element types a reader widens to f32 as they are: the integers an f32 does not hold exactly
+/// counted ([`Rounded::of`]) for u32 and i32, nothing for the others.
+pub(crate) trait Exact: Sized {
+    /// The values of `values` an f32 does not hold exactly.
+    fn rounded(_values: &[Self]) -> Rounded {
+        Rounded::default()
+    }
+}
+
+impl Exact for u8 {}
+impl Exact for i8 {}
+impl Exact for u16 {}
+impl Exact for i16 {}
+impl Exact for f32 {}
+impl Exact for f64 {}
+
+impl Exact for u32 {
+    fn rounded(values: &[u32]) -> Rounded {
+        Rounded::of(values.iter().map(|&v| i64::from(v)))
+    }
+}
+
+impl Exact for i32 {
+    fn rounded(values: &[i32]) -> Rounded {
+        Rounded::of(values.iter().map(|&v| i64::from(v)))
     }
 }
 
@@ -196,7 +268,8 @@ pub(crate) fn read_wide(
     let mut reader = WideReader::new(stream, wide, spec.endian);
     let voxels = {
         let mut buffered = std::io::BufReader::new(&mut reader);
-        super::read_voxels_from(&as_f32(spec), &mut buffered, what, room)?
+        // f32 values: nothing more rounded here.
+        super::read_voxels_from(&as_f32(spec), &mut buffered, what, room)?.0
     };
     Ok((voxels, reader.rounded))
 }
@@ -311,11 +384,57 @@ mod tests {
         assert_eq!(got, [18_446_744_073_709_551_616.0]);
         assert_eq!(rounded.largest, i128::from(u64::MAX));
         assert_eq!(
-            rounded.note(Wide::U64).unwrap(),
+            rounded.note(Wide::U64.name()).unwrap(),
             "1 u64 value beyond what an f32 holds exactly rounded to the nearest f32 (the \
              largest 18446744073709551615)"
         );
-        assert_eq!(Rounded::default().note(Wide::I64), None);
+        assert_eq!(Rounded::default().note("i64"), None);
+    }
+
+    #[test]
+    fn thirty_two_bit_integers_beyond_two_to_the_24_are_counted() {
+        let u: [u32; 5] = [0, 1 << 24, (1 << 24) + 1, (1 << 25) + 4, u32::MAX];
+        let le: Vec<u8> = u.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let be: Vec<u8> = u.iter().flat_map(|v| v.to_be_bytes()).collect();
+        // 2^24 and 2^25 + 4 are f32s (a step of 4 between 2^25 and 2^26); 2^24 + 1 and 2^32 - 1
+        // are not.
+        let expected = Rounded {
+            count: 2,
+            largest: i128::from(u32::MAX),
+        };
+        assert_eq!(
+            Rounded::of_bytes(&le, VoxelType::U32, Endian::Little),
+            expected
+        );
+        assert_eq!(
+            Rounded::of_bytes(&be, VoxelType::U32, Endian::Big),
+            expected
+        );
+        assert_eq!(u32::rounded(&u), expected);
+        let i: [i32; 4] = [-(1 << 24), -(1 << 24) - 1, i32::MIN, i32::MAX];
+        let le: Vec<u8> = i.iter().flat_map(|v| v.to_le_bytes()).collect();
+        // -2^24 and -2^31 are f32s; -2^24 - 1 and 2^31 - 1 are not.
+        let expected = Rounded {
+            count: 2,
+            largest: i128::from(i32::MAX),
+        };
+        assert_eq!(
+            Rounded::of_bytes(&le, VoxelType::I32, Endian::Little),
+            expected
+        );
+        assert_eq!(i32::rounded(&i), expected);
+        assert_eq!(
+            expected.note("i32").unwrap(),
+            "2 i32 values beyond what an f32 holds exactly rounded to the nearest f32 (the \
+             largest 2147483647)"
+        );
+        // Other types are not counted here: 16-bit and float values are f32s (or f64s rounded
+        // by design), 64-bit ones counted as they are read.
+        assert_eq!(
+            Rounded::of_bytes(&le, VoxelType::F32, Endian::Little),
+            Rounded::default()
+        );
+        assert_eq!(f64::rounded(&[1e300]), Rounded::default());
     }
 
     #[test]

@@ -49,6 +49,19 @@ fn number(file: &H5File, path: &str) -> Option<f64> {
     values.first().copied().filter(|v| v.is_finite())
 }
 
+/// The millimetres in one `unit` (a `units` attribute's value), µm when none is given; `None`
+/// for a unit that is no length read here.
+pub(super) fn mm_per(unit: Option<&str>) -> Option<f64> {
+    Some(match unit.map(str::trim) {
+        None | Some("um" | "µm" | "micron" | "microns" | "micrometer" | "micrometers") => 1e-3,
+        Some("nm" | "nanometer" | "nanometers") => 1e-6,
+        Some("angstrom" | "angstroms" | "Å" | "A") => 1e-7,
+        Some("mm" | "millimeter" | "millimeters") => 1.0,
+        Some("m" | "meter" | "meters") => 1e3,
+        Some(_) => return None,
+    })
+}
+
 /// The length the dataset `path` holds, in mm (its value in the unit its `units` attribute
 /// names, µm when none), and as the file gives it.
 fn length(file: &H5File, path: &str) -> Option<(f64, String)> {
@@ -59,13 +72,7 @@ fn length(file: &H5File, path: &str) -> Option<(f64, String)> {
         .attr("units")
         .ok()
         .and_then(|a| a.read_string().ok());
-    let to_mm = match unit.as_deref().map(str::trim) {
-        None | Some("um" | "µm" | "micron" | "microns" | "micrometer" | "micrometers") => 1e-3,
-        Some("nm" | "nanometer" | "nanometers") => 1e-6,
-        Some("mm" | "millimeter" | "millimeters") => 1.0,
-        Some("m" | "meter" | "meters") => 1e3,
-        Some(_) => return None,
-    };
+    let to_mm = mm_per(unit.as_deref())?;
     let shown = format!("{value} {}", unit.as_deref().unwrap_or("µm").trim());
     Some((value * to_mm, crate::error::names::text(&shown)))
 }

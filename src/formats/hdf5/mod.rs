@@ -15,6 +15,7 @@
 
 mod dxchange;
 mod imaris;
+mod nexus;
 mod pick;
 
 use std::path::Path;
@@ -246,14 +247,14 @@ fn load_level(source: &Source, opts: &LoadOptions, level: usize) -> Result<Read0
         trailing: false,
     };
     let mut stream = bytes.as_slice();
-    let voxels = match wide {
-        Some(wide) => {
-            let (voxels, rounded) = read_wide(&spec, wide, stream, "HDF5 dataset", opts.room())?;
-            notes.extend(rounded.note(wide));
-            voxels
-        }
-        None => read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.room())?,
+    let (voxels, rounded, stored) = if let Some(wide) = wide {
+        let (voxels, rounded) = read_wide(&spec, wide, stream, "HDF5 dataset", opts.room())?;
+        (voxels, rounded, wide.name())
+    } else {
+        let (voxels, rounded) = read_voxels_from(&spec, &mut stream, "HDF5 dataset", opts.room())?;
+        (voxels, rounded, ty.name())
     };
+    notes.extend(rounded.note(stored));
     drop(bytes);
     let imaris_spacing = imaris.and_then(|i| i.spacing);
     let spacing = voxel_size(
@@ -278,14 +279,20 @@ fn voxel_size(
     notes: &mut Vec<String>,
 ) -> [f64; 3] {
     let given = imaris.or_else(|| pick::spacing(ds)).or_else(|| {
-        let (spacing, note) = dxchange::spacing(file, path)?;
+        let shape = ds.shape();
+        let zyx = match shape.as_slice() {
+            [.., z, y, x] => [*z, *y, *x],
+            _ => return None,
+        };
+        let (spacing, note) =
+            dxchange::spacing(file, path).or_else(|| nexus::spacing(file, path, zyx))?;
         notes.push(note);
         Some(spacing)
     });
     given.unwrap_or_else(|| {
         notes.push(format!(
             "dataset {name} gives no voxel size (no element_size_um attribute, no DXchange \
-             pixel size): using 1 mm"
+             pixel size, no NeXus axes): using 1 mm"
         ));
         [1.0; 3]
     })

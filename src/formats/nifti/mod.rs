@@ -202,7 +202,8 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         volumes,
         trailing: false,
     };
-    let voxels = read_voxels(&spec, opts.room())?;
+    let (voxels, rounded) = read_voxels(&spec, opts.room())?;
+    notes.extend(rounded.note(ty.name()));
     let mut read = Read0::new(path, dims, spacing, ty, voxels, notes)?
         .with_transform(transform(&h, unit))
         .with_source(spec.file.path());

@@ -197,7 +197,7 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
             read
         }
     };
-    notes.extend(array.wide.and_then(|w| rounded.note(w)));
+    notes.extend(rounded.note(array.wide.map_or(array.ty.name(), Wide::name)));
     if array.cells {
         notes.push("cell data: a voxel a cell, at its centre".into());
     }

@@ -3,7 +3,7 @@
 //! at a time ([`Blocks`]). Every size the header claims is checked against the array's own size and the
 //! bytes the file holds before anything is allocated.
 
-use std::io::{Error as IoError, ErrorKind, Read};
+use std::io::{BufReader, Error as IoError, ErrorKind, Read};
 
 use flate2::bufread::ZlibDecoder;
 
@@ -149,9 +149,12 @@ impl Compressor {
     }
 }
 
-/// The compressed blocks of an array, decompressed one at a time as they are read.
+/// The compressed blocks of an array, decompressed one at a time as they are read: a zlib block
+/// as a stream (none of it held whole, compressed or not: one block may be the whole array, and
+/// the volume it is read into is held beside it), an LZ4 block whole (LZ4's block format has no
+/// stream).
 pub(super) struct Blocks<R> {
-    input: R,
+    stage: Stage<R>,
     compressor: Compressor,
     /// Each block's compressed size.
     sizes: Vec<u64>,
@@ -162,6 +165,26 @@ pub(super) struct Blocks<R> {
     block: Vec<u8>,
     at: usize,
 }
+
+/// Where the reading of [`Blocks`] is: between blocks (or in an LZ4 block, held whole), or in a
+/// zlib block, decoded as it is read.
+enum Stage<R> {
+    Between(R),
+    Zlib(Inflating<R>),
+    /// Only while one stage is made into the other.
+    Moving,
+}
+
+/// A zlib block being decoded: block `i`, of `size` bytes decoded, `made` of them given.
+struct Inflating<R> {
+    inflate: std::io::Take<ZlibDecoder<BufReader<std::io::Take<R>>>>,
+    i: usize,
+    size: u64,
+    made: u64,
+}
+
+/// The compressed bytes a zlib block's decoder reads ahead.
+const ZLIB_BUFFER: usize = 1 << 15;
 
 impl<R: Read> Blocks<R> {
     /// Reads the compression header of `input` (the number of blocks, the block size, the last
@@ -200,7 +223,7 @@ impl<R: Read> Blocks<R> {
             .map(|_| word())
             .collect::<Result<Vec<u64>, String>>()?;
         Ok(Self {
-            input,
+            stage: Stage::Between(input),
             compressor,
             sizes,
             block_size,
@@ -212,73 +235,150 @@ impl<R: Read> Blocks<R> {
         })
     }
 
-    /// Decompresses the next block into `block`.
-    fn inflate(&mut self) -> std::io::Result<()> {
-        let i = self.next;
-        let size = if i + 1 == self.sizes.len() {
+    /// The bytes the blocks hold in buffers now (their decoders' state aside).
+    #[cfg(test)]
+    fn held(&self) -> usize {
+        let zlib = match &self.stage {
+            Stage::Zlib(z) => z.inflate.get_ref().get_ref().capacity(),
+            _ => 0,
+        };
+        self.compressed.capacity() + self.block.capacity() + zlib
+    }
+
+    /// The bytes an LZ4 block is held in, whole, beside its compressed bytes (LZ4's blocks have
+    /// no stream): the largest block and the largest compressed block; `None` for zlib, whose
+    /// blocks are streams.
+    pub(super) fn held_whole(&self) -> Option<u64> {
+        (self.compressor == Compressor::Lz4).then(|| {
+            let compressed = self.sizes.iter().copied().max().unwrap_or(0);
+            self.block_size.saturating_add(compressed)
+        })
+    }
+
+    /// The decoded size of block `i`.
+    fn size(&self, i: usize) -> u64 {
+        if i + 1 == self.sizes.len() {
             self.last_size
         } else {
             self.block_size
+        }
+    }
+
+    /// Starts the next block: a zlib block's decoder set on its compressed bytes, an LZ4 block
+    /// decompressed whole into `block`.
+    fn start(&mut self) -> std::io::Result<()> {
+        let i = self.next;
+        let size = self.size(i);
+        self.next += 1;
+        let Stage::Between(input) = std::mem::replace(&mut self.stage, Stage::Moving) else {
+            return Err(invalid("blocks read out of order".into()));
         };
+        if self.compressor == Compressor::Zlib {
+            let compressed = BufReader::with_capacity(ZLIB_BUFFER, input.take(self.sizes[i]));
+            self.stage = Stage::Zlib(Inflating {
+                inflate: ZlibDecoder::new(compressed).take(size),
+                i,
+                size,
+                made: 0,
+            });
+            return Ok(());
+        }
+        let mut input = input;
+        let read = self.lz4(&mut input, i, size);
+        self.stage = Stage::Between(input);
+        read
+    }
+
+    /// Decompresses LZ4 block `i`, of `size` bytes decoded, from `input` into `block`.
+    fn lz4(&mut self, input: &mut R, i: usize, size: u64) -> std::io::Result<()> {
         self.compressed.clear();
-        (&mut self.input)
+        input
             .take(self.sizes[i])
             .read_to_end(&mut self.compressed)?;
         if (self.compressed.len() as u64) < self.sizes[i] {
             return Err(IoError::new(
                 ErrorKind::UnexpectedEof,
-                format!("{} block {i} is cut short", self.compressor.name()),
+                format!("lz4 block {i} is cut short"),
             ));
         }
-        let name = self.compressor.name();
-        self.block.clear();
-        let made = match self.compressor {
-            Compressor::Zlib => ZlibDecoder::new(&self.compressed[..])
-                .take(size)
-                .read_to_end(&mut self.block)
-                .map_err(|e| invalid(format!("zlib block {i}: {e}")))?,
-            Compressor::Lz4 => {
-                // An LZ4 byte decodes to at most 255 bytes (a match's length grows by 255 a
-                // byte): a block claiming more than its bytes can hold is refused before room is
-                // made for it.
-                let most = (self.compressed.len() as u64).saturating_mul(LZ4_MOST);
-                if size > most {
-                    return Err(invalid(format!(
-                        "lz4 block {i} of {} bytes cannot decompress to {size}",
-                        self.compressed.len()
-                    )));
-                }
-                self.block
-                    .resize(usize::try_from(size).unwrap_or(usize::MAX), 0);
-                let made = lz4_flex::block::decompress_into(&self.compressed, &mut self.block)
-                    .map_err(|e| invalid(format!("lz4 block {i}: {e}")))?;
-                self.block.truncate(made);
-                made
-            }
-        };
-        if made as u64 != size {
+        // An LZ4 byte decodes to at most 255 bytes (a match's length grows by 255 a byte): a
+        // block claiming more than its bytes can hold is refused before room is made for it.
+        let most = (self.compressed.len() as u64).saturating_mul(LZ4_MOST);
+        if size > most {
             return Err(invalid(format!(
-                "{name} block {i} decompresses to {made} bytes, not {size}"
+                "lz4 block {i} of {} bytes cannot decompress to {size}",
+                self.compressed.len()
             )));
         }
-        self.next += 1;
+        self.block.clear();
+        self.block
+            .resize(usize::try_from(size).unwrap_or(usize::MAX), 0);
+        let made = lz4_flex::block::decompress_into(&self.compressed, &mut self.block)
+            .map_err(|e| invalid(format!("lz4 block {i}: {e}")))?;
+        self.block.truncate(made);
         self.at = 0;
+        if made as u64 != size {
+            return Err(invalid(format!(
+                "lz4 block {i} decompresses to {made} bytes, not {size}"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Ends the zlib block being read, once its decoder gives no more: checked to have given
+    /// exactly its size, from exactly its compressed bytes.
+    fn end_zlib(&mut self) -> std::io::Result<()> {
+        let Stage::Zlib(z) = std::mem::replace(&mut self.stage, Stage::Moving) else {
+            return Ok(());
+        };
+        let (i, made, size) = (z.i, z.made, z.size);
+        if made != size {
+            return Err(invalid(format!(
+                "zlib block {i} decompresses to {made} bytes, not {size}"
+            )));
+        }
+        let mut rest = z.inflate.into_inner().into_inner().into_inner();
+        // Bytes of the block after its stream (read ahead or not) are skipped.
+        std::io::copy(&mut rest, &mut std::io::sink())?;
+        if rest.limit() > 0 {
+            return Err(IoError::new(
+                ErrorKind::UnexpectedEof,
+                format!("zlib block {i} is cut short"),
+            ));
+        }
+        self.stage = Stage::Between(rest.into_inner());
         Ok(())
     }
 }
 
 impl<R: Read> Read for Blocks<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        if self.at == self.block.len() {
-            if self.next == self.sizes.len() {
+        loop {
+            if let Stage::Zlib(z) = &mut self.stage {
+                if buf.is_empty() {
+                    return Ok(0);
+                }
+                let i = z.i;
+                let n = z
+                    .inflate
+                    .read(buf)
+                    .map_err(|e| invalid(format!("zlib block {i}: {e}")))?;
+                if n > 0 {
+                    z.made += n as u64;
+                    return Ok(n);
+                }
+                self.end_zlib()?;
+            } else if self.at < self.block.len() {
+                let n = buf.len().min(self.block.len() - self.at);
+                buf[..n].copy_from_slice(&self.block[self.at..self.at + n]);
+                self.at += n;
+                return Ok(n);
+            } else if self.next == self.sizes.len() {
                 return Ok(0);
+            } else {
+                self.start()?;
             }
-            self.inflate()?;
         }
-        let n = buf.len().min(self.block.len() - self.at);
-        buf[..n].copy_from_slice(&self.block[self.at..self.at + n]);
-        self.at += n;
-        Ok(n)
     }
 }
 
@@ -365,5 +465,67 @@ mod tests {
         let mut out = Vec::new();
         blocks.read_to_end(&mut out).unwrap();
         assert_eq!(out, b"A");
+    }
+
+    /// One zlib block of 8 MiB (of `byte`), its header and its compressed bytes.
+    fn one_zlib_block(byte: u8) -> Vec<u8> {
+        let block = vec![byte; 8 << 20];
+        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+        std::io::Write::write_all(&mut z, &block).unwrap();
+        let z = z.finish().unwrap();
+        let mut input: Vec<u8> = [1u32, 8 << 20, 0, u32::try_from(z.len()).unwrap()]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        input.extend_from_slice(&z);
+        input
+    }
+
+    #[test]
+    fn a_zlib_block_is_decoded_as_it_is_read_none_of_it_held_whole() {
+        let words = Words {
+            size: 4,
+            endian: Endian::Little,
+        };
+        // A block that is the whole array (8 MiB) read a MiB at a time: the blocks hold the
+        // decoder's read-ahead only, not the block (8 MiB and its compressed bytes before).
+        let input = one_zlib_block(7);
+        let mut blocks = Blocks::new(&input[..], Compressor::Zlib, words, 8 << 20, 100).unwrap();
+        let mut buf = vec![0u8; 1 << 20];
+        let mut total = 0;
+        let mut most = 0;
+        loop {
+            let n = blocks.read(&mut buf).unwrap();
+            if n == 0 {
+                break;
+            }
+            assert!(buf[..n].iter().all(|&b| b == 7));
+            total += n;
+            most = most.max(blocks.held());
+        }
+        assert_eq!(total, 8 << 20);
+        assert!(most <= ZLIB_BUFFER, "{most} bytes held");
+        // Cut short, and a block that decodes to less than its header says: refused.
+        let e = Blocks::new(
+            &input[..input.len() - 3],
+            Compressor::Zlib,
+            words,
+            8 << 20,
+            100,
+        )
+        .unwrap()
+        .read_to_end(&mut Vec::new())
+        .unwrap_err();
+        assert!(e.to_string().starts_with("zlib block 0"), "{e}");
+        let mut input = one_zlib_block(1);
+        input[4..8].copy_from_slice(&(9u32 << 20).to_le_bytes());
+        let e = Blocks::new(&input[..], Compressor::Zlib, words, 9 << 20, 100)
+            .unwrap()
+            .read_to_end(&mut Vec::new())
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "zlib block 0 decompresses to 8388608 bytes, not 9437184"
+        );
     }
 }

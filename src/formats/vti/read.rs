@@ -11,9 +11,10 @@ use crate::formats::data::wide::{Rounded, Wide, read_wide, read_wide_ascii};
 use crate::formats::data::{DataSpec, Encoding, read_voxels, read_voxels_from};
 use crate::formats::scratch::Room;
 use crate::volume::Voxels;
+use crate::volume::voxels::held_type;
 
 /// Reads the voxels of `array`, whose volume `spec` describes, from the file's `bytes`; with
-/// the 64-bit values rounded to f32 (none for other types).
+/// the 32- and 64-bit integers rounded to f32 counted (none for other types).
 pub(super) fn read_array(
     spec: &DataSpec,
     array: &Array,
@@ -42,8 +43,7 @@ pub(super) fn read_array(
             if let Some(wide) = array.wide {
                 return read_wide_ascii(&spec, wide, text, room);
             }
-            let voxels = read_voxels_from(&spec, &mut text, "ascii", room)?;
-            return Ok((voxels, Rounded::default()));
+            return read_voxels_from(&spec, &mut text, "ascii", room);
         }
         "binary" => (array.text.as_bytes(), true),
         "appended" => {
@@ -59,8 +59,7 @@ pub(super) fn read_array(
                 .filter(|&at| at <= bytes.len())
                 .ok_or_else(|| bad(format!("its offset {offset} is beyond the file's end")))?;
             if !appended.base64 && layout.compressor.is_none() && array.wide.is_none() {
-                let voxels = raw_in_place(spec, &bytes[at..], at, layout.words, expected, room)?;
-                return Ok((voxels, Rounded::default()));
+                return raw_in_place(spec, &bytes[at..], at, layout.words, expected, room);
             }
             (&bytes[at..], appended.base64)
         }
@@ -82,6 +81,7 @@ pub(super) fn read_array(
         let max_blocks = max_blocks.min(room.max_memory / 8);
         let blocks =
             Blocks::new(decoded, compressor, layout.words, expected, max_blocks).map_err(bad)?;
+        blocks_fit(spec, array, blocks.held_whole(), room)?;
         return voxels_of(spec, array.wide, blocks, compressor.name(), room);
     }
     let size = layout
@@ -97,6 +97,36 @@ pub(super) fn read_array(
     voxels_of(spec, array.wide, decoded.take(size), what, room)
 }
 
+/// Fails when an LZ4 block held whole (`held` bytes with its compressed bytes) does not fit in
+/// `room`'s budget beside the volume `spec` describes, when that is read into memory.
+fn blocks_fit(spec: &DataSpec, array: &Array, held: Option<u64>, room: Room) -> Result<()> {
+    let Some(held) = held else {
+        return Ok(());
+    };
+    let voxels = spec.dims.iter().map(|&d| d as u64).product::<u64>();
+    let volume = if room.scratch.is_some() {
+        0
+    } else {
+        voxels.saturating_mul(held_type(array.ty, false).size() as u64)
+    };
+    let needed = volume.saturating_add(held);
+    if needed <= room.max_memory {
+        return Ok(());
+    }
+    Err(Error::TooLarge {
+        path: spec.file.path().to_path_buf(),
+        what: format!(
+            "its array {:?}'s lz4 blocks, each held whole ({held} bytes with its compressed \
+             bytes) beside the volume",
+            crate::error::names::text(&array.name)
+        ),
+        needed,
+        limit: room.max_memory,
+        machine: false,
+        disk: false,
+    })
+}
+
 /// The voxels of the bytes of `stream` (64-bit integers of the type `wide`, if any), with the
 /// values rounded to f32; `what` names the stream in messages.
 fn voxels_of(
@@ -110,8 +140,7 @@ fn voxels_of(
         return read_wide(spec, wide, stream, what, room);
     }
     let mut stream = BufReader::new(stream);
-    let voxels = read_voxels_from(spec, &mut stream, what, room)?;
-    Ok((voxels, Rounded::default()))
+    read_voxels_from(spec, &mut stream, what, room)
 }
 
 /// Raw appended voxels at `at` in the file (`bytes` from there), after their size: read in place
@@ -123,7 +152,7 @@ fn raw_in_place(
     words: Words,
     expected: u64,
     room: Room,
-) -> Result<Voxels> {
+) -> Result<(Voxels, Rounded)> {
     let path = spec.file.path();
     let size = words
         .read(&mut &bytes[..])

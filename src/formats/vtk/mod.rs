@@ -324,14 +324,14 @@ fn load(source: &Source, opts: &LoadOptions) -> Result<Read0> {
         trailing: true,
     };
     let mut notes = Vec::new();
-    let mut voxels = match h.wide {
-        Some(wide) => {
-            let (voxels, rounded) = read_wide_values(&spec, wide, opts)?;
-            notes.extend(rounded.note(wide));
-            voxels
-        }
-        None => read_voxels(&spec, opts.room())?,
+    let (mut voxels, rounded, stored) = if let Some(wide) = h.wide {
+        let (voxels, rounded) = read_wide_values(&spec, wide, opts)?;
+        (voxels, rounded, wide.name())
+    } else {
+        let (voxels, rounded) = read_voxels(&spec, opts.room())?;
+        (voxels, rounded, ty.name())
     };
+    notes.extend(rounded.note(stored));
     let mut held = ty;
     if h.color && !h.binary {
         // ASCII colours are written as fractions of 255: the bytes again.

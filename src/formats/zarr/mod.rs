@@ -491,7 +491,8 @@ impl Opened {
             transform: t,
         } = self.grid(i, &mut notes);
         let stored = self.arrays[i].voxel_type().map_err(fail)?;
-        let voxels = self.dataset(i, opts).voxels(dims)?;
+        let (voxels, rounded) = self.dataset(i, opts).voxels_counted(dims)?;
+        notes.extend(rounded.note(stored.name()));
         let mut read0 = Read0::new(dir, dims, spacing, stored, voxels, notes)?;
         read0 = read0.with_transform(Some(t));
         if self.image.label {

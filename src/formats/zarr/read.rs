@@ -13,6 +13,7 @@ use super::meta::ArrayMeta;
 use super::root::Root;
 use crate::error::{Error, Result};
 use crate::formats::data::typed_buffer;
+use crate::formats::data::wide::{Exact, Rounded};
 use crate::formats::scratch::VoxelOut;
 use crate::progress::Cancel;
 use crate::volume::voxels::held_type;
@@ -47,6 +48,11 @@ impl Dataset<'_> {
     /// The voxels of the dataset, of dimensions `dims` (x fastest): integers of at most 16 bits
     /// in their type, everything else as f32.
     pub fn voxels(&self, dims: [usize; 3]) -> Result<Voxels> {
+        Ok(self.voxels_counted(dims)?.0)
+    }
+
+    /// [`Dataset::voxels`], with the 32-bit integers an f32 does not hold exactly counted.
+    pub fn voxels_counted(&self, dims: [usize; 3]) -> Result<(Voxels, Rounded)> {
         let fail = |m: String| Error::format(self.image, m);
         let stored = self.meta.voxel_type().map_err(fail)?;
         check_chunks(self.image, self.meta, stored, self.max_memory)?;
@@ -181,19 +187,23 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    /// The voxels, held as integers of at most 16 bits are, everything else as f32.
-    fn voxels(&self, stored: VoxelType) -> Result<Voxels> {
+    /// The voxels, held as integers of at most 16 bits are, everything else as f32; with the
+    /// 32-bit integers an f32 does not hold exactly counted.
+    fn voxels(&self, stored: VoxelType) -> Result<(Voxels, Rounded)> {
+        fn done<T: Voxel>((out, rounded): (VoxelOut<T>, Rounded)) -> Result<(Voxels, Rounded)> {
+            Ok((out.finish()?, rounded))
+        }
         match held_type(stored, false) {
-            VoxelType::U8 => self.read::<u8, u8>(|v| v)?.finish(),
-            VoxelType::I8 => self.read::<i8, i8>(|v| v)?.finish(),
-            VoxelType::U16 => self.read::<u16, u16>(|v| v)?.finish(),
-            VoxelType::I16 => self.read::<i16, i16>(|v| v)?.finish(),
+            VoxelType::U8 => done(self.read::<u8, u8>(|v| v)?),
+            VoxelType::I8 => done(self.read::<i8, i8>(|v| v)?),
+            VoxelType::U16 => done(self.read::<u16, u16>(|v| v)?),
+            VoxelType::I16 => done(self.read::<i16, i16>(|v| v)?),
             // Infinities made missing as each value is stored, as every reader stores them.
             _ => match stored {
-                VoxelType::U32 => self.read::<u32, f32>(|v| v as f32)?.finish(),
-                VoxelType::I32 => self.read::<i32, f32>(|v| v as f32)?.finish(),
-                VoxelType::F64 => self.read::<f64, f32>(|v| finite_or_nan(v as f32))?.finish(),
-                _ => self.read::<f32, f32>(finite_or_nan)?.finish(),
+                VoxelType::U32 => done(self.read::<u32, f32>(|v| v as f32)?),
+                VoxelType::I32 => done(self.read::<i32, f32>(|v| v as f32)?),
+                VoxelType::F64 => done(self.read::<f64, f32>(|v| finite_or_nan(v as f32))?),
+                _ => done(self.read::<f32, f32>(finite_or_nan)?),
             },
         }
     }
@@ -201,10 +211,10 @@ impl Reader<'_> {
     /// Reads elements of type `E` into a volume of `T`, converting each with `to`: slabs of one
     /// chunk's depth along z in parallel, each chunk of a slab in turn, stopped between chunks
     /// when the load is cancelled.
-    fn read<E: ElementOwned + Copy + Send + Sync, T: Voxel>(
+    fn read<E: ElementOwned + Copy + Send + Sync + Exact, T: Voxel>(
         &self,
         to: fn(E) -> T,
-    ) -> Result<VoxelOut<T>> {
+    ) -> Result<(VoxelOut<T>, Rounded)> {
         let (path, dims) = (self.path, self.dims);
         let mut all = VoxelOut::new(path, dims, self.scratch, || {
             typed_buffer::<T>(path, dims, self.max_memory)
@@ -214,31 +224,35 @@ impl Reader<'_> {
         let step = |axis: Option<usize>| axis.map_or(1, |a| self.step[a].max(1) as usize);
         let [sz, sy, sx] = self.layout.spatial.map(step);
         let slab = nx * ny * sz.min(nz);
-        out.par_chunks_mut(slab)
+        let rounded = out
+            .par_chunks_mut(slab)
             .enumerate()
-            .try_for_each(|(k, out)| {
+            .map(|(k, out)| {
                 let z0 = k * sz;
                 let z1 = (z0 + sz).min(nz);
+                let mut rounded = Rounded::default();
                 for y0 in (0..ny).step_by(sy) {
                     for x0 in (0..nx).step_by(sx) {
                         self.cancel.check()?;
                         let box3 = [z0..z1, y0..(y0 + sy).min(ny), x0..(x0 + sx).min(nx)];
-                        self.chunk(&box3, z0, out, to)?;
+                        rounded.add(self.chunk(&box3, z0, out, to)?);
                     }
                 }
-                Ok::<(), Error>(())
-            })?;
-        Ok(all)
+                Ok::<Rounded, Error>(rounded)
+            })
+            .try_reduce(Rounded::default, |a, b| Ok(a.plus(b)))?;
+        Ok((all, rounded))
     }
 
-    /// Reads the box `[z, y, x]` of the volume into `out`, the slab that starts at slice `z0`.
-    fn chunk<E: ElementOwned + Copy, T: Voxel>(
+    /// Reads the box `[z, y, x]` of the volume into `out`, the slab that starts at slice `z0`;
+    /// the values an f32 does not hold exactly, counted.
+    fn chunk<E: ElementOwned + Copy + Exact, T: Voxel>(
         &self,
         [z, y, x]: &[std::ops::Range<usize>; 3],
         z0: usize,
         out: &mut [T],
         to: fn(E) -> T,
-    ) -> Result<()> {
+    ) -> Result<Rounded> {
         let [nx, ny, _] = self.dims;
         let ranges: Vec<std::ops::Range<u64>> = (0..self.array.dimensionality())
             .map(|a| {
@@ -285,6 +299,6 @@ impl Reader<'_> {
                 *o = to(v);
             }
         }
-        Ok(())
+        Ok(E::rounded(&values))
     }
 }

@@ -4,8 +4,8 @@ function of its index, so the tests check values without a second copy: value(x,
 x + 10*y + 100*z (+ 1000*t for a 4-D dataset), stored in C order as h5py writes it, the array
 indexed [z, y, x] (the last index fastest). h5py is BSD-licensed; the files are this project's.
 `reference.json` beside them freezes h5py's own reading: each dataset's shape, dtype, chunks,
-filters, and the sum and first and last values of its voxels (and, for 64-bit integers, of
-numpy's nearest f32 of each, with how many an f32 does not hold exactly)."""
+filters, and the sum and first and last values of its voxels (and, for 32- and 64-bit integers,
+of numpy's nearest f32 of each, with how many an f32 does not hold exactly)."""
 
 import json
 from pathlib import Path
@@ -84,6 +84,37 @@ with new("wide_ints.h5") as f:
     beyond[-1, -1, -1] = np.iinfo(np.uint64).max
     f.create_dataset("beyond", data=beyond)
 
+# 32-bit integers an f32 does not hold exactly: the i32 ramp + 2^24 (its odd values rounded).
+with new("beyond_i32.h5") as f:
+    f.create_dataset("data", data=ramp(np.int32) + np.int32(1 << 24))
+
+# NeXus: the signal of an NXdata group, its axes named by an array of names (h5py's
+# variable-length strings, of which rust-hdf5 reads the first) and `*_indices`, each axis dataset
+# the voxels' coordinates along it with its `units`: z every 2.5 µm, y every 2 µm, x every
+# 1500 nm (x as bin edges: one more than the voxels).
+with new("nexus.h5") as f:
+    entry = f.create_group("entry")
+    entry.attrs["NX_class"] = "NXentry"
+    g = entry.create_group("data")
+    g.attrs["NX_class"] = "NXdata"
+    g.attrs["signal"] = "data"
+    g.attrs["axes"] = ["z", "y", "x"]
+    for i, a in enumerate("zyx"):
+        g.attrs[f"{a}_indices"] = i
+    g.create_dataset("data", data=ramp(np.uint16))
+    for a, n, step, units in [("z", NZ, 2.5, "um"), ("y", NY, 2.0, "um"), ("x", NX + 1, 1500.0, "nm")]:
+        d = g.create_dataset(a, data=10.0 + step * np.arange(n))
+        d.attrs["units"] = units
+# A cube: every axis of the same length, told apart by their names (z every 3 mm, y 2, x 1).
+with new("nexus_cube.h5") as f:
+    g = f.create_group("entry/data")
+    g.attrs["NX_class"] = "NXdata"
+    g.attrs["signal"] = "data"
+    g.attrs["axes"] = ["z", "y", "x"]
+    g.create_dataset("data", data=np.arange(64, dtype=np.uint8).reshape(4, 4, 4))
+    for a, step in [("x", 1.0), ("y", 2.0), ("z", 3.0)]:
+        g.create_dataset(a, data=step * np.arange(4)).attrs["units"] = "mm"
+
 
 def imaris_text(value):
     """Imaris's attributes: text as an array of one-byte strings."""
@@ -130,7 +161,7 @@ for path in sorted([*HERE.glob("*.h5"), *HERE.glob("*.ims")]):
                 "first": float(a.flat[0]) if a.size else None,
                 "last": float(a.flat[-1]) if a.size else None,
             }
-            if a.dtype.kind in "iu" and a.dtype.itemsize == 8 and a.ndim == 3:
+            if a.dtype.kind in "iu" and a.dtype.itemsize >= 4 and a.ndim == 3:
                 # Held as f32: numpy's nearest f32 of each value, and how many are not exact.
                 f32 = a.astype(np.float32)
                 entries["/" + name]["f32"] = {
