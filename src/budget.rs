@@ -93,16 +93,58 @@ impl Budget {
 }
 
 impl Budget {
-    /// That the label volume of `plan`'s partition into `slabs` slabs, at `volume`'s own shape
-    /// ([`label_volume`](crate::partition::label_volume)), fits in this budget beside what stays
-    /// held once the analysis is done: `volume`'s voxels in memory and the coarser levels the
-    /// plan ran on. `path` is the file the volume came from, for the error.
+    /// That the label volume of `plan`'s partition into `slabs` slabs, at `volume`'s own shape,
+    /// can be written to a file ([`stage_labels`](crate::report::stage_labels), a few planes at
+    /// a time) within this budget beside what stays held once the analysis is done: `volume`'s
+    /// voxels in memory and the coarser levels the plan ran on. The labels are never held
+    /// whole, so their size is never refused: only a found background's mask (a bit a voxel)
+    /// and one chunk of planes count. `path` is the file the volume came from, for the error.
     pub fn labels(
         &self,
         path: &std::path::Path,
         volume: &Volume,
         plan: &Plan,
         slabs: usize,
+    ) -> Result<()> {
+        let needed = crate::partition::label_stream_memory(volume, slabs);
+        self.labels_beside(
+            path,
+            volume,
+            plan,
+            needed,
+            "the background mask of every voxel",
+        )
+    }
+
+    /// That the label volume of `plan`'s partition into `slabs` slabs, at `volume`'s own shape
+    /// ([`label_volume`](crate::partition::label_volume)), fits in this budget held whole
+    /// (Python's `Analysis.labels()`, which returns it as an array), beside what
+    /// [`labels`](Self::labels) counts.
+    pub fn labels_held(
+        &self,
+        path: &std::path::Path,
+        volume: &Volume,
+        plan: &Plan,
+        slabs: usize,
+    ) -> Result<()> {
+        let needed = crate::partition::label_memory(volume, slabs);
+        self.labels_beside(
+            path,
+            volume,
+            plan,
+            needed,
+            "the label volume of every voxel",
+        )
+    }
+
+    /// That `needed` bytes for the labels of `volume` fit beside what stays held of `plan`.
+    fn labels_beside(
+        &self,
+        path: &std::path::Path,
+        volume: &Volume,
+        plan: &Plan,
+        needed: u64,
+        what: &str,
     ) -> Result<()> {
         let coarser = |level: &Volume| {
             if level.dims() == volume.dims() {
@@ -115,14 +157,14 @@ impl Budget {
         if plan.views.dims() != plan.partition.dims() {
             held += coarser(&plan.views);
         }
-        let needed = held + crate::partition::label_memory(volume, slabs);
+        let needed = held + needed;
         if needed <= self.max_memory {
             return Ok(());
         }
         let [x, y, z] = volume.dims();
         Err(Error::TooLarge {
             path: path.to_path_buf(),
-            what: format!("the label volume of every voxel ({x}×{y}×{z}) beside the analysis"),
+            what: format!("{what} ({x}×{y}×{z}) beside the analysis"),
             needed,
             limit: self.max_memory,
             machine: false,
