@@ -139,7 +139,7 @@ impl Budget {
 
     /// That `needed` bytes for the labels of `volume` fit beside what stays held of `plan`.
     fn labels_beside(
-        &self,
+        self,
         path: &std::path::Path,
         volume: &Volume,
         plan: &Plan,
