@@ -100,16 +100,25 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let analysed = super::args::analyze(&name, planned)?;
     let (volume, analysis) = (analysed.level().as_ref(), &analysed.analysis);
     let part = &analysis.partition;
-    if args.export_labels.is_some() {
+    let room = if args.export_labels.is_some() {
         request
             .budget
-            .labels(&args.file, full, &analysed.plan, part.slabs.len())?;
-    }
+            .labels(&args.file, full, &analysed.plan, part.slabs.len())?
+    } else {
+        0
+    };
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
     let mut staged = Vec::new();
     if let Some(path) = &args.export_labels {
-        staged.push(stage_labels(path, full, volume, part, &Monitor::none())?);
+        staged.push(stage_labels(
+            path,
+            full,
+            volume,
+            part,
+            room,
+            &Monitor::none(),
+        )?);
     }
     if let Some(path) = &args.export_slabs {
         let text = slabscope::report::to_json(&SlabsReport::new(&name, volume, part))?;

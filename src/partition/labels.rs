@@ -147,13 +147,15 @@ fn labels_of<V: Voxel, T: Copy + Send>(
         });
 }
 
-/// The most bytes of labels [`Labeller`] computes at once (one plane when a plane is larger).
-const CHUNK_BYTES: u64 = 8 << 20;
+/// The most bytes of labels [`Labeller`] computes at once, where the budget has room for them
+/// (one plane when a plane is larger).
+pub const LABEL_CHUNK_BYTES: u64 = 8 << 20;
 
 /// The label volume of a partition ([`label_volume`]'s voxels, by the same rule) computed a few
 /// planes at a time, for a writer that streams them to a file: a label volume larger than the
 /// memory budget (a 2048³ one is 8 GiB) is never held whole. What it holds is a found
-/// background's mask (a bit a voxel) and one chunk of planes ([`label_stream_memory`]).
+/// background's mask (a bit a voxel) and one chunk of planes, as many as the room its caller
+/// gives holds ([`label_stream_memory`]: at least one plane).
 pub struct Labeller<'a> {
     volume: &'a Volume,
     frame: Frame,
@@ -199,10 +201,15 @@ impl<'a> Labeller<'a> {
         }
     }
 
-    /// The planes (along z) computed at once: as many as [`CHUNK_BYTES`] hold, at least one.
+    /// The planes (along z) computed at once within `room` bytes: as many as `room` (at most
+    /// [`LABEL_CHUNK_BYTES`]) holds, at least one, at most all of them.
     #[must_use]
-    pub fn chunk_planes(&self) -> usize {
-        chunk_planes(self.volume, label_bytes_of(self.wide))
+    pub fn chunk_planes(&self, room: u64) -> usize {
+        let plane = plane_memory(self.volume, self.wide);
+        let planes = room.min(LABEL_CHUNK_BYTES) / plane.max(1);
+        usize::try_from(planes)
+            .unwrap_or(usize::MAX)
+            .clamp(1, self.volume.dims()[2].max(1))
     }
 
     /// The labels of planes `z` (along z, x fastest) as little-endian bytes, into `out`
@@ -223,29 +230,23 @@ impl<'a> Labeller<'a> {
     }
 }
 
-fn label_bytes_of(wide: bool) -> u64 {
-    if wide { 2 } else { 1 }
-}
-
-/// The planes of `volume` a chunk of labels of `bytes` bytes a voxel holds.
-fn chunk_planes(volume: &Volume, bytes: u64) -> usize {
+/// The memory one plane of labels of `volume` takes while it is streamed: its labels, and for
+/// u16 labels their bytes too.
+fn plane_memory(volume: &Volume, wide: bool) -> u64 {
     let [nx, ny, _] = volume.dims();
-    let plane = (nx * ny) as u64 * bytes;
-    usize::try_from(CHUNK_BYTES / plane.max(1))
-        .unwrap_or(usize::MAX)
-        .max(1)
+    (nx * ny) as u64 * if wide { 4 } else { 1 }
 }
 
-/// The memory a [`Labeller`] of `volume` and a partition of `slabs` slabs takes while its
-/// labels are streamed, in bytes: a found background's mask (a bit a voxel) and one chunk of
-/// planes, twice for u16 labels (the labels and their bytes).
+/// The least memory a [`Labeller`] of `volume` and a partition of `slabs` slabs takes while its
+/// labels are streamed, in bytes: a found background's mask (a bit a voxel) and one plane; and
+/// the most a chunk of planes beyond that takes usefully (the volume's planes, at most
+/// [`LABEL_CHUNK_BYTES`]).
 #[must_use]
-pub fn label_stream_memory(volume: &Volume, slabs: usize) -> u64 {
-    let [nx, ny, nz] = volume.dims();
-    let bytes = label_bytes(slabs);
-    let planes = chunk_planes(volume, bytes).min(nz) as u64;
-    let chunk = planes * (nx * ny) as u64 * bytes;
-    (volume.len() as u64).div_ceil(64) * 8 + if bytes == 2 { 2 * chunk } else { chunk }
+pub fn label_stream_memory(volume: &Volume, slabs: usize) -> (u64, u64) {
+    let plane = plane_memory(volume, label_bytes(slabs) == 2);
+    let mask = (volume.len() as u64).div_ceil(64) * 8;
+    let all = plane * volume.dims()[2] as u64;
+    (mask + plane, all.min(LABEL_CHUNK_BYTES.max(plane)))
 }
 
 #[cfg(test)]

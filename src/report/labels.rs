@@ -15,18 +15,20 @@ use crate::volume::Volume;
 /// The label volume of `p` at `volume`'s shape and world geometry (`partitioned` the level `p`
 /// partitions, as for [`label_volume`](crate::partition::label_volume)), in the format the
 /// extension of `path` names, to a temporary file beside it that [`Staged::persist`] puts in
-/// place. Holds a found background's mask and one chunk of planes
-/// ([`label_stream_memory`](crate::partition::label_stream_memory)); stops when `monitor` is
-/// cancelled, whose progress counts the planes written.
+/// place. Holds a found background's mask and one chunk of planes within `room` bytes (at least
+/// one plane; [`Budget::labels`](crate::budget::Budget::labels) gives the room a budget leaves,
+/// [`LABEL_CHUNK_BYTES`](crate::partition::LABEL_CHUNK_BYTES) is the most used); stops when
+/// `monitor` is cancelled, whose progress counts the planes written.
 pub fn stage_labels(
     path: &Path,
     volume: &Volume,
     partitioned: &Volume,
     p: &Partition,
+    room: u64,
     monitor: &Monitor,
 ) -> Result<Staged> {
     let labeller = Labeller::new(volume, partitioned, p, monitor)?;
-    let step = labeller.chunk_planes();
+    let step = labeller.chunk_planes(room);
     stage_in_chunks(path, volume, &labeller, step, monitor)
 }
 
@@ -70,14 +72,13 @@ fn stage_in_chunks(
 /// is set, and only when it is a regular file.
 pub fn write_labels(
     path: &Path,
-    volume: &Volume,
-    partitioned: &Volume,
-    p: &Partition,
+    (volume, partitioned, p): (&Volume, &Volume, &Partition),
+    room: u64,
     force: bool,
     monitor: &Monitor,
 ) -> Result<()> {
     crate::formats::check_output(path, force)?;
-    stage_labels(path, volume, partitioned, p, monitor)?.persist(force)
+    stage_labels(path, volume, partitioned, p, room, monitor)?.persist(force)
 }
 
 #[cfg(test)]
@@ -149,14 +150,17 @@ mod tests {
                 let want = written(dir.path(), &format!("{k}-whole.{ext}"), |path| {
                     stage_volume(path, &whole)
                 });
-                for step in [1, 3, labeller.chunk_planes()] {
+                let all = labeller.chunk_planes(crate::partition::LABEL_CHUNK_BYTES);
+                assert_eq!(all, v.dims()[2], "a small volume in one chunk");
+                assert_eq!(labeller.chunk_planes(0), 1, "at least a plane");
+                for step in [1, 3, all] {
                     let got = written(dir.path(), &format!("{k}-{step}.{ext}"), |path| {
                         stage_in_chunks(path, v, &labeller, step, &none)
                     });
                     assert!(got == want, "case {k}, .{ext}, {step} planes at a time");
                 }
                 let got = written(dir.path(), &format!("{k}-public.{ext}"), |path| {
-                    stage_labels(path, v, level, &p, &none)
+                    stage_labels(path, v, level, &p, 100, &none)
                 });
                 assert!(got == want, "case {k}, .{ext}, stage_labels");
             }

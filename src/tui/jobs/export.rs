@@ -48,7 +48,9 @@ pub(super) fn export(
     write_new(&json, text.as_bytes())?;
     // At the working volume's shape, whatever level the preview's partition is of, a few
     // planes at a time (gzip-compressed NRRD, by the name).
-    slabscope::report::write_labels(&labels, full, volume, &analysis.partition, false, monitor)?;
+    let labelled = (full, volume, &analysis.partition);
+    let room = slabscope::partition::LABEL_CHUNK_BYTES;
+    slabscope::report::write_labels(&labels, labelled, room, false, monitor)?;
     Ok(format!(
         "wrote {}, {} and {}",
         slabscope::error::shown(&png),
