@@ -361,7 +361,7 @@ impl Analysis {
     }
 
     /// Writes every voxel's label (as `labels()`: the slab's index + 1, 0 for background) to
-    /// `path` as `analyze --export-labels` does: NRRD (`.nrrd`) or NIfTI (`.nii`, `.nii.gz`) by
+    /// `path` as `analyze --export-labels` does: NRRD (`.nrrd`) or `NIfTI` (`.nii`, `.nii.gz`) by
     /// the extension, at the volume's shape and world geometry, computed and written a few
     /// planes at a time, so that labels beyond the memory budget are never held whole. An
     /// existing file is replaced only with `force=True`, never the volume's own file nor one
