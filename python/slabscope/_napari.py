@@ -80,7 +80,12 @@ def volume_of_layer(layer: ImageLayer) -> slabscope.Volume:
 
 
 class _Cancelled(Exception):
-    """Raised from the progress callback to stop an analysis the user cancelled."""
+    """Raised from the progress callback to stop a run the user cancelled, with the phase it
+    stopped in (None when the run had ended first)."""
+
+    def __init__(self, phase: Optional[str]) -> None:
+        super().__init__(phase)
+        self.phase = phase
 
 
 class _Signals(QObject):
@@ -102,6 +107,8 @@ class SlabsWidget(QWidget):
         self.view_layer: Optional[Any] = None
         self.worker: Optional[FunctionWorker] = None
         self._cancel: Optional[threading.Event] = None
+        # The phase the last cancelled run stopped in (None: it had ended when cancelled).
+        self.cancelled_in: Optional[str] = None
         self._source: Optional[ImageLayer] = None
         self._volume: Optional[slabscope.Volume] = None
         self._signals = _Signals()
@@ -192,13 +199,13 @@ class SlabsWidget(QWidget):
 
         def progress(phase: str, fraction: float) -> None:
             if cancel.is_set():
-                raise _Cancelled()
+                raise _Cancelled(phase)
             signals.progressed.emit(phase, fraction)
 
         def work() -> tuple[slabscope.Analysis, np.ndarray]:
             analysis = slabscope.analyze(volume, progress=progress, **options)
             if cancel.is_set():
-                raise _Cancelled()
+                raise _Cancelled(None)
             return analysis, to_napari(analysis.labels())
 
         self._start(work, lambda done: self._analysed(layer, volume, *done), cancel)
@@ -231,6 +238,7 @@ class SlabsWidget(QWidget):
 
     def _failed(self, error: BaseException) -> None:
         if isinstance(error, _Cancelled):
+            self.cancelled_in = error.phase
             self.status.setText("Cancelled.")
         else:
             self.status.setText(f"Failed: {error}")
@@ -292,7 +300,7 @@ class SlabsWidget(QWidget):
 
         def progress(phase: str, fraction: float) -> None:
             if cancel.is_set():
-                raise _Cancelled()
+                raise _Cancelled(phase)
             signals.progressed.emit(phase, fraction)
 
         def work() -> np.ndarray:

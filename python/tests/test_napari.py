@@ -118,6 +118,8 @@ def test_cancel_stops_a_run(qtbot):
     widget.cancel()
     qtbot.waitUntil(lambda: widget.worker is None, timeout=WAIT)
     assert widget.status.text() == "Cancelled."
+    # Stopped inside the analysis, at a progress report, not after it.
+    assert widget.cancelled_in is not None, "the analysis ran to its end"
     assert widget.analysis is None and "big slabs" not in viewer.layers
     assert widget.run_button.isEnabled() and not widget.view_button.isEnabled()
 
