@@ -93,17 +93,61 @@ impl Budget {
 }
 
 impl Budget {
-    /// That the label volume of `plan`'s partition into `slabs` slabs, at `volume`'s own shape
-    /// ([`label_volume`](crate::partition::label_volume)), fits in this budget beside what stays
-    /// held once the analysis is done: `volume`'s voxels in memory and the coarser levels the
-    /// plan ran on. `path` is the file the volume came from, for the error.
+    /// The room, in bytes, for the chunks of planes in which the label volume of `plan`'s
+    /// partition into `slabs` slabs, at `volume`'s own shape, is written to a file
+    /// ([`stage_labels`](crate::report::stage_labels)) within this budget beside what stays held
+    /// once the analysis is done: `volume`'s voxels in memory and the coarser levels the plan
+    /// ran on. The labels are never held whole, so their size is never refused: what must fit is
+    /// a found background's mask (a bit a voxel) and one plane; the room is what is left (at most
+    /// [`LABEL_CHUNK_BYTES`](crate::partition::LABEL_CHUNK_BYTES)). `path` is the file the
+    /// volume came from, for the error.
     pub fn labels(
         &self,
         path: &std::path::Path,
         volume: &Volume,
         plan: &Plan,
         slabs: usize,
+    ) -> Result<u64> {
+        let (least, most) = crate::partition::label_stream_memory(volume, slabs);
+        let what = "the background mask of every voxel and a plane of labels";
+        let needed = self.labels_beside(path, volume, plan, least, what)?;
+        // The mask is in `least` with one plane: the room is one plane and what is left.
+        let plane = least - (volume.len() as u64).div_ceil(64) * 8;
+        Ok((self.max_memory - needed + plane).min(most))
+    }
+
+    /// That the label volume of `plan`'s partition into `slabs` slabs, at `volume`'s own shape
+    /// ([`label_volume`](crate::partition::label_volume)), fits in this budget held whole
+    /// (Python's `Analysis.labels()`, which returns it as an array), beside what
+    /// [`labels`](Self::labels) counts.
+    pub fn labels_held(
+        &self,
+        path: &std::path::Path,
+        volume: &Volume,
+        plan: &Plan,
+        slabs: usize,
     ) -> Result<()> {
+        let needed = crate::partition::label_memory(volume, slabs);
+        self.labels_beside(
+            path,
+            volume,
+            plan,
+            needed,
+            "the label volume of every voxel",
+        )
+        .map(drop)
+    }
+
+    /// That `needed` bytes for the labels of `volume` fit beside what stays held of `plan`: the
+    /// bytes held with them.
+    fn labels_beside(
+        self,
+        path: &std::path::Path,
+        volume: &Volume,
+        plan: &Plan,
+        needed: u64,
+        what: &str,
+    ) -> Result<u64> {
         let coarser = |level: &Volume| {
             if level.dims() == volume.dims() {
                 0
@@ -115,14 +159,14 @@ impl Budget {
         if plan.views.dims() != plan.partition.dims() {
             held += coarser(&plan.views);
         }
-        let needed = held + crate::partition::label_memory(volume, slabs);
+        let needed = held + needed;
         if needed <= self.max_memory {
-            return Ok(());
+            return Ok(needed);
         }
         let [x, y, z] = volume.dims();
         Err(Error::TooLarge {
             path: path.to_path_buf(),
-            what: format!("the label volume of every voxel ({x}×{y}×{z}) beside the analysis"),
+            what: format!("{what} ({x}×{y}×{z}) beside the analysis"),
             needed,
             limit: self.max_memory,
             machine: false,
@@ -197,5 +241,41 @@ mod tests {
         // Nor is a glance finer than the budget allows.
         let glance = tight.plan(&volume, Purpose::Glance).unwrap();
         assert_eq!(glance.partition.dims(), [48, 48, 48]);
+    }
+
+    /// Labels streamed need the background's mask and one plane beside what the analysis
+    /// holds, whatever their whole size; the room for chunks is what the budget leaves.
+    #[test]
+    fn labels_stream_within_any_budget_with_room_for_a_plane() {
+        let volume = crate::volume::phantom::body([96, 96, 96], 1).unwrap();
+        let params = AnalysisParams::default();
+        let purpose = Purpose::Analysis {
+            wanted: 2,
+            every_voxel: false,
+            params: &params,
+        };
+        let plan = Budget::new(u64::MAX).plan(&volume, purpose).unwrap();
+        let path = std::path::Path::new("body");
+        let held = volume.memory_bytes() + plan.partition.memory_bytes();
+        let (mask, plane) = (96u64 * 96 * 96 / 8, 96u64 * 96);
+        let least = held + mask + plane;
+        let room = |max| Budget::new(max).labels(path, &volume, &plan, 4);
+        assert_eq!(room(least).unwrap(), plane);
+        assert_eq!(room(least + 1000).unwrap(), plane + 1000);
+        assert_eq!(
+            room(u64::MAX).unwrap(),
+            96 * plane,
+            "every plane at once, no more"
+        );
+        let e = room(least - 1).unwrap_err();
+        assert!(e.to_string().contains("background mask"), "{e}");
+        // Held whole (Python's labels()), they need every voxel's byte.
+        let whole = Budget::new(held + mask + 96 * plane);
+        assert!(whole.labels_held(path, &volume, &plan, 4).is_ok());
+        assert!(
+            Budget::new(held + mask + 96 * plane - 1)
+                .labels_held(path, &volume, &plan, 4)
+                .is_err()
+        );
     }
 }

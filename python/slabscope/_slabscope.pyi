@@ -147,7 +147,13 @@ class Analysis:
         """The object `slabscope analyze --json` prints."""
     def to_json(self) -> str: ...
     def labels(self) -> np.ndarray:
-        """The slab index of every voxel, [x, y, z], uint8 (uint16 beyond 256 slabs)."""
+        """Every voxel's slab index + 1 (0 for background), [x, y, z] at the volume's shape,
+        uint8 (uint16 beyond 255 slabs); refused beyond max_memory= (see write_labels)."""
+    def write_labels(
+        self, path: _PathLike, force: bool = False, progress: Optional[_Progress] = None
+    ) -> None:
+        """labels() written to a .nrrd, .nii or .nii.gz a few planes at a time, never held
+        whole, as `analyze --export-labels` writes them."""
     @property
     def volume(self) -> Volume: ...
     def __reduce__(self) -> Tuple[Any, ...]: ...

@@ -196,6 +196,12 @@ impl Analysis {
         })
     }
 
+    /// The memory budget the analysis ran within: its `max_memory=`, else its volume's.
+    fn max_memory(&self, py: Python<'_>) -> PyResult<u64> {
+        let kw = Kwargs::new(py, "analyze", Some(self.params.bind(py)))?;
+        crate::params::max_memory(&kw, self.volume.get().max_memory)
+    }
+
     /// The library's analysis and the level it partitioned: analysed again, once, for an
     /// unpickled analysis, which must then give the same report.
     pub fn computed(&self, py: Python<'_>) -> PyResult<&Analysed> {
@@ -309,11 +315,22 @@ impl Analysis {
 
     /// Every voxel's slab, `[x, y, z]` at the volume's shape whatever level the analysis ran
     /// on: the slab's index + 1, and 0 for background and missing voxels (uint8, or uint16
-    /// beyond 255 slabs), as `analyze --export-labels` writes it.
+    /// beyond 255 slabs), as `analyze --export-labels` writes it. An array held whole: beyond
+    /// the memory budget (`max_memory=`) it is refused, and `write_labels(path)` streams them
+    /// to a file instead.
     fn labels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let computed = self.computed(py)?;
         let (inner, level) = (&computed.analysis, computed.level());
         let full = Arc::clone(&self.volume.get().inner);
+        let name = std::path::Path::new(&self.volume.get().name);
+        let slabs = inner.partition.slabs.len();
+        let budget = slabscope::budget::Budget::new(self.max_memory(py)?);
+        if let Err(e) = budget.labels_held(name, &full, &computed.plan, slabs) {
+            return Err(crate::errors::VolumeError::new_err(format!(
+                "{e} (raise it with max_memory=, or write them to a file a few planes at a time \
+                 with write_labels(path))"
+            )));
+        }
         let labels = run::quick(py, || {
             slabscope::label_volume(&full, level, &inner.partition, &slabscope::Monitor::none())
         })?;
@@ -341,6 +358,52 @@ impl Analysis {
                 )));
             }
         })
+    }
+
+    /// Writes every voxel's label (as `labels()`: the slab's index + 1, 0 for background) to
+    /// `path` as `analyze --export-labels` does: NRRD (`.nrrd`) or `NIfTI` (`.nii`, `.nii.gz`) by
+    /// the extension, at the volume's shape and world geometry, computed and written a few
+    /// planes at a time, so that labels beyond the memory budget are never held whole. An
+    /// existing file is replaced only with `force=True`, never the volume's own file nor one
+    /// that is not a regular file.
+    #[pyo3(signature = (path, force=false, progress=None))]
+    fn write_labels(
+        &self,
+        py: Python<'_>,
+        path: &Bound<'_, PyAny>,
+        force: bool,
+        progress: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let out = crate::params::path(path)?;
+        slabscope::formats::VolumeOutput::for_path(&out)
+            .map_err(|e| PyValueError::new_err(crate::errors::message(&e)))?;
+        let volume = self.volume.get();
+        if volume
+            .source_file()
+            .is_some_and(|input| slabscope::formats::same_file(&out, input))
+        {
+            return Err(PyValueError::new_err(format!(
+                "{}: is the file the volume was read from; slabscope never writes over its input",
+                slabscope::error::shown(&out)
+            )));
+        }
+        slabscope::formats::check_output(&out, force).or_py()?;
+        let computed = self.computed(py)?;
+        let full = Arc::clone(&volume.inner);
+        let part = &computed.analysis.partition;
+        let room = slabscope::budget::Budget::new(self.max_memory(py)?)
+            .labels(
+                std::path::Path::new(&volume.name),
+                &full,
+                &computed.plan,
+                part.slabs.len(),
+            )
+            .or_py()?;
+        let labelled = (full.as_ref(), computed.level().as_ref(), part);
+        run::long(py, progress, |monitor| {
+            slabscope::report::write_labels(&out, labelled, room, force, monitor)
+        })?;
+        crate::errors::intact(&full)
     }
 
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {

@@ -532,6 +532,11 @@ impl Volume {
 }
 
 impl Volume {
+    /// The file it was read from (absolute), for a volume read from one.
+    pub fn source_file(&self) -> Option<&std::path::Path> {
+        self.file.as_ref().map(|(path, _)| path.as_path())
+    }
+
     /// A volume of `array`'s voxels, `[x, y, z]`, with `spacing` or `affine` (see `from_array`).
     pub(crate) fn of_array(
         py: Python<'_>,

@@ -118,3 +118,44 @@ def test_the_default_slab_count_is_not_blamed_on_slabs(cli):
     thin = slabscope.Volume.from_array(np.arange(2 * 2 * 3, dtype=np.uint8).reshape((2, 2, 3), order="F"))
     with pytest.raises(ValueError, match=r"the default of 4 slabs does not fit: .*\(slabs=K asks for another\)"):
         slabscope.analyze(thin, axis="z", background="none")
+
+
+def test_write_labels_streams_what_labels_holds_as_the_cli_writes_it(phantoms, cli, tmp_path):
+    path = str(phantoms["body"])
+    volume = slabscope.load(path)
+    analysis = slabscope.analyze(volume, axis="z", resolution=1, slabs=3)
+    labels = analysis.labels()
+    for name in ("l.nrrd", "l.nii", "l.nii.gz"):
+        out = tmp_path / name
+        analysis.write_labels(out)
+        written = slabscope.load(str(out))
+        assert written.array.dtype == np.uint8 and written.shape == volume.shape, name
+        assert np.array_equal(written.array, labels), name
+        np.testing.assert_allclose(written.affine, volume.affine, atol=1e-5)
+    # The CLI's export of the same analysis is the same file, byte for byte.
+    ours = tmp_path / "cli.nrrd"
+    cli("analyze", path, "--axis", "z", "--resolution", "1", "--slabs", "3", "--export-labels", str(ours))
+    assert ours.read_bytes() == (tmp_path / "l.nrrd").read_bytes()
+    with pytest.raises(FileExistsError, match="l.nrrd"):
+        analysis.write_labels(tmp_path / "l.nrrd")
+    analysis.write_labels(str(tmp_path / "l.nrrd"), force=True, progress=lambda phase, f: None)
+    with pytest.raises(ValueError, match="never writes over its input"):
+        analysis.write_labels(path, force=True)
+    with pytest.raises(ValueError, match=r"\.nrrd, \.nii or \.nii\.gz"):
+        analysis.write_labels(tmp_path / "l.png")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cli.nrrd", "l.nii", "l.nii.gz", "l.nrrd"]
+
+
+def test_labels_beyond_the_budget_are_refused_as_an_array_and_written_to_a_file(phantoms, tmp_path):
+    # The 96×96×128 body (2.3 MiB of int16), analysed on level 2: its labels (1.1 MiB of uint8)
+    # do not fit beside it in 3 MiB, the background's mask and a chunk of planes do.
+    volume = slabscope.load(str(phantoms["big"]))
+    analysis = slabscope.analyze(volume, axis="z", resolution=2, slabs=3, max_memory="3M")
+    with pytest.raises(slabscope.VolumeError, match=r"max_memory=.*write_labels\(path\)") as refused:
+        analysis.labels()
+    assert "\n" not in str(refused.value)
+    out = tmp_path / "labels.nii.gz"
+    analysis.write_labels(out)
+    roomy = slabscope.analyze(volume, axis="z", resolution=2, slabs=3)
+    assert roomy.slabs == analysis.slabs
+    assert np.array_equal(slabscope.load(str(out)).array, roomy.labels())

@@ -114,6 +114,7 @@ def analyse(volume: Volume) -> Analysis:
     report: dict[str, Any] = analysis.to_dict()
     text: str = analysis.to_json()
     labels: np.ndarray = analysis.labels()
+    analysis.write_labels("labels.nii.gz", force=True, progress=True)
     print(views, x, y, z, uncertain, contenders, slabs, steps, information, partition, notes)
     print(report, text, labels.shape, named, numbered)
     return analysis

@@ -7,10 +7,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use slabscope::explain::StepsShown;
-use slabscope::formats::{VolumeOutput, stage, stage_volume};
-use slabscope::report::curves_csv;
+use slabscope::formats::{VolumeOutput, stage};
+use slabscope::report::{curves_csv, stage_labels};
 use slabscope::request::Level;
-use slabscope::{Monitor, SlabsReport, label_volume};
+use slabscope::{Monitor, SlabsReport};
 
 use super::args::{AnalysisArgs, LoadArgs};
 use super::params::{self, Flags};
@@ -93,24 +93,31 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     request.params.explain = args.explain;
     let planned = request.plan(full)?;
     if args.export_labels.is_some() {
-        // A byte a voxel at least: refused before the analysis rather than after it.
+        // The background's mask beside the analysis: refused before it rather than after it
+        // (the labels themselves are written a few planes at a time, never held whole).
         request.budget.labels(&args.file, full, &planned.plan, 1)?;
     }
     let analysed = super::args::analyze(&name, planned)?;
     let (volume, analysis) = (analysed.level().as_ref(), &analysed.analysis);
     let part = &analysis.partition;
-    if args.export_labels.is_some() {
+    let room = if args.export_labels.is_some() {
         request
             .budget
-            .labels(&args.file, full, &analysed.plan, part.slabs.len())?;
-    }
+            .labels(&args.file, full, &analysed.plan, part.slabs.len())?
+    } else {
+        0
+    };
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
     let mut staged = Vec::new();
     if let Some(path) = &args.export_labels {
-        staged.push(stage_volume(
+        staged.push(stage_labels(
             path,
-            &label_volume(full, volume, part, &Monitor::none())?,
+            full,
+            volume,
+            part,
+            room,
+            &Monitor::none(),
         )?);
     }
     if let Some(path) = &args.export_slabs {

@@ -45,7 +45,7 @@ pub use output::{Staged, check_output, remove_staged, same_file, stage, write_at
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
 pub use registry::{folder_kind, picks_in_folder, volume_name};
 pub use source::{Source, check_input, open_regular};
-pub use write::{VolumeOutput, stage_volume, write_volume};
+pub use write::{Body, VolumeHeader, VolumeOutput, stage_streamed, stage_volume, write_volume};
 pub use zarr::ZarrOptions;
 
 use crate::error::{Error, Result};

@@ -1,13 +1,46 @@
 //! Writing a volume in the format its output's extension names, staged beside it and put in
 //! place whole ([`super::output`]).
 
+use std::io::Write;
 use std::path::Path;
 
 use super::output::{Staged, check_output};
 use super::{nifti, nrrd};
 use crate::error::{Error, Result};
-use crate::volume::Volume;
+use crate::geometry::WorldTransform;
+use crate::volume::{Volume, VoxelType};
 use nrrd::NrrdEncoding;
+
+/// What a volume file's header says: the shape, spacing, voxel type and voxel-to-world
+/// transform of the voxels that follow it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeHeader {
+    /// `[nx, ny, nz]`.
+    pub dims: [usize; 3],
+    /// `[sx, sy, sz]`, millimetres.
+    pub spacing: [f64; 3],
+    /// The voxels' type.
+    pub voxel_type: VoxelType,
+    /// The voxel-to-world transform.
+    pub transform: WorldTransform,
+}
+
+impl VolumeHeader {
+    /// The header of `volume`.
+    #[must_use]
+    pub fn of(volume: &Volume) -> Self {
+        Self {
+            dims: volume.dims(),
+            spacing: volume.spacing(),
+            voxel_type: volume.voxel_type(),
+            transform: *volume.transform(),
+        }
+    }
+}
+
+/// The voxels of a file being written, handed to their writer piece by piece: `body` writes
+/// every voxel of the header's shape, x fastest, little-endian, in the header's type.
+pub type Body<'a> = &'a mut dyn FnMut(&mut dyn Write) -> std::io::Result<()>;
 
 /// The formats slabscope writes volumes in, chosen by the output's extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,9 +88,20 @@ pub fn write_volume(path: &Path, volume: &Volume, force: bool) -> Result<()> {
 /// `volume` written in the format the extension of `path` names, to a temporary file beside it
 /// that [`Staged::persist`] puts in place.
 pub fn stage_volume(path: &Path, volume: &Volume) -> Result<Staged> {
+    let ty = volume.voxel_type();
+    stage_streamed(path, &VolumeHeader::of(volume), &mut |mut out| {
+        crate::volume::write_le(volume.data(), ty, &mut out)
+    })
+}
+
+/// A volume of `header`'s shape whose voxels `body` writes as it makes them (a volume never
+/// held whole), in the format the extension of `path` names, to a temporary file beside it
+/// that [`Staged::persist`] puts in place: the same bytes [`stage_volume`] writes for a volume
+/// of those voxels.
+pub fn stage_streamed(path: &Path, header: &VolumeHeader, body: Body<'_>) -> Result<Staged> {
     match VolumeOutput::for_path(path)? {
-        VolumeOutput::Nrrd => nrrd::stage(path, volume, NrrdEncoding::Gzip),
-        VolumeOutput::Nifti => nifti::stage(path, volume, false),
-        VolumeOutput::NiftiGz => nifti::stage(path, volume, true),
+        VolumeOutput::Nrrd => nrrd::stage(path, header, NrrdEncoding::Gzip, body),
+        VolumeOutput::Nifti => nifti::stage(path, header, false, body),
+        VolumeOutput::NiftiGz => nifti::stage(path, header, true, body),
     }
 }

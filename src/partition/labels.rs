@@ -25,21 +25,14 @@ pub fn label_volume(
     p: &Partition,
     monitor: &Monitor,
 ) -> Result<Volume> {
-    // By the analysis's rule, found on the voxels labelled: on the level analysed, the
-    // threshold the analysis found; on a finer one, that level's own (its noise is wider than
-    // the averaged level's, and a threshold from there would leave specks of air labelled).
-    let background = Background::find(volume, p.background.rule, monitor)?;
-    let mut slab_of = vec![0u16; p.slices];
-    for (i, &(a, b)) in p.slabs.iter().enumerate() {
-        slab_of[a..b].fill(i as u16 + 1);
-    }
-    let frame = Frame::of(volume, partitioned, p);
-    let (ty, data) = if label_bytes(p.slabs.len()) == 1 {
-        let labels = labels(volume, &frame, &background, &slab_of, |l| l as u8);
-        (VoxelType::U8, Voxels::owned(labels))
-    } else {
-        let labels = labels(volume, &frame, &background, &slab_of, |l| l);
+    let l = Labeller::new(volume, partitioned, p, monitor)?;
+    let (frame, bg, slabs) = (&l.frame, &l.background, l.slab_of.as_slice());
+    let (ty, data) = if l.wide {
+        let labels = labels(volume, frame, bg, slabs, |l| l);
         (VoxelType::U16, Voxels::owned(labels))
+    } else {
+        let labels = labels(volume, frame, bg, slabs, |l| l as u8);
+        (VoxelType::U8, Voxels::owned(labels))
     };
     Ok(
         Volume::from_voxels(volume.dims(), volume.spacing(), ty, data)?
@@ -105,25 +98,42 @@ fn labels<T: Copy + Default + Send>(
     slab_of: &[u16],
     label: impl Fn(u16) -> T + Sync,
 ) -> Vec<T> {
-    crate::volume::with_voxels!(volume.data(), |v| {
-        labels_of(v, volume.dims(), frame, background, slab_of, &label)
-    })
+    let mut out = vec![T::default(); volume.len()];
+    fill(volume, 0, &mut out, frame, background, slab_of, &label);
+    out
 }
 
-/// [`labels`] of voxels `v` of dimensions `dims`.
-fn labels_of<V: Voxel, T: Copy + Default + Send>(
-    v: &[V],
-    [nx, ny, _]: [usize; 3],
+/// The labels of the planes of `volume` from `z0` on, as many as `out` holds, into `out`.
+fn fill<T: Copy + Send>(
+    volume: &Volume,
+    z0: usize,
+    out: &mut [T],
     frame: &Frame,
     background: &Background,
     slab_of: &[u16],
     label: &(impl Fn(u16) -> T + Sync),
-) -> Vec<T> {
-    let mut labels = vec![T::default(); v.len()];
-    labels
-        .par_chunks_mut(nx * ny)
+) {
+    crate::volume::with_voxels!(volume.data(), |v| {
+        labels_of(v, volume.dims(), z0, out, frame, background, slab_of, label);
+    });
+}
+
+/// [`labels`] of the planes from `z0` on of voxels `v` of dimensions `dims`, into `out`.
+#[allow(clippy::too_many_arguments)] // the pieces of one rule, passed down once
+fn labels_of<V: Voxel, T: Copy + Send>(
+    v: &[V],
+    [nx, ny, _]: [usize; 3],
+    z0: usize,
+    out: &mut [T],
+    frame: &Frame,
+    background: &Background,
+    slab_of: &[u16],
+    label: &(impl Fn(u16) -> T + Sync),
+) {
+    out.par_chunks_mut(nx * ny)
         .enumerate()
-        .for_each(|(z, plane)| {
+        .for_each(|(dz, plane)| {
+            let z = z0 + dz;
             let base = z * nx * ny;
             for (i, l) in plane.iter_mut().enumerate() {
                 let value = v[base + i].to_f32();
@@ -135,7 +145,108 @@ fn labels_of<V: Voxel, T: Copy + Default + Send>(
                 });
             }
         });
-    labels
+}
+
+/// The most bytes of labels [`Labeller`] computes at once, where the budget has room for them
+/// (one plane when a plane is larger).
+pub const LABEL_CHUNK_BYTES: u64 = 8 << 20;
+
+/// The label volume of a partition ([`label_volume`]'s voxels, by the same rule) computed a few
+/// planes at a time, for a writer that streams them to a file: a label volume larger than the
+/// memory budget (a 2048³ one is 8 GiB) is never held whole. What it holds is a found
+/// background's mask (a bit a voxel) and one chunk of planes, as many as the room its caller
+/// gives holds ([`label_stream_memory`]: at least one plane).
+pub struct Labeller<'a> {
+    volume: &'a Volume,
+    frame: Frame,
+    background: Background,
+    slab_of: Vec<u16>,
+    wide: bool,
+}
+
+impl<'a> Labeller<'a> {
+    /// The labels of `p` at `volume`'s shape, `partitioned` being the level `p` partitions (as
+    /// for [`label_volume`]); finds the background (stops when `monitor` is cancelled).
+    pub fn new(
+        volume: &'a Volume,
+        partitioned: &Volume,
+        p: &Partition,
+        monitor: &Monitor,
+    ) -> Result<Self> {
+        // By the analysis's rule, found on the voxels labelled: on the level analysed, the
+        // threshold the analysis found; on a finer one, that level's own (its noise is wider
+        // than the averaged level's, and a threshold from there would leave specks of air
+        // labelled).
+        let background = Background::find(volume, p.background.rule, monitor)?;
+        let mut slab_of = vec![0u16; p.slices];
+        for (i, &(a, b)) in p.slabs.iter().enumerate() {
+            slab_of[a..b].fill(i as u16 + 1);
+        }
+        Ok(Self {
+            volume,
+            frame: Frame::of(volume, partitioned, p),
+            background,
+            slab_of,
+            wide: label_bytes(p.slabs.len()) == 2,
+        })
+    }
+
+    /// The labels' voxel type: u8 up to 255 slabs, u16 beyond.
+    #[must_use]
+    pub fn voxel_type(&self) -> VoxelType {
+        if self.wide {
+            VoxelType::U16
+        } else {
+            VoxelType::U8
+        }
+    }
+
+    /// The planes (along z) computed at once within `room` bytes: as many as `room` (at most
+    /// [`LABEL_CHUNK_BYTES`]) holds, at least one, at most all of them.
+    #[must_use]
+    pub fn chunk_planes(&self, room: u64) -> usize {
+        let plane = plane_memory(self.volume, self.wide);
+        let planes = room.min(LABEL_CHUNK_BYTES) / plane.max(1);
+        usize::try_from(planes)
+            .unwrap_or(usize::MAX)
+            .clamp(1, self.volume.dims()[2].max(1))
+    }
+
+    /// The labels of planes `z` (along z, x fastest) as little-endian bytes, into `out`
+    /// (cleared first).
+    pub fn planes_le(&self, z: std::ops::Range<usize>, out: &mut Vec<u8>) {
+        let [nx, ny, _] = self.volume.dims();
+        let n = z.len() * nx * ny;
+        let (frame, bg, slabs) = (&self.frame, &self.background, self.slab_of.as_slice());
+        out.clear();
+        if self.wide {
+            let mut l = vec![0u16; n];
+            fill(self.volume, z.start, &mut l, frame, bg, slabs, &|l| l);
+            out.extend(l.iter().flat_map(|x| x.to_le_bytes()));
+        } else {
+            out.resize(n, 0);
+            fill(self.volume, z.start, out, frame, bg, slabs, &|l| l as u8);
+        }
+    }
+}
+
+/// The memory one plane of labels of `volume` takes while it is streamed: its labels, and for
+/// u16 labels their bytes too.
+fn plane_memory(volume: &Volume, wide: bool) -> u64 {
+    let [nx, ny, _] = volume.dims();
+    (nx * ny) as u64 * if wide { 4 } else { 1 }
+}
+
+/// The least memory a [`Labeller`] of `volume` and a partition of `slabs` slabs takes while its
+/// labels are streamed, in bytes: a found background's mask (a bit a voxel) and one plane; and
+/// the most a chunk of planes beyond that takes usefully (the volume's planes, at most
+/// [`LABEL_CHUNK_BYTES`]).
+#[must_use]
+pub fn label_stream_memory(volume: &Volume, slabs: usize) -> (u64, u64) {
+    let plane = plane_memory(volume, label_bytes(slabs) == 2);
+    let mask = (volume.len() as u64).div_ceil(64) * 8;
+    let all = plane * volume.dims()[2] as u64;
+    (mask + plane, all.min(LABEL_CHUNK_BYTES.max(plane)))
 }
 
 #[cfg(test)]

@@ -18,8 +18,10 @@ use crate::volume::Volume;
 
 mod info;
 mod json;
+mod labels;
 
 pub use info::{FolderReport, InfoReport, ListedVolume};
+pub use labels::{stage_labels, write_labels};
 
 /// The version of the JSON contract.
 pub const SCHEMA_VERSION: u32 = 2;

@@ -10,6 +10,7 @@ use flate2::write::GzEncoder;
 use super::DATATYPES;
 use crate::error::Result;
 use crate::formats::Staged;
+use crate::formats::write::{Body, VolumeHeader};
 use crate::geometry::world::Quaternion;
 use crate::volume::Volume;
 use crate::volume::write_le;
@@ -25,28 +26,35 @@ use crate::volume::write_le;
 /// `path` is replaced only when `force` is set.
 pub fn write_nifti(path: &Path, volume: &Volume, gzip: bool, force: bool) -> Result<()> {
     super::super::check_output(path, force)?;
-    stage(path, volume, gzip)?.persist(force)
+    let ty = volume.voxel_type();
+    stage(path, &VolumeHeader::of(volume), gzip, &mut |mut out| {
+        write_le(volume.data(), ty, &mut out)
+    })?
+    .persist(force)
 }
 
-/// `volume` as NIfTI in a temporary file beside `path`, to be put in place.
-pub(crate) fn stage(path: &Path, volume: &Volume, gzip: bool) -> Result<Staged> {
-    let header = header_bytes(volume);
+/// A volume of `header` whose voxels `body` writes, as NIfTI in a temporary file beside `path`,
+/// to be put in place.
+pub(crate) fn stage(
+    path: &Path,
+    header: &VolumeHeader,
+    gzip: bool,
+    body: Body<'_>,
+) -> Result<Staged> {
+    let header = header_bytes(header);
     super::super::stage(path, |file| {
         let mut out = BufWriter::new(file);
         if gzip {
             let mut gz = GzEncoder::new(&mut out, Compression::fast());
-            write_body(&mut gz, &header, volume)?;
+            gz.write_all(&header)?;
+            body(&mut gz)?;
             gz.finish()?;
         } else {
-            write_body(&mut out, &header, volume)?;
+            out.write_all(&header)?;
+            body(&mut out)?;
         }
         out.flush()
     })
-}
-
-fn write_body(out: &mut impl Write, header: &[u8], volume: &Volume) -> std::io::Result<()> {
-    out.write_all(header)?;
-    write_le(volume.data(), volume.voxel_type(), out)
 }
 
 /// Where each written field lies in a version's header, and how wide its numbers are.
@@ -150,10 +158,10 @@ impl Fields<'_> {
     }
 }
 
-/// The little-endian NIfTI header of `volume` and the 4 zero bytes that say no extension
-/// follows: NIfTI-1 when every axis fits its 16-bit dimensions, else NIfTI-2.
-fn header_bytes(volume: &Volume) -> Vec<u8> {
-    let dims = volume.dims();
+/// The little-endian NIfTI header of a volume of `header` and the 4 zero bytes that say no
+/// extension follows: NIfTI-1 when every axis fits its 16-bit dimensions, else NIfTI-2.
+fn header_bytes(header: &VolumeHeader) -> Vec<u8> {
+    let dims = header.dims;
     let layout = if dims.iter().all(|&n| i16::try_from(n).is_ok()) {
         &NIFTI_1
     } else {
@@ -164,11 +172,11 @@ fn header_bytes(volume: &Volume) -> Vec<u8> {
         bytes: vec![0u8; l.size + 4],
         layout,
     };
-    let ty = volume.voxel_type();
+    let ty = header.voxel_type;
     let code = DATATYPES.iter().find(|d| d.1 == ty).map_or(16, |d| d.0);
-    let t = volume.transform();
+    let t = &header.transform;
     let known = t.known;
-    let zooms = if known { t.zooms() } else { volume.spacing() };
+    let zooms = if known { t.zooms() } else { header.spacing };
     let quaternion = if known { t.quaternion() } else { None };
     h.put(0, &(l.size as i32).to_le_bytes());
     if !l.wide {

@@ -9,6 +9,7 @@ use flate2::Compression;
 use flate2::write::GzEncoder;
 
 use super::super::Staged;
+use super::super::write::{Body, VolumeHeader};
 use super::type_name;
 use crate::error::Result;
 use crate::volume::Volume;
@@ -32,27 +33,42 @@ pub enum NrrdEncoding {
 /// `path` is replaced only when `force` is set.
 pub fn write_nrrd(path: &Path, volume: &Volume, encoding: NrrdEncoding, force: bool) -> Result<()> {
     super::super::check_output(path, force)?;
-    stage(path, volume, encoding)?.persist(force)
-}
-
-/// `volume` as NRRD in a temporary file beside `path`, to be put in place.
-pub(crate) fn stage(path: &Path, volume: &Volume, encoding: NrrdEncoding) -> Result<Staged> {
-    super::super::stage(path, |file| write_to(file, volume, encoding))
-}
-
-/// Writes the header and voxels of `volume` into `file`.
-fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Result<()> {
-    let mut out = BufWriter::new(file);
-    let [nx, ny, nz] = volume.dims();
-    let [sx, sy, sz] = volume.spacing();
     let ty = volume.voxel_type();
+    stage(path, &VolumeHeader::of(volume), encoding, &mut |mut out| {
+        write_le(volume.data(), ty, &mut out)
+    })?
+    .persist(force)
+}
+
+/// A volume of `header` whose voxels `body` writes, as NRRD in a temporary file beside `path`,
+/// to be put in place.
+pub(crate) fn stage(
+    path: &Path,
+    header: &VolumeHeader,
+    encoding: NrrdEncoding,
+    body: Body<'_>,
+) -> Result<Staged> {
+    super::super::stage(path, |file| write_to(file, header, encoding, body))
+}
+
+/// Writes `header` and the voxels `body` writes into `file`.
+fn write_to(
+    file: &File,
+    header: &VolumeHeader,
+    encoding: NrrdEncoding,
+    body: Body<'_>,
+) -> std::io::Result<()> {
+    let mut out = BufWriter::new(file);
+    let [nx, ny, nz] = header.dims;
+    let [sx, sy, sz] = header.spacing;
+    let ty = header.voxel_type;
     write!(
         out,
         "NRRD0004\n# written by slabscope {}\ntype: {}\ndimension: 3\nsizes: {nx} {ny} {nz}\n",
         env!("CARGO_PKG_VERSION"),
         type_name(ty)
     )?;
-    let t = volume.transform();
+    let t = &header.transform;
     if t.known {
         // LPS, as Slicer and ITK write it: x and y negated from RAS.
         let lps = |r: usize, v: f64| if r < 2 { -v } else { v };
@@ -80,7 +96,7 @@ fn write_to(file: &File, volume: &Volume, encoding: NrrdEncoding) -> std::io::Re
     } else {
         Box::new(&mut out)
     };
-    write_le(volume.data(), ty, &mut sink)?;
+    body(&mut sink)?;
     drop(sink);
     out.flush()
 }

@@ -3,10 +3,10 @@
 
 use std::path::{Path, PathBuf};
 
-use slabscope::formats::{NrrdEncoding, write_atomic, write_nrrd};
+use slabscope::formats::write_atomic;
 use slabscope::render::{ImageOutput, encode};
 use slabscope::request::RenderRequest;
-use slabscope::{Analysis, AnalysisReport, Monitor, Partition, Volume, label_volume};
+use slabscope::{Analysis, AnalysisReport, Monitor, Partition, Volume};
 
 use crate::tui::event::ExportRequest;
 
@@ -46,10 +46,11 @@ pub(super) fn export(
     let report = AnalysisReport::new(&r.name, full, &r.view_params, &analysis)?.computed_on(volume);
     let text = slabscope::report::to_json(&report)?;
     write_new(&json, text.as_bytes())?;
-    monitor.start("writing labels", 1);
-    // At the working volume's shape, whatever level the preview's partition is of.
-    let labelled = label_volume(full, volume, &analysis.partition, monitor)?;
-    write_nrrd(&labels, &labelled, NrrdEncoding::Gzip, false)?;
+    // At the working volume's shape, whatever level the preview's partition is of, a few
+    // planes at a time (gzip-compressed NRRD, by the name).
+    let labelled = (full, volume, &analysis.partition);
+    let room = slabscope::partition::LABEL_CHUNK_BYTES;
+    slabscope::report::write_labels(&labels, labelled, room, false, monitor)?;
     Ok(format!(
         "wrote {}, {} and {}",
         slabscope::error::shown(&png),
