@@ -30,6 +30,8 @@ mod orientation;
 mod partition;
 #[cfg(feature = "remote")]
 mod remote;
+#[cfg(feature = "remote")]
+mod remote_levels;
 mod render;
 mod size;
 mod slice;

@@ -319,6 +319,21 @@ fn a_chunk_refused_is_the_fill_value_with_missing_as_fill() {
 }
 
 #[test]
+fn a_label_images_chunk_refused_is_named_once() {
+    let server = serve(&zarr(), Mode::Status(403), "/labels/cells/s0/c");
+    let url = server.url("v05_sharded.ome.zarr");
+    let ran = run(&["info", "--exact", &url, "--label-image", "cells"]);
+    says(&ran.stderr, &url, &["labels/cells", "HTTP 403 Forbidden"]);
+    // The chunk's key once, as the array names it, not again from the store's root.
+    assert_eq!(
+        ran.stderr.matches("labels/cells").count(),
+        1,
+        "{}",
+        ran.stderr
+    );
+}
+
+#[test]
 fn a_bioformats2raw_container_at_a_url_names_its_first_image() {
     let dir = tempfile::tempdir().unwrap();
     let container = dir.path().join("plate.zarr");
