@@ -31,6 +31,8 @@ mod partition;
 #[cfg(feature = "remote")]
 mod remote;
 #[cfg(feature = "remote")]
+mod remote_cache;
+#[cfg(feature = "remote")]
 mod remote_levels;
 mod render;
 mod size;

@@ -316,6 +316,10 @@ fn a_chunk_refused_is_the_fill_value_with_missing_as_fill() {
     // Level 2's one chunk, the fill value (0) throughout.
     assert_eq!(json["range"], serde_json::json!([0.0, 0.0]), "{json}");
     assert_eq!(json["statistics_from"]["pyramid_level"], 2);
+    // A 403 is decided at once, never asked again: once by each run.
+    let asked = server.requests();
+    let refused = asked.iter().filter(|r| r.contains("/s2/0")).count();
+    assert_eq!(refused, 2, "{asked:#?}");
 }
 
 #[test]

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
-use super::Url;
+use super::{Url, cache};
 use crate::error::human_bytes;
 
 /// The most requests in flight at once, over all threads.
@@ -47,6 +47,8 @@ pub struct Client {
     fetched: AtomicU64,
     /// Whether a chunk answered 403 is missing (the fill value) rather than an error.
     forbidden_missing: bool,
+    /// The on-disk cache of chunks (`--cache DIR`), when asked.
+    disk: Option<std::sync::Arc<cache::Disk>>,
 }
 
 impl Client {
@@ -83,6 +85,7 @@ impl Client {
             requests: AtomicU64::new(0),
             fetched: AtomicU64::new(0),
             forbidden_missing: false,
+            disk: None,
         })
     }
 
@@ -94,6 +97,12 @@ impl Client {
             forbidden_missing: missing,
             ..self
         }
+    }
+
+    /// This client, keeping the chunks it fetches in `disk` and reading them from there.
+    #[must_use]
+    pub fn cached(self, disk: Option<std::sync::Arc<cache::Disk>>) -> Self {
+        Self { disk, ..self }
     }
 
     /// The store's URL.
@@ -111,9 +120,40 @@ impl Client {
 
     /// The bytes `span` of `key`, at most `limit` of them (more is an error, not read);
     /// `None` when the server has no such key (404). A server that ignores the range and sends
-    /// the whole object has the range cut from it (within the limit).
+    /// the whole object has the range cut from it (within the limit). A chunk's bytes are
+    /// fetched once: kept in memory (at most `limit` / [`cache::MEMORY_SHARE`] bytes of answers
+    /// in all) and on disk when the client has a cache.
     pub fn get(&self, key: &str, span: Span, limit: u64) -> Result<Option<Vec<u8>>, String> {
         let url = self.url.key(key)?;
+        let chunk = !super::is_metadata(key);
+        if chunk {
+            let kept = (cache::MEMORY.get(&url, span)).or_else(|| {
+                let bytes = self.disk.as_ref()?.get(&url, span, limit)?;
+                cache::MEMORY.put(&url, span, &bytes, limit / cache::MEMORY_SHARE);
+                Some(bytes)
+            });
+            if let Some(bytes) = kept.filter(|b| b.len() as u64 <= limit) {
+                return check_span(key, span, bytes).map(Some);
+            }
+        }
+        let fetched = self.fetch(key, &url, span, limit)?;
+        if let (true, Some(bytes)) = (chunk, &fetched) {
+            cache::MEMORY.put(&url, span, bytes, limit / cache::MEMORY_SHARE);
+            if let Some(disk) = &self.disk {
+                disk.put(&url, span, bytes);
+            }
+        }
+        Ok(fetched)
+    }
+
+    /// [`get`](Self::get) from the server, `url` the key's.
+    fn fetch(
+        &self,
+        key: &str,
+        url: &str,
+        span: Span,
+        limit: u64,
+    ) -> Result<Option<Vec<u8>>, String> {
         let range = match span {
             Span::All => None,
             Span::From(start, None) => Some(format!("bytes={start}-")),
@@ -124,7 +164,7 @@ impl Client {
             Span::Suffix(n) => Some(format!("bytes=-{n}")),
         };
         let fetched = self.retried(key, || {
-            let mut request = self.agent.get(&url);
+            let mut request = self.agent.get(url);
             if let Some(range) = &range {
                 request = request.header("Range", range);
             }

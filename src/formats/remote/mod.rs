@@ -8,6 +8,8 @@
 //! feature (on by default); a build without it refuses URLs with a message saying so.
 
 #[cfg(feature = "remote")]
+pub mod cache;
+#[cfg(feature = "remote")]
 pub mod http;
 
 /// The bytes of every answer's body fetched by this process, over every store.

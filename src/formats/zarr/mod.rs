@@ -97,6 +97,9 @@ pub struct ZarrOptions {
     /// Whether a chunk of a store at a URL that the server refuses (HTTP 403) is read as the
     /// fill value, as a chunk not written (`--missing-as-fill`), rather than an error.
     pub missing_as_fill: bool,
+    /// The folder where the chunks of a store at a URL are kept once fetched (`--cache DIR`),
+    /// so that reading the store again fetches none it holds; none when not given.
+    pub cache: Option<PathBuf>,
 }
 
 /// The reader of an OME-Zarr store or a plain Zarr array (a folder).
