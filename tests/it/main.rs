@@ -34,6 +34,8 @@ mod remote;
 mod remote_cache;
 #[cfg(feature = "remote")]
 mod remote_levels;
+#[cfg(feature = "remote")]
+mod remote_servers;
 mod render;
 mod size;
 mod slice;
