@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
-use super::{Url, cache};
+use super::{Url, cache, sigv4};
 use crate::error::human_bytes;
 
 /// The most requests in flight at once, over all threads.
@@ -49,6 +49,9 @@ pub struct Client {
     forbidden_missing: bool,
     /// The on-disk cache of chunks (`--cache DIR`), when asked.
     disk: Option<std::sync::Arc<cache::Disk>>,
+    /// The credentials an `s3://` store's requests are signed with, when the environment
+    /// holds some.
+    creds: Option<sigv4::Credentials>,
 }
 
 impl Client {
@@ -78,7 +81,6 @@ impl Client {
             .build()
             .into();
         Ok(Self {
-            url,
             agent,
             timeout,
             slots: Slots::new(MAX_IN_FLIGHT),
@@ -86,6 +88,11 @@ impl Client {
             fetched: AtomicU64::new(0),
             forbidden_missing: false,
             disk: None,
+            creds: url
+                .region
+                .as_ref()
+                .and_then(|_| sigv4::Credentials::from_env(|n| std::env::var(n).ok())),
+            url,
         })
     }
 
@@ -165,6 +172,9 @@ impl Client {
         };
         let fetched = self.retried(key, || {
             let mut request = self.agent.get(url);
+            for (name, value) in self.signed("GET", url) {
+                request = request.header(name, value);
+            }
             if let Some(range) = &range {
                 request = request.header("Range", range);
             }
@@ -208,7 +218,11 @@ impl Client {
     pub fn size(&self, key: &str) -> Result<Option<u64>, String> {
         let url = self.url.key(key)?;
         let fetched = self.retried(key, || {
-            let response = self.agent.head(&url).call()?;
+            let mut request = self.agent.head(&url);
+            for (name, value) in self.signed("HEAD", &url) {
+                request = request.header(name, value);
+            }
+            let response = request.call()?;
             let status = response.status().as_u16();
             if !(200..300).contains(&status) {
                 return Ok(Answer::Status(status));
@@ -224,6 +238,19 @@ impl Client {
             Some(Fetched::Size(n)) => Some(n),
             _ => None,
         })
+    }
+
+    /// The headers that sign `method` of `url` (an `s3://` store's, with credentials), now.
+    fn signed(&self, method: &str, url: &str) -> Vec<(&'static str, String)> {
+        let (Some(creds), Some(region)) = (&self.creds, &self.url.region) else {
+            return Vec::new();
+        };
+        let origin = format!("{}://{}", self.url.scheme, self.url.host);
+        let path = url.strip_prefix(&origin).unwrap_or(url);
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs());
+        sigv4::s3_headers(creds, method, &self.url.host, path, region, now)
     }
 
     /// Runs `call` until it answers, at most [`TRIES`] times on a 5xx answer or a connection
@@ -437,8 +464,8 @@ fn reason(status: u16) -> &'static str {
 fn advice(status: u16) -> &'static str {
     match status {
         401 | 403 => {
-            " (slabscope reads public stores, without credentials: is the URL the store's, and \
-             public?)"
+            " (is the URL the store's, and public? an s3:// store's requests are signed when \
+             AWS_ACCESS_KEY_ID and AWS_SECRET_ACCESS_KEY are set)"
         }
         _ => "",
     }
