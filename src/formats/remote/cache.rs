@@ -15,7 +15,7 @@ use std::sync::{Mutex, PoisonError};
 
 use sha2::{Digest, Sha256};
 
-use super::http::Span;
+use super::Span;
 
 /// The most bytes an on-disk cache holds: past it, its oldest files are removed.
 pub const DISK_CAP: u64 = 1 << 30;

@@ -25,16 +25,7 @@ pub const TIMEOUT_S: f64 = 30.0;
 /// The most redirects followed for one request.
 const MAX_REDIRECTS: u32 = 8;
 
-/// A range of a key's bytes, as zarrs asks them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Span {
-    /// The whole object.
-    All,
-    /// From a byte, to the end or for a length.
-    From(u64, Option<u64>),
-    /// The last bytes.
-    Suffix(u64),
-}
+pub use super::Span;
 
 /// A store's HTTP client.
 #[derive(Debug)]

@@ -14,6 +14,17 @@ pub mod http;
 #[cfg(feature = "remote")]
 pub mod sigv4;
 
+/// A range of a key's bytes, as zarrs asks them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Span {
+    /// The whole object.
+    All,
+    /// From a byte, to the end or for a length.
+    From(u64, Option<u64>),
+    /// The last bytes.
+    Suffix(u64),
+}
+
 /// The bytes of every answer's body fetched by this process, over every store.
 static FETCHED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
