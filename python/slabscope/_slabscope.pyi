@@ -117,6 +117,7 @@ def load(
     label_image: Optional[str] = None,
     endpoint: Optional[str] = None,
     missing_as_fill: bool = False,
+    cache: Optional[str] = None,
 ) -> Volume:
     """Reads a volume: NIfTI, NRRD, MetaImage, TIFF, DICOM (file or folder), OME-Zarr,
     MRC, VTK, HDF5, VolumeShop, raw."""

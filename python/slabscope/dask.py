@@ -42,6 +42,7 @@ LOAD_KEYWORDS = (
     "label_image",
     "endpoint",
     "missing_as_fill",
+    "cache",
 )
 
 

@@ -169,8 +169,8 @@ fn axis_number(p: &Param, n: i64, value: &Bound<'_, PyAny>) -> PyResult<String> 
 
 /// The load options: `dims`, `dtype`, `spacing`, `endian`, `offset` for raw files,
 /// `max_memory`, `scratch`, `threads`, `volume`, `channel`, `array`, `series`,
-/// `include_localizers`, `resample`, `show_phi`, `label_image`, `endpoint`, `missing_as_fill`; and
-/// the pool of `threads` threads.
+/// `include_localizers`, `resample`, `show_phi`, `label_image`, `endpoint`, `missing_as_fill`,
+/// `cache`; and the pool of `threads` threads.
 pub fn load_options(kw: &Kwargs<'_>) -> PyResult<(LoadOptions, Option<rayon::ThreadPool>)> {
     let given = given(kw, table::LOAD)?;
     Ok((given.load().or_py()?, given.thread_pool().or_py()?))

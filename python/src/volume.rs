@@ -50,7 +50,7 @@ pub struct Volume {
 /// store) with the CLI's loader options as keywords: `dims`, `dtype`, `spacing`, `endian`,
 /// `offset` (raw files), `max_memory`, `scratch`, `threads`, `volume`, `channel`, `array`,
 /// `series`, `include_localizers`, `resample`, `show_phi`, `label_image`, `endpoint`,
-/// `missing_as_fill`.
+/// `missing_as_fill`, `cache`.
 #[pyfunction]
 #[pyo3(signature = (path, **options))]
 pub fn load(

@@ -77,12 +77,17 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
         super::progress::stop_after(t);
     }
     let outputs = outputs(args)?;
-    let loaded = super::load(&args.file, &args.load)?;
-    super::check_outputs(&outputs, &loaded.sources, args.force)?;
-    let full = &loaded.volume;
     let name = slabscope::error::shown(&args.file);
     let context = |e: slabscope::Error| anyhow::Error::from(e).context(name.clone());
     let (resolution, named) = args.resolution.given.resolution_named().map_err(context)?;
+    // A remote store's coarser dataset serves a coarser level without level 0, unless the
+    // labels of every voxel of level 0 are asked.
+    let loaded = match &args.export_labels {
+        None => super::load_serving(&args.file, &args.load, resolution)?,
+        Some(_) => super::load(&args.file, &args.load)?,
+    };
+    super::check_outputs(&outputs, &loaded.sources, args.force)?;
+    let full = &loaded.volume;
     let level = Level::Asked(resolution, named);
     level.wanted(full).map_err(context)?;
     let mut request = args.analysis.request(

@@ -121,8 +121,35 @@ fn remove_staged_on_signals() {
 
 /// Loads `path`, printing the loader's notes to stderr.
 pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
+    load_by(path, args, slabscope::load)
+}
+
+/// [`load`], of a store at a URL the coarsest of its datasets that serves the pyramid level
+/// `resolution` picks, without its level 0 ([`slabscope::formats::load_serving`]), when it
+/// holds one.
+pub fn load_serving(
+    path: &Path,
+    args: &LoadArgs,
+    resolution: slabscope::volume::Resolution,
+) -> Result<Loaded> {
+    load_by(
+        path,
+        args,
+        |path, opts| match slabscope::formats::load_serving(path, opts, resolution)? {
+            Some(loaded) => Ok(loaded),
+            None => slabscope::load(path, opts),
+        },
+    )
+}
+
+/// [`load`] by `read`.
+fn load_by(
+    path: &Path,
+    args: &LoadArgs,
+    read: impl FnOnce(&Path, &slabscope::LoadOptions) -> slabscope::Result<Loaded>,
+) -> Result<Loaded> {
     let opts = args.options()?;
-    let loaded = progress::while_reading(path, || slabscope::load(path, &opts)).map_err(|e| {
+    let loaded = progress::while_reading(path, || read(path, &opts)).map_err(|e| {
         match e {
             // Stopped at the `--timeout`: said of the file, and of its loading.
             Error::Cancelled => anyhow::Error::from(e).context(format!("{}: loading", shown(path))),

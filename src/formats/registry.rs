@@ -80,7 +80,7 @@ fn read_url(path: &Path, opts: &LoadOptions) -> Result<(Format, Read0)> {
 
 /// Fails for the URL `path` when its name says a file of another format than Zarr's (read from
 /// disk), or when `opts` do not fit a store.
-fn check_url(path: &Path, opts: &LoadOptions) -> Result<()> {
+pub(super) fn check_url(path: &Path, opts: &LoadOptions) -> Result<()> {
     let shown = super::remote::shown_text(&path.to_string_lossy());
     let lower = shown.to_string_lossy().to_ascii_lowercase();
     let lower = lower.trim_end_matches('/');

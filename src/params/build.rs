@@ -2,9 +2,9 @@
 //! entry feeds which field.
 
 use super::table::{
-    ARRAY, AXIS, AXIS_BY, BACKGROUND, BINS, BLOCK, CHANNEL, COLORMAP, DIMS, ELEVATION, ENDIAN,
-    ENDPOINT, GAIN, GAP, HIGHLIGHT, INCLUDE_LOCALIZERS, LABEL_IMAGE, LEVEL, MAX_MEMORY, METHOD,
-    MISSING_AS_FILL, MODE, NO_LABELS, NO_OUTLINES, NO_SHADING, OFFSET, PAPER, PERSPECTIVE,
+    ARRAY, AXIS, AXIS_BY, BACKGROUND, BINS, BLOCK, CACHE, CHANNEL, COLORMAP, DIMS, ELEVATION,
+    ENDIAN, ENDPOINT, GAIN, GAP, HIGHLIGHT, INCLUDE_LOCALIZERS, LABEL_IMAGE, LEVEL, MAX_MEMORY,
+    METHOD, MISSING_AS_FILL, MODE, NO_LABELS, NO_OUTLINES, NO_SHADING, OFFSET, PAPER, PERSPECTIVE,
     PHASE_SUBSET, PHASES, RAY_SPACING, REFINE, RESAMPLE, SAMPLE_SPACING, SCRATCH, SERIES, SHOW_PHI,
     SLABS, SOLO, SPACING, SPREAD, STEP, TF, THREADS, THRESHOLD, TYPE, VOLUME, WINDOW, ZOOM,
 };
@@ -127,6 +127,9 @@ impl Given {
                 label_image: self.parsed(&LABEL_IMAGE, text::any)?,
                 endpoint: self.parsed(&ENDPOINT, text::any)?,
                 missing_as_fill: self.switch(&MISSING_AS_FILL)?,
+                cache: self
+                    .parsed(&CACHE, text::any)?
+                    .map(std::path::PathBuf::from),
             },
             scratch: self.scratch()?,
             cancel: crate::progress::Cancel::never(),

@@ -116,13 +116,23 @@ impl AnalysisReport {
                 ..view.clone()
             },
         };
+        // A level read without level 0 (a remote store's): the grid is level 0's, the range
+        // the level's own.
+        let (dims, spacing, geometry) = match volume.unread_finest() {
+            Some(f) => (
+                f.dims,
+                f.spacing,
+                GeometryReport::of_grid(&f.transform, f.dims),
+            ),
+            None => (volume.dims(), volume.spacing(), GeometryReport::of(volume)),
+        };
         Ok(Self {
             schema_version: SCHEMA_VERSION,
             file: file.to_string(),
-            dims: volume.dims(),
-            spacing: volume.spacing(),
+            dims,
+            spacing,
             range: [s.min, s.max],
-            geometry: GeometryReport::of(volume),
+            geometry,
             resolution: ResolutionReport::of(volume),
             views_resolution: None,
             params,

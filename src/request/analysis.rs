@@ -29,13 +29,26 @@ pub enum Level {
 }
 
 impl Level {
-    /// The pyramid level of `volume` this asks for (0 for a picture's): a level number past
-    /// the volume's last is an error about `resolution`.
+    /// The pyramid level this asks for, counted from `volume` (0 for a picture's): a level
+    /// number past the volume's last is an error about `resolution`. For a level read without
+    /// level 0 ([`Volume::unread_finest`]: a remote store's coarser dataset), the level is picked
+    /// on level 0's pyramid and counted from the level read; a finer one is an error.
     pub fn wanted(self, volume: &Volume) -> Result<usize> {
-        match self {
-            Self::Asked(resolution, _) => resolution.level(&volume.level_dims()),
-            Self::Picture => Ok(0),
-        }
+        let Self::Asked(resolution, _) = self else {
+            return Ok(0);
+        };
+        let level = resolution.level(&volume.pyramid_dims())?;
+        let here = match volume.unread_finest() {
+            Some(_) => volume.level().index,
+            None => 0,
+        };
+        level.checked_sub(here).ok_or_else(|| {
+            crate::error::Error::invalid(
+                "resolution",
+                level,
+                format!("pyramid level {here} or coarser: that level was read without level 0"),
+            )
+        })
     }
 }
 
@@ -74,7 +87,7 @@ impl AnalysisRequest {
         let purpose = match self.level {
             Level::Asked(_, named) => Purpose::Analysis {
                 wanted,
-                every_voxel: wanted == 0 && named,
+                every_voxel: wanted == 0 && named && volume.unread_finest().is_none(),
                 params: &self.params,
             },
             Level::Picture => Purpose::Picture,

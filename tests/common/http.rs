@@ -38,6 +38,8 @@ pub struct Server {
     pub base: String,
     /// Each request answered: method, path and range, one string each.
     pub log: Arc<Mutex<Vec<String>>>,
+    /// The `Authorization` header of each request that had one.
+    pub authorizations: Arc<Mutex<Vec<String>>>,
 }
 
 impl Server {
@@ -58,18 +60,24 @@ pub fn serve(root: &Path, mode: Mode, only: &str) -> Server {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let base = format!("http://{}", listener.local_addr().unwrap());
     let log = Arc::new(Mutex::new(Vec::new()));
+    let authorizations = Arc::new(Mutex::new(Vec::new()));
+    let auth = Arc::clone(&authorizations);
     let (root, only, shared) = (root.to_path_buf(), only.to_string(), Arc::clone(&log));
     let seen = Arc::new(Mutex::new(HashSet::new()));
     std::thread::spawn(move || {
         for stream in listener.incoming().flatten() {
             let (root, only, log) = (root.clone(), only.clone(), Arc::clone(&shared));
-            let seen = Arc::clone(&seen);
+            let (seen, auth) = (Arc::clone(&seen), Arc::clone(&auth));
             std::thread::spawn(move || {
-                let _ = connection(stream, &root, mode, &only, &log, &seen);
+                let _ = connection(stream, &root, mode, &only, (&log, &auth), &seen);
             });
         }
     });
-    Server { base, log }
+    Server {
+        base,
+        log,
+        authorizations,
+    }
 }
 
 /// A port on 127.0.0.1 that nothing listens on (bound, then let go).
@@ -84,7 +92,7 @@ fn connection(
     root: &Path,
     mode: Mode,
     only: &str,
-    log: &Mutex<Vec<String>>,
+    (log, auth): (&Mutex<Vec<String>>, &Mutex<Vec<String>>),
     seen: &Mutex<HashSet<String>>,
 ) -> std::io::Result<()> {
     let mut reader = BufReader::new(stream.try_clone()?);
@@ -107,10 +115,12 @@ fn connection(
             if header.is_empty() {
                 break;
             }
-            if let Some((name, value)) = header.split_once(':')
-                && name.eq_ignore_ascii_case("range")
-            {
-                range = Some(value.trim().to_string());
+            if let Some((name, value)) = header.split_once(':') {
+                if name.eq_ignore_ascii_case("range") {
+                    range = Some(value.trim().to_string());
+                } else if name.eq_ignore_ascii_case("authorization") {
+                    auth.lock().unwrap().push(value.trim().to_string());
+                }
             }
         }
         log.lock().unwrap().push(format!(

@@ -31,6 +31,12 @@ mod orientation;
 mod partition;
 #[cfg(feature = "remote")]
 mod remote;
+#[cfg(feature = "remote")]
+mod remote_cache;
+#[cfg(feature = "remote")]
+mod remote_levels;
+#[cfg(feature = "remote")]
+mod remote_servers;
 mod render;
 mod size;
 mod slice;

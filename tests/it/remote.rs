@@ -316,6 +316,25 @@ fn a_chunk_refused_is_the_fill_value_with_missing_as_fill() {
     // Level 2's one chunk, the fill value (0) throughout.
     assert_eq!(json["range"], serde_json::json!([0.0, 0.0]), "{json}");
     assert_eq!(json["statistics_from"]["pyramid_level"], 2);
+    // A 403 is decided at once, never asked again: once by each run.
+    let asked = server.requests();
+    let refused = asked.iter().filter(|r| r.contains("/s2/0")).count();
+    assert_eq!(refused, 2, "{asked:#?}");
+}
+
+#[test]
+fn a_label_images_chunk_refused_is_named_once() {
+    let server = serve(&zarr(), Mode::Status(403), "/labels/cells/s0/c");
+    let url = server.url("v05_sharded.ome.zarr");
+    let ran = run(&["info", "--exact", &url, "--label-image", "cells"]);
+    says(&ran.stderr, &url, &["labels/cells", "HTTP 403 Forbidden"]);
+    // The chunk's key once, as the array names it, not again from the store's root.
+    assert_eq!(
+        ran.stderr.matches("labels/cells").count(),
+        1,
+        "{}",
+        ran.stderr
+    );
 }
 
 #[test]
@@ -454,6 +473,30 @@ fn s3_stores_are_read_at_an_endpoint() {
             .all(|r| r.contains(" /zarr/v04_blosc.ome.zarr/")),
         "{asked:?}"
     );
+    // With credentials in the environment, every request is signed (AWS SigV4, its scope the
+    // key id, the day, the region and s3), and the secret shows nowhere.
+    let signed: crate::common::Ran = crate::common::slabscope()
+        .args(["info", "--json", "--exact", s3, "--endpoint", &server.base])
+        .env("AWS_ACCESS_KEY_ID", "AKIDTEST")
+        .env("AWS_SECRET_ACCESS_KEY", "hunter2secret")
+        .env("AWS_REGION", "eu-west-2")
+        .env_remove("AWS_SESSION_TOKEN")
+        .output()
+        .unwrap()
+        .into();
+    assert!(signed.ok, "{}", signed.stderr);
+    assert!(!signed.text().contains("hunter2"), "{}", signed.text());
+    let auths = server.authorizations.lock().unwrap().clone();
+    let asked = server.requests().len();
+    assert!(auths.len() >= 13 && auths.len() < asked, "{auths:?}");
+    for auth in &auths {
+        assert!(
+            auth.starts_with("AWS4-HMAC-SHA256 Credential=AKIDTEST/")
+                && auth.contains("/eu-west-2/s3/aws4_request, SignedHeaders=host;x-amz-content-sha256;x-amz-date, Signature="),
+            "{auth}"
+        );
+        assert!(!auth.contains("hunter2"));
+    }
     // Over plain HTTP the same 403 is an error.
     let (url, e) = failure(Mode::Status(403), "zarr.json");
     says(&e, &url, &["zarr.json: HTTP 403 Forbidden"]);

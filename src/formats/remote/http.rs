@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
-use super::Url;
+use super::{Url, cache, sigv4};
 use crate::error::human_bytes;
 
 /// The most requests in flight at once, over all threads.
@@ -25,16 +25,7 @@ pub const TIMEOUT_S: f64 = 30.0;
 /// The most redirects followed for one request.
 const MAX_REDIRECTS: u32 = 8;
 
-/// A range of a key's bytes, as zarrs asks them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Span {
-    /// The whole object.
-    All,
-    /// From a byte, to the end or for a length.
-    From(u64, Option<u64>),
-    /// The last bytes.
-    Suffix(u64),
-}
+pub use super::Span;
 
 /// A store's HTTP client.
 #[derive(Debug)]
@@ -47,6 +38,11 @@ pub struct Client {
     fetched: AtomicU64,
     /// Whether a chunk answered 403 is missing (the fill value) rather than an error.
     forbidden_missing: bool,
+    /// The on-disk cache of chunks (`--cache DIR`), when asked.
+    disk: Option<std::sync::Arc<cache::Disk>>,
+    /// The credentials an `s3://` store's requests are signed with, when the environment
+    /// holds some.
+    creds: Option<sigv4::Credentials>,
 }
 
 impl Client {
@@ -76,13 +72,18 @@ impl Client {
             .build()
             .into();
         Ok(Self {
-            url,
             agent,
             timeout,
             slots: Slots::new(MAX_IN_FLIGHT),
             requests: AtomicU64::new(0),
             fetched: AtomicU64::new(0),
             forbidden_missing: false,
+            disk: None,
+            creds: url
+                .region
+                .as_ref()
+                .and_then(|_| sigv4::Credentials::from_env(|n| std::env::var(n).ok())),
+            url,
         })
     }
 
@@ -94,6 +95,12 @@ impl Client {
             forbidden_missing: missing,
             ..self
         }
+    }
+
+    /// This client, keeping the chunks it fetches in `disk` and reading them from there.
+    #[must_use]
+    pub fn cached(self, disk: Option<std::sync::Arc<cache::Disk>>) -> Self {
+        Self { disk, ..self }
     }
 
     /// The store's URL.
@@ -111,9 +118,40 @@ impl Client {
 
     /// The bytes `span` of `key`, at most `limit` of them (more is an error, not read);
     /// `None` when the server has no such key (404). A server that ignores the range and sends
-    /// the whole object has the range cut from it (within the limit).
+    /// the whole object has the range cut from it (within the limit). A chunk's bytes are
+    /// fetched once: kept in memory (at most `limit` / [`cache::MEMORY_SHARE`] bytes of answers
+    /// in all) and on disk when the client has a cache.
     pub fn get(&self, key: &str, span: Span, limit: u64) -> Result<Option<Vec<u8>>, String> {
         let url = self.url.key(key)?;
+        let chunk = !super::is_metadata(key);
+        if chunk {
+            let kept = (cache::MEMORY.get(&url, span)).or_else(|| {
+                let bytes = self.disk.as_ref()?.get(&url, span, limit)?;
+                cache::MEMORY.put(&url, span, &bytes, limit / cache::MEMORY_SHARE);
+                Some(bytes)
+            });
+            if let Some(bytes) = kept.filter(|b| b.len() as u64 <= limit) {
+                return check_span(key, span, bytes).map(Some);
+            }
+        }
+        let fetched = self.fetch(key, &url, span, limit)?;
+        if let (true, Some(bytes)) = (chunk, &fetched) {
+            cache::MEMORY.put(&url, span, bytes, limit / cache::MEMORY_SHARE);
+            if let Some(disk) = &self.disk {
+                disk.put(&url, span, bytes);
+            }
+        }
+        Ok(fetched)
+    }
+
+    /// [`get`](Self::get) from the server, `url` the key's.
+    fn fetch(
+        &self,
+        key: &str,
+        url: &str,
+        span: Span,
+        limit: u64,
+    ) -> Result<Option<Vec<u8>>, String> {
         let range = match span {
             Span::All => None,
             Span::From(start, None) => Some(format!("bytes={start}-")),
@@ -124,7 +162,10 @@ impl Client {
             Span::Suffix(n) => Some(format!("bytes=-{n}")),
         };
         let fetched = self.retried(key, || {
-            let mut request = self.agent.get(&url);
+            let mut request = self.agent.get(url);
+            for (name, value) in self.signed("GET", url) {
+                request = request.header(name, value);
+            }
             if let Some(range) = &range {
                 request = request.header("Range", range);
             }
@@ -168,7 +209,11 @@ impl Client {
     pub fn size(&self, key: &str) -> Result<Option<u64>, String> {
         let url = self.url.key(key)?;
         let fetched = self.retried(key, || {
-            let response = self.agent.head(&url).call()?;
+            let mut request = self.agent.head(&url);
+            for (name, value) in self.signed("HEAD", &url) {
+                request = request.header(name, value);
+            }
+            let response = request.call()?;
             let status = response.status().as_u16();
             if !(200..300).contains(&status) {
                 return Ok(Answer::Status(status));
@@ -184,6 +229,19 @@ impl Client {
             Some(Fetched::Size(n)) => Some(n),
             _ => None,
         })
+    }
+
+    /// The headers that sign `method` of `url` (an `s3://` store's, with credentials), now.
+    fn signed(&self, method: &str, url: &str) -> Vec<(&'static str, String)> {
+        let (Some(creds), Some(region)) = (&self.creds, &self.url.region) else {
+            return Vec::new();
+        };
+        let origin = format!("{}://{}", self.url.scheme, self.url.host);
+        let path = url.strip_prefix(&origin).unwrap_or(url);
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs());
+        sigv4::s3_headers(creds, method, &self.url.host, path, region, now)
     }
 
     /// Runs `call` until it answers, at most [`TRIES`] times on a 5xx answer or a connection
@@ -397,8 +455,8 @@ fn reason(status: u16) -> &'static str {
 fn advice(status: u16) -> &'static str {
     match status {
         401 | 403 => {
-            " (slabscope reads public stores, without credentials: is the URL the store's, and \
-             public?)"
+            " (is the URL the store's, and public? an s3:// store's requests are signed when \
+             AWS_ACCESS_KEY_ID and AWS_SECRET_ACCESS_KEY are set)"
         }
         _ => "",
     }

@@ -1,6 +1,6 @@
 //! Volumes where they live: an `http://` or `https://` URL names a Zarr or OME-Zarr store read in
-//! place (docs/design.md, "Remote stores"), and so does `s3://bucket/prefix`, read anonymously
-//! over HTTPS (virtual-hosted, or path-style at the endpoint `AWS_ENDPOINT_URL_S3` or
+//! place (docs/design.md, "Remote stores"), and so does `s3://bucket/prefix`, read over HTTPS,
+//! anonymously unless the environment holds credentials (then signed: `sigv4.rs`) (virtual-hosted, or path-style at the endpoint `AWS_ENDPOINT_URL_S3` or
 //! `AWS_ENDPOINT_URL` names; the region from `AWS_REGION` or `AWS_DEFAULT_REGION`). This module knows URLs: which inputs are URLs
 //! ([`is_url`]), their checked form ([`Url`]: no user name, password, query or fragment, so that
 //! no credential is ever written in a message), and the keys of a store joined to them, confined
@@ -8,7 +8,22 @@
 //! feature (on by default); a build without it refuses URLs with a message saying so.
 
 #[cfg(feature = "remote")]
+pub mod cache;
+#[cfg(feature = "remote")]
 pub mod http;
+#[cfg(feature = "remote")]
+pub mod sigv4;
+
+/// A range of a key's bytes, as zarrs asks them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Span {
+    /// The whole object.
+    All,
+    /// From a byte, to the end or for a length.
+    From(u64, Option<u64>),
+    /// The last bytes.
+    Suffix(u64),
+}
 
 /// The bytes of every answer's body fetched by this process, over every store.
 static FETCHED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
@@ -63,6 +78,9 @@ pub struct Url {
     pub path: String,
     /// The `s3://bucket/prefix` it was given as, which messages show.
     pub s3: Option<String>,
+    /// The region of an `s3://` store (its requests are signed for it when the environment
+    /// holds credentials).
+    pub region: Option<String>,
 }
 
 impl Url {
@@ -100,6 +118,7 @@ impl Url {
             host: authority.to_ascii_lowercase(),
             path: path.trim_end_matches('/').to_string(),
             s3: None,
+            region: None,
         })
     }
 
@@ -142,6 +161,15 @@ impl Url {
         let endpoint = (endpoint.map(|e| ("--endpoint", e.to_string())))
             .or_else(|| set("AWS_ENDPOINT_URL_S3"))
             .or_else(|| set("AWS_ENDPOINT_URL"));
+        let (name, region) = set("AWS_REGION")
+            .or_else(|| set("AWS_DEFAULT_REGION"))
+            .unwrap_or(("the default", "us-east-1".into()));
+        if !region
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-')
+        {
+            return Err(format!("region {region:?} ({name}): not a region's name"));
+        }
         if let Some((name, endpoint)) = endpoint {
             if !matches!(scheme(endpoint.trim()), Some("http" | "https")) {
                 return Err(format!("the endpoint {name} names is not http(s)://"));
@@ -151,17 +179,9 @@ impl Url {
             return Ok(Self {
                 path: format!("{}/{bucket}{prefix}", base.path),
                 s3: Some(shown),
+                region: Some(region),
                 ..base
             });
-        }
-        let (name, region) = set("AWS_REGION")
-            .or_else(|| set("AWS_DEFAULT_REGION"))
-            .unwrap_or(("the default", "us-east-1".into()));
-        if !region
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '-')
-        {
-            return Err(format!("region {region:?} ({name}): not a region's name"));
         }
         let (host, path) = if bucket.contains('.') {
             (
@@ -179,6 +199,7 @@ impl Url {
             host,
             path,
             s3: Some(shown),
+            region: Some(region),
         })
     }
 

@@ -22,10 +22,17 @@ pub struct Remote {
 
 impl Remote {
     /// The store at `url`; a chunk answered 403 is missing (the fill value) when
-    /// `forbidden_missing` (`--missing-as-fill`), else an error.
-    pub fn new(url: Url, forbidden_missing: bool) -> Result<Self, String> {
+    /// `forbidden_missing` (`--missing-as-fill`), else an error; its chunks kept in `disk`
+    /// (`--cache DIR`) when given.
+    pub fn new(
+        url: Url,
+        forbidden_missing: bool,
+        disk: Option<Arc<crate::formats::remote::cache::Disk>>,
+    ) -> Result<Self, String> {
         Ok(Self {
-            client: Client::new(url)?.forbidden_as_missing(forbidden_missing),
+            client: Client::new(url)?
+                .forbidden_as_missing(forbidden_missing)
+                .cached(disk),
             metadata: Mutex::new(HashMap::new()),
         })
     }

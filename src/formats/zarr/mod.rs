@@ -8,6 +8,7 @@
 //! spacing and origin in mm; `--volume N` picks the time point and `--channel N` the channel.
 
 mod chain;
+mod coarse;
 mod details;
 mod guard;
 #[cfg(feature = "remote")]
@@ -32,6 +33,7 @@ use super::{Folder, Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
 use crate::geometry::WorldTransform;
 use crate::volume::pyramid;
+pub(crate) use coarse::read_serving;
 
 /// What `info` shows of a store: the image read, its axes, levels, chunking and codecs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -95,6 +97,9 @@ pub struct ZarrOptions {
     /// Whether a chunk of a store at a URL that the server refuses (HTTP 403) is read as the
     /// fill value, as a chunk not written (`--missing-as-fill`), rather than an error.
     pub missing_as_fill: bool,
+    /// The folder where the chunks of a store at a URL are kept once fetched (`--cache DIR`),
+    /// so that reading the store again fetches none it holds; none when not given.
+    pub cache: Option<PathBuf>,
 }
 
 /// The reader of an OME-Zarr store or a plain Zarr array (a folder).
@@ -156,7 +161,7 @@ impl Reader for Zarr {
         if !(is_url(path) || (path.is_dir() && is_store(path))) {
             return Ok(None);
         }
-        read_preview(path, opts, max_voxels)
+        coarse::read_preview(path, opts, max_voxels)
     }
 }
 
@@ -514,34 +519,6 @@ fn load(dir: &Path, opts: &LoadOptions) -> Result<Read0> {
         read0.volume = read0.volume.with_level_source(Arc::new(source), &steps);
     }
     Ok(read0)
-}
-
-/// The finest of the store's coarser datasets on the pyramid's grid with at most `max_voxels`
-/// voxels (with `max_voxels` 0, the coarsest), read as that pyramid level of the image without
-/// reading level 0 (so quantized with its own range); `None` when level 0 itself has at most
-/// `max_voxels` voxels or no such dataset exists.
-fn read_preview(dir: &Path, opts: &LoadOptions, max_voxels: usize) -> Result<Option<Read0>> {
-    let opened = Opened::new(dir, opts)?;
-    let finest = opened.grid(0, &mut Vec::new());
-    let dims0 = finest.dims;
-    let pyramid = levels::StorePyramid::of(&opened.image, &opened.arrays, &opened.layout);
-    let chain = pyramid::chain_dims(dims0, &pyramid::steps_after(dims0, &pyramid.steps));
-    let wanted = match max_voxels {
-        0 => 1,
-        _ => pyramid::level_within(&chain, max_voxels),
-    };
-    let within = pyramid.levels.iter().copied().filter(|&(k, _)| k >= wanted);
-    let best = if max_voxels == 0 {
-        within.max()
-    } else {
-        within.min()
-    };
-    let (Some((k, i)), 1..) = (best, wanted) else {
-        return Ok(None);
-    };
-    let mut read0 = opened.read(dir, i, opts)?;
-    read0.volume = read0.volume.into_pyramid_level(k, finest, &pyramid.steps);
-    Ok(Some(read0))
 }
 
 fn plural(n: usize) -> &'static str {

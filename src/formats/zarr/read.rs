@@ -287,8 +287,9 @@ impl Reader<'_> {
                 if text.starts_with(&format!("chunk {key} ")) {
                     return Error::format(self.path, text); // the guard's, naming it already
                 }
-                // A remote store's, naming the key already.
-                let text = text.strip_prefix(&format!("{key}: ")).unwrap_or(&text);
+                // A remote store's, naming the key already from the store's root (a label
+                // image's `labels/NAME/` before it): said once, as the array's key.
+                let text = strip_key(&text, key.as_str());
                 Error::format(self.path, format!("chunk {key}: {text}"))
             })?;
         let width = x.len();
@@ -300,5 +301,38 @@ impl Reader<'_> {
             }
         }
         Ok(E::rounded(&values))
+    }
+}
+
+/// `text` without the key it starts with, when that is `key` or a path ending in `/key` (the
+/// same chunk named from the store's root).
+fn strip_key<'t>(text: &'t str, key: &str) -> &'t str {
+    let Some((named, rest)) = text.split_once(": ") else {
+        return text;
+    };
+    let same = named == key
+        || named
+            .strip_suffix(key)
+            .is_some_and(|node| node.ends_with('/') && !node.contains(' '));
+    if same { rest } else { text }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::strip_key;
+
+    #[test]
+    fn a_chunk_named_from_the_root_is_named_once() {
+        let key = "s0/c/0/0/0";
+        assert_eq!(
+            strip_key("s0/c/0/0/0: HTTP 403 Forbidden", key),
+            "HTTP 403 Forbidden"
+        );
+        let label = "labels/cells/s0/c/0/0/0: HTTP 403 Forbidden";
+        assert_eq!(strip_key(label, key), "HTTP 403 Forbidden");
+        // Another key, or words, are kept.
+        assert_eq!(strip_key("xs0/c/0/0/0: a", key), "xs0/c/0/0/0: a");
+        assert_eq!(strip_key("the s0/c/0/0/0: a", key), "the s0/c/0/0/0: a");
+        assert_eq!(strip_key("no colon", key), "no colon");
     }
 }

@@ -35,7 +35,8 @@ pub enum Root {
 
 impl Root {
     /// The root of the store `dir`: a folder, or a URL ([`remote::is_url`]; an `s3://` one at
-    /// the endpoint `opts` name, a chunk answered 403 missing when they say so).
+    /// the endpoint `opts` name, a chunk answered 403 missing when they say so, its chunks kept
+    /// in the cache folder they name).
     pub fn open(dir: &Path, opts: &super::ZarrOptions) -> Result<Self> {
         let Some(text) = dir.to_str().filter(|_| remote::is_url(dir)) else {
             return Ok(Self::Local {
@@ -48,7 +49,14 @@ impl Root {
         #[cfg(feature = "remote")]
         {
             let shown = url.shown();
-            let remote = super::http_store::Remote::new(url, opts.missing_as_fill)
+            let disk = match &opts.cache {
+                Some(folder) => Some(Arc::new(
+                    remote::cache::Disk::open(folder, remote::cache::DISK_CAP)
+                        .map_err(|m| Error::format(folder, m))?,
+                )),
+                None => None,
+            };
+            let remote = super::http_store::Remote::new(url, opts.missing_as_fill, disk)
                 .map_err(|m| Error::format(&shown, m))?;
             Ok(Self::Remote(Arc::new(remote)))
         }

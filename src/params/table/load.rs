@@ -194,6 +194,21 @@ pub const MISSING_AS_FILL: Param = param(
     Takes::Switch,
 );
 
+pub const CACHE: Param = named(
+    "cache",
+    "cache",
+    "DIR",
+    "A folder where the chunks of a store at a URL are kept once fetched (made when missing; at \
+     most 1 GiB, the oldest dropped past it), so that reading the store again fetches none it \
+     holds",
+    Takes::Text {
+        valid: |s| !s.is_empty(),
+        expected: "a folder",
+        default: None,
+        hyphens: false,
+    },
+);
+
 /// How to read the input.
 pub const LOAD: &[&Param] = &[
     &DIMS,
@@ -214,4 +229,5 @@ pub const LOAD: &[&Param] = &[
     &LABEL_IMAGE,
     &ENDPOINT,
     &MISSING_AS_FILL,
+    &CACHE,
 ];

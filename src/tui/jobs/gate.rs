@@ -32,6 +32,26 @@ impl Gate {
         s.waiting -= 1;
     }
 
+    /// [`wait`](Self::wait), at most `limit`: whether the gate opened (else the time ran out).
+    pub fn wait_at_most(&self, limit: std::time::Duration) -> bool {
+        let (state, changed) = &*self.0;
+        let mut s = state.lock().unwrap_or_else(PoisonError::into_inner);
+        s.waiting += 1;
+        let end = std::time::Instant::now() + limit;
+        while s.held {
+            let left = end.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() {
+                break;
+            }
+            s = changed
+                .wait_timeout(s, left)
+                .unwrap_or_else(PoisonError::into_inner)
+                .0;
+        }
+        s.waiting -= 1;
+        !s.held
+    }
+
     /// Whether it is held.
     #[cfg(test)]
     pub fn held(&self) -> bool {
@@ -76,5 +96,10 @@ mod tests {
         rx.recv().unwrap();
         thread.join().unwrap();
         assert_eq!(gate.waiting(), 0);
+        // Held, a bounded wait ends when its time runs out, saying so.
+        gate.hold(true);
+        assert!(!gate.wait_at_most(std::time::Duration::from_millis(20)));
+        gate.hold(false);
+        assert!(gate.wait_at_most(std::time::Duration::from_secs(60)));
     }
 }

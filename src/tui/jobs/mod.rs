@@ -48,7 +48,14 @@ pub struct Jobs {
     full_delay: Duration,
     /// Holds background triage while the open volume's work runs.
     triage_gate: Gate,
+    /// Holds the reading of a remote store's level 0 until the first picture of its preview is
+    /// drawn (at most [`FIRST_PICTURE_WAIT`]), so that the first picture fetches no chunk of it.
+    first_picture: Gate,
 }
+
+/// The longest a remote store's level 0 waits for the first picture of its preview (a picture
+/// the app never asks, in a terminal too small for it, must not hold the load back for ever).
+const FIRST_PICTURE_WAIT: Duration = Duration::from_secs(5);
 
 impl Jobs {
     /// Jobs reporting to `events`, loading `source` (None: the built-in dataset).
@@ -74,6 +81,7 @@ impl Jobs {
                 .and_then(|ms| ms.parse().ok())
                 .map_or(Duration::ZERO, Duration::from_millis),
             triage_gate: Gate::default(),
+            first_picture: Gate::default(),
         }
     }
 
@@ -83,6 +91,11 @@ impl Jobs {
         match msg {
             JobMsg::Loaded(Ok((volume, _))) => self.open.full = Some(Arc::clone(volume)),
             JobMsg::Preview(volume, _) => self.open.preview = Some(Arc::clone(volume)),
+            // The first picture drawn (or failed): a remote store's level 0 may be read.
+            JobMsg::Rendered(..) => {
+                self.first_picture.hold(false);
+                return;
+            }
             _ => return,
         }
         self.start_renderer();
@@ -104,8 +117,19 @@ impl Jobs {
                 let (source, mut load) = (self.source.clone(), self.load.clone());
                 load.cancel = slabscope::Cancel::new(Arc::clone(&self.load_cancel));
                 let request = self.request(AnalysisParams::default());
+                // A new gate each load: a load before it, stopped, is let through.
+                self.first_picture.hold(false);
+                self.first_picture = Gate::default();
+                let remote = source
+                    .as_ref()
+                    .is_some_and(|e| slabscope::formats::remote::is_url(&e.path));
+                self.first_picture.hold(remote);
+                let first_picture = self.first_picture.clone();
                 self.spawn(Job::Load, move |_, send| {
-                    load_volume(source.as_ref(), &load, &request, send)
+                    let wait = || {
+                        first_picture.wait_at_most(FIRST_PICTURE_WAIT);
+                    };
+                    load_volume(source.as_ref(), &load, &request, &(send, &wait))
                 });
             }
             effect @ (Effect::SearchViews(..) | Effect::Analyze(..) | Effect::RankGain(..)) => {
@@ -219,6 +243,8 @@ impl Jobs {
     /// and what the jobs of the last one still send is dropped.
     fn open_next(&mut self, path: slabscope::triage::Entry) {
         self.load_cancel.store(true, Ordering::Relaxed);
+        // A load waiting for its first picture goes on to find itself stopped.
+        self.first_picture.hold(false);
         self.load_cancel = Arc::new(AtomicBool::new(false));
         self.epoch += 1;
         self.source = Some(path);
@@ -411,13 +437,16 @@ fn cutting(stack: &StackParams) -> AnalysisParams {
 
 /// Loads `source` (None: the built-in dataset) with `load`, a series in `source` taking the
 /// place of the options', and plans `request` on it: the volume worked on is the level its plan
-/// gives. A coarse pyramid level the file holds is sent first, as a preview.
+/// gives. A coarse pyramid level the file holds is sent first, as a preview (by `send`, the
+/// first of `to`), and level 0 read once `to`'s second returns (for a remote store, when the
+/// preview's first picture is drawn).
 fn load_volume(
     source: Option<&slabscope::triage::Entry>,
     load: &LoadOptions,
     request: &AnalysisRequest,
-    send: &dyn Fn(JobMsg),
+    to: &(&dyn Fn(JobMsg), &dyn Fn()),
 ) -> JobMsg {
+    let (send, first_picture) = *to;
     let loaded = match source {
         Some(entry) => {
             let load = entry.options(load);
@@ -425,6 +454,7 @@ fn load_volume(
             let preview = slabscope::formats::load_preview(&entry.path, &load, GLANCE_VOXELS);
             if let Ok(Some(p)) = preview {
                 send(JobMsg::Preview(Arc::new(p.volume), p.notes));
+                first_picture();
             }
             slabscope::load(&entry.path, &load).and_then(|l| worked_on(l, request))
         }

@@ -224,6 +224,93 @@ fn a_file_preview_serves_its_level_until_forgotten() {
     assert_eq!(jobs.open.level(1).unwrap().get().dims(), coarse.dims());
 }
 
+/// The loopback server of the integration tests, serving a folder with a request log.
+#[allow(dead_code, clippy::unwrap_used)]
+#[path = "../../../tests/common/http.rs"]
+mod http;
+
+/// The next message of the load under way that is not its progress.
+fn next_message(rx: &std::sync::mpsc::Receiver<Event>) -> JobMsg {
+    loop {
+        if let Event::Job(JobMsg::Epoch(0, msg)) = rx.recv().unwrap()
+            && !matches!(*msg, JobMsg::Progress(..))
+        {
+            return *msg;
+        }
+    }
+}
+
+/// A remote store's first picture fetches no chunk of level 0: its preview level is sent, and
+/// level 0 is read once the preview's first picture is drawn.
+#[test]
+fn a_remote_stores_level_0_waits_for_the_first_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let store = dir.path().join("big.ome.zarr");
+    let array = |path: &str, n: usize| {
+        std::fs::create_dir_all(store.join(path)).unwrap();
+        let meta = format!(
+            r#"{{"zarr_format": 2, "shape": [{n}, {n}, {n}], "chunks": [64, 64, 64],
+                "dtype": "|u1", "compressor": null, "fill_value": 3, "order": "C",
+                "filters": null}}"#
+        );
+        std::fs::write(store.join(path).join(".zarray"), meta).unwrap();
+    };
+    // No chunk written: each is a request the server logs (404: the fill value).
+    array("0", 256);
+    array("1", 128);
+    std::fs::write(store.join(".zgroup"), r#"{"zarr_format": 2}"#).unwrap();
+    let dataset = |path: &str, s: f64| {
+        let t = (s - 1.0) / 2.0;
+        format!(
+            r#"{{"path": "{path}", "coordinateTransformations": [{{"type": "scale", "scale": [{s}, {s}, {s}]}}, {{"type": "translation", "translation": [{t}, {t}, {t}]}}]}}"#
+        )
+    };
+    let attrs = format!(
+        r#"{{"multiscales": [{{"version": "0.4", "axes": [{{"name": "z", "type": "space"}},
+            {{"name": "y", "type": "space"}}, {{"name": "x", "type": "space"}}],
+            "datasets": [{}, {}]}}]}}"#,
+        dataset("0", 1.0),
+        dataset("1", 2.0)
+    );
+    std::fs::write(store.join(".zattrs"), attrs).unwrap();
+    let server = http::serve(dir.path(), http::Mode::Normal, "");
+    let level_0 = || {
+        let log = server.requests();
+        log.iter()
+            .filter(|r| {
+                r.contains("/big.ome.zarr/0/") && !r.contains("/.z") && !r.contains("zarr.json")
+            })
+            .count()
+    };
+    let (tx, rx) = channel();
+    let entry = slabscope::triage::Entry::file(server.url("big.ome.zarr"));
+    let mut jobs = Jobs::new(tx, Caps::blocks(), Some(entry), LoadOptions::default());
+    jobs.run(Effect::Load);
+    let JobMsg::Preview(preview, _) = next_message(&rx) else {
+        panic!("not the preview first");
+    };
+    assert_eq!(preview.dims(), [128, 128, 128]);
+    assert!(
+        server
+            .requests()
+            .iter()
+            .any(|r| r.contains("/big.ome.zarr/1/0.0.0"))
+    );
+    // Until a picture is drawn, level 0 waits: nothing of it is asked.
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(level_0(), 0, "{:?}", server.requests());
+    jobs.admit(JobMsg::Rendered(1, Err("drawn".into())));
+    let JobMsg::Loaded(Ok((full, _))) = next_message(&rx) else {
+        panic!("not level 0 next");
+    };
+    assert_eq!(full.dims(), [256, 256, 256]);
+    assert_eq!(
+        level_0(),
+        64,
+        "each chunk of level 0 once, after the picture"
+    );
+}
+
 /// Not a test but a measurement: `cargo test --release --bin slabscope preview_timing --
 /// --ignored --nocapture` prints, for the built-in dataset, the time to the first image
 /// after start, and the time and bytes of an image after a step at 1000×600 pixels, per

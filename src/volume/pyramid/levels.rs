@@ -109,6 +109,17 @@ impl Volume {
         self.pyramid.finest.as_ref()
     }
 
+    /// The dimensions of every level of this volume's pyramid from level 0, finest first: those
+    /// of level 0's grid on for a level read without level 0 ([`unread_finest`](Self::unread_finest)),
+    /// else [`level_dims`](Self::level_dims).
+    #[must_use]
+    pub fn pyramid_dims(&self) -> Vec<[usize; 3]> {
+        match &self.pyramid.finest {
+            Some(finest) => chain_dims(finest.dims, &self.pyramid.steps),
+            None => self.level_dims(),
+        }
+    }
+
     /// The dimensions of this level and of each coarser level, finest first.
     #[must_use]
     pub fn level_dims(&self) -> Vec<[usize; 3]> {

@@ -1,0 +1,204 @@
+//! `analyze --resolution auto` (or a level by number) of a store at a URL reads the coarsest of
+//! the store's datasets that serves the level picked, never a chunk of level 0; the analysis
+//! equals that dataset's analysed as a volume of its own, whose value range it takes.
+
+use std::path::{Path, PathBuf};
+
+use slabscope::formats::load_serving;
+use slabscope::volume::Resolution;
+use slabscope::{LoadOptions, load};
+
+use crate::common::http::{Mode, serve};
+use crate::common::{data, run, s};
+
+/// Level 1's voxel at `(x, y, z)`: layers along z, a pattern across them.
+fn voxel(x: usize, y: usize, z: usize) -> u8 {
+    ((z / 24) * 40 + (x * y + z) % 9) as u8
+}
+
+/// The `.zattrs` of an image of 3-D datasets `0`, `1`, ... of scales `scales` (µm).
+fn zattrs(scales: &[f64]) -> String {
+    let datasets: Vec<String> = (scales.iter().enumerate())
+        .map(|(i, s)| {
+            let t = (s - 1.0) / 2.0;
+            format!(
+                r#"{{"path": "{i}", "coordinateTransformations": [{{"type": "scale", "scale": [{s}, {s}, {s}]}},
+                    {{"type": "translation", "translation": [{t}, {t}, {t}]}}]}}"#
+            )
+        })
+        .collect();
+    format!(
+        r#"{{"multiscales": [{{"version": "0.4", "axes": [
+            {{"name": "z", "type": "space", "unit": "micrometer"}},
+            {{"name": "y", "type": "space", "unit": "micrometer"}},
+            {{"name": "x", "type": "space", "unit": "micrometer"}}],
+            "datasets": [{}]}}]}}"#,
+        datasets.join(", ")
+    )
+}
+
+/// An uncompressed u8 array of `n`³ voxels in chunks of 64³ at `dir`, its chunks written when
+/// `chunks` (else every chunk is missing: the fill value).
+fn array(dir: &Path, n: usize, chunks: bool) {
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(
+        dir.join(".zarray"),
+        format!(
+            r#"{{"zarr_format": 2, "shape": [{n}, {n}, {n}], "chunks": [64, 64, 64],
+                "dtype": "|u1", "compressor": null, "fill_value": 0, "order": "C",
+                "filters": null}}"#
+        ),
+    )
+    .unwrap();
+    if !chunks {
+        return;
+    }
+    let c = n / 64;
+    for (cz, cy, cx) in
+        (0..c).flat_map(|z| (0..c).flat_map(move |y| (0..c).map(move |x| (z, y, x))))
+    {
+        let mut bytes = Vec::with_capacity(64 * 64 * 64);
+        for z in 0..64 {
+            for y in 0..64 {
+                for x in 0..64 {
+                    bytes.push(voxel(cx * 64 + x, cy * 64 + y, cz * 64 + z));
+                }
+            }
+        }
+        std::fs::write(dir.join(format!("{cz}.{cy}.{cx}")), bytes).unwrap();
+    }
+}
+
+/// In `dir`: `pyramid.ome.zarr`, a 256³ level 0 whose chunks are never written (a read of one
+/// is a request the server logs) over a 128³ level 1; and `alone.ome.zarr`, that level 1 as an
+/// image of its own, on the same grid.
+fn stores(dir: &Path) -> (PathBuf, PathBuf) {
+    let pyramid = dir.join("pyramid.ome.zarr");
+    std::fs::create_dir_all(&pyramid).unwrap();
+    std::fs::write(pyramid.join(".zgroup"), r#"{"zarr_format": 2}"#).unwrap();
+    std::fs::write(pyramid.join(".zattrs"), zattrs(&[1.0, 2.0])).unwrap();
+    array(&pyramid.join("0"), 256, false);
+    array(&pyramid.join("1"), 128, true);
+    let alone = dir.join("alone.ome.zarr");
+    std::fs::create_dir_all(&alone).unwrap();
+    std::fs::write(alone.join(".zgroup"), r#"{"zarr_format": 2}"#).unwrap();
+    std::fs::write(alone.join(".zattrs"), zattrs(&[2.0])).unwrap();
+    crate::common::copy_tree(&pyramid.join("1"), &alone.join("0"));
+    (pyramid, alone)
+}
+
+/// Whether the logged request `r` asks a chunk of level 0 (`/0/` then a chunk key).
+fn level_0_chunk(r: &str) -> bool {
+    let path = r.split(' ').nth(1).unwrap();
+    path.contains("/pyramid.ome.zarr/0/")
+        && !path.ends_with("/.zarray")
+        && !path.ends_with("/.zattrs")
+}
+
+#[test]
+fn auto_reads_the_coarsest_dataset_that_serves_and_no_chunk_of_level_0() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, alone) = stores(dir.path());
+    let server = serve(dir.path(), Mode::Normal, "");
+    let url = server.url("pyramid.ome.zarr");
+    let json = |args: &[&str]| -> serde_json::Value {
+        let ran = run(args);
+        assert!(ran.ok, "{args:?}: {}", ran.stderr);
+        serde_json::from_str(&ran.stdout).unwrap()
+    };
+    let remote = json(&[
+        "analyze",
+        "--json",
+        "--slabs",
+        "3",
+        "--resolution",
+        "auto",
+        &url,
+    ]);
+    let asked = server.requests();
+    assert!(!asked.iter().any(|r| level_0_chunk(r)), "{asked:#?}");
+    assert!(
+        asked
+            .iter()
+            .any(|r| r.contains("/pyramid.ome.zarr/1/0.0.0")),
+        "{asked:#?}"
+    );
+    // Level 0's grid, the analysis of level 1 ...
+    assert_eq!(remote["dims"], serde_json::json!([256, 256, 256]));
+    assert_eq!(remote["spacing"], serde_json::json!([0.001, 0.001, 0.001]));
+    assert_eq!(remote["resolution"]["pyramid_level"], 1);
+    assert_eq!(
+        remote["resolution"]["dims"],
+        serde_json::json!([128, 128, 128])
+    );
+    // ... equal to the analysis of level 1 as a volume of its own, its range level 1's.
+    let own = json(&["analyze", "--json", "--slabs", "3", s(&alone)]);
+    for key in ["range", "views", "best_axis", "partition", "params"] {
+        assert_eq!(remote[key], own[key], "{key}");
+    }
+    // `--resolution 1` names it; `--resolution full` reads level 0 (its chunks missing: 404s).
+    let one = json(&[
+        "analyze",
+        "--json",
+        "--slabs",
+        "3",
+        "--resolution",
+        "1",
+        &url,
+    ]);
+    assert_eq!(one["partition"], own["partition"]);
+    assert!(!server.requests().iter().any(|r| level_0_chunk(r)));
+    let ran = run(&["info", "--exact", &url]);
+    assert!(ran.ok, "{}", ran.stderr);
+    assert!(server.requests().iter().any(|r| level_0_chunk(r)));
+}
+
+#[test]
+fn the_level_served_is_the_local_stores_voxel_for_voxel() {
+    let server = serve(&data("zarr"), Mode::Normal, "");
+    let name = "v04_blosc.ome.zarr";
+    let url = PathBuf::from(server.url(name));
+    let opts = LoadOptions::default();
+    let local = load(&data("zarr").join(name), &opts).unwrap();
+    // 14×12×10: auto keeps level 0, which the store's own load reads.
+    assert!(
+        load_serving(&url, &opts, Resolution::Auto)
+            .unwrap()
+            .is_none()
+    );
+    assert!(
+        load_serving(&url, &opts, Resolution::Full)
+            .unwrap()
+            .is_none()
+    );
+    // A local store is read as it always was.
+    let path = data("zarr").join(name);
+    assert!(
+        load_serving(&path, &opts, Resolution::Level(1))
+            .unwrap()
+            .is_none()
+    );
+    for k in 1..=2 {
+        let served = load_serving(&url, &opts, Resolution::Level(k))
+            .unwrap()
+            .unwrap();
+        let (a, b) = (&served.volume, local.volume.asked_level(k).unwrap());
+        assert_eq!(a.level().index, k);
+        assert_eq!(a.unread_finest().map(|f| f.dims), Some(local.volume.dims()));
+        assert_eq!((a.dims(), a.spacing()), (b.dims(), b.spacing()));
+        assert_eq!(a.transform(), b.transform());
+        assert_eq!(a.data().to_f32_vec(), b.data().to_f32_vec(), "level {k}");
+        assert!(
+            served.notes.iter().any(|n| n.contains("level 0 not read")),
+            "{:?}",
+            served.notes
+        );
+    }
+    let past = load_serving(&url, &opts, Resolution::Level(9)).unwrap_err();
+    assert!(past.to_string().contains("resolution"), "{past}");
+    assert!(
+        !server.requests().iter().any(|r| r.contains("/s0/0")),
+        "{:?}",
+        server.requests()
+    );
+}
