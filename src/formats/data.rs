@@ -8,7 +8,7 @@ use std::path::Path;
 use flate2::bufread::{MultiGzDecoder, ZlibDecoder};
 use rayon::prelude::*;
 
-mod ascii;
+pub(crate) mod ascii;
 pub(crate) mod budget;
 pub(crate) mod wide;
 

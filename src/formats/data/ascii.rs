@@ -3,10 +3,11 @@
 
 use std::io::{BufRead, Read};
 
-use super::wide::Rounded;
+use super::wide::{Rounded, Wide};
 use super::{DataSpec, Skip, buffered};
 use crate::error::{Error, Result};
-use crate::volume::VoxelType;
+use crate::formats::scratch::Room;
+use crate::volume::{VoxelType, Voxels};
 
 /// The longest token of ascii data: longer ones are not numbers slabscope reads.
 const MAX_TOKEN: usize = 64;
@@ -126,4 +127,62 @@ pub(super) fn read_ascii(
         ));
     }
     Ok(rounded)
+}
+
+/// The ascii 64-bit integers of `reader` as f32 voxels (each a whole number of the type's
+/// range), and what rounding them did.
+pub(crate) fn read_wide_ascii(
+    spec: &DataSpec,
+    wide: Wide,
+    mut reader: impl BufRead,
+    room: Room,
+) -> Result<(Voxels, Rounded)> {
+    let path = spec.file.path();
+    let mut out = room.f32_voxels(path, spec.dims)?;
+    let values = out.all();
+    let io = |e: std::io::Error| Error::format(path, format!("ascii data: {e}"));
+    let mut token = Vec::new();
+    let mut rounded = Rounded::default();
+    let mut n = 0;
+    while next_token(&mut reader, &mut token).map_err(io)? {
+        if n == values.len() {
+            if spec.allow_trailing() {
+                break;
+            }
+            return Err(Error::format(
+                path,
+                format!(
+                    "ascii data holds more than the {} values the header describes",
+                    values.len()
+                ),
+            ));
+        }
+        let text = std::str::from_utf8(&token).unwrap_or("");
+        let v = match wide {
+            Wide::I64 => text.parse::<i64>().ok().map(i128::from),
+            Wide::U64 => text.parse::<u64>().ok().map(i128::from),
+        };
+        let v = v.ok_or_else(|| {
+            Error::format(
+                path,
+                format!(
+                    "ascii data, value {n}: {} is not an integer of type {}",
+                    quote(&token),
+                    wide.name()
+                ),
+            )
+        })?;
+        values[n] = rounded.take(v);
+        n += 1;
+    }
+    if n < values.len() {
+        return Err(Error::format(
+            path,
+            format!(
+                "truncated ascii data: expected {} values, found {n}",
+                values.len()
+            ),
+        ));
+    }
+    Ok((out.finish()?, rounded))
 }

@@ -5,11 +5,10 @@
 //! were rounded are counted by one test ([`Rounded::of`], [`Rounded::of_bytes`], [`Exact`]), and
 //! said in a note ([`Rounded::note`]), never rounded silently.
 
-use std::io::{BufRead, ErrorKind, Read};
+use std::io::{ErrorKind, Read};
 
-use super::ascii::next_token;
 use super::{DataSpec, fill};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::formats::scratch::Room;
 use crate::volume::{Endian, VoxelType, Voxels};
 
@@ -89,7 +88,7 @@ impl Rounded {
     }
 
     /// `v` as the nearest f32, counted when that is not `v`.
-    fn take(&mut self, v: i128) -> f32 {
+    pub(super) fn take(&mut self, v: i128) -> f32 {
         #[allow(clippy::cast_precision_loss)] // counted below
         let f = v as f32;
         #[allow(clippy::cast_possible_truncation)] // an f32 of a 64-bit value fits an i128
@@ -272,64 +271,6 @@ pub(crate) fn read_wide(
         super::read_voxels_from(&as_f32(spec), &mut buffered, what, room)?.0
     };
     Ok((voxels, reader.rounded))
-}
-
-/// The ascii 64-bit integers of `reader` as f32 voxels (each a whole number of the type's
-/// range), and what rounding them did.
-pub(crate) fn read_wide_ascii(
-    spec: &DataSpec,
-    wide: Wide,
-    mut reader: impl BufRead,
-    room: Room,
-) -> Result<(Voxels, Rounded)> {
-    let path = spec.file.path();
-    let mut out = room.f32_voxels(path, spec.dims)?;
-    let values = out.all();
-    let io = |e: std::io::Error| Error::format(path, format!("ascii data: {e}"));
-    let mut token = Vec::new();
-    let mut rounded = Rounded::default();
-    let mut n = 0;
-    while next_token(&mut reader, &mut token).map_err(io)? {
-        if n == values.len() {
-            if spec.allow_trailing() {
-                break;
-            }
-            return Err(Error::format(
-                path,
-                format!(
-                    "ascii data holds more than the {} values the header describes",
-                    values.len()
-                ),
-            ));
-        }
-        let text = std::str::from_utf8(&token).unwrap_or("");
-        let v = match wide {
-            Wide::I64 => text.parse::<i64>().ok().map(i128::from),
-            Wide::U64 => text.parse::<u64>().ok().map(i128::from),
-        };
-        let v = v.ok_or_else(|| {
-            Error::format(
-                path,
-                format!(
-                    "ascii data, value {n}: {} is not an integer of type {}",
-                    super::ascii::quote(&token),
-                    wide.name()
-                ),
-            )
-        })?;
-        values[n] = rounded.take(v);
-        n += 1;
-    }
-    if n < values.len() {
-        return Err(Error::format(
-            path,
-            format!(
-                "truncated ascii data: expected {} values, found {n}",
-                values.len()
-            ),
-        ));
-    }
-    Ok((out.finish()?, rounded))
 }
 
 #[cfg(test)]

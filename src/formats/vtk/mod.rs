@@ -15,12 +15,13 @@ use serde::Serialize;
 
 use self::arrays::later_arrays;
 
-use super::data::wide::{Rounded, Wide, read_wide, read_wide_ascii};
+use super::data::wide::{Rounded, Wide, read_wide};
 use super::data::{DataSpec, Encoding, Skip, read_voxels};
 use super::details::{Details, json_of};
 use super::reader::{Reader, Sniff};
 use super::{Format, LoadOptions, Read0, Source};
 use crate::error::{Error, Result};
+use crate::formats::data::ascii::read_wide_ascii;
 use crate::geometry::WorldTransform;
 use crate::volume::{Endian, VoxelType, Voxels};
 
