@@ -1,7 +1,7 @@
 //! The library's error type: one enum grouped by concern, every message naming the file and the
-//! problem. Errors are data: a front end reads the fields (the parameter's name and value, the
-//! bytes needed and allowed) and words them in its own terms, such as command-line flags; the
-//! library's own messages name no flag.
+//! problem. Errors are data: the parameter's name and value, the bytes needed and allowed; their
+//! `Display` names no flag, and `Error::in_terms` (in `params`, which knows each parameter's flag
+//! and keyword) words them in a front end's terms: command-line flags or Python's keywords.
 
 use std::path::{Path, PathBuf};
 

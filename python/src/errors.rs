@@ -7,7 +7,7 @@ use pyo3::exceptions::{
 use pyo3::prelude::*;
 use slabscope::Error;
 use slabscope::error::names::controls;
-use slabscope::error::shown;
+use slabscope::params::Terms;
 
 pyo3::create_exception!(
     slabscope,
@@ -17,88 +17,10 @@ pyo3::create_exception!(
      the file and the problem."
 );
 
-/// The keyword of the library's parameter `name` (`ray_spacing`, `dtype` for `type`), or the
-/// name itself when no keyword stands for it.
-fn keyword(name: &str) -> &str {
-    slabscope::params::find(name).map_or(name, |p| p.keyword)
-}
-
-/// The one-line message of `e`, with the keyword that lifts a limit or allows an overwrite.
+/// The one-line message of `e`, worded by the library in keyword arguments (`bins=1`, the
+/// keyword that lifts a limit or allows an overwrite), control characters escaped.
 pub fn message(e: &Error) -> String {
-    let text = match e {
-        Error::InvalidParameter {
-            parameter,
-            value,
-            expected,
-        } => format!("{}={value}: expected {expected}", keyword(parameter)),
-        Error::DefaultUnfit { parameter, .. } => {
-            let placeholder = slabscope::params::find(parameter)
-                .and_then(|p| p.value_name)
-                .unwrap_or("VALUE");
-            format!(
-                "{e} ({}={placeholder} asks for another)",
-                keyword(parameter)
-            )
-        }
-        Error::Unfit {
-            parameter,
-            value,
-            problem,
-        } => {
-            let value = match value {
-                slabscope::error::Value::Size(w, h) => format!("({w}, {h})"),
-                slabscope::error::Value::Whole(n) => n.to_string(),
-            };
-            format!("{}={value}: {problem}", keyword(parameter))
-        }
-        Error::Conflicting { parameters: [a, b] } => {
-            format!("{}= and {}= cannot both be given", keyword(a), keyword(b))
-        }
-        Error::Needs { parameter, needed } => {
-            format!("{}= needs {}= too", keyword(parameter), keyword(needed))
-        }
-        Error::TooCoarse { note, cause } => format!(
-            "{}, because {note} (raise it with {}=)",
-            message(cause),
-            keyword("max_memory")
-        ),
-        Error::TooLarge {
-            machine: true,
-            disk: true,
-            ..
-        } => format!("{e} (decode it to disk with {}=)", keyword("scratch")),
-        Error::TooLarge { machine: true, .. } => e.to_string(),
-        Error::TooLarge { disk: true, .. } => format!(
-            "{e} (raise it with {}=, or decode it to disk with {}=)",
-            keyword("max_memory"),
-            keyword("scratch")
-        ),
-        Error::TooLarge { .. } => format!("{e} (raise it with {}=)", keyword("max_memory")),
-        Error::RawUndescribed {
-            path,
-            missing,
-            detail,
-        } => {
-            let keywords: Vec<String> = missing
-                .iter()
-                .filter_map(|m| slabscope::params::find(m))
-                .map(|p| match p.value_name {
-                    Some(v) if v.contains([',', 'x']) => {
-                        format!("{}=({})", p.keyword, v.replace(['x', ','], ", "))
-                    }
-                    _ => format!("{}= ({})", p.keyword, p.expected()),
-                })
-                .collect();
-            format!("{}: {detail}: give {}", shown(path), keywords.join(" and "))
-        }
-        Error::Exists { .. } => format!("{e} (force=True overwrites it)"),
-        Error::Series {
-            localizers: true, ..
-        } => format!("{e} ({}=True keeps them)", keyword("include_localizers")),
-        Error::Series { .. } => format!("{e} (pick one with {0}=N or {0}=UID)", keyword("series")),
-        _ => e.to_string(),
-    };
-    controls(&text).into_owned()
+    controls(&e.in_terms(Terms::Keywords)).into_owned()
 }
 
 /// `e` as the Python exception a user catches: `FileNotFoundError` and the other `OSError`s for

@@ -34,6 +34,7 @@ use clap::Subcommand;
 use slabscope::error::names::controls;
 use slabscope::error::shown;
 use slabscope::formats::{check_output, same_file};
+use slabscope::params::Terms;
 use slabscope::{Error, Loaded};
 
 pub use args::{AnalysisArgs, LoadArgs, TourArgs};
@@ -233,89 +234,20 @@ pub fn write_new(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
 }
 
 /// One error for people, on one line: each cause in the chain, library errors worded in the
-/// CLI's terms (the flag for a parameter, the flag that lifts a limit or allows an overwrite),
-/// control characters escaped whatever a cause quotes.
+/// CLI's terms by the library (`Terms::Flags`: the flag for a parameter, the flag that lifts a
+/// limit or allows an overwrite), a cancellation as the timeout that caused it, control
+/// characters escaped whatever a cause quotes.
 pub fn error_message(e: &anyhow::Error) -> String {
     let message = e
         .chain()
         .map(|cause| match cause.downcast_ref::<Error>() {
-            Some(e) => in_flag_terms(e),
+            Some(Error::Cancelled) => progress::timed_out().unwrap_or_else(|| cause.to_string()),
+            Some(e) => e.in_terms(Terms::Flags),
             None => cause.to_string(),
         })
         .collect::<Vec<_>>()
         .join(": ");
     controls(&message).into_owned()
-}
-
-/// The flag of the library's parameter `name` (`--ray-spacing`), or the name itself when no
-/// flag stands for it.
-fn flag(name: &str) -> String {
-    slabscope::params::find(name).map_or_else(|| name.to_string(), |p| format!("--{}", p.flag))
-}
-
-fn in_flag_terms(e: &Error) -> String {
-    match e {
-        Error::Cancelled => progress::timed_out().unwrap_or_else(|| e.to_string()),
-        Error::InvalidParameter {
-            parameter,
-            value,
-            expected,
-        } => format!("{} {value}: expected {expected}", flag(parameter)),
-        Error::DefaultUnfit { parameter, .. } => {
-            let placeholder = slabscope::params::find(parameter)
-                .and_then(|p| p.value_name)
-                .unwrap_or("VALUE");
-            format!("{e} ({} {placeholder} asks for another)", flag(parameter))
-        }
-        Error::Unfit {
-            parameter,
-            value,
-            problem,
-        } => format!("{} {value}: {problem}", flag(parameter)),
-        Error::Conflicting { parameters: [a, b] } => {
-            format!("{} and {} cannot both be given", flag(a), flag(b))
-        }
-        Error::Needs { parameter, needed } => format!("{} needs {}", flag(parameter), flag(needed)),
-        Error::TooCoarse { note, cause } => format!(
-            "{}, because {note} (raise it with {})",
-            in_flag_terms(cause),
-            flag("max_memory")
-        ),
-        Error::TooLarge {
-            machine: true,
-            disk: true,
-            ..
-        } => format!("{e} (decode it to disk with {} DIR)", flag("scratch")),
-        Error::TooLarge { machine: true, .. } => e.to_string(),
-        Error::TooLarge { disk: true, .. } => format!(
-            "{e} (raise it with {}, or decode it to disk with {} DIR)",
-            flag("max_memory"),
-            flag("scratch")
-        ),
-        Error::TooLarge { .. } => format!("{e} (raise it with {})", flag("max_memory")),
-        Error::RawUndescribed {
-            path,
-            missing,
-            detail,
-        } => {
-            let flags: Vec<String> = missing
-                .iter()
-                .filter_map(|m| slabscope::params::find(m))
-                .map(|p| match p.value_name {
-                    Some(v) if v != p.name.to_uppercase() => format!("--{} {v}", p.flag),
-                    _ => format!("--{} ({})", p.flag, p.expected()),
-                })
-                .collect();
-            format!("{}: {detail}: give {}", shown(path), flags.join(" and "))
-        }
-        Error::Exists { .. } => format!("{e} (use --force to overwrite it)"),
-        Error::NotRegularFile { .. } => format!("{e}, --force or not"),
-        Error::Series {
-            localizers: true, ..
-        } => format!("{e} ({} keeps them)", flag("include_localizers")),
-        Error::Series { .. } => format!("{e} (pick one with {} N|UID)", flag("series")),
-        _ => e.to_string(),
-    }
 }
 
 /// Writes to standard output; a closed pipe ends the process quietly (its outputs are already

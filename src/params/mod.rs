@@ -4,18 +4,21 @@
 //! keywords, defaults and signatures, and both hand the values given, as text, to [`Given`],
 //! which parses them here into the library's parameter types (`AnalysisParams`, `LoadOptions`,
 //! `RenderParams`, ...). An error about a parameter carries its name
-//! ([`Error::InvalidParameter`]); a front end words it by looking the entry up ([`find`]): the
-//! flag on the command line, the keyword in Python. No error text is matched anywhere.
+//! ([`Error::InvalidParameter`]); a front end words it in its [`Terms`] ([`Error::in_terms`],
+//! which looks the entry up): the flag on the command line, the keyword in Python. No error text
+//! is matched anywhere.
 
 mod build;
 mod choices;
 pub mod table;
+mod terms;
 pub mod text;
 
 use std::collections::BTreeMap;
 
 pub use build::Scene;
 pub use choices::Choice;
+pub use terms::Terms;
 
 use crate::error::{Error, Result};
 
