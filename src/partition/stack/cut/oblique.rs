@@ -40,7 +40,9 @@ impl Rays {
     /// The rays of lattice rows `rows` that meet the volume, their symbols laid out one after
     /// another from 0.
     fn of(lattice: &Lattice, rows: &[i64], k_first: i64) -> Self {
-        let per_row: Vec<Vec<(i64, Ray)>> = rows
+        // Per row, each ray's `i`, first slice and length (not the rays: they are made again
+        // as they are walked).
+        let per_row: Vec<Vec<(i64, u32, u32)>> = rows
             .par_iter()
             .map(|&j| {
                 let ((i0, i1), _) = lattice.ray_ranges();
@@ -48,7 +50,10 @@ impl Rays {
                     return Vec::new();
                 };
                 (a.max(i0)..=b.min(i1))
-                    .filter_map(|i| lattice.ray(i, j).map(|ray| (i, ray)))
+                    .filter_map(|i| {
+                        let ray = lattice.ray(i, j)?;
+                        Some((i, (ray.k0 - k_first) as u32, ray.len() as u32))
+                    })
                     .collect()
             })
             .collect();
@@ -61,14 +66,10 @@ impl Rays {
         let mut offset = 0;
         for row in per_row {
             rays.row_starts.push(rays.columns.len());
-            for (i, ray) in row {
-                rays.columns.push(Column {
-                    offset,
-                    first: (ray.k0 - k_first) as u32,
-                    len: ray.len() as u32,
-                });
+            for (i, first, len) in row {
+                rays.columns.push(Column { offset, first, len });
                 rays.is.push(i);
-                offset += ray.len();
+                offset += len as usize;
             }
         }
         rays.row_starts.push(rays.columns.len());
