@@ -193,14 +193,8 @@ class SlabsWidget(QWidget):
         except (ValueError, slabscope.VolumeError) as e:
             self.status.setText(str(e))
             return
-        cancel = threading.Event()
-        signals = self._signals
+        cancel, progress = self._reporter()
         options = dict(self.options)
-
-        def progress(phase: str, fraction: float) -> None:
-            if cancel.is_set():
-                raise _Cancelled(phase)
-            signals.progressed.emit(phase, fraction)
 
         def work() -> tuple[slabscope.Analysis, np.ndarray]:
             analysis = slabscope.analyze(volume, progress=progress, **options)
@@ -210,6 +204,19 @@ class SlabsWidget(QWidget):
 
         self._start(work, lambda done: self._analysed(layer, volume, *done), cancel)
         self.status.setText(f"Analysing {layer.name}…")
+
+    def _reporter(self) -> tuple[threading.Event, Callable[[str, float], None]]:
+        """A run's cancel flag and its progress callback, which reports to the widget and stops
+        the run at its next report once the flag is set."""
+        cancel = threading.Event()
+        signals = self._signals
+
+        def progress(phase: str, fraction: float) -> None:
+            if cancel.is_set():
+                raise _Cancelled(phase)
+            signals.progressed.emit(phase, fraction)
+
+        return cancel, progress
 
     def _start(
         self, work: Callable[[], Any], done: Callable[[Any], None], cancel: threading.Event
@@ -294,14 +301,8 @@ class SlabsWidget(QWidget):
         if analysis is None or volume is None or layer is None:
             self.status.setText("Analyse a layer first.")
             return
-        cancel = threading.Event()
-        signals = self._signals
+        cancel, progress = self._reporter()
         options = dict(self.options)
-
-        def progress(phase: str, fraction: float) -> None:
-            if cancel.is_set():
-                raise _Cancelled(phase)
-            signals.progressed.emit(phase, fraction)
 
         def work() -> np.ndarray:
             image = slabscope.render(volume, analysis, progress=progress, **_render_options(options))
