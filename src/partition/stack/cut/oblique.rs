@@ -4,10 +4,8 @@
 //!
 //! The rays are walked as the view search walks them, in tiles of neighbouring rays advancing
 //! together a sample at a time, so that the voxels a tile reads stay in the caches from one
-//! sample to the next. A ray walked alone from end to end, one after another, read each voxel
-//! from memory again for every ray that passes near it, and crossed a page of a large volume at
-//! nearly every sample: on the 256×256×415 body phantom that took about 300 ns a sample, ten
-//! times the tiles' cost (docs/performance.md).
+//! sample to the next, and the symbols are written in place (docs/performance.md, "The
+//! partition's oblique cut").
 
 use std::ops::Range;
 
