@@ -10,6 +10,7 @@ import json
 import os
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -87,3 +88,18 @@ def pytest_sessionfinish(session, exitstatus):
         session.exitstatus = 1
         if reporter:
             reporter.write_line(f"CI=true: {skipped} tests skipped, which fails the run", red=True)
+
+
+def run_mypy(tmp_path: Path, *args: str) -> str:
+    """Runs a mypy tool in an empty folder (the installed package, not a source folder, is
+    checked) with its cache there; returns its output, failing with it unless it succeeded."""
+    done = subprocess.run(
+        [sys.executable, "-m", *args],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=False,
+        env={**os.environ, "MYPY_CACHE_DIR": str(tmp_path / "cache")},
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    return done.stdout

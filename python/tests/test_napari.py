@@ -12,6 +12,7 @@ import os
 
 import numpy as np
 import pytest
+from conftest import run_mypy
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
@@ -147,17 +148,5 @@ def test_the_manifest_names_the_widget():
 
 
 def test_mypy_strict_accepts_the_plugin(tmp_path):
-    mypy = pytest.importorskip("mypy", reason="the typing check needs mypy: pip install mypy")
-    del mypy
-    import subprocess
-    import sys
-
-    done = subprocess.run(
-        [sys.executable, "-m", "mypy", "--strict", "-m", "slabscope._napari"],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        check=False,
-        env={**os.environ, "MYPY_CACHE_DIR": str(tmp_path / "cache")},
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
+    pytest.importorskip("mypy", reason="the typing check needs mypy: pip install mypy")
+    run_mypy(tmp_path, "mypy", "--strict", "-m", "slabscope._napari")
