@@ -22,6 +22,9 @@ pub use self::sparse::{InPlane, sampled_gain};
 /// Pixels a task of a cut along a coordinate axis fills.
 const CUT_BLOCK: usize = 4096;
 
+/// Neighbouring pixels a cut along a coordinate axis takes together, plane after plane.
+const RUN: usize = 64;
+
 /// The two axes other than `m`, in order.
 fn other_axes(m: usize) -> (usize, usize) {
     match m {
@@ -220,10 +223,9 @@ impl<'a> Cutter<'a> {
         sums: Option<&mut SliceSums>,
         monitor: &Monitor,
     ) -> Result<SliceStack> {
-        let keep = |index: usize, v: f32| self.symbol(index, v);
         match (&self.lattice, coordinate_axis(self.axis)) {
             (Some(lattice), _) => self.along_lattice(lattice, rows, sums, monitor),
-            (None, Some(m)) => self.along_coordinate(m, rows, &keep, monitor),
+            (None, Some(m)) => self.along_coordinate(m, rows, monitor),
             (None, None) => unreachable!("a coordinate axis has no lattice"),
         }
     }
@@ -290,11 +292,15 @@ impl<'a> Cutter<'a> {
         }
     }
 
+    /// The stack along coordinate axis `m`: per pixel its column of voxels. A task's pixels
+    /// are taken [`RUN`] neighbours along the row at a time, plane after plane, so that the
+    /// voxels are read along the rows they lie in: a column read alone steps a whole plane a
+    /// voxel, and on planes of a power of two (256 × 256, 512 × 512) those steps all fall in a
+    /// few sets of the caches, which then hold almost none of them.
     fn along_coordinate(
         &self,
         m: usize,
         rows: Range<usize>,
-        keep: &(dyn Fn(usize, f32) -> u8 + Sync),
         monitor: &Monitor,
     ) -> Result<SliceStack> {
         let volume = self.volume;
@@ -310,13 +316,21 @@ impl<'a> Cutter<'a> {
                 .par_chunks_mut(CUT_BLOCK * n)
                 .enumerate()
                 .try_for_each(|(c, out)| {
-                    for (k, col) in out.chunks_mut(n).enumerate() {
-                        let p = first + c * CUT_BLOCK + k;
+                    let (start, count) = (first + c * CUT_BLOCK, out.len() / n);
+                    let mut k0 = 0;
+                    while k0 < count {
+                        let p = start + k0;
+                        let run = (dims[a] - p % dims[a]).min(RUN).min(count - k0);
                         let base = (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b];
-                        for (s, o) in col.iter_mut().enumerate() {
-                            let i = base + s * stride[m];
-                            *o = keep(i, voxels[i].to_f32());
+                        let out = &mut out[k0 * n..(k0 + run) * n];
+                        for s in 0..n {
+                            let row = base + s * stride[m];
+                            for k in 0..run {
+                                let i = row + k * stride[a];
+                                out[k * n + s] = self.symbol(i, voxels[i].to_f32());
+                            }
                         }
+                        k0 += run;
                     }
                     monitor.advance(1)
                 })

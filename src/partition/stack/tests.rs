@@ -11,6 +11,51 @@ fn ramp() -> Volume {
     Volume::new([4, 3, 5], [1.0, 1.0, 2.5], VoxelType::F32, data).unwrap()
 }
 
+/// Along each coordinate axis of volumes wider than a run of pixels (so that a task's pixels
+/// are taken in several runs, some cut short by a row's end), every pixel's column holds its
+/// voxels' symbols in order, background left out.
+#[test]
+fn a_coordinate_cut_is_every_pixels_voxel_column() {
+    for dims in [[70, 67, 3], [3, 70, 67], [67, 3, 70]] {
+        let len = dims.iter().product::<usize>();
+        let data: Vec<f32> = (0..len).map(|i| ((i * 7919) % 1009) as f32).collect();
+        let v = Volume::new(dims, [1.0; 3], VoxelType::F32, data).unwrap();
+        let q = v.quantizer(32).unwrap();
+        let below = 100.0;
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        for m in 0..3 {
+            let mut axis = [0.0; 3];
+            axis[m] = 1.0;
+            let params = StackParams {
+                background: BackgroundRule::Below(below),
+                ..StackParams::default()
+            };
+            let s = SliceStack::new(&v, axis, &params, &Monitor::none()).unwrap();
+            let a = if m == 0 { 1 } else { 0 };
+            let b = 3 - m - a;
+            assert_eq!(s.pixels(), dims[a] * dims[b]);
+            for p in 0..s.pixels() {
+                let base = (p % dims[a]) * stride[a] + (p / dims[a]) * stride[b];
+                let expect: Vec<u8> = (0..dims[m])
+                    .map(|k| {
+                        let x = v.voxels()[base + k * stride[m]];
+                        if x <= below {
+                            MISSING
+                        } else {
+                            q.bin(x).unwrap()
+                        }
+                    })
+                    .collect();
+                assert_eq!(
+                    s.column(p, 0, dims[m]),
+                    (0, &expect[..]),
+                    "{dims:?} axis {m} pixel {p}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn coordinate_slices_are_voxel_planes() {
     let v = ramp();
