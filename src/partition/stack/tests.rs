@@ -31,7 +31,7 @@ fn a_coordinate_cut_is_every_pixels_voxel_column() {
                 ..StackParams::default()
             };
             let s = SliceStack::new(&v, axis, &params, &Monitor::none()).unwrap();
-            let a = if m == 0 { 1 } else { 0 };
+            let a = usize::from(m == 0);
             let b = 3 - m - a;
             assert_eq!(s.pixels(), dims[a] * dims[b]);
             for p in 0..s.pixels() {
