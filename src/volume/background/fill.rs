@@ -7,6 +7,8 @@
 //! seed a run, eight bytes each: gigabytes for a 1024³ volume, beyond any budget. The mask is
 //! the connected region whatever the order, so it is the same as the unbounded fill's.
 
+use rayon::prelude::*;
+
 use crate::error::Result;
 use crate::progress::Monitor;
 use crate::volume::Voxel;
@@ -25,9 +27,23 @@ pub(super) fn connected_below_of<T: Voxel>(
     Ok((mask, count))
 }
 
+/// Bit `j` of the result: whether voxel `64·w + j` is at or below `t` (NaN is not).
+fn below_word<T: Voxel>(v: &[T], w: usize, t: f32) -> u64 {
+    let start = 64 * w;
+    v[start..(start + 64).min(v.len())]
+        .iter()
+        .enumerate()
+        .fold(0, |bits, (j, x)| bits | u64::from(x.to_f32() <= t) << j)
+}
+
 /// The voxels of `v` (dimensions `dims`) at or below `t` connected to a border voxel at or
 /// below `t`, as a bit mask, with their count and the marked rows swept; the stack holding
 /// about `cap` seeds at most (and a row's more).
+///
+/// The fill works on one bit mask of the voxels still open (at or below `t`, not filled yet),
+/// made in parallel beforehand: extending a run, filling it and finding the runs of the rows
+/// beside it are operations on 64 voxels at a time that read no voxel. The filled voxels are
+/// then the ones at or below `t` no longer open.
 fn connected_below_capped<T: Voxel>(
     v: &[T],
     dims: [usize; 3],
@@ -36,11 +52,16 @@ fn connected_below_capped<T: Voxel>(
     cap: usize,
 ) -> Result<(Vec<u64>, usize, usize)> {
     let [nx, ny, nz] = dims;
+    let mut open = vec![0u64; v.len().div_ceil(64)];
+    open.par_iter_mut()
+        .enumerate()
+        .for_each(|(w, bits)| *bits = below_word(v, w, t));
+    monitor.check()?;
     let mut fill = Fill {
         v,
         dims,
         t,
-        mask: vec![0; v.len().div_ceil(64)],
+        open,
         marked: vec![0; (ny * nz).div_ceil(64)],
         stack: Vec::new(),
         cap,
@@ -53,10 +74,10 @@ fn connected_below_capped<T: Voxel>(
         for y in 0..ny {
             let row = (z * ny + y) * nx;
             if z == 0 || z + 1 == nz || y == 0 || y + 1 == ny {
-                fill.push_runs(row, 0, nx - 1, |_, _| true);
+                fill.push_starts(row, 0, nx - 1);
             } else {
                 for i in [row, row + nx - 1] {
-                    if fill.candidate(i) {
+                    if fill.is_open(i) {
                         fill.stack.push(i);
                     }
                 }
@@ -68,7 +89,12 @@ fn connected_below_capped<T: Voxel>(
     }
     fill.drain(monitor)?;
     while fill.sweep(monitor)? {}
-    Ok((fill.mask, fill.count, fill.swept))
+    let (count, swept) = (fill.count, fill.swept);
+    let mut mask = fill.open;
+    mask.par_iter_mut()
+        .enumerate()
+        .for_each(|(w, bits)| *bits = below_word(v, w, t) & !*bits);
+    Ok((mask, count, swept))
 }
 
 /// A fill under way.
@@ -76,7 +102,8 @@ struct Fill<'a, T> {
     v: &'a [T],
     dims: [usize; 3],
     t: f32,
-    mask: Vec<u64>,
+    /// A bit a voxel: at or below the threshold and not filled yet.
+    open: Vec<u64>,
     /// A bit a row (`z * ny + y`): rows beside filled voxels whose seeds were not pushed.
     marked: Vec<u64>,
     stack: Vec<usize>,
@@ -88,40 +115,78 @@ struct Fill<'a, T> {
 }
 
 impl<T: Voxel> Fill<'_, T> {
+    fn is_open(&self, i: usize) -> bool {
+        self.open[i / 64] >> (i % 64) & 1 == 1
+    }
+
     fn filled(&self, i: usize) -> bool {
-        self.mask[i / 64] >> (i % 64) & 1 == 1
+        self.v[i].to_f32() <= self.t && !self.is_open(i)
     }
 
-    /// At or below the threshold, and not filled yet.
-    fn candidate(&self, i: usize) -> bool {
-        self.v[i].to_f32() <= self.t && !self.filled(i)
+    /// The open voxels `a ..= b` as words: `(word, its bits in the range)` in order.
+    fn open_words(&self, a: usize, b: usize) -> impl Iterator<Item = (usize, u64)> + '_ {
+        (a / 64..=b / 64).map(move |w| {
+            let low = if w == a / 64 { !0u64 << (a % 64) } else { !0 };
+            let high = if w == b / 64 {
+                !0u64 >> (63 - b % 64)
+            } else {
+                !0
+            };
+            (w, self.open[w] & low & high)
+        })
     }
 
-    /// Pushes a seed at the start of every run of candidates in `row + a ..= row + b` holding
-    /// a voxel for which `touches` (given the fill and the voxel's x) holds.
-    fn push_runs(
-        &mut self,
-        row: usize,
-        a: usize,
-        b: usize,
-        touches: impl Fn(&Self, usize) -> bool,
-    ) {
+    /// Pushes a seed at the start of every run of open voxels in `row + a ..= row + b` (a run
+    /// cut by `a` starts there).
+    fn push_starts(&mut self, row: usize, a: usize, b: usize) {
+        let mut carry = 0;
         let mut stack = std::mem::take(&mut self.stack);
-        let mut run: Option<(usize, bool)> = None;
-        for x in a..=b {
-            if self.candidate(row + x) {
-                let (start, touching) = run.unwrap_or((row + x, false));
-                run = Some((start, touching || touches(self, x)));
-            } else if let Some((start, touching)) = run.take()
-                && touching
-            {
-                stack.push(start);
+        for (w, bits) in self.open_words(row + a, row + b) {
+            let mut starts = bits & !(bits << 1 | carry);
+            carry = bits >> 63;
+            while starts != 0 {
+                stack.push(64 * w + starts.trailing_zeros() as usize);
+                starts &= starts - 1;
             }
         }
-        if let Some((start, true)) = run {
-            stack.push(start);
-        }
         self.stack = stack;
+    }
+
+    /// The run of open voxels around the open voxel `i` within `row ..= last`.
+    fn run_around(&self, i: usize, row: usize, last: usize) -> (usize, usize) {
+        let mut b = i;
+        loop {
+            let ones = (!(self.open[b / 64] >> (b % 64))).trailing_zeros() as usize;
+            let reach = ones.min(64 - b % 64);
+            b += reach;
+            if b > last || reach < 64 - (b - reach) % 64 {
+                break;
+            }
+        }
+        let mut a = i;
+        loop {
+            let ones = (!(self.open[a / 64] << (63 - a % 64))).leading_zeros() as usize;
+            let reach = ones.min(a % 64 + 1);
+            if reach < a % 64 + 1 || a < reach + row {
+                a = a + 1 - reach;
+                break;
+            }
+            a -= reach;
+        }
+        (a.max(row), (b - 1).min(last))
+    }
+
+    /// Marks `a ..= b` filled.
+    fn close(&mut self, a: usize, b: usize) {
+        for w in a / 64..=b / 64 {
+            let low = if w == a / 64 { !0u64 << (a % 64) } else { !0 };
+            let high = if w == b / 64 {
+                !0u64 >> (63 - b % 64)
+            } else {
+                !0
+            };
+            self.open[w] &= !(low & high);
+        }
     }
 
     /// The rows beside row `row` (its first voxel's index): along y and along z.
@@ -141,7 +206,7 @@ impl<T: Voxel> Fill<'_, T> {
     fn drain(&mut self, monitor: &Monitor) -> Result<()> {
         let nx = self.dims[0];
         while let Some(seed) = self.stack.pop() {
-            if !self.candidate(seed) {
+            if !self.is_open(seed) {
                 continue;
             }
             // A glance at the cancel flag every few thousand runs: the fill of a large volume
@@ -151,23 +216,15 @@ impl<T: Voxel> Fill<'_, T> {
                 monitor.check()?;
             }
             let row = seed - seed % nx;
-            let (mut a, mut b) = (seed, seed);
-            while a > row && self.candidate(a - 1) {
-                a -= 1;
-            }
-            while b + 1 < row + nx && self.candidate(b + 1) {
-                b += 1;
-            }
-            for i in a..=b {
-                self.mask[i / 64] |= 1 << (i % 64);
-            }
+            let (a, b) = self.run_around(seed, row, row + nx - 1);
+            self.close(a, b);
             self.count += b - a + 1;
             for other in self.neighbours(row).into_iter().flatten() {
                 if self.stack.len() >= self.cap {
                     let r = other / nx;
                     self.marked[r / 64] |= 1 << (r % 64);
                 } else {
-                    self.push_runs(other, a - row, b - row, |_, _| true);
+                    self.push_starts(other, a - row, b - row);
                 }
             }
         }
@@ -187,9 +244,7 @@ impl<T: Voxel> Fill<'_, T> {
                 self.swept += 1;
                 let row = (w * 64 + bit) * nx;
                 let beside = self.neighbours(row);
-                self.push_runs(row, 0, nx - 1, |fill, x| {
-                    beside.iter().flatten().any(|&other| fill.filled(other + x))
-                });
+                self.push_touching(row, &beside);
                 if self.stack.len() >= self.cap {
                     self.drain(monitor)?;
                 }
@@ -197,6 +252,27 @@ impl<T: Voxel> Fill<'_, T> {
         }
         self.drain(monitor)?;
         Ok(any)
+    }
+
+    /// Pushes a seed at the start of every run of open voxels of `row` holding a voxel beside
+    /// a filled voxel of one of the rows `beside`.
+    fn push_touching(&mut self, row: usize, beside: &[Option<usize>; 4]) {
+        let nx = self.dims[0];
+        let mut run: Option<(usize, bool)> = None;
+        for x in 0..nx {
+            if self.is_open(row + x) {
+                let (start, touching) = run.unwrap_or((row + x, false));
+                let touches = beside.iter().flatten().any(|&o| self.filled(o + x));
+                run = Some((start, touching || touches));
+            } else if let Some((start, touching)) = run.take()
+                && touching
+            {
+                self.stack.push(start);
+            }
+        }
+        if let Some((start, true)) = run {
+            self.stack.push(start);
+        }
     }
 }
 
@@ -247,7 +323,16 @@ mod tests {
             state
         };
         let mut swept = 0;
-        for dims in [[1, 1, 1], [9, 1, 7], [1, 11, 6], [12, 9, 10], [23, 17, 19]] {
+        for dims in [
+            [1, 1, 1],
+            [9, 1, 7],
+            [1, 11, 6],
+            [12, 9, 10],
+            [23, 17, 19],
+            [150, 4, 3],
+            [130, 9, 5],
+            [64, 3, 4],
+        ] {
             for share in [30, 55, 70, 95] {
                 let v: Vec<f32> = (0..dims.iter().product::<usize>())
                     .map(|_| if random() % 100 < share { 0.0 } else { 9.0 })
