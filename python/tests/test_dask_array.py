@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import pickle
+from typing import Any
 
 import numpy as np
 import pytest
@@ -169,3 +170,39 @@ def test_the_last_task_keeps_to_the_memory_budget(client):
     # voxel are refused, not finished on another level.
     with pytest.raises(ValueError, match=r"counted in parts on every voxel, cannot finish an analysis of pyramid level 2, because .*\(raise it with max_memory=\)"):
         slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="50K", **params)
+
+
+def test_a_worker_killed_mid_run_costs_only_its_tasks(client, tmp_path):
+    """A worker process killed (SIGKILL) while the view search's tasks run: its nanny starts
+    another, the scheduler runs its tasks again elsewhere, and the answer is unchanged."""
+    import signal
+
+    zyx = voxels()
+    marks = str(tmp_path)
+
+    def chunk(block: np.ndarray, block_info: Any = None) -> np.ndarray:
+        # The range round reads each chunk once; the first chunk read again (by a count task
+        # of the paper's round) kills its own worker process, once in the whole run.
+        k = block_info[0]["chunk-location"][0]
+        seen = os.path.join(marks, f"seen-{k}")
+        if os.path.exists(seen):
+            try:
+                os.close(os.open(os.path.join(marks, "killed"), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            except FileExistsError:
+                return block
+            os.kill(os.getpid(), signal.SIGKILL)
+        open(seen, "w").close()
+        return block
+
+    before = set(client.run(os.getpid).values())
+    array = da.from_array(zyx, chunks=(8, 26, 30)).map_blocks(chunk, dtype=zyx.dtype)
+    heard = []
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", slabs=3, progress=lambda phase, fraction: heard.append(fraction))
+    assert os.path.exists(os.path.join(marks, "killed"))
+    client.wait_for_workers(2, timeout=60)  # the nanny's new process, perhaps still starting
+    after = set(client.run(os.getpid).values())
+    assert len(after) == 2 and len(before & after) == 1  # one worker process replaced
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3)
+    assert got.to_dict() == one.to_dict()
+    # Every task reported once, however many times it ran.
+    assert len(heard) == 5 * 2 + 1 and heard[-1] == 1.0
