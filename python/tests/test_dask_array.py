@@ -72,12 +72,71 @@ def test_axes_in_another_order_and_a_zarr_store(client, tmp_path):
     assert slabscope.dask.analyze_array(client, da.from_array(zyx.transpose(1, 0, 2)), axes="yzx", phases=0, background="none").to_dict() == one
 
 
-def test_axes_are_never_assumed_and_the_refinement_is_refused(client):
+def test_axes_are_never_assumed(client):
     array = da.from_array(voxels())
     with pytest.raises(ValueError, match="never assumed"):
         slabscope.dask.analyze_array(client, array)
-    with pytest.raises(ValueError, match="refine"):
-        slabscope.dask.analyze_array(client, array, axes="zyx", refine=True)
+
+
+@pytest.mark.parametrize("params", [{"phases": 0, "background": "none"}, {}], ids=["paper", "defaults"])
+def test_the_refinement_as_rounds_of_tasks_is_the_single_process_analysis(client, params):
+    zyx = voxels()
+    heard = []
+    got = slabscope.dask.analyze_array(
+        client,
+        da.from_array(zyx, chunks=(8, 13, 30)),
+        axes="zyx",
+        spacing=(1.0, 0.9, 1.3),
+        refine=True,
+        progress=lambda phase, fraction: heard.append((phase, fraction)),
+        **params,
+    )
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=(1.0, 0.9, 1.3)), refine=True, **params)
+    assert got.to_dict() == one.to_dict()
+    assert got.to_dict()["views"]["refined"] is not None
+    # The sphere's rounds, then at least two steps of the refinement, a round each of the
+    # paper's lattices (and of the shifted ones with phases), 5 slabs a round.
+    rounds = 1 if params else 2
+    phases = [p for p, _ in heard]
+    assert phases[: 5 * rounds] == ["view search in parts"] * (5 * rounds)
+    refining = phases.count("refining in parts")
+    assert refining >= 2 * 5 * rounds and refining % (5 * rounds) == 0
+    fractions = [f for _, f in heard]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0 and fractions.count(1.0) == 1
+
+
+def test_refined_rounds_out_of_order_are_refused(client):
+    zyx = voxels()
+    nz, ny, nx = zyx.shape
+    grid = ([nx, ny, nz], [1.0, 1.0, 1.0], "uint8", (float(zyx.min()), float(zyx.max()), zyx.size))
+    params = {"phases": 0, "refine": True}
+    (held,), _ = slabscope._slabscope._slab_planes([(0, nz - 1)], *grid, **params)
+    count = lambda samples, axes: slabscope._slabscope._count_view_slab(zyx[held[0] : held[1]].T, held[0], (0, nz - 1), *grid, samples=samples, axes=axes, **params)  # noqa: E731
+    paper = count(None, None)
+    asked = []
+
+    def counted(axes, samples):
+        part = count(samples, axes)
+        asked.append((axes, samples, part))
+        return part
+
+    slabscope._slabscope._refine_in_parts(paper, *grid, counted, **params)
+    assert len(asked) >= 2 and all(s is None and len(a) in (8, 16, 24) for a, s, _ in asked)
+    assert {p.round for _, _, p in asked} == {2}
+    volume = slabscope.Volume.from_array(zyx.T)
+    got = slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked, **params)
+    assert got.to_dict() == slabscope.analyze(volume, **params).to_dict()
+    with pytest.raises(ValueError, match="refined"):
+        slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked[::-1], **params)
+    with pytest.raises(ValueError, match="refined"):
+        slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked[:-1], **params)
+    with pytest.raises(ValueError, match="refine=True"):
+        slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked, phases=0)
+    # A count that gives a part of the wrong round, or raises, stops the refinement with it.
+    with pytest.raises(ValueError, match="round 0, not 2"):
+        slabscope._slabscope._refine_in_parts(paper, *grid, lambda axes, samples: paper, **params)
+    with pytest.raises(ZeroDivisionError):
+        slabscope._slabscope._refine_in_parts(paper, *grid, lambda axes, samples: 1 / 0, **params)
 
 
 def test_view_parts_add_and_pickle():
