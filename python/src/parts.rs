@@ -287,7 +287,11 @@ pub fn _refine_in_parts(
         match part {
             Ok(part) if part.get().round == round.kind() => Ok(part.get().counts.clone()),
             Ok(part) => {
-                let e = format!("count gave a part of round {}, not {}", part.get().round, round.kind());
+                let e = format!(
+                    "count gave a part of round {}, not {}",
+                    part.get().round,
+                    round.kind()
+                );
                 failed = Some(PyValueError::new_err(e));
                 Err(slabscope::Error::Cancelled)
             }
