@@ -248,6 +248,9 @@ pub fn _paper_samples(
 /// is given it: its axes and (for its shifted lattices) its paper lattices' samples.
 type Asked = (Vec<[f64; 3]>, Option<Vec<u64>>);
 
+/// A refinement round as `_analyze_with_parts` is given it: its axes, samples and sum.
+type Refined<'py> = (Vec<[f64; 3]>, Option<Vec<u64>>, PyRef<'py, ViewPart>);
+
 fn asked(round: &ViewRound) -> Asked {
     match round {
         ViewRound::RefinePaper(axes) => (axes.clone(), None),
@@ -318,7 +321,7 @@ pub fn _analyze_with_parts(
     volume: &Bound<'_, Volume>,
     paper: &ViewPart,
     shifted: Option<&ViewPart>,
-    refined: Option<Vec<(Vec<[f64; 3]>, Option<Vec<u64>>, PyRef<'_, ViewPart>)>>,
+    refined: Option<Vec<Refined<'_>>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<crate::analysis::Analysis> {
     let inner = &volume.get().inner;
