@@ -93,7 +93,7 @@ def test_the_refinement_as_rounds_of_tasks_is_the_single_process_analysis(client
     )
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=(1.0, 0.9, 1.3)), refine=True, **params)
     assert got.to_dict() == one.to_dict()
-    assert got.to_dict()["views"]["refined"] is not None
+    assert got.to_dict()["refined"] is not None
     # The sphere's rounds, then at least two steps of the refinement, a round each of the
     # paper's lattices (and of the shifted ones with phases), 5 slabs a round.
     rounds = 1 if params else 2
