@@ -34,6 +34,7 @@ __all__ = [
     "_count_view_slab",
     "_slab_planes",
     "_paper_samples",
+    "_refine_in_parts",
     "_analyze_with_parts",
 ]
 
@@ -318,6 +319,7 @@ def _count_view_slab(
     dtype: str,
     range: Tuple[float, float, int],
     samples: Optional[Sequence[int]] = None,
+    axes: Optional[Sequence[Tuple[float, float, float]]] = None,
     **params: Any,
 ) -> ViewPart: ...
 def _slab_planes(
@@ -336,6 +338,22 @@ def _paper_samples(
     range: Tuple[float, float, int],
     **params: Any,
 ) -> list[int]: ...
+def _refine_in_parts(
+    paper: ViewPart,
+    dims: Sequence[int],
+    spacing: Sequence[float],
+    dtype: str,
+    range: Tuple[float, float, int],
+    count: Callable[[list[Tuple[float, float, float]], Optional[list[int]]], ViewPart],
+    shifted: Optional[ViewPart] = None,
+    **params: Any,
+) -> None: ...
 def _analyze_with_parts(
-    volume: Volume, paper: ViewPart, shifted: Optional[ViewPart] = None, **params: Any
+    volume: Volume,
+    paper: ViewPart,
+    shifted: Optional[ViewPart] = None,
+    refined: Optional[
+        Sequence[Tuple[Sequence[Tuple[float, float, float]], Optional[Sequence[int]], ViewPart]]
+    ] = None,
+    **params: Any,
 ) -> Analysis: ...

@@ -249,21 +249,24 @@ def _range(array: Any) -> tuple:
     return low, high, finite.sum()
 
 
-def _count(block: Any, first: int, planes: tuple, grid: tuple, samples: Any, params: dict) -> Any:
-    """One task: the part of the slab ``planes`` from its voxel planes ``block`` ([z, y, x])."""
-    return slabscope._slabscope._count_view_slab(block.T, first, planes, *grid, samples=samples, **params)
+def _count(block: Any, first: int, planes: tuple, grid: tuple, round: tuple, params: dict) -> Any:
+    """One task: the part of the slab ``planes`` from its voxel planes ``block`` ([z, y, x]) in
+    the round ``(samples, axes)``."""
+    samples, axes = round
+    return slabscope._slabscope._count_view_slab(block.T, first, planes, *grid, samples=samples, axes=axes, **params)
 
 
-def _round(client: Any, array: Any, slabs: list, held: list, grid: tuple, samples: Any, params: dict, report: Any) -> Any:
+def _round(client: Any, array: Any, slabs: list, held: list, grid: tuple, round: tuple, params: dict, report: Any) -> Any:
     """A round of tasks, one a slab (``held`` its voxel planes), added up on the client as
-    they come."""
+    they come; ``round`` is ``(samples, axes)``: the paper samples of a shifted round (else
+    None) and a refinement step's axes (else None, the sphere's)."""
     import dask
     from distributed import as_completed
 
     tasks = []
     for planes, (first, end) in zip(slabs, held):
         block = array[first:end]
-        tasks.append(dask.delayed(_count)(block, first, planes, grid, samples, params))
+        tasks.append(dask.delayed(_count)(block, first, planes, grid, round, params))
     total = None
     for future in as_completed(client.compute(tasks)):
         part = future.result()
@@ -295,11 +298,13 @@ def analyze_array(
     ``Volume.from_array`` takes them, and override the store's.
 
     Rounds: the range (min/max reductions), the paper's lattices, the shifted lattices (with
-    phases), then the partition and the background in one task over the whole array (not
-    split yet: docs/design.md), within half its worker's Dask memory limit unless
-    ``max_memory`` is given (a budget that would move one process to a coarser pyramid level
-    is a ``ValueError``). ``progress(phase, fraction)`` hears the tasks done of all.
-    The refinement (``refine=True``) is refused: it is not split yet."""
+    phases), with ``refine=True`` two such rounds a step of the refinement (the axes each step
+    asks for, found on the client from the sums), then the partition and the background in one
+    task over the whole array (not split yet: docs/design.md), within half its worker's Dask
+    memory limit unless ``max_memory`` is given (a budget that would move one process to a
+    coarser pyramid level is a ``ValueError``). ``progress(phase, fraction)`` hears the tasks
+    done of all (with the refinement, whose steps are not known ahead, of all foreseen: one
+    more step while it goes on), never less than before."""
 
     array, held_type, stored = _as_xyz(source, axes)
     spacing, geometry = _geometry(spacing, affine, stored)
@@ -312,28 +317,48 @@ def analyze_array(
     slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
     # The voxel planes each slab's task holds, the same in both rounds: found once.
     held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, **params)
-    total = len(slabs) * (2 if shifted else 1) + 1
+    step = len(slabs) * (2 if shifted else 1)
+    refine = bool(params.get("refine"))
+    # Tasks foreseen and not yet done: the sphere's rounds, the last task and, with the
+    # refinement, its first step (another foreseen as each step starts, the one never taken
+    # dropped at its end).
+    ahead = [step + 1 + (step if refine else 0)]
     done = [0]
+    heard = [0.0]
 
-    def report() -> None:
+    def report(phase: str = "view search in parts") -> None:
         done[0] += 1
+        ahead[0] -= 1
+        heard[0] = 1.0 if ahead[0] <= 0 else max(heard[0], done[0] / (done[0] + ahead[0]))
         if progress is not None:
-            progress("view search in parts", done[0] / total)
+            progress(phase, heard[0])
 
-    paper = _round(client, array, slabs, held, grid, None, params, report)
+    paper = _round(client, array, slabs, held, grid, (None, None), params, report)
     more = None
     if shifted:
         samples = slabscope._slabscope._paper_samples(paper, *grid, **params)
-        more = _round(client, array, slabs, held, grid, samples, params, report)
+        more = _round(client, array, slabs, held, grid, (samples, None), params, report)
+    refined: list = []
+    if refine:
+
+        def count(axes: list, samples: Optional[list]) -> Any:
+            if samples is None:
+                ahead[0] += step
+            total = _round(client, array, slabs, held, grid, (samples, axes), params, lambda: report("refining in parts"))
+            refined.append((axes, samples, total))
+            return total
+
+        slabscope._slabscope._refine_in_parts(paper, *grid, count, shifted=more, **params)
+        ahead[0] -= step
     import dask
 
-    whole = client.compute(dask.delayed(_finish)(array, geometry, paper, more, params)).result()
+    whole = client.compute(dask.delayed(_finish)(array, geometry, paper, more, refined, params)).result()
     report()
     return whole
 
 
-def _finish(array: Any, geometry: dict, paper: Any, shifted: Any, params: dict) -> Any:
+def _finish(array: Any, geometry: dict, paper: Any, shifted: Any, refined: list, params: dict) -> Any:
     """The last task: the analysis of the whole array from the view search's parts, within
     half its worker's Dask memory limit unless ``max_memory`` is given (beyond the voxels)."""
     volume = slabscope.Volume.from_array(np.asarray(array).T, **geometry)
-    return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, **_with_budget(params))
+    return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, refined=refined, **_with_budget(params))

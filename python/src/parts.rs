@@ -1,8 +1,8 @@
 //! The view search counted in parts (issue #44), for `slabscope.dask.analyze_array`:
 //! `ViewPart` (the counts of one or more slabs of one round: it adds with `+` and pickles as
 //! bytes), and the functions a task and the client call: the voxel planes a slab's task holds,
-//! a slab's part counted from those planes alone, the paper lattices' sample counts, and the
-//! analysis finished from the parts' sums.
+//! a slab's part counted from those planes alone, the paper lattices' sample counts, the
+//! refinement's rounds asked of the client, and the analysis finished from the parts' sums.
 
 use numpy::PyUntypedArrayMethods;
 use pyo3::exceptions::PyValueError;
@@ -19,14 +19,16 @@ use crate::volume::Volume;
 /// The counts of one round of the view search over some slabs: one entry a lattice.
 #[pyclass(module = "slabscope", frozen)]
 pub struct ViewPart {
-    /// 0 for the paper's lattices, 1 for the shifted ones.
+    /// 0 for the paper's lattices, 1 for the shifted ones, 2 and 3 the same of a refinement
+    /// step (`ViewRound::kind`).
     round: u8,
     counts: Vec<PartialCounts>,
 }
 
 #[pymethods]
 impl ViewPart {
-    /// The round: 0 for the paper's lattices, 1 for the shifted ones.
+    /// The round: 0 for the paper's lattices, 1 for the shifted ones, 2 and 3 the same of a
+    /// refinement step.
     #[getter]
     fn round(&self) -> u8 {
         self.round
@@ -70,9 +72,9 @@ impl ViewPart {
 /// Unpickles a `ViewPart`.
 #[pyfunction]
 pub fn _view_part_of(round: u8, counts: Vec<Vec<u8>>) -> PyResult<ViewPart> {
-    if round > 1 {
+    if round > 3 {
         return Err(PyValueError::new_err(format!(
-            "a ViewPart of round {round}: expected 0 (the paper's lattices) or 1 (the shifted ones)"
+            "a ViewPart of round {round}: expected 0 (the paper's lattices), 1 (the shifted ones), 2 or 3 (the same of a refinement step)"
         )));
     }
     let counts = counts
@@ -120,15 +122,23 @@ fn rounds(
     ViewRounds::new(volume, &analysis.view).or_py()
 }
 
-fn round_of(samples: Option<Vec<u64>>) -> ViewRound {
-    samples.map_or(ViewRound::Paper, ViewRound::Shifted)
+/// The round of the sphere's axes (`axes` None) or a refinement step's, of their paper
+/// lattices (`samples` None) or their shifted ones.
+fn round_of(axes: Option<Vec<[f64; 3]>>, samples: Option<Vec<u64>>) -> ViewRound {
+    match (axes, samples) {
+        (None, None) => ViewRound::Paper,
+        (None, Some(samples)) => ViewRound::Shifted(samples),
+        (Some(axes), None) => ViewRound::RefinePaper(axes),
+        (Some(axes), Some(samples)) => ViewRound::RefineShifted(axes, samples),
+    }
 }
 
-/// The cell planes `planes` of a slab of the grid counted in `round` (`samples`: `None` for
-/// the paper's lattices, the paper's sample counts for the shifted ones) from `voxels`, its
+/// The cell planes `planes` of a slab of the grid counted in a round (`samples`: `None` for
+/// the paper's lattices, the paper's sample counts for the shifted ones; `axes`: `None` for
+/// the sphere's, those of a refinement step as `_refine_in_parts` asks) from `voxels`, its
 /// voxel planes from `first` on (indexed `[x, y, z]`, x fastest), as `_slab_planes` gives them.
 #[pyfunction]
-#[pyo3(signature = (voxels, first, planes, dims, spacing, dtype, range, samples=None, **params))]
+#[pyo3(signature = (voxels, first, planes, dims, spacing, dtype, range, samples=None, axes=None, **params))]
 #[allow(clippy::too_many_arguments)]
 pub fn _count_view_slab(
     py: Python<'_>,
@@ -140,6 +150,7 @@ pub fn _count_view_slab(
     dtype: &str,
     range: (f32, f32, u64),
     samples: Option<Vec<u64>>,
+    axes: Option<Vec<[f64; 3]>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<ViewPart> {
     let grid = grid(dims, spacing, dtype, range);
@@ -175,13 +186,12 @@ pub fn _count_view_slab(
             planes.0, planes.1, needed.start, needed.end, shape[2]
         )));
     }
-    let round = round_of(samples);
-    let is_paper = round == ViewRound::Paper;
+    let round = round_of(axes, samples);
     let counts = py
         .detach(|| rounds.count_slab(&slab, &round, planes.0..planes.1))
         .or_py()?;
     Ok(ViewPart {
-        round: u8::from(!is_paper),
+        round: round.kind(),
         counts,
     })
 }
@@ -234,22 +244,121 @@ pub fn _paper_samples(
     rounds.paper_samples(&volume, &paper.counts).or_py()
 }
 
-/// The analysis of `volume` (the whole one) by the analysis keywords `params`, its view search
-/// finished from the rounds' sums `paper` and `shifted`: `analyze`'s, to the byte.
+/// A refinement step's round as `_refine_in_parts` asks for it and `_analyze_with_parts`
+/// is given it: its axes and (for its shifted lattices) its paper lattices' samples.
+type Asked = (Vec<[f64; 3]>, Option<Vec<u64>>);
+
+/// A refinement round as `_analyze_with_parts` is given it: its axes, samples and sum.
+type Refined<'py> = (Vec<[f64; 3]>, Option<Vec<u64>>, PyRef<'py, ViewPart>);
+
+fn asked(round: &ViewRound) -> Asked {
+    match round {
+        ViewRound::RefinePaper(axes) => (axes.clone(), None),
+        ViewRound::RefineShifted(axes, samples) => (axes.clone(), Some(samples.clone())),
+        _ => (Vec::new(), None),
+    }
+}
+
+/// The refinement's rounds on the client, after the sphere's (`paper` and `shifted` their
+/// sums): `count(axes, samples)` is called for each round in turn (a step's paper lattices,
+/// `samples` None, then with phases its shifted ones) and returns the sum of its parts, which
+/// the next round's axes depend on. Nothing without `refine=True`.
 #[pyfunction]
-#[pyo3(signature = (volume, paper, shifted=None, **params))]
+#[pyo3(signature = (paper, dims, spacing, dtype, range, count, shifted=None, **params))]
+#[allow(clippy::too_many_arguments)]
+pub fn _refine_in_parts(
+    py: Python<'_>,
+    paper: &ViewPart,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+    count: &Bound<'_, PyAny>,
+    shifted: Option<&ViewPart>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<()> {
+    let grid = grid(dims, spacing, dtype, range);
+    let volume = empty(&grid)?;
+    let rounds = rounds(py, &volume, params)?;
+    let shifted = shifted.map_or(&[][..], |s| &s.counts[..]);
+    let sphere = rounds.finish(&volume, &paper.counts, shifted).or_py()?;
+    let mut failed = None;
+    let done = rounds.refine(&volume, sphere, |round| {
+        let part = count
+            .call1(asked(round))
+            .and_then(|p| Ok(p.cast_into::<ViewPart>()?));
+        match part {
+            Ok(part) if part.get().round == round.kind() => Ok(part.get().counts.clone()),
+            Ok(part) => {
+                let e = format!(
+                    "count gave a part of round {}, not {}",
+                    part.get().round,
+                    round.kind()
+                );
+                failed = Some(PyValueError::new_err(e));
+                Err(slabscope::Error::Cancelled)
+            }
+            Err(e) => {
+                failed = Some(e);
+                Err(slabscope::Error::Cancelled)
+            }
+        }
+    });
+    match (done, failed) {
+        (_, Some(e)) => Err(e),
+        (done, None) => done.map(drop).or_py(),
+    }
+}
+
+/// The analysis of `volume` (the whole one) by the analysis keywords `params`, its view search
+/// finished from the rounds' sums `paper` and `shifted`, and with `refine=True` refined from
+/// `refined`, the refinement's rounds as `_refine_in_parts` asked for them, in order, each
+/// `(axes, samples, sum)`: `analyze`'s, to the byte.
+#[pyfunction]
+#[pyo3(signature = (volume, paper, shifted=None, refined=None, **params))]
 pub fn _analyze_with_parts(
     py: Python<'_>,
     volume: &Bound<'_, Volume>,
     paper: &ViewPart,
     shifted: Option<&ViewPart>,
+    refined: Option<Vec<Refined<'_>>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<crate::analysis::Analysis> {
     let inner = &volume.get().inner;
     let rounds = rounds(py, inner, params)?;
     let shifted = shifted.map_or(&[][..], |s| &s.counts[..]);
+    let given: Vec<(Asked, u8, Vec<PartialCounts>)> = refined
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(axes, samples, part)| ((axes, samples), part.round, part.counts.clone()))
+        .collect();
+    let refine = rounds.params().refine;
+    if !refine && !given.is_empty() {
+        return Err(PyValueError::new_err(
+            "refined= holds the refinement's rounds: refine=True asks for them",
+        ));
+    }
     let views = py
-        .detach(|| rounds.finish(inner, &paper.counts, shifted))
+        .detach(|| {
+            let sphere = rounds.finish(inner, &paper.counts, shifted)?;
+            let mut given = given.into_iter();
+            let views = rounds.refine(inner, sphere, |round| match given.next() {
+                Some((a, kind, counts)) if a == asked(round) && kind == round.kind() => Ok(counts),
+                _ => Err(slabscope::Error::invalid(
+                    "refined",
+                    "rounds",
+                    "the refinement's rounds in the order they were asked for, each (axes, samples, sum)",
+                )),
+            })?;
+            match given.next() {
+                None => Ok(views),
+                Some(_) => Err(slabscope::Error::invalid(
+                    "refined",
+                    "more rounds",
+                    "the refinement's rounds alone: it asked for fewer",
+                )),
+            }
+        })
         .or_py()?;
     crate::analysis::analyze_with(py, volume, Some(views), params)
 }

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import pickle
+from typing import Any
 
 import numpy as np
 import pytest
@@ -71,12 +72,71 @@ def test_axes_in_another_order_and_a_zarr_store(client, tmp_path):
     assert slabscope.dask.analyze_array(client, da.from_array(zyx.transpose(1, 0, 2)), axes="yzx", phases=0, background="none").to_dict() == one
 
 
-def test_axes_are_never_assumed_and_the_refinement_is_refused(client):
+def test_axes_are_never_assumed(client):
     array = da.from_array(voxels())
     with pytest.raises(ValueError, match="never assumed"):
         slabscope.dask.analyze_array(client, array)
-    with pytest.raises(ValueError, match="refine"):
-        slabscope.dask.analyze_array(client, array, axes="zyx", refine=True)
+
+
+@pytest.mark.parametrize("params", [{"phases": 0, "background": "none"}, {}], ids=["paper", "defaults"])
+def test_the_refinement_as_rounds_of_tasks_is_the_single_process_analysis(client, params):
+    zyx = voxels()
+    heard = []
+    got = slabscope.dask.analyze_array(
+        client,
+        da.from_array(zyx, chunks=(8, 13, 30)),
+        axes="zyx",
+        spacing=(1.0, 0.9, 1.3),
+        refine=True,
+        progress=lambda phase, fraction: heard.append((phase, fraction)),
+        **params,
+    )
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=(1.0, 0.9, 1.3)), refine=True, **params)
+    assert got.to_dict() == one.to_dict()
+    assert got.to_dict()["refined"] is not None
+    # The sphere's rounds, then at least two steps of the refinement, a round each of the
+    # paper's lattices (and of the shifted ones with phases), 5 slabs a round.
+    rounds = 1 if params else 2
+    phases = [p for p, _ in heard]
+    assert phases[: 5 * rounds] == ["view search in parts"] * (5 * rounds)
+    refining = phases.count("refining in parts")
+    assert refining >= 2 * 5 * rounds and refining % (5 * rounds) == 0
+    fractions = [f for _, f in heard]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0 and fractions.count(1.0) == 1
+
+
+def test_refined_rounds_out_of_order_are_refused(client):
+    zyx = voxels()
+    nz, ny, nx = zyx.shape
+    grid = ([nx, ny, nz], [1.0, 1.0, 1.0], "uint8", (float(zyx.min()), float(zyx.max()), zyx.size))
+    params = {"phases": 0, "refine": True}
+    (held,), _ = slabscope._slabscope._slab_planes([(0, nz - 1)], *grid, **params)
+    count = lambda samples, axes: slabscope._slabscope._count_view_slab(zyx[held[0] : held[1]].T, held[0], (0, nz - 1), *grid, samples=samples, axes=axes, **params)  # noqa: E731
+    paper = count(None, None)
+    asked = []
+
+    def counted(axes, samples):
+        part = count(samples, axes)
+        asked.append((axes, samples, part))
+        return part
+
+    slabscope._slabscope._refine_in_parts(paper, *grid, counted, **params)
+    assert len(asked) >= 2 and all(s is None and len(a) in (8, 16, 24) for a, s, _ in asked)
+    assert {p.round for _, _, p in asked} == {2}
+    volume = slabscope.Volume.from_array(zyx.T)
+    got = slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked, **params)
+    assert got.to_dict() == slabscope.analyze(volume, **params).to_dict()
+    with pytest.raises(ValueError, match="refined"):
+        slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked[::-1], **params)
+    with pytest.raises(ValueError, match="refined"):
+        slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked[:-1], **params)
+    with pytest.raises(ValueError, match="refine=True"):
+        slabscope._slabscope._analyze_with_parts(volume, paper, refined=asked, phases=0)
+    # A count that gives a part of the wrong round, or raises, stops the refinement with it.
+    with pytest.raises(ValueError, match="round 0, not 2"):
+        slabscope._slabscope._refine_in_parts(paper, *grid, lambda axes, samples: paper, **params)
+    with pytest.raises(ZeroDivisionError):
+        slabscope._slabscope._refine_in_parts(paper, *grid, lambda axes, samples: 1 / 0, **params)
 
 
 def test_view_parts_add_and_pickle():
@@ -169,3 +229,39 @@ def test_the_last_task_keeps_to_the_memory_budget(client):
     # voxel are refused, not finished on another level.
     with pytest.raises(ValueError, match=r"counted in parts on every voxel, cannot finish an analysis of pyramid level 2, because .*\(raise it with max_memory=\)"):
         slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="50K", **params)
+
+
+def test_a_worker_killed_mid_run_costs_only_its_tasks(client, tmp_path):
+    """A worker process killed (SIGKILL) while the view search's tasks run: its nanny starts
+    another, the scheduler runs its tasks again elsewhere, and the answer is unchanged."""
+    import signal
+
+    zyx = voxels()
+    marks = str(tmp_path)
+
+    def chunk(block: np.ndarray, block_info: Any = None) -> np.ndarray:
+        # The range round reads each chunk once; the first chunk read again (by a count task
+        # of the paper's round) kills its own worker process, once in the whole run.
+        k = block_info[0]["chunk-location"][0]
+        seen = os.path.join(marks, f"seen-{k}")
+        if os.path.exists(seen):
+            try:
+                os.close(os.open(os.path.join(marks, "killed"), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            except FileExistsError:
+                return block
+            os.kill(os.getpid(), signal.SIGKILL)
+        open(seen, "w").close()
+        return block
+
+    before = set(client.run(os.getpid).values())
+    array = da.from_array(zyx, chunks=(8, 26, 30)).map_blocks(chunk, dtype=zyx.dtype)
+    heard = []
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", slabs=3, progress=lambda phase, fraction: heard.append(fraction))
+    assert os.path.exists(os.path.join(marks, "killed"))
+    client.wait_for_workers(2, timeout=60)  # the nanny's new process, perhaps still starting
+    after = set(client.run(os.getpid).values())
+    assert len(after) == 2 and len(before & after) == 1  # one worker process replaced
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3)
+    assert got.to_dict() == one.to_dict()
+    # Every task reported once, however many times it ran.
+    assert len(heard) == 5 * 2 + 1 and heard[-1] == 1.0

@@ -112,7 +112,10 @@ mod tests {
         } else {
             Vec::new()
         };
-        rounds.finish(v, &paper, &shifted).unwrap()
+        let sphere = rounds.finish(v, &paper, &shifted).unwrap();
+        rounds
+            .refine(v, sphere, |round| Ok(count(round, lcg)))
+            .unwrap()
     }
 
     /// What an analysis reports, as JSON text.
@@ -128,7 +131,9 @@ mod tests {
         let body = phantom::body([26, 22, 30], 7).unwrap();
         let layers = phantom::layers([24, 20, 28], [0.3, 0.2, 1.0], 3).unwrap();
         for v in [body, layers] {
-            for params in [AnalysisParams::paper(), AnalysisParams::default()] {
+            let mut refined = AnalysisParams::default();
+            refined.view.refine = true;
+            for params in [AnalysisParams::paper(), AnalysisParams::default(), refined] {
                 let expect = report(&analyze(&v, &params, &none).unwrap());
                 let views = search_in_parts(&v, &params, &mut lcg);
                 let got = analyze_with_views(&v, &params, Some(views), &none).unwrap();

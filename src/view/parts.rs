@@ -8,14 +8,17 @@
 //! Two rounds, as in the slab-by-slab search: the paper's lattice of every axis, then (with
 //! phases) the shifted lattices, whose rays depend on the samples the paper's counted. Each
 //! task is told the round (and, for the second, those sample counts), so the lattices are made
-//! again where the task runs and nothing but numbers travels.
+//! again where the task runs and nothing but numbers travels. The refinement
+//! ([`ViewRounds::refine`]) is more rounds of the same two kinds, two a step of its pattern
+//! searches in lockstep (as the slab-by-slab search takes them), of the axes each step asks for.
 
 use std::ops::Range;
 
 use rayon::prelude::*;
 
 use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
-use super::{ViewParams, ViewSearch, candidate_axes, concluded, finish};
+use super::refine::refine_in_lockstep;
+use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
 use super::{lattice_of, ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
@@ -23,13 +26,32 @@ use crate::measure::{BlockCounts, PartialCounts};
 use crate::volume::Volume;
 
 /// A round of a view search counted in parts.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ViewRound {
     /// The paper's lattice of every axis.
     Paper,
     /// The shifted lattices of every axis (phases 1 on), given the samples each axis's paper
     /// lattice counted (the first round's [`ViewRounds::paper_samples`]).
     Shifted(Vec<u64>),
+    /// A step of the refinement: the paper's lattices of these (canonical) axes.
+    RefinePaper(Vec<[f64; 3]>),
+    /// A step of the refinement: the shifted lattices of these axes, given the samples each
+    /// one's paper lattice counted.
+    RefineShifted(Vec<[f64; 3]>, Vec<u64>),
+}
+
+impl ViewRound {
+    /// The round's kind: 0 the paper's lattices, 1 the shifted ones, 2 and 3 the same of a
+    /// refinement step (what a part carries, so that parts of two kinds never add).
+    #[must_use]
+    pub fn kind(&self) -> u8 {
+        match self {
+            Self::Paper => 0,
+            Self::Shifted(_) => 1,
+            Self::RefinePaper(_) => 2,
+            Self::RefineShifted(..) => 3,
+        }
+    }
 }
 
 /// The view search of one volume counted in parts: its parameters resolved and its axes, the
@@ -43,16 +65,9 @@ pub struct ViewRounds {
 
 impl ViewRounds {
     /// The rounds of `params`' search of `volume` (the whole volume, or a slab of it made by
-    /// [`Volume::of_slab`]: only its grid and statistics are read). The refinement is refused:
-    /// it evaluates axes one after another, each from the last, and is not split yet.
+    /// [`Volume::of_slab`]: only its grid and statistics are read). With `refine`, the
+    /// sphere's search ([`finish`](Self::finish)) is followed by [`refine`](Self::refine).
     pub fn new(volume: &Volume, params: &ViewParams) -> Result<Self> {
-        if params.refine {
-            return Err(Error::invalid(
-                "refine",
-                true,
-                "off for a view search counted in parts (the refinement is not split yet)",
-            ));
-        }
         let params = resolve(volume, params)?;
         let axes = candidate_axes(params.level)?;
         Ok(Self {
@@ -92,31 +107,52 @@ impl ViewRounds {
         volume: &Volume,
         round: &ViewRound,
     ) -> Result<Vec<(usize, Lattice, RaySubset)>> {
-        let mut out = Vec::new();
         match round {
-            ViewRound::Paper => {
-                for (a, &axis) in self.axes.iter().enumerate() {
-                    out.push((
-                        a,
-                        lattice_of(volume, &self.params, axis, 0)?,
-                        RaySubset::ALL,
-                    ));
-                }
-            }
-            ViewRound::Shifted(samples) => {
-                if samples.len() != self.axes.len() {
-                    return Err(Error::invalid(
-                        "paper samples",
-                        samples.len(),
-                        format!("one count for each of the {} axes", self.axes.len()),
-                    ));
-                }
-                for (a, (&axis, &n)) in self.axes.iter().zip(samples).enumerate() {
-                    for (lattice, subset) in shifted_lattices(volume, &self.params, axis, n)? {
-                        if let Some(subset) = subset {
-                            out.push((a, lattice, subset));
-                        }
-                    }
+            ViewRound::Paper => self.paper_lattices(volume, &self.axes),
+            ViewRound::Shifted(samples) => self.shifted_lattices(volume, &self.axes, samples),
+            ViewRound::RefinePaper(axes) => self.paper_lattices(volume, axes),
+            ViewRound::RefineShifted(axes, samples) => self.shifted_lattices(volume, axes, samples),
+        }
+    }
+
+    /// The paper's lattice of each of `axes`.
+    fn paper_lattices(
+        &self,
+        volume: &Volume,
+        axes: &[[f64; 3]],
+    ) -> Result<Vec<(usize, Lattice, RaySubset)>> {
+        axes.iter()
+            .enumerate()
+            .map(|(a, &axis)| {
+                Ok((
+                    a,
+                    lattice_of(volume, &self.params, axis, 0)?,
+                    RaySubset::ALL,
+                ))
+            })
+            .collect()
+    }
+
+    /// The shifted lattices of each of `axes` whose paper lattice counted `samples`, the
+    /// lattices whose rays hold no subset left out.
+    fn shifted_lattices(
+        &self,
+        volume: &Volume,
+        axes: &[[f64; 3]],
+        samples: &[u64],
+    ) -> Result<Vec<(usize, Lattice, RaySubset)>> {
+        if samples.len() != axes.len() {
+            return Err(Error::invalid(
+                "paper samples",
+                samples.len(),
+                format!("one count for each of the {} axes", axes.len()),
+            ));
+        }
+        let mut out = Vec::new();
+        for (a, (&axis, &n)) in axes.iter().zip(samples).enumerate() {
+            for (lattice, subset) in shifted_lattices(volume, &self.params, axis, n)? {
+                if let Some(subset) = subset {
+                    out.push((a, lattice, subset));
                 }
             }
         }
@@ -191,25 +227,67 @@ impl ViewRounds {
     /// what [`ViewRound::Shifted`] needs.
     pub fn paper_samples(&self, volume: &Volume, paper: &[PartialCounts]) -> Result<Vec<u64>> {
         Ok(self
-            .entropies(&self.paper_directions(volume, paper.len())?, paper)?
+            .rates(volume, &ViewRound::Paper, paper)?
             .iter()
-            .map(|r| r.samples)
+            .map(|(_, r)| r.samples)
             .collect())
     }
 
-    /// The directions of the paper lattices, for a paper round of `n` counts.
-    fn paper_directions(&self, volume: &Volume, n: usize) -> Result<Vec<[f64; 3]>> {
-        if n != self.axes.len() {
+    /// The entropy rates of `round`'s lattices from its counts added up, one a lattice, each
+    /// with the index of its axis.
+    fn rates(
+        &self,
+        volume: &Volume,
+        round: &ViewRound,
+        counts: &[PartialCounts],
+    ) -> Result<Vec<(usize, AxisEntropy)>> {
+        let lattices = self.lattices(volume, round)?;
+        if lattices.len() != counts.len() {
+            let (name, what) = match round {
+                ViewRound::Paper | ViewRound::RefinePaper(_) => ("paper counts", "axes"),
+                _ => ("shifted counts", "shifted lattices"),
+            };
             return Err(Error::invalid(
-                "paper counts",
-                n,
-                format!("one for each of the {} axes", self.axes.len()),
+                name,
+                counts.len(),
+                format!("one for each of the {} {what}", lattices.len()),
             ));
         }
-        Ok(self
-            .lattices(volume, &ViewRound::Paper)?
-            .into_iter()
-            .map(|(_, l, _)| l.d)
+        let directions: Vec<[f64; 3]> = lattices.iter().map(|(_, l, _)| l.d).collect();
+        let rates = self.entropies(&directions, counts)?;
+        Ok(lattices.iter().map(|(a, _, _)| *a).zip(rates).collect())
+    }
+
+    /// The entropy rates of the axes of the paper round `round` (the sphere's or a refinement
+    /// step's), as the search evaluates each: from its paper lattice's counts `paper` and (with
+    /// phases) its shifted lattices' `shifted`.
+    fn evaluated(
+        &self,
+        volume: &Volume,
+        round: &ViewRound,
+        paper: &[PartialCounts],
+        shifted: &[PartialCounts],
+    ) -> Result<Vec<AxisEntropy>> {
+        let axes = match round {
+            ViewRound::Paper => &self.axes,
+            ViewRound::RefinePaper(axes) => axes,
+            _ => return Err(Error::invalid("round", "shifted", "a paper round")),
+        };
+        let paper = self.rates(volume, round, paper)?;
+        let mut of_axis = vec![Vec::new(); axes.len()];
+        if self.has_shifted() {
+            let samples = paper.iter().map(|(_, r)| r.samples).collect();
+            for (a, r) in self.rates(volume, &shifted_round(round, samples), shifted)? {
+                of_axis[a].push(r);
+            }
+        }
+        Ok(axes
+            .iter()
+            .zip(paper)
+            .zip(&of_axis)
+            .map(|((&axis, (_, paper)), shifted)| {
+                finish(volume, &self.params, axis, paper, shifted)
+            })
             .collect())
     }
 
@@ -238,42 +316,63 @@ impl ViewRounds {
 
     /// The view search of the whole volume from the rounds' counts added up: `paper` of the
     /// first round, `shifted` of the second (empty without phases), `search`'s result bit for
-    /// bit. `volume` gives the grid (a slab of it will do).
+    /// bit, but for the refinement, which [`refine`](Self::refine) adds. `volume` gives the
+    /// grid (a slab of it will do).
     pub fn finish(
         &self,
         volume: &Volume,
         paper: &[PartialCounts],
         shifted: &[PartialCounts],
     ) -> Result<ViewSearch> {
-        let paper = self.entropies(&self.paper_directions(volume, paper.len())?, paper)?;
-        let axes = &self.axes;
-        let mut of_axis = vec![Vec::new(); axes.len()];
-        if self.has_shifted() {
-            let round = ViewRound::Shifted(paper.iter().map(|r| r.samples).collect());
-            let lattices = self.lattices(volume, &round)?;
-            if lattices.len() != shifted.len() {
-                return Err(Error::invalid(
-                    "shifted counts",
-                    shifted.len(),
-                    format!("one for each of the {} shifted lattices", lattices.len()),
-                ));
-            }
-            let directions: Vec<[f64; 3]> = lattices.iter().map(|(_, l, _)| l.d).collect();
-            for ((a, _, _), r) in lattices.iter().zip(self.entropies(&directions, shifted)?) {
-                of_axis[*a].push(r);
-            }
-        }
-        let views = axes
-            .iter()
-            .zip(paper)
-            .zip(&of_axis)
-            .map(|((&axis, paper), shifted)| finish(volume, &self.params, axis, paper, shifted))
-            .collect();
+        let views = self.evaluated(volume, &ViewRound::Paper, paper, shifted)?;
         Ok(concluded(
             ranked(views, self.params.block)?,
             self.params.clone(),
             None,
         ))
+    }
+
+    /// The sphere's search `search` ([`finish`](Self::finish)'s) refined when the parameters
+    /// ask for it (else as it is): the pattern searches from its best axes taken in lockstep,
+    /// the axes of each step evaluated from the sums `count` gives of a round's parts (a
+    /// [`ViewRound::RefinePaper`], then with phases a [`ViewRound::RefineShifted`] of the samples
+    /// it counted): [`search`](super::search)'s result with `refine`, bit for bit.
+    pub fn refine(
+        &self,
+        volume: &Volume,
+        search: ViewSearch,
+        mut count: impl FnMut(&ViewRound) -> Result<Vec<PartialCounts>>,
+    ) -> Result<ViewSearch> {
+        if !self.params.refine {
+            return Ok(search);
+        }
+        let refined = refine_in_lockstep(self.params.level, &search.views, |axes| {
+            let axes = axes
+                .iter()
+                .map(|&a| canonical_axis(a))
+                .collect::<Result<Vec<_>>>()?;
+            let round = ViewRound::RefinePaper(axes);
+            let paper = count(&round)?;
+            let shifted = if self.has_shifted() {
+                let rates = self.rates(volume, &round, &paper)?;
+                count(&shifted_round(
+                    &round,
+                    rates.iter().map(|(_, r)| r.samples).collect(),
+                ))?
+            } else {
+                Vec::new()
+            };
+            self.evaluated(volume, &round, &paper, &shifted)
+        })?;
+        Ok(concluded(search.views, search.params, Some(refined)))
+    }
+}
+
+/// The shifted round following the paper round `round`, its lattices having counted `samples`.
+fn shifted_round(round: &ViewRound, samples: Vec<u64>) -> ViewRound {
+    match round {
+        ViewRound::RefinePaper(axes) => ViewRound::RefineShifted(axes.clone(), samples),
+        _ => ViewRound::Shifted(samples),
     }
 }
 
@@ -380,14 +479,54 @@ mod tests {
     }
 
     #[test]
-    fn the_refinement_and_slabs_off_the_grid_are_refused() {
+    fn the_refinement_in_parts_is_the_search_bit_for_bit() {
+        let mut lcg = Lcg::new(4444);
+        let v = awkward_volume([26, 22, 29], [1.0, 0.9, 1.2], VoxelType::U8, 4);
+        for params in [ViewParams::paper(), ViewParams::default()] {
+            let params = ViewParams {
+                refine: true,
+                ..params
+            };
+            let expect = super::super::search(&v, &params, &Monitor::none()).unwrap();
+            assert!(expect.refined.is_some());
+            let slabs = random_slabs(28, &mut lcg);
+            let rounds = ViewRounds::new(&v, &params).unwrap();
+            let paper = added(&rounds, &v, &ViewRound::Paper, &slabs, &mut lcg);
+            let shifted = if rounds.has_shifted() {
+                let samples = rounds.paper_samples(&v, &paper).unwrap();
+                added(&rounds, &v, &ViewRound::Shifted(samples), &slabs, &mut lcg)
+            } else {
+                Vec::new()
+            };
+            let sphere = rounds.finish(&v, &paper, &shifted).unwrap();
+            assert!(sphere.refined.is_none());
+            let mut kinds = Vec::new();
+            let got = rounds
+                .refine(&v, sphere, |round| {
+                    kinds.push(round.kind());
+                    Ok(added(&rounds, &v, round, &slabs, &mut lcg))
+                })
+                .unwrap();
+            let json = |s: &ViewSearch| serde_json::to_string(s).unwrap();
+            assert_eq!(json(&got), json(&expect));
+            // Rounds of a step: the paper's lattices, then (with phases) the shifted ones.
+            let step: &[u8] = if rounds.has_shifted() { &[2, 3] } else { &[2] };
+            assert!(kinds.len() >= 2 * step.len(), "{kinds:?}");
+            assert!(kinds.chunks(step.len()).all(|c| c == step), "{kinds:?}");
+        }
+        // Without refine, the search is as it was and nothing more is counted.
+        let rounds = ViewRounds::new(&v, &ViewParams::paper()).unwrap();
+        let slabs_of_all = random_slabs(28, &mut lcg);
+        let paper = added(&rounds, &v, &ViewRound::Paper, &slabs_of_all, &mut lcg);
+        let sphere = rounds.finish(&v, &paper, &[]).unwrap();
+        let expect = serde_json::to_string(&sphere).unwrap();
+        let got = rounds.refine(&v, sphere, |_| unreachable!()).unwrap();
+        assert_eq!(serde_json::to_string(&got).unwrap(), expect);
+    }
+
+    #[test]
+    fn slabs_off_the_grid_are_refused() {
         let v = awkward_volume([20, 20, 20], [1.0; 3], VoxelType::U8, 4);
-        let refine = ViewParams {
-            refine: true,
-            ..ViewParams::default()
-        };
-        let e = ViewRounds::new(&v, &refine).unwrap_err();
-        assert!(e.to_string().contains("refine"), "{e}");
         let rounds = ViewRounds::new(&v, &ViewParams::paper()).unwrap();
         for planes in [5..5, 10..20] {
             let e = rounds
