@@ -14,7 +14,7 @@ pub mod names;
 #[non_exhaustive]
 pub enum Error {
     /// Reading or writing a file failed at the operating-system level.
-    #[error("{}: {error}", shown(path))]
+    #[error("{}: {}", shown(path), self.detail())]
     Io {
         /// The file concerned.
         path: PathBuf,
@@ -22,7 +22,7 @@ pub enum Error {
         error: std::io::Error,
     },
     /// The file is not a valid volume of the format it claims, or its header contradicts itself or its data.
-    #[error("{}: {message}", shown(path))]
+    #[error("{}: {}", shown(path), self.detail())]
     Format {
         /// The file concerned.
         path: PathBuf,
@@ -30,10 +30,7 @@ pub enum Error {
         message: String,
     },
     /// The file holds fewer bytes of voxel data than its header promises.
-    #[error(
-        "{}: truncated voxel data: expected {expected} bytes, found {found}",
-        shown(path)
-    )]
+    #[error("{}: {}", shown(path), self.detail())]
     Truncated {
         /// The file holding the voxel data.
         path: PathBuf,
@@ -43,10 +40,7 @@ pub enum Error {
         found: u64,
     },
     /// Loading would need more memory than the limit allows; nothing was allocated.
-    #[error(
-        "{}: {what} needs {}, over the memory limit of {}",
-        shown(path), human_bytes(*needed), human_bytes(*limit)
-    )]
+    #[error("{}: {}", shown(path), self.detail())]
     TooLarge {
         /// The file concerned.
         path: PathBuf,
@@ -64,7 +58,7 @@ pub enum Error {
         disk: bool,
     },
     /// The format is recognised but this variant of it is not supported.
-    #[error("{}: unsupported: {message}", shown(path))]
+    #[error("{}: {}", shown(path), self.detail())]
     Unsupported {
         /// The file concerned.
         path: PathBuf,
@@ -72,7 +66,7 @@ pub enum Error {
         message: String,
     },
     /// Headerless raw data whose description is incomplete: the raw options that must be given.
-    #[error("{}: {detail}: its {} must be given", shown(path), missing.join(" and "))]
+    #[error("{}: {}", shown(path), self.detail())]
     RawUndescribed {
         /// The file concerned.
         path: PathBuf,
@@ -83,7 +77,7 @@ pub enum Error {
     },
     /// A DICOM folder holds several series and none was named, the one named is not there, or
     /// every image was a localizer left out.
-    #[error("{}: {message}", shown(path))]
+    #[error("{}: {}", shown(path), self.detail())]
     Series {
         /// The folder (or file).
         path: PathBuf,
@@ -93,17 +87,14 @@ pub enum Error {
         localizers: bool,
     },
     /// A file that would be written exists already and overwriting was not asked for.
-    #[error("{}: already exists", shown(path))]
+    #[error("{}: {}", shown(path), self.detail())]
     Exists {
         /// The file that exists.
         path: PathBuf,
     },
     /// A file that would be written exists and is not a regular file (a device, a FIFO, a
     /// folder): it is never replaced, whether overwriting was asked for or not.
-    #[error(
-        "{}: not a regular file: slabscope writes only regular files",
-        shown(path)
-    )]
+    #[error("{}: {}", shown(path), self.detail())]
     NotRegularFile {
         /// The file that exists.
         path: PathBuf,
@@ -253,22 +244,60 @@ impl Error {
         }
     }
 
+    /// What this error says of the file it names ([`path`](Self::path)), without naming it:
+    /// its message after the file's name and `": "`; an error that names no file, its whole
+    /// message.
+    #[must_use]
+    pub fn detail(&self) -> String {
+        match self {
+            Self::Io { error, .. } => error.to_string(),
+            Self::Format { message, .. } | Self::Series { message, .. } => message.clone(),
+            Self::Truncated {
+                expected, found, ..
+            } => format!("truncated voxel data: expected {expected} bytes, found {found}"),
+            Self::TooLarge {
+                what,
+                needed,
+                limit,
+                ..
+            } => format!(
+                "{what} needs {}, over the memory limit of {}",
+                human_bytes(*needed),
+                human_bytes(*limit)
+            ),
+            Self::Unsupported { message, .. } => format!("unsupported: {message}"),
+            Self::RawUndescribed {
+                missing, detail, ..
+            } => format!("{detail}: its {} must be given", missing.join(" and ")),
+            Self::Exists { .. } => "already exists".into(),
+            Self::NotRegularFile { .. } => {
+                "not a regular file: slabscope writes only regular files".into()
+            }
+            _ => self.to_string(),
+        }
+    }
+
+    /// This error's message in a list whose line names `file` already: without the file when
+    /// it is the one the error names, else whole.
+    #[must_use]
+    pub fn within(&self, file: &Path) -> String {
+        if self.path() == Some(file) {
+            self.detail()
+        } else {
+            self.to_string()
+        }
+    }
+
     /// This error, reported about `named`, the file the user gave, when it is about another
     /// file that `named` led to (a detached header's data file, a folder's slice): the message
     /// then names both, the user's first.
     #[must_use]
     pub fn reached_from(self, named: &Path) -> Self {
         match self.path() {
-            Some(p) if p != named => {
-                let inner = self.to_string();
-                let message = inner
-                    .strip_prefix(&format!("{}: ", shown(p)))
-                    .unwrap_or(&inner);
-                Self::Format {
-                    path: named.to_path_buf(),
-                    message: format!("{}: {message}", shown(p)),
-                }
-            }
+            Some(p) if p != named => Self::Format {
+                path: named.to_path_buf(),
+                message: format!("{}: {}", shown(p), self.detail()),
+            },
             _ => self,
         }
     }

@@ -56,9 +56,11 @@ pub fn intact(volume: &slabscope::Volume) -> PyResult<()> {
     volume.data().check_intact().map_err(to_py)
 }
 
-/// A `ValueError` for keyword `name` given `value`, which should be `expected`.
-pub fn invalid(name: &str, value: impl std::fmt::Display, expected: &str) -> PyErr {
-    PyValueError::new_err(controls(&format!("{name}={value}: expected {expected}")).into_owned())
+/// A `ValueError` for parameter `name` (the library's name, which the library words as its
+/// keyword) given `value` as Python shows it, which should be `expected`: the library's
+/// [`Error::InvalidParameter`] in Python's terms, so that Python words no error of its own.
+pub fn invalid(name: &'static str, value: impl std::fmt::Display, expected: &str) -> PyErr {
+    to_py(Error::invalid(name, value, expected))
 }
 
 /// Results of the library as Python results.

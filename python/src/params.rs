@@ -104,11 +104,7 @@ pub fn given(kw: &Kwargs<'_>, params: &[&'static Param]) -> PyResult<Given> {
 fn checked_text(p: &Param, value: &Bound<'_, PyAny>) -> PyResult<String> {
     let text = as_text(p, value)?;
     if !value.is_instance_of::<pyo3::types::PyString>() && p.check(&text).is_err() {
-        return Err(crate::errors::invalid(
-            p.keyword,
-            repr(value),
-            &p.expected(),
-        ));
+        return Err(crate::errors::to_py(p.invalid(repr(value))));
     }
     Ok(text)
 }
@@ -141,11 +137,8 @@ pub fn as_text(p: &Param, value: &Bound<'_, PyAny>) -> PyResult<String> {
             return Ok(name);
         }
     }
-    Err(PyTypeError::new_err(format!(
-        "{}={}: expected {}",
-        p.keyword,
-        repr(value),
-        p.expected()
+    Err(PyTypeError::new_err(crate::errors::message(
+        &p.invalid(repr(value)),
     )))
 }
 
@@ -160,7 +153,7 @@ fn axis_number(p: &Param, n: i64, value: &Bound<'_, PyAny>) -> PyResult<String> 
         1 => Ok("y".into()),
         2 => Ok("z".into()),
         _ => Err(crate::errors::invalid(
-            p.keyword,
+            p.name,
             repr(value),
             &format!("0, 1 or 2 (x, y, z), {}", p.expected()),
         )),

@@ -10,13 +10,15 @@ use std::time::Duration;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use slabscope::error::names::controls;
 use slabscope::error::shown;
+use slabscope::params::Terms;
 use slabscope::triage::{
     Entry, MANIFEST_HEADER, Source, TriagePlan, look_all, parse_manifest, select,
 };
 
 use crate::analysis::parse;
-use crate::errors::{OrPy, message};
+use crate::errors::OrPy;
 use crate::params::{Kwargs, analysis_params, load_options};
 
 /// Volumes looked at at once, as the CLI does.
@@ -145,9 +147,7 @@ pub fn triage(
     let (tx, rx) = sync_channel::<String>(WORKERS);
     std::thread::spawn(move || {
         let describe = |path: &std::path::Path, e: slabscope::Error| {
-            let m = message(&e);
-            m.strip_prefix(&format!("{}: ", shown(path)))
-                .map_or(m.clone(), str::to_string)
+            controls(&e.in_terms_within(Terms::Keywords, path)).into_owned()
         };
         look_all(
             &volumes,

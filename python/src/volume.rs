@@ -180,7 +180,7 @@ fn array_type(dtype: &Bound<'_, PyAny>) -> PyResult<VoxelType> {
 /// `ValueError` naming the keyword and showing the value as given.
 fn given_spacing(value: &Bound<'_, PyAny>) -> PyResult<[f64; 3]> {
     let entry = &slabscope::params::table::SPACING;
-    let invalid = || crate::errors::invalid(entry.keyword, repr(value), &entry.expected());
+    let invalid = || crate::errors::to_py(entry.invalid(repr(value)));
     let text = crate::params::as_text(entry, value).map_err(|_| invalid())?;
     slabscope::params::text::spacing(&text).ok_or_else(invalid)
 }
@@ -412,10 +412,11 @@ impl Volume {
         let affine = affine
             .map(|a| {
                 a.extract::<Affine>().map_err(|_| {
-                    PyValueError::new_err(format!(
-                        "affine={}: expected a 4x4 matrix (voxel index to RAS+ mm)",
-                        repr(a)
-                    ))
+                    crate::errors::invalid(
+                        "affine",
+                        repr(a),
+                        "a 4x4 matrix (voxel index to RAS+ mm)",
+                    )
                 })
             })
             .transpose()?;

@@ -9,7 +9,7 @@ use anyhow::Result;
 use clap::Args;
 use slabscope::Error;
 use slabscope::error::names::controls;
-use slabscope::error::shown;
+use slabscope::params::Terms;
 use slabscope::render::{ImageOutput, encode, sheet};
 use slabscope::triage::{
     Entry, Source, TriageOutcome, TriagePlan, TriageRow, manifest_lines, select,
@@ -189,10 +189,10 @@ fn look_all(
         fast: !args.full,
         tile: args.sheet.as_ref().map(|_| args.tile),
     };
-    let describe = |path: &Path, e: Error| {
-        let m = super::error_message(&e.into());
-        m.strip_prefix(&format!("{}: ", shown(path)))
-            .map_or(m.clone(), str::to_string)
+    // A row names its file: its error need not (told by the error's path, not its words).
+    let describe = |path: &Path, e: Error| match e {
+        Error::Cancelled => super::error_message(&e.into()),
+        e => controls(&e.in_terms_within(Terms::Flags, path)).into_owned(),
     };
     slabscope::triage::look_all(volumes, &how, WORKERS, None, &describe, emit);
     Ok(())

@@ -125,6 +125,26 @@ impl Error {
     /// pick a series. Errors that name no parameter read as their [`Display`](std::fmt::Display).
     #[must_use]
     pub fn in_terms(&self, terms: Terms) -> String {
+        match self.path() {
+            Some(path) => format!("{}: {}", shown(path), self.detail_in_terms(terms)),
+            None => self.detail_in_terms(terms),
+        }
+    }
+
+    /// This error's message in `terms` in a list whose line names `file` already (triage's
+    /// rows): without the file when it is the one the error names, else whole.
+    #[must_use]
+    pub fn in_terms_within(&self, terms: Terms, file: &std::path::Path) -> String {
+        if self.path() == Some(file) {
+            self.detail_in_terms(terms)
+        } else {
+            self.in_terms(terms)
+        }
+    }
+
+    /// [`in_terms`](Self::in_terms) without the file the error names (its
+    /// [`detail`](Self::detail) in `terms`).
+    fn detail_in_terms(&self, terms: Terms) -> String {
         let t = terms;
         match self {
             Self::InvalidParameter {
@@ -153,28 +173,36 @@ impl Error {
                 t.name("max_memory")
             ),
             Self::TooLarge { machine, disk, .. } => match t.too_large(*machine, *disk) {
-                Some(lift) => format!("{self} ({lift})"),
-                None => self.to_string(),
+                Some(lift) => format!("{} ({lift})", self.detail()),
+                None => self.detail(),
             },
             Self::RawUndescribed {
-                path,
-                missing,
-                detail,
+                missing, detail, ..
             } => {
                 let give: Vec<String> = missing.iter().filter_map(|m| t.raw_option(m)).collect();
-                format!("{}: {detail}: give {}", shown(path), give.join(" and "))
+                format!("{detail}: give {}", give.join(" and "))
             }
             // `force` is each command's own, not an entry: named here as each front end spells it.
             Self::Exists { .. } => match t {
-                Terms::Flags => format!("{self} (use --force to overwrite it)"),
-                Terms::Keywords => format!("{self} (force=True overwrites it)"),
+                Terms::Flags => format!("{} (use --force to overwrite it)", self.detail()),
+                Terms::Keywords => format!("{} (force=True overwrites it)", self.detail()),
             },
-            Self::NotRegularFile { .. } if t == Terms::Flags => format!("{self}, --force or not"),
+            Self::NotRegularFile { .. } if t == Terms::Flags => {
+                format!("{}, --force or not", self.detail())
+            }
             Self::Series {
                 localizers: true, ..
-            } => format!("{self} ({} keeps them)", t.switch("include_localizers")),
-            Self::Series { .. } => format!("{self} (pick one with {})", t.placeholder("series")),
-            _ => self.to_string(),
+            } => format!(
+                "{} ({} keeps them)",
+                self.detail(),
+                t.switch("include_localizers")
+            ),
+            Self::Series { .. } => format!(
+                "{} (pick one with {})",
+                self.detail(),
+                t.placeholder("series")
+            ),
+            _ => self.detail(),
         }
     }
 }

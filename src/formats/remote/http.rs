@@ -10,6 +10,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
+use ureq::unversioned::resolver::{DefaultResolver, ResolvedSocketAddrs, Resolver};
+use ureq::unversioned::transport::{DefaultConnector, NextTimeout};
+
 use super::{Url, cache, sigv4};
 use crate::error::human_bytes;
 
@@ -61,7 +64,7 @@ impl Client {
             Err(_) => TIMEOUT_S,
         };
         let timeout = Duration::from_secs_f64(timeout);
-        let agent = ureq::Agent::config_builder()
+        let config = ureq::Agent::config_builder()
             .http_status_as_error(false)
             .max_redirects(MAX_REDIRECTS)
             .timeout_resolve(Some(timeout))
@@ -69,8 +72,8 @@ impl Client {
             .timeout_per_read(Some(timeout))
             .timeout_send_request(Some(timeout))
             .user_agent(concat!("slabscope/", env!("CARGO_PKG_VERSION")))
-            .build()
-            .into();
+            .build();
+        let agent = ureq::Agent::with_parts(config, DefaultConnector::default(), Lookup::default());
         Ok(Self {
             agent,
             timeout,
@@ -360,13 +363,29 @@ impl Client {
                     "the server did not answer within {s} s (a stalled server; \
                      SLABSCOPE_HTTP_TIMEOUT sets the seconds)"
                 ),
-                // The standard library's resolver says so in its message only.
-                _ if io.to_string().contains("failed to lookup address") => {
-                    format!("unknown host {host}")
-                }
                 _ => format!("{host}: {io}"),
             },
             other => other.to_string(),
+        }
+    }
+}
+
+/// ureq's resolver, whose failures are all [`ureq::Error::HostNotFound`]: the standard library
+/// reports a name that does not resolve as an I/O error of no kind of its own (its message
+/// alone says so), and an I/O error out of the resolver is one, whatever its words.
+#[derive(Debug, Default)]
+struct Lookup(DefaultResolver);
+
+impl Resolver for Lookup {
+    fn resolve(
+        &self,
+        uri: &ureq::http::Uri,
+        config: &ureq::config::Config,
+        timeout: NextTimeout,
+    ) -> Result<ResolvedSocketAddrs, ureq::Error> {
+        match self.0.resolve(uri, config, timeout) {
+            Err(ureq::Error::Io(_)) => Err(ureq::Error::HostNotFound),
+            other => other,
         }
     }
 }
@@ -521,5 +540,19 @@ mod tests {
         assert_eq!(cut(body.clone(), Span::From(12, Some(2))), b"");
         assert!(check_span("k", Span::From(8, Some(5)), b"89".to_vec()).is_err());
         assert_eq!(check_span("k", Span::All, body.clone()).unwrap(), body);
+    }
+
+    /// A name that does not resolve (`.invalid` never does, RFC 6761) is an unknown host, told
+    /// by the resolver's failing, in the words the CLI has always printed.
+    #[test]
+    fn a_host_that_does_not_resolve_is_unknown() {
+        let client =
+            Client::new(Url::parse("http://nonexistent.invalid/store.zarr").unwrap()).unwrap();
+        let e = client.size("zarr.json").unwrap_err();
+        if e.contains("did not answer") {
+            eprintln!("skipped: this machine's resolver does not answer ({e})");
+            return;
+        }
+        assert_eq!(e, "zarr.json: unknown host nonexistent.invalid");
     }
 }

@@ -205,3 +205,45 @@ fn placeholders_of_several_numbers_are_tuples() {
         assert_eq!(tuple(kept), kept);
     }
 }
+
+/// In a list whose line names the file (triage's rows), an error about that file reads without
+/// it, one about another file (or none) whole: told by the error's path, not its words.
+#[test]
+fn errors_of_a_listed_file_leave_its_name_out() {
+    let raw = Error::RawUndescribed {
+        path: "scan.raw".into(),
+        missing: &["dims"],
+        detail: "headerless data".into(),
+    };
+    let e = too_large(false, false);
+    let file = std::path::Path::new("ct.nii.gz");
+    let said = "a 8x8x8 f32 volume needs 2.0 KiB (2048 bytes), over the memory limit of 1.0 KiB \
+                (1024 bytes)";
+    assert_eq!(e.detail(), said);
+    assert_eq!(e.within(file), said);
+    assert_eq!(e.to_string(), format!("ct.nii.gz: {said}"));
+    assert_eq!(
+        e.in_terms_within(Terms::Flags, file),
+        format!("{said} (raise it with --max-memory)")
+    );
+    assert_eq!(
+        e.in_terms_within(Terms::Keywords, file),
+        format!("{said} (raise it with max_memory=)")
+    );
+    assert_eq!(
+        raw.in_terms_within(Terms::Flags, std::path::Path::new("scan.raw")),
+        "headerless data: give --dims NXxNYxNZ"
+    );
+    for terms in [Terms::Flags, Terms::Keywords] {
+        assert_eq!(raw.in_terms_within(terms, file), raw.in_terms(terms));
+        let bins = Error::invalid("bins", 1, "2 to 255");
+        assert_eq!(bins.in_terms_within(terms, file), bins.in_terms(terms));
+    }
+    assert_eq!(raw.within(file), raw.to_string());
+    // A file's error reached from the one named keeps both names, the named first.
+    let reached = raw.reached_from(std::path::Path::new("scan.nhdr"));
+    assert_eq!(
+        reached.to_string(),
+        "scan.nhdr: scan.raw: headerless data: its dims must be given"
+    );
+}

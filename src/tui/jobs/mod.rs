@@ -279,11 +279,7 @@ impl Jobs {
                 // The open volume's work first: its view search, histories and picture.
                 gate.wait();
                 // The list names the file: its errors need not.
-                let prefix = format!("{}: ", slabscope::error::shown(&entry.path));
-                let describe = |e: slabscope::Error| {
-                    let m = e.to_string();
-                    m.strip_prefix(&prefix).map_or(m.clone(), str::to_string)
-                };
+                let describe = |e: slabscope::Error| e.within(&entry.path);
                 let looked = slabscope::triage::look(entry, &how, &|_| {}, &describe);
                 let thumbnail = looked.cell.and_then(|cell| {
                     let (w, h) = (cell.width(), cell.height());
