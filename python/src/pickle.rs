@@ -40,7 +40,7 @@ pub fn reduce_volume<'py>(slf: &Bound<'py, Volume>) -> PyResult<Bound<'py, PyAny
 
 /// What a volume carrying its voxels pickles besides them.
 fn state<'py>(py: Python<'py>, volume: &Volume) -> PyResult<Bound<'py, PyDict>> {
-    let inner = &volume.inner;
+    let inner = volume.inner(py)?;
     let about = volume.about();
     let state = PyDict::new(py);
     state.set_item("dtype", numpy_name(inner.voxel_type()))?;
@@ -72,7 +72,7 @@ pub fn deepcopy_volume<'py>(slf: &Bound<'py, Volume>) -> PyResult<Bound<'py, PyA
         copied: true,
         ..this.about()
     };
-    let inner = &this.inner;
+    let inner = this.inner(py)?;
     let volume = Volume::restore(
         &copy,
         inner.voxel_type(),
