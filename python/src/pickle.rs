@@ -30,7 +30,13 @@ pub fn reduce_volume<'py>(slf: &Bound<'py, Volume>) -> PyResult<Bound<'py, PyAny
     let py = slf.py();
     let this = slf.get();
     if let Some((path, options)) = this.file() {
-        let args = (path.clone(), options.bind(py).copy()?, this.name.clone());
+        let options = options.bind(py).copy()?;
+        // A URL as text: a Python path would fold its `//`.
+        if slabscope::formats::remote::is_url(path) {
+            let url = path.to_string_lossy().into_owned();
+            return reduced(py, "_volume_from_file", (url, options, this.name.clone()));
+        }
+        let args = (path.clone(), options, this.name.clone());
         return reduced(py, "_volume_from_file", args);
     }
     let voxels = slf.getattr("array")?;

@@ -118,7 +118,8 @@ def _level_0_chunks(asked: list[str]) -> list[str]:
     return [
         p
         for p in asked
-        if p.startswith("/pyramid.ome.zarr/0/") and not p.endswith((".zarray", ".zattrs"))
+        if p.startswith("/pyramid.ome.zarr/0/")
+        and not p.endswith((".zarray", ".zattrs", "zarr.json"))
     ]
 
 
