@@ -175,6 +175,34 @@ impl Budget {
     }
 }
 
+/// Of a volume `read` as a coarser pyramid level without its level 0 (a store's dataset,
+/// [`Volume::unread_finest`]) : `None` when level 0's analysis fits in `max_memory` bytes held
+/// in memory ([`memory_needed_unread`](crate::analysis::memory_needed_unread), from its grid),
+/// so that level 0 is to be read; else the finest coarser pyramid level whose analysis fits,
+/// that level read as a volume of its own (the last when none does), so that level 0, beyond
+/// the budget, is never read. `None` too for a volume read with its level 0.
+#[must_use]
+pub fn unread_level_within(read: &Volume, max_memory: u64) -> Option<usize> {
+    let finest = read.unread_finest()?;
+    let held = crate::volume::voxels::held_type(read.voxel_type(), false);
+    let chain = read.pyramid_dims();
+    let fits = |l: usize| {
+        let dims = chain[l];
+        // Each axis's spacing grows as its voxels fewer (an estimate where a count is odd).
+        let spacing =
+            std::array::from_fn(|m| finest.spacing[m] * finest.dims[m] as f64 / dims[m] as f64);
+        crate::analysis::memory_needed_unread(dims, spacing, held) <= max_memory
+    };
+    if fits(0) {
+        return None;
+    }
+    Some(
+        (1..chain.len())
+            .find(|&l| fits(l))
+            .unwrap_or(chain.len() - 1),
+    )
+}
+
 /// `e`, raised by the analysis `plan` planned, blamed on the budget when the budget moved the
 /// analysis to a coarser level and `e` is about a parameter (a slab count that the level asked
 /// for would hold): [`Error::TooCoarse`].
@@ -201,7 +229,7 @@ pub fn glance_level(volume: &Volume) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::pyramid;
+    use crate::volume::{VoxelType, pyramid};
 
     #[test]
     fn each_purpose_gets_its_level() {
@@ -241,6 +269,45 @@ mod tests {
         // Nor is a glance finer than the budget allows.
         let glance = tight.plan(&volume, Purpose::Glance).unwrap();
         assert_eq!(glance.partition.dims(), [48, 48, 48]);
+    }
+
+    /// A level read without level 0 tells from level 0's grid whether level 0's analysis fits,
+    /// and else the finest level whose own does, counted as a volume of that level held alone.
+    #[test]
+    fn a_level_read_without_level_0_names_the_level_that_fits() {
+        let level0 = crate::volume::phantom::body([64, 64, 64], 1).unwrap();
+        let finest = crate::volume::pyramid::Finest {
+            dims: level0.dims(),
+            spacing: level0.spacing(),
+            transform: *level0.transform(),
+        };
+        let read = Volume::clone(&level0.coarser(2)).into_pyramid_level(2, finest, &[]);
+        // Level 0 as a store would hold it, its stored type.
+        let held = crate::volume::voxels::held_type(read.voxel_type(), false);
+        let alone = |n: usize| {
+            let f = 64.0 / n as f64;
+            let spacing = level0.spacing().map(|s| s * f);
+            crate::analysis::memory_needed_unread([n; 3], spacing, held)
+        };
+        assert_eq!(unread_level_within(&read, alone(64)), None);
+        assert_eq!(unread_level_within(&level0, 0), None, "level 0 was read");
+        assert_eq!(unread_level_within(&read, alone(64) - 1), Some(1));
+        assert_eq!(unread_level_within(&read, alone(32)), Some(1));
+        assert_eq!(unread_level_within(&read, alone(32) - 1), Some(2));
+        assert_eq!(unread_level_within(&read, alone(16)), Some(2));
+        // From the grid, as from a volume of u8 held in memory.
+        let bytes = crate::volume::Voxels::owned(vec![7u8; 4096]);
+        let small = Volume::from_voxels([16; 3], [1.0; 3], VoxelType::U8, bytes).unwrap();
+        assert_eq!(
+            crate::analysis::memory_needed_unread([16; 3], [1.0; 3], VoxelType::U8),
+            crate::analysis::memory_needed(&small, 0)
+        );
+        let top = read.pyramid_dims().len() - 1;
+        assert_eq!(
+            unread_level_within(&read, 1),
+            Some(top),
+            "the last when none fits"
+        );
     }
 
     /// Labels streamed need the background's mask and one plane beside what the analysis

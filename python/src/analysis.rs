@@ -130,7 +130,7 @@ fn compute(
     let max_memory = crate::params::max_memory(&kw, volume.max_memory)?;
     let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
-    let full = Arc::clone(&volume.inner);
+    let full = volume.analysed(py, resolution)?;
     let request = AnalysisRequest {
         level: Level::Asked(resolution, named),
         given: Some(given),
@@ -225,7 +225,10 @@ impl Analysis {
     /// That `volume` is the one analysed: the same object, or (read again, or pickled apart
     /// from it) a volume of the same shape, spacing, type, geometry and voxels.
     pub fn check_volume(&self, py: Python<'_>, volume: &Volume) -> PyResult<()> {
-        let (a, b) = (&self.volume.get().inner, &volume.inner);
+        if std::ptr::eq(self.volume.get(), volume) {
+            return Ok(());
+        }
+        let (a, b) = (self.volume.get().inner(py)?, volume.inner(py)?);
         let same = Arc::ptr_eq(a, b)
             || (a.dims() == b.dims()
                 && a.spacing() == b.spacing()
@@ -321,7 +324,7 @@ impl Analysis {
     fn labels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let computed = self.computed(py)?;
         let (inner, level) = (&computed.analysis, computed.level());
-        let full = Arc::clone(&self.volume.get().inner);
+        let full = Arc::clone(self.volume.get().inner(py)?);
         let name = std::path::Path::new(&self.volume.get().name);
         let slabs = inner.partition.slabs.len();
         let budget = slabscope::budget::Budget::new(self.max_memory(py)?);
@@ -389,7 +392,7 @@ impl Analysis {
         }
         slabscope::formats::check_output(&out, force).or_py()?;
         let computed = self.computed(py)?;
-        let full = Arc::clone(&volume.inner);
+        let full = Arc::clone(volume.inner(py)?);
         let part = &computed.analysis.partition;
         let room = slabscope::budget::Budget::new(self.max_memory(py)?)
             .labels(

@@ -171,7 +171,7 @@ pub fn render(
     let pixmap = run::long(py, reporter.callback(), |monitor| {
         request.render(analysed, monitor)
     })?;
-    crate::errors::intact(&volume.get().inner)?;
+    crate::errors::intact(volume.get().inner(py)?)?;
     Ok(Image { pixmap })
 }
 
@@ -198,7 +198,7 @@ pub fn slice(
     let (params, _) = analysis_params(&kw)?;
     let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
-    let full = &volume.inner;
+    let full = volume.inner(py)?;
     let mut request = SliceRequest {
         params,
         axis: None,

@@ -7,6 +7,8 @@ mod analysis;
 mod errors;
 mod foreign;
 mod image;
+mod lazy;
+mod lent;
 mod params;
 mod parts;
 mod pickle;

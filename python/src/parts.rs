@@ -164,7 +164,7 @@ pub fn _count_view_slab(
     // Read in place where the array is of the held type in Fortran order (a C-ordered
     // [z, y, x] block's transpose is); else copied once. Either way `of_slab` copies the
     // planes into their place in the grid.
-    let (data, _copy) = match crate::volume::lend_any(voxels, grid.voxel_type) {
+    let (data, _copy) = match crate::lent::lend_any(voxels, grid.voxel_type) {
         Some(lent) => (lent, voxels.clone()),
         None => crate::volume::copy_of(voxels, grid.voxel_type)?,
     };
@@ -324,7 +324,7 @@ pub fn _analyze_with_parts(
     refined: Option<Vec<Refined<'_>>>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<crate::analysis::Analysis> {
-    let inner = &volume.get().inner;
+    let inner = volume.get().inner(py)?;
     let rounds = rounds(py, inner, params)?;
     let shifted = shifted.map_or(&[][..], |s| &s.counts[..]);
     let given: Vec<(Asked, u8, Vec<PartialCounts>)> = refined

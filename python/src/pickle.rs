@@ -30,7 +30,13 @@ pub fn reduce_volume<'py>(slf: &Bound<'py, Volume>) -> PyResult<Bound<'py, PyAny
     let py = slf.py();
     let this = slf.get();
     if let Some((path, options)) = this.file() {
-        let args = (path.clone(), options.bind(py).copy()?, this.name.clone());
+        let options = options.bind(py).copy()?;
+        // A URL as text: a Python path would fold its `//`.
+        if slabscope::formats::remote::is_url(path) {
+            let url = path.to_string_lossy().into_owned();
+            return reduced(py, "_volume_from_file", (url, options, this.name.clone()));
+        }
+        let args = (path.clone(), options, this.name.clone());
         return reduced(py, "_volume_from_file", args);
     }
     let voxels = slf.getattr("array")?;
@@ -40,7 +46,7 @@ pub fn reduce_volume<'py>(slf: &Bound<'py, Volume>) -> PyResult<Bound<'py, PyAny
 
 /// What a volume carrying its voxels pickles besides them.
 fn state<'py>(py: Python<'py>, volume: &Volume) -> PyResult<Bound<'py, PyDict>> {
-    let inner = &volume.inner;
+    let inner = volume.inner(py)?;
     let about = volume.about();
     let state = PyDict::new(py);
     state.set_item("dtype", numpy_name(inner.voxel_type()))?;
@@ -72,7 +78,7 @@ pub fn deepcopy_volume<'py>(slf: &Bound<'py, Volume>) -> PyResult<Bound<'py, PyA
         copied: true,
         ..this.about()
     };
-    let inner = &this.inner;
+    let inner = this.inner(py)?;
     let volume = Volume::restore(
         &copy,
         inner.voxel_type(),

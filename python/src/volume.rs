@@ -3,18 +3,19 @@
 //! already as slabscope holds voxels: Fortran order, a type held as stored, native byte order).
 
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use numpy::ndarray::{ArrayView3, ShapeBuilder};
-use numpy::{Element, PyArray2, PyArray3, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{Element, PyArray2, PyArray3, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slabscope::geometry::world::WorldTransform;
-use slabscope::volume::{LentBytes, Voxel, VoxelType, Voxels};
+use slabscope::volume::{VoxelType, Voxels};
 
 use crate::errors::repr;
 use crate::foreign::{self, Affine, Library, geometry};
+use crate::lent::lend_any;
 use crate::params::{Kwargs, load_options, numpy_name};
 use crate::run;
 
@@ -22,8 +23,11 @@ use crate::run;
 /// `orientation`. Made by `slabscope.load(path)` or `Volume.from_array(array)`.
 #[pyclass(module = "slabscope", frozen)]
 pub struct Volume {
-    /// The volume.
-    pub inner: Arc<slabscope::Volume>,
+    /// The volume (level 0): held, or for a store at a URL read when first needed
+    /// ([`inner`](Self::inner)).
+    pub(crate) level0: OnceLock<Arc<slabscope::Volume>>,
+    /// Of a store at a URL with coarser datasets, what is known before level 0 is read.
+    pub(crate) unread: Option<Arc<crate::lazy::Unread>>,
     /// How reports name it: the path as given, or `array`.
     pub name: String,
     /// The memory budget its analyses run within, bytes.
@@ -36,18 +40,18 @@ pub struct Volume {
     /// The format it was read as (`nifti`, `nrrd`, `dicom`, ...), `array` for an array.
     #[pyo3(get)]
     format: String,
-    /// What a user should know about the file (a 4D file's volume taken, a series' gaps...).
-    #[pyo3(get)]
+    /// What a user should know about the file (a 4D file's volume taken, a series' gaps...):
+    /// the `notes` property, with level 0's once read lazily.
     notes: Vec<String>,
-    /// The file it was read from (absolute) and the keywords it was read with: what it pickles
-    /// as, unless `carry` (None for a volume made from an array).
-    file: Option<(PathBuf, Py<PyDict>)>,
+    /// The file it was read from (absolute, or its URL) and the keywords it was read with: what
+    /// it pickles as, unless `carry` (None for a volume made from an array).
+    pub(crate) file: Option<(PathBuf, Py<PyDict>)>,
     /// Whether it pickles as its voxels even when read from a file (`carrying_voxels()`).
     carry: bool,
 }
 
 /// Reads the volume at `path` (a file, a folder of TIFF slices or of DICOM files, an OME-Zarr
-/// store) with the CLI's loader options as keywords: `dims`, `dtype`, `spacing`, `endian`,
+/// store, a store at a URL: of one with coarser datasets, level 0 read when first needed) with the CLI's loader options as keywords: `dims`, `dtype`, `spacing`, `endian`,
 /// `offset` (raw files), `max_memory`, `scratch`, `threads`, `volume`, `channel`, `array`,
 /// `series`, `include_localizers`, `resample`, `show_phi`, `label_image`, `endpoint`,
 /// `missing_as_fill`, `cache`.
@@ -72,78 +76,39 @@ pub fn load_file(
     let (opts, pool) = load_options(&kw)?;
     kw.finish()?;
     let _threads = run::Threads::bound(pool);
-    let loaded = run::loading(py, |cancel| {
-        slabscope::load(&file, &slabscope::LoadOptions { cancel, ..opts })
-    })?;
+    let (level0, unread, format, notes) = match crate::lazy::read(py, &file, &opts)? {
+        crate::lazy::Read::Level0(loaded) => (
+            OnceLock::from(Arc::new(loaded.volume)),
+            None,
+            loaded.format.name(),
+            loaded.notes,
+        ),
+        crate::lazy::Read::Unread(unread) => {
+            let format = unread.format.name();
+            (OnceLock::new(), Some(Arc::new(unread)), format, Vec::new())
+        }
+    };
     let kept = match options {
         Some(d) => d.copy()?,
         None => PyDict::new(py),
     };
+    let file = if slabscope::formats::remote::is_url(&file) {
+        file
+    } else {
+        std::path::absolute(&file).unwrap_or(file)
+    };
     Ok(Volume {
-        inner: Arc::new(loaded.volume),
+        level0,
+        unread,
         name: slabscope::error::shown(&file),
         max_memory: opts.max_memory,
         array: None,
         copied: false,
-        format: loaded.format.name().to_string(),
-        notes: loaded.notes,
-        file: Some((std::path::absolute(&file).unwrap_or(file), kept.unbind())),
+        format: format.to_string(),
+        notes,
+        file: Some((file, kept.unbind())),
         carry: false,
     })
-}
-
-/// A NumPy array's memory lent to a volume: the array is kept alive as long as the volume.
-struct ArrayBytes {
-    _array: Py<PyAny>,
-    data: *const u8,
-    len: usize,
-}
-
-// SAFETY: the bytes are read only, and the array they belong to is kept alive (its reference
-// is released through PyO3's pool when dropped without the GIL).
-unsafe impl Send for ArrayBytes {}
-// SAFETY: as above: shared reads of memory nobody frees while the volume lives.
-unsafe impl Sync for ArrayBytes {}
-
-impl std::fmt::Debug for ArrayBytes {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "ArrayBytes({} bytes)", self.len)
-    }
-}
-
-impl LentBytes for ArrayBytes {
-    fn bytes(&self) -> &[u8] {
-        // SAFETY: `data` points at `len` bytes of the array's buffer, which `_array` keeps
-        // alive; the volume only reads them.
-        unsafe { std::slice::from_raw_parts(self.data, self.len) }
-    }
-}
-
-/// The voxels of `array` read in place, when it is a Fortran-ordered, aligned array of `T`
-/// in native byte order (and, for f32, without infinities).
-fn lend<T: Voxel + Element>(array: &Bound<'_, PyAny>) -> Option<Voxels> {
-    let typed = array.cast::<PyArray3<T>>().ok()?;
-    if !typed.is_fortran_contiguous() || !typed.is_aligned() {
-        return None;
-    }
-    let bytes = ArrayBytes {
-        _array: array.clone().unbind(),
-        data: typed.data().cast::<u8>().cast_const(),
-        len: typed.len() * std::mem::size_of::<T>(),
-    };
-    Voxels::lent::<T>(Arc::new(bytes))
-}
-
-/// The voxels of `array` in place, where its type is held as stored.
-pub fn lend_any(array: &Bound<'_, PyAny>, ty: VoxelType) -> Option<Voxels> {
-    match ty {
-        VoxelType::U8 => lend::<u8>(array),
-        VoxelType::I8 => lend::<i8>(array),
-        VoxelType::U16 => lend::<u16>(array),
-        VoxelType::I16 => lend::<i16>(array),
-        VoxelType::F32 => lend::<f32>(array),
-        _ => None,
-    }
 }
 
 /// The voxel type a NumPy array of `dtype` stands for (a file of it would have): its own, or
@@ -289,7 +254,8 @@ impl Volume {
         })?
         .with_transform(transform);
         Ok(Self {
-            inner: Arc::new(volume),
+            level0: OnceLock::from(Arc::new(volume)),
+            unread: None,
             name: about.name,
             max_memory: about.max_memory,
             array: Some(kept.unbind()),
@@ -312,7 +278,7 @@ impl Volume {
         About {
             name: self.name.clone(),
             format: self.format.clone(),
-            notes: self.notes.clone(),
+            notes: [self.notes.clone(), self.level0_notes()].concat(),
             max_memory: self.max_memory,
             copied: self.copied,
         }
@@ -325,7 +291,8 @@ impl Volume {
 
     fn clone_ref(&self, py: Python<'_>) -> Self {
         Self {
-            inner: Arc::clone(&self.inner),
+            level0: self.level0.clone(),
+            unread: self.unread.clone(),
             name: self.name.clone(),
             max_memory: self.max_memory,
             array: self.array.as_ref().map(|a| a.clone_ref(py)),
@@ -451,68 +418,68 @@ impl Volume {
             view.getattr("flags")?.setattr("writeable", false)?;
             return Ok(view);
         }
-        crate::errors::intact(&this.inner)?;
-        let dims = this.inner.dims();
-        with_voxels!(this.inner.data(), |data| view(data, dims, slf.as_any()))
+        let inner = this.inner(slf.py())?;
+        crate::errors::intact(inner)?;
+        let dims = inner.dims();
+        with_voxels!(inner.data(), |data| view(data, dims, slf.as_any()))
     }
 
-    /// Dimensions `(nx, ny, nz)`.
+    /// Dimensions `(nx, ny, nz)` (of a store at a URL, known before level 0 is read).
     #[getter]
-    fn shape(&self) -> (usize, usize, usize) {
-        let [x, y, z] = self.inner.dims();
-        (x, y, z)
+    fn shape(&self, py: Python<'_>) -> PyResult<(usize, usize, usize)> {
+        let [x, y, z] = self.grid(py)?.0;
+        Ok((x, y, z))
     }
 
     /// Voxel spacing `(sx, sy, sz)` in mm.
     #[getter]
-    fn spacing(&self) -> (f64, f64, f64) {
-        let [x, y, z] = self.inner.spacing();
-        (x, y, z)
+    fn spacing(&self, py: Python<'_>) -> PyResult<(f64, f64, f64)> {
+        let [x, y, z] = self.grid(py)?.1;
+        Ok((x, y, z))
     }
 
     /// The 4x4 voxel-to-world matrix (voxel index to RAS+ mm); spacing on the diagonal when the
     /// file states no orientation.
     #[getter]
     fn affine<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let rows: Vec<Vec<f64>> = self
-            .inner
-            .transform()
-            .matrix
-            .iter()
-            .map(|r| r.to_vec())
-            .collect();
+        let rows: Vec<Vec<f64>> = self.grid(py)?.2.matrix.iter().map(|r| r.to_vec()).collect();
         PyArray2::from_vec2(py, &rows).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
     /// The orientation codes as nibabel's `aff2axcodes` gives them (`"LPS"`, `"RAS"`, ...), or
     /// None when the file states no orientation.
     #[getter]
-    fn orientation(&self) -> Option<String> {
-        self.inner.transform().axcodes()
+    fn orientation(&self, py: Python<'_>) -> PyResult<Option<String>> {
+        Ok(self.grid(py)?.2.axcodes())
     }
 
     /// The voxel type of the file (or array), as a NumPy dtype name: the CLI's `--type`.
     #[getter]
-    pub fn dtype(&self) -> &'static str {
-        numpy_name(self.inner.voxel_type())
+    pub fn dtype(&self, py: Python<'_>) -> PyResult<&'static str> {
+        Ok(numpy_name(self.voxel_type(py)?))
     }
 
     /// `(min, max)` of the finite voxels.
     #[getter]
-    fn range(&self) -> (f32, f32) {
-        let s = self.inner.stats();
-        (s.min, s.max)
+    fn range(&self, py: Python<'_>) -> PyResult<(f32, f32)> {
+        let s = self.inner(py)?.stats();
+        Ok((s.min, s.max))
     }
 
     /// How many voxels are missing (NaN).
     #[getter]
-    fn missing(&self) -> u64 {
-        self.inner.stats().missing as u64
+    fn missing(&self, py: Python<'_>) -> PyResult<u64> {
+        Ok(self.inner(py)?.stats().missing as u64)
     }
 
-    fn __repr__(&self) -> String {
-        let [x, y, z] = self.inner.dims();
-        let spacing = self.inner.spacing();
+    /// What a user should know about the file (a 4D file's volume taken, a series' gaps...).
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        [self.notes.clone(), self.level0_notes()].concat()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let ([x, y, z], spacing, transform) = self.grid(py)?;
         // In µm or Å where the voxels are that small, as `info` says them.
         let (unit, per_mm) =
             slabscope::geometry::length_unit(spacing.into_iter().fold(0.0, f64::max));
@@ -522,13 +489,12 @@ impl Volume {
                 .trim_end_matches('.')
                 .to_string()
         });
-        format!(
+        Ok(format!(
             "<slabscope.Volume {:?} {x}x{y}x{z} {} spacing ({sx}, {sy}, {sz}) {unit}{}>",
             self.name,
-            self.dtype(),
-            self.orientation()
-                .map_or_else(String::new, |o| format!(" {o}"))
-        )
+            self.dtype(py)?,
+            (transform.axcodes()).map_or_else(String::new, |o| format!(" {o}"))
+        ))
     }
 }
 
@@ -578,7 +544,8 @@ impl Volume {
         })?
         .with_transform(transform);
         Ok(Self {
-            inner: Arc::new(volume),
+            level0: OnceLock::from(Arc::new(volume)),
+            unread: None,
             name: "array".into(),
             max_memory: slabscope::formats::default_max_memory(),
             array: Some(kept.unbind()),

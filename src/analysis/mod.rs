@@ -25,8 +25,8 @@ use crate::partition::{
 };
 use crate::progress::Monitor;
 use crate::view::{ViewParams, ViewSearch};
-use crate::volume::Volume;
 use crate::volume::background::BackgroundRule;
+use crate::volume::{Volume, VoxelType};
 
 /// What to analyse and how. The sampling (bins and spacings) is stated once, in `view`, and used
 /// by the slicing too.
@@ -333,14 +333,32 @@ pub fn memory_needed_with(volume: &Volume, level: usize, bins: usize) -> u64 {
     let (dims, spacing) = volume.level_grids()[level];
     let n = dims.iter().map(|&d| d as u64).product::<u64>();
     let (held, map) = if level == 0 {
-        let integer = volume.data().held() != crate::volume::VoxelType::F32;
+        let integer = volume.data().held() != VoxelType::F32;
         (volume.memory_bytes(), if integer { n } else { 2 * n })
     } else {
         (volume.memory_bytes() + 4 * n, 2 * n)
     };
+    held + map.max(stack_bytes(dims, spacing, bins))
+}
+
+/// [`memory_needed`] of level 0 of a volume of `dims` and `spacing` whose voxels would be held
+/// in memory as `held`, from its grid alone: before it is read (a store's level 0, known from
+/// its metadata, [`Volume::unread_finest`]), or of a coarser level that would be read as a
+/// volume of its own.
+#[must_use]
+pub fn memory_needed_unread(dims: [usize; 3], spacing: [f64; 3], held: VoxelType) -> u64 {
+    let n = dims.iter().map(|&d| d as u64).product::<u64>();
+    let map = if held == VoxelType::F32 { 2 * n } else { n };
+    let bins = crate::geometry::lattice::SamplingParams::default().bins;
+    n * held.size() as u64 + map.max(stack_bytes(dims, spacing, bins))
+}
+
+/// The partition's slice stack with the background mask and their columns, with the per-slice
+/// sums of the longest stack of a volume of `dims` and `spacing` ([`memory_needed`]).
+fn stack_bytes(dims: [usize; 3], spacing: [f64; 3], bins: usize) -> u64 {
+    let n = dims.iter().map(|&d| d as u64).product::<u64>();
     let slices = crate::partition::most_slices(dims, spacing);
-    let stack = n + n / 4 + slices * crate::partition::slice_bytes(bins);
-    held + map.max(stack)
+    n + n / 4 + slices * crate::partition::slice_bytes(bins)
 }
 
 /// The finest pyramid level of `volume` at or coarser than level `wanted` whose analysis fits in
@@ -428,7 +446,6 @@ pub fn notes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::VoxelType;
 
     #[test]
     fn the_budget_picks_the_finest_level_that_fits() {

@@ -80,7 +80,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     let name = slabscope::error::shown(&args.file);
     let context = |e: slabscope::Error| anyhow::Error::from(e).context(name.clone());
     let (resolution, named) = args.resolution.given.resolution_named().map_err(context)?;
-    // A remote store's coarser dataset serves a coarser level without level 0, unless the
+    // A store's coarser dataset serves a coarser level without level 0, unless the
     // labels of every voxel of level 0 are asked.
     let loaded = match &args.export_labels {
         None => super::load_serving(&args.file, &args.load, resolution)?,

@@ -125,7 +125,7 @@ pub fn load(path: &Path, args: &LoadArgs) -> Result<Loaded> {
     load_by(path, args, slabscope::load)
 }
 
-/// [`load`], of a store at a URL the coarsest of its datasets that serves the pyramid level
+/// [`load`], of a Zarr store the coarsest of its datasets that serves the pyramid level
 /// `resolution` picks, without its level 0 ([`slabscope::formats::load_serving`]), when it
 /// holds one.
 pub fn load_serving(

@@ -290,24 +290,26 @@ pub fn load_preview(path: &Path, opts: &LoadOptions, max_voxels: usize) -> Resul
         .transpose()
 }
 
-/// For a store at a URL, the coarsest of its datasets on the pyramid's grid that serves the
-/// pyramid level `resolution` picks (that level, or the finest above it, from which it is
-/// computed), read without reading level 0, whose grid its
+/// For a Zarr store, local or at a URL, the coarsest of its datasets on the pyramid's grid that
+/// serves the pyramid level `resolution` picks (that level, or the finest above it, from which
+/// it is computed), read without reading level 0, whose grid its
 /// [`Volume::unread_finest`](crate::Volume::unread_finest) gives; quantized with its own range,
-/// a note says so. `None` for a local file or store (whose level 0 is read, as [`load`] does),
-/// when `resolution` picks level 0, and when the store holds no such dataset: then [`load`]
-/// reads level 0. What `analyze --resolution auto` reads of a remote store.
+/// a note says so. `None` for any other file (whose level 0 is read, as [`load`] does), when
+/// `resolution` picks level 0, and when the store holds no such dataset: then [`load`] reads
+/// level 0. What `analyze --resolution auto` reads of a store.
 pub fn load_serving(
     path: &Path,
     opts: &LoadOptions,
     resolution: crate::volume::Resolution,
 ) -> Result<Option<Loaded>> {
-    if !remote::is_url(path) || resolution == crate::volume::Resolution::Full {
+    let url = remote::is_url(path);
+    let store = url || (path.is_dir() && zarr::is_store(path));
+    if !store || resolution == crate::volume::Resolution::Full {
         return Ok(None);
     }
     opts.cancel.check()?;
     check_input(path)?;
-    let read = registry::check_url(path, opts)
+    let read = registry::check_store(path, url, opts)
         .and_then(|()| zarr::read_serving(path, opts, resolution))
         .map_err(|e| e.reached_from(&named(path)))?;
     read.map(|read| finish(path, Format::OmeZarr, read))

@@ -100,6 +100,18 @@ pub(super) fn check_url(path: &Path, opts: &LoadOptions) -> Result<()> {
     Ok(())
 }
 
+/// The options checked of the store at `path` (a URL when `url`, else a folder) as a load checks
+/// them ([`check_url`], or every reader's [`Reader::check_options`] of a folder).
+pub(super) fn check_store(path: &Path, url: bool, opts: &LoadOptions) -> Result<()> {
+    if url {
+        return check_url(path, opts);
+    }
+    for reader in READERS {
+        reader.check_options(path, true, opts)?;
+    }
+    Ok(())
+}
+
 /// Whether the file name says a volume slabscope reads (content decides when it is loaded; a
 /// raw file counts only when its name carries its dimensions).
 pub fn volume_name(path: &Path) -> bool {

@@ -1,6 +1,7 @@
 //! `analyze --resolution auto` (or a level by number) of a store at a URL reads the coarsest of
 //! the store's datasets that serves the level picked, never a chunk of level 0; the analysis
-//! equals that dataset's analysed as a volume of its own, whose value range it takes.
+//! equals that dataset's analysed as a volume of its own, whose value range it takes. A local
+//! store's the same, without decoding level 0 (#47).
 
 use std::path::{Path, PathBuf};
 
@@ -171,12 +172,14 @@ fn the_level_served_is_the_local_stores_voxel_for_voxel() {
             .unwrap()
             .is_none()
     );
-    // A local store is read as it always was.
+    // A local store's dataset serves as the remote one does.
     let path = data("zarr").join(name);
-    assert!(
-        load_serving(&path, &opts, Resolution::Level(1))
-            .unwrap()
-            .is_none()
+    let here = load_serving(&path, &opts, Resolution::Level(1)).unwrap();
+    let here = here.unwrap().volume;
+    assert_eq!(here.level().index, 1);
+    assert_eq!(
+        here.unread_finest().map(|f| f.dims),
+        Some(local.volume.dims())
     );
     for k in 1..=2 {
         let served = load_serving(&url, &opts, Resolution::Level(k))
@@ -188,6 +191,9 @@ fn the_level_served_is_the_local_stores_voxel_for_voxel() {
         assert_eq!((a.dims(), a.spacing()), (b.dims(), b.spacing()));
         assert_eq!(a.transform(), b.transform());
         assert_eq!(a.data().to_f32_vec(), b.data().to_f32_vec(), "level {k}");
+        if k == 1 {
+            assert_eq!(a.data().to_f32_vec(), here.data().to_f32_vec());
+        }
         assert!(
             served.notes.iter().any(|n| n.contains("level 0 not read")),
             "{:?}",
@@ -201,4 +207,38 @@ fn the_level_served_is_the_local_stores_voxel_for_voxel() {
         "{:?}",
         server.requests()
     );
+}
+
+#[test]
+fn a_local_stores_coarser_dataset_serves_without_decoding_level_0() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pyramid, alone) = stores(dir.path());
+    // Level 0's chunks: one corrupt (3 bytes where 64³ are due), the others absent.
+    std::fs::write(pyramid.join("0").join("0.0.0"), b"bad").unwrap();
+    let json = |args: &[&str]| -> serde_json::Value {
+        let ran = run(args);
+        assert!(ran.ok, "{args:?}: {}", ran.stderr);
+        serde_json::from_str(&ran.stdout).unwrap()
+    };
+    let own = json(&["analyze", "--json", "--slabs", "3", s(&alone)]);
+    for resolution in ["1", "auto"] {
+        let args = [
+            "analyze",
+            "--json",
+            "--slabs",
+            "3",
+            "--resolution",
+            resolution,
+        ];
+        let local = json(&[&args[..], &[s(&pyramid)]].concat());
+        assert_eq!(local["dims"], serde_json::json!([256, 256, 256]));
+        assert_eq!(local["resolution"]["pyramid_level"], 1);
+        for key in ["range", "views", "best_axis", "partition", "params"] {
+            assert_eq!(local[key], own[key], "{resolution}: {key}");
+        }
+    }
+    // Level 0 itself is refused, naming the chunk.
+    let full = run(&["analyze", "--json", "--resolution", "full", s(&pyramid)]);
+    assert!(!full.ok);
+    assert!(full.stderr.contains("0.0.0"), "{}", full.stderr);
 }

@@ -137,3 +137,60 @@ fn a_pyramid_level_of_bombs_asked_for_is_refused_within_the_budget() {
         &store,
     );
 }
+
+/// A folder of hostile stores triaged under a small budget (#47): the bombs above (codec chains,
+/// a second frame, a shard inside a shard) and the mutation harness's seeds beside them (tests/data/zarr/hostile), the loads sharing one budget, the peak
+/// anonymous memory of the process at most that budget and 64 MiB; each bomb's row an error.
+#[test]
+fn a_folder_of_hostile_stores_is_triaged_within_a_small_budget() {
+    let _alone = crate::one_at_a_time();
+    if !Path::new("/proc/self/status").exists() {
+        eprintln!("skipped: no /proc to read the anonymous memory from");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let gz = gzip_of_zeros();
+    let zs = zstd_of_zeros();
+    let mut frames = zstd::bulk::compress(&[1u8; 16], 3).unwrap();
+    frames.extend(&zs);
+    let bombs = [
+        store(
+            dir.path(),
+            "gzgz.zarr",
+            &["bytes", "gzip", "gzip"],
+            &gzip(&gz),
+        ),
+        store(
+            dir.path(),
+            "zsgz.zarr",
+            &["bytes", "zstd", "gzip"],
+            &gzip(&zs),
+        ),
+        store(dir.path(), "frames.zarr", &["bytes", "zstd"], &frames),
+        nested_shard(dir.path(), "nested.zarr", &gz),
+    ];
+    let seeds = crate::common::data("zarr/hostile");
+    for name in ["gzip_gzip.zarr", "nested_shard.zarr", "small_chunks.zarr"] {
+        crate::common::copy_tree(&seeds.join(name), &dir.path().join(name));
+    }
+    let small: u64 = 64 << 20;
+    let args = ["triage", s(dir.path()), "--json", "--max-memory", "64M"];
+    let (_, stdout, peak) = peak_run(&args);
+    let rows = crate::common::rows(&stdout);
+    assert_eq!(rows.len(), 7, "{stdout}");
+    for bomb in &bombs {
+        let name = bomb.file_name().unwrap().to_string_lossy();
+        let row = rows
+            .iter()
+            .find(|r| r["path"].as_str().is_some_and(|p| p.ends_with(&*name)));
+        assert!(
+            row.is_some_and(|r| r["error"].is_string()),
+            "{name}: {rows:?}"
+        );
+    }
+    assert!(
+        peak <= small + SLACK,
+        "peak anonymous memory {} MiB over the budget of 64 MiB and 64 MiB",
+        peak >> 20
+    );
+}

@@ -1,5 +1,5 @@
 //! A store's coarser datasets read without its level 0: the first picture's preview
-//! ([`read_preview`]) and, for a store at a URL, the level an analysis asks for
+//! ([`read_preview`]) and, for a store local or at a URL, the level an analysis asks for
 //! ([`read_serving`]), each as its pyramid level of the image, quantized with its own range
 //! (level 0's is not known until level 0 is read).
 

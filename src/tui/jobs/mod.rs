@@ -16,6 +16,7 @@ use slabscope::budget::GLANCE_VOXELS;
 use slabscope::partition::StackParams;
 use slabscope::request::{AnalysisRequest, Level};
 use slabscope::view::ViewParams;
+use slabscope::volume::Resolution;
 use slabscope::{AnalysisParams, LoadOptions, Monitor, Progress, Volume};
 
 use super::event::{Effect, Event, Job, JobMsg, PictureJob};
@@ -435,7 +436,9 @@ fn cutting(stack: &StackParams) -> AnalysisParams {
 /// place of the options', and plans `request` on it: the volume worked on is the level its plan
 /// gives. A coarse pyramid level the file holds is sent first, as a preview (by `send`, the
 /// first of `to`), and level 0 read once `to`'s second returns (for a remote store, when the
-/// preview's first picture is drawn).
+/// preview's first picture is drawn); where level 0's analysis would not fit the memory budget,
+/// the coarsest of the file's datasets that serves the level that fits is read instead, never
+/// level 0 ([`slabscope::budget::unread_level_within`]).
 fn load_volume(
     source: Option<&slabscope::triage::Entry>,
     load: &LoadOptions,
@@ -448,11 +451,23 @@ fn load_volume(
             let load = entry.options(load);
             // A preview that cannot be read is no error: level 0's load says what is wrong.
             let preview = slabscope::formats::load_preview(&entry.path, &load, GLANCE_VOXELS);
+            let mut beyond = None;
             if let Ok(Some(p)) = preview {
+                beyond = slabscope::budget::unread_level_within(&p.volume, load.max_memory);
                 send(JobMsg::Preview(Arc::new(p.volume), p.notes));
                 first_picture();
             }
-            slabscope::load(&entry.path, &load).and_then(|l| worked_on(l, request))
+            // Level 0 beyond the budget: the store's dataset that serves the level that fits,
+            // level 0 never read.
+            let served = beyond
+                .map(|k| slabscope::formats::load_serving(&entry.path, &load, Resolution::Level(k)))
+                .transpose()
+                .map(Option::flatten);
+            match served {
+                Ok(Some(loaded)) => worked_on(loaded, request),
+                Ok(None) => slabscope::load(&entry.path, &load).and_then(|l| worked_on(l, request)),
+                Err(e) => Err(e),
+            }
         }
         None => slabscope::builtin_dataset().map(|v| (Arc::new(v), Vec::new())),
     };

@@ -240,12 +240,10 @@ fn next_message(rx: &std::sync::mpsc::Receiver<Event>) -> JobMsg {
     }
 }
 
-/// A remote store's first picture fetches no chunk of level 0: its preview level is sent, and
-/// level 0 is read once the preview's first picture is drawn.
-#[test]
-fn a_remote_stores_level_0_waits_for_the_first_picture() {
-    let dir = tempfile::tempdir().unwrap();
-    let store = dir.path().join("big.ome.zarr");
+/// In `dir`, `big.ome.zarr`: a 256³ u8 level 0 over a 128³ level 1, no chunk written (each is
+/// a request the server logs, answered 404: the fill value, 3).
+fn two_level_store(dir: &std::path::Path) {
+    let store = dir.join("big.ome.zarr");
     let array = |path: &str, n: usize| {
         std::fs::create_dir_all(store.join(path)).unwrap();
         let meta = format!(
@@ -255,7 +253,6 @@ fn a_remote_stores_level_0_waits_for_the_first_picture() {
         );
         std::fs::write(store.join(path).join(".zarray"), meta).unwrap();
     };
-    // No chunk written: each is a request the server logs (404: the fill value).
     array("0", 256);
     array("1", 128);
     std::fs::write(store.join(".zgroup"), r#"{"zarr_format": 2}"#).unwrap();
@@ -273,15 +270,25 @@ fn a_remote_stores_level_0_waits_for_the_first_picture() {
         dataset("1", 2.0)
     );
     std::fs::write(store.join(".zattrs"), attrs).unwrap();
+}
+
+/// How many chunks of `big.ome.zarr`'s level 0 the server was asked for.
+fn level_0_chunks(server: &http::Server) -> usize {
+    (server.requests().iter())
+        .filter(|r| {
+            r.contains("/big.ome.zarr/0/") && !r.contains("/.z") && !r.contains("zarr.json")
+        })
+        .count()
+}
+
+/// A remote store's first picture fetches no chunk of level 0: its preview level is sent, and
+/// level 0 is read once the preview's first picture is drawn.
+#[test]
+fn a_remote_stores_level_0_waits_for_the_first_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    two_level_store(dir.path());
     let server = http::serve(dir.path(), http::Mode::Normal, "");
-    let level_0 = || {
-        let log = server.requests();
-        log.iter()
-            .filter(|r| {
-                r.contains("/big.ome.zarr/0/") && !r.contains("/.z") && !r.contains("zarr.json")
-            })
-            .count()
-    };
+    let level_0 = || level_0_chunks(&server);
     let (tx, rx) = channel();
     let entry = slabscope::triage::Entry::file(server.url("big.ome.zarr"));
     let mut jobs = Jobs::new(tx, Caps::blocks(), Some(entry), LoadOptions::default());
@@ -308,6 +315,40 @@ fn a_remote_stores_level_0_waits_for_the_first_picture() {
         level_0(),
         64,
         "each chunk of level 0 once, after the picture"
+    );
+}
+
+/// A remote store whose level 0 is beyond `--max-memory` never has a chunk of level 0 fetched:
+/// after the first picture, the level that fits is read from the store's dataset that serves it.
+#[test]
+fn a_remote_store_beyond_the_budget_opens_the_level_that_fits() {
+    let dir = tempfile::tempdir().unwrap();
+    two_level_store(dir.path());
+    let server = http::serve(dir.path(), http::Mode::Normal, "");
+    let (tx, rx) = channel();
+    let entry = slabscope::triage::Entry::file(server.url("big.ome.zarr"));
+    // Level 0's analysis needs 36 MiB (16 of voxels, 20 of slice stack), level 1's 4.5 MiB.
+    let load = LoadOptions {
+        max_memory: 16 << 20,
+        ..LoadOptions::default()
+    };
+    let mut jobs = Jobs::new(tx, Caps::blocks(), Some(entry), load);
+    jobs.run(Effect::Load);
+    let JobMsg::Preview(preview, _) = next_message(&rx) else {
+        panic!("not the preview first");
+    };
+    assert_eq!(preview.dims(), [128, 128, 128]);
+    jobs.admit(JobMsg::Rendered(1, Err("drawn".into())));
+    let JobMsg::Loaded(Ok((level, _))) = next_message(&rx) else {
+        panic!("not the level that fits next");
+    };
+    assert_eq!((level.dims(), level.level().index), ([128; 3], 1));
+    assert_eq!(level.unread_finest().map(|f| f.dims), Some([256; 3]));
+    assert_eq!(level_0_chunks(&server), 0, "{:?}", server.requests());
+    assert!(
+        (server.requests().iter()).any(|r| r.contains("/big.ome.zarr/1/0.0.0")),
+        "{:?}",
+        server.requests()
     );
 }
 
