@@ -5,7 +5,7 @@
 //! anonymous memory of the process at most the budget and 64 MiB.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::budget::peak_run;
 use crate::common::s;
@@ -62,6 +62,21 @@ fn refused_within_budget(args: &[&str], named: &Path) -> String {
     stdout
 }
 
+/// The four bombs in `dir`: codec chains of gzip in gzip and gzip over zstd, a second zstd frame
+/// after a small one, and a shard inside a shard.
+fn bombs(dir: &Path) -> [PathBuf; 4] {
+    let gz = gzip_of_zeros();
+    let zs = zstd_of_zeros();
+    let mut frames = zstd::bulk::compress(&[1u8; 16], 3).unwrap();
+    frames.extend(&zs);
+    [
+        store(dir, "gzgz.zarr", &["bytes", "gzip", "gzip"], &gzip(&gz)),
+        store(dir, "zsgz.zarr", &["bytes", "zstd", "gzip"], &gzip(&zs)),
+        store(dir, "frames.zarr", &["bytes", "zstd"], &frames),
+        nested_shard(dir, "nested.zarr", &gz),
+    ]
+}
+
 #[test]
 fn bombs_are_refused_within_the_budget() {
     let _alone = crate::one_at_a_time();
@@ -70,26 +85,7 @@ fn bombs_are_refused_within_the_budget() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let gz = gzip_of_zeros();
-    let zs = zstd_of_zeros();
-    let mut frames = zstd::bulk::compress(&[1u8; 16], 3).unwrap();
-    frames.extend(&zs);
-    let stores = [
-        store(
-            dir.path(),
-            "gzgz.zarr",
-            &["bytes", "gzip", "gzip"],
-            &gzip(&gz),
-        ),
-        store(
-            dir.path(),
-            "zsgz.zarr",
-            &["bytes", "zstd", "gzip"],
-            &gzip(&zs),
-        ),
-        store(dir.path(), "frames.zarr", &["bytes", "zstd"], &frames),
-        nested_shard(dir.path(), "nested.zarr", &gz),
-    ];
+    let stores = bombs(dir.path());
     for store in &stores {
         refused_within_budget(&["analyze", s(store), "--max-memory", "256M"], store);
     }
@@ -149,26 +145,7 @@ fn a_folder_of_hostile_stores_is_triaged_within_a_small_budget() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let gz = gzip_of_zeros();
-    let zs = zstd_of_zeros();
-    let mut frames = zstd::bulk::compress(&[1u8; 16], 3).unwrap();
-    frames.extend(&zs);
-    let bombs = [
-        store(
-            dir.path(),
-            "gzgz.zarr",
-            &["bytes", "gzip", "gzip"],
-            &gzip(&gz),
-        ),
-        store(
-            dir.path(),
-            "zsgz.zarr",
-            &["bytes", "zstd", "gzip"],
-            &gzip(&zs),
-        ),
-        store(dir.path(), "frames.zarr", &["bytes", "zstd"], &frames),
-        nested_shard(dir.path(), "nested.zarr", &gz),
-    ];
+    let bombs = bombs(dir.path());
     let seeds = crate::common::data("zarr/hostile");
     for name in ["gzip_gzip.zarr", "nested_shard.zarr", "small_chunks.zarr"] {
         crate::common::copy_tree(&seeds.join(name), &dir.path().join(name));
