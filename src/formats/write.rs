@@ -81,15 +81,35 @@ impl VolumeOutput {
 /// Writes `volume` in the format its extension names ([`VolumeOutput`]), atomically; an existing
 /// `path` is replaced only when `force` is set, and only when it is a regular file.
 pub fn write_volume(path: &Path, volume: &Volume, force: bool) -> Result<()> {
-    check_output(path, force)?;
-    stage_volume(path, volume)?.persist(force)
+    write_whole(path, volume, force, stage_streamed)
 }
 
 /// `volume` written in the format the extension of `path` names, to a temporary file beside it
 /// that [`Staged::persist`] puts in place.
 pub fn stage_volume(path: &Path, volume: &Volume) -> Result<Staged> {
+    stage_whole(path, volume, stage_streamed)
+}
+
+/// Writes `volume` whole through a format's `stage`, atomically; an existing `path` is replaced
+/// only when `force` is set, and only when it is a regular file.
+pub(crate) fn write_whole(
+    path: &Path,
+    volume: &Volume,
+    force: bool,
+    stage: impl Fn(&Path, &VolumeHeader, Body<'_>) -> Result<Staged>,
+) -> Result<()> {
+    check_output(path, force)?;
+    stage_whole(path, volume, stage)?.persist(force)
+}
+
+/// `volume`'s header and voxels, little-endian in their own type, through a format's `stage`.
+fn stage_whole(
+    path: &Path,
+    volume: &Volume,
+    stage: impl Fn(&Path, &VolumeHeader, Body<'_>) -> Result<Staged>,
+) -> Result<Staged> {
     let ty = volume.voxel_type();
-    stage_streamed(path, &VolumeHeader::of(volume), &mut |mut out| {
+    stage(path, &VolumeHeader::of(volume), &mut |mut out| {
         crate::volume::write_le(volume.data(), ty, &mut out)
     })
 }

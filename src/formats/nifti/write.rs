@@ -10,10 +10,9 @@ use flate2::write::GzEncoder;
 use super::DATATYPES;
 use crate::error::Result;
 use crate::formats::Staged;
-use crate::formats::write::{Body, VolumeHeader};
+use crate::formats::write::{Body, VolumeHeader, write_whole};
 use crate::geometry::world::Quaternion;
 use crate::volume::Volume;
-use crate::volume::write_le;
 
 /// Writes `volume` as a single-file NIfTI (`.nii`, or gzip-compressed when `gzip`) in its voxel
 /// type (integer types rounded and clamped), with its voxel-to-world transform as both the sform
@@ -25,12 +24,9 @@ use crate::volume::write_le;
 /// The file is written to a temporary file beside `path` and renamed into place; an existing
 /// `path` is replaced only when `force` is set.
 pub fn write_nifti(path: &Path, volume: &Volume, gzip: bool, force: bool) -> Result<()> {
-    super::super::check_output(path, force)?;
-    let ty = volume.voxel_type();
-    stage(path, &VolumeHeader::of(volume), gzip, &mut |mut out| {
-        write_le(volume.data(), ty, &mut out)
-    })?
-    .persist(force)
+    write_whole(path, volume, force, |path, header, body| {
+        stage(path, header, gzip, body)
+    })
 }
 
 /// A volume of `header` whose voxels `body` writes, as NIfTI in a temporary file beside `path`,

@@ -9,11 +9,10 @@ use flate2::Compression;
 use flate2::write::GzEncoder;
 
 use super::super::Staged;
-use super::super::write::{Body, VolumeHeader};
+use super::super::write::{Body, VolumeHeader, write_whole};
 use super::type_name;
 use crate::error::Result;
 use crate::volume::Volume;
-use crate::volume::write_le;
 
 /// How [`write_nrrd`] stores the voxels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -32,12 +31,9 @@ pub enum NrrdEncoding {
 /// The file is written to a temporary file beside `path` and renamed into place; an existing
 /// `path` is replaced only when `force` is set.
 pub fn write_nrrd(path: &Path, volume: &Volume, encoding: NrrdEncoding, force: bool) -> Result<()> {
-    super::super::check_output(path, force)?;
-    let ty = volume.voxel_type();
-    stage(path, &VolumeHeader::of(volume), encoding, &mut |mut out| {
-        write_le(volume.data(), ty, &mut out)
-    })?
-    .persist(force)
+    write_whole(path, volume, force, |path, header, body| {
+        stage(path, header, encoding, body)
+    })
 }
 
 /// A volume of `header` whose voxels `body` writes, as NRRD in a temporary file beside `path`,
