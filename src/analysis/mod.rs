@@ -245,7 +245,7 @@ fn analyzed_with(
         Some(shown) => {
             let (partition, histories) = partitioned_kept(plan, axis, params, monitor)?;
             let explained = crate::explain::explain(
-                &plan.views,
+                (&plan.views, plan.views_streamed),
                 views.as_ref(),
                 &params.view,
                 &histories,

@@ -109,11 +109,11 @@ impl Plan {
 }
 
 /// Whether the view search and the partition of every voxel of `volume` can both be counted
-/// in `room` bytes: not when the lesson shows the whole cell map. (The gain ranking reads the
-/// voxels where they are, with the background's mask, which the partition's floor counts.)
+/// in `room` bytes (the lesson's axes are then counted slab by slab too). (The gain ranking
+/// reads the voxels where they are, with the background's mask, which the partition's floor
+/// counts.)
 fn streams_search(volume: &Volume, params: &AnalysisParams, room: u64) -> bool {
     params.runs_search()
-        && params.explain.is_none()
         && room >= crate::view::streamed_memory_floor(volume, &params.view)
         && room >= crate::partition::streamed_memory_floor(volume, params.view.sampling.bins)
 }

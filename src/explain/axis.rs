@@ -8,7 +8,10 @@ use crate::geometry::lattice::Lattice;
 use crate::geometry::{WorldAxis, canonical, normalize};
 use crate::measure::{BlockCounts, entropy};
 use crate::progress::Monitor;
-use crate::view::{BinSampler, ViewParams, block_counts, ray_bins, work_units};
+use crate::view::{
+    BinSampler, ViewParams, block_counts, block_counts_streamed, ray_bins, streamed_slabs,
+    work_units,
+};
 use crate::volume::Volume;
 
 /// One block of symbols (quantized samples in sequence order) and how often it occurs.
@@ -187,21 +190,38 @@ pub fn axis_lesson(
     params: &ViewParams,
     monitor: &Monitor,
 ) -> Result<AxisLesson> {
+    axis_lesson_within(volume, axis, params, None, monitor)
+}
+
+/// [`axis_lesson`], its blocks counted slab by slab within `room` bytes when given (as the view
+/// search streamed within them counts them: the same numbers, bit for bit), else with the
+/// whole cell map in memory.
+pub fn axis_lesson_within(
+    volume: &Volume,
+    axis: [f64; 3],
+    params: &ViewParams,
+    room: Option<u64>,
+    monitor: &Monitor,
+) -> Result<AxisLesson> {
     let lattice = paper_lattice(volume, axis, params)?;
     let block = params.block;
     let bins = params.sampling.bins;
     let q = volume.quantizer(bins)?;
     let walk = |block: usize| -> Result<(BlockCounts, u64)> {
+        if let Some(room) = room {
+            return block_counts_streamed(volume, &lattice, params, block, room, monitor);
+        }
         crate::volume::with_voxels!(volume.data(), |data| {
             block_counts(&BinSampler::over(data, volume, q), &lattice, block, monitor)
         })
     };
     // L = 4 has a middle length its counts do not give: the walk with blocks of 2 does.
     let middle = 2..block.saturating_sub(1);
-    monitor.start(
-        "counting blocks",
-        work_units(&lattice) * (1 + middle.len() as u64),
-    );
+    let walk_units = match room {
+        Some(room) => streamed_slabs(volume, room),
+        None => work_units(&lattice),
+    };
+    monitor.start("counting blocks", walk_units * (1 + middle.len() as u64));
     let (counts, rays) = walk(block)?;
     let (h1, h_short, h_long) = counts.entropies();
     let mut block_entropies = vec![h1];

@@ -14,8 +14,8 @@ mod worked;
 use serde::Serialize;
 
 pub use axis::{
-    AxisLesson, BlockCount, RayPlane, RaySamples, axis_lesson, ray_plane, ray_samples,
-    table_entropy,
+    AxisLesson, BlockCount, RayPlane, RaySamples, axis_lesson, axis_lesson_within, ray_plane,
+    ray_samples, table_entropy,
 };
 pub use modes::{ModeLesson, mode_lesson};
 pub use steps::{
@@ -92,9 +92,10 @@ pub struct Explain {
 }
 
 /// The lesson of an analysis: its axes on `views_volume` (the level the view search ran on) by
-/// the search's parameters, and the steps of `partition` from the `histories` it came from.
+/// the search's parameters, counted slab by slab within `room` bytes when the search was
+/// ([`axis_lesson_within`]), and the steps of `partition` from the `histories` it came from.
 pub fn explain(
-    views_volume: &Volume,
+    (views_volume, room): (&Volume, Option<u64>),
     search: Option<&ViewSearch>,
     view: &ViewParams,
     histories: &Histories,
@@ -105,12 +106,12 @@ pub fn explain(
     let params = search.map_or(view, |s| &s.params);
     let mut axes = vec![ExplainedAxis {
         role: AxisRole::Chosen,
-        lesson: axis_lesson(views_volume, partition.axis, params, monitor)?,
+        lesson: axis_lesson_within(views_volume, partition.axis, params, room, monitor)?,
     }];
     if let Some(worst) = search.and_then(|s| s.views.iter().rev().find(|v| v.measured())) {
         axes.push(ExplainedAxis {
             role: AxisRole::Worst,
-            lesson: axis_lesson(views_volume, worst.axis, params, monitor)?,
+            lesson: axis_lesson_within(views_volume, worst.axis, params, room, monitor)?,
         });
     }
     let taken = partition.steps.len();

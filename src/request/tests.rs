@@ -377,8 +377,8 @@ fn histories_of_a_plan_counted_in_strips_are_the_methods_own() {
 
 /// Every voxel asked for by name beyond the budget: the view search with the refinement and
 /// the gain ranking is counted slab by slab (`view::streamed`'s tests hold the search bit for
-/// bit to the search in memory, and the next test the gain ranking beside it); with the
-/// lesson, which shows the whole cell map, it runs on a coarser level.
+/// bit to the search in memory, and the next tests the gain ranking and the lesson beside it),
+/// with the lesson or without.
 #[test]
 fn a_refined_search_of_every_voxel_beyond_the_budget_is_streamed() {
     let volume = phantom::body([256, 256, 256], 1).unwrap();
@@ -398,11 +398,42 @@ fn a_refined_search_of_every_voxel_beyond_the_budget_is_streamed() {
         };
         let planned = request.plan(&volume).unwrap();
         let note = &planned.plan.note;
-        assert_eq!(
-            planned.plan.views_streamed.is_some(),
-            !explain,
-            "{explain}: {note:?}"
+        assert!(planned.plan.views_streamed.is_some(), "{explain}: {note:?}");
+        assert!(planned.plan.streamed.is_some(), "{explain}: {note:?}");
+    }
+}
+
+/// The lesson of an analysis whose views are counted slab by slab and whose slabs strip by
+/// strip: its block tables and entropies, the chosen axis's and the worst's, are those of the
+/// lesson in memory, every count.
+#[test]
+fn the_lesson_beside_views_counted_slab_by_slab_is_the_one_in_memory() {
+    let volume = phantom::body([40, 36, 52], 3).unwrap();
+    for block in [3, 4] {
+        let params = AnalysisParams {
+            view: crate::view::ViewParams {
+                block,
+                ..crate::view::ViewParams::default()
+            },
+            explain: Some(crate::explain::StepsShown::All),
+            ..AnalysisParams::default()
+        };
+        let request = AnalysisRequest::new(params.clone(), u64::MAX);
+        let in_memory = request.run(&volume, &Monitor::none()).unwrap();
+        let mut planned = request.on(Arc::new(volume.clone()));
+        let bins = params.view.sampling.bins;
+        // The least room: slabs of one plane of cells, the most seams to join.
+        planned.plan.views_streamed =
+            Some(crate::view::streamed_memory_floor(&volume, &params.view));
+        planned.plan.streamed = Some(crate::partition::streamed_memory_floor(&volume, bins));
+        let done = planned.run(&Monitor::none()).unwrap();
+        let (streamed, whole) = (
+            done.analysis.explain.as_ref().unwrap(),
+            in_memory.analysis.explain.as_ref().unwrap(),
         );
+        assert_eq!(streamed.axes.len(), 2);
+        assert!(streamed.axes[0].lesson.blocks.len() > 10, "{block}");
+        assert_eq!(streamed, whole, "L = {block}");
     }
 }
 

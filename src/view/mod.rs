@@ -19,7 +19,7 @@ pub use rate::{
     entropy_rate_of, ray_bins, work_units, work_units_of,
 };
 pub use refine::{REFINE_STOP_DEGREES, pattern_search, refine_evaluations, refine_steps};
-pub use streamed::{search_streamed, streamed_memory_floor};
+pub use streamed::{block_counts_streamed, search_streamed, streamed_memory_floor, streamed_slabs};
 
 use crate::error::{Error, Result};
 use crate::geometry::lattice::{Lattice, SamplingParams};

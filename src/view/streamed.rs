@@ -20,7 +20,7 @@ use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, f
 use super::{lattice_of, ranked, refine_evaluations, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
-use crate::measure::{Fragment, PartialCounts};
+use crate::measure::{BlockCounts, Fragment, PartialCounts};
 use crate::progress::Monitor;
 use crate::view::rate::SLAB_ROWS;
 use crate::volume::{Quantizer, Volume, Voxel};
@@ -66,6 +66,46 @@ pub fn search_streamed(
         };
         sweeps.search(&axes, monitor)
     })
+}
+
+/// The block counts of every ray of `lattice` in blocks of `block` by `params`' bins, and the
+/// rays that met the volume: [`block_counts`](super::block_counts)'s, bit for bit, counted a
+/// slab of planes at a time within about `room` bytes (at least [`streamed_memory_floor`]);
+/// one progress unit a slab.
+pub fn block_counts_streamed(
+    volume: &Volume,
+    lattice: &Lattice,
+    params: &ViewParams,
+    block: usize,
+    room: u64,
+    monitor: &Monitor,
+) -> Result<(BlockCounts, u64)> {
+    let params = ViewParams {
+        block,
+        ..resolve(volume, params)?
+    };
+    let q = volume.quantizer(params.sampling.bins)?;
+    crate::volume::with_voxels!(volume.data(), |data| {
+        let sweeps = Sweeps {
+            data,
+            volume,
+            q,
+            params: &params,
+            room,
+        };
+        let slabs = sweeps.slabs();
+        let lattices = vec![(lattice.clone(), RaySubset::ALL)];
+        let mut counts = sweeps.counts(lattices, slabs, monitor)?;
+        let counts = counts.pop().expect("one lattice counted");
+        Ok((counts.counts, counts.rays))
+    })
+}
+
+/// The slabs a sweep of [`block_counts_streamed`] reads `volume` in, within `room` bytes: one
+/// progress unit each.
+#[must_use]
+pub fn streamed_slabs(volume: &Volume, room: u64) -> u64 {
+    crate::volume::with_voxels!(volume.data(), |data| slab_count(data, volume.dims(), room))
 }
 
 /// One lattice counted slab by slab.
@@ -150,14 +190,31 @@ impl<T: Voxel> Sweeps<'_, T> {
             .collect())
     }
 
-    /// The entropy rates of `lattices` (each with the rays it walks), in as few sweeps over the
-    /// volume's slabs as the room allows; one progress unit a lattice and slab.
+    /// The entropy rates of `lattices` (each with the rays it walks), as [`Self::counts`]
+    /// counts them.
     fn count(
+        &self,
+        lattices: Vec<(Lattice, RaySubset)>,
+        slabs: (Bricks, usize),
+        monitor: &Monitor,
+    ) -> Result<Vec<AxisEntropy>> {
+        let axes: Vec<[f64; 3]> = lattices.iter().map(|(l, _)| l.d).collect();
+        let counts = self.counts(lattices, slabs, monitor)?;
+        Ok(axes
+            .iter()
+            .zip(counts)
+            .map(|(&d, c)| AxisEntropy::new(d, &c.counts, c.rays))
+            .collect())
+    }
+
+    /// The block counts of `lattices` (each with the rays it walks), in as few sweeps over the
+    /// volume's slabs as the room allows; one progress unit a lattice and slab.
+    fn counts(
         &self,
         lattices: Vec<(Lattice, RaySubset)>,
         (bricks, slab): (Bricks, usize),
         monitor: &Monitor,
-    ) -> Result<Vec<AxisEntropy>> {
+    ) -> Result<Vec<PartialCounts>> {
         let dims = self.volume.dims();
         let window = BinSampler::<T>::window_bytes(dims, slab + 1);
         // Each thread walks one band of one lattice's rays at a time.
@@ -196,13 +253,13 @@ impl<T: Voxel> Sweeps<'_, T> {
         Ok(out)
     }
 
-    /// One sweep over the slabs counting `jobs`, and their entropy rates.
+    /// One sweep over the slabs counting `jobs`, and their counts, every ray joined whole.
     fn sweep(
         &self,
         mut jobs: Vec<Job>,
         (bricks, slab): (Bricks, usize),
         monitor: &Monitor,
-    ) -> Result<Vec<AxisEntropy>> {
+    ) -> Result<Vec<PartialCounts>> {
         let block = self.params.block;
         for planes in planes(self.volume.dims(), slab) {
             let sampler = BinSampler::window(self.data, self.volume, self.q, planes.clone());
@@ -228,11 +285,7 @@ impl<T: Voxel> Sweeps<'_, T> {
                         job.open.len()
                     )));
                 }
-                Ok(AxisEntropy::new(
-                    job.lattice.d,
-                    &job.counts.counts,
-                    job.counts.rays,
-                ))
+                Ok(job.counts)
             })
             .collect()
     }
@@ -241,15 +294,26 @@ impl<T: Voxel> Sweeps<'_, T> {
     /// bricks but the last), as many as a quarter of the room allows.
     fn slabs(&self) -> (Bricks, usize) {
         let dims = self.volume.dims();
-        let cells = dims[2].saturating_sub(1).max(1);
-        let per_plane = BinSampler::<T>::window_bytes(dims, 1).max(1);
-        let affordable = ((self.room / 4) / per_plane).saturating_sub(1).max(1) as usize;
-        let planes = affordable.min(cells);
+        let planes = slab_planes::<T>(dims, self.room);
         // A slab is one brick: its rays' stretches run from face to face of the slab, long
         // enough that the walk's cost per stretch fades (bricks of 64³ cells cost twice the tile
         // walk for it), and its map stays in the last-level cache.
         (Bricks::shaped(dims, [dims[0], dims[1], planes]), planes)
     }
+}
+
+/// The planes of cells a slab of a sweep within `room` bytes holds: as many as a quarter of the
+/// room allows.
+fn slab_planes<T: Voxel>(dims: [usize; 3], room: u64) -> usize {
+    let cells = dims[2].saturating_sub(1).max(1);
+    let per_plane = BinSampler::<T>::window_bytes(dims, 1).max(1);
+    let affordable = ((room / 4) / per_plane).saturating_sub(1).max(1) as usize;
+    affordable.min(cells)
+}
+
+/// The slabs of a sweep over `data`'s volume of `dims` within `room` bytes.
+fn slab_count<T: Voxel>(_data: &[T], dims: [usize; 3], room: u64) -> u64 {
+    planes(dims, slab_planes::<T>(dims, room)).count() as u64
 }
 
 /// The planes of cells of each slab of `slab` planes, in order along z.
