@@ -2,7 +2,10 @@
 //! the current folder under names not taken yet.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
+use slabscope::analysis::Plan;
+use slabscope::budget::Budget;
 use slabscope::formats::write_atomic;
 use slabscope::render::{ImageOutput, encode};
 use slabscope::request::RenderRequest;
@@ -12,15 +15,25 @@ use crate::tui::event::ExportRequest;
 
 /// Writes the view (PNG), the analysis (JSON) and the labels (NRRD) of the request's partition
 /// to the current folder under names not taken yet; says what it wrote.
+/// Within `max_memory` bytes: the labels are refused before anything is written when the
+/// background mask of every voxel and a plane of them do not fit beside the volume.
 pub(super) fn export(
     full: &Volume,
     r: &ExportRequest,
+    max_memory: u64,
     monitor: &Monitor,
 ) -> slabscope::Result<String> {
     // A preview's partition is of its pyramid level, and says so.
     let level = full.coarser(r.level);
     let volume = level.as_ref();
     let part = Partition::new(&r.histories, r.method, r.position, monitor)?;
+    let room = labels_room(
+        Path::new(&r.name),
+        full,
+        &level,
+        part.slabs.len(),
+        max_memory,
+    )?;
     let stem = Path::new(&r.name)
         .file_stem()
         .map_or_else(|| "builtin".into(), |s| s.to_string_lossy().into_owned());
@@ -49,7 +62,6 @@ pub(super) fn export(
     // At the working volume's shape, whatever level the preview's partition is of, a few
     // planes at a time (gzip-compressed NRRD, by the name).
     let labelled = (full, volume, &analysis.partition);
-    let room = slabscope::partition::LABEL_CHUNK_BYTES;
     slabscope::report::write_labels(&labels, labelled, room, false, monitor)?;
     Ok(format!(
         "wrote {}, {} and {}",
@@ -57,6 +69,20 @@ pub(super) fn export(
         slabscope::error::shown(&json),
         slabscope::error::shown(&labels)
     ))
+}
+
+/// The working memory for writing the labels of a partition of `level` into `slabs` slabs at
+/// `full`'s shape within `max_memory` bytes, as the CLI's `--export-labels` weighs it
+/// ([`Budget::labels`]); an error naming the volume at `path` when they do not fit.
+fn labels_room(
+    path: &Path,
+    full: &Volume,
+    level: &Arc<Volume>,
+    slabs: usize,
+    max_memory: u64,
+) -> slabscope::Result<u64> {
+    let plan = Plan::at(Arc::clone(level));
+    Budget::new(max_memory).labels(path, full, &plan, slabs)
 }
 
 /// Writes `bytes` to `path`, which must not exist.
@@ -78,4 +104,31 @@ fn free_name(stem: &str, ext: &str) -> PathBuf {
         .map(name)
         .find(|p| !p.exists())
         .unwrap_or_else(|| name(u32::MAX))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::labels_room;
+    use slabscope::volume::phantom;
+
+    /// The labels' room is the CLI's: the background mask of every voxel (a bit each) and a plane
+    /// of labels beside the volume, refused in one line naming the volume when they do not fit.
+    #[test]
+    fn the_labels_are_weighed_against_the_budget_before_anything_is_written() {
+        let full = phantom::body([64, 64, 80], 1).unwrap();
+        let level = full.coarser(1);
+        let path = Path::new("body.nii");
+        let held = full.memory_bytes();
+        let mask = (full.len() as u64).div_ceil(64) * 8;
+        let plane = 64 * 64;
+        let least = held + level.memory_bytes() + mask + plane;
+        assert!(labels_room(path, &full, &level, 4, least).unwrap() >= plane);
+        let refused = labels_room(path, &full, &level, 4, least - 1).unwrap_err();
+        let text = refused.to_string();
+        assert!(text.starts_with("body.nii: "), "{text}");
+        assert!(text.contains("background mask"), "{text}");
+        assert!(!text.contains('\n'), "{text}");
+    }
 }

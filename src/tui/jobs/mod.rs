@@ -160,9 +160,11 @@ impl Jobs {
             }
             Effect::Export(request) => {
                 if let Some(volume) = self.open.full.clone() {
+                    let max_memory = self.load.max_memory;
                     self.spawn(Job::Export, move |monitor, _| {
                         JobMsg::Exported(
-                            export(&volume, &request, monitor).map_err(|e| e.to_string()),
+                            export(&volume, &request, max_memory, monitor)
+                                .map_err(|e| e.to_string()),
                         )
                     });
                 }
