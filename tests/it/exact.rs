@@ -1,14 +1,16 @@
 //! 32-bit integers beyond what an f32 holds exactly (2^24 + 1 and up): every reader that widens
 //! u32 or i32 voxels to f32 says how many it rounded and the largest, in one note (the one count
 //! `data::wide` keeps for 64-bit integers too); values up to 2^24 give none. Each file is written
-//! here: NRRD (raw, gzip, ascii), NIfTI, MetaImage, TIFF, VTK XML and legacy, Zarr; the HDF5
-//! one is h5py's (`tests/data/hdf5/make_hdf5.py`).
+//! here: NRRD (raw, gzip, ascii), NIfTI, MetaImage, TIFF, VTK XML and legacy, Zarr, DICOM; the
+//! HDF5 one is h5py's (`tests/data/hdf5/make_hdf5.py`). DICOM counts its values after the
+//! rescale: the values the volume holds.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use slabscope::{LoadOptions, load};
 
+use crate::common::dicom::dicom32;
 use crate::common::{data, run, s};
 
 /// 2^24 + 1: the first integer an f32 does not hold.
@@ -225,4 +227,74 @@ fn hdf5_and_info() {
     let info = run(&["info", s(&path)]);
     assert!(info.ok, "{}", info.stderr);
     assert!(info.stderr.contains(said), "{}", info.stderr);
+}
+
+#[test]
+fn dicom_u32_and_i32() {
+    for (ty, signed) in [("u32", false), ("i32", true)] {
+        both(ty, |dir, name, last| {
+            let path = dir.join(format!("{name}_{ty}.dcm"));
+            std::fs::write(&path, dicom32(&values(last), 1, signed, None)).unwrap();
+            path
+        });
+    }
+}
+
+/// DICOM counts the values the volume holds, after the rescale: 2^24 + 1 less 1 is an f32,
+/// while 2^24 and 2^24 + 2 plus 1 are not (odd numbers past 2^24); a fractional slope's values
+/// are the scale's to round.
+#[test]
+fn dicom_counts_the_rescaled_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let load_notes = |name: &str, bytes: Vec<u8>| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let loaded = load(&path, &LoadOptions::default()).unwrap();
+        let rounding: Vec<String> = loaded
+            .notes
+            .into_iter()
+            .filter(|n| n.contains("beyond what an f32 holds"))
+            .collect();
+        (rounding, loaded.volume.data().to_f32_vec())
+    };
+    let (notes, v) = load_notes(
+        "less.dcm",
+        dicom32(&values(BEYOND), 1, false, Some(("1", "-1"))),
+    );
+    assert!(notes.is_empty(), "{notes:?}");
+    assert_eq!(v, [-1.0, 6.0, 16_777_215.0, 16_777_216.0]);
+    let more = values((1 << 24) + 2);
+    let (notes, v) = load_notes("more.dcm", dicom32(&more, 1, false, Some(("1", "1"))));
+    let said = "2 rescaled u32 values beyond what an f32 holds exactly rounded to the nearest \
+                f32 (the largest 16777219)";
+    assert_eq!(notes, [said]);
+    assert_eq!(v, [1.0, 8.0, 16_777_216.0, 16_777_220.0]);
+    let (notes, _) = load_notes(
+        "half.dcm",
+        dicom32(&values(BEYOND), 1, false, Some(("0.5", "0"))),
+    );
+    assert!(notes.is_empty(), "{notes:?}");
+}
+
+/// `info` and `analyze` say the note of a DICOM file's rounded values (a stack of six 2x2
+/// frames: each frame's 2^24 + 1 counted, 6 in all).
+#[test]
+fn dicom_rounding_is_said_by_info_and_analyze() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("frames.dcm");
+    std::fs::write(&path, dicom32(&values(BEYOND), 6, false, None)).unwrap();
+    let said = "6 u32 values beyond what an f32 holds exactly rounded to the nearest f32 (the \
+                largest 16777217)";
+    let info = run(&["info", s(&path)]);
+    assert!(info.ok, "{}", info.stderr);
+    assert!(info.stderr.contains(said), "{}", info.stderr);
+    // `analyze` says what loading found on stderr, as it says every load's notes.
+    let analyze = run(&["analyze", s(&path), "--json"]);
+    assert!(analyze.ok, "{}", analyze.stderr);
+    let line = format!("slabscope: note: {}: {said}", s(&path));
+    assert!(
+        analyze.stderr.lines().any(|l| l == line),
+        "{}",
+        analyze.stderr
+    );
 }

@@ -3,15 +3,15 @@
 //! time points, and refused or read by a fallback when the CSA header is gone or wrong. Tile
 //! `k` of time point `t` holds `3i + 5j + 11k + 100t + 1`.
 
-use slabscope::{LoadOptions, Loaded, Volume};
+use slabscope::{LoadOptions, Loaded, Result, Volume};
 
-use crate::common::dicom_data;
+use crate::common::{dicom, dicom_data};
 
 fn stored(i: usize, j: usize, k: usize, t: usize) -> f32 {
     (3 * i + 5 * j + 11 * k + 100 * t + 1) as f32
 }
 
-fn load(name: &str, volume: usize) -> slabscope::Result<Loaded> {
+fn load(name: &str, volume: usize) -> Result<Loaded> {
     let opts = LoadOptions {
         part: slabscope::formats::PartOptions {
             volume,
@@ -311,4 +311,129 @@ fn a_csa1_header_gives_the_slice_normal_as_csa2_does() {
     assert_eq!(v.value([0, 0, 6]), stored(0, 0, 0, 0));
     same_as_dcm2niix(v, &frozen("desc"), 0, true);
     assert_eq!(l.notes, load("desc", 0).unwrap().notes);
+}
+
+/// The file `bytes` written as `name` in a new folder, loaded as volume `volume`.
+fn load_bytes(bytes: &[u8], name: &str, volume: usize) -> (tempfile::TempDir, Result<Loaded>) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join(name);
+    std::fs::write(&file, bytes).unwrap();
+    let opts = LoadOptions {
+        part: slabscope::formats::PartOptions {
+            volume,
+            ..slabscope::formats::PartOptions::default()
+        },
+        ..LoadOptions::default()
+    };
+    let loaded = slabscope::load(&file, &opts);
+    (dir, loaded)
+}
+
+/// `a` and `b` are the same volume: dims, spacing, transform and every voxel.
+fn same_volume(a: &Volume, b: &Volume) {
+    assert_eq!(a.dims(), b.dims());
+    assert_eq!(a.spacing(), b.spacing());
+    for r in 0..4 {
+        for c in 0..4 {
+            let d = a.transform().matrix[r][c] - b.transform().matrix[r][c];
+            assert!(d.abs() < 1e-9, "{:?} != {:?}", a.transform(), b.transform());
+        }
+    }
+    assert_eq!(a.data().to_f32_vec(), b.data().to_f32_vec());
+}
+
+/// A mosaic file of three frames (`asc`'s three files' pixel data in one, `NumberOfFrames` 3):
+/// each frame a time point, cut as the single-frame files are, voxel for voxel.
+#[test]
+fn a_multi_frame_mosaic_is_the_4d_series_its_frames_would_be_as_files() {
+    let bytes = dicom::mosaic_frames();
+    for t in 0..3 {
+        let (_dir, frames) = load_bytes(&bytes, "frames.dcm", t);
+        let frames = frames.unwrap();
+        let files = load("asc", t).unwrap();
+        same_volume(&frames.volume, &files.volume);
+        assert_eq!(frames.volume.value([5, 4, 6]), stored(5, 4, 6, t));
+        assert!(
+            frames
+                .notes
+                .iter()
+                .any(|n| n == "the positions repeat: a 4D series of 3 volumes of 7 slices"),
+            "{:?}",
+            frames.notes
+        );
+    }
+    let (_dir, e) = load_bytes(&bytes, "frames.dcm", 3);
+    let e = e.unwrap_err().to_string();
+    assert!(e.contains("frames.dcm") && e.contains('3'), "{e}");
+    // Four frames claimed by the pixel data of three: refused before a pixel is read.
+    let four = dicom::with(&bytes, (0x28, 0x08), *b"IS", b"4 ");
+    let (_dir, e) = load_bytes(&four, "four.dcm", 0);
+    let e = e.unwrap_err().to_string();
+    assert!(e.contains("four.dcm") && e.lines().count() == 1, "{e}");
+}
+
+/// The first time point of `asc` loaded with a CSA series header holding `protocol`.
+fn with_protocol(protocol: &str) -> Loaded {
+    let bytes = dicom::mosaic_protocol(protocol);
+    load_bytes(&bytes, "p.dcm", 0).1.unwrap()
+}
+
+const REVERSED: &str = "the CSA series header sets sSliceArray.ucImageNumb (Siemens numbered the \
+                        slices in reverse): the tiles are placed by SliceNormalVector all the \
+                        same, as dcm2niix places them (it warns and changes nothing)";
+
+/// `sSliceArray.ucImageNumb` in the series header's ASCCONV block: read as dcm2niix reads it
+/// (`siemensCsaAscii`), which warns and keeps the tiles where they are; so do we, with a note.
+#[test]
+fn the_reversed_numbering_flag_is_noted_and_the_tiles_stay_where_dcm2niix_puts_them() {
+    let alone = slabscope::load(&dicom_data("mosaic/asc/t0.dcm"), &LoadOptions::default()).unwrap();
+    let plain = with_protocol(&dicom::ascconv(""));
+    let set = with_protocol(&dicom::ascconv("sSliceArray.ucImageNumb = 0x1\n"));
+    let zero = with_protocol(&dicom::ascconv("sSliceArray.ucImageNumb = 0x0\n"));
+    for l in [&plain, &set, &zero] {
+        same_volume(&l.volume, &alone.volume);
+        same_as_dcm2niix(&l.volume, &frozen("asc"), 0, false);
+    }
+    assert!(set.notes.iter().any(|n| n == REVERSED), "{:?}", set.notes);
+    assert_eq!(plain.notes, alone.notes);
+    assert_eq!(zero.notes, alone.notes);
+    // After the block's end, or in a header with no block: not read.
+    let after = format!("{}sSliceArray.ucImageNumb = 0x1\n", dicom::ascconv(""));
+    assert_eq!(with_protocol(&after).notes, alone.notes);
+    assert_eq!(
+        with_protocol("sSliceArray.ucImageNumb = 0x1\n").notes,
+        alone.notes
+    );
+}
+
+#[test]
+fn a_huge_or_malformed_series_header_is_bounded() {
+    let alone = slabscope::load(&dicom_data("mosaic/asc/t0.dcm"), &LoadOptions::default()).unwrap();
+    // Beyond 4 MiB: not searched, and said.
+    let mut huge = dicom::ascconv("sSliceArray.ucImageNumb = 0x1\n");
+    huge.push_str(&" ".repeat(4 << 20));
+    let l = with_protocol(&huge);
+    same_volume(&l.volume, &alone.volume);
+    assert!(
+        l.notes
+            .iter()
+            .any(|n| n.starts_with("the CSA series header holds 41")
+                && n.ends_with("bytes (beyond 4 MiB): not searched for sSliceArray.ucImageNumb")),
+        "{:?}",
+        l.notes
+    );
+    assert!(!l.notes.iter().any(|n| n == REVERSED));
+    // No end marker, the value cut at the header's end, digits beyond any integer, bytes
+    // that are not text: read to where they end, never a panic.
+    let open = "### ASCCONV BEGIN ###\nsSliceArray.ucImageNumb = 0x1";
+    assert!(with_protocol(open).notes.iter().any(|n| n == REVERSED));
+    let long = dicom::ascconv(&format!("sSliceArray.ucImageNumb = {}\n", "7".repeat(64)));
+    assert!(with_protocol(&long).notes.iter().any(|n| n == REVERSED));
+    let cut = "### ASCCONV BEGIN ###\nsSliceArray.ucImageNumb";
+    assert_eq!(with_protocol(cut).notes, alone.notes);
+    // A series header that is no CSA header at all: its bytes searched all the same.
+    let raw = dicom::ascconv("sSliceArray.ucImageNumb = 0x1\n");
+    let bytes = dicom::with(&dicom::asc(0), (0x29, 0x1020), *b"OB", raw.as_bytes());
+    let l = load_bytes(&bytes, "raw.dcm", 0).1.unwrap();
+    assert!(l.notes.iter().any(|n| n == REVERSED), "{:?}", l.notes);
 }

@@ -14,7 +14,7 @@ use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::common::{bounded, data, prlimit_available};
+use crate::common::{bounded, data, dicom, prlimit_available};
 
 /// The budget every mutant is loaded under.
 const BUDGET: u64 = 64 << 20;
@@ -151,6 +151,17 @@ const READERS: &[(&str, &[(&str, &str)])] = &[
             ("hdf5/ramp_i16_gzip_latest.h5", "m.h5"),
             ("hdf5/ramp_4d_i8.h5", "m.h5"),
             ("hdf5/imaris.ims", "m.ims"),
+        ],
+    ),
+    // Issue #49's DICOM paths, written by `common::dicom` (`gen:` seeds): a mosaic of three
+    // frames, a mosaic whose CSA series header holds an ASCCONV protocol setting
+    // `sSliceArray.ucImageNumb`, and 32-bit samples beyond 2^24 over four frames.
+    (
+        "dicom-49",
+        &[
+            ("gen:mosaic_frames", "m.dcm"),
+            ("gen:mosaic_protocol", "m.dcm"),
+            ("gen:dicom32", "m.dcm"),
         ],
     ),
 ];
@@ -354,8 +365,21 @@ fn volumeshop_seed() -> Vec<u8> {
 fn seed_bytes(seed: &str) -> Vec<u8> {
     match seed.split_once("//") {
         _ if seed.is_empty() => volumeshop_seed(),
+        _ if seed.starts_with("gen:") => generated(&seed[4..]),
         Some((store, member)) => std::fs::read(data(store).join(member)).unwrap(),
         None => std::fs::read(data(seed)).unwrap(),
+    }
+}
+
+/// The seed `common::dicom` writes for `name`.
+fn generated(name: &str) -> Vec<u8> {
+    match name {
+        "mosaic_frames" => dicom::mosaic_frames(),
+        "mosaic_protocol" => {
+            dicom::mosaic_protocol(&dicom::ascconv("sSliceArray.ucImageNumb = 0x1\n"))
+        }
+        "dicom32" => dicom::dicom32(&[0, 7, 1 << 24, (1 << 24) + 1], 4, false, None),
+        _ => panic!("no generated seed {name}"),
     }
 }
 

@@ -88,7 +88,7 @@ impl Rounded {
     }
 
     /// `v` as the nearest f32, counted when that is not `v`.
-    pub(super) fn take(&mut self, v: i128) -> f32 {
+    pub(crate) fn take(&mut self, v: i128) -> f32 {
         #[allow(clippy::cast_precision_loss)] // counted below
         let f = v as f32;
         #[allow(clippy::cast_possible_truncation)] // an f32 of a 64-bit value fits an i128

@@ -403,6 +403,7 @@ pub(super) fn layout(
     let mut notes = Vec::new();
     if let Some(t) = &first.tile {
         notes.push(mosaic_note(first, t));
+        notes.extend(t.numbering.note());
     }
     let [dy, dx] = pixel_spacing(first, &mut notes);
     let placed = frame_of(first).filter(|_| images.iter().all(|im| im.position.is_some()));

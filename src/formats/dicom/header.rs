@@ -1,7 +1,7 @@
 //! What series assembly needs of a DICOM file, read from its parsed header: one [`Image`] per
 //! frame (a classic file has one; an enhanced multi-frame file describes each frame in its
-//! functional groups; a Siemens mosaic one per tile of each frame), each with the pixel format
-//! the file's frames share (`format`).
+//! functional groups; a Siemens mosaic one per tile of each frame, its frames time points at
+//! one position), each with the pixel format the file's frames share (`format`).
 
 use dicom_dictionary_std::tags;
 use dicom_object::InMemDicomObject;
@@ -134,13 +134,14 @@ pub(super) fn images(obj: &InMemDicomObject, mosaic: Option<&Mosaic>) -> Vec<Ima
         .get(tags::PER_FRAME_FUNCTIONAL_GROUPS_SEQUENCE)
         .and_then(|e| e.items());
     // A classic multi-frame file steps its frames along the normal by SpacingBetweenSlices,
-    // or by the offsets of GridFrameOffsetVector (RT dose).
+    // or by the offsets of GridFrameOffsetVector (RT dose); a mosaic's frames are its time
+    // points, each holding every slice, at the file's position.
     let offsets = floats(obj, tags::GRID_FRAME_OFFSET_VECTOR);
     let mut out = Vec::with_capacity(format.frames.min(1 << 16) as usize);
     for frame in 0..format.frames {
         let fields = match per_frame.and_then(|p| p.get(frame as usize)) {
             Some(f) => FrameFields::from(f).over(&shared),
-            None if per_frame.is_none() && format.frames > 1 => {
+            None if per_frame.is_none() && format.frames > 1 && mosaic.is_none() => {
                 classic_frame(&shared, frame, offsets.as_deref())
             }
             None => shared.clone(),

@@ -1,11 +1,11 @@
 //! DICOM: a file, or a folder of files, read as a volume. Each file is walked safely first
 //! (`read`), its header parsed by dicom-object (its elements' values read by `elements`, the
-//! pixel format by `format`) and described per frame (`header`); the
-//! frames (a Siemens mosaic's tiles, `mosaic`, from its CSA header, `csa`) are grouped into
-//! series and laid out along the slice normal (`assemble`); native pixels are read straight
-//! from the files, compressed ones decoded by dicom-pixeldata, and both turned into values the
-//! same way (`pixels`). The scan of files to series is `scan`, the
-//! reading of a series' frames into a volume's voxels `voxels`.
+//! pixel format by `format`) and described per frame (`header`); the frames (a Siemens mosaic's
+//! tiles, `mosaic`, from its CSA headers, `csa` and `protocol`) are grouped into series and laid
+//! out along the slice normal (`assemble`); native pixels are read straight from the files,
+//! compressed ones decoded by dicom-pixeldata, and both turned into values the same way
+//! (`pixels`). The scan of files to series is `scan`, the reading of a series' frames into a
+//! volume's voxels `voxels`.
 
 mod assemble;
 mod codestream;
@@ -17,6 +17,7 @@ mod group;
 mod header;
 mod mosaic;
 mod pixels;
+mod protocol;
 mod read;
 mod scan;
 mod voxels;
@@ -331,7 +332,12 @@ fn name(scan: &Scan, im: &Image) -> String {
     let path = &scan.files[im.file].path;
     let file = crate::error::shown(path.file_name().map_or(path.as_path(), Path::new));
     if let Some(tile) = &im.tile {
-        format!("{file} tile {}", tile.index)
+        let frame = if im.format.frames > 1 {
+            format!(" frame {}", im.frame)
+        } else {
+            String::new()
+        };
+        format!("{file}{frame} tile {}", tile.index)
     } else if im.format.frames > 1 {
         format!("{file} frame {}", im.frame)
     } else {
@@ -442,13 +448,14 @@ fn load_from(
     let dims = [cols, rows, slices];
     opts.room().check(path, dims)?;
     let order = &layout.order[opts.part.volume];
-    let voxels = if resample {
-        let voxels = voxels::resampled(path, &scan, series, &layout, order, slices, opts.room())?;
+    let (voxels, rounded) = if resample {
+        let read = voxels::resampled(path, &scan, series, &layout, order, slices, opts.room())?;
         notes.push(resampled_note(&layout, slices));
-        voxels
+        read
     } else {
         voxels::as_they_lie(path, &scan, series, order, dims, opts.room())?
     };
+    notes.extend(rounded.note(&samples_name(series)));
     let mut volume = Volume::from_voxels(dims, layout.spacing, VoxelType::F32, voxels)
         .map_err(|e| e.reached_from(path))?;
     let ty = voxel_type(series, &volume.stats());
@@ -467,6 +474,18 @@ fn load_from(
         details: Some(std::sync::Arc::new(described(&scan, series, key))),
         format_version: None,
     })
+}
+
+/// How a note names the samples of `series`: their type, `rescaled` when a slice is.
+fn samples_name(series: &Series) -> String {
+    let first = &series.images[0];
+    let rescale = series
+        .images
+        .iter()
+        .map(|im| im.rescale)
+        .find(|&r| r != (1.0, 0.0))
+        .unwrap_or((1.0, 0.0));
+    pixels::Decode::new(&first.format, false, rescale).name()
 }
 
 /// What a load says of resampling `layout` to `slices` evenly spaced slices.

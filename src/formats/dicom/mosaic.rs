@@ -13,6 +13,7 @@ use dicom_object::mem::InMemElement;
 use super::csa;
 use super::elements::{float, floats, text};
 use super::format::PixelFormat;
+use super::protocol::{self, Numbering};
 use crate::geometry::{cross, dot, normalize};
 
 /// The most slices a mosaic may hold (dcm2niix's limit for slices of one volume).
@@ -33,6 +34,8 @@ pub(super) struct Mosaic {
     pub step: f64,
     /// Where the step comes from, for a note.
     pub step_from: &'static str,
+    /// What the CSA series header says of the slices' numbering.
+    pub numbering: Numbering,
 }
 
 /// One tile of a mosaic frame: which, and its size.
@@ -48,9 +51,19 @@ pub(super) struct Tile {
     pub of: u32,
     /// Where the slice spacing comes from.
     pub step_from: &'static str,
+    /// What the CSA series header says of the slices' numbering.
+    pub numbering: Numbering,
 }
 
 impl Tile {
+    /// Whether pixel (`x`, `y`) of the mosaic frame lies in one of its slices' tiles (not in a
+    /// trailing empty one).
+    pub fn holds(&self, x: usize, y: usize) -> bool {
+        let [tc, tr] = self.plane.map(usize::from);
+        let (col, row) = (x / tc.max(1), y / tr.max(1));
+        col < self.per_row as usize && row * self.per_row as usize + col < self.of as usize
+    }
+
     /// Copies this tile of the mosaic frame `values` (`mosaic_cols` wide) into `plane`.
     pub fn cut(&self, values: &[f32], mosaic_cols: usize, plane: &mut [f32]) {
         let [tc, tr] = self.plane.map(usize::from);
@@ -149,6 +162,12 @@ pub(super) fn of(obj: &InMemDicomObject, format: &PixelFormat) -> Result<Option<
             "no SpacingBetweenSlices or SliceThickness, 1 mm assumed",
         ),
     };
+    let numbering = match private(obj, 0x0029, "SIEMENS CSA HEADER", 0x20) {
+        Some(e) if tiles > 1 => e
+            .to_bytes()
+            .map_or(Numbering::Plain, |b| protocol::numbering(&b)),
+        _ => Numbering::Plain,
+    };
     let sign = match (normal, orientation_normal(obj)) {
         (Some(v), Some(n)) if dot(v, n) < 0.0 => -1.0,
         _ => 1.0,
@@ -160,6 +179,7 @@ pub(super) fn of(obj: &InMemDicomObject, format: &PixelFormat) -> Result<Option<
         sign,
         step,
         step_from,
+        numbering,
     }))
 }
 
@@ -179,6 +199,7 @@ impl Mosaic {
             plane: self.plane,
             of: self.tiles,
             step_from: self.step_from,
+            numbering: self.numbering,
         }
     }
 

@@ -20,12 +20,14 @@ use super::read::{self, Pixels, Syntax};
 use super::scan::{Scan, Scanned};
 use super::{parse, quoted};
 use crate::error::{Error, Result};
+use crate::formats::data::wide::Rounded;
 use crate::formats::data::{check_budget, voxel_buffer};
 use crate::formats::scratch::{Room, VoxelOut};
 use crate::volume::Voxels;
 
 /// The voxels of slices `order` of `series` as they lie: a volume of `dims` columns, rows and
-/// slices, within the budget of `room` or in its scratch folder.
+/// slices, within the budget of `room` or in its scratch folder; with the values an f32 does
+/// not hold exactly, counted.
 pub(super) fn as_they_lie(
     path: &Path,
     scan: &Scan,
@@ -33,16 +35,17 @@ pub(super) fn as_they_lie(
     order: &[usize],
     dims: [usize; 3],
     room: Room,
-) -> Result<Voxels> {
+) -> Result<(Voxels, Rounded)> {
     let mut out = room.f32_voxels(path, dims)?;
     let planes: Vec<&mut [f32]> = out.all().chunks_mut(dims[0] * dims[1]).collect();
-    fill(scan, series, order, planes, room.max_memory)?;
-    out.finish()
+    let rounded = fill(scan, series, order, planes, room.max_memory)?;
+    Ok((out.finish()?, rounded))
 }
 
 /// The voxels of slices `order` of `series` resampled to `slices` evenly spaced along the
 /// normal of `layout` (the tilt undone): the source slices within the budget of `room`, the
-/// volume made from them beside them or in its scratch folder.
+/// volume made from them beside them or in its scratch folder; with the source values an f32
+/// does not hold exactly, counted.
 pub(super) fn resampled(
     path: &Path,
     scan: &Scan,
@@ -51,7 +54,7 @@ pub(super) fn resampled(
     order: &[usize],
     slices: usize,
     room: Room,
-) -> Result<Voxels> {
+) -> Result<(Voxels, Rounded)> {
     let [cols, rows] = layout.plane;
     let budget = room.max_memory;
     check_budget(path, [cols, rows, layout.slices], budget)?;
@@ -61,7 +64,7 @@ pub(super) fn resampled(
         check_budget(path, [cols, rows, layout.slices + slices], budget)?;
         voxel_buffer(path, dims, budget)
     })?;
-    let planes = read_slices(scan, series, order, layout.plane, budget)?;
+    let (planes, rounded) = read_slices(scan, series, order, layout.plane, budget)?;
     let step = layout.spacing[2];
     out.all()
         .par_chunks_mut(cols * rows)
@@ -77,7 +80,7 @@ pub(super) fn resampled(
                 plane,
             );
         });
-    out.finish()
+    Ok((out.finish()?, rounded))
 }
 
 /// Reads the slices `order` names into planes of their own (for resampling).
@@ -87,22 +90,22 @@ fn read_slices(
     order: &[usize],
     plane: [usize; 2],
     budget: u64,
-) -> Result<Vec<Vec<f32>>> {
+) -> Result<(Vec<Vec<f32>>, Rounded)> {
     let mut planes: Vec<Vec<f32>> = vec![vec![0.0; plane[0] * plane[1]]; order.len()];
     let refs: Vec<&mut [f32]> = planes.iter_mut().map(Vec::as_mut_slice).collect();
-    fill(scan, series, order, refs, budget)?;
-    Ok(planes)
+    let rounded = fill(scan, series, order, refs, budget)?;
+    Ok((planes, rounded))
 }
 
 /// Decodes slice `k` of `order` into `planes[k]`, file by file in parallel, stopped between
-/// files when the load is cancelled.
+/// files when the load is cancelled; the values an f32 does not hold exactly, counted.
 fn fill(
     scan: &Scan,
     series: &Series,
     order: &[usize],
     planes: Vec<&mut [f32]>,
     budget: u64,
-) -> Result<()> {
+) -> Result<Rounded> {
     let mut by_file: std::collections::BTreeMap<usize, Vec<(&Image, &mut [f32])>> =
         std::collections::BTreeMap::new();
     for (&i, plane) in order.iter().zip(planes) {
@@ -113,14 +116,15 @@ fn fill(
         .into_iter()
         .collect::<Vec<_>>()
         .into_par_iter()
-        .try_for_each(|(file, frames)| {
+        .map(|(file, frames)| {
             scan.cancel.check()?;
             read_frames(&scan.files[file], frames, budget)
         })
+        .try_reduce(Rounded::default, |a, b| Ok(a.plus(b)))
 }
 
 /// Decodes `frames` of one file.
-fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -> Result<()> {
+fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -> Result<Rounded> {
     let path = file.path.as_path();
     let big = file.syntax.big;
     match &file.pixels {
@@ -130,7 +134,7 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
             let size = f.metadata().map_err(|e| Error::io(path, e))?.len();
             let (mut buf, mut mosaic) = (Vec::new(), MosaicFrame::new(path, budget));
             for (im, plane) in frames {
-                mosaic.put(im, plane, |out| {
+                mosaic.put(im, plane, |out, counted| {
                     let bytes = im.format.frame_bytes();
                     let start = u64::from(im.frame) * bytes;
                     let available = (*len).min(size.saturating_sub(*offset));
@@ -145,11 +149,11 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
                     f.seek(SeekFrom::Start(offset + start))
                         .and_then(|_| f.read_exact(&mut buf))
                         .map_err(|e| Error::io(path, e))?;
-                    Decode::new(&im.format, big, im.rescale).frame(&buf, out);
-                    Ok(())
+                    let d = Decode::new(&im.format, big, im.rescale);
+                    Ok(d.frame(&buf, out, counted))
                 })?;
             }
-            Ok(())
+            Ok(mosaic.rounded)
         }
         Pixels::Deflated | Pixels::Inflated(_) | Pixels::Encapsulated | Pixels::Fragments(..) => {
             let part = read::read(path, budget, true)?;
@@ -157,7 +161,7 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
                 Pixels::Inflated(data) => {
                     let mut mosaic = MosaicFrame::new(path, budget);
                     for (im, plane) in frames {
-                        mosaic.put(im, plane, |out| {
+                        mosaic.put(im, plane, |out, counted| {
                             let bytes = im.format.frame_bytes();
                             let start = u64::from(im.frame) * bytes;
                             let src = data
@@ -167,11 +171,11 @@ fn read_frames(file: &Scanned, frames: Vec<(&Image, &mut [f32])>, budget: u64) -
                                     expected: start + bytes,
                                     found: data.len() as u64,
                                 })?;
-                            Decode::new(&im.format, false, im.rescale).frame(src, out);
-                            Ok(())
+                            let d = Decode::new(&im.format, false, im.rescale);
+                            Ok(d.frame(src, out, counted))
                         })?;
                     }
-                    Ok(())
+                    Ok(mosaic.rounded)
                 }
                 Pixels::Fragments(table, fragments) => {
                     let mosaic = MosaicFrame::new(path, budget);
@@ -193,7 +197,7 @@ fn decode_fragments(
     fragments: Vec<Vec<u8>>,
     frames: Vec<(&Image, &mut [f32])>,
     mut mosaic: MosaicFrame,
-) -> Result<()> {
+) -> Result<Rounded> {
     let format = &frames[0].0.format;
     super::codestream::check(path, syntax, format, &fragments)?;
     let mut obj = parse(path, dataset, syntax)?;
@@ -210,7 +214,7 @@ fn decode_fragments(
         .with_meta(meta)
         .map_err(|e| Error::format(path, format!("DICOM header: {}", quoted(&e))))?;
     for (im, plane) in frames {
-        mosaic.put(im, plane, |out| {
+        mosaic.put(im, plane, |out, counted| {
             let decoded = obj.decode_pixel_data_frame(im.frame).map_err(|e| {
                 Error::format(
                     path,
@@ -230,20 +234,24 @@ fn decode_fragments(
             if f.colour() {
                 f.photometric = "RGB".into();
             }
-            Decode::new(&f, false, im.rescale).frame(src, out);
-            Ok(())
+            Ok(Decode::new(&f, false, im.rescale).frame(src, out, counted))
         })?;
     }
-    Ok(())
+    Ok(mosaic.rounded)
 }
 
 /// The frame of a Siemens mosaic last decoded, kept while its tiles are cut from it (each frame
-/// is decoded once, however many slices it holds).
+/// is decoded once, however many slices it holds); and the values an f32 does not hold exactly
+/// counted over the file's frames (each frame's used tiles once).
 struct MosaicFrame<'p> {
     path: &'p Path,
     budget: u64,
     frame: Option<u32>,
     values: Vec<f32>,
+    /// The mosaic frames already counted.
+    counted: std::collections::BTreeSet<u32>,
+    /// The count so far.
+    rounded: Rounded,
 }
 
 impl<'p> MosaicFrame<'p> {
@@ -253,19 +261,24 @@ impl<'p> MosaicFrame<'p> {
             budget,
             frame: None,
             values: Vec::new(),
+            counted: std::collections::BTreeSet::new(),
+            rounded: Rounded::default(),
         }
     }
 
     /// Puts the pixels of `im` into `plane`: a whole frame `decode`d into it, or a tile cut
-    /// from its mosaic frame, `decode`d once into a buffer of its own (charged to the budget).
+    /// from its mosaic frame, `decode`d once into a buffer of its own (charged to the budget),
+    /// its tiles' values counted once (the trailing empty tiles are no slices).
     fn put(
         &mut self,
         im: &Image,
         plane: &mut [f32],
-        decode: impl FnOnce(&mut [f32]) -> Result<()>,
+        decode: impl FnOnce(&mut [f32], &dyn Fn(usize) -> bool) -> Result<Rounded>,
     ) -> Result<()> {
         let Some(tile) = &im.tile else {
-            return decode(plane);
+            let r = decode(plane, &|_| true)?;
+            self.rounded.add(r);
+            return Ok(());
         };
         let cols = usize::from(im.format.cols);
         if self.frame != Some(im.frame) {
@@ -274,7 +287,10 @@ impl<'p> MosaicFrame<'p> {
             if self.values.len() != dims[0] * dims[1] {
                 self.values = voxel_buffer(self.path, dims, self.budget)?;
             }
-            decode(&mut self.values)?;
+            let first = self.counted.insert(im.frame);
+            let used = |i: usize| first && tile.holds(i % cols, i / cols);
+            let r = decode(&mut self.values, &used)?;
+            self.rounded.add(r);
             self.frame = Some(im.frame);
         }
         tile.cut(&self.values, cols, plane);
