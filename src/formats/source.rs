@@ -141,7 +141,12 @@ pub fn open_regular(path: &Path) -> std::io::Result<File> {
         use std::os::unix::fs::OpenOptionsExt;
         options.custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY);
     }
-    let file = options.open(path)?;
+    regular(options.open(path)?)
+}
+
+/// `file`, opened without blocking, when its handle is of a regular file: else an error (of kind
+/// `InvalidInput`) saying what it is.
+pub fn regular(file: File) -> std::io::Result<File> {
     let meta = file.metadata()?;
     match kind(&meta) {
         None if meta.is_file() => Ok(file),

@@ -13,7 +13,7 @@ use std::time::Duration;
 use ureq::unversioned::resolver::{DefaultResolver, ResolvedSocketAddrs, Resolver};
 use ureq::unversioned::transport::{DefaultConnector, NextTimeout};
 
-use super::{Url, cache, sigv4};
+use super::{Failed, Url, cache, sigv4};
 use crate::error::human_bytes;
 
 /// The most requests in flight at once, over all threads.
@@ -124,8 +124,8 @@ impl Client {
     /// the whole object has the range cut from it (within the limit). A chunk's bytes are
     /// fetched once: kept in memory (at most `limit` / [`cache::MEMORY_SHARE`] bytes of answers
     /// in all) and on disk when the client has a cache.
-    pub fn get(&self, key: &str, span: Span, limit: u64) -> Result<Option<Vec<u8>>, String> {
-        let url = self.url.key(key)?;
+    pub fn get(&self, key: &str, span: Span, limit: u64) -> Result<Option<Vec<u8>>, Failed> {
+        let url = self.url.key(key).map_err(Failed::Refused)?;
         let chunk = !super::is_metadata(key);
         if chunk {
             let kept = (cache::MEMORY.get(&url, span)).or_else(|| {
@@ -154,7 +154,7 @@ impl Client {
         url: &str,
         span: Span,
         limit: u64,
-    ) -> Result<Option<Vec<u8>>, String> {
+    ) -> Result<Option<Vec<u8>>, Failed> {
         let range = match span {
             Span::All => None,
             Span::From(start, None) => Some(format!("bytes={start}-")),
@@ -209,8 +209,8 @@ impl Client {
     }
 
     /// The size in bytes of `key` (a HEAD request); `None` when there is none.
-    pub fn size(&self, key: &str) -> Result<Option<u64>, String> {
-        let url = self.url.key(key)?;
+    pub fn size(&self, key: &str) -> Result<Option<u64>, Failed> {
+        let url = self.url.key(key).map_err(Failed::Refused)?;
         let fetched = self.retried(key, || {
             let mut request = self.agent.head(&url);
             for (name, value) in self.signed("HEAD", &url) {
@@ -253,7 +253,7 @@ impl Client {
         &self,
         key: &str,
         call: impl Fn() -> Result<Answer, ureq::Error>,
-    ) -> Result<Option<Fetched>, String> {
+    ) -> Result<Option<Fetched>, Failed> {
         let mut last = String::new();
         for attempt in 0..TRIES {
             if attempt > 0 {
@@ -269,7 +269,7 @@ impl Client {
                 Ok(Answer::Size(size)) => {
                     return size
                         .map(|n| Some(Fetched::Size(n)))
-                        .ok_or_else(|| format!("{key}: the server gives no size"));
+                        .ok_or_else(|| Failed::at(key, "the server gives no size"));
                 }
                 Ok(Answer::Status(404)) => return Ok(None),
                 // S3 answers 403 for a key it does not have when listing is not allowed: a
@@ -282,51 +282,58 @@ impl Client {
                     return Ok(None);
                 }
                 Ok(Answer::Status(403)) if !super::is_metadata(key) => {
-                    return Err(format!(
-                        "{key}: HTTP 403 Forbidden (--missing-as-fill reads a chunk refused as \
-                         the fill value, as public S3 refuses a chunk never written)"
+                    return Err(Failed::at(
+                        key,
+                        "HTTP 403 Forbidden (--missing-as-fill reads a chunk refused as the fill \
+                         value, as public S3 refuses a chunk never written)",
                     ));
                 }
                 Ok(Answer::Status(status)) if status >= 500 => {
                     last = format!("HTTP {status} {}", reason(status));
                 }
                 Ok(Answer::Status(status)) => {
-                    return Err(format!(
-                        "{key}: HTTP {status} {}{}",
-                        reason(status),
-                        advice(status)
+                    return Err(Failed::at(
+                        key,
+                        format!("HTTP {status} {}{}", reason(status), advice(status)),
                     ));
                 }
                 Ok(Answer::TooLarge(n)) => {
-                    return Err(format!(
-                        "{key}: the server sends {}, more than the memory limit allows",
-                        human_bytes(n)
+                    return Err(Failed::at(
+                        key,
+                        format!(
+                            "the server sends {}, more than the memory limit allows",
+                            human_bytes(n)
+                        ),
                     ));
                 }
                 Ok(Answer::Short(got, stated)) => {
-                    return Err(format!(
-                        "{key}: the answer ended after {got} of the {stated} bytes its \
+                    return Err(Failed::at(
+                        key,
+                        format!(
+                            "the answer ended after {got} of the {stated} bytes its \
                          Content-Length says"
+                        ),
                     ));
                 }
                 Ok(Answer::Broken(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-                    return Err(format!(
-                        "{key}: the answer ended before the bytes its Content-Length says"
+                    return Err(Failed::at(
+                        key,
+                        "the answer ended before the bytes its Content-Length says",
                     ));
                 }
                 Ok(Answer::Broken(e)) => {
                     // ureq's own errors (a body past its limit) come back out of the wrapping.
                     let e = ureq::Error::from(e);
                     if !retry(&e) {
-                        return Err(format!("{key}: {}", self.words(&e)));
+                        return Err(Failed::at(key, self.words(&e)));
                     }
                     last = self.words(&e);
                 }
                 Err(e) if retry(&e) => last = self.words(&e),
-                Err(e) => return Err(format!("{key}: {}", self.words(&e))),
+                Err(e) => return Err(Failed::at(key, self.words(&e))),
             }
         }
-        Err(format!("{key}: {last}, after {TRIES} tries"))
+        Err(Failed::at(key, format!("{last}, after {TRIES} tries")))
     }
 
     /// A failure of the client in words.
@@ -428,15 +435,18 @@ fn cut(mut body: Vec<u8>, span: Span) -> Vec<u8> {
 
 /// `bytes` when they are as many as `span` asks: a server that answers a range with fewer bytes
 /// (past the object's end, or a lying `Content-Range`) is an error, never read as the chunk.
-fn check_span(key: &str, span: Span, bytes: Vec<u8>) -> Result<Vec<u8>, String> {
+fn check_span(key: &str, span: Span, bytes: Vec<u8>) -> Result<Vec<u8>, Failed> {
     let wanted = match span {
         Span::From(_, Some(n)) | Span::Suffix(n) => Some(n),
         _ => None,
     };
     match wanted {
-        Some(n) if bytes.len() as u64 != n => Err(format!(
-            "{key}: {n} bytes asked, {} answered (a range the object does not hold)",
-            bytes.len()
+        Some(n) if bytes.len() as u64 != n => Err(Failed::at(
+            key,
+            format!(
+                "{n} bytes asked, {} answered (a range the object does not hold)",
+                bytes.len()
+            ),
         )),
         _ => Ok(bytes),
     }
@@ -549,10 +559,14 @@ mod tests {
         let client =
             Client::new(Url::parse("http://nonexistent.invalid/store.zarr").unwrap()).unwrap();
         let e = client.size("zarr.json").unwrap_err();
-        if e.contains("did not answer") {
+        if e.to_string().contains("did not answer") {
             eprintln!("skipped: this machine's resolver does not answer ({e})");
             return;
         }
-        assert_eq!(e, "zarr.json: unknown host nonexistent.invalid");
+        assert_eq!(
+            e,
+            Failed::at("zarr.json", "unknown host nonexistent.invalid")
+        );
+        assert_eq!(e.to_string(), "zarr.json: unknown host nonexistent.invalid");
     }
 }

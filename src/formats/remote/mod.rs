@@ -25,6 +25,46 @@ pub enum Span {
     Suffix(u64),
 }
 
+/// Why a request gave no bytes, typed (a store over HTTP words it by what it is, reading no
+/// text): shown as before, `key: problem`, or why no request was made.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Failed {
+    /// The request for `key` (from the store's root) failed: `problem`.
+    At {
+        /// The key asked for.
+        key: String,
+        /// What went wrong, in words.
+        problem: String,
+    },
+    /// No request was made (a key that would leave the store): why.
+    Refused(String),
+}
+
+impl Failed {
+    /// The failure of the request for `key`: `problem`.
+    pub fn at(key: &str, problem: impl Into<String>) -> Self {
+        Self::At {
+            key: key.to_string(),
+            problem: problem.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for Failed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::At { key, problem } => write!(f, "{key}: {problem}"),
+            Self::Refused(why) => f.write_str(why),
+        }
+    }
+}
+
+impl From<Failed> for String {
+    fn from(failed: Failed) -> Self {
+        failed.to_string()
+    }
+}
+
 /// The bytes of every answer's body fetched by this process, over every store.
 static FETCHED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 

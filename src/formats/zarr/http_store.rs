@@ -9,9 +9,10 @@ use std::sync::{Arc, Mutex};
 use zarrs::storage::byte_range::{ByteRange, ByteRangeIterator};
 use zarrs::storage::{Bytes, MaybeBytesIterator, ReadableStorageTraits, StorageError, StoreKey};
 
+use super::failure::Failure;
 use super::guard::Guard;
 use crate::formats::remote::http::{Client, Span};
-use crate::formats::remote::{Url, is_metadata, join};
+use crate::formats::remote::{Failed, Url, is_metadata, join};
 
 /// A remote store: its client, and its metadata files as fetched (absent ones too).
 #[derive(Debug)]
@@ -92,9 +93,12 @@ impl HttpStore {
     /// The bytes `range` of `key`, with the span of the object they are (start, end) and the
     /// object's size as far as the answer tells it (what the guard needs to know a shard's index
     /// from a chunk); `None` when there is no such key.
-    fn range(&self, key: &str, range: ByteRange) -> Result<Option<Answered>, String> {
+    fn range(&self, key: &str, range: ByteRange) -> Result<Option<Answered>, StorageError> {
         if is_metadata(key) {
-            let bytes = self.remote.metadata(key, self.max_file)?;
+            let bytes = self
+                .remote
+                .metadata(key, self.max_file)
+                .map_err(StorageError::Other)?;
             return Ok(bytes.map(|b| {
                 let n = b.len() as u64;
                 (Bytes::from(b.to_vec()), (0, n), n)
@@ -105,7 +109,8 @@ impl HttpStore {
             ByteRange::FromStart(start, length) => Span::From(start, length),
             ByteRange::Suffix(n) => Span::Suffix(n),
         };
-        let Some(bytes) = self.remote.client.get(key, span, self.max_file)? else {
+        let got = self.remote.client.get(key, span, self.max_file);
+        let Some(bytes) = got.map_err(unread)? else {
             return Ok(None);
         };
         let n = bytes.len() as u64;
@@ -118,6 +123,14 @@ impl HttpStore {
     }
 }
 
+/// A request's failure, for zarrs: typed when it names its key ([`Failure::Unread`]).
+fn unread(failed: Failed) -> StorageError {
+    match failed {
+        Failed::At { key, problem } => Failure::Unread { key, problem }.into(),
+        Failed::Refused(why) => StorageError::Other(why),
+    }
+}
+
 impl ReadableStorageTraits for HttpStore {
     fn get_partial_many<'a>(
         &'a self,
@@ -127,13 +140,12 @@ impl ReadableStorageTraits for HttpStore {
         let full = join(&self.prefix, key.as_str());
         let mut out: Vec<Result<Bytes, StorageError>> = Vec::new();
         for range in byte_ranges {
-            let Some((bytes, at, size)) = self.range(&full, range).map_err(StorageError::Other)?
-            else {
+            let Some((bytes, at, size)) = self.range(&full, range)? else {
                 return Ok(None);
             };
             self.guard
                 .check(key.as_str(), at, size, &bytes)
-                .map_err(StorageError::Other)?;
+                .map_err(Failure::Refused)?;
             out.push(Ok(bytes));
         }
         Ok(Some(Box::new(out.into_iter())))
@@ -141,7 +153,7 @@ impl ReadableStorageTraits for HttpStore {
 
     fn size_key(&self, key: &StoreKey) -> Result<Option<u64>, StorageError> {
         let full = join(&self.prefix, key.as_str());
-        self.remote.client.size(&full).map_err(StorageError::Other)
+        self.remote.client.size(&full).map_err(unread)
     }
 
     fn supports_get_partial(&self) -> bool {

@@ -10,6 +10,7 @@
 mod chain;
 mod coarse;
 mod details;
+mod failure;
 mod guard;
 #[cfg(feature = "remote")]
 mod http_store;

@@ -8,6 +8,7 @@ use zarrs::array::{Array, ArraySubset, ElementOwned};
 use zarrs::storage::ReadableStorageTraits;
 
 use super::Layout;
+use super::failure::{self, Failure};
 use super::guard::Guard;
 use super::meta::ArrayMeta;
 use super::root::Root;
@@ -283,14 +284,16 @@ impl Reader<'_> {
                     .map(|(r, &c)| r.start / c.max(1))
                     .collect();
                 let key = self.array.chunk_key(&chunk);
-                let text = e.to_string();
-                if text.starts_with(&format!("chunk {key} ")) {
-                    return Error::format(self.path, text); // the guard's, naming it already
+                match failure::find(&e) {
+                    // The guard's refusal names the chunk already.
+                    Some(Failure::Refused(message)) => Error::format(self.path, message.clone()),
+                    // The store's, naming the file from where the store is (a label image's
+                    // `labels/NAME/` before the key over HTTP): said once, as the array's key.
+                    Some(Failure::Unread { problem, .. }) => {
+                        Error::format(self.path, format!("chunk {key}: {problem}"))
+                    }
+                    None => Error::format(self.path, format!("chunk {key}: {e}")),
                 }
-                // A remote store's, naming the key already from the store's root (a label
-                // image's `labels/NAME/` before it): said once, as the array's key.
-                let text = strip_key(&text, key.as_str());
-                Error::format(self.path, format!("chunk {key}: {text}"))
             })?;
         let width = x.len();
         for (i, row) in values.chunks_exact(width).enumerate() {
@@ -301,38 +304,5 @@ impl Reader<'_> {
             }
         }
         Ok(E::rounded(&values))
-    }
-}
-
-/// `text` without the key it starts with, when that is `key` or a path ending in `/key` (the
-/// same chunk named from the store's root).
-fn strip_key<'t>(text: &'t str, key: &str) -> &'t str {
-    let Some((named, rest)) = text.split_once(": ") else {
-        return text;
-    };
-    let same = named == key
-        || named
-            .strip_suffix(key)
-            .is_some_and(|node| node.ends_with('/') && !node.contains(' '));
-    if same { rest } else { text }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::strip_key;
-
-    #[test]
-    fn a_chunk_named_from_the_root_is_named_once() {
-        let key = "s0/c/0/0/0";
-        assert_eq!(
-            strip_key("s0/c/0/0/0: HTTP 403 Forbidden", key),
-            "HTTP 403 Forbidden"
-        );
-        let label = "labels/cells/s0/c/0/0/0: HTTP 403 Forbidden";
-        assert_eq!(strip_key(label, key), "HTTP 403 Forbidden");
-        // Another key, or words, are kept.
-        assert_eq!(strip_key("xs0/c/0/0/0: a", key), "xs0/c/0/0/0: a");
-        assert_eq!(strip_key("the s0/c/0/0/0: a", key), "the s0/c/0/0/0: a");
-        assert_eq!(strip_key("no colon", key), "no colon");
     }
 }

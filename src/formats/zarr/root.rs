@@ -86,13 +86,8 @@ impl Root {
     /// The bytes of the metadata file `key` (at most [`MAX_JSON`]); `None` when there is none.
     fn bytes(&self, key: &str) -> std::result::Result<Option<Arc<[u8]>>, String> {
         match self {
-            Self::Local { dir, tree } => {
-                let path = if key.is_empty() {
-                    dir.clone()
-                } else {
-                    dir.join(key)
-                };
-                let file = match store::open_inside(tree, &path) {
+            Self::Local { tree, .. } => {
+                let file = match store::open_inside(tree, Path::new(key)) {
                     Ok(file) => file,
                     Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
                     Err(e) => return Err(format!("{}: {e}", name(key))),
@@ -151,13 +146,8 @@ impl Root {
         guard: Guard,
     ) -> Arc<dyn ReadableStorageTraits> {
         match self {
-            Self::Local { dir, tree } => {
-                let at = if node.is_empty() {
-                    dir.clone()
-                } else {
-                    dir.join(node)
-                };
-                Arc::new(LocalStore::new(&at, tree, max_file).with_guard(guard))
+            Self::Local { tree, .. } => {
+                Arc::new(LocalStore::new(tree, Path::new(node), max_file).with_guard(guard))
             }
             #[cfg(feature = "remote")]
             Self::Remote(r) => Arc::new(super::http_store::HttpStore::new(
