@@ -32,9 +32,12 @@ pub struct Unread {
     pub format: slabscope::Format,
     /// The notes of level 0's read, once read.
     pub notes: OnceLock<Vec<String>>,
-    /// The resolution last analysed below level 0 and the dataset read for it.
-    serving: Mutex<Option<(Resolution, Arc<slabscope::Volume>)>>,
+    /// The resolution last analysed below level 0, the dataset read for it and its read's notes.
+    serving: Mutex<Option<Served>>,
 }
+
+/// A coarser dataset read for a resolution: the resolution, the dataset and its read's notes.
+type Served = (Resolution, Arc<slabscope::Volume>, Vec<String>);
 
 /// What `load` reads of `file`: level 0, or for a store at a URL with a coarser dataset, that
 /// store's grid without level 0 ([`Unread`]).
@@ -119,7 +122,7 @@ impl Unread {
             return Ok(None);
         }
         let last = || self.serving.lock().unwrap_or_else(PoisonError::into_inner);
-        if let Some((r, v)) = last().as_ref()
+        if let Some((r, v, _)) = last().as_ref()
             && *r == resolution
         {
             return Ok(Some(Arc::clone(v)));
@@ -130,11 +133,17 @@ impl Unread {
             let opts = LoadOptions { cancel, ..opts };
             slabscope::formats::load_serving(&self.path, &opts, resolution)
         })?;
-        let served = served.map(|loaded| Arc::new(loaded.volume));
-        if let Some(v) = &served {
-            *last() = Some((resolution, Arc::clone(v)));
-        }
-        Ok(served)
+        Ok(served.map(|loaded| {
+            let volume = Arc::new(loaded.volume);
+            *last() = Some((resolution, Arc::clone(&volume), loaded.notes));
+            volume
+        }))
+    }
+
+    /// The notes of the coarser dataset last read for an analysis.
+    pub fn served_notes(&self) -> Vec<String> {
+        let last = self.serving.lock().unwrap_or_else(PoisonError::into_inner);
+        last.as_ref().map(|s| s.2.clone()).unwrap_or_default()
     }
 }
 
@@ -193,5 +202,10 @@ impl Volume {
         (self.unread.as_ref())
             .and_then(|u| u.notes.get().cloned())
             .unwrap_or_default()
+    }
+
+    /// The notes of the coarser dataset last read for an analysis below level 0.
+    pub fn served_notes(&self) -> Vec<String> {
+        self.unread.as_ref().map(Unread::served_notes).unwrap_or_default()
     }
 }

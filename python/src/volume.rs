@@ -472,10 +472,12 @@ impl Volume {
         Ok(self.inner(py)?.stats().missing as u64)
     }
 
-    /// What a user should know about the file (a 4D file's volume taken, a series' gaps...).
+    /// What a user should know about the file (a 4D file's volume taken, a series' gaps...), and
+    /// of a store at a URL the notes of its datasets read so far (the coarser one an analysis
+    /// read, as the CLI says them of `analyze URL --resolution auto`).
     #[getter]
     fn notes(&self) -> Vec<String> {
-        [self.notes.clone(), self.level0_notes()].concat()
+        [self.notes.clone(), self.level0_notes(), self.served_notes()].concat()
     }
 
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
