@@ -123,7 +123,7 @@ fn the_merge_pages_example_is_each_historys_merge_of_the_highest_nmi() {
     // Between the third split's gain and the fourth's; the count the test expects is counted
     // from the gains themselves.
     let gains: Vec<f64> = body.2.top().steps.iter().map(|s| s.gain).collect();
-    let threshold = (gains[2] + gains[3]) / 2.0;
+    let threshold = f64::midpoint(gains[2], gains[3]);
     let layers = |dims, normal, seed| analysed(phantom::layers(dims, normal, seed).unwrap());
     let cases = [
         (
