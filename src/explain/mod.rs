@@ -19,8 +19,8 @@ pub use axis::{
 };
 pub use modes::{ModeLesson, mode_lesson};
 pub use steps::{
-    MergeLesson, OptimalLesson, RunnerUp, SplitLesson, highest_nmi_merge, merge_lesson,
-    merge_lessons, optimal_lesson, split_lesson,
+    MergeLesson, OptimalLesson, RunnerUp, SplitLesson, example_merge, highest_nmi_merge,
+    merge_lesson, merge_lessons, optimal_lesson, split_lesson,
 };
 
 pub use worked::{JsExample, NmiExample, RayExample, Worked, worked};

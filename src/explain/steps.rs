@@ -207,6 +207,18 @@ pub fn highest_nmi_merge(steps: impl IntoIterator<Item = Option<f64>>) -> Option
         .map(|(step, _)| step)
 }
 
+/// The merge the lesson and the tour's export show as the example of slabs alike, among `steps`
+/// in order (each a merge's NMI, or `None` for a step that is no merge): the first of the
+/// highest NMI below 1 ([`highest_nmi_merge`]). Two constant slabs, or slabs whose paired
+/// samples are each of one bin, have a joint histogram of one cell, `H(X,Y) = 0`, and NMI 1 by
+/// convention (0/0): nothing to show, and a perfect copy's diagonal is shown as well by the
+/// nearly perfect pair below it. The first of the highest NMI of all when every merge's is 1;
+/// `None` when no step is a merge.
+pub fn example_merge(steps: &[Option<f64>]) -> Option<usize> {
+    let below_one = steps.iter().map(|nmi| nmi.filter(|&v| v < 1.0));
+    highest_nmi_merge(below_one).or_else(|| highest_nmi_merge(steps.iter().copied()))
+}
+
 /// The lesson of bottom-up's merge number `step` (from 1): one pass over the stack for the
 /// joint histogram.
 pub fn merge_lesson(histories: &Histories, step: usize, monitor: &Monitor) -> Result<MergeLesson> {
@@ -251,7 +263,9 @@ pub fn optimal_lesson(histories: &Histories, slabs: usize) -> Option<OptimalLess
 
 #[cfg(test)]
 mod tests {
-    use super::highest_nmi_merge;
+    use super::{example_merge, highest_nmi_merge};
+    use crate::partition::{Histories, Scope, SliceStack};
+    use crate::progress::Monitor;
 
     #[test]
     fn the_highest_nmi_merge_is_the_first_of_equals_among_merges() {
@@ -266,5 +280,40 @@ mod tests {
         );
         assert_eq!(highest_nmi_merge([None, None]), None);
         assert_eq!(highest_nmi_merge(std::iter::empty()), None);
+    }
+
+    #[test]
+    fn the_example_merge_passes_over_an_nmi_of_one() {
+        // A merge of two constant slabs (NMI 1 by convention, H(X,Y) = 0) before the highest
+        // below 1; steps that are no merge count in the numbering.
+        assert_eq!(
+            example_merge(&[Some(0.4), Some(1.0), None, Some(0.9), Some(0.9), Some(1.0)]),
+            Some(4)
+        );
+        // Only merges of NMI 1 yet: the first of them; no merge: none.
+        assert_eq!(example_merge(&[None, Some(1.0), Some(1.0)]), Some(2));
+        assert_eq!(example_merge(&[None]), None);
+        assert_eq!(example_merge(&[]), None);
+    }
+
+    #[test]
+    fn constant_slabs_merge_at_an_nmi_of_one() {
+        // Two constant slices of two bins, two slices of two bins partly alike: bottom-up first joins
+        // the constant ones, NMI 1 by convention, and the example is the other two's.
+        let slices = [
+            vec![0, 0, 0, 0],
+            vec![3, 3, 3, 3],
+            vec![1, 2, 1, 2],
+            vec![1, 2, 1, 1],
+        ];
+        let stack = SliceStack::from_slices(&slices, 4).unwrap();
+        let h = Histories::of_stack(stack, Scope::ALL, &Monitor::none()).unwrap();
+        let steps = &h.bottom().unwrap().steps;
+        assert_eq!((steps[0].merge, steps[0].nmi), (((0, 1), (1, 2)), 1.0));
+        assert_eq!(steps[1].merge, ((2, 3), (3, 4)));
+        assert!(steps[1].nmi > 0.0 && steps[1].nmi < 1.0, "{}", steps[1].nmi);
+        let nmis: Vec<_> = steps.iter().map(|s| Some(s.nmi)).collect();
+        assert_eq!(highest_nmi_merge(nmis.iter().copied()), Some(1));
+        assert_eq!(example_merge(&nmis), Some(2));
     }
 }

@@ -5,7 +5,8 @@ use std::sync::Arc;
 
 use slabscope::explain::{
     AxisLesson, MergeLesson, ModeLesson, OptimalLesson, RayPlane, RaySamples, SplitLesson,
-    axis_lesson, merge_lesson, mode_lesson, optimal_lesson, ray_plane, ray_samples, split_lesson,
+    axis_lesson, example_merge, merge_lesson, mode_lesson, optimal_lesson, ray_plane, ray_samples,
+    split_lesson,
 };
 use slabscope::partition::Method;
 use slabscope::{Histories, Monitor, ViewParams, Volume};
@@ -38,8 +39,9 @@ pub enum Subject {
         /// The histories' request generation, so that new histories are a new subject.
         generation: u64,
     },
-    /// The merge of the highest NMI among the first `upto` bottom-up took (the tour's page on a
-    /// merge: the last one may join slabs barely alike), beside the step shown, `upto`.
+    /// The merge of the highest NMI below 1 among the first `upto` bottom-up took (the tour's
+    /// page on a merge: the last one may join slabs barely alike;
+    /// [`example_merge`]), beside the step shown, `upto`.
     BestMerge {
         /// The step shown: the merges taken to the slab count shown.
         upto: usize,
@@ -158,7 +160,9 @@ impl LessonRequest {
                     .histories
                     .as_deref()
                     .ok_or("the partition is not ready yet")?;
-                let step = highest_nmi(h, *upto).ok_or("no merge taken yet")?;
+                let steps = h.bottom().map_or(&[][..], |b| &b.steps);
+                let nmis: Vec<_> = steps.iter().take(*upto).map(|s| Some(s.nmi)).collect();
+                let step = example_merge(&nmis).ok_or("no merge taken yet")?;
                 Ok(Lesson::BestMerge {
                     merge: Box::new(merge_lesson(h, step, monitor).map_err(text)?),
                     upto: *upto,
@@ -167,11 +171,4 @@ impl LessonRequest {
             }
         }
     }
-}
-
-/// The merge of the highest NMI among the first `upto` bottom-up took (its step, from 1; the
-/// first on ties), as `tour --export` picks it from the analysis's steps; `None` before any.
-pub fn highest_nmi(histories: &Histories, upto: usize) -> Option<usize> {
-    let steps = &histories.bottom()?.steps;
-    slabscope::explain::highest_nmi_merge(steps.iter().take(upto).map(|s| Some(s.nmi)))
 }

@@ -169,7 +169,7 @@ pub fn run(options: Options) -> Result<()> {
             files.thumbs = thumbs;
         }
         if let Some(mode) = tour {
-            app.tour = Some(app::tour::Tour::new(mode.paper));
+            app.start_tour(mode.paper);
         }
         run_loop(&mut terminal, &mut app, &rx, &mut jobs, effects)?;
         // The user saw why; the exit status says so too.

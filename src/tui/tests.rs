@@ -161,6 +161,7 @@ mod keys;
 mod lesson;
 mod pages;
 mod tour;
+mod tour_merge;
 mod upgrade;
 
 #[test]

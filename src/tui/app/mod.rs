@@ -174,6 +174,10 @@ impl App {
             best_merge: false,
             ..t
         });
+        if self.tour.is_some() {
+            // The terminal's note is not the tour's page.
+            self.status.notice = None;
+        }
         self.sync_focus();
         effects
     }

@@ -128,7 +128,8 @@ impl Setup {
 /// The page on paper mode and the defaults, whose lesson is the two modes' numbers.
 pub const MODES: usize = 6;
 
-/// The page of a merge, whose lesson is the merge of the highest NMI taken to the step shown.
+/// The page of a merge, whose lesson is the merge of the highest NMI taken to the step shown
+/// (below 1, which is a joint histogram of one cell's: `explain::example_merge`).
 pub const MERGE: usize = 12;
 
 /// The page setting top-down beside bottom-up, which adds what each keeps.
@@ -319,6 +320,14 @@ pub fn position(histories: &Histories, method: Method, slabs: usize) -> Option<u
 }
 
 impl App {
+    /// Starts the tour at its first page, in paper mode when `paper`. The status line is the
+    /// page's from now on: the terminal's note (how to let images through tmux) goes at once,
+    /// not once the first page's data is in.
+    pub fn start_tour(&mut self, paper: bool) {
+        self.tour = Some(Tour::new(paper));
+        self.status.notice = None;
+    }
+
     /// Whether the exploded view shows large, over the four panes: on the tour's last page,
     /// unless the lesson or the help covers it.
     pub fn preview_large(&self) -> bool {
@@ -400,8 +409,6 @@ impl App {
             (self.lesson.subject, self.lesson.lesson) = (None, Task::Idle);
         }
         self.ray = (0, 0);
-        // What the terminal's answers said is not the page's.
-        self.status.notice = None;
         let best_merge = t.page == MERGE && method == Method::BottomUp;
         if let Some(t) = self.tour.as_mut() {
             (t.applied, t.numbers, t.best_merge) = (true, numbers, best_merge);

@@ -3,23 +3,29 @@
 //! where the last merge, the one that leaves the slab count, may join slabs barely alike.
 
 use anyhow::Result;
-use slabscope::explain::{MergeLesson, highest_nmi_merge, merge_lesson};
+use slabscope::explain::{MergeLesson, example_merge, merge_lesson};
 use slabscope::partition::{Histories, Method, Scope, Step};
 use slabscope::{Analysis, AnalysisParams, Monitor, Volume};
 
-/// The merge of the highest NMI among those `bottom` took (the first on ties), explained on
-/// the histories along its axis with the stack `params` give; `None` when it took none.
+/// The merge of the highest NMI among those `bottom` took (the first on ties, below 1 unless
+/// every one's is: [`example_merge`]), explained on the histories along its axis with the stack
+/// `params` give; `None` when it took none.
 pub fn best_merge(
     volume: &Volume,
     bottom: &Analysis,
     params: &AnalysisParams,
     monitor: &Monitor,
 ) -> Result<Option<MergeLesson>> {
-    let nmis = bottom.partition.steps.iter().map(|s| match s {
-        Step::Merge { nmi, .. } => Some(*nmi),
-        Step::Split { .. } => None,
-    });
-    let Some(step) = highest_nmi_merge(nmis) else {
+    let nmis: Vec<_> = bottom
+        .partition
+        .steps
+        .iter()
+        .map(|s| match s {
+            Step::Merge { nmi, .. } => Some(*nmi),
+            Step::Split { .. } => None,
+        })
+        .collect();
+    let Some(step) = example_merge(&nmis) else {
         return Ok(None);
     };
     let stack = AnalysisParams {

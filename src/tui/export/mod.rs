@@ -505,8 +505,10 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
             let mut lines = text::merge_lines(m, bottom.steps.len());
             if let Some(best) = &n.best_merge {
                 numbers["highest_nmi"] = json!(best);
+                // Below 1 unless every merge's NMI is 1 (explain::example_merge).
+                let below = if best.nmi < 1.0 { " below 1" } else { "" };
                 lines.push(format!(
-                    "The merge of the highest NMI: step {}, {} and {}, NMI = {:.4}",
+                    "The merge of the highest NMI{below}: step {}, {} and {}, NMI = {:.4}",
                     best.step,
                     charts::slices(best.merge.0),
                     charts::slices(best.merge.1),

@@ -33,8 +33,9 @@ pub(super) fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, b
             (1.0 + (c as f64).ln()) / (1.0 + (top as f64).ln())
         }
     };
+    let bins = if group == 1 { "bin" } else { "bins" };
     Paragraph::new(format!(
-        "joint histogram: X's bin down, Y's across, log counts, {group} bin a cell"
+        "joint histogram: X's bin down, Y's across, log counts, {group} {bins} a cell"
     ))
     .render(Rect { height: 1, ..area }, buf);
     let mut lines = Vec::new();

@@ -471,7 +471,7 @@ fn merge(
             0,
             format!(
                 "The example: of the {upto} merges taken to the slabs shown, the one of the \
-                 highest NMI (n p step on from merge {upto}, the last):"
+                 highest NMI below 1 (n p step on from merge {upto}, the last):"
             ),
         );
     }

@@ -494,3 +494,36 @@ fn in_the_tour_a_remotes_keys_turn_pages_and_open_no_other_volume() {
         "{effects:?}"
     );
 }
+
+#[test]
+fn in_the_tour_a_volume_opened_from_the_folder_brings_no_terminal_note() {
+    let root = PathBuf::from("/data");
+    let screen = Screen {
+        theme: PLAIN,
+        note: Some("tmux keeps images from the terminal".into()),
+        ..Screen::default()
+    };
+    let names = ["a.nii", "b.nrrd"];
+    let params = AnalysisParams::default();
+    let (mut app, _) = App::for_folder(root.clone(), entries(&root, &names), params, screen);
+    assert!(app.status.notice.is_some());
+    app.start_tour(false);
+    assert_eq!(app.status.notice, None);
+    let open = |app: &mut App, by: isize| {
+        app.focus = Pane::Files;
+        app.update(Action::Move(by));
+        let effects = app.update(Action::Select);
+        assert!(
+            effects.iter().any(|e| matches!(e, Effect::Open(_))),
+            "{effects:?}"
+        );
+    };
+    open(&mut app, 1);
+    assert!(app.name.ends_with("b.nrrd"), "{}", app.name);
+    assert_eq!(app.status.notice, None);
+    // Outside the tour the note comes with every volume.
+    app.tour = None;
+    open(&mut app, -1);
+    assert!(app.name.ends_with("a.nii"), "{}", app.name);
+    assert!(app.status.notice.is_some());
+}

@@ -345,3 +345,46 @@ fn a_level_0_beyond_the_budget_starts_afresh_without_the_file_preview() {
     assert!(matches!(app.views.views, Task::Running(_)));
     assert_eq!(app.status.resolution, None);
 }
+
+#[test]
+fn the_tours_merge_page_shows_the_new_histories_merge_of_the_highest_nmi() {
+    use super::lesson::answer;
+    use super::tour_merge::highest;
+    use crate::tui::lesson::{Lesson, Subject};
+    let b = big();
+    let (mut app, _) = previewed();
+    app.start_tour(false);
+    let example = |app: &App| match &app.lesson.lesson {
+        Task::Ready(l) => match l.as_ref() {
+            Lesson::BestMerge { merge, upto, .. } => (merge.step, *upto),
+            _ => panic!("not the best merge's lesson"),
+        },
+        _ => panic!("no lesson"),
+    };
+    // The preview's 66 slices to four slabs: 62 merges, the example among them.
+    let effects = app.update(Action::TurnPage(crate::tui::app::tour::MERGE as isize));
+    assert!(matches!(
+        answer(&mut app, effects),
+        Subject::BestMerge { upto: 62, .. }
+    ));
+    let preview = highest(&b.along_z[1], 62);
+    assert_eq!(example(&app), (preview, 62));
+    // Full resolution's 132 slices replace them in place: 128 merges, the example theirs.
+    job(&mut app, JobMsg::Views(0, Ok(Box::new(b.views.clone()))));
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(2, 0, Ok(Arc::clone(&b.along_z[0]))),
+    );
+    assert_eq!(
+        (app.part.method, app.part.slab_count()),
+        (Method::BottomUp, Some(4))
+    );
+    assert!(matches!(
+        answer(&mut app, effects),
+        Subject::BestMerge { upto: 128, .. }
+    ));
+    let full = highest(&b.along_z[0], 128);
+    assert_eq!(example(&app), (full, 128));
+    let steps = &b.along_z[0].bottom().unwrap().steps;
+    assert!(full < 128 && steps[full - 1].nmi > steps[127].nmi, "{full}");
+}
