@@ -206,6 +206,9 @@ impl Volume {
 
     /// The notes of the coarser dataset last read for an analysis below level 0.
     pub fn served_notes(&self) -> Vec<String> {
-        self.unread.as_ref().map(Unread::served_notes).unwrap_or_default()
+        self.unread
+            .as_ref()
+            .map(|u| u.served_notes())
+            .unwrap_or_default()
     }
 }

@@ -142,6 +142,9 @@ def test_a_coarser_level_is_analysed_without_a_chunk_of_level_0(served, stores):
     assert auto["dims"] == [256, 256, 256]
     assert auto["resolution"]["pyramid_level"] == 1
     assert auto["resolution"]["dims"] == [128, 128, 128]
+    # The note the CLI prints of the dataset read, on the volume.
+    (served,) = [n for n in volume.notes if n.startswith("pyramid level 1 from the store's")]
+    assert "level 0 not read: quantized with that dataset's own value range" in served
     # Level 1 analysed as a volume of its own gives the same analysis, its range level 1's.
     own = slabscope.analyze(slabscope.load(stores / "alone.ome.zarr"), slabs=3).to_dict()
     for key in ["range", "views", "best_axis", "partition", "params"]:
