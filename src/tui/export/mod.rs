@@ -502,19 +502,25 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
         ),
         "A merge" => merge.map_or_else(none, |m| {
             let mut numbers = json!(m);
-            let mut lines = text::merge_lines(m, bottom.steps.len());
-            if let Some(best) = &n.best_merge {
-                numbers["highest_nmi"] = json!(best);
-                // Below 1 unless every merge's NMI is 1 (explain::example_merge).
-                let below = if best.nmi < 1.0 { " below 1" } else { "" };
-                lines.push(format!(
-                    "The merge of the highest NMI{below}: step {}, {} and {}, NMI = {:.4}",
-                    best.step,
-                    charts::slices(best.merge.0),
-                    charts::slices(best.merge.1),
-                    best.nmi
-                ));
-            }
+            let taken = bottom.steps.len();
+            let Some(best) = &n.best_merge else {
+                return (numbers, text::merge_lines(m, taken));
+            };
+            numbers["highest_nmi"] = json!(best);
+            // The example the TUI's page shows in full, as the slides should: the merge of the
+            // highest NMI below 1 (unless every merge's NMI is 1: explain::example_merge); the
+            // last merge, to the slab count, in a line after it.
+            let below = if best.nmi < 1.0 { " below 1" } else { "" };
+            let mut lines = vec![format!("The merge of the highest NMI{below}:")];
+            lines.extend(text::merge_lines(best, taken));
+            lines.push(format!(
+                "The last merge, to {} slabs: step {}, {} and {}, NMI = {:.4}",
+                bottom.slabs.len(),
+                m.step,
+                charts::slices(m.merge.0),
+                charts::slices(m.merge.1),
+                m.nmi
+            ));
             (numbers, lines)
         }),
         "Top-down against bottom-up" => (
