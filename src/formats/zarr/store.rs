@@ -71,8 +71,8 @@ fn beneath(tree: &Path, target: &Path) -> std::io::Result<PathBuf> {
 /// The path is walked one name at a time from the tree's root, each folder opened relative to
 /// the one before it and nothing opened through a link (`O_NOFOLLOW`): a link on the way is read
 /// and its target walked the same way, `..` never above the root. What is opened is what was
-/// checked, so a link swapped in meanwhile cannot lead the read out of the tree.
-#[cfg(unix)]
+/// checked, so a link swapped in meanwhile cannot lead the read out of the tree. (The library
+/// reads on Unix alone: `FileExt` above.)
 pub fn open_inside(tree: &Path, relative: &Path) -> std::io::Result<std::fs::File> {
     use std::os::unix::ffi::OsStringExt;
 
@@ -137,29 +137,6 @@ pub fn open_inside(tree: &Path, relative: &Path) -> std::io::Result<std::fs::Fil
         Some(fd) => crate::formats::regular(std::fs::File::from(fd)),
         None => Err(out_of_the_store()),
     }
-}
-
-/// The file `relative` of the store whose tree is `tree`, where there are no `openat` and
-/// `O_NOFOLLOW`: its real place checked to lie in the tree before and after the open, and to be
-/// the very file opened.
-#[cfg(not(unix))]
-pub fn open_inside(tree: &Path, relative: &Path) -> std::io::Result<std::fs::File> {
-    let inside = |p: &Path| {
-        let real = p.canonicalize()?;
-        if real.starts_with(tree) {
-            Ok(real)
-        } else {
-            Err(out_of_the_store())
-        }
-    };
-    let real = inside(&tree.join(relative))?;
-    let file = crate::formats::open_regular(&real)?;
-    let again = std::fs::metadata(inside(&real)?)?;
-    let opened = file.metadata()?;
-    if opened.len() != again.len() || opened.modified().ok() != again.modified().ok() {
-        return Err(out_of_the_store());
-    }
-    Ok(file)
 }
 
 /// A read-only Zarr store over the folder `node` of a store's tree, whose files all lie in the

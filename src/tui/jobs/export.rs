@@ -15,6 +15,7 @@ use crate::tui::event::ExportRequest;
 
 /// Writes the view (PNG), the analysis (JSON) and the labels (NRRD) of the request's partition
 /// to the current folder under names not taken yet; says what it wrote.
+///
 /// Within `max_memory` bytes: the labels are refused before anything is written when the
 /// background mask of every voxel and a plane of them do not fit beside the volume.
 pub(super) fn export(
