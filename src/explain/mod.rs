@@ -8,6 +8,7 @@ mod axis;
 pub mod figure;
 mod modes;
 mod steps;
+mod structure;
 pub mod text;
 mod worked;
 
@@ -23,6 +24,10 @@ pub use steps::{
     merge_lesson, merge_lessons, optimal_lesson, split_lesson,
 };
 
+pub use structure::{
+    Boundaries, COUNTS, Structure, boundaries, boundaries_brief, boundaries_sentence, structure,
+    structure_brief, structure_sentence,
+};
 pub use worked::{JsExample, NmiExample, RayExample, Worked, worked};
 
 use crate::error::Result;

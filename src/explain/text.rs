@@ -7,7 +7,7 @@ use super::{
 use crate::partition::{Slab, slab_text};
 
 /// `slices 12–40`, or `slice 7` for one.
-fn slices(s: Slab) -> String {
+pub(super) fn slices(s: Slab) -> String {
     let word = if s.1 <= s.0 + 1 { "slice" } else { "slices" };
     format!("{word} {}", slab_text(s))
 }
@@ -230,6 +230,41 @@ pub fn merge_lines(m: &MergeLesson, of: usize) -> Vec<String> {
             "  NMI = MI / H(X,Y) = {:.4} / {:.4} = {:.4}, the largest of the adjacent pairs",
             m.mi, m.h_xy, m.nmi
         ),
+        runner,
+    ]
+}
+
+/// [`merge_lines`] in five short lines, for a small terminal where the joint histogram needs
+/// the room: the merge, the entropies, MI, NMI, the runner-up.
+pub fn merge_brief(m: &MergeLesson, of: usize) -> Vec<String> {
+    let (x, y) = m.merge;
+    let runner = m.runner_up.as_ref().map_or_else(
+        || "runner-up: not kept (over 1024 slabs left)".to_string(),
+        |r| {
+            format!(
+                "runner-up: {} with {}, NMI {:.4}",
+                slab_text(r.merge.0),
+                slab_text(r.merge.1),
+                r.nmi
+            )
+        },
+    );
+    vec![
+        format!(
+            "Merge {} of {of}: {} (X) with {} (Y)",
+            m.step,
+            slab_text(x),
+            slab_text(y)
+        ),
+        format!(
+            "H(X) {:.4}, H(Y) {:.4}, H(X,Y) {:.4} bits",
+            m.h_x, m.h_y, m.h_xy
+        ),
+        format!(
+            "MI = {:.4} + {:.4} − {:.4} = {:.4}",
+            m.h_x, m.h_y, m.h_xy, m.mi
+        ),
+        format!("NMI = MI / H(X,Y) = {:.4}", m.nmi),
         runner,
     ]
 }

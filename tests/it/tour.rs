@@ -160,23 +160,50 @@ fn check_lessons(
         assert_eq!(split[key], lesson["splits"][0][key], "{key}");
     }
     assert_eq!(page("The optimum"), lesson["optimal"]);
-    // The merge leaving four slabs bottom-up, as `analyze --method bottomup` explains it.
-    let mut bottom_up = vec![
-        "analyze",
-        s(body),
-        "--json",
-        "--slabs",
-        "4",
-        "--method",
-        "bottomup",
-        "--explain",
-        "all",
-    ];
-    if paper {
-        bottom_up.extend(["--phases", "0", "--background", "none"]);
-    }
-    let merges = analyzed(&bottom_up);
+    // The merge page shows bottom-up where the NMI of its merges falls furthest, between 3 and
+    // 8 slabs, counted here from the whole history `analyze --method bottomup` gives.
     let merge = page("A merge");
+    let bottom_up = |slabs: &str| {
+        let mut args = vec![
+            "analyze",
+            s(body),
+            "--json",
+            "--method",
+            "bottomup",
+            "--explain",
+            "all",
+            "--slabs",
+        ];
+        args.push(slabs);
+        if paper {
+            args.extend(["--phases", "0", "--background", "none"]);
+        }
+        analyzed(&args)
+    };
+    let whole = bottom_up("1");
+    let nmis: Vec<f64> = whole["partition"]["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["nmi"].as_f64().unwrap())
+        .collect();
+    let slices = nmis.len() + 1;
+    let fall = |k: usize| nmis[slices - k - 1] - nmis[slices - k];
+    let structured = (3..=8)
+        .filter(|&k| fall(k) > 0.0)
+        .fold(None, |best: Option<usize>, k| match best {
+            Some(b) if fall(b) >= fall(k) => best,
+            _ => Some(k),
+        })
+        .unwrap();
+    assert_eq!(merge["slabs"], structured, "{merge}");
+    assert_eq!(merge["structure"]["at"]["slabs"], structured);
+    assert_eq!(
+        merge["structure"]["at"]["next_nmi"],
+        nmis[slices - structured]
+    );
+    let shown = structured.to_string();
+    let merges = bottom_up(&shown);
     let explained = merges["explain"]["merges"].as_array().unwrap();
     let last = explained.last().unwrap();
     for key in ["nmi", "mi", "h_xy", "merge"] {

@@ -208,6 +208,16 @@ impl MergeHistory {
     pub fn slice_nmi(&self) -> &[f64] {
         &self.slice_nmi
     }
+
+    /// A history of `slices` slices that took `steps`, for tests of what reads histories.
+    #[cfg(test)]
+    pub(crate) fn of_steps(slices: usize, steps: Vec<Merge>) -> Self {
+        Self {
+            slices,
+            steps,
+            slice_nmi: Vec::new(),
+        }
+    }
 }
 
 #[cfg(test)]

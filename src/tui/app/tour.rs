@@ -7,6 +7,7 @@
 //! then do anything, and the next page sets them again.
 
 use slabscope::Histories;
+use slabscope::explain;
 use slabscope::partition::Method;
 
 use super::{App, Pane};
@@ -46,19 +47,30 @@ pub struct Tour {
     pub best_merge: bool,
 }
 
-/// The numbers a page adds to its paragraph, from the histories shown.
+/// The numbers a page adds to its paragraph, from the histories shown at `slabs` slabs.
 pub fn page_numbers(page: usize, histories: &Histories, slabs: usize) -> Option<String> {
     let kept = |method| {
         let position = position(histories, method, slabs)?;
         Some(histories.information(&histories.slabs(method, position)))
     };
+    let bottom = histories.bottom();
     match page {
-        COMPARED => Some(format!(
-            "Here {slabs} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
-            kept(Method::TopDown)?,
-            kept(Method::BottomUp)?,
-            histories.entropy()
-        )),
+        COMPARED => {
+            let mut text = format!(
+                "Here {slabs} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
+                kept(Method::TopDown)?,
+                kept(Method::BottomUp)?,
+                histories.entropy()
+            );
+            if let Some(b) = bottom.and_then(|h| explain::boundaries(h, slabs)) {
+                text.push(' ');
+                text.push_str(&explain::boundaries_brief(&b));
+            }
+            Some(text)
+        }
+        MERGE => explain::structure(bottom?)
+            .filter(|s| s.at.slabs == slabs)
+            .map(|s| explain::structure_brief(&s)),
         _ => None,
     }
 }
@@ -114,13 +126,18 @@ const fn setup(focus: Pane, lesson: bool, row: Row, method: Method, slabs: usize
 /// show one slab or the first split keep theirs.
 pub const SHOWN: usize = 4;
 
+/// The slab count of the pages on bottom-up's merges: where the history shows structure
+/// ([`explain::structure`], computed from the volume), or the analysis's when it has none.
+pub const STRUCTURED: usize = 0;
+
 impl Setup {
-    /// The slab count the page shows when the analysis gives `given` slabs.
-    pub fn slabs_with(&self, given: usize) -> usize {
-        if self.slabs == SHOWN {
-            given
-        } else {
-            self.slabs
+    /// The slab count the page shows when the analysis gives `given` slabs and bottom-up's
+    /// history shows structure at `structured`.
+    pub fn slabs_with(&self, given: usize, structured: Option<usize>) -> usize {
+        match self.slabs {
+            SHOWN => given,
+            STRUCTURED => structured.unwrap_or(given),
+            k => k,
         }
     }
 }
@@ -177,8 +194,8 @@ pub const PAGES: [Page; 16] = [
         title: "Blocks and H(X^L)",
         text: "A block is L samples in a row on one ray. Counted over every ray, blocks have a \
                distribution p; its entropy is H(X^L) = -Σ p(x1..xL) log2 p(x1..xL) bits \
-               (eq. 2). On the volume: the strip is the ray through the centre, a cell a sample, \
-               grey by bin; the lesson lists the most frequent blocks and H(X^1) … H(X^L).",
+               (eq. 2). The strip is the ray through the centre, grey by bin; the lesson lists \
+               the most frequent blocks and H(X^1) … H(X^L).",
         board: None,
         setup: setup(Pane::Views, true, Row::Best, Method::TopDown, SHOWN),
     },
@@ -239,7 +256,7 @@ pub const PAGES: [Page; 16] = [
                other; NMI = MI / H(X,Y) (eq. 8) scales it to 0 … 1. Here the slices agree on \
                six pixels of eight.",
         board: Some(Board::Nmi),
-        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, SHOWN),
+        setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, STRUCTURED),
     },
     Page {
         title: "A merge",
@@ -247,13 +264,12 @@ pub const PAGES: [Page; 16] = [
                alike: the largest NMI = MI / H(X,Y) of their joint histogram over corresponding \
                pixels, MI = H(X) + H(Y) - H(X,Y) (eq. 7, 8).",
         board: None,
-        setup: setup(Pane::Slabs, true, Row::Best, Method::BottomUp, SHOWN),
+        setup: setup(Pane::Slabs, true, Row::Best, Method::BottomUp, STRUCTURED),
     },
     Page {
         title: "Top-down against bottom-up",
-        text: "The two greedy methods answer different questions: top-down keeps the most \
-               information about the values, bottom-up keeps alike slices together. Their slab \
-               tables and the information each keeps differ; m switches the method.",
+        text: "Top-down keeps the most information about the values, bottom-up keeps alike \
+               slices together; m switches the method.",
         board: None,
         setup: setup(Pane::Slabs, false, Row::Best, Method::BottomUp, SHOWN),
     },
@@ -379,8 +395,9 @@ impl App {
                 h.position_for_threshold(Method::TopDown, v),
             ),
         };
+        let structured = h.bottom().and_then(explain::structure).map(|s| s.at.slabs);
         let s = Setup {
-            slabs: s.slabs_with(given),
+            slabs: s.slabs_with(given, structured),
             ..s
         };
         let numbers = page_numbers(t.page, h, s.slabs);

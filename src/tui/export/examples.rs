@@ -1,33 +1,41 @@
-//! The well-chosen examples the pages show beside the analysis's own steps: the merge of the
-//! highest NMI bottom-up took (two slices nearly alike, a joint histogram along its diagonal),
-//! where the last merge, the one that leaves the slab count, may join slabs barely alike.
+//! The well-chosen examples the merge pages show beside the analysis's own steps, as the TUI's
+//! tour shows them: bottom-up at the slab count where its history shows structure
+//! ([`structure`]), the merge of the highest NMI taken to it (two slices nearly alike, a joint
+//! histogram along its diagonal) where the last merge may join slabs barely alike, and why the
+//! boundaries of the analysis's own count stand where they do.
 
 use anyhow::Result;
-use slabscope::explain::{MergeLesson, example_merge, merge_lesson};
-use slabscope::partition::{Histories, Method, Scope, Step};
-use slabscope::{Analysis, AnalysisParams, Monitor, Volume};
+use slabscope::explain::{
+    Boundaries, MergeLesson, Structure, boundaries, example_merge, merge_lesson, structure,
+};
+use slabscope::partition::{Histories, Method, Scope};
+use slabscope::{AnalysisParams, Monitor, Volume};
 
-/// The merge of the highest NMI among those `bottom` took (the first on ties, below 1 unless
-/// every one's is: [`example_merge`]), explained on the histories along its axis with the stack
-/// `params` give; `None` when it took none.
-pub fn best_merge(
+/// The merge pages' examples.
+pub struct Merges {
+    /// The slab count where bottom-up's history shows structure, and why; `None` when it shows
+    /// none (the pages keep the analysis's count).
+    pub structure: Option<Structure>,
+    /// The count the merge page shows: the structure's, or the analysis's.
+    pub slabs: usize,
+    /// The merge of the highest NMI taken to `slabs` slabs (below 1 unless every one's is:
+    /// [`example_merge`]).
+    pub best: Option<MergeLesson>,
+    /// The last merge taken to `slabs` slabs.
+    pub last: Option<MergeLesson>,
+    /// What holds the boundaries at the analysis's own count, beside top-down's.
+    pub given: Option<Boundaries>,
+}
+
+/// The merge pages' examples of bottom-up along `axis`, whose analysis gives `given` slabs, on
+/// the histories of the stack `params` give.
+pub fn merges(
     volume: &Volume,
-    bottom: &Analysis,
+    axis: [f64; 3],
     params: &AnalysisParams,
+    given: usize,
     monitor: &Monitor,
-) -> Result<Option<MergeLesson>> {
-    let nmis: Vec<_> = bottom
-        .partition
-        .steps
-        .iter()
-        .map(|s| match s {
-            Step::Merge { nmi, .. } => Some(*nmi),
-            Step::Split { .. } => None,
-        })
-        .collect();
-    let Some(step) = example_merge(&nmis) else {
-        return Ok(None);
-    };
+) -> Result<Merges> {
     let stack = AnalysisParams {
         method: Method::BottomUp,
         ..params.clone()
@@ -38,6 +46,26 @@ pub fn best_merge(
         optimal_slabs: 0,
         ..Scope::ALL
     };
-    let histories = Histories::new(volume, bottom.axis(), &stack, scope, monitor)?;
-    Ok(Some(merge_lesson(&histories, step, monitor)?))
+    let histories = Histories::new(volume, axis, &stack, scope, monitor)?;
+    let Some(history) = histories.bottom() else {
+        anyhow::bail!("the bottom-up history was not computed");
+    };
+    let structure = structure(history);
+    let slabs = structure.as_ref().map_or(given, |s| s.at.slabs);
+    let taken = history.slices.saturating_sub(slabs);
+    let nmis: Vec<_> = history.steps[..taken].iter().map(|m| Some(m.nmi)).collect();
+    let lesson = |step: Option<usize>| -> Result<Option<MergeLesson>> {
+        Ok(step
+            .map(|s| merge_lesson(&histories, s, monitor))
+            .transpose()?)
+    };
+    let best = lesson(example_merge(&nmis))?;
+    let last = lesson((taken > 0).then_some(taken))?;
+    Ok(Merges {
+        structure,
+        slabs,
+        best,
+        last,
+        given: boundaries(history, given),
+    })
 }

@@ -45,12 +45,12 @@ struct Numbers {
     volume: Volume,
     /// Top-down along the chosen axis at the given analysis's slab count, every split explained.
     top: Analysis,
-    /// Bottom-up along the same axis at the same slab count, its last merge explained.
+    /// Bottom-up along the same axis at the same slab count.
     bottom: Analysis,
     /// The given analysis's partition when its method is not top-down (else `top`'s).
     chosen: Option<slabscope::Partition>,
-    /// The merge of the highest NMI bottom-up took: the page's example of slices alike.
-    best_merge: Option<explain::MergeLesson>,
+    /// Bottom-up where its history shows structure: the merge page's count and examples.
+    merges: examples::Merges,
     modes: explain::ModeLesson,
 }
 
@@ -180,8 +180,8 @@ fn check_folder(dir: &Path, force: bool) -> Result<()> {
 
 /// The analyses behind the pages: the given one (its method, its stop: `--slabs` or
 /// `--threshold`, as `analyze` runs it), top-down along its axis with every split explained,
-/// bottom-up along the same axis with the merge that leaves the same slab count, and the modes'
-/// numbers.
+/// bottom-up along the same axis at the same slab count and where its history shows structure
+/// ([`examples::merges`]), and the modes' numbers.
 fn compute(o: &ExportOptions) -> Result<Numbers> {
     let (name, volume) = match &o.file {
         Some(path) => (
@@ -228,20 +228,20 @@ fn compute(o: &ExportOptions) -> Result<Numbers> {
         method: Method::BottomUp,
         stop: Stop::Slabs(slabs),
         axis: along,
-        explain: Some(StepsShown::Last(1)),
+        explain: None,
         // The axis is the given analysis's: no second view search.
         search_views: false,
         ..o.analysis.clone()
     })?;
     let modes = explain::mode_lesson(&volume, top.axis(), &o.analysis.view, &monitor)?;
-    let best_merge = examples::best_merge(&volume, &bottom, &o.analysis, &monitor)?;
+    let merges = examples::merges(&volume, top.axis(), &o.analysis, slabs, &monitor)?;
     Ok(Numbers {
         name,
         volume,
         top,
         bottom,
         chosen,
-        best_merge,
+        merges,
         modes,
     })
 }
@@ -286,7 +286,7 @@ fn pictures(n: &Numbers) -> Result<Vec<(&'static str, Vec<u8>)>> {
     if let Some(m) = last_merge(n) {
         out.push((MERGE, png(&charts::merge(m, 800, 640)?)?));
     }
-    if let Some(m) = &n.best_merge {
+    if let Some(m) = &n.merges.best {
         out.push((MERGE_BEST, png(&charts::merge(m, 800, 640)?)?));
     }
     Ok(out)
@@ -297,9 +297,9 @@ fn first_split(n: &Numbers) -> Option<&explain::SplitLesson> {
     n.top.explain.as_ref().and_then(|e| e.splits.first())
 }
 
-/// Bottom-up's merge that leaves the tour's slab count, explained.
+/// Bottom-up's merge that leaves the merge page's slab count, explained.
 fn last_merge(n: &Numbers) -> Option<&explain::MergeLesson> {
-    n.bottom.explain.as_ref().and_then(|e| e.merges.last())
+    n.merges.last.as_ref()
 }
 
 /// The charts a page of the volume's own numbers shows, by its title.
@@ -308,7 +308,7 @@ fn charts_of(title: &str, n: &Numbers) -> Vec<&'static str> {
         "Slicing along the best axis" | "Further splits and the gain curve" => vec![CURVES],
         "The first split" if first_split(n).is_some() => vec![SPLIT],
         "A merge" => [
-            (MERGE_BEST, n.best_merge.is_some()),
+            (MERGE_BEST, n.merges.best.is_some()),
             (MERGE, last_merge(n).is_some()),
         ]
         .into_iter()
@@ -479,7 +479,6 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
     let (part, bottom) = (&n.top.partition, &n.bottom.partition);
     let e = n.top.explain.as_ref();
     let splits = e.map(|e| e.splits.as_slice()).unwrap_or_default();
-    let merge = last_merge(n);
     let none = || (Value::Null, Vec::new());
     match title {
         "The first split" => splits
@@ -500,29 +499,7 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
                 })
                 .collect(),
         ),
-        "A merge" => merge.map_or_else(none, |m| {
-            let mut numbers = json!(m);
-            let taken = bottom.steps.len();
-            let Some(best) = &n.best_merge else {
-                return (numbers, text::merge_lines(m, taken));
-            };
-            numbers["highest_nmi"] = json!(best);
-            // The example the TUI's page shows in full, as the slides should: the merge of the
-            // highest NMI below 1 (unless every merge's NMI is 1: explain::example_merge); the
-            // last merge, to the slab count, in a line after it.
-            let below = if best.nmi < 1.0 { " below 1" } else { "" };
-            let mut lines = vec![format!("The merge of the highest NMI{below}:")];
-            lines.extend(text::merge_lines(best, taken));
-            lines.push(format!(
-                "The last merge, to {} slabs: step {}, {} and {}, NMI = {:.4}",
-                bottom.slabs.len(),
-                m.step,
-                charts::slices(m.merge.0),
-                charts::slices(m.merge.1),
-                m.nmi
-            ));
-            (numbers, lines)
-        }),
+        "A merge" => merge_page(n),
         "Top-down against bottom-up" => (
             json!({
                 "top_down": part.information,
@@ -531,13 +508,16 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
                 "top_down_slabs": part.slabs,
                 "bottom_up_slabs": bottom.slabs,
             }),
-            vec![format!(
+            [format!(
                 "Here {} slabs keep {:.4} bits top-down and {:.4} bits bottom-up, of H = {:.4}.",
                 n.slabs(),
                 part.information,
                 bottom.information,
                 part.entropy
-            )],
+            )]
+            .into_iter()
+            .chain(n.merges.given.as_ref().map(explain::boundaries_sentence))
+            .collect(),
         ),
         "The optimum" => match e.and_then(|e| e.optimal.as_ref()) {
             Some(o) => (json!(o), text::optimal_lines(o)),
@@ -548,6 +528,43 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
         },
         _ => none(),
     }
+}
+
+/// The numbers and lines of the page of a merge: bottom-up at the count where its history shows
+/// structure and why, the example the TUI's page shows in full (the merge of the highest NMI
+/// below 1 unless every merge's NMI is 1: `explain::example_merge`), and the last merge to the
+/// count in a line after it.
+fn merge_page(n: &Numbers) -> (Value, Vec<String>) {
+    let m = &n.merges;
+    let Some(last) = &m.last else {
+        return (Value::Null, Vec::new());
+    };
+    let mut numbers = json!(last);
+    numbers["slabs"] = json!(m.slabs);
+    numbers["structure"] = json!(m.structure);
+    let taken = last.step;
+    let mut lines: Vec<String> = m
+        .structure
+        .iter()
+        .map(explain::structure_sentence)
+        .collect();
+    let Some(best) = &m.best else {
+        lines.extend(text::merge_lines(last, taken));
+        return (numbers, lines);
+    };
+    numbers["highest_nmi"] = json!(best);
+    let below = if best.nmi < 1.0 { " below 1" } else { "" };
+    lines.push(format!("The merge of the highest NMI{below}:"));
+    lines.extend(text::merge_lines(best, taken));
+    lines.push(format!(
+        "The last merge, to {} slabs: step {}, {} and {}, NMI = {:.4}",
+        m.slabs,
+        last.step,
+        charts::slices(last.merge.0),
+        charts::slices(last.merge.1),
+        last.nmi
+    ));
+    (numbers, lines)
 }
 
 /// An axis lesson's numbers without its full block tables (the ten most frequent blocks).

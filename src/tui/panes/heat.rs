@@ -14,10 +14,12 @@ use crate::tui::theme::Theme;
 /// (half blocks), bins grouped where the area is smaller; shades without colours. X's bins are
 /// ticked on the left, Y's under the map, and a colour scale from one count to the most ends it.
 pub(super) fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, buf: &mut Buffer) {
-    if area.height < 4 || area.width < 16 {
+    // The title in one line where the area is wide, else in two.
+    let titled: u16 = if area.width >= WIDE { 1 } else { 2 };
+    if area.height < titled + 3 || area.width < 16 {
         return;
     }
-    let rows = usize::from(area.height - 3) * 2;
+    let rows = usize::from(area.height - titled - 2) * 2;
     let cols = usize::from(area.width) - TICKS;
     let group = bins.div_ceil(rows).max(bins.div_ceil(cols)).max(1);
     let n = bins.div_ceil(group);
@@ -34,10 +36,23 @@ pub(super) fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, b
         }
     };
     let bins = if group == 1 { "bin" } else { "bins" };
-    Paragraph::new(format!(
-        "joint histogram: X's bin down, Y's across, log counts, {group} {bins} a cell"
-    ))
-    .render(Rect { height: 1, ..area }, buf);
+    let title = if titled == 1 {
+        vec![Line::from(format!(
+            "joint histogram: X's bin down, Y's across, log counts, {group} {bins} a cell"
+        ))]
+    } else {
+        vec![
+            Line::from("joint histogram, log counts:"),
+            Line::from(format!("X down, Y across, {group} {bins} a cell")),
+        ]
+    };
+    Paragraph::new(title).render(
+        Rect {
+            height: titled,
+            ..area
+        },
+        buf,
+    );
     let mut lines = Vec::new();
     for r in 0..n.div_ceil(2) {
         // Every other line says the X bin of its upper row.
@@ -76,12 +91,26 @@ pub(super) fn heat_map(m: &MergeLesson, bins: usize, theme: Theme, area: Rect, b
     lines.push(Line::from(scale));
     Paragraph::new(lines).render(
         Rect {
-            y: area.y + 1,
-            height: area.height - 1,
+            y: area.y + titled,
+            height: area.height - titled,
             ..area
         },
         buf,
     );
+}
+
+/// The narrowest area whose title takes one line.
+const WIDE: u16 = 70;
+
+/// The columns a heat map beside text takes: 2 bins a cell of 32 and its ticks, and its colour
+/// scale with a count of six digits.
+pub(super) const BESIDE: u16 = 32;
+
+/// The rows the heat map of `bins` bins takes at `group` bins a cell in an area of `width`
+/// columns: its title, a line for two rows of cells, the ticks and the colour scale.
+pub(super) fn rows(bins: usize, group: usize, width: u16) -> u16 {
+    let titled = if width >= WIDE { 1 } else { 2 };
+    u16::try_from(bins.div_ceil(group).div_ceil(2) + 2 + titled).unwrap_or(u16::MAX)
 }
 
 /// Columns the X ticks take left of the heat map.

@@ -465,7 +465,8 @@ fn merge(
     area: Rect,
     buf: &mut Buffer,
 ) {
-    let mut words = text::merge_lines(m, of.max(m.step));
+    let of = of.max(m.step);
+    let mut words = text::merge_lines(m, of);
     if let Some(upto) = upto {
         words.insert(
             0,
@@ -475,9 +476,26 @@ fn merge(
             ),
         );
     }
-    let used = wrapped_rows(&words, area.width).min(area.height);
-    let [top, map] = Layout::vertical([Constraint::Length(used), Constraint::Min(0)]).areas(area);
-    paragraph(words.into_iter().map(Line::from).collect(), top, buf);
+    // Where the sentences leave the joint histogram less than its rows at two bins a cell, the
+    // same numbers in a few lines, the map beside them.
+    if wrapped_rows(&words, area.width) + heat::rows(m.bins, 2, area.width) <= area.height {
+        let used = wrapped_rows(&words, area.width);
+        let [top, map] =
+            Layout::vertical([Constraint::Length(used), Constraint::Min(0)]).areas(area);
+        paragraph(words.into_iter().map(Line::from).collect(), top, buf);
+        heat::heat_map(m, m.bins, theme, map, buf);
+        return;
+    }
+    let mut brief = text::merge_brief(m, of);
+    if let Some(upto) = upto {
+        brief.insert(
+            0,
+            format!("Example: the highest NMI below 1 of the {upto} merges taken (n p step on):"),
+        );
+    }
+    let [left, map] =
+        Layout::horizontal([Constraint::Min(0), Constraint::Length(heat::BESIDE)]).areas(area);
+    paragraph(brief.into_iter().map(Line::from).collect(), left, buf);
     heat::heat_map(m, m.bins, theme, map, buf);
 }
 

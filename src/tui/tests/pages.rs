@@ -47,6 +47,7 @@ fn every_page_at_both_sizes_in_both_themes() {
                 let title = format!("page {} of {}: {}", i + 1, PAGES.len(), page.title);
                 let head: String = title.chars().take(usize::from(w) - 40).collect();
                 assert!(screen.contains(&head), "{head} not in\n{screen}");
+                paragraph_ends(&app, &screen, i);
                 insta::assert_snapshot!(format!("tour_{name}_page_{:02}_{w}x{h}", i + 1), screen);
                 if theme.contrast && page.board.is_some() {
                     board_is_black(&app, w, h, i);
@@ -56,6 +57,31 @@ fn every_page_at_both_sizes_in_both_themes() {
             answer_any(&mut app, effects);
         }
     }
+}
+
+/// The tour's box on `screen` ends with the last word of page `i`'s paragraph and numbers:
+/// none is cut off at the box's last row.
+fn paragraph_ends(app: &App, screen: &str, i: usize) {
+    let tour = app.tour.as_ref().unwrap();
+    let text = match &tour.numbers {
+        Some(n) => format!("{} {n}", PAGES[i].text),
+        None => PAGES[i].text.to_string(),
+    };
+    let last_word = text.split_whitespace().last().unwrap();
+    let rows: Vec<&str> = screen
+        .lines()
+        .skip_while(|l| !l.contains(" Tour ("))
+        .skip(1)
+        .take_while(|l| !l.starts_with('└'))
+        .map(|l| l.trim_matches(|c: char| c == '│' || c.is_whitespace()))
+        .filter(|l| !l.is_empty())
+        .collect();
+    let end = rows.last().copied().unwrap_or_default();
+    assert!(
+        end.ends_with(last_word),
+        "page {}: the box ends with {end:?}, not {last_word:?}\n{screen}",
+        i + 1
+    );
 }
 
 /// The board of page `i` (in the exploded view's place) is drawn on the contrast theme's black.

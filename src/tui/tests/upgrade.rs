@@ -361,15 +361,20 @@ fn the_tours_merge_page_shows_the_new_histories_merge_of_the_highest_nmi() {
         },
         _ => panic!("no lesson"),
     };
-    // The preview's 66 slices to four slabs: 62 merges, the example among them.
+    // The preview's 66 slices to the count where its bottom-up history shows structure.
+    let shown = slabscope::explain::structure(b.along_z[1].bottom().unwrap())
+        .unwrap()
+        .at
+        .slabs;
+    let upto = 66 - shown;
     let effects = app.update(Action::TurnPage(crate::tui::app::tour::MERGE as isize));
     assert!(matches!(
         answer(&mut app, effects),
-        Subject::BestMerge { upto: 62, .. }
+        Subject::BestMerge { upto: u, .. } if u == upto
     ));
-    let preview = highest(&b.along_z[1], 62);
-    assert_eq!(example(&app), (preview, 62));
-    // Full resolution's 132 slices replace them in place: 128 merges, the example theirs.
+    let preview = highest(&b.along_z[1], upto);
+    assert_eq!(example(&app), (preview, upto));
+    // Full resolution's 132 slices replace them in place at the count shown: the example theirs.
     job(&mut app, JobMsg::Views(0, Ok(Box::new(b.views.clone()))));
     let effects = job(
         &mut app,
@@ -377,14 +382,18 @@ fn the_tours_merge_page_shows_the_new_histories_merge_of_the_highest_nmi() {
     );
     assert_eq!(
         (app.part.method, app.part.slab_count()),
-        (Method::BottomUp, Some(4))
+        (Method::BottomUp, Some(shown))
     );
+    let upto = 132 - shown;
     assert!(matches!(
         answer(&mut app, effects),
-        Subject::BestMerge { upto: 128, .. }
+        Subject::BestMerge { upto: u, .. } if u == upto
     ));
-    let full = highest(&b.along_z[0], 128);
-    assert_eq!(example(&app), (full, 128));
+    let full = highest(&b.along_z[0], upto);
+    assert_eq!(example(&app), (full, upto));
     let steps = &b.along_z[0].bottom().unwrap().steps;
-    assert!(full < 128 && steps[full - 1].nmi > steps[127].nmi, "{full}");
+    assert!(
+        full < upto && steps[full - 1].nmi > steps[upto - 1].nmi,
+        "{full}"
+    );
 }
