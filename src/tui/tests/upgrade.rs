@@ -390,11 +390,11 @@ fn the_tours_merge_page_shows_the_new_histories_merge_of_the_highest_nmi() {
 }
 
 /// A picture of the preview marked so that it can be told from any other when shown.
-fn picture(caption: &str) -> Box<crate::tui::event::Rendered> {
-    Box::new(crate::tui::event::Rendered {
+fn picture(caption: &str) -> crate::tui::event::Rendered {
+    crate::tui::event::Rendered {
         caption: Some(caption.into()),
         ..super::rendered(40, 12)
-    })
+    }
 }
 
 /// The generation of the render request among `effects`.
@@ -430,7 +430,10 @@ fn a_late_picture_of_the_file_preview_is_never_shown_as_full_resolution() {
         JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
     );
     // Adopted, the preview still shown: its picture is taken, under the preview's label.
-    job(&mut app, JobMsg::Rendered(slabs, Ok(picture("preview"))));
+    job(
+        &mut app,
+        JobMsg::Rendered(slabs, Ok(Box::new(picture("preview")))),
+    );
     assert!(matches!(app.preview.image, Task::Ready(_)));
     assert_eq!(app.preview.caption.as_deref(), Some("preview"));
     let label = app.status.resolution.clone().unwrap();
@@ -451,11 +454,14 @@ fn a_late_picture_of_the_file_preview_is_never_shown_as_full_resolution() {
     for late in [first, slabs] {
         job(
             &mut app,
-            JobMsg::Rendered(late, Ok(picture("late preview"))),
+            JobMsg::Rendered(late, Ok(Box::new(picture("late preview")))),
         );
         assert_eq!(app.preview.caption.as_deref(), Some("preview"));
     }
-    job(&mut app, JobMsg::Rendered(full, Ok(picture("level 0"))));
+    job(
+        &mut app,
+        JobMsg::Rendered(full, Ok(Box::new(picture("level 0")))),
+    );
     assert_eq!(app.preview.caption.as_deref(), Some("level 0"));
 }
 
@@ -489,11 +495,11 @@ fn a_late_picture_of_the_file_preview_is_dropped_when_the_app_starts_afresh() {
         }
     }
     // The preview's picture, under way before, comes: dropped with its epoch.
-    let late = JobMsg::Rendered(first, Ok(picture("late preview")));
+    let late = JobMsg::Rendered(first, Ok(Box::new(picture("late preview"))));
     assert!(deliver(&mut jobs, &mut app, 0, late).is_none());
     assert!(!matches!(app.preview.image, Task::Ready(_)));
     // The new volume's own picture is shown.
-    let own = JobMsg::Rendered(first, Ok(picture("level 1")));
+    let own = JobMsg::Rendered(first, Ok(Box::new(picture("level 1"))));
     assert!(deliver(&mut jobs, &mut app, 1, own).is_some());
     assert_eq!(app.preview.caption.as_deref(), Some("level 1"));
 }
