@@ -11,6 +11,9 @@
 //!   finest level of at most [`GLANCE_VOXELS`] voxels, at once, before the real answer.
 //! - A **pixel**'s level in the ray caster is the finest whose voxels are no larger than the
 //!   pixel's footprint (`render::pyramid_level`).
+//!
+//! A volume fetched from a store at a URL is planned within the budget less the share the
+//! answers to its chunk requests kept in memory may take ([`Budget::room`]).
 
 use crate::analysis::{AnalysisParams, Plan};
 use crate::error::{Error, Result};
@@ -57,37 +60,68 @@ impl Budget {
         Self { max_memory }
     }
 
-    /// Where `purpose`'s work on `volume` runs within this budget; the plan's note says what the
-    /// user should know when the budget moved it from the level asked for.
+    /// The bytes of this budget that `volume`'s source keeps beside it: for a volume fetched
+    /// from a store at a URL ([`Volume::is_remote`]), the share the process's cache of the
+    /// answers to its chunk requests may take (`formats::remote::cache`: 1/16); else nothing.
+    #[must_use]
+    pub fn kept_for_source(&self, volume: &Volume) -> u64 {
+        kept_for(volume, self.max_memory)
+    }
+
+    /// The bytes of this budget left for `volume` and the work on it: the budget less what its
+    /// source keeps ([`kept_for_source`](Self::kept_for_source)).
+    #[must_use]
+    pub fn room(&self, volume: &Volume) -> u64 {
+        self.max_memory - self.kept_for_source(volume)
+    }
+
+    /// Where `purpose`'s work on `volume` runs within this budget, less what the volume's
+    /// source keeps beside it ([`room`](Self::room)); the plan's note says what the user should
+    /// know when the budget moved it from the level asked for.
     pub fn plan(&self, volume: &Volume, purpose: Purpose<'_>) -> Result<Plan> {
-        match purpose {
-            Purpose::Analysis {
-                wanted,
-                every_voxel,
-                params,
-            } => {
-                if wanted > 0 {
-                    // A level the file holds and the user asked for is read or refused, never
-                    // computed in its place.
-                    volume.asked_level(wanted)?;
-                }
-                Plan::within(volume, (wanted, every_voxel), self.max_memory, params)
+        let mut plan = plan_in(volume, purpose, self.room(volume))?;
+        let kept = self.kept_for_source(volume);
+        if let (Some(note), 1..) = (&mut plan.note, kept) {
+            let human = crate::error::short_bytes;
+            *note = format!(
+                "{note} (the memory limit of {} less {} kept for the chunks fetched from the \
+                 store)",
+                human(self.max_memory),
+                human(kept)
+            );
+        }
+        Ok(plan)
+    }
+}
+
+/// [`Budget::plan`] within `room` bytes.
+fn plan_in(volume: &Volume, purpose: Purpose<'_>, room: u64) -> Result<Plan> {
+    match purpose {
+        Purpose::Analysis {
+            wanted,
+            every_voxel,
+            params,
+        } => {
+            if wanted > 0 {
+                // A level the file holds and the user asked for is read or refused, never
+                // computed in its place.
+                volume.asked_level(wanted)?;
             }
-            Purpose::Picture => {
-                let (level, note) = crate::analysis::within_memory(volume, 0, self.max_memory)?;
-                Ok(Plan {
-                    note,
-                    ..Plan::at(level)
-                })
-            }
-            Purpose::Glance => {
-                // Never finer than the budget allows either.
-                let bins = crate::geometry::lattice::SamplingParams::default().bins;
-                let (fits, _) =
-                    crate::analysis::level_within_memory(volume, 0, self.max_memory, bins)?;
-                let level = glance_level(volume).max(fits);
-                Ok(Plan::at(volume.coarser(level)))
-            }
+            Plan::within(volume, (wanted, every_voxel), room, params)
+        }
+        Purpose::Picture => {
+            let (level, note) = crate::analysis::within_memory(volume, 0, room)?;
+            Ok(Plan {
+                note,
+                ..Plan::at(level)
+            })
+        }
+        Purpose::Glance => {
+            // Never finer than the budget allows either.
+            let bins = crate::geometry::lattice::SamplingParams::default().bins;
+            let (fits, _) = crate::analysis::level_within_memory(volume, 0, room, bins)?;
+            let level = glance_level(volume).max(fits);
+            Ok(Plan::at(volume.coarser(level)))
         }
     }
 }
@@ -159,14 +193,19 @@ impl Budget {
         if plan.views.dims() != plan.partition.dims() {
             held += coarser(&plan.views);
         }
-        let needed = held + needed;
+        let kept = self.kept_for_source(volume);
+        let needed = held + needed + kept;
         if needed <= self.max_memory {
             return Ok(needed);
         }
         let [x, y, z] = volume.dims();
+        let beside = match kept {
+            0 => "the analysis",
+            _ => "the analysis and the chunks kept from the store",
+        };
         Err(Error::TooLarge {
             path: path.to_path_buf(),
-            what: format!("{what} ({x}×{y}×{z}) beside the analysis"),
+            what: format!("{what} ({x}×{y}×{z}) beside {beside}"),
             needed,
             limit: self.max_memory,
             machine: false,
@@ -184,6 +223,8 @@ impl Budget {
 #[must_use]
 pub fn unread_level_within(read: &Volume, max_memory: u64) -> Option<usize> {
     let finest = read.unread_finest()?;
+    // Less what the store's source keeps beside it, as the plan leaves it.
+    let max_memory = max_memory - kept_for(read, max_memory);
     let held = crate::volume::voxels::held_type(read.voxel_type(), false);
     let chain = read.pyramid_dims();
     let fits = |l: usize| {
@@ -201,6 +242,17 @@ pub fn unread_level_within(read: &Volume, max_memory: u64) -> Option<usize> {
             .find(|&l| fits(l))
             .unwrap_or(chain.len() - 1),
     )
+}
+
+/// The bytes of a budget of `max_memory` that `volume`'s source keeps beside it
+/// ([`Budget::kept_for_source`]).
+fn kept_for(volume: &Volume, max_memory: u64) -> u64 {
+    #[cfg(feature = "remote")]
+    if volume.is_remote() {
+        return max_memory / crate::formats::remote::cache::MEMORY_SHARE;
+    }
+    let _ = (volume, max_memory);
+    0
 }
 
 /// `e`, raised by the analysis `plan` planned, blamed on the budget when the budget moved the
@@ -308,6 +360,94 @@ mod tests {
             Some(top),
             "the last when none fits"
         );
+    }
+
+    /// A volume fetched from a store at a URL is planned within the budget less the share its
+    /// chunks kept in memory may take (1/16), so that the two together stay within the budget;
+    /// any other volume within the whole budget.
+    /// The least budget whose room beside the chunk cache's share (1/16) holds `needed` bytes.
+    #[cfg(feature = "remote")]
+    fn least_beside_the_share(needed: u64) -> u64 {
+        let share = crate::formats::remote::cache::MEMORY_SHARE;
+        (needed..=2 * needed + share)
+            .find(|&m| m - m / share >= needed)
+            .unwrap()
+    }
+
+    #[cfg(feature = "remote")]
+    #[test]
+    fn a_remote_volumes_plan_leaves_the_chunk_caches_share() {
+        let local = crate::volume::phantom::body([96, 96, 96], 1).unwrap();
+        // (A pyramid of its own: a clone would share local's coarser levels.)
+        let remote = crate::volume::phantom::body([96, 96, 96], 1)
+            .unwrap()
+            .fetched_remotely();
+        let params = AnalysisParams::default();
+        let analysis = Purpose::Analysis {
+            wanted: 0,
+            every_voxel: false,
+            params: &params,
+        };
+        let level_of = |volume: &Volume, max: u64, purpose| {
+            let plan = Budget::new(max).plan(volume, purpose).unwrap();
+            (plan.partition.dims()[0], plan.note)
+        };
+        let needed = crate::analysis::memory_needed(&local, 0);
+        let share = |max: u64| max / crate::formats::remote::cache::MEMORY_SHARE;
+        // The least budget whose room beside the share holds level 0's analysis.
+        let least = least_beside_the_share(needed);
+        assert_eq!(least - share(least), needed);
+        assert_eq!(Budget::new(least).kept_for_source(&remote), share(least));
+        assert_eq!(Budget::new(least).kept_for_source(&local), 0);
+        assert_eq!(Budget::new(least).room(&local), least);
+        for purpose in [analysis, Purpose::Picture] {
+            assert_eq!(level_of(&local, needed, purpose), (96, None));
+            assert_eq!(level_of(&remote, least, purpose), (96, None));
+            let (dims, note) = level_of(&remote, least - 1, purpose);
+            assert_eq!(dims, 48, "level 1");
+            let note = note.unwrap();
+            let limit = crate::error::short_bytes(least - 1);
+            let kept = crate::error::short_bytes(share(least - 1));
+            assert!(
+                note.ends_with(&format!(
+                    "(the memory limit of {limit} less {kept} kept for the chunks fetched from \
+                     the store)"
+                )),
+                "{note}"
+            );
+        }
+        // The level a store's dataset serves, from level 0's grid: the same room.
+        let finest = crate::volume::pyramid::Finest {
+            dims: local.dims(),
+            spacing: local.spacing(),
+            transform: *local.transform(),
+        };
+        let read = Volume::clone(&local.coarser(2)).into_pyramid_level(2, finest, &[]);
+        let alone = crate::analysis::memory_needed_unread(
+            [96; 3],
+            local.spacing(),
+            crate::volume::voxels::held_type(read.voxel_type(), false),
+        );
+        let fetched = read.clone().fetched_remotely();
+        let least = least_beside_the_share(alone);
+        assert_eq!(unread_level_within(&read, alone), None);
+        assert_eq!(unread_level_within(&fetched, alone), Some(1));
+        assert_eq!(unread_level_within(&fetched, least), None);
+        assert_eq!(unread_level_within(&fetched, least - 1), Some(1));
+        // Labels, too, are weighed beside the share.
+        let plan = Budget::new(u64::MAX).plan(&remote, analysis).unwrap();
+        let path = std::path::Path::new("body");
+        let whole = remote.memory_bytes() + crate::partition::label_memory(&remote, 4);
+        let fits = |max: u64| {
+            Budget::new(max)
+                .labels_held(path, &remote, &plan, 4)
+                .is_ok()
+        };
+        let least = least_beside_the_share(whole);
+        assert!(fits(least) && !fits(least - 1));
+        let e = Budget::new(whole).labels_held(path, &remote, &plan, 4);
+        let e = e.unwrap_err().to_string();
+        assert!(e.contains("the chunks kept from the store"), "{e}");
     }
 
     /// Labels streamed need the background's mask and one plane beside what the analysis

@@ -1,7 +1,8 @@
 """A store at a URL whose pyramid holds coarser datasets: `load` reads its metadata and coarsest
 dataset, level 0 when first needed, and `analyze(volume, resolution=...)` the coarsest dataset
 that serves the level, never a chunk of level 0, as `slabscope analyze URL --resolution auto`
-does. A server on 127.0.0.1 counts the requests."""
+does; the labels of such an analysis are level 0's. A server on 127.0.0.1 counts the
+requests."""
 
 from __future__ import annotations
 
@@ -61,11 +62,20 @@ def _array(folder: Path, n: int, voxels: np.ndarray | None) -> None:
                 (folder / f"{z}.{y}.{x}").write_bytes(np.ascontiguousarray(block).tobytes())
 
 
+def _disc(n: int) -> np.ndarray:
+    """The pixels of an n×n plane, [y, x], inside the disc of radius 7n/16 at its centre."""
+    y, x = np.indices((n, n))
+    c = (n - 1) / 2
+    return (x - c) ** 2 + (y - c) ** 2 < (7 * n / 16) ** 2
+
+
 @pytest.fixture(scope="module")
 def stores(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """`pyramid.ome.zarr`: a 256³ level 0 whose chunks are absent over a 128³ level 1; and
+    """`pyramid.ome.zarr`: a 256³ level 0 whose chunks are absent over a 128³ level 1;
     `alone.ome.zarr`, that level 1 as an image of its own on the same grid (the Rust suite's
-    tests/it/remote_levels.rs, the same voxels)."""
+    tests/it/remote_levels.rs, the same voxels); and `full.ome.zarr`, that level 1 + 1 inside a
+    cylinder along z (0 outside) over a level 0 whose every 2³ block is level 1's voxel (so
+    level 1 is level 0's average)."""
     root = tmp_path_factory.mktemp("levels")
     z, y, x = np.indices((128, 128, 128))
     level1 = ((z // 24) * 40 + (x * y + z) % 9).astype(np.uint8)
@@ -80,6 +90,13 @@ def stores(tmp_path_factory: pytest.TempPathFactory) -> Path:
     (alone / ".zgroup").write_text('{"zarr_format": 2}')
     (alone / ".zattrs").write_text(_zattrs([2.0]))
     shutil.copytree(pyramid / "1", alone / "0")
+    full = root / "full.ome.zarr"
+    full.mkdir()
+    (full / ".zgroup").write_text('{"zarr_format": 2}')
+    (full / ".zattrs").write_text(_zattrs([1.0, 2.0]))
+    body = np.where(_disc(128)[None], level1 + 1, 0).astype(np.uint8)
+    _array(full / "0", 256, body.repeat(2, 0).repeat(2, 1).repeat(2, 2))
+    _array(full / "1", 128, body)
     return root
 
 
@@ -114,11 +131,11 @@ def served(stores: Path) -> Iterator[tuple[str, list[str]]]:
         server.shutdown()
 
 
-def _level_0_chunks(asked: list[str]) -> list[str]:
+def _level_0_chunks(asked: list[str], store: str = "pyramid.ome.zarr") -> list[str]:
     return [
         p
         for p in asked
-        if p.startswith("/pyramid.ome.zarr/0/")
+        if p.startswith(f"/{store}/0/")
         and not p.endswith((".zarray", ".zattrs", "zarr.json"))
     ]
 
@@ -166,3 +183,33 @@ def test_a_store_at_a_url_pickles_as_its_url(served):
     assert copy.shape == (256, 256, 256)
     assert copy.affine.tolist() == volume.affine.tolist()
     assert _level_0_chunks(asked) == []
+
+
+def test_labels_of_an_analysis_at_a_served_level_are_at_level_0s_shape(served, stores):
+    base, asked = served
+    url = f"{base}/full.ome.zarr"
+    # Along z, the axis of the layers, so that each label can be told from its slice.
+    kw = {"resolution": "auto", "slabs": 3, "axis": "z"}
+    remote = slabscope.analyze(slabscope.load(url), **kw)
+    local = slabscope.analyze(slabscope.load(stores / "full.ome.zarr"), **kw)
+    d = remote.to_dict()
+    assert d["resolution"]["pyramid_level"] == 1
+    assert local.to_dict()["resolution"] == d["resolution"]
+    assert remote.slabs == local.slabs
+    assert _level_0_chunks(asked, "full.ome.zarr") == []
+
+    labels = remote.labels()
+    # Level 0 read for them (its 64 chunks, once), the labels at its shape, [x, y, z].
+    assert len(set(_level_0_chunks(asked, "full.ome.zarr"))) == 64
+    assert labels.shape == (256, 256, 256)
+    assert labels.dtype == np.uint8
+    assert np.array_equal(labels, local.labels())
+    # A labelled voxel at z lies in level 1's slice z // 2.
+    assert d["partition"]["axis"] == [0.0, 0.0, 1.0]
+    slab_of = np.zeros(128, dtype=np.uint8)
+    for i, (first, end) in enumerate(remote.slabs):
+        slab_of[first:end] = i + 1
+    expected = np.broadcast_to(slab_of.repeat(2)[None, None, :], labels.shape)
+    # The background found on level 0: the voxels outside the cylinder, and only those.
+    inside = _disc(128).repeat(2, 0).repeat(2, 1).T[:, :, None]
+    assert np.array_equal(labels, np.where(inside, expected, 0))

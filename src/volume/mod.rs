@@ -65,6 +65,8 @@ pub struct Volume {
     /// The coarser levels of this volume's pyramid, shared by all its levels: slot `i` holds
     /// pyramid level `i + 1`, built once when first asked for.
     pyramid: Arc<pyramid::Pyramid>,
+    /// Whether its voxels were fetched from a store at a URL ([`Volume::is_remote`]).
+    remote: bool,
 }
 
 /// The distinct values of a label volume with their voxel counts.
@@ -125,7 +127,24 @@ impl Volume {
             },
             labels: Arc::default(),
             pyramid: pyramid::empty(dims),
+            remote: false,
         })
+    }
+
+    /// Whether this volume's voxels were fetched from a store at a URL (every level of it,
+    /// computed or read): the process then keeps the answers to the store's chunk requests in
+    /// memory, a share of the memory budget that the planner leaves them
+    /// ([`Budget`](crate::budget::Budget)).
+    #[must_use]
+    pub fn is_remote(&self) -> bool {
+        self.remote
+    }
+
+    /// This volume, its voxels fetched from a store at a URL ([`Volume::is_remote`]).
+    #[must_use]
+    pub(crate) fn fetched_remotely(mut self) -> Self {
+        self.remote = true;
+        self
     }
 
     /// The distinct values with their voxel counts when this looks like a label volume (see

@@ -110,6 +110,7 @@ impl Volume {
             },
             labels: Arc::default(),
             pyramid: pyramid::empty(grid.dims),
+            remote: false,
         })
     }
 }

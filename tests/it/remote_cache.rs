@@ -88,3 +88,39 @@ fn a_cache_on_disk_makes_the_second_read_fetch_no_chunk() {
         ran.stderr
     );
 }
+
+/// The chunks kept in memory take up to 1/16 of `--max-memory`, so the budget's planner leaves
+/// that share for them on a store at a URL: a budget that just holds level 0's analysis of the
+/// local store moves the remote one's to pyramid level 1, saying so.
+#[test]
+fn a_remote_stores_analysis_leaves_the_chunks_share_of_the_budget() {
+    let server = serve(&data("zarr"), Mode::Normal, "");
+    let name = "v04_blosc.ome.zarr";
+    let (url, local) = (server.url(name), data("zarr").join(name));
+    let opts = LoadOptions::default();
+    let read = |p: &std::path::Path| slabscope::load(p, &opts).unwrap().volume;
+    let volume = read(&local);
+    assert!(!volume.is_remote());
+    assert!(read(&PathBuf::from(&url)).is_remote());
+    let needed = slabscope::analysis::memory_needed(&volume, 0);
+    let least = (needed..=2 * needed)
+        .find(|&m| m - m / 16 >= needed)
+        .unwrap();
+    let level = |input: &str, max: u64| {
+        let max = max.to_string();
+        let ran = run(&["analyze", "--json", "--max-memory", &max, input]);
+        assert!(ran.ok, "{input}: {}", ran.stderr);
+        let json: serde_json::Value = serde_json::from_str(&ran.stdout).unwrap();
+        // The view search's level (the slabs are then counted on every voxel, strip by strip).
+        let views = json.get("views_resolution").unwrap_or(&json["resolution"]);
+        (views["pyramid_level"].as_u64(), json["notes"].to_string())
+    };
+    assert_eq!(level(s(&local), needed).0, Some(0));
+    assert_eq!(level(&url, least).0, Some(0));
+    let (moved, notes) = level(&url, least - 1);
+    assert_eq!(moved, Some(1), "{notes}");
+    assert!(
+        notes.contains("kept for the chunks fetched from the store"),
+        "{notes}"
+    );
+}

@@ -41,6 +41,11 @@ fn zattrs(scales: &[f64]) -> String {
 /// An uncompressed u8 array of `n`³ voxels in chunks of 64³ at `dir`, its chunks written when
 /// `chunks` (else every chunk is missing: the fill value).
 fn array(dir: &Path, n: usize, chunks: bool) {
+    array_of(dir, n, chunks.then_some(&voxel));
+}
+
+/// [`array`] with the voxels `voxel` gives, when given.
+fn array_of(dir: &Path, n: usize, voxel: Option<&dyn Fn(usize, usize, usize) -> u8>) {
     std::fs::create_dir_all(dir).unwrap();
     std::fs::write(
         dir.join(".zarray"),
@@ -51,9 +56,9 @@ fn array(dir: &Path, n: usize, chunks: bool) {
         ),
     )
     .unwrap();
-    if !chunks {
+    let Some(voxel) = voxel else {
         return;
-    }
+    };
     let c = n / 64;
     for (cz, cy, cx) in
         (0..c).flat_map(|z| (0..c).flat_map(move |y| (0..c).map(move |x| (z, y, x))))
@@ -241,4 +246,76 @@ fn a_local_stores_coarser_dataset_serves_without_decoding_level_0() {
     let full = run(&["analyze", "--json", "--resolution", "full", s(&pyramid)]);
     assert!(!full.ok);
     assert!(full.stderr.contains("0.0.0"), "{}", full.stderr);
+}
+
+/// Whether pixel `(x, y)` of a 128² plane lies inside the disc of radius 56 at its centre.
+fn inside(x: usize, y: usize) -> bool {
+    let (dx, dy) = (x as f64 - 63.5, y as f64 - 63.5);
+    dx * dx + dy * dy < 56.0 * 56.0
+}
+
+/// Level 1 of `full.ome.zarr`: [`voxel`] + 1 inside a cylinder along z, 0 around it.
+fn body(x: usize, y: usize, z: usize) -> u8 {
+    if inside(x, y) { voxel(x, y, z) + 1 } else { 0 }
+}
+
+#[test]
+fn labels_of_an_analysis_at_a_served_level_are_level_0s() {
+    // Level 0 of 256³ whose every 2³ block is level 1's voxel, so level 1 is its average.
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.ome.zarr");
+    std::fs::create_dir_all(&full).unwrap();
+    std::fs::write(full.join(".zgroup"), r#"{"zarr_format": 2}"#).unwrap();
+    std::fs::write(full.join(".zattrs"), zattrs(&[1.0, 2.0])).unwrap();
+    array_of(
+        &full.join("0"),
+        256,
+        Some(&|x, y, z| body(x / 2, y / 2, z / 2)),
+    );
+    array_of(&full.join("1"), 128, Some(&body));
+    let server = serve(dir.path(), Mode::Normal, "");
+    let url = server.url("full.ome.zarr");
+    let out = tempfile::tempdir().unwrap();
+    let analysed = |store: &str, labels: &Path| -> serde_json::Value {
+        let args = ["analyze", "--json", "--slabs", "3", "--axis", "z"];
+        let more = ["--resolution", "auto", "--export-labels", s(labels), store];
+        let ran = run(&[&args[..], &more[..]].concat());
+        assert!(ran.ok, "{store}: {}", ran.stderr);
+        serde_json::from_str(&ran.stdout).unwrap()
+    };
+    let (there, here) = (out.path().join("remote.nii"), out.path().join("local.nii"));
+    let remote = analysed(&url, &there);
+    let local = analysed(s(&full), &here);
+    assert_eq!(remote["resolution"]["pyramid_level"], 1);
+    assert_eq!(remote["partition"], local["partition"]);
+    let opts = LoadOptions::default();
+    let (a, b) = (load(&there, &opts).unwrap(), load(&here, &opts).unwrap());
+    assert_eq!(a.volume.dims(), [256, 256, 256]);
+    assert_eq!(
+        a.volume.spacing(),
+        [f64::from(0.001f32); 3],
+        "NIfTI's f32 spacing"
+    );
+    let labels = a.volume.data().to_f32_vec();
+    assert_eq!(labels, b.volume.data().to_f32_vec());
+    // A voxel at z lies in level 1's slice z / 2; the background, found on level 0, is the
+    // voxels outside the cylinder and only those.
+    let slabs = remote["partition"]["slabs"].as_array().unwrap();
+    let slab_of = |k: usize| {
+        (slabs.iter())
+            .position(|r| {
+                r[0].as_u64().unwrap() as usize <= k && k < r[1].as_u64().unwrap() as usize
+            })
+            .unwrap() as f32
+            + 1.0
+    };
+    for (i, &l) in labels.iter().enumerate() {
+        let (x, y, z) = (i % 256, i / 256 % 256, i / 65536);
+        let expected = if inside(x / 2, y / 2) {
+            slab_of(z / 2)
+        } else {
+            0.0
+        };
+        assert_eq!(l, expected, "({x}, {y}, {z})");
+    }
 }

@@ -504,6 +504,9 @@ impl Opened {
         if self.image.label {
             read0.volume = read0.volume.declared_labels();
         }
+        if self.root.is_remote() {
+            read0.volume = read0.volume.fetched_remotely();
+        }
         read0.format_version.clone_from(&self.info.version);
         read0.details = Some(std::sync::Arc::new(self.info.clone()));
         Ok(read0)

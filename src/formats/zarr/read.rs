@@ -78,7 +78,7 @@ impl Dataset<'_> {
             step,
             chunks: &self.meta.chunks,
             dims,
-            max_memory: self.max_memory,
+            max_memory: self.root.room(self.max_memory),
             scratch: self.scratch,
             cancel: self.cancel,
         }

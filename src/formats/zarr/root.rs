@@ -73,6 +73,17 @@ impl Root {
         !matches!(self, Self::Local { .. })
     }
 
+    /// The bytes of a budget of `max_memory` left for the voxels read: all of it for a local
+    /// folder; for a store at a URL, less the share the answers to its chunk requests kept in
+    /// memory may take (`remote::cache::MEMORY_SHARE`), as the budget's planner leaves it.
+    pub fn room(&self, max_memory: u64) -> u64 {
+        match self {
+            Self::Local { .. } => max_memory,
+            #[cfg(feature = "remote")]
+            Self::Remote(_) => max_memory - max_memory / remote::cache::MEMORY_SHARE,
+        }
+    }
+
     /// The node or file `key` as messages name it: a path in the folder, or a URL.
     pub fn shown(&self, key: &str) -> PathBuf {
         match self {

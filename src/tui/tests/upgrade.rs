@@ -397,3 +397,118 @@ fn the_tours_merge_page_shows_the_new_histories_merge_of_the_highest_nmi() {
         "{full}"
     );
 }
+
+/// A picture of the preview marked so that it can be told from any other when shown.
+fn picture(caption: &str) -> crate::tui::event::Rendered {
+    crate::tui::event::Rendered {
+        caption: Some(caption.into()),
+        ..super::rendered(40, 12)
+    }
+}
+
+/// The generation of the render request among `effects`.
+fn rendering(effects: &[Effect]) -> u64 {
+    match effects.iter().find(|e| matches!(e, Effect::Render(_))) {
+        Some(Effect::Render(r)) => r.generation,
+        _ => panic!("no render in {effects:?}"),
+    }
+}
+
+/// A picture of a store's preview that comes after level 0 was adopted shows while the preview
+/// does, labelled as the preview's; once full resolution is shown, a late one of the preview is
+/// never shown in its place: each render request has its generation, and only the newest
+/// request's picture is taken.
+#[test]
+fn a_late_picture_of_the_file_preview_is_never_shown_as_full_resolution() {
+    let b = big();
+    let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
+    app.preview.cells = (40, 12);
+    let first = rendering(&job(
+        &mut app,
+        JobMsg::Preview(Arc::clone(&b.coarse), vec![]),
+    ));
+    job(&mut app, JobMsg::Views(1, Ok(Box::new(b.views.clone()))));
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(1, 1, Ok(Arc::clone(&b.along_z[1]))),
+    );
+    let slabs = rendering(&effects);
+    assert!(slabs > first);
+    job(
+        &mut app,
+        JobMsg::Loaded(Ok((Arc::clone(&b.volume), vec![]))),
+    );
+    // Adopted, the preview still shown: its picture is taken, under the preview's label.
+    job(
+        &mut app,
+        JobMsg::Rendered(slabs, Ok(Box::new(picture("preview")))),
+    );
+    assert!(matches!(app.preview.image, Task::Ready(_)));
+    assert_eq!(app.preview.caption.as_deref(), Some("preview"));
+    let label = app.status.resolution.clone().unwrap();
+    assert!(label.starts_with("preview: 1/2 resolution"), "{label}");
+    // Full resolution replaces it and asks for its own picture.
+    job(&mut app, JobMsg::Views(0, Ok(Box::new(b.views.clone()))));
+    let effects = job(
+        &mut app,
+        JobMsg::Analysis(2, 0, Ok(Arc::clone(&b.along_z[0]))),
+    );
+    assert_eq!(
+        (app.part.level, app.status.resolution.as_deref()),
+        (0, None)
+    );
+    let full = rendering(&effects);
+    assert!(matches!(&effects[..], [Effect::Render(r)] if r.level == 0));
+    // The preview's pictures still under way come late: neither is shown.
+    for late in [first, slabs] {
+        job(
+            &mut app,
+            JobMsg::Rendered(late, Ok(Box::new(picture("late preview")))),
+        );
+        assert_eq!(app.preview.caption.as_deref(), Some("preview"));
+    }
+    job(
+        &mut app,
+        JobMsg::Rendered(full, Ok(Box::new(picture("level 0")))),
+    );
+    assert_eq!(app.preview.caption.as_deref(), Some("level 0"));
+}
+
+/// Beyond the budget the store's level that fits is opened afresh, and the fresh app's first
+/// render request has the generation the preview's first had: the jobs' epoch, moved by
+/// `Effect::Forget`, is what keeps the preview's late picture (sent under the old epoch by its
+/// render worker) from being shown as the new volume's.
+#[test]
+fn a_late_picture_of_the_file_preview_is_dropped_when_the_app_starts_afresh() {
+    use crate::term::Caps;
+    use crate::tui::jobs::Jobs;
+    let b = big();
+    let (tx, _rx) = std::sync::mpsc::channel();
+    let mut jobs = Jobs::new(tx, Caps::blocks(), None, slabscope::LoadOptions::default());
+    let (mut app, _) = App::new("store".into(), AnalysisParams::default(), Screen::default());
+    app.preview.cells = (40, 12);
+    let deliver = |jobs: &mut Jobs, app: &mut App, epoch, msg| {
+        let admitted = jobs.admit(JobMsg::Epoch(epoch, Box::new(msg)));
+        admitted.map(|msg| app.update(Action::Job(msg)))
+    };
+    let preview = JobMsg::Preview(Arc::clone(&b.coarse), vec![]);
+    let first = rendering(&deliver(&mut jobs, &mut app, 0, preview).unwrap());
+    // What loaded is itself level 1 (level 0 did not fit): everything starts afresh.
+    let loaded = JobMsg::Loaded(Ok((Arc::clone(&b.coarse), vec![])));
+    let effects = deliver(&mut jobs, &mut app, 0, loaded).unwrap();
+    assert!(matches!(effects[..2], [Effect::Cancel, Effect::Forget]));
+    assert_eq!(rendering(&effects), first, "the generations start again");
+    for effect in effects {
+        if matches!(effect, Effect::Cancel | Effect::Forget) {
+            jobs.run(effect);
+        }
+    }
+    // The preview's picture, under way before, comes: dropped with its epoch.
+    let late = JobMsg::Rendered(first, Ok(Box::new(picture("late preview"))));
+    assert!(deliver(&mut jobs, &mut app, 0, late).is_none());
+    assert!(!matches!(app.preview.image, Task::Ready(_)));
+    // The new volume's own picture is shown.
+    let own = JobMsg::Rendered(first, Ok(Box::new(picture("level 1"))));
+    assert!(deliver(&mut jobs, &mut app, 1, own).is_some());
+    assert_eq!(app.preview.caption.as_deref(), Some("level 1"));
+}

@@ -271,6 +271,7 @@ impl Volume {
             },
             labels: Arc::new(OnceLock::from(labels_of_level0)),
             pyramid: Arc::clone(&self.pyramid),
+            remote: self.remote,
         }
     }
 }
