@@ -195,17 +195,7 @@ pub fn split_lines(s: &SplitLesson, of: usize) -> Vec<String> {
 pub fn merge_lines(m: &MergeLesson, of: usize) -> Vec<String> {
     let (x, y) = m.merge;
     let pairs: u64 = m.joint.iter().map(|c| c[2]).sum();
-    let runner = m.runner_up.as_ref().map_or_else(
-        || "  runner-up: not kept (over 1024 slabs were left)".to_string(),
-        |r| {
-            format!(
-                "  runner-up: {} with {}, NMI {:.4}",
-                slices(r.merge.0),
-                slices(r.merge.1),
-                r.nmi
-            )
-        },
-    );
+    let runner = format!("  {}", runner_up(m, slices));
     vec![
         format!(
             "Merge {} of {of}: {} (X) with {} (Y)",
@@ -238,17 +228,6 @@ pub fn merge_lines(m: &MergeLesson, of: usize) -> Vec<String> {
 /// the room: the merge, the entropies, MI, NMI, the runner-up.
 pub fn merge_brief(m: &MergeLesson, of: usize) -> Vec<String> {
     let (x, y) = m.merge;
-    let runner = m.runner_up.as_ref().map_or_else(
-        || "runner-up: not kept (over 1024 slabs left)".to_string(),
-        |r| {
-            format!(
-                "runner-up: {} with {}, NMI {:.4}",
-                slab_text(r.merge.0),
-                slab_text(r.merge.1),
-                r.nmi
-            )
-        },
-    );
     vec![
         format!(
             "Merge {} of {of}: {} (X) with {} (Y)",
@@ -265,8 +244,23 @@ pub fn merge_brief(m: &MergeLesson, of: usize) -> Vec<String> {
             m.h_x, m.h_y, m.h_xy, m.mi
         ),
         format!("NMI = MI / H(X,Y) = {:.4}", m.nmi),
-        runner,
+        runner_up(m, slab_text),
     ]
+}
+
+/// The line on a merge's runner-up pair, its slabs named by `name`.
+fn runner_up(m: &MergeLesson, name: fn(Slab) -> String) -> String {
+    m.runner_up.as_ref().map_or_else(
+        || "runner-up: not kept (over 1024 slabs were left)".to_string(),
+        |r| {
+            format!(
+                "runner-up: {} with {}, NMI {:.4}",
+                name(r.merge.0),
+                name(r.merge.1),
+                r.nmi
+            )
+        },
+    )
 }
 
 /// The lines of the optimum beside greedy splitting.
