@@ -17,6 +17,7 @@
 
 use crate::analysis::{AnalysisParams, Plan};
 use crate::error::{Error, Result};
+use crate::partition::LabelRoom;
 use crate::volume::Volume;
 
 /// The most voxels a glance is computed on: the view search, the histories and the picture of
@@ -127,33 +128,49 @@ fn plan_in(volume: &Volume, purpose: Purpose<'_>, room: u64) -> Result<Plan> {
 }
 
 impl Budget {
-    /// The room, in bytes, for the chunks of planes in which the label volume of `plan`'s
-    /// partition into `slabs` slabs, at `volume`'s own shape, is written to a file
+    /// The working memory in which the label volume of `plan`'s partition into `slabs` slabs,
+    /// at `volume`'s own shape, is written to a file
     /// ([`stage_labels`](crate::report::stage_labels)) within this budget beside what stays held
     /// once the analysis is done: `volume`'s voxels in memory and the coarser levels the plan
-    /// ran on. The labels are never held whole, so their size is never refused: what must fit is
-    /// a found background's mask (a bit a voxel) and one plane; the room is what is left (at most
-    /// [`LABEL_CHUNK_BYTES`](crate::partition::LABEL_CHUNK_BYTES)). `path` is the file the
-    /// volume came from, for the error.
+    /// ran on. The labels are never held whole, so their size is never refused, nor is a found
+    /// background's mask (a bit a voxel: 1 GiB at 2048³): it is held in memory when it fits
+    /// there beside one plane of labels, else in a mapped scratch file
+    /// ([`MaskHome::Scratch`](crate::partition::MaskHome::Scratch)), which the kernel's page
+    /// cache holds, not the process. What must fit is one plane; the room for chunks of planes
+    /// is what is left (at most [`LABEL_CHUNK_BYTES`](crate::partition::LABEL_CHUNK_BYTES)).
+    /// `path` is the file the volume came from, for the error.
     pub fn labels(
         &self,
         path: &std::path::Path,
         volume: &Volume,
         plan: &Plan,
         slabs: usize,
-    ) -> Result<u64> {
-        let (least, most) = crate::partition::label_stream_memory(volume, slabs);
-        let what = "the background mask of every voxel and a plane of labels";
-        let needed = self.labels_beside(path, volume, plan, least, what)?;
-        // The mask is in `least` with one plane: the room is one plane and what is left.
-        let plane = least - (volume.len() as u64).div_ceil(64) * 8;
-        Ok((self.max_memory - needed + plane).min(most))
+    ) -> Result<LabelRoom> {
+        let memory = crate::partition::label_stream_memory(volume, slabs);
+        let held = self.held_beside_labels(volume, plan);
+        let with_mask = held + memory.mask + memory.plane;
+        if with_mask <= self.max_memory {
+            return Ok(LabelRoom {
+                chunk: (self.max_memory - held - memory.mask).min(memory.most),
+                mask_in_memory: true,
+            });
+        }
+        let [x, y, z] = volume.dims();
+        let what = format!(
+            "a plane of the labels of {x}×{y}×{z} voxels beside {}",
+            self.beside(volume)
+        );
+        self.fits(path, held + memory.plane, what)?;
+        Ok(LabelRoom {
+            chunk: (self.max_memory - held).min(memory.most),
+            mask_in_memory: false,
+        })
     }
 
     /// That the label volume of `plan`'s partition into `slabs` slabs, at `volume`'s own shape
-    /// ([`label_volume`](crate::partition::label_volume)), fits in this budget held whole
-    /// (Python's `Analysis.labels()`, which returns it as an array), beside what
-    /// [`labels`](Self::labels) counts.
+    /// ([`label_volume`](crate::partition::label_volume)), fits in this budget held whole with
+    /// its background's mask (Python's `Analysis.labels()`, which returns it as an array),
+    /// beside what [`labels`](Self::labels) counts.
     pub fn labels_held(
         &self,
         path: &std::path::Path,
@@ -162,26 +179,18 @@ impl Budget {
         slabs: usize,
     ) -> Result<()> {
         let needed = crate::partition::label_memory(volume, slabs);
-        self.labels_beside(
-            path,
-            volume,
-            plan,
-            needed,
-            "the label volume of every voxel",
-        )
-        .map(drop)
+        let [x, y, z] = volume.dims();
+        let what = format!(
+            "the label volume of every voxel ({x}×{y}×{z}) beside {}",
+            self.beside(volume)
+        );
+        self.fits(path, self.held_beside_labels(volume, plan) + needed, what)
     }
 
-    /// That `needed` bytes for the labels of `volume` fit beside what stays held of `plan`: the
-    /// bytes held with them.
-    fn labels_beside(
-        self,
-        path: &std::path::Path,
-        volume: &Volume,
-        plan: &Plan,
-        needed: u64,
-        what: &str,
-    ) -> Result<u64> {
+    /// What stays held of `plan` once its analysis is done, beside the labels of `volume`: the
+    /// volume's voxels in memory, the coarser levels the plan ran on, and what its source keeps
+    /// ([`kept_for_source`](Self::kept_for_source)).
+    fn held_beside_labels(self, volume: &Volume, plan: &Plan) -> u64 {
         let coarser = |level: &Volume| {
             if level.dims() == volume.dims() {
                 0
@@ -193,19 +202,25 @@ impl Budget {
         if plan.views.dims() != plan.partition.dims() {
             held += coarser(&plan.views);
         }
-        let kept = self.kept_for_source(volume);
-        let needed = held + needed + kept;
-        if needed <= self.max_memory {
-            return Ok(needed);
-        }
-        let [x, y, z] = volume.dims();
-        let beside = match kept {
+        held + self.kept_for_source(volume)
+    }
+
+    /// What the labels of `volume` are weighed beside, as an error says it.
+    fn beside(self, volume: &Volume) -> &'static str {
+        match self.kept_for_source(volume) {
             0 => "the analysis",
             _ => "the analysis and the chunks kept from the store",
-        };
+        }
+    }
+
+    /// That `needed` bytes, for `what`, fit in this budget.
+    fn fits(self, path: &std::path::Path, needed: u64, what: String) -> Result<()> {
+        if needed <= self.max_memory {
+            return Ok(());
+        }
         Err(Error::TooLarge {
             path: path.to_path_buf(),
-            what: format!("{what} ({x}×{y}×{z}) beside {beside}"),
+            what,
             needed,
             limit: self.max_memory,
             machine: false,
@@ -362,9 +377,6 @@ mod tests {
         );
     }
 
-    /// A volume fetched from a store at a URL is planned within the budget less the share its
-    /// chunks kept in memory may take (1/16), so that the two together stay within the budget;
-    /// any other volume within the whole budget.
     /// The least budget whose room beside the chunk cache's share (1/16) holds `needed` bytes.
     #[cfg(feature = "remote")]
     fn least_beside_the_share(needed: u64) -> u64 {
@@ -374,6 +386,9 @@ mod tests {
             .unwrap()
     }
 
+    /// A volume fetched from a store at a URL is planned within the budget less the share its
+    /// chunks kept in memory may take (1/16), so that the two together stay within the budget;
+    /// any other volume within the whole budget.
     #[cfg(feature = "remote")]
     #[test]
     fn a_remote_volumes_plan_leaves_the_chunk_caches_share() {
@@ -450,8 +465,9 @@ mod tests {
         assert!(e.contains("the chunks kept from the store"), "{e}");
     }
 
-    /// Labels streamed need the background's mask and one plane beside what the analysis
-    /// holds, whatever their whole size; the room for chunks is what the budget leaves.
+    /// Labels streamed need one plane beside what the analysis holds, whatever their whole size;
+    /// the background's mask is in memory when it fits there beside that plane, else in a
+    /// scratch file; the room for chunks is what the budget leaves.
     #[test]
     fn labels_stream_within_any_budget_with_room_for_a_plane() {
         let volume = crate::volume::phantom::body([96, 96, 96], 1).unwrap();
@@ -465,17 +481,31 @@ mod tests {
         let path = std::path::Path::new("body");
         let held = volume.memory_bytes() + plan.partition.memory_bytes();
         let (mask, plane) = (96u64 * 96 * 96 / 8, 96u64 * 96);
+        let room = |max| {
+            let r = Budget::new(max).labels(path, &volume, &plan, 4)?;
+            Ok::<_, Error>((r.chunk, r.mask_in_memory))
+        };
         let least = held + mask + plane;
-        let room = |max| Budget::new(max).labels(path, &volume, &plan, 4);
-        assert_eq!(room(least).unwrap(), plane);
-        assert_eq!(room(least + 1000).unwrap(), plane + 1000);
+        assert_eq!(room(least).unwrap(), (plane, true));
+        assert_eq!(room(least + 1000).unwrap(), (plane + 1000, true));
         assert_eq!(
             room(u64::MAX).unwrap(),
-            96 * plane,
+            (96 * plane, true),
             "every plane at once, no more"
         );
-        let e = room(least - 1).unwrap_err();
-        assert!(e.to_string().contains("background mask"), "{e}");
+        // Below the mask beside a plane: the mask goes to a scratch file, the chunk has the rest.
+        assert_eq!(room(least - 1).unwrap(), (mask + plane - 1, false));
+        assert_eq!(room(held + plane).unwrap(), (plane, false));
+        let e = room(held + plane - 1).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "body: a plane of the labels of 96×96×96 voxels beside the analysis needs {}, \
+                 over the memory limit of {}",
+                crate::error::human_bytes(held + plane),
+                crate::error::human_bytes(held + plane - 1)
+            )
+        );
         // Held whole (Python's labels()), they need every voxel's byte.
         let whole = Budget::new(held + mask + 96 * plane);
         assert!(whole.labels_held(path, &volume, &plan, 4).is_ok());

@@ -9,6 +9,12 @@ order; slabscope indexes voxels ``[x, y, z]``. The widget turns the layer's data
 order (a transposed view, read in place) with its scale as the spacing, and the labels back
 into napari's order, with the image layer's scale, translate, rotate, shear and affine, so that
 they lie on the image whatever its world transform. Axes in the table are napari's ``(z, y, x)``.
+
+A layer of more than three axes (time, channels: ``(t, z, y, x)``, ``(c, z, y, x)``, ...) is
+analysed at the 3D volume napari displays: its last three axes are the volume's ``(z, y, x)``,
+its leading ones indexed where the viewer's sliders stand. Its labels are a layer of the same
+axes, one long on each leading axis and moved there, so they lie on that volume alone. An RGB
+layer is refused.
 """
 
 from __future__ import annotations
@@ -41,7 +47,7 @@ import slabscope
 if TYPE_CHECKING:  # pragma: no cover - for the types only
     import napari  # type: ignore[import-untyped]
 
-__all__ = ["SlabsWidget", "to_napari", "to_slabscope", "volume_of_layer"]
+__all__ = ["SlabsWidget", "displayed_indices", "labels_placement", "to_napari", "to_slabscope", "volume_of_layer"]
 
 # The progress bar's steps.
 _STEPS = 1000
@@ -65,18 +71,67 @@ def axis_to_napari(axis: Sequence[float]) -> tuple[float, float, float]:
     return (z, y, x)
 
 
-def volume_of_layer(layer: ImageLayer) -> slabscope.Volume:
-    """The slabscope volume of a 3D single-channel napari image layer: its data (the finest
-    level of a multiscale layer) in slabscope's order and its scale as the spacing, in mm. A
-    layer of another kind is a ``ValueError`` naming it."""
+def volume_of_layer(layer: ImageLayer, at: Sequence[int] = ()) -> slabscope.Volume:
+    """The slabscope volume of a single-channel napari image layer: its data (the finest level of
+    a multiscale layer) in slabscope's order and its scale as the spacing, in mm. A layer of more
+    than three axes gives the 3D volume of its last three at the indices ``at`` of its leading
+    ones (``displayed_indices``). A layer of another kind, or ``at`` that does not index its
+    leading axes, is a ``ValueError`` naming it."""
     name = layer.name
     if layer.rgb:
-        raise ValueError(f"layer {name!r} is RGB: slabscope analyses single-channel 3D images")
-    if layer.ndim != 3:
+        raise ValueError(
+            f"layer {name!r} is RGB: slabscope analyses single-channel images "
+            "(split its colours into layers of their own first)"
+        )
+    if layer.ndim < 3:
         raise ValueError(f"layer {name!r} is {layer.ndim}D: slabscope analyses 3D images")
     data = layer.data[0] if layer.multiscale else layer.data
-    spacing = tuple(abs(float(s)) for s in np.asarray(layer.scale)[::-1])
-    return slabscope.Volume.from_array(to_slabscope(data), spacing=spacing)
+    lead = layer.ndim - 3
+    at = tuple(int(i) for i in at)
+    if len(at) != lead or any(not 0 <= i < n for i, n in zip(at, data.shape)):
+        raise ValueError(
+            f"layer {name!r} has data of shape {tuple(data.shape)}: expected {lead} indices of "
+            f"its leading axes within it, got {list(at)}"
+        )
+    spacing = tuple(abs(float(s)) for s in np.asarray(layer.scale)[lead:][::-1])
+    return slabscope.Volume.from_array(to_slabscope(data[at] if at else data), spacing=spacing)
+
+
+def displayed_indices(layer: ImageLayer, viewer: Any) -> tuple[int, ...]:
+    """The indices along ``layer``'s leading axes (all but its last three: time, channels...) of
+    the 3D volume ``viewer`` displays: the sliders' point in the world mapped into the layer's
+    data, rounded and kept within it; ``()`` for a 3D layer."""
+    lead = layer.ndim - 3
+    if lead <= 0:
+        return ()
+    point = np.asarray(viewer.dims.point, dtype=float)[-layer.ndim :]
+    position = np.asarray(layer.world_to_data(point), dtype=float)
+    shape = (layer.data[0] if layer.multiscale else layer.data).shape
+    return tuple(int(np.clip(np.rint(position[i]), 0, shape[i] - 1)) for i in range(lead))
+
+
+def labels_placement(layer: ImageLayer, at: Sequence[int] = ()) -> dict[str, Any]:
+    """The placement (``scale``, ``translate``, ``rotate``, ``shear``, ``affine``) of a labels
+    layer of ``layer``'s axes, one long on each leading axis, that lies on the 3D volume at the
+    indices ``at`` of the leading ones: the layer's own, moved by ``at`` in its data (through its
+    scale, rotation and shear, before its affine); the layer's own for a 3D layer."""
+    placement = {
+        "scale": layer.scale,
+        "translate": layer.translate,
+        "rotate": layer.rotate,
+        "shear": layer.shear,
+        "affine": layer.affine,
+    }
+    if any(at):
+        offset = np.zeros(layer.ndim)
+        offset[: len(at)] = at
+        moved = np.asarray(layer.data_to_world(offset), dtype=float)
+        moved -= np.asarray(layer.data_to_world(np.zeros(layer.ndim)), dtype=float)
+        # data → world is the affine after translate ∘ rotate ∘ shear ∘ scale: the offset's world
+        # step, taken back through the affine's linear part, is the translate's.
+        linear = np.asarray(layer.affine.affine_matrix, dtype=float)[:-1, :-1]
+        placement["translate"] = np.asarray(layer.translate, dtype=float) + np.linalg.solve(linear, moved)
+    return placement
 
 
 class _Cancelled(Exception):
@@ -126,7 +181,8 @@ class SlabsWidget(QWidget):
         self.table.setHorizontalHeaderLabels(["axis (z, y, x)", "entropy rate", "rank by"])
         header = self.table.horizontalHeader()
         if header is not None:
-            header.setSectionResizeMode(QHeaderView.Stretch)
+            # Each column as wide as its header and its cells, never cut by a narrow dock.
+            header.setSectionResizeMode(QHeaderView.ResizeToContents)
         self.cancel_button.setEnabled(False)
         self.view_button.setEnabled(False)
 
@@ -143,6 +199,7 @@ class SlabsWidget(QWidget):
         layout.addWidget(self.table)
         layout.addWidget(self.view_button)
         self.setLayout(layout)
+        self._fit_table()
 
         self.run_button.clicked.connect(self.run)
         self.cancel_button.clicked.connect(self.cancel)
@@ -155,12 +212,9 @@ class SlabsWidget(QWidget):
     # The layers offered.
 
     def image_layers(self) -> list[ImageLayer]:
-        """The viewer's image layers slabscope can analyse (3D, one channel)."""
-        return [
-            layer
-            for layer in self.viewer.layers
-            if isinstance(layer, ImageLayer) and layer.ndim == 3 and not layer.rgb
-        ]
+        """The viewer's image layers of three axes or more (a 4D one is analysed at the 3D
+        volume displayed; an RGB one is refused when analysed, saying why)."""
+        return [layer for layer in self.viewer.layers if isinstance(layer, ImageLayer) and layer.ndim >= 3]
 
     def _refresh_layers(self, event: Any = None) -> None:
         current = self.layer_box.currentText()
@@ -189,7 +243,8 @@ class SlabsWidget(QWidget):
             self.status.setText("No 3D image layer to analyse.")
             return
         try:
-            volume = volume_of_layer(layer)
+            at = displayed_indices(layer, self.viewer)
+            volume = volume_of_layer(layer, at)
         except (ValueError, slabscope.VolumeError) as e:
             self.status.setText(str(e))
             return
@@ -202,8 +257,8 @@ class SlabsWidget(QWidget):
                 raise _Cancelled(None)
             return analysis, to_napari(analysis.labels())
 
-        self._start(work, lambda done: self._analysed(layer, volume, *done), cancel)
-        self.status.setText(f"Analysing {layer.name}…")
+        self._start(work, lambda done: self._analysed(layer, at, volume, *done), cancel)
+        self.status.setText(f"Analysing {_volume_shown(layer, at)}…")
 
     def _reporter(self) -> tuple[threading.Event, Callable[[str, float], None]]:
         """A run's cancel flag and its progress callback, which reports to the widget and stops
@@ -258,27 +313,28 @@ class SlabsWidget(QWidget):
         self.view_button.setEnabled(self.analysis is not None)
 
     def _analysed(
-        self, layer: ImageLayer, volume: slabscope.Volume, analysis: slabscope.Analysis, labels: np.ndarray
+        self,
+        layer: ImageLayer,
+        at: tuple[int, ...],
+        volume: slabscope.Volume,
+        analysis: slabscope.Analysis,
+        labels: np.ndarray,
     ) -> None:
         self.analysis, self._source, self._volume = analysis, layer, volume
         self.progress.setValue(_STEPS)
         name = f"{layer.name} slabs"
         if name in self.viewer.layers:
             self.viewer.layers.remove(name)
-        # The image's own placement in the world, so that the labels lie on it.
+        # The image's own placement in the world (moved to the volume analysed along its leading
+        # axes), so that the labels lie on it.
         self.labels_layer = self.viewer.add_labels(
-            labels,
-            name=name,
-            scale=layer.scale,
-            translate=layer.translate,
-            rotate=layer.rotate,
-            shear=layer.shear,
-            affine=layer.affine,
+            labels.reshape((1,) * len(at) + labels.shape), name=name, **labels_placement(layer, at)
         )
         self.fill_table(analysis)
         slabs = len(analysis.slabs)
+        where = f" of {_volume_shown(layer, at)}" if at else ""
         self.status.setText(
-            f"{slabs} slabs across axis {_shown(axis_to_napari(analysis.best_axis))} (z, y, x)."
+            f"{slabs} slabs across axis {_shown(axis_to_napari(analysis.best_axis))} (z, y, x){where}."
         )
 
     def fill_table(self, analysis: slabscope.Analysis) -> None:
@@ -293,6 +349,20 @@ class SlabsWidget(QWidget):
             )
             for column, text in enumerate(cells):
                 self.table.setItem(row, column, QTableWidgetItem(text))
+        self._fit_table()
+
+    def _fit_table(self) -> None:
+        """Sizes the columns to their headers and cells, and keeps the table (so the dock) at
+        least as wide as they are together, so that no header or cell is cut."""
+        self.table.resizeColumnsToContents()
+        header, rows = self.table.horizontalHeader(), self.table.verticalHeader()
+        if header is None or rows is None:
+            return
+        columns = sum(header.sectionSize(c) for c in range(self.table.columnCount()))
+        scroll = self.table.verticalScrollBar()
+        extra = rows.sizeHint().width() + 2 * self.table.frameWidth()
+        extra += scroll.sizeHint().width() if scroll is not None else 0
+        self.table.setMinimumWidth(columns + extra)
 
     def add_exploded_view(self) -> None:
         """Adds the exploded view of the last analysis as an RGB image layer (drawn in a worker
@@ -320,6 +390,15 @@ def _render_options(options: dict[str, Any]) -> dict[str, Any]:
     """The keywords of ``options`` that ``render`` takes (its own and the look's)."""
     keywords = {p["keyword"] for p in slabscope.parameters("render")}
     return {k: v for k, v in options.items() if k in keywords}
+
+
+def _volume_shown(layer: ImageLayer, at: Sequence[int]) -> str:
+    """The volume analysed of ``layer``: its name, and for a layer of more than three axes the
+    3D volume displayed, as NumPy indexes its data."""
+    if not at:
+        return str(layer.name)
+    index = ", ".join([str(i) for i in at] + [":"] * 3)
+    return f"{layer.name}, the 3D volume displayed: data[{index}] of its {layer.ndim}D data"
 
 
 def _shown(axis: Sequence[float]) -> str:

@@ -159,3 +159,20 @@ def test_labels_beyond_the_budget_are_refused_as_an_array_and_written_to_a_file(
     roomy = slabscope.analyze(volume, axis="z", resolution=2, slabs=3)
     assert roomy.slabs == analysis.slabs
     assert np.array_equal(slabscope.load(str(out)).array, roomy.labels())
+
+
+def test_labels_under_a_budget_below_the_background_mask_are_written_all_the_same(phantoms, tmp_path):
+    # The 96×96×128 body (2.25 MiB of int16 held) analysed on level 2 (72 KiB of float32) in
+    # 2450 KiB: its found background's mask (144 KiB, a bit a voxel) and a plane of labels do not
+    # fit beside them, so the mask is held in an unnamed scratch file and the labels written.
+    volume = slabscope.load(str(phantoms["big"]))
+    analysis = slabscope.analyze(volume, axis="z", resolution=2, slabs=3, max_memory="2450K")
+    assert analysis.to_dict()["resolution"]["pyramid_level"] == 2
+    out = tmp_path / "labels.nrrd"
+    analysis.write_labels(out)
+    roomy = slabscope.analyze(volume, axis="z", resolution=2, slabs=3)
+    assert roomy.slabs == analysis.slabs
+    roomy.write_labels(tmp_path / "roomy.nrrd")
+    assert out.read_bytes() == (tmp_path / "roomy.nrrd").read_bytes()
+    assert (slabscope.load(str(out)).array == 0).any(), "the air left out by the mask"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["labels.nrrd", "roomy.nrrd"]

@@ -29,7 +29,15 @@ except ImportError as missing:
     )
 
 import slabscope
-from slabscope._napari import SlabsWidget, _shown, axis_to_napari, to_napari, to_slabscope, volume_of_layer
+from slabscope._napari import (
+    SlabsWidget,
+    _shown,
+    axis_to_napari,
+    displayed_indices,
+    to_napari,
+    to_slabscope,
+    volume_of_layer,
+)
 
 # Worker threads finish within this (ms).
 WAIT = 120_000
@@ -128,12 +136,137 @@ def test_cancel_stops_a_run(qtbot):
 def test_layers_slabscope_cannot_analyse_are_named():
     class Layer:
         name, rgb, ndim, multiscale = "photo", True, 3, False
+        data = np.zeros((2, 4, 5, 6), np.float32)
+        scale = (1.0, 1.0, 1.0, 1.0)
 
-    with pytest.raises(ValueError, match="'photo' is RGB"):
+    with pytest.raises(ValueError, match="'photo' is RGB: slabscope analyses single-channel images"):
         volume_of_layer(Layer())  # type: ignore[arg-type]
     Layer.rgb, Layer.ndim = False, 2
     with pytest.raises(ValueError, match="'photo' is 2D"):
         volume_of_layer(Layer())  # type: ignore[arg-type]
+    Layer.ndim = 4
+    for at in ((), (2,), (0, 0)):
+        with pytest.raises(ValueError, match=r"'photo' has data of shape \(2, 4, 5, 6\): expected 1 indices"):
+            volume_of_layer(Layer(), at)  # type: ignore[arg-type]
+    assert volume_of_layer(Layer(), (1,)).shape == (6, 5, 4)  # type: ignore[arg-type]
+
+
+def frames_tzyx(nt: int, shape: tuple[int, int, int]) -> np.ndarray:
+    """``nt`` (z, y, x) volumes, each its own: layers along z, then along y, then along x..."""
+    frames = []
+    for t in range(nt):
+        frame = layered_zyx(shape, seed=10 + t)
+        if t % 3 == 1:
+            frame = np.ascontiguousarray(np.transpose(layered_zyx((shape[1], shape[0], shape[2]), 10 + t), (1, 0, 2)))
+        elif t % 3 == 2:
+            frame = np.ascontiguousarray(np.transpose(layered_zyx((shape[2], shape[1], shape[0]), 10 + t), (2, 1, 0)))
+        frames.append(frame)
+    return np.stack(frames)
+
+
+def test_a_4d_layer_is_analysed_at_the_volume_displayed_and_labelled_there(qtbot):
+    viewer = viewer_model()
+    data = frames_tzyx(3, (24, 16, 20))
+    # A time step of 3 and a world affine that scales time and turns (y, x): the labels must be
+    # moved through both to lie on the time point.
+    turn = np.eye(5)
+    turn[0, 0] = 2.0
+    turn[2:4, 2:4] = [[0.8, -0.6], [0.6, 0.8]]
+    image = viewer.add_image(
+        data, name="cine", scale=(3.0, 2.0, 0.5, 0.75), translate=(100.0, 10.0, -5.0, 3.0), affine=turn
+    )
+    viewer.dims.set_current_step(0, 2)
+    assert displayed_indices(image, viewer) == (2,)
+    widget = SlabsWidget(viewer)
+    qtbot.addWidget(widget)
+    assert [widget.layer_box.itemText(i) for i in range(widget.layer_box.count())] == ["cine"]
+    widget.run()
+    assert "cine, the 3D volume displayed: data[2, :, :, :] of its 4D data" in widget.status.text()
+    qtbot.waitUntil(lambda: widget.worker is None, timeout=WAIT)
+    assert widget.status.text().endswith("(z, y, x) of cine, the 3D volume displayed: data[2, :, :, :] of its 4D data.")
+
+    # The analysis of time point 2, not of another.
+    def analysed(t: int) -> slabscope.Analysis:
+        volume = slabscope.Volume.from_array(to_slabscope(data[t]), spacing=(0.75, 0.5, 2.0))
+        return slabscope.analyze(volume)
+
+    analysis = analysed(2)
+    assert widget.analysis is not None and widget.analysis.to_dict() == analysis.to_dict()
+    assert analysis.to_dict() != analysed(0).to_dict() and analysis.to_dict() != analysed(1).to_dict()
+
+    # Labels of the layer's four axes, one time point long, lying on time point 2.
+    labels = viewer.layers["cine slabs"]
+    assert labels.data.shape == (1, 24, 16, 20)
+    assert np.array_equal(labels.data[0], to_napari(analysis.labels()))
+    for point in ([0, 0, 0], [23, 15, 19], [5, 7, 11]):
+        np.testing.assert_allclose(labels.data_to_world([0, *point]), image.data_to_world([2, *point]), atol=1e-9)
+    # Where the sliders stand, the labels' one time point; elsewhere none of theirs.
+    assert np.rint(labels.world_to_data(viewer.dims.point)[0]) == 0
+    viewer.dims.set_current_step(0, 0)
+    assert np.rint(labels.world_to_data(viewer.dims.point)[0]) == -2
+
+
+def test_a_channel_axis_and_time_are_indexed_where_the_sliders_stand(qtbot):
+    viewer = viewer_model()
+    data = frames_tzyx(4, (16, 12, 14)).reshape(2, 2, 16, 12, 14)
+    image = viewer.add_image(data, name="tc")
+    viewer.dims.set_current_step(0, 1)
+    viewer.dims.set_current_step(1, 0)
+    assert displayed_indices(image, viewer) == (1, 0)
+    widget = SlabsWidget(viewer)
+    qtbot.addWidget(widget)
+    widget.run()
+    qtbot.waitUntil(lambda: widget.worker is None, timeout=WAIT)
+    volume = slabscope.Volume.from_array(to_slabscope(data[1, 0]), spacing=(1.0, 1.0, 1.0))
+    assert widget.analysis is not None and widget.analysis.to_dict() == slabscope.analyze(volume).to_dict()
+    labels = viewer.layers["tc slabs"]
+    assert labels.data.shape == (1, 1, 16, 12, 14)
+    np.testing.assert_allclose(labels.data_to_world([0, 0, 3, 4, 5]), image.data_to_world([1, 0, 3, 4, 5]))
+
+
+def test_an_rgb_layer_is_refused_saying_why(qtbot):
+    viewer = viewer_model()
+    viewer.add_image(np.zeros((6, 8, 10, 3), np.uint8), name="photo", rgb=True)
+    widget = SlabsWidget(viewer)
+    qtbot.addWidget(widget)
+    widget.run()
+    assert widget.worker is None
+    assert widget.status.text() == (
+        "layer 'photo' is RGB: slabscope analyses single-channel images "
+        "(split its colours into layers of their own first)"
+    )
+    assert [layer.name for layer in viewer.layers] == ["photo"]
+
+
+def test_the_tables_columns_show_their_headers_whole_in_a_narrow_dock(qtbot):
+    viewer = viewer_model()
+    widget = SlabsWidget(viewer)
+    qtbot.addWidget(widget)
+    widget.resize(120, 500)
+    widget.show()
+    qtbot.waitExposed(widget)
+
+    def whole() -> None:
+        header = widget.table.horizontalHeader()
+        metrics = header.fontMetrics()
+        for column in range(widget.table.columnCount()):
+            text = widget.table.horizontalHeaderItem(column).text()
+            size = header.sectionSize(column)
+            assert size >= metrics.horizontalAdvance(text), (text, size)
+            # Within the table's view: not cut by the dock's edge.
+            assert header.sectionViewportPosition(column) + size <= header.viewport().width(), text
+
+    whole()
+    volume = slabscope.Volume.from_array(to_slabscope(layered_zyx((16, 12, 14))))
+    widget.fill_table(slabscope.analyze(volume))
+    qtbot.wait(10)
+    whole()
+    header = widget.table.horizontalHeader()
+    metrics = header.fontMetrics()
+    for row in range(widget.table.rowCount()):
+        for column in range(2):
+            text = widget.table.item(row, column).text()
+            assert header.sectionSize(column) >= metrics.horizontalAdvance(text), text
 
 
 def test_the_manifest_names_the_widget():

@@ -98,24 +98,21 @@ pub fn run(args: &AnalyzeArgs) -> Result<()> {
     request.params.explain = args.explain;
     let planned = request.plan(full)?;
     if args.export_labels.is_some() {
-        // The background's mask beside the analysis: refused before it rather than after it
-        // (the labels themselves are written a few planes at a time, never held whole).
+        // A plane of labels beside the analysis: refused before it rather than after it (the
+        // labels themselves are written a few planes at a time, never held whole, and the
+        // background's mask goes to a scratch file when memory has no room for it).
         request.budget.labels(&args.file, full, &planned.plan, 1)?;
     }
     let analysed = super::args::analyze(&name, planned)?;
     let (volume, analysis) = (analysed.level().as_ref(), &analysed.analysis);
     let part = &analysis.partition;
-    let room = if args.export_labels.is_some() {
-        request
-            .budget
-            .labels(&args.file, full, &analysed.plan, part.slabs.len())?
-    } else {
-        0
-    };
     // Every export is written in full before any is put in place, and the report printed only
     // then: an error leaves no export behind and nothing on standard output.
     let mut staged = Vec::new();
     if let Some(path) = &args.export_labels {
+        let room = request
+            .budget
+            .labels(&args.file, full, &analysed.plan, part.slabs.len())?;
         staged.push(stage_labels(
             path,
             full,

@@ -15,18 +15,12 @@
 
 #![allow(unsafe_code)]
 
-use std::fs::File;
-use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::volume::mapped;
+use crate::volume::scratch::scratch_map;
 use crate::volume::{Voxel, Voxels};
-
-/// Free space a scratch file must leave on its file system: this fraction of it (capped at
-/// [`MARGIN_MAX`]), so that decoding never fills a disk others use.
-const MARGIN_FRACTION: u64 = 20;
-const MARGIN_MAX: u64 = 1 << 30;
 
 /// Decoded voxels of type `T` on their way to a volume: a vector in memory, or the map of a
 /// scratch file, filled in any order ([`all`](Self::all)) or in memory order a stretch at a time
@@ -177,106 +171,6 @@ impl<T: Voxel> VoxelOut<T> {
     }
 }
 
-/// The writable map of an unnamed file in the scratch folder with `bytes` reserved on disk,
-/// or why there is none.
-fn scratch_map(dir: &Path, bytes: u64) -> std::result::Result<memmap2::MmapMut, String> {
-    let shown = crate::error::shown(dir);
-    let file = tempfile::tempfile_in(dir)
-        .map_err(|e| format!("no scratch file could be made in {shown} ({e})"))?;
-    let room = room_of(&file).map_err(|e| format!("the scratch folder {shown}: {e}"))?;
-    if room.in_memory {
-        return Err(format!(
-            "the scratch folder {shown} is in memory (tmpfs), not on disk"
-        ));
-    }
-    let margin = (room.total / MARGIN_FRACTION).min(MARGIN_MAX);
-    if bytes.saturating_add(margin) > room.free {
-        return Err(format!(
-            "the scratch folder {shown} has {} free, not {} with a margin",
-            mib(room.free),
-            mib(bytes.saturating_add(margin))
-        ));
-    }
-    reserve(&file, bytes).map_err(|e| format!("the scratch folder {shown}: {e}"))?;
-    // SAFETY: the file has no name, so no other process can open, write or truncate it; its
-    // blocks are reserved, so writing through the map cannot meet a full disk.
-    unsafe { memmap2::MmapMut::map_mut(&file) }
-        .map_err(|e| format!("the scratch file in {shown} could not be mapped ({e})"))
-}
-
-/// Sets `file`'s length to `bytes` with every block allocated on disk: `fallocate(2)` itself,
-/// not glibc's `posix_fallocate`, which on a file system without it writes every block in turn;
-/// such a file system is refused instead.
-#[cfg(target_os = "linux")]
-fn reserve(file: &File, bytes: u64) -> std::io::Result<()> {
-    let len = libc::off_t::try_from(bytes).map_err(std::io::Error::other)?;
-    // SAFETY: a plain system call on a descriptor `file` keeps open.
-    if unsafe { libc::fallocate(file.as_raw_fd(), 0, 0, len) } == 0 {
-        return Ok(());
-    }
-    let e = std::io::Error::last_os_error();
-    if e.raw_os_error() == Some(libc::EOPNOTSUPP) {
-        return Err(std::io::Error::other(
-            "its file system cannot reserve room for a file (no fallocate)",
-        ));
-    }
-    Err(e)
-}
-
-#[cfg(not(target_os = "linux"))]
-fn reserve(_file: &File, _bytes: u64) -> std::io::Result<()> {
-    Err(std::io::Error::other(
-        "decoding to disk is built for Linux only",
-    ))
-}
-
-fn mib(bytes: u64) -> String {
-    format!("{:.1} MiB", bytes as f64 / f64::from(1u32 << 20))
-}
-
-/// The file system a file is on: its size and free bytes, and whether it lives in memory.
-struct FileSystem {
-    total: u64,
-    free: u64,
-    in_memory: bool,
-}
-
-#[allow(clippy::useless_conversion)] // the fields are wider or narrower elsewhere
-fn room_of(file: &File) -> std::io::Result<FileSystem> {
-    let fd = file.as_raw_fd();
-    // SAFETY: `fstatvfs` writes one `statvfs` into the zeroed struct it is given, for an open
-    // descriptor that `file` keeps alive.
-    let mut vfs: libc::statvfs = unsafe { std::mem::zeroed() };
-    if unsafe { libc::fstatvfs(fd, &raw mut vfs) } != 0 {
-        return Err(std::io::Error::last_os_error());
-    }
-    let block = u64::from(vfs.f_frsize);
-    Ok(FileSystem {
-        total: u64::from(vfs.f_blocks).saturating_mul(block),
-        free: u64::from(vfs.f_bavail).saturating_mul(block),
-        in_memory: in_memory(fd)?,
-    })
-}
-
-#[cfg(target_os = "linux")]
-fn in_memory(fd: std::os::fd::RawFd) -> std::io::Result<bool> {
-    const TMPFS_MAGIC: i64 = 0x0102_1994;
-    const RAMFS_MAGIC: i64 = 0x8584_58f6;
-    // SAFETY: as for `fstatvfs` above: one `statfs` written into the zeroed struct.
-    let mut fs: libc::statfs = unsafe { std::mem::zeroed() };
-    if unsafe { libc::fstatfs(fd, &raw mut fs) } != 0 {
-        return Err(std::io::Error::last_os_error());
-    }
-    #[allow(clippy::useless_conversion)]
-    let kind = i64::from(fs.f_type);
-    Ok(kind == TMPFS_MAGIC || kind == RAMFS_MAGIC)
-}
-
-#[cfg(not(target_os = "linux"))]
-fn in_memory(_fd: std::os::fd::RawFd) -> std::io::Result<bool> {
-    Ok(false)
-}
-
 /// The budget's refusal: without a scratch folder (`why` `None`), saying that one would do;
 /// else saying why the voxels could not go to a scratch file there.
 fn refusal(refused: Error, why: Option<&str>) -> Error {
@@ -394,6 +288,7 @@ mod tests {
 
     #[test]
     fn a_scratch_folder_in_memory_is_refused() {
+        use crate::volume::scratch::room_of;
         let shm = Path::new("/dev/shm");
         let Ok(file) = tempfile::tempfile_in(shm) else {
             return; // no /dev/shm here: nothing to test

@@ -4,13 +4,15 @@
 //! (scikit-image's `regionprops`) see the slabs and nothing else. Slab indices stay as they are
 //! everywhere else (JSON `slabs[].index`, `--highlight`, the TUI).
 
+use std::path::{Path, PathBuf};
+
 use rayon::prelude::*;
 
 use super::Partition;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::geometry::dot;
 use crate::progress::Monitor;
-use crate::volume::background::Background;
+use crate::volume::background::{Background, MaskWords};
 use crate::volume::{Volume, Voxel, VoxelType, Voxels};
 
 /// The label volume of `p` at `volume`'s shape, spacing and world geometry: each voxel's slab
@@ -25,7 +27,7 @@ pub fn label_volume(
     p: &Partition,
     monitor: &Monitor,
 ) -> Result<Volume> {
-    let l = Labeller::new(volume, partitioned, p, monitor)?;
+    let l = Labeller::new(volume, partitioned, p, MaskHome::Memory, monitor)?;
     let (frame, bg, slabs) = (&l.frame, &l.background, l.slab_of.as_slice());
     let (ty, data) = if l.wide {
         let labels = labels(volume, frame, bg, slabs, |l| l);
@@ -151,11 +153,35 @@ fn labels_of<V: Voxel, T: Copy + Send>(
 /// (one plane when a plane is larger).
 pub const LABEL_CHUNK_BYTES: u64 = 8 << 20;
 
+/// The working memory a budget gives labels streamed to a file
+/// ([`Budget::labels`](crate::budget::Budget::labels)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LabelRoom {
+    /// Bytes for a chunk of planes (one plane is computed at once whatever it says).
+    pub chunk: u64,
+    /// Whether a found background's mask is held in memory; else in a mapped scratch file
+    /// ([`MaskHome::Scratch`]).
+    pub mask_in_memory: bool,
+}
+
+/// Where a [`Labeller`] holds a found background's mask (a bit a voxel: 1 GiB at 2048³).
+#[derive(Clone, Copy, Debug)]
+pub enum MaskHome<'a> {
+    /// In memory.
+    Memory,
+    /// In an unnamed scratch file, mapped: in the folder of the labels' file given (where they
+    /// are being written, so on a disk with room for them), else in the system's temporary
+    /// folder; never in a folder in memory (tmpfs). Its pages are the kernel's page cache,
+    /// which it writes out and drops under pressure, not the process's memory.
+    Scratch(&'a Path),
+}
+
 /// The label volume of a partition ([`label_volume`]'s voxels, by the same rule) computed a few
 /// planes at a time, for a writer that streams them to a file: a label volume larger than the
 /// memory budget (a 2048³ one is 8 GiB) is never held whole. What it holds is a found
-/// background's mask (a bit a voxel) and one chunk of planes, as many as the room its caller
-/// gives holds ([`label_stream_memory`]: at least one plane).
+/// background's mask (a bit a voxel), in memory or in a mapped scratch file ([`MaskHome`]),
+/// and one chunk of planes, as many as the room its caller gives holds
+/// ([`label_stream_memory`]: at least one plane).
 pub struct Labeller<'a> {
     volume: &'a Volume,
     frame: Frame,
@@ -166,18 +192,29 @@ pub struct Labeller<'a> {
 
 impl<'a> Labeller<'a> {
     /// The labels of `p` at `volume`'s shape, `partitioned` being the level `p` partitions (as
-    /// for [`label_volume`]); finds the background (stops when `monitor` is cancelled).
+    /// for [`label_volume`]); finds the background, its mask held in `home` (stops when
+    /// `monitor` is cancelled).
     pub fn new(
         volume: &'a Volume,
         partitioned: &Volume,
         p: &Partition,
+        home: MaskHome<'_>,
         monitor: &Monitor,
     ) -> Result<Self> {
         // By the analysis's rule, found on the voxels labelled: on the level analysed, the
         // threshold the analysis found; on a finer one, that level's own (its noise is wider
         // than the averaged level's, and a threshold from there would leave specks of air
         // labelled).
-        let background = Background::find(volume, p.background.rule, monitor)?;
+        let rule = p.background.rule;
+        let background = match home {
+            MaskHome::Memory => Background::find(volume, rule, monitor)?,
+            MaskHome::Scratch(out) => {
+                let folders = scratch_folders(out);
+                Background::find_in(volume, rule, monitor, |words| {
+                    mask_scratch(out, words, &folders)
+                })?
+            }
+        };
         let mut slab_of = vec![0u16; p.slices];
         for (i, &(a, b)) in p.slabs.iter().enumerate() {
             slab_of[a..b].fill(i as u16 + 1);
@@ -230,6 +267,40 @@ impl<'a> Labeller<'a> {
     }
 }
 
+/// Room for `words` words of a background's mask in an unnamed scratch file mapped
+/// ([`MaskHome::Scratch`]), for the labels being written to `out`, in the first of
+/// [`scratch_folders`] that can hold one; an error naming `out` when none can.
+fn mask_scratch(out: &Path, words: usize, folders: &[PathBuf]) -> Result<MaskWords> {
+    let bytes = (words as u64).saturating_mul(8);
+    crate::volume::scratch::scratch_in_any(folders, bytes)
+        .map(MaskWords::Mapped)
+        .map_err(|why| {
+            Error::io(
+                out,
+                std::io::Error::other(format!(
+                    "the background's mask ({}) fits neither in the memory limit nor in a \
+                     scratch file: {why}",
+                    crate::error::short_bytes(bytes)
+                )),
+            )
+        })
+}
+
+/// Where the scratch file of a background's mask for labels written to `out` goes: `out`'s
+/// folder, then the system's temporary folder.
+fn scratch_folders(out: &Path) -> Vec<PathBuf> {
+    let here = match out.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut folders = vec![here];
+    let temp = std::env::temp_dir();
+    if !folders.contains(&temp) {
+        folders.push(temp);
+    }
+    folders
+}
+
 /// The memory one plane of labels of `volume` takes while it is streamed: its labels, and for
 /// u16 labels their bytes too.
 fn plane_memory(volume: &Volume, wide: bool) -> u64 {
@@ -237,16 +308,30 @@ fn plane_memory(volume: &Volume, wide: bool) -> u64 {
     (nx * ny) as u64 * if wide { 4 } else { 1 }
 }
 
-/// The least memory a [`Labeller`] of `volume` and a partition of `slabs` slabs takes while its
-/// labels are streamed, in bytes: a found background's mask (a bit a voxel) and one plane; and
-/// the most a chunk of planes beyond that takes usefully (the volume's planes, at most
-/// [`LABEL_CHUNK_BYTES`]).
+/// The memory a [`Labeller`] of `volume` and a partition of `slabs` slabs takes while its
+/// labels are streamed ([`label_stream_memory`]), in bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StreamMemory {
+    /// A found background's mask (a bit a voxel), when held in memory ([`MaskHome::Memory`]).
+    pub mask: u64,
+    /// One plane: the least chunk.
+    pub plane: u64,
+    /// The most a chunk of planes takes usefully (the volume's planes, at most
+    /// [`LABEL_CHUNK_BYTES`]).
+    pub most: u64,
+}
+
+/// The memory a [`Labeller`] of `volume` and a partition of `slabs` slabs takes while its
+/// labels are streamed.
 #[must_use]
-pub fn label_stream_memory(volume: &Volume, slabs: usize) -> (u64, u64) {
+pub fn label_stream_memory(volume: &Volume, slabs: usize) -> StreamMemory {
     let plane = plane_memory(volume, label_bytes(slabs) == 2);
-    let mask = (volume.len() as u64).div_ceil(64) * 8;
     let all = plane * volume.dims()[2] as u64;
-    (mask + plane, all.min(LABEL_CHUNK_BYTES.max(plane)))
+    StreamMemory {
+        mask: (volume.len() as u64).div_ceil(64) * 8,
+        plane,
+        most: all.min(LABEL_CHUNK_BYTES.max(plane)),
+    }
 }
 
 #[cfg(test)]
@@ -371,6 +456,68 @@ mod tests {
             let body = (6..18).contains(&x) && (6..18).contains(&y);
             assert_eq!(label == 0, !body, "voxel {i}: label {label}");
         }
+    }
+
+    /// A found background's mask held in an unnamed scratch file beside the labels' file
+    /// labels every voxel as the mask in memory does, holds no memory for it, and leaves no
+    /// file behind.
+    #[test]
+    fn a_mask_in_a_scratch_file_labels_as_one_in_memory() {
+        let v = crate::volume::phantom::body([40, 36, 30], 3).unwrap();
+        let params = PartitionParams {
+            stop: Stop::Slabs(3),
+            ..PartitionParams::default()
+        };
+        let p = partition(&v, [0.0, 0.0, 1.0], &params, &Monitor::none()).unwrap();
+        assert_eq!(p.background.rule, BackgroundRule::Auto);
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("labels.nrrd");
+        let none = Monitor::none();
+        let memory = Labeller::new(&v, &v, &p, MaskHome::Memory, &none).unwrap();
+        let mapped = Labeller::new(&v, &v, &p, MaskHome::Scratch(&out), &none).unwrap();
+        let words = (40u64 * 36 * 30).div_ceil(64);
+        assert_eq!(memory.background.memory_bytes(), 8 * words);
+        assert_eq!(mapped.background.memory_bytes(), 0, "the page cache's");
+        assert!(memory.background.fraction > 0.2, "air around the body");
+        assert_eq!(mapped.background, memory.background);
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        memory.planes_le(0..30, &mut a);
+        mapped.planes_le(0..30, &mut b);
+        assert!(a == b, "the same labels");
+        assert!(a.contains(&0) && a.contains(&3));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    /// The mask's scratch file goes beside the labels, else in the system's temporary folder;
+    /// where no folder can hold it, the error is one line naming the labels' file and why.
+    #[test]
+    fn a_mask_with_no_room_anywhere_is_one_line_naming_the_file() {
+        let temp = std::env::temp_dir();
+        assert_eq!(
+            scratch_folders(Path::new("labels.nrrd")),
+            [PathBuf::from("."), temp.clone()]
+        );
+        assert_eq!(
+            scratch_folders(&Path::new("/data/out").join("l.nii")),
+            [PathBuf::from("/data/out"), temp.clone()]
+        );
+        assert_eq!(scratch_folders(&temp.join("l.nii")), [temp]);
+        let out = Path::new("/nonexistent-slabscope/labels.nrrd");
+        let folders = [PathBuf::from("/nonexistent-slabscope"), "/nowhere".into()];
+        let Err(e) = mask_scratch(out, 1 << 20, &folders) else {
+            panic!("no folder to hold it");
+        };
+        let text = e.to_string();
+        assert!(
+            text.starts_with(
+                "/nonexistent-slabscope/labels.nrrd: the background's mask (8.0 MiB) fits \
+                 neither in the memory limit nor in a scratch file: no scratch file could be \
+                 made in /nonexistent-slabscope ("
+            ),
+            "{text}"
+        );
+        assert!(text.contains("; no scratch file could be made in /nowhere ("));
+        assert!(!text.contains('\n'), "{text}");
     }
 
     #[test]

@@ -16,7 +16,8 @@ pub use crate::geometry::coordinate_axis;
 pub use bottom_up::{Merge, MergeHistory, PAIRS_KEPT, slice_nmi};
 pub use histories::{Histories, Scope};
 pub use labels::{
-    LABEL_CHUNK_BYTES, Labeller, label_bytes, label_memory, label_stream_memory, label_volume,
+    LABEL_CHUNK_BYTES, LabelRoom, Labeller, MaskHome, StreamMemory, label_bytes, label_memory,
+    label_stream_memory, label_volume,
 };
 pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
 pub use result::{Comparison, Partition, PartitionParams, Step, Stop, partition, partition_kept};

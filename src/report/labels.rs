@@ -8,15 +8,16 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::formats::{Staged, VolumeHeader, stage_streamed};
-use crate::partition::{Labeller, Partition};
+use crate::partition::{LabelRoom, Labeller, MaskHome, Partition};
 use crate::progress::Monitor;
 use crate::volume::Volume;
 
 /// The label volume of `p` at `volume`'s shape and world geometry (`partitioned` the level `p`
 /// partitions, as for [`label_volume`](crate::partition::label_volume)), in the format the
 /// extension of `path` names, to a temporary file beside it that [`Staged::persist`] puts in
-/// place. Holds a found background's mask and one chunk of planes within `room` bytes (at least
-/// one plane; [`Budget::labels`](crate::budget::Budget::labels) gives the room a budget leaves,
+/// place. Holds a found background's mask, in memory or in a mapped scratch file beside `path`
+/// as `room` says ([`MaskHome`]), and one chunk of planes within `room`'s bytes (at least one
+/// plane; [`Budget::labels`](crate::budget::Budget::labels) gives the room a budget leaves,
 /// [`LABEL_CHUNK_BYTES`](crate::partition::LABEL_CHUNK_BYTES) is the most used); stops when
 /// `monitor` is cancelled, whose progress counts the planes written.
 pub fn stage_labels(
@@ -24,11 +25,16 @@ pub fn stage_labels(
     volume: &Volume,
     partitioned: &Volume,
     p: &Partition,
-    room: u64,
+    room: LabelRoom,
     monitor: &Monitor,
 ) -> Result<Staged> {
-    let labeller = Labeller::new(volume, partitioned, p, monitor)?;
-    let step = labeller.chunk_planes(room);
+    let home = if room.mask_in_memory {
+        MaskHome::Memory
+    } else {
+        MaskHome::Scratch(path)
+    };
+    let labeller = Labeller::new(volume, partitioned, p, home, monitor)?;
+    let step = labeller.chunk_planes(room.chunk);
     stage_in_chunks(path, volume, &labeller, step, monitor)
 }
 
@@ -73,7 +79,7 @@ fn stage_in_chunks(
 pub fn write_labels(
     path: &Path,
     (volume, partitioned, p): (&Volume, &Volume, &Partition),
-    room: u64,
+    room: LabelRoom,
     force: bool,
     monitor: &Monitor,
 ) -> Result<()> {
@@ -145,7 +151,7 @@ mod tests {
             assert_eq!(p.slabs.len(), slabs);
             let whole = label_volume(v, level, &p, &none).unwrap();
             assert_eq!(whole.voxel_type(), ty);
-            let labeller = Labeller::new(v, level, &p, &none).unwrap();
+            let labeller = Labeller::new(v, level, &p, MaskHome::Memory, &none).unwrap();
             for ext in ["nrrd", "nii", "nii.gz"] {
                 let want = written(dir.path(), &format!("{k}-whole.{ext}"), |path| {
                     stage_volume(path, &whole)
@@ -159,12 +165,61 @@ mod tests {
                     });
                     assert!(got == want, "case {k}, .{ext}, {step} planes at a time");
                 }
-                let got = written(dir.path(), &format!("{k}-public.{ext}"), |path| {
-                    stage_labels(path, v, level, &p, 100, &none)
-                });
-                assert!(got == want, "case {k}, .{ext}, stage_labels");
+                for mask_in_memory in [true, false] {
+                    let room = LabelRoom {
+                        chunk: 100,
+                        mask_in_memory,
+                    };
+                    let got = written(
+                        dir.path(),
+                        &format!("{k}-public-{mask_in_memory}.{ext}"),
+                        |path| stage_labels(path, v, level, &p, room, &none),
+                    );
+                    assert!(got == want, "case {k}, .{ext}, stage_labels, {room:?}");
+                }
             }
         }
+    }
+
+    /// With a found background's mask held in a scratch file beside the labels (the room a
+    /// budget below the mask gives: `Budget::labels`), the labels written are byte for byte
+    /// the label volume computed in memory and written whole, in every format, and the scratch
+    /// file leaves no name behind.
+    #[test]
+    fn labels_with_the_mask_in_a_scratch_file_are_those_in_memory() {
+        let volume = crate::volume::phantom::body([48, 40, 36], 5).unwrap();
+        let params = PartitionParams {
+            stop: Stop::Slabs(3),
+            ..PartitionParams::default()
+        };
+        let none = Monitor::none();
+        let p = partition(&volume, [0.0, 0.0, 1.0], &params, &none).unwrap();
+        assert_eq!(p.background.rule, BackgroundRule::Auto);
+        let room = LabelRoom {
+            chunk: 48 * 40 + 10,
+            mask_in_memory: false,
+        };
+        let whole = label_volume(&volume, &volume, &p, &none).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        for ext in ["nrrd", "nii", "nii.gz"] {
+            let want = written(dir.path(), &format!("whole.{ext}"), |path| {
+                stage_volume(path, &whole)
+            });
+            let got = written(dir.path(), &format!("streamed.{ext}"), |path| {
+                stage_labels(path, &volume, &volume, &p, room, &none)
+            });
+            assert!(want == got, ".{ext}");
+        }
+        let crate::volume::Voxels::U8(l) = whole.data() else {
+            panic!("u8 labels")
+        };
+        let labelled = l.as_slice().iter().filter(|&&x| x > 0).count();
+        let zeros = 48 * 40 * 36 - labelled;
+        assert!(
+            zeros > 48 * 40 * 36 / 5,
+            "air left out by the mask: {zeros}"
+        );
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 6);
     }
 
     #[test]
@@ -174,7 +229,7 @@ mod tests {
         let p = labelled(&v, 2);
         let flag = std::sync::atomic::AtomicBool::new(true);
         let monitor = Monitor::new(Some(&flag), None);
-        let labeller = Labeller::new(&v, &v, &p, &Monitor::none()).unwrap();
+        let labeller = Labeller::new(&v, &v, &p, MaskHome::Memory, &Monitor::none()).unwrap();
         let path = dir.path().join("l.nrrd");
         let e = stage_in_chunks(&path, &v, &labeller, 1, &monitor).err();
         assert!(matches!(e, Some(Error::Cancelled)), "{e:?}");

@@ -9,6 +9,7 @@ pub mod mapped;
 pub mod phantom;
 pub mod pyramid;
 mod quantize;
+pub(crate) mod scratch;
 mod slab;
 mod voxel;
 pub mod voxels;

@@ -216,6 +216,47 @@ fn labels_of_a_coarser_level_are_at_the_volumes_shape() {
     assert_eq!(info["range"], serde_json::json!([0.0, 3.0]));
 }
 
+/// Under a budget below the background's mask (a bit a voxel, 48 KiB here) beside what the
+/// analysis holds, `--export-labels` still writes the labels, the mask held in an unnamed scratch
+/// file: byte for byte those written with room to spare, and nothing else left in the folder.
+#[test]
+fn labels_are_written_under_a_budget_below_the_background_mask() {
+    let dir = tempfile::tempdir().unwrap();
+    let nii = dir.path().join("body.nii");
+    let Ran { ok, stderr, .. } = run(&["phantom", "body", "--dims", "64x64x96", "-o", s(&nii)]);
+    assert!(ok, "{stderr}");
+    let (tight, roomy) = (dir.path().join("tight.nrrd"), dir.path().join("roomy.nrrd"));
+    let export = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "analyze",
+            s(&nii),
+            "--axis",
+            "z",
+            "--slabs",
+            "3",
+            "--json",
+            "--export-labels",
+            s(out),
+        ];
+        args.extend_from_slice(extra);
+        json(&args)
+    };
+    // 60 KiB: the analysis of level 2 (16×16×24) fits, but not its level, the 48 KiB mask of
+    // the 64×64×96 voxels and a 4 KiB plane of labels together.
+    let report = export(&tight, &["--max-memory", "60K"]);
+    assert_eq!(report["resolution"]["pyramid_level"], 2, "{report}");
+    export(&roomy, &["--resolution", "2"]);
+    let (a, b) = (
+        std::fs::read(&tight).unwrap(),
+        std::fs::read(&roomy).unwrap(),
+    );
+    assert!(a == b, "the same labels");
+    let info = json(&["info", s(&tight), "--json"]);
+    assert_eq!(info["dims"], serde_json::json!([64, 64, 96]));
+    assert_eq!(info["range"], serde_json::json!([0.0, 3.0]));
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+}
+
 /// `--threads` bounds the work without changing an answer; 0 threads is refused by name.
 #[test]
 fn threads_change_no_answer() {

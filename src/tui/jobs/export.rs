@@ -7,6 +7,7 @@ use std::sync::Arc;
 use slabscope::analysis::Plan;
 use slabscope::budget::Budget;
 use slabscope::formats::write_atomic;
+use slabscope::partition::LabelRoom;
 use slabscope::render::{ImageOutput, encode};
 use slabscope::request::RenderRequest;
 use slabscope::{Analysis, AnalysisReport, Monitor, Partition, Volume};
@@ -16,8 +17,9 @@ use crate::tui::event::ExportRequest;
 /// Writes the view (PNG), the analysis (JSON) and the labels (NRRD) of the request's partition
 /// to the current folder under names not taken yet; says what it wrote.
 ///
-/// Within `max_memory` bytes: the labels are refused before anything is written when the
-/// background mask of every voxel and a plane of them do not fit beside the volume.
+/// Within `max_memory` bytes: the labels are refused before anything is written when a plane of
+/// them does not fit beside the volume; the background's mask (a bit a voxel) is held in memory
+/// when it fits beside that plane, else in a mapped scratch file.
 pub(super) fn export(
     full: &Volume,
     r: &ExportRequest,
@@ -74,14 +76,15 @@ pub(super) fn export(
 
 /// The working memory for writing the labels of a partition of `level` into `slabs` slabs at
 /// `full`'s shape within `max_memory` bytes, as the CLI's `--export-labels` weighs it
-/// ([`Budget::labels`]); an error naming the volume at `path` when they do not fit.
+/// ([`Budget::labels`]): the room for chunks of planes and where the background's mask is
+/// held; an error naming the volume at `path` when not even a plane fits.
 fn labels_room(
     path: &Path,
     full: &Volume,
     level: &Arc<Volume>,
     slabs: usize,
     max_memory: u64,
-) -> slabscope::Result<u64> {
+) -> slabscope::Result<LabelRoom> {
     let plan = Plan::at(Arc::clone(level));
     Budget::new(max_memory).labels(path, full, &plan, slabs)
 }
@@ -114,22 +117,30 @@ mod tests {
     use super::labels_room;
     use slabscope::volume::phantom;
 
-    /// The labels' room is the CLI's: the background mask of every voxel (a bit each) and a plane
-    /// of labels beside the volume, refused in one line naming the volume when they do not fit.
+    /// The labels' room is the CLI's: the background mask of every voxel (a bit each) in memory
+    /// beside a plane of labels and the volume when it fits, else in a scratch file; refused in
+    /// one line naming the volume when not even a plane fits.
     #[test]
     fn the_labels_are_weighed_against_the_budget_before_anything_is_written() {
         let full = phantom::body([64, 64, 80], 1).unwrap();
         let level = full.coarser(1);
         let path = Path::new("body.nii");
-        let held = full.memory_bytes();
+        let held = full.memory_bytes() + level.memory_bytes();
         let mask = (full.len() as u64).div_ceil(64) * 8;
         let plane = 64 * 64;
-        let least = held + level.memory_bytes() + mask + plane;
-        assert!(labels_room(path, &full, &level, 4, least).unwrap() >= plane);
-        let refused = labels_room(path, &full, &level, 4, least - 1).unwrap_err();
+        let room = |max| labels_room(path, &full, &level, 4, max);
+        let in_memory = room(held + mask + plane).unwrap();
+        assert_eq!((in_memory.chunk, in_memory.mask_in_memory), (plane, true));
+        let mapped = room(held + mask + plane - 1).unwrap();
+        assert_eq!(
+            (mapped.chunk, mapped.mask_in_memory),
+            (mask + plane - 1, false)
+        );
+        assert_eq!(room(held + plane).unwrap().chunk, plane);
+        let refused = room(held + plane - 1).unwrap_err();
         let text = refused.to_string();
         assert!(text.starts_with("body.nii: "), "{text}");
-        assert!(text.contains("background mask"), "{text}");
+        assert!(text.contains("a plane of the labels"), "{text}");
         assert!(!text.contains('\n'), "{text}");
     }
 }

@@ -9,6 +9,7 @@
 
 use rayon::prelude::*;
 
+use super::MaskWords;
 use crate::error::Result;
 use crate::progress::Monitor;
 use crate::volume::Voxel;
@@ -16,15 +17,17 @@ use crate::volume::Voxel;
 /// The seeds the stack holds before rows are marked instead: 8 MiB.
 const STACK_SEEDS: usize = 1 << 20;
 
-/// [`connected_below_capped`] with the stack bounded by [`STACK_SEEDS`].
+/// [`connected_below_capped`] with the stack bounded by [`STACK_SEEDS`], the mask made in
+/// `words` (a word per 64 voxels).
 pub(super) fn connected_below_of<T: Voxel>(
     v: &[T],
     dims: [usize; 3],
     t: f32,
     monitor: &Monitor,
-) -> Result<(Vec<u64>, usize)> {
-    let (mask, count, _) = connected_below_capped(v, dims, t, monitor, STACK_SEEDS)?;
-    Ok((mask, count))
+    mut words: MaskWords,
+) -> Result<(MaskWords, usize)> {
+    let (count, _) = connected_below_capped(v, dims, t, monitor, STACK_SEEDS, words.words_mut())?;
+    Ok((words, count))
 }
 
 /// Bit `j` of the result: whether voxel `64·w + j` is at or below `t` (NaN is not).
@@ -37,8 +40,8 @@ fn below_word<T: Voxel>(v: &[T], w: usize, t: f32) -> u64 {
 }
 
 /// The voxels of `v` (dimensions `dims`) at or below `t` connected to a border voxel at or
-/// below `t`, as a bit mask, with their count and the marked rows swept; the stack holding
-/// about `cap` seeds at most (and a row's more).
+/// below `t`, as a bit mask made in `mask` (a word per 64 voxels), with their count and the
+/// marked rows swept; the stack holding about `cap` seeds at most (and a row's more).
 ///
 /// The fill works on one bit mask of the voxels still open (at or below `t`, not filled yet),
 /// made in parallel beforehand: extending a run, filling it and finding the runs of the rows
@@ -50,9 +53,11 @@ fn connected_below_capped<T: Voxel>(
     t: f32,
     monitor: &Monitor,
     cap: usize,
-) -> Result<(Vec<u64>, usize, usize)> {
+    mask: &mut [u64],
+) -> Result<(usize, usize)> {
     let [nx, ny, nz] = dims;
-    let mut open = vec![0u64; v.len().div_ceil(64)];
+    debug_assert_eq!(mask.len(), v.len().div_ceil(64));
+    let open = mask;
     open.par_iter_mut()
         .enumerate()
         .for_each(|(w, bits)| *bits = below_word(v, w, t));
@@ -90,11 +95,11 @@ fn connected_below_capped<T: Voxel>(
     fill.drain(monitor)?;
     while fill.sweep(monitor)? {}
     let (count, swept) = (fill.count, fill.swept);
-    let mut mask = fill.open;
-    mask.par_iter_mut()
+    fill.open
+        .par_iter_mut()
         .enumerate()
         .for_each(|(w, bits)| *bits = below_word(v, w, t) & !*bits);
-    Ok((mask, count, swept))
+    Ok((count, swept))
 }
 
 /// A fill under way.
@@ -103,7 +108,7 @@ struct Fill<'a, T> {
     dims: [usize; 3],
     t: f32,
     /// A bit a voxel: at or below the threshold and not filled yet.
-    open: Vec<u64>,
+    open: &'a mut [u64],
     /// A bit a row (`z * ny + y`): rows beside filled voxels whose seeds were not pushed.
     marked: Vec<u64>,
     stack: Vec<usize>,
@@ -339,8 +344,11 @@ mod tests {
                     .collect();
                 let (seen, n) = by_search(&v, dims, 1.0);
                 for cap in [1, 2, 5, usize::MAX] {
-                    let (mask, count, rows) =
-                        connected_below_capped(&v, dims, 1.0, &Monitor::none(), cap).unwrap();
+                    // Dirty words to start with: the fill owes nothing to a zeroed mask.
+                    let mut mask = vec![!0u64; v.len().div_ceil(64)];
+                    let (count, rows) =
+                        connected_below_capped(&v, dims, 1.0, &Monitor::none(), cap, &mut mask)
+                            .unwrap();
                     assert_eq!(count, n, "{dims:?} {share}% {cap}");
                     for (i, &s) in seen.iter().enumerate() {
                         assert_eq!(mask[i / 64] >> (i % 64) & 1 == 1, s, "{dims:?} {i} {cap}");

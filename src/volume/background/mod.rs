@@ -3,6 +3,8 @@
 //! connected to the volume's border at or below a threshold estimated from the border voxels, so
 //! that dark cavities inside the object (lungs, airways, ventricles) stay in.
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -35,7 +37,67 @@ pub struct Background {
     /// The share of the volume's voxels that are background.
     pub fraction: f64,
     /// For a found background: one bit per voxel.
-    mask: Option<Vec<u64>>,
+    mask: Option<Mask>,
+}
+
+/// Room for a found background's mask, a word per 64 voxels, handed to
+/// [`Background::find_in`]: memory, or the writable map of a scratch file (its pages the
+/// kernel's page cache, which it can write out and drop, not the process's own memory).
+pub enum MaskWords {
+    /// Words in memory.
+    Memory(Vec<u64>),
+    /// The map of a scratch file of 8 bytes a word, its room on disk reserved.
+    Mapped(memmap2::MmapMut),
+}
+
+impl MaskWords {
+    /// `words` words in memory.
+    #[must_use]
+    pub fn memory(words: usize) -> Self {
+        Self::Memory(vec![0; words])
+    }
+
+    fn words_mut(&mut self) -> &mut [u64] {
+        match self {
+            Self::Memory(v) => v,
+            // A map starts on a page, so its bytes are aligned as words.
+            Self::Mapped(m) => bytemuck::cast_slice_mut(&mut m[..]),
+        }
+    }
+}
+
+/// A found background's mask, as [`MaskWords`] held once made (a map made read-only).
+#[derive(Clone, Debug)]
+enum Mask {
+    Memory(Vec<u64>),
+    Mapped(Arc<memmap2::Mmap>),
+}
+
+impl Mask {
+    fn of(words: MaskWords) -> Result<Self> {
+        Ok(match words {
+            MaskWords::Memory(v) => Self::Memory(v),
+            MaskWords::Mapped(m) => Self::Mapped(Arc::new(m.make_read_only().map_err(|e| {
+                crate::error::Error::Degenerate(format!(
+                    "the background's mask in its scratch file could not be made read-only ({e})"
+                ))
+            })?)),
+        })
+    }
+
+    #[inline]
+    fn words(&self) -> &[u64] {
+        match self {
+            Self::Memory(v) => v,
+            Self::Mapped(m) => bytemuck::cast_slice(&m[..]),
+        }
+    }
+}
+
+impl PartialEq for Mask {
+    fn eq(&self, other: &Self) -> bool {
+        self.words() == other.words()
+    }
 }
 
 /// Border voxels a threshold is estimated from must mostly be dark: their median must lie in
@@ -56,23 +118,35 @@ impl Background {
         }
     }
 
-    /// The background `rule` finds in `volume`; stops when `monitor` is cancelled.
+    /// The background `rule` finds in `volume`, a found one's mask in memory; stops when
+    /// `monitor` is cancelled.
     pub fn find(volume: &Volume, rule: BackgroundRule, monitor: &Monitor) -> Result<Self> {
+        Self::find_in(volume, rule, monitor, |words| Ok(MaskWords::memory(words)))
+    }
+
+    /// [`find`](Self::find), a found background's mask made in the words `room` gives for the
+    /// number of words asked (called only when there is a mask to make).
+    pub fn find_in(
+        volume: &Volume,
+        rule: BackgroundRule,
+        monitor: &Monitor,
+        room: impl FnOnce(usize) -> Result<MaskWords>,
+    ) -> Result<Self> {
         let value = match rule {
             BackgroundRule::None => None,
             BackgroundRule::Below(t) => Some(t),
             BackgroundRule::Auto => border_threshold(volume),
         };
-        Self::at(volume, rule, value, monitor)
+        Self::at(volume, (rule, value), monitor, room)
     }
 
     /// The background of `volume` by `rule` at the threshold `value` (none without one): what
-    /// [`find`](Self::find) gives when it finds `value`.
+    /// [`find_in`](Self::find_in) gives when it finds `value`.
     fn at(
         volume: &Volume,
-        rule: BackgroundRule,
-        value: Option<f32>,
+        (rule, value): (BackgroundRule, Option<f32>),
         monitor: &Monitor,
+        room: impl FnOnce(usize) -> Result<MaskWords>,
     ) -> Result<Self> {
         Ok(match (rule, value) {
             (BackgroundRule::None, _) | (_, None) => Self {
@@ -91,12 +165,13 @@ impl Background {
                 }
             }
             (BackgroundRule::Auto, Some(t)) => {
-                let (mask, count) = connected_below(volume, t, monitor)?;
+                let words = room(volume.len().div_ceil(64))?;
+                let (mask, count) = connected_below(volume, t, monitor, words)?;
                 Self {
                     rule,
                     value: Some(t),
                     fraction: count as f64 / volume.len() as f64,
-                    mask: Some(mask),
+                    mask: Some(Mask::of(mask)?),
                 }
             }
         })
@@ -106,15 +181,19 @@ impl Background {
     #[inline]
     pub fn contains(&self, index: usize, v: f32) -> bool {
         match (&self.mask, self.rule) {
-            (Some(mask), _) => mask[index / 64] >> (index % 64) & 1 == 1,
+            (Some(mask), _) => mask.words()[index / 64] >> (index % 64) & 1 == 1,
             (None, BackgroundRule::Below(t)) => v <= t,
             (None, _) => false,
         }
     }
 
-    /// The bytes it holds: its mask, for a found background.
+    /// The bytes it holds in memory: its mask, for a found background made in memory (a mask
+    /// in a mapped scratch file is the page cache's).
     pub fn memory_bytes(&self) -> u64 {
-        self.mask.as_ref().map_or(0, |m| 8 * m.len() as u64)
+        match &self.mask {
+            Some(Mask::Memory(m)) => 8 * m.len() as u64,
+            _ => 0,
+        }
     }
 
     /// Whether any voxel is background.
@@ -172,10 +251,15 @@ fn median_of(values: &mut [f32]) -> f32 {
 }
 
 /// The voxels at or below `t` connected (6-neighbours) to a border voxel at or below `t`, as a
-/// bit mask, with their count ([`fill`]).
-fn connected_below(volume: &Volume, t: f32, monitor: &Monitor) -> Result<(Vec<u64>, usize)> {
+/// bit mask made in `words`, with their count ([`fill`]).
+fn connected_below(
+    volume: &Volume,
+    t: f32,
+    monitor: &Monitor,
+    words: MaskWords,
+) -> Result<(MaskWords, usize)> {
     crate::volume::with_voxels!(volume.data(), |v| {
-        fill::connected_below_of(v, volume.dims(), t, monitor)
+        fill::connected_below_of(v, volume.dims(), t, monitor, words)
     })
 }
 
