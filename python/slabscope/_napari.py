@@ -178,7 +178,7 @@ class SlabsWidget(QWidget):
         self.status = QLabel("")
         self.status.setWordWrap(True)
         self.table = QTableWidget(0, 3)
-        self.table.setHorizontalHeaderLabels(["axis (z, y, x)", "entropy rate", "rank by"])
+        self.table.setHorizontalHeaderLabels(["axis (z, y, x)", "entropy rate", "mean over phases"])
         header = self.table.horizontalHeader()
         if header is not None:
             # Each column as wide as its header and its cells, never cut by a narrow dock.
@@ -338,14 +338,16 @@ class SlabsWidget(QWidget):
         )
 
     def fill_table(self, analysis: slabscope.Analysis) -> None:
-        """One row a view, best first, as ``analysis.views`` ranks them."""
+        """One row a view, best first, as ``analysis.views`` ranks them: its axis, its entropy
+        rate on the paper's lattice, and the mean over lattice phases the defaults rank by
+        (a dash by the paper's method, which ranks by the entropy rate)."""
         views = list(analysis.views)
         self.table.setRowCount(len(views))
         for row, view in enumerate(views):
             cells = (
                 _shown(axis_to_napari(view["axis"])),
                 f"{view['entropy_rate']:.4f}",
-                str(view.get("ranked_by", "")),
+                _phase_mean(view),
             )
             for column, text in enumerate(cells):
                 self.table.setItem(row, column, QTableWidgetItem(text))
@@ -399,6 +401,13 @@ def _volume_shown(layer: ImageLayer, at: Sequence[int]) -> str:
         return str(layer.name)
     index = ", ".join([str(i) for i in at] + [":"] * 3)
     return f"{layer.name}, the 3D volume displayed: data[{index}] of its {layer.ndim}D data"
+
+
+def _phase_mean(view: dict[str, Any]) -> str:
+    """The mean entropy rate over lattice phases a view was ranked by, or a dash when the
+    analysis ran on the paper's lattice alone."""
+    phases = view.get("phases")
+    return f"{phases['mean']:.4f}" if isinstance(phases, dict) else "–"
 
 
 def _shown(axis: Sequence[float]) -> str:

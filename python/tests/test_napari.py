@@ -107,6 +107,10 @@ def test_the_widget_lays_labels_on_the_image_and_ranks_the_views(qtbot):
     for row, view in enumerate(views):
         assert widget.table.item(row, 0).text() == _shown(axis_to_napari(view["axis"]))
         assert widget.table.item(row, 1).text() == f"{view['entropy_rate']:.4f}"
+        # The defaults rank by the mean over lattice phases: the third column, in the list's order.
+        assert widget.table.item(row, 2).text() == f"{view['phases']['mean']:.4f}"
+    means = [float(widget.table.item(row, 2).text()) for row in range(len(views))]
+    assert means == sorted(means)
 
     # The exploded view, as an RGB image layer.
     assert widget.view_button.isEnabled()
