@@ -5,6 +5,8 @@
 //! boundaries of the analysis's own count stand where they do.
 
 use anyhow::Result;
+use serde_json::{Value, json};
+use slabscope::explain::text;
 use slabscope::explain::{
     Boundaries, MergeLesson, Structure, boundaries, example_merge, merge_lesson, structure,
 };
@@ -68,4 +70,42 @@ pub fn merges(
         last,
         given: boundaries(history, given),
     })
+}
+
+impl Merges {
+    /// The numbers and lines of the page of a merge: bottom-up at the count where its history
+    /// shows structure and why, the example the TUI's page shows in full (the merge of the
+    /// highest NMI below 1 unless every merge's NMI is 1: [`example_merge`]), and the last
+    /// merge to the count in a line after it.
+    pub fn page(&self) -> (Value, Vec<String>) {
+        let Some(last) = &self.last else {
+            return (Value::Null, Vec::new());
+        };
+        let mut numbers = json!(last);
+        numbers["slabs"] = json!(self.slabs);
+        numbers["structure"] = json!(self.structure);
+        let taken = last.step;
+        let mut lines: Vec<String> = self
+            .structure
+            .iter()
+            .map(slabscope::explain::structure_sentence)
+            .collect();
+        let Some(best) = &self.best else {
+            lines.extend(text::merge_lines(last, taken));
+            return (numbers, lines);
+        };
+        numbers["highest_nmi"] = json!(best);
+        let below = if best.nmi < 1.0 { " below 1" } else { "" };
+        lines.push(format!("The merge of the highest NMI{below}:"));
+        lines.extend(text::merge_lines(best, taken));
+        lines.push(format!(
+            "The last merge, to {} slabs: step {}, {} and {}, NMI = {:.4}",
+            self.slabs,
+            last.step,
+            super::charts::slices(last.merge.0),
+            super::charts::slices(last.merge.1),
+            last.nmi
+        ));
+        (numbers, lines)
+    }
 }

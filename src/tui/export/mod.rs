@@ -499,7 +499,7 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
                 })
                 .collect(),
         ),
-        "A merge" => merge_page(n),
+        "A merge" => n.merges.page(),
         "Top-down against bottom-up" => (
             json!({
                 "top_down": part.information,
@@ -528,43 +528,6 @@ fn step_page(title: &str, n: &Numbers) -> (Value, Vec<String>) {
         },
         _ => none(),
     }
-}
-
-/// The numbers and lines of the page of a merge: bottom-up at the count where its history shows
-/// structure and why, the example the TUI's page shows in full (the merge of the highest NMI
-/// below 1 unless every merge's NMI is 1: `explain::example_merge`), and the last merge to the
-/// count in a line after it.
-fn merge_page(n: &Numbers) -> (Value, Vec<String>) {
-    let m = &n.merges;
-    let Some(last) = &m.last else {
-        return (Value::Null, Vec::new());
-    };
-    let mut numbers = json!(last);
-    numbers["slabs"] = json!(m.slabs);
-    numbers["structure"] = json!(m.structure);
-    let taken = last.step;
-    let mut lines: Vec<String> = m
-        .structure
-        .iter()
-        .map(explain::structure_sentence)
-        .collect();
-    let Some(best) = &m.best else {
-        lines.extend(text::merge_lines(last, taken));
-        return (numbers, lines);
-    };
-    numbers["highest_nmi"] = json!(best);
-    let below = if best.nmi < 1.0 { " below 1" } else { "" };
-    lines.push(format!("The merge of the highest NMI{below}:"));
-    lines.extend(text::merge_lines(best, taken));
-    lines.push(format!(
-        "The last merge, to {} slabs: step {}, {} and {}, NMI = {:.4}",
-        m.slabs,
-        last.step,
-        charts::slices(last.merge.0),
-        charts::slices(last.merge.1),
-        last.nmi
-    ));
-    (numbers, lines)
 }
 
 /// An axis lesson's numbers without its full block tables (the ten most frequent blocks).
