@@ -246,8 +246,9 @@ impl PartialCounts {
     }
 }
 
-/// The first words of [`PartialCounts::to_bytes`]: `SLABPC` and a version.
-const MAGIC: u64 = u64::from_le_bytes(*b"SLABPC\x00\x01");
+/// The first words of [`PartialCounts::to_bytes`]: `SLABPC` and a version (2 since ray keys
+/// are in the order of row then ray: a part of version 1 would not stitch to these).
+const MAGIC: u64 = u64::from_le_bytes(*b"SLABPC\x00\x02");
 
 impl Fragment {
     /// The fragment as six words.
