@@ -43,10 +43,13 @@ pub struct Fragment {
     run: Run,
 }
 
-/// The key of ray `(i, j)` of a lattice: the two indices' 32-bit patterns side by side (rays of
-/// a volume's lattice have indices far within 32 bits).
+/// The key of ray `(i, j)` of a lattice: the two indices side by side, row `j` first, each as
+/// 32 bits offset so that keys are in the order of `(j, i)` (rays of a volume's lattice have
+/// indices far within 32 bits). The walks set rays up by bands of rows, so the open pieces of
+/// the bands taken in order are in key order already, and are never sorted again (issue #44).
 pub fn ray_key(i: i64, j: i64) -> u64 {
-    (u64::from(i as i32 as u32) << 32) | u64::from(j as i32 as u32)
+    let ordered = |x: i64| u64::from(x as i32 as u32 ^ 0x8000_0000);
+    (ordered(j) << 32) | ordered(i)
 }
 
 impl Fragment {
@@ -243,8 +246,9 @@ impl PartialCounts {
     }
 }
 
-/// The first words of [`PartialCounts::to_bytes`]: `SLABPC` and a version.
-const MAGIC: u64 = u64::from_le_bytes(*b"SLABPC\x00\x01");
+/// The first words of [`PartialCounts::to_bytes`]: `SLABPC` and a version (2 since ray keys
+/// are in the order of row then ray: a part of version 1 would not stitch to these).
+const MAGIC: u64 = u64::from_le_bytes(*b"SLABPC\x00\x02");
 
 impl Fragment {
     /// The fragment as six words.
@@ -349,9 +353,12 @@ fn stitched(
     if more.is_empty() {
         return held;
     }
-    // Only the new ones are sorted, and the two runs merged.
+    // Only the new ones are sorted (unless they come in order, as a part's own do: a slab's
+    // bands taken in order, or a part read back), and the two runs merged.
     let order = |f: &Fragment| (f.key, f.start);
-    more.sort_unstable_by_key(order);
+    if !more.is_sorted_by_key(order) {
+        more.sort_unstable_by_key(order);
+    }
     let mut out: Vec<Fragment> = Vec::with_capacity(held.len() + more.len());
     let (mut a, mut b) = (held.into_iter().peekable(), more.into_iter().peekable());
     let merged = std::iter::from_fn(|| match (a.peek(), b.peek()) {
@@ -462,6 +469,24 @@ mod tests {
             assert_eq!(total.rays, met, "{at}");
             same(&total.counts, &whole(&seqs, bins, block), &at);
         }
+    }
+
+    #[test]
+    fn ray_keys_are_in_the_order_of_row_then_ray() {
+        let rays = [
+            (-3, -2),
+            (5, -2),
+            (-7, -1),
+            (-1, 0),
+            (0, 0),
+            (2, 0),
+            (-9, 4),
+            (1, 4),
+        ];
+        let keys: Vec<u64> = rays.iter().map(|&(i, j)| ray_key(i, j)).collect();
+        assert!(keys.windows(2).all(|w| w[0] < w[1]), "{keys:x?}");
+        assert_eq!(ray_key(0, 0), 0x8000_0000_8000_0000);
+        assert_eq!(ray_key(-1, 1), 0x8000_0001_7fff_ffff);
     }
 
     #[test]

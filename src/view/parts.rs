@@ -432,6 +432,8 @@ mod tests {
         for part in parts {
             // Each part travels as bytes, as between a cluster's processes.
             for (s, p) in sum.iter_mut().zip(part) {
+                // A slab's pieces come in key order: they are never sorted again.
+                assert!(p.fragments().is_sorted_by_key(|f| (f.key, f.start)));
                 let bytes = p.to_bytes();
                 let back = PartialCounts::from_bytes(&bytes).unwrap();
                 assert_eq!(back.to_bytes(), bytes);
