@@ -20,25 +20,8 @@ use slabscope::progress::Monitor;
 use slabscope::view::{ViewParams, ViewRound, ViewRounds, search};
 use slabscope::volume::{SlabGrid, Voxels, phantom};
 
-fn arg(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
-}
-
-fn parse_dims(text: &str) -> Option<[usize; 3]> {
-    let v: Vec<usize> = text
-        .split('x')
-        .map(|t| t.parse().ok())
-        .collect::<Option<_>>()?;
-    v.try_into().ok()
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
+mod common;
+use common::{arg, median, parse_dims};
 
 /// The process's CPU seconds so far, every thread's, user and system.
 fn cpu() -> f64 {

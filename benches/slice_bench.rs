@@ -13,12 +13,8 @@ use slabscope::progress::Monitor;
 use slabscope::volume::background::BackgroundRule;
 use slabscope::volume::{Volume, phantom};
 
-fn arg(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
-}
+mod common;
+use common::arg;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let volume: Volume = if let Some(path) = arg("--file") {

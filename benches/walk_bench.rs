@@ -18,25 +18,8 @@ use slabscope::progress::Monitor;
 use slabscope::view::{BinSampler, Walk, block_counts_by, icosphere};
 use slabscope::volume::phantom;
 
-fn arg(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
-}
-
-fn parse_dims(text: &str) -> Option<[usize; 3]> {
-    let v: Vec<usize> = text
-        .split('x')
-        .map(|t| t.parse().ok())
-        .collect::<Option<_>>()?;
-    v.try_into().ok()
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
+mod common;
+use common::{arg, median, parse_dims};
 
 /// 21 passes over `cells` in memory order, rows of `nx` cells, counting 3-blocks into a table
 /// per thread; the blocks counted, so that the work is not optimized away.

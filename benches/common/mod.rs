@@ -10,6 +10,15 @@ use std::time::{Duration, Instant};
 use slabscope::formats::write_volume;
 use slabscope::volume::phantom;
 
+/// The value after `name` among the process's arguments, if given (for the benchmarks that time
+/// work in process and take flags of their own).
+pub fn arg(name: &str) -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1).cloned())
+}
+
 /// The command line the whole-process benchmarks share: `--runs N`, `--dir DIR` (where their
 /// volumes are written), any number of `--bin PATH` (the builds compared in turns; the release
 /// build when none), and flags of their own read by [`Args::value`].
