@@ -80,8 +80,23 @@ impl Budget {
     /// source keeps beside it ([`room`](Self::room)); the plan's note says what the user should
     /// know when the budget moved it from the level asked for.
     pub fn plan(&self, volume: &Volume, purpose: Purpose<'_>) -> Result<Plan> {
-        let mut plan = plan_in(volume, purpose, self.room(volume))?;
         let kept = self.kept_for_source(volume);
+        let mut plan = plan_in(volume, purpose, self.room(volume)).map_err(|e| match e {
+            // The limit the user gave, not the room left beside the kept chunks.
+            Error::InvalidParameter {
+                parameter: "max_memory",
+                expected,
+                ..
+            } if kept > 0 => Error::invalid(
+                "max_memory",
+                crate::error::short_bytes(self.max_memory),
+                format!(
+                    "{expected}, beside the {} kept for the chunks fetched from the store",
+                    crate::error::short_bytes(kept)
+                ),
+            ),
+            e => e,
+        })?;
         if let (Some(note), 1..) = (&mut plan.note, kept) {
             let human = crate::error::short_bytes;
             *note = format!(
@@ -431,6 +446,17 @@ mod tests {
                 "{note}"
             );
         }
+        // Too little for any level: the error names the limit given, and the share beside it.
+        let e = Budget::new(4096)
+            .plan(&remote, analysis)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "max_memory 4.0 KiB: expected room for the analysis of a pyramid level with two \
+             voxels along every axis (level 0 needs 5.1 MiB), beside the 256 bytes kept for the \
+             chunks fetched from the store"
+        );
         // The level a store's dataset serves, from level 0's grid: the same room.
         let finest = crate::volume::pyramid::Finest {
             dims: local.dims(),
