@@ -20,6 +20,12 @@ pub enum Mode {
     Stall,
     /// It states the file's length but sends half of it, then closes the connection.
     Truncate,
+    /// It states half the file's length but sends all of it, keeping the connection open: the
+    /// rest is what a client reusing the connection reads as its next answer.
+    Overlong,
+    /// It sends each file whole as stated, then a few more bytes that belong to no answer,
+    /// keeping the connection open.
+    Trailing,
     /// It answers this status, with an empty body.
     Status(u16),
     /// It redirects every request to itself.
@@ -195,10 +201,12 @@ fn answer(
     } else {
         String::new()
     };
-    let head = format!(
-        "HTTP/1.1 {status}\r\nContent-Length: {}\r\n{range}\r\n",
+    let stated = if mode == Mode::Overlong {
+        body.len() / 2
+    } else {
         body.len()
-    );
+    };
+    let head = format!("HTTP/1.1 {status}\r\nContent-Length: {stated}\r\n{range}\r\n");
     out.write_all(head.as_bytes())?;
     if method == "HEAD" {
         return Ok(true);
@@ -209,6 +217,9 @@ fn answer(
         return Ok(false);
     }
     out.write_all(body)?;
+    if mode == Mode::Trailing {
+        out.write_all(b"HTTP/1.1 200 OK\r\nContent-Length: 5\r\n\r\nextra")?;
+    }
     Ok(true)
 }
 

@@ -300,6 +300,39 @@ fn each_failure_of_the_server_is_one_line_naming_the_url() {
     says(&ran.stderr, &url, &["TLS failure with 127.0.0.1"]);
 }
 
+/// A server that sends more than its Content-Length states: HTTP ends the answer at the stated
+/// length, so what the client takes is cut short, and what follows on the connection belongs to
+/// no request (ureq closes a connection with bytes waiting rather than reuse it). A metadata file
+/// or a chunk so cut fails to parse or to decode: one line naming the URL and the key. A server
+/// that sends a whole answer and then another nobody asked for never makes `info` say anything
+/// but what the honest server's store says, or one line naming the URL.
+#[test]
+fn a_body_longer_than_its_content_length_is_never_taken_for_the_store() {
+    let (url, e) = failure(Mode::Overlong, ".zattrs");
+    says(&e, &url, &[".zattrs: not JSON"]);
+    let (url, e) = failure(Mode::Overlong, ".zarray");
+    says(&e, &url, &[".zarray: not JSON"]);
+    let (url, e) = failure(Mode::Overlong, "/s2/0");
+    says(&e, &url, &["chunk s2/0/0/0:"]);
+    let honest = serve(&zarr(), Mode::Normal, "");
+    let expected = run(&["info", "--json", &honest.url("v04_blosc.ome.zarr")]);
+    assert!(expected.ok, "{}", expected.stderr);
+    let server = serve(&zarr(), Mode::Trailing, "");
+    let url = server.url("v04_blosc.ome.zarr");
+    let ran = run(&["info", "--json", &url]);
+    if ran.ok {
+        let json = |out: &str| {
+            let mut json: serde_json::Value = serde_json::from_str(out).unwrap();
+            json["file"] = serde_json::Value::Null;
+            json
+        };
+        assert_eq!(json(&ran.stdout), json(&expected.stdout));
+    } else {
+        assert_eq!(ran.stderr.lines().count(), 1, "{}", ran.stderr);
+        assert!(ran.stderr.contains(&url), "{}", ran.stderr);
+    }
+}
+
 #[test]
 fn a_chunk_refused_is_the_fill_value_with_missing_as_fill() {
     let server = serve(&zarr(), Mode::Status(403), "/s2/0");
