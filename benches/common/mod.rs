@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use slabscope::formats::write_volume;
-use slabscope::volume::phantom;
+use slabscope::formats::{NrrdEncoding, VolumeHeader, write_streamed};
+use slabscope::volume::phantom::Recipe;
 
 /// The value after `name` among the process's arguments, if given (for the benchmarks that time
 /// work in process and take flags of their own).
@@ -112,7 +112,8 @@ pub fn free_bytes(dir: &Path) -> Option<u64> {
         .ok()
 }
 
-/// The phantom of `dims` as i16 NIfTI in `dir`, written unless it is there.
+/// The body phantom of `dims` as i16 NIfTI in `dir`, written unless it is there (a chunk of
+/// voxels at a time: never held whole).
 pub fn volume(dir: &Path, dims: [usize; 3]) -> Result<PathBuf, Box<dyn std::error::Error>> {
     let path = dir.join(format!("body_{}x{}x{}.nii", dims[0], dims[1], dims[2]));
     if path.exists() {
@@ -123,8 +124,17 @@ pub fn volume(dir: &Path, dims: [usize; 3]) -> Result<PathBuf, Box<dyn std::erro
         return Err(format!("{}: not enough free disk for {bytes} bytes", dir.display()).into());
     }
     let t = Instant::now();
-    let v = phantom::body(dims, 1)?;
-    write_volume(&path, &v, false)?;
+    // Made and written a chunk at a time, never held: 2048³ (16 GiB) as well as 256³.
+    let recipe = Recipe::body(dims, 1)?;
+    let header = VolumeHeader {
+        dims,
+        spacing: [1.0; 3],
+        voxel_type: recipe.voxel_type(),
+        transform: recipe.transform(),
+    };
+    write_streamed(&path, &header, NrrdEncoding::Raw, false, &mut |out| {
+        recipe.write_le(out)
+    })?;
     println!(
         "wrote {} in {:.1} s",
         path.display(),

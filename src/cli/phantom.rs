@@ -4,8 +4,8 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
-use slabscope::formats::{NrrdEncoding, VolumeOutput, write_nrrd, write_volume};
-use slabscope::volume::phantom;
+use slabscope::formats::{NrrdEncoding, VolumeHeader, VolumeOutput, write_streamed};
+use slabscope::volume::phantom::Recipe;
 
 /// The phantoms.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -60,24 +60,30 @@ pub fn run(args: &PhantomArgs) -> Result<()> {
         Kind::Layers | Kind::SheppLogan => [96; 3],
     };
     let dims = args.dims.or(args.size.map(|n| [n; 3])).unwrap_or(default);
-    let volume = match args.kind {
+    let recipe = match args.kind {
         Kind::Layers => {
             let Some(normal) = slabscope::geometry::parse_triple(&args.normal) else {
                 bail!("--normal {:?} is not three numbers DX,DY,DZ", args.normal);
             };
-            phantom::layers(dims, normal, args.seed)?
+            Recipe::layers(dims, normal, args.seed)?
         }
-        Kind::Body => phantom::body(dims, args.seed)?,
-        Kind::SheppLogan => phantom::shepp_logan(dims)?,
+        Kind::Body => Recipe::body(dims, args.seed)?,
+        Kind::SheppLogan => Recipe::shepp_logan(dims)?,
     };
-    if format != VolumeOutput::Nrrd {
-        return Ok(write_volume(&args.output, &volume, args.force)?);
-    }
+    let header = VolumeHeader {
+        dims,
+        spacing: [1.0; 3],
+        voxel_type: recipe.voxel_type(),
+        transform: recipe.transform(),
+    };
     let encoding = if args.raw {
         NrrdEncoding::Raw
     } else {
         NrrdEncoding::Gzip
     };
-    write_nrrd(&args.output, &volume, encoding, args.force)?;
+    // Made and written a chunk of voxels at a time: a phantom of any size in a few tens of MiB.
+    write_streamed(&args.output, &header, encoding, args.force, &mut |out| {
+        recipe.write_le(out)
+    })?;
     Ok(())
 }

@@ -45,7 +45,9 @@ pub use output::{Staged, check_output, remove_staged, same_file, stage, write_at
 pub use raw::{RawOptions, parse_dims, parse_raw_name};
 pub use registry::{folder_kind, picks_in_folder, volume_name};
 pub use source::{Source, check_input, open_regular, regular};
-pub use write::{Body, VolumeHeader, VolumeOutput, stage_streamed, stage_volume, write_volume};
+pub use write::{
+    Body, VolumeHeader, VolumeOutput, stage_streamed, stage_volume, write_streamed, write_volume,
+};
 pub use zarr::ZarrOptions;
 
 use crate::error::{Error, Result};

@@ -38,6 +38,36 @@ impl VolumeHeader {
     }
 }
 
+/// Whether the file system of `file` has room for the voxels of `header` (as they are, or
+/// compressed: then at least what deflate could pack them to, 1032 bytes a byte), an error
+/// saying how much it needs and has when not: checked before a volume file is written, so that
+/// a volume too large for the disk is refused at once, not when the disk is full.
+pub(crate) fn check_disk_room(
+    file: &std::fs::File,
+    header: &VolumeHeader,
+    compressed: bool,
+) -> std::io::Result<()> {
+    let voxels = header.dims.iter().map(|&d| d as u64).product::<u64>();
+    let bytes = voxels.saturating_mul(header.voxel_type.size() as u64);
+    let needed = if compressed { bytes / 1032 } else { bytes };
+    let free = crate::volume::scratch::room_of(file)?.free;
+    if needed > free {
+        return Err(std::io::Error::other(disk_short(needed, free, compressed)));
+    }
+    Ok(())
+}
+
+/// The words of [`check_disk_room`]'s refusal.
+fn disk_short(needed: u64, free: u64, compressed: bool) -> String {
+    use crate::error::human_bytes;
+    format!(
+        "its voxels need {}{} of disk and the disk holds {} free",
+        if compressed { "at least " } else { "" },
+        human_bytes(needed),
+        human_bytes(free)
+    )
+}
+
 /// The voxels of a file being written, handed to their writer piece by piece: `body` writes
 /// every voxel of the header's shape, x fastest, little-endian, in the header's type.
 pub type Body<'a> = &'a mut dyn FnMut(&mut dyn Write) -> std::io::Result<()>;
@@ -119,9 +149,33 @@ fn stage_whole(
 /// that [`Staged::persist`] puts in place: the same bytes [`stage_volume`] writes for a volume
 /// of those voxels.
 pub fn stage_streamed(path: &Path, header: &VolumeHeader, body: Body<'_>) -> Result<Staged> {
+    stage_encoded(path, header, NrrdEncoding::Gzip, body)
+}
+
+/// [`stage_streamed`] with `.nrrd` written in `encoding`.
+fn stage_encoded(
+    path: &Path,
+    header: &VolumeHeader,
+    encoding: NrrdEncoding,
+    body: Body<'_>,
+) -> Result<Staged> {
     match VolumeOutput::for_path(path)? {
-        VolumeOutput::Nrrd => nrrd::stage(path, header, NrrdEncoding::Gzip, body),
+        VolumeOutput::Nrrd => nrrd::stage(path, header, encoding, body),
         VolumeOutput::Nifti => nifti::stage(path, header, false, body),
         VolumeOutput::NiftiGz => nifti::stage(path, header, true, body),
     }
+}
+
+/// Writes a volume of `header`'s shape whose voxels `body` writes as it makes them (never held
+/// whole) to `path`, in the format its extension names (`.nrrd` in `encoding`), atomically; an
+/// existing `path` is replaced only when `force` is set, and only when it is a regular file.
+pub fn write_streamed(
+    path: &Path,
+    header: &VolumeHeader,
+    encoding: NrrdEncoding,
+    force: bool,
+    body: Body<'_>,
+) -> Result<()> {
+    check_output(path, force)?;
+    stage_encoded(path, header, encoding, body)?.persist(force)
 }

@@ -95,7 +95,7 @@ fn mib(bytes: u64) -> String {
 /// The file system a file is on: its size and free bytes, and whether it lives in memory.
 pub(crate) struct FileSystem {
     total: u64,
-    free: u64,
+    pub(crate) free: u64,
     /// Whether it lives in memory (tmpfs, ramfs).
     pub(crate) in_memory: bool,
 }

@@ -307,6 +307,30 @@ fn phantoms_are_deterministic_and_protected() {
         s(&dir.path().join("d.nii.gz")),
     ]);
     assert!(!ok && stderr.contains("--raw is for .nrrd"), "{stderr}");
+    // Made and written a chunk at a time: a phantom is never held whole, and one larger than
+    // the disk (512 TiB of i16) is refused before a byte is written, in one line naming it.
+    for (name, raw) in [("huge.nii", None), ("huge.nrrd", Some("--raw"))] {
+        let huge = dir.path().join(name);
+        let mut args = vec!["phantom", "body", "--size", "65536", "-o", s(&huge)];
+        args.extend(raw);
+        let Ran { ok, stderr, .. } = run(&args);
+        assert!(!ok, "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.contains(s(&huge)) && stderr.contains("of disk"),
+            "{stderr}"
+        );
+    }
+    let mut left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["a.nrrd", "b.nrrd", "c.nii"],
+        "nothing else left behind"
+    );
 }
 
 #[test]

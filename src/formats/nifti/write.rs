@@ -10,7 +10,7 @@ use flate2::write::GzEncoder;
 use super::DATATYPES;
 use crate::error::Result;
 use crate::formats::Staged;
-use crate::formats::write::{Body, VolumeHeader, write_whole};
+use crate::formats::write::{Body, VolumeHeader, check_disk_room, write_whole};
 use crate::geometry::world::Quaternion;
 use crate::volume::Volume;
 
@@ -37,16 +37,17 @@ pub(crate) fn stage(
     gzip: bool,
     body: Body<'_>,
 ) -> Result<Staged> {
-    let header = header_bytes(header);
+    let bytes = header_bytes(header);
     super::super::stage(path, |file| {
+        check_disk_room(file, header, gzip)?;
         let mut out = BufWriter::new(file);
         if gzip {
             let mut gz = GzEncoder::new(&mut out, Compression::fast());
-            gz.write_all(&header)?;
+            gz.write_all(&bytes)?;
             body(&mut gz)?;
             gz.finish()?;
         } else {
-            out.write_all(&header)?;
+            out.write_all(&bytes)?;
             body(&mut out)?;
         }
         out.flush()

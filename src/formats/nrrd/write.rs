@@ -9,7 +9,7 @@ use flate2::Compression;
 use flate2::write::GzEncoder;
 
 use super::super::Staged;
-use super::super::write::{Body, VolumeHeader, write_whole};
+use super::super::write::{Body, VolumeHeader, check_disk_room, write_whole};
 use super::type_name;
 use crate::error::Result;
 use crate::volume::Volume;
@@ -44,7 +44,10 @@ pub(crate) fn stage(
     encoding: NrrdEncoding,
     body: Body<'_>,
 ) -> Result<Staged> {
-    super::super::stage(path, |file| write_to(file, header, encoding, body))
+    super::super::stage(path, |file| {
+        check_disk_room(file, header, encoding == NrrdEncoding::Gzip)?;
+        write_to(file, header, encoding, body)
+    })
 }
 
 /// Writes `header` and the voxels `body` writes into `file`.

@@ -45,50 +45,187 @@ fn check_dims(dims: [usize; 3]) -> Result<usize> {
     }
 }
 
-/// Fills a volume by evaluating `f(x, y, z, index)` for every voxel, in parallel over z-slices.
-fn generate(
+/// A phantom's recipe: its grid, its voxel type, its place in the world and the value of every
+/// voxel, a function of the voxel's place alone (the noise a hash of its index), so that it can
+/// be made whole ([`Recipe::volume`]) or written a chunk of voxels at a time without ever being
+/// held ([`Recipe::write_le`]): the same voxels either way.
+pub struct Recipe {
     dims: [usize; 3],
-    f: impl Fn(usize, usize, usize, u64) -> f32 + Sync,
-) -> Result<Vec<f32>> {
-    let n = check_dims(dims)?;
-    let [nx, ny, _] = dims;
-    let mut data = vec![0.0f32; n];
-    data.par_chunks_mut(nx * ny)
-        .enumerate()
-        .for_each(|(z, slice)| {
-            for y in 0..ny {
-                for x in 0..nx {
-                    let i = x + nx * y;
-                    slice[i] = f(x, y, z, (i + z * nx * ny) as u64);
-                }
+    voxel_type: VoxelType,
+    transform: Option<WorldTransform>,
+    kind: Kind,
+}
+
+/// What a [`Recipe`] makes, with what its voxels' function needs.
+enum Kind {
+    /// The unit normal, the half extent along it, the seed.
+    Layers([f64; 3], f64, u64),
+    Body(u64),
+    /// Each ellipsoid's rotation.
+    SheppLogan(Vec<[[f64; 3]; 3]>),
+}
+
+/// Voxels made at a time by [`Recipe::write_le`]: 32 MiB of f32 and their encoding beside them,
+/// whatever the phantom's size.
+const WRITE_VOXELS: usize = 1 << 23;
+
+impl Recipe {
+    /// `[nx, ny, nz]`.
+    #[must_use]
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// The type its voxels are stored in.
+    #[must_use]
+    pub fn voxel_type(&self) -> VoxelType {
+        self.voxel_type
+    }
+
+    /// Its voxel-to-world transform (1 mm voxels).
+    #[must_use]
+    pub fn transform(&self) -> WorldTransform {
+        self.transform
+            .unwrap_or_else(|| WorldTransform::unknown([1.0; 3]))
+    }
+
+    /// The value of voxel `(x, y, z)`, whose linear index is `i`.
+    fn value(&self, x: usize, y: usize, z: usize, i: u64) -> f32 {
+        let [nx, ny, nz] = self.dims;
+        match &self.kind {
+            Kind::Layers(n, extent, seed) => {
+                let half = |k: usize| (self.dims[k] as f64 - 1.0) / 2.0;
+                let t = n[0] * (x as f64 - half(0))
+                    + n[1] * (y as f64 - half(1))
+                    + n[2] * (z as f64 - half(2));
+                let layer = (((t + extent) / (2.0 * extent) * 6.0).floor() as usize).min(5);
+                let v = f64::from(LAYER_VALUES[layer]) + LAYER_NOISE * gaussian(*seed, i);
+                v.round().clamp(0.0, 255.0) as f32
             }
-        });
-    Ok(data)
+            Kind::Body(seed) => {
+                let p = [
+                    (x as f64 + 0.5) / nx as f64 * 2.0 - 1.0,
+                    (y as f64 + 0.5) / ny as f64 * 2.0 - 1.0,
+                    (z as f64 + 0.5) / nz as f64,
+                ];
+                let v = body_hu(p) + BODY_NOISE * gaussian(*seed, i);
+                v.round().clamp(-1024.0, 3071.0) as f32
+            }
+            Kind::SheppLogan(rotations) => shepp_logan_at([x, y, z], self.dims, rotations),
+        }
+    }
+
+    /// Voxels `first..first + out.len()` in linear order (x fastest), in parallel.
+    fn fill(&self, first: usize, out: &mut [f32]) {
+        let [nx, ny, _] = self.dims;
+        out.par_chunks_mut(nx.max(1 << 12))
+            .enumerate()
+            .for_each(|(c, part)| {
+                let start = first + c * nx.max(1 << 12);
+                for (k, v) in part.iter_mut().enumerate() {
+                    let i = start + k;
+                    let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
+                    *v = self.value(x, y, z, i as u64);
+                }
+            });
+    }
+
+    /// The phantom made whole, in memory (refused when that memory cannot be had).
+    pub fn volume(&self) -> Result<Volume> {
+        let n = self.dims.iter().product::<usize>();
+        let mut data = Vec::new();
+        data.try_reserve_exact(n).map_err(|_| {
+            Error::invalid(
+                "dims",
+                crate::volume::dims_string(self.dims),
+                "a phantom this machine can hold in memory (write it to a file instead)",
+            )
+        })?;
+        data.resize(n, 0.0f32);
+        let plane = self.dims[0] * self.dims[1];
+        data.par_chunks_mut(plane)
+            .enumerate()
+            .for_each(|(z, slice)| self.fill(z * plane, slice));
+        let volume = Volume::new(self.dims, [1.0; 3], self.voxel_type, data)?;
+        Ok(match self.transform {
+            Some(t) => volume.with_transform(t),
+            None => volume,
+        })
+    }
+
+    /// Writes every voxel, x fastest, little-endian in its type (what a volume file's body
+    /// holds), made [`WRITE_VOXELS`] at a time: never more than that in memory.
+    pub fn write_le(&self, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        self.write_le_in(out, WRITE_VOXELS)
+    }
+
+    /// [`write_le`](Self::write_le), `chunk` voxels at a time.
+    fn write_le_in(&self, out: &mut dyn std::io::Write, chunk: usize) -> std::io::Result<()> {
+        let n = self.dims.iter().product::<usize>();
+        let mut values = vec![0.0f32; chunk.min(n)];
+        let mut bytes = Vec::with_capacity(values.len() * self.voxel_type.size());
+        for first in (0..n).step_by(chunk) {
+            let values = &mut values[..chunk.min(n - first)];
+            self.fill(first, values);
+            bytes.clear();
+            super::voxel::encode_le(values, self.voxel_type, &mut bytes);
+            out.write_all(&bytes)?;
+        }
+        Ok(())
+    }
 }
 
 /// Six materials in parallel layers of equal thickness along `normal` (physical space, spacing 1),
 /// with mild Gaussian noise; voxel type u8. The layer of voxel `p` is
 /// `floor(6 · (n·(p - c) + t) / 2t)` where `c` is the centre and `t` the half extent along `n`.
 pub fn layers(dims: [usize; 3], normal: [f64; 3], seed: u64) -> Result<Volume> {
-    let len = normal.iter().map(|c| c * c).sum::<f64>().sqrt();
-    if !(len.is_finite() && len > 0.0) {
-        return Err(Error::invalid(
-            "normal",
-            format!("{normal:?}"),
-            "a direction with a length",
-        ));
+    Recipe::layers(dims, normal, seed)?.volume()
+}
+
+impl Recipe {
+    /// The recipe of [`layers`].
+    pub fn layers(dims: [usize; 3], normal: [f64; 3], seed: u64) -> Result<Self> {
+        check_dims(dims)?;
+        let len = normal.iter().map(|c| c * c).sum::<f64>().sqrt();
+        if !(len.is_finite() && len > 0.0) {
+            return Err(Error::invalid(
+                "normal",
+                format!("{normal:?}"),
+                "a direction with a length",
+            ));
+        }
+        let n = normal.map(|c| c / len);
+        let half = |k: usize| (dims[k] as f64 - 1.0) / 2.0;
+        let extent: f64 = (0..3).map(|k| n[k].abs() * half(k)).sum::<f64>().max(0.5);
+        Ok(Self {
+            dims,
+            voxel_type: VoxelType::U8,
+            transform: None,
+            kind: Kind::Layers(n, extent, seed),
+        })
     }
-    let n = normal.map(|c| c / len);
-    let half = |k: usize| (dims[k] as f64 - 1.0) / 2.0;
-    let extent: f64 = (0..3).map(|k| n[k].abs() * half(k)).sum::<f64>().max(0.5);
-    let data = generate(dims, |x, y, z, i| {
-        let t =
-            n[0] * (x as f64 - half(0)) + n[1] * (y as f64 - half(1)) + n[2] * (z as f64 - half(2));
-        let layer = (((t + extent) / (2.0 * extent) * 6.0).floor() as usize).min(5);
-        let v = f64::from(LAYER_VALUES[layer]) + LAYER_NOISE * gaussian(seed, i);
-        v.round().clamp(0.0, 255.0) as f32
-    })?;
-    Volume::new(dims, [1.0; 3], VoxelType::U8, data)
+
+    /// The recipe of [`body`].
+    pub fn body(dims: [usize; 3], seed: u64) -> Result<Self> {
+        check_dims(dims)?;
+        Ok(Self {
+            dims,
+            voxel_type: VoxelType::I16,
+            transform: Some(body_transform(dims)),
+            kind: Kind::Body(seed),
+        })
+    }
+
+    /// The recipe of [`shepp_logan`].
+    pub fn shepp_logan(dims: [usize; 3]) -> Result<Self> {
+        check_dims(dims)?;
+        Ok(Self {
+            dims,
+            voxel_type: VoxelType::F32,
+            transform: None,
+            kind: Kind::SheppLogan(shepp_logan_rotations()),
+        })
+    }
 }
 
 /// The layer (0 to 5) that [`layers`] puts voxel `(x, y, z)` in, without noise.
@@ -283,17 +420,7 @@ fn trunk_hu(p: [f64; 3]) -> f64 {
 /// ribs and abdominal organs, arms, legs; long axis along z with the head at high z, the liver on
 /// the low-x side and the spine at high y, so its axes are LPS, and its transform says so.
 pub fn body(dims: [usize; 3], seed: u64) -> Result<Volume> {
-    let [nx, ny, nz] = dims;
-    let data = generate(dims, |x, y, z, i| {
-        let p = [
-            (x as f64 + 0.5) / nx as f64 * 2.0 - 1.0,
-            (y as f64 + 0.5) / ny as f64 * 2.0 - 1.0,
-            (z as f64 + 0.5) / nz as f64,
-        ];
-        let v = body_hu(p) + BODY_NOISE * gaussian(seed, i);
-        v.round().clamp(-1024.0, 3071.0) as f32
-    })?;
-    Ok(Volume::new(dims, [1.0; 3], VoxelType::I16, data)?.with_transform(body_transform(dims)))
+    Recipe::body(dims, seed)?.volume()
 }
 
 /// The body's place in the world: it is laid out as a CT scan is (x to the patient's left, y to
@@ -321,7 +448,12 @@ const SHEPP_LOGAN: [[f64; 10]; 10] = [
 
 /// The 3D modified Shepp-Logan phantom (f32, values 0 to 1) on [-1, 1]³, noise-free.
 pub fn shepp_logan(dims: [usize; 3]) -> Result<Volume> {
-    let rotations: Vec<[[f64; 3]; 3]> = SHEPP_LOGAN
+    Recipe::shepp_logan(dims)?.volume()
+}
+
+/// The rotation of each of the [`SHEPP_LOGAN`] ellipsoids, from its Euler angles.
+fn shepp_logan_rotations() -> Vec<[[f64; 3]; 3]> {
+    SHEPP_LOGAN
         .iter()
         .map(|e| {
             let (phi, theta, psi) = (e[7].to_radians(), e[8].to_radians(), e[9].to_radians());
@@ -339,7 +471,11 @@ pub fn shepp_logan(dims: [usize; 3]) -> Result<Volume> {
                 [st * sf, -st * cf, ct],
             ]
         })
-        .collect();
+        .collect()
+}
+
+/// The Shepp-Logan value of voxel `v` of a grid of `dims` on [-1, 1]³.
+fn shepp_logan_at(v: [usize; 3], dims: [usize; 3], rotations: &[[[f64; 3]; 3]]) -> f32 {
     let coord = |i: usize, n: usize| {
         if n > 1 {
             -1.0 + 2.0 * i as f64 / (n - 1) as f64
@@ -347,100 +483,16 @@ pub fn shepp_logan(dims: [usize; 3]) -> Result<Volume> {
             0.0
         }
     };
-    let data = generate(dims, |x, y, z, _| {
-        let p = [coord(x, dims[0]), coord(y, dims[1]), coord(z, dims[2])];
-        let mut v = 0.0;
-        for (e, r) in SHEPP_LOGAN.iter().zip(&rotations) {
-            let q: [f64; 3] =
-                std::array::from_fn(|k| r[k][0] * p[0] + r[k][1] * p[1] + r[k][2] * p[2]);
-            if ell(q, [e[4], e[5], e[6]], [e[1], e[2], e[3]]) <= 1.0 {
-                v += e[0];
-            }
+    let p: [f64; 3] = std::array::from_fn(|k| coord(v[k], dims[k]));
+    let mut value = 0.0;
+    for (e, r) in SHEPP_LOGAN.iter().zip(rotations) {
+        let q: [f64; 3] = std::array::from_fn(|k| r[k][0] * p[0] + r[k][1] * p[1] + r[k][2] * p[2]);
+        if ell(q, [e[4], e[5], e[6]], [e[1], e[2], e[3]]) <= 1.0 {
+            value += e[0];
         }
-        v as f32
-    })?;
-    Volume::new(dims, [1.0; 3], VoxelType::F32, data)
+    }
+    value as f32
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn noise_is_standard_normal_and_deterministic() {
-        let n = 200_000;
-        let xs: Vec<f64> = (0..n).map(|i| gaussian(7, i)).collect();
-        let mean = xs.iter().sum::<f64>() / n as f64;
-        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
-        assert!(mean.abs() < 0.01, "mean {mean}");
-        assert!((var - 1.0).abs() < 0.02, "variance {var}");
-        assert_eq!(gaussian(7, 12), gaussian(7, 12));
-        assert_ne!(gaussian(7, 12), gaussian(8, 12));
-    }
-
-    #[test]
-    fn layers_follow_the_normal() {
-        let dims = [24, 24, 24];
-        let v = layers(dims, [0.0, 0.0, 1.0], 1).unwrap();
-        assert_eq!(v.voxel_type(), VoxelType::U8);
-        // Along z, each 4-slice band is one material.
-        for z in 0..24 {
-            let mean: f64 = (0..24 * 24)
-                .map(|i| f64::from(v.array()[[i % 24, i / 24, z]]))
-                .sum::<f64>()
-                / 576.0;
-            let expect = f64::from(LAYER_VALUES[z / 4]);
-            assert!(
-                (mean - expect).abs() < 1.0,
-                "slice {z}: mean {mean}, material {expect}"
-            );
-            assert_eq!(layer_of(dims, [0.0, 0.0, 1.0], [3, 5, z]), z / 4);
-        }
-    }
-
-    #[test]
-    fn layers_reject_a_zero_normal() {
-        assert!(layers([4, 4, 4], [0.0; 3], 1).is_err());
-    }
-
-    #[test]
-    fn phantoms_are_deterministic_per_seed() {
-        let a = body([20, 20, 34], 3).unwrap();
-        let b = body([20, 20, 34], 3).unwrap();
-        let c = body([20, 20, 34], 4).unwrap();
-        assert_eq!(a.voxels(), b.voxels());
-        assert_ne!(a.voxels(), c.voxels());
-    }
-
-    #[test]
-    fn body_has_air_lungs_and_bone() {
-        let v = body([64, 64, 104], 1).unwrap();
-        let s = v.stats();
-        assert!(
-            s.min < -950.0 && s.max > 800.0,
-            "range {} .. {}",
-            s.min,
-            s.max
-        );
-        // The centre of the left lung, and a corner of air.
-        let at = |p: [f64; 3]| {
-            let idx = [
-                (f64::midpoint(p[0], 1.0) * 64.0) as usize,
-                (f64::midpoint(p[1], 1.0) * 64.0) as usize,
-                (p[2] * 104.0) as usize,
-            ];
-            f64::from(v.array()[idx])
-        };
-        assert!((at([-0.28, 0.02, 0.71]) - hu::LUNG).abs() < 60.0);
-        assert!((at([-0.95, -0.95, 0.5]) - hu::AIR).abs() < 60.0);
-    }
-
-    #[test]
-    fn shepp_logan_has_its_known_values() {
-        let v = shepp_logan([65, 65, 65]).unwrap();
-        // The centre lies in the skull (1) and the brain (-0.8): 0.2; outside is 0.
-        assert!((v.array()[[32, 32, 32]] - 0.2).abs() < 1e-6);
-        assert_eq!(v.array()[[0, 0, 0]], 0.0);
-        assert!((v.stats().max - 1.0).abs() < 1e-6);
-    }
-}
+mod tests;
