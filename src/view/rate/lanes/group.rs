@@ -139,6 +139,10 @@ impl Group {
         sampler: &BinSampler<T>,
     ) {
         let (cells, base) = (sampler.cells(), sampler.cells_base());
+        // Lanes outside the window of the map (idle lanes, and only they: their labels are
+        // neither queued nor counted) read its last cell instead: no bounds check a lane.
+        let window = (cells.len() - 1, _mm256_set1_epi32(base as i32));
+        let last = _mm256_set1_epi32(window.0 as i32);
         chunk.missing = [0; CHUNK];
         // First the labels: no step waits for another's, so many are read at once...
         for t in 0..chunk.steps {
@@ -153,14 +157,13 @@ impl Group {
             for &cell in &future.0 {
                 sampler.prefetch_cell(cell as usize);
             }
-            let at = &mut chunk.cells[t];
-            at.set(cell);
-            for (label, &i) in chunk.labels[t].iter_mut().zip(&at.0) {
-                // Outside a window of the map (idle lanes, and only they): mixed.
-                *label = cells
-                    .get((i as usize).wrapping_sub(base))
-                    .copied()
-                    .unwrap_or(MIXED);
+            chunk.cells[t].set(cell);
+            let mut inside = Narrow::default();
+            inside.set(_mm256_min_epu32(_mm256_sub_epi32(cell, window.1), last));
+            for (label, &i) in chunk.labels[t].iter_mut().zip(&inside.0) {
+                debug_assert!(i as usize <= window.0);
+                // SAFETY: `i` is at most the window's last index (the minimum above).
+                *label = unsafe { *cells.get_unchecked(i as usize) };
             }
             self.p = offset(&self.p, &c.step);
         }

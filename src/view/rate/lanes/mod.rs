@@ -51,9 +51,12 @@ const LANES: usize = 8;
 /// How many steps before its label is read a cell is prefetched.
 const AHEAD: usize = 16;
 
-/// Whether this processor has AVX2, and `sampler`'s cells can be indexed by 32-bit lanes.
+/// Whether this processor has AVX2, and `sampler`'s cells (a map of at least one) can be
+/// indexed by 32-bit lanes.
 pub(super) fn available<T: Voxel>(sampler: &BinSampler<T>) -> bool {
-    is_x86_feature_detected!("avx2") && i32::try_from(sampler.voxels().len()).is_ok()
+    is_x86_feature_detected!("avx2")
+        && i32::try_from(sampler.voxels().len()).is_ok()
+        && !sampler.cells().is_empty()
 }
 
 /// Resolves the queue of `chunk` one entry at a time, through the scalar path: for rays on the
