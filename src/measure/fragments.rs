@@ -182,7 +182,7 @@ impl Fragment {
     /// counts the sequence's end if it can be known here; `None` when it is the whole
     /// sequence (complete: only its counts remain).
     pub fn close(mut self, counts: &mut BlockCounts, last: bool) -> Option<Self> {
-        self.bits = (self.bits & !LAST) | u8::from(last) * LAST;
+        self.bits = (self.bits & !LAST) | (u8::from(last) * LAST);
         if last && self.determined(counts.block()) {
             let mut run = self.run();
             counts.end_run(&mut run);

@@ -146,8 +146,8 @@ fn a_piece_is_32_bytes_and_keeps_its_head_and_run() {
     let head: Vec<Sample> = (0..f.head_len(4)).map(|k| f.head_sample(k)).collect();
     assert_eq!(head, [Some(255), None, Some(7)]);
     assert!(f.broken() && !f.first() && !f.last() && f.len() == 5);
-    // The run after the missing sample: 7, 254, 253 (three symbols of 8 bits).
-    assert_eq!(f.run().parts(), ((7 << 16) | (254 << 8) | 253, 3));
+    // The run after the missing sample: 7, 254 (0xfe), 253 (0xfd), three symbols of 8 bits.
+    assert_eq!(f.run().parts(), ((7 << 16) | (0xfe << 8) | 0xfd, 3));
     let mut run = f.run();
     for s in [1, 2, 3, 4, 5, 6] {
         c.push_to(&mut run, s);
