@@ -2,8 +2,8 @@
 //! phantoms (i16, as the CLI's): (a) `search` of the whole volume; (b) the same counts as the
 //! Dask tasks make them: for each slab of N cell planes along z, the slab's volume built as
 //! `_count_view_slab` builds it (`Volume::of_slab` of the grid), its rounds made from it,
-//! `ViewRounds::count_slab`, each part sent as bytes and added on the "client" as `ViewPart +
-//! ViewPart` adds (a copy of the total plus the part), then `finish`; (c) the phases of (b): CPU
+//! `ViewRounds::count_slab`, each part sent as bytes and added on the "client" as `total +=
+//! part` adds (in place), then `finish`; (c) the phases of (b): CPU
 //! seconds (the process's user + system, every thread's) and wall seconds of each, and the parts'
 //! size (bytes as sent, open pieces of rays a lattice). Checks that (b)'s result is (a)'s, as
 //! JSON. Prints the medians of `--runs` runs, taken in turns.
@@ -117,17 +117,15 @@ fn round(
                 })
                 .collect()
         });
-        // `total + part`: a copy of the total, the part's copy added to it.
-        total = Some(split.add.time(|| match &total {
-            None => part,
+        // `total += part`, as the client adds: the part added in place, the total not copied.
+        split.add.time(|| match &mut total {
+            None => total = Some(part),
             Some(t) => {
-                let mut sum = t.clone();
-                for (s, p) in sum.iter_mut().zip(&part) {
-                    s.add(p.clone());
+                for (s, p) in t.iter_mut().zip(&part) {
+                    s.add_ref(p);
                 }
-                sum
             }
-        }));
+        });
     }
     total.expect("a slab at least")
 }

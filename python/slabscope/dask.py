@@ -270,7 +270,11 @@ def _round(client: Any, array: Any, slabs: list, held: list, grid: tuple, round:
     total = None
     for future in as_completed(client.compute(tasks)):
         part = future.result()
-        total = part if total is None else total + part
+        if total is None:
+            total = part
+        else:
+            # In place: the total is never copied (issue #44).
+            total += part
         report()
     return total
 

@@ -17,12 +17,27 @@ use crate::params::{Kwargs, analysis_params};
 use crate::volume::Volume;
 
 /// The counts of one round of the view search over some slabs: one entry a lattice.
-#[pyclass(module = "slabscope", frozen)]
+#[pyclass(module = "slabscope")]
 pub struct ViewPart {
     /// 0 for the paper's lattices, 1 for the shifted ones, 2 and 3 the same of a refinement
     /// step (`ViewRound::kind`).
     round: u8,
     counts: Vec<PartialCounts>,
+}
+
+impl ViewPart {
+    /// An error unless `other` counts the same round of the same search.
+    fn check(&self, other: &Self) -> PyResult<()> {
+        if self.round != other.round
+            || self.counts.len() != other.counts.len()
+            || !(self.counts.iter().zip(&other.counts)).all(|(a, b)| a.counts.agrees(&b.counts))
+        {
+            return Err(PyValueError::new_err(
+                "ViewPart + ViewPart: parts of two different rounds or searches",
+            ));
+        }
+        Ok(())
+    }
 }
 
 #[pymethods]
@@ -41,22 +56,25 @@ impl ViewPart {
     }
 
     fn __add__(&self, other: &Self) -> PyResult<Self> {
-        if self.round != other.round
-            || self.counts.len() != other.counts.len()
-            || !(self.counts.iter().zip(&other.counts)).all(|(a, b)| a.counts.agrees(&b.counts))
-        {
-            return Err(PyValueError::new_err(
-                "ViewPart + ViewPart: parts of two different rounds or searches",
-            ));
-        }
+        self.check(other)?;
         let mut counts = self.counts.clone();
         for (a, b) in counts.iter_mut().zip(&other.counts) {
-            a.add(b.clone());
+            a.add_ref(b);
         }
         Ok(Self {
             round: self.round,
             counts,
         })
+    }
+
+    /// `total += part`: `part` added in place, the total not copied (a client adding the parts
+    /// of a round as they come). `part += part` adds by `+` (the part is borrowed twice).
+    fn __iadd__(&mut self, other: PyRef<'_, Self>) -> PyResult<()> {
+        self.check(&other)?;
+        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
+            a.add_ref(b);
+        }
+        Ok(())
     }
 
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -288,11 +306,11 @@ pub fn _refine_in_parts(
             .call1(asked(round))
             .and_then(|p| Ok(p.cast_into::<ViewPart>()?));
         match part {
-            Ok(part) if part.get().round == round.kind() => Ok(part.get().counts.clone()),
+            Ok(part) if part.borrow().round == round.kind() => Ok(part.borrow().counts.clone()),
             Ok(part) => {
                 let e = format!(
                     "count gave a part of round {}, not {}",
-                    part.get().round,
+                    part.borrow().round,
                     round.kind()
                 );
                 failed = Some(PyValueError::new_err(e));

@@ -153,6 +153,15 @@ def test_view_parts_add_and_pickle():
     back = pickle.loads(pickle.dumps(parts[1]))
     total = parts[0] + back
     assert total.complete and total.round == 0
+    # In place (`+=`, as the client adds a round's parts): the same sum, the part added left
+    # as it was; parts of another version of slabscope are refused by name.
+    inplace = pickle.loads(pickle.dumps(parts[0]))
+    same = inplace
+    inplace += back
+    assert inplace is same and inplace.complete and not back.complete
+    assert pickle.dumps(inplace) == pickle.dumps(total)
+    with pytest.raises(ValueError, match="version 2 where this slabscope reads version 3"):
+        slabscope._slabscope._view_part_of(0, [b"SLABPC\x00\x02" + bytes(8)])
     volume = slabscope.Volume.from_array(zyx.T)
     got = slabscope._slabscope._analyze_with_parts(volume, total, None, phases=0, background="none")
     assert got.to_dict() == slabscope.analyze(volume, phases=0, background="none").to_dict()

@@ -350,6 +350,16 @@ impl BlockCounts {
         self.long.total()
     }
 
+    /// The number of symbols counted over.
+    pub fn bins(&self) -> usize {
+        self.bins
+    }
+
+    /// The bits an L-block's code may have set.
+    pub(crate) fn code_mask(&self) -> u64 {
+        self.packing.long_mask
+    }
+
     /// The block length L.
     pub fn block(&self) -> usize {
         self.packing.block as usize

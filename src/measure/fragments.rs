@@ -14,13 +14,32 @@
 
 use super::blocks::{BlockCounts, Counter, Run};
 
+mod bytes;
+
 /// The longest head a fragment keeps: L - 1 for the longest block, 4.
 const MAX_HEAD: usize = 3;
 
 /// One sample: a symbol, or a missing sample (`None`) that breaks its sequence.
 pub type Sample = Option<u8>;
 
-/// A piece of one sequence counted apart: samples `start..end` of sequence `key`.
+/// [`Fragment::bits`]: it ends its sequence.
+const LAST: u8 = 1;
+/// [`Fragment::bits`]: one of its samples is missing.
+const BROKEN: u8 = 2;
+/// [`Fragment::bits`]: the first of three bits saying which of its head's samples are missing.
+const HEAD_MISSING: u32 = 2;
+/// [`Fragment::bits`]: the first of three bits holding its run's length, capped.
+const RUN_LEN: u32 = 5;
+/// The longest run length a fragment keeps: more says no more (only whether a run reaches L - 1
+/// and L samples counts, and L is at most 4).
+const RUN_CAP: u64 = 7;
+
+/// A piece of one sequence counted apart: samples `start..end` of sequence `key`, in 32 bytes
+/// (a cluster's parts hold one for each ray crossing a slab's face, issue #44).
+///
+/// It starts the sequence when `start` is 0 (then nothing is left open at its start). Its head,
+/// its first L-1 samples (fewer when it is shorter; none when it starts the sequence), is kept
+/// raw and not counted: as many samples as its length and L allow, so its length is not stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Fragment {
     /// Which sequence (for a ray of a lattice, its `(i, j)` packed by [`ray_key`]).
@@ -29,18 +48,13 @@ pub struct Fragment {
     pub start: u64,
     /// One past its last sample's index.
     pub end: u64,
-    /// Whether it starts the sequence (`start` is 0): then nothing is left open at its start.
-    pub first: bool,
-    /// Whether it ends the sequence.
-    pub last: bool,
-    /// Whether one of its samples is missing.
-    broken: bool,
-    /// Its first L-1 samples (fewer when it is shorter), kept raw and not counted; empty when
-    /// it starts the sequence.
-    head: [Sample; MAX_HEAD],
-    head_len: u8,
-    /// The run at its end.
-    run: Run,
+    /// The code of the run at its end (its last L symbols: 32 bits at most, 8 bits a symbol).
+    code: u32,
+    /// Its head's symbols (0 where one is missing).
+    head: [u8; MAX_HEAD],
+    /// [`LAST`], [`BROKEN`], which head samples are missing from bit [`HEAD_MISSING`] on, and
+    /// the run's length (capped at [`RUN_CAP`]) from bit [`RUN_LEN`] on.
+    bits: u8,
 }
 
 /// The key of ray `(i, j)` of a lattice: the two indices side by side, row `j` first, each as
@@ -60,12 +74,9 @@ impl Fragment {
             key,
             start,
             end: start,
-            first: start == 0,
-            last: false,
-            broken: false,
-            head: [None; MAX_HEAD],
-            head_len: 0,
-            run: Run::default(),
+            code: 0,
+            head: [0; MAX_HEAD],
+            bits: 0,
         }
     }
 
@@ -79,80 +90,125 @@ impl Fragment {
         self.end == self.start
     }
 
+    /// Whether it starts the sequence: then nothing is left open at its start.
+    pub fn first(&self) -> bool {
+        self.start == 0
+    }
+
+    /// Whether it ends the sequence.
+    pub fn last(&self) -> bool {
+        self.bits & LAST != 0
+    }
+
+    /// Whether one of its samples is missing.
+    fn broken(&self) -> bool {
+        self.bits & BROKEN != 0
+    }
+
+    /// How many of its first samples are kept raw for blocks of length `block`.
+    fn head_len(&self, block: usize) -> usize {
+        if self.first() {
+            0
+        } else {
+            self.len().min(block as u64 - 1) as usize
+        }
+    }
+
+    /// Its head's sample `k`.
+    fn head_sample(&self, k: usize) -> Sample {
+        (self.bits & 1 << (HEAD_MISSING as usize + k) == 0).then_some(self.head[k])
+    }
+
+    /// Keeps `sample` as its head's sample `k`.
+    fn set_head(&mut self, k: usize, sample: Sample) {
+        self.head[k] = sample.unwrap_or(0);
+        self.bits |= u8::from(sample.is_none()) << (HEAD_MISSING as usize + k);
+    }
+
     /// Whether its next sample is still part of its head: kept raw, not counted (then it must
     /// go through [`push`](Self::push), one at a time).
     #[inline]
     pub fn in_head(&self, block: usize) -> bool {
-        !self.first && self.len() < block as u64 - 1
+        !self.first() && self.len() < block as u64 - 1
     }
 
     /// The run at its end, for a walk that takes over after the head (see
     /// [`walked`](Self::walked)).
     pub fn run(&self) -> Run {
-        self.run
+        Run::from_parts(u64::from(self.code), u64::from(self.bits >> RUN_LEN))
+    }
+
+    /// Keeps `run` as the run at its end.
+    fn set_run(&mut self, run: Run) {
+        let (code, len) = run.parts();
+        // A block code holds L symbols of at most 8 bits: 32 bits.
+        self.code = code as u32;
+        self.bits = (self.bits & ((1 << RUN_LEN) - 1)) | (len.min(RUN_CAP) as u8) << RUN_LEN;
     }
 
     /// Its run after a walk of `samples` more samples past its head, which left the run `run`
     /// and counted them (a missing sample there matters no more: the head is known).
     pub fn walked(&mut self, samples: u64, run: Run) {
         self.end += samples;
-        self.run = run;
+        self.set_run(run);
     }
 
     /// Appends one sample, counting into `counts` what it completes (nothing in the head).
     pub fn push(&mut self, counts: &mut BlockCounts, sample: Sample) {
         let block = counts.block();
+        let mut run = self.run();
         if self.in_head(block) {
-            self.head[self.head_len as usize] = sample;
-            self.head_len += 1;
-            counts.prime(&mut self.run, sample);
+            // The head holds every sample so far.
+            self.set_head(self.len() as usize, sample);
+            counts.prime(&mut run, sample);
         } else {
             match sample {
-                Some(s) => counts.push_to(&mut self.run, s),
-                None => counts.end_run(&mut self.run),
+                Some(s) => counts.push_to(&mut run, s),
+                None => counts.end_run(&mut run),
             }
         }
-        self.broken |= sample.is_none();
+        self.set_run(run);
+        self.bits |= u8::from(sample.is_none()) * BROKEN;
         self.end += 1;
     }
 
     /// Whether everything before its end is known: it starts the sequence, has a missing
     /// sample, or holds L-1 samples (as many as a run end looks back).
     fn determined(&self, block: usize) -> bool {
-        self.first || self.broken || self.len() >= block as u64 - 1
+        self.first() || self.broken() || self.len() >= block as u64 - 1
     }
 
     /// Ends it where the sequence ends (when `last`) or where the next piece takes over:
     /// counts the sequence's end if it can be known here; `None` when it is the whole
     /// sequence (complete: only its counts remain).
     pub fn close(mut self, counts: &mut BlockCounts, last: bool) -> Option<Self> {
-        self.last = last;
+        self.bits = (self.bits & !LAST) | (u8::from(last) * LAST);
         if last && self.determined(counts.block()) {
-            let mut run = self.run;
+            let mut run = self.run();
             counts.end_run(&mut run);
         }
-        (!(self.first && self.last)).then_some(self)
+        (!(self.first() && self.last())).then_some(self)
     }
 
     /// The fragment `self` followed by `next`, the piece of the same sequence that starts where
     /// `self` ends, counting into `counts` what crosses the seam; `None` when together they are
     /// the whole sequence.
     pub fn stitch(self, next: &Self, counts: &mut BlockCounts) -> Option<Self> {
-        debug_assert!(self.key == next.key && self.end == next.start && !next.first);
+        debug_assert!(self.key == next.key && self.end == next.start && !next.first());
         let block = counts.block();
-        let mut run = self.run;
+        let mut run = self.run();
         let mut out = Self {
             end: next.end,
-            last: next.last,
-            broken: self.broken || next.broken,
+            bits: (self.bits & !LAST) | (next.bits & LAST) | (next.bits & BROKEN),
             ..self
         };
         // The seam's samples: `next`'s head, counted from where the whole is known, kept in
         // the whole's head before that.
-        for (k, &sample) in next.head[..next.head_len as usize].iter().enumerate() {
-            if !out.first && self.len() + (k as u64) < block as u64 - 1 {
-                out.head[out.head_len as usize] = sample;
-                out.head_len += 1;
+        for k in 0..next.head_len(block) {
+            let sample = next.head_sample(k);
+            let at = self.len() + k as u64;
+            if !out.first() && at < block as u64 - 1 {
+                out.set_head(at as usize, sample);
                 counts.prime(&mut run, sample);
             } else {
                 match sample {
@@ -163,15 +219,15 @@ impl Fragment {
         }
         // `next` walked on from its head with the run its head left: the same as ours from
         // there on, once it holds L-1 samples or a missing one; else all of it was its head.
-        out.run = if next.determined(block) {
-            next.run
+        out.set_run(if next.determined(block) {
+            next.run()
         } else {
             run
-        };
-        if next.last && !next.determined(block) && out.determined(block) {
+        });
+        if next.last() && !next.determined(block) && out.determined(block) {
             counts.end_run(&mut run);
         }
-        (!(out.first && out.last)).then_some(out)
+        (!(out.first() && out.last())).then_some(out)
     }
 }
 
@@ -183,7 +239,7 @@ pub struct PartialCounts {
     pub counts: BlockCounts,
     /// Sequences started (for a lattice: rays that met the volume).
     pub rays: u64,
-    /// Fragments not yet joined to their neighbours, by key and start.
+    /// Fragments not yet joined to their neighbours, in order of key and start.
     fragments: Vec<Fragment>,
 }
 
@@ -201,7 +257,7 @@ impl PartialCounts {
             rays,
             fragments: Vec::new(),
         };
-        out.join(fragments);
+        join(&mut out.fragments, fragments, &mut out.counts);
         out
     }
 
@@ -209,7 +265,25 @@ impl PartialCounts {
     pub fn add(&mut self, other: Self) {
         self.counts.merge(&other.counts);
         self.rays += other.rays;
-        self.join(other.fragments);
+        join(&mut self.fragments, other.fragments, &mut self.counts);
+    }
+
+    /// Adds `other`'s counts in place, as [`add`](Self::add) does, leaving `other` as it is:
+    /// nothing of `self` is copied but where the two lists of open pieces are merged.
+    pub fn add_ref(&mut self, other: &Self) {
+        self.counts.merge(&other.counts);
+        self.rays += other.rays;
+        if other.fragments.is_sorted_by_key(order) {
+            in_order(&mut self.fragments);
+            merge_in(&mut self.fragments, &other.fragments);
+            stitch_sorted(&mut self.fragments, &mut self.counts);
+        } else {
+            join(
+                &mut self.fragments,
+                other.fragments.clone(),
+                &mut self.counts,
+            );
+        }
     }
 
     /// Keeps `fragment` (if any) open, to be stitched by the next [`add`](Self::add): a walk's
@@ -218,7 +292,8 @@ impl PartialCounts {
         self.fragments.extend(fragment);
     }
 
-    /// The fragments still open.
+    /// The fragments still open, in order of key and start (once added or read: those a walk
+    /// pushed, as it pushed them).
     pub fn fragments(&self) -> &[Fragment] {
         &self.fragments
     }
@@ -234,288 +309,95 @@ impl PartialCounts {
     /// keeps the open rays of a sweep by bands of its own rather than in one list.
     pub fn stitch_into(&mut self, open: &mut Vec<Fragment>) {
         let more = std::mem::take(&mut self.fragments);
-        *open = stitched(std::mem::take(open), more, &mut self.counts);
+        join(open, more, &mut self.counts);
         // Held until the next slab: no room kept for the merge it came from.
         open.shrink_to_fit();
     }
-
-    /// Takes `more` fragments in, stitching every pair that meets.
-    fn join(&mut self, more: Vec<Fragment>) {
-        let held = std::mem::take(&mut self.fragments);
-        self.fragments = stitched(held, more, &mut self.counts);
-    }
 }
 
-/// The first words of [`PartialCounts::to_bytes`]: `SLABPC` and a version (2 since ray keys
-/// are in the order of row then ray: a part of version 1 would not stitch to these).
-const MAGIC: u64 = u64::from_le_bytes(*b"SLABPC\x00\x02");
-
-impl Fragment {
-    /// The fragment as six words.
-    fn write(&self, out: &mut Vec<u64>) {
-        let flags = u64::from(self.first)
-            | u64::from(self.last) << 1
-            | u64::from(self.broken) << 2
-            | u64::from(self.head_len) << 8;
-        let head = self
-            .head
-            .iter()
-            .enumerate()
-            .map(|(k, s)| s.map_or(0, |v| u64::from(v) + 1) << (16 * k))
-            .fold(0, |a, b| a | b);
-        let (code, len) = self.run.parts();
-        out.extend([
-            self.key,
-            self.start,
-            self.end,
-            flags | head << 16,
-            code,
-            len,
-        ]);
-    }
-
-    /// A fragment [`write`](Self::write) wrote.
-    fn read(words: &mut super::blocks::Words) -> super::blocks::ReadResult<Self> {
-        let [key, start, end, flags, code, len] = [(); 6].map(|()| words.next());
-        let (key, start, end, flags) = (key?, start?, end?, flags?);
-        let head_len = (flags >> 8 & 0xff) as u8;
-        if end < start || usize::from(head_len) > MAX_HEAD {
-            return Err(super::blocks::corrupt("a piece of a ray"));
-        }
-        let head = std::array::from_fn(|k| match flags >> (16 + 16 * k) & 0xffff {
-            0 => None,
-            v => Some((v - 1) as u8),
-        });
-        Ok(Self {
-            key,
-            start,
-            end,
-            first: flags & 1 != 0,
-            last: flags & 2 != 0,
-            broken: flags & 4 != 0,
-            head,
-            head_len,
-            run: Run::from_parts(code?, len?),
-        })
-    }
+/// The order fragments are kept in.
+fn order(f: &Fragment) -> (u64, u64) {
+    (f.key, f.start)
 }
 
-impl PartialCounts {
-    /// The counts, rays and open pieces as bytes (little-endian words), to send to another
-    /// process: [`from_bytes`](Self::from_bytes) reads them back to the same counts.
-    #[must_use]
-    pub fn to_bytes(&self) -> Vec<u8> {
-        let mut words = vec![MAGIC];
-        self.counts.write(&mut words);
-        words.extend([self.rays, self.fragments.len() as u64]);
-        for f in &self.fragments {
-            f.write(&mut words);
-        }
-        words.iter().flat_map(|w| w.to_le_bytes()).collect()
-    }
-
-    /// Counts [`to_bytes`](Self::to_bytes) wrote; an error for any other bytes.
-    pub fn from_bytes(bytes: &[u8]) -> super::blocks::ReadResult<Self> {
-        let corrupt = super::blocks::corrupt;
-        if !bytes.len().is_multiple_of(8) {
-            return Err(corrupt("not a whole number of words"));
-        }
-        let words: Vec<u64> = bytes
-            .chunks_exact(8)
-            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
-            .collect();
-        let mut words = super::blocks::Words::new(&words);
-        if words.next()? != MAGIC {
-            return Err(corrupt("not slabscope's partial counts"));
-        }
-        let counts = BlockCounts::read(&mut words)?;
-        let (rays, n) = (words.next()?, words.next()?);
-        if n > words.left() as u64 / 6 {
-            return Err(corrupt("more pieces of rays than words"));
-        }
-        let fragments = (0..n)
-            .map(|_| Fragment::read(&mut words))
-            .collect::<super::blocks::ReadResult<Vec<_>>>()?;
-        if words.left() > 0 {
-            return Err(corrupt("words after the last piece"));
-        }
-        Ok(Self::of(counts, rays, fragments))
-    }
-}
-
-/// The fragments `held` (in order of key and start) and `more` (in any order) in order, every
-/// pair that meets stitched, counting into `counts` what crosses the seams.
-fn stitched(
-    held: Vec<Fragment>,
-    mut more: Vec<Fragment>,
-    counts: &mut BlockCounts,
-) -> Vec<Fragment> {
+/// Takes the fragments `more` (in any order) into `held` (in order), every pair that meets
+/// stitched, counting into `counts` what crosses the seams.
+fn join(held: &mut Vec<Fragment>, mut more: Vec<Fragment>, counts: &mut BlockCounts) {
     if more.is_empty() {
-        return held;
+        return;
     }
-    // Only the new ones are sorted (unless they come in order, as a part's own do: a slab's
-    // bands taken in order, or a part read back), and the two runs merged.
-    let order = |f: &Fragment| (f.key, f.start);
-    if !more.is_sorted_by_key(order) {
-        more.sort_unstable_by_key(order);
+    in_order(&mut more);
+    in_order(held);
+    if held.is_empty() {
+        *held = more;
+    } else {
+        merge_in(held, &more);
     }
-    let mut out: Vec<Fragment> = Vec::with_capacity(held.len() + more.len());
-    let (mut a, mut b) = (held.into_iter().peekable(), more.into_iter().peekable());
-    let merged = std::iter::from_fn(|| match (a.peek(), b.peek()) {
-        (Some(x), Some(y)) if order(y) < order(x) => b.next(),
-        (Some(_), _) => a.next(),
-        (None, _) => b.next(),
-    });
-    for f in merged {
-        match out.last_mut() {
-            Some(prev) if prev.key == f.key && prev.end == f.start => {
-                match prev.stitch(&f, counts) {
-                    Some(joined) => *prev = joined,
-                    None => {
-                        out.pop();
-                    }
-                }
-            }
-            _ => out.push(f),
+    stitch_sorted(held, counts);
+}
+
+/// Sorts `v` when it is not in order already (a part's own pieces are: a slab's bands taken in
+/// order, a part read back or added; a walk's pieces pushed one by one may not be). By the
+/// stable sort, which merges runs already in order: a slab's walk pushes a band's pieces as a
+/// few such runs (those set up on its faces, those leaving it, those ending in it).
+fn in_order(v: &mut [Fragment]) {
+    if !v.is_sorted_by_key(order) {
+        v.sort_by_key(order);
+    }
+}
+
+/// `held` and `more` (both in order) merged in place into `held`, in order, `held`'s first
+/// where two compare equal: from the back, so that nothing of `held` moves twice.
+fn merge_in(held: &mut Vec<Fragment>, more: &[Fragment]) {
+    if more.is_empty() {
+        return;
+    }
+    let n = held.len();
+    if held.last().is_none_or(|f| order(f) <= order(&more[0])) {
+        held.extend_from_slice(more);
+        return;
+    }
+    held.reserve_exact(more.len());
+    held.extend_from_slice(more);
+    let (mut i, mut j) = (n, more.len());
+    let mut k = held.len();
+    while j > 0 {
+        k -= 1;
+        if i > 0 && order(&held[i - 1]) > order(&more[j - 1]) {
+            held[k] = held[i - 1];
+            i -= 1;
+        } else {
+            held[k] = more[j - 1];
+            j -= 1;
         }
     }
-    out
+}
+
+/// Stitches in place every pair of consecutive fragments of `v` (in order) that meet,
+/// counting into `counts` what crosses the seams.
+fn stitch_sorted(v: &mut Vec<Fragment>, counts: &mut BlockCounts) {
+    // Nothing moves before the first pair that meets.
+    let Some(first) = v
+        .windows(2)
+        .position(|w| w[0].key == w[1].key && w[0].end == w[1].start)
+    else {
+        return;
+    };
+    let mut kept = first + 1;
+    for r in first + 1..v.len() {
+        let f = v[r];
+        if kept > 0 && v[kept - 1].key == f.key && v[kept - 1].end == f.start {
+            match v[kept - 1].stitch(&f, counts) {
+                Some(joined) => v[kept - 1] = joined,
+                None => kept -= 1,
+            }
+        } else {
+            v[kept] = f;
+            kept += 1;
+        }
+    }
+    v.truncate(kept);
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::testing::Lcg;
-
-    /// Sequences of symbols below `bins` with missing samples, of lengths 0 to `max`.
-    fn sequences(lcg: &mut Lcg, n: usize, max: u64, bins: u64) -> Vec<Vec<Sample>> {
-        let mut next = |k: u64| (lcg.next_u64() >> 33) % k;
-        (0..n)
-            .map(|_| {
-                let len = next(max + 1);
-                (0..len)
-                    .map(|_| (next(9) != 0).then(|| next(bins) as u8))
-                    .collect()
-            })
-            .collect()
-    }
-
-    fn whole(seqs: &[Vec<Sample>], bins: usize, block: usize) -> BlockCounts {
-        let mut c = BlockCounts::new(bins, block);
-        for seq in seqs.iter().filter(|s| !s.is_empty()) {
-            for s in seq {
-                match s {
-                    Some(s) => c.push(*s),
-                    None => c.end_sequence(),
-                }
-            }
-            c.end_sequence();
-        }
-        c
-    }
-
-    fn same(a: &BlockCounts, b: &BlockCounts, at: &str) {
-        for k in [1, a.block() - 1, a.block()] {
-            assert_eq!(a.table(k), b.table(k), "{k}-blocks, {at}");
-        }
-        assert_eq!(a.entropies(), b.entropies(), "{at}");
-    }
-
-    #[test]
-    fn pieces_counted_apart_and_added_in_any_order_count_the_whole() {
-        let mut lcg = Lcg::new(42);
-        for trial in 0..300 {
-            let block = 2 + trial % 3;
-            let bins = [2, 3, 5, 32][trial % 4];
-            let seqs = sequences(&mut lcg, 12, 14, bins as u64);
-            let mut next = |k: u64| (lcg.next_u64() >> 33) % k;
-            // Each sequence cut at random places, each piece counted apart.
-            let mut pieces = Vec::new();
-            for (key, seq) in seqs.iter().enumerate().filter(|(_, s)| !s.is_empty()) {
-                let n = seq.len() as u64;
-                let mut cuts: Vec<u64> = (1..n).filter(|_| next(3) == 0).collect();
-                cuts.insert(0, 0);
-                cuts.push(n);
-                for w in cuts.windows(2) {
-                    let mut c = BlockCounts::new(bins, block);
-                    let mut f = Fragment::new(key as u64, w[0]);
-                    for &s in &seq[w[0] as usize..w[1] as usize] {
-                        f.push(&mut c, s);
-                    }
-                    let rays = u64::from(f.first);
-                    let open = f.close(&mut c, w[1] == n).into_iter().collect();
-                    pieces.push(PartialCounts::of(c, rays, open));
-                }
-            }
-            // Shuffled, added in random groups, the groups added.
-            for i in (1..pieces.len()).rev() {
-                pieces.swap(i, next(i as u64 + 1) as usize);
-            }
-            let mut groups: Vec<PartialCounts> = Vec::new();
-            for p in pieces {
-                let g = next(groups.len() as u64 + 1) as usize;
-                match groups.get_mut(g) {
-                    Some(group) => group.add(p),
-                    None => groups.push(p),
-                }
-            }
-            let mut total = PartialCounts::new(bins, block);
-            while let Some(g) = groups.pop() {
-                total.add(g);
-            }
-            let at = format!("trial {trial}, L {block}, {bins} bins");
-            assert!(total.is_complete(), "{at}: {:?}", total.fragments());
-            let met = seqs.iter().filter(|s| !s.is_empty()).count() as u64;
-            assert_eq!(total.rays, met, "{at}");
-            same(&total.counts, &whole(&seqs, bins, block), &at);
-        }
-    }
-
-    #[test]
-    fn ray_keys_are_in_the_order_of_row_then_ray() {
-        let rays = [
-            (-3, -2),
-            (5, -2),
-            (-7, -1),
-            (-1, 0),
-            (0, 0),
-            (2, 0),
-            (-9, 4),
-            (1, 4),
-        ];
-        let keys: Vec<u64> = rays.iter().map(|&(i, j)| ray_key(i, j)).collect();
-        assert!(keys.windows(2).all(|w| w[0] < w[1]), "{keys:x?}");
-        assert_eq!(ray_key(0, 0), 0x8000_0000_8000_0000);
-        assert_eq!(ray_key(-1, 1), 0x8000_0001_7fff_ffff);
-    }
-
-    #[test]
-    fn a_piece_alone_counts_only_what_it_holds() {
-        // a b a b c as a b | a b c: the first piece holds no 3-block, the second only abc;
-        // aba and bab cross the seam and are counted when the pieces meet.
-        let seq = [0u8, 1, 0, 1, 2];
-        let mut parts = Vec::new();
-        for (start, end) in [(0, 2), (2, 5)] {
-            let mut c = BlockCounts::new(4, 3);
-            let mut f = Fragment::new(7, start);
-            for &s in &seq[start as usize..end as usize] {
-                f.push(&mut c, Some(s));
-            }
-            let f = f.close(&mut c, end == 5).unwrap();
-            parts.push((c, f));
-        }
-        assert_eq!(parts[0].0.blocks(), 0);
-        assert_eq!(parts[1].0.table(3).unwrap(), vec![(vec![0, 1, 2], 1)]);
-        let (c0, f0) = parts.remove(0);
-        let (c1, f1) = parts.remove(0);
-        let mut total = PartialCounts::of(c0, 1, vec![f0]);
-        total.add(PartialCounts::of(c1, 0, vec![f1]));
-        assert!(total.is_complete());
-        let mut expect = BlockCounts::new(4, 3);
-        for s in seq {
-            expect.push(s);
-        }
-        expect.end_sequence();
-        same(&total.counts, &expect, "a b | a b c");
-    }
-}
+mod tests;

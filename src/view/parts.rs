@@ -200,14 +200,8 @@ impl ViewRounds {
                         (z.clone(), *subset),
                         &mut open,
                     );
-                    let mut out = PartialCounts::new(bins, block);
-                    out.add(part);
-                    out.add(PartialCounts::of(
-                        crate::measure::BlockCounts::new(bins, block),
-                        0,
-                        open.into_fragments(),
-                    ));
-                    out
+                    // The bands' pieces, taken in order, are in key order: never sorted.
+                    PartialCounts::of(part.counts, part.rays, open.into_fragments())
                 })
                 .collect())
         })

@@ -7,26 +7,32 @@ use super::{BlockCounts, Table};
 /// What reading counts back gives: the counts, or what is wrong with the words.
 pub type ReadResult<T> = std::result::Result<T, String>;
 
-/// Reads words one at a time, refusing to read past the end.
+/// Reads little-endian words one at a time from bytes, refusing to read past the end.
 pub(crate) struct Words<'a> {
-    words: &'a [u64],
+    bytes: &'a [u8],
     at: usize,
 }
 
 impl<'a> Words<'a> {
-    pub(crate) fn new(words: &'a [u64]) -> Self {
-        Self { words, at: 0 }
+    /// The words of `bytes` (a whole number of them).
+    pub(crate) fn new(bytes: &'a [u8]) -> Self {
+        Self { bytes, at: 0 }
     }
 
     pub(crate) fn next(&mut self) -> ReadResult<u64> {
-        let w = self.words.get(self.at).copied().ok_or_else(short)?;
-        self.at += 1;
-        Ok(w)
+        let word = self.bytes.get(self.at..self.at + 8).ok_or_else(short)?;
+        self.at += 8;
+        Ok(u64::from_le_bytes(word.try_into().unwrap_or_default()))
     }
 
     /// The number of words left.
     pub(crate) fn left(&self) -> usize {
-        self.words.len() - self.at
+        (self.bytes.len() - self.at) / 8
+    }
+
+    /// The bytes left.
+    pub(crate) fn rest(&self) -> &'a [u8] {
+        &self.bytes[self.at..]
     }
 }
 

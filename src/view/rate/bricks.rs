@@ -380,7 +380,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
     fn enter(&self, slot: &mut Slot, b: usize, out: &mut PartialCounts) -> Option<Walker> {
         let f = slot.open.get_or_insert_with(|| {
             let mut f = Fragment::new(slot.key, if slot.t == slot.t0 { 0 } else { slot.t as u64 });
-            if f.first {
+            if f.first() {
                 out.rays += 1;
                 // The samples before the inner span.
                 self.feed(&mut f, &mut out.counts, slot.p0, slot.grid, slot.t0);

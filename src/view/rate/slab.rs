@@ -60,7 +60,11 @@ impl OpenRays {
     /// The open pieces, to add to other parts' ([`PartialCounts::of`]).
     #[must_use]
     pub fn into_fragments(self) -> Vec<Fragment> {
-        self.open.into_iter().flatten().collect()
+        let mut out = Vec::with_capacity(self.len());
+        for band in self.open {
+            out.extend(band);
+        }
+        out
     }
 }
 
