@@ -101,6 +101,9 @@ fn connection(
     (log, auth): (&Mutex<Vec<String>>, &Mutex<Vec<String>>),
     seen: &Mutex<HashSet<String>>,
 ) -> std::io::Result<()> {
+    // A response goes out as two writes (its head, then its body): with Nagle's algorithm the
+    // second waited for the client's delayed acknowledgement, 40 ms a request on keep-alive.
+    stream.set_nodelay(true)?;
     let mut reader = BufReader::new(stream.try_clone()?);
     let mut out = stream;
     loop {
