@@ -154,7 +154,7 @@ impl Recipe {
     }
 
     /// Writes every voxel, x fastest, little-endian in its type (what a volume file's body
-    /// holds), made [`WRITE_VOXELS`] at a time: never more than that in memory.
+    /// holds), made eight million at a time: never more than those in memory.
     pub fn write_le(&self, out: &mut dyn std::io::Write) -> std::io::Result<()> {
         self.write_le_in(out, WRITE_VOXELS)
     }
