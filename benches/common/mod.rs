@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use slabscope::formats::{NrrdEncoding, VolumeHeader, write_streamed};
+use slabscope::formats::{NrrdEncoding, write_phantom};
 use slabscope::volume::phantom::Recipe;
 
 /// The value after `name` among the process's arguments, if given (for the benchmarks that time
@@ -125,16 +125,7 @@ pub fn volume(dir: &Path, dims: [usize; 3]) -> Result<PathBuf, Box<dyn std::erro
     }
     let t = Instant::now();
     // Made and written a chunk at a time, never held: 2048³ (16 GiB) as well as 256³.
-    let recipe = Recipe::body(dims, 1)?;
-    let header = VolumeHeader {
-        dims,
-        spacing: [1.0; 3],
-        voxel_type: recipe.voxel_type(),
-        transform: recipe.transform(),
-    };
-    write_streamed(&path, &header, NrrdEncoding::Raw, false, &mut |out| {
-        recipe.write_le(out)
-    })?;
+    write_phantom(&path, &Recipe::body(dims, 1)?, NrrdEncoding::Raw, false)?;
     println!(
         "wrote {} in {:.1} s",
         path.display(),

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
-use slabscope::formats::{NrrdEncoding, VolumeHeader, VolumeOutput, write_streamed};
+use slabscope::formats::{NrrdEncoding, VolumeOutput, write_phantom};
 use slabscope::volume::phantom::Recipe;
 
 /// The phantoms.
@@ -70,20 +70,12 @@ pub fn run(args: &PhantomArgs) -> Result<()> {
         Kind::Body => Recipe::body(dims, args.seed)?,
         Kind::SheppLogan => Recipe::shepp_logan(dims)?,
     };
-    let header = VolumeHeader {
-        dims,
-        spacing: [1.0; 3],
-        voxel_type: recipe.voxel_type(),
-        transform: recipe.transform(),
-    };
     let encoding = if args.raw {
         NrrdEncoding::Raw
     } else {
         NrrdEncoding::Gzip
     };
     // Made and written a chunk of voxels at a time: a phantom of any size in a few tens of MiB.
-    write_streamed(&args.output, &header, encoding, args.force, &mut |out| {
-        recipe.write_le(out)
-    })?;
+    write_phantom(&args.output, &recipe, encoding, args.force)?;
     Ok(())
 }

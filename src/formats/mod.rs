@@ -46,7 +46,7 @@ pub use raw::{RawOptions, parse_dims, parse_raw_name};
 pub use registry::{folder_kind, picks_in_folder, volume_name};
 pub use source::{Source, check_input, open_regular, regular};
 pub use write::{
-    Body, VolumeHeader, VolumeOutput, stage_streamed, stage_volume, write_streamed, write_volume,
+    Body, VolumeHeader, VolumeOutput, stage_streamed, stage_volume, write_phantom, write_volume,
 };
 pub use zarr::ZarrOptions;
 

@@ -169,7 +169,7 @@ fn stage_encoded(
 /// Writes a volume of `header`'s shape whose voxels `body` writes as it makes them (never held
 /// whole) to `path`, in the format its extension names (`.nrrd` in `encoding`), atomically; an
 /// existing `path` is replaced only when `force` is set, and only when it is a regular file.
-pub fn write_streamed(
+fn write_streamed(
     path: &Path,
     header: &VolumeHeader,
     encoding: NrrdEncoding,
@@ -178,4 +178,23 @@ pub fn write_streamed(
 ) -> Result<()> {
     check_output(path, force)?;
     stage_encoded(path, header, encoding, body)?.persist(force)
+}
+
+/// Writes the phantom `recipe` makes to `path` as [`write_streamed`] does: made and written a
+/// chunk of voxels at a time, never held whole.
+pub fn write_phantom(
+    path: &Path,
+    recipe: &crate::volume::phantom::Recipe,
+    encoding: NrrdEncoding,
+    force: bool,
+) -> Result<()> {
+    let header = VolumeHeader {
+        dims: recipe.dims(),
+        spacing: [1.0; 3],
+        voxel_type: recipe.voxel_type(),
+        transform: recipe.transform(),
+    };
+    write_streamed(path, &header, encoding, force, &mut |out| {
+        recipe.write_le(out)
+    })
 }

@@ -118,14 +118,24 @@ impl Recipe {
     /// Voxels `first..first + out.len()` in linear order (x fastest), in parallel.
     fn fill(&self, first: usize, out: &mut [f32]) {
         let [nx, ny, _] = self.dims;
-        out.par_chunks_mut(nx.max(1 << 12))
+        let part = nx.max(1 << 12);
+        out.par_chunks_mut(part)
             .enumerate()
-            .for_each(|(c, part)| {
-                let start = first + c * nx.max(1 << 12);
-                for (k, v) in part.iter_mut().enumerate() {
-                    let i = start + k;
-                    let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
-                    *v = self.value(x, y, z, i as u64);
+            .for_each(|(c, values)| {
+                // The first voxel's place found once, the others' by stepping along x.
+                let start = first + c * part;
+                let (mut x, mut y, mut z) = (start % nx, start / nx % ny, start / (nx * ny));
+                for (i, v) in (start as u64..).zip(values.iter_mut()) {
+                    *v = self.value(x, y, z, i);
+                    x += 1;
+                    if x == nx {
+                        x = 0;
+                        y += 1;
+                        if y == ny {
+                            y = 0;
+                            z += 1;
+                        }
+                    }
                 }
             });
     }

@@ -141,8 +141,11 @@ impl Group {
         let (cells, base) = (sampler.cells(), sampler.cells_base());
         // Lanes outside the window of the map (idle lanes, and only they: their labels are
         // neither queued nor counted) read its last cell instead: no bounds check a lane.
-        let window = (cells.len() - 1, _mm256_set1_epi32(base as i32));
-        let last = _mm256_set1_epi32(window.0 as i32);
+        let last = cells.len() - 1;
+        let (base_lanes, last_lanes) = (
+            _mm256_set1_epi32(base as i32),
+            _mm256_set1_epi32(last as i32),
+        );
         chunk.missing = [0; CHUNK];
         // First the labels: no step waits for another's, so many are read at once...
         for t in 0..chunk.steps {
@@ -159,9 +162,12 @@ impl Group {
             }
             chunk.cells[t].set(cell);
             let mut inside = Narrow::default();
-            inside.set(_mm256_min_epu32(_mm256_sub_epi32(cell, window.1), last));
+            inside.set(_mm256_min_epu32(
+                _mm256_sub_epi32(cell, base_lanes),
+                last_lanes,
+            ));
             for (label, &i) in chunk.labels[t].iter_mut().zip(&inside.0) {
-                debug_assert!(i as usize <= window.0);
+                debug_assert!(i as usize <= last);
                 // SAFETY: `i` is at most the window's last index (the minimum above).
                 *label = unsafe { *cells.get_unchecked(i as usize) };
             }
