@@ -180,8 +180,9 @@ fn write_streamed(
     stage_encoded(path, header, encoding, body)?.persist(force)
 }
 
-/// Writes the phantom `recipe` makes to `path` as [`write_streamed`] does: made and written a
-/// chunk of voxels at a time, never held whole.
+/// Writes the phantom `recipe` makes to `path` in the format its extension names (`.nrrd` in
+/// `encoding`), made and written a chunk of voxels at a time, never held whole, atomically; an
+/// existing `path` is replaced only when `force` is set, and only when it is a regular file.
 pub fn write_phantom(
     path: &Path,
     recipe: &crate::volume::phantom::Recipe,
