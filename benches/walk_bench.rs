@@ -6,7 +6,7 @@
 //! them (no interpolation, no mixed cells): the cost of reading the map 21 times. Prints the
 //! median seconds of each and its nanoseconds per voxel.
 //!
-//! `cargo bench --bench walk_bench -- [--sizes 256x256x415,512x512x512] [--bricks 64,s64]
+//! `cargo bench --bench walk_bench -- [--sizes 256x256x415,512x512x512] [--bricks 64,s64 or "" for none]
 //! [--runs 3] [--no-tiles]`
 
 use std::time::Instant;
@@ -52,6 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let bricks: Vec<(usize, bool)> = arg("--bricks")
         .unwrap_or_else(|| "64,s64".into())
         .split(',')
+        .filter(|b| !b.is_empty())
         .map(|b| {
             Ok::<_, std::num::ParseIntError>((
                 b.trim_start_matches('s').parse()?,
