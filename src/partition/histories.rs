@@ -95,7 +95,9 @@ impl Histories {
     pub fn of_stack(stack: SliceStack, scope: Scope, monitor: &Monitor) -> Result<Self> {
         let n = stack.slices();
         Self::check_slices(n)?;
+        monitor.start("slice histograms and NMI", 2);
         let histograms = stack.slice_histograms();
+        monitor.advance(1)?;
         let bottom = if scope.bottom_up {
             Some(MergeHistory::new(&stack, monitor)?)
         } else {
@@ -105,7 +107,9 @@ impl Histories {
             b.slice_nmi().to_vec()
         } else {
             let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
-            consecutive_nmi(&stack, &Columns::new(&stack), &singles, monitor)?
+            let nmi = consecutive_nmi(&stack, &Columns::new(&stack), &singles, monitor)?;
+            monitor.advance(1)?;
+            nmi
         };
         Self::of_parts(stack, histograms, nmi_curve, bottom, scope)
     }

@@ -42,15 +42,6 @@ impl PixelHistogram {
         *c += n;
     }
 
-    fn fill(&mut self, symbols: &[u8]) {
-        self.clear();
-        for &s in symbols {
-            if s != MISSING {
-                self.add(s, 1);
-            }
-        }
-    }
-
     /// Adds `other ⊗ self` into the `bins × bins` joint histogram `h` (rows are `other`'s bins).
     fn cross_into(&self, other: &Self, h: &mut [u64], bins: usize) {
         for &x in &other.used {
@@ -365,10 +356,15 @@ fn joints_over_pixels(
         .fold(
             || (zero(), vec![]),
             |(mut joint, mut hists): (Vec<u64>, Vec<PixelHistogram>), i| {
+                if singles {
+                    let (first, column) = stack.column(columns.active[i] as usize, start, end);
+                    add_neighbours(column, first - start, &mut joint, b);
+                    return (joint, hists);
+                }
                 if hists.is_empty() {
                     hists = (0..slabs.len()).map(|_| PixelHistogram::new(b)).collect();
                 }
-                if !singles && let Some(symbol) = columns.single_run(i, start, end) {
+                if let Some(symbol) = columns.single_run(i, start, end) {
                     // One symbol throughout the slabs: each pair adds |S_j|·|S_j+1| to (s, s).
                     if symbol != MISSING {
                         let cell = usize::from(symbol) * (b + 1);
@@ -379,15 +375,7 @@ fn joints_over_pixels(
                     }
                     return (joint, hists);
                 }
-                if singles {
-                    let (first, column) = stack.column(columns.active[i] as usize, start, end);
-                    for (j, h) in hists.iter_mut().enumerate() {
-                        let k = (start + j).wrapping_sub(first);
-                        h.fill(column.get(k..=k).unwrap_or(&[]));
-                    }
-                } else {
-                    columns.fill_from_runs(i, slabs, &mut hists);
-                }
+                columns.fill_from_runs(i, slabs, &mut hists);
                 for (j, pair) in hists.windows(2).enumerate() {
                     pair[1].cross_into(&pair[0], &mut joint[j * b * b..(j + 1) * b * b], b);
                 }
@@ -411,6 +399,25 @@ fn joints_over_pixels(
         }
     }
     flat.chunks(b * b).map(<[u64]>::to_vec).collect()
+}
+
+/// Adds one pixel's pairs of neighbouring slices to their joint histograms: `column` holds its
+/// symbols from the slice `first` pairs past the first pair's (`joints` holds a `bins × bins`
+/// histogram a pair, rows the first slice's bins), missing samples left out. A slab of one slice
+/// holds one sample a pixel, so its pair's histogram gains one count, where the slabs' general
+/// path builds a histogram of each slab at the pixel and crosses them.
+#[inline]
+fn add_neighbours(column: &[u8], first: usize, joints: &mut [u64], bins: usize) {
+    if column.len() < 2 {
+        return;
+    }
+    let joints = &mut joints[first * bins * bins..];
+    for (pair, joint) in column.windows(2).zip(joints.chunks_exact_mut(bins * bins)) {
+        let (x, y) = (pair[0], pair[1]);
+        if x != MISSING && y != MISSING {
+            joint[usize::from(x) * bins + usize::from(y)] += 1;
+        }
+    }
 }
 
 /// Adds the joint histograms of every consecutive pair of `slabs` into `joints` (`pairs × bins²`

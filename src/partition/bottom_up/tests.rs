@@ -166,3 +166,61 @@ fn long_columns_of_noise_give_the_pairwise_joint_histograms_from_their_checkpoin
         }
     }
 }
+
+#[test]
+fn the_joint_histograms_of_neighbouring_slices_follow_the_pairwise_definition() {
+    use crate::volume::{Volume, VoxelType};
+    // An oblique stack (columns that start and end at different slices) of blocky values with
+    // noise, and a few background voxels left out (missing samples); slabs of one slice each,
+    // more pairs than the threads' blocks, so that the pairs are split among them.
+    let mut state = 3u32;
+    let data = (0..23 * 17 * 29)
+        .map(|i| {
+            state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+            ((i % 23) / 6 * 20 + (i / 391) / 4 * 30) as f32
+                + if state >> 29 == 0 { 15.0 } else { 0.0 }
+        })
+        .collect();
+    let v = Volume::new([23, 17, 29], [1.0; 3], VoxelType::F32, data).unwrap();
+    let params = super::super::StackParams {
+        sampling: crate::geometry::lattice::SamplingParams {
+            bins: 8,
+            ..Default::default()
+        },
+        background: crate::volume::background::BackgroundRule::Below(0.0),
+        ..Default::default()
+    };
+    let stack = SliceStack::new(&v, [2.0, -1.0, 3.0], &params, &Monitor::none()).unwrap();
+    let n = stack.slices();
+    assert!(n > 30, "{n} slices");
+    let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
+    let symbol = |p: usize, k: usize| stack.column(p, k, k + 1).1.first().copied();
+    let literal = |s: usize| {
+        let mut joint = vec![0u64; 64];
+        for p in 0..stack.pixels() {
+            if let (Some(x), Some(y)) = (symbol(p, s), symbol(p, s + 1))
+                && x != MISSING
+                && y != MISSING
+            {
+                joint[usize::from(x) * 8 + usize::from(y)] += 1;
+            }
+        }
+        joint
+    };
+    let columns = Columns::new(&stack);
+    let missing = (0..stack.pixels())
+        .flat_map(|p| (0..n).map(move |s| (p, s)))
+        .filter(|&(p, s)| symbol(p, s) == Some(MISSING))
+        .count();
+    assert!(missing > 0, "no sample left out");
+    let joints = consecutive_joints(&stack, &columns, &singles);
+    assert_eq!(joints.len(), n - 1);
+    for (s, joint) in joints.iter().enumerate() {
+        assert_eq!(joint, &literal(s), "slices {s} and {}", s + 1);
+    }
+    // A few pairs (a merge step's) split the pixels among the threads instead.
+    let joints = consecutive_joints(&stack, &columns, &singles[10..13]);
+    for (k, joint) in joints.iter().enumerate() {
+        assert_eq!(joint, &literal(10 + k), "slices {} and {}", 10 + k, 11 + k);
+    }
+}

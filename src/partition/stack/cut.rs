@@ -76,11 +76,16 @@ impl SliceStack {
             positions,
             ..
         } = cutter.cut(rows, sums.as_mut(), monitor)?;
-        Ok(Self {
+        // The slices' sums along a coordinate axis take a pass over the voxels of their own: a
+        // phase, so that a progress bar does not stand full meanwhile.
+        monitor.start("summing slices", 1);
+        let stack = Self {
             columns,
             symbols,
             ..cutter.summary(positions, sums, monitor)?
-        })
+        };
+        monitor.advance(1)?;
+        Ok(stack)
     }
 }
 
