@@ -452,7 +452,7 @@ impl SliceSums {
 fn plane_sums(
     volume: &Volume,
     m: usize,
-    counted: &(dyn Fn(usize, f32) -> bool + Sync),
+    counted: &(impl Fn(usize, f32) -> bool + Sync),
 ) -> SliceSums {
     let dims = volume.dims();
     let stride = [1, dims[0], dims[0] * dims[1]];
