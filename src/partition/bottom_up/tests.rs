@@ -188,7 +188,6 @@ fn the_joint_histograms_of_neighbouring_slices_follow_the_pairwise_definition() 
             ..Default::default()
         },
         background: crate::volume::background::BackgroundRule::Below(0.0),
-        ..Default::default()
     };
     let stack = SliceStack::new(&v, [2.0, -1.0, 3.0], &params, &Monitor::none()).unwrap();
     let n = stack.slices();
