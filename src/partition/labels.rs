@@ -132,6 +132,7 @@ fn labels_of<V: Voxel, T: Copy + Send>(
     slab_of: &[u16],
     label: &(impl Fn(u16) -> T + Sync),
 ) {
+    let background = background.test();
     out.par_chunks_mut(nx * ny)
         .enumerate()
         .for_each(|(dz, plane)| {

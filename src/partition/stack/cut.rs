@@ -11,7 +11,7 @@ use super::{BackgroundSummary, Column, Lattice, MISSING, SliceStack, StackParams
 use crate::error::{Error, Result};
 use crate::geometry::{WorldAxis, canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
-use crate::volume::background::Background;
+use crate::volume::background::{Background, BackgroundTest};
 use crate::volume::{Quantizer, Volume, Voxel};
 
 mod oblique;
@@ -204,10 +204,11 @@ impl<'a> Cutter<'a> {
     }
 
     /// The symbol of a sample of value `v` whose voxel (the nearest, for an interpolated one)
-    /// is at linear `index`: its bin, or [`MISSING`] for background and values that do not count.
+    /// is at linear `index`: its bin, or [`MISSING`] for `background` (the cutter's, its test
+    /// found once for a loop) and values that do not count.
     #[inline]
-    pub(super) fn symbol(&self, index: usize, v: f32) -> u8 {
-        if self.background.contains(index, v) {
+    pub(super) fn symbol_in(&self, background: BackgroundTest, index: usize, v: f32) -> u8 {
+        if background.contains(index, v) {
             MISSING
         } else {
             self.quantizer.bin(v).unwrap_or(MISSING)
@@ -247,7 +248,8 @@ impl<'a> Cutter<'a> {
     ) -> Result<SliceStack> {
         monitor.check()?;
         let (volume, d) = (self.volume, self.axis);
-        let counted = |index: usize, v: f32| v.is_finite() && !self.background.contains(index, v);
+        let background = self.background.test();
+        let counted = |index: usize, v: f32| v.is_finite() && !background.contains(index, v);
         let SliceSums { sums, counts } = match (sums, coordinate_axis(d)) {
             (Some(sums), _) => sums,
             (None, Some(m)) => plane_sums(volume, m, &counted),
@@ -316,6 +318,7 @@ impl<'a> Cutter<'a> {
         let first = rows.start * dims[a];
         let pixels = rows.len() * dims[a];
         let mut symbols = vec![MISSING; pixels * n];
+        let background = self.background.test();
         crate::volume::with_voxels!(volume.data(), |voxels| {
             symbols
                 .par_chunks_mut(CUT_BLOCK * n)
@@ -332,7 +335,7 @@ impl<'a> Cutter<'a> {
                             let row = base + s * stride[m];
                             for k in 0..run {
                                 let i = row + k * stride[a];
-                                out[k * n + s] = self.symbol(i, voxels[i].to_f32());
+                                out[k * n + s] = self.symbol_in(background, i, voxels[i].to_f32());
                             }
                         }
                         k0 += run;

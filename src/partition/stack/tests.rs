@@ -217,7 +217,7 @@ fn an_oblique_cut_is_every_rays_samples_in_order_and_strips_add_to_the_whole() {
                         let p = ray.at(k);
                         let (value, index) = (it.sample(p), it.nearest(p));
                         let s = (k - k_first) as usize;
-                        symbols.push(cutter.symbol(index, value));
+                        symbols.push(cutter.symbol_in(cutter.background.test(), index, value));
                         positions[s] += 1;
                         if value.is_finite() && !cutter.background.contains(index, value) {
                             sums[s] += f64::from(value);

@@ -40,6 +40,30 @@ pub struct Background {
     mask: Option<Mask>,
 }
 
+/// [`Background::contains`] resolved for a loop: a found background's mask, a threshold, or
+/// nothing.
+#[derive(Clone, Copy, Debug)]
+pub enum BackgroundTest<'a> {
+    /// One bit per voxel.
+    Mask(&'a [u64]),
+    /// Every voxel at or below the value.
+    Below(f32),
+    /// No background.
+    Nothing,
+}
+
+impl BackgroundTest<'_> {
+    /// Whether the voxel at linear `index`, of value `v`, is background.
+    #[inline]
+    pub fn contains(self, index: usize, v: f32) -> bool {
+        match self {
+            Self::Mask(words) => words[index / 64] >> (index % 64) & 1 == 1,
+            Self::Below(t) => v <= t,
+            Self::Nothing => false,
+        }
+    }
+}
+
 /// Room for a found background's mask, a word per 64 voxels, handed to
 /// [`Background::find_in`]: memory, or the writable map of a scratch file (its pages the
 /// kernel's page cache, which it can write out and drop, not the process's own memory).
@@ -180,10 +204,17 @@ impl Background {
     /// Whether the voxel at linear `index`, of value `v`, is background.
     #[inline]
     pub fn contains(&self, index: usize, v: f32) -> bool {
+        self.test().contains(index, v)
+    }
+
+    /// The test of [`contains`](Self::contains) with its mask found once, for a loop over
+    /// voxels (`contains` finds where the mask lies at every voxel).
+    #[inline]
+    pub fn test(&self) -> BackgroundTest<'_> {
         match (&self.mask, self.rule) {
-            (Some(mask), _) => mask.words()[index / 64] >> (index % 64) & 1 == 1,
-            (None, BackgroundRule::Below(t)) => v <= t,
-            (None, _) => false,
+            (Some(mask), _) => BackgroundTest::Mask(mask.words()),
+            (None, BackgroundRule::Below(t)) => BackgroundTest::Below(t),
+            (None, _) => BackgroundTest::Nothing,
         }
     }
 

@@ -155,6 +155,7 @@ impl Cutter<'_> {
         let (bins, q) = (self.bins, VoxelQuantizer::new::<T>(self.quantizer));
         let du = slicing.step[0] * stride[0] as f64;
         let zero = || vec![0u64; slicing.slices * bins];
+        let background = self.background.test();
         (first[2]..dims[2])
             .into_par_iter()
             .step_by(stride[2])
@@ -166,7 +167,7 @@ impl Cutter<'_> {
                     for x in (first[0]..dims[0]).step_by(stride[0]) {
                         let index = row + x;
                         let v = voxels[index];
-                        if !self.background.contains(index, v.to_f32())
+                        if !background.contains(index, v.to_f32())
                             && let Some(b) = q.bin(v)
                         {
                             h[slicing.slice(u) * bins + usize::from(b)] += 1;
