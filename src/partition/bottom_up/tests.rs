@@ -51,20 +51,24 @@ fn slab_joint_histograms_equal_the_pairwise_definition() {
     }
 }
 
-#[test]
-fn oblique_columns_follow_the_pairwise_definition() {
-    use crate::volume::{Volume, VoxelType};
-    // Blocky values with noise, so columns have both long runs and short ones, and start and
-    // end at different slices.
-    let mut state = 11u32;
-    let data = (0..14 * 11 * 9)
+/// Blocky values with noise: blocks of `x` voxels along x and `z` planes along z, a voxel in
+/// eight raised at random (`seed`).
+fn blocky(dims: [usize; 3], (x, z): (usize, usize), seed: u32) -> crate::volume::Volume {
+    let mut state = seed;
+    let data = (0..dims.iter().product::<usize>())
         .map(|i| {
             state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
-            ((i % 14) / 5 * 20 + (i / 154) / 3 * 30) as f32
+            ((i % dims[0]) / x * 20 + (i / (dims[0] * dims[1])) / z * 30) as f32
                 + if state >> 29 == 0 { 15.0 } else { 0.0 }
         })
         .collect();
-    let v = Volume::new([14, 11, 9], [1.0; 3], VoxelType::F32, data).unwrap();
+    crate::volume::Volume::new(dims, [1.0; 3], crate::volume::VoxelType::F32, data).unwrap()
+}
+
+#[test]
+fn oblique_columns_follow_the_pairwise_definition() {
+    // Columns with both long runs and short ones, which start and end at different slices.
+    let v = blocky([14, 11, 9], (5, 3), 11);
     let params = super::super::StackParams {
         sampling: crate::geometry::lattice::SamplingParams {
             bins: 8,
@@ -169,19 +173,10 @@ fn long_columns_of_noise_give_the_pairwise_joint_histograms_from_their_checkpoin
 
 #[test]
 fn the_joint_histograms_of_neighbouring_slices_follow_the_pairwise_definition() {
-    use crate::volume::{Volume, VoxelType};
-    // An oblique stack (columns that start and end at different slices) of blocky values with
-    // noise, and a few background voxels left out (missing samples); slabs of one slice each,
-    // more pairs than the threads' blocks, so that the pairs are split among them.
-    let mut state = 3u32;
-    let data = (0..23 * 17 * 29)
-        .map(|i| {
-            state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
-            ((i % 23) / 6 * 20 + (i / 391) / 4 * 30) as f32
-                + if state >> 29 == 0 { 15.0 } else { 0.0 }
-        })
-        .collect();
-    let v = Volume::new([23, 17, 29], [1.0; 3], VoxelType::F32, data).unwrap();
+    // An oblique stack (columns that start and end at different slices) with a few background
+    // voxels left out (missing samples); slabs of one slice each, more pairs than the threads'
+    // blocks, so that the pairs are split among them.
+    let v = blocky([23, 17, 29], (6, 4), 3);
     let params = super::super::StackParams {
         sampling: crate::geometry::lattice::SamplingParams {
             bins: 8,
