@@ -7,8 +7,9 @@
 
 use rayon::prelude::*;
 
-use super::bricks::BrickWalk;
+use super::bricks::{BrickWalk, at, by_length, common_walk};
 use super::grid::Bricks;
+use super::tiles::{RayStart, Walker, advance, sample_bin};
 use super::{BinSampler, RaySubset};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{Fragment, PartialCounts};
@@ -91,8 +92,12 @@ pub fn count_slab_into<T: Voxel>(
         .par_iter()
         .zip(open.open.par_iter_mut())
         .fold(empty, |mut out, (&js, held)| {
-            let mut band = walk.band(js, &mut out);
-            walk.walk(&mut band, &order, &mut out);
+            if walk.whole_slab() {
+                whole_band(&walk, js, &mut out);
+            } else {
+                let mut band = walk.band(js, &mut out);
+                walk.walk(&mut band, &order, &mut out);
+            }
             out.stitch_into(held);
             out
         })
@@ -100,4 +105,82 @@ pub fn count_slab_into<T: Voxel>(
             a.add(b);
             a
         })
+}
+
+/// A ray's stretch in a slab walked whole: its open piece, and where its walk stands.
+struct Stretch {
+    f: Fragment,
+    p: [i64; 3],
+    t: i64,
+    t1: i64,
+    n: i64,
+    grid: bool,
+}
+
+/// The rays of rows `js` through a slab whose planes are walked whole (one brick): each ray's
+/// samples inside cells there are one stretch, found by arithmetic ([`BrickWalk::slab_stretch`])
+/// rather than brick by brick, and the stretches walked together, as the bricked walk walks a
+/// brick's. The same pieces, counted and left open alike, as the bricked walk's.
+fn whole_band<T: Voxel>(walk: &BrickWalk<T>, js: (i64, i64), out: &mut PartialCounts) {
+    let (sampler, step, block) = (walk.sampler, walk.step, walk.block);
+    let (mut stretches, mut walkers) = (Vec::new(), Vec::new());
+    walk.rays(js, out, |key, start, out| {
+        let RayStart { p, grid, n, t0, t1 } = start;
+        let (ta, tb) = walk.slab_stretch(p, (t0, t1));
+        if ta >= tb {
+            return;
+        }
+        let mut f = Fragment::new(key, if ta == t0 { 0 } else { ta as u64 });
+        if f.first() {
+            out.rays += 1;
+            // The samples before the inner span.
+            walk.feed(&mut f, &mut out.counts, p, grid, t0);
+        }
+        let (mut p, mut t) = (at(p, step, ta), ta);
+        // The head of a piece that does not start its ray, one sample at a time.
+        while t < tb && f.in_head(block) {
+            f.push(&mut out.counts, sample_bin(sampler, p, grid));
+            advance(&mut p, step);
+            t += 1;
+        }
+        if t < tb {
+            walkers.push(Walker {
+                p,
+                run: f.run(),
+                inner: tb - t,
+                grid,
+                id: stretches.len(),
+                ..Walker::idle()
+            });
+        }
+        stretches.push(Stretch {
+            f,
+            p,
+            t,
+            t1,
+            n,
+            grid,
+        });
+    });
+    // Stretches of like lengths side by side, as the bricked walk takes a brick's.
+    let (mut sorted, mut tally) = (Vec::new(), Vec::new());
+    by_length(&mut walkers, &mut sorted, &mut tally);
+    common_walk(&mut sorted, step, sampler, &mut out.counts);
+    for w in &sorted {
+        let s = &mut stretches[w.id];
+        s.p = w.p;
+        s.t += w.inner;
+        s.f.walked(w.inner as u64, w.run);
+    }
+    // In order of key, as the rays were set up: never sorted again.
+    out.reserve_fragments(stretches.len());
+    for s in stretches {
+        let (mut f, last) = (s.f, s.t == s.t1);
+        if last {
+            // The samples after the inner span, where the ray ends in this slab.
+            walk.feed(&mut f, &mut out.counts, s.p, s.grid, s.n - s.t1);
+        }
+        let left = f.close(&mut out.counts, last);
+        out.push_fragment(left);
+    }
 }
