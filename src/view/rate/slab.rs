@@ -91,16 +91,20 @@ pub fn count_slab_into<T: Voxel>(
     open.bands
         .par_iter()
         .zip(open.open.par_iter_mut())
-        .fold(empty, |mut out, (&js, held)| {
-            if walk.whole_slab() {
-                whole_band(&walk, js, &mut out);
-            } else {
-                let mut band = walk.band(js, &mut out);
-                walk.walk(&mut band, &order, &mut out);
-            }
-            out.stitch_into(held);
-            out
-        })
+        .fold(
+            || (empty(), Scratch::default()),
+            |(mut out, mut scratch), (&js, held)| {
+                if walk.whole_slab() {
+                    whole_band(&walk, js, &mut out, &mut scratch);
+                } else {
+                    let mut band = walk.band(js, &mut out);
+                    walk.walk(&mut band, &order, &mut out);
+                }
+                out.stitch_into(held);
+                (out, scratch)
+            },
+        )
+        .map(|(out, _)| out)
         .reduce(empty, |mut a, b| {
             a.add(b);
             a
@@ -112,18 +116,41 @@ struct Stretch {
     f: Fragment,
     p: [i64; 3],
     t: i64,
+    tb: i64,
     t1: i64,
     n: i64,
     grid: bool,
+}
+
+/// What a thread's walk of whole slabs keeps from band to band: room for a band's stretches and
+/// walkers, allocated once (fresh vectors of a band's size took page faults and copies).
+#[derive(Default)]
+struct Scratch {
+    stretches: Vec<Stretch>,
+    walkers: Vec<Walker>,
+    sorted: Vec<Walker>,
+    tally: Vec<usize>,
 }
 
 /// The rays of rows `js` through a slab whose planes are walked whole (one brick): each ray's
 /// samples inside cells there are one stretch, found by arithmetic ([`BrickWalk::slab_stretch`])
 /// rather than brick by brick, and the stretches walked together, as the bricked walk walks a
 /// brick's. The same pieces, counted and left open alike, as the bricked walk's.
-fn whole_band<T: Voxel>(walk: &BrickWalk<T>, js: (i64, i64), out: &mut PartialCounts) {
-    let (sampler, step, block) = (walk.sampler, walk.step, walk.block);
-    let (mut stretches, mut walkers) = (Vec::new(), Vec::new());
+fn whole_band<T: Voxel>(
+    walk: &BrickWalk<T>,
+    js: (i64, i64),
+    out: &mut PartialCounts,
+    scratch: &mut Scratch,
+) {
+    let (sampler, step) = (walk.sampler, walk.step);
+    let Scratch {
+        stretches,
+        walkers,
+        sorted,
+        tally,
+    } = scratch;
+    stretches.clear();
+    walkers.clear();
     walk.rays(js, out, |key, start, out| {
         let RayStart { p, grid, n, t0, t1 } = start;
         let (ta, tb) = walk.slab_stretch(p, (t0, t1));
@@ -136,37 +163,24 @@ fn whole_band<T: Voxel>(walk: &BrickWalk<T>, js: (i64, i64), out: &mut PartialCo
             // The samples before the inner span.
             walk.feed(&mut f, &mut out.counts, p, grid, t0);
         }
-        let (mut p, mut t) = (at(p, step, ta), ta);
-        // The head of a piece that does not start its ray, one sample at a time.
-        while t < tb && f.in_head(block) {
-            f.push(&mut out.counts, sample_bin(sampler, p, grid));
-            advance(&mut p, step);
-            t += 1;
-        }
-        if t < tb {
-            walkers.push(Walker {
-                p,
-                run: f.run(),
-                inner: tb - t,
-                grid,
-                id: stretches.len(),
-                ..Walker::idle()
-            });
-        }
+        let p = at(p, step, ta);
+        // Its head is read once the band is set up: by then its cell has arrived.
+        sampler.prefetch_cell(sampler.inner_cell(p));
         stretches.push(Stretch {
             f,
             p,
-            t,
+            t: ta,
+            tb,
             t1,
             n,
             grid,
         });
     });
+    heads(walk, stretches, walkers, out);
     // Stretches of like lengths side by side, as the bricked walk takes a brick's.
-    let (mut sorted, mut tally) = (Vec::new(), Vec::new());
-    by_length(&mut walkers, &mut sorted, &mut tally);
-    common_walk(&mut sorted, step, sampler, &mut out.counts);
-    for w in &sorted {
+    by_length(walkers, sorted, tally);
+    common_walk(sorted, step, sampler, &mut out.counts);
+    for w in sorted.iter() {
         let s = &mut stretches[w.id];
         s.p = w.p;
         s.t += w.inner;
@@ -174,7 +188,7 @@ fn whole_band<T: Voxel>(walk: &BrickWalk<T>, js: (i64, i64), out: &mut PartialCo
     }
     // In order of key, as the rays were set up: never sorted again.
     out.reserve_fragments(stretches.len());
-    for s in stretches {
+    for s in stretches.drain(..) {
         let (mut f, last) = (s.f, s.t == s.t1);
         if last {
             // The samples after the inner span, where the ray ends in this slab.
@@ -182,5 +196,33 @@ fn whole_band<T: Voxel>(walk: &BrickWalk<T>, js: (i64, i64), out: &mut PartialCo
         }
         let left = f.close(&mut out.counts, last);
         out.push_fragment(left);
+    }
+}
+
+/// The heads of `stretches` (the samples of a piece that does not start its ray, up to L − 1,
+/// one at a time), and a walker for what each has left, into `walkers`.
+fn heads<T: Voxel>(
+    walk: &BrickWalk<T>,
+    stretches: &mut [Stretch],
+    walkers: &mut Vec<Walker>,
+    out: &mut PartialCounts,
+) {
+    let (sampler, step, block) = (walk.sampler, walk.step, walk.block);
+    for (id, s) in stretches.iter_mut().enumerate() {
+        while s.t < s.tb && s.f.in_head(block) {
+            s.f.push(&mut out.counts, sample_bin(sampler, s.p, s.grid));
+            advance(&mut s.p, step);
+            s.t += 1;
+        }
+        if s.t < s.tb {
+            walkers.push(Walker {
+                p: s.p,
+                run: s.f.run(),
+                inner: s.tb - s.t,
+                grid: s.grid,
+                id,
+                ..Walker::idle()
+            });
+        }
     }
 }
