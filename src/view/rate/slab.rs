@@ -8,6 +8,7 @@
 use rayon::prelude::*;
 
 use super::bricks::{BrickWalk, at, by_length, common_walk};
+use super::columns::slab_rows;
 use super::grid::Bricks;
 use super::tiles::{RayStart, Walker, advance, sample_bin};
 use super::{BinSampler, RaySubset};
@@ -85,7 +86,15 @@ pub fn count_slab_into<T: Voxel>(
     (planes, subset): (std::ops::Range<i64>, RaySubset),
     open: &mut OpenRays,
 ) -> PartialCounts {
-    let walk = BrickWalk::of_slab(sampler, lattice, block, bricks, (planes, subset));
+    let walk = BrickWalk::of_slab(sampler, lattice, block, bricks, (planes.clone(), subset));
+    if walk.whole_slab()
+        && subset == RaySubset::ALL
+        && let Some(axis @ (0 | 1)) = lattice.columns()
+    {
+        // Rays along x or y lie in voxel planes, each whole in one slab: voxel rows.
+        let z = planes.start.max(0) as usize..planes.end.max(0) as usize;
+        return slab_rows(sampler, axis, z, block);
+    }
     let order = walk.order();
     let empty = || PartialCounts::new(sampler.bins(), block);
     open.bands

@@ -343,7 +343,7 @@ fn slabs_walked_whole_count_what_the_tile_walk_counts() {
     // more than a plane along z (a ray steps over a thin slab), rays along z and lying in
     // planes, missing voxels, subsets; each slab apart, added in a shuffled order, and a sweep.
     let mut lcg = Lcg::new(44);
-    let mut compared = 0;
+    let (mut compared, mut rows) = (0, 0);
     for (dims, spacing, sample) in [
         ([17, 13, 29], [1.0, 1.0, 1.0], 1.0),
         ([11, 9, 23], [0.7, 1.3, 0.4], 1.1),
@@ -353,13 +353,19 @@ fn slabs_walked_whole_count_what_the_tile_walk_counts() {
         let q = v.quantizer(16).unwrap();
         let whole = BinSampler::new(&v, q);
         let cells = dims[2] - 1;
-        for axis in [
-            [0.0, 0.0, 1.0],
-            [0.6, 0.8, 0.0],
-            [0.3, -0.5, 0.81],
-            [0.2, 0.1, -0.97],
+        // Rays along x and y on the voxel rows (counted as the columns' walk counts them where
+        // the spacing is even), and oblique ones.
+        let (on_grid, off) = ([0.0; 3], [0.4, 0.1, 0.6]);
+        for (axis, rays, phase) in [
+            ([1.0, 0.0, 0.0], 1.0, on_grid),
+            ([0.0, 1.0, 0.0], 1.0, on_grid),
+            ([0.0, 0.0, 1.0], 0.9, off),
+            ([0.6, 0.8, 0.0], 0.9, off),
+            ([0.3, -0.5, 0.81], 0.9, off),
+            ([0.2, 0.1, -0.97], 0.9, off),
         ] {
-            let lattice = Lattice::new(dims, spacing, axis, 0.9, sample, [0.4, 0.1, 0.6]).unwrap();
+            let lattice = Lattice::new(dims, spacing, axis, rays, sample, phase).unwrap();
+            rows += usize::from(lattice.columns().is_some());
             for subset in [
                 RaySubset::ALL,
                 RaySubset {
@@ -412,7 +418,8 @@ fn slabs_walked_whole_count_what_the_tile_walk_counts() {
             }
         }
     }
-    assert_eq!(compared, 3 * 4 * 2 * 5);
+    assert_eq!(compared, 3 * 6 * 2 * 5);
+    assert_eq!(rows, 4);
 }
 
 #[test]
