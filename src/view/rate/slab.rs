@@ -1,6 +1,8 @@
 //! The walk of one slab of planes: the stretches of a lattice's rays between two planes of
 //! constant z, counted with the bricked walk from a window of the cell map
-//! ([`BinSampler::window`]), bands of rows of rays in parallel, and stitched at once, band by
+//! ([`BinSampler::window`]), bands of rows of rays in parallel (a slab that is one brick of whole
+//! planes, as the sweeps and the parts make it, walked as one stretch a ray found by arithmetic,
+//! and a lattice of voxel rows along x or y by the columns' walk), and stitched at once, band by
 //! band, to the pieces of rays that the slabs walked before it left open ([`OpenRays`]). A slab
 //! walked with nothing open is counted apart: its part and its open pieces
 //! ([`OpenRays::into_fragments`]) add to its neighbours' in any order ([`PartialCounts::of`]).
