@@ -292,6 +292,11 @@ impl PartialCounts {
         self.fragments.extend(fragment);
     }
 
+    /// Room for `more` fragments to be pushed without moving the others.
+    pub fn reserve_fragments(&mut self, more: usize) {
+        self.fragments.reserve(more);
+    }
+
     /// The fragments still open, in order of key and start (once added or read: those a walk
     /// pushed, as it pushed them).
     pub fn fragments(&self) -> &[Fragment] {

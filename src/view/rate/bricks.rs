@@ -76,17 +76,17 @@ fn steps_in(p: [i64; 3], step: [i64; 3], lo: [i64; 3], hi: [i64; 3]) -> i64 {
 }
 
 #[inline]
-fn at(p0: [i64; 3], step: [i64; 3], t: i64) -> [i64; 3] {
+pub(super) fn at(p0: [i64; 3], step: [i64; 3], t: i64) -> [i64; 3] {
     std::array::from_fn(|m| p0[m] + t * step[m])
 }
 
 /// The walk of one lattice brick by brick: what every band shares.
 pub(super) struct BrickWalk<'a, T: Voxel> {
-    sampler: &'a BinSampler<'a, T>,
+    pub(super) sampler: &'a BinSampler<'a, T>,
     lattice: &'a Lattice,
     bricks: Bricks,
-    block: usize,
-    step: [i64; 3],
+    pub(super) block: usize,
+    pub(super) step: [i64; 3],
     /// Which bricks are walked (all when `None`).
     member: Option<Vec<bool>>,
     /// Which rays are walked.
@@ -94,6 +94,9 @@ pub(super) struct BrickWalk<'a, T: Voxel> {
     /// When the bricks walked are a slab of the grid: its cells along z, `lo..hi` in fixed
     /// point. Rays are then set up only where they can meet it, and taken up where they enter it.
     slab: Option<(i64, i64)>,
+    /// Whether the bricks walked are one brick, the slab's planes whole: a ray's samples inside
+    /// cells there are then one stretch, found by arithmetic ([`slab_stretch`](Self::slab_stretch)).
+    whole: bool,
 }
 
 impl<'a, T: Voxel> BrickWalk<'a, T> {
@@ -113,6 +116,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             member,
             subset: RaySubset::ALL,
             slab: None,
+            whole: false,
         }
     }
 
@@ -125,17 +129,51 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
         bricks: Bricks,
         (planes, subset): (std::ops::Range<i64>, RaySubset),
     ) -> Self {
-        let member = (0..bricks.len())
+        let member: Vec<bool> = (0..bricks.len())
             .map(|b| {
                 let (lo, hi) = bricks.cells_of(b);
                 lo[2] >= planes.start && hi[2] <= planes.end
             })
             .collect();
+        let (_, all) = bricks.cells_of(bricks.len() - 1);
+        let whole = member.iter().filter(|&&m| m).count() == 1
+            && member.iter().enumerate().any(|(b, &m)| {
+                m && bricks.cells_of(b) == ([0, 0, planes.start], [all[0], all[1], planes.end])
+            });
         Self {
             subset,
             slab: Some((planes.start << FIXED_BITS, planes.end << FIXED_BITS)),
+            whole,
             ..Self::new(sampler, lattice, block, bricks, Some(member))
         }
+    }
+
+    /// Whether the bricks walked are the slab's planes whole, one brick.
+    pub(super) fn whole_slab(&self) -> bool {
+        self.whole
+    }
+
+    /// The samples `ta..tb` of the inner span `t0..t1` of the ray from `p0` (fixed point) whose
+    /// cells lie in the slab's planes (empty when none do), for a walk of the slab's planes
+    /// whole ([`whole_slab`](Self::whole_slab)): as the ray's cells along z rise or fall
+    /// steadily, they are one stretch, from where it enters the slab to where it leaves it.
+    pub(super) fn slab_stretch(&self, p0: [i64; 3], (t0, t1): (i64, i64)) -> (i64, i64) {
+        let Some((lo, hi)) = self.slab else {
+            return (t0, t1);
+        };
+        let (s, ta) = (self.step[2], self.slab_entry(p0, t0));
+        let z = p0[2] + ta * s;
+        if ta >= t1 || z < lo || z >= hi {
+            // It misses the slab, or steps over it.
+            return (t1, t1);
+        }
+        let exit = match s.signum() {
+            // The first sample at or past `hi`, or below `lo` going down.
+            1 => floor_div(hi - 1 - p0[2], s) + 1,
+            -1 => floor_div(p0[2] - lo, -s) + 1,
+            _ => t1,
+        };
+        (ta, exit.min(t1))
     }
 
     /// The range of `i` of row `j` whose rays can meet the bricks walked.
@@ -186,18 +224,18 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             .collect()
     }
 
-    /// The rays of rows `j0..=j1`, each waiting in the brick of its first sample inside a cell
-    /// that is walked (in a slab, the first from where the ray can enter it). A ray with no
-    /// sample inside a cell is counted into `out` here: whole if the brick of its first sample
-    /// is walked, or, in a slab, as the pieces of its samples in the slab's bricks
-    /// ([`outer_pieces`](Self::outer_pieces)).
-    pub(super) fn band(&self, (j0, j1): (i64, i64), out: &mut PartialCounts) -> Band {
+    /// Each ray of rows `j0..=j1` that can meet the bricks walked and has samples inside cells,
+    /// set up, in order of key, to `each`. A ray with no sample inside a cell is counted into
+    /// `out` here: whole if the brick of its first sample is walked, or, in a slab, as the
+    /// pieces of its samples in the slab's bricks ([`outer_pieces`](Self::outer_pieces)).
+    pub(super) fn rays(
+        &self,
+        (j0, j1): (i64, i64),
+        out: &mut PartialCounts,
+        mut each: impl FnMut(u64, RayStart, &mut PartialCounts),
+    ) {
         let ((i0, i1), _) = self.lattice.ray_ranges();
         let starts = RayStarts::new(self.lattice, self.sampler, self.step);
-        let mut band = Band {
-            slots: Vec::new(),
-            waiting: vec![Vec::new(); self.bricks.len()],
-        };
         for j in j0..=j1 {
             let Some((a, b)) = self.row_span(j) else {
                 continue;
@@ -206,52 +244,63 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
                 if !self.subset.keeps(i, j) {
                     continue;
                 }
-                let Some(RayStart {
-                    p: p0,
-                    grid,
-                    n,
-                    t0,
-                    t1,
-                }) = starts.of(i, j)
-                else {
+                let Some(start) = starts.of(i, j) else {
                     continue;
                 };
                 let key = ray_key(i, j);
-                if t0 >= t1 {
-                    // No sample inside a cell (the ray lies on the volume's far faces).
-                    if self.slab.is_some() {
-                        // In a slab: its samples in the slab's bricks, as pieces.
-                        self.outer_pieces(key, (p0, grid, n), out);
-                    } else if self.walked(self.bricks.holding(p0)) {
-                        // Else the whole ray, with the brick of its first sample.
-                        let mut f = Fragment::new(key, 0);
-                        self.feed(&mut f, &mut out.counts, p0, grid, n);
-                        out.rays += 1;
-                        let _ = f.close(&mut out.counts, true);
-                    }
-                    continue;
+                if start.t0 < start.t1 {
+                    each(key, start, out);
+                } else if self.slab.is_some() {
+                    // No sample inside a cell (the ray lies on the volume's far faces). In a
+                    // slab: its samples in the slab's bricks, as pieces.
+                    self.outer_pieces(key, (start.p, start.grid, start.n), out);
+                } else if self.walked(self.bricks.holding(start.p)) {
+                    // Else the whole ray, with the brick of its first sample.
+                    let mut f = Fragment::new(key, 0);
+                    self.feed(&mut f, &mut out.counts, start.p, start.grid, start.n);
+                    out.rays += 1;
+                    let _ = f.close(&mut out.counts, true);
                 }
-                let t = self.slab_entry(p0, t0);
-                if t >= t1 {
-                    continue;
-                }
-                let mut slot = Slot {
-                    p0,
-                    grid,
-                    n,
-                    t0,
-                    t1,
-                    t,
-                    p: at(p0, self.step, t),
-                    key,
-                    open: None,
-                };
-                if let Some(b) = self.locate(&mut slot, out) {
-                    band.waiting[b].push(band.slots.len() as u32);
-                }
-                band.slots.push(slot);
             }
         }
+    }
+
+    /// The rays of rows `j0..=j1`, each waiting in the brick of its first sample inside a cell
+    /// that is walked (in a slab, the first from where the ray can enter it); those with no
+    /// sample inside a cell counted into `out` at once ([`rays`](Self::rays)).
+    pub(super) fn band(&self, js: (i64, i64), out: &mut PartialCounts) -> Band {
+        let mut band = Band {
+            slots: Vec::new(),
+            waiting: vec![Vec::new(); self.bricks.len()],
+        };
+        self.rays(js, out, |key, start, out| {
+            let RayStart {
+                p: p0,
+                grid,
+                n,
+                t0,
+                t1,
+            } = start;
+            let t = self.slab_entry(p0, t0);
+            if t >= t1 {
+                return;
+            }
+            let mut slot = Slot {
+                p0,
+                grid,
+                n,
+                t0,
+                t1,
+                t,
+                p: at(p0, self.step, t),
+                key,
+                open: None,
+            };
+            if let Some(b) = self.locate(&mut slot, out) {
+                band.waiting[b].push(band.slots.len() as u32);
+            }
+            band.slots.push(slot);
+        });
         band
     }
 
@@ -287,7 +336,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
     }
 
     /// Appends the `count` samples of a ray from `p` on to `f`, one by one.
-    fn feed(
+    pub(super) fn feed(
         &self,
         f: &mut Fragment,
         counts: &mut BlockCounts,
@@ -408,7 +457,11 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
 
 /// `walkers` moved into `sorted`, longest stretch first (a counting sort: the lengths are
 /// small numbers, bounded by a brick's diameter).
-fn by_length(walkers: &mut Vec<Walker>, sorted: &mut Vec<Walker>, tally: &mut Vec<usize>) {
+pub(super) fn by_length(
+    walkers: &mut Vec<Walker>,
+    sorted: &mut Vec<Walker>,
+    tally: &mut Vec<usize>,
+) {
     let longest = walkers.iter().map(|w| w.inner).max().unwrap_or(0) as usize;
     tally.clear();
     tally.resize(longest + 2, 0);
@@ -429,7 +482,7 @@ fn by_length(walkers: &mut Vec<Walker>, sorted: &mut Vec<Walker>, tally: &mut Ve
 
 /// The inner spans of `walkers` walked together, into `counts`: eight at a time with AVX2 on a
 /// dense table, else one by one.
-fn common_walk<T: Voxel>(
+pub(super) fn common_walk<T: Voxel>(
     walkers: &mut [Walker],
     step: [i64; 3],
     sampler: &BinSampler<T>,

@@ -1,18 +1,21 @@
 //! The walk of a lattice whose rays are voxel columns: samples are voxels, read in memory order a
 //! row of columns at a time.
 
+use rayon::prelude::*;
+
 use super::{BinSampler, SERIAL_VOXELS, VoxelBins, count_in_parallel, work_units};
 use crate::error::Result;
 use crate::geometry::lattice::Lattice;
-use crate::measure::{BlockCounts, Counter, Run};
+use crate::measure::{BlockCounts, Counter, PartialCounts, Run};
 use crate::progress::Monitor;
 use crate::volume::Voxel;
 use crate::volume::cells::MIXED;
 
 /// Voxel columns along one axis, walked a few side by side (so that their work overlaps) in
-/// memory order: item `i` holds the columns starting at voxels `base·i + gap·c` for `c` in
-/// `0..width` (fewer in the last item), and a column's sample `k` lies `stride·k` further.
+/// memory order: item `i` holds the columns starting at voxels `offset + base·i + gap·c` for `c`
+/// in `0..width` (fewer in the last item), and a column's sample `k` lies `stride·k` further.
 struct Columns {
+    offset: usize,
     count: usize,
     width: usize,
     gap: usize,
@@ -30,6 +33,7 @@ impl Columns {
             _ => (nx * ny, nx, 1, nx, nx * ny, nz),
         };
         Self {
+            offset: 0,
             count,
             width,
             gap,
@@ -75,7 +79,7 @@ impl Columns {
             let width = self.width.min(self.count - item * self.width);
             total += width;
             for k in 0..self.length {
-                let start = item * self.base + k * self.stride;
+                let start = self.offset + item * self.base + k * self.stride;
                 for (c, run) in runs[..width].iter_mut().enumerate() {
                     match bin(start + c * self.gap) {
                         Some(b) => counts.push_to(run, b),
@@ -120,4 +124,43 @@ pub(super) fn column_counts<T: Voxel>(
             None => columns.walk(range, sampler, counts),
         },
     )
+}
+
+/// The counts of a lattice whose rays are the voxel rows along x or y (`axis` 0 or 1, see
+/// [`Lattice::columns`]) in a slab of cell planes `planes` along z walked whole: the rows of the
+/// voxel planes `planes` (and of the last voxel plane, on the far face, in the last slab), each
+/// a whole ray, none left open; every voxel read through `sampler` (which may hold a window of
+/// the map). What the slab walk counts there, by the columns' walk, as the search counts them.
+pub(super) fn slab_rows<T: Voxel>(
+    sampler: &BinSampler<T>,
+    axis: usize,
+    planes: std::ops::Range<usize>,
+    block: usize,
+) -> PartialCounts {
+    let [nx, ny, nz] = sampler.dims();
+    let cells = nz.saturating_sub(1).max(1);
+    let end = if planes.end >= cells { nz } else { planes.end };
+    let depth = end.saturating_sub(planes.start);
+    let columns = Columns {
+        offset: planes.start * nx * ny,
+        ..Columns::new([nx, ny, depth], axis)
+    };
+    let items = columns.items();
+    let parts = items.clamp(1, 64);
+    let empty = || PartialCounts::new(sampler.bins(), block);
+    let bin = |at: usize| sampler.voxel_bin_at(at);
+    (0..parts)
+        .into_par_iter()
+        .fold(empty, |mut out, part| {
+            let range = part * items / parts..(part + 1) * items / parts;
+            out.rays += match out.counts.dense() {
+                Some(mut dense) => columns.walk_with(range, &mut dense, bin),
+                None => columns.walk_with(range, &mut out.counts, bin),
+            };
+            out
+        })
+        .reduce(empty, |mut a, b| {
+            a.add(b);
+            a
+        })
 }

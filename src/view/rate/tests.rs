@@ -337,6 +337,92 @@ fn slabs_counted_apart_from_windows_of_the_map_add_up_to_the_whole() {
 }
 
 #[test]
+fn slabs_walked_whole_count_what_the_tile_walk_counts() {
+    // A slab one brick of whole planes (as the parts and the streamed search make them) is
+    // walked as one stretch a ray: slabs of 1 to 7 planes and more than the volume, steps of
+    // more than a plane along z (a ray steps over a thin slab), rays along z and lying in
+    // planes, missing voxels, subsets; each slab apart, added in a shuffled order, and a sweep.
+    let mut lcg = Lcg::new(44);
+    let (mut compared, mut rows) = (0, 0);
+    for (dims, spacing, sample) in [
+        ([17, 13, 29], [1.0, 1.0, 1.0], 1.0),
+        ([11, 9, 23], [0.7, 1.3, 0.4], 1.1),
+        ([8, 7, 2], [1.0, 1.0, 1.0], 1.0),
+    ] {
+        let v = awkward_volume(dims, spacing, 7);
+        let q = v.quantizer(16).unwrap();
+        let whole = BinSampler::new(&v, q);
+        let cells = dims[2] - 1;
+        // Rays along x and y on the voxel rows (counted as the columns' walk counts them where
+        // the spacing is even), and oblique ones.
+        let (on_grid, off) = ([0.0; 3], [0.4, 0.1, 0.6]);
+        for (axis, rays, phase) in [
+            ([1.0, 0.0, 0.0], 1.0, on_grid),
+            ([0.0, 1.0, 0.0], 1.0, on_grid),
+            ([0.0, 0.0, 1.0], 0.9, off),
+            ([0.6, 0.8, 0.0], 0.9, off),
+            ([0.3, -0.5, 0.81], 0.9, off),
+            ([0.2, 0.1, -0.97], 0.9, off),
+        ] {
+            let lattice = Lattice::new(dims, spacing, axis, rays, sample, phase).unwrap();
+            rows += usize::from(lattice.columns().is_some());
+            for subset in [
+                RaySubset::ALL,
+                RaySubset {
+                    every: 2,
+                    offset: 1,
+                },
+            ] {
+                let none = Monitor::none();
+                let tiles = Walk::Tiles { vector: true };
+                let (counts, rays) =
+                    counts_with(&whole, &lattice, 3, &none, tiles, subset).unwrap();
+                let expect = AxisEntropy::new(lattice.d, &counts, rays);
+                for slab in [1, 2, 3, 7, 64] {
+                    let mut slabs: Vec<std::ops::Range<usize>> = (0..cells)
+                        .step_by(slab)
+                        .map(|z| z..(z + slab).min(cells))
+                        .collect();
+                    for k in (1..slabs.len()).rev() {
+                        slabs.swap(k, (lcg.next_u64() % (k as u64 + 1)) as usize);
+                    }
+                    let (mut sweep, mut apart) =
+                        (PartialCounts::new(16, 3), PartialCounts::new(16, 3));
+                    let mut open = OpenRays::new(&lattice);
+                    for planes in slabs {
+                        let window = BinSampler::window(v.voxels(), &v, q, planes.clone());
+                        let bricks = Bricks::shaped_from(
+                            dims,
+                            [dims[0], dims[1], planes.len()],
+                            planes.start,
+                        );
+                        let z = planes.start as i64..planes.end as i64;
+                        let walk = |open: &mut OpenRays| {
+                            count_slab_into(&window, &lattice, 3, bricks, (z.clone(), subset), open)
+                        };
+                        sweep.add(walk(&mut open));
+                        let mut alone = OpenRays::new(&lattice);
+                        let part = walk(&mut alone);
+                        let pieces = alone.into_fragments();
+                        assert!(pieces.is_sorted_by_key(|f| (f.key, f.start)));
+                        apart.add(PartialCounts::of(part.counts, part.rays, pieces));
+                    }
+                    assert!(open.is_empty(), "{dims:?} {axis:?} slabs of {slab}");
+                    assert!(apart.is_complete(), "{dims:?} {axis:?} slabs of {slab}");
+                    for total in [sweep, apart] {
+                        let got = AxisEntropy::new(lattice.d, &total.counts, total.rays);
+                        assert_eq!(got, expect, "{dims:?} {axis:?} {subset:?} slabs of {slab}");
+                    }
+                    compared += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(compared, 3 * 6 * 2 * 5);
+    assert_eq!(rows, 4);
+}
+
+#[test]
 fn a_window_of_the_map_answers_every_sample_as_the_whole_map() {
     let v = awkward_volume([14, 13, 12], [1.0; 3], 8);
     for bins in [4, 32] {
