@@ -95,7 +95,7 @@ impl Histories {
     pub fn of_stack(stack: SliceStack, scope: Scope, monitor: &Monitor) -> Result<Self> {
         let n = stack.slices();
         Self::check_slices(n)?;
-        monitor.start("slice histograms and NMI", 2);
+        monitor.start("slice histograms and curves", 2);
         let histograms = stack.slice_histograms();
         monitor.advance(1)?;
         let bottom = if scope.bottom_up {
