@@ -252,6 +252,50 @@ fn bricks_counted_apart_in_random_groups_add_up_to_the_whole() {
     assert!(open > 10_000, "{open} pieces of rays stitched");
 }
 
+/// The cell planes `0..cells` in slabs of `slab` planes, in a shuffled order.
+fn shuffled_slabs(cells: usize, slab: usize, lcg: &mut Lcg) -> Vec<std::ops::Range<usize>> {
+    let mut slabs: Vec<std::ops::Range<usize>> = (0..cells)
+        .step_by(slab)
+        .map(|z| z..(z + slab).min(cells))
+        .collect();
+    for k in (1..slabs.len()).rev() {
+        slabs.swap(k, (lcg.next_u64() % (k as u64 + 1)) as usize);
+    }
+    slabs
+}
+
+/// The rays of `lattice` (those `subset` keeps) counted slab by slab in the order of `slabs`,
+/// each from a window of the map holding its planes alone, in the bricks `bricks_of` gives it:
+/// by one sweep holding the open rays, and by every slab apart with its pieces (in key order)
+/// added. Checks that neither leaves a piece open; returns both totals' rates.
+fn slab_by_slab(
+    v: &Volume,
+    q: crate::volume::Quantizer,
+    lattice: &Lattice,
+    subset: RaySubset,
+    slabs: Vec<std::ops::Range<usize>>,
+    bricks_of: impl Fn(&std::ops::Range<usize>) -> Bricks,
+) -> [AxisEntropy; 2] {
+    let (mut sweep, mut apart) = (PartialCounts::new(16, 3), PartialCounts::new(16, 3));
+    let mut open = OpenRays::new(lattice);
+    for planes in slabs {
+        let window = BinSampler::window(v.voxels(), v, q, planes.clone());
+        let (bricks, z) = (bricks_of(&planes), planes.start as i64..planes.end as i64);
+        let walk = |open: &mut OpenRays| {
+            count_slab_into(&window, lattice, 3, bricks, (z.clone(), subset), open)
+        };
+        sweep.add(walk(&mut open));
+        let mut alone = OpenRays::new(lattice);
+        let part = walk(&mut alone);
+        let pieces = alone.into_fragments();
+        assert!(pieces.is_sorted_by_key(|f| (f.key, f.start)));
+        apart.add(PartialCounts::of(part.counts, part.rays, pieces));
+    }
+    assert!(open.is_empty(), "{:?}: rays left open", lattice.d);
+    assert!(apart.is_complete(), "{:?}: pieces left apart", lattice.d);
+    [sweep, apart].map(|total| AxisEntropy::new(lattice.d, &total.counts, total.rays))
+}
+
 #[test]
 fn slabs_counted_apart_from_windows_of_the_map_add_up_to_the_whole() {
     // Each slab walked with a sampler holding its planes' cells alone; the slabs added in a
@@ -296,36 +340,9 @@ fn slabs_counted_apart_from_windows_of_the_map_add_up_to_the_whole() {
                 let expect = AxisEntropy::new(lattice.d, &counts, rays);
                 for (slab, brick) in [(1, 1), (2, 1), (5, 5), (6, 3), (64, 64)] {
                     let bricks = Bricks::shaped(dims, [4, 7, brick]);
-                    let mut slabs: Vec<std::ops::Range<usize>> = (0..cells)
-                        .step_by(slab)
-                        .map(|z| z..(z + slab).min(cells))
-                        .collect();
-                    for k in (1..slabs.len()).rev() {
-                        slabs.swap(k, (lcg.next_u64() % (k as u64 + 1)) as usize);
-                    }
-                    // One sweep holding the open rays, and every slab apart, added.
-                    let (mut sweep, mut apart) =
-                        (PartialCounts::new(16, 3), PartialCounts::new(16, 3));
-                    let mut open = OpenRays::new(&lattice);
-                    for planes in slabs {
-                        let window = BinSampler::window(v.voxels(), &v, q, planes.clone());
-                        let z = planes.start as i64..planes.end as i64;
-                        let walk = |open: &mut OpenRays| {
-                            count_slab_into(&window, &lattice, 3, bricks, (z.clone(), subset), open)
-                        };
-                        sweep.add(walk(&mut open));
-                        let mut alone = OpenRays::new(&lattice);
-                        let part = walk(&mut alone);
-                        apart.add(PartialCounts::of(
-                            part.counts,
-                            part.rays,
-                            alone.into_fragments(),
-                        ));
-                    }
-                    assert!(open.is_empty(), "{dims:?} {axis:?} slabs of {slab}");
-                    assert!(apart.is_complete(), "{dims:?} {axis:?} slabs of {slab}");
-                    for total in [sweep, apart] {
-                        let got = AxisEntropy::new(lattice.d, &total.counts, total.rays);
+                    let slabs = shuffled_slabs(cells, slab, &mut lcg);
+                    let totals = slab_by_slab(&v, q, &lattice, subset, slabs, |_| bricks);
+                    for got in totals {
                         assert_eq!(got, expect, "{dims:?} {axis:?} {subset:?} slabs of {slab}");
                     }
                     compared += 1;
@@ -379,38 +396,12 @@ fn slabs_walked_whole_count_what_the_tile_walk_counts() {
                     counts_with(&whole, &lattice, 3, &none, tiles, subset).unwrap();
                 let expect = AxisEntropy::new(lattice.d, &counts, rays);
                 for slab in [1, 2, 3, 7, 64] {
-                    let mut slabs: Vec<std::ops::Range<usize>> = (0..cells)
-                        .step_by(slab)
-                        .map(|z| z..(z + slab).min(cells))
-                        .collect();
-                    for k in (1..slabs.len()).rev() {
-                        slabs.swap(k, (lcg.next_u64() % (k as u64 + 1)) as usize);
-                    }
-                    let (mut sweep, mut apart) =
-                        (PartialCounts::new(16, 3), PartialCounts::new(16, 3));
-                    let mut open = OpenRays::new(&lattice);
-                    for planes in slabs {
-                        let window = BinSampler::window(v.voxels(), &v, q, planes.clone());
-                        let bricks = Bricks::shaped_from(
-                            dims,
-                            [dims[0], dims[1], planes.len()],
-                            planes.start,
-                        );
-                        let z = planes.start as i64..planes.end as i64;
-                        let walk = |open: &mut OpenRays| {
-                            count_slab_into(&window, &lattice, 3, bricks, (z.clone(), subset), open)
-                        };
-                        sweep.add(walk(&mut open));
-                        let mut alone = OpenRays::new(&lattice);
-                        let part = walk(&mut alone);
-                        let pieces = alone.into_fragments();
-                        assert!(pieces.is_sorted_by_key(|f| (f.key, f.start)));
-                        apart.add(PartialCounts::of(part.counts, part.rays, pieces));
-                    }
-                    assert!(open.is_empty(), "{dims:?} {axis:?} slabs of {slab}");
-                    assert!(apart.is_complete(), "{dims:?} {axis:?} slabs of {slab}");
-                    for total in [sweep, apart] {
-                        let got = AxisEntropy::new(lattice.d, &total.counts, total.rays);
+                    let slabs = shuffled_slabs(cells, slab, &mut lcg);
+                    let whole_planes = |planes: &std::ops::Range<usize>| {
+                        Bricks::shaped_from(dims, [dims[0], dims[1], planes.len()], planes.start)
+                    };
+                    let totals = slab_by_slab(&v, q, &lattice, subset, slabs, whole_planes);
+                    for got in totals {
                         assert_eq!(got, expect, "{dims:?} {axis:?} {subset:?} slabs of {slab}");
                     }
                     compared += 1;
