@@ -87,6 +87,15 @@ impl<'a> Monitor<'a> {
         }
     }
 
+    /// The units recorded in the phase under way, and the total it announced.
+    #[cfg(test)]
+    pub(crate) fn counted(&self) -> (u64, u64) {
+        (
+            self.done.load(Ordering::Relaxed),
+            self.total.load(Ordering::Relaxed),
+        )
+    }
+
     /// Records `units` finished units; reports when the whole percentage changes; fails when
     /// cancelled.
     pub fn advance(&self, units: u64) -> Result<()> {

@@ -322,9 +322,41 @@ struct Evaluator<'a, T> {
 }
 
 impl<T: Voxel> Evaluator<'_, T> {
+    /// The progress units of an axis whose paper lattice is `paper`: its own, the samples a
+    /// lattice of its spacings holds in the volume's box (the same for every axis), and each
+    /// shifted lattice's, in proportion to the rays it walks (one in its subset's `every`), so
+    /// that a unit takes about as long in every lattice. (Counted in rows of tiles, a unit of a
+    /// lattice walking one ray in twelve, or of an axis whose tiles lie along its rows, took a
+    /// fraction of another's: the bar ran ahead through some lattices and stood through others.)
+    fn shares(&self, paper: &Lattice) -> (u64, u64) {
+        let extent: f64 = (0..3)
+            .map(|m| (self.volume.dims()[m] - 1) as f64 * self.volume.spacing()[m])
+            .product();
+        let samples = (extent / (paper.ray_spacing.powi(2) * paper.sample_spacing)) as u64;
+        let own = samples.max(work_units(paper));
+        (own, own / subset(&self.params, samples, 1).every)
+    }
+
+    /// The entropy rate of the rays of `lattice` that `subset` keeps, reporting `units` in all:
+    /// a share of them for each row of tiles walked, what does not divide at the end.
+    fn walk(
+        &self,
+        lattice: &Lattice,
+        subset: RaySubset,
+        (monitor, units): (&Monitor, u64),
+    ) -> Result<AxisEntropy> {
+        let rows = work_units_of(lattice, subset);
+        let per_row = units / rows.max(1);
+        let block = self.params.block;
+        let rate = entropy_rate_of(&self.sampler, lattice, block, subset, (monitor, per_row))?;
+        monitor.advance(units.saturating_sub(per_row * rows))?;
+        Ok(rate)
+    }
+
     fn units(&self, axis: [f64; 3]) -> Result<u64> {
-        let phases = self.params.phases.max(1) as u64;
-        Ok(work_units(&lattice_of(self.volume, &self.params, axis, 0)?) * phases)
+        let lattice = lattice_of(self.volume, &self.params, axis, 0)?;
+        let (own, shifted) = self.shares(&lattice);
+        Ok(own + shifted * self.params.phases.saturating_sub(1) as u64)
     }
 
     /// The entropy rate of `axis` on the paper's lattice, with the phase statistics when asked
@@ -332,25 +364,15 @@ impl<T: Voxel> Evaluator<'_, T> {
     fn evaluate(&self, axis: [f64; 3], monitor: &Monitor) -> Result<AxisEntropy> {
         let axis = canonical_axis(axis)?;
         let (volume, params) = (self.volume, &self.params);
-        let block = params.block;
         let lattice = lattice_of(volume, params, axis, 0)?;
-        let paper = entropy_rate(&self.sampler, &lattice, block, monitor)?;
+        let (own, share) = self.shares(&lattice);
+        let paper = self.walk(&lattice, RaySubset::ALL, (monitor, own))?;
         let mut shifted = Vec::new();
         for (lattice, subset) in shifted_lattices(volume, params, axis, paper.samples)? {
-            let Some(subset) = subset else {
-                monitor.advance(work_units(&lattice))?;
-                continue;
-            };
-            shifted.push(entropy_rate_of(
-                &self.sampler,
-                &lattice,
-                block,
-                subset,
-                monitor,
-            )?);
-            // A subset walks fewer rows of tiles: the progress of the rest.
-            let rest = work_units(&lattice).saturating_sub(work_units_of(&lattice, subset));
-            monitor.advance(rest)?;
+            match subset {
+                Some(subset) => shifted.push(self.walk(&lattice, subset, (monitor, share))?),
+                None => monitor.advance(share)?,
+            }
         }
         Ok(finish(volume, params, axis, paper, &shifted))
     }
@@ -451,4 +473,38 @@ fn concluded(
 pub fn axis_angle(a: [f64; 3], b: [f64; 3]) -> f64 {
     let (a, b) = (normalize(a).unwrap_or(a), normalize(b).unwrap_or(b));
     dot(a, b).abs().clamp(0.0, 1.0).acos().to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::rate::tests::awkward_volume_of as awkward_volume;
+    use crate::volume::VoxelType;
+
+    /// A search reports exactly the units it announced: the paper lattices' rows, the shifted
+    /// lattices' shares whether they walk a subset of their rays (few bins: a subset of one in
+    /// twelve), all of them (32 bins on a small volume) or none (a volume too thin for a block).
+    #[test]
+    fn a_search_reports_the_units_it_announced() {
+        let few_bins = |bins| {
+            let mut params = ViewParams::default();
+            params.sampling.bins = bins;
+            params
+        };
+        for (dims, params, every) in [
+            ([30, 26, 41], few_bins(4), 12),
+            ([30, 26, 41], few_bins(32), 1),
+            ([30, 26, 41], ViewParams::paper(), 1),
+            ([23, 19, 2], few_bins(4), 1),
+        ] {
+            let v = awkward_volume(dims, [1.0, 0.9, 1.3], VoxelType::U8, 7);
+            // The case is the one named: the rays a shifted lattice walks, about.
+            let resolved = resolve(&v, &params).unwrap();
+            assert_eq!(subset(&resolved, v.len() as u64, 1).every, every);
+            let monitor = Monitor::new(None, None);
+            search(&v, &params, &monitor).unwrap();
+            let (done, total) = monitor.counted();
+            assert_eq!(done, total, "{dims:?} {params:?}");
+        }
+    }
 }

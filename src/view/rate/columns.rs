@@ -105,7 +105,7 @@ pub(super) fn column_counts<T: Voxel>(
     lattice: &Lattice,
     axis: usize,
     block: usize,
-    monitor: &Monitor,
+    monitor: (&Monitor, u64),
 ) -> Result<(BlockCounts, u64)> {
     let columns = Columns::new(sampler.dims(), axis);
     // As many parts as the general walk reports progress units.

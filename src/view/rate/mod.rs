@@ -197,18 +197,20 @@ pub fn entropy_rate<T: Voxel>(
     block: usize,
     monitor: &Monitor,
 ) -> Result<AxisEntropy> {
-    entropy_rate_of(sampler, lattice, block, RaySubset::ALL, monitor)
+    entropy_rate_of(sampler, lattice, block, RaySubset::ALL, (monitor, 1))
 }
 
-/// [`entropy_rate`] over the tiles of rays `subset` keeps.
+/// [`entropy_rate`] over the tiles of rays `subset` keeps, reporting `per_row` units for each
+/// row of tiles it walks (so that a search can make a unit of every lattice about as long).
 pub fn entropy_rate_of<T: Voxel>(
     sampler: &BinSampler<T>,
     lattice: &Lattice,
     block: usize,
     subset: RaySubset,
-    monitor: &Monitor,
+    (monitor, per_row): (&Monitor, u64),
 ) -> Result<AxisEntropy> {
-    let (counts, rays) = counts_with(sampler, lattice, block, monitor, Walk::Fastest, subset)?;
+    let walk = (Walk::Fastest, subset);
+    let (counts, rays) = counts_with(sampler, lattice, block, (monitor, per_row), walk)?;
     Ok(AxisEntropy::new(lattice.d, &counts, rays))
 }
 
@@ -242,14 +244,8 @@ pub fn block_counts<T: Voxel>(
     block: usize,
     monitor: &Monitor,
 ) -> Result<(BlockCounts, u64)> {
-    counts_with(
-        sampler,
-        lattice,
-        block,
-        monitor,
-        Walk::Fastest,
-        RaySubset::ALL,
-    )
+    let walk = (Walk::Fastest, RaySubset::ALL);
+    counts_with(sampler, lattice, block, (monitor, 1), walk)
 }
 
 /// [`block_counts`] by the walk `walk`: for comparing the walks (every one counts the same).
@@ -260,24 +256,30 @@ pub fn block_counts_by<T: Voxel>(
     walk: Walk,
     monitor: &Monitor,
 ) -> Result<(BlockCounts, u64)> {
-    counts_with(sampler, lattice, block, monitor, walk, RaySubset::ALL)
+    counts_with(
+        sampler,
+        lattice,
+        block,
+        (monitor, 1),
+        (walk, RaySubset::ALL),
+    )
 }
 
 /// The block counts, and the rays that met the volume, of the lattice's rays `subset` keeps,
-/// walked as `walk` says.
+/// walked as `walk` says, reporting `per_row` units to `monitor` for each row of tiles (the
+/// bricked walk: one for each tile).
 fn counts_with<T: Voxel>(
     sampler: &BinSampler<T>,
     lattice: &Lattice,
     block: usize,
-    monitor: &Monitor,
-    walk: Walk,
-    subset: RaySubset,
+    (monitor, per_row): (&Monitor, u64),
+    (walk, subset): (Walk, RaySubset),
 ) -> Result<(BlockCounts, u64)> {
     if walk == Walk::Fastest
         && subset == RaySubset::ALL
         && let Some(axis) = lattice.columns()
     {
-        return column_counts(sampler, lattice, axis, block, monitor);
+        return column_counts(sampler, lattice, axis, block, (monitor, per_row));
     }
     if let Walk::Bricks { size, shaped } = walk {
         return bricks::bricked_counts(sampler, lattice, block, (size, shaped), monitor);
@@ -287,7 +289,7 @@ fn counts_with<T: Voxel>(
     let step = fixed_step(lattice);
     let serial = sampler.voxels().len() < SERIAL_VOXELS;
     let table = (sampler.bins(), block);
-    count_in_parallel(rows, table, serial, monitor, |js, counts| {
+    count_in_parallel(rows, table, serial, (monitor, per_row), |js, counts| {
         match counts.dense() {
             #[cfg(target_arch = "x86_64")]
             Some(mut dense) if vector && lanes::available(sampler) => {
@@ -323,20 +325,20 @@ fn counts_with<T: Voxel>(
 /// tables). Counts are integer sums, the same in any order, so every result is unchanged.
 pub(crate) const SERIAL_VOXELS: usize = 1 << 16;
 
-/// Block counts of `parts` of the work, counted by `count` (which returns its rays), one
-/// progress unit per part: in parallel, unless `serial`.
+/// Block counts of `parts` of the work, counted by `count` (which returns its rays), `per_part`
+/// progress units a part: in parallel, unless `serial`.
 fn count_in_parallel<P: Send>(
     parts: Vec<P>,
     (bins, block): (usize, usize),
     serial: bool,
-    monitor: &Monitor,
+    (monitor, per_part): (&Monitor, u64),
     count: impl Fn(P, &mut BlockCounts) -> u64 + Sync,
 ) -> Result<(BlockCounts, u64)> {
     if serial {
         let (mut counts, mut rays) = (BlockCounts::new(bins, block), 0);
         for part in parts {
             rays += count(part, &mut counts);
-            monitor.advance(1)?;
+            monitor.advance(per_part)?;
         }
         return Ok((counts, rays));
     }
@@ -345,7 +347,7 @@ fn count_in_parallel<P: Send>(
         .into_par_iter()
         .try_fold(empty, |(mut counts, rays), part| {
             let n = count(part, &mut counts);
-            monitor.advance(1)?;
+            monitor.advance(per_part)?;
             Ok((counts, rays + n))
         })
         .try_reduce(empty, |(mut a, ra), (b, rb)| {

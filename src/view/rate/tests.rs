@@ -121,8 +121,13 @@ fn every_walk_counts_what_the_scalar_walk_counts() {
                         Lattice::new(dims, v.spacing(), axis, s, s * along, phase).unwrap();
                     let none = Monitor::none();
                     let walk = |walk| {
-                        let (counts, rays) =
-                            counts_with(&sampler, &lattice, block, &none, walk, RaySubset::ALL)?;
+                        let (counts, rays) = counts_with(
+                            &sampler,
+                            &lattice,
+                            block,
+                            (&none, 1),
+                            (walk, RaySubset::ALL),
+                        )?;
                         Ok::<_, crate::error::Error>(AxisEntropy::new(lattice.d, &counts, rays))
                     };
                     let fast = walk(Walk::Fastest).unwrap();
@@ -332,9 +337,8 @@ fn slabs_counted_apart_from_windows_of_the_map_add_up_to_the_whole() {
                     &whole,
                     &lattice,
                     3,
-                    &none,
-                    Walk::Tiles { vector: false },
-                    subset,
+                    (&none, 1),
+                    (Walk::Tiles { vector: false }, subset),
                 )
                 .unwrap();
                 let expect = AxisEntropy::new(lattice.d, &counts, rays);
@@ -393,7 +397,7 @@ fn slabs_walked_whole_count_what_the_tile_walk_counts() {
                 let none = Monitor::none();
                 let tiles = Walk::Tiles { vector: true };
                 let (counts, rays) =
-                    counts_with(&whole, &lattice, 3, &none, tiles, subset).unwrap();
+                    counts_with(&whole, &lattice, 3, (&none, 1), (tiles, subset)).unwrap();
                 let expect = AxisEntropy::new(lattice.d, &counts, rays);
                 for slab in [1, 2, 3, 7, 64] {
                     let slabs = shuffled_slabs(cells, slab, &mut lcg);
