@@ -7,6 +7,7 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
+use super::wide::wide;
 use super::{Quantizer, Volume, Voxel};
 
 /// Voxels per parallel task.
@@ -201,28 +202,6 @@ fn scale_and_margin(volume: &Volume, q: &Quantizer) -> (f64, f64) {
         scale,
         16.0 * f64::from(f32::EPSILON) * magnitude * scale + 1e-9,
     )
-}
-
-/// Runs `work`, compiled for AVX2 as well as for the baseline processor and run so where the
-/// processor has it: the loops above are vectorized either way, and AVX2 doubles their width.
-#[inline]
-fn wide(work: impl FnOnce()) {
-    #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx2") {
-        // SAFETY: this processor has AVX2.
-        #[allow(unsafe_code)]
-        unsafe {
-            with_avx2(work);
-        }
-        return;
-    }
-    work();
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn with_avx2(work: impl FnOnce()) {
-    work();
 }
 
 #[cfg(test)]
