@@ -153,8 +153,9 @@ def _scales(transforms: Any, n: int) -> list:
 
 
 def _ome_zarr(path: str) -> tuple:
-    """An OME-Zarr group's full-resolution array (its first dataset), its axes' names and their
-    spacing, mm (scales in the axes' units; without a unit, taken as mm). Axes other than
+    """An OME-Zarr group's full-resolution array (its first dataset) as a dask array, its axes'
+    names, their spacing, mm (scales in the axes' units; without a unit, taken as mm), and the
+    stored array with the name of each of its axes (None for one dropped). Axes other than
     x, y and z (time, channel) must be one long: they are dropped."""
     import dask.array as da
     import zarr
@@ -177,7 +178,8 @@ def _ome_zarr(path: str) -> tuple:
         scale = [a * b for a, b in zip(scale, _scales(ms.get("coordinateTransformations"), len(axes)))]
     except (AttributeError, KeyError, IndexError, TypeError, ValueError) as e:
         raise ValueError(f"{path}: OME-Zarr multiscales metadata without axes, datasets or a valid scale ({e})") from None
-    array = da.from_zarr(path, component=dataset["path"])
+    stored = zarr.open_array(store=path, path=dataset["path"], mode="r")
+    array = da.from_zarr(stored)
     if array.ndim != len(axes):
         raise ValueError(f"{path}: {len(axes)} axes named for an array of {array.ndim} dimensions")
     keep = []
@@ -194,22 +196,29 @@ def _ome_zarr(path: str) -> tuple:
         spacing[axes[i]] = scale[i] * (_MM[unit] if unit else 1.0)
     array = array[tuple(slice(None) if i in keep else 0 for i in range(array.ndim))]
     names = "".join(axes[i] for i in keep)
-    return array, names, tuple(spacing.get(a, 1.0) for a in "xyz")
+    reader = (stored, [axes[i] if i in keep else None for i in range(len(axes))])
+    return array, names, tuple(spacing.get(a, 1.0) for a in "xyz"), reader
 
 
 def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
     """``source`` (a Zarr path or URL, or a dask array whose axis order ``axes`` names) as a
-    dask array indexed ``[z, y, x]`` in the type the volume holds, that type, and the spacing
-    an OME-Zarr store gives (else None)."""
+    dask array indexed ``[z, y, x]`` in the type the volume holds, that type, the spacing an
+    OME-Zarr store gives (else None), and for a store, the stored array and its axes' names
+    (what :func:`_read_layer` reads; else None)."""
     import dask.array as da
 
     spacing = None
+    reader = None
     if isinstance(source, (str, os.PathLike)):
         path = str(source)
         if axes is None:
-            array, axes, spacing = _ome_zarr(path)
+            array, axes, spacing, reader = _ome_zarr(path)
         else:
-            array = da.from_zarr(path)
+            import zarr
+
+            stored = zarr.open_array(store=path, mode="r")
+            array = da.from_zarr(stored)
+            reader = (stored, list(axes))
     else:
         array = source
     if axes is None:
@@ -218,7 +227,7 @@ def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
         raise ValueError(f"analyze_array: axes={axes!r} for an array of {array.ndim} dimensions: a permutation of \"xyz\" for 3")
     array = array.transpose([axes.index(a) for a in "zyx"])
     held = array.dtype.name if array.dtype.name in _HELD else "float32"
-    return array.astype(held), held, spacing
+    return array.astype(held), held, spacing, reader
 
 
 def _geometry(spacing: Any, affine: Any, stored: Optional[tuple]) -> tuple:
@@ -239,15 +248,31 @@ def _geometry(spacing: Any, affine: Any, stored: Optional[tuple]) -> tuple:
     return tuple(probe.spacing), given
 
 
-def _layers(client: Any, array: Any) -> tuple:
+def _layers(client: Any, array: Any, reader: Optional[tuple]) -> tuple:
     """The array's chunk layers along z as futures on ``client``'s workers, each a layer's
     voxel planes ([z, y, x], whole planes, in the held type) held there until released, and
-    the planes ``(start, end)`` each holds. One graph for all: each chunk is read once, and
-    fused with its layer's assembly (issue #44)."""
-    whole = array.rechunk({1: -1, 2: -1})
-    futures = client.compute(list(whole.to_delayed().ravel()))
-    cuts = [int(c) for c in np.cumsum((0,) + whole.chunks[0])]
-    return futures, list(zip(cuts, cuts[1:]))
+    the planes ``(start, end)`` each holds. Each chunk is read once (issue #44): from a store
+    (``reader``), a task a layer reads its chunks in one call; from a dask array, one graph
+    for all layers, each chunk computed once and gathered into its layer."""
+    cuts = [int(c) for c in np.cumsum((0,) + array.chunks[0])]
+    bounds = list(zip(cuts, cuts[1:]))
+    if reader is not None:
+        stored, names = reader
+        held = array.dtype.name
+        futures = [client.submit(_read_layer, stored, names, held, a, b, pure=False) for a, b in bounds]
+    else:
+        futures = client.compute(list(array.rechunk({1: -1, 2: -1}).to_delayed().ravel()))
+    return futures, bounds
+
+
+def _read_layer(stored: Any, names: list, held: str, start: int, end: int) -> np.ndarray:
+    """Planes ``start..end`` along z of a stored array whose axes ``names`` names (None for
+    an axis of one, dropped), indexed [z, y, x], in the held type: what the dask array
+    ``_as_xyz`` makes of the store gives for them."""
+    index = tuple(slice(start, end) if n == "z" else slice(None) if n else 0 for n in names)
+    kept = [n for n in names if n]
+    planes = np.asarray(stored[index]).transpose([kept.index(a) for a in "zyx"])
+    return np.ascontiguousarray(planes.astype(held, copy=False))
 
 
 def _range_of(layer: np.ndarray) -> tuple:
@@ -353,12 +378,12 @@ def analyze_array(
     done of all (with the refinement, whose steps are not known ahead, of all foreseen: one
     more step while it goes on), never less than before."""
 
-    array, held_type, stored = _as_xyz(source, axes)
+    array, held_type, stored, reader = _as_xyz(source, axes)
     spacing, geometry = _geometry(spacing, affine, stored)
     nz, ny, nx = array.shape
     # Each chunk is read once in the whole call: into its layer of whole planes, held on the
     # workers until the last task has taken them (what that task holds anyway: design.md).
-    layers, bounds = _layers(client, array)
+    layers, bounds = _layers(client, array, reader)
     kept: list = list(layers)
     try:
         low, high, finite = _range(client, layers)
