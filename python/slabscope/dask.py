@@ -369,7 +369,9 @@ def analyze_array(
     or ``affine`` (4×4, voxel index ``(x, y, z)`` to RAS+ mm, as nibabel gives it) are taken as
     ``Volume.from_array`` takes them, and override the store's.
 
-    Rounds: the range (min/max reductions), the paper's lattices, the shifted lattices (with
+    Each chunk is read once: into layers of whole planes (a chunk layer along z each), held on
+    the workers until the call returns (the whole array spread over them; the last task holds
+    it whole anyway). Rounds: the range (a task a layer), the paper's lattices, the shifted lattices (with
     phases), with ``refine=True`` two such rounds a step of the refinement (the axes each step
     asks for, found on the client from the sums), then the partition and the background in one
     task over the whole array (not split yet: docs/design.md), within half its worker's Dask
