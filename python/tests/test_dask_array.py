@@ -274,7 +274,7 @@ def test_each_chunk_is_read_once_in_a_call(client, tmp_path):
     """Every chunk of the array is read (computed) once in a whole call, whatever the rounds:
     the range, the paper's and the shifted lattices, the refinement's and the last task all
     read the chunk layers held on the workers (before, each round read every chunk again, and
-    neighbouring slabs' tasks each read the chunks they share: 4 to 8 times a chunk)."""
+    neighbouring slabs' tasks each read the chunks they share: 22 to 32 times a chunk here)."""
     zyx = voxels()
     marks = str(tmp_path)
 
