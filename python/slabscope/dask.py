@@ -153,8 +153,9 @@ def _scales(transforms: Any, n: int) -> list:
 
 
 def _ome_zarr(path: str) -> tuple:
-    """An OME-Zarr group's full-resolution array (its first dataset), its axes' names and their
-    spacing, mm (scales in the axes' units; without a unit, taken as mm). Axes other than
+    """An OME-Zarr group's full-resolution array (its first dataset) as a dask array, its axes'
+    names, their spacing, mm (scales in the axes' units; without a unit, taken as mm), and the
+    stored array with the name of each of its axes (None for one dropped). Axes other than
     x, y and z (time, channel) must be one long: they are dropped."""
     import dask.array as da
     import zarr
@@ -177,7 +178,8 @@ def _ome_zarr(path: str) -> tuple:
         scale = [a * b for a, b in zip(scale, _scales(ms.get("coordinateTransformations"), len(axes)))]
     except (AttributeError, KeyError, IndexError, TypeError, ValueError) as e:
         raise ValueError(f"{path}: OME-Zarr multiscales metadata without axes, datasets or a valid scale ({e})") from None
-    array = da.from_zarr(path, component=dataset["path"])
+    stored = zarr.open_array(store=path, path=dataset["path"], mode="r")
+    array = da.from_zarr(stored)
     if array.ndim != len(axes):
         raise ValueError(f"{path}: {len(axes)} axes named for an array of {array.ndim} dimensions")
     keep = []
@@ -194,22 +196,29 @@ def _ome_zarr(path: str) -> tuple:
         spacing[axes[i]] = scale[i] * (_MM[unit] if unit else 1.0)
     array = array[tuple(slice(None) if i in keep else 0 for i in range(array.ndim))]
     names = "".join(axes[i] for i in keep)
-    return array, names, tuple(spacing.get(a, 1.0) for a in "xyz")
+    reader = (stored, [axes[i] if i in keep else None for i in range(len(axes))])
+    return array, names, tuple(spacing.get(a, 1.0) for a in "xyz"), reader
 
 
 def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
     """``source`` (a Zarr path or URL, or a dask array whose axis order ``axes`` names) as a
-    dask array indexed ``[z, y, x]`` in the type the volume holds, that type, and the spacing
-    an OME-Zarr store gives (else None)."""
+    dask array indexed ``[z, y, x]`` in the type the volume holds, that type, the spacing an
+    OME-Zarr store gives (else None), and for a store, the stored array and its axes' names
+    (what :func:`_read_layer` reads; else None)."""
     import dask.array as da
 
     spacing = None
+    reader = None
     if isinstance(source, (str, os.PathLike)):
         path = str(source)
         if axes is None:
-            array, axes, spacing = _ome_zarr(path)
+            array, axes, spacing, reader = _ome_zarr(path)
         else:
-            array = da.from_zarr(path)
+            import zarr
+
+            stored = zarr.open_array(store=path, mode="r")
+            array = da.from_zarr(stored)
+            reader = (stored, list(axes))
     else:
         array = source
     if axes is None:
@@ -218,7 +227,7 @@ def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
         raise ValueError(f"analyze_array: axes={axes!r} for an array of {array.ndim} dimensions: a permutation of \"xyz\" for 3")
     array = array.transpose([axes.index(a) for a in "zyx"])
     held = array.dtype.name if array.dtype.name in _HELD else "float32"
-    return array.astype(held), held, spacing
+    return array.astype(held), held, spacing, reader
 
 
 def _geometry(spacing: Any, affine: Any, stored: Optional[tuple]) -> tuple:
@@ -239,36 +248,95 @@ def _geometry(spacing: Any, affine: Any, stored: Optional[tuple]) -> tuple:
     return tuple(probe.spacing), given
 
 
-def _range(array: Any) -> tuple:
-    """The finite voxels' min, max and count (one round of reductions on the cluster)."""
-    import dask.array as da
+def _layers(client: Any, array: Any, reader: Optional[tuple]) -> tuple:
+    """The array's chunk layers along z as futures on ``client``'s workers, each a layer's
+    voxel planes ([z, y, x], whole planes, in the held type) held there until released, and
+    the planes ``(start, end)`` each holds. Each chunk is read once (issue #44): from a store
+    (``reader``), a task a layer reads its chunks in one call; from a dask array, one graph
+    for all layers, each chunk computed once and gathered into its layer."""
+    cuts = [int(c) for c in np.cumsum((0,) + array.chunks[0])]
+    bounds = list(zip(cuts, cuts[1:]))
+    if reader is not None:
+        stored, names = reader
+        held = array.dtype.name
+        futures = [client.submit(_read_layer, stored, names, held, a, b, pure=False) for a, b in bounds]
+    else:
+        futures = client.compute(list(array.rechunk({1: -1, 2: -1}).to_delayed().ravel()))
+    return futures, bounds
 
-    finite = da.isfinite(array)
-    low = da.where(finite, array, np.inf).min()
-    high = da.where(finite, array, -np.inf).max()
-    return low, high, finite.sum()
+
+def _read_layer(stored: Any, names: list, held: str, start: int, end: int) -> np.ndarray:
+    """Planes ``start..end`` along z of a stored array whose axes ``names`` names (None for
+    an axis of one, dropped), indexed [z, y, x], in the held type: what the dask array
+    ``_as_xyz`` makes of the store gives for them."""
+    index = tuple(slice(start, end) if n == "z" else slice(None) if n else 0 for n in names)
+    kept = [n for n in names if n]
+    planes = np.asarray(stored[index]).transpose([kept.index(a) for a in "zyx"])
+    return np.ascontiguousarray(planes.astype(held, copy=False))
 
 
-def _count(block: Any, first: int, planes: tuple, grid: tuple, round: tuple, params: dict) -> Any:
-    """One task: the part of the slab ``planes`` from its voxel planes ``block`` ([z, y, x]) in
-    the round ``(samples, axes)``."""
+def _range_of(layer: np.ndarray) -> tuple:
+    """A layer's finite voxels' min, max and count (min above max when it has none)."""
+    if layer.dtype.kind in "iu":
+        if layer.size == 0:
+            return np.inf, -np.inf, 0
+        return float(layer.min()), float(layer.max()), int(layer.size)
+    finite = np.isfinite(layer)
+    count = int(np.count_nonzero(finite))
+    if count == 0:
+        return np.inf, -np.inf, 0
+    values = layer if count == layer.size else layer[finite]
+    return float(values.min()), float(values.max()), count
+
+
+def _range(client: Any, layers: list) -> tuple:
+    """The finite voxels' min, max and count: one task a layer, where it is held."""
+    ranges = client.gather(client.map(_range_of, layers, pure=False))
+    return min(r[0] for r in ranges), max(r[1] for r in ranges), sum(r[2] for r in ranges)
+
+
+def _planes(layer: np.ndarray, start: int, end: int) -> np.ndarray:
+    """Planes ``start..end`` of a layer (a task where the layer is held: the few planes a
+    neighbouring slab's task reads travel, not the layer)."""
+    return np.ascontiguousarray(layer[start:end])
+
+
+def _pieces(client: Any, layers: list, bounds: list, held: list) -> list:
+    """For each slab's held planes ``(first, end)``, the futures whose planes, in order, are
+    exactly those: the layers held whole, and tasks taking the planes it needs of the others
+    (made once for every round)."""
+    pieces = []
+    for first, end in held:
+        these = []
+        for layer, (z0, z1) in zip(layers, bounds):
+            a, b = max(first, z0), min(end, z1)
+            if a >= b:
+                continue
+            these.append(layer if (a, b) == (z0, z1) else client.submit(_planes, layer, a - z0, b - z0, pure=False))
+        pieces.append(these)
+    return pieces
+
+
+def _count(first: int, planes: tuple, grid: tuple, round: tuple, params: dict, *pieces: np.ndarray) -> Any:
+    """One task: the part of the slab ``planes`` from its voxel planes (``pieces``, [z, y, x],
+    in order from plane ``first``) in the round ``(samples, axes)``."""
     samples, axes = round
+    block = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=0)
     return slabscope._slabscope._count_view_slab(block.T, first, planes, *grid, samples=samples, axes=axes, **params)
 
 
-def _round(client: Any, array: Any, slabs: list, held: list, grid: tuple, round: tuple, params: dict, report: Any) -> Any:
-    """A round of tasks, one a slab (``held`` its voxel planes), added up on the client as
-    they come; ``round`` is ``(samples, axes)``: the paper samples of a shifted round (else
-    None) and a refinement step's axes (else None, the sphere's)."""
-    import dask
+def _round(client: Any, pieces: list, slabs: list, held: list, grid: tuple, round: tuple, params: dict, report: Any) -> Any:
+    """A round of tasks, one a slab (``pieces`` the futures of its voxel planes, from plane
+    ``held``'s first), added up on the client as they come; ``round`` is ``(samples, axes)``:
+    the paper samples of a shifted round (else None) and a refinement step's axes (else None,
+    the sphere's)."""
     from distributed import as_completed
 
     tasks = []
-    for planes, (first, end) in zip(slabs, held):
-        block = array[first:end]
-        tasks.append(dask.delayed(_count)(block, first, planes, grid, round, params))
+    for planes, (first, _), these in zip(slabs, held, pieces):
+        tasks.append(client.submit(_count, first, planes, grid, round, params, *these, pure=False))
     total = None
-    for future in as_completed(client.compute(tasks)):
+    for future in as_completed(tasks):
         part = future.result()
         if total is None:
             total = part
@@ -301,7 +369,9 @@ def analyze_array(
     or ``affine`` (4×4, voxel index ``(x, y, z)`` to RAS+ mm, as nibabel gives it) are taken as
     ``Volume.from_array`` takes them, and override the store's.
 
-    Rounds: the range (min/max reductions), the paper's lattices, the shifted lattices (with
+    Each chunk is read once: into layers of whole planes (a chunk layer along z each), held on
+    the workers until the call returns (the whole array spread over them; the last task holds
+    it whole anyway). Rounds: the range (a task a layer), the paper's lattices, the shifted lattices (with
     phases), with ``refine=True`` two such rounds a step of the refinement (the axes each step
     asks for, found on the client from the sums), then the partition and the background in one
     task over the whole array (not split yet: docs/design.md), within half its worker's Dask
@@ -310,17 +380,43 @@ def analyze_array(
     done of all (with the refinement, whose steps are not known ahead, of all foreseen: one
     more step while it goes on), never less than before."""
 
-    array, held_type, stored = _as_xyz(source, axes)
+    array, held_type, stored, reader = _as_xyz(source, axes)
     spacing, geometry = _geometry(spacing, affine, stored)
     nz, ny, nx = array.shape
-    low, high, finite = client.compute(list(_range(array)), sync=True)
-    grid = ([nx, ny, nz], list(spacing), held_type, (float(low), float(high), int(finite)))
-    cells = max(nz - 1, 1)
-    cuts = [int(c) for c in np.cumsum((0,) + array.chunks[0])]
-    cuts = sorted({min(c, cells) for c in cuts} | {0, cells})
-    slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
-    # The voxel planes each slab's task holds, the same in both rounds: found once.
-    held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, **params)
+    # Each chunk is read once in the whole call: into its layer of whole planes, held on the
+    # workers until the last task has taken them (what that task holds anyway: design.md).
+    layers, bounds = _layers(client, array, reader)
+    kept: list = list(layers)
+    try:
+        low, high, finite = _range(client, layers)
+        grid = ([nx, ny, nz], list(spacing), held_type, (float(low), float(high), int(finite)))
+        cells = max(nz - 1, 1)
+        cuts = sorted({min(b, cells) for _, b in bounds} | {0, cells})
+        slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
+        # The voxel planes each slab's task holds, the same in every round: found once, and
+        # the planes it takes from neighbouring layers cut out once.
+        held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, **params)
+        pieces = _pieces(client, layers, bounds, held)
+        kept += [f for these in pieces for f in these]
+        return _rounds(client, layers, pieces, slabs, held, shifted, grid, geometry, params, progress)
+    finally:
+        for future in kept:
+            future.release()
+
+
+def _rounds(
+    client: Any,
+    layers: list,
+    pieces: list,
+    slabs: list,
+    held: list,
+    shifted: bool,
+    grid: tuple,
+    geometry: dict,
+    params: dict,
+    progress: Any,
+) -> Any:
+    """The view search's rounds of tasks and the last task, reporting to ``progress``."""
     step = len(slabs) * (2 if shifted else 1)
     refine = bool(params.get("refine"))
     # Tasks foreseen and not yet done: the sphere's rounds, the last task and, with the
@@ -337,32 +433,32 @@ def analyze_array(
         if progress is not None:
             progress(phase, heard[0])
 
-    paper = _round(client, array, slabs, held, grid, (None, None), params, report)
+    paper = _round(client, pieces, slabs, held, grid, (None, None), params, report)
     more = None
     if shifted:
         samples = slabscope._slabscope._paper_samples(paper, *grid, **params)
-        more = _round(client, array, slabs, held, grid, (samples, None), params, report)
+        more = _round(client, pieces, slabs, held, grid, (samples, None), params, report)
     refined: list = []
     if refine:
 
         def count(axes: list, samples: Optional[list]) -> Any:
             if samples is None:
                 ahead[0] += step
-            total = _round(client, array, slabs, held, grid, (samples, axes), params, lambda: report("refining in parts"))
+            total = _round(client, pieces, slabs, held, grid, (samples, axes), params, lambda: report("refining in parts"))
             refined.append((axes, samples, total))
             return total
 
         slabscope._slabscope._refine_in_parts(paper, *grid, count, shifted=more, **params)
         ahead[0] -= step
-    import dask
-
-    whole = client.compute(dask.delayed(_finish)(array, geometry, paper, more, refined, params)).result()
+    whole = client.submit(_finish, geometry, paper, more, refined, params, *layers, pure=False).result()
     report()
     return whole
 
 
-def _finish(array: Any, geometry: dict, paper: Any, shifted: Any, refined: list, params: dict) -> Any:
-    """The last task: the analysis of the whole array from the view search's parts, within
-    half its worker's Dask memory limit unless ``max_memory`` is given (beyond the voxels)."""
-    volume = slabscope.Volume.from_array(np.asarray(array).T, **geometry)
+def _finish(geometry: dict, paper: Any, shifted: Any, refined: list, params: dict, *layers: np.ndarray) -> Any:
+    """The last task: the analysis of the whole array (its ``layers`` along z) from the view
+    search's parts, within half its worker's Dask memory limit unless ``max_memory`` is given
+    (beyond the voxels)."""
+    array = layers[0] if len(layers) == 1 else np.concatenate(layers, axis=0)
+    volume = slabscope.Volume.from_array(array.T, **geometry)
     return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, refined=refined, **_with_budget(params))

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import time
 from typing import Any
 
 import numpy as np
@@ -240,37 +241,59 @@ def test_the_last_task_keeps_to_the_memory_budget(client):
         slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="50K", **params)
 
 
-def test_a_worker_killed_mid_run_costs_only_its_tasks(client, tmp_path):
+def test_a_worker_killed_mid_run_costs_only_its_tasks(client):
     """A worker process killed (SIGKILL) while the view search's tasks run: its nanny starts
-    another, the scheduler runs its tasks again elsewhere, and the answer is unchanged."""
+    another, the scheduler runs its tasks again elsewhere (and reads again the chunk layers the
+    dead process held), and the answer is unchanged."""
     import signal
 
     zyx = voxels()
-    marks = str(tmp_path)
-
-    def chunk(block: np.ndarray, block_info: Any = None) -> np.ndarray:
-        # The range round reads each chunk once; the first chunk read again (by a count task
-        # of the paper's round) kills its own worker process, once in the whole run.
-        k = block_info[0]["chunk-location"][0]
-        seen = os.path.join(marks, f"seen-{k}")
-        if os.path.exists(seen):
-            try:
-                os.close(os.open(os.path.join(marks, "killed"), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
-            except FileExistsError:
-                return block
-            os.kill(os.getpid(), signal.SIGKILL)
-        open(seen, "w").close()
-        return block
-
     before = set(client.run(os.getpid).values())
-    array = da.from_array(zyx, chunks=(8, 26, 30)).map_blocks(chunk, dtype=zyx.dtype)
+    victim = sorted(before)[0]
     heard = []
-    got = slabscope.dask.analyze_array(client, array, axes="zyx", slabs=3, progress=lambda phase, fraction: heard.append(fraction))
-    assert os.path.exists(os.path.join(marks, "killed"))
+
+    def progress(phase: str, fraction: float) -> None:
+        # The first part of the paper's round is in: the other tasks of the round are queued
+        # or running, and each worker holds chunk layers.
+        if not heard:
+            os.kill(victim, signal.SIGKILL)
+        heard.append(fraction)
+
+    array = da.from_array(zyx, chunks=(8, 26, 30))
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", slabs=3, progress=progress)
     client.wait_for_workers(2, timeout=60)  # the nanny's new process, perhaps still starting
     after = set(client.run(os.getpid).values())
-    assert len(after) == 2 and len(before & after) == 1  # one worker process replaced
+    assert len(after) == 2 and victim not in after and len(before & after) == 1  # one replaced
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3)
     assert got.to_dict() == one.to_dict()
     # Every task reported once, however many times it ran.
     assert len(heard) == 5 * 2 + 1 and heard[-1] == 1.0
+
+
+def test_each_chunk_is_read_once_in_a_call(client, tmp_path):
+    """Every chunk of the array is read (computed) once in a whole call, whatever the rounds:
+    the range, the paper's and the shifted lattices, the refinement's and the last task all
+    read the chunk layers held on the workers (before, each round read every chunk again, and
+    neighbouring slabs' tasks each read the chunks they share: 22 to 32 times a chunk here)."""
+    zyx = voxels()
+    marks = str(tmp_path)
+
+    def chunk(block: np.ndarray, block_info: Any = None) -> np.ndarray:
+        k, j, i = block_info[0]["chunk-location"]
+        with open(os.path.join(marks, f"read-{k}-{j}-{i}"), "a") as f:
+            f.write("x")
+        return block
+
+    array = da.from_array(zyx, chunks=(8, 13, 15)).map_blocks(chunk, dtype=zyx.dtype)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", refine=True)
+    assert got.to_dict() == slabscope.analyze(slabscope.Volume.from_array(zyx.T), refine=True).to_dict()
+    reads = {name: len(open(os.path.join(marks, name)).read()) for name in os.listdir(marks)}
+    assert len(reads) == 5 * 2 * 2  # chunks of 8 planes, 13 rows, 15 columns
+    assert set(reads.values()) == {1}
+    # Nothing of the call is left on the workers (released as the call returns; the
+    # scheduler hears of it a moment later).
+    held = lambda: sum(client.run(lambda dask_worker: len(dask_worker.data)).values())  # noqa: E731
+    deadline = time.monotonic() + 30
+    while held() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert held() == 0
