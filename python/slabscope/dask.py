@@ -450,7 +450,15 @@ def _rounds(
 
         slabscope._slabscope._refine_in_parts(paper, *grid, count, shifted=more, **params)
         ahead[0] -= step
-    whole = client.submit(_finish, geometry, paper, more, refined, params, *layers, pure=False).result()
+    # The sums travel as data scattered to the cluster, not inside the task's graph (tens of
+    # MB with phases: Dask warns of a large graph).
+    sums = client.scatter([paper, more, refined], hash=False)
+    try:
+        whole = client.submit(_finish, geometry, *sums, params, *layers, pure=False).result()
+    finally:
+        # Released now, not when the futures are collected (an error's traceback keeps them).
+        for future in sums:
+            future.release()
     report()
     return whole
 
