@@ -216,29 +216,33 @@ pub fn downsample_by<T: Voxel>(
 /// sums are the same in any order, and adding whole rows lets the compiler vectorize them (with
 /// AVX2 where the processor has it), where summing each block apart did not (docs/performance.md).
 fn whole_means<T: Voxel>(rows: &[&[T]], sx: usize, sums: &mut [i32], out: &mut [f32]) {
-    let value = |v: &T| v.integer().unwrap_or(0);
-    super::wide::wide(|| {
-        sums.fill(0);
-        for row in rows {
-            if sx == 1 {
-                for (s, v) in sums.iter_mut().zip(row.iter()) {
-                    *s += value(v);
-                }
-                continue;
-            }
-            let pairs = row.chunks_exact(2);
-            if let ([.., last], [odd]) = (&mut *sums, pairs.remainder()) {
-                *last += value(odd);
-            }
-            for (s, pair) in sums.iter_mut().zip(pairs) {
-                *s += value(&pair[0]) + value(&pair[1]);
-            }
-        }
-    });
+    super::wide::wide(|| row_sums(rows, sx, sums));
     let nx = rows.first().map_or(0, |r| r.len());
     for (i, (o, &sum)) in out.iter_mut().zip(sums.iter()).enumerate() {
         let voxels = rows.len() * ((i * sx + sx).min(nx) - i * sx);
         *o = (f64::from(sum) / voxels as f64) as f32;
+    }
+}
+
+/// The sums of [`whole_means`], always inlined so that `wide` compiles them for AVX2 too.
+#[inline(always)]
+fn row_sums<T: Voxel>(rows: &[&[T]], sx: usize, sums: &mut [i32]) {
+    let value = |v: &T| v.integer().unwrap_or(0);
+    sums.fill(0);
+    for row in rows {
+        if sx == 1 {
+            for (s, v) in sums.iter_mut().zip(row.iter()) {
+                *s += value(v);
+            }
+            continue;
+        }
+        let pairs = row.chunks_exact(2);
+        if let ([.., last], [odd]) = (&mut *sums, pairs.remainder()) {
+            *last += value(odd);
+        }
+        for (s, pair) in sums.iter_mut().zip(pairs) {
+            *s += value(&pair[0]) + value(&pair[1]);
+        }
     }
 }
 
