@@ -225,7 +225,7 @@ fn whole_means<T: Voxel>(rows: &[&[T]], sx: usize, sums: &mut [i32], out: &mut [
 }
 
 /// The sums of [`whole_means`], always inlined so that `wide` compiles them for AVX2 too.
-#[allow(clippy::inline_always)] // out of line, they ran the baseline's code (measured)
+#[allow(clippy::inline_always)] // out of line, they ran the baseline's code (seen in a profile)
 #[inline(always)]
 fn row_sums<T: Voxel>(rows: &[&[T]], sx: usize, sums: &mut [i32]) {
     let value = |v: &T| v.integer().unwrap_or(0);
