@@ -210,10 +210,11 @@ impl SliceStack {
                 }
                 h
             })
-            .reduce(zero, |mut a, b| {
+            .reduce_with(|mut a, b| {
                 a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
                 a
             })
+            .unwrap_or_else(zero)
     }
 }
 

@@ -383,10 +383,11 @@ fn joints_over_pixels(
             },
         )
         .map(|(joint, _)| joint)
-        .reduce(zero, |mut a, c| {
+        .reduce_with(|mut a, c| {
             a.iter_mut().zip(&c).for_each(|(x, y)| *x += y);
             a
-        });
+        })
+        .unwrap_or_else(zero);
     // A constant column adds |S ∩ column| · |T ∩ column| to the cell (s, s) of each pair.
     let overlap = |s: Slab, first: usize, len: usize| {
         s.1.min(first + len).saturating_sub(s.0.max(first)) as u64

@@ -544,10 +544,11 @@ pub(super) fn bricked_counts<T: Voxel>(
             monitor.advance(tiles.len() as u64)?;
             Ok::<_, Error>(out)
         })
-        .try_reduce(empty, |mut a, b| {
+        .try_reduce_with(|mut a, b| {
             a.add(b);
             Ok(a)
-        })?;
+        })
+        .unwrap_or_else(|| Ok(empty()))?;
     if !total.is_complete() {
         return Err(Error::Degenerate(format!(
             "the bricked walk left {} pieces of rays unjoined",

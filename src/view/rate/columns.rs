@@ -159,8 +159,9 @@ pub(super) fn slab_rows<T: Voxel>(
             };
             out
         })
-        .reduce(empty, |mut a, b| {
+        .reduce_with(|mut a, b| {
             a.add(b);
             a
         })
+        .unwrap_or_else(empty)
 }

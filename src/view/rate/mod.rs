@@ -350,10 +350,11 @@ fn count_in_parallel<P: Send>(
             monitor.advance(per_part)?;
             Ok((counts, rays + n))
         })
-        .try_reduce(empty, |(mut a, ra), (b, rb)| {
+        .try_reduce_with(|(mut a, ra), (b, rb)| {
             a.merge(&b);
             Ok((a, ra + rb))
         })
+        .unwrap_or_else(|| Ok(empty()))
 }
 
 #[cfg(test)]

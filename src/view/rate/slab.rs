@@ -116,10 +116,11 @@ pub fn count_slab_into<T: Voxel>(
             },
         )
         .map(|(out, _)| out)
-        .reduce(empty, |mut a, b| {
+        .reduce_with(|mut a, b| {
             a.add(b);
             a
         })
+        .unwrap_or_else(empty)
 }
 
 /// A ray's stretch in a slab walked whole: its open piece, and where its walk stands.

@@ -178,10 +178,11 @@ impl Cutter<'_> {
                 monitor.check()?;
                 Ok(h)
             })
-            .try_reduce(zero, |mut a, b| {
+            .try_reduce_with(|mut a, b| {
                 a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
                 Ok(a)
             })
+            .unwrap_or_else(|| Ok(zero()))
     }
 }
 
