@@ -54,11 +54,6 @@ impl<'py> Kwargs<'py> {
         })
     }
 
-    /// Takes keyword `name`, or `default`.
-    pub fn or<T: for<'a> FromPyObject<'a, 'py>>(&self, name: &str, default: T) -> PyResult<T> {
-        Ok(self.get(name)?.unwrap_or(default))
-    }
-
     /// Fails on any keyword not taken, as Python does for a function's unknown keyword.
     pub fn finish(self) -> PyResult<()> {
         match self.dict.keys().iter().next() {
