@@ -50,7 +50,7 @@ impl TriagePlan {
         load: LoadOptions,
         params: AnalysisParams,
         sheet: bool,
-    ) -> crate::Result<Self> {
+    ) -> crate::error::Result<Self> {
         Ok(Self {
             load,
             params,
