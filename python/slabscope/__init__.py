@@ -69,8 +69,8 @@ def triage_frame(paths: Any = None, **options: Any) -> Any:
 def _signed(call: Callable[..., Any], *positional: tuple[str, Any]) -> Callable[..., Any]:
     """`call` with a signature that lists its keywords and their defaults, from the library's
     table of parameters (the CLI's flags are made from the same table), so that ``help()``,
-    Jupyter and IDEs show them. Other keywords of the call (``resolution``, ``force``, ...) stay
-    in ``**options``, as its docstring says."""
+    Jupyter and IDEs show them. The package's own keywords (``explain``, ``manifest``,
+    ``entries``) stay in ``**options``, as the call's docstring says."""
     kind = inspect.Parameter
     params = [kind(name, kind.POSITIONAL_OR_KEYWORD, default=d) for name, d in positional]
     params += [

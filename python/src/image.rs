@@ -6,13 +6,14 @@ use numpy::ndarray::{Array3, ArrayView3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
+use slabscope::params::table;
 use slabscope::render::{ImageOutput, encode, slice as slices};
 use slabscope::request::{RenderRequest, SliceRequest};
 use tiny_skia::Pixmap;
 
 use crate::analysis::{Analysis, analyze};
 use crate::errors::OrPy;
-use crate::params::{Kwargs, analysis_params, look, render_params, size};
+use crate::params::{Kwargs, analysis_params, given, look, render_params, size};
 use crate::run;
 use crate::volume::Volume;
 
@@ -142,13 +143,15 @@ pub fn render(
 ) -> PyResult<Image> {
     let reporter = run::Reporter::new("render", progress)?;
     let kw = Kwargs::new(py, "render", options)?;
-    let size = size(&kw, &slabscope::params::table::RENDER_SIZE)?;
+    let size = size(&kw, &table::RENDER_SIZE)?;
     let slabscope::params::Scene {
         params,
         gap,
         spread,
     } = render_params(&kw, size)?;
-    let faces: bool = kw.or("faces", false)?;
+    let faces = given(&kw, &[&table::FACES])?
+        .switch(&table::FACES)
+        .or_py()?;
     let _threads = run::Threads::bound(crate::params::threads(&kw)?);
     kw.finish()?;
     let made;
@@ -192,8 +195,10 @@ pub fn slice(
 ) -> PyResult<Image> {
     let reporter = run::Reporter::new("slice", progress)?;
     let kw = Kwargs::new(py, "slice", options)?;
-    let fit = size(&kw, &slabscope::params::table::SLICE_SIZE)?;
-    let letters = !kw.or("no_letters", false)?;
+    let fit = size(&kw, &table::SLICE_SIZE)?;
+    let letters = !given(&kw, &[&table::NO_LETTERS])?
+        .switch(&table::NO_LETTERS)
+        .or_py()?;
     let look = look(&kw)?;
     let (params, _) = analysis_params(&kw)?;
     let _threads = run::Threads::bound(crate::params::threads(&kw)?);

@@ -54,11 +54,6 @@ impl<'py> Kwargs<'py> {
         })
     }
 
-    /// Takes keyword `name`, or `default`.
-    pub fn or<T: for<'a> FromPyObject<'a, 'py>>(&self, name: &str, default: T) -> PyResult<T> {
-        Ok(self.get(name)?.unwrap_or(default))
-    }
-
     /// Fails on any keyword not taken, as Python does for a function's unknown keyword.
     pub fn finish(self) -> PyResult<()> {
         match self.dict.keys().iter().next() {
@@ -248,7 +243,8 @@ pub fn path(given: &Bound<'_, PyAny>) -> PyResult<PathBuf> {
 fn call_params(call: &str) -> Option<Vec<&'static Param>> {
     let analysis_and = |first: &[&'static Param]| [first, table::ANALYSIS].concat();
     Some(match call {
-        "load" | "list_volumes" => table::LOAD.to_vec(),
+        "load" => table::LOAD.to_vec(),
+        "list_volumes" => [table::LOAD, &[&table::SHARD]].concat(),
         "analyze" => [
             table::ANALYSIS,
             &[
@@ -264,12 +260,22 @@ fn call_params(call: &str) -> Option<Vec<&'static Param>> {
             table::SCENE_FIRST,
             table::LOOK,
             table::SCENE,
+            &[&table::FACES],
         ]
         .concat(),
-        "slice" => {
-            analysis_and(&[&[&table::SLICE_SIZE, &table::THREADS][..], table::LOOK].concat())
-        }
-        "triage" => [table::ANALYSIS, table::LOAD].concat(),
+        "slice" => analysis_and(
+            &[
+                &[&table::SLICE_SIZE, &table::THREADS, &table::NO_LETTERS][..],
+                table::LOOK,
+            ]
+            .concat(),
+        ),
+        "triage" => [
+            table::ANALYSIS,
+            table::LOAD,
+            &[&table::SHARD, &table::FULL, &table::TRIAGE_TIMEOUT],
+        ]
+        .concat(),
         _ => return None,
     })
 }

@@ -12,14 +12,14 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slabscope::error::names::controls;
 use slabscope::error::shown;
-use slabscope::params::Terms;
+use slabscope::params::{Terms, table};
 use slabscope::triage::{
     Entry, MANIFEST_HEADER, Source, TriagePlan, look_all, parse_manifest, select,
 };
 
 use crate::analysis::parse;
 use crate::errors::OrPy;
-use crate::params::{Kwargs, analysis_params, load_options};
+use crate::params::{Kwargs, analysis_params, given, load_options};
 
 /// Volumes looked at at once, as the CLI does.
 const WORKERS: usize = 2;
@@ -70,16 +70,9 @@ fn entries(
 ) -> PyResult<Vec<Entry>> {
     let manifest: Option<PathBuf> = kw.get("manifest")?;
     let lines: Option<Vec<String>> = kw.get("entries")?;
-    let shard: Option<(u64, u64)> = kw.get("shard")?;
-    if let Some((k, n)) = shard
-        && (n == 0 || k == 0 || k > n)
-    {
-        return Err(crate::errors::invalid(
-            "shard",
-            format!("({k}, {n})"),
-            "(K, N) with K from 1 to N",
-        ));
-    }
+    let shard = crate::params::given(kw, &[&table::SHARD])?
+        .shard()
+        .or_py()?;
     let given = given.map(paths).transpose()?;
     match (given, manifest, lines) {
         (None, None, Some(lines)) => {
@@ -114,7 +107,7 @@ fn entries(
 /// Every volume under `paths` (folders walked, files, or a list of both), or those of
 /// `manifest=` or `entries=`, one row each, as `triage --json` gives them: an iterator of
 /// dicts. Keywords as the CLI's: `shard=(K, N)`, `full`, `timeout=60`, the loader's and the
-/// analysis' (`series`, `max_memory`, `slabs`, `method`, ...).
+/// analysis' (`series`, `max_memory`, `slabs`, `method`, ...): the library's entries.
 #[pyfunction]
 #[pyo3(signature = (paths=None, **options))]
 pub fn triage(
@@ -125,24 +118,10 @@ pub fn triage(
     let kw = Kwargs::new(py, "triage", options)?;
     let (load, pool) = load_options(&kw)?;
     let (params, _) = analysis_params(&kw)?;
-    let timeout: f64 = kw.or("timeout", 60.0)?;
-    if !(timeout.is_finite() && (0.1..=86400.0).contains(&timeout)) {
-        return Err(crate::errors::invalid(
-            "timeout",
-            timeout,
-            "seconds from 0.1 to 86400",
-        ));
-    }
-    let fast = !kw.or("full", false)?;
-    let volumes = entries(py, &kw, paths, &load)?;
+    let own = given(&kw, &[&table::FULL, &table::TRIAGE_TIMEOUT])?;
+    let how = TriagePlan::given(&own, load, params, false).or_py()?;
+    let volumes = entries(py, &kw, paths, &how.load)?;
     kw.finish()?;
-    let how = TriagePlan {
-        load,
-        params,
-        timeout: Duration::from_secs_f64(timeout),
-        fast,
-        tile: None,
-    };
     let count = volumes.len();
     let (tx, rx) = sync_channel::<String>(WORKERS);
     std::thread::spawn(move || {

@@ -75,6 +75,9 @@ def test_both_refuse_the_same_values(cli):
     calls = {
         "analyze": lambda **kw: slabscope.analyze(volume, **kw),
         "render": lambda **kw: slabscope.render(volume, analysis, **kw),
+        # Refused before any path is looked at: triage's own (`timeout`), the loader's, the
+        # analysis'.
+        "triage": lambda **kw: slabscope.triage("nowhere.nii", **kw),
     }
     checked = 0
     for call, run in calls.items():
@@ -95,7 +98,7 @@ def test_both_refuse_the_same_values(cli):
                 )
                 assert done.returncode == 2 and entry["flag"] in done.stderr, done.stderr
                 checked += 1
-    assert checked >= 10
+    assert checked >= 20
 
 
 def as_given(entry: dict, value: float) -> int | float:

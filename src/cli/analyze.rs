@@ -50,9 +50,8 @@ pub struct AnalyzeArgs {
     /// Overwrite export files that exist.
     #[arg(long)]
     pub force: bool,
-    /// Stop after this many seconds, with an error saying so.
-    #[arg(long, value_name = "SECONDS", value_parser = super::args::within(0.1, 86400.0))]
-    pub timeout: Option<f64>,
+    #[command(flatten)]
+    pub timeout: Flags<params::Timeout>,
     #[command(flatten)]
     pub load: LoadArgs,
 }
@@ -73,9 +72,7 @@ fn outputs(args: &AnalyzeArgs) -> Result<Vec<&Path>> {
 }
 
 pub fn run(args: &AnalyzeArgs) -> Result<()> {
-    if let Some(t) = args.timeout {
-        super::progress::stop_after(t);
-    }
+    super::progress::stop_after_given(&args.timeout)?;
     let outputs = outputs(args)?;
     let name = slabscope::error::shown(&args.file);
     let context = |e: slabscope::Error| anyhow::Error::from(e).context(name.clone());

@@ -76,16 +76,6 @@ pub fn analyze(name: &str, planned: Planned<'_>) -> anyhow::Result<Analysed> {
         .map_err(|e| anyhow::Error::from(e).context(name.to_string()))
 }
 
-/// A parser of numbers in `lo..=hi`, for float options.
-pub fn within(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
-    move |s: &str| match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
-        _ => Err(format!("{s:?} is not a number from {lo} to {hi}")),
-    }
-}
-
-pub use text::pair;
-
 /// Parses `NXxNYxNZ`.
 pub fn parse_dims_arg(s: &str) -> Result<[usize; 3], String> {
     text::dims(s).ok_or_else(|| format!("{s:?} is not NXxNYxNZ, e.g. 256x256x113"))

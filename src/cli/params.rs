@@ -163,3 +163,27 @@ set!(
     /// What a render shows and how: the mode, the look, the camera and the layout.
     Scene => [table::SCENE_FIRST, table::LOOK, table::SCENE].concat()
 );
+set!(
+    /// The faces of every slab instead of the exploded view.
+    Faces => vec![&table::FACES]
+);
+set!(
+    /// No orientation letters on a slice.
+    NoLetters => vec![&table::NO_LETTERS]
+);
+set!(
+    /// A bound on the whole run.
+    Timeout => vec![&table::TIMEOUT]
+);
+set!(
+    /// Triage's shard and lattice.
+    Shard => vec![&table::SHARD, &table::FULL]
+);
+set!(
+    /// The size of the sheet's pictures.
+    Tile => vec![&table::TILE]
+);
+set!(
+    /// A bound on each volume of a triage.
+    TriageTimeout => vec![&table::TRIAGE_TIMEOUT]
+);

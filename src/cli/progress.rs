@@ -215,6 +215,16 @@ pub fn stop_after(seconds: f64) {
     }
 }
 
+/// [`stop_after`] the `--timeout` given, if one was.
+pub fn stop_after_given(
+    timeout: &super::params::Flags<super::params::Timeout>,
+) -> slabscope::Result<()> {
+    if let Some(t) = timeout.given.value(&slabscope::params::table::TIMEOUT)? {
+        stop_after(t);
+    }
+    Ok(())
+}
+
 /// The cancellation a load takes: raised at the `--timeout`, as [`with_bar`]'s monitor is.
 pub fn load_cancel() -> Cancel {
     Cancel::new(Arc::clone(&STOP))

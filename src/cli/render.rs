@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use image::{DynamicImage, RgbaImage};
-use slabscope::params::Scene;
+use slabscope::params::{Scene, table};
 use slabscope::render::{TransferChoice, encode};
 use slabscope::request::{Level, RenderRequest};
 use tiny_skia::Pixmap;
@@ -50,13 +50,10 @@ pub struct RenderArgs {
     /// Overwrite OUT if it exists.
     #[arg(long)]
     pub force: bool,
-    /// Instead of the exploded view, the faces of every slab: its last slice above its first,
-    /// a column a slab, fit into the size.
-    #[arg(long)]
-    pub faces: bool,
-    /// Stop after this many seconds, with an error saying so.
-    #[arg(long, value_name = "SECONDS", value_parser = super::args::within(0.1, 86400.0))]
-    pub timeout: Option<f64>,
+    #[command(flatten)]
+    pub faces: Flags<params::Faces>,
+    #[command(flatten)]
+    pub timeout: Flags<params::Timeout>,
     #[command(flatten)]
     pub scene: SceneArgs,
 }
@@ -114,18 +111,14 @@ fn render_file(
 }
 
 pub fn run_render(args: &RenderArgs) -> Result<()> {
-    if let Some(t) = args.timeout {
-        super::progress::stop_after(t);
-    }
+    super::progress::stop_after_given(&args.timeout)?;
     let format = super::picture_output(&args.output, &args.file, args.force)?;
     let image = render_file(
         &args.file,
         &args.scene,
-        args.size
-            .given
-            .size(&slabscope::params::table::RENDER_SIZE)?,
+        args.size.given.size(&table::RENDER_SIZE)?,
         Some((&args.output, args.force)),
-        args.faces,
+        args.faces.given.switch(&table::FACES)?,
     )?;
     super::write_new(&args.output, &encode(&image, format)?, args.force)
 }

@@ -32,9 +32,8 @@ pub struct SliceArgs {
     /// Overwrite OUT if it exists.
     #[arg(long)]
     pub force: bool,
-    /// No orientation letters on the edges.
-    #[arg(long)]
-    pub no_letters: bool,
+    #[command(flatten)]
+    pub no_letters: Flags<params::NoLetters>,
     #[command(flatten)]
     pub look: LookArgs,
     #[command(flatten)]
@@ -57,7 +56,7 @@ pub fn run(args: &SliceArgs) -> Result<()> {
         look: args.look.look()?,
         picture: SliceParams {
             fit: args.size.given.size(&table::SLICE_SIZE)?,
-            letters: !args.no_letters,
+            letters: !args.no_letters.given.switch(&table::NO_LETTERS)?,
             ..SliceParams::default()
         },
     };

@@ -3,19 +3,19 @@
 //! shards need not walk the folders again.
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use anyhow::Result;
 use clap::Args;
 use slabscope::Error;
 use slabscope::error::names::controls;
-use slabscope::params::Terms;
+use slabscope::params::{Given, Terms, table};
 use slabscope::render::{ImageOutput, encode, sheet};
 use slabscope::triage::{
     Entry, Source, TriageOutcome, TriagePlan, TriageRow, manifest_lines, select,
 };
 
 use super::args::{AnalysisArgs, LoadArgs};
+use super::params::{self, Flags};
 use super::progress::Bar;
 
 /// Arguments of `slabscope triage`.
@@ -38,38 +38,39 @@ pub struct TriageArgs {
     /// instead of walking folders.
     #[arg(long, value_name = "FILE", conflicts_with = "paths")]
     pub manifest: Option<PathBuf>,
-    /// Take the K-th of N contiguous blocks of the sorted volumes (K from 1), e.g.
-    /// `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
-    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
-    pub shard: Option<(u64, u64)>,
-    /// The view search on the voxels' own lattice over every phase, not the fast path's twice
-    /// coarser lattice over 4 phases (used unless --ray-spacing or --sample-spacing is given, on
-    /// volumes of 32 voxels a side or more).
-    #[arg(long)]
-    pub full: bool,
+    /// `--shard` and `--full`.
+    #[command(flatten)]
+    pub shard: Flags<params::Shard>,
     /// Also write a contact sheet: per volume, numbered in row order, its exploded view and its
     /// three orthogonal mid slices.
     #[arg(long, value_name = "OUT.png")]
     pub sheet: Option<PathBuf>,
-    /// Size of the sheet's pictures, pixels.
-    #[arg(long, value_name = "PIXELS", default_value_t = 160, value_parser = clap::value_parser!(u32).range(32..=1024))]
-    pub tile: u32,
+    #[command(flatten)]
+    pub tile: Flags<params::Tile>,
     /// Overwrite the sheet if it exists.
     #[arg(long)]
     pub force: bool,
-    /// Stop the loading and analysis of a volume after this many seconds (its row says so).
-    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = super::args::within(0.1, 86400.0))]
-    pub timeout: f64,
+    #[command(flatten)]
+    pub timeout: Flags<params::TriageTimeout>,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     #[command(flatten)]
     pub load: LoadArgs,
 }
 
-fn parse_shard(s: &str) -> Result<(u64, u64), String> {
-    super::args::pair::<u64>(s, &['/'])
-        .filter(|&(k, n)| (1..=n).contains(&k))
-        .ok_or_else(|| format!("{s:?} is not K/N with 1 <= K <= N, e.g. 3/10"))
+impl TriageArgs {
+    /// `--tile`: the size of the sheet's pictures.
+    fn tile(&self) -> slabscope::Result<u32> {
+        self.tile.given.number(&table::TILE)
+    }
+
+    /// The values of triage's own flags given.
+    fn own(&self) -> Given {
+        let mut own = self.shard.given.clone();
+        own.extend(&self.tile.given);
+        own.extend(&self.timeout.given);
+        own
+    }
 }
 
 /// Runs triage; the exit status: 0 when every volume was looked at, 1 when some failed (their
@@ -136,7 +137,7 @@ pub fn run(args: &TriageArgs) -> Result<u8> {
     result?;
     drop(bar);
     if let Some(out) = &args.sheet {
-        let picture = sheet::sheet(&cells, args.tile, sheet_columns(cells.len()))?;
+        let picture = sheet::sheet(&cells, args.tile()?, sheet_columns(cells.len()))?;
         super::write_new(
             out,
             &encode(&picture, ImageOutput::for_path(out)?)?,
@@ -157,7 +158,7 @@ fn check_sheet(args: &TriageArgs, volumes: &[Entry]) -> Result<()> {
         ImageOutput::for_path(out)?;
         let inputs: Vec<PathBuf> = volumes.iter().map(|v| v.path.clone()).collect();
         super::check_outputs(&[out], &inputs, args.force)?;
-        sheet::check_sheet(volumes.len(), args.tile, sheet_columns(volumes.len()))?;
+        sheet::check_sheet(volumes.len(), args.tile()?, sheet_columns(volumes.len()))?;
     }
     Ok(())
 }
@@ -168,7 +169,7 @@ fn volumes(args: &TriageArgs) -> Result<Vec<Entry>> {
         Some(m) => Source::Manifest(m),
         None => Source::Paths(&args.paths),
     };
-    let selection = select(source, &args.load.options()?, args.shard)?;
+    let selection = select(source, &args.load.options()?, args.shard.given.shard()?)?;
     if let Some(note) = selection.note {
         eprintln!("slabscope: note: {}", controls(&note));
     }
@@ -182,13 +183,12 @@ fn look_all(
     args: &TriageArgs,
     emit: impl FnMut(usize, TriageOutcome) -> bool,
 ) -> Result<()> {
-    let how = TriagePlan {
-        load: args.load.options()?,
-        params: args.analysis.params(false)?,
-        timeout: Duration::from_secs_f64(args.timeout),
-        fast: !args.full,
-        tile: args.sheet.as_ref().map(|_| args.tile),
-    };
+    let how = TriagePlan::given(
+        &args.own(),
+        args.load.options()?,
+        args.analysis.params(false)?,
+        args.sheet.is_some(),
+    )?;
     // A row names its file: its error need not (told by the error's path, not its words).
     let describe = |path: &Path, e: Error| match e {
         Error::Cancelled => super::error_message(&e.into()),

@@ -99,6 +99,11 @@ impl Given {
         Ok((self.resolution()?, self.has(&super::table::RESOLUTION)))
     }
 
+    /// Triage's shard `(K, N)`, when one was given.
+    pub fn shard(&self) -> Result<Option<(u64, u64)>> {
+        self.parsed(&super::table::SHARD, text::shard)
+    }
+
     /// How to read the input.
     pub fn load(&self) -> Result<LoadOptions> {
         Ok(LoadOptions {
@@ -309,6 +314,38 @@ mod tests {
                 needed: "highlight"
             })
         ));
+    }
+
+    #[test]
+    fn the_commands_own_entries_parse_and_refuse() {
+        assert_eq!(Given::new().shard().unwrap(), None);
+        let shard = |t: &str| Given::new().with(&table::SHARD, t).shard();
+        assert_eq!(shard("3/10").unwrap(), Some((3, 10)));
+        assert_eq!(shard("3,10").unwrap(), Some((3, 10)));
+        assert_eq!(shard("10/10").unwrap(), Some((10, 10)));
+        for bad in ["4/3", "0/3", "1/0", "3", "a/b"] {
+            assert_eq!(
+                shard(bad).unwrap_err().to_string(),
+                format!("shard {bad}: expected K/N with 1 <= K <= N, e.g. 3/10")
+            );
+        }
+        // `analyze`'s and `render`'s timeout has no default; triage's is a minute.
+        assert_eq!(Given::new().value::<f64>(&table::TIMEOUT).unwrap(), None);
+        assert_eq!(
+            Given::new().number::<f64>(&table::TRIAGE_TIMEOUT).unwrap(),
+            60.0
+        );
+        let e = Given::new()
+            .with(&table::TIMEOUT, "86400.5")
+            .value::<f64>(&table::TIMEOUT)
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "timeout 86400.5: expected a number from 0.1 to 86400"
+        );
+        let switches = Given::new().with(&table::FACES, "true");
+        assert!(switches.switch(&table::FACES).unwrap());
+        assert!(!switches.switch(&table::NO_LETTERS).unwrap());
     }
 
     #[test]

@@ -189,6 +189,12 @@ impl Given {
         self
     }
 
+    /// This, with the values given in `other` too (`other`'s where both give one).
+    pub fn extend(&mut self, other: &Self) {
+        self.values
+            .extend(other.values.iter().map(|(k, v)| (*k, v.clone())));
+    }
+
     /// Whether `p` was given.
     #[must_use]
     pub fn has(&self, p: &Param) -> bool {

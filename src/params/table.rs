@@ -397,9 +397,11 @@ pub const INDEX: Param = named(
     count(0, u64::MAX, None),
 );
 
-// How to read the input: in `table/load.rs`.
+// How to read the input: in `table/load.rs`; the commands' own: in `table/commands.rs`.
 
+mod commands;
 mod load;
+pub use commands::*;
 pub use load::*;
 
 /// The pictures' and slices' own entries.
@@ -423,8 +425,18 @@ pub const TOUR: &[&Param] = &[&PAPER];
 
 /// Every entry, for looking one up by name.
 pub fn all() -> impl Iterator<Item = &'static Param> {
-    [ANALYSIS, LOOK, SCENE_FIRST, SCENE, PICTURES, LOAD, TOUR]
-        .into_iter()
-        .flatten()
-        .copied()
+    [
+        ANALYSIS,
+        LOOK,
+        SCENE_FIRST,
+        SCENE,
+        PICTURES,
+        LOAD,
+        TOUR,
+        COMMANDS,
+        TRIAGE,
+    ]
+    .into_iter()
+    .flatten()
+    .copied()
 }

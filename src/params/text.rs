@@ -1,6 +1,7 @@
 //! The parameters written in a syntax of their own, parsed: an axis, a background rule, a
-//! window, raw dimensions and spacing, a voxel type, a byte order, a byte count, a resolution.
-//! Each returns `None` for text it does not take; what it takes is said by the parameter's entry.
+//! window, raw dimensions and spacing, a voxel type, a byte order, a byte count, a resolution,
+//! a shard. Each returns `None` for text it does not take; what it takes is said by the
+//! parameter's entry.
 
 use crate::formats::{parse_bytes, parse_dims};
 use crate::geometry::AxisChoice;
@@ -87,6 +88,12 @@ pub fn size(s: &str) -> Option<(u32, u32)> {
     pair::<u32>(s, &['x', 'X', ',']).filter(|&(w, h)| {
         w > 0 && h > 0 && u64::from(w) * u64::from(h) <= crate::render::MAX_PIXELS
     })
+}
+
+/// A shard `K/N` (or `K,N`, as Python's tuples come): the K-th of N, K from 1 to N.
+#[must_use]
+pub fn shard(s: &str) -> Option<(u64, u64)> {
+    pair::<u64>(s, &['/', ',']).filter(|&(k, n)| (1..=n).contains(&k))
 }
 
 /// Any text (a series' number or UID, a label image's name).

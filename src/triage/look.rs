@@ -10,6 +10,7 @@ use crate::analysis::AnalysisParams;
 use crate::budget::Budget;
 use crate::error::Error;
 use crate::formats::{LoadOptions, group, load};
+use crate::params::{Given, table};
 use crate::progress::{Cancel, Monitor, Progress};
 use crate::request::{Analysed, AnalysisRequest, Level};
 use crate::volume::Volume;
@@ -39,6 +40,29 @@ pub struct TriagePlan {
     pub fast: bool,
     /// Draw each volume's contact-sheet cell, with tiles of this many pixels.
     pub tile: Option<u32>,
+}
+
+impl TriagePlan {
+    /// The plan of the values `given` (the entries `timeout`, `full` and `tile`): volumes read
+    /// with `load` and analysed with `params`, and with `sheet` each drawn as a sheet's cell.
+    pub fn given(
+        given: &Given,
+        load: LoadOptions,
+        params: AnalysisParams,
+        sheet: bool,
+    ) -> crate::error::Result<Self> {
+        Ok(Self {
+            load,
+            params,
+            timeout: Duration::from_secs_f64(given.number(&table::TRIAGE_TIMEOUT)?),
+            fast: !given.switch(&table::FULL)?,
+            tile: if sheet {
+                Some(given.number(&table::TILE)?)
+            } else {
+                None
+            },
+        })
+    }
 }
 
 /// What triage gives of one volume: its row, and its contact-sheet cell when asked for and the
@@ -265,4 +289,50 @@ pub fn look_all(
             }
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plan_takes_the_entries_given_or_their_defaults() {
+        let load = LoadOptions::default;
+        let params = AnalysisParams::default;
+        let plan = TriagePlan::given(&Given::new(), load(), params(), false).unwrap();
+        assert_eq!(
+            (plan.timeout, plan.fast, plan.tile),
+            (Duration::from_secs(60), true, None)
+        );
+        let plan = TriagePlan::given(&Given::new(), load(), params(), true).unwrap();
+        assert_eq!(plan.tile, Some(160));
+        let given = Given::new()
+            .with(&table::TRIAGE_TIMEOUT, "2.5")
+            .with(&table::FULL, "true")
+            .with(&table::TILE, "64");
+        let plan = TriagePlan::given(&given, load(), params(), true).unwrap();
+        assert_eq!(
+            (plan.timeout, plan.fast, plan.tile),
+            (Duration::from_millis(2500), false, Some(64))
+        );
+        let e = TriagePlan::given(
+            &Given::new().with(&table::TRIAGE_TIMEOUT, "0.05"),
+            load(),
+            params(),
+            false,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "timeout 0.05: expected a number from 0.1 to 86400"
+        );
+        let e = TriagePlan::given(
+            &Given::new().with(&table::TILE, "31"),
+            load(),
+            params(),
+            true,
+        )
+        .unwrap_err();
+        assert_eq!(e.to_string(), "tile 31: expected 32 to 1024");
+    }
 }
