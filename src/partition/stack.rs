@@ -12,7 +12,7 @@ use crate::geometry::WorldAxis;
 use crate::geometry::lattice::{Lattice, SamplingParams};
 use crate::volume::background::{Background, BackgroundRule};
 
-pub(crate) use self::cut::Cutter;
+pub(crate) use self::cut::{Cutter, SliceSums};
 pub use self::cut::{InPlane, sampled_gain, slice_geometry};
 
 /// The symbol of a sample that does not count: outside the volume, missing, or background.

@@ -11,10 +11,10 @@
 
 use std::ops::Range;
 
-use super::bottom_up::{Columns, add_consecutive_joints, nmi_of_joints};
 use super::histories::Histories;
+use super::parts::{SlabJoints, SlabsFound, SliceCounts, StackSplit};
 use super::stack::Cutter;
-use super::{Method, Partition, PartitionParams, Slab};
+use super::{Partition, PartitionParams};
 use crate::error::{Error, Result, short_bytes};
 use crate::progress::Monitor;
 use crate::volume::Volume;
@@ -81,60 +81,29 @@ pub fn partition_streamed_kept(
     max_memory: u64,
     monitor: &Monitor,
 ) -> Result<(Partition, Histories)> {
-    if params.method == Method::BottomUp {
-        return Err(Error::invalid(
-            "method",
-            params.method.name(),
-            "top-down or optimal for a stack counted strip by strip (bottom-up merging reads \
-             the whole stack once per merge)",
-        ));
-    }
-    Histories::check_not_constant(volume)?;
+    let split = StackSplit::new(volume, axis, params)?;
     let cutter = Cutter::new(volume, axis, &params.stack, monitor)?;
-    let (n, bins) = (cutter.slices(), cutter.bins());
-    Histories::check_slices(n)?;
     let strips = strips(&cutter, max_memory)?;
-    let work = strips.iter().map(|r| cutter.work(r)).sum();
+    let work = |counting| strips.iter().map(|r| cutter.work(r, counting)).sum();
 
-    monitor.start("slicing in strips (pass 1 of 2)", work);
-    let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
-    let mut histograms = vec![0u64; n * bins];
-    let mut positions = vec![0u64; n];
-    let mut joints = vec![0u64; (n - 1) * bins * bins];
-    let mut sums = cutter.sums();
+    monitor.start("slicing in strips (pass 1 of 2)", work(true));
+    let mut counts = SliceCounts::new(&cutter);
     for rows in &strips {
-        let strip = cutter.cut(rows.clone(), sums.as_mut(), monitor)?;
-        add(&mut histograms, &strip.slice_histograms());
-        add(&mut positions, strip.positions());
-        add_consecutive_joints(
-            &strip,
-            &Columns::new(&strip),
-            &singles,
-            &mut joints,
-            monitor,
-        )?;
+        counts.add_rows(&cutter, rows.clone(), monitor)?;
     }
-    let nmi_curve = nmi_of_joints(&joints, bins);
-    drop(joints);
-    let summary = cutter.summary(positions, sums, monitor)?;
-    let scope = params.scope(Some(n));
-    let histories = Histories::of_summary(summary, histograms, nmi_curve, scope)?;
-    let position = histories.position(params.method, params.stop)?;
-    let slabs = histories.slabs(params.method, position);
+    let found = SlabsFound::of(counts.into_histories(&cutter, params, monitor)?, params)?;
 
-    let boundary_nmi = if slabs.len() > 1 {
-        monitor.start("slicing in strips (pass 2 of 2)", work);
-        let mut joints = vec![0u64; (slabs.len() - 1) * bins * bins];
+    let joints = if found.slabs.len() > 1 {
+        monitor.start("slicing in strips (pass 2 of 2)", work(false));
+        let mut joints = SlabJoints::new(&found.slabs, cutter.bins(), cutter.rows());
         for rows in &strips {
-            let strip = cutter.cut(rows.clone(), None, monitor)?;
-            add_consecutive_joints(&strip, &Columns::new(&strip), &slabs, &mut joints, monitor)?;
+            joints.add_rows(&cutter, rows.clone(), monitor)?;
         }
-        nmi_of_joints(&joints, bins)
+        Some(joints)
     } else {
-        Vec::new()
+        None
     };
-    let mut partition =
-        Partition::with_boundary_nmi(&histories, params.method, position, boundary_nmi);
+    let mut partition = split.finish(&found, joints)?;
     partition.notes.insert(
         0,
         format!(
@@ -147,7 +116,7 @@ pub fn partition_streamed_kept(
             },
         ),
     );
-    Ok((partition, histories))
+    Ok((partition, found.histories))
 }
 
 /// The bytes a strip of `rows` rows of `cutter`'s stack takes at its peak.
@@ -197,15 +166,10 @@ fn strips(cutter: &Cutter, max_memory: u64) -> Result<Vec<Range<usize>>> {
         .collect())
 }
 
-/// Adds `b` into `a`, element by element.
-fn add(a: &mut [u64], b: &[u64]) {
-    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::partition::{SliceStack, Stop, partition};
+    use crate::partition::{Method, SliceStack, Stop, partition};
     use crate::volume::VoxelType;
     use crate::volume::background::BackgroundRule;
 

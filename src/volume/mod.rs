@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 pub use pyramid::Resolution;
 pub use quantize::Quantizer;
-pub use slab::SlabGrid;
+pub use slab::{SlabGrid, VoxelBox};
 pub use voxel::{Endian, VoxelType};
 pub(crate) use voxel::{decode_to, write_le};
 pub(crate) use voxels::with_voxels;

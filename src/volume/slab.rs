@@ -42,6 +42,38 @@ impl SlabGrid {
     }
 }
 
+/// A box of voxels of a grid: its first voxel and its size, per axis (x, y, z).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VoxelBox {
+    /// The first voxel.
+    pub origin: [usize; 3],
+    /// The voxels along each axis.
+    pub size: [usize; 3],
+}
+
+impl VoxelBox {
+    /// Its voxels.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.size.iter().product()
+    }
+
+    /// Whether it holds none.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether it lies within a grid of `dims` voxels.
+    fn within(&self, dims: [usize; 3]) -> bool {
+        (0..3).all(|m| {
+            self.origin[m]
+                .checked_add(self.size[m])
+                .is_some_and(|end| end <= dims[m])
+        })
+    }
+}
+
 /// An anonymous map of a whole grid's bytes, written only where a slab is.
 #[derive(Debug)]
 struct SparseBytes(memmap2::Mmap);
@@ -59,13 +91,7 @@ impl Volume {
     /// them.
     pub fn of_slab<T: Voxel>(grid: &SlabGrid, first: usize, voxels: &[T]) -> Result<Self> {
         let [nx, ny, nz] = grid.dims;
-        let too_many = || Error::invalid("slab", "a grid", "one of a size this machine can map");
-        let plane = nx.checked_mul(ny).ok_or_else(too_many)?;
-        let count = plane.checked_mul(nz).ok_or_else(too_many)?;
-        count
-            .checked_mul(std::mem::size_of::<T>())
-            .ok_or_else(too_many)?;
-        check_shape(grid.dims, grid.spacing, count)?;
+        let plane = nx.saturating_mul(ny);
         if plane == 0
             || !voxels.len().is_multiple_of(plane)
             || first > nz
@@ -77,19 +103,52 @@ impl Volume {
                 format!("whole planes of {nx}×{ny} voxels within the {nz} planes"),
             ));
         }
+        let held = VoxelBox {
+            origin: [0, 0, first],
+            size: [nx, ny, voxels.len() / plane],
+        };
+        Self::of_box(grid, held, voxels)
+    }
+
+    /// The volume of `grid` whose box `held` is `voxels` (x fastest), every other voxel
+    /// unread: the whole volume to every walk and cut that reads that box alone. f32
+    /// infinities are made missing, as every reader makes them.
+    pub fn of_box<T: Voxel>(grid: &SlabGrid, held: VoxelBox, voxels: &[T]) -> Result<Self> {
+        let too_many = || Error::invalid("slab", "a grid", "one of a size this machine can map");
+        let count = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+        let count = count.ok_or_else(too_many)?;
         let size = std::mem::size_of::<T>();
+        count.checked_mul(size).ok_or_else(too_many)?;
+        check_shape(grid.dims, grid.spacing, count)?;
+        if !held.within(grid.dims) || voxels.len() != held.len() {
+            return Err(Error::invalid(
+                "slab",
+                format!(
+                    "{} voxels in a box of {:?} from {:?}",
+                    voxels.len(),
+                    held.size,
+                    held.origin
+                ),
+                format!("a box's voxels within the grid of {:?}", grid.dims),
+            ));
+        }
         let mut map = memmap2::MmapOptions::new()
-            .len((plane * nz * size).max(1))
+            .len((count * size).max(1))
             .no_reserve_swap()
             .map_anon()
             .map_err(|e| Error::invalid("slab", "a map of the whole grid", e.to_string()))?;
-        let start = first * plane * size;
-        let bytes: &[u8] = bytemuck::cast_slice(voxels);
-        map[start..start + bytes.len()].copy_from_slice(bytes);
-        if T::TYPE == VoxelType::F32 {
-            let written: &mut [f32] =
-                bytemuck::cast_slice_mut(&mut map[start..start + bytes.len()]);
-            super::voxels::infinities_missing(written);
+        let [nx, ny, _] = grid.dims;
+        let [sx, sy, sz] = held.size;
+        let [x0, y0, z0] = held.origin;
+        let rows = voxels.chunks_exact(sx.max(1)).take(sy * sz);
+        for (r, row) in rows.enumerate() {
+            let (y, z) = (y0 + r % sy, z0 + r / sy);
+            let start = ((z * ny + y) * nx + x0) * size;
+            let end = start + std::mem::size_of_val(row);
+            map[start..end].copy_from_slice(bytemuck::cast_slice(row));
+            if T::TYPE == VoxelType::F32 {
+                super::voxels::infinities_missing(bytemuck::cast_slice_mut(&mut map[start..end]));
+            }
         }
         let map = map
             .make_read_only()

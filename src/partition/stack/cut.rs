@@ -12,10 +12,14 @@ use crate::error::{Error, Result};
 use crate::geometry::{WorldAxis, canonical, coordinate_axis, normalize};
 use crate::progress::Monitor;
 use crate::volume::background::{Background, BackgroundTest};
-use crate::volume::{Quantizer, Volume, Voxel};
+use crate::volume::{Quantizer, Volume, Voxel, VoxelBox};
 
 mod oblique;
 mod sparse;
+mod sums;
+
+use self::oblique::lattice_box;
+pub(crate) use self::sums::{RowSink, SliceSums};
 
 pub use self::sparse::{InPlane, sampled_gain};
 
@@ -68,24 +72,19 @@ impl SliceStack {
     ) -> Result<Self> {
         let cutter = Cutter::new(volume, axis, params, monitor)?;
         let rows = 0..cutter.rows();
-        monitor.start("slicing", cutter.work(&rows));
-        let mut sums = cutter.sums();
+        monitor.start("slicing", cutter.work(&rows, true));
+        let mut sums = SliceSums::new(cutter.slices());
         let Self {
             columns,
             symbols,
             positions,
             ..
-        } = cutter.cut(rows, sums.as_mut(), monitor)?;
-        // The slices' sums along a coordinate axis take a pass over the voxels of their own: a
-        // phase, so that a progress bar does not stand full meanwhile.
-        monitor.start("summing slices", 1);
-        let stack = Self {
+        } = cutter.cut(rows, Some(&mut |row| sums.add_onto(row)), monitor)?;
+        Ok(Self {
             columns,
             symbols,
             ..cutter.summary(positions, sums, monitor)?
-        };
-        monitor.advance(1)?;
-        Ok(stack)
+        })
     }
 }
 
@@ -114,6 +113,20 @@ impl<'a> Cutter<'a> {
     ) -> Result<Self> {
         let background = Background::find(volume, params.background, monitor)?;
         Self::with(volume, axis, params, Cow::Owned(background), |d| {
+            oblique_lattice(volume, d, params)
+        })
+    }
+
+    /// The cutter of `volume` along `axis` (made canonical) with `background` found beforehand
+    /// (of the whole volume, when `volume` holds a part of it): what a task of a partition in
+    /// parts cuts with.
+    pub(crate) fn given(
+        volume: &'a Volume,
+        axis: [f64; 3],
+        params: &StackParams,
+        background: &'a Background,
+    ) -> Result<Self> {
+        Self::with(volume, axis, params, Cow::Borrowed(background), |d| {
             oblique_lattice(volume, d, params)
         })
     }
@@ -182,6 +195,24 @@ impl<'a> Cutter<'a> {
         }
     }
 
+    /// The box of voxels the samples of `rows` read (their cells' corners and nearest
+    /// voxels), `None` when they hold no sample.
+    pub(crate) fn voxel_box(&self, rows: &Range<usize>) -> Option<VoxelBox> {
+        match (&self.lattice, coordinate_axis(self.axis)) {
+            (Some(lattice), _) => lattice_box(lattice, rows, self.volume.dims()),
+            (None, Some(m)) => {
+                let (dims, (_, b)) = (self.volume.dims(), other_axes(m));
+                if rows.is_empty() || rows.end > dims[b] || dims.contains(&0) {
+                    return None;
+                }
+                let (mut origin, mut size) = ([0; 3], dims);
+                (origin[b], size[b]) = (rows.start, rows.len());
+                Some(VoxelBox { origin, size })
+            }
+            (None, None) => unreachable!("a coordinate axis has no lattice"),
+        }
+    }
+
     /// The number of bins.
     pub(crate) fn bins(&self) -> usize {
         self.bins
@@ -192,12 +223,14 @@ impl<'a> Cutter<'a> {
         self.background.memory_bytes()
     }
 
-    /// The units of work [`cut`](Self::cut) of `rows` advances its monitor by (the caller starts
-    /// the phase, so that strips cut one after another advance one phase).
-    pub(crate) fn work(&self, rows: &Range<usize>) -> u64 {
+    /// The units of work [`cut`](Self::cut) of `rows` advances its monitor by, `counting` the
+    /// rows' sums or not (the caller starts the phase, so that strips cut one after another
+    /// advance one phase).
+    pub(crate) fn work(&self, rows: &Range<usize>, counting: bool) -> u64 {
         match coordinate_axis(self.axis) {
             Some(m) if self.lattice.is_none() => {
-                (rows.len() * self.volume.dims()[other_axes(m).0]).div_ceil(CUT_BLOCK) as u64
+                let cut = (rows.len() * self.volume.dims()[other_axes(m).0]).div_ceil(CUT_BLOCK);
+                (cut + if counting { rows.len() } else { 0 }) as u64
             }
             _ => rows.len() as u64,
         }
@@ -215,46 +248,41 @@ impl<'a> Cutter<'a> {
         }
     }
 
-    /// The sums to give [`cut`](Self::cut): an oblique cut counts them as it cuts; along a
-    /// coordinate axis [`summary`](Self::summary) counts them plane by plane.
-    pub(crate) fn sums(&self) -> Option<SliceSums> {
-        self.lattice.as_ref().map(|_| SliceSums::new(self.slices()))
-    }
-
-    /// The stack of the pixels of `rows` (a strip's positions are its own). Along an oblique
-    /// axis, its slices' sums and counts of counted values are added onto `sums` when given.
+    /// The stack of the pixels of `rows` (a strip's positions are its own). With `sums`, each
+    /// row's sums and counts of counted values per slice are handed to it, in row order: the
+    /// slices' sums are those rows' sums added in row order, whether the rows are cut at once,
+    /// in strips one after another, or in parts apart ([`SliceSums`]).
     pub(crate) fn cut(
         &self,
         rows: Range<usize>,
-        sums: Option<&mut SliceSums>,
+        sums: Option<RowSink>,
         monitor: &Monitor,
     ) -> Result<SliceStack> {
         match (&self.lattice, coordinate_axis(self.axis)) {
             (Some(lattice), _) => self.along_lattice(lattice, rows, sums, monitor),
-            (None, Some(m)) => self.along_coordinate(m, rows, monitor),
+            (None, Some(m)) => {
+                let stack = self.along_coordinate(m, rows.clone(), monitor)?;
+                if let Some(sink) = sums {
+                    self.coordinate_row_sums(m, rows, sink, monitor)?;
+                }
+                Ok(stack)
+            }
             (None, None) => unreachable!("a coordinate axis has no lattice"),
         }
     }
 
     /// The stack's per-slice geometry, background and sums without its columns: what a
     /// partition reports of the stack once its histograms are counted. `positions` are the
-    /// strips' positions summed, `sums` the sums the cuts counted ([`sums`](Self::sums)),
-    /// `None` along a coordinate axis, whose sums are counted here.
+    /// strips' positions summed, `sums` every row's sums added in row order.
     pub(crate) fn summary(
         &self,
         positions: Vec<u64>,
-        sums: Option<SliceSums>,
+        sums: SliceSums,
         monitor: &Monitor,
     ) -> Result<SliceStack> {
         monitor.check()?;
         let (volume, d) = (self.volume, self.axis);
-        let background = self.background.test();
-        let counted = |index: usize, v: f32| v.is_finite() && !background.contains(index, v);
-        let SliceSums { sums, counts } = match (sums, coordinate_axis(d)) {
-            (Some(sums), _) => sums,
-            (None, Some(m)) => plane_sums(volume, m, &counted),
-            (None, None) => unreachable!("an oblique cut counts its sums"),
-        };
+        let SliceSums { sums, counts } = sums;
         let (thickness, offset) = match (&self.lattice, coordinate_axis(d)) {
             (Some(l), _) => (
                 l.sample_spacing,
@@ -420,67 +448,6 @@ impl SliceStack {
             world_line: (1.0, 0.0),
         })
     }
-}
-
-/// Per slice: the sum and count of the values that count (for slab means).
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct SliceSums {
-    pub(crate) sums: Vec<f64>,
-    pub(crate) counts: Vec<u64>,
-}
-
-impl SliceSums {
-    /// None yet, for `slices` slices.
-    pub(crate) fn new(slices: usize) -> Self {
-        Self {
-            sums: vec![0.0; slices],
-            counts: vec![0; slices],
-        }
-    }
-
-    /// Adds `other`'s, slice by slice.
-    pub(crate) fn add_onto(&mut self, other: &Self) {
-        self.sums
-            .iter_mut()
-            .zip(&other.sums)
-            .for_each(|(a, b)| *a += b);
-        self.counts
-            .iter_mut()
-            .zip(&other.counts)
-            .for_each(|(a, b)| *a += b);
-    }
-}
-
-/// Per voxel plane along coordinate axis `m`: the sum and count of the counted values.
-fn plane_sums(
-    volume: &Volume,
-    m: usize,
-    counted: &(impl Fn(usize, f32) -> bool + Sync),
-) -> SliceSums {
-    let dims = volume.dims();
-    let stride = [1, dims[0], dims[0] * dims[1]];
-    let (a, b) = other_axes(m);
-    let (sums, counts) = crate::volume::with_voxels!(volume.data(), |voxels| {
-        (0..dims[m])
-            .into_par_iter()
-            .map(|s| {
-                let (mut sum, mut count) = (0.0, 0u64);
-                for j in 0..dims[b] {
-                    let row = s * stride[m] + j * stride[b];
-                    for i in 0..dims[a] {
-                        let index = row + i * stride[a];
-                        let v = voxels[index].to_f32();
-                        if counted(index, v) {
-                            sum += f64::from(v);
-                            count += 1;
-                        }
-                    }
-                }
-                (sum, count)
-            })
-            .unzip()
-    });
-    SliceSums { sums, counts }
 }
 
 /// The lattice of an oblique stack.

@@ -12,12 +12,12 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::super::{Column, Lattice, MISSING, SliceStack};
-use super::{Cutter, SliceSums};
+use super::{Cutter, RowSink, SliceSums};
 use crate::error::Result;
 use crate::geometry::lattice::Ray;
 use crate::progress::Monitor;
-use crate::volume::Voxel;
 use crate::volume::interpolate::Interpolator;
+use crate::volume::{Voxel, VoxelBox};
 
 /// Lattice rows a parallel task cuts.
 const BAND_ROWS: usize = 16;
@@ -114,14 +114,12 @@ struct TileRay {
 
 impl Cutter<'_> {
     /// The stack of lattice rows `rows` (counted from the lattice's first). With `sums`, each
-    /// slice's sum and count of counted values are added onto them, a row at a time in row
-    /// order: the same additions, in the same order, whether the rows are cut at once or in
-    /// strips one after another.
+    /// row's sums and counts of counted values per slice are handed to it, in row order.
     pub(super) fn along_lattice(
         &self,
         lattice: &Lattice,
         rows: Range<usize>,
-        mut sums: Option<&mut SliceSums>,
+        mut sums: Option<RowSink>,
         monitor: &Monitor,
     ) -> Result<SliceStack> {
         let (_, (j0, _)) = lattice.ray_ranges();
@@ -166,10 +164,8 @@ impl Cutter<'_> {
                         Ok(sums)
                     })
                     .collect::<Result<Vec<Vec<SliceSums>>>>()?;
-                if let Some(sums) = sums.as_deref_mut() {
-                    for row in parts.iter().flatten() {
-                        sums.add_onto(row);
-                    }
+                if let Some(sink) = sums.as_deref_mut() {
+                    parts.iter().flatten().for_each(&mut *sink);
                 }
             }
             Ok::<(), crate::error::Error>(())
@@ -261,4 +257,39 @@ impl Cutter<'_> {
             }
         }
     }
+}
+
+/// The box of voxels of a grid of `dims` that the samples of lattice `rows` (counted from the
+/// lattice's first) read: the corners of the cells they lie in and their nearest voxels.
+/// A ray's samples lie on a line, so its two ends bound them.
+pub(super) fn lattice_box(
+    lattice: &Lattice,
+    rows: &Range<usize>,
+    dims: [usize; 3],
+) -> Option<VoxelBox> {
+    let ((i0, i1), (j0, _)) = lattice.ray_ranges();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for r in rows.clone() {
+        for i in i0..=i1 {
+            let Some(ray) = lattice.ray(i, j0 + r as i64) else {
+                continue;
+            };
+            for p in [ray.at(ray.k0), ray.at(ray.k1)] {
+                for m in 0..3 {
+                    (lo[m], hi[m]) = (lo[m].min(p[m]), hi[m].max(p[m]));
+                }
+            }
+        }
+    }
+    if lo[0] > hi[0] {
+        return None;
+    }
+    let first: [usize; 3] =
+        std::array::from_fn(|m| (lo[m].max(0.0).floor() as usize).min(dims[m] - 1));
+    let last: [usize; 3] =
+        std::array::from_fn(|m| (hi[m].max(0.0).floor() as usize + 1).min(dims[m] - 1));
+    Some(VoxelBox {
+        origin: first,
+        size: std::array::from_fn(|m| last[m] + 1 - first[m]),
+    })
 }
