@@ -439,5 +439,6 @@ pub(super) fn add(a: &mut [u64], b: &[u64]) {
     a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
 }
 
+mod bytes;
 #[cfg(test)]
 mod tests;

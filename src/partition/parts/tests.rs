@@ -128,9 +128,13 @@ fn in_parts(v: &Volume, axis: [f64; 3], p: &PartitionParams, rng: &mut Lcg) -> P
         .iter()
         .map(|rows| {
             let held = held_for(&split, v, rows);
-            split
+            let part = split
                 .count(&held, &background, rows.clone(), &none)
-                .unwrap()
+                .unwrap();
+            // Each part travels as bytes, as a task's does.
+            let read = SliceCounts::from_bytes(&part.to_bytes()).unwrap();
+            assert_eq!(read, part);
+            read
         })
         .collect();
     let counts = add_grouped(counts, rng, |a, b| a.add(b).unwrap());
@@ -152,10 +156,10 @@ fn in_parts(v: &Volume, axis: [f64; 3], p: &PartitionParams, rng: &mut Lcg) -> P
             .map(|rows| {
                 let held = held_for(&split, v, rows);
                 let slabs = &found.slabs;
-                split.count_boundaries(&held, &background, rows.clone(), slabs, &none)
+                let part = split.count_boundaries(&held, &background, rows.clone(), slabs, &none);
+                SlabJoints::from_bytes(&part.unwrap().to_bytes()).unwrap()
             })
-            .collect::<Result<Vec<_>>>()
-            .unwrap();
+            .collect();
         add_grouped(joints, rng, |a, b| a.add(&b).unwrap())
     });
     split.finish(&found, joints).unwrap()
@@ -199,4 +203,72 @@ fn strips_counted_apart_from_their_boxes_and_added_shuffled_give_the_whole_parti
             }
         }
     }
+}
+
+#[test]
+fn parts_read_back_from_their_bytes_and_nothing_else_does() {
+    let v = layered(VoxelType::F32, 3.0, 0.371);
+    let p = PartitionParams {
+        stop: Stop::Slabs(3),
+        ..PartitionParams::default()
+    };
+    let none = Monitor::none();
+    let split = StackSplit::new(&v, [0.3, 0.5, 0.8], &p).unwrap();
+    let background = Background::none();
+    let count = |rows: Range<usize>| split.count(&v, &background, rows, &none).unwrap();
+    // A part holding folded rows and a row kept apart, and one holding kept rows alone.
+    let mut first = count(0..3);
+    first.add(count(6..7)).unwrap();
+    let later = count(8..12);
+    for part in [&first, &later] {
+        let bytes = part.to_bytes();
+        assert_eq!(&SliceCounts::from_bytes(&bytes).unwrap(), part);
+        // Cut short anywhere, longer, or another version: refused.
+        for cut in [0, 8, bytes.len() / 2, bytes.len() - 8] {
+            assert!(SliceCounts::from_bytes(&bytes[..cut]).is_err(), "{cut}");
+        }
+        let mut other = bytes.clone();
+        other[7] = 9;
+        let e = SliceCounts::from_bytes(&other).unwrap_err();
+        assert!(e.contains("version 9"), "{e}");
+        let mut longer = bytes.clone();
+        longer.extend([0; 8]);
+        assert!(SliceCounts::from_bytes(&longer).is_err());
+        assert!(SlabJoints::from_bytes(&bytes).is_err());
+    }
+    let slabs = [(0, 10), (10, split.slices())];
+    let joints = split
+        .count_boundaries(&v, &background, 2..8, &slabs, &none)
+        .unwrap();
+    let bytes = joints.to_bytes();
+    assert_eq!(SlabJoints::from_bytes(&bytes).unwrap(), joints);
+    assert!(SlabJoints::from_bytes(&bytes[..bytes.len() - 8]).is_err());
+    assert!(SliceCounts::from_bytes(&bytes).is_err());
+    // A stack claiming tables beyond what any partition holds is refused before they are made.
+    let mut huge = bytes.clone();
+    huge[8..16].copy_from_slice(&(1u64 << 40).to_le_bytes());
+    assert!(SlabJoints::from_bytes(&huge).is_err());
+}
+
+#[test]
+fn rows_counted_twice_or_left_out_are_errors() {
+    let v = layered(VoxelType::U8, 0.0, 1.0);
+    let p = PartitionParams::default();
+    let none = Monitor::none();
+    let split = StackSplit::new(&v, [0.0, 0.0, 1.0], &p).unwrap();
+    let background = Background::none();
+    let mut a = split.count(&v, &background, 0..5, &none).unwrap();
+    let b = split.count(&v, &background, 4..8, &none).unwrap();
+    let e = a.add(b).unwrap_err().to_string();
+    assert!(e.contains("rows 4–7"), "{e}");
+    let e = split
+        .slabs(&v, &background, a, &none)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains(&format!("5 of {} rows", split.rows())), "{e}");
+    let other = StackSplit::new(&v, [1.0, 0.0, 0.0], &p).unwrap();
+    let mut a = split.count(&v, &background, 0..5, &none).unwrap();
+    let b = other.count(&v, &background, 5..6, &none).unwrap();
+    assert!(a.add(b).is_err());
 }
