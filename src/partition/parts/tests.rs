@@ -1,5 +1,6 @@
 use super::*;
 use crate::partition::{Stop, partition};
+use crate::testing::Lcg;
 use crate::volume::background::BackgroundRule;
 use crate::volume::{SlabGrid, Voxel, VoxelType};
 
@@ -71,39 +72,31 @@ fn held_for(split: &StackSplit, v: &Volume, rows: &Range<usize>) -> Volume {
     })
 }
 
-/// A little generator of numbers, the same every run.
-struct Lcg(u64);
+/// A number below `n` from `rng`.
+fn below(rng: &mut Lcg, n: usize) -> usize {
+    ((rng.next_u64() >> 33) % n as u64) as usize
+}
 
-impl Lcg {
-    fn below(&mut self, n: usize) -> usize {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1);
-        ((self.0 >> 33) % n as u64) as usize
+/// `0..rows` cut into strips of 1 to 7 rows, in a shuffled order.
+fn shuffled_strips(rng: &mut Lcg, rows: usize) -> Vec<Range<usize>> {
+    let mut strips = Vec::new();
+    let mut at = 0;
+    while at < rows {
+        let end = (at + 1 + below(rng, 7)).min(rows);
+        strips.push(at..end);
+        at = end;
     }
-
-    /// `0..rows` cut into strips of 1 to 7 rows, in a shuffled order.
-    fn strips(&mut self, rows: usize) -> Vec<Range<usize>> {
-        let mut strips = Vec::new();
-        let mut at = 0;
-        while at < rows {
-            let end = (at + 1 + self.below(7)).min(rows);
-            strips.push(at..end);
-            at = end;
-        }
-        for i in (1..strips.len()).rev() {
-            strips.swap(i, self.below(i + 1));
-        }
-        strips
+    for i in (1..strips.len()).rev() {
+        strips.swap(i, below(rng, i + 1));
     }
+    strips
 }
 
 /// Adds `parts` in random groups, then the groups in turn.
 fn add_grouped<T>(parts: Vec<T>, rng: &mut Lcg, add: impl Fn(&mut T, T)) -> T {
     let mut groups: Vec<T> = Vec::new();
     for part in parts {
-        let g = rng.below(groups.len() + 1);
+        let g = below(rng, groups.len() + 1);
         if g == groups.len() {
             groups.push(part);
         } else {
@@ -122,7 +115,7 @@ fn in_parts(v: &Volume, axis: [f64; 3], p: &PartitionParams, rng: &mut Lcg) -> P
     let none = Monitor::none();
     let split = StackSplit::new(v, axis, p).unwrap();
     let background = Background::find(v, p.stack.background, &none).unwrap();
-    let strips = rng.strips(split.rows());
+    let strips = shuffled_strips(rng, split.rows());
     assert!(strips.len() > 3);
     let counts = strips
         .iter()
@@ -150,8 +143,7 @@ fn in_parts(v: &Volume, axis: [f64; 3], p: &PartitionParams, rng: &mut Lcg) -> P
     let empty = empty.unwrap_or_else(|_| v.clone());
     let found = split.slabs(&empty, &background, counts, &none).unwrap();
     let joints = (found.slabs.len() > 1).then(|| {
-        let joints = rng
-            .strips(split.rows())
+        let joints = shuffled_strips(rng, split.rows())
             .iter()
             .map(|rows| {
                 let held = held_for(&split, v, rows);
@@ -167,7 +159,7 @@ fn in_parts(v: &Volume, axis: [f64; 3], p: &PartitionParams, rng: &mut Lcg) -> P
 
 #[test]
 fn strips_counted_apart_from_their_boxes_and_added_shuffled_give_the_whole_partition() {
-    let mut rng = Lcg(7);
+    let mut rng = Lcg::new(7);
     let volumes = [
         layered(VoxelType::U8, 0.0, 1.0),
         layered(VoxelType::F32, 3.0, 0.371),
