@@ -8,7 +8,7 @@ mod plan;
 use std::sync::Arc;
 
 pub(crate) use parts::analyze_planned_with;
-pub use parts::analyze_with_views;
+pub use parts::{analyze_with_partition, analyze_with_views, partition_axis};
 
 pub use gain::{
     AGREE_DEGREES, AxisBy, AxisGain, GainRanking, GainSampling, MAX_EVERY, MIN_PIXELS,
@@ -234,11 +234,9 @@ fn analyzed_with(
     if let (Some(g), Some(v)) = (&gain, &mut views) {
         g.annotate(v);
     }
-    let axis = match (chosen, &views, &gain) {
-        (Some(a), _, _) => a.direction(),
-        (None, _, Some(g)) if by_gain => g.refined.axis,
-        (None, Some(v), _) => v.best().axis,
-        (None, None, _) => unreachable!("the view search runs when no axis is given"),
+    let axis = match (chosen, &gain) {
+        (None, Some(g)) if by_gain => g.refined.axis,
+        _ => axis_of(chosen.map(crate::geometry::Axis::direction), views.as_ref()),
     };
     let (partition, explain) = match params.explain {
         None => (partitioned(plan, axis, params, monitor)?, None),
@@ -277,6 +275,15 @@ fn analyzed_with(
         notes,
         explain,
     })
+}
+
+/// The axis to partition along by entropy rate: the one `chosen`, else the best of `views`.
+fn axis_of(chosen: Option<[f64; 3]>, views: Option<&ViewSearch>) -> [f64; 3] {
+    match (chosen, views) {
+        (Some(a), _) => a,
+        (None, Some(v)) => v.best().axis,
+        (None, None) => unreachable!("the view search runs when no axis is given"),
+    }
 }
 
 /// The partition of `plan`'s partition level along `axis`: in memory or strip by strip.

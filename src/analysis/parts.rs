@@ -4,8 +4,10 @@
 
 use std::sync::Arc;
 
-use super::{Analysis, AnalysisParams, Plan, analyzed_with};
+use super::{Analysis, AnalysisParams, Plan, analyzed_with, axis_of, notes};
 use crate::error::{Error, Result};
+use crate::geometry::Axis;
+use crate::partition::Partition;
 use crate::progress::Monitor;
 use crate::view::ViewSearch;
 use crate::volume::Volume;
@@ -31,24 +33,85 @@ pub(crate) fn analyze_planned_with(
     views: Option<ViewSearch>,
     monitor: &Monitor,
 ) -> Result<Analysis> {
-    match (&views, params.runs_search()) {
-        (None, true) => {
-            return Err(Error::invalid(
-                "views",
-                "none",
-                "the view search's result: these parameters search the views",
-            ));
-        }
-        (Some(_), false) => {
-            return Err(Error::invalid(
-                "views",
-                "a view search",
-                "none: an axis is given and no view search was asked for",
-            ));
-        }
-        _ => {}
-    }
+    check_views(params, views.as_ref())?;
     analyzed_with(plan, params, views, monitor)
+}
+
+/// An error unless `views` is there exactly when `params` run the view search.
+fn check_views(params: &AnalysisParams, views: Option<&ViewSearch>) -> Result<()> {
+    match (views, params.runs_search()) {
+        (None, true) => Err(Error::invalid(
+            "views",
+            "none",
+            "the view search's result: these parameters search the views",
+        )),
+        (Some(_), false) => Err(Error::invalid(
+            "views",
+            "a view search",
+            "none: an axis is given and no view search was asked for",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The axis the partition of an analysis in parts runs along (a unit physical direction): the
+/// one `params` name, else the best of `views`. The ranking by gain and `explain`, which read
+/// the voxels where they are, are refused: they do not run in parts.
+pub fn partition_axis(
+    grid: &Volume,
+    params: &AnalysisParams,
+    views: Option<&ViewSearch>,
+) -> Result<[f64; 3]> {
+    if params.ranks_by_gain() {
+        return Err(Error::invalid(
+            "axis_by",
+            "gain",
+            "the entropy rate's ranking alone in parts (the gain ranking reads the voxels where \
+             they are)",
+        ));
+    }
+    if params.explain.is_some() {
+        return Err(Error::invalid(
+            "explain",
+            "steps",
+            "none in parts (its numbers read the voxels where they are)",
+        ));
+    }
+    check_views(params, views)?;
+    let chosen = params.axis.resolve(grid.transform(), grid.spacing())?;
+    Ok(axis_of(chosen.map(Axis::direction), views))
+}
+
+/// The analysis of a volume whose view search and partition were both counted in parts:
+/// `grid` the whole volume's grid and statistics (it need hold no voxel: a volume of an empty
+/// box, [`Volume::of_box`], will do), `views` the view search's result, `partition` the one a
+/// [`StackSplit`](crate::partition::StackSplit) finished along [`partition_axis`]. The same
+/// [`Analysis`] as [`analyze`](super::analyze) of the whole volume, at full resolution.
+pub fn analyze_with_partition(
+    grid: &Volume,
+    params: &AnalysisParams,
+    views: Option<ViewSearch>,
+    partition: Partition,
+) -> Result<Analysis> {
+    let axis = partition_axis(grid, params, views.as_ref())?;
+    let along: f64 = (0..3).map(|m| axis[m] * partition.axis[m]).sum();
+    if along.abs() < 1.0 - 1e-9 {
+        return Err(Error::invalid(
+            "partition",
+            "a partition along another axis",
+            "the partition along the axis the views and parameters choose",
+        ));
+    }
+    let notes = notes(grid, grid, &params.view, &partition);
+    let chosen = params.axis.resolve(grid.transform(), grid.spacing())?;
+    Ok(Analysis {
+        views,
+        gain: None,
+        axis_by: chosen.is_none().then_some(params.axis_by),
+        partition,
+        notes,
+        explain: None,
+    })
 }
 
 #[cfg(test)]
@@ -58,9 +121,12 @@ mod tests {
     use super::*;
     use crate::analysis::analyze;
     use crate::measure::PartialCounts;
+    use crate::partition::Stop;
+    use crate::partition::parts_testing::in_parts;
     use crate::testing::Lcg;
     use crate::view::{ViewRound, ViewRounds};
-    use crate::volume::{SlabGrid, phantom};
+    use crate::volume::background::Background;
+    use crate::volume::{SlabGrid, VoxelBox, phantom};
 
     /// Cell planes `0..cells` cut at random into slabs of 1 to 6 planes.
     fn random_slabs(cells: usize, lcg: &mut Lcg) -> Vec<Range<usize>> {
@@ -140,6 +206,49 @@ mod tests {
                 assert_eq!(report(&got), expect, "{:?}", params.background);
             }
         }
+    }
+
+    #[test]
+    fn an_analysis_with_its_partition_in_parts_too_is_the_analysis_bit_for_bit() {
+        let mut lcg = Lcg::new(4405);
+        let none = Monitor::none();
+        let body = phantom::body([26, 22, 30], 7).unwrap();
+        let layers = phantom::layers([24, 20, 28], [0.3, 0.2, 1.0], 3).unwrap();
+        for v in [body, layers] {
+            // The grid alone: no voxel held.
+            let empty = VoxelBox {
+                origin: [0; 3],
+                size: [0; 3],
+            };
+            let grid = Volume::of_box::<u8>(&SlabGrid::of(&v), empty, &[]).unwrap();
+            let along_x = AnalysisParams {
+                axis: crate::geometry::AxisChoice::Along(crate::geometry::Axis::X),
+                stop: Stop::Slabs(3),
+                ..AnalysisParams::default()
+            };
+            for params in [AnalysisParams::paper(), AnalysisParams::default(), along_x] {
+                let expect = report(&analyze(&v, &params, &none).unwrap());
+                let views = params
+                    .runs_search()
+                    .then(|| search_in_parts(&v, &params, &mut lcg));
+                let axis = partition_axis(&grid, &params, views.as_ref()).unwrap();
+                // The background as the whole volume's (found in parts elsewhere).
+                let background = Background::find(&v, params.background, &none).unwrap();
+                let p = params.partition();
+                let partition = in_parts(&v, axis, &p, &background, &mut lcg);
+                let got = analyze_with_partition(&grid, &params, views, partition).unwrap();
+                assert_eq!(report(&got), expect, "{:?}", params.axis);
+            }
+        }
+        // What does not run in parts is refused.
+        let v = phantom::body([12, 12, 12], 2).unwrap();
+        let gain = AnalysisParams {
+            gain: true,
+            ..AnalysisParams::default()
+        };
+        let views = crate::view::search(&v, &gain.view, &none).unwrap();
+        let e = partition_axis(&v, &gain, Some(&views)).unwrap_err();
+        assert!(e.to_string().contains("gain"), "{e}");
     }
 
     #[test]

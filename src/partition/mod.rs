@@ -6,6 +6,8 @@ mod histories;
 mod labels;
 mod optimal;
 mod parts;
+#[cfg(test)]
+pub(crate) use parts::testing as parts_testing;
 mod result;
 mod stack;
 mod streamed;

@@ -441,4 +441,6 @@ pub(super) fn add(a: &mut [u64], b: &[u64]) {
 
 mod bytes;
 #[cfg(test)]
+pub(crate) mod testing;
+#[cfg(test)]
 mod tests;
