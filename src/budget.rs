@@ -353,6 +353,44 @@ mod tests {
         assert_eq!(glance.partition.dims(), [48, 48, 48]);
     }
 
+    #[test]
+    fn with_an_axis_given_the_slabs_of_every_voxel_take_the_whole_room() {
+        // At 8 bins the strips' floor (mostly the joint histograms of consecutive slices) is
+        // below what the analysis of every voxel holds at once.
+        let volume = crate::volume::phantom::body([96, 96, 96], 1).unwrap();
+        let mut given = AnalysisParams {
+            axis: crate::geometry::AxisChoice::Along(crate::geometry::Axis::Z),
+            ..AnalysisParams::default()
+        };
+        given.view.sampling.bins = 8;
+        let floor = crate::partition::streamed_memory_floor(&volume, 8);
+        let needed = crate::analysis::memory_needed_with(&volume, 0, 8);
+        let budget = Budget::new(volume.memory_bytes() + floor);
+        assert!(volume.memory_bytes() + floor < needed);
+        let mut searched = AnalysisParams::default();
+        searched.view.sampling.bins = 8;
+        for (params, every_voxel) in [(&given, true), (&given, false), (&searched, false)] {
+            let purpose = Purpose::Analysis {
+                wanted: 0,
+                every_voxel,
+                params,
+            };
+            let plan = budget.plan(&volume, purpose).unwrap();
+            let note = plan.note.unwrap_or_default();
+            if params.runs_search() {
+                // Beside the view search's level there is no room for the strips: the whole
+                // analysis runs on level 1.
+                assert_eq!(plan.partition.dims(), [48; 3], "{note}");
+                assert!(note.contains("computed on pyramid level 1"), "{note}");
+            } else {
+                assert_eq!(plan.partition.dims(), [96; 3], "{note}");
+                assert_eq!(plan.views.dims(), [96; 3]);
+                assert!(plan.streamed.is_some(), "{note}");
+                assert!(note.ends_with("the slabs are counted on every voxel, strip by strip"));
+            }
+        }
+    }
+
     /// A level read without level 0 tells from level 0's grid whether level 0's analysis fits,
     /// and else the finest level whose own does, counted as a volume of that level held alone.
     #[test]

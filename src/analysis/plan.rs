@@ -56,7 +56,9 @@ impl Plan {
     /// fits ([`memory_needed`]), except that a full-resolution partition by top-down or optimal
     /// splitting whose stack does not fit is counted strip by strip when the voxels are read in
     /// place (or held) and room is left beside the view search's level for the strips: the
-    /// slabs are then those of every voxel, the best axis that of the coarser level.
+    /// slabs are then those of every voxel, the best axis that of the coarser level (with an
+    /// axis given, no view search, no gain ranking and no explanation, the strips have the
+    /// whole room).
     pub(crate) fn within(
         volume: &Volume,
         (wanted, every_voxel): (usize, bool),
@@ -83,10 +85,27 @@ impl Plan {
                 views_streamed: Some(full_room),
             });
         }
+        // With an axis given and nothing else read on the views' level, no level but the
+        // partition's is held: its strips have the whole room.
+        let on_views = params.runs_search() || params.ranks_by_gain() || params.explain.is_some();
+        let floor = crate::partition::streamed_memory_floor(volume, bins);
+        if beyond && !on_views && full_room >= floor {
+            return Ok(Self {
+                note: Some(format!(
+                    "level 0 needs {needs} for the analysis in memory, over the memory limit of \
+                     {}: the slabs are counted on every voxel, strip by strip",
+                    human(max_memory),
+                )),
+                views: Arc::clone(&full),
+                partition: full,
+                streamed: Some(full_room),
+                views_streamed: None,
+            });
+        }
         let views = volume.coarser(level);
         let coarse = if level > 0 { views.memory_bytes() } else { 0 };
         let room = full_room.saturating_sub(coarse);
-        if !(beyond && room >= crate::partition::streamed_memory_floor(volume, bins)) {
+        if !(beyond && room >= floor) {
             return Ok(Self {
                 note,
                 ..Self::at(views)
