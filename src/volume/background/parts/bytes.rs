@@ -5,9 +5,11 @@
 //! A summary: `SLABBS`, a zero and the version; the volume's dims, the chunk's origin and size
 //! (three words each); the face labels' count n; the six faces' byte lengths (0 for a face on
 //! the volume's border); ⌈n / 64⌉ words of border bits; the faces' runs. An answer: `SLABBA`, a
-//! zero and the version; dims, origin and size; n; ⌈n / 64⌉ words of background bits.
+//! zero and the version; dims, origin and size; n; ⌈n / 64⌉ words of background bits. A mask:
+//! `SLABBM`, a zero and the version; dims, origin and size; its count; a bit a voxel of the
+//! chunk, x fastest, in whole words.
 
-use super::{Chunk, ChunkAnswer, ChunkSummary, face_area};
+use super::{Chunk, ChunkAnswer, ChunkMask, ChunkSummary, face_area};
 use crate::error::{Error, Result};
 
 /// The first word of [`ChunkSummary::to_bytes`].
@@ -15,6 +17,9 @@ const SUMMARY: [u8; 8] = *b"SLABBS\x00\x01";
 
 /// The first word of [`ChunkAnswer::to_bytes`].
 const ANSWER: [u8; 8] = *b"SLABBA\x00\x01";
+
+/// The first word of [`ChunkMask::to_bytes`].
+const MASK: [u8; 8] = *b"SLABBM\x00\x01";
 
 /// Appends `x` as a LEB128 varint.
 fn put(out: &mut Vec<u8>, mut x: u64) {
@@ -293,6 +298,40 @@ impl ChunkAnswer {
             chunk,
             ids,
             background,
+        })
+    }
+}
+
+impl ChunkMask {
+    /// The chunk's bits as bytes, which [`from_bytes`](Self::from_bytes) reads back.
+    #[must_use]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        head(&mut out, MASK, &self.chunk);
+        words(&mut out, [self.count as u64]);
+        words(&mut out, self.words.iter().copied());
+        out
+    }
+
+    /// A chunk's bits [`to_bytes`](Self::to_bytes) wrote; an error for any other bytes (their
+    /// count not the bits set among them).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let what = "a background chunk mask";
+        let mut w = Words { bytes, what };
+        let chunk = w.start(MASK)?;
+        let count = w.next()?;
+        let words = w.bits(chunk.len())?;
+        if !w.bytes.is_empty() {
+            return Err(bad(what, "bytes after its bits"));
+        }
+        let set: u64 = words.iter().map(|w| u64::from(w.count_ones())).sum();
+        if set != count {
+            return Err(bad(what, format_args!("a count of {count} for {set} bits")));
+        }
+        Ok(Self {
+            chunk,
+            words,
+            count: set as usize,
         })
     }
 }

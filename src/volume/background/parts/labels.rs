@@ -63,9 +63,9 @@ pub struct ChunkAnswer {
 /// count.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ChunkMask {
-    chunk: Chunk,
-    words: Vec<u64>,
-    count: usize,
+    pub(super) chunk: Chunk,
+    pub(super) words: Vec<u64>,
+    pub(super) count: usize,
 }
 
 impl ChunkLabels {

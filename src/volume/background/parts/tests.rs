@@ -124,6 +124,7 @@ fn mask_in_parts<T: Voxel>(
         let (c, v) = chunks.iter().find(|(c, _)| c == a.chunk()).unwrap();
         let again = ChunkLabels::find(v, c, t).unwrap();
         let m = again.mask(&back).unwrap();
+        let m = ChunkMask::from_bytes(&m.to_bytes()).unwrap();
         m.write_into(words.words_mut()).unwrap();
         count += m.count();
     }
@@ -341,6 +342,7 @@ fn middle() -> (ChunkLabels, ChunkAnswer) {
 #[test]
 fn bytes_cut_short_or_foreign_are_refused() {
     let (labels, answer) = middle();
+    let mask = labels.mask(&answer).unwrap().to_bytes();
     let summary = labels.summary().to_bytes();
     let answer = answer.to_bytes();
     for (bytes, read) in [
@@ -349,6 +351,7 @@ fn bytes_cut_short_or_foreign_are_refused() {
             (|b| ChunkSummary::from_bytes(b).map(|_| ())) as fn(&[u8]) -> Result<()>,
         ),
         (&answer, |b| ChunkAnswer::from_bytes(b).map(|_| ())),
+        (&mask, |b| ChunkMask::from_bytes(b).map(|_| ())),
     ] {
         read(bytes).unwrap();
         for cut in 0..bytes.len() {
@@ -377,6 +380,11 @@ fn bytes_cut_short_or_foreign_are_refused() {
             let _ = read(&changed);
         }
     }
+    // A mask whose count (the word after magic, dims, origin and size) is not its bits'.
+    let mut miscounted = mask.clone();
+    miscounted[80] += 1;
+    let e = ChunkMask::from_bytes(&miscounted).unwrap_err().to_string();
+    assert!(e.ends_with("a count of 18 for 17 bits"), "{e}");
     // A face label past the count, in the middle chunk's first inner face (x low).
     let mut s = labels.summary();
     s.faces[0] = super::bytes::runs([1, s.ids + 1].into_iter().chain([0; 10]));
