@@ -126,6 +126,15 @@ impl ChunkLabels {
         4 * (self.labels.len() + self.face.len()) as u64 + 8 * self.border.len() as u64
     }
 
+    /// The most bytes [`find`](Self::find) can hold for `chunk`, besides its voxels, to weigh
+    /// against a budget before labelling: a label a voxel, the stack's as many at most, and a
+    /// label's face label and border bit for as many labels as voxels.
+    #[must_use]
+    pub fn most_bytes(chunk: &Chunk) -> u64 {
+        let n = chunk.len() as u64 + 1;
+        12 * n + n.div_ceil(64) * 8
+    }
+
     /// The summary the client joins.
     #[must_use]
     pub fn summary(&self) -> ChunkSummary {

@@ -96,6 +96,9 @@ fn mask_in_parts<T: Voxel>(
         .iter()
         .map(|(c, v)| ChunkLabels::find(v, c, t).unwrap())
         .collect();
+    for l in &labels {
+        assert!(l.memory_bytes() <= ChunkLabels::most_bytes(l.chunk()));
+    }
     let mut order: Vec<usize> = (0..chunks.len()).collect();
     rng.shuffle(&mut order);
     let mut join = BackgroundJoin::new(dims);
