@@ -20,6 +20,9 @@ use std::sync::{Arc, OnceLock};
 use ndarray::{ArrayView3, ShapeBuilder};
 use rayon::prelude::*;
 
+pub use background::parts::{
+    BackgroundJoin, Chunk, ChunkAnswer, ChunkLabels, ChunkMask, ChunkSummary,
+};
 pub use pyramid::Resolution;
 pub use quantize::Quantizer;
 pub use slab::{SlabGrid, VoxelBox};

@@ -13,6 +13,7 @@ use crate::progress::Monitor;
 use crate::volume::{Volume, Voxel};
 
 mod fill;
+pub mod parts;
 
 /// How the background is chosen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -81,7 +82,8 @@ impl MaskWords {
         Self::Memory(vec![0; words])
     }
 
-    fn words_mut(&mut self) -> &mut [u64] {
+    /// The words, to write.
+    pub fn words_mut(&mut self) -> &mut [u64] {
         match self {
             Self::Memory(v) => v,
             // A map starts on a page, so its bytes are aligned as words.
@@ -201,6 +203,50 @@ impl Background {
         })
     }
 
+    /// The found background ([`BackgroundRule::Auto`]) of a volume of dimensions `dims` at the
+    /// threshold `value`, assembled from its parts ([`parts`]): `words` the mask, every
+    /// chunk's bits written at their own linear indices ([`parts::ChunkMask::write_into`]),
+    /// `count` the background's voxels (the chunks' counts added). Equal to what
+    /// [`find`](Self::find) gives when it finds `value` (without one, no background: `words`
+    /// and `count` are not read). An error when `words` is not a word per 64 voxels or does
+    /// not hold `count` bits.
+    pub fn of_parts(
+        dims: [usize; 3],
+        value: Option<f32>,
+        mut words: MaskWords,
+        count: usize,
+    ) -> Result<Self> {
+        let Some(t) = value else {
+            return Ok(Self {
+                rule: BackgroundRule::Auto,
+                ..Self::none()
+            });
+        };
+        let len = parts::Chunk::new(dims, [0; 3], dims)?.len();
+        let mask = words.words_mut();
+        if mask.len() != len.div_ceil(64) {
+            return Err(crate::error::Error::invalid(
+                "background mask",
+                format!("{} words", mask.len()),
+                format!("{} words, one per 64 of the {len} voxels", len.div_ceil(64)),
+            ));
+        }
+        let set: usize = mask.par_iter().map(|w| w.count_ones() as usize).sum();
+        if set != count {
+            return Err(crate::error::Error::invalid(
+                "background count",
+                count,
+                format!("the {set} voxels its mask holds"),
+            ));
+        }
+        Ok(Self {
+            rule: BackgroundRule::Auto,
+            value: Some(t),
+            fraction: count as f64 / len as f64,
+            mask: Some(Mask::of(words)?),
+        })
+    }
+
     /// Whether the voxel at linear `index`, of value `v`, is background.
     #[inline]
     pub fn contains(&self, index: usize, v: f32) -> bool {
@@ -233,7 +279,7 @@ impl Background {
     }
 }
 
-/// The voxels on the volume's six faces, finite ones only.
+/// The voxels on the volume's six faces (those that are not finite too).
 fn border_values(volume: &Volume) -> Vec<f32> {
     crate::volume::with_voxels!(volume.data(), |v| border_values_of(v, volume.dims()))
 }
@@ -253,7 +299,6 @@ fn border_values_of<T: Voxel>(v: &[T], [nx, ny, nz]: [usize; 3]) -> Vec<f32> {
             }
         }
     }
-    out.retain(|x| x.is_finite());
     out
 }
 
@@ -261,14 +306,27 @@ fn border_values_of<T: Voxel>(v: &[T], [nx, ny, nz]: [usize; 3]) -> Vec<f32> {
 /// deviations (1.4826 × the median absolute deviation), when the border is mostly dark; `None`
 /// when the volume has no background to speak of (its border is bright, or it is all border).
 pub fn border_threshold(volume: &Volume) -> Option<f32> {
-    let mut border = border_values(volume);
     let s = volume.stats();
-    let range = f64::from(s.max) - f64::from(s.min);
-    if border.is_empty() || range <= 0.0 || volume.dims().iter().any(|&d| d < 3) {
+    threshold_of_border(border_values(volume), (s.min, s.max), volume.dims())
+}
+
+/// [`border_threshold`] of a volume of dimensions `dims` whose finite voxels range over
+/// `(min, max)` and whose six faces hold the finite values `border` (in any order; any value
+/// that is not finite is left out): what tasks each holding a part of the volume give together
+/// ([`parts::border_values_in`]).
+#[must_use]
+pub fn threshold_of_border(
+    mut border: Vec<f32>,
+    (min, max): (f32, f32),
+    dims: [usize; 3],
+) -> Option<f32> {
+    border.retain(|x| x.is_finite());
+    let range = f64::from(max) - f64::from(min);
+    if border.is_empty() || range <= 0.0 || dims.iter().any(|&d| d < 3) {
         return None;
     }
     let median = median_of(&mut border);
-    if (f64::from(median) - f64::from(s.min)) / range > DARK_BORDER {
+    if (f64::from(median) - f64::from(min)) / range > DARK_BORDER {
         return None;
     }
     let mut deviations: Vec<f32> = border.iter().map(|v| (v - median).abs()).collect();
