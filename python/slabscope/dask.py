@@ -15,13 +15,27 @@ order of the volumes: exactly the rows ``slabscope triage --json`` prints.
 from __future__ import annotations
 
 import os
-from typing import Any, Optional, Sequence
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 import slabscope
 
 __all__ = ["triage", "analyze", "analyze_array", "LOAD_KEYWORDS"]
+
+#: Keyword arguments passed on (to ``slabscope.load``, ``slabscope.analyze`` or a task).
+Options = Dict[str, Any]
+
+#: What every task of :func:`analyze_array` is told of the whole grid: its dims (x, y, z),
+#: spacing (mm), held type, and the finite voxels' min, max and count.
+Grid = Tuple[List[int], List[float], str, Tuple[float, float, int]]
+
+#: A round of the view search: the paper samples of a shifted round and a refinement step's
+#: axes (None for the paper round and the sphere's axes).
+Round = Tuple[Optional[List[int]], Optional[List[Tuple[float, float, float]]]]
+
+#: A range of planes or cell planes along z, ``(start, end)``.
+Planes = Tuple[int, int]
 
 #: The keywords of :func:`slabscope.load`, which also choose the volumes a run takes.
 LOAD_KEYWORDS = (
@@ -56,7 +70,7 @@ def _budget() -> Optional[int]:
     return int(limit) // 2 if limit else None
 
 
-def _with_budget(options: dict) -> dict:
+def _with_budget(options: Options) -> Options:
     if options.get("max_memory") is None:
         budget = _budget()
         if budget is not None:
@@ -64,16 +78,17 @@ def _with_budget(options: dict) -> dict:
     return options
 
 
-def _triage_one(entry: str, options: dict) -> dict:
-    rows = list(slabscope.triage(entries=[entry], **_with_budget(options)))
+def _triage_one(entry: str, options: Options) -> Options:
+    rows: List[Options] = list(slabscope.triage(entries=[entry], **_with_budget(options)))
     return rows[0]
 
 
-def _analyze_one(path: str, load: dict, params: dict) -> dict:
+def _analyze_one(path: str, load: Options, params: Options) -> Options:
     load = _with_budget(load)
     try:
         volume = slabscope.load(path, **load)
-        return slabscope.analyze(volume, max_memory=load.get("max_memory"), **params).to_dict()
+        result: Options = slabscope.analyze(volume, max_memory=load.get("max_memory"), **params).to_dict()
+        return result
     except (slabscope.VolumeError, OSError, ValueError) as e:
         return {"file": path, "error": str(e)}
 
@@ -84,24 +99,26 @@ def triage(
     *,
     manifest: Any = None,
     entries: Optional[Sequence[str]] = None,
-    shard: Optional[tuple] = None,
+    shard: Any = None,
     **options: Any,
-) -> list:
+) -> List[Options]:
     """The rows of ``slabscope.triage(paths, ...)`` (the same keywords), one Dask task per
     volume on ``client``'s workers, gathered in order."""
     load = {k: v for k, v in options.items() if k in LOAD_KEYWORDS}
     lines = slabscope.list_volumes(paths, manifest=manifest, entries=entries, shard=shard, **load)
     futures = client.map(_triage_one, lines, options=options, pure=False)
-    return client.gather(futures)
+    rows: List[Options] = client.gather(futures)
+    return rows
 
 
-def analyze(client: Any, paths: Sequence[Any], **options: Any) -> list:
+def analyze(client: Any, paths: Sequence[Any], **options: Any) -> List[Options]:
     """``slabscope.analyze(slabscope.load(path), ...).to_dict()`` for every path, one Dask task
     each, in order; a volume that cannot be read or analysed gives ``{"file", "error"}``."""
     load = {k: v for k, v in options.items() if k in LOAD_KEYWORDS}
     params = {k: v for k, v in options.items() if k not in LOAD_KEYWORDS}
     futures = client.map(_analyze_one, [str(p) for p in paths], load=load, params=params, pure=False)
-    return client.gather(futures)
+    rows: List[Options] = client.gather(futures)
+    return rows
 
 
 #: The NumPy types a volume holds as they are; any other is held as float32.
@@ -139,7 +156,7 @@ _MM = {
 }
 
 
-def _scales(transforms: Any, n: int) -> list:
+def _scales(transforms: Any, n: int) -> List[float]:
     """The product of the ``scale`` transformations of an OME-Zarr ``coordinateTransformations``
     list, one factor an axis (its translations move no voxel nearer another: not read)."""
     scale = [1.0] * n
@@ -152,7 +169,7 @@ def _scales(transforms: Any, n: int) -> list:
     return scale
 
 
-def _ome_zarr(path: str) -> tuple:
+def _ome_zarr(path: str) -> Tuple[Any, str, Tuple[float, ...], Tuple[Any, List[Optional[str]]]]:
     """An OME-Zarr group's full-resolution array (its first dataset) as a dask array, its axes'
     names, their spacing, mm (scales in the axes' units; without a unit, taken as mm), and the
     stored array with the name of each of its axes (None for one dropped). Axes other than
@@ -179,7 +196,7 @@ def _ome_zarr(path: str) -> tuple:
     except (AttributeError, KeyError, IndexError, TypeError, ValueError) as e:
         raise ValueError(f"{path}: OME-Zarr multiscales metadata without axes, datasets or a valid scale ({e})") from None
     stored = zarr.open_array(store=path, path=dataset["path"], mode="r")
-    array = da.from_zarr(stored)
+    array = da.from_zarr(stored)  # type: ignore[no-untyped-call]
     if array.ndim != len(axes):
         raise ValueError(f"{path}: {len(axes)} axes named for an array of {array.ndim} dimensions")
     keep = []
@@ -188,7 +205,7 @@ def _ome_zarr(path: str) -> tuple:
             keep.append(i)
         elif n != 1:
             raise ValueError(f"{path}: its {name!r} axis holds {n}: one volume at a time (take one with dask.array indexing and axes=)")
-    spacing = {}
+    spacing: Dict[str, float] = {}
     for i in keep:
         unit = units[i]
         if unit is not None and unit not in _MM:
@@ -200,15 +217,15 @@ def _ome_zarr(path: str) -> tuple:
     return array, names, tuple(spacing.get(a, 1.0) for a in "xyz"), reader
 
 
-def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
+def _as_xyz(source: Any, axes: Optional[str]) -> Tuple[Any, str, Optional[Tuple[float, ...]], Optional[Tuple[Any, List[Optional[str]]]]]:
     """``source`` (a Zarr path or URL, or a dask array whose axis order ``axes`` names) as a
     dask array indexed ``[z, y, x]`` in the type the volume holds, that type, the spacing an
     OME-Zarr store gives (else None), and for a store, the stored array and its axes' names
     (what :func:`_read_layer` reads; else None)."""
     import dask.array as da
 
-    spacing = None
-    reader = None
+    spacing: Optional[Tuple[float, ...]] = None
+    reader: Optional[Tuple[Any, List[Optional[str]]]] = None
     if isinstance(source, (str, os.PathLike)):
         path = str(source)
         if axes is None:
@@ -217,7 +234,7 @@ def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
             import zarr
 
             stored = zarr.open_array(store=path, mode="r")
-            array = da.from_zarr(stored)
+            array = da.from_zarr(stored)  # type: ignore[no-untyped-call]
             reader = (stored, list(axes))
     else:
         array = source
@@ -230,14 +247,14 @@ def _as_xyz(source: Any, axes: Optional[str]) -> tuple:
     return array.astype(held), held, spacing, reader
 
 
-def _geometry(spacing: Any, affine: Any, stored: Optional[tuple]) -> tuple:
+def _geometry(spacing: Any, affine: Any, stored: Optional[Tuple[float, ...]]) -> Tuple[Tuple[float, ...], Options]:
     """The spacing the tasks count with and the keywords of the whole volume's
     ``Volume.from_array``: from ``affine`` (4×4, voxel index ``(x, y, z)`` to RAS+ mm, as nibabel
     gives it) and ``spacing`` as ``from_array`` takes them (so that they must agree, and the
     spacing is the one ``from_array`` finds), else the store's."""
     if affine is None and spacing is None:
         spacing = stored
-    given = {}
+    given: Options = {}
     if affine is not None:
         given["affine"] = np.asarray(affine, dtype=float)
     if spacing is not None:
@@ -248,7 +265,7 @@ def _geometry(spacing: Any, affine: Any, stored: Optional[tuple]) -> tuple:
     return tuple(probe.spacing), given
 
 
-def _layers(client: Any, array: Any, reader: Optional[tuple]) -> tuple:
+def _layers(client: Any, array: Any, reader: Optional[Tuple[Any, List[Optional[str]]]]) -> Tuple[List[Any], List[Planes]]:
     """The array's chunk layers along z as futures on ``client``'s workers, each a layer's
     voxel planes ([z, y, x], whole planes, in the held type) held there until released, and
     the planes ``(start, end)`` each holds. Each chunk is read once (issue #44): from a store
@@ -265,7 +282,7 @@ def _layers(client: Any, array: Any, reader: Optional[tuple]) -> tuple:
     return futures, bounds
 
 
-def _read_layer(stored: Any, names: list, held: str, start: int, end: int) -> np.ndarray:
+def _read_layer(stored: Any, names: List[Optional[str]], held: str, start: int, end: int) -> np.ndarray:
     """Planes ``start..end`` along z of a stored array whose axes ``names`` names (None for
     an axis of one, dropped), indexed [z, y, x], in the held type: what the dask array
     ``_as_xyz`` makes of the store gives for them."""
@@ -275,7 +292,7 @@ def _read_layer(stored: Any, names: list, held: str, start: int, end: int) -> np
     return np.ascontiguousarray(planes.astype(held, copy=False))
 
 
-def _range_of(layer: np.ndarray) -> tuple:
+def _range_of(layer: np.ndarray) -> Tuple[float, float, int]:
     """A layer's finite voxels' min, max and count (min above max when it has none)."""
     if layer.dtype.kind in "iu":
         if layer.size == 0:
@@ -289,7 +306,7 @@ def _range_of(layer: np.ndarray) -> tuple:
     return float(values.min()), float(values.max()), count
 
 
-def _range(client: Any, layers: list) -> tuple:
+def _range(client: Any, layers: List[Any]) -> Tuple[float, float, int]:
     """The finite voxels' min, max and count: one task a layer, where it is held."""
     ranges = client.gather(client.map(_range_of, layers, pure=False))
     return min(r[0] for r in ranges), max(r[1] for r in ranges), sum(r[2] for r in ranges)
@@ -301,13 +318,13 @@ def _planes(layer: np.ndarray, start: int, end: int) -> np.ndarray:
     return np.ascontiguousarray(layer[start:end])
 
 
-def _pieces(client: Any, layers: list, bounds: list, held: list) -> list:
+def _pieces(client: Any, layers: List[Any], bounds: List[Planes], held: List[Planes]) -> List[List[Any]]:
     """For each slab's held planes ``(first, end)``, the futures whose planes, in order, are
     exactly those: the layers held whole, and tasks taking the planes it needs of the others
     (made once for every round)."""
-    pieces = []
+    pieces: List[List[Any]] = []
     for first, end in held:
-        these = []
+        these: List[Any] = []
         for layer, (z0, z1) in zip(layers, bounds):
             a, b = max(first, z0), min(end, z1)
             if a >= b:
@@ -317,26 +334,36 @@ def _pieces(client: Any, layers: list, bounds: list, held: list) -> list:
     return pieces
 
 
-def _count(first: int, planes: tuple, grid: tuple, round: tuple, params: dict, *pieces: np.ndarray) -> Any:
+def _count(first: int, planes: Planes, grid: Grid, round: Round, params: Options, *pieces: np.ndarray) -> Any:
     """One task: the part of the slab ``planes`` from its voxel planes (``pieces``, [z, y, x],
     in order from plane ``first``) in the round ``(samples, axes)``."""
     samples, axes = round
     block = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=0)
-    return slabscope._slabscope._count_view_slab(block.T, first, planes, *grid, samples=samples, axes=axes, **params)
+    dims, spacing, held, range_ = grid
+    return slabscope._slabscope._count_view_slab(block.T, first, planes, dims, spacing, held, range_, samples=samples, axes=axes, **params)
 
 
-def _round(client: Any, pieces: list, slabs: list, held: list, grid: tuple, round: tuple, params: dict, report: Any) -> Any:
+def _round(
+    client: Any,
+    pieces: List[List[Any]],
+    slabs: List[Planes],
+    held: List[Planes],
+    grid: Grid,
+    round: Round,
+    params: Options,
+    report: Callable[[], None],
+) -> Any:
     """A round of tasks, one a slab (``pieces`` the futures of its voxel planes, from plane
     ``held``'s first), added up on the client as they come; ``round`` is ``(samples, axes)``:
     the paper samples of a shifted round (else None) and a refinement step's axes (else None,
     the sphere's)."""
     from distributed import as_completed
 
-    tasks = []
+    tasks: List[Any] = []
     for planes, (first, _), these in zip(slabs, held, pieces):
         tasks.append(client.submit(_count, first, planes, grid, round, params, *these, pure=False))
     total = None
-    for future in as_completed(tasks):
+    for future in as_completed(tasks):  # type: ignore[no-untyped-call]
         part = future.result()
         if total is None:
             total = part
@@ -386,10 +413,10 @@ def analyze_array(
     # Each chunk is read once in the whole call: into its layer of whole planes, held on the
     # workers until the last task has taken them (what that task holds anyway: design.md).
     layers, bounds = _layers(client, array, reader)
-    kept: list = list(layers)
+    kept: List[Any] = list(layers)
     try:
         low, high, finite = _range(client, layers)
-        grid = ([nx, ny, nz], list(spacing), held_type, (float(low), float(high), int(finite)))
+        grid: Grid = ([nx, ny, nz], list(spacing), held_type, (float(low), float(high), int(finite)))
         cells = max(nz - 1, 1)
         cuts = sorted({min(b, cells) for _, b in bounds} | {0, cells})
         slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
@@ -406,14 +433,14 @@ def analyze_array(
 
 def _rounds(
     client: Any,
-    layers: list,
-    pieces: list,
-    slabs: list,
-    held: list,
+    layers: List[Any],
+    pieces: List[List[Any]],
+    slabs: List[Planes],
+    held: List[Planes],
     shifted: bool,
-    grid: tuple,
-    geometry: dict,
-    params: dict,
+    grid: Grid,
+    geometry: Options,
+    params: Options,
     progress: Any,
 ) -> Any:
     """The view search's rounds of tasks and the last task, reporting to ``progress``."""
@@ -438,17 +465,18 @@ def _rounds(
     if shifted:
         samples = slabscope._slabscope._paper_samples(paper, *grid, **params)
         more = _round(client, pieces, slabs, held, grid, (samples, None), params, report)
-    refined: list = []
+    refined: List[Tuple[Any, Any, Any]] = []
     if refine:
 
-        def count(axes: list, samples: Optional[list]) -> Any:
+        def count(axes: List[Tuple[float, float, float]], samples: Optional[List[int]]) -> Any:
             if samples is None:
                 ahead[0] += step
             total = _round(client, pieces, slabs, held, grid, (samples, axes), params, lambda: report("refining in parts"))
             refined.append((axes, samples, total))
             return total
 
-        slabscope._slabscope._refine_in_parts(paper, *grid, count, shifted=more, **params)
+        dims, spacing, held_type, range_ = grid
+        slabscope._slabscope._refine_in_parts(paper, dims, spacing, held_type, range_, count, shifted=more, **params)
         ahead[0] -= step
     # The sums travel as data scattered to the cluster, not inside the task's graph (tens of
     # MB with phases: Dask warns of a large graph).
@@ -463,7 +491,7 @@ def _rounds(
     return whole
 
 
-def _finish(geometry: dict, paper: Any, shifted: Any, refined: list, params: dict, *layers: np.ndarray) -> Any:
+def _finish(geometry: Options, paper: Any, shifted: Any, refined: List[Tuple[Any, Any, Any]], params: Options, *layers: np.ndarray) -> Any:
     """The last task: the analysis of the whole array (its ``layers`` along z) from the view
     search's parts, within half its worker's Dask memory limit unless ``max_memory`` is given
     (beyond the voxels)."""
