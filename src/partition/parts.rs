@@ -303,15 +303,24 @@ impl SliceCounts {
     /// Takes row `row`'s sums: folded when every row before it is, else kept.
     fn take_row(&mut self, row: usize, sums: &SliceSums) {
         add(&mut self.counts, &sums.counts);
-        self.pending.insert(row, sums.sums.clone());
-        self.fold();
+        if row == self.folded {
+            self.fold_row(&sums.sums);
+            self.fold();
+        } else {
+            self.pending.insert(row, sums.sums.clone());
+        }
+    }
+
+    /// Adds the next row's sums onto the folded ones.
+    fn fold_row(&mut self, sums: &[f64]) {
+        self.sums.iter_mut().zip(sums).for_each(|(a, b)| *a += b);
+        self.folded += 1;
     }
 
     /// Folds the kept rows that follow the folded ones.
     fn fold(&mut self) {
         while let Some(sums) = self.pending.remove(&self.folded) {
-            self.sums.iter_mut().zip(&sums).for_each(|(a, b)| *a += b);
-            self.folded += 1;
+            self.fold_row(&sums);
         }
     }
 
@@ -435,7 +444,7 @@ impl SlabJoints {
 }
 
 /// Adds `b` into `a`, element by element.
-pub(super) fn add(a: &mut [u64], b: &[u64]) {
+fn add(a: &mut [u64], b: &[u64]) {
     a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
 }
 
