@@ -247,6 +247,83 @@ impl Background {
         })
     }
 
+    /// The background a task holding part of a volume tests the voxels it reads against, by
+    /// `rule` at the threshold `value` the whole volume's gives (a found one's from its border,
+    /// [`threshold_of_border`]; `Below` its own, `value` unread): for [`BackgroundRule::Auto`] the bits of
+    /// `masks`, the chunks around the voxels the task reads, at their own linear indices of a
+    /// mask of the whole grid whose other bits are clear (its pages never written, so never
+    /// held). Its `fraction` is of the chunks given (of none for `Below`): a part's counts never
+    /// read it. An error when a mask is of another grid.
+    pub fn in_part(
+        dims: [usize; 3],
+        rule: BackgroundRule,
+        value: Option<f32>,
+        masks: &[parts::ChunkMask],
+    ) -> Result<Self> {
+        let t = match (rule, value) {
+            (BackgroundRule::Below(t), _) => {
+                return Ok(Self {
+                    rule,
+                    value: Some(t),
+                    fraction: 0.0,
+                    mask: None,
+                });
+            }
+            (BackgroundRule::None, _) | (_, None) => {
+                return Ok(Self {
+                    rule,
+                    ..Self::none()
+                });
+            }
+            (BackgroundRule::Auto, Some(t)) => t,
+        };
+        let len = parts::Chunk::new(dims, [0; 3], dims)?.len();
+        let mut words = MaskWords::memory(len.div_ceil(64));
+        let (mut count, mut held) = (0, 0);
+        for mask in masks {
+            if mask.chunk().dims() != dims {
+                return Err(crate::error::Error::invalid(
+                    "background mask",
+                    format!("a chunk of a {:?} grid", mask.chunk().dims()),
+                    format!("a chunk of the {dims:?} grid"),
+                ));
+            }
+            mask.write_into(words.words_mut())?;
+            count += mask.count();
+            held += mask.chunk().len();
+        }
+        Ok(Self {
+            rule: BackgroundRule::Auto,
+            value: Some(t),
+            fraction: count as f64 / held.max(1) as f64,
+            mask: Some(Mask::of(words)?),
+        })
+    }
+
+    /// The background as the client of an analysis in parts knows it: by `rule` at the
+    /// threshold `value` the whole volume's gives (`Below` its own, `value` unread), `count` of
+    /// the volume's `len` voxels (the parts' counts added), and no mask: it tests no voxel (a
+    /// task's does, [`in_part`](Self::in_part)). What reports it reads is `find`'s: the rule,
+    /// the threshold and the fraction.
+    #[must_use]
+    pub fn summarized(rule: BackgroundRule, value: Option<f32>, count: usize, len: usize) -> Self {
+        let value = match rule {
+            BackgroundRule::None => return Self::none(),
+            BackgroundRule::Below(t) => Some(t),
+            BackgroundRule::Auto => value,
+        };
+        Self {
+            rule,
+            value,
+            fraction: if value.is_some() {
+                count as f64 / len as f64
+            } else {
+                0.0
+            },
+            mask: None,
+        }
+    }
+
     /// Whether the voxel at linear `index`, of value `v`, is background.
     #[inline]
     pub fn contains(&self, index: usize, v: f32) -> bool {

@@ -91,7 +91,7 @@ fn mask_in_parts<T: Voxel>(
     dims: [usize; 3],
     t: f32,
     rng: &mut Rng,
-) -> (Background, usize) {
+) -> (Background, usize, Vec<ChunkMask>) {
     let labels: Vec<ChunkLabels> = chunks
         .iter()
         .map(|(c, v)| ChunkLabels::find(v, c, t).unwrap())
@@ -116,7 +116,7 @@ fn mask_in_parts<T: Voxel>(
     rng.shuffle(&mut answers);
     let len: usize = dims.iter().product();
     let mut words = MaskWords::Memory(vec![!0; len.div_ceil(64)]);
-    let (mut count, mut joined) = (0, 0);
+    let (mut count, mut joined, mut masks) = (0, 0, Vec::new());
     for a in answers {
         let back = ChunkAnswer::from_bytes(&a.to_bytes()).unwrap();
         assert_eq!(back, a);
@@ -130,6 +130,7 @@ fn mask_in_parts<T: Voxel>(
         let m = ChunkMask::from_bytes(&m.to_bytes()).unwrap();
         m.write_into(words.words_mut()).unwrap();
         count += m.count();
+        masks.push(m);
     }
     // Bits past the volume's last voxel were never a chunk's.
     if let MaskWords::Memory(w) = &mut words
@@ -140,6 +141,7 @@ fn mask_in_parts<T: Voxel>(
     (
         Background::of_parts(dims, Some(t), words, count).unwrap(),
         joined,
+        masks,
     )
 }
 
@@ -205,7 +207,7 @@ fn check<T: Voxel>(v: Vec<T>, dims: [usize; 3], ty: VoxelType, seed: u64) -> usi
     let parts = match t {
         None => Background::of_parts(dims, None, MaskWords::memory(0), 0).unwrap(),
         Some(t) => {
-            let (b, j) = mask_in_parts(&chunks, dims, t, &mut rng);
+            let (b, j, _) = mask_in_parts(&chunks, dims, t, &mut rng);
             joined += j;
             b
         }
@@ -220,7 +222,7 @@ fn check<T: Voxel>(v: Vec<T>, dims: [usize; 3], ty: VoxelType, seed: u64) -> usi
         |w| Ok(MaskWords::memory(w)),
     )
     .unwrap();
-    let (b, j) = mask_in_parts(&chunks, dims, t, &mut rng);
+    let (b, j, _) = mask_in_parts(&chunks, dims, t, &mut rng);
     assert_eq!(b, fill, "{dims:?} {grid:?} at {t}");
     joined + j
 }
@@ -300,11 +302,11 @@ fn pockets() -> (Vec<f32>, [usize; 3], [Vec<usize>; 3]) {
 fn a_pocket_reaching_the_border_through_other_chunks_is_background() {
     let (v, dims, grid) = pockets();
     let chunks = chunks_of(&v, dims, &grid);
-    let volume = Volume::new(dims, [1.0; 3], VoxelType::F32, v).unwrap();
+    let volume = Volume::new(dims, [1.0; 3], VoxelType::F32, v.clone()).unwrap();
     let mut rng = Rng(5);
     let t = threshold_in_parts(&chunks, &volume, &mut rng);
     assert_eq!(t, Some(1.0));
-    let (b, joined) = mask_in_parts(&chunks, dims, 1.0, &mut rng);
+    let (b, joined, masks) = mask_in_parts(&chunks, dims, 1.0, &mut rng);
     let idx = |x: usize, y: usize, z: usize| x + 12 * (y + 9 * z);
     assert!(
         b.contains(idx(6, 4, 5), 0.0),
@@ -320,6 +322,37 @@ fn a_pocket_reaching_the_border_through_other_chunks_is_background() {
     assert_eq!(joined, 2);
     let found = Background::find(&volume, BackgroundRule::Auto, &Monitor::none()).unwrap();
     assert_eq!(b, found);
+    // A task holding the chunks of one layer along z (as a strip of the partition's does the
+    // chunks around its box): the background there, nothing elsewhere.
+    let layer: Vec<ChunkMask> = masks
+        .into_iter()
+        .filter(|m| m.chunk().origin()[2] == 4)
+        .collect();
+    assert_eq!(layer.len(), 9);
+    let part = Background::in_part(dims, BackgroundRule::Auto, Some(1.0), &layer).unwrap();
+    let mut inside = 0;
+    for (i, &x) in v.iter().enumerate() {
+        let held = i / (12 * 9) >= 4;
+        assert_eq!(part.contains(i, x), held && b.contains(i, x), "voxel {i}");
+        inside += usize::from(held && b.contains(i, x));
+    }
+    assert!(inside > 200 && part.fraction == inside as f64 / (12.0 * 9.0 * 4.0));
+    let other = Background::in_part([12, 9, 9], BackgroundRule::Auto, Some(1.0), &layer);
+    assert!(other.unwrap_err().to_string().contains("[12, 9, 9] grid"));
+    // A threshold's rule and none need no mask; a found one without a threshold is none.
+    let below = Background::in_part(dims, BackgroundRule::Below(50.0), None, &[]).unwrap();
+    assert!(below.contains(0, 50.0) && !below.contains(0, 50.5));
+    let none = Background::in_part(dims, BackgroundRule::None, Some(1.0), &layer).unwrap();
+    assert_eq!(none, Background::none());
+    let auto = Background::in_part(dims, BackgroundRule::Auto, None, &layer).unwrap();
+    assert!(auto.value.is_none() && !auto.contains(0, 0.0));
+    // The client's: find's rule, threshold and fraction from the chunks' counts, no mask.
+    let client = Background::summarized(BackgroundRule::Auto, Some(1.0), 459, 864);
+    assert_eq!(
+        (client.rule, client.value, client.fraction),
+        (found.rule, found.value, found.fraction)
+    );
+    assert!(client.memory_bytes() == 0 && !client.contains(0, 0.0));
 }
 
 /// The summary of the middle chunk of [`pockets`] and the join's answer to it.
