@@ -36,6 +36,18 @@ __all__ = [
     "_paper_samples",
     "_refine_in_parts",
     "_analyze_with_parts",
+    "_volume_of_grid",
+    "PartitionPart",
+    "PartitionSplit",
+    "_partition_part_of",
+    "_count_strip",
+    "_layer_border",
+    "_background_threshold",
+    "_layer_summary",
+    "_background_answers",
+    "_layer_mask",
+    "_layer_below",
+    "_runs_search",
 ]
 
 __version__: str
@@ -358,3 +370,88 @@ def _analyze_with_parts(
     ] = None,
     **params: Any,
 ) -> Analysis: ...
+def _volume_of_grid(
+    grid: Tuple[Sequence[int], Sequence[float], Sequence[Sequence[float]], bool], dtype: str, name: str
+) -> Volume: ...
+
+@final
+class PartitionPart:
+    """The partition's counts of one pass over some strips of the slice stack's rows (issue
+    #44): adds with ``+`` (any grouping and order), or in place with ``+=``, and pickles as
+    bytes."""
+
+    @property
+    def round(self) -> int: ...
+    def __add__(self, other: PartitionPart, /) -> PartitionPart: ...
+    def __radd__(self, other: PartitionPart, /) -> PartitionPart: ...
+    def __iadd__(self, other: PartitionPart, /) -> PartitionPart: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
+
+@final
+class PartitionSplit:
+    """The client's side of the partition in parts: the view search finished from its parts,
+    the axis, the strips, the slabs, the analysis."""
+
+    def __new__(
+        cls,
+        probe: Volume,
+        dims: Sequence[int],
+        dtype: str,
+        range: Tuple[float, float, int],
+        paper: Optional[ViewPart] = None,
+        shifted: Optional[ViewPart] = None,
+        refined: Optional[
+            Sequence[Tuple[Sequence[Tuple[float, float, float]], Optional[Sequence[int]], ViewPart]]
+        ] = None,
+        /,
+        **params: Any,
+    ) -> PartitionSplit: ...
+    @property
+    def axis(self) -> Tuple[float, float, float]: ...
+    def strips(
+        self, count: int
+    ) -> list[Tuple[Tuple[int, int], Optional[Tuple[list[int], list[int]]]]]: ...
+    def slabs(
+        self, counts: PartitionPart, background: Tuple[Optional[float], int]
+    ) -> list[Tuple[int, int]]: ...
+    def analysis(self, joints: Optional[PartitionPart], name: str, /, **params: Any) -> Analysis: ...
+
+def _partition_part_of(bytes: bytes) -> PartitionPart: ...
+def _count_strip(
+    voxels: np.ndarray,
+    origin: Sequence[int],
+    rows: Tuple[int, int],
+    axis: Sequence[float],
+    dims: Sequence[int],
+    spacing: Sequence[float],
+    dtype: str,
+    range: Tuple[float, float, int],
+    background: Tuple[Optional[float], Sequence[bytes]],
+    slabs: Optional[Sequence[Tuple[int, int]]] = None,
+    /,
+    **params: Any,
+) -> PartitionPart: ...
+def _layer_border(layer: np.ndarray, z0: int, dims: Sequence[int], dtype: str) -> bytes: ...
+def _background_threshold(
+    borders: Sequence[bytes], dims: Sequence[int], range: Tuple[float, float]
+) -> Optional[float]: ...
+def _layer_summary(
+    layer: np.ndarray,
+    z0: int,
+    dims: Sequence[int],
+    dtype: str,
+    threshold: float,
+    max_memory: Any = None,
+) -> bytes: ...
+def _background_answers(summaries: Sequence[bytes], dims: Sequence[int]) -> list[Tuple[int, bytes]]: ...
+def _layer_mask(
+    layer: np.ndarray,
+    z0: int,
+    dims: Sequence[int],
+    dtype: str,
+    threshold: float,
+    answer: bytes,
+    max_memory: Any = None,
+) -> Tuple[bytes, int]: ...
+def _layer_below(layer: np.ndarray, dtype: str, **params: Any) -> int: ...
+def _runs_search(**params: Any) -> bool: ...

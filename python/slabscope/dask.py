@@ -1,5 +1,5 @@
 """slabscope on a Dask cluster: triage or analysis of many volumes, one task per volume, and
-the view search of one volume split into tasks over its chunks (:func:`analyze_array`).
+the analysis of one volume split into tasks over its chunks (:func:`analyze_array`).
 
 Dask is optional (``pip install 'slabscope[dask]'``). Each task runs on a worker of an existing
 ``distributed.Client`` and gets, as its memory budget, half of that worker's Dask memory limit
@@ -385,9 +385,10 @@ def analyze_array(
     **params: Any,
 ) -> Any:
     """``slabscope.analyze`` of one volume held as a Zarr store (a path or URL) or a dask
-    array, its view search counted by tasks on ``client``'s workers, a task a slab of the
-    array's chunks along z (with the planes around it that its samples read), the parts
-    added on the client: the same ``Analysis`` as one process gives, ``to_dict()`` equal.
+    array, counted by tasks on ``client``'s workers over the array's chunks, no task holding
+    the whole array, the parts added on the client: the same ``Analysis`` as one process
+    gives, ``to_dict()`` equal, of a volume holding no voxel (its grid alone: what reads
+    voxels, ``labels()`` or a picture, raises a ``ValueError`` saying so).
 
     ``axes`` names the array's axis order (``"zyx"`` for what ``dask.array.from_zarr``
     gives; never assumed). An OME-Zarr group's path needs none: its ``multiscales``
@@ -397,21 +398,24 @@ def analyze_array(
     ``Volume.from_array`` takes them, and override the store's.
 
     Each chunk is read once: into layers of whole planes (a chunk layer along z each), held on
-    the workers until the call returns (the whole array spread over them; the last task holds
-    it whole anyway). Rounds: the range (a task a layer), the paper's lattices, the shifted lattices (with
+    the workers until the call returns (the whole array spread over them). Rounds: the range
+    (a task a layer); the view search, a task a slab of the chunks along z (with the planes
+    around it that its samples read): the paper's lattices, the shifted lattices (with
     phases), with ``refine=True`` two such rounds a step of the refinement (the axes each step
-    asks for, found on the client from the sums), then the partition and the background in one
-    task over the whole array (not split yet: docs/design.md), within half its worker's Dask
-    memory limit unless ``max_memory`` is given (a budget that would move one process to a
-    coarser pyramid level is a ``ValueError``). ``progress(phase, fraction)`` hears the tasks
-    done of all (with the refinement, whose steps are not known ahead, of all foreseen: one
-    more step while it goes on), never less than before."""
+    asks for, found on the client from the sums); the background (the automatic one in three
+    rounds of a task a layer, a threshold's in one); the partition in two rounds of a task a
+    strip of the slice stack's rows, each gathering the box of voxels its rows read. Labelling
+    a layer's background keeps within half its worker's Dask memory limit unless
+    ``max_memory`` is given. ``explain``, the gain ranking and a coarser ``resolution`` read
+    voxels where they lie and are refused. ``progress(phase, fraction)`` hears the tasks done
+    of all (with the refinement, whose steps are not known ahead, of all foreseen: one more
+    step while it goes on), never less than before."""
 
     array, held_type, stored, reader = _as_xyz(source, axes)
     spacing, geometry = _geometry(spacing, affine, stored)
     nz, ny, nx = array.shape
     # Each chunk is read once in the whole call: into its layer of whole planes, held on the
-    # workers until the last task has taken them (what that task holds anyway: design.md).
+    # workers until the partition's last round has taken its boxes from them (design.md).
     layers, bounds = _layers(client, array, reader)
     kept: List[Any] = list(layers)
     try:
@@ -421,11 +425,14 @@ def analyze_array(
         cuts = sorted({min(b, cells) for _, b in bounds} | {0, cells})
         slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
         # The voxel planes each slab's task holds, the same in every round: found once, and
-        # the planes it takes from neighbouring layers cut out once.
+        # the planes it takes from neighbouring layers cut out once. None with an axis given
+        # and no view search asked for.
+        if not slabscope._slabscope._runs_search(**params):
+            slabs = []
         held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, **params)
         pieces = _pieces(client, layers, bounds, held)
         kept += [f for these in pieces for f in these]
-        return _rounds(client, layers, pieces, slabs, held, shifted, grid, geometry, params, progress)
+        return _rounds(client, (layers, bounds), pieces, slabs, held, shifted, grid, geometry, params, progress)
     finally:
         for future in kept:
             future.release()
@@ -433,7 +440,7 @@ def analyze_array(
 
 def _rounds(
     client: Any,
-    layers: List[Any],
+    held_layers: Tuple[List[Any], List[Planes]],
     pieces: List[List[Any]],
     slabs: List[Planes],
     held: List[Planes],
@@ -443,13 +450,17 @@ def _rounds(
     params: Options,
     progress: Any,
 ) -> Any:
-    """The view search's rounds of tasks and the last task, reporting to ``progress``."""
+    """The view search's rounds of tasks, then the background's and the partition's, reporting
+    to ``progress``."""
+    layers = held_layers[0]
     step = len(slabs) * (2 if shifted else 1)
-    refine = bool(params.get("refine"))
-    # Tasks foreseen and not yet done: the sphere's rounds, the last task and, with the
-    # refinement, its first step (another foreseen as each step starts, the one never taken
-    # dropped at its end).
-    ahead = [step + 1 + (step if refine else 0)]
+    refine = bool(params.get("refine")) and bool(slabs)
+    # Tasks foreseen and not yet done: the sphere's rounds, the background's three rounds of a
+    # task a layer (a found one's), the partition's two of a task a strip (as many as layers),
+    # the analysis and, with the refinement, its first step (another foreseen as each step
+    # starts, the one never taken dropped at its end).
+    after = (_BACKGROUND_ROUNDS[_background_rule(params)] + 2) * len(layers)
+    ahead = [step + after + 1 + (step if refine else 0)]
     done = [0]
     heard = [0.0]
 
@@ -460,6 +471,14 @@ def _rounds(
         if progress is not None:
             progress(phase, heard[0])
 
+    def end(views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]]) -> Any:
+        whole = _after_views(client, held_layers, grid, geometry, views, params, report)
+        ahead[0] = 1
+        report("partition in parts")
+        return whole
+
+    if not slabs:
+        return end((None, None, []))
     paper = _round(client, pieces, slabs, held, grid, (None, None), params, report)
     more = None
     if shifted:
@@ -478,23 +497,206 @@ def _rounds(
         dims, spacing, held_type, range_ = grid
         slabscope._slabscope._refine_in_parts(paper, dims, spacing, held_type, range_, count, shifted=more, **params)
         ahead[0] -= step
-    # The sums travel as data scattered to the cluster, not inside the task's graph (tens of
-    # MB with phases: Dask warns of a large graph).
-    sums = client.scatter([paper, more, refined], hash=False)
+    return end((paper, more, refined))
+
+
+def _background_rule(params: Options) -> str:
+    """The background rule the analysis keywords name, as the library reads ``background=``:
+    ``auto`` (the default: three rounds of a task a layer), ``none``, or ``value`` (a
+    threshold: one round, counting the voxels at or below it)."""
+    rule = params.get("background")
+    word = "auto" if rule is None else str(rule).strip()
+    return word if word in ("auto", "none") else "value"
+
+
+#: The background's rounds of a task a layer, by its rule.
+_BACKGROUND_ROUNDS = {"auto": 3, "value": 1, "none": 0}
+
+#: What the background's rounds give: a found background's threshold (None: no background, or
+#: another rule), each layer's mask and voxel count (futures where they were made), and how
+#: many voxels the background holds in all.
+Found = Tuple[Optional[float], List[Any], int]
+
+
+def _after_views(
+    client: Any,
+    held_layers: Tuple[List[Any], List[Planes]],
+    grid: Grid,
+    geometry: Options,
+    views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]],
+    params: Options,
+    report: Callable[[str], None],
+) -> Any:
+    """The background's rounds, then the partition's, then the analysis."""
+    found = _background(client, held_layers, grid, params, lambda: report("background in parts"))
     try:
-        whole = client.submit(_finish, geometry, *sums, params, *layers, pure=False).result()
+        return _partition(client, held_layers, grid, geometry, views, found, params, lambda: report("partition in parts"))
     finally:
-        # Released now, not when the futures are collected (an error's traceback keeps them).
-        for future in sums:
+        for future in found[1]:
             future.release()
-    report()
-    return whole
 
 
-def _finish(geometry: Options, paper: Any, shifted: Any, refined: List[Tuple[Any, Any, Any]], params: Options, *layers: np.ndarray) -> Any:
-    """The last task: the analysis of the whole array (its ``layers`` along z) from the view
-    search's parts, within half its worker's Dask memory limit unless ``max_memory`` is given
-    (beyond the voxels)."""
-    array = layers[0] if len(layers) == 1 else np.concatenate(layers, axis=0)
-    volume = slabscope.Volume.from_array(array.T, **geometry)
-    return slabscope._slabscope._analyze_with_parts(volume, paper, shifted, refined=refined, **_with_budget(params))
+def _background(client: Any, held_layers: Tuple[List[Any], List[Planes]], grid: Grid, params: Options, report: Callable[[], None]) -> Found:
+    """The background by the rule the keywords name, in rounds of a task a layer. A found one
+    (the default) in three: each layer's border values, the summary of its components at or
+    below the threshold they give (the client joining the summaries), its mask. A threshold's
+    in one: each layer's voxels at or below it, counted for the fraction."""
+    layers, bounds = held_layers
+    dims, _, _, range_ = grid
+    rule = _background_rule(params)
+    starts = [a for a, _ in bounds]
+
+    def each(task: Callable[..., Any], *given: Any) -> List[Any]:
+        futures = [client.submit(task, layer, a, grid, params, *given, pure=False) for layer, a in zip(layers, starts)]
+        done = []
+        for future in futures:
+            done.append(future.result())
+            report()
+        return done
+
+    if rule == "none":
+        return None, [], 0
+    if rule == "value":
+        return None, [], sum(each(_below))
+    threshold = slabscope._slabscope._background_threshold(each(_border), dims, (range_[0], range_[1]))
+    if threshold is None:
+        for _ in range(2 * len(layers)):
+            report()
+        return None, [], 0
+    answers = dict(slabscope._slabscope._background_answers(each(_labelled, threshold), dims))
+    masks = [client.submit(_labelled, layer, a, grid, params, threshold, answers[a], pure=False) for layer, a in zip(layers, starts)]
+    count = 0
+    for future in masks:
+        count += client.submit(_second, future, pure=False).result()  # a refusal raises here
+        report()
+    return threshold, masks, count
+
+
+def _second(pair: Tuple[Any, Any]) -> Any:
+    """The second of a pair (a task where the pair is held: a mask's count, not its bits)."""
+    return pair[1]
+
+
+def _border(layer: np.ndarray, z0: int, grid: Grid, params: Options) -> bytes:
+    """A task: a layer's ([z, y, x], from plane ``z0``) finite values on the volume's faces."""
+    dims, _, held_type, _ = grid
+    values: bytes = slabscope._slabscope._layer_border(layer.T, z0, dims, held_type)
+    return values
+
+
+def _below(layer: np.ndarray, z0: int, grid: Grid, params: Options) -> int:
+    """A task: how many of a layer's voxels are at or below the threshold ``background=``
+    gives."""
+    count: int = slabscope._slabscope._layer_below(layer.T, grid[2], **params)
+    return count
+
+
+def _labelled(layer: np.ndarray, z0: int, grid: Grid, params: Options, threshold: float, answer: Optional[bytes] = None) -> Any:
+    """A task: a layer's summary of its components at or below ``threshold`` (``answer``
+    None), or its mask and count given the client's answer; labelling within half its
+    worker's Dask memory limit unless ``max_memory`` is given."""
+    dims, _, held_type, _ = grid
+    budget = _with_budget({"max_memory": params.get("max_memory")})["max_memory"]
+    ext = slabscope._slabscope
+    if answer is None:
+        return ext._layer_summary(layer.T, z0, dims, held_type, threshold, max_memory=budget)
+    return ext._layer_mask(layer.T, z0, dims, held_type, threshold, answer, max_memory=budget)
+
+
+def _partition(
+    client: Any,
+    held_layers: Tuple[List[Any], List[Planes]],
+    grid: Grid,
+    geometry: Options,
+    views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]],
+    background: Found,
+    params: Options,
+    report: Callable[[], None],
+) -> Any:
+    """The partition in two rounds of a task a strip of the slice stack's rows (as many strips
+    as layers), each task gathering the box of voxels its rows read from the layers it crosses
+    (with their background masks), the client adding the parts as they come; then the
+    analysis, on the client, of a volume holding no voxel."""
+    layers, bounds = held_layers
+    dims, _, held_type, range_ = grid
+    probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **geometry)
+    split = slabscope._slabscope.PartitionSplit(probe, dims, held_type, range_, *views, **params)
+    strips = split.strips(len(layers))
+    boxes: List[List[Any]] = []
+    near: List[List[Any]] = []
+    for _, box in strips:
+        these: List[Any] = []
+        masks: List[Any] = []
+        if box is not None:
+            (x0, y0, z0), (sx, sy, sz) = box
+            for k, (layer, (a, b)) in enumerate(zip(layers, bounds)):
+                lo, hi = max(a, z0), min(b, z0 + sz)
+                if lo < hi:
+                    these.append(client.submit(_box_of, layer, (lo - a, hi - a), (y0, y0 + sy), (x0, x0 + sx), pure=False))
+                    masks += background[1][k : k + 1]
+        boxes.append(these)
+        near.append(masks)
+    task = (split.axis, grid, background[0], params)
+    try:
+        total = _strip_round(client, strips, boxes, near, task, None, report)
+        slabs = split.slabs(total, (background[0], background[2]))
+        joints = None
+        if len(slabs) > 1:
+            joints = _strip_round(client, strips, boxes, near, task, slabs, report)
+        else:
+            for _ in strips:
+                report()
+    finally:
+        for these in boxes:
+            for future in these:
+                future.release()
+    return split.analysis(joints, "array", **params)
+
+
+def _box_of(layer: np.ndarray, z: Planes, y: Planes, x: Planes) -> np.ndarray:
+    """The voxels of a layer ([z, y, x]) in a box (a task where the layer is held: the box
+    travels, not the layer)."""
+    return np.ascontiguousarray(layer[z[0] : z[1], y[0] : y[1], x[0] : x[1]])
+
+
+#: What every strip's task is told: the axis, the grid, the background's threshold and the
+#: analysis keywords.
+Told = Tuple[Tuple[float, float, float], Grid, Optional[float], Options]
+
+
+def _strip_round(
+    client: Any,
+    strips: List[Tuple[Planes, Any]],
+    boxes: List[List[Any]],
+    near: List[List[Any]],
+    told: Told,
+    slabs: Optional[List[Planes]],
+    report: Callable[[], None],
+) -> Any:
+    """A pass of the partition: a task a strip, its parts added on the client as they come."""
+    from distributed import as_completed
+
+    tasks = [client.submit(_strip, rows, box, told, masks, slabs, *these, pure=False) for (rows, box), these, masks in zip(strips, boxes, near)]
+    total = None
+    for future in as_completed(tasks):  # type: ignore[no-untyped-call]
+        part = future.result()
+        if total is None:
+            total = part
+        else:
+            total += part
+        report()
+    return total
+
+
+def _strip(rows: Planes, box: Any, told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:
+    """One task: a strip's counts (the first pass, or given ``slabs`` the second) from its box
+    of voxels (``pieces``, [z, y, x], in order along z) and the masks of the layers it crosses."""
+    axis, grid, threshold, params = told
+    dims, spacing, held_type, range_ = grid
+    if box is None:
+        origin, block = (0, 0, 0), np.zeros((0, 0, 0), dtype=held_type)
+    else:
+        origin = box[0]
+        block = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=0)
+    bits = [mask for mask, _ in masks]
+    return slabscope._slabscope._count_strip(block.T, origin, rows, axis, dims, spacing, held_type, range_, (threshold, bits), slabs, **params)

@@ -20,16 +20,17 @@ use crate::params::{Kwargs, load_options};
 use crate::run;
 use crate::volume::Volume;
 
-/// What is known of a store at a URL whose level 0 is not read yet.
+/// What is known of a store at a URL whose level 0 is not read yet, or of a volume counted in
+/// parts across a cluster whose voxels are held nowhere here (`path` None).
 pub struct Unread {
-    /// The URL as given.
-    path: PathBuf,
+    /// The URL as given; None for a volume counted in parts.
+    path: Option<PathBuf>,
     /// Level 0's grid, from the store's metadata.
     pub finest: Finest,
     /// The stored voxel type (the coarsest dataset's, as read).
     pub voxel_type: VoxelType,
-    /// The format read.
-    pub format: slabscope::Format,
+    /// The format read (None for a volume counted in parts).
+    pub format: Option<slabscope::Format>,
     /// The notes of level 0's read, once read.
     pub notes: OnceLock<Vec<String>>,
     /// The resolution last analysed below level 0, the dataset read for it and its read's notes.
@@ -38,6 +39,11 @@ pub struct Unread {
 
 /// A coarser dataset read for a resolution: the resolution, the dataset and its read's notes.
 type Served = (Resolution, Arc<slabscope::Volume>, Vec<String>);
+
+/// Why a volume counted in parts has no voxels to give.
+const NOWHERE: &str = "counted in parts across a cluster (slabscope.dask.analyze_array), its \
+     voxels are held nowhere here: for labels or pictures, analyze a Volume of them \
+     (slabscope.load, Volume.from_array)";
 
 /// What `load` reads of `file`: level 0, or for a store at a URL with a coarser dataset, that
 /// store's grid without level 0 ([`Unread`]).
@@ -65,10 +71,10 @@ pub fn read(py: Python<'_>, file: &Path, opts: &LoadOptions) -> PyResult<Read> {
         });
         if let Some((finest, voxel_type, format)) = finest {
             return Ok(Read::Unread(Unread {
-                path: file.to_path_buf(),
+                path: Some(file.to_path_buf()),
                 finest,
                 voxel_type,
-                format,
+                format: Some(format),
                 notes: OnceLock::new(),
                 serving: Mutex::new(None),
             }));
@@ -98,12 +104,33 @@ impl Unread {
         Ok(options)
     }
 
+    /// What is known of a volume of `finest`'s grid and `voxel_type` counted in parts across a
+    /// cluster: no voxel, and nowhere to read them from.
+    pub fn nowhere(finest: Finest, voxel_type: VoxelType) -> Self {
+        Self {
+            path: None,
+            finest,
+            voxel_type,
+            format: None,
+            notes: OnceLock::new(),
+            serving: Mutex::new(None),
+        }
+    }
+
+    /// Whether its voxels can be read (a store's), or are held nowhere.
+    pub fn readable(&self) -> bool {
+        self.path.is_some()
+    }
+
     /// Level 0, read now with `load`'s keywords `kept`, and its notes.
     pub fn level0(&self, py: Python<'_>, kept: &Py<PyDict>) -> PyResult<slabscope::Volume> {
+        let Some(path) = &self.path else {
+            return Err(PyValueError::new_err(NOWHERE));
+        };
         let (opts, pool) = Self::options(py, kept)?;
         let _threads = run::Threads::bound(pool);
         let loaded = run::loading(py, |cancel| {
-            slabscope::load(&self.path, &LoadOptions { cancel, ..opts })
+            slabscope::load(path, &LoadOptions { cancel, ..opts })
         })?;
         let _ = self.notes.set(loaded.notes);
         Ok(loaded.volume)
@@ -118,9 +145,13 @@ impl Unread {
         kept: &Py<PyDict>,
         resolution: Resolution,
     ) -> PyResult<Option<Arc<slabscope::Volume>>> {
-        if resolution == Resolution::Full {
+        let Some(path) = self
+            .path
+            .as_ref()
+            .filter(|_| resolution != Resolution::Full)
+        else {
             return Ok(None);
-        }
+        };
         let last = || self.serving.lock().unwrap_or_else(PoisonError::into_inner);
         if let Some((r, v, _)) = last().as_ref()
             && *r == resolution
@@ -131,7 +162,7 @@ impl Unread {
         let _threads = run::Threads::bound(pool);
         let served = run::loading(py, |cancel| {
             let opts = LoadOptions { cancel, ..opts };
-            slabscope::formats::load_serving(&self.path, &opts, resolution)
+            slabscope::formats::load_serving(path, &opts, resolution)
         })?;
         Ok(served.map(|loaded| {
             let volume = Arc::new(loaded.volume);
@@ -154,9 +185,15 @@ impl Volume {
             return Ok(v);
         }
         let (Some(unread), Some((_, kept))) = (&self.unread, &self.file) else {
+            let nowhere = self.unread.as_ref().is_some_and(|u| !u.readable());
             return Err(PyValueError::new_err(format!(
-                "volume {:?}: its voxels are not held",
-                self.name
+                "volume {:?}: {}",
+                self.name,
+                if nowhere {
+                    NOWHERE
+                } else {
+                    "its voxels are not held"
+                }
             )));
         };
         let read = unread.level0(py, kept)?;

@@ -13,6 +13,7 @@ mod params;
 mod parts;
 mod pickle;
 mod run;
+mod split;
 mod triage;
 mod volume;
 
@@ -31,6 +32,8 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<image::Image>()?;
     m.add_class::<triage::Triage>()?;
     m.add_class::<parts::ViewPart>()?;
+    m.add_class::<split::PartitionPart>()?;
+    m.add_class::<split::PartitionSplit>()?;
     m.add_function(wrap_pyfunction!(volume::load, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
     m.add_function(wrap_pyfunction!(image::render, m)?)?;
@@ -49,5 +52,15 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parts::_paper_samples, m)?)?;
     m.add_function(wrap_pyfunction!(parts::_refine_in_parts, m)?)?;
     m.add_function(wrap_pyfunction!(parts::_analyze_with_parts, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_volume_of_grid, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_partition_part_of, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_count_strip, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_layer_border, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_background_threshold, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_layer_summary, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_background_answers, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_layer_mask, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_layer_below, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_runs_search, m)?)?;
     Ok(())
 }

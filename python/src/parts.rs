@@ -103,15 +103,25 @@ pub fn _view_part_of(round: u8, counts: Vec<Vec<u8>>) -> PyResult<ViewPart> {
     Ok(ViewPart { round, counts })
 }
 
-/// The grid every task is told: dims `[x, y, z]`, spacing, the held type's name and the range.
-fn grid(dims: [usize; 3], spacing: [f64; 3], dtype: &str, range: (f32, f32, u64)) -> SlabGrid {
-    let voxel_type = match dtype {
+/// The held type of its NumPy name (float32 for any other).
+pub(crate) fn voxel_type(dtype: &str) -> VoxelType {
+    match dtype {
         "uint8" => VoxelType::U8,
         "int8" => VoxelType::I8,
         "uint16" => VoxelType::U16,
         "int16" => VoxelType::I16,
         _ => VoxelType::F32,
-    };
+    }
+}
+
+/// The grid every task is told: dims `[x, y, z]`, spacing, the held type's name and the range.
+pub(crate) fn grid(
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+) -> SlabGrid {
+    let voxel_type = voxel_type(dtype);
     let n = dims.iter().product::<usize>();
     SlabGrid {
         dims,
@@ -130,7 +140,7 @@ fn grid(dims: [usize; 3], spacing: [f64; 3], dtype: &str, range: (f32, f32, u64)
 }
 
 /// The rounds of the analysis keywords `params` on a grid (any volume of it).
-fn rounds(
+pub(crate) fn rounds(
     py: Python<'_>,
     volume: &slabscope::Volume,
     params: Option<&Bound<'_, PyDict>>,
@@ -186,14 +196,8 @@ pub fn _count_view_slab(
         Some(lent) => (lent, voxels.clone()),
         None => crate::volume::copy_of(voxels, grid.voxel_type)?,
     };
-    let slab = match &data {
-        Voxels::U8(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
-        Voxels::I8(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
-        Voxels::U16(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
-        Voxels::I16(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
-        Voxels::F32(s) => slabscope::Volume::of_slab(&grid, first, s.as_slice()),
-    }
-    .or_py()?;
+    let slab = crate::volume::with_voxels!(&data, |s| slabscope::Volume::of_slab(&grid, first, s))
+        .or_py()?;
     let rounds = rounds(py, &slab, params)?;
     // The planes the slab's samples read, every one of them: a plane missing would read as
     // zeros, the counts wrong with no error.
@@ -215,7 +219,7 @@ pub fn _count_view_slab(
 }
 
 /// A volume of the grid holding no voxel: what the rounds are made from on the client.
-fn empty(grid: &SlabGrid) -> PyResult<slabscope::Volume> {
+pub(crate) fn empty(grid: &SlabGrid) -> PyResult<slabscope::Volume> {
     slabscope::Volume::of_slab::<u8>(grid, 0, &[]).or_py()
 }
 
@@ -267,7 +271,7 @@ pub fn _paper_samples(
 type Asked = (Vec<[f64; 3]>, Option<Vec<u64>>);
 
 /// A refinement round as `_analyze_with_parts` is given it: its axes, samples and sum.
-type Refined<'py> = (Vec<[f64; 3]>, Option<Vec<u64>>, PyRef<'py, ViewPart>);
+pub(crate) type Refined<'py> = (Vec<[f64; 3]>, Option<Vec<u64>>, PyRef<'py, ViewPart>);
 
 fn asked(round: &ViewRound) -> Asked {
     match round {
@@ -344,6 +348,21 @@ pub fn _analyze_with_parts(
 ) -> PyResult<crate::analysis::Analysis> {
     let inner = volume.get().inner(py)?;
     let rounds = rounds(py, inner, params)?;
+    let views = views_of(py, &rounds, inner, paper, shifted, refined)?;
+    crate::analysis::analyze_with(py, volume, Some(views), params)
+}
+
+/// The view search of `volume` by `rounds` finished from the rounds' sums `paper` and
+/// `shifted`, and with the refinement from `refined` (its rounds as `_refine_in_parts` asked for
+/// them, in order, each `(axes, samples, sum)`).
+pub(crate) fn views_of(
+    py: Python<'_>,
+    rounds: &ViewRounds,
+    inner: &slabscope::Volume,
+    paper: &ViewPart,
+    shifted: Option<&ViewPart>,
+    refined: Option<Vec<Refined<'_>>>,
+) -> PyResult<slabscope::ViewSearch> {
     let shifted = shifted.map_or(&[][..], |s| &s.counts[..]);
     let given: Vec<(Asked, u8, Vec<PartialCounts>)> = refined
         .unwrap_or_default()
@@ -356,8 +375,7 @@ pub fn _analyze_with_parts(
             "refined= holds the refinement's rounds: refine=True asks for them",
         ));
     }
-    let views = py
-        .detach(|| {
+    py.detach(|| {
             let sphere = rounds.finish(inner, &paper.counts, shifted)?;
             let mut given = given.into_iter();
             let views = rounds.refine(inner, sphere, |round| match given.next() {
@@ -376,7 +394,6 @@ pub fn _analyze_with_parts(
                     "the refinement's rounds alone: it asked for fewer",
                 )),
             }
-        })
-        .or_py()?;
-    crate::analysis::analyze_with(py, volume, Some(views), params)
+    })
+    .or_py()
 }

@@ -39,9 +39,38 @@ pub fn reduce_volume<'py>(slf: &Bound<'py, Volume>) -> PyResult<Bound<'py, PyAny
         let args = (path.clone(), options, this.name.clone());
         return reduced(py, "_volume_from_file", args);
     }
+    if let (None, Some(unread)) = (this.level0.get(), &this.unread)
+        && !unread.readable()
+    {
+        let f = &unread.finest;
+        let grid = (f.dims, f.spacing, f.transform.matrix, f.transform.known);
+        let args = (grid, numpy_name(unread.voxel_type), this.name.clone());
+        return reduced(py, "_volume_of_grid", args);
+    }
     let voxels = slf.getattr("array")?;
     let args = (voxels, state(py, this)?);
     reduced(py, "_volume_from_voxels", args)
+}
+
+/// A pickled volume's grid: dims, spacing, affine and whether the file stated it.
+type Grid = ([usize; 3], [f64; 3], [[f64; 4]; 4], bool);
+
+/// Unpickles a volume counted in parts across a cluster, whose voxels are held nowhere: its
+/// `grid`, stored type and name.
+#[pyfunction]
+pub fn _volume_of_grid(grid: Grid, dtype: &str, name: String) -> PyResult<Volume> {
+    let voxel_type = VoxelType::parse(dtype).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "a pickled Volume's dtype {dtype:?}: not a voxel type"
+        ))
+    })?;
+    let (dims, spacing, matrix, known) = grid;
+    let finest = slabscope::volume::pyramid::Finest {
+        dims,
+        spacing,
+        transform: WorldTransform { matrix, known },
+    };
+    Ok(Volume::of_grid(finest, voxel_type, name))
 }
 
 /// What a volume carrying its voxels pickles besides them.

@@ -11,6 +11,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slabscope::geometry::world::WorldTransform;
+use slabscope::volume::pyramid::Finest;
 use slabscope::volume::{VoxelType, Voxels};
 
 use crate::errors::repr;
@@ -84,7 +85,7 @@ pub fn load_file(
             loaded.notes,
         ),
         crate::lazy::Read::Unread(unread) => {
-            let format = unread.format.name();
+            let format = unread.format.map_or("array", |f| f.name());
             (OnceLock::new(), Some(Arc::new(unread)), format, Vec::new())
         }
     };
@@ -199,6 +200,7 @@ macro_rules! with_voxels {
         }
     };
 }
+pub(crate) use with_voxels;
 
 /// A read-only NumPy view of `data` (a volume's voxels, `[x, y, z]` in Fortran order) that
 /// keeps `owner` alive.
@@ -504,6 +506,24 @@ impl Volume {
     /// The file it was read from (absolute), for a volume read from one.
     pub fn source_file(&self) -> Option<&std::path::Path> {
         self.file.as_ref().map(|(path, _)| path.as_path())
+    }
+
+    /// A volume of `finest`'s grid and `voxel_type` whose voxels are held nowhere here: what an
+    /// analysis counted in parts across a cluster is of (`slabscope.dask.analyze_array`). Its
+    /// shape, spacing, affine and type are known; reading its voxels is an error saying why.
+    pub(crate) fn of_grid(finest: Finest, voxel_type: VoxelType, name: String) -> Self {
+        Self {
+            level0: OnceLock::new(),
+            unread: Some(Arc::new(crate::lazy::Unread::nowhere(finest, voxel_type))),
+            name,
+            max_memory: slabscope::formats::default_max_memory(),
+            array: None,
+            copied: false,
+            format: "array".into(),
+            notes: Vec::new(),
+            file: None,
+            carry: false,
+        }
     }
 
     /// A volume of `array`'s voxels, `[x, y, z]`, with `spacing` or `affine` (see `from_array`).

@@ -44,15 +44,19 @@ def test_one_volume_across_the_cluster_is_the_single_process_analysis(client, pa
         da.from_array(zyx, chunks=(8, 13, 30)),
         axes="zyx",
         spacing=spacing,
-        progress=lambda phase, fraction: heard.append(fraction),
+        progress=lambda phase, fraction: heard.append((phase, fraction)),
         slabs=3,
         **params,
     )
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=spacing), slabs=3, **params)
     assert got.to_dict() == one.to_dict()
-    slabs = 5  # chunks of 8 planes along z over 36 planes of cells
-    assert heard[-1] == 1.0 and len(heard) == slabs * (2 if not params else 1) + 1
-    assert heard == sorted(heard)
+    # Chunks of 8 planes along z: 5 layers, 5 slabs of cells. The view search's rounds (two
+    # with phases), the found background's three rounds of a task a layer, the partition's two
+    # passes of a task a strip (5 strips), and the end.
+    views, background = (5, 0) if params else (10, 15)
+    assert [p for p, _ in heard] == ["view search in parts"] * views + ["background in parts"] * background + ["partition in parts"] * 11
+    fractions = [f for _, f in heard]
+    assert fractions[-1] == 1.0 and fractions.count(1.0) == 1 and fractions == sorted(fractions)
 
 
 def test_axes_in_another_order_and_a_zarr_store(client, tmp_path):
@@ -228,17 +232,82 @@ def test_an_affine_as_nibabel_gives_it(client):
         slabscope.dask.analyze_array(client, da.from_array(zyx), axes="zyx", affine=affine, spacing=(2, 2, 2), **params)
 
 
-def test_the_last_task_keeps_to_the_memory_budget(client):
+def test_no_task_holds_the_whole_array(client):
+    """The background and the partition run in parts too: the analysis is assembled on the
+    client, of a volume holding no voxel (its grid alone), which says so when its voxels are
+    asked for; it pickles as its grid. A task's budget bounds what labelling a layer holds."""
     zyx = voxels()
-    params = {"phases": 0, "background": "none"}
     array = da.from_array(zyx, chunks=(8, 26, 30))
-    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), max_memory="100K", **params)
-    got = slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="100K", **params)
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="100K", slabs=3)
     assert got.to_dict() == one.to_dict()
-    # 50 KiB fits level 2 alone, where one process would analyse: the views counted on every
-    # voxel are refused, not finished on another level.
-    with pytest.raises(ValueError, match=r"counted in parts on every voxel, cannot finish an analysis of pyramid level 2, because .*\(raise it with max_memory=\)"):
-        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="50K", **params)
+    assert got.slabs == one.slabs and got.best_axis == one.best_axis
+    volume = got.volume
+    assert volume.shape == (30, 26, 37) and volume.dtype == np.dtype("uint8")
+    with pytest.raises(ValueError, match="counted in parts across a cluster .* held nowhere here"):
+        volume.array
+    with pytest.raises(ValueError, match="held nowhere here"):
+        got.labels()
+    back = pickle.loads(pickle.dumps(got))
+    assert back.to_dict() == one.to_dict() and back.volume.shape == (30, 26, 37)
+    # Labelling a layer of 8 planes of 30×26 voxels holds up to 12 bytes a voxel.
+    with pytest.raises(ValueError, match=r"labelling the background of planes 0..8 takes up to 75676 bytes, beyond the task's budget of 10240"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="10K")
+    # What reads the voxels where they are does not run in parts.
+    with pytest.raises(ValueError, match="explain"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", explain=True)
+    with pytest.raises(ValueError, match="resolution"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", resolution=1)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'slab'"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", slab=3)
+
+
+@pytest.mark.parametrize("params", [{"background": 60}, {"axis": "x", "slabs": 3}, {"method": "optimal", "slabs": 2}], ids=["threshold", "axis", "optimal"])
+def test_the_partition_in_parts_follows_every_rule(client, params):
+    """A threshold's background (no rounds of its own), an axis given (no view search; the
+    stack's rows then lie along z, so every strip's box crosses every layer), the optimal
+    partition: `analyze`'s, to the key."""
+    zyx = voxels()
+    array = da.from_array(zyx, chunks=(7, 26, 30))
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=(1.0, 0.9, 1.3)), **params)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", spacing=(1.0, 0.9, 1.3), **params)
+    assert got.to_dict() == one.to_dict()
+
+
+def test_partition_parts_add_and_pickle():
+    """A strip's part pickles as bytes and adds in any order; the two passes do not mix."""
+    zyx = voxels()
+    nz, ny, nx = zyx.shape
+    grid = ([nx, ny, nz], [1.0, 1.0, 1.0], "uint8", (float(zyx.min()), float(zyx.max()), zyx.size))
+    probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8))
+    split = slabscope._slabscope.PartitionSplit(probe, grid[0], "uint8", grid[3], axis="z", background="none")
+    assert split.axis == (0.0, 0.0, 1.0)
+    strips = split.strips(3)
+    assert [rows for rows, _ in strips] == [(0, 8), (8, 17), (17, 26)]
+
+    def count(strip: Any, slabs: Any = None, short: int = 0) -> Any:
+        rows, ((x0, y0, z0), (sx, sy, sz)) = strip
+        box = zyx[z0 : z0 + sz, y0 + short : y0 + sy, x0 : x0 + sx]
+        return slabscope._slabscope._count_strip(box.T, (x0, y0 + short, z0), rows, split.axis, *grid, (None, []), slabs, axis="z", background="none")
+
+    parts = [count(strip) for strip in strips]
+    total = pickle.loads(pickle.dumps(parts[2])) + parts[0]
+    total += parts[1]
+    slabs = split.slabs(total, (None, 0))
+    assert len(slabs) == 4
+    joints = [count(strip, slabs) for strip in strips]
+    with pytest.raises(ValueError, match="first pass"):
+        split.slabs(joints[0], (None, 0))
+    with pytest.raises(ValueError, match="two passes"):
+        total + joints[0]
+    both = joints[0] + pickle.loads(pickle.dumps(joints[2])) + joints[1]
+    assert both.round == 1 and total.round == 0
+    got = split.analysis(both, "array", axis="z", background="none")
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), axis="z", background="none")
+    assert got.to_dict() == one.to_dict()
+    # A box one voxel short of what the rows read is refused, not counted as zeros.
+    with pytest.raises(ValueError, match="not all in the"):
+        count(strips[1], short=1)
 
 
 def test_a_worker_killed_mid_run_costs_only_its_tasks(client):
@@ -266,8 +335,9 @@ def test_a_worker_killed_mid_run_costs_only_its_tasks(client):
     assert len(after) == 2 and victim not in after and len(before & after) == 1  # one replaced
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3)
     assert got.to_dict() == one.to_dict()
-    # Every task reported once, however many times it ran.
-    assert len(heard) == 5 * 2 + 1 and heard[-1] == 1.0
+    # Every task reported once, however many times it ran: the view search's two rounds, the
+    # background's three and the partition's two (5 layers, 5 strips), and the end.
+    assert len(heard) == 5 * 2 + 5 * 3 + 5 * 2 + 1 and heard[-1] == 1.0
 
 
 def test_each_chunk_is_read_once_in_a_call(client, tmp_path):

@@ -1,0 +1,550 @@
+//! The background and the partition counted in parts (issue #44), for
+//! `slabscope.dask.analyze_array`, so that no task holds the whole volume: the found
+//! background's three rounds over the array's layers (each a chunk of whole planes along z: its
+//! border values, its components' summary, its mask), and the partition's two rounds over
+//! strips of the slice stack's rows (`PartitionPart`, which adds with `+` and pickles as bytes),
+//! each task holding the box of voxels its rows read; `PartitionSplit`, on the client, finishes
+//! the view search from its parts, names the axis and the strips, and assembles the `Analysis`.
+
+use numpy::PyUntypedArrayMethods;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use slabscope::analysis::{AnalysisParams, Plan, analyze_with_partition, partition_axis};
+use slabscope::partition::{SlabJoints, SlabsFound, SliceCounts, StackSplit};
+use slabscope::request::Analysed;
+use slabscope::view::ViewSearch;
+use slabscope::volume::Voxel;
+use slabscope::volume::background::parts::{
+    BackgroundJoin, Chunk, ChunkAnswer, ChunkLabels, ChunkMask, ChunkSummary, border_values_in,
+};
+use slabscope::volume::background::{Background, BackgroundRule, threshold_of_border};
+use slabscope::volume::pyramid::Finest;
+use slabscope::volume::{SlabGrid, VoxelBox, VoxelType, Voxels};
+
+use crate::errors::OrPy;
+use crate::params::Kwargs;
+use crate::parts::{Refined, ViewPart, empty, grid, views_of};
+use crate::volume::Volume;
+
+/// The voxels of `array` (indexed `[x, y, z]`, x fastest) in the held type `t`: read in place
+/// where they are of that type in Fortran order, else copied once.
+fn voxels_of<'py>(
+    array: &Bound<'py, PyAny>,
+    t: VoxelType,
+) -> PyResult<(Voxels, Bound<'py, PyAny>)> {
+    match crate::lent::lend_any(array, t) {
+        Some(lent) => Ok((lent, array.clone())),
+        None => crate::volume::copy_of(array, t),
+    }
+}
+
+/// The shape of an array as `[x, y, z]`, an error unless it has three dimensions.
+fn shape_of(array: &Bound<'_, PyAny>) -> PyResult<[usize; 3]> {
+    let shape = array.cast::<numpy::PyUntypedArray>()?.shape().to_vec();
+    match shape[..] {
+        [x, y, z] => Ok([x, y, z]),
+        _ => Err(PyValueError::new_err(format!(
+            "an array of shape {shape:?}: voxels indexed [x, y, z]"
+        ))),
+    }
+}
+
+/// A layer's chunk of the grid: whole planes from `z0`, as many as `layer` holds.
+fn layer_chunk(layer: &Bound<'_, PyAny>, z0: usize, dims: [usize; 3]) -> PyResult<Chunk> {
+    let [x, y, z] = shape_of(layer)?;
+    if [x, y] != [dims[0], dims[1]] {
+        return Err(PyValueError::new_err(format!(
+            "a layer of {x}×{y} voxels a plane: whole planes of {}×{}",
+            dims[0], dims[1]
+        )));
+    }
+    Chunk::new(dims, [0, 0, z0], [x, y, z]).or_py()
+}
+
+/// Runs `$body` with `$v` bound to the voxels of `$layer` in the held type `$dtype`, as a
+/// slice of their own type.
+macro_rules! with_layer {
+    ($layer:expr, $dtype:expr, |$v:ident| $body:expr) => {{
+        let (voxels, _kept) = voxels_of($layer, crate::parts::voxel_type($dtype))?;
+        crate::volume::with_voxels!(&voxels, |$v| $body)
+    }};
+}
+
+/// A layer's finite values on the volume's faces, as little-endian f32 bytes: the first round
+/// of the found background.
+#[pyfunction]
+pub fn _layer_border<'py>(
+    py: Python<'py>,
+    layer: &Bound<'py, PyAny>,
+    z0: usize,
+    dims: [usize; 3],
+    dtype: &str,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let chunk = layer_chunk(layer, z0, dims)?;
+    let values = with_layer!(layer, dtype, |v| border_values_in(v, &chunk).or_py()?);
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    Ok(PyBytes::new(py, &bytes))
+}
+
+/// The found background's threshold from every layer's border values (`borders`, in any
+/// order), the volume's finite range `(min, max)` and dims: what one process finds, or None.
+#[pyfunction]
+pub fn _background_threshold(
+    borders: Vec<Vec<u8>>,
+    dims: [usize; 3],
+    range: (f32, f32),
+) -> PyResult<Option<f32>> {
+    let mut values = Vec::new();
+    for b in &borders {
+        if b.len() % 4 != 0 {
+            return Err(PyValueError::new_err(format!(
+                "border values of {} bytes: 4 a value",
+                b.len()
+            )));
+        }
+        values.extend(
+            b.chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+        );
+    }
+    Ok(threshold_of_border(values, range, dims))
+}
+
+/// A layer's labels of its voxels at or below `threshold`, after checking what labelling holds
+/// against `max_memory` (`max_memory=` as `analyze` takes it; None: no check).
+fn labels_of(
+    layer: &Bound<'_, PyAny>,
+    z0: usize,
+    dims: [usize; 3],
+    dtype: &str,
+    threshold: f32,
+    max_memory: Option<&Bound<'_, PyAny>>,
+) -> PyResult<ChunkLabels> {
+    let py = layer.py();
+    let chunk = layer_chunk(layer, z0, dims)?;
+    let most = ChunkLabels::most_bytes(&chunk);
+    let given = PyDict::new(py);
+    given.set_item("max_memory", max_memory)?;
+    let kw = Kwargs::new(py, "analyze_array", Some(&given))?;
+    let budget = crate::params::max_memory(&kw, u64::MAX)?;
+    if most > budget {
+        return Err(PyValueError::new_err(format!(
+            "labelling the background of planes {z0}..{} takes up to {most} bytes, beyond the \
+             task's budget of {budget} (chunks of fewer planes along z, or raise max_memory=)",
+            z0 + chunk.size()[2]
+        )));
+    }
+    with_layer!(layer, dtype, |v| py
+        .detach(|| ChunkLabels::find(v, &chunk, threshold))
+        .or_py())
+}
+
+/// A layer's summary of its components at or below `threshold` (the found background's second
+/// round), as bytes.
+#[pyfunction]
+#[pyo3(signature = (layer, z0, dims, dtype, threshold, max_memory=None))]
+pub fn _layer_summary<'py>(
+    layer: &Bound<'py, PyAny>,
+    z0: usize,
+    dims: [usize; 3],
+    dtype: &str,
+    threshold: f32,
+    max_memory: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let labels = labels_of(layer, z0, dims, dtype, threshold, max_memory)?;
+    Ok(PyBytes::new(layer.py(), &labels.summary().to_bytes()))
+}
+
+/// Every layer's answer (which of its face labels are background) from all their summaries, in
+/// any order: `(z0, answer)` in order of z0.
+#[pyfunction]
+pub fn _background_answers(
+    py: Python<'_>,
+    summaries: Vec<Vec<u8>>,
+    dims: [usize; 3],
+) -> PyResult<Vec<(usize, Py<PyBytes>)>> {
+    let mut join = BackgroundJoin::new(dims);
+    for bytes in &summaries {
+        join.add(ChunkSummary::from_bytes(bytes).or_py()?).or_py()?;
+    }
+    let mut answers = join.finish().or_py()?;
+    answers.sort_by_key(|a| a.chunk().origin()[2]);
+    Ok(answers
+        .iter()
+        .map(|a| {
+            (
+                a.chunk().origin()[2],
+                PyBytes::new(py, &a.to_bytes()).unbind(),
+            )
+        })
+        .collect())
+}
+
+/// A layer's mask of background voxels (the found background's third round), as bytes, from
+/// its `answer`, and how many voxels it holds.
+#[pyfunction]
+#[pyo3(signature = (layer, z0, dims, dtype, threshold, answer, max_memory=None))]
+pub fn _layer_mask<'py>(
+    layer: &Bound<'py, PyAny>,
+    z0: usize,
+    dims: [usize; 3],
+    dtype: &str,
+    threshold: f32,
+    answer: &[u8],
+    max_memory: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Bound<'py, PyBytes>, usize)> {
+    let labels = labels_of(layer, z0, dims, dtype, threshold, max_memory)?;
+    let answer = ChunkAnswer::from_bytes(answer).or_py()?;
+    let mask = labels.mask(&answer).or_py()?;
+    Ok((PyBytes::new(layer.py(), &mask.to_bytes()), mask.count()))
+}
+
+/// How many of a layer's voxels are at or below the threshold the analysis keywords `params`
+/// give as their background (`background=` a value): that rule's round, for its fraction.
+#[pyfunction]
+#[pyo3(signature = (layer, dtype, **params))]
+pub fn _layer_below(
+    py: Python<'_>,
+    layer: &Bound<'_, PyAny>,
+    dtype: &str,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<usize> {
+    let BackgroundRule::Below(t) = analysis_of(py, params)?.background else {
+        return Err(PyValueError::new_err(
+            "_layer_below: background= a value, the voxels at or below it",
+        ));
+    };
+    with_layer!(layer, dtype, |v| Ok(
+        py.detach(|| v.iter().filter(|x| x.to_f32() <= t).count())
+    ))
+}
+
+/// The counts of one pass of the partition over some strips of the stack's rows.
+#[pyclass(module = "slabscope")]
+pub struct PartitionPart {
+    counts: PassCounts,
+}
+
+/// A pass's counts: the first's (the slices) or the second's (the slabs' boundaries).
+#[derive(Clone)]
+enum PassCounts {
+    Slices(SliceCounts),
+    Joints(SlabJoints),
+}
+
+#[pymethods]
+impl PartitionPart {
+    /// The pass: 0 for the slices' counts, 1 for the slabs' boundaries'.
+    #[getter]
+    fn round(&self) -> u8 {
+        match self.counts {
+            PassCounts::Slices(_) => 0,
+            PassCounts::Joints(_) => 1,
+        }
+    }
+
+    fn __add__(&self, other: &Self) -> PyResult<Self> {
+        let mut sum = Self {
+            counts: self.counts.clone(),
+        };
+        sum.add(other)?;
+        Ok(sum)
+    }
+
+    /// `total += part`: `part` added in place.
+    fn __iadd__(&mut self, other: PyRef<'_, Self>) -> PyResult<()> {
+        self.add(&other)
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let bytes = match &self.counts {
+            PassCounts::Slices(c) => c.to_bytes(),
+            PassCounts::Joints(j) => j.to_bytes(),
+        };
+        crate::pickle::reduced(py, "_partition_part_of", (PyBytes::new(py, &bytes),))
+    }
+}
+
+impl PartitionPart {
+    fn add(&mut self, other: &Self) -> PyResult<()> {
+        match (&mut self.counts, &other.counts) {
+            (PassCounts::Slices(a), PassCounts::Slices(b)) => a.add(b.clone()).or_py(),
+            (PassCounts::Joints(a), PassCounts::Joints(b)) => a.add(b).or_py(),
+            _ => Err(PyValueError::new_err(
+                "PartitionPart + PartitionPart: parts of the two passes",
+            )),
+        }
+    }
+}
+
+/// Unpickles a `PartitionPart`: the bytes of either pass, told apart by their name.
+#[pyfunction]
+pub fn _partition_part_of(bytes: &[u8]) -> PyResult<PartitionPart> {
+    let counts = if bytes.starts_with(b"SLABSJ") {
+        PassCounts::Joints(SlabJoints::from_bytes(bytes).map_err(PyValueError::new_err)?)
+    } else {
+        PassCounts::Slices(SliceCounts::from_bytes(bytes).map_err(PyValueError::new_err)?)
+    };
+    Ok(PartitionPart { counts })
+}
+
+/// What every strip's task is told of the background: the rule's threshold (None: no
+/// background) and the masks of the layers around its box (a found background's).
+type Told = (Option<f32>, Vec<Vec<u8>>);
+
+/// A strip's counts, one pass of the partition along `axis`: the first (`slabs` None) or the
+/// second, given the slabs the first found (positional, as every argument before the analysis
+/// keywords `params`, whose names they may share: `axis`, `slabs`). `voxels` is the strip's box of voxels (`origin`,
+/// indexed `[x, y, z]`) as `PartitionSplit.strips` names it.
+#[pyfunction]
+#[pyo3(signature = (voxels, origin, rows, axis, dims, spacing, dtype, range, background, slabs=None, /, **params))]
+#[allow(clippy::too_many_arguments)]
+pub fn _count_strip(
+    py: Python<'_>,
+    voxels: &Bound<'_, PyAny>,
+    origin: [usize; 3],
+    rows: (usize, usize),
+    axis: [f64; 3],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+    background: Told,
+    slabs: Option<Vec<(usize, usize)>>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PartitionPart> {
+    let grid = grid(dims, spacing, dtype, range);
+    let size = shape_of(voxels)?;
+    let held = VoxelBox { origin, size };
+    let volume = with_layer!(voxels, dtype, |v| slabscope::Volume::of_box(&grid, held, v)
+        .or_py()?);
+    let params = analysis_of(py, params)?;
+    let split = StackSplit::new(&volume, axis, &params.partition()).or_py()?;
+    let rows = rows.0..rows.1;
+    if let Some(needed) = split.voxel_box(&volume, &rows).or_py()?
+        && !contains(held, needed)
+    {
+        return Err(PyValueError::new_err(format!(
+            "rows {}..{} read the voxels of {needed:?}, not all in the {held:?} given",
+            rows.start, rows.end
+        )));
+    }
+    let masks = (background.1.iter())
+        .map(|b| ChunkMask::from_bytes(b))
+        .collect::<Result<Vec<_>, _>>()
+        .or_py()?;
+    let background = Background::in_part(dims, params.background, background.0, &masks).or_py()?;
+    let none = slabscope::progress::Monitor::none();
+    let counts = py
+        .detach(|| match slabs {
+            None => split
+                .count(&volume, &background, rows, &none)
+                .map(PassCounts::Slices),
+            Some(slabs) => split
+                .count_boundaries(&volume, &background, rows, &slabs, &none)
+                .map(PassCounts::Joints),
+        })
+        .or_py()?;
+    Ok(PartitionPart { counts })
+}
+
+/// Whether box `a` holds box `b`.
+fn contains(a: VoxelBox, b: VoxelBox) -> bool {
+    (0..3).all(|m| a.origin[m] <= b.origin[m] && b.origin[m] + b.size[m] <= a.origin[m] + a.size[m])
+}
+
+/// The analysis keywords `params` (the others `analyze_array` takes are read by the client).
+fn analysis_of(py: Python<'_>, params: Option<&Bound<'_, PyDict>>) -> PyResult<AnalysisParams> {
+    let kw = Kwargs::new(py, "analyze_array", params)?;
+    Ok(crate::params::analysis_params(&kw)?.0)
+}
+
+/// Whether the analysis keywords `params` run the view search: no axis given, or the views
+/// asked for beside one.
+#[pyfunction]
+#[pyo3(signature = (**params))]
+pub fn _runs_search(py: Python<'_>, params: Option<&Bound<'_, PyDict>>) -> PyResult<bool> {
+    Ok(analysis_of(py, params)?.runs_search())
+}
+
+/// The client's side of the partition in parts: the view search finished from its parts, the
+/// axis, the stack's split into strips, and once the first pass is in, the slabs it found.
+#[pyclass(module = "slabscope")]
+pub struct PartitionSplit {
+    grid: SlabGrid,
+    params: AnalysisParams,
+    views: Option<ViewSearch>,
+    axis: [f64; 3],
+    split: StackSplit,
+    found: Option<SlabsFound>,
+}
+
+/// A strip as `PartitionSplit.strips` names it: its rows, and the box of voxels they read
+/// (`origin`, `size`, `[x, y, z]`; None when they read none).
+type Strip = ((usize, usize), Option<([usize; 3], [usize; 3])>);
+
+#[pymethods]
+impl PartitionSplit {
+    /// The split of the volume of `probe`'s geometry (any volume of it: its spacing and affine
+    /// are read), dims `[x, y, z]`, held type `dtype` and finite `range`, by the analysis
+    /// keywords `params`, along the axis they name or the best of the view search finished from
+    /// its rounds' sums (`paper`, `shifted`, `refined` as `_analyze_with_parts` takes them).
+    /// Keywords that do not run in parts are refused: `explain`, the gain ranking, a resolution
+    /// other than every voxel.
+    #[new]
+    #[pyo3(signature = (probe, dims, dtype, range, paper=None, shifted=None, refined=None, /, **params))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        probe: &Bound<'_, Volume>,
+        dims: [usize; 3],
+        dtype: &str,
+        range: (f32, f32, u64),
+        paper: Option<PyRef<'_, ViewPart>>,
+        shifted: Option<PyRef<'_, ViewPart>>,
+        refined: Option<Vec<Refined<'_>>>,
+        params: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let geometry = probe.get().inner(py)?;
+        let mut grid = grid(dims, geometry.spacing(), dtype, range);
+        grid.transform = *geometry.transform();
+        let volume = empty(&grid)?;
+        let analysis = checked(py, params)?;
+        let views = match &paper {
+            Some(paper) => {
+                let rounds = crate::parts::rounds(py, &volume, params)?;
+                let shifted = shifted.as_deref();
+                Some(views_of(py, &rounds, &volume, paper, shifted, refined)?)
+            }
+            None => None,
+        };
+        let axis = partition_axis(&volume, &analysis, views.as_ref()).or_py()?;
+        let split = StackSplit::new(&volume, axis, &analysis.partition()).or_py()?;
+        Ok(Self {
+            grid,
+            params: analysis,
+            views,
+            axis,
+            split,
+            found: None,
+        })
+    }
+
+    /// The axis the partition runs along (a unit physical direction).
+    #[getter]
+    fn axis(&self) -> (f64, f64, f64) {
+        (self.axis[0], self.axis[1], self.axis[2])
+    }
+
+    /// The stack's rows cut in `count` strips (fewer when there are fewer rows), each with the
+    /// box of voxels its task holds.
+    fn strips(&self, count: usize) -> PyResult<Vec<Strip>> {
+        let volume = empty(&self.grid)?;
+        (self.split.strips(count).into_iter())
+            .map(|rows| {
+                let held = self.split.voxel_box(&volume, &rows).or_py()?;
+                Ok(((rows.start, rows.end), held.map(|b| (b.origin, b.size))))
+            })
+            .collect()
+    }
+
+    /// The slabs the first pass's `counts` (every strip's added) find, kept for `analysis`;
+    /// `background` is the threshold a found background's rounds gave and how many voxels the
+    /// background holds (the layers' counts added), for its report.
+    fn slabs(
+        &mut self,
+        py: Python<'_>,
+        counts: &PartitionPart,
+        background: (Option<f32>, usize),
+    ) -> PyResult<Vec<(usize, usize)>> {
+        let PassCounts::Slices(counts) = &counts.counts else {
+            return Err(PyValueError::new_err(
+                "slabs: the first pass's counts, not the second's",
+            ));
+        };
+        let volume = empty(&self.grid)?;
+        let none = slabscope::progress::Monitor::none();
+        let len = self.grid.dims.iter().product();
+        let (value, count) = background;
+        let background = Background::summarized(self.params.background, value, count, len);
+        let found = py
+            .detach(|| (self.split).slabs(&volume, &background, counts.clone(), &none))
+            .or_py()?;
+        let slabs = found.slabs.clone();
+        self.found = Some(found);
+        Ok(slabs)
+    }
+
+    /// The analysis: the slabs found, with the NMI at their boundaries from the second pass's
+    /// `joints` (every strip's added; None for a single slab), named `name`. Its volume holds no
+    /// voxel (its grid alone): `to_dict()`, the views, slabs and partition are there; labels and
+    /// pictures need a volume of the voxels.
+    #[pyo3(signature = (joints, name, /, **params))]
+    fn analysis(
+        &self,
+        py: Python<'_>,
+        joints: Option<&PartitionPart>,
+        name: String,
+        params: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<crate::analysis::Analysis> {
+        let found = (self.found.as_ref())
+            .ok_or_else(|| PyValueError::new_err("analysis: the slabs are not found yet"))?;
+        let joints = match joints.map(|j| &j.counts) {
+            None => None,
+            Some(PassCounts::Joints(j)) => Some(j.clone()),
+            Some(PassCounts::Slices(_)) => {
+                return Err(PyValueError::new_err(
+                    "analysis: the second pass's counts, not the first's",
+                ));
+            }
+        };
+        let partition = self.split.finish(found, joints).or_py()?;
+        let volume = empty(&self.grid)?;
+        let analysis =
+            analyze_with_partition(&volume, &self.params, self.views.clone(), partition).or_py()?;
+        let analysed = Analysed {
+            params: self.params.clone(),
+            plan: Plan::at(std::sync::Arc::new(volume.clone())),
+            analysis,
+        };
+        let json = slabscope::report::to_json(&analysed.report(&name, &volume).or_py()?).or_py()?;
+        let g = &self.grid;
+        let finest = Finest {
+            dims: g.dims,
+            spacing: g.spacing,
+            transform: g.transform,
+        };
+        let held = Bound::new(py, Volume::of_grid(finest, g.voxel_type, name))?;
+        let params = match params {
+            Some(d) => d.copy()?,
+            None => PyDict::new(py),
+        };
+        crate::analysis::Analysis::pending(py, held.unbind(), params.unbind(), json)
+    }
+}
+
+/// The analysis keywords of `params`, every keyword `analyze_array` passes on checked as
+/// `analyze` checks them; those that do not run in parts refused.
+fn checked(py: Python<'_>, params: Option<&Bound<'_, PyDict>>) -> PyResult<AnalysisParams> {
+    let kw = Kwargs::new(py, "analyze_array", params)?;
+    let (analysis, _) = crate::params::analysis_params(&kw)?;
+    if let Some(explain) = kw.get::<Bound<'_, PyAny>>("explain")?
+        && explain.is_truthy()?
+    {
+        return Err(PyValueError::new_err(
+            "explain: not in parts (its numbers read the voxels where they are): analyze a Volume",
+        ));
+    }
+    let (resolution, _) = crate::params::resolution(&kw)?;
+    if resolution != slabscope::volume::Resolution::Full {
+        return Err(PyValueError::new_err(
+            "resolution: analyze_array counts every voxel (\"full\"); for a coarser level, analyze \
+             a Volume of that level",
+        ));
+    }
+    crate::params::max_memory(&kw, 0)?;
+    crate::params::threads(&kw)?;
+    kw.finish()?;
+    Ok(analysis)
+}
