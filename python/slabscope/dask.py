@@ -622,34 +622,29 @@ def _partition(
     probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **geometry)
     split = slabscope._slabscope.PartitionSplit(probe, dims, held_type, range_, *views, **params)
     strips = split.strips(len(layers))
-    boxes: List[List[Any]] = []
+    # Each strip's box as pieces of the layers it crosses (a layer's index and the box's
+    # planes, rows and columns in it), and those layers' masks.
+    cuts: List[List[Tuple[int, Planes, Planes, Planes]]] = []
     near: List[List[Any]] = []
     for _, box in strips:
-        these: List[Any] = []
-        masks: List[Any] = []
+        these: List[Tuple[int, Planes, Planes, Planes]] = []
         if box is not None:
             (x0, y0, z0), (sx, sy, sz) = box
-            for k, (layer, (a, b)) in enumerate(zip(layers, bounds)):
+            for k, (a, b) in enumerate(bounds):
                 lo, hi = max(a, z0), min(b, z0 + sz)
                 if lo < hi:
-                    these.append(client.submit(_box_of, layer, (lo - a, hi - a), (y0, y0 + sy), (x0, x0 + sx), pure=False))
-                    masks += background[1][k : k + 1]
-        boxes.append(these)
-        near.append(masks)
-    task = (split.axis, grid, background[0], params)
-    try:
-        total = _strip_round(client, strips, boxes, near, task, None, report)
-        slabs = split.slabs(total, (background[0], background[2]))
-        joints = None
-        if len(slabs) > 1:
-            joints = _strip_round(client, strips, boxes, near, task, slabs, report)
-        else:
-            for _ in strips:
-                report()
-    finally:
-        for these in boxes:
-            for future in these:
-                future.release()
+                    these.append((k, (lo - a, hi - a), (y0, y0 + sy), (x0, x0 + sx)))
+        cuts.append(these)
+        near.append([background[1][k] for k, *_ in these] if background[1] else [])
+    told = (split.axis, grid, background[0], params)
+    total = _strip_round(client, layers, strips, (cuts, near), told, None, report)
+    slabs = split.slabs(total, (background[0], background[2]))
+    joints = None
+    if len(slabs) > 1:
+        joints = _strip_round(client, layers, strips, (cuts, near), told, slabs, report)
+    else:
+        for _ in strips:
+            report()
     return split.analysis(joints, "array", **params)
 
 
@@ -666,26 +661,36 @@ Told = Tuple[Tuple[float, float, float], Grid, Optional[float], Options]
 
 def _strip_round(
     client: Any,
+    layers: List[Any],
     strips: List[Tuple[Planes, Any]],
-    boxes: List[List[Any]],
-    near: List[List[Any]],
+    around: Tuple[List[List[Tuple[int, Planes, Planes, Planes]]], List[List[Any]]],
     told: Told,
     slabs: Optional[List[Planes]],
     report: Callable[[], None],
 ) -> Any:
-    """A pass of the partition: a task a strip, its parts added on the client as they come."""
+    """A pass of the partition: a task a strip, given the pieces of its box cut from the
+    layers it crosses (where they lie, for this pass: released as it ends, so that the
+    workers hold one pass's boxes at most beside the layers) and their masks, its parts added
+    on the client as they come."""
     from distributed import as_completed
 
-    tasks = [client.submit(_strip, rows, box, told, masks, slabs, *these, pure=False) for (rows, box), these, masks in zip(strips, boxes, near)]
-    total = None
-    for future in as_completed(tasks):  # type: ignore[no-untyped-call]
-        part = future.result()
-        if total is None:
-            total = part
-        else:
-            total += part
-        report()
-    return total
+    cuts, near = around
+    pieces = [[client.submit(_box_of, layers[k], z, y, x, pure=False) for k, z, y, x in these] for these in cuts]
+    try:
+        tasks = [client.submit(_strip, rows, box, told, masks, slabs, *these, pure=False) for (rows, box), these, masks in zip(strips, pieces, near)]
+        total = None
+        for future in as_completed(tasks):  # type: ignore[no-untyped-call]
+            part = future.result()
+            if total is None:
+                total = part
+            else:
+                total += part
+            report()
+        return total
+    finally:
+        for these in pieces:
+            for future in these:
+                future.release()
 
 
 def _strip(rows: Planes, box: Any, told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:
