@@ -169,6 +169,35 @@ pub fn threads(kw: &Kwargs<'_>) -> PyResult<Option<rayon::ThreadPool>> {
     given(kw, &[&table::THREADS])?.thread_pool().or_py()
 }
 
+/// `threads`: how many threads (`None`: all of them), read and checked, no pool made.
+pub fn thread_count(kw: &Kwargs<'_>) -> PyResult<Option<usize>> {
+    given(kw, &[&table::THREADS])?.threads().or_py()
+}
+
+/// `threads`: a pool of that many threads kept for the process's later calls (a task of
+/// `slabscope.dask.analyze_array` a call, hundreds of them: one pool each would start and stop
+/// its threads every time), `None` for all of them.
+pub fn shared_threads(kw: &Kwargs<'_>) -> PyResult<Option<std::sync::Arc<rayon::ThreadPool>>> {
+    use std::sync::{Arc, Mutex, PoisonError};
+    static POOLS: Mutex<Vec<(usize, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
+    let Some(n) = thread_count(kw)? else {
+        return Ok(None);
+    };
+    let mut pools = POOLS.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some((_, pool)) = pools.iter().find(|(m, _)| *m == n) {
+        return Ok(Some(Arc::clone(pool)));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .map_err(|e| {
+            pyo3::exceptions::PyRuntimeError::new_err(format!("a pool of {n} threads: {e}"))
+        })?;
+    let pool = Arc::new(pool);
+    pools.push((n, Arc::clone(&pool)));
+    Ok(Some(pool))
+}
+
 /// `max_memory`: bytes as a number or as text (`"8G"`), or `default`.
 pub fn max_memory(kw: &Kwargs<'_>, default: u64) -> PyResult<u64> {
     let given = given(kw, &[&table::MAX_MEMORY])?;

@@ -209,13 +209,27 @@ pub fn _count_view_slab(
         )));
     }
     let round = round_of(axes, samples);
+    let pool = task_threads(py, params)?;
     let counts = py
-        .detach(|| rounds.count_slab(&slab, &round, planes.0..planes.1))
+        .detach(|| {
+            crate::run::in_pool(pool.as_deref(), || {
+                rounds.count_slab(&slab, &round, planes.0..planes.1)
+            })
+        })
         .or_py()?;
     Ok(ViewPart {
         round: round.kind(),
         counts,
     })
+}
+
+/// The pool of the `threads=` the analysis keywords `params` give a task (kept for the
+/// process's later tasks), `None` for all the machine's threads.
+pub(crate) fn task_threads(
+    py: Python<'_>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Option<std::sync::Arc<rayon::ThreadPool>>> {
+    crate::params::shared_threads(&Kwargs::new(py, "analyze_array", params)?)
 }
 
 /// A volume of the grid holding no voxel: what the rounds are made from on the client.

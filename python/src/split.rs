@@ -319,8 +319,8 @@ pub fn _count_strip(
     let held = VoxelBox { origin, size };
     let volume = with_layer!(voxels, dtype, |v| slabscope::Volume::of_box(&grid, held, v)
         .or_py()?);
-    let params = analysis_of(py, params)?;
-    let split = StackSplit::new(&volume, axis, &params.partition()).or_py()?;
+    let analysis = analysis_of(py, params)?;
+    let split = StackSplit::new(&volume, axis, &analysis.partition()).or_py()?;
     let rows = rows.0..rows.1;
     if let Some(needed) = split.voxel_box(&volume, &rows).or_py()?
         && !contains(held, needed)
@@ -334,16 +334,20 @@ pub fn _count_strip(
         .map(|b| ChunkMask::from_bytes(b))
         .collect::<Result<Vec<_>, _>>()
         .or_py()?;
-    let background = Background::in_part(dims, params.background, background.0, &masks).or_py()?;
+    let background =
+        Background::in_part(dims, analysis.background, background.0, &masks).or_py()?;
     let none = slabscope::progress::Monitor::none();
+    let pool = crate::parts::task_threads(py, params)?;
     let counts = py
-        .detach(|| match slabs {
-            None => split
-                .count(&volume, &background, rows, &none)
-                .map(PassCounts::Slices),
-            Some(slabs) => split
-                .count_boundaries(&volume, &background, rows, &slabs, &none)
-                .map(PassCounts::Joints),
+        .detach(|| {
+            crate::run::in_pool(pool.as_deref(), || match slabs {
+                None => split
+                    .count(&volume, &background, rows, &none)
+                    .map(PassCounts::Slices),
+                Some(slabs) => split
+                    .count_boundaries(&volume, &background, rows, &slabs, &none)
+                    .map(PassCounts::Joints),
+            })
         })
         .or_py()?;
     Ok(PartitionPart { counts })
@@ -544,7 +548,7 @@ fn checked(py: Python<'_>, params: Option<&Bound<'_, PyDict>>) -> PyResult<Analy
         ));
     }
     crate::params::max_memory(&kw, 0)?;
-    crate::params::threads(&kw)?;
+    crate::params::thread_count(&kw)?;
     kw.finish()?;
     Ok(analysis)
 }

@@ -260,6 +260,10 @@ def test_no_task_holds_the_whole_array(client):
         slabscope.dask.analyze_array(client, array, axes="zyx", resolution=1)
     with pytest.raises(TypeError, match="unexpected keyword argument 'slab'"):
         slabscope.dask.analyze_array(client, array, axes="zyx", slab=3)
+    # Each task counts in a pool of threads=, kept by its worker process for the next tasks.
+    assert slabscope.dask.analyze_array(client, array, axes="zyx", threads=1, slabs=3).to_dict() == one.to_dict()
+    with pytest.raises(ValueError, match="threads"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", threads=0)
 
 
 @pytest.mark.parametrize("params", [{"background": 60}, {"axis": "x", "slabs": 3}, {"method": "optimal", "slabs": 2}], ids=["threshold", "axis", "optimal"])
