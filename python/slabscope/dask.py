@@ -15,7 +15,8 @@ order of the volumes: exactly the rows ``slabscope triage --json`` prints.
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from contextlib import contextmanager
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -265,21 +266,19 @@ def _geometry(spacing: Any, affine: Any, stored: Optional[Tuple[float, ...]]) ->
     return tuple(probe.spacing), given
 
 
-def _layers(client: Any, array: Any, reader: Optional[Tuple[Any, List[Optional[str]]]]) -> Tuple[List[Any], List[Planes]]:
+def _layers(client: Any, array: Any, reader: Optional[Tuple[Any, List[Optional[str]]]]) -> List[Any]:
     """The array's chunk layers along z as futures on ``client``'s workers, each a layer's
-    voxel planes ([z, y, x], whole planes, in the held type) held there until released, and
-    the planes ``(start, end)`` each holds. Each chunk is read once (issue #44): from a store
-    (``reader``), a task a layer reads its chunks in one call; from a dask array, one graph
-    for all layers, each chunk computed once and gathered into its layer."""
-    cuts = [int(c) for c in np.cumsum((0,) + array.chunks[0])]
-    bounds = list(zip(cuts, cuts[1:]))
+    voxel planes ([z, y, x], whole planes, in the held type) held there until released. Each
+    chunk read once (issue #44): from a store (``reader``), a task a layer reads its chunks in
+    one call; from a dask array, one graph for all layers, each chunk computed once and
+    gathered into its layer."""
     if reader is not None:
         stored, names = reader
         held = array.dtype.name
-        futures = [client.submit(_read_layer, stored, names, held, a, b, pure=False) for a, b in bounds]
-    else:
-        futures = client.compute(list(array.rechunk({1: -1, 2: -1}).to_delayed().ravel()))
-    return futures, bounds
+        cuts = [int(c) for c in np.cumsum((0,) + array.chunks[0])]
+        return [client.submit(_read_layer, stored, names, held, a, b, pure=False) for a, b in zip(cuts, cuts[1:])]
+    futures: List[Any] = client.compute(list(array.rechunk({1: -1, 2: -1}).to_delayed().ravel()))
+    return futures
 
 
 def _read_layer(stored: Any, names: List[Optional[str]], held: str, start: int, end: int) -> np.ndarray:
@@ -290,6 +289,79 @@ def _read_layer(stored: Any, names: List[Optional[str]], held: str, start: int, 
     kept = [n for n in names if n]
     planes = np.asarray(stored[index]).transpose([kept.index(a) for a in "zyx"])
     return np.ascontiguousarray(planes.astype(held, copy=False))
+
+
+#: The share of the workers' memory limits the array may take to be kept whole between rounds.
+_KEEP_SHARE = 0.5
+
+
+def _fits(client: Any, nbytes: int) -> bool:
+    """Whether an array of ``nbytes`` fits within :data:`_KEEP_SHARE` of the workers' Dask
+    memory limits added up (a worker without a limit: it fits)."""
+    limits = client.run(lambda dask_worker: getattr(getattr(dask_worker, "memory_manager", None), "memory_limit", None) or getattr(dask_worker, "memory_limit", None))
+    if not limits or not all(limits.values()):
+        return True
+    return nbytes <= _KEEP_SHARE * sum(int(v) for v in limits.values())
+
+
+class _Layers:
+    """The array's chunk layers along z on the workers. Kept when the array fits within
+    :data:`_KEEP_SHARE` of the workers' memory limits: read once, at the first round, and held
+    until :meth:`release`; else read again for each round (each chunk once a round) and
+    released as the round ends, so that a volume beyond the cluster's memory is analysed
+    from its store rather than from Dask's spill."""
+
+    def __init__(self, client: Any, array: Any, reader: Optional[Tuple[Any, List[Optional[str]]]]) -> None:
+        self.client, self.array, self.reader = client, array, reader
+        cuts = [int(c) for c in np.cumsum((0,) + array.chunks[0])]
+        self.bounds: List[Planes] = list(zip(cuts, cuts[1:]))
+        self.keep = _fits(client, int(array.nbytes))
+        self._kept: Optional[List[Any]] = None
+        self._pieces: Dict[Tuple[Planes, ...], List[List[Any]]] = {}
+
+    def __len__(self) -> int:
+        return len(self.bounds)
+
+    @contextmanager
+    def round(self) -> Iterator[List[Any]]:
+        """The layers' futures for a round: the kept ones, or read for this round alone."""
+        if self.keep:
+            if self._kept is None:
+                self._kept = _layers(self.client, self.array, self.reader)
+            yield self._kept
+            return
+        futures = _layers(self.client, self.array, self.reader)
+        try:
+            yield futures
+        finally:
+            for future in futures:
+                future.release()
+
+    @contextmanager
+    def pieces(self, held: List[Planes]) -> Iterator[List[List[Any]]]:
+        """For each slab's held planes, the futures of its planes for a round (:func:`_pieces`):
+        cut once for the call from kept layers, else for this round from its own read."""
+        if self.keep:
+            with self.round() as layers:
+                key = tuple(held)
+                if key not in self._pieces:
+                    self._pieces[key] = _pieces(self.client, layers, self.bounds, held)
+                yield self._pieces[key]
+            return
+        with self.round() as layers:
+            pieces = _pieces(self.client, layers, self.bounds, held)
+            try:
+                yield pieces
+            finally:
+                for these in pieces:
+                    for future in these:
+                        future.release()
+
+    def release(self) -> None:
+        """Releases what is kept (an error's traceback would keep the futures alive)."""
+        pieces = [f for slabs in self._pieces.values() for these in slabs for f in these]
+        for future in (self._kept or []) + pieces:
+            future.release()
 
 
 def _range_of(layer: np.ndarray) -> Tuple[float, float, int]:
@@ -345,7 +417,7 @@ def _count(first: int, planes: Planes, grid: Grid, round: Round, params: Options
 
 def _round(
     client: Any,
-    pieces: List[List[Any]],
+    layers: _Layers,
     slabs: List[Planes],
     held: List[Planes],
     grid: Grid,
@@ -353,25 +425,26 @@ def _round(
     params: Options,
     report: Callable[[], None],
 ) -> Any:
-    """A round of tasks, one a slab (``pieces`` the futures of its voxel planes, from plane
-    ``held``'s first), added up on the client as they come; ``round`` is ``(samples, axes)``:
+    """A round of tasks, one a slab (given the futures of its voxel planes from ``layers``,
+    from plane ``held``'s first), added up on the client as they come; ``round`` is ``(samples, axes)``:
     the paper samples of a shifted round (else None) and a refinement step's axes (else None,
     the sphere's)."""
     from distributed import as_completed
 
-    tasks: List[Any] = []
-    for planes, (first, _), these in zip(slabs, held, pieces):
-        tasks.append(client.submit(_count, first, planes, grid, round, params, *these, pure=False))
-    total = None
-    for future in as_completed(tasks):  # type: ignore[no-untyped-call]
-        part = future.result()
-        if total is None:
-            total = part
-        else:
-            # In place: the total is never copied (issue #44).
-            total += part
-        report()
-    return total
+    with layers.pieces(held) as pieces:
+        tasks: List[Any] = []
+        for planes, (first, _), these in zip(slabs, held, pieces):
+            tasks.append(client.submit(_count, first, planes, grid, round, params, *these, pure=False))
+        total = None
+        for future in as_completed(tasks):  # type: ignore[no-untyped-call]
+            part = future.result()
+            if total is None:
+                total = part
+            else:
+                # In place: the total is never copied (issue #44).
+                total += part
+            report()
+        return total
 
 
 def analyze_array(
@@ -397,8 +470,9 @@ def analyze_array(
     or ``affine`` (4×4, voxel index ``(x, y, z)`` to RAS+ mm, as nibabel gives it) are taken as
     ``Volume.from_array`` takes them, and override the store's.
 
-    Each chunk is read once: into layers of whole planes (a chunk layer along z each), held on
-    the workers until the call returns (the whole array spread over them). Rounds: the range
+    The chunks are read into layers of whole planes (a chunk layer along z each): once, held on
+    the workers until the call returns, where the array fits within half their Dask memory
+    limits; else once a round, released after it. Rounds: the range
     (a task a layer); the view search, a task a slab of the chunks along z (with the planes
     around it that its samples read): the paper's lattices, the shifted lattices (with
     phases), with ``refine=True`` two such rounds a step of the refinement (the axes each step
@@ -414,12 +488,14 @@ def analyze_array(
     array, held_type, stored, reader = _as_xyz(source, axes)
     spacing, geometry = _geometry(spacing, affine, stored)
     nz, ny, nx = array.shape
-    # Each chunk is read once in the whole call: into its layer of whole planes, held on the
-    # workers until the partition's last round has taken its boxes from them (design.md).
-    layers, bounds = _layers(client, array, reader)
-    kept: List[Any] = list(layers)
+    # Each chunk is read into its layer of whole planes, once in the whole call where the
+    # array fits the workers' memory (held until the partition's last round has taken its
+    # boxes from them), else once a round (design.md).
+    layers = _Layers(client, array, reader)
+    bounds = layers.bounds
     try:
-        low, high, finite = _range(client, layers)
+        with layers.round() as current:
+            low, high, finite = _range(client, current)
         grid: Grid = ([nx, ny, nz], list(spacing), held_type, (float(low), float(high), int(finite)))
         cells = max(nz - 1, 1)
         cuts = sorted({min(b, cells) for _, b in bounds} | {0, cells})
@@ -430,18 +506,14 @@ def analyze_array(
         if not slabscope._slabscope._runs_search(**params):
             slabs = []
         held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, **params)
-        pieces = _pieces(client, layers, bounds, held)
-        kept += [f for these in pieces for f in these]
-        return _rounds(client, (layers, bounds), pieces, slabs, held, shifted, grid, geometry, params, progress)
+        return _rounds(client, layers, slabs, held, shifted, grid, geometry, params, progress)
     finally:
-        for future in kept:
-            future.release()
+        layers.release()
 
 
 def _rounds(
     client: Any,
-    held_layers: Tuple[List[Any], List[Planes]],
-    pieces: List[List[Any]],
+    layers: "_Layers",
     slabs: List[Planes],
     held: List[Planes],
     shifted: bool,
@@ -452,7 +524,6 @@ def _rounds(
 ) -> Any:
     """The view search's rounds of tasks, then the background's and the partition's, reporting
     to ``progress``."""
-    layers = held_layers[0]
     step = len(slabs) * (2 if shifted else 1)
     refine = bool(params.get("refine")) and bool(slabs)
     # Tasks foreseen and not yet done: the sphere's rounds, the background's three rounds of a
@@ -472,25 +543,25 @@ def _rounds(
             progress(phase, heard[0])
 
     def end(views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]]) -> Any:
-        whole = _after_views(client, held_layers, grid, geometry, views, params, report)
+        whole = _after_views(client, layers, grid, geometry, views, params, report)
         ahead[0] = 1
         report("partition in parts")
         return whole
 
     if not slabs:
         return end((None, None, []))
-    paper = _round(client, pieces, slabs, held, grid, (None, None), params, report)
+    paper = _round(client, layers, slabs, held, grid, (None, None), params, report)
     more = None
     if shifted:
         samples = slabscope._slabscope._paper_samples(paper, *grid, **params)
-        more = _round(client, pieces, slabs, held, grid, (samples, None), params, report)
+        more = _round(client, layers, slabs, held, grid, (samples, None), params, report)
     refined: List[Tuple[Any, Any, Any]] = []
     if refine:
 
         def count(axes: List[Tuple[float, float, float]], samples: Optional[List[int]]) -> Any:
             if samples is None:
                 ahead[0] += step
-            total = _round(client, pieces, slabs, held, grid, (samples, axes), params, lambda: report("refining in parts"))
+            total = _round(client, layers, slabs, held, grid, (samples, axes), params, lambda: report("refining in parts"))
             refined.append((axes, samples, total))
             return total
 
@@ -520,7 +591,7 @@ Found = Tuple[Optional[float], List[Any], int]
 
 def _after_views(
     client: Any,
-    held_layers: Tuple[List[Any], List[Planes]],
+    layers: _Layers,
     grid: Grid,
     geometry: Options,
     views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]],
@@ -528,31 +599,31 @@ def _after_views(
     report: Callable[[str], None],
 ) -> Any:
     """The background's rounds, then the partition's, then the analysis."""
-    found = _background(client, held_layers, grid, params, lambda: report("background in parts"))
+    found = _background(client, layers, grid, params, lambda: report("background in parts"))
     try:
-        return _partition(client, held_layers, grid, geometry, views, found, params, lambda: report("partition in parts"))
+        return _partition(client, layers, grid, geometry, views, found, params, lambda: report("partition in parts"))
     finally:
         for future in found[1]:
             future.release()
 
 
-def _background(client: Any, held_layers: Tuple[List[Any], List[Planes]], grid: Grid, params: Options, report: Callable[[], None]) -> Found:
+def _background(client: Any, layers: _Layers, grid: Grid, params: Options, report: Callable[[], None]) -> Found:
     """The background by the rule the keywords name, in rounds of a task a layer. A found one
     (the default) in three: each layer's border values, the summary of its components at or
     below the threshold they give (the client joining the summaries), its mask. A threshold's
     in one: each layer's voxels at or below it, counted for the fraction."""
-    layers, bounds = held_layers
     dims, _, _, range_ = grid
     rule = _background_rule(params)
-    starts = [a for a, _ in bounds]
+    starts = [a for a, _ in layers.bounds]
 
     def each(task: Callable[..., Any], *given: Any) -> List[Any]:
-        futures = [client.submit(task, layer, a, grid, params, *given, pure=False) for layer, a in zip(layers, starts)]
-        done = []
-        for future in futures:
-            done.append(future.result())
-            report()
-        return done
+        with layers.round() as current:
+            futures = [client.submit(task, layer, a, grid, params, *given, pure=False) for layer, a in zip(current, starts)]
+            done = []
+            for future in futures:
+                done.append(future.result())
+                report()
+            return done
 
     if rule == "none":
         return None, [], 0
@@ -564,11 +635,12 @@ def _background(client: Any, held_layers: Tuple[List[Any], List[Planes]], grid: 
             report()
         return None, [], 0
     answers = dict(slabscope._slabscope._background_answers(each(_labelled, threshold), dims))
-    masks = [client.submit(_labelled, layer, a, grid, params, threshold, answers[a], pure=False) for layer, a in zip(layers, starts)]
-    count = 0
-    for future in masks:
-        count += client.submit(_second, future, pure=False).result()  # a refusal raises here
-        report()
+    with layers.round() as current:
+        masks = [client.submit(_labelled, layer, a, grid, params, threshold, answers[a], pure=False) for layer, a in zip(current, starts)]
+        count = 0
+        for future in masks:
+            count += client.submit(_second, future, pure=False).result()  # a refusal raises here
+            report()
     return threshold, masks, count
 
 
@@ -605,7 +677,7 @@ def _labelled(layer: np.ndarray, z0: int, grid: Grid, params: Options, threshold
 
 def _partition(
     client: Any,
-    held_layers: Tuple[List[Any], List[Planes]],
+    layers: _Layers,
     grid: Grid,
     geometry: Options,
     views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]],
@@ -617,7 +689,6 @@ def _partition(
     as layers), each task gathering the box of voxels its rows read from the layers it crosses
     (with their background masks), the client adding the parts as they come; then the
     analysis, on the client, of a volume holding no voxel."""
-    layers, bounds = held_layers
     dims, _, held_type, range_ = grid
     probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **geometry)
     split = slabscope._slabscope.PartitionSplit(probe, dims, held_type, range_, *views, **params)
@@ -630,7 +701,7 @@ def _partition(
         these: List[Tuple[int, Planes, Planes, Planes]] = []
         if box is not None:
             (x0, y0, z0), (sx, sy, sz) = box
-            for k, (a, b) in enumerate(bounds):
+            for k, (a, b) in enumerate(layers.bounds):
                 lo, hi = max(a, z0), min(b, z0 + sz)
                 if lo < hi:
                     these.append((k, (lo - a, hi - a), (y0, y0 + sy), (x0, x0 + sx)))
@@ -661,7 +732,7 @@ Told = Tuple[Tuple[float, float, float], Grid, Optional[float], Options]
 
 def _strip_round(
     client: Any,
-    layers: List[Any],
+    layers: _Layers,
     strips: List[Tuple[Planes, Any]],
     around: Tuple[List[List[Tuple[int, Planes, Planes, Planes]]], List[List[Any]]],
     told: Told,
@@ -675,22 +746,23 @@ def _strip_round(
     from distributed import as_completed
 
     cuts, near = around
-    pieces = [[client.submit(_box_of, layers[k], z, y, x, pure=False) for k, z, y, x in these] for these in cuts]
-    try:
-        tasks = [client.submit(_strip, rows, box, told, masks, slabs, *these, pure=False) for (rows, box), these, masks in zip(strips, pieces, near)]
-        total = None
-        for future in as_completed(tasks):  # type: ignore[no-untyped-call]
-            part = future.result()
-            if total is None:
-                total = part
-            else:
-                total += part
-            report()
-        return total
-    finally:
-        for these in pieces:
-            for future in these:
-                future.release()
+    with layers.round() as current:
+        pieces = [[client.submit(_box_of, current[k], z, y, x, pure=False) for k, z, y, x in these] for these in cuts]
+        try:
+            tasks = [client.submit(_strip, rows, box, told, masks, slabs, *these, pure=False) for (rows, box), these, masks in zip(strips, pieces, near)]
+            total = None
+            for future in as_completed(tasks):  # type: ignore[no-untyped-call]
+                part = future.result()
+                if total is None:
+                    total = part
+                else:
+                    total += part
+                report()
+            return total
+        finally:
+            for these in pieces:
+                for future in these:
+                    future.release()
 
 
 def _strip(rows: Planes, box: Any, told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:

@@ -371,3 +371,38 @@ def test_each_chunk_is_read_once_in_a_call(client, tmp_path):
     while held() and time.monotonic() < deadline:
         time.sleep(0.05)
     assert held() == 0
+
+
+def test_an_array_beyond_the_workers_memory_is_read_once_a_round(client, tmp_path, monkeypatch):
+    """Where the array does not fit within the share of the workers' memory limits it may
+    take, its layers are not kept between rounds: each round reads the chunks it needs again
+    (at most once: the range, the view search's two rounds, the background's three, the
+    partition's two; Dask computes a chunk once for two rounds when the first's is still in
+    memory as the second asks for it) and releases them, and the answer is the same."""
+    zyx = voxels()
+    marks = str(tmp_path)
+
+    def chunk(block: np.ndarray, block_info: Any = None) -> np.ndarray:
+        k, j, i = block_info[0]["chunk-location"]
+        with open(os.path.join(marks, f"read-{k}-{j}-{i}"), "a") as f:
+            f.write("x")
+        return block
+
+    monkeypatch.setattr(slabscope.dask, "_KEEP_SHARE", 0.0)
+    array = da.from_array(zyx, chunks=(8, 13, 15)).map_blocks(chunk, dtype=zyx.dtype)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", slabs=3)
+    assert got.to_dict() == slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3).to_dict()
+    reads = {name: len(open(os.path.join(marks, name)).read()) for name in os.listdir(marks)}
+    assert len(reads) == 5 * 2 * 2 and max(reads.values()) <= 1 + 2 + 3 + 2
+    assert sum(reads.values()) > 2 * len(reads), "read again in later rounds"
+    # From a store, a task a layer each round.
+    zarr = pytest.importorskip("zarr")
+    store = str(tmp_path / "v.zarr")
+    stored = zarr.open_array(store, mode="w", shape=zyx.shape, chunks=(10, 26, 30), dtype=zyx.dtype)
+    stored[:] = zyx
+    assert slabscope.dask.analyze_array(client, store, axes="zyx", slabs=3).to_dict() == got.to_dict()
+    held = lambda: sum(client.run(lambda dask_worker: len(dask_worker.data)).values())  # noqa: E731
+    deadline = time.monotonic() + 30
+    while held() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert held() == 0
