@@ -409,8 +409,8 @@ class PartitionSplit:
     @property
     def axis(self) -> Tuple[float, float, float]: ...
     def strips(
-        self, count: int
-    ) -> list[Tuple[Tuple[int, int], Optional[Tuple[list[int], list[int]]]]]: ...
+        self, count: int, planes: Sequence[Tuple[int, int]]
+    ) -> list[Tuple[Tuple[int, int], list[Tuple[int, list[int], list[int]]]]]: ...
     def slabs(
         self, counts: PartitionPart, background: Tuple[Optional[float], int]
     ) -> list[Tuple[int, int]]: ...
@@ -419,7 +419,7 @@ class PartitionSplit:
 def _partition_part_of(bytes: bytes) -> PartitionPart: ...
 def _count_strip(
     voxels: np.ndarray,
-    origin: Sequence[int],
+    boxes: Sequence[Tuple[Tuple[int, int], Sequence[int], Sequence[int]]],
     rows: Tuple[int, int],
     axis: Sequence[float],
     dims: Sequence[int],

@@ -692,27 +692,14 @@ def _partition(
     dims, _, held_type, range_ = grid
     probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **geometry)
     split = slabscope._slabscope.PartitionSplit(probe, dims, held_type, range_, *views, **params)
-    strips = split.strips(len(layers))
-    # Each strip's box as pieces of the layers it crosses (a layer's index and the box's
-    # planes, rows and columns in it), and those layers' masks.
-    cuts: List[List[Tuple[int, Planes, Planes, Planes]]] = []
-    near: List[List[Any]] = []
-    for _, box in strips:
-        these: List[Tuple[int, Planes, Planes, Planes]] = []
-        if box is not None:
-            (x0, y0, z0), (sx, sy, sz) = box
-            for k, (a, b) in enumerate(layers.bounds):
-                lo, hi = max(a, z0), min(b, z0 + sz)
-                if lo < hi:
-                    these.append((k, (lo - a, hi - a), (y0, y0 + sy), (x0, x0 + sx)))
-        cuts.append(these)
-        near.append([background[1][k] for k, *_ in these] if background[1] else [])
+    strips = split.strips(len(layers), layers.bounds)
+    near = [[background[1][k] for k, _, _ in boxes] if background[1] else [] for _, boxes in strips]
     told = (split.axis, grid, background[0], params)
-    total = _strip_round(client, layers, strips, (cuts, near), told, None, report)
+    total = _strip_round(client, layers, strips, near, told, None, report)
     slabs = split.slabs(total, (background[0], background[2]))
     joints = None
     if len(slabs) > 1:
-        joints = _strip_round(client, layers, strips, (cuts, near), told, slabs, report)
+        joints = _strip_round(client, layers, strips, near, told, slabs, report)
     else:
         for _ in strips:
             report()
@@ -730,26 +717,39 @@ def _box_of(layer: np.ndarray, z: Planes, y: Planes, x: Planes) -> np.ndarray:
 Told = Tuple[Tuple[float, float, float], Grid, Optional[float], Options]
 
 
+#: A strip as ``PartitionSplit.strips`` names it: its rows, and its boxes of voxels, one a
+#: layer it reads (the layer's index, the box's origin and size, x y z).
+Strip = Tuple[Planes, List[Tuple[int, List[int], List[int]]]]
+
+
 def _strip_round(
     client: Any,
     layers: _Layers,
-    strips: List[Tuple[Planes, Any]],
-    around: Tuple[List[List[Tuple[int, Planes, Planes, Planes]]], List[List[Any]]],
+    strips: List[Strip],
+    near: List[List[Any]],
     told: Told,
     slabs: Optional[List[Planes]],
     report: Callable[[], None],
 ) -> Any:
-    """A pass of the partition: a task a strip, given the pieces of its box cut from the
-    layers it crosses (where they lie, for this pass: released as it ends, so that the
-    workers hold one pass's boxes at most beside the layers) and their masks, its parts added
-    on the client as they come."""
+    """A pass of the partition: a task a strip, given its boxes cut from the layers it reads
+    (where they lie, for this pass: released as it ends, so that the workers hold one pass's
+    boxes at most beside the layers) and those layers' masks, its parts added on the client as
+    they come."""
     from distributed import as_completed
 
-    cuts, near = around
     with layers.round() as current:
-        pieces = [[client.submit(_box_of, current[k], z, y, x, pure=False) for k, z, y, x in these] for these in cuts]
+        pieces = []
+        for _, boxes in strips:
+            these = []
+            for k, (x0, y0, z0), (sx, sy, sz) in boxes:
+                a = layers.bounds[k][0]
+                these.append(client.submit(_box_of, current[k], (z0 - a, z0 - a + sz), (y0, y0 + sy), (x0, x0 + sx), pure=False))
+            pieces.append(these)
         try:
-            tasks = [client.submit(_strip, rows, box, told, masks, slabs, *these, pure=False) for (rows, box), these, masks in zip(strips, pieces, near)]
+            tasks = []
+            for (rows, boxes), these, masks in zip(strips, pieces, near):
+                held = [(layers.bounds[k], origin, size) for k, origin, size in boxes]
+                tasks.append(client.submit(_strip, rows, held, told, masks, slabs, *these, pure=False))
             total = None
             for future in as_completed(tasks):  # type: ignore[no-untyped-call]
                 part = future.result()
@@ -765,15 +765,12 @@ def _strip_round(
                     future.release()
 
 
-def _strip(rows: Planes, box: Any, told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:
-    """One task: a strip's counts (the first pass, or given ``slabs`` the second) from its box
-    of voxels (``pieces``, [z, y, x], in order along z) and the masks of the layers it crosses."""
+def _strip(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:
+    """One task: a strip's counts (the first pass, or given ``slabs`` the second) from its
+    boxes of voxels (``pieces``, each [z, y, x], a layer's planes, origin and size in ``held``)
+    and the masks of the layers it reads."""
     axis, grid, threshold, params = told
     dims, spacing, held_type, range_ = grid
-    if box is None:
-        origin, block = (0, 0, 0), np.zeros((0, 0, 0), dtype=held_type)
-    else:
-        origin = box[0]
-        block = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=0)
+    voxels = np.concatenate([p.ravel() for p in pieces]) if pieces else np.zeros(0, dtype=held_type)
     bits = [mask for mask, _ in masks]
-    return slabscope._slabscope._count_strip(block.T, origin, rows, axis, dims, spacing, held_type, range_, (threshold, bits), slabs, **params)
+    return slabscope._slabscope._count_strip(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), slabs, **params)

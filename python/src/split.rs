@@ -293,17 +293,24 @@ pub fn _partition_part_of(bytes: &[u8]) -> PyResult<PartitionPart> {
 /// background) and the masks of the layers around its box (a found background's).
 type Told = (Option<f32>, Vec<Vec<u8>>);
 
+/// A box a strip's task holds: the planes along z of the layer it was cut from, its origin
+/// and its size (`[x, y, z]`).
+type Held = ((usize, usize), [usize; 3], [usize; 3]);
+
 /// A strip's counts, one pass of the partition along `axis`: the first (`slabs` None) or the
 /// second, given the slabs the first found (positional, as every argument before the analysis
-/// keywords `params`, whose names they may share: `axis`, `slabs`). `voxels` is the strip's box of voxels (`origin`,
-/// indexed `[x, y, z]`) as `PartitionSplit.strips` names it.
+/// keywords `params`, whose names they may share: `axis`, `slabs`). `voxels` holds the voxels
+/// of the strip's `boxes` one after another, each x fastest, read in C order (a box's
+/// `[z, y, x]` array as it is, or all of them raveled and joined), a box a layer of the array as
+/// `PartitionSplit.strips` names them. Boxes that miss a voxel the rows read are
+/// refused: it would read as zero.
 #[pyfunction]
-#[pyo3(signature = (voxels, origin, rows, axis, dims, spacing, dtype, range, background, slabs=None, /, **params))]
+#[pyo3(signature = (voxels, boxes, rows, axis, dims, spacing, dtype, range, background, slabs=None, /, **params))]
 #[allow(clippy::too_many_arguments)]
 pub fn _count_strip(
     py: Python<'_>,
     voxels: &Bound<'_, PyAny>,
-    origin: [usize; 3],
+    boxes: Vec<Held>,
     rows: (usize, usize),
     axis: [f64; 3],
     dims: [usize; 3],
@@ -315,21 +322,32 @@ pub fn _count_strip(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PartitionPart> {
     let grid = grid(dims, spacing, dtype, range);
-    let size = shape_of(voxels)?;
-    let held = VoxelBox { origin, size };
-    let volume = with_layer!(voxels, dtype, |v| slabscope::Volume::of_box(&grid, held, v)
-        .or_py()?);
+    let held: Vec<(std::ops::Range<usize>, VoxelBox)> = (boxes.iter())
+        .map(|&((a, b), origin, size)| (a..b, VoxelBox { origin, size }))
+        .collect();
+    let total: usize = held.iter().map(|(_, b)| b.len()).sum();
+    // Read in C order, one run of every box's voxels: a box [z, y, x] is x fastest so.
+    let voxels = &voxels.call_method1("reshape", ((-1isize, 1, 1),))?;
+    let volume = with_layer!(voxels, dtype, |v| {
+        if v.len() != total {
+            return Err(PyValueError::new_err(format!(
+                "{} voxels for boxes of {total}",
+                v.len()
+            )));
+        }
+        let mut at = 0;
+        let pieces: Vec<_> = (held.iter())
+            .map(|&(_, b)| {
+                at += b.len();
+                (b, &v[at - b.len()..at])
+            })
+            .collect();
+        slabscope::Volume::of_boxes(&grid, &pieces).or_py()?
+    });
     let analysis = analysis_of(py, params)?;
     let split = StackSplit::new(&volume, axis, &analysis.partition()).or_py()?;
     let rows = rows.0..rows.1;
-    if let Some(needed) = split.voxel_box(&volume, &rows).or_py()?
-        && !contains(held, needed)
-    {
-        return Err(PyValueError::new_err(format!(
-            "rows {}..{} read the voxels of {needed:?}, not all in the {held:?} given",
-            rows.start, rows.end
-        )));
-    }
+    check_held(&split, &volume, &rows, &held)?;
     let masks = (background.1.iter())
         .map(|b| ChunkMask::from_bytes(b))
         .collect::<Result<Vec<_>, _>>()
@@ -351,6 +369,42 @@ pub fn _count_strip(
         })
         .or_py()?;
     Ok(PartitionPart { counts })
+}
+
+/// An error unless the boxes `held` (each with the planes of its layer) hold every voxel the
+/// samples of `rows` read: each layer's voxels in its box, and every plane read in a layer.
+fn check_held(
+    split: &StackSplit,
+    volume: &slabscope::Volume,
+    rows: &std::ops::Range<usize>,
+    held: &[(std::ops::Range<usize>, VoxelBox)],
+) -> PyResult<()> {
+    let planes: Vec<_> = held.iter().map(|(p, _)| p.clone()).collect();
+    let needed = split.voxel_boxes(volume, rows, &planes).or_py()?;
+    for ((p, b), need) in held.iter().zip(needed) {
+        if let Some(need) = need
+            && !contains(*b, need)
+        {
+            return Err(PyValueError::new_err(format!(
+                "rows {}..{} read the voxels of {need:?} in planes {}..{}, not all in the {b:?} given",
+                rows.start, rows.end, p.start, p.end
+            )));
+        }
+    }
+    let Some(whole) = split.voxel_box(volume, rows).or_py()? else {
+        return Ok(());
+    };
+    let (mut z, end) = (whole.origin[2], whole.origin[2] + whole.size[2]);
+    while z < end {
+        let Some((p, _)) = held.iter().find(|(p, _)| p.contains(&z)) else {
+            return Err(PyValueError::new_err(format!(
+                "rows {}..{} read plane {z}, in none of the layers given",
+                rows.start, rows.end
+            )));
+        };
+        z = p.end;
+    }
+    Ok(())
 }
 
 /// Whether box `a` holds box `b`.
@@ -384,9 +438,9 @@ pub struct PartitionSplit {
     found: Option<SlabsFound>,
 }
 
-/// A strip as `PartitionSplit.strips` names it: its rows, and the box of voxels they read
-/// (`origin`, `size`, `[x, y, z]`; None when they read none).
-type Strip = ((usize, usize), Option<([usize; 3], [usize; 3])>);
+/// A strip as `PartitionSplit.strips` names it: its rows, and the boxes of voxels they read, a
+/// layer each (the layer's index, the box's origin and size, `[x, y, z]`).
+type Strip = ((usize, usize), Vec<(usize, [usize; 3], [usize; 3])>);
 
 #[pymethods]
 impl PartitionSplit {
@@ -442,13 +496,18 @@ impl PartitionSplit {
     }
 
     /// The stack's rows cut in `count` strips (fewer when there are fewer rows), each with the
-    /// box of voxels its task holds.
-    fn strips(&self, count: usize) -> PyResult<Vec<Strip>> {
+    /// boxes of voxels its task holds, one a layer of `planes` along z it reads (the layer's
+    /// index among them, the box's origin and size).
+    fn strips(&self, count: usize, planes: Vec<(usize, usize)>) -> PyResult<Vec<Strip>> {
         let volume = empty(&self.grid)?;
+        let planes: Vec<_> = planes.iter().map(|&(a, b)| a..b).collect();
         (self.split.strips(count).into_iter())
             .map(|rows| {
-                let held = self.split.voxel_box(&volume, &rows).or_py()?;
-                Ok(((rows.start, rows.end), held.map(|b| (b.origin, b.size))))
+                let boxes = self.split.voxel_boxes(&volume, &rows, &planes).or_py()?;
+                let held = (boxes.into_iter().enumerate())
+                    .filter_map(|(k, b)| b.map(|b| (k, b.origin, b.size)))
+                    .collect();
+                Ok(((rows.start, rows.end), held))
             })
             .collect()
     }

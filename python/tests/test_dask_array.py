@@ -286,13 +286,15 @@ def test_partition_parts_add_and_pickle():
     probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8))
     split = slabscope._slabscope.PartitionSplit(probe, grid[0], "uint8", grid[3], axis="z", background="none")
     assert split.axis == (0.0, 0.0, 1.0)
-    strips = split.strips(3)
+    # One layer of every plane: a box a strip.
+    strips = split.strips(3, [(0, nz)])
     assert [rows for rows, _ in strips] == [(0, 8), (8, 17), (17, 26)]
 
     def count(strip: Any, slabs: Any = None, short: int = 0) -> Any:
-        rows, ((x0, y0, z0), (sx, sy, sz)) = strip
+        rows, [(k, (x0, y0, z0), (sx, sy, sz))] = strip
         box = zyx[z0 : z0 + sz, y0 + short : y0 + sy, x0 : x0 + sx]
-        return slabscope._slabscope._count_strip(box.T, (x0, y0 + short, z0), rows, split.axis, *grid, (None, []), slabs, axis="z", background="none")
+        held = [((0, nz), (x0, y0 + short, z0), (sx, sy - short, sz))]
+        return slabscope._slabscope._count_strip(box, held, rows, split.axis, *grid, (None, []), slabs, axis="z", background="none")
 
     parts = [count(strip) for strip in strips]
     total = pickle.loads(pickle.dumps(parts[2])) + parts[0]
@@ -309,9 +311,14 @@ def test_partition_parts_add_and_pickle():
     got = split.analysis(both, "array", axis="z", background="none")
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), axis="z", background="none")
     assert got.to_dict() == one.to_dict()
-    # A box one voxel short of what the rows read is refused, not counted as zeros.
+    # A box one voxel short of what the rows read is refused, not counted as zeros; so is a
+    # plane the rows read in no layer given.
     with pytest.raises(ValueError, match="not all in the"):
         count(strips[1], short=1)
+    rows, [(_, (x0, y0, _), (sx, sy, _))] = strips[1]
+    top = zyx[:20, y0 : y0 + sy, x0 : x0 + sx]
+    with pytest.raises(ValueError, match="read plane 20, in none of the layers given"):
+        slabscope._slabscope._count_strip(top, [((0, 20), (x0, y0, 0), (sx, sy, 20))], rows, split.axis, *grid, (None, []), axis="z", background="none")
 
 
 def test_a_worker_killed_mid_run_costs_only_its_tasks(client):

@@ -99,6 +99,25 @@ impl StackSplit {
         Ok(cutter.voxel_box(rows))
     }
 
+    /// [`voxel_box`](Self::voxel_box) cut by layers of planes along z: for each of `planes`,
+    /// a box holding every voxel of those planes the samples of `rows` read (`None` where
+    /// they read none). Along an oblique axis a strip's rows are a slanted slab of rays, whose
+    /// one box may hold most of the volume while its boxes a layer each hold little more than
+    /// the slab: a task gathering its voxels from an array's layers of chunks takes these.
+    pub fn voxel_boxes(
+        &self,
+        volume: &Volume,
+        rows: &Range<usize>,
+        planes: &[Range<usize>],
+    ) -> Result<Vec<Option<VoxelBox>>> {
+        let none = Background::none();
+        let cutter = Cutter::given(volume, self.axis, &self.params.stack, &none)?;
+        Ok(planes
+            .iter()
+            .map(|p| cutter.voxel_box_within(rows, Some(p)))
+            .collect())
+    }
+
     /// The first pass's counts of `rows`, from `volume` (holding at least their
     /// [`voxel_box`](Self::voxel_box)) and the whole volume's `background`.
     pub fn count(

@@ -114,23 +114,31 @@ impl Volume {
     /// unread: the whole volume to every walk and cut that reads that box alone. f32
     /// infinities are made missing, as every reader makes them.
     pub fn of_box<T: Voxel>(grid: &SlabGrid, held: VoxelBox, voxels: &[T]) -> Result<Self> {
+        Self::of_boxes(grid, &[(held, voxels)])
+    }
+
+    /// [`of_box`](Self::of_box) of several boxes, each with its voxels (x fastest): a voxel in
+    /// two takes the later one's value.
+    pub fn of_boxes<T: Voxel>(grid: &SlabGrid, boxes: &[(VoxelBox, &[T])]) -> Result<Self> {
         let too_many = || Error::invalid("slab", "a grid", "one of a size this machine can map");
         let count = grid.dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
         let count = count.ok_or_else(too_many)?;
         let size = std::mem::size_of::<T>();
         count.checked_mul(size).ok_or_else(too_many)?;
         check_shape(grid.dims, grid.spacing, count)?;
-        if !held.within(grid.dims) || voxels.len() != held.len() {
-            return Err(Error::invalid(
-                "slab",
-                format!(
-                    "{} voxels in a box of {:?} from {:?}",
-                    voxels.len(),
-                    held.size,
-                    held.origin
-                ),
-                format!("a box's voxels within the grid of {:?}", grid.dims),
-            ));
+        for &(held, voxels) in boxes {
+            if !held.within(grid.dims) || voxels.len() != held.len() {
+                return Err(Error::invalid(
+                    "slab",
+                    format!(
+                        "{} voxels in a box of {:?} from {:?}",
+                        voxels.len(),
+                        held.size,
+                        held.origin
+                    ),
+                    format!("a box's voxels within the grid of {:?}", grid.dims),
+                ));
+            }
         }
         let mut map = memmap2::MmapOptions::new()
             .len((count * size).max(1))
@@ -138,16 +146,19 @@ impl Volume {
             .map_anon()
             .map_err(|e| Error::invalid("slab", "a map of the whole grid", e.to_string()))?;
         let [nx, ny, _] = grid.dims;
-        let [sx, sy, sz] = held.size;
-        let [x0, y0, z0] = held.origin;
-        let rows = voxels.chunks_exact(sx.max(1)).take(sy * sz);
-        for (r, row) in rows.enumerate() {
-            let (y, z) = (y0 + r % sy, z0 + r / sy);
-            let start = ((z * ny + y) * nx + x0) * size;
-            let end = start + std::mem::size_of_val(row);
-            map[start..end].copy_from_slice(bytemuck::cast_slice(row));
-            if T::TYPE == VoxelType::F32 {
-                super::voxels::infinities_missing(bytemuck::cast_slice_mut(&mut map[start..end]));
+        for &(held, voxels) in boxes {
+            let [sx, sy, sz] = held.size;
+            let [x0, y0, z0] = held.origin;
+            let rows = voxels.chunks_exact(sx.max(1)).take(sy * sz);
+            for (r, row) in rows.enumerate() {
+                let (y, z) = (y0 + r % sy, z0 + r / sy);
+                let start = ((z * ny + y) * nx + x0) * size;
+                let end = start + std::mem::size_of_val(row);
+                map[start..end].copy_from_slice(bytemuck::cast_slice(row));
+                if T::TYPE == VoxelType::F32 {
+                    let row = bytemuck::cast_slice_mut(&mut map[start..end]);
+                    super::voxels::infinities_missing(row);
+                }
             }
         }
         let map = map

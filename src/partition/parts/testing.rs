@@ -44,34 +44,58 @@ fn box_voxels<T: Voxel>(v: &[T], dims: [usize; 3], b: VoxelBox) -> Vec<T> {
     out
 }
 
-/// The volume a task counting `rows` holds: `v`'s box for them, nothing else (zeros). For an
-/// f32 volume every voxel outside the box is NaN instead, so that a sample reading one would
-/// be missing and change the counts.
-fn held_for(split: &StackSplit, v: &Volume, rows: &Range<usize>) -> Volume {
+/// The boxes a task counting `rows` holds: the one box of their voxels, or (every other
+/// time) a box a layer of planes along z, the layers random.
+fn boxes_for(split: &StackSplit, v: &Volume, rows: &Range<usize>, rng: &mut Lcg) -> Vec<VoxelBox> {
+    if below(rng, 2) == 0 {
+        return vec![split.voxel_box(v, rows).unwrap().expect("rows with samples")];
+    }
+    let mut layers = Vec::new();
+    let mut at = 0;
+    while at < v.dims()[2] {
+        let end = (at + 1 + below(rng, 9)).min(v.dims()[2]);
+        layers.push(at..end);
+        at = end;
+    }
+    let boxes: Vec<VoxelBox> = (split.voxel_boxes(v, rows, &layers).unwrap())
+        .into_iter()
+        .flatten()
+        .collect();
+    assert!(!boxes.is_empty(), "rows with samples");
+    boxes
+}
+
+/// The volume a task counting `rows` holds: `v`'s boxes for them ([`boxes_for`]), nothing
+/// else (zeros). For an f32 volume every voxel outside them is NaN instead, so that a sample
+/// reading one would be missing and change the counts.
+fn held_for(split: &StackSplit, v: &Volume, rows: &Range<usize>, rng: &mut Lcg) -> Volume {
     let grid = SlabGrid::of(v);
-    let b = split
-        .voxel_box(v, rows)
-        .unwrap()
-        .expect("rows with samples");
+    let boxes = boxes_for(split, v, rows, rng);
     if v.voxel_type() == VoxelType::F32 {
         let mut poisoned = vec![f32::NAN; v.len()];
-        let inside = box_voxels(v.voxels(), v.dims(), b);
+        for &b in &boxes {
+            let inside = box_voxels(v.voxels(), v.dims(), b);
+            let mut k = 0;
+            for z in b.origin[2]..b.origin[2] + b.size[2] {
+                for y in b.origin[1]..b.origin[1] + b.size[1] {
+                    let row = (z * v.dims()[1] + y) * v.dims()[0] + b.origin[0];
+                    poisoned[row..row + b.size[0]].copy_from_slice(&inside[k..k + b.size[0]]);
+                    k += b.size[0];
+                }
+            }
+        }
         let whole = VoxelBox {
             origin: [0; 3],
             size: v.dims(),
         };
-        let mut k = 0;
-        for z in b.origin[2]..b.origin[2] + b.size[2] {
-            for y in b.origin[1]..b.origin[1] + b.size[1] {
-                let row = (z * v.dims()[1] + y) * v.dims()[0] + b.origin[0];
-                poisoned[row..row + b.size[0]].copy_from_slice(&inside[k..k + b.size[0]]);
-                k += b.size[0];
-            }
-        }
         return Volume::of_box(&grid, whole, &poisoned).unwrap();
     }
     crate::volume::with_voxels!(v.data(), |data| {
-        Volume::of_box(&grid, b, &box_voxels(data, v.dims(), b)).unwrap()
+        let pieces: Vec<_> = (boxes.iter())
+            .map(|&b| (b, box_voxels(data, v.dims(), b)))
+            .collect();
+        let pieces: Vec<_> = pieces.iter().map(|(b, p)| (*b, &p[..])).collect();
+        Volume::of_boxes(&grid, &pieces).unwrap()
     })
 }
 
@@ -80,12 +104,14 @@ fn below(rng: &mut Lcg, n: usize) -> usize {
     ((rng.next_u64() >> 33) % n as u64) as usize
 }
 
-/// `0..rows` cut into strips of 1 to 7 rows, in a shuffled order.
+/// `0..rows` cut into strips of 1 to 7 rows (fewer where the rows are few: four strips at
+/// least from four rows on), in a shuffled order.
 fn shuffled_strips(rng: &mut Lcg, rows: usize) -> Vec<Range<usize>> {
     let mut strips = Vec::new();
     let mut at = 0;
+    let most = (rows / 4).clamp(1, 7);
     while at < rows {
-        let end = (at + 1 + below(rng, 7)).min(rows);
+        let end = (at + 1 + below(rng, most)).min(rows);
         strips.push(at..end);
         at = end;
     }
@@ -129,7 +155,7 @@ pub(crate) fn in_parts(
     let counts = strips
         .iter()
         .map(|rows| {
-            let held = held_for(&split, v, rows);
+            let held = held_for(&split, v, rows, rng);
             let part = split
                 .count(&held, &background, rows.clone(), &none)
                 .unwrap();
@@ -155,7 +181,7 @@ pub(crate) fn in_parts(
         let joints = shuffled_strips(rng, split.rows())
             .iter()
             .map(|rows| {
-                let held = held_for(&split, v, rows);
+                let held = held_for(&split, v, rows, rng);
                 let slabs = &found.slabs;
                 let part = split.count_boundaries(&held, &background, rows.clone(), slabs, &none);
                 SlabJoints::from_bytes(&part.unwrap().to_bytes()).unwrap()

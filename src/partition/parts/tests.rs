@@ -114,3 +114,27 @@ fn rows_counted_twice_or_left_out_are_errors() {
     let b = other.count(&v, &background, 5..6, &none).unwrap();
     assert!(a.add(b).is_err());
 }
+
+#[test]
+fn an_oblique_strip_holds_far_less_in_a_box_a_layer_than_in_one_box() {
+    let v = layered(VoxelType::U8, 0.0, 1.0);
+    let split = StackSplit::new(&v, [0.3, 0.5, 0.8], &PartitionParams::default()).unwrap();
+    let layers: Vec<Range<usize>> = (0..28).step_by(4).map(|z| z..z + 4).collect();
+    let (mut one, mut layered) = (0, 0);
+    for rows in split.strips(4) {
+        let whole = split.voxel_box(&v, &rows).unwrap().unwrap();
+        let boxes = split.voxel_boxes(&v, &rows, &layers).unwrap();
+        for (b, planes) in boxes.iter().zip(&layers) {
+            let Some(b) = b else { continue };
+            // Within the one box and the layer's planes.
+            for m in 0..3 {
+                assert!(whole.origin[m] <= b.origin[m]);
+                assert!(b.origin[m] + b.size[m] <= whole.origin[m] + whole.size[m]);
+            }
+            assert!(planes.start <= b.origin[2] && b.origin[2] + b.size[2] <= planes.end);
+        }
+        one += whole.len();
+        layered += boxes.iter().flatten().map(VoxelBox::len).sum::<usize>();
+    }
+    assert!(layered * 3 < one * 2, "{layered} of {one}");
+}

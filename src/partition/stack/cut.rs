@@ -198,8 +198,19 @@ impl<'a> Cutter<'a> {
     /// The box of voxels the samples of `rows` read (their cells' corners and nearest
     /// voxels), `None` when they hold no sample.
     pub(crate) fn voxel_box(&self, rows: &Range<usize>) -> Option<VoxelBox> {
-        match (&self.lattice, coordinate_axis(self.axis)) {
-            (Some(lattice), _) => lattice_box(lattice, rows, self.volume.dims()),
+        self.voxel_box_within(rows, None)
+    }
+
+    /// [`voxel_box`](Self::voxel_box) of the voxels in the planes `planes` along z alone (all
+    /// of them with `None`): a box holding every voxel of those planes the samples of `rows`
+    /// read, `None` when they read none there.
+    pub(crate) fn voxel_box_within(
+        &self,
+        rows: &Range<usize>,
+        planes: Option<&Range<usize>>,
+    ) -> Option<VoxelBox> {
+        let whole = match (&self.lattice, coordinate_axis(self.axis)) {
+            (Some(lattice), _) => lattice_box(lattice, rows, self.volume.dims(), planes),
             (None, Some(m)) => {
                 let (dims, (_, b)) = (self.volume.dims(), other_axes(m));
                 if rows.is_empty() || rows.end > dims[b] || dims.contains(&0) {
@@ -210,7 +221,16 @@ impl<'a> Cutter<'a> {
                 Some(VoxelBox { origin, size })
             }
             (None, None) => unreachable!("a coordinate axis has no lattice"),
-        }
+        }?;
+        let Some(planes) = planes else {
+            return Some(whole);
+        };
+        let start = whole.origin[2].max(planes.start);
+        let end = (whole.origin[2] + whole.size[2]).min(planes.end);
+        (start < end).then(|| VoxelBox {
+            origin: [whole.origin[0], whole.origin[1], start],
+            size: [whole.size[0], whole.size[1], end - start],
+        })
     }
 
     /// The number of bins.

@@ -259,24 +259,34 @@ impl Cutter<'_> {
     }
 }
 
-/// The box of voxels of a grid of `dims` that the samples of lattice `rows` (counted from the
-/// lattice's first) read: the corners of the cells they lie in and their nearest voxels.
-/// A ray's samples lie on a line, so its two ends bound them.
+/// The box of voxels the samples of lattice rows `rows` read: the box around each ray's two
+/// ends (its samples lie between them), widened by a voxel for the trilinear corners; with
+/// `planes`, of the voxels in those planes along z alone, each ray's segment clipped to where
+/// its samples read a voxel of them (z from a plane before the first to the last: a sample at
+/// z reads planes ⌊z⌋ and ⌊z⌋ + 1), so that a slanted slab of rays holds in a box a layer of
+/// planes far less than in one box.
 pub(super) fn lattice_box(
     lattice: &Lattice,
     rows: &Range<usize>,
     dims: [usize; 3],
+    planes: Option<&Range<usize>>,
 ) -> Option<VoxelBox> {
     let ((i0, i1), (j0, _)) = lattice.ray_ranges();
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let clip = planes.map(|p| (p.start as f64 - 1.0, p.end as f64));
     for r in rows.clone() {
         for i in i0..=i1 {
             let Some(ray) = lattice.ray(i, j0 + r as i64) else {
                 continue;
             };
-            for p in [ray.at(ray.k0), ray.at(ray.k1)] {
+            let (a, b) = (ray.at(ray.k0), ray.at(ray.k1));
+            let Some((s0, s1)) = clip.map_or(Some((0.0, 1.0)), |z| clipped(a[2], b[2], z)) else {
+                continue;
+            };
+            for s in [s0, s1] {
                 for m in 0..3 {
-                    (lo[m], hi[m]) = (lo[m].min(p[m]), hi[m].max(p[m]));
+                    let p = a[m] + s * (b[m] - a[m]);
+                    (lo[m], hi[m]) = (lo[m].min(p), hi[m].max(p));
                 }
             }
         }
@@ -292,4 +302,15 @@ pub(super) fn lattice_box(
         origin: first,
         size: std::array::from_fn(|m| last[m] + 1 - first[m]),
     })
+}
+
+/// The part `(s0, s1)` of the segment from z = `a` to z = `b` (s from 0 to 1) within
+/// `[lo, hi]`, or `None` when it never is.
+fn clipped(a: f64, b: f64, (lo, hi): (f64, f64)) -> Option<(f64, f64)> {
+    if a == b {
+        return (lo <= a && a <= hi).then_some((0.0, 1.0));
+    }
+    let (t0, t1) = ((lo - a) / (b - a), (hi - a) / (b - a));
+    let (s0, s1) = (t0.min(t1).max(0.0), t0.max(t1).min(1.0));
+    (s0 <= s1).then_some((s0, s1))
 }
