@@ -429,22 +429,27 @@ def _round(
     from plane ``held``'s first), added up on the client as they come; ``round`` is ``(samples, axes)``:
     the paper samples of a shifted round (else None) and a refinement step's axes (else None,
     the sphere's)."""
-    from distributed import as_completed
-
     with layers.pieces(held) as pieces:
         tasks: List[Any] = []
         for planes, (first, _), these in zip(slabs, held, pieces):
             tasks.append(client.submit(_count, first, planes, grid, round, params, *these, pure=False))
-        total = None
-        for future in as_completed(tasks):  # type: ignore[no-untyped-call]
-            part = future.result()
-            if total is None:
-                total = part
-            else:
-                # In place: the total is never copied (issue #44).
-                total += part
-            report()
-        return total
+        return _sum(tasks, report)
+
+
+def _sum(tasks: List[Any], report: Callable[[], None]) -> Any:
+    """The parts ``tasks`` give, added up on the client as they come (in place: the total is
+    never copied, issue #44), ``report`` called for each."""
+    from distributed import as_completed
+
+    total = None
+    for future in as_completed(tasks):  # type: ignore[no-untyped-call]
+        part = future.result()
+        if total is None:
+            total = part
+        else:
+            total += part
+        report()
+    return total
 
 
 def analyze_array(
@@ -735,8 +740,6 @@ def _strip_round(
     (where they lie, for this pass: released as it ends, so that the workers hold one pass's
     boxes at most beside the layers) and those layers' masks, its parts added on the client as
     they come."""
-    from distributed import as_completed
-
     with layers.round() as current:
         pieces = []
         for _, boxes in strips:
@@ -750,15 +753,7 @@ def _strip_round(
             for (rows, boxes), these, masks in zip(strips, pieces, near):
                 held = [(layers.bounds[k], origin, size) for k, origin, size in boxes]
                 tasks.append(client.submit(_strip, rows, held, told, masks, slabs, *these, pure=False))
-            total = None
-            for future in as_completed(tasks):  # type: ignore[no-untyped-call]
-                part = future.result()
-                if total is None:
-                    total = part
-                else:
-                    total += part
-                report()
-            return total
+            return _sum(tasks, report)
         finally:
             for these in pieces:
                 for future in these:

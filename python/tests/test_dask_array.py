@@ -351,13 +351,9 @@ def test_a_worker_killed_mid_run_costs_only_its_tasks(client):
     assert len(heard) == 5 * 2 + 5 * 3 + 5 * 2 + 1 and heard[-1] == 1.0
 
 
-def test_each_chunk_is_read_once_in_a_call(client, tmp_path):
-    """Every chunk of the array is read (computed) once in a whole call, whatever the rounds:
-    the range, the paper's and the shifted lattices, the refinement's and the last task all
-    read the chunk layers held on the workers (before, each round read every chunk again, and
-    neighbouring slabs' tasks each read the chunks they share: 22 to 32 times a chunk here)."""
-    zyx = voxels()
-    marks = str(tmp_path)
+def marking(marks: str) -> Any:
+    """A ``map_blocks`` function leaving a mark in the folder ``marks`` for each chunk it reads
+    (a file a chunk, a byte a read), the chunk as it is."""
 
     def chunk(block: np.ndarray, block_info: Any = None) -> np.ndarray:
         k, j, i = block_info[0]["chunk-location"]
@@ -365,19 +361,37 @@ def test_each_chunk_is_read_once_in_a_call(client, tmp_path):
             f.write("x")
         return block
 
-    array = da.from_array(zyx, chunks=(8, 13, 15)).map_blocks(chunk, dtype=zyx.dtype)
-    got = slabscope.dask.analyze_array(client, array, axes="zyx", refine=True)
-    assert got.to_dict() == slabscope.analyze(slabscope.Volume.from_array(zyx.T), refine=True).to_dict()
-    reads = {name: len(open(os.path.join(marks, name)).read()) for name in os.listdir(marks)}
-    assert len(reads) == 5 * 2 * 2  # chunks of 8 planes, 13 rows, 15 columns
-    assert set(reads.values()) == {1}
-    # Nothing of the call is left on the workers (released as the call returns; the
-    # scheduler hears of it a moment later).
+    return chunk
+
+
+def nothing_held(client: Any) -> bool:
+    """Whether the workers hold nothing, waiting up to 30 s for the scheduler to hear of what
+    a call released as it returned."""
     held = lambda: sum(client.run(lambda dask_worker: len(dask_worker.data)).values())  # noqa: E731
     deadline = time.monotonic() + 30
     while held() and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert held() == 0
+    return held() == 0
+
+
+def test_each_chunk_is_read_once_in_a_call(client, tmp_path):
+    """Every chunk of the array is read (computed) once in a whole call, whatever the rounds:
+    the range, the paper's and the shifted lattices, the refinement's, the background's and
+    the partition's all read the chunk layers held on the workers (before, each round read
+    every chunk again, and neighbouring slabs' tasks each read the chunks they share: 22 to 32
+    times a chunk here)."""
+    zyx = voxels()
+    chunk = marking(str(tmp_path))
+
+    array = da.from_array(zyx, chunks=(8, 13, 15)).map_blocks(chunk, dtype=zyx.dtype)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", refine=True)
+    assert got.to_dict() == slabscope.analyze(slabscope.Volume.from_array(zyx.T), refine=True).to_dict()
+    reads = {name: len(open(os.path.join(tmp_path, name)).read()) for name in os.listdir(tmp_path)}
+    assert len(reads) == 5 * 2 * 2  # chunks of 8 planes, 13 rows, 15 columns
+    assert set(reads.values()) == {1}
+    # Nothing of the call is left on the workers (released as the call returns; the
+    # scheduler hears of it a moment later).
+    assert nothing_held(client)
 
 
 def test_an_array_beyond_the_workers_memory_is_read_once_a_round(client, tmp_path, monkeypatch):
@@ -387,19 +401,13 @@ def test_an_array_beyond_the_workers_memory_is_read_once_a_round(client, tmp_pat
     partition's two; Dask computes a chunk once for two rounds when the first's is still in
     memory as the second asks for it) and releases them, and the answer is the same."""
     zyx = voxels()
-    marks = str(tmp_path)
-
-    def chunk(block: np.ndarray, block_info: Any = None) -> np.ndarray:
-        k, j, i = block_info[0]["chunk-location"]
-        with open(os.path.join(marks, f"read-{k}-{j}-{i}"), "a") as f:
-            f.write("x")
-        return block
+    chunk = marking(str(tmp_path))
 
     monkeypatch.setattr(slabscope.dask, "_KEEP_SHARE", 0.0)
     array = da.from_array(zyx, chunks=(8, 13, 15)).map_blocks(chunk, dtype=zyx.dtype)
     got = slabscope.dask.analyze_array(client, array, axes="zyx", slabs=3)
     assert got.to_dict() == slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3).to_dict()
-    reads = {name: len(open(os.path.join(marks, name)).read()) for name in os.listdir(marks)}
+    reads = {name: len(open(os.path.join(tmp_path, name)).read()) for name in os.listdir(tmp_path)}
     assert len(reads) == 5 * 2 * 2 and max(reads.values()) <= 1 + 2 + 3 + 2
     assert sum(reads.values()) > 2 * len(reads), "read again in later rounds"
     # From a store, a task a layer each round.
@@ -408,8 +416,4 @@ def test_an_array_beyond_the_workers_memory_is_read_once_a_round(client, tmp_pat
     stored = zarr.open_array(store, mode="w", shape=zyx.shape, chunks=(10, 26, 30), dtype=zyx.dtype)
     stored[:] = zyx
     assert slabscope.dask.analyze_array(client, store, axes="zyx", slabs=3).to_dict() == got.to_dict()
-    held = lambda: sum(client.run(lambda dask_worker: len(dask_worker.data)).values())  # noqa: E731
-    deadline = time.monotonic() + 30
-    while held() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert held() == 0
+    assert nothing_held(client)

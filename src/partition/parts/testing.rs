@@ -48,7 +48,12 @@ fn box_voxels<T: Voxel>(v: &[T], dims: [usize; 3], b: VoxelBox) -> Vec<T> {
 /// time) a box a layer of planes along z, the layers random.
 fn boxes_for(split: &StackSplit, v: &Volume, rows: &Range<usize>, rng: &mut Lcg) -> Vec<VoxelBox> {
     if below(rng, 2) == 0 {
-        return vec![split.voxel_box(v, rows).unwrap().expect("rows with samples")];
+        return vec![
+            split
+                .voxel_box(v, rows)
+                .unwrap()
+                .expect("rows with samples"),
+        ];
     }
     let mut layers = Vec::new();
     let mut at = 0;
