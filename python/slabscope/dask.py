@@ -763,9 +763,10 @@ def _strip_round(
 def _strip(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:
     """One task: a strip's counts (the first pass, or given ``slabs`` the second) from its
     boxes of voxels (``pieces``, each [z, y, x], a layer's planes, origin and size in ``held``)
-    and the masks of the layers it reads."""
+    and the masks of the layers it reads, within half its worker's Dask memory limit unless
+    ``max_memory`` is given."""
     axis, grid, threshold, params = told
     dims, spacing, held_type, range_ = grid
     voxels = np.concatenate([p.ravel() for p in pieces]) if pieces else np.zeros(0, dtype=held_type)
     bits = [mask for mask, _ in masks]
-    return slabscope._slabscope._count_strip(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), slabs, **params)
+    return slabscope._slabscope._count_strip(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), slabs, **_with_budget(params))

@@ -326,6 +326,14 @@ pub fn _count_strip(
         .map(|&((a, b), origin, size)| (a..b, VoxelBox { origin, size }))
         .collect();
     let total: usize = held.iter().map(|(_, b)| b.len()).sum();
+    check_room(
+        py,
+        params,
+        &held,
+        total * grid.voxel_type.size(),
+        &background.1,
+        rows,
+    )?;
     // Read in C order, one run of every box's voxels: a box [z, y, x] is x fastest so.
     let voxels = &voxels.call_method1("reshape", ((-1isize, 1, 1),))?;
     let volume = with_layer!(voxels, dtype, |v| {
@@ -369,6 +377,34 @@ pub fn _count_strip(
         })
         .or_py()?;
     Ok(PartitionPart { counts })
+}
+
+/// An error unless what a strip's task holds fits its `max_memory=` (if given): its boxes'
+/// voxels (`bytes`) twice, as given and as copied into the volume it counts, and its layers'
+/// masks (their bits, copied into a mask of the grid).
+fn check_room(
+    py: Python<'_>,
+    params: Option<&Bound<'_, PyDict>>,
+    held: &[(std::ops::Range<usize>, VoxelBox)],
+    bytes: usize,
+    masks: &[Vec<u8>],
+    rows: (usize, usize),
+) -> PyResult<()> {
+    let budget = crate::params::max_memory(&Kwargs::new(py, "analyze_array", params)?, u64::MAX)?;
+    let holds = 2 * bytes as u64 + 2 * masks.iter().map(|m| m.len() as u64).sum::<u64>();
+    if holds > budget {
+        let planes: usize = held.iter().map(|(p, _)| p.len()).sum();
+        return Err(PyValueError::new_err(format!(
+            "the strip of rows {}..{} holds {holds} bytes (its voxels in {} boxes across {planes} \
+             planes, as given and copied, and their layers' masks), beyond the task's budget of \
+             {budget} (chunks of fewer planes along z, so more and thinner strips, or raise \
+             max_memory=)",
+            rows.0,
+            rows.1,
+            held.len()
+        )));
+    }
+    Ok(())
 }
 
 /// An error unless the boxes `held` (each with the planes of its layer) hold every voxel the

@@ -253,6 +253,9 @@ def test_no_task_holds_the_whole_array(client):
     # Labelling a layer of 8 planes of 30×26 voxels holds up to 12 bytes a voxel.
     with pytest.raises(ValueError, match=r"labelling the background of planes 0..8 takes up to 63640 bytes, beyond the task's budget of 10240"):
         slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="10K")
+    # So does what a strip's task holds: its boxes' voxels, given and copied, and masks.
+    with pytest.raises(ValueError, match=r"the strip of rows \d+\.\.\d+ holds \d+ bytes \(its voxels in \d+ boxes .* beyond the task's budget of 4096"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="4K", background="none")
     # What reads the voxels where they are does not run in parts.
     with pytest.raises(ValueError, match="explain"):
         slabscope.dask.analyze_array(client, array, axes="zyx", explain=True)
