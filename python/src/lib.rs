@@ -7,6 +7,7 @@ mod analysis;
 mod errors;
 mod foreign;
 mod image;
+mod layers;
 mod lazy;
 mod lent;
 mod params;
@@ -55,12 +56,12 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pickle::_volume_of_grid, m)?)?;
     m.add_function(wrap_pyfunction!(split::_partition_part_of, m)?)?;
     m.add_function(wrap_pyfunction!(split::_count_strip, m)?)?;
-    m.add_function(wrap_pyfunction!(split::_layer_border, m)?)?;
-    m.add_function(wrap_pyfunction!(split::_background_threshold, m)?)?;
-    m.add_function(wrap_pyfunction!(split::_layer_summary, m)?)?;
-    m.add_function(wrap_pyfunction!(split::_background_answers, m)?)?;
-    m.add_function(wrap_pyfunction!(split::_layer_mask, m)?)?;
-    m.add_function(wrap_pyfunction!(split::_layer_below, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::_layer_border, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::_background_threshold, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::_layer_summary, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::_background_answers, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::_layer_mask, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::_layer_below, m)?)?;
     m.add_function(wrap_pyfunction!(split::_runs_search, m)?)?;
     Ok(())
 }
