@@ -248,11 +248,11 @@ def _as_xyz(source: Any, axes: Optional[str]) -> Tuple[Any, str, Optional[Tuple[
     return array.astype(held), held, spacing, reader
 
 
-def _geometry(spacing: Any, affine: Any, stored: Optional[Tuple[float, ...]]) -> Tuple[Tuple[float, ...], Options]:
-    """The spacing the tasks count with and the keywords of the whole volume's
-    ``Volume.from_array``: from ``affine`` (4×4, voxel index ``(x, y, z)`` to RAS+ mm, as nibabel
-    gives it) and ``spacing`` as ``from_array`` takes them (so that they must agree, and the
-    spacing is the one ``from_array`` finds), else the store's."""
+def _geometry(spacing: Any, affine: Any, stored: Optional[Tuple[float, ...]]) -> Any:
+    """A volume of one voxel with the whole volume's geometry (its spacing the one the tasks
+    count with, its affine the report's): from ``affine`` (4×4, voxel index ``(x, y, z)`` to
+    RAS+ mm, as nibabel gives it) and ``spacing`` as ``Volume.from_array`` takes them (so that
+    they must agree, and the spacing is the one ``from_array`` finds), else the store's."""
     if affine is None and spacing is None:
         spacing = stored
     given: Options = {}
@@ -260,10 +260,7 @@ def _geometry(spacing: Any, affine: Any, stored: Optional[Tuple[float, ...]]) ->
         given["affine"] = np.asarray(affine, dtype=float)
     if spacing is not None:
         given["spacing"] = tuple(float(s) for s in spacing)
-    if not given:
-        return (1.0, 1.0, 1.0), given
-    probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **given)
-    return tuple(probe.spacing), given
+    return slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **given)
 
 
 def _layers(client: Any, array: Any, reader: Optional[Tuple[Any, List[Optional[str]]]]) -> List[Any]:
@@ -491,7 +488,8 @@ def analyze_array(
     step while it goes on), never less than before."""
 
     array, held_type, stored, reader = _as_xyz(source, axes)
-    spacing, geometry = _geometry(spacing, affine, stored)
+    geometry = _geometry(spacing, affine, stored)
+    spacing = tuple(geometry.spacing)
     nz, ny, nx = array.shape
     # Each chunk is read into its layer of whole planes, once in the whole call where the
     # array fits the workers' memory (held until the partition's last round has taken its
@@ -523,7 +521,7 @@ def _rounds(
     held: List[Planes],
     shifted: bool,
     grid: Grid,
-    geometry: Options,
+    geometry: Any,
     params: Options,
     progress: Any,
 ) -> Any:
@@ -598,7 +596,7 @@ def _after_views(
     client: Any,
     layers: _Layers,
     grid: Grid,
-    geometry: Options,
+    geometry: Any,
     views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]],
     params: Options,
     report: Callable[[str], None],
@@ -684,7 +682,7 @@ def _partition(
     client: Any,
     layers: _Layers,
     grid: Grid,
-    geometry: Options,
+    geometry: Any,
     views: Tuple[Any, Any, List[Tuple[Any, Any, Any]]],
     background: Found,
     params: Options,
@@ -695,8 +693,7 @@ def _partition(
     (with their background masks), the client adding the parts as they come; then the
     analysis, on the client, of a volume holding no voxel."""
     dims, _, held_type, range_ = grid
-    probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8), **geometry)
-    split = slabscope._slabscope.PartitionSplit(probe, dims, held_type, range_, *views, **params)
+    split = slabscope._slabscope.PartitionSplit(geometry, dims, held_type, range_, *views, **params)
     strips = split.strips(len(layers), layers.bounds)
     near = [[background[1][k] for k, _, _ in boxes] if background[1] else [] for _, boxes in strips]
     told = (split.axis, grid, background[0], params)
