@@ -66,6 +66,13 @@ pub fn ray_key(i: i64, j: i64) -> u64 {
     (ordered(j) << 32) | ordered(i)
 }
 
+/// The ray `(i, j)` whose key [`ray_key`] made.
+#[must_use]
+pub fn key_ray(key: u64) -> (i64, i64) {
+    let index = |x: u64| i64::from((x as u32 ^ 0x8000_0000) as i32);
+    (index(key), index(key >> 32))
+}
+
 impl Fragment {
     /// An empty fragment of sequence `key` starting at sample `start` (the sequence's first when
     /// `start` is 0).

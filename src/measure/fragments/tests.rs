@@ -205,3 +205,23 @@ fn a_piece_alone_counts_only_what_it_holds() {
     expect.end_sequence();
     same(&total.counts, &expect, "a b | a b c");
 }
+
+#[test]
+fn a_rays_key_gives_back_its_indices_and_orders_rows_first() {
+    let rays = [
+        (0, 0),
+        (-1, 0),
+        (0, -1),
+        (7, -3),
+        (-2_000_000, 5),
+        (i32::MAX as i64, i32::MIN as i64),
+    ];
+    for &(i, j) in &rays {
+        assert_eq!(key_ray(ray_key(i, j)), (i, j));
+    }
+    let mut by_key = rays.to_vec();
+    by_key.sort_by_key(|&(i, j)| ray_key(i, j));
+    let mut by_row = rays.to_vec();
+    by_row.sort_by_key(|&(i, j)| (j, i));
+    assert_eq!(by_key, by_row);
+}

@@ -21,7 +21,9 @@
 use rayon::prelude::*;
 
 use super::grid::Bricks;
-use super::tiles::{RayStart, RayStarts, Walker, advance, sample_bin, scalar_walk, tile_rows};
+use super::tiles::{
+    RayStart, RayStarts, TileOrder, Walker, advance, by_bucket, sample_bin, scalar_walk, tile_rows,
+};
 use super::{BinSampler, RaySubset};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::{FIXED_BITS, Lattice};
@@ -146,6 +148,11 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             whole,
             ..Self::new(sampler, lattice, block, bricks, Some(member))
         }
+    }
+
+    /// The tile walk's order of the rays walked.
+    pub(super) fn tile_order(&self) -> TileOrder {
+        TileOrder::new(self.lattice, self.subset.every)
     }
 
     /// Whether the bricks walked are the slab's planes whole, one brick.
@@ -463,21 +470,7 @@ pub(super) fn by_length(
     tally: &mut Vec<usize>,
 ) {
     let longest = walkers.iter().map(|w| w.inner).max().unwrap_or(0) as usize;
-    tally.clear();
-    tally.resize(longest + 2, 0);
-    for w in walkers.iter() {
-        tally[longest - w.inner as usize + 1] += 1;
-    }
-    for k in 1..tally.len() {
-        tally[k] += tally[k - 1];
-    }
-    sorted.clear();
-    sorted.resize_with(walkers.len(), Walker::idle);
-    for w in walkers.drain(..) {
-        let slot = &mut tally[longest - w.inner as usize];
-        sorted[*slot] = w;
-        *slot += 1;
-    }
+    by_bucket(walkers, sorted, tally, |w| longest - w.inner as usize);
 }
 
 /// The inner spans of `walkers` walked together, into `counts`: eight at a time with AVX2 on a

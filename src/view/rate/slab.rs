@@ -9,13 +9,13 @@
 
 use rayon::prelude::*;
 
-use super::bricks::{BrickWalk, at, by_length, common_walk};
+use super::bricks::{BrickWalk, at, common_walk};
 use super::columns::slab_rows;
 use super::grid::Bricks;
-use super::tiles::{RayStart, Walker, advance, sample_bin};
+use super::tiles::{RayStart, Walker, advance, by_bucket, sample_bin};
 use super::{BinSampler, RaySubset};
 use crate::geometry::lattice::Lattice;
-use crate::measure::{Fragment, PartialCounts};
+use crate::measure::{Fragment, PartialCounts, key_ray};
 use crate::volume::Voxel;
 
 /// Rows of rays a slab's walk sets up at a time: what it holds per ray is bounded by a band.
@@ -189,8 +189,16 @@ fn whole_band<T: Voxel>(
         });
     });
     heads(walk, stretches, walkers, out);
-    // Stretches of like lengths side by side, as the bricked walk takes a brick's.
-    by_length(walkers, sorted, tally);
+    // In the tile walk's order: a stretch runs from face to face of the slab (or of the volume
+    // where it leaves it first), so neighbouring rays' stretches have like lengths, and walked
+    // together they share the cache lines they read. (Longest first, as the bricked walk takes
+    // a brick's, a group's eight rays came from all over the band: on the 512³ body held as
+    // f32, 35% more CPU for a slab of the whole volume and 11% for slabs of 64 planes; as i16,
+    // whose map is half the size, the same within the noise.)
+    let tiles = walk.tile_order();
+    by_bucket(walkers, sorted, tally, |w| {
+        tiles.tile_of(key_ray(stretches[w.id].f.key))
+    });
     common_walk(sorted, step, sampler, &mut out.counts);
     for w in sorted.iter() {
         let s = &mut stretches[w.id];

@@ -42,6 +42,65 @@ fn tile_shape(lattice: &Lattice, every: u64) -> (i64, i64) {
     (ti, rays / ti)
 }
 
+/// The tile walk's order of a lattice's rays, as the number of each ray's tile: rows of tiles
+/// in turn, each column by column. Rays set up in key order (row by row) and sorted stably by
+/// it are walked as the tile walk takes them, neighbours together, so that a ray meets the
+/// cache lines its neighbours in the rows beside it have just read.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TileOrder {
+    first: (i64, i64),
+    shape: (i64, i64),
+    columns: i64,
+}
+
+impl TileOrder {
+    pub(super) fn new(lattice: &Lattice, every: u64) -> Self {
+        let ((i0, i1), (j0, _)) = lattice.ray_ranges();
+        let shape = tile_shape(lattice, every);
+        Self {
+            first: (i0, j0),
+            shape,
+            columns: (i1 - i0).div_euclid(shape.0) + 1,
+        }
+    }
+
+    /// The tile of ray `(i, j)` (of the lattice's ranges).
+    pub(super) fn tile_of(&self, (i, j): (i64, i64)) -> usize {
+        let column = (i - self.first.0).div_euclid(self.shape.0);
+        let row = (j - self.first.1).div_euclid(self.shape.1);
+        (row * self.columns + column).max(0) as usize
+    }
+}
+
+/// `walkers` into `sorted` by the bucket `of` gives each, smallest first, in their order within
+/// a bucket: a counting sort (no walker compared, each moved once), with `tally` its counts.
+pub(super) fn by_bucket(
+    walkers: &mut Vec<Walker>,
+    sorted: &mut Vec<Walker>,
+    tally: &mut Vec<usize>,
+    of: impl Fn(&Walker) -> usize,
+) {
+    let (lo, hi) = walkers
+        .iter()
+        .map(&of)
+        .fold((usize::MAX, 0), |(lo, hi), b| (lo.min(b), hi.max(b)));
+    tally.clear();
+    tally.resize(hi.saturating_sub(lo) + 2, 0);
+    for w in walkers.iter() {
+        tally[of(w) - lo + 1] += 1;
+    }
+    for k in 1..tally.len() {
+        tally[k] += tally[k - 1];
+    }
+    sorted.clear();
+    sorted.resize_with(walkers.len(), Walker::idle);
+    for w in walkers.drain(..) {
+        let slot = &mut tally[of(&w) - lo];
+        sorted[*slot] = w;
+        *slot += 1;
+    }
+}
+
 /// A ray of a tile being walked: where it is, its block state, and how many samples it has in
 /// the tile's common walk (all inside cells, see [`BinSampler::inner_span`]) and after it.
 pub(super) struct Walker {
