@@ -409,7 +409,7 @@ def _count(first: int, planes: Planes, grid: Grid, round: Round, params: Options
     samples, axes = round
     block = pieces[0] if len(pieces) == 1 else np.concatenate(pieces, axis=0)
     dims, spacing, held, range_ = grid
-    return slabscope._slabscope._count_view_slab(block.T, first, planes, dims, spacing, held, range_, samples=samples, axes=axes, **params)
+    return slabscope._slabscope._count_view_slab(block.T, first, planes, dims, spacing, held, range_, samples=samples, axes=axes, **_with_budget(params))
 
 
 def _round(

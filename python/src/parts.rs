@@ -189,18 +189,10 @@ pub fn _count_view_slab(
             dims[0], dims[1]
         )));
     }
-    // Read in place where the array is of the held type in Fortran order (a C-ordered
-    // [z, y, x] block's transpose is); else copied once. Either way `of_slab` copies the
-    // planes into their place in the grid.
-    let (data, _copy) = match crate::lent::lend_any(voxels, grid.voxel_type) {
-        Some(lent) => (lent, voxels.clone()),
-        None => crate::volume::copy_of(voxels, grid.voxel_type)?,
-    };
-    let slab = crate::volume::with_voxels!(&data, |s| slabscope::Volume::of_slab(&grid, first, s))
-        .or_py()?;
-    let rounds = rounds(py, &slab, params)?;
     // The planes the slab's samples read, every one of them: a plane missing would read as
     // zeros, the counts wrong with no error.
+    let whole = empty(&grid)?;
+    let rounds = rounds(py, &whole, params)?;
     let needed = rounds.voxel_planes(&(planes.0..planes.1), dims[2]);
     if first != needed.start || shape[2] != needed.len() {
         return Err(PyValueError::new_err(format!(
@@ -208,8 +200,33 @@ pub fn _count_view_slab(
             planes.0, planes.1, needed.start, needed.end, shape[2]
         )));
     }
+    // Read in place where the array is of the held type in Fortran order (a C-ordered
+    // [z, y, x] block's transpose is); else copied once. Either way `of_slab` copies the
+    // planes into their place in the grid.
+    let lent = crate::lent::lend_any(voxels, grid.voxel_type);
     let round = round_of(axes, samples);
     let pool = task_threads(py, params)?;
+    let threads = pool
+        .as_ref()
+        .map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
+    // The voxels as given, copied into the slab (and once more where not lent), and the
+    // counts, weighed before any is copied.
+    let copies = if lent.is_some() { 2 } else { 3 };
+    let given = (shape.iter().product::<usize>() * grid.voxel_type.size()) as u64;
+    let counts = (rounds.slab_bytes(
+        &whole,
+        &round,
+        (&(planes.0..planes.1), threads),
+        grid.voxel_type,
+    ))
+    .or_py()?;
+    check_slab_room(py, params, planes, copies * given + counts)?;
+    let (data, _copy) = match lent {
+        Some(lent) => (lent, voxels.clone()),
+        None => crate::volume::copy_of(voxels, grid.voxel_type)?,
+    };
+    let slab = crate::volume::with_voxels!(&data, |s| slabscope::Volume::of_slab(&grid, first, s))
+        .or_py()?;
     let counts = py
         .detach(|| {
             crate::run::in_pool(pool.as_deref(), || {
@@ -221,6 +238,28 @@ pub fn _count_view_slab(
         round: round.kind(),
         counts,
     })
+}
+
+/// An error unless what a view task counting the cell planes `planes` holds (`bytes`: its voxel
+/// planes as given and copied, the cell map over them and its round's counts) fits its
+/// `max_memory=` (if given).
+fn check_slab_room(
+    py: Python<'_>,
+    params: Option<&Bound<'_, PyDict>>,
+    planes: (usize, usize),
+    bytes: u64,
+) -> PyResult<()> {
+    let budget = crate::params::max_memory(&Kwargs::new(py, "analyze_array", params)?, u64::MAX)?;
+    if bytes > budget {
+        return Err(PyValueError::new_err(format!(
+            "the slab of cell planes {}..{} holds {bytes} bytes (its voxel planes as given and \
+             copied, the cell map over them and its round's counts), beyond the task's budget of \
+             {budget} (chunks of fewer planes along z, so more and thinner slabs, or raise \
+             max_memory=)",
+            planes.0, planes.1
+        )));
+    }
+    Ok(())
 }
 
 /// The pool of the `threads=` the analysis keywords `params` give a task (kept for the

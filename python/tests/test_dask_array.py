@@ -235,11 +235,12 @@ def test_an_affine_as_nibabel_gives_it(client):
 def test_no_task_holds_the_whole_array(client):
     """The background and the partition run in parts too: the analysis is assembled on the
     client, of a volume holding no voxel (its grid alone), which says so when its voxels are
-    asked for; it pickles as its grid. A task's budget bounds what labelling a layer holds."""
+    asked for; it pickles as its grid. A task's budget bounds what each task holds: a slab's
+    view counts, a layer's labelling, a strip."""
     zyx = voxels()
     array = da.from_array(zyx, chunks=(8, 26, 30))
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3)
-    got = slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="100K", slabs=3)
+    got = slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="64M", slabs=3)
     assert got.to_dict() == one.to_dict()
     assert got.slabs == one.slabs and got.best_axis == one.best_axis
     volume = got.volume
@@ -250,12 +251,18 @@ def test_no_task_holds_the_whole_array(client):
         got.labels()
     back = pickle.loads(pickle.dumps(got))
     assert back.to_dict() == one.to_dict() and back.volume.shape == (30, 26, 37)
-    # Labelling a layer of 8 planes of 30×26 voxels holds up to 12 bytes a voxel.
+    # A view task weighs its voxels and its round's counts: a block table of 32³ codes a
+    # lattice (266 KiB with its ends), 147 of them in the shifted round, and the pieces of
+    # rays open at its faces.
+    with pytest.raises(ValueError, match=r"the slab of cell planes \d+\.\.\d+ holds \d+ bytes \(its voxel planes .* beyond the task's budget of 4194304 \(chunks of fewer planes"):
+        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="4M")
+    # With an axis given no view task runs. Labelling a layer of 8 planes of 30×26 voxels
+    # holds up to 12 bytes a voxel.
     with pytest.raises(ValueError, match=r"labelling the background of planes 0..8 takes up to 63640 bytes, beyond the task's budget of 10240"):
-        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="10K")
+        slabscope.dask.analyze_array(client, array, axes="zyx", axis=(0, 0, 1), max_memory="10K")
     # So does what a strip's task holds: its boxes' voxels, given and copied, and masks.
     with pytest.raises(ValueError, match=r"the strip of rows \d+\.\.\d+ holds \d+ bytes \(its voxels in \d+ boxes .* beyond the task's budget of 4096"):
-        slabscope.dask.analyze_array(client, array, axes="zyx", max_memory="4K", background="none")
+        slabscope.dask.analyze_array(client, array, axes="zyx", axis=(0, 0, 1), max_memory="4K", background="none")
     # What reads the voxels where they are does not run in parts.
     with pytest.raises(ValueError, match="explain"):
         slabscope.dask.analyze_array(client, array, axes="zyx", explain=True)

@@ -259,6 +259,24 @@ impl Counter for DenseCounts<'_> {
 }
 
 impl BlockCounts {
+    /// About the bytes [`new`](Self::new)'s tables for `bins` and `block` hold: exactly where a
+    /// table is dense (a word a code), and 32 bytes a possible code where it is a map (an entry
+    /// a code counted, every code at worst).
+    #[must_use]
+    pub fn held_bytes(bins: usize, block: usize) -> u64 {
+        let bits = usize::BITS - (bins.max(2) - 1).leading_zeros();
+        let table = |bits: u32| {
+            let codes = 1u64 << bits.min(40);
+            if bits <= DENSE_BITS {
+                8 * (codes + 1)
+            } else {
+                32 * codes
+            }
+        };
+        let long = bits * block as u32;
+        table(long) + table(long.saturating_sub(bits)) + 8 * 256
+    }
+
     /// Empty counts for blocks of length `block` (2 to 4) over `bins` symbols (2 to 256).
     pub fn new(bins: usize, block: usize) -> Self {
         assert!((2..=4).contains(&block), "block length {block}");

@@ -18,12 +18,13 @@ use rayon::prelude::*;
 
 use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
 use super::refine::refine_in_lockstep;
+use super::streamed::slab_part_bytes;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
 use super::{lattice_of, ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, PartialCounts};
-use crate::volume::Volume;
+use crate::volume::{Volume, VoxelType};
 
 /// A round of a view search counted in parts.
 #[derive(Clone, Debug, PartialEq)]
@@ -205,6 +206,27 @@ impl ViewRounds {
                 })
                 .collect())
         })
+    }
+
+    /// About the bytes [`count_slab`](Self::count_slab) of `round` in the cell planes `planes`
+    /// of `volume` (its grid alone is read), its voxels held as `held`, holds beyond the voxels
+    /// it is given, with `threads` threads: what a task weighs against its budget before it
+    /// copies its voxels.
+    pub fn slab_bytes(
+        &self,
+        volume: &Volume,
+        round: &ViewRound,
+        (planes, threads): (&Range<usize>, usize),
+        held: VoxelType,
+    ) -> Result<u64> {
+        let lattices = self.lattices(volume, round)?;
+        let slab = (planes.len(), threads.max(1));
+        Ok(slab_part_bytes(
+            (volume.dims(), held),
+            &self.params,
+            &lattices,
+            slab,
+        ))
     }
 
     /// The empty counts of `round` (what parts are added to).

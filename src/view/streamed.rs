@@ -14,7 +14,9 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
+use super::rate::{
+    AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into, window_bytes,
+};
 use super::refine::refine_in_lockstep;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
 use super::{lattice_of, ranked, refine_evaluations, resolve, shifted_lattices};
@@ -23,7 +25,7 @@ use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, Fragment, PartialCounts};
 use crate::progress::Monitor;
 use crate::view::rate::SLAB_ROWS;
-use crate::volume::{Quantizer, Volume, Voxel};
+use crate::volume::{Quantizer, Volume, Voxel, VoxelType};
 
 /// About what a ray being set up for a slab's walk holds, bytes.
 const SLOT_BYTES: u64 = 160;
@@ -302,6 +304,33 @@ impl<T: Voxel> Sweeps<'_, T> {
     }
 }
 
+/// About the bytes counting `lattices` in a slab of `planes` planes of cells of a volume of
+/// `dims` voxels held as `voxel_type` holds beyond its voxels, as
+/// [`ViewRounds::count_slab`](super::ViewRounds::count_slab) counts them with `threads`
+/// threads: the window of the cell map over the slab; each lattice's tables and the pieces of
+/// its rays open at the slab's two faces, all held until the part is whole; and each thread's
+/// band of rays being walked.
+pub(super) fn slab_part_bytes(
+    (dims, voxel_type): ([usize; 3], VoxelType),
+    params: &ViewParams,
+    lattices: &[(usize, Lattice, RaySubset)],
+    (planes, threads): (usize, usize),
+) -> u64 {
+    let window = window_bytes(voxel_type, dims, planes);
+    let tables = BlockCounts::held_bytes(params.sampling.bins, params.block);
+    let held = lattices.iter().fold(0u64, |sum, (_, lattice, subset)| {
+        let open = 2 * crossing(dims, lattice, subset.every) * FRAGMENT;
+        sum.saturating_add(tables + open)
+    });
+    let band = (lattices.iter())
+        .map(|(_, lattice, _)| band_bytes(lattice, params))
+        .max()
+        .unwrap_or(0);
+    window
+        .saturating_add(held)
+        .saturating_add((threads as u64).saturating_mul(band))
+}
+
 /// The planes of cells a slab of a sweep within `room` bytes holds: as many as a quarter of the
 /// room allows.
 fn slab_planes<T: Voxel>(dims: [usize; 3], room: u64) -> usize {
@@ -429,5 +458,48 @@ mod tests {
         let monitor = Monitor::new(Some(&cancel), None);
         let e = search_streamed(&v, &ViewParams::default(), 1, &monitor).unwrap_err();
         assert!(matches!(e, Error::Cancelled), "{e}");
+    }
+
+    #[test]
+    fn a_slabs_part_holds_no_more_than_its_task_weighs() {
+        use crate::view::{ViewRound, ViewRounds};
+        for (dims, voxel_type) in [
+            ([30, 26, 41], VoxelType::U8),
+            ([28, 20, 33], VoxelType::F32),
+        ] {
+            let v = awkward_volume(dims, [1.0, 1.0, 1.3], voxel_type, 4);
+            let params = ViewParams::default();
+            let rounds = ViewRounds::new(&v, &params).unwrap();
+            let paper = rounds
+                .count_slab(&v, &ViewRound::Paper, 0..dims[2] - 1)
+                .unwrap();
+            let shifted = ViewRound::Shifted(rounds.paper_samples(&v, &paper).unwrap());
+            let params = rounds.params().clone();
+            for round in [ViewRound::Paper, shifted] {
+                for planes in [0..1, 3..12, 0..dims[2] - 1] {
+                    let parts = rounds.count_slab(&v, &round, planes.clone()).unwrap();
+                    let window = match voxel_type {
+                        VoxelType::F32 => 2,
+                        _ => 1,
+                    } * (dims[0] * dims[1] * planes.len()) as u64;
+                    let held = parts.iter().fold(window, |sum, p| {
+                        sum + BlockCounts::held_bytes(params.sampling.bins, params.block)
+                            + p.fragments().len() as u64 * FRAGMENT
+                    });
+                    let weighed = rounds
+                        .slab_bytes(&v, &round, (&planes, 1), voxel_type)
+                        .unwrap();
+                    assert!(
+                        held <= weighed,
+                        "{planes:?}: {held} held, {weighed} weighed"
+                    );
+                    // A second thread weighs one more band of rays, less than the rest.
+                    let two = rounds
+                        .slab_bytes(&v, &round, (&planes, 2), voxel_type)
+                        .unwrap();
+                    assert!(weighed < two && two - weighed < weighed);
+                }
+            }
+        }
     }
 }

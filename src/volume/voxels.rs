@@ -393,11 +393,21 @@ impl BinTable {
     /// Whether values of `T` are binned by a table (integers of at most 16 bits).
     #[must_use]
     pub fn exists<T: Voxel>() -> bool {
-        Self::size::<T>().is_some()
+        Self::exists_for(T::TYPE)
+    }
+
+    /// Whether values of `voxel_type` are binned by a table.
+    #[must_use]
+    pub fn exists_for(voxel_type: VoxelType) -> bool {
+        Self::size_for(voxel_type).is_some()
     }
 
     fn size<T: Voxel>() -> Option<u32> {
-        match T::TYPE {
+        Self::size_for(T::TYPE)
+    }
+
+    fn size_for(voxel_type: VoxelType) -> Option<u32> {
+        match voxel_type {
             VoxelType::U8 | VoxelType::I8 => Some(1 << 8),
             VoxelType::U16 | VoxelType::I16 => Some(1 << 16),
             _ => None,

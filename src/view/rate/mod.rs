@@ -15,7 +15,7 @@ use serde::Serialize;
 
 pub use bricks::counts_of_bricks;
 pub use grid::{BRICK_CELLS, Bricks};
-pub use sampler::{BinSampler, InnerSpans, VoxelBins};
+pub use sampler::{BinSampler, InnerSpans, VoxelBins, window_bytes};
 pub(crate) use slab::SLAB_ROWS;
 pub use slab::{OpenRays, count_slab_into};
 

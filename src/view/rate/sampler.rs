@@ -6,7 +6,7 @@ use crate::geometry::lattice::{FIXED_BITS, FIXED_STEP, ceil_i64, to_fixed};
 use crate::volume::cells::{MIXED, cell_map, cells_only, cells_window, voxel_map_window};
 use crate::volume::interpolate::Interpolator;
 use crate::volume::voxels::BinTable;
-use crate::volume::{Quantizer, Volume, Voxel};
+use crate::volume::{Quantizer, Volume, Voxel, VoxelType};
 
 /// Quantized trilinear sampling: the bin of the interpolated value, as
 /// [`Quantizer::bin`]`(`[`Interpolator::sample`]`)` gives it, but answered from a cell map (see
@@ -93,8 +93,7 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
     /// The bytes [`window`](Self::window) holds for `planes` planes of cells of a volume of
     /// `dims` voxels of type `T` (one a voxel, two for f32 with its per-voxel map).
     pub fn window_bytes(dims: [usize; 3], planes: usize) -> u64 {
-        let per_voxel = if BinTable::exists::<T>() { 1 } else { 2 };
-        (dims[0] * dims[1] * planes * per_voxel) as u64
+        window_bytes(T::TYPE, dims, planes)
     }
 
     /// The cell map's entry for cell `index`: [`MIXED`] outside the planes held.
@@ -370,6 +369,18 @@ fn div_floor(a: i128, b: i128) -> i128 {
 
 fn div_ceil(a: i128, b: i128) -> i128 {
     -div_floor(-a, b)
+}
+
+/// The bytes [`BinSampler::window`] holds for `planes` planes of cells of a volume of `dims`
+/// voxels of `voxel_type` (one a voxel, two for f32 with its per-voxel map).
+#[must_use]
+pub fn window_bytes(voxel_type: VoxelType, dims: [usize; 3], planes: usize) -> u64 {
+    let per_voxel = if BinTable::exists_for(voxel_type) {
+        1
+    } else {
+        2
+    };
+    (dims[0] * dims[1] * planes * per_voxel) as u64
 }
 
 #[cfg(test)]
