@@ -390,23 +390,13 @@ pub struct BinTable {
 }
 
 impl BinTable {
-    /// Whether values of `T` are binned by a table (integers of at most 16 bits).
+    /// Whether values of `voxel_type` are binned by a table (integers of at most 16 bits).
     #[must_use]
-    pub fn exists<T: Voxel>() -> bool {
-        Self::exists_for(T::TYPE)
+    pub fn exists(voxel_type: VoxelType) -> bool {
+        Self::size(voxel_type).is_some()
     }
 
-    /// Whether values of `voxel_type` are binned by a table.
-    #[must_use]
-    pub fn exists_for(voxel_type: VoxelType) -> bool {
-        Self::size_for(voxel_type).is_some()
-    }
-
-    fn size<T: Voxel>() -> Option<u32> {
-        Self::size_for(T::TYPE)
-    }
-
-    fn size_for(voxel_type: VoxelType) -> Option<u32> {
+    fn size(voxel_type: VoxelType) -> Option<u32> {
         match voxel_type {
             VoxelType::U8 | VoxelType::I8 => Some(1 << 8),
             VoxelType::U16 | VoxelType::I16 => Some(1 << 16),
@@ -417,7 +407,7 @@ impl BinTable {
     /// The table of `T` under `q`, or `None` for f32 (no table: quantize by the formula).
     #[must_use]
     pub fn new<T: Voxel>(q: &Quantizer) -> Option<Self> {
-        let size = Self::size::<T>()?;
+        let size = Self::size(T::TYPE)?;
         let min = T::TYPE.range().0;
         let bins = (0..size)
             .map(|i| {

@@ -25,6 +25,26 @@ impl<'a> Words<'a> {
         Ok(u64::from_le_bytes(word.try_into().unwrap_or_default()))
     }
 
+    /// Reads the magic word `magic` (seven bytes of name, then a version) of a `what`: bytes that
+    /// begin otherwise, however few, are not slabscope's; those of another version of slabscope
+    /// are refused by their version.
+    pub(crate) fn magic(&mut self, magic: [u8; 8], what: &str) -> ReadResult<()> {
+        let rest = self.rest();
+        let name = &rest[..rest.len().min(7)];
+        if name != &magic[..name.len()] {
+            return Err(corrupt(&format!("not slabscope's {what}")));
+        }
+        let version = self.next()?.to_le_bytes()[7];
+        if version != magic[7] {
+            return Err(format!(
+                "{what} of version {version} where this slabscope reads version {}: count the \
+                 parts again with one version of slabscope",
+                magic[7]
+            ));
+        }
+        Ok(())
+    }
+
     /// The number of words left.
     pub(crate) fn left(&self) -> usize {
         (self.bytes.len() - self.at) / 8

@@ -27,22 +27,6 @@ fn bytes_of(words: &[u64]) -> Vec<u8> {
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
 }
 
-/// Reads the magic word `magic` of a `what`, refusing another version's by name.
-fn check_magic(words: &mut Words, magic: [u8; 8], what: &str) -> ReadResult<()> {
-    let got = words.next()?.to_le_bytes();
-    if got[..7] == magic[..7] && got[7] != magic[7] {
-        return Err(format!(
-            "{what} of version {} where this slabscope reads version {}: count the parts \
-             again with one version of slabscope",
-            got[7], magic[7]
-        ));
-    }
-    if got != magic {
-        return Err(corrupt(&format!("not slabscope's {what}")));
-    }
-    Ok(())
-}
-
 /// The most bytes the tables of a part read back may take: a stack's joint histograms of
 /// consecutive slices, dense, take this much for about 4,000 slices of 255 bins.
 const MOST_TABLE_BYTES: u64 = 1 << 31;
@@ -158,7 +142,7 @@ impl SliceCounts {
     /// another version of slabscope among them.
     pub fn from_bytes(bytes: &[u8]) -> ReadResult<Self> {
         let mut words = Words::new(bytes);
-        check_magic(&mut words, COUNTS_MAGIC, "slice counts")?;
+        words.magic(COUNTS_MAGIC, "slice counts")?;
         let (n, bins, rows) = read_shape(&mut words)?;
         let counted = read_rows(&mut words, rows)?;
         let histograms = read_sparse(&mut words, n * bins)?;
@@ -226,7 +210,7 @@ impl SlabJoints {
     /// Joint histograms [`to_bytes`](Self::to_bytes) wrote; an error for any other bytes.
     pub fn from_bytes(bytes: &[u8]) -> ReadResult<Self> {
         let mut words = Words::new(bytes);
-        check_magic(&mut words, JOINTS_MAGIC, "slab joints")?;
+        words.magic(JOINTS_MAGIC, "slab joints")?;
         let (slices, bins, rows) = read_shape(&mut words)?;
         let count = words.next()?;
         if count == 0 || count > slices as u64 {

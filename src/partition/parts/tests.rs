@@ -76,7 +76,13 @@ fn parts_read_back_from_their_bytes_and_nothing_else_does() {
         let mut longer = bytes.clone();
         longer.extend([0; 8]);
         assert!(SliceCounts::from_bytes(&longer).is_err());
-        assert!(SlabJoints::from_bytes(&bytes).is_err());
+        let e = SlabJoints::from_bytes(&bytes).unwrap_err();
+        assert!(e.contains("not slabscope's slab joints"), "{e}");
+        // Fewer bytes than a word: foreign, or the start of a part cut short.
+        let e = SliceCounts::from_bytes(b"junk").unwrap_err();
+        assert!(e.contains("not slabscope's slice counts"), "{e}");
+        let e = SliceCounts::from_bytes(&bytes[..4]).unwrap_err();
+        assert!(e.contains("cut short"), "{e}");
     }
     let slabs = [(0, 10), (10, split.slices())];
     let joints = split

@@ -375,11 +375,7 @@ fn div_ceil(a: i128, b: i128) -> i128 {
 /// voxels of `voxel_type` (one a voxel, two for f32 with its per-voxel map).
 #[must_use]
 pub fn window_bytes(voxel_type: VoxelType, dims: [usize; 3], planes: usize) -> u64 {
-    let per_voxel = if BinTable::exists_for(voxel_type) {
-        1
-    } else {
-        2
-    };
+    let per_voxel = if BinTable::exists(voxel_type) { 1 } else { 2 };
     (dims[0] * dims[1] * planes * per_voxel) as u64
 }
 
