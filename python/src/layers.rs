@@ -16,7 +16,6 @@ use slabscope::volume::background::{BackgroundRule, threshold_of_border};
 use slabscope::volume::{VoxelType, Voxels};
 
 use crate::errors::OrPy;
-use crate::params::Kwargs;
 use crate::split::analysis_of;
 
 /// The voxels of `array` (indexed `[x, y, z]`, x fastest) in the held type `t`: read in place
@@ -119,15 +118,13 @@ fn labels_of(
     let most = ChunkLabels::most_bytes(&chunk);
     let given = PyDict::new(py);
     given.set_item("max_memory", max_memory)?;
-    let kw = Kwargs::new(py, "analyze_array", Some(&given))?;
-    let budget = crate::params::max_memory(&kw, u64::MAX)?;
-    if most > budget {
-        return Err(PyValueError::new_err(format!(
+    crate::params::within_task_budget(py, Some(&given), most, |budget| {
+        format!(
             "labelling the background of planes {z0}..{} takes up to {most} bytes, beyond the \
              task's budget of {budget} (chunks of fewer planes along z, or raise max_memory=)",
             z0 + chunk.size()[2]
-        )));
-    }
+        )
+    })?;
     with_layer!(layer, dtype, |v| py
         .detach(|| ChunkLabels::find(v, &chunk, threshold))
         .or_py())

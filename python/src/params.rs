@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slabscope::params::{Given, Param, Scene, Takes, table, text};
@@ -205,6 +205,22 @@ pub fn max_memory(kw: &Kwargs<'_>, default: u64) -> PyResult<u64> {
         .parsed(&table::MAX_MEMORY, text::bytes)
         .or_py()?
         .unwrap_or(default))
+}
+
+/// An error worded by `refusal` (given the budget) unless `bytes` fit the budget `max_memory=`
+/// among `params` gives a task of `analyze_array` (none given: no bound): what each task
+/// weighs before it spends it.
+pub(crate) fn within_task_budget(
+    py: Python<'_>,
+    params: Option<&Bound<'_, PyDict>>,
+    bytes: u64,
+    refusal: impl FnOnce(u64) -> String,
+) -> PyResult<()> {
+    let budget = max_memory(&Kwargs::new(py, "analyze_array", params)?, u64::MAX)?;
+    if bytes > budget {
+        return Err(PyValueError::new_err(refusal(budget)));
+    }
+    Ok(())
 }
 
 /// The NumPy dtype name of a voxel type.

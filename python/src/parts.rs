@@ -249,17 +249,15 @@ fn check_slab_room(
     planes: (usize, usize),
     bytes: u64,
 ) -> PyResult<()> {
-    let budget = crate::params::max_memory(&Kwargs::new(py, "analyze_array", params)?, u64::MAX)?;
-    if bytes > budget {
-        return Err(PyValueError::new_err(format!(
+    crate::params::within_task_budget(py, params, bytes, |budget| {
+        format!(
             "the slab of cell planes {}..{} holds {bytes} bytes (its voxel planes as given and \
              copied, the cell map over them and its round's counts), beyond the task's budget of \
              {budget} (chunks of fewer planes along z, so more and thinner slabs, or raise \
              max_memory=)",
             planes.0, planes.1
-        )));
-    }
-    Ok(())
+        )
+    })
 }
 
 /// The pool of the `threads=` the analysis keywords `params` give a task (kept for the

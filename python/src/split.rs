@@ -192,11 +192,10 @@ fn check_room(
     masks: &[Vec<u8>],
     rows: (usize, usize),
 ) -> PyResult<()> {
-    let budget = crate::params::max_memory(&Kwargs::new(py, "analyze_array", params)?, u64::MAX)?;
     let holds = 2 * bytes as u64 + 2 * masks.iter().map(|m| m.len() as u64).sum::<u64>();
-    if holds > budget {
+    crate::params::within_task_budget(py, params, holds, |budget| {
         let planes: usize = held.iter().map(|(p, _)| p.len()).sum();
-        return Err(PyValueError::new_err(format!(
+        format!(
             "the strip of rows {}..{} holds {holds} bytes (its voxels in {} boxes across {planes} \
              planes, as given and copied, and their layers' masks), beyond the task's budget of \
              {budget} (chunks of fewer planes along z, so more and thinner strips, or raise \
@@ -204,9 +203,8 @@ fn check_room(
             rows.0,
             rows.1,
             held.len()
-        )));
-    }
-    Ok(())
+        )
+    })
 }
 
 /// An error unless the boxes `held` (each with the planes of its layer) hold every voxel the
