@@ -40,6 +40,7 @@ def store(folder: str, size: int, chunk: int) -> str:
 
     import slabscope
 
+    os.makedirs(folder, exist_ok=True)
     path = os.path.join(folder, f"body{size}_c{chunk}.zarr")
     if os.path.exists(path):
         return path
