@@ -218,7 +218,7 @@ impl<T: Voxel> Sweeps<'_, T> {
         monitor: &Monitor,
     ) -> Result<Vec<PartialCounts>> {
         let dims = self.volume.dims();
-        let window = BinSampler::<T>::window_bytes(dims, slab + 1);
+        let window = window_bytes(T::TYPE, dims, slab + 1);
         // Each thread walks one band of one lattice's rays at a time.
         let widest = lattices
             .iter()
@@ -335,7 +335,7 @@ pub(super) fn slab_part_bytes(
 /// room allows.
 fn slab_planes<T: Voxel>(dims: [usize; 3], room: u64) -> usize {
     let cells = dims[2].saturating_sub(1).max(1);
-    let per_plane = BinSampler::<T>::window_bytes(dims, 1).max(1);
+    let per_plane = window_bytes(T::TYPE, dims, 1).max(1);
     let affordable = ((room / 4) / per_plane).saturating_sub(1).max(1) as usize;
     affordable.min(cells)
 }

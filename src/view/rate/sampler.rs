@@ -90,12 +90,6 @@ impl<'a, T: Voxel> BinSampler<'a, T> {
         }
     }
 
-    /// The bytes [`window`](Self::window) holds for `planes` planes of cells of a volume of
-    /// `dims` voxels of type `T` (one a voxel, two for f32 with its per-voxel map).
-    pub fn window_bytes(dims: [usize; 3], planes: usize) -> u64 {
-        window_bytes(T::TYPE, dims, planes)
-    }
-
     /// The cell map's entry for cell `index`: [`MIXED`] outside the planes held.
     #[inline]
     fn cell_entry(&self, index: usize) -> u8 {
