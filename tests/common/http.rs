@@ -1,8 +1,8 @@
 //! A loopback HTTP server written for the tests (no server from outside): it serves a folder
 //! (a fixture store) on 127.0.0.1 with single-range support (`Range: bytes=a-b`, `a-`, `-n`),
 //! GET and HEAD, keep-alive, counts the requests it answers, and can misbehave on the paths that
-//! hold a given text: stall, truncate the body, answer a status, redirect in a loop, or send an
-//! HTML page.
+//! hold a given text: stall, answer slowly, truncate the body, answer a status, redirect in a
+//! loop, or send an HTML page.
 
 use std::collections::HashSet;
 use std::io::{BufRead, BufReader, Write};
@@ -18,6 +18,9 @@ pub enum Mode {
     Normal,
     /// It reads the request and never answers (until the connection is closed by the client).
     Stall,
+    /// It waits this many milliseconds before each answer, then serves the folder: a load that
+    /// takes as long as its requests make it, whatever the machine.
+    Slow(u64),
     /// It states the file's length but sends half of it, then closes the connection.
     Truncate,
     /// It states half the file's length but sends all of it, keeping the connection open: the
@@ -161,6 +164,10 @@ fn answer(
         Mode::Stall => {
             std::thread::sleep(Duration::from_secs(60));
             return Ok(false);
+        }
+        Mode::Slow(ms) => {
+            std::thread::sleep(Duration::from_millis(ms));
+            return answer(out, root, Mode::Normal, method, path, range);
         }
         Mode::Status(code) => {
             write!(out, "HTTP/1.1 {code} Nope\r\nContent-Length: 0\r\n\r\n")?;

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use slabscope::{LoadOptions, load};
 
+use crate::common::http::{Mode, Server, serve};
 use crate::common::zarr::{codec, nested_shard, store};
 
 /// The bytes a bomb decodes to: far past the 256 KiB chunk and the 64 MiB budget's quarter.
@@ -212,24 +213,27 @@ fn a_flood_of_tiny_chunks_is_refused_before_any_is_read() {
     assert_eq!(v.volume.dims(), [64, 64, 64]);
 }
 
-/// A store of 64,000 chunks of 8³ voxels (under the flood limit, none written): seconds of
-/// opening absent files, long enough for a timeout or a cancellation to fall inside the load.
-fn slow_store(dir: &Path) -> PathBuf {
-    flood(dir, "slow.zarr", 320, 8)
+/// A store of 64 absent chunks served over loopback HTTP, each request answered after 50 ms: a
+/// load of at least 1.6 s on two threads, however fast the machine, so a timeout of 0.1 s or
+/// a cancellation at 10 ms falls inside it. (A store of 64,000 absent chunks on disk, which
+/// these tests read before, loaded within a fifth of a second on a fast machine.) The server
+/// and the URL it is read from.
+fn slow_store(dir: &Path) -> (Server, String) {
+    flood(dir, "slow.zarr", 64, 16);
+    let server = serve(dir, Mode::Slow(50), "/c/");
+    let url = server.url("slow.zarr");
+    (server, url)
 }
 
 #[test]
 fn a_timeout_stops_a_long_load_naming_the_file() {
-    use crate::common::{run, s};
+    use crate::common::run;
     let dir = tempfile::tempdir().unwrap();
-    let store = slow_store(dir.path());
-    let stopped = run(&["analyze", s(&store), "--timeout", "0.2"]);
+    let (_server, url) = slow_store(dir.path());
+    let stopped = run(&["analyze", &url, "--timeout", "0.1"]);
     assert!(!stopped.ok);
     // Stopped in the load (the analysis' stop names no loading), on one line naming the store.
-    let line = format!(
-        "slabscope: error: {}: loading: stopped at the --timeout of 0.2 s\n",
-        store.display()
-    );
+    let line = format!("slabscope: error: {url}: loading: stopped at the --timeout of 0.1 s\n");
     assert_eq!(stopped.stderr, line);
     assert!(stopped.stdout.is_empty());
 }
@@ -237,17 +241,17 @@ fn a_timeout_stops_a_long_load_naming_the_file() {
 #[test]
 fn a_load_stops_when_its_cancellation_is_raised() {
     let dir = tempfile::tempdir().unwrap();
-    let store = slow_store(dir.path());
+    let (_server, url) = slow_store(dir.path());
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let opts = LoadOptions {
         cancel: slabscope::Cancel::new(std::sync::Arc::clone(&flag)),
         ..LoadOptions::default()
     };
     let raise = std::thread::spawn(move || {
-        std::thread::sleep(std::time::Duration::from_millis(100));
+        std::thread::sleep(std::time::Duration::from_millis(10));
         flag.store(true, std::sync::atomic::Ordering::Relaxed);
     });
-    let loaded = load(&store, &opts);
+    let loaded = load(Path::new(&url), &opts);
     raise.join().unwrap();
     assert!(
         matches!(loaded, Err(slabscope::Error::Cancelled)),
@@ -257,15 +261,15 @@ fn a_load_stops_when_its_cancellation_is_raised() {
 
 #[test]
 fn triage_stops_a_long_load_at_its_timeout_in_the_row() {
-    use crate::common::{rows, run, s};
+    use crate::common::{rows, run};
     let dir = tempfile::tempdir().unwrap();
-    let store = slow_store(dir.path());
-    let ran = run(&["triage", s(&store), "--json", "--timeout", "0.2"]);
+    let (_server, url) = slow_store(dir.path());
+    let ran = run(&["triage", &url, "--json", "--timeout", "0.1"]);
     assert_eq!(ran.code, 1, "{}", ran.stderr);
     let rows = rows(&ran.stdout);
     assert_eq!(
         rows[0]["error"],
-        "loading took longer than the 0.2 s timeout"
+        "loading took longer than the 0.1 s timeout"
     );
     assert!(rows[0]["dims"].is_null(), "not loaded");
 }
