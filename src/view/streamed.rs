@@ -317,7 +317,7 @@ pub(super) fn slab_part_bytes(
     (planes, threads): (usize, usize),
 ) -> u64 {
     let window = window_bytes(voxel_type, dims, planes);
-    let tables = BlockCounts::held_bytes(params.sampling.bins, params.block);
+    let tables = table_bytes(params);
     let held = lattices.iter().fold(0u64, |sum, (_, lattice, subset)| {
         let open = 2 * crossing(dims, lattice, subset.every) * FRAGMENT;
         sum.saturating_add(tables + open)
@@ -353,10 +353,10 @@ fn planes(dims: [usize; 3], slab: usize) -> impl Iterator<Item = Range<usize>> {
         .map(move |z| z..(z + slab).min(cells))
 }
 
-/// The bytes of one lattice's block tables.
+/// The bytes of one lattice's block tables (266 KiB at 32 bins and blocks of 3; the estimate
+/// here before, 32 bytes a possible code, was four times that).
 fn table_bytes(params: &ViewParams) -> u64 {
-    let bits = usize::BITS - (params.sampling.bins.max(2) - 1).leading_zeros();
-    32u64 << (bits as usize * params.block).min(40)
+    BlockCounts::held_bytes(params.sampling.bins, params.block)
 }
 
 /// The bytes one lattice counted in a sweep over a volume of `dims` holds between slabs: its
