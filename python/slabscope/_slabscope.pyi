@@ -33,6 +33,7 @@ __all__ = [
     "_view_part_of",
     "_count_view_slab",
     "_slab_planes",
+    "_view_slabs",
     "_paper_samples",
     "_refine_in_parts",
     "_analyze_with_parts",
@@ -343,6 +344,18 @@ def _slab_planes(
     range: Tuple[float, float, int],
     **params: Any,
 ) -> Tuple[list[Tuple[int, int]], bool]: ...
+def _view_slabs(
+    layers: Sequence[Tuple[int, int]],
+    tasks: int,
+    counting_threads: int,
+    dims: Sequence[int],
+    spacing: Sequence[float],
+    dtype: str,
+    range: Tuple[float, float, int],
+    samples: Optional[Sequence[int]] = None,
+    axes: Optional[Sequence[Tuple[float, float, float]]] = None,
+    **params: Any,
+) -> list[Tuple[int, int]]: ...
 def _paper_samples(
     paper: ViewPart,
     dims: Sequence[int],

@@ -65,10 +65,19 @@ def _budget() -> Optional[int]:
     """Half the Dask memory limit of the worker running this task, bytes (None: no limit)."""
     from distributed import get_worker
 
-    worker = get_worker()
-    manager = getattr(worker, "memory_manager", None)
-    limit = getattr(manager, "memory_limit", None) or getattr(worker, "memory_limit", None)
+    return _worker_budget(get_worker())
+
+
+def _worker_budget(dask_worker: Any) -> Optional[int]:
+    """Half ``dask_worker``'s Dask memory limit, bytes (None: no limit): a task's budget there."""
+    manager = getattr(dask_worker, "memory_manager", None)
+    limit = getattr(manager, "memory_limit", None) or getattr(dask_worker, "memory_limit", None)
     return int(limit) // 2 if limit else None
+
+
+def _threads() -> int:
+    """The threads a task's counts run on by default here (the processors this process may use)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def _with_budget(options: Options) -> Options:
@@ -415,8 +424,7 @@ def _count(first: int, planes: Planes, grid: Grid, round: Round, params: Options
 def _round(
     client: Any,
     layers: _Layers,
-    slabs: List[Planes],
-    held: List[Planes],
+    planned: Tuple[List[Planes], List[Planes]],
     grid: Grid,
     round: Round,
     params: Options,
@@ -426,6 +434,7 @@ def _round(
     from plane ``held``'s first), added up on the client as they come; ``round`` is ``(samples, axes)``:
     the paper samples of a shifted round (else None) and a refinement step's axes (else None,
     the sphere's)."""
+    slabs, held = planned
     with layers.pieces(held) as pieces:
         tasks: List[Any] = []
         for planes, (first, _), these in zip(slabs, held, pieces):
@@ -475,8 +484,9 @@ def analyze_array(
     The chunks are read into layers of whole planes (a chunk layer along z each): once, held on
     the workers until the call returns, where the array fits within half their Dask memory
     limits; else once a round, released after it. Rounds: the range
-    (a task a layer); the view search, a task a slab of the chunks along z (with the planes
-    around it that its samples read): the paper's lattices, the shifted lattices (with
+    (a task a layer); the view search, a task a slab of whole chunk layers along z (as few
+    slabs as keep the cluster's threads at work within a task's budget; with the planes around
+    it that its samples read): the paper's lattices, the shifted lattices (with
     phases), with ``refine=True`` two such rounds a step of the refinement (the axes each step
     asks for, found on the client from the sums); the background (the automatic one in three
     rounds of a task a layer, a threshold's in one); the partition in two rounds of a task a
@@ -502,24 +512,44 @@ def analyze_array(
         grid: Grid = ([nx, ny, nz], list(spacing), held_type, (float(low), float(high), int(finite)))
         cells = max(nz - 1, 1)
         cuts = sorted({min(b, cells) for _, b in bounds} | {0, cells})
-        slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
-        # The voxel planes each slab's task holds, the same in every round: found once, and
-        # the planes it takes from neighbouring layers cut out once. None with an axis given
-        # and no view search asked for.
-        if not slabscope._slabscope._runs_search(**params):
-            slabs = []
-        held, shifted = slabscope._slabscope._slab_planes(slabs, *grid, **params)
-        return _rounds(client, layers, slabs, held, shifted, grid, geometry, params, progress)
+        # The cell planes of each layer, which a round's slabs join (none with an axis given
+        # and no view search asked for).
+        slabs = [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a] if slabscope._slabscope._runs_search(**params) else []
+        return _rounds(client, layers, _Slabs(client, slabs, grid, params), grid, geometry, params, progress)
     finally:
         layers.release()
+
+
+class _Slabs:
+    """The slabs of the view search's rounds: the chunk layers' cell planes joined into as few
+    slabs as keep the cluster's threads at work within a task's budget (``_view_slabs``), for
+    each round as its counts weigh, with the voxel planes each slab's task holds (a slab's
+    planes taken from its layers are cut out once for the call where the layers are kept)."""
+
+    def __init__(self, client: Any, layers: List[Planes], grid: Grid, params: Options) -> None:
+        self.layers, self.grid, self.params = layers, grid, params
+        self.tasks = max(sum(client.nthreads().values()), 1)
+        self.threads = int(params.get("threads") or max(client.run(_threads).values(), default=1))
+        # The smallest worker's task budget, unless one is given.
+        budgets = [b for b in client.run(_worker_budget).values() if b is not None]
+        given = params.get("max_memory") is not None or not budgets
+        self.budgeted = params if given else {**params, "max_memory": min(budgets)}
+        self.shifted = bool(slabscope._slabscope._slab_planes([], *grid, **params)[1])
+
+    def __bool__(self) -> bool:
+        return bool(self.layers)
+
+    def of(self, samples: Optional[List[int]] = None, axes: Optional[List[Any]] = None) -> Tuple[List[Planes], List[Planes]]:
+        """The slabs of the round ``(samples, axes)`` and the voxel planes each holds."""
+        slabs = slabscope._slabscope._view_slabs(self.layers, self.tasks, self.threads, *self.grid, samples=samples, axes=axes, **self.budgeted)
+        held, _ = slabscope._slabscope._slab_planes(slabs, *self.grid, **self.params)
+        return slabs, held
 
 
 def _rounds(
     client: Any,
     layers: "_Layers",
-    slabs: List[Planes],
-    held: List[Planes],
-    shifted: bool,
+    planned: _Slabs,
     grid: Grid,
     geometry: Any,
     params: Options,
@@ -527,8 +557,10 @@ def _rounds(
 ) -> Any:
     """The view search's rounds of tasks, then the background's and the partition's, reporting
     to ``progress``."""
-    step = len(slabs) * (2 if shifted else 1)
-    refine = bool(params.get("refine")) and bool(slabs)
+    shifted = planned.shifted
+    slabs = planned.of() if planned else ([], [])
+    step = len(slabs[0]) * (2 if shifted else 1)
+    refine = bool(params.get("refine")) and bool(planned)
     # Tasks foreseen and not yet done: the sphere's rounds, the background's three rounds of a
     # task a layer (a found one's), the partition's two of a task a strip (as many as layers),
     # the analysis and, with the refinement, its first step (another foreseen as each step
@@ -551,20 +583,27 @@ def _rounds(
         report("partition in parts")
         return whole
 
-    if not slabs:
+    def planned_for(samples: Optional[List[int]], axes: Optional[List[Any]] = None) -> Tuple[List[Planes], List[Planes]]:
+        # A round weighed apart may be split more finely than the paper's: its further tasks
+        # foreseen.
+        these = planned.of(samples, axes)
+        ahead[0] += len(these[0]) - len(slabs[0])
+        return these
+
+    if not planned:
         return end((None, None, []))
-    paper = _round(client, layers, slabs, held, grid, (None, None), params, report)
+    paper = _round(client, layers, slabs, grid, (None, None), params, report)
     more = None
     if shifted:
         samples = slabscope._slabscope._paper_samples(paper, *grid, **params)
-        more = _round(client, layers, slabs, held, grid, (samples, None), params, report)
+        more = _round(client, layers, planned_for(samples), grid, (samples, None), params, report)
     refined: List[Tuple[Any, Any, Any]] = []
     if refine:
 
         def count(axes: List[Tuple[float, float, float]], samples: Optional[List[int]]) -> Any:
             if samples is None:
                 ahead[0] += step
-            total = _round(client, layers, slabs, held, grid, (samples, axes), params, lambda: report("refining in parts"))
+            total = _round(client, layers, planned_for(samples, axes), grid, (samples, axes), params, lambda: report("refining in parts"))
             refined.append((axes, samples, total))
             return total
 

@@ -299,6 +299,62 @@ pub fn _slab_planes(
     Ok((held, rounds.has_shifted()))
 }
 
+/// The slabs of cell planes a round's tasks count: the chunk layers' slabs `layers` (in order
+/// along z) joined into as few slabs as keep `tasks` tasks at work, each within the task budget
+/// `max_memory=` (if given) as `_count_view_slab` weighs it on `counting_threads` (its voxel
+/// planes as given and copied twice, the cell map over them, the round's counts): more and
+/// thinner ones where fewer do not fit, the layers' own at most. Each seam between slabs costs
+/// every ray crossing it a piece sent to the client and stitched there, and a set-up in each
+/// slab: on the 512³ body in 8 layers on 2 workers, slabs of 2 and 4 layers took 0.76× the
+/// CPU of a slab a layer (docs/performance.md).
+#[pyfunction]
+#[pyo3(signature = (layers, tasks, counting_threads, dims, spacing, dtype, range, samples=None, axes=None, **params))]
+#[allow(clippy::too_many_arguments)]
+pub fn _view_slabs(
+    py: Python<'_>,
+    layers: Vec<(usize, usize)>,
+    tasks: usize,
+    counting_threads: usize,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+    samples: Option<Vec<u64>>,
+    axes: Option<Vec<[f64; 3]>>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Vec<(usize, usize)>> {
+    let grid = grid(dims, spacing, dtype, range);
+    let whole = empty(&grid)?;
+    let rounds = rounds(py, &whole, params)?;
+    let round = round_of(axes, samples);
+    let budget = crate::params::max_memory(&Kwargs::new(py, "analyze_array", params)?, u64::MAX)?;
+    let plane = (dims[0] * dims[1] * grid.voxel_type.size()) as u64;
+    let n = layers.len();
+    for k in tasks.clamp(1, n.max(1))..n {
+        let slabs = joined(&layers, k);
+        // What a slab holds grows with its planes alone: the thickest weighs for all.
+        let Some(&(a, b)) = slabs.iter().max_by_key(|(a, b)| b - a) else {
+            break;
+        };
+        let held = rounds.voxel_planes(&(a..b), dims[2]).len() as u64;
+        let counts = rounds
+            .slab_bytes(&whole, &round, (&(a..b), counting_threads), grid.voxel_type)
+            .or_py()?;
+        if (3 * plane * held).saturating_add(counts) <= budget {
+            return Ok(slabs);
+        }
+    }
+    Ok(layers)
+}
+
+/// `layers` (consecutive slabs) joined into `k` slabs of as even a count of layers as can be.
+fn joined(layers: &[(usize, usize)], k: usize) -> Vec<(usize, usize)> {
+    let n = layers.len();
+    (0..k)
+        .map(|i| (layers[i * n / k].0, layers[(i + 1) * n / k - 1].1))
+        .collect()
+}
+
 /// The samples each axis's paper lattice counted, from the first round's sum.
 #[pyfunction]
 #[pyo3(signature = (paper, dims, spacing, dtype, range, **params))]

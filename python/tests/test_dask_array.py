@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import re
 import time
 from typing import Any
 
@@ -50,10 +51,11 @@ def test_one_volume_across_the_cluster_is_the_single_process_analysis(client, pa
     )
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=spacing), slabs=3, **params)
     assert got.to_dict() == one.to_dict()
-    # Chunks of 8 planes along z: 5 layers, 5 slabs of cells. The view search's rounds (two
-    # with phases), the found background's three rounds of a task a layer, the partition's two
-    # passes of a task a strip (5 strips), and the end.
-    views, background = (5, 0) if params else (10, 15)
+    # Chunks of 8 planes along z: 5 layers, joined into 2 slabs of cells for the view search
+    # (the cluster's two threads). The view search's rounds (two with phases), the found
+    # background's three rounds of a task a layer, the partition's two passes of a task a strip
+    # (5 strips), and the end.
+    views, background = (2, 0) if params else (4, 15)
     assert [p for p, _ in heard] == ["view search in parts"] * views + ["background in parts"] * background + ["partition in parts"] * 11
     fractions = [f for _, f in heard]
     assert fractions[-1] == 1.0 and fractions.count(1.0) == 1 and fractions == sorted(fractions)
@@ -100,12 +102,13 @@ def test_the_refinement_as_rounds_of_tasks_is_the_single_process_analysis(client
     assert got.to_dict() == one.to_dict()
     assert got.to_dict()["refined"] is not None
     # The sphere's rounds, then at least two steps of the refinement, a round each of the
-    # paper's lattices (and of the shifted ones with phases), 5 slabs a round.
+    # paper's lattices (and of the shifted ones with phases), 2 slabs a round (5 layers joined
+    # for the cluster's two threads).
     rounds = 1 if params else 2
     phases = [p for p, _ in heard]
-    assert phases[: 5 * rounds] == ["view search in parts"] * (5 * rounds)
+    assert phases[: 2 * rounds] == ["view search in parts"] * (2 * rounds)
     refining = phases.count("refining in parts")
-    assert refining >= 2 * 5 * rounds and refining % (5 * rounds) == 0
+    assert refining >= 2 * 2 * rounds and refining % (2 * rounds) == 0
     fractions = [f for _, f in heard]
     assert fractions == sorted(fractions) and fractions[-1] == 1.0 and fractions.count(1.0) == 1
 
@@ -142,6 +145,36 @@ def test_refined_rounds_out_of_order_are_refused(client):
         slabscope._slabscope._refine_in_parts(paper, *grid, lambda axes, samples: paper, **params)
     with pytest.raises(ZeroDivisionError):
         slabscope._slabscope._refine_in_parts(paper, *grid, lambda axes, samples: 1 / 0, **params)
+
+
+def test_view_slabs_join_layers_for_the_threads_within_the_budget():
+    """The view search's slabs: the chunk layers joined into as few slabs as the cluster's
+    threads take, evenly, each within the task budget; thinner where they do not fit; the
+    layers' own where none joined fits (each task then refuses, naming its slab)."""
+    zyx = voxels()
+    nz, ny, nx = zyx.shape
+    grid = ([nx, ny, nz], [1.0, 1.0, 1.0], "uint8", (float(zyx.min()), float(zyx.max()), zyx.size))
+    layers = [(0, 8), (8, 16), (16, 24), (24, 32), (32, 39)]
+    view_slabs = slabscope._slabscope._view_slabs
+    assert view_slabs(layers, 2, 1, *grid, phases=0) == [(0, 16), (16, 39)]
+    assert view_slabs(layers, 1, 1, *grid, phases=0) == [(0, 39)]
+    assert view_slabs(layers, 3, 1, *grid, phases=0) == [(0, 8), (8, 24), (24, 39)]
+    assert view_slabs(layers, 8, 1, *grid, phases=0) == layers
+    assert view_slabs([], 2, 1, *grid, phases=0) == []
+    # What one task of each plan weighs (on one thread, as the plans are made for), from the
+    # task's own refusal at a budget of a byte.
+    def weighs(planes):
+        (first, end), = slabscope._slabscope._slab_planes([planes], *grid, phases=0)[0]
+        with pytest.raises(ValueError, match="beyond the task's budget") as refused:
+            slabscope._slabscope._count_view_slab(zyx[first:end].T, first, planes, *grid, phases=0, threads=1, max_memory=1)
+        return int(re.search(r"holds (\d+) bytes", str(refused.value)).group(1))
+
+    whole, half, layer = weighs((0, 39)), weighs((16, 39)), weighs((32, 39))
+    assert layer < half < whole
+    # A budget the whole volume's slab exceeds and a half's meets: two slabs even for one thread.
+    assert view_slabs(layers, 1, 1, *grid, phases=0, max_memory=whole - 1) == [(0, 16), (16, 39)]
+    assert view_slabs(layers, 2, 1, *grid, phases=0, max_memory=layer) == layers
+    assert view_slabs(layers, 2, 1, *grid, phases=0, max_memory=1) == layers
 
 
 def test_view_parts_add_and_pickle():
@@ -356,9 +389,10 @@ def test_a_worker_killed_mid_run_costs_only_its_tasks(client):
     assert len(after) == 2 and victim not in after and len(before & after) == 1  # one replaced
     one = slabscope.analyze(slabscope.Volume.from_array(zyx.T), slabs=3)
     assert got.to_dict() == one.to_dict()
-    # Every task reported once, however many times it ran: the view search's two rounds, the
-    # background's three and the partition's two (5 layers, 5 strips), and the end.
-    assert len(heard) == 5 * 2 + 5 * 3 + 5 * 2 + 1 and heard[-1] == 1.0
+    # Every task reported once, however many times it ran: the view search's two rounds (2
+    # slabs each), the background's three and the partition's two (5 layers, 5 strips), and
+    # the end.
+    assert len(heard) == 2 * 2 + 5 * 3 + 5 * 2 + 1 and heard[-1] == 1.0
 
 
 def marking(marks: str) -> Any:
