@@ -332,11 +332,15 @@ pub fn _view_slabs(
     let n = layers.len();
     for k in tasks.clamp(1, n.max(1))..n {
         let slabs = joined(&layers, k);
-        // What a slab holds grows with its planes alone: the thickest weighs for all.
+        // A slab's counts grow with its cell planes alone, its voxel planes with where it lies
+        // too (the margins around it, cut at the volume's ends): the most of each weighs for all.
         let Some(&(a, b)) = slabs.iter().max_by_key(|(a, b)| b - a) else {
             break;
         };
-        let held = rounds.voxel_planes(&(a..b), dims[2]).len() as u64;
+        let held = (slabs.iter())
+            .map(|&(a, b)| rounds.voxel_planes(&(a..b), dims[2]).len() as u64)
+            .max()
+            .unwrap_or(0);
         let counts = rounds
             .slab_bytes(&whole, &round, (&(a..b), counting_threads), grid.voxel_type)
             .or_py()?;
