@@ -7,6 +7,46 @@ use super::{BlockCounts, Table};
 /// What reading counts back gives: the counts, or what is wrong with the words.
 pub type ReadResult<T> = std::result::Result<T, String>;
 
+/// Appends `x` as a LEB128 varint (seven bits a byte, the lowest first): the numbers of the
+/// parts' open pieces and of the background's runs.
+pub(crate) fn put_varint(out: &mut Vec<u8>, mut x: u64) {
+    while x >= 0x80 {
+        out.push(x as u8 | 0x80);
+        x >>= 7;
+    }
+    out.push(x as u8);
+}
+
+/// Why a LEB128 varint did not read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BadVarint {
+    /// The bytes end before its last byte.
+    Short,
+    /// It is longer than 64 bits.
+    Long,
+}
+
+/// The LEB128 varint [`put_varint`] wrote at the start of `bytes`, and how many bytes it took.
+#[inline]
+pub(crate) fn varint(bytes: &[u8]) -> Result<(u64, usize), BadVarint> {
+    let mut x = 0u64;
+    for (k, &b) in bytes.iter().enumerate().take(10) {
+        let bits = u64::from(b & 0x7f);
+        if k == 9 && bits > 1 {
+            return Err(BadVarint::Long);
+        }
+        x |= bits << (7 * k);
+        if b & 0x80 == 0 {
+            return Ok((x, k + 1));
+        }
+    }
+    Err(if bytes.len() >= 10 {
+        BadVarint::Long
+    } else {
+        BadVarint::Short
+    })
+}
+
 /// Reads little-endian words one at a time from bytes, refusing to read past the end.
 pub(crate) struct Words<'a> {
     bytes: &'a [u8],
@@ -129,5 +169,31 @@ impl BlockCounts {
             }
         }
         Ok(counts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{BadVarint, put_varint, varint};
+
+    #[test]
+    fn varints_read_back_and_refuse_what_is_cut_or_too_long() {
+        for x in [0, 1, 127, 128, 300, 1 << 35, u64::MAX - 1, u64::MAX] {
+            let mut out = vec![];
+            put_varint(&mut out, x);
+            assert_eq!(
+                out.len(),
+                (64 - x.leading_zeros() as usize).div_ceil(7).max(1)
+            );
+            out.push(0xff);
+            assert_eq!(varint(&out), Ok((x, out.len() - 1)), "{x}");
+            assert_eq!(varint(&out[..out.len() - 2]), Err(BadVarint::Short), "{x}");
+        }
+        assert_eq!(varint(&[]), Err(BadVarint::Short));
+        // A tenth byte holds the 64th bit alone; an eleventh is never reached.
+        let mut ten = vec![0xff; 9];
+        ten.push(0x02);
+        assert_eq!(varint(&ten), Err(BadVarint::Long));
+        assert_eq!(varint(&[0x80; 12]), Err(BadVarint::Long));
     }
 }

@@ -7,7 +7,7 @@
 //! (48 bytes) were written before version 3.
 
 use super::{Fragment, HEAD_MISSING, MAX_HEAD, PartialCounts, RUN_LEN};
-use crate::measure::blocks::{BlockCounts, ReadResult, Words, corrupt};
+use crate::measure::blocks::{BadVarint, BlockCounts, ReadResult, Words, corrupt, put_varint};
 
 /// The first word of [`PartialCounts::to_bytes`]: `SLABPC`, a zero and the version. 3 since
 /// the pieces are written in a few bytes each (2: six words a piece; 1: ray keys in another
@@ -16,15 +16,6 @@ const MAGIC: [u8; 8] = *b"SLABPC\x00\x03";
 
 /// The fewest bytes a piece takes: its key's step, start, length, flags and code.
 const LEAST_PIECE: usize = 5;
-
-/// Appends `x` as a LEB128 varint.
-fn put(out: &mut Vec<u8>, mut x: u64) {
-    while x >= 0x80 {
-        out.push(x as u8 | 0x80);
-        x >>= 7;
-    }
-    out.push(x as u8);
-}
 
 /// Reads bytes one at a time, refusing to read past the end.
 struct Bytes<'a> {
@@ -41,19 +32,14 @@ impl Bytes<'_> {
 
     /// A LEB128 varint of at most 64 bits.
     fn varint(&mut self) -> ReadResult<u64> {
-        let mut x = 0u64;
-        for shift in (0..64).step_by(7) {
-            let b = self.byte()?;
-            let bits = u64::from(b & 0x7f);
-            if shift == 63 && bits > 1 {
-                break;
+        match crate::measure::blocks::varint(&self.bytes[self.at..]) {
+            Ok((x, n)) => {
+                self.at += n;
+                Ok(x)
             }
-            x |= bits << shift;
-            if b & 0x80 == 0 {
-                return Ok(x);
-            }
+            Err(BadVarint::Short) => Err(cut()),
+            Err(BadVarint::Long) => Err(corrupt("a number longer than 64 bits")),
         }
-        Err(corrupt("a number longer than 64 bits"))
     }
 }
 
@@ -66,12 +52,12 @@ impl Fragment {
     fn write(&self, last_key: u64, block: usize, out: &mut Vec<u8>) {
         // The step from the last key, which is no greater (wrapping, so that any order reads
         // back as it was written).
-        put(out, self.key.wrapping_sub(last_key));
-        put(out, self.start);
-        put(out, self.len());
+        put_varint(out, self.key.wrapping_sub(last_key));
+        put_varint(out, self.start);
+        put_varint(out, self.len());
         out.push(self.bits);
         out.extend_from_slice(&self.head[..self.head_len(block)]);
-        put(out, u64::from(self.code));
+        put_varint(out, u64::from(self.code));
     }
 
     /// A fragment [`write`](Self::write) wrote after one of key `last_key`, for `counts`.
@@ -220,9 +206,9 @@ mod tests {
         // The second piece: its key 5 - (-2) = 7 past the first's, start 0 and 3 samples,
         // flags (a run of 3: 0b011 << 5), no head, the run's code (31, 0, 8 at 5 bits each).
         let mut tail = Vec::new();
-        put(&mut tail, 7);
+        put_varint(&mut tail, 7);
         tail.extend([0, 3, 3 << 5]);
-        put(&mut tail, (31 << 10) | 8);
+        put_varint(&mut tail, (31 << 10) | 8);
         let end = bytes.iter().rposition(|&b| b != 0).unwrap() + 1;
         assert_eq!(&bytes[end - tail.len()..end], &tail[..]);
         // The pieces in 24 bytes (the first's key takes 10), where version 2 wrote 96.

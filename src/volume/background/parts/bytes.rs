@@ -11,6 +11,7 @@
 
 use super::{Chunk, ChunkAnswer, ChunkMask, ChunkSummary, face_area};
 use crate::error::{Error, Result};
+use crate::measure::{put_varint, varint};
 
 /// The first word of [`ChunkSummary::to_bytes`].
 const SUMMARY: [u8; 8] = *b"SLABBS\x00\x01";
@@ -21,15 +22,6 @@ const ANSWER: [u8; 8] = *b"SLABBA\x00\x01";
 /// The first word of [`ChunkMask::to_bytes`].
 const MASK: [u8; 8] = *b"SLABBM\x00\x01";
 
-/// Appends `x` as a LEB128 varint.
-fn put(out: &mut Vec<u8>, mut x: u64) {
-    while x >= 0x80 {
-        out.push(x as u8 | 0x80);
-        x >>= 7;
-    }
-    out.push(x as u8);
-}
-
 /// Values as runs `(value, length)`, two varints each.
 pub(super) fn runs(values: impl Iterator<Item = u32>) -> Vec<u8> {
     let mut out = Vec::new();
@@ -38,16 +30,16 @@ pub(super) fn runs(values: impl Iterator<Item = u32>) -> Vec<u8> {
         run = match run {
             Some((w, n)) if w == v => Some((w, n + 1)),
             Some((w, n)) => {
-                put(&mut out, u64::from(w));
-                put(&mut out, n);
+                put_varint(&mut out, u64::from(w));
+                put_varint(&mut out, n);
                 Some((v, 1))
             }
             None => Some((v, 1)),
         };
     }
     if let Some((w, n)) = run {
-        put(&mut out, u64::from(w));
-        put(&mut out, n);
+        put_varint(&mut out, u64::from(w));
+        put_varint(&mut out, n);
     }
     out
 }
@@ -64,19 +56,9 @@ impl<'a> Runs<'a> {
     }
 
     fn varint(&mut self) -> Option<u64> {
-        let mut x = 0u64;
-        for (k, &b) in self.bytes.iter().enumerate().take(10) {
-            let bits = u64::from(b & 0x7f);
-            if k == 9 && bits > 1 {
-                return None;
-            }
-            x |= bits << (7 * k);
-            if b & 0x80 == 0 {
-                self.bytes = &self.bytes[k + 1..];
-                return Some(x);
-            }
-        }
-        None
+        let (x, n) = varint(self.bytes).ok()?;
+        self.bytes = &self.bytes[n..];
+        Some(x)
     }
 
     /// Whether every byte was read.
