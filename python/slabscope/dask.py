@@ -68,11 +68,17 @@ def _budget() -> Optional[int]:
     return _worker_budget(get_worker())
 
 
-def _worker_budget(dask_worker: Any) -> Optional[int]:
-    """Half ``dask_worker``'s Dask memory limit, bytes (None: no limit): a task's budget there."""
+def _worker_limit(dask_worker: Any) -> Optional[int]:
+    """``dask_worker``'s Dask memory limit, bytes (None: no limit)."""
     manager = getattr(dask_worker, "memory_manager", None)
     limit = getattr(manager, "memory_limit", None) or getattr(dask_worker, "memory_limit", None)
-    return int(limit) // 2 if limit else None
+    return int(limit) if limit else None
+
+
+def _worker_budget(dask_worker: Any) -> Optional[int]:
+    """Half ``dask_worker``'s Dask memory limit, bytes (None: no limit): a task's budget there."""
+    limit = _worker_limit(dask_worker)
+    return limit // 2 if limit else None
 
 
 def _threads() -> int:
@@ -304,7 +310,7 @@ _KEEP_SHARE = 0.5
 def _fits(client: Any, nbytes: int) -> bool:
     """Whether an array of ``nbytes`` fits within :data:`_KEEP_SHARE` of the workers' Dask
     memory limits added up (a worker without a limit: it fits)."""
-    limits = client.run(lambda dask_worker: getattr(getattr(dask_worker, "memory_manager", None), "memory_limit", None) or getattr(dask_worker, "memory_limit", None))
+    limits = client.run(_worker_limit)
     if not limits or not all(limits.values()):
         return True
     return nbytes <= _KEEP_SHARE * sum(int(v) for v in limits.values())

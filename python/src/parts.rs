@@ -209,18 +209,14 @@ pub fn _count_view_slab(
     let threads = pool
         .as_ref()
         .map_or_else(rayon::current_num_threads, |p| p.current_num_threads());
-    // The voxels as given, copied into the slab (and once more where not lent), and the
-    // counts, weighed before any is copied.
-    let copies = if lent.is_some() { 2 } else { 3 };
-    let given = (shape.iter().product::<usize>() * grid.voxel_type.size()) as u64;
-    let counts = (rounds.slab_bytes(
-        &whole,
-        &round,
-        (&(planes.0..planes.1), threads),
-        grid.voxel_type,
-    ))
-    .or_py()?;
-    check_slab_room(py, params, planes, copies * given + counts)?;
+    // Weighed before any voxel is copied.
+    let bytes = task_bytes(
+        (&rounds, &whole, &round),
+        (&(planes.0..planes.1), needed.len(), grid.voxel_type),
+        lent.is_some(),
+        threads,
+    )?;
+    check_slab_room(py, params, planes, bytes)?;
     let (data, _copy) = match lent {
         Some(lent) => (lent, voxels.clone()),
         None => crate::volume::copy_of(voxels, grid.voxel_type)?,
@@ -238,6 +234,25 @@ pub fn _count_view_slab(
         round: round.kind(),
         counts,
     })
+}
+
+/// What a view task counting the cell planes `planes` of `round` holds, bytes: its
+/// `voxel_planes` held as `voxel_type` as given, copied into the slab (and once more first
+/// where they cannot be lent as they are), and the round's counts (`ViewRounds::slab_bytes`) on
+/// `threads` threads; `whole` the grid's volume holding no voxel.
+fn task_bytes(
+    (rounds, whole, round): (&ViewRounds, &slabscope::Volume, &ViewRound),
+    (planes, voxel_planes, voxel_type): (&std::ops::Range<usize>, usize, VoxelType),
+    lent: bool,
+    threads: usize,
+) -> PyResult<u64> {
+    let [nx, ny, _] = whole.dims();
+    let given = (nx * ny * voxel_planes * voxel_type.size()) as u64;
+    let copies = if lent { 2 } else { 3 };
+    let counts = rounds
+        .slab_bytes(whole, round, (planes, threads), voxel_type)
+        .or_py()?;
+    Ok((copies * given).saturating_add(counts))
 }
 
 /// An error unless what a view task counting the cell planes `planes` holds (`bytes`: its voxel
@@ -328,7 +343,6 @@ pub fn _view_slabs(
     let rounds = rounds(py, &whole, params)?;
     let round = round_of(axes, samples);
     let budget = crate::params::max_memory(&Kwargs::new(py, "analyze_array", params)?, u64::MAX)?;
-    let plane = (dims[0] * dims[1] * grid.voxel_type.size()) as u64;
     let n = layers.len();
     for k in tasks.clamp(1, n.max(1))..n {
         let slabs = joined(&layers, k);
@@ -338,13 +352,17 @@ pub fn _view_slabs(
             break;
         };
         let held = (slabs.iter())
-            .map(|&(a, b)| rounds.voxel_planes(&(a..b), dims[2]).len() as u64)
+            .map(|&(a, b)| rounds.voxel_planes(&(a..b), dims[2]).len())
             .max()
             .unwrap_or(0);
-        let counts = rounds
-            .slab_bytes(&whole, &round, (&(a..b), counting_threads), grid.voxel_type)
-            .or_py()?;
-        if (3 * plane * held).saturating_add(counts) <= budget {
+        // Weighed as a task whose planes are copied before they are lent, the most it holds.
+        let bytes = task_bytes(
+            (&rounds, &whole, &round),
+            (&(a..b), held, grid.voxel_type),
+            false,
+            counting_threads,
+        )?;
+        if bytes <= budget {
             return Ok(slabs);
         }
     }

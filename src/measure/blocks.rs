@@ -41,6 +41,18 @@ impl Table {
         }
     }
 
+    /// About the bytes [`new`](Self::new)'s table for codes of `bits` bits holds: exactly where
+    /// it is dense (a word a code), and 32 bytes a possible code where it is a map (an entry a
+    /// code counted, every code at worst).
+    fn held_bytes(bits: u32) -> u64 {
+        let codes = 1u64 << bits.min(40);
+        if bits <= DENSE_BITS {
+            8 * (codes + 1)
+        } else {
+            32 * codes
+        }
+    }
+
     #[inline]
     fn add(&mut self, code: u64, n: u64) {
         match self {
@@ -259,22 +271,13 @@ impl Counter for DenseCounts<'_> {
 }
 
 impl BlockCounts {
-    /// About the bytes [`new`](Self::new)'s tables for `bins` and `block` hold: exactly where a
-    /// table is dense (a word a code), and 32 bytes a possible code where it is a map (an entry
-    /// a code counted, every code at worst).
+    /// About the bytes [`new`](Self::new)'s tables for `bins` and `block` hold (each table's as
+    /// `Table::held_bytes` says).
     #[must_use]
     pub fn held_bytes(bins: usize, block: usize) -> u64 {
         let bits = usize::BITS - (bins.max(2) - 1).leading_zeros();
-        let table = |bits: u32| {
-            let codes = 1u64 << bits.min(40);
-            if bits <= DENSE_BITS {
-                8 * (codes + 1)
-            } else {
-                32 * codes
-            }
-        };
         let long = bits * block as u32;
-        table(long) + table(long.saturating_sub(bits)) + 8 * 256
+        Table::held_bytes(long) + Table::held_bytes(long.saturating_sub(bits)) + 8 * 256
     }
 
     /// Empty counts for blocks of length `block` (2 to 4) over `bins` symbols (2 to 256).
