@@ -42,6 +42,10 @@ __all__ = [
     "PartitionSplit",
     "_partition_part_of",
     "_count_strip",
+    "_count_strip_keeping",
+    "StripRuns",
+    "_strip_joints",
+    "_strip_runs_of",
     "_layer_border",
     "_background_threshold",
     "_layer_summary",
@@ -444,6 +448,33 @@ def _count_strip(
     /,
     **params: Any,
 ) -> PartitionPart: ...
+def _count_strip_keeping(
+    voxels: np.ndarray,
+    boxes: Sequence[Tuple[Tuple[int, int], Sequence[int], Sequence[int]]],
+    rows: Tuple[int, int],
+    axis: Sequence[float],
+    dims: Sequence[int],
+    spacing: Sequence[float],
+    dtype: str,
+    range: Tuple[float, float, int],
+    background: Tuple[Optional[float], Sequence[bytes]],
+    /,
+    **params: Any,
+) -> Tuple[PartitionPart, Optional[StripRuns]]: ...
+
+@final
+class StripRuns:
+    """A strip of the slice stack as its columns' runs, kept on the worker that cut it between
+    the partition's passes (issue #44): pickles as bytes; ``sys.getsizeof`` gives the memory it
+    holds."""
+
+    @property
+    def rows(self) -> Tuple[int, int]: ...
+    def __sizeof__(self) -> int: ...
+    def __reduce__(self) -> Tuple[Any, ...]: ...
+
+def _strip_joints(runs: StripRuns, slabs: Sequence[Tuple[int, int]], /, **params: Any) -> PartitionPart: ...
+def _strip_runs_of(bytes: bytes) -> StripRuns: ...
 def _layer_border(layer: np.ndarray, z0: int, dims: Sequence[int], dtype: str) -> bytes: ...
 def _background_threshold(
     borders: Sequence[bytes], dims: Sequence[int], range: Tuple[float, float]

@@ -734,22 +734,27 @@ def _partition(
     report: Callable[[], None],
 ) -> Any:
     """The partition in two rounds of a task a strip of the slice stack's rows (as many strips
-    as layers), each task gathering the box of voxels its rows read from the layers it crosses
-    (with their background masks), the client adding the parts as they come; then the
+    as layers): the first's tasks gathering the box of voxels their rows read from the layers
+    they cross (with their background masks) and keeping their strips' runs, the second's
+    reading those runs (:func:`_second_pass`), the client adding the parts as they come; then the
     analysis, on the client, of a volume holding no voxel."""
     dims, _, held_type, range_ = grid
     split = slabscope._slabscope.PartitionSplit(geometry, dims, held_type, range_, *views, **params)
     strips = split.strips(len(layers), layers.bounds)
     near = [[background[1][k] for k, _, _ in boxes] if background[1] else [] for _, boxes in strips]
     told = (split.axis, grid, background[0], params)
-    total = _strip_round(client, layers, strips, near, told, None, report)
-    slabs = split.slabs(total, (background[0], background[2]))
-    joints = None
-    if len(slabs) > 1:
-        joints = _strip_round(client, layers, strips, near, told, slabs, report)
-    else:
-        for _ in strips:
-            report()
+    total, kept = _first_pass(client, layers, strips, near, told, report)
+    try:
+        slabs = split.slabs(total, (background[0], background[2]))
+        joints = None
+        if len(slabs) > 1:
+            joints = _second_pass(client, layers, strips, near, told, slabs, kept, report)
+        else:
+            for _ in strips:
+                report()
+    finally:
+        for future in kept:
+            future.release()
     return split.analysis(joints, "array", **params)
 
 
@@ -769,19 +774,11 @@ Told = Tuple[Tuple[float, float, float], Grid, Optional[float], Options]
 Strip = Tuple[Planes, List[Tuple[int, List[int], List[int]]]]
 
 
-def _strip_round(
-    client: Any,
-    layers: _Layers,
-    strips: List[Strip],
-    near: List[List[Any]],
-    told: Told,
-    slabs: Optional[List[Planes]],
-    report: Callable[[], None],
-) -> Any:
-    """A pass of the partition: a task a strip, given its boxes cut from the layers it reads
-    (where they lie, for this pass: released as it ends, so that the workers hold one pass's
-    boxes at most beside the layers) and those layers' masks, its parts added on the client as
-    they come."""
+@contextmanager
+def _boxes(client: Any, layers: _Layers, strips: List[Strip]) -> Iterator[List[List[Any]]]:
+    """For each strip, the futures of its boxes cut from the layers it reads (where they lie,
+    for this pass: released as it ends, so that the workers hold one pass's boxes at most
+    beside the layers)."""
     with layers.round() as current:
         pieces = []
         for _, boxes in strips:
@@ -791,15 +788,95 @@ def _strip_round(
                 these.append(client.submit(_box_of, current[k], (z0 - a, z0 - a + sz), (y0, y0 + sy), (x0, x0 + sx), pure=False))
             pieces.append(these)
         try:
-            tasks = []
-            for (rows, boxes), these, masks in zip(strips, pieces, near):
-                held = [(layers.bounds[k], origin, size) for k, origin, size in boxes]
-                tasks.append(client.submit(_strip, rows, held, told, masks, slabs, *these, pure=False))
-            return _sum(tasks, report)
+            yield pieces
         finally:
             for these in pieces:
                 for future in these:
                     future.release()
+
+
+def _held(strip: Strip, layers: _Layers) -> List[Tuple[Planes, List[int], List[int]]]:
+    """A strip's boxes as its task is told of them: each with its layer's planes."""
+    return [(layers.bounds[k], origin, size) for k, origin, size in strip[1]]
+
+
+def _first_pass(
+    client: Any,
+    layers: _Layers,
+    strips: List[Strip],
+    near: List[List[Any]],
+    told: Told,
+    report: Callable[[], None],
+) -> Tuple[Any, List[Any]]:
+    """The partition's first pass: a task a strip, given its boxes and the masks of the layers
+    they come from, its counts added on the client as they come. Each task keeps its strip's
+    runs where it ran (when they take no more memory than its voxels), so that the second pass
+    reads them instead of the voxels: the futures of the tasks' (counts, runs) come back with
+    the sum, for the caller to release."""
+    with _boxes(client, layers, strips) as pieces:
+        kept = []
+        for strip, these, masks in zip(strips, pieces, near):
+            kept.append(client.submit(_strip_keeping, strip[0], _held(strip, layers), told, masks, *these, pure=False))
+        try:
+            return _sum([client.submit(_first, pair, pure=False) for pair in kept], report), kept
+        except BaseException:
+            for future in kept:
+                future.release()
+            raise
+
+
+def _second_pass(
+    client: Any,
+    layers: _Layers,
+    strips: List[Strip],
+    near: List[List[Any]],
+    told: Told,
+    slabs: List[Planes],
+    kept: List[Any],
+    report: Callable[[], None],
+) -> Any:
+    """The partition's second pass, the joint histograms of consecutive ``slabs``: from each
+    strip's runs where its first task kept them, else (they took more memory than its voxels)
+    from its boxes cut again; added on the client as they come."""
+    has = client.gather([client.submit(_has_runs, pair, pure=False) for pair in kept])
+    tasks = [client.submit(_joints_of, pair, slabs, told[3], pure=False) for pair, h in zip(kept, has) if h]
+    again = [k for k, h in enumerate(has) if not h]
+    if not again:
+        return _sum(tasks, report)
+    with _boxes(client, layers, [strips[k] for k in again]) as pieces:
+        for k, these in zip(again, pieces):
+            tasks.append(client.submit(_strip, strips[k][0], _held(strips[k], layers), told, near[k], slabs, *these, pure=False))
+        return _sum(tasks, report)
+
+
+def _first(pair: Tuple[Any, Any]) -> Any:
+    """The first of a pair (a task where the pair is held: a strip's counts, not its runs)."""
+    return pair[0]
+
+
+def _has_runs(pair: Tuple[Any, Any]) -> bool:
+    """Whether a strip's first task kept its runs."""
+    return pair[1] is not None
+
+
+def _joints_of(pair: Tuple[Any, Any], slabs: List[Planes], params: Options) -> Any:
+    """One task, where a strip's runs are held: its second-pass counts from them."""
+    return slabscope._slabscope._strip_joints(pair[1], slabs, **_with_budget(params))
+
+
+def _strip_keeping(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], *pieces: np.ndarray) -> Any:
+    """One task: a strip's first-pass counts and its runs (or None), as :func:`_strip` is
+    given them."""
+    axis, grid, threshold, params = told
+    dims, spacing, held_type, range_ = grid
+    voxels = _joined(pieces, held_type)
+    bits = [mask for mask, _ in masks]
+    return slabscope._slabscope._count_strip_keeping(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), **_with_budget(params))
+
+
+def _joined(pieces: Tuple[np.ndarray, ...], held_type: str) -> np.ndarray:
+    """A strip's boxes' voxels one after another."""
+    return np.concatenate([p.ravel() for p in pieces]) if pieces else np.zeros(0, dtype=held_type)
 
 
 def _strip(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:
@@ -809,6 +886,6 @@ def _strip(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: 
     ``max_memory`` is given."""
     axis, grid, threshold, params = told
     dims, spacing, held_type, range_ = grid
-    voxels = np.concatenate([p.ravel() for p in pieces]) if pieces else np.zeros(0, dtype=held_type)
+    voxels = _joined(pieces, held_type)
     bits = [mask for mask, _ in masks]
     return slabscope._slabscope._count_strip(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), slabs, **_with_budget(params))

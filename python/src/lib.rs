@@ -34,6 +34,7 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<triage::Triage>()?;
     m.add_class::<parts::ViewPart>()?;
     m.add_class::<split::PartitionPart>()?;
+    m.add_class::<split::StripRuns>()?;
     m.add_class::<split::PartitionSplit>()?;
     m.add_function(wrap_pyfunction!(volume::load, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
@@ -57,6 +58,9 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pickle::_volume_of_grid, m)?)?;
     m.add_function(wrap_pyfunction!(split::_partition_part_of, m)?)?;
     m.add_function(wrap_pyfunction!(split::_count_strip, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_count_strip_keeping, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_strip_joints, m)?)?;
+    m.add_function(wrap_pyfunction!(split::_strip_runs_of, m)?)?;
     m.add_function(wrap_pyfunction!(layers::_layer_border, m)?)?;
     m.add_function(wrap_pyfunction!(layers::_background_threshold, m)?)?;
     m.add_function(wrap_pyfunction!(layers::_layer_summary, m)?)?;

@@ -124,61 +124,197 @@ pub fn _count_strip(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PartitionPart> {
     let grid = grid(dims, spacing, dtype, range);
-    let held: Vec<(std::ops::Range<usize>, VoxelBox)> = (boxes.iter())
-        .map(|&((a, b), origin, size)| (a..b, VoxelBox { origin, size }))
-        .collect();
-    let total: usize = held.iter().map(|(_, b)| b.len()).sum();
-    check_room(
+    let t = StripTask::new(
         py,
-        params,
-        &held,
-        total * grid.voxel_type.size(),
-        &background.1,
+        voxels,
+        boxes,
         rows,
+        axis,
+        (&grid, dtype),
+        background,
+        params,
     )?;
-    // Read in C order, one run of every box's voxels: a box [z, y, x] is x fastest so.
-    let voxels = &voxels.call_method1("reshape", ((-1isize, 1, 1),))?;
-    let volume = with_layer!(voxels, dtype, |v| {
-        if v.len() != total {
-            return Err(PyValueError::new_err(format!(
-                "{} voxels for boxes of {total}",
-                v.len()
-            )));
-        }
-        let mut at = 0;
-        let pieces: Vec<_> = (held.iter())
-            .map(|&(_, b)| {
-                at += b.len();
-                (b, &v[at - b.len()..at])
-            })
-            .collect();
-        slabscope::Volume::of_boxes(&grid, &pieces).or_py()?
-    });
-    let analysis = analysis_of(py, params)?;
-    let split = StackSplit::new(&volume, axis, &analysis.partition()).or_py()?;
-    let rows = rows.0..rows.1;
-    check_held(&split, &volume, &rows, &held)?;
-    let masks = (background.1.iter())
-        .map(|b| ChunkMask::from_bytes(b))
-        .collect::<Result<Vec<_>, _>>()
-        .or_py()?;
-    let background =
-        Background::in_part(dims, analysis.background, background.0, &masks).or_py()?;
     let none = slabscope::progress::Monitor::none();
-    let pool = crate::parts::task_threads(py, params)?;
     let counts = py
         .detach(|| {
-            crate::run::in_pool(pool.as_deref(), || match slabs {
-                None => split
-                    .count(&volume, &background, rows, &none)
+            crate::run::in_pool(t.pool.as_deref(), || match slabs {
+                None => (t.split)
+                    .count(&t.volume, &t.background, t.rows.clone(), &none)
                     .map(PassCounts::Slices),
-                Some(slabs) => split
-                    .count_boundaries(&volume, &background, rows, &slabs, &none)
+                Some(slabs) => (t.split)
+                    .count_boundaries(&t.volume, &t.background, t.rows.clone(), &slabs, &none)
                     .map(PassCounts::Joints),
             })
         })
         .or_py()?;
     Ok(PartitionPart { counts })
+}
+
+/// A strip's first-pass counts as [`_count_strip`] gives them, and its runs kept for the second
+/// pass ([`_strip_joints`]) when they take no more memory than its voxels (else None: the second
+/// pass then cuts the strip from its voxels again).
+#[pyfunction]
+#[pyo3(signature = (voxels, boxes, rows, axis, dims, spacing, dtype, range, background, /, **params))]
+#[allow(clippy::too_many_arguments)]
+pub fn _count_strip_keeping(
+    py: Python<'_>,
+    voxels: &Bound<'_, PyAny>,
+    boxes: Vec<Held>,
+    rows: (usize, usize),
+    axis: [f64; 3],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    dtype: &str,
+    range: (f32, f32, u64),
+    background: Told,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<(PartitionPart, Option<StripRuns>)> {
+    let grid = grid(dims, spacing, dtype, range);
+    let t = StripTask::new(
+        py,
+        voxels,
+        boxes,
+        rows,
+        axis,
+        (&grid, dtype),
+        background,
+        params,
+    )?;
+    let none = slabscope::progress::Monitor::none();
+    let (counts, runs) = py
+        .detach(|| {
+            crate::run::in_pool(t.pool.as_deref(), || {
+                (t.split).count_keeping(&t.volume, &t.background, t.rows.clone(), &none)
+            })
+        })
+        .or_py()?;
+    let runs = (runs.held_bytes() <= t.voxel_bytes).then_some(StripRuns { runs });
+    let counts = PassCounts::Slices(counts);
+    Ok((PartitionPart { counts }, runs))
+}
+
+/// A strip's second-pass counts from the runs its first pass kept: the joint histograms of
+/// consecutive `slabs`, as [`_count_strip`] gives them from the strip's voxels.
+#[pyfunction]
+#[pyo3(signature = (runs, slabs, /, **params))]
+pub fn _strip_joints(
+    py: Python<'_>,
+    runs: &StripRuns,
+    slabs: Vec<(usize, usize)>,
+    params: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PartitionPart> {
+    let pool = crate::parts::task_threads(py, params)?;
+    let none = slabscope::progress::Monitor::none();
+    let joints = py
+        .detach(|| crate::run::in_pool(pool.as_deref(), || runs.runs.joints(&slabs, &none)))
+        .or_py()?;
+    let counts = PassCounts::Joints(joints);
+    Ok(PartitionPart { counts })
+}
+
+/// A strip's columns as runs, kept on the worker that cut it between the partition's passes;
+/// pickles as bytes (should Dask move it), and tells Dask the memory it holds.
+#[pyclass(module = "slabscope", frozen)]
+pub struct StripRuns {
+    runs: slabscope::partition::StripRuns,
+}
+
+#[pymethods]
+impl StripRuns {
+    /// The strip's rows.
+    #[getter]
+    fn rows(&self) -> (usize, usize) {
+        let rows = self.runs.rows();
+        (rows.start, rows.end)
+    }
+
+    /// The bytes the runs hold (what `sys.getsizeof` and so Dask's memory count see).
+    fn __sizeof__(&self) -> usize {
+        self.runs.held_bytes()
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let bytes = PyBytes::new(py, &self.runs.to_bytes());
+        crate::pickle::reduced(py, "_strip_runs_of", (bytes,))
+    }
+}
+
+/// Unpickles `StripRuns`.
+#[pyfunction]
+pub fn _strip_runs_of(bytes: &[u8]) -> PyResult<StripRuns> {
+    let runs = slabscope::partition::StripRuns::from_bytes(bytes).map_err(PyValueError::new_err)?;
+    Ok(StripRuns { runs })
+}
+
+/// What a strip's task counts from: the volume of its boxes, the split, the whole volume's
+/// background as far as the task knows it, its rows, its threads and its voxels' bytes.
+struct StripTask {
+    volume: slabscope::Volume,
+    split: StackSplit,
+    background: Background,
+    rows: std::ops::Range<usize>,
+    pool: Option<std::sync::Arc<rayon::ThreadPool>>,
+    voxel_bytes: usize,
+}
+
+impl StripTask {
+    /// The task of `rows` from its boxes' `voxels`, checked against its budget and against the
+    /// voxels its rows read.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        voxels: &Bound<'_, PyAny>,
+        boxes: Vec<Held>,
+        rows: (usize, usize),
+        axis: [f64; 3],
+        (grid, dtype): (&SlabGrid, &str),
+        background: Told,
+        params: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let held: Vec<(std::ops::Range<usize>, VoxelBox)> = (boxes.iter())
+            .map(|&((a, b), origin, size)| (a..b, VoxelBox { origin, size }))
+            .collect();
+        let total: usize = held.iter().map(|(_, b)| b.len()).sum();
+        let voxel_bytes = total * grid.voxel_type.size();
+        check_room(py, params, &held, voxel_bytes, &background.1, rows)?;
+        // Read in C order, one run of every box's voxels: a box [z, y, x] is x fastest so.
+        let voxels = &voxels.call_method1("reshape", ((-1isize, 1, 1),))?;
+        let volume = with_layer!(voxels, dtype, |v| {
+            if v.len() != total {
+                return Err(PyValueError::new_err(format!(
+                    "{} voxels for boxes of {total}",
+                    v.len()
+                )));
+            }
+            let mut at = 0;
+            let pieces: Vec<_> = (held.iter())
+                .map(|&(_, b)| {
+                    at += b.len();
+                    (b, &v[at - b.len()..at])
+                })
+                .collect();
+            slabscope::Volume::of_boxes(grid, &pieces).or_py()?
+        });
+        let analysis = analysis_of(py, params)?;
+        let split = StackSplit::new(&volume, axis, &analysis.partition()).or_py()?;
+        let rows = rows.0..rows.1;
+        check_held(&split, &volume, &rows, &held)?;
+        let masks = (background.1.iter())
+            .map(|b| ChunkMask::from_bytes(b))
+            .collect::<Result<Vec<_>, _>>()
+            .or_py()?;
+        let background =
+            Background::in_part(grid.dims, analysis.background, background.0, &masks).or_py()?;
+        let pool = crate::parts::task_threads(py, params)?;
+        Ok(Self {
+            volume,
+            split,
+            background,
+            rows,
+            pool,
+            voxel_bytes,
+        })
+    }
 }
 
 /// An error unless what a strip's task holds fits its `max_memory=` (if given): its boxes'

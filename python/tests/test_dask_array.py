@@ -364,6 +364,82 @@ def test_partition_parts_add_and_pickle():
         slabscope._slabscope._count_strip(top, [((0, 20), (x0, y0, 0), (sx, sy, 20))], rows, split.axis, *grid, (None, []), axis="z", background="none")
 
 
+def smooth() -> np.ndarray:
+    """A 30×26×37 volume indexed [z, y, x] of thick tilted layers held as i16: a strip's
+    columns hold a few runs each, which take less memory than its voxels."""
+    z, y, x = np.meshgrid(np.arange(37), np.arange(26), np.arange(30), indexing="ij")
+    values = ((x + y + 4 * z) // 60 % 4) * 300 - 200
+    values[:, :2] = 0
+    return values.astype(np.int16)
+
+
+def ran(stream: Any) -> Any:
+    """How many tasks of each function a task stream holds (a task's key is the function's
+    name, a dash and a token)."""
+    from collections import Counter
+
+    return Counter(str(t["key"]).split("-", 1)[0] for t in stream.data)
+
+
+@pytest.mark.parametrize("kind", ["kept", "cut again"])
+def test_the_second_pass_reads_the_runs_the_first_kept(client, kind):
+    """The partition's first pass keeps each strip's runs on its worker where they take no
+    more memory than its voxels, and the second pass reads them there: no box of voxels is
+    cut for it. A strip whose runs would take more (the noisy volume's, u8) is cut from its
+    voxels again. The answer is one process's either way."""
+    from distributed import get_task_stream
+
+    # Along z a strip's columns are its voxels' columns; along the oblique axis the columns at
+    # a strip's corners hold a sample or two between missing ones, and take more than voxels.
+    zyx = smooth() if kind == "kept" else voxels()
+    array = da.from_array(zyx, chunks=(8, 26, 30))
+    axis = (0.0, 0.0, 1.0) if kind == "kept" else (0.3, 0.5, 0.8)
+    params = {"axis": axis, "slabs": 3, "background": "none"}
+    with get_task_stream(client) as stream:
+        got = slabscope.dask.analyze_array(client, array, axes="zyx", **params)
+    assert got.to_dict() == slabscope.analyze(slabscope.Volume.from_array(zyx.T), **params).to_dict()
+    tasks = ran(stream)
+    # A strip a layer, each given a box from every layer its rows read.
+    nz, ny, nx = zyx.shape
+    grid = ([nx, ny, nz], "uint8", (0.0, 1.0, 1))
+    probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8))
+    split = slabscope._slabscope.PartitionSplit(probe, *grid, axis=axis, background="none")
+    boxes = sum(len(b) for _, b in split.strips(5, [(0, 8), (8, 16), (16, 24), (24, 32), (32, 37)]))
+    assert tasks["_strip_keeping"] == 5
+    if kind == "kept":
+        assert (tasks["_joints_of"], tasks["_strip"], tasks["_box_of"]) == (5, 0, boxes)
+    else:
+        assert (tasks["_joints_of"], tasks["_strip"], tasks["_box_of"]) == (0, 5, 2 * boxes)
+
+
+def test_strip_runs_pickle_and_give_the_second_pass():
+    """A strip's runs pickle as bytes (should Dask move them) and give the second pass's
+    counts the strip's voxels give; bytes of anything else are refused."""
+    zyx = smooth()
+    nz, ny, nx = zyx.shape
+    grid = ([nx, ny, nz], [1.0, 1.0, 1.0], "int16", (float(zyx.min()), float(zyx.max()), zyx.size))
+    probe = slabscope.Volume.from_array(np.zeros((1, 1, 1), np.uint8))
+    split = slabscope._slabscope.PartitionSplit(probe, grid[0], "int16", grid[3], axis="z", background="none")
+    ext = slabscope._slabscope
+    parts, kept, boxes = [], [], []
+    for rows, [(_, (x0, y0, z0), (sx, sy, sz))] in split.strips(3, [(0, nz)]):
+        box = zyx[z0 : z0 + sz, y0 : y0 + sy, x0 : x0 + sx]
+        held = [((0, nz), (x0, y0, z0), (sx, sy, sz))]
+        part, runs = ext._count_strip_keeping(box, held, rows, split.axis, *grid, (None, []), axis="z", background="none")
+        assert runs is not None and runs.rows == rows and 0 < runs.__sizeof__() < box.nbytes
+        parts.append(part)
+        kept.append(pickle.loads(pickle.dumps(runs)))
+        boxes.append((box, held, rows))
+    slabs = split.slabs(parts[0] + parts[1] + parts[2], (None, 0))
+    for runs, (box, held, rows) in zip(kept, boxes):
+        again = ext._count_strip(box, held, rows, split.axis, *grid, (None, []), slabs, axis="z", background="none")
+        assert pickle.dumps(ext._strip_joints(runs, slabs)) == pickle.dumps(again)
+    with pytest.raises(ValueError, match="tile the stack"):
+        ext._strip_joints(kept[0], [(0, 3)])
+    with pytest.raises(ValueError, match="not slabscope's strip's runs"):
+        ext._strip_runs_of(b"junk")
+
+
 def test_a_worker_killed_mid_run_costs_only_its_tasks(client):
     """A worker process killed (SIGKILL) while the view search's tasks run: its nanny starts
     another, the scheduler runs its tasks again elsewhere (and reads again the chunk layers the

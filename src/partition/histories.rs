@@ -393,7 +393,7 @@ impl Histories {
             .map(|&(first, second)| {
                 let mut joint = vec![0u64; bins * bins];
                 add_consecutive_joints(
-                    &self.stack,
+                    Some(&self.stack),
                     &columns,
                     &[first, second],
                     &mut joint,

@@ -23,7 +23,7 @@ pub use labels::{
     label_stream_memory, label_volume,
 };
 pub use optimal::{COMPARE_MAX_SLICES, MAX_SLICES, OptimalPartitions, Optimum};
-pub use parts::{SlabJoints, SlabsFound, SliceCounts, StackSplit};
+pub use parts::{SlabJoints, SlabsFound, SliceCounts, StackSplit, StripRuns};
 pub use result::{Comparison, Partition, PartitionParams, Step, Stop, partition, partition_kept};
 pub use stack::{
     BackgroundSummary, InPlane, MISSING, SliceStack, StackParams, sampled_gain, slice_geometry,

@@ -134,6 +134,28 @@ impl StackSplit {
         Ok(counts)
     }
 
+    /// [`count`](Self::count), keeping the strip's columns as runs: what the second pass reads
+    /// of the strip, so that [`StripRuns::joints`] gives its second-pass counts without cutting
+    /// the strip from the voxels again.
+    pub fn count_keeping(
+        &self,
+        volume: &Volume,
+        background: &Background,
+        rows: Range<usize>,
+        monitor: &Monitor,
+    ) -> Result<(SliceCounts, StripRuns)> {
+        let cutter = Cutter::given(volume, self.axis, &self.params.stack, background)?;
+        monitor.start("slicing in strips (pass 1 of 2)", cutter.work(&rows, true));
+        let mut counts = SliceCounts::new(&cutter);
+        let columns = counts.add_rows_keeping(&cutter, rows.clone(), monitor)?;
+        let runs = StripRuns {
+            stack_rows: self.rows,
+            rows,
+            columns,
+        };
+        Ok((counts, runs))
+    }
+
     /// The slabs of every row's first-pass counts added up.
     pub fn slabs(
         &self,
@@ -297,6 +319,17 @@ impl SliceCounts {
         rows: Range<usize>,
         monitor: &Monitor,
     ) -> Result<()> {
+        self.add_rows_keeping(cutter, rows, monitor).map(drop)
+    }
+
+    /// [`add_rows`](Self::add_rows), giving back the strip's columns as runs (what the second
+    /// pass reads of it).
+    fn add_rows_keeping(
+        &mut self,
+        cutter: &Cutter,
+        rows: Range<usize>,
+        monitor: &Monitor,
+    ) -> Result<Columns> {
         self.counted.insert(&rows)?;
         let mut row = rows.start;
         let strip = cutter.cut(
@@ -310,13 +343,9 @@ impl SliceCounts {
         add(&mut self.histograms, &strip.slice_histograms());
         add(&mut self.positions, strip.positions());
         let singles: Vec<Slab> = (0..self.slices).map(|s| (s, s + 1)).collect();
-        add_consecutive_joints(
-            &strip,
-            &Columns::new(&strip),
-            &singles,
-            &mut self.joints,
-            monitor,
-        )
+        let columns = Columns::new(&strip);
+        add_consecutive_joints(Some(&strip), &columns, &singles, &mut self.joints, monitor)?;
+        Ok(columns)
     }
 
     /// Takes row `row`'s sums: folded when every row before it is, else kept.
@@ -431,7 +460,7 @@ impl SlabJoints {
         self.counted.insert(&rows)?;
         let strip = cutter.cut(rows, None, monitor)?;
         add_consecutive_joints(
-            &strip,
+            Some(&strip),
             &Columns::new(&strip),
             &self.slabs,
             &mut self.joints,
@@ -468,6 +497,9 @@ fn add(a: &mut [u64], b: &[u64]) {
 }
 
 mod bytes;
+mod runs;
+
+pub use runs::StripRuns;
 #[cfg(test)]
 pub(crate) mod testing;
 #[cfg(test)]

@@ -47,6 +47,53 @@ pub(crate) fn varint(bytes: &[u8]) -> Result<(u64, usize), BadVarint> {
     })
 }
 
+/// Reads bytes and LEB128 varints one at a time, refusing to read past the end.
+pub(crate) struct Bytes<'a> {
+    data: &'a [u8],
+    at: usize,
+    /// What reading past the end says.
+    cut: &'static str,
+}
+
+impl<'a> Bytes<'a> {
+    /// The bytes of `bytes`; reading past their end is the error `cut`.
+    pub(crate) fn new(bytes: &'a [u8], cut: &'static str) -> Self {
+        Self {
+            data: bytes,
+            at: 0,
+            cut,
+        }
+    }
+
+    pub(crate) fn byte(&mut self) -> ReadResult<u8> {
+        let b = self.data.get(self.at).copied().ok_or(self.cut)?;
+        self.at += 1;
+        Ok(b)
+    }
+
+    /// A LEB128 varint of at most 64 bits.
+    pub(crate) fn varint(&mut self) -> ReadResult<u64> {
+        match varint(&self.data[self.at..]) {
+            Ok((x, n)) => {
+                self.at += n;
+                Ok(x)
+            }
+            Err(BadVarint::Short) => Err(self.cut.into()),
+            Err(BadVarint::Long) => Err(corrupt("a number longer than 64 bits")),
+        }
+    }
+
+    /// The bytes left.
+    pub(crate) fn left(&self) -> usize {
+        self.data.len() - self.at
+    }
+
+    /// Whether every byte was read.
+    pub(crate) fn is_done(&self) -> bool {
+        self.at == self.data.len()
+    }
+}
+
 /// Reads little-endian words one at a time from bytes, refusing to read past the end.
 pub(crate) struct Words<'a> {
     bytes: &'a [u8],

@@ -7,7 +7,7 @@
 //! (48 bytes) were written before version 3.
 
 use super::{Fragment, HEAD_MISSING, MAX_HEAD, PartialCounts, RUN_LEN};
-use crate::measure::blocks::{BadVarint, BlockCounts, ReadResult, Words, corrupt, put_varint};
+use crate::measure::blocks::{BlockCounts, Bytes, ReadResult, Words, corrupt, put_varint};
 
 /// The first word of [`PartialCounts::to_bytes`]: `SLABPC`, a zero and the version. 3 since
 /// the pieces are written in a few bytes each (2: six words a piece; 1: ray keys in another
@@ -17,35 +17,8 @@ const MAGIC: [u8; 8] = *b"SLABPC\x00\x03";
 /// The fewest bytes a piece takes: its key's step, start, length, flags and code.
 const LEAST_PIECE: usize = 5;
 
-/// Reads bytes one at a time, refusing to read past the end.
-struct Bytes<'a> {
-    bytes: &'a [u8],
-    at: usize,
-}
-
-impl Bytes<'_> {
-    fn byte(&mut self) -> ReadResult<u8> {
-        let b = self.bytes.get(self.at).copied().ok_or_else(cut)?;
-        self.at += 1;
-        Ok(b)
-    }
-
-    /// A LEB128 varint of at most 64 bits.
-    fn varint(&mut self) -> ReadResult<u64> {
-        match crate::measure::blocks::varint(&self.bytes[self.at..]) {
-            Ok((x, n)) => {
-                self.at += n;
-                Ok(x)
-            }
-            Err(BadVarint::Short) => Err(cut()),
-            Err(BadVarint::Long) => Err(corrupt("a number longer than 64 bits")),
-        }
-    }
-}
-
-fn cut() -> String {
-    "counts cut short: the pieces of rays end early".into()
-}
+/// What reading pieces past their end says.
+const CUT: &str = "counts cut short: the pieces of rays end early";
 
 impl Fragment {
     /// Appends the fragment, `last_key` the key of the one written before it (0 for the first).
@@ -146,10 +119,7 @@ impl PartialCounts {
         if pad.iter().any(|&b| b != 0) {
             return Err(corrupt("bytes after the last piece"));
         }
-        let mut bytes = Bytes {
-            bytes: pieces,
-            at: 0,
-        };
+        let mut bytes = Bytes::new(pieces, CUT);
         let mut fragments = Vec::with_capacity(n as usize);
         let mut last_key = 0;
         for _ in 0..n {
@@ -157,7 +127,7 @@ impl PartialCounts {
             last_key = f.key;
             fragments.push(f);
         }
-        if bytes.at != pieces.len() {
+        if !bytes.is_done() {
             return Err(corrupt("bytes after the last piece"));
         }
         Ok(Self::of(counts, rays, fragments))

@@ -74,6 +74,11 @@ impl Checkpoints {
         out
     }
 
+    /// The bytes the checkpoints hold.
+    pub fn held_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.start[..]) + std::mem::size_of_val(&self.counts[..])
+    }
+
     /// Whether column `i`'s histogram over slices `lo..hi` is better taken from its checkpoints
     /// than run by run.
     #[inline]

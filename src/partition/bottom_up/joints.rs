@@ -63,30 +63,34 @@ pub(crate) const PASS_BYTES: usize = 32 << 20;
 /// Bytes of joint histograms one pass holds for `stack`: at most [`PASS_BYTES`], and at most a
 /// mebibyte or the stack's own samples, so that a stack of many small slices (a long thin
 /// volume: 200,000 slices of one pixel) holds histograms in proportion to its samples.
-fn pass_bytes(stack: &SliceStack) -> usize {
-    (stack.pixels().saturating_mul(stack.slices())).clamp(1 << 20, PASS_BYTES)
+fn pass_bytes(columns: &Columns) -> usize {
+    (columns.pixels.saturating_mul(columns.slices)).clamp(1 << 20, PASS_BYTES)
 }
 
 /// A group of constant columns: their symbol, first slice, slices, and how many pixels.
-type ConstantGroup = (u8, usize, usize, u64);
+pub(super) type ConstantGroup = (u8, usize, usize, u64);
 
 /// The stack's columns sorted for joint histograms: columns of one symbol throughout (air, empty
 /// background) are grouped by symbol and valid range, since each contributes to one cell without
 /// being read; the others are read.
 pub(crate) struct Columns {
+    /// The stack's bins, slices and pixels.
+    pub(super) bins: usize,
+    pub(super) slices: usize,
+    pub(super) pixels: usize,
     /// Pixels whose column holds more than one symbol, or missing samples.
-    active: Vec<u32>,
+    pub(super) active: Vec<u32>,
     /// Constant columns, grouped.
-    constant: Vec<ConstantGroup>,
+    pub(super) constant: Vec<ConstantGroup>,
     /// The active columns as runs of one symbol: active column `i` has the runs
     /// `run_start[i] .. run_start[i + 1]`, each from slice `run_first[r]` to the next run's first
     /// (or `run_end[i]`), of symbol `run_symbol[r]`.
-    run_start: Vec<usize>,
-    run_first: Vec<u32>,
-    run_symbol: Vec<u8>,
-    run_end: Vec<u32>,
+    pub(super) run_start: Vec<usize>,
+    pub(super) run_first: Vec<u32>,
+    pub(super) run_symbol: Vec<u8>,
+    pub(super) run_end: Vec<u32>,
     /// The cumulative histograms of the columns of many runs, at every so many runs.
-    checkpoints: Checkpoints,
+    pub(super) checkpoints: Checkpoints,
 }
 
 impl Columns {
@@ -98,6 +102,26 @@ impl Columns {
         // then fill the arrays, a block of columns a task.
         let run_start = run_starts(stack, &active);
         let (run_first, run_symbol, run_end) = runs_of(stack, &active, &run_start);
+        let shape = [stack.bins(), stack.slices(), stack.pixels()];
+        Self::of_runs(
+            shape,
+            active,
+            constant,
+            run_start,
+            (run_first, run_symbol, run_end),
+        )
+    }
+
+    /// The columns of a stack of `[bins, slices, pixels]`, from the constant groups and the
+    /// active columns' runs as laid out in the fields (checked by the caller), their checkpoints
+    /// made.
+    pub(super) fn of_runs(
+        [bins, slices, pixels]: [usize; 3],
+        active: Vec<u32>,
+        constant: Vec<ConstantGroup>,
+        run_start: Vec<usize>,
+        (run_first, run_symbol, run_end): (Vec<u32>, Vec<u8>, Vec<u32>),
+    ) -> Self {
         let runs = |i: usize| {
             let r = run_start[i]..run_start[i + 1];
             Runs {
@@ -106,8 +130,11 @@ impl Columns {
                 end: run_end[i],
             }
         };
-        let checkpoints = Checkpoints::new(active.len(), runs, stack.bins());
+        let checkpoints = Checkpoints::new(active.len(), runs, bins);
         Self {
+            bins,
+            slices,
+            pixels,
             active,
             constant,
             run_start,
@@ -116,6 +143,28 @@ impl Columns {
             run_end,
             checkpoints,
         }
+    }
+
+    /// The stack's bins.
+    pub(crate) fn bins(&self) -> usize {
+        self.bins
+    }
+
+    /// The stack's slices.
+    pub(crate) fn slices(&self) -> usize {
+        self.slices
+    }
+
+    /// The bytes the columns hold.
+    pub(crate) fn held_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(&self.active[..])
+            + size_of_val(&self.constant[..])
+            + size_of_val(&self.run_start[..])
+            + size_of_val(&self.run_first[..])
+            + size_of_val(&self.run_symbol[..])
+            + size_of_val(&self.run_end[..])
+            + self.checkpoints.held_bytes()
     }
 
     /// Active column `i`'s runs.
@@ -298,10 +347,12 @@ fn runs_of(
 }
 
 /// The joint histograms `h(S_i, S_i+1)` of consecutive slabs of `slabs` (contiguous, in order),
-/// each `bins × bins`. Many pairs are split among the threads, each pair's histogram made once;
-/// a few pairs (a merge step) split the pixels instead.
+/// each `bins × bins`, from `columns` (and `stack`, the stack they were made from, if it is
+/// still held: slabs of a slice each are read from it, else from the runs). Many pairs are split
+/// among the threads, each pair's histogram made once; a few pairs (a merge step) split the
+/// pixels instead.
 pub(super) fn consecutive_joints(
-    stack: &SliceStack,
+    stack: Option<&SliceStack>,
     columns: &Columns,
     slabs: &[Slab],
 ) -> Vec<Vec<u64>> {
@@ -330,12 +381,12 @@ pub(super) fn consecutive_joints(
 /// The joint histograms of consecutive `slabs` by one pass over the active pixels (in parallel
 /// when `parallel`) and the constant groups.
 fn joints_over_pixels(
-    stack: &SliceStack,
+    stack: Option<&SliceStack>,
     columns: &Columns,
     slabs: &[Slab],
     parallel: bool,
 ) -> Vec<Vec<u64>> {
-    let b = stack.bins();
+    let b = columns.bins;
     let pairs = slabs.len().saturating_sub(1);
     if pairs == 0 {
         return Vec::new();
@@ -349,14 +400,14 @@ fn joints_over_pixels(
         1
     };
     let chunk = columns.active.len().div_ceil(tasks).max(1024);
-    let singles = slabs.iter().all(|s| s.1 - s.0 == 1);
+    let singles = stack.filter(|_| slabs.iter().all(|s| s.1 - s.0 == 1));
     let mut flat = (0..columns.active.len())
         .into_par_iter()
         .with_min_len(chunk)
         .fold(
             || (zero(), vec![]),
             |(mut joint, mut hists): (Vec<u64>, Vec<PixelHistogram>), i| {
-                if singles {
+                if let Some(stack) = singles {
                     let (first, column) = stack.column(columns.active[i] as usize, start, end);
                     add_neighbours(column, first - start, &mut joint, b);
                     return (joint, hists);
@@ -422,18 +473,19 @@ fn add_neighbours(column: &[u8], first: usize, joints: &mut [u64], bins: usize) 
 }
 
 /// Adds the joint histograms of every consecutive pair of `slabs` into `joints` (`pairs × bins²`
-/// counts, pair by pair), batched so that a pass's histograms fit in memory. Joint histograms are
+/// counts, pair by pair), batched so that a pass's histograms fit in memory, from `columns` and
+/// the `stack` they were made from if it is held ([`consecutive_joints`]). Joint histograms are
 /// sums over pixels, so those of a stack cut in strips of pixels add up to the whole stack's.
 pub(crate) fn add_consecutive_joints(
-    stack: &SliceStack,
+    stack: Option<&SliceStack>,
     columns: &Columns,
     slabs: &[Slab],
     joints: &mut [u64],
     monitor: &Monitor,
 ) -> Result<()> {
-    let b2 = stack.bins() * stack.bins();
+    let b2 = columns.bins * columns.bins;
     debug_assert_eq!(joints.len(), slabs.len().saturating_sub(1) * b2);
-    let batch = (pass_bytes(stack) / (b2 * 8)).max(1);
+    let batch = (pass_bytes(columns) / (b2 * 8)).max(1);
     let mut i = 0;
     while i + 1 < slabs.len() {
         let j = (i + batch + 1).min(slabs.len());
@@ -470,13 +522,13 @@ pub(crate) fn consecutive_nmi(
     monitor: &Monitor,
 ) -> Result<Vec<f64>> {
     let b = stack.bins();
-    let batch = (pass_bytes(stack) / (b * b * 8)).max(1);
+    let batch = (pass_bytes(columns) / (b * b * 8)).max(1);
     let mut nmi = Vec::with_capacity(slabs.len().saturating_sub(1));
     let mut i = 0;
     while i + 1 < slabs.len() {
         let j = (i + batch + 1).min(slabs.len());
         let mut joints = vec![0u64; (j - i - 1) * b * b];
-        add_consecutive_joints(stack, columns, &slabs[i..j], &mut joints, monitor)?;
+        add_consecutive_joints(Some(stack), columns, &slabs[i..j], &mut joints, monitor)?;
         nmi.extend(nmi_of_joints(&joints, b));
         i = j - 1;
     }

@@ -5,6 +5,7 @@
 //! Those histograms and their NMI are `joints`; this is the merging.
 
 mod checkpoints;
+mod encoded;
 mod joints;
 
 use std::cmp::Ordering;

@@ -41,7 +41,7 @@ fn slab_joint_histograms_equal_the_pairwise_definition() {
         .collect();
     let stack = stack_of(&slices, 5);
     let slabs = [(0, 2), (2, 3), (3, 7), (7, 9)];
-    let joints = consecutive_joints(&stack, &Columns::new(&stack), &slabs);
+    let joints = consecutive_joints(Some(&stack), &Columns::new(&stack), &slabs);
     for (i, joint) in joints.iter().enumerate() {
         assert_eq!(
             joint,
@@ -79,7 +79,7 @@ fn oblique_columns_follow_the_pairwise_definition() {
     let stack = SliceStack::new(&v, [1.0, 2.0, 3.0], &params, &Monitor::none()).unwrap();
     let n = stack.slices();
     let slabs = [(0, 3), (3, 4), (4, n / 2), (n / 2, n)];
-    let joints = consecutive_joints(&stack, &Columns::new(&stack), &slabs);
+    let joints = consecutive_joints(Some(&stack), &Columns::new(&stack), &slabs);
     let symbol = |p: usize, k: usize| stack.column(p, k, k + 1).1.first().copied();
     for (i, joint) in joints.iter().enumerate() {
         let mut literal = vec![0u64; 64];
@@ -163,7 +163,7 @@ fn long_columns_of_noise_give_the_pairwise_joint_histograms_from_their_checkpoin
         vec![(5, 400), (400, 1333), (1333, 1334), (1334, 2999)],
         vec![(0, 1500), (1500, 3000)],
     ] {
-        let joints = consecutive_joints(&stack, &columns, &slabs);
+        let joints = consecutive_joints(Some(&stack), &columns, &slabs);
         for (i, joint) in joints.iter().enumerate() {
             let expect = literal_joint(&slices, slabs[i], slabs[i + 1], 5);
             assert_eq!(joint, &expect, "{slabs:?}, pair {i}");
@@ -207,13 +207,13 @@ fn the_joint_histograms_of_neighbouring_slices_follow_the_pairwise_definition() 
         .filter(|&(p, s)| symbol(p, s) == Some(MISSING))
         .count();
     assert!(missing > 0, "no sample left out");
-    let joints = consecutive_joints(&stack, &columns, &singles);
+    let joints = consecutive_joints(Some(&stack), &columns, &singles);
     assert_eq!(joints.len(), n - 1);
     for (s, joint) in joints.iter().enumerate() {
         assert_eq!(joint, &literal(s), "slices {s} and {}", s + 1);
     }
     // A few pairs (a merge step's) split the pixels among the threads instead.
-    let joints = consecutive_joints(&stack, &columns, &singles[10..13]);
+    let joints = consecutive_joints(Some(&stack), &columns, &singles[10..13]);
     for (k, joint) in joints.iter().enumerate() {
         assert_eq!(joint, &literal(10 + k), "slices {} and {}", 10 + k, 11 + k);
     }

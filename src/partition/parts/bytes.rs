@@ -23,7 +23,7 @@ const JOINTS_MAGIC: [u8; 8] = *b"SLABSJ\x00\x01";
 const MAX_BINS: u64 = 255;
 
 /// Writes words as bytes.
-fn bytes_of(words: &[u64]) -> Vec<u8> {
+pub(super) fn bytes_of(words: &[u64]) -> Vec<u8> {
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
 }
 
@@ -33,7 +33,7 @@ const MOST_TABLE_BYTES: u64 = 1 << 31;
 
 /// The stack's shape: slices, bins and rows, each within what a stack can have, and its
 /// tables within [`MOST_TABLE_BYTES`] (checked before they are made).
-fn read_shape(words: &mut Words) -> ReadResult<(usize, usize, usize)> {
+pub(super) fn read_shape(words: &mut Words) -> ReadResult<(usize, usize, usize)> {
     let (slices, bins, rows) = (words.next()?, words.next()?, words.next()?);
     if !(2..=MAX_SLICES as u64 * 64).contains(&slices)
         || !(2..=MAX_BINS).contains(&bins)

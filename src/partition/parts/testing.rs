@@ -157,19 +157,21 @@ pub(crate) fn in_parts(
     let split = StackSplit::new(v, axis, p).unwrap();
     let strips = shuffled_strips(rng, split.rows());
     assert!(strips.len() > 3);
-    let counts = strips
+    // Every other time the first pass keeps each strip's runs and the second reads them.
+    let keep = below(rng, 2) == 0;
+    let (counts, kept): (Vec<SliceCounts>, Vec<StripRuns>) = strips
         .iter()
         .map(|rows| {
             let held = held_for(&split, v, rows, rng);
-            let part = split
-                .count(&held, &background, rows.clone(), &none)
+            let (part, runs) = split
+                .count_keeping(&held, &background, rows.clone(), &none)
                 .unwrap();
             // Each part travels as bytes, as a task's does.
             let read = SliceCounts::from_bytes(&part.to_bytes()).unwrap();
             assert_eq!(read, part);
-            read
+            (read, StripRuns::from_bytes(&runs.to_bytes()).unwrap())
         })
-        .collect();
+        .unzip();
     let counts = add_grouped(counts, rng, |a, b| a.add(b).unwrap());
     let grid = SlabGrid::of(v);
     let empty = Volume::of_box::<u8>(
@@ -183,15 +185,22 @@ pub(crate) fn in_parts(
     let empty = empty.unwrap_or_else(|_| v.clone());
     let found = split.slabs(&empty, &background, counts, &none).unwrap();
     let joints = (found.slabs.len() > 1).then(|| {
-        let joints = shuffled_strips(rng, split.rows())
-            .iter()
-            .map(|rows| {
-                let held = held_for(&split, v, rows, rng);
-                let slabs = &found.slabs;
-                let part = split.count_boundaries(&held, &background, rows.clone(), slabs, &none);
-                SlabJoints::from_bytes(&part.unwrap().to_bytes()).unwrap()
-            })
-            .collect();
+        let slabs = &found.slabs;
+        let joints = if keep {
+            let joints = kept.iter().map(|runs| runs.joints(slabs, &none).unwrap());
+            joints
+                .map(|j| SlabJoints::from_bytes(&j.to_bytes()).unwrap())
+                .collect()
+        } else {
+            (shuffled_strips(rng, split.rows()).iter())
+                .map(|rows| {
+                    let held = held_for(&split, v, rows, rng);
+                    let part =
+                        split.count_boundaries(&held, &background, rows.clone(), slabs, &none);
+                    SlabJoints::from_bytes(&part.unwrap().to_bytes()).unwrap()
+                })
+                .collect()
+        };
         add_grouped(joints, rng, |a, b| a.add(&b).unwrap())
     });
     split.finish(&found, joints).unwrap()

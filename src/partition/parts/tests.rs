@@ -144,3 +144,80 @@ fn an_oblique_strip_holds_far_less_in_a_box_a_layer_than_in_one_box() {
     }
     assert!(layered * 3 < one * 2, "{layered} of {one}");
 }
+
+#[test]
+fn a_strips_kept_runs_give_its_second_pass_bit_for_bit_and_read_back_from_their_bytes_alone() {
+    let v = layered(VoxelType::F32, 3.0, 0.371);
+    let none = Monitor::none();
+    let p = PartitionParams::default();
+    for (axis, background) in [
+        ([0.3, 0.5, 0.8], Background::none()),
+        (
+            [0.0, 0.0, 1.0],
+            Background::find(&v, BackgroundRule::Auto, &none).unwrap(),
+        ),
+    ] {
+        let split = StackSplit::new(&v, axis, &p).unwrap();
+        let n = split.slices();
+        for rows in split.strips(3) {
+            let (counts, runs) = split
+                .count_keeping(&v, &background, rows.clone(), &none)
+                .unwrap();
+            assert_eq!(
+                counts,
+                split.count(&v, &background, rows.clone(), &none).unwrap()
+            );
+            assert_eq!(runs.rows(), rows);
+            let bytes = runs.to_bytes();
+            let read = StripRuns::from_bytes(&bytes).unwrap();
+            // Slabs of a slice each (read from the runs, where the first pass reads the stack),
+            // uneven ones, and one slab (no pair).
+            let singles: Vec<Slab> = (0..n).map(|s| (s, s + 1)).collect();
+            for slabs in [
+                singles,
+                vec![(0, 3), (3, 4), (4, 17), (17, n)],
+                vec![(0, n)],
+            ] {
+                let expected = split
+                    .count_boundaries(&v, &background, rows.clone(), &slabs, &none)
+                    .unwrap();
+                assert_eq!(
+                    runs.joints(&slabs, &none).unwrap(),
+                    expected,
+                    "{axis:?} {rows:?}"
+                );
+                assert_eq!(read.joints(&slabs, &none).unwrap(), expected);
+            }
+            // Slabs that do not tile the stack are refused.
+            for slabs in [vec![(0, 3), (4, n)], vec![(0, n - 1)], vec![(1, n)], vec![]] {
+                let e = runs.joints(&slabs, &none).unwrap_err().to_string();
+                assert!(e.contains("tile the stack"), "{e}");
+            }
+            assert!(runs.held_bytes() > 0);
+            // Cut short anywhere, longer, another version or a byte changed: refused or read as
+            // some runs, never a panic.
+            for cut in 0..bytes.len() {
+                assert!(StripRuns::from_bytes(&bytes[..cut]).is_err(), "{cut}");
+            }
+            let mut longer = bytes.clone();
+            longer.push(0);
+            assert!(StripRuns::from_bytes(&longer).is_err());
+            let mut other = bytes.clone();
+            other[7] = 9;
+            assert!(
+                StripRuns::from_bytes(&other)
+                    .unwrap_err()
+                    .contains("version 9")
+            );
+            let mut rng = Lcg::new(rows.start as u64);
+            for _ in 0..2000 {
+                let mut changed = bytes.clone();
+                let at = 48 + (rng.next_u64() as usize) % (bytes.len() - 48);
+                changed[at] = rng.next_u64() as u8;
+                if let Ok(runs) = StripRuns::from_bytes(&changed) {
+                    let _ = runs.joints(&[(0, 5), (5, n)], &none);
+                }
+            }
+        }
+    }
+}
