@@ -324,7 +324,7 @@ impl SliceCounts {
 
     /// [`add_rows`](Self::add_rows), giving back the strip's columns as runs (what the second
     /// pass reads of it).
-    fn add_rows_keeping(
+    pub(super) fn add_rows_keeping(
         &mut self,
         cutter: &Cutter,
         rows: Range<usize>,
@@ -466,6 +466,18 @@ impl SlabJoints {
             &mut self.joints,
             monitor,
         )
+    }
+
+    /// Adds the joint histograms of the strip of `rows` whose columns' runs are `columns` (kept
+    /// by its first pass): [`add_rows`](Self::add_rows)' counts without cutting it again.
+    pub(super) fn add_runs(
+        &mut self,
+        rows: &Range<usize>,
+        columns: &Columns,
+        monitor: &Monitor,
+    ) -> Result<()> {
+        self.counted.insert(rows)?;
+        add_consecutive_joints(None, columns, &self.slabs, &mut self.joints, monitor)
     }
 
     /// Adds `other`'s joint histograms (of other rows of the same stack and slabs).

@@ -7,6 +7,9 @@
 //! Two passes over the volume: the first counts the slice histograms (from which the top-down
 //! history and the optimum follow) and the NMI between consecutive slices; the second, once the
 //! slabs are known, the joint histograms of consecutive slabs for the NMI at their boundaries.
+//! The strips take half the room left beside the sums, and the first pass keeps each strip's
+//! runs in the other half as far as they fit: the second reads those instead of the volume (one
+//! pass over it when they all fit, as a smooth volume's do).
 //! Bottom-up merging reads the stack once per merge and is not streamed.
 
 use std::ops::Range;
@@ -83,21 +86,45 @@ pub fn partition_streamed_kept(
 ) -> Result<(Partition, Histories)> {
     let split = StackSplit::new(volume, axis, params)?;
     let cutter = Cutter::new(volume, axis, &params.stack, monitor)?;
-    let strips = strips(&cutter, max_memory)?;
-    let work = |counting| strips.iter().map(|r| cutter.work(r, counting)).sum();
+    // Strips within half the room beside the sums where a row fits in it, the other half for the
+    // runs the first pass keeps of them, which the second reads instead of cutting them again.
+    let fixed = fixed_bytes(&cutter);
+    let half = fixed + max_memory.saturating_sub(fixed) / 2;
+    let strips = strips(&cutter, half).or_else(|_| strips(&cutter, max_memory))?;
+    let widest = strips.iter().map(ExactSizeIterator::len).max().unwrap_or(0);
+    let room = max_memory.saturating_sub(fixed + stack_bytes(&cutter, widest));
+    let work = |strips: &mut dyn Iterator<Item = &Range<usize>>, counting| {
+        strips.map(|r| cutter.work(r, counting)).sum()
+    };
 
-    monitor.start("slicing in strips (pass 1 of 2)", work(true));
+    monitor.start(
+        "slicing in strips (pass 1 of 2)",
+        work(&mut strips.iter(), true),
+    );
     let mut counts = SliceCounts::new(&cutter);
+    let (mut kept, mut kept_bytes) = (Vec::with_capacity(strips.len()), 0);
     for rows in &strips {
-        counts.add_rows(&cutter, rows.clone(), monitor)?;
+        let columns = counts.add_rows_keeping(&cutter, rows.clone(), monitor)?;
+        let bytes = columns.held_bytes() as u64;
+        let keep = kept_bytes + bytes <= room;
+        kept_bytes += if keep { bytes } else { 0 };
+        kept.push(keep.then_some(columns));
     }
     let found = SlabsFound::of(counts.into_histories(&cutter, params, monitor)?, params)?;
 
+    let again = strips.iter().zip(&kept).filter(|(_, k)| k.is_none());
+    let again: Vec<&Range<usize>> = again.map(|(r, _)| r).collect();
     let joints = if found.slabs.len() > 1 {
-        monitor.start("slicing in strips (pass 2 of 2)", work(false));
+        monitor.start(
+            "slicing in strips (pass 2 of 2)",
+            work(&mut again.iter().copied(), false),
+        );
         let mut joints = SlabJoints::new(&found.slabs, cutter.bins(), cutter.rows());
-        for rows in &strips {
-            joints.add_rows(&cutter, rows.clone(), monitor)?;
+        for (rows, columns) in strips.iter().zip(kept) {
+            match columns {
+                Some(columns) => joints.add_runs(rows, &columns, monitor)?,
+                None => joints.add_rows(&cutter, rows.clone(), monitor)?,
+            }
         }
         Some(joints)
     } else {
@@ -107,16 +134,32 @@ pub fn partition_streamed_kept(
     partition.notes.insert(
         0,
         format!(
-            "the slice stack ({}) is over the memory limit: it was counted in {}, in two passes \
-             over the volume",
+            "the slice stack ({}) is over the memory limit: it was counted in {}, {}",
             short_bytes(stack_bytes(&cutter, cutter.rows())),
             match strips.len() {
-                1 => format!("one strip of {} rows", strips[0].len()),
-                n => format!("{n} strips of at most {} rows", strips[0].len()),
+                1 => format!("one strip of {widest} rows"),
+                n => format!("{n} strips of at most {widest} rows"),
             },
+            passes(strips.len(), again.len(), found.slabs.len() > 1),
         ),
     );
     Ok((partition, found.histories))
+}
+
+/// How many passes over the volume a streamed partition of `strips` strips took, `again` of
+/// them cut again by the `second` pass (the others' runs kept from the first).
+fn passes(strips: usize, again: usize, second: bool) -> String {
+    match (second, again) {
+        (false, _) => "in one pass over the volume".into(),
+        (true, 0) => "in one pass over the volume (the second read each strip's runs, kept from \
+                      the first)"
+            .into(),
+        (true, a) if a == strips => "in two passes over the volume".into(),
+        (true, a) => format!(
+            "in two passes over the volume (the second over {a} of the strips, the others' runs \
+             kept from the first)"
+        ),
+    }
 }
 
 /// The bytes a strip of `rows` rows of `cutter`'s stack takes at its peak.
@@ -217,26 +260,46 @@ mod tests {
             for background in [BackgroundRule::Auto, BackgroundRule::None] {
                 for method in [Method::TopDown, Method::Optimal] {
                     let p = params(method, background);
-                    let budget = budget(&v, axis, &p, 2);
                     let whole_stack =
                         SliceStack::new(&v, axis, &p.stack, &Monitor::none()).unwrap();
                     let expected = partition(&v, axis, &p, &Monitor::none()).unwrap();
-                    let got = partition_streamed(&v, axis, &p, budget, &Monitor::none()).unwrap();
-                    assert!(got.notes[0].contains("strips"), "{:?}", got.notes);
-                    let cutter = Cutter::new(&v, axis, &p.stack, &Monitor::none()).unwrap();
-                    assert!(strips(&cutter, budget).unwrap().len() > 2);
-                    assert_eq!(got.slices, whole_stack.slices());
                     let json = |p: &Partition| {
                         let mut p = p.clone();
                         p.notes.clear();
                         serde_json::to_string(&p).unwrap()
                     };
-                    assert_eq!(
-                        json(&got),
-                        json(&expected),
-                        "{axis:?} {background:?} {method:?}"
-                    );
-                    assert_eq!(got.background, expected.background);
+                    // Room for strips of one row alone (the second pass cutting each again),
+                    // for strips of one row and some of their runs (which the second pass reads
+                    // instead), and for the whole stack twice (one strip, its runs kept).
+                    let cutter = Cutter::new(&v, axis, &p.stack, &Monitor::none()).unwrap();
+                    let all = 2 * cutter.rows();
+                    for (rows, strips_of, passes) in [
+                        (
+                            1,
+                            "strips of at most 1 rows",
+                            "in two passes over the volume",
+                        ),
+                        (2, "strips of at most 1 rows", "(the second over "),
+                        (
+                            all,
+                            "one strip of ",
+                            "in one pass over the volume (the second read",
+                        ),
+                    ] {
+                        let budget = budget(&v, axis, &p, rows);
+                        let got =
+                            partition_streamed(&v, axis, &p, budget, &Monitor::none()).unwrap();
+                        let note = &got.notes[0];
+                        assert!(note.contains(strips_of) && note.contains(passes), "{note}");
+                        assert!(rows == 1 || !note.ends_with("volume"), "{note}");
+                        assert_eq!(got.slices, whole_stack.slices());
+                        assert_eq!(
+                            json(&got),
+                            json(&expected),
+                            "{axis:?} {background:?} {method:?} {rows}"
+                        );
+                        assert_eq!(got.background, expected.background);
+                    }
                 }
             }
         }

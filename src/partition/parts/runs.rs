@@ -5,7 +5,7 @@
 
 use std::ops::Range;
 
-use super::super::bottom_up::{Columns, add_consecutive_joints};
+use super::super::bottom_up::Columns;
 use super::SlabJoints;
 use super::bytes::{bytes_of, read_shape};
 use crate::error::{Error, Result};
@@ -63,8 +63,7 @@ impl StripRuns {
             ));
         }
         let mut joints = SlabJoints::new(slabs, self.columns.bins(), self.stack_rows);
-        joints.counted.insert(&self.rows)?;
-        add_consecutive_joints(None, &self.columns, slabs, &mut joints.joints, monitor)?;
+        joints.add_runs(&self.rows, &self.columns, monitor)?;
         Ok(joints)
     }
 
