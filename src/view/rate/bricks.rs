@@ -247,10 +247,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             let Some((a, b)) = self.row_span(j) else {
                 continue;
             };
-            for i in a.max(i0)..=b.min(i1) {
-                if !self.subset.keeps(i, j) {
-                    continue;
-                }
+            for i in self.subset.row(j, (a.max(i0), b.min(i1))) {
                 let Some(start) = starts.of(i, j) else {
                     continue;
                 };

@@ -439,3 +439,21 @@ fn a_window_of_the_map_answers_every_sample_as_the_whole_map() {
         }
     }
 }
+
+#[test]
+fn a_subsets_rows_are_the_rays_it_keeps_in_order() {
+    let mut rng = Lcg::new(12);
+    for _ in 0..4000 {
+        let every = 1 + rng.next_u64() % 20;
+        let subset = RaySubset {
+            every,
+            offset: rng.next_u64() % (every + 3),
+        };
+        let j = (rng.next_u64() % 400) as i64 - 200;
+        let a = (rng.next_u64() % 400) as i64 - 200;
+        let b = a + (rng.next_u64() % 120) as i64 - 10;
+        let kept: Vec<i64> = (a..=b).filter(|&i| subset.keeps(i, j)).collect();
+        let row: Vec<i64> = subset.row(j, (a, b)).collect();
+        assert_eq!(row, kept, "{subset:?} j {j} {a}..={b}");
+    }
+}

@@ -287,10 +287,7 @@ fn walk_tile<C: Counter, T: Voxel>(
     walkers.clear();
     for (j, row) in (tile.js.0..=tile.js.1).zip(tile.rows) {
         let Some((a, b)) = *row else { continue };
-        for i in a.max(tile.is.0)..=b.min(tile.is.1) {
-            if !tile.subset.keeps(i, j) {
-                continue;
-            }
+        for i in tile.subset.row(j, (a.max(tile.is.0), b.min(tile.is.1))) {
             let Some(RayStart { p, grid, n, t0, t1 }) = starts.of(i, j) else {
                 continue;
             };
