@@ -11,7 +11,7 @@ use std::collections::HashMap;
 
 mod codec;
 pub use codec::ReadResult;
-pub(crate) use codec::{Bytes, Words, corrupt, put_varint, varint};
+pub(crate) use codec::{Bytes, Words, corrupt, put_varint};
 
 use super::{entropy, sum_c_log_c};
 

@@ -6,7 +6,7 @@ mod blocks;
 mod fragments;
 
 pub use blocks::{BlockCounts, Counter, DenseCounts, ReadResult, Run, RunEnds, block_entropies};
-pub(crate) use blocks::{Bytes, Words, corrupt, put_varint, varint};
+pub(crate) use blocks::{Bytes, Words, corrupt, put_varint};
 pub use fragments::{Fragment, PartialCounts, Sample, key_ray, ray_key};
 
 /// `Σ c·log2 c` over the non-zero counts, the part of an entropy that depends on the shape.

@@ -19,7 +19,7 @@ pub(crate) fn put_varint(out: &mut Vec<u8>, mut x: u64) {
 
 /// Why a LEB128 varint did not read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum BadVarint {
+enum BadVarint {
     /// The bytes end before its last byte.
     Short,
     /// It is longer than 64 bits.
@@ -28,7 +28,7 @@ pub(crate) enum BadVarint {
 
 /// The LEB128 varint [`put_varint`] wrote at the start of `bytes`, and how many bytes it took.
 #[inline]
-pub(crate) fn varint(bytes: &[u8]) -> Result<(u64, usize), BadVarint> {
+fn varint(bytes: &[u8]) -> Result<(u64, usize), BadVarint> {
     let mut x = 0u64;
     for (k, &b) in bytes.iter().enumerate().take(10) {
         let bits = u64::from(b & 0x7f);

@@ -11,7 +11,7 @@
 
 use super::{Chunk, ChunkAnswer, ChunkMask, ChunkSummary, face_area};
 use crate::error::{Error, Result};
-use crate::measure::{put_varint, varint};
+use crate::measure::{Bytes, put_varint};
 
 /// The first word of [`ChunkSummary::to_bytes`].
 const SUMMARY: [u8; 8] = *b"SLABBS\x00\x01";
@@ -47,23 +47,19 @@ pub(super) fn runs(values: impl Iterator<Item = u32>) -> Vec<u8> {
 /// The runs [`runs`] wrote, read back: `(value, length)`; `None` at the end or at a number
 /// that does not read (longer than 64 bits, or cut short).
 pub(super) struct Runs<'a> {
-    bytes: &'a [u8],
+    bytes: Bytes<'a>,
 }
 
 impl<'a> Runs<'a> {
     pub(super) fn new(bytes: &'a [u8]) -> Self {
-        Self { bytes }
-    }
-
-    fn varint(&mut self) -> Option<u64> {
-        let (x, n) = varint(self.bytes).ok()?;
-        self.bytes = &self.bytes[n..];
-        Some(x)
+        Self {
+            bytes: Bytes::new(bytes, "runs cut short"),
+        }
     }
 
     /// Whether every byte was read.
     pub(super) fn done(&self) -> bool {
-        self.bytes.is_empty()
+        self.bytes.is_done()
     }
 }
 
@@ -71,10 +67,10 @@ impl Iterator for Runs<'_> {
     type Item = (u64, u64);
 
     fn next(&mut self) -> Option<(u64, u64)> {
-        if self.bytes.is_empty() {
+        if self.done() {
             return None;
         }
-        Some((self.varint()?, self.varint()?))
+        Some((self.bytes.varint().ok()?, self.bytes.varint().ok()?))
     }
 }
 
