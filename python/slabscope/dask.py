@@ -867,25 +867,22 @@ def _joints_of(pair: Tuple[Any, Any], slabs: List[Planes], params: Options) -> A
 def _strip_keeping(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], *pieces: np.ndarray) -> Any:
     """One task: a strip's first-pass counts and its runs (or None), as :func:`_strip` is
     given them."""
+    return _strip_counted(slabscope._slabscope._count_strip_keeping, rows, held, told, masks, pieces)
+
+
+def _strip(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], slabs: List[Planes], *pieces: np.ndarray) -> Any:
+    """One task: a strip's second-pass counts, given ``slabs``, from its boxes of voxels
+    (``pieces``, each [z, y, x], a layer's planes, origin and size in ``held``) and the masks of
+    the layers it reads, within half its worker's Dask memory limit unless ``max_memory`` is
+    given."""
+    return _strip_counted(slabscope._slabscope._count_strip, rows, held, told, masks, pieces, slabs)
+
+
+def _strip_counted(count: Callable[..., Any], rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], pieces: Tuple[np.ndarray, ...], *more: Any) -> Any:
+    """``count`` (the extension's count of a strip) given a strip's boxes' voxels one after
+    another, its boxes, rows, axis, grid and background, then ``more``."""
     axis, grid, threshold, params = told
     dims, spacing, held_type, range_ = grid
-    voxels = _joined(pieces, held_type)
+    voxels = np.concatenate([p.ravel() for p in pieces]) if pieces else np.zeros(0, dtype=held_type)
     bits = [mask for mask, _ in masks]
-    return slabscope._slabscope._count_strip_keeping(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), **_with_budget(params))
-
-
-def _joined(pieces: Tuple[np.ndarray, ...], held_type: str) -> np.ndarray:
-    """A strip's boxes' voxels one after another."""
-    return np.concatenate([p.ravel() for p in pieces]) if pieces else np.zeros(0, dtype=held_type)
-
-
-def _strip(rows: Planes, held: List[Tuple[Planes, List[int], List[int]]], told: Told, masks: List[Tuple[bytes, int]], slabs: Optional[List[Planes]], *pieces: np.ndarray) -> Any:
-    """One task: a strip's counts (the first pass, or given ``slabs`` the second) from its
-    boxes of voxels (``pieces``, each [z, y, x], a layer's planes, origin and size in ``held``)
-    and the masks of the layers it reads, within half its worker's Dask memory limit unless
-    ``max_memory`` is given."""
-    axis, grid, threshold, params = told
-    dims, spacing, held_type, range_ = grid
-    voxels = _joined(pieces, held_type)
-    bits = [mask for mask, _ in masks]
-    return slabscope._slabscope._count_strip(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), slabs, **_with_budget(params))
+    return count(voxels, held, rows, axis, dims, spacing, held_type, range_, (threshold, bits), *more, **_with_budget(params))

@@ -127,10 +127,7 @@ impl StackSplit {
         rows: Range<usize>,
         monitor: &Monitor,
     ) -> Result<SliceCounts> {
-        let cutter = Cutter::given(volume, self.axis, &self.params.stack, background)?;
-        monitor.start("slicing in strips (pass 1 of 2)", cutter.work(&rows, true));
-        let mut counts = SliceCounts::new(&cutter);
-        counts.add_rows(&cutter, rows, monitor)?;
+        let (counts, _) = self.count_keeping(volume, background, rows, monitor)?;
         Ok(counts)
     }
 
@@ -147,7 +144,7 @@ impl StackSplit {
         let cutter = Cutter::given(volume, self.axis, &self.params.stack, background)?;
         monitor.start("slicing in strips (pass 1 of 2)", cutter.work(&rows, true));
         let mut counts = SliceCounts::new(&cutter);
-        let columns = counts.add_rows_keeping(&cutter, rows.clone(), monitor)?;
+        let columns = counts.add_rows(&cutter, rows.clone(), monitor)?;
         let runs = StripRuns {
             stack_rows: self.rows,
             rows,
@@ -312,19 +309,9 @@ impl SliceCounts {
         }
     }
 
-    /// Cuts `rows` of `cutter`'s stack and adds their counts.
+    /// Cuts `rows` of `cutter`'s stack and adds their counts, giving back the strip's columns
+    /// as runs (what the second pass reads of it).
     pub(super) fn add_rows(
-        &mut self,
-        cutter: &Cutter,
-        rows: Range<usize>,
-        monitor: &Monitor,
-    ) -> Result<()> {
-        self.add_rows_keeping(cutter, rows, monitor).map(drop)
-    }
-
-    /// [`add_rows`](Self::add_rows), giving back the strip's columns as runs (what the second
-    /// pass reads of it).
-    pub(super) fn add_rows_keeping(
         &mut self,
         cutter: &Cutter,
         rows: Range<usize>,

@@ -104,7 +104,7 @@ pub fn partition_streamed_kept(
     let mut counts = SliceCounts::new(&cutter);
     let (mut kept, mut kept_bytes) = (Vec::with_capacity(strips.len()), 0);
     for rows in &strips {
-        let columns = counts.add_rows_keeping(&cutter, rows.clone(), monitor)?;
+        let columns = counts.add_rows(&cutter, rows.clone(), monitor)?;
         let bytes = columns.held_bytes() as u64;
         let keep = kept_bytes + bytes <= room;
         kept_bytes += if keep { bytes } else { 0 };
