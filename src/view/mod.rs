@@ -16,7 +16,7 @@ pub use parts::{ViewRound, ViewRounds};
 pub use rate::{
     AxisEntropy, BRICK_CELLS, BinSampler, Bricks, InnerSpans, OpenRays, PhaseStats, RaySubset,
     Walk, block_counts, block_counts_by, count_slab_into, counts_of_bricks, entropy_rate,
-    entropy_rate_of, ray_bins, work_units, work_units_of,
+    entropy_rate_of, entropy_rates_of, ray_bins, work_units, work_units_of,
 };
 pub use refine::{REFINE_STOP_DEGREES, pattern_search, refine_evaluations, refine_steps};
 pub use streamed::{block_counts_streamed, search_streamed, streamed_memory_floor, streamed_slabs};
@@ -345,12 +345,10 @@ impl<T: Voxel> Evaluator<'_, T> {
         subset: RaySubset,
         (monitor, units): (&Monitor, u64),
     ) -> Result<AxisEntropy> {
-        let rows = work_units_of(lattice, subset);
-        let per_row = units / rows.max(1);
         let block = self.params.block;
-        let rate = entropy_rate_of(&self.sampler, lattice, block, subset, (monitor, per_row))?;
-        monitor.advance(units.saturating_sub(per_row * rows))?;
-        Ok(rate)
+        let mut rate =
+            entropy_rates_of(&self.sampler, &[(lattice, subset)], block, (monitor, units))?;
+        Ok(rate.pop().expect("one lattice's rate"))
     }
 
     fn units(&self, axis: [f64; 3]) -> Result<u64> {
@@ -367,13 +365,14 @@ impl<T: Voxel> Evaluator<'_, T> {
         let lattice = lattice_of(volume, params, axis, 0)?;
         let (own, share) = self.shares(&lattice);
         let paper = self.walk(&lattice, RaySubset::ALL, (monitor, own))?;
-        let mut shifted = Vec::new();
-        for (lattice, subset) in shifted_lattices(volume, params, axis, paper.samples)? {
-            match subset {
-                Some(subset) => shifted.push(self.walk(&lattice, subset, (monitor, share))?),
-                None => monitor.advance(share)?,
-            }
-        }
+        let lattices = shifted_lattices(volume, params, axis, paper.samples)?;
+        let kept: Vec<(&Lattice, RaySubset)> = lattices
+            .iter()
+            .filter_map(|(l, subset)| subset.map(|s| (l, s)))
+            .collect();
+        monitor.advance(share * (lattices.len() - kept.len()) as u64)?;
+        let units = share * kept.len() as u64;
+        let shifted = entropy_rates_of(&self.sampler, &kept, params.block, (monitor, units))?;
         Ok(finish(volume, params, axis, paper, &shifted))
     }
 }

@@ -498,7 +498,7 @@ pub(super) fn common_walk<T: Voxel>(
 /// Rows of tiles per band: about four bricks thick, so that few bricks are read by two bands.
 fn band_rows(lattice: &Lattice, size: usize) -> usize {
     let rays = 4.0 * size as f64 * lattice.sample_spacing / lattice.ray_spacing;
-    let tile = tile_rows(lattice, 1)
+    let tile = tile_rows(&[(lattice, RaySubset::ALL)])
         .next()
         .map_or(1, |(a, b)| (b - a + 1).max(1));
     ((rays / tile as f64).ceil() as usize).max(1)
@@ -522,7 +522,7 @@ pub(super) fn bricked_counts<T: Voxel>(
     };
     let walk = BrickWalk::new(sampler, lattice, block, bricks, None);
     let order = walk.order();
-    let rows: Vec<(i64, i64)> = tile_rows(lattice, 1).collect();
+    let rows: Vec<(i64, i64)> = tile_rows(&[(lattice, RaySubset::ALL)]).collect();
     let bands: Vec<&[(i64, i64)]> = rows.chunks(band_rows(lattice, size)).collect();
     let empty = || PartialCounts::new(sampler.bins(), block);
     let total = bands

@@ -29,7 +29,7 @@ use columns::column_counts;
 #[cfg(target_arch = "x86_64")]
 use tiles::mixed_bin;
 pub use tiles::ray_bins;
-use tiles::{Walker, fixed_step, scalar_walk, tile_rows, walk_row};
+use tiles::{Walker, fixed_step, scalar_walk, tile_rows, walk_rows};
 
 /// An axis's entropy rate over lattice phases: the paper's lattice and shifted ones.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -231,7 +231,7 @@ pub fn work_units(lattice: &Lattice) -> u64 {
 
 /// Number of progress units [`entropy_rate_of`] reports for `lattice` and `subset`.
 pub fn work_units_of(lattice: &Lattice, subset: RaySubset) -> u64 {
-    tile_rows(lattice, subset.every).count() as u64
+    tile_rows(&[(lattice, subset)]).count() as u64
 }
 
 /// The entropy rate along `lattice`'s axis with blocks of length `block`, reporting one unit per
@@ -330,38 +330,112 @@ fn counts_with<T: Voxel>(
         return bricks::bricked_counts(sampler, lattice, block, (size, shaped), monitor);
     }
     let vector = walk != (Walk::Tiles { vector: false });
-    let rows: Vec<(i64, i64)> = tile_rows(lattice, subset.every).collect();
-    let step = fixed_step(lattice);
+    let mut out = tile_counts(
+        sampler,
+        &[(lattice, subset)],
+        block,
+        (monitor, per_row),
+        vector,
+    )?;
+    Ok(out.pop().expect("one lattice's counts"))
+}
+
+/// The entropy rates of `lattices` over the rays each one's subset keeps, reporting `units` in
+/// all: each [`entropy_rate_of`]'s, but the shifted phases of one axis (one step, each walking
+/// one block of rays in the same `every`) walked together, tile by tile
+/// ([`tiles::walk_rows`]): counts are sums, so the same counts.
+pub fn entropy_rates_of<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattices: &[(&Lattice, RaySubset)],
+    block: usize,
+    (monitor, units): (&Monitor, u64),
+) -> Result<Vec<AxisEntropy>> {
+    let Some(&(first, subset)) = lattices.first() else {
+        monitor.advance(units)?;
+        return Ok(Vec::new());
+    };
+    let step = fixed_step(first);
+    let together = lattices.len() > 1
+        && subset.every > 1
+        && lattices
+            .iter()
+            .all(|(l, s)| s.every == subset.every && fixed_step(l) == step);
+    if !together {
+        let each = units / lattices.len() as u64;
+        let rates = lattices
+            .iter()
+            .map(|&(l, s)| {
+                let rows = work_units_of(l, s);
+                let per_row = each / rows.max(1);
+                let rate = entropy_rate_of(sampler, l, block, s, (monitor, per_row))?;
+                monitor.advance(each - per_row * rows)?;
+                Ok(rate)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        monitor.advance(units - each * lattices.len() as u64)?;
+        return Ok(rates);
+    }
+    let rows = tile_rows(lattices).count() as u64;
+    let per_row = units / rows.max(1);
+    let counts = tile_counts(sampler, lattices, block, (monitor, per_row), true)?;
+    monitor.advance(units.saturating_sub(per_row * rows))?;
+    Ok(lattices
+        .iter()
+        .zip(counts)
+        .map(|((l, _), (counts, rays))| AxisEntropy::new(l.d, &counts, rays))
+        .collect())
+}
+
+/// The tile walk of `lattices` (one step; see [`tiles::walk_rows`]): vector where the processor
+/// has it and `vector` allows, else one by one.
+fn tile_counts<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattices: &[(&Lattice, RaySubset)],
+    block: usize,
+    (monitor, per_row): (&Monitor, u64),
+    vector: bool,
+) -> Result<Vec<(BlockCounts, u64)>> {
+    let rows: Vec<(i64, i64)> = tile_rows(lattices).collect();
+    let step = fixed_step(lattices[0].0);
     let serial = sampler.voxels().len() < SERIAL_VOXELS;
-    let table = (sampler.bins(), block);
-    count_in_parallel(rows, table, serial, (monitor, per_row), |js, counts| {
-        match counts.dense() {
-            #[cfg(target_arch = "x86_64")]
-            Some(mut dense) if vector && lanes::available(sampler) => {
-                let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
-                    #[allow(unsafe_code)]
-                    // SAFETY: `lanes::available` found AVX2 on this processor.
-                    unsafe {
-                        lanes::walk(w, step, sampler, c);
-                    }
-                };
-                walk_row(lattice, js, subset, step, sampler, &mut dense, &mut common)
+    let table = (sampler.bins(), block, lattices.len());
+    let along = (step, sampler);
+    counts_in_parallel(
+        rows,
+        table,
+        serial,
+        (monitor, per_row),
+        |js, counts, rays| {
+            let dense: Option<Vec<DenseCounts>> =
+                counts.iter_mut().map(BlockCounts::dense).collect();
+            match dense {
+                #[cfg(target_arch = "x86_64")]
+                Some(mut dense) if vector && lanes::available(sampler) => {
+                    let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
+                        #[allow(unsafe_code)]
+                        // SAFETY: `lanes::available` found AVX2 on this processor.
+                        unsafe {
+                            lanes::walk(w, step, sampler, c);
+                        }
+                    };
+                    walk_rows(lattices, js, along, &mut dense, rays, &mut common);
+                }
+                Some(mut dense) => {
+                    let _ = vector;
+                    let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
+                        scalar_walk(w, step, sampler, c);
+                    };
+                    walk_rows(lattices, js, along, &mut dense, rays, &mut common);
+                }
+                None => {
+                    let mut common = |w: &mut [Walker], c: &mut BlockCounts| {
+                        scalar_walk(w, step, sampler, c);
+                    };
+                    walk_rows(lattices, js, along, counts, rays, &mut common);
+                }
             }
-            Some(mut dense) => {
-                let _ = vector;
-                let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
-                    scalar_walk(w, step, sampler, c);
-                };
-                walk_row(lattice, js, subset, step, sampler, &mut dense, &mut common)
-            }
-            None => {
-                let mut common = |w: &mut [Walker], c: &mut BlockCounts| {
-                    scalar_walk(w, step, sampler, c);
-                };
-                walk_row(lattice, js, subset, step, sampler, counts, &mut common)
-            }
-        }
-    })
+        },
+    )
 }
 
 /// Volumes of fewer voxels than this are counted on one thread, into one table: each parallel
@@ -379,27 +453,50 @@ fn count_in_parallel<P: Send>(
     (monitor, per_part): (&Monitor, u64),
     count: impl Fn(P, &mut BlockCounts) -> u64 + Sync,
 ) -> Result<(BlockCounts, u64)> {
-    if serial {
-        let (mut counts, mut rays) = (BlockCounts::new(bins, block), 0);
+    let one = |part, counts: &mut [BlockCounts], rays: &mut [u64]| {
+        rays[0] += count(part, &mut counts[0]);
+    };
+    let mut out = counts_in_parallel(parts, (bins, block, 1), serial, (monitor, per_part), one)?;
+    Ok(out.pop().expect("one table"))
+}
+
+/// [`count_in_parallel`] into `tables` tables at once, `count` adding each one's rays to its
+/// entry of the rays it is given.
+fn counts_in_parallel<P: Send>(
+    parts: Vec<P>,
+    (bins, block, tables): (usize, usize, usize),
+    serial: bool,
+    (monitor, per_part): (&Monitor, u64),
+    count: impl Fn(P, &mut [BlockCounts], &mut [u64]) + Sync,
+) -> Result<Vec<(BlockCounts, u64)>> {
+    let empty = || (vec![BlockCounts::new(bins, block); tables], vec![0; tables]);
+    let (counts, rays) = if serial {
+        let (mut counts, mut rays) = empty();
         for part in parts {
-            rays += count(part, &mut counts);
+            count(part, &mut counts, &mut rays);
             monitor.advance(per_part)?;
         }
-        return Ok((counts, rays));
-    }
-    let empty = || (BlockCounts::new(bins, block), 0);
-    parts
-        .into_par_iter()
-        .try_fold(empty, |(mut counts, rays), part| {
-            let n = count(part, &mut counts);
-            monitor.advance(per_part)?;
-            Ok((counts, rays + n))
-        })
-        .try_reduce_with(|(mut a, ra), (b, rb)| {
-            a.merge(&b);
-            Ok((a, ra + rb))
-        })
-        .unwrap_or_else(|| Ok(empty()))
+        (counts, rays)
+    } else {
+        parts
+            .into_par_iter()
+            .try_fold(empty, |(mut counts, mut rays), part| {
+                count(part, &mut counts, &mut rays);
+                monitor.advance(per_part)?;
+                Ok::<_, crate::error::Error>((counts, rays))
+            })
+            .try_reduce_with(|(mut a, mut ra), (b, rb)| {
+                for (a, b) in a.iter_mut().zip(&b) {
+                    a.merge(b);
+                }
+                for (a, b) in ra.iter_mut().zip(rb) {
+                    *a += b;
+                }
+                Ok((a, ra))
+            })
+            .unwrap_or_else(|| Ok(empty()))?
+    };
+    Ok(counts.into_iter().zip(rays).collect())
 }
 
 #[cfg(test)]

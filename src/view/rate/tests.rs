@@ -457,3 +457,51 @@ fn a_subsets_rows_are_the_rays_it_keeps_in_order() {
         assert_eq!(row, kept, "{subset:?} j {j} {a}..={b}");
     }
 }
+
+#[test]
+fn phases_walked_together_count_what_each_walks_alone() {
+    // An axis's shifted lattices (one step, offsets apart), each keeping one block of rays in
+    // `every`, walked tile by tile together and each alone by the scalar tile walk.
+    let mut blocks = 0;
+    for (dims, spacing, voxel_type) in [
+        ([61, 47, 38], [1.0, 1.0, 1.0], VoxelType::F32),
+        ([44, 70, 29], [0.8, 1.1, 1.9], VoxelType::I16),
+    ] {
+        let v = awkward_volume_of(dims, spacing, voxel_type, 5);
+        let sampler = BinSampler::new(&v, v.quantizer(32).unwrap());
+        let s = min_spacing(v.spacing());
+        for axis in [[0.0, 0.0, 1.0], [0.3, -0.5, 0.81], [1.0, 1.0, 1.0]] {
+            for every in [12, 3, 1] {
+                let phases = [[0.5, 0.5, 0.5], [0.13, 0.71, 0.2], [0.9, 0.05, 0.66]];
+                let lattices: Vec<Lattice> = phases
+                    .iter()
+                    .map(|&p| Lattice::new(dims, v.spacing(), axis, s, s, p).unwrap())
+                    .collect();
+                let kept: Vec<(&Lattice, RaySubset)> = lattices
+                    .iter()
+                    .enumerate()
+                    .map(|(n, l)| {
+                        let offset = n as u64 + 1;
+                        (l, RaySubset { every, offset })
+                    })
+                    .collect();
+                let last = std::sync::Mutex::new(0.0);
+                let report = |p: crate::progress::Progress| *last.lock().unwrap() = p.fraction;
+                let monitor = Monitor::new(None, Some(&report));
+                monitor.start("test", 1000);
+                let together = entropy_rates_of(&sampler, &kept, 3, (&monitor, 1000)).unwrap();
+                assert_eq!(*last.lock().unwrap(), 1.0, "every unit reported");
+                for (&(l, subset), got) in kept.iter().zip(&together) {
+                    let none = Monitor::none();
+                    let walk = (Walk::Tiles { vector: false }, subset);
+                    let (counts, rays) = counts_with(&sampler, l, 3, (&none, 1), walk).unwrap();
+                    let alone = AxisEntropy::new(l.d, &counts, rays);
+                    assert_eq!(*got, alone, "{dims:?} {axis:?} one in {every}");
+                    assert!(got.blocks > 0, "{dims:?} {axis:?}: a lattice with blocks");
+                    blocks += got.blocks;
+                }
+            }
+        }
+    }
+    assert!(blocks > 100_000, "{blocks} blocks compared");
+}
