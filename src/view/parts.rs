@@ -16,7 +16,7 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into};
+use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slabs_into};
 use super::refine::refine_in_lockstep;
 use super::streamed::slab_part_bytes;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
@@ -189,22 +189,28 @@ impl ViewRounds {
         crate::volume::with_voxels!(volume.data(), |data| {
             let sampler = BinSampler::window(data, volume, q, planes.clone());
             let z = planes.start as i64..planes.end as i64;
-            Ok(lattices
+            // An axis's lattices (its shifted phases) walked together.
+            let axes: Vec<&[(usize, Lattice, RaySubset)]> =
+                lattices.chunk_by(|a, b| a.0 == b.0).collect();
+            let parts: Vec<Vec<PartialCounts>> = axes
                 .par_iter()
-                .map(|(_, lattice, subset)| {
-                    let mut open = OpenRays::new(lattice);
-                    let part = count_slab_into(
-                        &sampler,
-                        lattice,
-                        block,
-                        bricks,
-                        (z.clone(), *subset),
-                        &mut open,
-                    );
+                .map(|axis| {
+                    let kept: Vec<(&Lattice, RaySubset)> =
+                        axis.iter().map(|(_, l, s)| (l, *s)).collect();
+                    let mut opens: Vec<OpenRays> =
+                        axis.iter().map(|(_, l, _)| OpenRays::new(l)).collect();
+                    let mut each: Vec<&mut OpenRays> = opens.iter_mut().collect();
+                    let parts =
+                        count_slabs_into(&sampler, &kept, block, (bricks, z.clone()), &mut each);
                     // The bands' pieces, taken in order, are in key order: never sorted.
-                    PartialCounts::of(part.counts, part.rays, open.into_fragments())
+                    (parts.into_iter().zip(opens))
+                        .map(|(part, open)| {
+                            PartialCounts::of(part.counts, part.rays, open.into_fragments())
+                        })
+                        .collect()
                 })
-                .collect())
+                .collect();
+            Ok(parts.into_iter().flatten().collect())
         })
     }
 

@@ -15,7 +15,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::rate::{
-    AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slab_into, window_bytes,
+    AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slabs_into, window_bytes,
 };
 use super::refine::refine_in_lockstep;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
@@ -224,7 +224,8 @@ impl<T: Voxel> Sweeps<'_, T> {
             .iter()
             .map(|(l, _)| band_bytes(l, self.params))
             .max()
-            .unwrap_or(0);
+            .unwrap_or(0)
+            + together_bytes(lattices.iter().map(|(l, _)| l.d), self.params);
         let threads = rayon::current_num_threads() as u64;
         let room = self
             .room
@@ -266,17 +267,23 @@ impl<T: Voxel> Sweeps<'_, T> {
         for planes in planes(self.volume.dims(), slab) {
             let sampler = BinSampler::window(self.data, self.volume, self.q, planes.clone());
             let z = planes.start as i64..planes.end as i64;
-            jobs.par_iter_mut().try_for_each(|job| {
-                let part = count_slab_into(
-                    &sampler,
-                    &job.lattice,
-                    block,
-                    bricks,
-                    (z.clone(), job.subset),
-                    &mut job.open,
-                );
-                job.counts.add(part);
-                monitor.advance(1)
+            // An axis's lattices (its shifted phases) walked together.
+            let axes: Vec<&mut [Job]> = jobs
+                .chunk_by_mut(|a, b| a.lattice.d == b.lattice.d)
+                .collect();
+            axes.into_par_iter().try_for_each(|axis| {
+                let (mut kept, mut opens, mut counts) = (Vec::new(), Vec::new(), Vec::new());
+                for job in axis.iter_mut() {
+                    kept.push((&job.lattice, job.subset));
+                    opens.push(&mut job.open);
+                    counts.push(&mut job.counts);
+                }
+                let parts =
+                    count_slabs_into(&sampler, &kept, block, (bricks, z.clone()), &mut opens);
+                for (counts, part) in counts.into_iter().zip(parts) {
+                    counts.add(part);
+                }
+                monitor.advance(kept.len() as u64)
             })?;
         }
         jobs.into_iter()
@@ -325,7 +332,8 @@ pub(super) fn slab_part_bytes(
     let band = (lattices.iter())
         .map(|(_, lattice, _)| band_bytes(lattice, params))
         .max()
-        .unwrap_or(0);
+        .unwrap_or(0)
+        + together_bytes(lattices.iter().map(|(_, l, _)| l.d), params);
     window
         .saturating_add(held)
         .saturating_add((threads as u64).saturating_mul(band))
@@ -373,6 +381,18 @@ fn band_bytes(lattice: &Lattice, params: &ViewParams) -> u64 {
     let ((i0, i1), _) = lattice.ray_ranges();
     let rays = SLAB_ROWS * (i1 - i0 + 1).max(1) as u64;
     rays * (SLOT_BYTES + 3 * FRAGMENT) + 2 * table_bytes(params)
+}
+
+/// What a thread walking an axis's lattices together ([`count_slabs_into`]) holds beyond one
+/// lattice's band ([`band_bytes`]): the tables of the others, for the longest run of lattices
+/// along one axis among those of `directions`.
+fn together_bytes(directions: impl Iterator<Item = [f64; 3]>, params: &ViewParams) -> u64 {
+    let (mut longest, mut run, mut last) = (0u64, 0u64, None);
+    for d in directions {
+        run = if last == Some(d) { run + 1 } else { 1 };
+        (longest, last) = (longest.max(run), Some(d));
+    }
+    longest.saturating_sub(1) * 2 * table_bytes(params)
 }
 
 const FRAGMENT: u64 = std::mem::size_of::<Fragment>() as u64;

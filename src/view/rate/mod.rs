@@ -17,7 +17,7 @@ pub use bricks::counts_of_bricks;
 pub use grid::{BRICK_CELLS, Bricks};
 pub use sampler::{BinSampler, InnerSpans, VoxelBins, window_bytes};
 pub(crate) use slab::SLAB_ROWS;
-pub use slab::{OpenRays, count_slab_into};
+pub use slab::{OpenRays, count_slab_into, count_slabs_into};
 
 use crate::error::Result;
 use crate::geometry::WorldAxis;

@@ -88,40 +88,91 @@ pub fn count_slab_into<T: Voxel>(
     (planes, subset): (std::ops::Range<i64>, RaySubset),
     open: &mut OpenRays,
 ) -> PartialCounts {
-    let walk = BrickWalk::of_slab(sampler, lattice, block, bricks, (planes.clone(), subset));
-    if walk.whole_slab()
-        && subset == RaySubset::ALL
-        && let Some(axis @ (0 | 1)) = lattice.columns()
-    {
-        // Rays along x or y lie in voxel planes, each whole in one slab: voxel rows.
-        let z = planes.start.max(0) as usize..planes.end.max(0) as usize;
-        return slab_rows(sampler, axis, z, block);
-    }
-    let order = walk.order();
+    let one = [(lattice, subset)];
+    let mut parts = count_slabs_into(sampler, &one, block, (bricks, planes), &mut [open]);
+    parts.pop().expect("one lattice's part")
+}
+
+/// [`count_slab_into`] of several lattices at once, each with its open pieces in `opens`, a
+/// part each: an axis's shifted phases (each walking one block of rays in 12, phase n's blocks
+/// beside phase n + 1's, their bands of one index over about the same rows) walked band by
+/// band, each band's rays of every lattice in turn, so that the cache lines one phase's blocks
+/// read are still near for its neighbours'. Counts are sums: the parts are each lattice's alone.
+pub fn count_slabs_into<T: Voxel>(
+    sampler: &BinSampler<T>,
+    lattices: &[(&Lattice, RaySubset)],
+    block: usize,
+    (bricks, planes): (Bricks, std::ops::Range<i64>),
+    opens: &mut [&mut OpenRays],
+) -> Vec<PartialCounts> {
+    assert_eq!(lattices.len(), opens.len(), "open pieces for each lattice");
     let empty = || PartialCounts::new(sampler.bins(), block);
-    open.bands
-        .par_iter()
-        .zip(open.open.par_iter_mut())
+    let walks: Vec<BrickWalk<T>> = (lattices.iter())
+        .map(|&(l, s)| BrickWalk::of_slab(sampler, l, block, bricks, (planes.clone(), s)))
+        .collect();
+    // Rays along x or y lie in voxel planes, each whole in one slab: voxel rows.
+    let rows_of = |k: usize| {
+        let (lattice, subset) = lattices[k];
+        match lattice.columns() {
+            Some(axis @ (0 | 1)) if walks[k].whole_slab() && subset == RaySubset::ALL => {
+                let z = planes.start.max(0) as usize..planes.end.max(0) as usize;
+                Some(slab_rows(sampler, axis, z, block))
+            }
+            _ => None,
+        }
+    };
+    let mut parts: Vec<Option<PartialCounts>> = (0..lattices.len()).map(rows_of).collect();
+    let orders: Vec<Vec<usize>> = walks.iter().map(BrickWalk::order).collect();
+    // Each band's open pieces of every lattice walked by the band.
+    let mut bands: Vec<Vec<BandOf>> = Vec::new();
+    for (k, open) in opens.iter_mut().enumerate() {
+        if parts[k].is_some() {
+            continue;
+        }
+        for (b, (&js, held)) in open.bands.iter().zip(&mut open.open).enumerate() {
+            if bands.len() <= b {
+                bands.push(Vec::with_capacity(lattices.len()));
+            }
+            bands[b].push((k, js, held));
+        }
+    }
+    let outs = || lattices.iter().map(|_| empty()).collect::<Vec<_>>();
+    let walked = bands
+        .into_par_iter()
         .fold(
-            || (empty(), Scratch::default()),
-            |(mut out, mut scratch), (&js, held)| {
-                if walk.whole_slab() {
-                    whole_band(&walk, js, &mut out, &mut scratch);
-                } else {
-                    let mut band = walk.band(js, &mut out);
-                    walk.walk(&mut band, &order, &mut out);
+            || (outs(), Scratch::default()),
+            |(mut outs, mut scratch), band| {
+                for (k, js, held) in band {
+                    let (walk, out) = (&walks[k], &mut outs[k]);
+                    if walk.whole_slab() {
+                        whole_band(walk, js, out, &mut scratch);
+                    } else {
+                        let mut band = walk.band(js, out);
+                        walk.walk(&mut band, &orders[k], out);
+                    }
+                    out.stitch_into(held);
                 }
-                out.stitch_into(held);
-                (out, scratch)
+                (outs, scratch)
             },
         )
-        .map(|(out, _)| out)
+        .map(|(outs, _)| outs)
         .reduce_with(|mut a, b| {
-            a.add(b);
+            for (a, b) in a.iter_mut().zip(b) {
+                a.add(b);
+            }
             a
         })
-        .unwrap_or_else(empty)
+        .unwrap_or_else(outs);
+    parts
+        .iter_mut()
+        .zip(walked)
+        .map(|(rows, walked)| rows.take().unwrap_or(walked))
+        .collect()
 }
+
+/// A band of one lattice's rays a slab's walk takes: the lattice's index, the band's rows, and
+/// the band's open pieces.
+type BandOf<'a> = (usize, (i64, i64), &'a mut Vec<Fragment>);
 
 /// A ray's stretch in a slab walked whole: its open piece, and where its walk stands.
 struct Stretch {

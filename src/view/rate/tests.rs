@@ -505,3 +505,62 @@ fn phases_walked_together_count_what_each_walks_alone() {
     }
     assert!(blocks > 100_000, "{blocks} blocks compared");
 }
+
+#[test]
+fn phases_walked_together_slab_by_slab_count_what_each_walks_alone() {
+    // An axis's shifted lattices swept slab by slab together (whole planes, and bricks smaller
+    // than a slab), each lattice's parts added: its tile walk's counts, nothing left open.
+    let mut lcg = Lcg::new(8);
+    let v = awkward_volume([61, 47, 38], [1.0, 1.0, 1.0], 5);
+    let q = v.quantizer(16).unwrap();
+    let whole = BinSampler::new(&v, q);
+    let dims = v.dims();
+    for axis in [[0.0, 0.0, 1.0], [0.3, -0.5, 0.81]] {
+        for every in [12, 3] {
+            let phases = [[0.5, 0.5, 0.5], [0.13, 0.71, 0.2], [0.9, 0.05, 0.66]];
+            let lattices: Vec<Lattice> = (phases.iter())
+                .map(|&p| Lattice::new(dims, v.spacing(), axis, 1.0, 1.0, p).unwrap())
+                .collect();
+            let kept: Vec<(&Lattice, RaySubset)> = (lattices.iter().enumerate())
+                .map(|(n, l)| {
+                    (
+                        l,
+                        RaySubset {
+                            every,
+                            offset: n as u64 + 1,
+                        },
+                    )
+                })
+                .collect();
+            for (slab, whole_planes) in [(5, true), (12, false), (40, true)] {
+                let mut opens: Vec<OpenRays> = lattices.iter().map(OpenRays::new).collect();
+                let mut totals: Vec<PartialCounts> =
+                    lattices.iter().map(|_| PartialCounts::new(16, 3)).collect();
+                for planes in shuffled_slabs(dims[2] - 1, slab, &mut lcg) {
+                    let window = BinSampler::window(v.voxels(), &v, q, planes.clone());
+                    let bricks = if whole_planes {
+                        Bricks::shaped_from(dims, [dims[0], dims[1], planes.len()], planes.start)
+                    } else {
+                        Bricks::shaped(dims, [9, 7, slab])
+                    };
+                    let z = planes.start as i64..planes.end as i64;
+                    let mut each: Vec<&mut OpenRays> = opens.iter_mut().collect();
+                    let parts = count_slabs_into(&window, &kept, 3, (bricks, z), &mut each);
+                    for (total, part) in totals.iter_mut().zip(parts) {
+                        total.add(part);
+                    }
+                }
+                for ((&(l, subset), total), open) in kept.iter().zip(&totals).zip(&opens) {
+                    let none = Monitor::none();
+                    let walk = (Walk::Tiles { vector: false }, subset);
+                    let (counts, rays) = counts_with(&whole, l, 3, (&none, 1), walk).unwrap();
+                    let at = format!("{axis:?} one in {every}, slabs of {slab}");
+                    assert_eq!(total.rays, rays, "{at}");
+                    let got = AxisEntropy::new(l.d, &total.counts, total.rays);
+                    assert_eq!(got, AxisEntropy::new(l.d, &counts, rays), "{at}");
+                    assert!(got.blocks > 0 && open.is_empty(), "{at}");
+                }
+            }
+        }
+    }
+}
