@@ -469,7 +469,12 @@ fn counts_in_parallel<P: Send>(
     (monitor, per_part): (&Monitor, u64),
     count: impl Fn(P, &mut [BlockCounts], &mut [u64]) + Sync,
 ) -> Result<Vec<(BlockCounts, u64)>> {
-    let empty = || (vec![BlockCounts::new(bins, block); tables], vec![0; tables]);
+    // Each table made apart (not cloned): its pages are zeroed lazily, and only those its codes
+    // touch are ever resident.
+    let empty = || {
+        let counts: Vec<BlockCounts> = (0..tables).map(|_| BlockCounts::new(bins, block)).collect();
+        (counts, vec![0; tables])
+    };
     let (counts, rays) = if serial {
         let (mut counts, mut rays) = empty();
         for part in parts {
