@@ -3,6 +3,7 @@
 //! coordinate axes), with the axes that cannot be told from the best named as contenders, and
 //! optionally refined around the best.
 
+mod evaluator;
 pub mod icosphere;
 mod parts;
 mod rate;
@@ -12,6 +13,8 @@ mod streamed;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use evaluator::Evaluator;
+pub use evaluator::evaluate;
 pub use parts::{ViewRound, ViewRounds};
 pub use rate::{
     AxisEntropy, BRICK_CELLS, BinSampler, Bricks, InnerSpans, OpenRays, PhaseStats, RaySubset,
@@ -314,69 +317,6 @@ fn finish(
     paper
 }
 
-/// Everything one search needs to evaluate an axis.
-struct Evaluator<'a, T> {
-    volume: &'a Volume,
-    sampler: BinSampler<'a, T>,
-    params: ViewParams,
-}
-
-impl<T: Voxel> Evaluator<'_, T> {
-    /// The progress units of an axis whose paper lattice is `paper`: its own, the samples a
-    /// lattice of its spacings holds in the volume's box (the same for every axis), and each
-    /// shifted lattice's, in proportion to the rays it walks (one in its subset's `every`), so
-    /// that a unit takes about as long in every lattice. (Counted in rows of tiles, a unit of a
-    /// lattice walking one ray in twelve, or of an axis whose tiles lie along its rows, took a
-    /// fraction of another's: the bar ran ahead through some lattices and stood through others.)
-    fn shares(&self, paper: &Lattice) -> (u64, u64) {
-        let extent: f64 = (0..3)
-            .map(|m| (self.volume.dims()[m] - 1) as f64 * self.volume.spacing()[m])
-            .product();
-        let samples = (extent / (paper.ray_spacing.powi(2) * paper.sample_spacing)) as u64;
-        let own = samples.max(work_units(paper));
-        (own, own / subset(&self.params, samples, 1).every)
-    }
-
-    /// The entropy rate of the rays of `lattice` that `subset` keeps, reporting `units` in all:
-    /// a share of them for each row of tiles walked, what does not divide at the end.
-    fn walk(
-        &self,
-        lattice: &Lattice,
-        subset: RaySubset,
-        (monitor, units): (&Monitor, u64),
-    ) -> Result<AxisEntropy> {
-        let block = self.params.block;
-        let mut rate =
-            entropy_rates_of(&self.sampler, &[(lattice, subset)], block, (monitor, units))?;
-        Ok(rate.pop().expect("one lattice's rate"))
-    }
-
-    fn units(&self, axis: [f64; 3]) -> Result<u64> {
-        let lattice = lattice_of(self.volume, &self.params, axis, 0)?;
-        let (own, shifted) = self.shares(&lattice);
-        Ok(own + shifted * self.params.phases.saturating_sub(1) as u64)
-    }
-
-    /// The entropy rate of `axis` on the paper's lattice, with the phase statistics when asked
-    /// for.
-    fn evaluate(&self, axis: [f64; 3], monitor: &Monitor) -> Result<AxisEntropy> {
-        let axis = canonical_axis(axis)?;
-        let (volume, params) = (self.volume, &self.params);
-        let lattice = lattice_of(volume, params, axis, 0)?;
-        let (own, share) = self.shares(&lattice);
-        let paper = self.walk(&lattice, RaySubset::ALL, (monitor, own))?;
-        let lattices = shifted_lattices(volume, params, axis, paper.samples)?;
-        let kept: Vec<(&Lattice, RaySubset)> = lattices
-            .iter()
-            .filter_map(|(l, subset)| subset.map(|s| (l, s)))
-            .collect();
-        monitor.advance(share * (lattices.len() - kept.len()) as u64)?;
-        let units = share * kept.len() as u64;
-        let shifted = entropy_rates_of(&self.sampler, &kept, params.block, (monitor, units))?;
-        Ok(finish(volume, params, axis, paper, &shifted))
-    }
-}
-
 /// Evaluates every axis of the viewpoint sphere and sorts them by their score (ties keep the
 /// sphere's order). Fails with [`Error::Cancelled`] when the monitor's flag is raised.
 pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result<ViewSearch> {
@@ -384,27 +324,6 @@ pub fn search(volume: &Volume, params: &ViewParams, monitor: &Monitor) -> Result
     let q = volume.quantizer(params.sampling.bins)?;
     crate::volume::with_voxels!(volume.data(), |data| {
         search_in(BinSampler::over(data, volume, q), volume, params, monitor)
-    })
-}
-
-/// The entropy rate of one `axis` as [`search`] measures it under `params` (with its phase
-/// statistics when `params` asks for phases).
-pub fn evaluate(
-    volume: &Volume,
-    params: &ViewParams,
-    axis: [f64; 3],
-    monitor: &Monitor,
-) -> Result<AxisEntropy> {
-    let params = resolve(volume, params)?;
-    let q = volume.quantizer(params.sampling.bins)?;
-    crate::volume::with_voxels!(volume.data(), |data| {
-        let eval = Evaluator {
-            volume,
-            sampler: BinSampler::over(data, volume, q),
-            params,
-        };
-        monitor.start("one axis", eval.units(axis)?);
-        eval.evaluate(axis, monitor)
     })
 }
 

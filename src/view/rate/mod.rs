@@ -350,16 +350,14 @@ pub fn entropy_rates_of<T: Voxel>(
     block: usize,
     (monitor, units): (&Monitor, u64),
 ) -> Result<Vec<AxisEntropy>> {
-    let Some(&(first, subset)) = lattices.first() else {
+    let Some(&(first, _)) = lattices.first() else {
         monitor.advance(units)?;
         return Ok(Vec::new());
     };
     let step = fixed_step(first);
     let together = lattices.len() > 1
-        && subset.every > 1
-        && lattices
-            .iter()
-            .all(|(l, s)| s.every == subset.every && fixed_step(l) == step);
+        && lattices.iter().any(|(_, s)| s.every > 1)
+        && lattices.iter().all(|(l, _)| fixed_step(l) == step);
     if !together {
         let each = units / lattices.len() as u64;
         let rates = lattices
