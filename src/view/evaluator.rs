@@ -17,6 +17,14 @@ fn box_samples(volume: &Volume, paper: &Lattice) -> u64 {
     (extent / (paper.ray_spacing.powi(2) * paper.sample_spacing)) as u64
 }
 
+/// The lattices of `lattices` that walk rays, with the rays they walk.
+fn walked(lattices: &[(Lattice, Option<RaySubset>)]) -> Vec<(&Lattice, RaySubset)> {
+    lattices
+        .iter()
+        .filter_map(|(l, subset)| subset.map(|s| (l, s)))
+        .collect()
+}
+
 /// Everything one search needs to evaluate an axis.
 pub(super) struct Evaluator<'a, T> {
     pub(super) volume: &'a Volume,
@@ -84,9 +92,8 @@ impl<T: Voxel> Evaluator<'_, T> {
         {
             return Ok(None);
         }
-        let all: Vec<(&Lattice, RaySubset)> = std::iter::once((paper, RaySubset::ALL))
-            .chain(guess.iter().filter_map(|(l, s)| s.map(|s| (l, s))))
-            .collect();
+        let mut all = vec![(paper, RaySubset::ALL)];
+        all.extend(walked(&guess));
         let units = own + share * (all.len() - 1) as u64;
         let mut rates = entropy_rates_of(&self.sampler, &all, params.block, (monitor, units))?;
         let shifted = rates.split_off(1);
@@ -96,11 +103,8 @@ impl<T: Voxel> Evaluator<'_, T> {
             return Ok(Some(finish(volume, params, axis, paper_rate, &shifted)));
         }
         // Too many samples were missing for the guess: the shifted lattices walked again.
-        let kept: Vec<(&Lattice, RaySubset)> = wanted
-            .iter()
-            .filter_map(|(l, subset)| subset.map(|s| (l, s)))
-            .collect();
-        let shifted = entropy_rates_of(&self.sampler, &kept, params.block, (monitor, 0))?;
+        let shifted =
+            entropy_rates_of(&self.sampler, &walked(&wanted), params.block, (monitor, 0))?;
         Ok(Some(finish(volume, params, axis, paper_rate, &shifted)))
     }
 
@@ -116,10 +120,7 @@ impl<T: Voxel> Evaluator<'_, T> {
         }
         let paper = self.walk(&lattice, RaySubset::ALL, (monitor, own))?;
         let lattices = shifted_lattices(volume, params, axis, paper.samples)?;
-        let kept: Vec<(&Lattice, RaySubset)> = lattices
-            .iter()
-            .filter_map(|(l, subset)| subset.map(|s| (l, s)))
-            .collect();
+        let kept = walked(&lattices);
         monitor.advance(share * (lattices.len() - kept.len()) as u64)?;
         let units = share * kept.len() as u64;
         let shifted = entropy_rates_of(&self.sampler, &kept, params.block, (monitor, units))?;
@@ -127,8 +128,8 @@ impl<T: Voxel> Evaluator<'_, T> {
     }
 }
 
-/// The entropy rate of one `axis` as [`search`](super::search) measures it under `params` (with its phase
-/// statistics when `params` asks for phases).
+/// The entropy rate of one `axis` as [`search`](super::search) measures it under `params`
+/// (with its phase statistics when `params` asks for phases).
 pub fn evaluate(
     volume: &Volume,
     params: &ViewParams,
@@ -169,11 +170,11 @@ mod tests {
             };
             let lattice = lattice_of(volume, &params, axis, 0).unwrap();
             let paper = rate(&lattice, RaySubset::ALL);
-            let shifted: Vec<AxisEntropy> = shifted_lattices(volume, &params, axis, paper.samples)
-                .unwrap()
-                .iter()
-                .filter_map(|(l, s)| s.map(|s| rate(l, s)))
-                .collect();
+            let shifted: Vec<AxisEntropy> =
+                walked(&shifted_lattices(volume, &params, axis, paper.samples).unwrap())
+                    .into_iter()
+                    .map(|(l, s)| rate(l, s))
+                    .collect();
             finish(volume, &params, axis, paper, &shifted)
         })
     }

@@ -341,9 +341,10 @@ fn counts_with<T: Voxel>(
 }
 
 /// The entropy rates of `lattices` over the rays each one's subset keeps, reporting `units` in
-/// all: each [`entropy_rate_of`]'s, but the shifted phases of one axis (one step, each walking
-/// one block of rays in the same `every`) walked together, tile by tile
-/// (`tiles::walk_rows`): counts are sums, so the same counts.
+/// all: each [`entropy_rate_of`]'s, but lattices of one step of which some walk a subset of
+/// their rays (an axis's shifted phases, each walking one block of rays in 12, with or without
+/// its paper lattice) walked together, tile by tile (`tiles::walk_rows`): counts are sums, so
+/// the same counts.
 pub fn entropy_rates_of<T: Voxel>(
     sampler: &BinSampler<T>,
     lattices: &[(&Lattice, RaySubset)],

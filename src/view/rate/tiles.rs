@@ -417,8 +417,8 @@ impl RowOf {
 /// Feeds the rays of the tile row `js` of each of `lattices` that its subset keeps into its
 /// counter in `counts`, walking their inner spans with `common`, and adds each lattice's rays
 /// to `rays`. The lattices share one step (an axis's shifted phases, each walking one block of
-/// rays in `every`, the blocks of one phase beside those of the next) and the tiles of the
-/// first: each tile's rays of every lattice are walked in turn, so that the cache lines one
+/// rays in `every`, the blocks of one phase beside those of the next, and perhaps its paper
+/// lattice, every ray) and the tiles of the first: each tile's rays of every lattice are walked in turn, so that the cache lines one
 /// lattice's block of rays reads are still near for its neighbours' blocks. (Walked one
 /// lattice after another, each block met lines whose other rays' blocks were walked a whole
 /// sweep of the volume earlier or later.)
