@@ -277,6 +277,44 @@ fn shifted_lattices(
         .collect()
 }
 
+/// About how many samples a lattice of `paper`'s spacings holds in `volume`'s box (the same
+/// for every axis).
+fn box_samples(volume: &Volume, paper: &Lattice) -> u64 {
+    let extent: f64 = (0..3)
+        .map(|m| (volume.dims()[m] - 1) as f64 * volume.spacing()[m])
+        .product();
+    (extent / (paper.ray_spacing.powi(2) * paper.sample_spacing)) as u64
+}
+
+/// The shifted lattices of `axis` and the rays each walks, guessed before its paper lattice
+/// `paper` is walked, so that they can be walked with it: their subset hangs on the paper's
+/// samples, guessed as those its lattice holds in the volume's box. `None` where the guess
+/// gives any of them less than the largest subset (or none: too thin), or phases are not asked
+/// for; else the guess is right unless missing samples bring the paper's count under it,
+/// which [`guess_holds`] tells once it is counted.
+fn guessed_shifted(
+    volume: &Volume,
+    params: &ViewParams,
+    axis: [f64; 3],
+    paper: &Lattice,
+) -> Result<Option<Vec<(Lattice, RaySubset)>>> {
+    if params.phases < 2 {
+        return Ok(None);
+    }
+    let guess = shifted_lattices(volume, params, axis, box_samples(volume, paper))?;
+    Ok(guess
+        .into_iter()
+        .map(|(l, s)| s.filter(|s| s.every == params.phase_subset).map(|s| (l, s)))
+        .collect())
+}
+
+/// Whether [`guessed_shifted`]'s lattices walk the rays [`shifted_lattices`] gives them for a
+/// paper lattice that counted `samples`: the largest subset (thinness does not hang on the
+/// samples, and every phase's subset is the same).
+fn guess_holds(params: &ViewParams, samples: u64) -> bool {
+    subset(params, samples, 1).every == params.phase_subset
+}
+
 /// The rays a shifted lattice walks, for an axis whose paper lattice counted `samples`:
 /// one block in `phase_subset`, spread over the volume, as long as each shifted lattice keeps
 /// [`SAMPLES_PER_CELL`] samples per cell of the L-block table; else all of them.

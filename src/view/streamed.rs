@@ -8,7 +8,8 @@
 //! tables and the pieces of its rays open at the slab's face ([`OpenRays`], stitched band by
 //! band as each slab is walked), and per thread the band of rays it is walking. The lattices
 //! are counted in as few sweeps as that memory allows: the paper's lattices of every axis first,
-//! then the shifted ones, whose rays depend on what the paper's counted (see `subset`).
+//! with the shifted ones whose rays can be guessed before the paper's samples are counted, then
+//! the other shifted ones, whose rays depend on what the paper's counted (see `subset`).
 
 use std::ops::Range;
 
@@ -18,8 +19,9 @@ use super::rate::{
     AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slabs_into, window_bytes,
 };
 use super::refine::refine_in_lockstep;
+use super::shifted_lattices;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
-use super::{lattice_of, ranked, refine_evaluations, resolve, shifted_lattices};
+use super::{guess_holds, guessed_shifted, lattice_of, ranked, refine_evaluations, resolve};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, Fragment, PartialCounts};
@@ -152,8 +154,9 @@ impl<T: Voxel> Sweeps<'_, T> {
     }
 
     /// The entropy rates of `axes` (canonical), as `Evaluator::evaluate` gives each: its
-    /// paper's lattice counted in one round of sweeps, then its shifted lattices, whose rays
-    /// depend on what the paper's counted.
+    /// paper's lattice counted in one round of sweeps, with its shifted lattices where their
+    /// rays can be guessed before the paper's samples are counted ([`guessed_shifted`]), the
+    /// others (and those the count proves guessed wrong) in a second round.
     fn evaluate(
         &self,
         axes: &[[f64; 3]],
@@ -162,13 +165,26 @@ impl<T: Voxel> Sweeps<'_, T> {
     ) -> Result<Vec<AxisEntropy>> {
         let (volume, params) = (self.volume, self.params);
         let sweep = planes(volume.dims(), slabs.1).count() as u64;
-        let paper = axes
-            .iter()
-            .map(|&axis| Ok((lattice_of(volume, params, axis, 0)?, RaySubset::ALL)))
-            .collect::<Result<Vec<_>>>()?;
-        let paper = self.count(paper, slabs, monitor)?;
+        let (mut first, mut joined) = (Vec::new(), Vec::new());
+        for &axis in axes {
+            let paper = lattice_of(volume, params, axis, 0)?;
+            let guess = guessed_shifted(volume, params, axis, &paper)?;
+            first.push((paper, RaySubset::ALL));
+            joined.push(guess.as_ref().map_or(0, Vec::len));
+            first.extend(guess.into_iter().flatten());
+        }
+        let mut counted = self.count(first, slabs, monitor)?.into_iter();
+        let (mut paper, mut of_axis) = (Vec::new(), Vec::new());
+        for &k in &joined {
+            paper.push(counted.next().expect("a paper lattice's rate"));
+            of_axis.push(counted.by_ref().take(k).collect::<Vec<_>>());
+        }
         let (mut owners, mut shifted) = (Vec::new(), Vec::new());
         for (a, (&axis, paper)) in axes.iter().zip(&paper).enumerate() {
+            if joined[a] > 0 && guess_holds(params, paper.samples) {
+                continue;
+            }
+            of_axis[a].clear();
             for (lattice, subset) in shifted_lattices(volume, params, axis, paper.samples)? {
                 match subset {
                     Some(subset) => {
@@ -179,9 +195,7 @@ impl<T: Voxel> Sweeps<'_, T> {
                 }
             }
         }
-        let shifted = self.count(shifted, slabs, monitor)?;
-        let mut of_axis = vec![Vec::new(); axes.len()];
-        for (a, r) in owners.into_iter().zip(shifted) {
+        for (a, r) in owners.into_iter().zip(self.count(shifted, slabs, monitor)?) {
             of_axis[a].push(r);
         }
         Ok(axes
@@ -411,7 +425,8 @@ fn crossing(dims: [usize; 3], lattice: &Lattice, every: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::view::rate::tests::awkward_volume_of as awkward_volume;
+    use crate::view::evaluator::tests::evaluated_apart;
+    use crate::view::rate::tests::{awkward_volume_of as awkward_volume, holed_below};
     use crate::volume::VoxelType;
 
     #[test]
@@ -441,6 +456,28 @@ mod tests {
             }
         }
         assert_eq!(sweeps, 18);
+    }
+
+    /// With few bins a small volume's shifted lattices walk one block of rays in 12, guessed
+    /// before the paper's samples are counted and swept with the paper's lattices; a slab of
+    /// NaN proves the guess wrong and they are swept again: the search's result either way.
+    #[test]
+    fn the_phases_swept_with_the_paper_lattices_are_the_search() {
+        let none = Monitor::none();
+        let mut params = ViewParams::default();
+        params.sampling.bins = 4;
+        let v = awkward_volume([32, 32, 32], [1.0, 0.9, 1.3], VoxelType::I16, 5);
+        for volume in [&v, &holed_below(&v, 20)] {
+            let expect = super::super::search(volume, &params, &none).unwrap();
+            for view in &expect.views {
+                assert_eq!(view, &evaluated_apart(volume, &params, view.axis));
+            }
+            let expect = serde_json::to_string(&expect).unwrap();
+            for room in [u64::MAX, 1] {
+                let got = search_streamed(volume, &params, room, &none).unwrap();
+                assert_eq!(serde_json::to_string(&got).unwrap(), expect, "{room}");
+            }
+        }
     }
 
     #[test]

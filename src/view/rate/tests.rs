@@ -93,6 +93,19 @@ pub(in crate::view) fn awkward_volume_of(
     Volume::new(dims, spacing, voxel_type, data).unwrap()
 }
 
+/// `volume` as f32 with its voxel planes below `z` missing (NaN): fewer samples than its box
+/// holds.
+pub(in crate::view) fn holed_below(volume: &Volume, z: usize) -> Volume {
+    let [nx, ny, nz] = volume.dims();
+    let data = (0..nx * ny * nz)
+        .map(|i| match [i % nx, i / nx % ny, i / (nx * ny)] {
+            [_, _, k] if k < z => f32::NAN,
+            at => volume.value(at),
+        })
+        .collect();
+    Volume::new(volume.dims(), volume.spacing(), VoxelType::F32, data).unwrap()
+}
+
 #[test]
 fn every_walk_counts_what_the_scalar_walk_counts() {
     // Whatever the processor: without AVX2 the vector runs take the scalar walk.
