@@ -95,9 +95,9 @@ pub fn count_slab_into<T: Voxel>(
 
 /// [`count_slab_into`] of several lattices at once, each with its open pieces in `opens`, a
 /// part each: an axis's shifted phases (each walking one block of rays in 12, phase n's blocks
-/// beside phase n + 1's, their bands of one index over about the same rows) walked band by
-/// band, each band's rays of every lattice in turn, so that the cache lines one phase's blocks
-/// read are still near for its neighbours'. Counts are sums: the parts are each lattice's alone.
+/// beside phase n + 1's, their bands of one index over about the same rows), with or without
+/// its paper lattice, walked band by band, each band's rays of every lattice in turn, so that
+/// the cache lines one lattice's rays read are still near for its neighbours'. Counts are sums: the parts are each lattice's alone.
 pub fn count_slabs_into<T: Voxel>(
     sampler: &BinSampler<T>,
     lattices: &[(&Lattice, RaySubset)],

@@ -51,7 +51,8 @@ fn tile_shape(lattice: &Lattice, density: f64) -> (i64, i64) {
 /// density). Measured on the default search of a 512³ body (an axis's paper lattice and its 7
 /// shifted phases, each walking one block of rays in 12, walked together): tiles spanning 512
 /// lattice rays took 5% less time than tiles holding 256 of the rays walked, and as long as
-/// tiles spanning 1,024; the paper's lattice alone, 4% less than tiles of 256 rays.
+/// tiles spanning 1,024; the paper's lattice alone took the same time with tiles of 256 and
+/// 512 rays.
 fn shape_of(lattices: &[(&Lattice, RaySubset)]) -> (i64, i64) {
     let Some(&(l, _)) = lattices.first() else {
         return (1, 1);
