@@ -34,7 +34,7 @@ __all__ = [
     "_count_view_slab",
     "_slab_planes",
     "_view_slabs",
-    "_paper_samples",
+    "_shifted_samples",
     "_refine_in_parts",
     "_analyze_with_parts",
     "_volume_of_grid",
@@ -360,14 +360,14 @@ def _view_slabs(
     axes: Optional[Sequence[Tuple[float, float, float]]] = None,
     **params: Any,
 ) -> list[Tuple[int, int]]: ...
-def _paper_samples(
+def _shifted_samples(
     paper: ViewPart,
     dims: Sequence[int],
     spacing: Sequence[float],
     dtype: str,
     range: Tuple[float, float, int],
     **params: Any,
-) -> list[int]: ...
+) -> Optional[list[int]]: ...
 def _refine_in_parts(
     paper: ViewPart,
     dims: Sequence[int],

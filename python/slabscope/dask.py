@@ -492,9 +492,11 @@ def analyze_array(
     limits; else once a round, released after it. Rounds: the range
     (a task a layer); the view search, a task a slab of whole chunk layers along z (as few
     slabs as keep the cluster's threads at work within a task's budget; with the planes around
-    it that its samples read): the paper's lattices, the shifted lattices (with
-    phases), with ``refine=True`` two such rounds a step of the refinement (the axes each step
-    asks for, found on the client from the sums); the background (the automatic one in three
+    it that its samples read): the paper's lattices, with the shifted lattices (phases) where
+    their rays can be guessed before the paper's are counted (a volume whose box holds enough
+    samples), then the shifted lattices the first round did not count right (none on most
+    volumes), with ``refine=True`` such rounds for each step of the refinement (the axes each
+    step asks for, found on the client from the sums); the background (the automatic one in three
     rounds of a task a layer, a threshold's in one); the partition in two rounds of a task a
     strip of the slice stack's rows, each gathering the box of voxels its rows read. Labelling
     a layer's background keeps within half its worker's Dask memory limit unless
@@ -599,16 +601,24 @@ def _rounds(
     if not planned:
         return end((None, None, []))
     paper = _round(client, layers, slabs, grid, (None, None), params, report)
+    # The shifted lattices the paper round did not count (guessed wrong, or not guessed: a
+    # small volume), a second round where there are any.
     more = None
-    if shifted:
-        samples = slabscope._slabscope._paper_samples(paper, *grid, **params)
+    samples = slabscope._slabscope._shifted_samples(paper, *grid, **params)
+    if samples is not None:
+        if not shifted:
+            ahead[0] += len(slabs[0])
         more = _round(client, layers, planned_for(samples), grid, (samples, None), params, report)
+    elif shifted:
+        ahead[0] -= len(slabs[0])
     refined: List[Tuple[Any, Any, Any]] = []
     if refine:
 
         def count(axes: List[Tuple[float, float, float]], samples: Optional[List[int]]) -> Any:
             if samples is None:
                 ahead[0] += step
+            elif not shifted:
+                ahead[0] += len(slabs[0])
             total = _round(client, layers, planned_for(samples, axes), grid, (samples, axes), params, lambda: report("refining in parts"))
             refined.append((axes, samples, total))
             return total

@@ -52,7 +52,7 @@ fn _slabscope(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parts::_count_view_slab, m)?)?;
     m.add_function(wrap_pyfunction!(parts::_slab_planes, m)?)?;
     m.add_function(wrap_pyfunction!(parts::_view_slabs, m)?)?;
-    m.add_function(wrap_pyfunction!(parts::_paper_samples, m)?)?;
+    m.add_function(wrap_pyfunction!(parts::_shifted_samples, m)?)?;
     m.add_function(wrap_pyfunction!(parts::_refine_in_parts, m)?)?;
     m.add_function(wrap_pyfunction!(parts::_analyze_with_parts, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_volume_of_grid, m)?)?;

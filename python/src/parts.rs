@@ -290,7 +290,8 @@ pub(crate) fn empty(grid: &SlabGrid) -> PyResult<slabscope::Volume> {
 }
 
 /// The voxel planes `(first, end)` the task counting each slab of cell planes of `planes`
-/// holds (found once for every round), and whether a second round follows.
+/// holds (found once for every round), and whether a second round is foreseen
+/// (`ViewRounds::foresees_shifted`).
 #[pyfunction]
 #[pyo3(signature = (planes, dims, spacing, dtype, range, **params))]
 pub fn _slab_planes(
@@ -303,7 +304,8 @@ pub fn _slab_planes(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(Vec<(usize, usize)>, bool)> {
     let grid = grid(dims, spacing, dtype, range);
-    let rounds = rounds(py, &empty(&grid)?, params)?;
+    let whole = empty(&grid)?;
+    let rounds = rounds(py, &whole, params)?;
     let held = planes
         .iter()
         .map(|&(a, b)| {
@@ -311,7 +313,8 @@ pub fn _slab_planes(
             (held.start, held.end)
         })
         .collect();
-    Ok((held, rounds.has_shifted()))
+    let foreseen = rounds.foresees_shifted(&whole).or_py()?;
+    Ok((held, foreseen))
 }
 
 /// The slabs of cell planes a round's tasks count: the chunk layers' slabs `layers` (in order
@@ -377,10 +380,12 @@ fn joined(layers: &[(usize, usize)], k: usize) -> Vec<(usize, usize)> {
         .collect()
 }
 
-/// The samples each axis's paper lattice counted, from the first round's sum.
+/// The samples each axis's paper lattice counted, from the first round's sum, if a second
+/// round (the shifted lattices the first did not count right) is to be counted with them; else
+/// `None` (`ViewRounds::shifted_after`).
 #[pyfunction]
 #[pyo3(signature = (paper, dims, spacing, dtype, range, **params))]
-pub fn _paper_samples(
+pub fn _shifted_samples(
     py: Python<'_>,
     paper: &ViewPart,
     dims: [usize; 3],
@@ -388,11 +393,14 @@ pub fn _paper_samples(
     dtype: &str,
     range: (f32, f32, u64),
     params: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Vec<u64>> {
+) -> PyResult<Option<Vec<u64>>> {
     let grid = grid(dims, spacing, dtype, range);
     let volume = empty(&grid)?;
     let rounds = rounds(py, &volume, params)?;
-    rounds.paper_samples(&volume, &paper.counts).or_py()
+    match rounds.shifted_after(&volume, &ViewRound::Paper, &paper.counts).or_py()? {
+        Some(ViewRound::Shifted(samples)) => Ok(Some(samples)),
+        _ => Ok(None),
+    }
 }
 
 /// A refinement step's round as `_refine_in_parts` asks for it and `_analyze_with_parts`

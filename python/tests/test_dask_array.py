@@ -61,6 +61,32 @@ def test_one_volume_across_the_cluster_is_the_single_process_analysis(client, pa
     assert fractions[-1] == 1.0 and fractions.count(1.0) == 1 and fractions == sorted(fractions)
 
 
+@pytest.mark.parametrize("holed, rounds", [(0, 1), (15, 2)], ids=["guessed", "guessed-wrong"])
+def test_the_phases_counted_in_the_paper_round_on_the_cluster(client, holed, rounds):
+    # With 4 bins the volume's box holds enough samples for the shifted lattices' largest
+    # subset: they are counted in the paper's round, and no second round is needed, unless
+    # missing voxels (planes of NaN) bring an axis's paper samples under it.
+    zyx = voxels().astype(np.float32)
+    zyx[:holed] = np.nan
+    spacing = (1.0, 0.9, 1.3)
+    heard = []
+    params = {"bins": 4, "background": "none", "slabs": 2}
+    got = slabscope.dask.analyze_array(
+        client,
+        da.from_array(zyx, chunks=(8, 13, 30)),
+        axes="zyx",
+        spacing=spacing,
+        progress=lambda phase, fraction: heard.append((phase, fraction)),
+        **params,
+    )
+    one = slabscope.analyze(slabscope.Volume.from_array(zyx.T, spacing=spacing), **params)
+    assert got.to_dict() == one.to_dict()
+    # A round is 2 slabs (5 layers joined for the cluster's two threads).
+    assert [p for p, _ in heard].count("view search in parts") == 2 * rounds
+    fractions = [f for _, f in heard]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+
+
 def test_axes_in_another_order_and_a_zarr_store(client, tmp_path):
     zarr = pytest.importorskip("zarr")
     zyx = voxels()

@@ -172,11 +172,9 @@ mod tests {
             sum
         };
         let paper = count(&ViewRound::Paper, lcg);
-        let shifted = if rounds.has_shifted() {
-            let samples = rounds.paper_samples(v, &paper).unwrap();
-            count(&ViewRound::Shifted(samples), lcg)
-        } else {
-            Vec::new()
+        let shifted = match rounds.shifted_after(v, &ViewRound::Paper, &paper).unwrap() {
+            Some(next) => count(&next, lcg),
+            None => Vec::new(),
         };
         let sphere = rounds.finish(v, &paper, &shifted).unwrap();
         rounds

@@ -6,11 +6,16 @@
 //! search ([`search_streamed`](super::search_streamed)), with nothing open when a slab starts.
 //!
 //! Two rounds, as in the slab-by-slab search: the paper's lattice of every axis, then (with
-//! phases) the shifted lattices, whose rays depend on the samples the paper's counted. Each
-//! task is told the round (and, for the second, those sample counts), so the lattices are made
-//! again where the task runs and nothing but numbers travels. The refinement
-//! ([`ViewRounds::refine`]) is more rounds of the same two kinds, two a step of its pattern
-//! searches in lockstep (as the slab-by-slab search takes them), of the axes each step asks for.
+//! phases) the shifted lattices, whose rays depend on the samples the paper's counted. Where
+//! they can be guessed from the volume's box ([`guessed_shifted`]), an axis's shifted lattices
+//! are counted in the first round beside its paper lattice (walked together, reading the same
+//! cells), and the second round counts only those of the axes whose guess could not be made or
+//! the count proved wrong: on a large volume there is no second round
+//! ([`ViewRounds::shifted_after`] says). Each task is told the round (and, for the second, the
+//! paper lattices' sample counts), so the lattices are made again where the task runs and
+//! nothing but numbers travels. The refinement ([`ViewRounds::refine`]) is more rounds of the
+//! same two kinds, two a step of its pattern searches in lockstep (as the slab-by-slab search
+//! takes them), of the axes each step asks for.
 
 use std::ops::Range;
 
@@ -20,7 +25,7 @@ use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_sl
 use super::refine::refine_in_lockstep;
 use super::streamed::slab_part_bytes;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
-use super::{lattice_of, ranked, resolve, shifted_lattices};
+use super::{guess_holds, guessed_shifted, lattice_of, ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, PartialCounts};
@@ -29,15 +34,18 @@ use crate::volume::{Volume, VoxelType};
 /// A round of a view search counted in parts.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ViewRound {
-    /// The paper's lattice of every axis.
+    /// The paper's lattice of every axis, each followed by its shifted lattices where they can
+    /// be guessed ([`guessed_shifted`]).
     Paper,
-    /// The shifted lattices of every axis (phases 1 on), given the samples each axis's paper
-    /// lattice counted (the first round's [`ViewRounds::paper_samples`]).
+    /// The shifted lattices (phases 1 on) of every axis the paper round did not count right,
+    /// given the samples each axis's paper lattice counted (the first round's
+    /// [`ViewRounds::paper_samples`]).
     Shifted(Vec<u64>),
-    /// A step of the refinement: the paper's lattices of these (canonical) axes.
+    /// A step of the refinement: the paper's lattices of these (canonical) axes, with their
+    /// guessed shifted lattices.
     RefinePaper(Vec<[f64; 3]>),
-    /// A step of the refinement: the shifted lattices of these axes, given the samples each
-    /// one's paper lattice counted.
+    /// A step of the refinement: the shifted lattices of these axes its paper round did not
+    /// count right, given the samples each one's paper lattice counted.
     RefineShifted(Vec<[f64; 3]>, Vec<u64>),
 }
 
@@ -84,10 +92,27 @@ impl ViewRounds {
         &self.params
     }
 
-    /// Whether a second round (the shifted lattices) follows the paper's.
+    /// Whether the search walks shifted lattices (phases), in the paper round where they are
+    /// guessed, else in a second round ([`shifted_after`](Self::shifted_after)).
     #[must_use]
     pub fn has_shifted(&self) -> bool {
         self.params.phases > 1
+    }
+
+    /// Whether a second round is foreseen before the first is counted: phases, and an axis
+    /// whose shifted lattices cannot be guessed (one the count proves guessed wrong makes a
+    /// second round no one foresaw).
+    pub fn foresees_shifted(&self, volume: &Volume) -> Result<bool> {
+        if !self.has_shifted() {
+            return Ok(false);
+        }
+        for &axis in &self.axes {
+            let paper = lattice_of(volume, &self.params, axis, 0)?;
+            if guessed_shifted(volume, &self.params, axis, &paper)?.is_none() {
+                return Ok(true);
+            }
+        }
+        Ok(false)
     }
 
     /// The voxel planes along z a task counting the cell planes `planes` of a volume `depth`
@@ -116,26 +141,26 @@ impl ViewRounds {
         }
     }
 
-    /// The paper's lattice of each of `axes`.
+    /// The paper's lattice of each of `axes`, each followed by its guessed shifted lattices
+    /// (none where they cannot be guessed): an axis's first lattice is its paper lattice.
     fn paper_lattices(
         &self,
         volume: &Volume,
         axes: &[[f64; 3]],
     ) -> Result<Vec<(usize, Lattice, RaySubset)>> {
-        axes.iter()
-            .enumerate()
-            .map(|(a, &axis)| {
-                Ok((
-                    a,
-                    lattice_of(volume, &self.params, axis, 0)?,
-                    RaySubset::ALL,
-                ))
-            })
-            .collect()
+        let mut out = Vec::new();
+        for (a, &axis) in axes.iter().enumerate() {
+            let paper = lattice_of(volume, &self.params, axis, 0)?;
+            let guess = guessed_shifted(volume, &self.params, axis, &paper)?;
+            out.push((a, paper, RaySubset::ALL));
+            out.extend(guess.into_iter().flatten().map(|(l, s)| (a, l, s)));
+        }
+        Ok(out)
     }
 
     /// The shifted lattices of each of `axes` whose paper lattice counted `samples`, the
-    /// lattices whose rays hold no subset left out.
+    /// lattices whose rays hold no subset left out, and those of the axes whose guess the paper
+    /// round counted right ([`counted_with_paper`](Self::counted_with_paper)) too.
     fn shifted_lattices(
         &self,
         volume: &Volume,
@@ -151,6 +176,9 @@ impl ViewRounds {
         }
         let mut out = Vec::new();
         for (a, (&axis, &n)) in axes.iter().zip(samples).enumerate() {
+            if self.counted_with_paper(volume, axis, n)? {
+                continue;
+            }
             for (lattice, subset) in shifted_lattices(volume, &self.params, axis, n)? {
                 if let Some(subset) = subset {
                     out.push((a, lattice, subset));
@@ -158,6 +186,16 @@ impl ViewRounds {
             }
         }
         Ok(out)
+    }
+
+    /// Whether the paper round counted `axis`'s shifted lattices as they are walked for a paper
+    /// lattice of `samples`: guessed, and guessed right.
+    fn counted_with_paper(&self, volume: &Volume, axis: [f64; 3], samples: u64) -> Result<bool> {
+        if !guess_holds(&self.params, samples) {
+            return Ok(false);
+        }
+        let paper = lattice_of(volume, &self.params, axis, 0)?;
+        Ok(guessed_shifted(volume, &self.params, axis, &paper)?.is_some())
     }
 
     /// The counts of `round`'s lattices in the slab of planes of cells `planes` along z (cell
@@ -248,11 +286,27 @@ impl ViewRounds {
     /// The samples each axis's paper lattice counted, from the first round's counts added up:
     /// what [`ViewRound::Shifted`] needs.
     pub fn paper_samples(&self, volume: &Volume, paper: &[PartialCounts]) -> Result<Vec<u64>> {
-        Ok(self
-            .rates(volume, &ViewRound::Paper, paper)?
-            .iter()
-            .map(|(_, r)| r.samples)
-            .collect())
+        let (paper, _) = self.paper_rates(volume, &ViewRound::Paper, paper)?;
+        Ok(paper.iter().map(|r| r.samples).collect())
+    }
+
+    /// The round that follows the paper round `round` (the sphere's or a refinement step's),
+    /// given its counts added up: the shifted lattices it did not count right. `None` where
+    /// there are none: without phases, or where every axis's were guessed right (on any volume
+    /// whose box holds enough samples for the shifted lattices' largest subset and no missing
+    /// voxel brings a paper lattice's count under it).
+    pub fn shifted_after(
+        &self,
+        volume: &Volume,
+        round: &ViewRound,
+        counts: &[PartialCounts],
+    ) -> Result<Option<ViewRound>> {
+        if !self.has_shifted() {
+            return Ok(None);
+        }
+        let (paper, _) = self.paper_rates(volume, round, counts)?;
+        let next = shifted_round(round, paper.iter().map(|r| r.samples).collect());
+        Ok((!self.lattices(volume, &next)?.is_empty()).then_some(next))
     }
 
     /// The entropy rates of `round`'s lattices from its counts added up, one a lattice, each
@@ -266,13 +320,13 @@ impl ViewRounds {
         let lattices = self.lattices(volume, round)?;
         if lattices.len() != counts.len() {
             let (name, what) = match round {
-                ViewRound::Paper | ViewRound::RefinePaper(_) => ("paper counts", "axes"),
+                ViewRound::Paper | ViewRound::RefinePaper(_) => ("paper counts", "lattices"),
                 _ => ("shifted counts", "shifted lattices"),
             };
             return Err(Error::invalid(
                 name,
                 counts.len(),
-                format!("one for each of the {} {what}", lattices.len()),
+                format!("one for each of the round's {} {what}", lattices.len()),
             ));
         }
         let directions: Vec<[f64; 3]> = lattices.iter().map(|(_, l, _)| l.d).collect();
@@ -280,9 +334,30 @@ impl ViewRounds {
         Ok(lattices.iter().map(|(a, _, _)| *a).zip(rates).collect())
     }
 
+    /// The entropy rates of the paper round `round`'s lattices from its counts added up: each
+    /// axis's paper lattice's, and its guessed shifted lattices' (empty where none were).
+    fn paper_rates(
+        &self,
+        volume: &Volume,
+        round: &ViewRound,
+        counts: &[PartialCounts],
+    ) -> Result<(Vec<AxisEntropy>, Vec<Vec<AxisEntropy>>)> {
+        let (mut paper, mut guessed) = (Vec::new(), Vec::new());
+        for (a, r) in self.rates(volume, round, counts)? {
+            // An axis's first lattice is its paper lattice, the rest its guessed ones.
+            if a == paper.len() {
+                paper.push(r);
+                guessed.push(Vec::new());
+            } else {
+                guessed[a].push(r);
+            }
+        }
+        Ok((paper, guessed))
+    }
+
     /// The entropy rates of the axes of the paper round `round` (the sphere's or a refinement
     /// step's), as the search evaluates each: from its paper lattice's counts `paper` and (with
-    /// phases) its shifted lattices' `shifted`.
+    /// phases) its shifted lattices', guessed in `paper` or counted in `shifted`.
     fn evaluated(
         &self,
         volume: &Volume,
@@ -295,10 +370,14 @@ impl ViewRounds {
             ViewRound::RefinePaper(axes) => axes,
             _ => return Err(Error::invalid("round", "shifted", "a paper round")),
         };
-        let paper = self.rates(volume, round, paper)?;
-        let mut of_axis = vec![Vec::new(); axes.len()];
+        let (paper, mut of_axis) = self.paper_rates(volume, round, paper)?;
         if self.has_shifted() {
-            let samples = paper.iter().map(|(_, r)| r.samples).collect();
+            for (of_axis, p) in of_axis.iter_mut().zip(&paper) {
+                if !guess_holds(&self.params, p.samples) {
+                    of_axis.clear();
+                }
+            }
+            let samples = paper.iter().map(|r| r.samples).collect();
             for (a, r) in self.rates(volume, &shifted_round(round, samples), shifted)? {
                 of_axis[a].push(r);
             }
@@ -307,9 +386,7 @@ impl ViewRounds {
             .iter()
             .zip(paper)
             .zip(&of_axis)
-            .map(|((&axis, (_, paper)), shifted)| {
-                finish(volume, &self.params, axis, paper, shifted)
-            })
+            .map(|((&axis, paper), shifted)| finish(volume, &self.params, axis, paper, shifted))
             .collect())
     }
 
@@ -337,7 +414,7 @@ impl ViewRounds {
     }
 
     /// The view search of the whole volume from the rounds' counts added up: `paper` of the
-    /// first round, `shifted` of the second (empty without phases), `search`'s result bit for
+    /// first round, `shifted` of the second (empty where [`shifted_after`](Self::shifted_after) gave none), `search`'s result bit for
     /// bit, but for the refinement, which [`refine`](Self::refine) adds. `volume` gives the
     /// grid (a slab of it will do).
     pub fn finish(
@@ -375,14 +452,9 @@ impl ViewRounds {
                 .collect::<Result<Vec<_>>>()?;
             let round = ViewRound::RefinePaper(axes);
             let paper = count(&round)?;
-            let shifted = if self.has_shifted() {
-                let rates = self.rates(volume, &round, &paper)?;
-                count(&shifted_round(
-                    &round,
-                    rates.iter().map(|(_, r)| r.samples).collect(),
-                ))?
-            } else {
-                Vec::new()
+            let shifted = match self.shifted_after(volume, &round, &paper)? {
+                Some(next) => count(&next)?,
+                None => Vec::new(),
             };
             self.evaluated(volume, &round, &paper, &shifted)
         })?;
@@ -399,200 +471,4 @@ fn shifted_round(round: &ViewRound, samples: Vec<u64>) -> ViewRound {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::progress::Monitor;
-    use crate::testing::Lcg;
-    use crate::view::rate::tests::awkward_volume_of as awkward_volume;
-    use crate::volume::{SlabGrid, VoxelType};
-
-    /// Cell planes `0..cells` cut at random into slabs.
-    pub(crate) fn random_slabs(cells: usize, lcg: &mut Lcg) -> Vec<Range<usize>> {
-        let mut cuts = vec![0];
-        while *cuts.last().unwrap() < cells {
-            let last = *cuts.last().unwrap();
-            let len = 1 + (lcg.next_u64() >> 33) as usize % 9;
-            cuts.push((last + len).min(cells));
-        }
-        cuts.windows(2).map(|w| w[0]..w[1]).collect()
-    }
-
-    /// The volume holding only the voxel planes a slab of cell planes `planes` reads.
-    pub(crate) fn slab_of(v: &Volume, rounds: &ViewRounds, planes: &Range<usize>) -> Volume {
-        let [nx, ny, nz] = v.dims();
-        let held = rounds.voxel_planes(planes, nz);
-        crate::volume::with_voxels!(v.data(), |d| {
-            Volume::of_slab(
-                &SlabGrid::of(v),
-                held.start,
-                &d[held.start * nx * ny..held.end * nx * ny],
-            )
-        })
-        .unwrap()
-    }
-
-    /// The parts of `round` over `slabs`, counted apart and added in a shuffled order.
-    fn added(
-        rounds: &ViewRounds,
-        v: &Volume,
-        round: &ViewRound,
-        slabs: &[Range<usize>],
-        lcg: &mut Lcg,
-    ) -> Vec<PartialCounts> {
-        let mut parts: Vec<_> = slabs
-            .iter()
-            .map(|p| {
-                rounds
-                    .count_slab(&slab_of(v, rounds, p), round, p.clone())
-                    .unwrap()
-            })
-            .collect();
-        for i in (1..parts.len()).rev() {
-            parts.swap(i, (lcg.next_u64() >> 33) as usize % (i + 1));
-        }
-        let mut sum = rounds.zero(v, round).unwrap();
-        for part in parts {
-            // Each part travels as bytes, as between a cluster's processes.
-            for (s, p) in sum.iter_mut().zip(part) {
-                // A slab's pieces come in key order: they are never sorted again.
-                assert!(p.fragments().is_sorted_by_key(|f| (f.key, f.start)));
-                let bytes = p.to_bytes();
-                let back = PartialCounts::from_bytes(&bytes).unwrap();
-                assert_eq!(back.to_bytes(), bytes);
-                for cut in [0, 7, 8, bytes.len() - 8] {
-                    assert!(PartialCounts::from_bytes(&bytes[..cut]).is_err());
-                }
-                s.add(back);
-            }
-        }
-        sum
-    }
-
-    #[test]
-    fn parts_of_slabs_added_in_any_order_are_the_search_bit_for_bit() {
-        let mut lcg = Lcg::new(44);
-        for (dims, spacing, voxel_type) in [
-            ([30, 26, 41], [1.0, 1.0, 1.0], VoxelType::U8),
-            ([28, 20, 33], [0.8, 0.8, 1.7], VoxelType::F32),
-            ([24, 31, 19], [1.0, 1.2, 1.0], VoxelType::I16),
-        ] {
-            let v = awkward_volume(dims, spacing, voxel_type, 4);
-            for params in [ViewParams::paper(), ViewParams::default()] {
-                let expect = super::super::search(&v, &params, &Monitor::none()).unwrap();
-                let expect = serde_json::to_string(&expect).unwrap();
-                let slabs = random_slabs(dims[2] - 1, &mut lcg);
-                assert!(slabs.len() > 2);
-                // Each slab's rounds made from its own volume, as a task makes them.
-                let whole = ViewRounds::new(&v, &params).unwrap();
-                let rounds = ViewRounds::new(&slab_of(&v, &whole, &slabs[1]), &params).unwrap();
-                let paper = added(&rounds, &v, &ViewRound::Paper, &slabs, &mut lcg);
-                let shifted = if rounds.has_shifted() {
-                    let samples = rounds.paper_samples(&v, &paper).unwrap();
-                    added(&rounds, &v, &ViewRound::Shifted(samples), &slabs, &mut lcg)
-                } else {
-                    Vec::new()
-                };
-                let got = rounds.finish(&v, &paper, &shifted).unwrap();
-                assert_eq!(serde_json::to_string(&got).unwrap(), expect, "{dims:?}");
-                // A slab left out is an error, not another answer.
-                let short = added(&rounds, &v, &ViewRound::Paper, &slabs[1..], &mut lcg);
-                let e = rounds.finish(&v, &short, &shifted).unwrap_err();
-                assert!(e.to_string().contains("unjoined"), "{e}");
-            }
-        }
-    }
-
-    #[test]
-    fn the_refinement_in_parts_is_the_search_bit_for_bit() {
-        let mut lcg = Lcg::new(4444);
-        let v = awkward_volume([26, 22, 29], [1.0, 0.9, 1.2], VoxelType::U8, 4);
-        for params in [ViewParams::paper(), ViewParams::default()] {
-            let params = ViewParams {
-                refine: true,
-                ..params
-            };
-            let expect = super::super::search(&v, &params, &Monitor::none()).unwrap();
-            assert!(expect.refined.is_some());
-            let slabs = random_slabs(28, &mut lcg);
-            let rounds = ViewRounds::new(&v, &params).unwrap();
-            let paper = added(&rounds, &v, &ViewRound::Paper, &slabs, &mut lcg);
-            let shifted = if rounds.has_shifted() {
-                let samples = rounds.paper_samples(&v, &paper).unwrap();
-                added(&rounds, &v, &ViewRound::Shifted(samples), &slabs, &mut lcg)
-            } else {
-                Vec::new()
-            };
-            let sphere = rounds.finish(&v, &paper, &shifted).unwrap();
-            assert!(sphere.refined.is_none());
-            let mut kinds = Vec::new();
-            let got = rounds
-                .refine(&v, sphere, |round| {
-                    kinds.push(round.kind());
-                    Ok(added(&rounds, &v, round, &slabs, &mut lcg))
-                })
-                .unwrap();
-            let json = |s: &ViewSearch| serde_json::to_string(s).unwrap();
-            assert_eq!(json(&got), json(&expect));
-            // Rounds of a step: the paper's lattices, then (with phases) the shifted ones.
-            let step: &[u8] = if rounds.has_shifted() { &[2, 3] } else { &[2] };
-            assert!(kinds.len() >= 2 * step.len(), "{kinds:?}");
-            assert!(kinds.chunks(step.len()).all(|c| c == step), "{kinds:?}");
-        }
-        // Without refine, the search is as it was and nothing more is counted.
-        let rounds = ViewRounds::new(&v, &ViewParams::paper()).unwrap();
-        let slabs_of_all = random_slabs(28, &mut lcg);
-        let paper = added(&rounds, &v, &ViewRound::Paper, &slabs_of_all, &mut lcg);
-        let sphere = rounds.finish(&v, &paper, &[]).unwrap();
-        let expect = serde_json::to_string(&sphere).unwrap();
-        let got = rounds.refine(&v, sphere, |_| unreachable!()).unwrap();
-        assert_eq!(serde_json::to_string(&got).unwrap(), expect);
-    }
-
-    #[test]
-    fn slabs_off_the_grid_are_refused() {
-        let v = awkward_volume([20, 20, 20], [1.0; 3], VoxelType::U8, 4);
-        let rounds = ViewRounds::new(&v, &ViewParams::paper()).unwrap();
-        for planes in [5..5, 10..20] {
-            let e = rounds
-                .count_slab(&v, &ViewRound::Paper, planes)
-                .unwrap_err();
-            assert!(e.to_string().contains("0..19"), "{e}");
-        }
-    }
-
-    /// Bytes that no writer made are refused, never read into counts that would overflow or
-    /// tables whose codes repeat; parts of another binning are refused when they are added up.
-    #[test]
-    fn hostile_or_foreign_parts_are_refused() {
-        let mut counts = BlockCounts::new(4, 3);
-        let mut run = crate::measure::Run::default();
-        for s in [0, 1, 2, 3, 0, 1] {
-            crate::measure::Counter::push_to(&mut counts, &mut run, s);
-        }
-        let bytes = PartialCounts::of(counts, 1, Vec::new()).to_bytes();
-        let words: Vec<u64> = bytes
-            .chunks_exact(8)
-            .map(|c| u64::from_le_bytes(c.try_into().unwrap()))
-            .collect();
-        // MAGIC, bins, block, then the long table: its length and (code, count) pairs.
-        assert!(words[3] >= 2, "{words:?}");
-        let with = |edit: &dyn Fn(&mut Vec<u64>)| {
-            let mut w = words.clone();
-            edit(&mut w);
-            let b: Vec<u8> = w.iter().flat_map(|x| x.to_le_bytes()).collect();
-            PartialCounts::from_bytes(&b).err().unwrap_or_default()
-        };
-        assert!(with(&|w| w[6] = w[4]).contains("out of order or repeated"));
-        assert!(with(&|w| w[5] = u64::MAX).contains("more blocks than any volume holds"));
-        let v = awkward_volume([12, 10, 9], [1.0; 3], VoxelType::U8, 4);
-        let params = ViewParams {
-            phases: 0,
-            ..ViewParams::default()
-        };
-        let rounds = ViewRounds::new(&v, &params).unwrap();
-        let paper = rounds.zero(&v, &ViewRound::Paper).unwrap();
-        let foreign = vec![PartialCounts::new(8, 3); paper.len()];
-        let e = rounds.finish(&v, &foreign, &[]);
-        assert!(e.is_err_and(|e| e.to_string().contains("other bins")));
-    }
-}
+mod tests;
