@@ -149,11 +149,11 @@ fn split(v: &Volume, params: &ViewParams, depth: usize) -> Split {
     };
     let rounds = ViewRounds::new(v, params).expect("rounds");
     let paper = round(v, params, &ViewRound::Paper, &slabs, &mut out);
-    let shifted = if rounds.has_shifted() {
-        let samples = rounds.paper_samples(v, &paper).expect("samples");
-        round(v, params, &ViewRound::Shifted(samples), &slabs, &mut out)
-    } else {
-        Vec::new()
+    // The shifted lattices the paper round did not count (none on a volume of 232³ or more).
+    let next = rounds.shifted_after(v, &ViewRound::Paper, &paper);
+    let shifted = match next.expect("samples") {
+        Some(next) => round(v, params, &next, &slabs, &mut out),
+        None => Vec::new(),
     };
     let result = out
         .finish
