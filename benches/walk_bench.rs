@@ -19,7 +19,7 @@ use slabscope::geometry::lattice::Lattice;
 use slabscope::measure::BlockCounts;
 use slabscope::progress::Monitor;
 use slabscope::view::{
-    BinSampler, ViewParams, ViewRound, ViewRounds, Walk, block_counts_by, icosphere,
+    BinSampler, Vector, ViewParams, ViewRound, ViewRounds, Walk, block_counts_by, icosphere,
 };
 use slabscope::volume::Volume;
 use slabscope::volume::phantom;
@@ -109,7 +109,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let sampler = BinSampler::new(&volume, volume.quantizer(32)?);
         let mut walks = Vec::new();
         if !std::env::args().any(|a| a == "--no-tiles") {
-            walks.push(("tiles".to_string(), Walk::Tiles { vector: true }));
+            walks.push((
+                "tiles".to_string(),
+                Walk::Tiles {
+                    vector: Vector::Widest,
+                },
+            ));
         }
         for &(size, shaped) in &bricks {
             let name = format!("bricks {}{size}", if shaped { "s" } else { "" });

@@ -18,7 +18,7 @@ pub use evaluator::evaluate;
 pub use parts::{ViewRound, ViewRounds};
 pub use rate::{
     AxisEntropy, BRICK_CELLS, BinSampler, Bricks, InnerSpans, OpenRays, PhaseStats, RaySubset,
-    Walk, block_counts, block_counts_by, count_slab_into, counts_of_bricks, entropy_rate,
+    Vector, Walk, block_counts, block_counts_by, count_slab_into, counts_of_bricks, entropy_rate,
     entropy_rate_of, entropy_rates_of, ray_bins, work_units, work_units_of,
 };
 pub use refine::{REFINE_STOP_DEGREES, pattern_search, refine_evaluations, refine_steps};

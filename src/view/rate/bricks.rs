@@ -485,9 +485,11 @@ pub(super) fn common_walk<T: Voxel>(
         #[cfg(target_arch = "x86_64")]
         Some(mut dense) if super::lanes::available(sampler) => {
             #[allow(unsafe_code)]
-            // SAFETY: `lanes::available` found AVX2 on this processor.
+            // SAFETY: `lanes::available` found AVX2 on this processor, and `detected` AVX-512
+            // where it chose it.
             unsafe {
-                super::lanes::walk(walkers, step, sampler, &mut dense);
+                let width = super::lanes::Width::detected();
+                super::lanes::walk(width, walkers, step, sampler, &mut dense);
             }
         }
         Some(mut dense) => scalar_walk(walkers, step, sampler, &mut dense),

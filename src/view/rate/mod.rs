@@ -268,8 +268,9 @@ pub enum Walk {
     Fastest,
     /// The tile walk.
     Tiles {
-        /// Eight rays at a time where the processor has AVX2, else one by one.
-        vector: bool,
+        /// Eight rays at a time where the processor has AVX2 (by the compilation asked for),
+        /// else one by one.
+        vector: Vector,
     },
     /// The bricked walk.
     Bricks {
@@ -278,6 +279,17 @@ pub enum Walk {
         /// Whether the bricks are shaped for the lattice's axis (see [`Bricks::along`]).
         shaped: bool,
     },
+}
+
+/// Which compilation of the tile walk's eight-lane walk walks: every one counts the same.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Vector {
+    /// None: one ray at a time.
+    Off,
+    /// The AVX2 one, on a processor with AVX-512 too (for tests and benchmarks).
+    Avx2,
+    /// The widest this processor runs: AVX-512's where it has it, else AVX2's.
+    Widest,
 }
 
 /// The counts behind [`entropy_rate`], kept: the L-blocks, (L-1)-blocks and symbols of every
@@ -329,7 +341,10 @@ fn counts_with<T: Voxel>(
     if let Walk::Bricks { size, shaped } = walk {
         return bricks::bricked_counts(sampler, lattice, block, (size, shaped), monitor);
     }
-    let vector = walk != (Walk::Tiles { vector: false });
+    let vector = match walk {
+        Walk::Tiles { vector } => vector,
+        _ => Vector::Widest,
+    };
     let mut out = tile_counts(
         sampler,
         &[(lattice, subset)],
@@ -376,7 +391,7 @@ pub fn entropy_rates_of<T: Voxel>(
     }
     let rows = tile_rows(lattices).count() as u64;
     let per_row = units / rows.max(1);
-    let counts = tile_counts(sampler, lattices, block, (monitor, per_row), true)?;
+    let counts = tile_counts(sampler, lattices, block, (monitor, per_row), Vector::Widest)?;
     monitor.advance(units.saturating_sub(per_row * rows))?;
     Ok(lattices
         .iter()
@@ -392,7 +407,7 @@ fn tile_counts<T: Voxel>(
     lattices: &[(&Lattice, RaySubset)],
     block: usize,
     (monitor, per_row): (&Monitor, u64),
-    vector: bool,
+    vector: Vector,
 ) -> Result<Vec<(BlockCounts, u64)>> {
     let rows: Vec<(i64, i64)> = tile_rows(lattices).collect();
     let step = fixed_step(lattices[0].0);
@@ -409,12 +424,17 @@ fn tile_counts<T: Voxel>(
                 counts.iter_mut().map(BlockCounts::dense).collect();
             match dense {
                 #[cfg(target_arch = "x86_64")]
-                Some(mut dense) if vector && lanes::available(sampler) => {
+                Some(mut dense) if vector != Vector::Off && lanes::available(sampler) => {
+                    let width = match vector {
+                        Vector::Avx2 => lanes::Width::Avx2,
+                        _ => lanes::Width::detected(),
+                    };
                     let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
                         #[allow(unsafe_code)]
-                        // SAFETY: `lanes::available` found AVX2 on this processor.
+                        // SAFETY: `lanes::available` found AVX2 on this processor, and
+                        // `detected` AVX-512 where it chose it.
                         unsafe {
-                            lanes::walk(w, step, sampler, c);
+                            lanes::walk(width, w, step, sampler, c);
                         }
                     };
                     walk_rows(lattices, js, along, &mut dense, rays, &mut common);

@@ -69,9 +69,8 @@ impl Chunk {
     /// together, and returns the length after them. (The length is kept by the caller, in a
     /// register: in `self` it would go through memory at every step, as the stores might
     /// write it.)
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn enqueue(&mut self, at: usize, lanes: u32, columns: [__m256i; 2]) -> usize {
+    #[inline(always)]
+    pub(super) unsafe fn enqueue(&mut self, at: usize, lanes: u32, columns: [__m256i; 2]) -> usize {
         let order = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(LEFT_PACK[lanes as usize] as i64));
         for (queue, column) in self.queue.iter_mut().zip(columns) {
             let to = &mut queue[at..at + LANES];
@@ -87,9 +86,8 @@ impl Chunk {
     }
 
     /// Entries `k..k + 8` of the queue column `column`.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn entries(&self, column: usize, k: usize) -> __m256i {
+    #[inline(always)]
+    pub(super) unsafe fn entries(&self, column: usize, k: usize) -> __m256i {
         let from = &self.queue[column][k..k + LANES];
         // SAFETY: the 32 bytes read are `from`'s; the load needs no alignment.
         unsafe { _mm256_loadu_si256(from.as_ptr().cast()) }

@@ -6,6 +6,7 @@ use std::arch::x86_64::*;
 use super::chunk::{CELL, CHUNK, Chunk};
 use super::registers::{
     Narrow, Positions, Wide, bits_of, cells_shuffled, fractions, lanes_of, natural, offset,
+    per_axis,
 };
 use super::{AHEAD, LANES};
 use crate::measure::{Run, RunEnds};
@@ -48,9 +49,8 @@ pub(super) struct Group {
 }
 
 impl Group {
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn load(walkers: &[Walker], block: u64, c: &Consts) -> Self {
+    #[inline(always)]
+    pub(super) unsafe fn load(walkers: &[Walker], block: u64, c: &Consts) -> Self {
         let mut pos = [Wide::default(); 3];
         let (mut span, mut code, mut len) =
             (Narrow::default(), Narrow::default(), Narrow::default());
@@ -64,13 +64,13 @@ impl Group {
             code.0[l] = c as u32;
             len.0[l] = n.min(block) as u32;
         }
-        let mut p = std::array::from_fn(|m| [pos[m].get(0), pos[m].get(1)]);
+        let mut p = per_axis!(m => [pos[m].get(0), pos[m].get(1)]);
         let origin = fractions(&p);
-        let cells = std::array::from_fn(|_| {
-            let cell = natural(cells_shuffled(&p, c.sy, c.sz));
+        let mut cells = [_mm256_setzero_si256(); AHEAD];
+        for cell in &mut cells {
+            *cell = natural(cells_shuffled(&p, c.sy, c.sz));
             p = offset(&p, &c.step);
-            cell
-        });
+        }
         Self {
             p,
             cells,
@@ -85,9 +85,8 @@ impl Group {
 
     /// Puts the group's runs back in `walkers`, and each walker at the end of its inner span
     /// (`step` further per sample).
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn store(&self, walkers: &mut [Walker], step: [i64; 3]) {
+    #[inline(always)]
+    pub(super) unsafe fn store(&self, walkers: &mut [Walker], step: [i64; 3]) {
         let (mut code, mut len) = (Narrow::default(), Narrow::default());
         code.set(self.code);
         len.set(self.len);
@@ -100,16 +99,14 @@ impl Group {
     }
 
     /// The lanes still in their inner spans at step `t`.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn on(&self, t: usize) -> __m256i {
+    #[inline(always)]
+    pub(super) unsafe fn on(&self, t: usize) -> __m256i {
         _mm256_cmpgt_epi32(self.span, _mm256_set1_epi32(t as i32))
     }
 
     /// Ends the runs (`code`, `len`) of the lanes set in `lanes` (missing samples).
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn end_runs(
+    #[inline(always)]
+    pub(super) unsafe fn end_runs(
         mut lanes: u32,
         (code, len): (__m256i, __m256i),
         ends: &mut RunEnds,
@@ -130,9 +127,8 @@ impl Group {
 
     /// Walks `chunk.steps` steps from step `chunk.start`: reads the labels of the cells, and
     /// queues the samples in mixed cells (prefetching the cells AHEAD steps on).
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn read<T: Voxel>(
+    #[inline(always)]
+    pub(super) unsafe fn read<T: Voxel>(
         &mut self,
         chunk: &mut Chunk,
         c: &Consts,
@@ -193,9 +189,8 @@ impl Group {
     }
 
     /// Appends the chunk's samples to the runs, counting each complete L-block.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn count(
+    #[inline(always)]
+    pub(super) unsafe fn count(
         &mut self,
         chunk: &Chunk,
         c: &Consts,
@@ -242,9 +237,8 @@ impl Group {
     }
 
     /// Adds the held counts of the lanes in the mask `lanes` to the table.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn flush(lanes: __m256i, held: __m256i, times: __m256i, table: &mut [u64]) {
+    #[inline(always)]
+    pub(super) unsafe fn flush(lanes: __m256i, held: __m256i, times: __m256i, table: &mut [u64]) {
         let (mut codes, mut counts) = (Narrow::default(), Narrow::default());
         // The other lanes add nothing, to their own codes.
         codes.set(held);
@@ -256,9 +250,8 @@ impl Group {
     }
 
     /// Adds all held counts to the table.
-    #[inline]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn flush_all(&mut self, table: &mut [u64]) {
+    #[inline(always)]
+    pub(super) unsafe fn flush_all(&mut self, table: &mut [u64]) {
         Self::flush(_mm256_set1_epi32(-1), self.held, self.times, table);
         self.times = _mm256_setzero_si256();
     }

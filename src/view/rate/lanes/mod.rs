@@ -25,8 +25,18 @@
 //! here.) The walk feeds exactly the same symbols to the same sequences as
 //! [`super::scalar_walk`]; only the order in which rays take turns differs, and counts are sums.
 //!
+//! The walk is compiled twice: for AVX2, and for processors with AVX-512 (F and VL), whose 32
+//! vector registers hold the count pass's state where AVX2's 16 spilled part of it to the stack
+//! at every step (the same instructions on 256-bit registers otherwise, so the same counts).
+//! Its helpers are inlined into each (`#[inline(always)]`, which a function with its own target
+//! features cannot be), so they are `unsafe fn`s: they may run only where AVX2 is.
+//!
 //! [`MIXED`]: crate::volume::cells::MIXED
 #![allow(unsafe_code)]
+// Every helper is an unsafe fn only for the processor it needs: its operations are intrinsics.
+#![allow(unsafe_op_in_unsafe_fn)]
+// The helpers must be inlined into each compilation of the walk (see above).
+#![allow(clippy::inline_always)]
 // The intrinsics used are too many to name one by one.
 #![allow(clippy::wildcard_imports)]
 
@@ -79,10 +89,70 @@ fn resolve_one_by_one<T: Voxel>(
     }
 }
 
+/// The widest compilation of the walk this processor runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Width {
+    /// AVX2: 16 vector registers.
+    Avx2,
+    /// AVX-512 F and VL: 32 vector registers.
+    Avx512,
+}
+
+impl Width {
+    /// This processor's (which [`available`] must have found to have AVX2).
+    pub(super) fn detected() -> Self {
+        if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl") {
+            Self::Avx512
+        } else {
+            Self::Avx2
+        }
+    }
+}
+
 /// The inner spans of `walkers` (in tile order), eight neighbouring rays at a time, leaving
-/// each at the end of its span with its run up to date.
+/// each at the end of its span with its run up to date, by the walk compiled for `width`.
+///
+/// # Safety
+///
+/// The processor has AVX2 ([`available`]), and AVX-512 F and VL for [`Width::Avx512`].
+pub(super) unsafe fn walk<T: Voxel>(
+    width: Width,
+    walkers: &mut [Walker],
+    step: [i64; 3],
+    sampler: &BinSampler<T>,
+    counts: &mut DenseCounts,
+) {
+    match width {
+        Width::Avx2 => walk_avx2(walkers, step, sampler, counts),
+        Width::Avx512 => walk_avx512(walkers, step, sampler, counts),
+    }
+}
+
 #[target_feature(enable = "avx2")]
-pub(super) fn walk<T: Voxel>(
+fn walk_avx2<T: Voxel>(
+    walkers: &mut [Walker],
+    step: [i64; 3],
+    sampler: &BinSampler<T>,
+    counts: &mut DenseCounts,
+) {
+    // SAFETY: this function runs where AVX2 is.
+    unsafe { walk_with(walkers, step, sampler, counts) }
+}
+
+#[target_feature(enable = "avx2,avx512f,avx512vl")]
+fn walk_avx512<T: Voxel>(
+    walkers: &mut [Walker],
+    step: [i64; 3],
+    sampler: &BinSampler<T>,
+    counts: &mut DenseCounts,
+) {
+    // SAFETY: this function runs where AVX2 is.
+    unsafe { walk_with(walkers, step, sampler, counts) }
+}
+
+/// [`walk`]'s body, inlined into each compilation.
+#[inline(always)]
+unsafe fn walk_with<T: Voxel>(
     walkers: &mut [Walker],
     step: [i64; 3],
     sampler: &BinSampler<T>,
@@ -104,8 +174,8 @@ pub(super) fn walk<T: Voxel>(
     let consts = Consts {
         sy: _mm256_set1_epi32(sy as i32),
         sz: _mm256_set1_epi32(sz as i32),
-        step: step.map(|s| _mm256_set1_epi64x(s)),
-        step_low: step.map(|s| _mm256_set1_epi32(s as i32)),
+        step: registers::per_axis!(m => _mm256_set1_epi64x(step[m])),
+        step_low: registers::per_axis!(m => _mm256_set1_epi32(step[m] as i32)),
         shift: _mm_cvtsi32_si128(bits as i32),
         code_mask: _mm256_set1_epi32(mask as i32),
         full: _mm256_set1_epi32(block as i32),
@@ -117,13 +187,18 @@ pub(super) fn walk<T: Voxel>(
         let mut g = Group::load(group, block, &consts);
         // On the grid, samples are voxels, not interpolated: the scalar path takes them.
         let vector_mixer = mixer.as_ref().filter(|_| !group.iter().any(|w| w.grid));
-        let mut finish = |g: &mut Group, chunk: &mut Chunk| {
-            match vector_mixer {
-                Some(mixer) => mixer.resolve(chunk, &g.origin, &consts.step_low),
-                None => resolve_one_by_one(chunk, group, step, sampler),
-            }
-            g.count(chunk, &consts, table, &mut ends);
-        };
+        // Not a closure: a closure is compiled with no target features of its own, and its
+        // intrinsics would be calls.
+        macro_rules! finish {
+            ($g:expr, $chunk:expr) => {{
+                let (g, chunk): (&mut Group, &mut Chunk) = ($g, $chunk);
+                match vector_mixer {
+                    Some(mixer) => mixer.resolve(chunk, &g.origin, &consts.step_low),
+                    None => resolve_one_by_one(chunk, group, step, sampler),
+                }
+                g.count(chunk, &consts, table, &mut ends);
+            }};
+        }
         // A pipeline of two chunks: the labels of one are read (and the corners of its mixed
         // cells prefetched) before the mixed samples of the one before are resolved and its
         // samples counted.
@@ -136,12 +211,12 @@ pub(super) fn walk<T: Voxel>(
             now.steps = CHUNK.min(steps - start);
             g.read(now, &consts, sampler);
             if k > 0 {
-                finish(&mut g, before);
+                finish!(&mut g, before);
             }
             last = Some(k % 2);
         }
         if let Some(last) = last {
-            finish(&mut g, &mut chunks[last]);
+            finish!(&mut g, &mut chunks[last]);
         }
         g.flush_all(table);
         g.store(group, step);
