@@ -35,7 +35,7 @@ use crate::volume::{Volume, VoxelType};
 #[derive(Clone, Debug, PartialEq)]
 pub enum ViewRound {
     /// The paper's lattice of every axis, each followed by its shifted lattices where they can
-    /// be guessed ([`guessed_shifted`]).
+    /// be guessed (`view::guessed_shifted`).
     Paper,
     /// The shifted lattices (phases 1 on) of every axis the paper round did not count right,
     /// given the samples each axis's paper lattice counted (the first round's
