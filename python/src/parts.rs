@@ -397,7 +397,10 @@ pub fn _shifted_samples(
     let grid = grid(dims, spacing, dtype, range);
     let volume = empty(&grid)?;
     let rounds = rounds(py, &volume, params)?;
-    match rounds.shifted_after(&volume, &ViewRound::Paper, &paper.counts).or_py()? {
+    match rounds
+        .shifted_after(&volume, &ViewRound::Paper, &paper.counts)
+        .or_py()?
+    {
         Some(ViewRound::Shifted(samples)) => Ok(Some(samples)),
         _ => Ok(None),
     }
