@@ -308,6 +308,40 @@ fn guessed_shifted(
         .collect())
 }
 
+/// The paper lattice of each of `axes`, each followed by its [`guessed_shifted`] lattices (none
+/// where they cannot be guessed), each with the index of its axis: what a search counting the
+/// phases with the paper's lattices walks first ([`by_axis`] splits what it counts).
+fn paper_and_guessed(
+    volume: &Volume,
+    params: &ViewParams,
+    axes: &[[f64; 3]],
+) -> Result<Vec<(usize, Lattice, RaySubset)>> {
+    let mut out = Vec::new();
+    for (a, &axis) in axes.iter().enumerate() {
+        let paper = lattice_of(volume, params, axis, 0)?;
+        let guess = guessed_shifted(volume, params, axis, &paper)?;
+        out.push((a, paper, RaySubset::ALL));
+        out.extend(guess.into_iter().flatten().map(|(l, s)| (a, l, s)));
+    }
+    Ok(out)
+}
+
+/// What was counted of [`paper_and_guessed`]'s lattices, in their order with their axes' indices,
+/// split into each axis's paper lattice's and its guessed lattices' (empty where none were).
+fn by_axis<R>(counted: impl IntoIterator<Item = (usize, R)>) -> (Vec<R>, Vec<Vec<R>>) {
+    let (mut paper, mut guessed) = (Vec::new(), Vec::new());
+    for (a, r) in counted {
+        // An axis's first lattice is its paper lattice, the rest its guessed ones.
+        if a == paper.len() {
+            paper.push(r);
+            guessed.push(Vec::new());
+        } else {
+            guessed[a].push(r);
+        }
+    }
+    (paper, guessed)
+}
+
 /// Whether [`guessed_shifted`]'s lattices walk the rays [`shifted_lattices`] gives them for a
 /// paper lattice that counted `samples`: the largest subset (thinness does not hang on the
 /// samples, and every phase's subset is the same).

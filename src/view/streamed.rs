@@ -19,9 +19,10 @@ use super::rate::{
     AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_slabs_into, window_bytes,
 };
 use super::refine::refine_in_lockstep;
+use super::resolve;
 use super::shifted_lattices;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
-use super::{guess_holds, guessed_shifted, lattice_of, ranked, refine_evaluations, resolve};
+use super::{by_axis, guess_holds, paper_and_guessed, ranked, refine_evaluations};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, Fragment, PartialCounts};
@@ -155,7 +156,7 @@ impl<T: Voxel> Sweeps<'_, T> {
 
     /// The entropy rates of `axes` (canonical), as `Evaluator::evaluate` gives each: its
     /// paper's lattice counted in one round of sweeps, with its shifted lattices where their
-    /// rays can be guessed before the paper's samples are counted ([`guessed_shifted`]), the
+    /// rays can be guessed before the paper's samples are counted ([`guessed_shifted`](super::guessed_shifted)), the
     /// others (and those the count proves guessed wrong) in a second round.
     fn evaluate(
         &self,
@@ -165,23 +166,15 @@ impl<T: Voxel> Sweeps<'_, T> {
     ) -> Result<Vec<AxisEntropy>> {
         let (volume, params) = (self.volume, self.params);
         let sweep = planes(volume.dims(), slabs.1).count() as u64;
-        let (mut first, mut joined) = (Vec::new(), Vec::new());
-        for &axis in axes {
-            let paper = lattice_of(volume, params, axis, 0)?;
-            let guess = guessed_shifted(volume, params, axis, &paper)?;
-            first.push((paper, RaySubset::ALL));
-            joined.push(guess.as_ref().map_or(0, Vec::len));
-            first.extend(guess.into_iter().flatten());
-        }
-        let mut counted = self.count(first, slabs, monitor)?.into_iter();
-        let (mut paper, mut of_axis) = (Vec::new(), Vec::new());
-        for &k in &joined {
-            paper.push(counted.next().expect("a paper lattice's rate"));
-            of_axis.push(counted.by_ref().take(k).collect::<Vec<_>>());
-        }
+        let (owners, first): (Vec<usize>, Vec<_>) = paper_and_guessed(volume, params, axes)?
+            .into_iter()
+            .map(|(a, l, s)| (a, (l, s)))
+            .unzip();
+        let counted = self.count(first, slabs, monitor)?;
+        let (paper, mut of_axis) = by_axis(owners.into_iter().zip(counted));
         let (mut owners, mut shifted) = (Vec::new(), Vec::new());
         for (a, (&axis, paper)) in axes.iter().zip(&paper).enumerate() {
-            if joined[a] > 0 && guess_holds(params, paper.samples) {
+            if !of_axis[a].is_empty() && guess_holds(params, paper.samples) {
                 continue;
             }
             of_axis[a].clear();

@@ -25,7 +25,8 @@ use super::rate::{AxisEntropy, BinSampler, Bricks, OpenRays, RaySubset, count_sl
 use super::refine::refine_in_lockstep;
 use super::streamed::slab_part_bytes;
 use super::{ViewParams, ViewSearch, candidate_axes, canonical_axis, concluded, finish};
-use super::{guess_holds, guessed_shifted, lattice_of, ranked, resolve, shifted_lattices};
+use super::{by_axis, guess_holds, guessed_shifted, lattice_of, paper_and_guessed};
+use super::{ranked, resolve, shifted_lattices};
 use crate::error::{Error, Result};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, PartialCounts};
@@ -134,28 +135,11 @@ impl ViewRounds {
         round: &ViewRound,
     ) -> Result<Vec<(usize, Lattice, RaySubset)>> {
         match round {
-            ViewRound::Paper => self.paper_lattices(volume, &self.axes),
+            ViewRound::Paper => paper_and_guessed(volume, &self.params, &self.axes),
             ViewRound::Shifted(samples) => self.shifted_lattices(volume, &self.axes, samples),
-            ViewRound::RefinePaper(axes) => self.paper_lattices(volume, axes),
+            ViewRound::RefinePaper(axes) => paper_and_guessed(volume, &self.params, axes),
             ViewRound::RefineShifted(axes, samples) => self.shifted_lattices(volume, axes, samples),
         }
-    }
-
-    /// The paper's lattice of each of `axes`, each followed by its guessed shifted lattices
-    /// (none where they cannot be guessed): an axis's first lattice is its paper lattice.
-    fn paper_lattices(
-        &self,
-        volume: &Volume,
-        axes: &[[f64; 3]],
-    ) -> Result<Vec<(usize, Lattice, RaySubset)>> {
-        let mut out = Vec::new();
-        for (a, &axis) in axes.iter().enumerate() {
-            let paper = lattice_of(volume, &self.params, axis, 0)?;
-            let guess = guessed_shifted(volume, &self.params, axis, &paper)?;
-            out.push((a, paper, RaySubset::ALL));
-            out.extend(guess.into_iter().flatten().map(|(l, s)| (a, l, s)));
-        }
-        Ok(out)
     }
 
     /// The shifted lattices of each of `axes` whose paper lattice counted `samples`, the
@@ -342,17 +326,7 @@ impl ViewRounds {
         round: &ViewRound,
         counts: &[PartialCounts],
     ) -> Result<(Vec<AxisEntropy>, Vec<Vec<AxisEntropy>>)> {
-        let (mut paper, mut guessed) = (Vec::new(), Vec::new());
-        for (a, r) in self.rates(volume, round, counts)? {
-            // An axis's first lattice is its paper lattice, the rest its guessed ones.
-            if a == paper.len() {
-                paper.push(r);
-                guessed.push(Vec::new());
-            } else {
-                guessed[a].push(r);
-            }
-        }
-        Ok((paper, guessed))
+        Ok(by_axis(self.rates(volume, round, counts)?))
     }
 
     /// The entropy rates of the axes of the paper round `round` (the sphere's or a refinement
