@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::{BinSampler, SERIAL_VOXELS, VoxelBins, count_in_parallel, work_units};
+use super::{BinSampler, SERIAL_VOXELS, VoxelBins, count_in_parallel, serial_len, work_units};
 use crate::error::Result;
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, Counter, PartialCounts, Run};
@@ -151,6 +151,7 @@ pub(super) fn slab_rows<T: Voxel>(
     let bin = |at: usize| sampler.voxel_bin_at(at);
     (0..parts)
         .into_par_iter()
+        .with_min_len(serial_len(nx * ny * depth, parts))
         .fold(empty, |mut out, part| {
             let range = part * items / parts..(part + 1) * items / parts;
             out.rays += match out.counts.dense() {

@@ -463,6 +463,18 @@ fn tile_counts<T: Voxel>(
 /// tables). Counts are integer sums, the same in any order, so every result is unchanged.
 pub(crate) const SERIAL_VOXELS: usize = 1 << 16;
 
+/// The least number of a parallel walk's `items` a thread takes when they cover `voxels`: all
+/// of them below [`SERIAL_VOXELS`] (a slab of a few planes of a small volume, as the streamed
+/// search with a small budget sweeps, is walked sooner than its parts are handed to other
+/// threads and each given a zeroed table to add), else one.
+fn serial_len(voxels: usize, items: usize) -> usize {
+    if voxels < SERIAL_VOXELS {
+        items.max(1)
+    } else {
+        1
+    }
+}
+
 /// Block counts of `parts` of the work, counted by `count` (which returns its rays), `per_part`
 /// progress units a part: in parallel, unless `serial`.
 fn count_in_parallel<P: Send>(

@@ -13,7 +13,7 @@ use super::bricks::{BrickWalk, at, common_walk};
 use super::columns::slab_rows;
 use super::grid::Bricks;
 use super::tiles::{RayStart, Walker, advance, by_bucket, sample_bin};
-use super::{BinSampler, RaySubset};
+use super::{BinSampler, RaySubset, serial_len};
 use crate::geometry::lattice::Lattice;
 use crate::measure::{Fragment, PartialCounts, key_ray};
 use crate::volume::Voxel;
@@ -137,8 +137,12 @@ pub fn count_slabs_into<T: Voxel>(
         }
     }
     let outs = || lattices.iter().map(|_| empty()).collect::<Vec<_>>();
+    let [nx, ny, _] = sampler.dims();
+    let voxels = (planes.end - planes.start).max(0) as usize * nx * ny;
+    let min_len = serial_len(voxels, bands.len());
     let walked = bands
         .into_par_iter()
+        .with_min_len(min_len)
         .fold(
             || (outs(), Scratch::default()),
             |(mut outs, mut scratch), band| {
