@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::{BinSampler, SERIAL_VOXELS, VoxelBins, count_in_parallel, serial_len, work_units};
+use super::{BinSampler, VoxelBins, count_in_parallel, serial_len, work_units};
 use crate::error::Result;
 use crate::geometry::lattice::Lattice;
 use crate::measure::{BlockCounts, Counter, PartialCounts, Run};
@@ -117,7 +117,7 @@ pub(super) fn column_counts<T: Voxel>(
     count_in_parallel(
         ranges,
         (sampler.bins(), block),
-        sampler.voxels().len() < SERIAL_VOXELS,
+        sampler.voxels().len(),
         monitor,
         |range, counts| match counts.dense() {
             Some(mut dense) => columns.walk(range, sampler, &mut dense),

@@ -411,13 +411,12 @@ fn tile_counts<T: Voxel>(
 ) -> Result<Vec<(BlockCounts, u64)>> {
     let rows: Vec<(i64, i64)> = tile_rows(lattices).collect();
     let step = fixed_step(lattices[0].0);
-    let serial = sampler.voxels().len() < SERIAL_VOXELS;
     let table = (sampler.bins(), block, lattices.len());
     let along = (step, sampler);
     counts_in_parallel(
         rows,
         table,
-        serial,
+        sampler.voxels().len(),
         (monitor, per_row),
         |js, counts, rays| {
             let dense: Option<Vec<DenseCounts>> =
@@ -461,7 +460,7 @@ fn tile_counts<T: Voxel>(
 /// split zeroes and merges a table of its own (256 KiB at the default bins and block), which
 /// costs more than counting a small volume (a single DICOM image took 20 ms so, mostly zeroing
 /// tables). Counts are integer sums, the same in any order, so every result is unchanged.
-pub(crate) const SERIAL_VOXELS: usize = 1 << 16;
+const SERIAL_VOXELS: usize = 1 << 16;
 
 /// The least number of a parallel walk's `items` a thread takes when they cover `voxels`: all
 /// of them below [`SERIAL_VOXELS`] (a slab of a few planes of a small volume, as the streamed
@@ -475,19 +474,20 @@ fn serial_len(voxels: usize, items: usize) -> usize {
     }
 }
 
-/// Block counts of `parts` of the work, counted by `count` (which returns its rays), `per_part`
-/// progress units a part: in parallel, unless `serial`.
+/// Block counts of `parts` of the work over `voxels` voxels, counted by `count` (which returns
+/// its rays), `per_part` progress units a part: in parallel, unless [`serial_len`] says one
+/// thread.
 fn count_in_parallel<P: Send>(
     parts: Vec<P>,
     (bins, block): (usize, usize),
-    serial: bool,
+    voxels: usize,
     (monitor, per_part): (&Monitor, u64),
     count: impl Fn(P, &mut BlockCounts) -> u64 + Sync,
 ) -> Result<(BlockCounts, u64)> {
     let one = |part, counts: &mut [BlockCounts], rays: &mut [u64]| {
         rays[0] += count(part, &mut counts[0]);
     };
-    let mut out = counts_in_parallel(parts, (bins, block, 1), serial, (monitor, per_part), one)?;
+    let mut out = counts_in_parallel(parts, (bins, block, 1), voxels, (monitor, per_part), one)?;
     Ok(out.pop().expect("one table"))
 }
 
@@ -496,7 +496,7 @@ fn count_in_parallel<P: Send>(
 fn counts_in_parallel<P: Send>(
     parts: Vec<P>,
     (bins, block, tables): (usize, usize, usize),
-    serial: bool,
+    voxels: usize,
     (monitor, per_part): (&Monitor, u64),
     count: impl Fn(P, &mut [BlockCounts], &mut [u64]) + Sync,
 ) -> Result<Vec<(BlockCounts, u64)>> {
@@ -506,32 +506,25 @@ fn counts_in_parallel<P: Send>(
         let counts: Vec<BlockCounts> = (0..tables).map(|_| BlockCounts::new(bins, block)).collect();
         (counts, vec![0; tables])
     };
-    let (counts, rays) = if serial {
-        let (mut counts, mut rays) = empty();
-        for part in parts {
+    let min_len = serial_len(voxels, parts.len());
+    let (counts, rays) = parts
+        .into_par_iter()
+        .with_min_len(min_len)
+        .try_fold(empty, |(mut counts, mut rays), part| {
             count(part, &mut counts, &mut rays);
             monitor.advance(per_part)?;
-        }
-        (counts, rays)
-    } else {
-        parts
-            .into_par_iter()
-            .try_fold(empty, |(mut counts, mut rays), part| {
-                count(part, &mut counts, &mut rays);
-                monitor.advance(per_part)?;
-                Ok::<_, crate::error::Error>((counts, rays))
-            })
-            .try_reduce_with(|(mut a, mut ra), (b, rb)| {
-                for (a, b) in a.iter_mut().zip(&b) {
-                    a.merge(b);
-                }
-                for (a, b) in ra.iter_mut().zip(rb) {
-                    *a += b;
-                }
-                Ok((a, ra))
-            })
-            .unwrap_or_else(|| Ok(empty()))?
-    };
+            Ok::<_, crate::error::Error>((counts, rays))
+        })
+        .try_reduce_with(|(mut a, mut ra), (b, rb)| {
+            for (a, b) in a.iter_mut().zip(&b) {
+                a.merge(b);
+            }
+            for (a, b) in ra.iter_mut().zip(rb) {
+                *a += b;
+            }
+            Ok((a, ra))
+        })
+        .unwrap_or_else(|| Ok(empty()))?;
     Ok(counts.into_iter().zip(rays).collect())
 }
 
