@@ -24,8 +24,8 @@ const TILE_SPAN: f64 = 512.0;
 /// same at 256×256×415, where rays are shorter; with 1 or 2 MiB (Zen 4, Xeon) 512 was best.
 const SMALL_TILE_SPAN: f64 = 128.0;
 
-/// ...and at least half as many of those walked: a tile of a lattice walking one ray in 12
-/// spans six times as many.
+/// Whichever the span, a tile walks at least this share of it: a tile of a lattice walking one
+/// ray in 12 spans six times as many of its rays.
 const TILE_RAYS_OF_SPAN: f64 = 0.5;
 
 /// The rays a tile spans on this processor ([`TILE_SPAN`], [`SMALL_TILE_SPAN`]), found once.
@@ -479,8 +479,8 @@ pub(super) fn walk_rows<C: Counter, T: Voxel>(
         .iter()
         .map(|(l, _)| RayStarts::new(l, sampler, step))
         .collect();
-    let (ti, _) = shape_of(lattices);
-    let mut walkers = Vec::with_capacity(tile_span() as usize);
+    let (ti, tj) = shape_of(lattices);
+    let mut walkers = Vec::with_capacity((ti * tj) as usize);
     for i in (lo..=hi).step_by(ti as usize) {
         for (k, o) in own.iter().enumerate() {
             let Some(o) = o else { continue };
