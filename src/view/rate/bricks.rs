@@ -489,7 +489,8 @@ pub(super) fn common_walk<T: Voxel>(
             // where it chose it.
             unsafe {
                 let width = super::lanes::Width::detected();
-                super::lanes::walk(width, walkers, step, sampler, &mut dense);
+                let mut chunks = super::lanes::Chunks::new();
+                super::lanes::walk(width, walkers, (step, sampler), &mut dense, &mut chunks);
             }
         }
         Some(mut dense) => scalar_walk(walkers, step, sampler, &mut dense),

@@ -428,12 +428,13 @@ fn tile_counts<T: Voxel>(
                         Vector::Avx2 => lanes::Width::Avx2,
                         _ => lanes::Width::detected(),
                     };
+                    let mut chunks = lanes::Chunks::new();
                     let mut common = |w: &mut [Walker], c: &mut DenseCounts| {
                         #[allow(unsafe_code)]
                         // SAFETY: `lanes::available` found AVX2 on this processor, and
                         // `detected` AVX-512 where it chose it.
                         unsafe {
-                            lanes::walk(width, w, step, sampler, c);
+                            lanes::walk(width, w, along, c, &mut chunks);
                         }
                     };
                     walk_rows(lattices, js, along, &mut dense, rays, &mut common);

@@ -1,10 +1,11 @@
-//! A chunk of a group's walk: the labels of its steps, the lanes whose samples are missing, and
-//! the queue of samples in mixed cells waiting to be resolved.
+//! A chunk of a group's walk: the labels of its steps, and the queue of samples in mixed cells
+//! waiting to be resolved.
 
 use std::arch::x86_64::*;
 
 use super::LANES;
 use super::registers::Narrow;
+use crate::volume::cells::MIXED;
 
 /// Steps of a group walked per chunk (see the module documentation).
 pub(super) const CHUNK: usize = 32;
@@ -37,17 +38,14 @@ pub(super) const LEFT_PACK: [u64; 256] = {
 };
 
 /// Up to [`CHUNK`] steps of a group from step `start`: per step the lanes' labels (bins, with
-/// [`MIXED`] for samples in mixed cells until they are resolved) and the lanes whose sample is
-/// missing; and the queue of samples in mixed cells, by slot (step in the chunk · 8 + lane) and
-/// cell.
-///
-/// [`MIXED`]: crate::volume::cells::MIXED
+/// [`MIXED`] for samples in mixed cells until they are resolved, and for missing samples after:
+/// no bin is [`MIXED`]); and the queue of samples in mixed cells, by slot (step in the chunk
+/// · 8 + lane) and cell.
 pub(super) struct Chunk {
     pub(super) start: usize,
     pub(super) steps: usize,
     pub(super) labels: [[u8; LANES]; CHUNK],
     pub(super) cells: [Narrow; CHUNK],
-    pub(super) missing: [u8; CHUNK],
     pub(super) queue: [[u32; QUEUE]; 2],
     pub(super) len: usize,
 }
@@ -59,7 +57,6 @@ impl Chunk {
             steps: 0,
             labels: [[0; LANES]; CHUNK],
             cells: [Narrow::default(); CHUNK],
-            missing: [0; CHUNK],
             queue: [[0; QUEUE]; 2],
             len: 0,
         }
@@ -100,13 +97,18 @@ impl Chunk {
         (slot / LANES, slot % LANES)
     }
 
-    /// Puts the bin of queue entry `k`, or its absence, in its slot.
+    /// Puts `label` in slot `slot` (step in the chunk · 8 + lane): a bin, or [`MIXED`] for a
+    /// missing sample. Slots are below [`CHUNK`] · 8 = 256, so the slot's low byte is it: no
+    /// bounds check.
+    #[inline(always)]
+    pub(super) fn put(&mut self, slot: u32, label: u8) {
+        const { assert!(CHUNK * LANES == 256) };
+        self.labels.as_flattened_mut()[usize::from(slot as u8)] = label;
+    }
+
+    /// Puts the bin of queue entry `k`, or [`MIXED`] for its absence, in its slot.
     #[inline]
     pub(super) fn resolve(&mut self, k: usize, bin: Option<u8>) {
-        let (t, l) = self.slot(k);
-        match bin {
-            Some(b) => self.labels[t][l] = b,
-            None => self.missing[t] |= 1 << l,
-        }
+        self.put(self.queue[SLOT][k], bin.unwrap_or(MIXED));
     }
 }

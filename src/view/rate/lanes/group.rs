@@ -3,7 +3,7 @@
 
 use std::arch::x86_64::*;
 
-use super::chunk::{CELL, CHUNK, Chunk};
+use super::chunk::{CELL, Chunk};
 use super::registers::{
     Narrow, Positions, Wide, bits_of, cells_shuffled, fractions, lanes_of, natural, offset,
     per_axis,
@@ -142,7 +142,6 @@ impl Group {
             _mm256_set1_epi32(base as i32),
             _mm256_set1_epi32(last as i32),
         );
-        chunk.missing = [0; CHUNK];
         // First the labels: no step waits for another's, so many are read at once...
         for t in 0..chunk.steps {
             let step = chunk.start + t;
@@ -204,13 +203,17 @@ impl Group {
         let (mut held, mut times) = (self.held, self.times);
         for t in 0..chunk.steps {
             let mut push = self.on(chunk.start + t);
-            let missing = chunk.missing[t];
+            let bytes = _mm_cvtsi64_si128(i64::from_le_bytes(chunk.labels[t]));
+            // A sample still MIXED after the resolve pass is missing (an idle lane's label
+            // may be anything).
+            let missing = _mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_set1_epi8(MIXED as i8)))
+                as u32
+                & bits_of(push);
             if missing != 0 {
-                (code, len) = Self::end_runs(u32::from(missing), (code, len), ends);
-                push = _mm256_andnot_si256(lanes_of(u32::from(missing)), push);
+                (code, len) = Self::end_runs(missing, (code, len), ends);
+                push = _mm256_andnot_si256(lanes_of(missing), push);
             }
-            let labels =
-                _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(i64::from_le_bytes(chunk.labels[t])));
+            let labels = _mm256_cvtepu8_epi32(bytes);
             // Append the symbols: code = (code << bits | symbol) & mask, length capped at L.
             let pushed = _mm256_and_si256(
                 _mm256_or_si256(_mm256_sll_epi32(code, c.shift), labels),

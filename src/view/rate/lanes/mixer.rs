@@ -5,10 +5,11 @@ use std::arch::x86_64::*;
 
 use super::LANES;
 use super::chunk::{CELL, Chunk, SLOT};
-use super::registers::{Narrow, bits_of, per_axis};
+use super::registers::{Narrow, per_axis};
 use crate::geometry::lattice::FIXED_BITS;
 use crate::view::rate::BinSampler;
-use crate::volume::Voxel;
+use crate::volume::cells::MIXED;
+use crate::volume::{Voxel, VoxelType};
 
 /// What the vector walk needs to interpolate and quantize samples in mixed cells.
 pub(super) struct Mixer<'a, T> {
@@ -20,6 +21,8 @@ pub(super) struct Mixer<'a, T> {
     pub(super) range: __m256d,
     pub(super) bins: __m256d,
     pub(super) last: __m256i,
+    /// [`MIXED`] in every lane.
+    pub(super) mixed: __m256i,
 }
 
 impl<'a, T: Voxel> Mixer<'a, T> {
@@ -36,6 +39,7 @@ impl<'a, T: Voxel> Mixer<'a, T> {
             range: _mm256_set1_pd(range),
             bins: _mm256_set1_pd(bins),
             last: _mm256_set1_epi32(sampler.bins() as i32 - 1),
+            mixed: _mm256_set1_epi32(i32::from(MIXED)),
         })
     }
 }
@@ -46,18 +50,7 @@ impl<T: Voxel> Mixer<'_, T> {
     /// corner): the same as `BinSampler::inner_bin`, eight at a time.
     #[inline(always)]
     pub(super) unsafe fn bins(&self, cell: __m256i, low: [__m256i; 3]) -> (__m256i, __m256i) {
-        let mut base = Narrow::default();
-        base.set(cell);
-        let mut corners = [Narrow::default(); 8];
-        for (l, &base) in base.0.iter().enumerate() {
-            for (corner, &offset) in corners.iter_mut().zip(&self.corners) {
-                corner.0[l] = self.voxels[base as usize + offset].to_f32().to_bits();
-            }
-        }
-        let mut c = [_mm256_setzero_ps(); 8];
-        for (c, corner) in c.iter_mut().zip(&corners) {
-            *c = _mm256_castsi256_ps(corner.get());
-        }
+        let c = self.corner_values(cell);
         let f = per_axis!(m => fraction(low[m]));
         let c00 = lerp(c[0], c[1], f[0]);
         let c10 = lerp(c[2], c[3], f[0]);
@@ -71,6 +64,85 @@ impl<T: Voxel> Mixer<'_, T> {
         );
         let bins = _mm256_min_epi32(_mm256_max_epi32(whole, _mm256_setzero_si256()), self.last);
         (bins, missing)
+    }
+
+    /// The eight corners of eight cells as f32 (`Voxel::to_f32`), in the order of `corners`:
+    /// gathered, where the voxel type allows it and every voxel read lies in the volume, else
+    /// read one by one. Gathered, a cell's two corners along x are one 32-bit read for 16-bit
+    /// voxels (and for 8-bit ones, from two bytes before them, so that no read passes the
+    /// volume's last voxel): per eight samples four gathers and a few shifts instead of 64
+    /// loads, conversions and stores, with the same values.
+    #[inline(always)]
+    unsafe fn corner_values(&self, cell: __m256i) -> [__m256; 8] {
+        let [_, x, y, _, z, _, z_y, _] = self.corners;
+        let pairs = [0, y, z, z_y];
+        let data = self.voxels.as_ptr().cast::<i32>();
+        // No closures: a closure is compiled without the walk's target features.
+        macro_rules! gather {
+            ($scale:literal, $offset:expr, $back:expr) => {{
+                let at = _mm256_add_epi32(cell, _mm256_set1_epi32($offset as i32 - $back));
+                // SAFETY: every lane's read lies in the volume (`within`, checked before).
+                unsafe { _mm256_i32gather_epi32::<$scale>(data, at) }
+            }};
+        }
+        let mut words = [_mm256_setzero_si256(); 4];
+        match T::TYPE {
+            VoxelType::F32 if self.within(cell, 0) => {
+                let mut out = [_mm256_setzero_ps(); 8];
+                for (out, &offset) in out.iter_mut().zip(&self.corners) {
+                    *out = _mm256_castsi256_ps(gather!(4, offset, 0));
+                }
+                out
+            }
+            VoxelType::I16 | VoxelType::U16 if x == 1 && self.within(cell, 0) => {
+                for (w, &offset) in words.iter_mut().zip(&pairs) {
+                    *w = gather!(2, offset, 0);
+                }
+                split(words, 16, T::TYPE == VoxelType::I16)
+            }
+            VoxelType::I8 | VoxelType::U8 if x == 1 && self.within(cell, 2) => {
+                // Bytes 2 and 3 of each word, shifted down to its low half.
+                for (w, &offset) in words.iter_mut().zip(&pairs) {
+                    *w = _mm256_srli_epi32::<16>(gather!(1, offset, 2));
+                }
+                split(words, 8, T::TYPE == VoxelType::I8)
+            }
+            _ => self.corner_values_one_by_one(cell),
+        }
+    }
+
+    /// Whether every lane of `cell` reads voxels within the volume from `back` voxels before
+    /// the cell's lower corner to its upper one.
+    #[inline(always)]
+    unsafe fn within(&self, cell: __m256i, back: usize) -> bool {
+        let Some(last) = self.voxels.len().checked_sub(1 + self.corners[7]) else {
+            return false;
+        };
+        // Both bounds below i32::MAX: `available` keeps the voxels' indices in 32-bit lanes.
+        let (lo, hi) = (back as i32 - 1, last as i32);
+        let inside = _mm256_andnot_si256(
+            _mm256_cmpgt_epi32(cell, _mm256_set1_epi32(hi)),
+            _mm256_cmpgt_epi32(cell, _mm256_set1_epi32(lo)),
+        );
+        _mm256_movemask_epi8(inside) == -1
+    }
+
+    /// [`corner_values`](Self::corner_values), a voxel at a time (bounds checked).
+    #[inline(always)]
+    unsafe fn corner_values_one_by_one(&self, cell: __m256i) -> [__m256; 8] {
+        let mut base = Narrow::default();
+        base.set(cell);
+        let mut corners = [Narrow::default(); 8];
+        for (l, &base) in base.0.iter().enumerate() {
+            for (corner, &offset) in corners.iter_mut().zip(&self.corners) {
+                corner.0[l] = self.voxels[base as usize + offset].to_f32().to_bits();
+            }
+        }
+        let mut out = [_mm256_setzero_ps(); 8];
+        for (out, corner) in out.iter_mut().zip(&corners) {
+            *out = _mm256_castsi256_ps(corner.get());
+        }
+        out
     }
 
     /// bin = min(B - 1, floor((v - min) * B / range)) of four values, in f64 as the quantizer
@@ -115,11 +187,13 @@ impl<T: Voxel> Mixer<'_, T> {
                 _mm256_mullo_epi32(t, step[m]),
             ));
             let (bins, missing) = self.bins(chunk.entries(CELL, k), low);
-            let mut out = Narrow::default();
-            out.set(bins);
-            let missing = bits_of(missing);
-            for (i, &bin) in out.0.iter().enumerate().take(len - k) {
-                chunk.resolve(k + i, (missing >> i & 1 == 0).then_some(bin as u8));
+            // Missing samples get MIXED, which no bin is. Every entry is put, the padding's
+            // too: it is the first entry again, its own label.
+            let (mut labels, mut slots) = (Narrow::default(), Narrow::default());
+            labels.set(_mm256_blendv_epi8(bins, self.mixed, missing));
+            slots.set(slot);
+            for (&slot, &label) in slots.0.iter().zip(&labels.0) {
+                chunk.put(slot, label as u8);
             }
         }
     }
@@ -150,4 +224,26 @@ unsafe fn half_fraction(h: __m128i) -> __m128 {
 #[inline(always)]
 unsafe fn lerp(a: __m256, b: __m256, t: __m256) -> __m256 {
     _mm256_add_ps(a, _mm256_mul_ps(t, _mm256_sub_ps(b, a)))
+}
+
+/// The corners of [`Mixer::corner_values`] from four words a pair of neighbours along x, the lower in
+/// the low `bits` of each 32-bit lane and the upper in the `bits` above them: each as an
+/// integer (sign-extended if `signed`), then as f32 (exactly: 16 bits at most).
+#[inline(always)]
+unsafe fn split(words: [__m256i; 4], bits: i32, signed: bool) -> [__m256; 8] {
+    let shift = _mm_cvtsi32_si128(32 - bits);
+    let down = _mm_cvtsi32_si128(bits);
+    let mut out = [_mm256_setzero_ps(); 8];
+    for (pair, w) in out.chunks_exact_mut(2).zip(words) {
+        let low = _mm256_sll_epi32(w, shift);
+        let high = _mm256_sll_epi32(_mm256_srl_epi32(w, down), shift);
+        let [low, high] = if signed {
+            [_mm256_sra_epi32(low, shift), _mm256_sra_epi32(high, shift)]
+        } else {
+            [_mm256_srl_epi32(low, shift), _mm256_srl_epi32(high, shift)]
+        };
+        pair[0] = _mm256_cvtepi32_ps(low);
+        pair[1] = _mm256_cvtepi32_ps(high);
+    }
+    out
 }
