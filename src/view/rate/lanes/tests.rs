@@ -1,43 +1,28 @@
 //! The eight-lane walk on every voxel type: its corners gathered (or read one by one where a
 //! gather could leave the volume) give the scalar walk's counts.
 
+use super::super::tests::awkward_volume_of;
 use super::super::{AxisEntropy, BinSampler, RaySubset, Vector, Walk, counts_with};
 use crate::geometry::lattice::Lattice;
 use crate::progress::Monitor;
-use crate::testing::Lcg;
 use crate::volume::{Volume, Voxel, VoxelType, Voxels, with_voxels};
 
-/// Blocks of `(x/3 + y/4 + z/5) mod 7` with noise, stretched over `voxel_type`'s range so that
-/// the sign bit and the high byte of its values are used (negative values for the signed
-/// types, values above the signed range for the unsigned ones); f32 adds missing voxels.
-fn blocks_of(dims: [usize; 3], voxel_type: VoxelType, seed: u64) -> Volume {
+/// The walks' test volume (`awkward_volume_of`) held in `voxel_type` itself, its values
+/// stretched over the type's range so that the sign bit and the high byte are used (negative
+/// values for the signed types, values above the signed range for the unsigned ones); f32 as it
+/// is, with its missing voxels.
+fn held_as(dims: [usize; 3], voxel_type: VoxelType, seed: u64) -> Volume {
     let (scale, offset) = match voxel_type {
         VoxelType::U8 => (3.0, 40.0),
         VoxelType::I8 => (3.0, -110.0),
         VoxelType::U16 => (900.0, 2000.0),
         VoxelType::I16 => (900.0, -30000.0),
-        _ => (0.7, 0.0),
+        _ => (1.0, 0.0),
     };
-    let mut lcg = Lcg::new(seed);
-    let data = (0..dims.iter().product::<usize>())
-        .map(|i| {
-            let r = (lcg.next_u64() >> 33) as u32;
-            let [x, y, z] = [i % dims[0], i / dims[0] % dims[1], i / (dims[0] * dims[1])];
-            let level = ((x / 3 + y / 4 + z / 5) % 7) as f32 * 10.0 + (r % 5) as f32;
-            if voxel_type == VoxelType::F32 && r.is_multiple_of(89) {
-                f32::NAN
-            } else {
-                (level * scale + offset).round()
-            }
-        })
-        .collect();
-    let v = Volume::from_voxels(
-        dims,
-        [1.0; 3],
-        voxel_type,
-        Voxels::narrowed(data, voxel_type),
-    );
-    let v = v.unwrap();
+    let v = awkward_volume_of(dims, [1.0; 3], voxel_type, seed);
+    let data = v.voxels().iter().map(|&x| x * scale + offset).collect();
+    let held = Voxels::narrowed(data, voxel_type);
+    let v = Volume::from_voxels(dims, [1.0; 3], voxel_type, held).unwrap();
     assert_eq!(v.data().held(), voxel_type, "voxels held in their own type");
     v
 }
@@ -83,7 +68,7 @@ fn every_voxel_type_walked_eight_rays_at_a_time_counts_what_one_at_a_time_counts
         // One voxel thick along x (whose corners along x are one voxel: read one by one), two
         // thick, and one whose first and last cells are mixed and met by oblique rays.
         for dims in [[1, 17, 15], [2, 13, 11], [25, 21, 19]] {
-            let v = blocks_of(dims, voxel_type, 5);
+            let v = held_as(dims, voxel_type, 5);
             samples += with_voxels!(v.data(), |d| lanes_agree(d, &v));
         }
     }
