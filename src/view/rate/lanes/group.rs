@@ -201,9 +201,19 @@ impl Group {
         // at every step, as the table's increments might write it.
         let (mut code, mut len) = (self.code, self.len);
         let (mut held, mut times) = (self.held, self.times);
+        // The labels and lanes of the last step when it left every lane it pushed to with a
+        // complete block equal to the one before (one symbol repeated): a step with the same
+        // labels and lanes repeats each lane's block, so it only counts them. (Most steps do,
+        // in uniform regions; `u32::MAX` is no step's lanes.)
+        let (mut repeat_labels, mut repeat_lanes) = (0, u32::MAX);
         for t in 0..chunk.steps {
             let mut push = self.on(chunk.start + t);
-            let bytes = _mm_cvtsi64_si128(i64::from_le_bytes(chunk.labels[t]));
+            let word = i64::from_le_bytes(chunk.labels[t]);
+            if word == repeat_labels && bits_of(push) == repeat_lanes {
+                times = _mm256_sub_epi32(times, push);
+                continue;
+            }
+            let bytes = _mm_cvtsi64_si128(word);
             // A sample still MIXED after the resolve pass is missing (an idle lane's label
             // may be anything).
             let missing = _mm_movemask_epi8(_mm_cmpeq_epi8(bytes, _mm_set1_epi8(MIXED as i8)))
@@ -220,11 +230,12 @@ impl Group {
                 c.code_mask,
             );
             let grown = _mm256_min_epu32(_mm256_add_epi32(len, one), c.full);
+            let repeated = _mm256_cmpeq_epi32(pushed, code);
             code = _mm256_blendv_epi8(code, pushed, push);
             len = _mm256_blendv_epi8(len, grown, push);
-            // Count each complete L-block: most (nine steps in ten have all eight lanes so)
-            // repeat their lane's last block, and are counted in registers; at a step where
-            // some lane's block differs, those lanes add their counts to the table.
+            // Count each complete L-block: most repeat their lane's last block, and are
+            // counted in registers; at a step where some lane's block differs, those lanes
+            // add their counts to the table.
             let complete = _mm256_and_si256(_mm256_cmpeq_epi32(len, c.full), push);
             let same = _mm256_cmpeq_epi32(code, held);
             times = _mm256_sub_epi32(times, _mm256_and_si256(complete, same));
@@ -234,6 +245,15 @@ impl Group {
                 held = _mm256_blendv_epi8(held, code, change);
                 times = _mm256_blendv_epi8(times, one, change);
             }
+            // Each lane pushed to now holds its block (`held`); when every one of them is
+            // complete and its block the one before, the next step repeats them if its
+            // labels and lanes are these. (A lane whose sample was missing is not among
+            // these lanes, and is among the next step's unless its span ended.)
+            let steady = bits_of(_mm256_andnot_si256(
+                _mm256_and_si256(complete, repeated),
+                push,
+            )) == 0;
+            (repeat_labels, repeat_lanes) = (word, if steady { bits_of(push) } else { u32::MAX });
         }
         (self.code, self.len) = (code, len);
         (self.held, self.times) = (held, times);

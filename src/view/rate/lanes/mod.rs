@@ -20,7 +20,10 @@
 //!    counted. A lane holds the count of its last block in a register while the block repeats
 //!    (in nine steps of ten all eight lanes repeat theirs, inside uniform regions) and adds it
 //!    to the table when the block changes: a table increment per sample took a quarter of the
-//!    walk's time.
+//!    walk's time. A step whose eight labels and lanes are the last step's, when that step left
+//!    every lane with a block of one symbol repeated, repeats every block: it only adds one to
+//!    each lane's count (one comparison of the labels as a word, where a whole step took about
+//!    thirty instructions: 8–10% of a default analysis's).
 //!
 //! Walking and interpolating in one pass, as this module did before, was 10–15% slower: about
 //! one step in three has a sample in a mixed cell, and the branches on it were mispredicted.
