@@ -7,7 +7,7 @@ use crate::geometry::min_spacing;
 use crate::measure::{PartialCounts, block_entropies};
 use crate::testing::Lcg;
 use crate::volume::Volume;
-use crate::volume::VoxelType;
+use crate::volume::{VoxelType, Voxels};
 
 fn random_volume(dims: [usize; 3], levels: u32, seed: u64) -> Volume {
     let mut lcg = Lcg::new(seed);
@@ -58,6 +58,16 @@ fn axis_aligned_rate_equals_a_brute_force_count_over_columns() {
     }
 }
 
+/// The scalar tile walk of the rays `subset` keeps: what the other walks are held to.
+fn one_by_one(subset: RaySubset) -> (Walk, RaySubset) {
+    (
+        Walk::Tiles {
+            vector: Vector::Off,
+        },
+        subset,
+    )
+}
+
 /// A noisy volume with blocks, bins at their edges and missing voxels.
 fn awkward_volume(dims: [usize; 3], spacing: [f64; 3], seed: u64) -> Volume {
     awkward_volume_of(dims, spacing, VoxelType::F32, seed)
@@ -65,7 +75,8 @@ fn awkward_volume(dims: [usize; 3], spacing: [f64; 3], seed: u64) -> Volume {
 
 /// A noisy volume of blocks for the walks' tests: `(x/3 + y/4 + z/5) mod 7` times ten, noise of
 /// up to 2.8 (f32, in steps of 0.7, so that values fall on bin edges) or 4 (integers), and a
-/// missing voxel in about 97 where `voxel_type` is f32.
+/// missing voxel in about 97 where `voxel_type` is f32; held in `voxel_type` itself, so that
+/// the walks read it as a volume of that type is read.
 pub(in crate::view) fn awkward_volume_of(
     dims: [usize; 3],
     spacing: [f64; 3],
@@ -90,7 +101,8 @@ pub(in crate::view) fn awkward_volume_of(
             }
         })
         .collect();
-    Volume::new(dims, spacing, voxel_type, data).unwrap()
+    let held = Voxels::narrowed(data, voxel_type);
+    Volume::from_voxels(dims, spacing, voxel_type, held).unwrap()
 }
 
 /// `volume` as f32 with its voxel planes below `z` missing (NaN): fewer samples than its box
@@ -348,19 +360,8 @@ fn slabs_counted_apart_from_windows_of_the_map_add_up_to_the_whole() {
                 },
             ] {
                 let none = Monitor::none();
-                let (counts, rays) = counts_with(
-                    &whole,
-                    &lattice,
-                    3,
-                    (&none, 1),
-                    (
-                        Walk::Tiles {
-                            vector: Vector::Off,
-                        },
-                        subset,
-                    ),
-                )
-                .unwrap();
+                let (counts, rays) =
+                    counts_with(&whole, &lattice, 3, (&none, 1), one_by_one(subset)).unwrap();
                 let expect = AxisEntropy::new(lattice.d, &counts, rays);
                 for (slab, brick) in [(1, 1), (2, 1), (5, 5), (6, 3), (64, 64)] {
                     let bricks = Bricks::shaped(dims, [4, 7, brick]);
@@ -490,47 +491,50 @@ fn phases_walked_together_count_what_each_walks_alone() {
         ([44, 70, 29], [0.8, 1.1, 1.9], VoxelType::I16),
     ] {
         let v = awkward_volume_of(dims, spacing, voxel_type, 5);
-        let sampler = BinSampler::new(&v, v.quantizer(32).unwrap());
-        let s = min_spacing(v.spacing());
-        for axis in [[0.0, 0.0, 1.0], [0.3, -0.5, 0.81], [1.0, 1.0, 1.0]] {
-            for every in [12, 3, 1] {
-                let phases = [[0.5, 0.5, 0.5], [0.13, 0.71, 0.2], [0.9, 0.05, 0.66]];
-                let lattices: Vec<Lattice> = phases
-                    .iter()
-                    .map(|&p| Lattice::new(dims, v.spacing(), axis, s, s, p).unwrap())
-                    .collect();
-                let kept: Vec<(&Lattice, RaySubset)> = lattices
-                    .iter()
-                    .enumerate()
-                    .map(|(n, l)| {
-                        let offset = n as u64 + 1;
-                        (l, RaySubset { every, offset })
-                    })
-                    .collect();
-                let last = std::sync::Mutex::new(0.0);
-                let report = |p: crate::progress::Progress| *last.lock().unwrap() = p.fraction;
-                let monitor = Monitor::new(None, Some(&report));
-                monitor.start("test", 1000);
-                let together = entropy_rates_of(&sampler, &kept, 3, (&monitor, 1000)).unwrap();
-                assert_eq!(*last.lock().unwrap(), 1.0, "every unit reported");
-                for (&(l, subset), got) in kept.iter().zip(&together) {
-                    let none = Monitor::none();
-                    let walk = (
-                        Walk::Tiles {
-                            vector: Vector::Off,
-                        },
-                        subset,
-                    );
-                    let (counts, rays) = counts_with(&sampler, l, 3, (&none, 1), walk).unwrap();
-                    let alone = AxisEntropy::new(l.d, &counts, rays);
-                    assert_eq!(*got, alone, "{dims:?} {axis:?} one in {every}");
-                    assert!(got.blocks > 0, "{dims:?} {axis:?}: a lattice with blocks");
-                    blocks += got.blocks;
-                }
+        blocks += crate::volume::with_voxels!(v.data(), |d| phases_agree(d, &v));
+    }
+    assert!(blocks > 100_000, "{blocks} blocks compared");
+}
+
+/// Whether the shifted lattices of a few axes walked together over `voxels` (those of `v`)
+/// count what each walks alone; returns the blocks compared.
+fn phases_agree<T: Voxel>(voxels: &[T], v: &Volume) -> u64 {
+    let (dims, mut blocks) = (v.dims(), 0);
+    let sampler = BinSampler::over(voxels, v, v.quantizer(32).unwrap());
+    let s = min_spacing(v.spacing());
+    for axis in [[0.0, 0.0, 1.0], [0.3, -0.5, 0.81], [1.0, 1.0, 1.0]] {
+        for every in [12, 3, 1] {
+            let phases = [[0.5, 0.5, 0.5], [0.13, 0.71, 0.2], [0.9, 0.05, 0.66]];
+            let lattices: Vec<Lattice> = phases
+                .iter()
+                .map(|&p| Lattice::new(dims, v.spacing(), axis, s, s, p).unwrap())
+                .collect();
+            let kept: Vec<(&Lattice, RaySubset)> = lattices
+                .iter()
+                .enumerate()
+                .map(|(n, l)| {
+                    let offset = n as u64 + 1;
+                    (l, RaySubset { every, offset })
+                })
+                .collect();
+            let last = std::sync::Mutex::new(0.0);
+            let report = |p: crate::progress::Progress| *last.lock().unwrap() = p.fraction;
+            let monitor = Monitor::new(None, Some(&report));
+            monitor.start("test", 1000);
+            let together = entropy_rates_of(&sampler, &kept, 3, (&monitor, 1000)).unwrap();
+            assert_eq!(*last.lock().unwrap(), 1.0, "every unit reported");
+            for (&(l, subset), got) in kept.iter().zip(&together) {
+                let none = Monitor::none();
+                let walk = one_by_one(subset);
+                let (counts, rays) = counts_with(&sampler, l, 3, (&none, 1), walk).unwrap();
+                let alone = AxisEntropy::new(l.d, &counts, rays);
+                assert_eq!(*got, alone, "{dims:?} {axis:?} one in {every}");
+                assert!(got.blocks > 0, "{dims:?} {axis:?}: a lattice with blocks");
+                blocks += got.blocks;
             }
         }
     }
-    assert!(blocks > 100_000, "{blocks} blocks compared");
+    blocks
 }
 
 #[test]
@@ -579,12 +583,7 @@ fn phases_walked_together_slab_by_slab_count_what_each_walks_alone() {
                 }
                 for ((&(l, subset), total), open) in kept.iter().zip(&totals).zip(&opens) {
                     let none = Monitor::none();
-                    let walk = (
-                        Walk::Tiles {
-                            vector: Vector::Off,
-                        },
-                        subset,
-                    );
+                    let walk = one_by_one(subset);
                     let (counts, rays) = counts_with(&whole, l, 3, (&none, 1), walk).unwrap();
                     let at = format!("{axis:?} one in {every}, slabs of {slab}");
                     assert_eq!(total.rays, rays, "{at}");

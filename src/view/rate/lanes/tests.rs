@@ -20,7 +20,12 @@ fn held_as(dims: [usize; 3], voxel_type: VoxelType, seed: u64) -> Volume {
         _ => (1.0, 0.0),
     };
     let v = awkward_volume_of(dims, [1.0; 3], voxel_type, seed);
-    let data = v.voxels().iter().map(|&x| x * scale + offset).collect();
+    let data = v
+        .data()
+        .to_f32_vec()
+        .iter()
+        .map(|&x| x * scale + offset)
+        .collect();
     let held = Voxels::narrowed(data, voxel_type);
     let v = Volume::from_voxels(dims, [1.0; 3], voxel_type, held).unwrap();
     assert_eq!(v.data().held(), voxel_type, "voxels held in their own type");
