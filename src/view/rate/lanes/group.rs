@@ -174,6 +174,9 @@ impl Group {
             // SAFETY: the 8 bytes read are the step's labels.
             let labels = unsafe { _mm_loadl_epi64(chunk.labels[t].as_ptr().cast()) };
             let mixed = _mm_movemask_epi8(_mm_cmpeq_epi8(labels, _mm_set1_epi8(MIXED as i8)));
+            if mixed == 0 {
+                continue;
+            }
             let slots = _mm256_add_epi32(
                 _mm256_set1_epi32((t * LANES) as i32),
                 _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),

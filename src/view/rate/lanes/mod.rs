@@ -1,15 +1,18 @@
 //! The common walk of a tile eight rays at a time with AVX2 (x86-64 processors since 2013).
 //!
 //! A group of eight neighbouring rays walks its inner spans together, in chunks of [`CHUNK`]
-//! steps, each in three passes with no branch per step or per lane on the data (only loops over
-//! the queue of mixed samples, and a rare one for missing samples):
+//! steps, each in three passes with no branch per lane on the data (per step only branches that
+//! skip work in uniform regions, and a rare one for missing samples; loops over the queue of
+//! mixed samples):
 //!
 //! 1. **Read**: positions and cell indices in vector registers, the label of each lane's cell
 //!    (its bin, or [`MIXED`]) into the chunk, cells prefetched [`AHEAD`] steps before they are
 //!    read. The samples in mixed cells are appended to a queue (packed with a permutation, not
 //!    a branch per lane), and their corners prefetched. Reading the labels is one loop and
 //!    queueing another: in one loop each step's queueing waited on its label loads, and the
-//!    processor could keep only two or three steps in flight (about 8% slower).
+//!    processor could keep only two or three steps in flight (about 8% slower). A step with no
+//!    label [`MIXED`] queues nothing and is passed over (a branch, taken in uniform regions,
+//!    where the packing took a twentieth of a default analysis's instructions).
 //! 2. **Resolve**, a chunk later (so that the corners have arrived): the queued samples are
 //!    interpolated and quantized eight at a time, every lane a real sample, with the same f32
 //!    and f64 operations as `BinSampler::inner_bin`, and their labels put back in their slots
