@@ -380,6 +380,7 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
     /// counting into `out`, and ends them.
     pub(super) fn walk(&self, band: &mut Band, order: &[usize], out: &mut PartialCounts) {
         let (mut walkers, mut sorted, mut tally) = (Vec::new(), Vec::new(), Vec::new());
+        let mut state = CommonState::default();
         for &b in order {
             let ids = std::mem::take(&mut band.waiting[b]);
             if ids.is_empty() {
@@ -398,7 +399,8 @@ impl<'a, T: Voxel> BrickWalk<'a, T> {
             // as many steps as its longest (stretches in a brick run from one sample to its
             // diameter; every cell they read is in cache).
             by_length(&mut walkers, &mut sorted, &mut tally);
-            common_walk(&mut sorted, self.step, self.sampler, &mut out.counts);
+            let along = (self.step, self.sampler);
+            common_walk(&mut sorted, along, &mut out.counts, &mut state);
             for w in &sorted {
                 let slot = &mut band.slots[w.id];
                 slot.p = w.p;
@@ -470,13 +472,22 @@ pub(super) fn by_length(
     by_bucket(walkers, sorted, tally, |w| longest - w.inner as usize);
 }
 
+/// What [`common_walk`] keeps from one call to the next of a thread's walk: the eight-lane
+/// walk's chunks, made at the first call that walks eight at a time (a brick's stretches are
+/// walked by a call each, and making the chunks for each would allocate and zero 6.8 KiB).
+#[derive(Default)]
+pub(super) struct CommonState {
+    #[cfg(target_arch = "x86_64")]
+    chunks: Option<super::lanes::Chunks>,
+}
+
 /// The inner spans of `walkers` walked together, into `counts`: eight at a time with AVX2 on a
 /// dense table, else one by one.
 pub(super) fn common_walk<T: Voxel>(
     walkers: &mut [Walker],
-    step: [i64; 3],
-    sampler: &BinSampler<T>,
+    (step, sampler): ([i64; 3], &BinSampler<T>),
     counts: &mut BlockCounts,
+    state: &mut CommonState,
 ) {
     if walkers.is_empty() {
         return;
@@ -484,13 +495,13 @@ pub(super) fn common_walk<T: Voxel>(
     match counts.dense() {
         #[cfg(target_arch = "x86_64")]
         Some(mut dense) if super::lanes::available(sampler) => {
+            let chunks = state.chunks.get_or_insert_with(super::lanes::Chunks::new);
             #[allow(unsafe_code)]
             // SAFETY: `lanes::available` found AVX2 on this processor, and `detected` AVX-512
             // where it chose it.
             unsafe {
                 let width = super::lanes::Width::detected();
-                let mut chunks = super::lanes::Chunks::new();
-                super::lanes::walk(width, walkers, (step, sampler), &mut dense, &mut chunks);
+                super::lanes::walk(width, walkers, (step, sampler), &mut dense, chunks);
             }
         }
         Some(mut dense) => scalar_walk(walkers, step, sampler, &mut dense),

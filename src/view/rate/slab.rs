@@ -9,7 +9,7 @@
 
 use rayon::prelude::*;
 
-use super::bricks::{BrickWalk, at, common_walk};
+use super::bricks::{BrickWalk, CommonState, at, common_walk};
 use super::columns::slab_rows;
 use super::grid::Bricks;
 use super::tiles::{RayStart, Walker, advance, by_bucket, sample_bin};
@@ -190,13 +190,15 @@ struct Stretch {
 }
 
 /// What a thread's walk of whole slabs keeps from band to band: room for a band's stretches and
-/// walkers, allocated once (fresh vectors of a band's size took page faults and copies).
+/// walkers, and the common walk's chunks, allocated once (fresh vectors of a band's size took
+/// page faults and copies).
 #[derive(Default)]
 struct Scratch {
     stretches: Vec<Stretch>,
     walkers: Vec<Walker>,
     sorted: Vec<Walker>,
     tally: Vec<usize>,
+    common: CommonState,
 }
 
 /// The rays of rows `js` through a slab whose planes are walked whole (one brick): each ray's
@@ -215,6 +217,7 @@ fn whole_band<T: Voxel>(
         walkers,
         sorted,
         tally,
+        common,
     } = scratch;
     stretches.clear();
     walkers.clear();
@@ -254,7 +257,7 @@ fn whole_band<T: Voxel>(
     by_bucket(walkers, sorted, tally, |w| {
         tiles.tile_of(key_ray(stretches[w.id].f.key))
     });
-    common_walk(sorted, step, sampler, &mut out.counts);
+    common_walk(sorted, (step, sampler), &mut out.counts, common);
     for w in sorted.iter() {
         let s = &mut stretches[w.id];
         s.p = w.p;

@@ -14,8 +14,9 @@
 //!    label [`MIXED`] queues nothing and is passed over (a branch, taken in uniform regions,
 //!    where the packing took a twentieth of a default analysis's instructions).
 //! 2. **Resolve**, a chunk later (so that the corners have arrived): the queued samples are
-//!    interpolated and quantized eight at a time, every lane a real sample, with the same f32
-//!    and f64 operations as `BinSampler::inner_bin`, and their labels put back in their slots
+//!    interpolated and quantized eight at a time, every lane a real sample, from corners
+//!    gathered (`Mixer::corner_values`), with the same f32 and f64 operations as
+//!    `BinSampler::inner_bin`, and their labels put back in their slots
 //!    of the chunk, a missing sample's as [`MIXED`] (which no bin is): eight stores, where
 //!    putting each bin or absence in its step's lane by a branch took a tenth of the walk's
 //!    instructions. The count pass finds the missing samples among the labels.
@@ -30,8 +31,9 @@
 //!
 //! Walking and interpolating in one pass, as this module did before, was 10–15% slower: about
 //! one step in three has a sample in a mixed cell, and the branches on it were mispredicted.
-//! (AVX2 gathers were tried for the reads and were no faster than plain loads on the processors
-//! here.) The walk feeds exactly the same symbols to the same sequences as
+//! (AVX2 gathers were tried for the labels' reads and were no faster than plain loads on the
+//! processors here; for the corners, one gather a register of a cell's corners replaced eight
+//! loads, conversions and stores.) The walk feeds exactly the same symbols to the same sequences as
 //! [`super::scalar_walk`]; only the order in which rays take turns differs, and counts are sums.
 //!
 //! The walk is compiled twice: for AVX2, and for processors with AVX-512 (F and VL), whose 32
